@@ -1,0 +1,130 @@
+"""One front door for every orientation filter of the suite.
+
+::
+
+    from fusionlab import estimators
+    estimators.available()      # {'gyro': {'uses_mag': False, 'summary': ..., 'seed': ...}, ...}
+    q = estimators.run('gyro', gyr=gyr, acc=acc, fs=fs, mag=None, frame='ENU')   # (N, 4) [w, x, y, z]
+
+Units at this door: ``gyr`` rad/s, ``acc`` m/s² reading +g on the up axis at rest (as real IMUs do), ``mag`` any
+consistent unit, ``fs`` Hz. The result is the body→``frame`` quaternion of every sample in the library convention
+(:mod:`fusionlab.rotations`). Each filter is written for the NED navigation frame and converts to its seed's own
+units and frame inside; this module converts NED→ENU at the door when asked.
+
+Filters register themselves with :func:`register`; the labs add theirs (complementary, Freescale, DCM AHRS, ...).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import rotations, sensors, validate
+
+__all__ = ["register", "available", "run"]
+
+_REGISTRY = {}
+FRAMES = ("NED", "ENU")
+
+
+def register(name, uses_mag, summary, seed):
+    """Decorator: register ``fn(gyr, acc, mag, fs) -> (N, 4) body→NED quaternions`` under ``name``."""
+    def deco(fn):
+        if name in _REGISTRY:
+            raise ValueError(f"estimator {name!r} is already registered")
+        _REGISTRY[name] = {"fn": fn, "uses_mag": bool(uses_mag), "summary": summary, "seed": seed}
+        return fn
+    return deco
+
+
+def available():
+    """``{name: {'uses_mag', 'summary', 'seed'}}`` of every registered estimator."""
+    return {k: {f: v[f] for f in ("uses_mag", "summary", "seed")} for k, v in sorted(_REGISTRY.items())}
+
+
+def run(name, gyr, acc, fs, mag=None, frame="ENU"):
+    """Run estimator ``name`` on one recording.
+
+    Parameters
+    ----------
+    name : str -- one of :func:`available`
+    gyr : (N, 3) array, rad/s
+    acc : (N, 3) array, m/s² (+g on the up axis at rest)
+    fs : float, Hz
+    mag : (N, 3) array or None -- required by estimators with ``uses_mag``
+    frame : 'ENU' or 'NED' -- navigation frame of the result
+    Returns
+    -------
+    (N, 4) array -- unit quaternions ``[w, x, y, z]``, body→``frame``
+    """
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
+    if frame not in FRAMES:
+        raise ValueError(f"frame must be 'ENU' or 'NED'; got {frame!r}")
+    gyr = _samples(gyr, "gyr")
+    acc = _samples(acc, "acc")
+    fs = validate.positive(fs, "fs")
+    entry = _REGISTRY[name]
+    if mag is not None:
+        mag = _samples(mag, "mag")
+    elif entry["uses_mag"]:
+        raise ValueError(f"estimator {name!r} uses the magnetometer: pass mag=(N, 3) array")
+    validate.same_length(gyr=gyr, acc=acc, mag=mag)
+    if len(gyr) == 0:
+        raise ValueError("gyr, acc must hold at least one sample; got 0")
+    if np.max(np.abs(gyr)) > 50:
+        raise ValueError(f"gyr must be in rad/s; got a rate of {np.max(np.abs(gyr)):.4g}, which looks like deg/s "
+                         "-- use np.radians(...)")
+    q_ned = entry["fn"](gyr, acc, mag, fs)
+    return q_ned if frame == "NED" else rotations.quat_nav_swap(q_ned)
+
+
+def _samples(x, name):
+    a = validate.array(x, name, shape=(None, 3))
+    if a.ndim != 2:
+        raise ValueError(f"{name} must have shape (N, 3); got {a.shape}")
+    return a
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Two baselines every filter should beat
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _level_start(acc, fs, seconds=0.5):
+    """Body→NED quaternion with roll and pitch from the mean of the first ``seconds`` of acc, yaw 0."""
+    n = max(1, min(len(acc), int(round(seconds * fs))))
+    roll, pitch = sensors.tilt_from_accel(acc[:n].mean(axis=0))
+    return rotations.euler_to_quat([roll, pitch, 0.0])
+
+
+@register("gyro", uses_mag=False, seed="000 §3.3 / 001 attitude §3",
+          summary="pure gyro integration (exact per-sample quaternion update) from an accelerometer-levelled start")
+def _gyro(gyr, acc, mag, fs):
+    q = rotations.integrate_gyro_quat(_level_start(acc, fs), gyr, 1.0 / fs)
+    return q[1:]                                     # attitude after each sample
+
+
+def triad(acc, mag):
+    """Accelerometer + magnetometer snapshot attitude (TRIAD): body→NED DCMs, one per sample.
+
+    Down is opposite the specific force; east is down × field; north completes the triad. Heading is magnetic.
+    """
+    acc = validate.vectors(acc, "acc")
+    mag = validate.vectors(mag, "mag")
+    down = -acc / _norm(acc, "acc")
+    east = np.cross(down, mag)
+    east = east / _norm(east, "mag (parallel to gravity?)")
+    north = np.cross(east, down)
+    return np.stack([north, east, down], -2)         # rows: nav axes written in body coordinates
+
+
+def _norm(v, name):
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(n < 1e-12):
+        raise ValueError(f"{name} has a zero-length vector; cannot form an attitude from it")
+    return n
+
+
+@register("triad", uses_mag=True, seed="(baseline, not from a seed)",
+          summary="accelerometer + magnetometer snapshot (TRIAD) at every sample, no gyro")
+def _triad(gyr, acc, mag, fs):
+    return rotations.dcm_to_quat(triad(acc, mag))

@@ -1,0 +1,315 @@
+"""Figures of frames and attitudes: triads, an aircraft, and the Euler sequence of seed 001 (figs 2-5).
+
+Every helper takes attitudes in the library convention (:mod:`fusionlab.rotations`): ``C_bn`` body→NED, columns
+are the body axes written in North-East-Down coordinates, ``euler = [roll, pitch, yaw]`` in radians. Degrees appear
+only in titles.
+
+Display mapping
+---------------
+NED is drawn the way a reader expects to see the world: Down points down on the screen. The 3-D axes show
+``(x, y, z) = (East, North, Up = -Down)`` (:func:`ned_to_display`). This is a proper rotation of NED (det +1), so
+nothing is mirrored: positive yaw still turns the nose clockwise seen from above, the right wing is on the right.
+(Plotting ``(North, East, -Down)`` directly would be a reflection and draw every attitude mirror-imaged.)
+
+Artists that draw a frame axis carry a ``gid`` such as ``'B:x'`` (body x axis), so tests and notebooks can find
+them in a figure.
+"""
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.lines import Line2D
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from . import rotations, validate
+
+__all__ = ["NED_TO_DISPLAY", "ned_to_display", "setup_ned_axes", "draw_triad", "draw_aircraft",
+           "euler_frames", "plot_euler_frames", "plot_gimbal_lock"]
+
+#: Rows pick (East, North, -Down) out of (North, East, Down); det = +1, so no mirror image.
+NED_TO_DISPLAY = np.array([[0.0, 1.0, 0.0],
+                           [1.0, 0.0, 0.0],
+                           [0.0, 0.0, -1.0]])
+
+GREY, RED = "0.6", "tab:red"
+AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
+
+
+def ned_to_display(v):
+    """NED vectors to the plotted coordinates ``(East, North, Up)``.
+
+    Parameters
+    ----------
+    v : (..., 3) array -- vectors or points in NED
+    Returns
+    -------
+    (..., 3) array -- ``[v_E, v_N, -v_D]``
+    """
+    v = validate.vectors(v, "v")
+    return v @ NED_TO_DISPLAY.T
+
+
+def setup_ned_axes(ax, lim=1.2, elev=25, azim=-70):
+    """Label a 3-D axis for NED data drawn with :func:`ned_to_display`: equal aspect, Down pointing down.
+
+    Parameters
+    ----------
+    ax : mpl_toolkits.mplot3d.Axes3D
+    lim : float -- half-width of the cube shown, in the units of the data
+    elev, azim : float, degrees -- camera elevation and azimuth (default: from the south, slightly east and above:
+        East to the right, North into the page, Down down)
+    """
+    lim = validate.positive(lim, "lim")
+    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), zlim=(-lim, lim),
+           xlabel="East", ylabel="North", zlabel="Up (= -Down)")
+    ax.set_box_aspect((1, 1, 1), zoom=1.15)
+    ax.view_init(elev=elev, azim=azim)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_ticklabels([])                             # unit vectors: the grid is enough, numbers clutter
+        axis.labelpad = -12
+    return ax
+
+
+def _colors(colors):
+    return [colors] * 3 if isinstance(colors, str) else list(colors)
+
+
+def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.0, length=1.0, lw=2.0,
+               label_at=1.15):
+    """Draw the three columns of ``C`` as arrows labelled ``x_label``, ``y_label``, ``z_label``.
+
+    Parameters
+    ----------
+    ax : Axes3D -- set up with :func:`setup_ned_axes`
+    C : (3, 3) array -- columns are the frame's unit axes in NED (e.g. ``C_bn``)
+    origin : (3,) array -- NED point the arrows start from
+    colors : str or 3 colours -- one colour for the whole triad, or one per axis
+    label : str or None -- frame name used as subscript (``'B'`` gives x_B ...) and in the artists' gid
+    alpha, length, lw : float -- opacity, arrow length (data units), line width
+    label_at : float -- axis labels sit at ``label_at * length`` along each axis (move them apart when two
+        triads share an axis)
+    Returns
+    -------
+    list of artists -- shaft lines (gid ``'{label}:x'`` ...), arrow heads and labels
+    """
+    C = validate.matrices(C, "C")
+    if C.shape != (3, 3):
+        raise ValueError(f"C must have shape (3, 3); got {C.shape}")
+    o = ned_to_display(validate.vectors(origin, "origin"))
+    tips = ned_to_display(length * C.T)                     # row k: axis k in display coordinates
+    artists = []
+    for k, (name, color) in enumerate(zip("xyz", _colors(colors))):
+        d = tips[k]
+        gid = f"{label}:{name}" if label is not None else None
+        artists += ax.plot(*np.stack([o, o + d]).T, color=color, alpha=alpha, lw=lw, gid=gid)
+        head = 0.18 * d                                     # the quiver draws only the head of the arrow
+        artists.append(ax.quiver(*(o + d - head), *head, color=color, alpha=alpha, lw=lw,
+                                 arrow_length_ratio=1.0))
+        text = f"${name}_{{{label}}}$" if label is not None else name
+        artists.append(ax.text(*(o + label_at * d), text, color=color, alpha=alpha, fontsize=10,
+                               ha="center", va="center"))
+    return artists
+
+
+# Aircraft outline in body coordinates (x nose, y right wing, z down), in units of `scale`.
+_FUSELAGE = np.array([[0.9, 0, 0], [-0.85, 0, 0]])
+_WINGS = np.array([[0.2, 0, 0], [-0.1, 0.85, 0], [-0.28, 0.85, 0], [-0.2, 0, 0],
+                   [-0.28, -0.85, 0], [-0.1, -0.85, 0]])
+_STABILISER = np.array([[-0.6, 0, 0], [-0.75, 0.3, 0], [-0.85, 0.3, 0], [-0.82, 0, 0],
+                        [-0.85, -0.3, 0], [-0.75, -0.3, 0]])
+_FIN = np.array([[-0.55, 0, 0], [-0.78, 0, -0.35], [-0.88, 0, -0.35], [-0.82, 0, 0]])   # -z: up when level
+
+
+def draw_aircraft(ax, C_bn, scale=1.0, color="lightsteelblue"):
+    """Draw a simple aircraft at attitude ``C_bn``: fuselage on body x, wings on body y, fin toward body -z.
+
+    The right (starboard) wing tip carries a green light, the left (port) one a red light, as on real aircraft,
+    so the sign of roll can be read off the picture.
+
+    Parameters
+    ----------
+    ax : Axes3D -- set up with :func:`setup_ned_axes`
+    C_bn : (3, 3) array -- body→NED attitude
+    scale : float -- half-length of the fuselage is about ``0.9 * scale`` (data units)
+    Returns
+    -------
+    list of artists
+    """
+    C_bn = validate.matrices(C_bn, "C_bn")
+    scale = validate.positive(scale, "scale")
+
+    def place(pts_b):                                       # body points -> display points
+        return ned_to_display(scale * pts_b @ C_bn.T)
+
+    body = [place(p) for p in (_WINGS, _STABILISER, _FIN)]
+    poly = Poly3DCollection(body, facecolor=color, edgecolor="navy", linewidths=0.8, alpha=0.8)
+    artists = [ax.add_collection3d(poly)]
+    artists += ax.plot(*place(_FUSELAGE).T, color="navy", lw=3, solid_capstyle="round", gid="aircraft")
+    lights = place(np.array([[-0.19, 0.85, 0], [-0.19, -0.85, 0]]))
+    artists.append(ax.scatter(*lights.T, c=["tab:green", "tab:red"], s=18, depthshade=False))
+    return artists
+
+
+# --------------------------------------------------------------------------------------------------------------
+# The Euler sequence (seed 001, Euler note figs 2-4) and gimbal lock (fig 5)
+# --------------------------------------------------------------------------------------------------------------
+
+
+def _deg(a):
+    """Angle in rad as a short degree string: 40°, -10°, 12.5° (never -0°)."""
+    return f"{round(float(np.degrees(a)), 1) + 0.0:g}°"
+
+
+def _euler(euler):
+    e = validate.vectors(euler, "euler")
+    if e.shape != (3,):
+        raise ValueError(f"euler must have shape (3,) = [roll, pitch, yaw]; got {e.shape}")
+    return validate.angles_rad(e, "euler")
+
+
+def _angle(x, name):
+    a = validate.angles_rad(x, name)
+    if a.shape != ():
+        raise ValueError(f"{name} must be a scalar angle in rad; got shape {a.shape}")
+    return float(a)
+
+
+def euler_frames(euler):
+    """The four frames of the Z-Y-X sequence as DCMs to NED (columns = the frame's axes in NED).
+
+    Parameters
+    ----------
+    euler : (3,) array, rad -- ``[roll, pitch, yaw]``
+    Returns
+    -------
+    dict -- ``{'I': I, 'v1': Rz(ψ), 'v2': Rz(ψ) Ry(θ), 'B': Rz(ψ) Ry(θ) Rx(φ) = C_bn}``, each (3, 3)
+    """
+    roll, pitch, yaw = _euler(euler)
+    v1 = rotations.rot_z(yaw)                                # yaw about z_I        (001 Euler §3)
+    v2 = v1 @ rotations.rot_y(pitch)                         # pitch about y_v1     (001 Euler §4)
+    return {"I": np.eye(3), "v1": v1, "v2": v2, "B": v2 @ rotations.rot_x(roll)}   # roll about x_v2 (§5)
+
+
+def _arc(ax, C_prev, rot, angle, moving, radius=0.5):
+    """Arc swept by axis ``moving`` (0, 1, 2) of frame ``C_prev`` as it turns by ``angle`` under ``rot``."""
+    if abs(angle) < 1e-9:
+        return
+    R = rot(np.linspace(0.0, angle, 40))                      # (40, 3, 3)
+    pts = ned_to_display(radius * (C_prev @ R)[:, :, moving])
+    ax.plot(*pts.T, color="k", lw=1.2)
+    ax.quiver(*pts[-2], *(pts[-1] - pts[-2]), color="k", arrow_length_ratio=8.0, lw=1.2)
+
+
+def _new_axes(n, ax, figsize):
+    if ax is None:
+        fig = plt.figure(figsize=figsize)
+        return fig, [fig.add_subplot(1, n, i + 1, projection="3d") for i in range(n)]
+    axes = list(np.atleast_1d(ax))
+    if len(axes) != n or not all(getattr(a, "name", "") == "3d" for a in axes):
+        raise ValueError(f"ax must be None or {n} 3-D axes; got {ax!r}")
+    return axes[0].figure, axes
+
+
+def plot_euler_frames(euler, ax=None, stages=True):
+    """Draw the Euler sequence I → v1 (yaw) → v2 (pitch) → B (roll), as in seed 001 figs 2-4.
+
+    Parameters
+    ----------
+    euler : (3,) array, rad -- ``[roll, pitch, yaw]``
+    ax : None, or 4 Axes3D (``stages=True``), or one Axes3D (``stages=False``) -- where to draw
+    stages : bool -- True: four panels, each the previous frame in grey and the new one in red, with the arc the
+        moving axis sweeps; False: one panel with all four frames and the aircraft.
+    Returns
+    -------
+    matplotlib.figure.Figure -- not shown (end the notebook line with ``;``)
+
+    Raises
+    ------
+    ValueError -- if ``euler`` is not a finite (3,) array in radians
+    """
+    roll, pitch, yaw = _euler(euler)
+    F = euler_frames([roll, pitch, yaw])
+    angles = f"(φ, θ, ψ) = ({_deg(roll)}, {_deg(pitch)}, {_deg(yaw)})"
+    if not stages:
+        fig, (ax,) = _new_axes(1, None if ax is None else [ax], (6, 6))
+        setup_ned_axes(ax)
+        for name, color, alpha in (("I", GREY, 1.0), ("v1", "tab:orange", 0.5), ("v2", "tab:purple", 0.5),
+                                   ("B", RED, 1.0)):
+            draw_triad(ax, F[name], colors=color, label=name, alpha=alpha, lw=2.5 if name == "B" else 1.5,
+                       label_at=1.35 if name in ("v1", "v2") else 1.15)
+        draw_aircraft(ax, F["B"], scale=0.6)
+        ax.set_title(f"{angles}: body frame B (red) reached from NED (grey)\nvia v1 (yaw) and v2 (pitch)",
+                     fontsize=10)
+        return fig
+
+    fig, axes = _new_axes(4, ax, (17, 5))
+    steps = [("yaw ψ", yaw, rotations.rot_z, "z", "I", "v1", 0),     # (name, angle, rot, about, prev, new, arc)
+             ("pitch θ", pitch, rotations.rot_y, "y", "v1", "v2", 0),
+             ("roll φ", roll, rotations.rot_x, "x", "v2", "B", 1)]
+    setup_ned_axes(axes[0])
+    draw_triad(axes[0], F["I"], colors=GREY, label="I")
+    axes[0].set_title("start: inertial frame I\n(North-East-Down, Down drawn down)", fontsize=10)
+    for a, (name, angle, rot, about, prev, new, moving) in zip(axes[1:], steps):
+        setup_ned_axes(a)
+        draw_triad(a, F[prev], colors=GREY, label=prev, lw=1.5, label_at=1.35)
+        draw_triad(a, F[new], colors=RED, label=new, lw=2.5)
+        _arc(a, F[prev], rot, angle, moving)
+        a.set_title(f"{name} = {_deg(angle)} about ${about}_{{{prev}}}$\n→ frame {new}", fontsize=10)
+    draw_aircraft(axes[3], F["B"], scale=0.6)
+    fig.suptitle(f"Euler angles {angles}: yaw about $z_I$, then pitch about the new y, then roll about the "
+                 f"newest x;  $C_{{bn}} = R_z(ψ)\\,R_y(θ)\\,R_x(φ)$", fontsize=12)
+    fig.legend(handles=[Line2D([], [], color=GREY, lw=1.5, label="previous frame"),
+                        Line2D([], [], color=RED, lw=2.5, label="new frame"),
+                        Line2D([], [], color="k", lw=1.2, label="path of the turning axis")],
+               loc="lower center", ncol=3, frameon=False)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.08, top=0.85, wspace=0.02)
+    return fig
+
+
+def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
+    """Two (roll, yaw) pairs that give the same body triad at θ = ±90° (seed 001 Euler note §6, fig 5).
+
+    At θ = +90° only ``φ - ψ`` is observable, at θ = -90° only ``φ + ψ`` (digest §4). The second pair keeps that
+    combination and sets yaw to 0 -- exactly what :func:`rotations.dcm_to_euler` reports at lock (if ``yaw`` is
+    already 0 the second pair shifts roll and yaw by 60° instead). Away from ±90° the two pairs differ, and the
+    figure says so.
+
+    Parameters
+    ----------
+    roll, yaw : float, rad -- the first pair
+    pitch : float, rad -- the pitch shared by both pairs
+    Returns
+    -------
+    matplotlib.figure.Figure -- three panels: pair A, pair B, both triads overlaid
+    """
+    roll, yaw, pitch = _angle(roll, "roll"), _angle(yaw, "yaw"), _angle(pitch, "pitch")
+    s = 1.0 if pitch >= 0 else -1.0                          # +90°: φ - ψ kept; -90°: φ + ψ kept
+    delta = -s * yaw if abs(yaw) > 1e-9 else np.pi / 3
+    pairs = {"A": (roll, yaw), "B": (roll + delta, yaw + s * delta)}
+    C = {k: rotations.euler_to_dcm([r, pitch, y]) for k, (r, y) in pairs.items()}
+    diff = float(np.max(np.abs(C["A"] - C["B"])))
+    combo, sign = ("φ − ψ", -1.0) if s > 0 else ("φ + ψ", 1.0)
+
+    fig, axes = _new_axes(3, None, (14, 5.2))
+    for a, k, color in zip(axes, "AB", (RED, "tab:blue")):
+        setup_ned_axes(a)
+        draw_triad(a, np.eye(3), colors=GREY, label="I", lw=1.0, alpha=0.6)
+        draw_triad(a, C[k], colors=color, label=k)
+        draw_aircraft(a, C[k], scale=0.6)
+        r, y = pairs[k]
+        a.set_title(f"pair {k}: φ = {_deg(r)}, ψ = {_deg(y)}, θ = {_deg(pitch)}\n"
+                    f"{combo} = {_deg(r + sign * y)}", fontsize=10)
+    setup_ned_axes(axes[2])
+    draw_triad(axes[2], C["A"], colors=RED, label="A", lw=4, alpha=0.5, label_at=1.4)
+    draw_triad(axes[2], C["B"], colors="tab:blue", label="B", lw=1.5)
+    axes[2].set_title(f"A and B overlaid: max |C_A − C_B| = {diff:.1e}", fontsize=10)
+
+    if diff < 1e-9:
+        finding = (f"At θ = {_deg(pitch)} roll and yaw turn about the same line: only {combo} is observable, "
+                   f"so pairs A and B give the same attitude")
+    else:
+        finding = (f"At θ = {_deg(pitch)} roll and yaw are distinct: keeping {combo} is not enough, "
+                   f"A and B are different attitudes")
+    fig.suptitle(finding, fontsize=12)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.82, wspace=0.02)
+    return fig

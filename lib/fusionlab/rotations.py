@@ -1,0 +1,704 @@
+"""The one rotation convention of the suite, and a Rosetta stone to every seed's own.
+
+The library convention (stated here once; every other module imports it)
+-------------------------------------------------------------------------
+* **Quaternions** are Hamilton, scalar first, ``q = [w, x, y, z]``. A unit ``q`` rotates *body to navigation
+  frame*: ``v_n = q ⊗ (0, v_b) ⊗ q*``, and ``C_bn = quat_to_dcm(q)`` is the matching direction cosine matrix
+  (``v_n = C_bn @ v_b``; its columns are the body axes written in navigation coordinates).
+* **Euler angles** are ``euler = [roll φ, pitch θ, yaw ψ]`` in radians, aerospace Z-Y-X (yaw, then pitch about the
+  new y, then roll about the newest x): ``C_bn = Rz(ψ) @ Ry(θ) @ Rx(φ)`` with the *active* elementary matrices
+  :func:`rot_x`, :func:`rot_y`, :func:`rot_z`.
+* **Navigation frame** NED by default (x North, y East, z Down; positive yaw turns the nose from North to East,
+  positive pitch is nose up, positive roll is right wing down). ENU is supported by :func:`dcm_nav_swap` /
+  :func:`quat_nav_swap`, which re-express the same attitude in the other navigation frame (the body frame is
+  untouched: it is whatever the sensor's axes are).
+* Angles are radians everywhere in the library; degrees appear only at the display edge.
+
+Every function accepts a leading batch axis: ``euler`` of shape ``(N, 3)`` gives ``(N, 3, 3)`` matrices, and so on.
+
+Each seed writes rotations its own way. The converters at the bottom of this module are the only place where a
+seed's convention meets ours:
+
+========  ==========================================================  ==========================================
+seed      what it writes                                              converter
+========  ==========================================================  ==========================================
+000       (3.36)-(3.38) passive elementary matrices; (3.39) printed   :func:`frame_rot_x` ..., :func:`seed000_eq339`
+          product (wrong order); (3.40) = our ``C_bn``; lab code      :func:`seed000_labcode_dcm`,
+          with pitch about x, roll about y and its own Ω sign         :func:`seed000_labcode_rates`,
+                                                                      :func:`seed000_labcode_angles`
+001       passive ``R_I^B`` (nav→body) = ``C_bn.T``; quaternion       :func:`seed001_R_IB`, :func:`dcm_from_seed001`,
+          formulas that hold only for body→inertial ``q`` (ours)      :func:`seed001_quat_to_euler`
+002       frame-rotation quaternion global→sensor, ``v_S = q* v_G q``: :func:`quat_from_seed002`,
+          the same numbers as ours; NED, Android or Win8 (ENU) frames :func:`quat_to_seed002`
+004       ``C_b^n`` in NED: the same as ours                          :func:`dcm_from_seed004`
+BROAD     body→ENU quaternion ``[w, x, y, z]``                         :func:`quat_nav_swap` (to NED)
+========  ==========================================================  ==========================================
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import validate
+
+__all__ = [
+    "skew", "rot_x", "rot_y", "rot_z", "frame_rot_x", "frame_rot_y", "frame_rot_z",
+    "euler_to_dcm", "dcm_to_euler", "sequence_to_dcm", "dcm_to_sequence", "dcm_to_quat", "quat_to_dcm", "euler_to_quat", "quat_to_euler",
+    "quat_multiply", "quat_conjugate", "quat_normalize", "quat_rotate", "quat_angle_between",
+    "rotvec_to_quat", "quat_to_rotvec", "rodrigues_dcm", "dcm_renormalize", "is_rotation",
+    "euler_rates_matrix", "body_rates_matrix", "integrate_gyro_dcm", "integrate_gyro_quat",
+    "NED_ENU", "dcm_nav_swap", "quat_nav_swap",
+    "seed000_eq339", "seed000_labcode_dcm", "seed000_labcode_omega", "seed000_labcode_rates",
+    "seed000_labcode_angles", "seed000_eq379_381_printed",
+    "seed001_R_IB", "dcm_from_seed001", "dcm_to_seed001", "seed001_quat_to_euler",
+    "quat_from_seed002", "quat_to_seed002", "dcm_from_seed004",
+]
+
+# ----------------------------------------------------------------------------------------------------------------
+# Building blocks
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def skew(v):
+    """Cross-product matrix: ``skew(v) @ u == np.cross(v, u)``.
+
+    Parameters
+    ----------
+    v : (..., 3) array
+    Returns
+    -------
+    (..., 3, 3) array -- seed 000 eq 3.50 (Ω) and 3.47 (δΨ) are this matrix of ω and of the small angles
+    """
+    v = validate.vectors(v, "v")
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    o = np.zeros_like(x)
+    return np.stack([np.stack([o, -z, y], -1),
+                     np.stack([z, o, -x], -1),
+                     np.stack([-y, x, o], -1)], -2)
+
+
+def _elementary(angle, name, axis):
+    a = validate.array(angle, name)
+    c, s = np.cos(a), np.sin(a)
+    o, i = np.zeros_like(a), np.ones_like(a)
+    rows = {0: [[i, o, o], [o, c, -s], [o, s, c]],
+            1: [[c, o, s], [o, i, o], [-s, o, c]],
+            2: [[c, -s, o], [s, c, o], [o, o, i]]}[axis]
+    return np.stack([np.stack(r, -1) for r in rows], -2)
+
+
+def rot_x(angle):
+    """Active rotation by ``angle`` (rad) about x: turns a vector counter-clockwise seen from +x. Shape (..., 3, 3)."""
+    return _elementary(angle, "angle", 0)
+
+
+def rot_y(angle):
+    """Active rotation by ``angle`` (rad) about y. Shape (..., 3, 3)."""
+    return _elementary(angle, "angle", 1)
+
+
+def rot_z(angle):
+    """Active rotation by ``angle`` (rad) about z. Shape (..., 3, 3)."""
+    return _elementary(angle, "angle", 2)
+
+
+def frame_rot_x(angle):
+    """Passive (frame) rotation about x, as seed 000 eq 3.38 and seed 001 §5 print it: ``rot_x(angle).T``."""
+    return np.swapaxes(rot_x(angle), -1, -2)
+
+
+def frame_rot_y(angle):
+    """Passive (frame) rotation about y, seed 000 eq 3.37 / seed 001 §4: ``rot_y(angle).T``."""
+    return np.swapaxes(rot_y(angle), -1, -2)
+
+
+def frame_rot_z(angle):
+    """Passive (frame) rotation about z, seed 000 eq 3.36 / seed 001 §3: ``rot_z(angle).T``."""
+    return np.swapaxes(rot_z(angle), -1, -2)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Euler angles, DCM, quaternion
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def euler_to_dcm(euler):
+    """Body→navigation DCM from aerospace Z-Y-X Euler angles (seed 000 eq 3.40; seed 004 eq for C_b^n).
+
+    Parameters
+    ----------
+    euler : (..., 3) array, rad -- ``[roll, pitch, yaw]``
+    Returns
+    -------
+    C_bn : (..., 3, 3) array -- ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``
+    """
+    e = validate.vectors(euler, "euler")
+    return rot_z(e[..., 2]) @ rot_y(e[..., 1]) @ rot_x(e[..., 0])        # (000 eq 3.40)
+
+
+def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
+    """Euler angles ``[roll, pitch, yaw]`` (rad) of a body→navigation DCM, correct at gimbal lock.
+
+    Away from lock (seed 000 eqs 3.69, 3.72, 3.75): ``θ = -asin(r31)``, ``φ = atan2(r32, r33)``,
+    ``ψ = atan2(r21, r11)``. At ``cos θ = 0`` only one combination of roll and yaw is observable; the yaw is then
+    set to ``yaw_at_lock`` and the roll follows from the *corrected* seed 000 eqs 3.79/3.81 (the thesis prints the
+    two cases swapped):
+
+    * θ = +90°: ``φ = ψ + atan2(r12, r13)``   (only φ - ψ is observable)
+    * θ = -90°: ``φ = -ψ + atan2(-r12, -r13)`` (only φ + ψ is observable)
+
+    Parameters
+    ----------
+    C_bn : (..., 3, 3) array -- a rotation matrix
+    yaw_at_lock : float, rad -- the yaw to report when the pitch is at ±90°
+    lock_tol : float -- ``cos θ`` below this is treated as gimbal lock
+    """
+    C = validate.matrices(C_bn, "C_bn")
+    r11, r21, r31 = C[..., 0, 0], C[..., 1, 0], C[..., 2, 0]
+    cos_pitch = np.hypot(r11, r21)
+    pitch = np.arctan2(-r31, cos_pitch)                                   # (000 eq 3.69), robust near ±1
+    lock = cos_pitch < lock_tol
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])                         # (000 eq 3.72)
+    yaw = np.arctan2(r21, r11)                                            # (000 eq 3.75)
+    if np.any(lock):
+        r12, r13 = C[..., 0, 1], C[..., 0, 2]
+        up = r31 < 0                                                      # θ = +90° has r31 = -1
+        roll_up = yaw_at_lock + np.arctan2(r12, r13)                      # (000 eq 3.81, corrected)
+        roll_down = -yaw_at_lock + np.arctan2(-r12, -r13)                 # (000 eq 3.79, corrected)
+        roll = np.where(lock, _wrap(np.where(up, roll_up, roll_down)), roll)
+        yaw = np.where(lock, yaw_at_lock, yaw)
+    return np.stack([roll, pitch, yaw], -1)
+
+
+def sequence_to_dcm(angles, seq):
+    """DCM of an intrinsic rotation sequence: ``seq='ZYX'`` with angles ``(a1, a2, a3)`` is
+    ``R_Z(a1) @ R_Y(a2) @ R_X(a3)`` -- rotate about Z, then about the *new* Y, then the newest X.
+
+    ``sequence_to_dcm([yaw, pitch, roll], 'ZYX') == euler_to_dcm([roll, pitch, yaw])``.
+
+    Parameters
+    ----------
+    angles : (..., 3) array, rad -- in the order the rotations are applied
+    seq : str -- three letters from 'XYZ', e.g. 'XYZ', 'ZXY', 'YXZ' (consecutive letters must differ)
+    """
+    a = validate.vectors(angles, "angles")
+    _check_seq(seq)
+    elem = {"X": rot_x, "Y": rot_y, "Z": rot_z}
+    return elem[seq[0]](a[..., 0]) @ elem[seq[1]](a[..., 1]) @ elem[seq[2]](a[..., 2])
+
+
+def dcm_to_sequence(C, seq):
+    """Angles (rad) of the intrinsic sequence ``seq`` that gives rotation ``C`` (inverse of :func:`sequence_to_dcm`).
+
+    Uses ``scipy.spatial.transform.Rotation`` (upper-case sequences are intrinsic there too); the middle angle is
+    in [-90°, 90°] for Tait-Bryan sequences.
+    """
+    from scipy.spatial.transform import Rotation
+    C = validate.matrices(C, "C")
+    _require_rotation(C, "C")
+    _check_seq(seq)
+    return Rotation.from_matrix(C).as_euler(seq)
+
+
+def _check_seq(seq):
+    if not (isinstance(seq, str) and len(seq) == 3 and set(seq) <= set("XYZ") and seq[0] != seq[1] != seq[2]):
+        raise ValueError(f"seq must be three axis letters from 'XYZ' with no letter twice in a row, e.g. 'ZYX'; "
+                         f"got {seq!r}")
+
+
+def _wrap(a):
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def quat_to_dcm(q):
+    """Body→navigation DCM ``C_bn`` of a unit quaternion ``[w, x, y, z]`` (seed 001 quaternion note §3 matrix).
+
+    Parameters
+    ----------
+    q : (..., 4) array -- unit quaternions
+    Returns
+    -------
+    (..., 3, 3) array
+    """
+    q = validate.quaternions(q, "q")
+    w, x, y, z = (q[..., i] for i in range(4))
+    return np.stack([
+        np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1)], -2)
+
+
+def dcm_to_quat(C_bn):
+    """Unit quaternion ``[w, x, y, z]`` with ``w >= 0`` of a rotation matrix (Shepperd's method: the largest of
+    ``w, x, y, z`` is found from the trace/diagonal first, so there is no division by a small number).
+
+    Parameters
+    ----------
+    C_bn : (..., 3, 3) array -- a rotation matrix (checked: orthonormal with det +1 within 1e-6)
+    Returns
+    -------
+    (..., 4) array
+    """
+    C = validate.matrices(C_bn, "C_bn")
+    _require_rotation(C, "C_bn")
+    tr = np.trace(C, axis1=-2, axis2=-1)
+    d = np.stack([tr, C[..., 0, 0], C[..., 1, 1], C[..., 2, 2]], -1)
+    k = np.argmax(d, axis=-1)
+    # four candidate quaternions, each computed from the largest component in its own row
+    cand = np.stack([
+        np.stack([1 + tr, C[..., 2, 1] - C[..., 1, 2], C[..., 0, 2] - C[..., 2, 0], C[..., 1, 0] - C[..., 0, 1]], -1),
+        np.stack([C[..., 2, 1] - C[..., 1, 2], 1 + 2 * C[..., 0, 0] - tr, C[..., 0, 1] + C[..., 1, 0],
+                  C[..., 0, 2] + C[..., 2, 0]], -1),
+        np.stack([C[..., 0, 2] - C[..., 2, 0], C[..., 0, 1] + C[..., 1, 0], 1 + 2 * C[..., 1, 1] - tr,
+                  C[..., 1, 2] + C[..., 2, 1]], -1),
+        np.stack([C[..., 1, 0] - C[..., 0, 1], C[..., 0, 2] + C[..., 2, 0], C[..., 1, 2] + C[..., 2, 1],
+                  1 + 2 * C[..., 2, 2] - tr], -1)], -2)
+    q = np.take_along_axis(cand, k[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def euler_to_quat(euler):
+    """Quaternion of Z-Y-X Euler angles: ``q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`` (same rotation as :func:`euler_to_dcm`)."""
+    e = validate.vectors(euler, "euler")
+    h = e / 2
+    o = np.zeros_like(h[..., 0])
+    qx = np.stack([np.cos(h[..., 0]), np.sin(h[..., 0]), o, o], -1)
+    qy = np.stack([np.cos(h[..., 1]), o, np.sin(h[..., 1]), o], -1)
+    qz = np.stack([np.cos(h[..., 2]), o, o, np.sin(h[..., 2])], -1)
+    return quat_multiply(quat_multiply(qz, qy), qx)
+
+
+def quat_to_euler(q, yaw_at_lock=0.0):
+    """Euler angles ``[roll, pitch, yaw]`` (rad) of a unit quaternion; gimbal-lock aware (see :func:`dcm_to_euler`)."""
+    return dcm_to_euler(quat_to_dcm(q), yaw_at_lock=yaw_at_lock)
+
+
+def quat_multiply(p, q):
+    """Hamilton product ``p ⊗ q`` of scalar-first quaternions (seed 001 quaternion note §2). Shapes broadcast."""
+    p = validate.array(p, "p", shape=(4,))
+    q = validate.array(q, "q", shape=(4,))
+    pw, px, py, pz = (p[..., i] for i in range(4))
+    qw, qx, qy, qz = (q[..., i] for i in range(4))
+    return np.stack([pw * qw - px * qx - py * qy - pz * qz,
+                     pw * qx + px * qw + py * qz - pz * qy,
+                     pw * qy - px * qz + py * qw + pz * qx,
+                     pw * qz + px * qy - py * qx + pz * qw], -1)
+
+
+def quat_conjugate(q):
+    """``q* = [w, -x, -y, -z]``: the inverse rotation of a unit quaternion."""
+    q = validate.array(q, "q", shape=(4,))
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_normalize(q):
+    """``q / |q|``; raises for a zero quaternion (it encodes no rotation)."""
+    q = validate.array(q, "q", shape=(4,))
+    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    if np.any(n < 1e-12):
+        raise ValueError("q must be non-zero to be normalised; got a quaternion of norm 0")
+    return q / n
+
+
+def quat_rotate(q, v):
+    """Rotate body vectors into the navigation frame: ``v_n = q ⊗ (0, v_b) ⊗ q*``.
+
+    Parameters
+    ----------
+    q : (..., 4) unit quaternions; v : (..., 3) vectors (shapes broadcast)
+    Returns
+    -------
+    (..., 3) array
+    """
+    q = validate.quaternions(q, "q")
+    v = validate.vectors(v, "v")
+    v4 = np.concatenate([np.zeros(v.shape[:-1] + (1,)), v], -1)
+    return quat_multiply(quat_multiply(q, v4), quat_conjugate(q))[..., 1:]
+
+
+def quat_angle_between(q1, q2):
+    """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter."""
+    q1 = validate.quaternions(q1, "q1")
+    q2 = validate.quaternions(q2, "q2")
+    dot = np.abs(np.sum(q1 * q2, axis=-1))
+    return 2 * np.arccos(np.clip(dot, 0.0, 1.0))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Rotation vectors and attitude propagation
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def rotvec_to_quat(sigma, order="exact"):
+    """Quaternion of a rotation vector ``σ`` (axis × angle, rad).
+
+    ``order='exact'``: ``[cos(s/2), sin(s/2) σ/s]`` with ``s = |σ|`` (series near 0).
+    ``order='first'``: the small-angle form ``[1, σ/2]`` -- *not* unit length; its norm error is ``s²/8``.
+    """
+    sigma = validate.vectors(sigma, "sigma")
+    if order == "first":
+        return np.concatenate([np.ones(sigma.shape[:-1] + (1,)), sigma / 2], -1)
+    if order != "exact":
+        raise ValueError(f"order must be 'exact' or 'first'; got {order!r}")
+    s = np.linalg.norm(sigma, axis=-1, keepdims=True)
+    small = s < 1e-6
+    s_ = np.where(small, 1.0, s)
+    k = np.where(small, 0.5 - s ** 2 / 48, np.sin(s_ / 2) / s_)          # sin(s/2)/s
+    return np.concatenate([np.cos(s / 2), k * sigma], -1)
+
+
+def quat_to_rotvec(q):
+    """Rotation vector (rad) of a unit quaternion, angle in [0, π] (``q`` and ``-q`` give the same answer)."""
+    q = validate.quaternions(q, "q")
+    q = np.where(q[..., :1] < 0, -q, q)
+    v = q[..., 1:]
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2 * np.arctan2(n, q[..., :1])
+    small = n < 1e-12
+    scale = np.where(small, 2.0 / np.where(q[..., :1] == 0, 1, q[..., :1]), angle / np.where(small, 1.0, n))
+    return scale * v
+
+
+def rodrigues_dcm(sigma, order="exact"):
+    """DCM increment ``A`` for a body rotation vector over one step: ``C_bn(t+dt) = C_bn(t) @ A``.
+
+    ``order='exact'`` is Rodrigues' formula, seed 000 eq 3.54 **corrected**:
+    ``A = I + (sin s / s) B + ((1 - cos s) / s²) B²`` with ``B = skew(σ)``, ``s = |σ|`` -- the thesis prints
+    ``(1 - cos s)/s``. ``order='first'`` is eq 3.55, ``A = I + B``; ``order='second'`` adds ``B²/2``.
+
+    Parameters
+    ----------
+    sigma : (..., 3) array, rad -- body rate × dt
+    Returns
+    -------
+    (..., 3, 3) array
+    """
+    sigma = validate.vectors(sigma, "sigma")
+    B = skew(sigma)                                                       # (000 eq 3.53)
+    eye = np.broadcast_to(np.eye(3), B.shape)
+    if order == "first":
+        return eye + B                                                    # (000 eq 3.55)
+    if order == "second":
+        return eye + B + B @ B / 2
+    if order != "exact":
+        raise ValueError(f"order must be 'exact', 'second' or 'first'; got {order!r}")
+    s = np.linalg.norm(sigma, axis=-1)[..., None, None]
+    small = s < 1e-6
+    s_ = np.where(small, 1.0, s)
+    a = np.where(small, 1 - s ** 2 / 6, np.sin(s_) / s_)
+    b = np.where(small, 0.5 - s ** 2 / 24, (1 - np.cos(s_)) / s_ ** 2)   # printed: (1 - cos s)/s
+    return eye + a * B + b * (B @ B)                                      # (000 eq 3.54, corrected)
+
+
+def dcm_renormalize(C, axis="columns"):
+    """Re-orthonormalise a drifting DCM (seed 000 eqs 3.59-3.65; Premerlani & Bizard).
+
+    Take the first two rows (``axis='rows'``, as the thesis text does) or columns (as its lab code does),
+    share their dot-product error half each (3.59-3.61), rebuild the third as their cross product (3.62) and scale
+    each by the first-order factor ``(3 - r·r)/2`` (3.63-3.65). Either choice is valid for a rotation matrix.
+
+    Parameters
+    ----------
+    C : (..., 3, 3) array -- nearly orthonormal
+    axis : 'columns' or 'rows'
+    """
+    C = validate.matrices(C, "C")
+    if axis not in ("columns", "rows"):
+        raise ValueError(f"axis must be 'columns' or 'rows'; got {axis!r}")
+    M = np.swapaxes(C, -1, -2) if axis == "columns" else C
+    r1, r2 = M[..., 0, :], M[..., 1, :]
+    err = np.sum(r1 * r2, axis=-1, keepdims=True)                         # (000 eq 3.59)
+    r1n = r1 - err / 2 * r2                                               # (000 eq 3.60)
+    r2n = r2 - err / 2 * r1                                               # (000 eq 3.61)
+    r3n = np.cross(r1n, r2n)                                              # (000 eq 3.62)
+    out = np.stack([(3 - np.sum(r * r, axis=-1, keepdims=True)) / 2 * r for r in (r1n, r2n, r3n)], -2)  # (3.63-65)
+    return np.swapaxes(out, -1, -2) if axis == "columns" else out
+
+
+def is_rotation(C, tol=1e-6):
+    """True where ``C`` is orthonormal with determinant +1 within ``tol``."""
+    C = validate.matrices(C, "C")
+    ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)), axis=(-2, -1))
+    return (ortho < tol) & (np.abs(np.linalg.det(C) - 1) < tol)
+
+
+def _require_rotation(C, name, tol=1e-6):
+    ok = is_rotation(C, tol)
+    if not np.all(ok):
+        ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)))
+        det = np.linalg.det(C)
+        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1); got max|C Cᵀ - I| = {ortho:.3g},"
+                         f" det = {np.min(det):.6g} -- a transposed or reflected matrix, or one that needs "
+                         f"dcm_renormalize?")
+
+
+def euler_rates_matrix(roll, pitch):
+    """Matrix ``D(φ, θ)`` mapping body rates ``(p, q, r)`` to Euler-angle rates (seed 001 Euler note §7).
+
+    ``[φ̇, θ̇, ψ̇] = D @ [p, q, r]``. It does not depend on yaw (the note's ``D(φ, θ, ψ)`` is a misnomer) and both
+    its first row (tan θ) and last row (1/cos θ) diverge at θ = ±90°.
+    """
+    r = validate.array(roll, "roll")
+    p = validate.array(pitch, "pitch")
+    sr, cr, tp, cp = np.sin(r), np.cos(r), np.tan(p), np.cos(p)
+    o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
+    return np.stack([np.stack([i, sr * tp, cr * tp], -1),
+                     np.stack([o, cr + o, -sr + o], -1),
+                     np.stack([o, sr / cp, cr / cp], -1)], -2)          # (001 Euler §7, D)
+
+
+def body_rates_matrix(roll, pitch):
+    """Matrix ``W(φ, θ)`` mapping Euler-angle rates to body rates, the inverse of :func:`euler_rates_matrix`.
+
+    ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (derived in the seed 001 digest §5.3; not printed in the note).
+    """
+    r = validate.array(roll, "roll")
+    p = validate.array(pitch, "pitch")
+    sr, cr, sp, cp = np.sin(r), np.cos(r), np.sin(p), np.cos(p)
+    o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
+    return np.stack([np.stack([i, o, -sp + o], -1),
+                     np.stack([o, cr + o, sr * cp], -1),
+                     np.stack([o, -sr + o, cr * cp], -1)], -2)
+
+
+def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
+    """Propagate a body→nav DCM with body rates: ``C_{k+1} = C_k @ A(ω_k dt)`` (seed 000 eqs 3.44, 3.54-3.55).
+
+    Parameters
+    ----------
+    C0 : (3, 3) array -- initial ``C_bn``
+    gyr : (N, 3) array, rad/s -- body rates, one row per step
+    dt : float, s
+    order : 'first' (I + B, the thesis lab), 'second' or 'exact' (Rodrigues), see :func:`rodrigues_dcm`
+    renormalize : 'columns', 'rows' or None -- apply :func:`dcm_renormalize` after every step
+    Returns
+    -------
+    (N + 1, 3, 3) array -- ``C0`` and the attitude after every step
+    """
+    C = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
+    gyr = validate.array(gyr, "gyr", shape=(None, 3))
+    if gyr.ndim != 2:
+        raise ValueError(f"gyr must have shape (N, 3); got {gyr.shape}")
+    dt = validate.positive(dt, "dt")
+    if renormalize not in (None, "columns", "rows"):
+        raise ValueError(f"renormalize must be 'columns', 'rows' or None; got {renormalize!r}")
+    A = rodrigues_dcm(gyr * dt, order=order)
+    out = np.empty((len(gyr) + 1, 3, 3))
+    out[0] = C
+    for k in range(len(gyr)):
+        C = C @ A[k]                                                      # (000 eq 3.44)
+        if renormalize:
+            C = dcm_renormalize(C, axis=renormalize)
+        out[k + 1] = C
+    return out
+
+
+def integrate_gyro_quat(q0, gyr, dt):
+    """Propagate a body→nav quaternion exactly for piecewise-constant rates: ``q_{k+1} = q_k ⊗ q(ω_k dt)``.
+
+    Parameters
+    ----------
+    q0 : (4,) unit quaternion; gyr : (N, 3) rad/s; dt : float, s
+    Returns
+    -------
+    (N + 1, 4) array
+    """
+    q = validate.quaternions(q0, "q0").reshape(4)
+    gyr = validate.array(gyr, "gyr", shape=(None, 3))
+    if gyr.ndim != 2:
+        raise ValueError(f"gyr must have shape (N, 3); got {gyr.shape}")
+    dt = validate.positive(dt, "dt")
+    dq = rotvec_to_quat(gyr * dt)
+    out = np.empty((len(gyr) + 1, 4))
+    out[0] = q
+    w, x, y, z = q
+    for k, (a, b, c, d) in enumerate(dq):                                 # Hamilton product, unrolled for speed
+        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
+                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
+        n = (w * w + x * x + y * y + z * z) ** 0.5
+        w, x, y, z = w / n, x / n, y / n, z / n
+        out[k + 1] = (w, x, y, z)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Navigation frames
+# ----------------------------------------------------------------------------------------------------------------
+
+#: Re-expresses navigation coordinates NED ↔ ENU (its own inverse): ``v_enu = NED_ENU @ v_ned``.
+NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+_Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])            # the quaternion of NED_ENU
+
+
+def dcm_nav_swap(C_bn):
+    """The same attitude with the navigation frame changed NED ↔ ENU: ``NED_ENU @ C_bn`` (body axes unchanged)."""
+    C = validate.matrices(C_bn, "C_bn")
+    return NED_ENU @ C
+
+
+def quat_nav_swap(q):
+    """Quaternion form of :func:`dcm_nav_swap` (NED ↔ ENU navigation frame), ``w >= 0``."""
+    q = validate.quaternions(q, "q")
+    out = quat_multiply(_Q_NED_ENU, q)
+    return np.where(out[..., :1] < 0, -out, out)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Rosetta stone: each seed's convention, converted at its edge
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def _angles(scalar=False, **named):
+    """Validate named angle (or rate) arguments; with ``scalar`` each must be a single number."""
+    out = []
+    for name, v in named.items():
+        a = validate.array(v, name)
+        if scalar and a.ndim != 0:
+            raise ValueError(f"{name} must be a single number; got shape {a.shape}")
+        out.append(float(a) if scalar else a)
+    return out
+
+
+def seed000_eq339(roll, pitch, yaw):
+    """Seed 000 eq 3.39 *as printed*: ``R_z(ψ) R_y(θ) R_x(φ)`` of the printed passive matrices (3.36)-(3.38).
+
+    Erratum: this is not the thesis' own (3.40), which is our ``C_bn`` and equals ``(R_x R_y R_z)ᵀ`` of the
+    passive matrices. Kept so the lab can show the difference numerically.
+    """
+    roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
+    return frame_rot_z(yaw) @ frame_rot_y(pitch) @ frame_rot_x(roll)     # (000 eq 3.39, as printed)
+
+
+def seed000_labcode_dcm(yaw, pitch, roll):
+    """Seed 000 lab 1 Part A code, verbatim: ``Rz*Rx*Ry`` with "pitch" in the passive ``Rx`` and "roll" in ``Ry``.
+
+    The argument order (yaw, pitch, roll) follows the printed call. The matrix is *not* (3.40) at the same angles:
+    the code mislabels the axes and multiplies in another order.
+    """
+    yaw, pitch, roll = _angles(yaw=yaw, pitch=pitch, roll=roll)
+    return frame_rot_z(yaw) @ frame_rot_x(pitch) @ frame_rot_y(roll)
+
+
+def seed000_labcode_omega(wx, wy, wz):
+    """Seed 000 lab 1 Part B ``Omega = [0 Wz -Wy; -Wz 0 -Wx; Wy Wx 0]``, verbatim.
+
+    It is skew-symmetric but equals ``skew([Wx, -Wy, -Wz])``: the opposite sign to eq 3.50 on y and z.
+    """
+    wx, wy, wz = _angles(wx=wx, wy=wy, wz=wz, scalar=True)
+    return np.array([[0.0, wz, -wy], [-wz, 0.0, -wx], [wy, wx, 0.0]])
+
+
+def seed000_labcode_rates(wx, wy, wz):
+    """Convert the lab code's gyro inputs to our body rates: its ``R*(I + Omega dt)`` is our
+    ``C_bn @ (I + skew(ω) dt)`` with ``ω = (Wx, -Wy, -Wz)``. Shapes broadcast; returns ``(..., 3)``."""
+    wx, wy, wz = np.broadcast_arrays(*_angles(wx=wx, wy=wy, wz=wz))
+    return np.stack([wx, -wy, -wz], -1)
+
+
+def seed000_labcode_angles(R):
+    """Seed 000 lab 1 Part B extraction, verbatim: ``Pitch = asin(R(3,2))``, ``Roll = atan2(R(3,1), R(3,3))``,
+    ``Yaw = atan2(R(1,2), R(2,2))``. Returns ``(..., 3)`` = ``[pitch, roll, yaw]`` in radians, in the lab's names.
+
+    These are not (3.69)/(3.72)/(3.75): on the same matrix those give other numbers (CORRECTIONS: 41.630 /
+    -18.374 / -7.037 deg for the Part B result). A non-zero initial pitch reads back with the wrong sign.
+    """
+    R = validate.matrices(R, "R")
+    pitch = np.arcsin(np.clip(R[..., 2, 1], -1, 1))
+    roll = np.arctan2(R[..., 2, 0], R[..., 2, 2])
+    yaw = np.arctan2(R[..., 0, 1], R[..., 1, 1])
+    return np.stack([pitch, roll, yaw], -1)
+
+
+def seed000_eq379_381_printed(C_bn, yaw=0.0):
+    """Seed 000 eqs 3.79 and 3.81 *as printed* (swapped): θ=-90° → ``φ = ψ + atan2(r12, r13)``,
+    θ=+90° → ``φ = -ψ + atan2(-r12, -r13)``. Returns the roll (rad) the printed rule gives at gimbal lock."""
+    C = validate.matrices(C_bn, "C_bn")
+    r12, r13, r31 = C[..., 0, 1], C[..., 0, 2], C[..., 2, 0]
+    return np.where(r31 > 0, yaw + np.arctan2(r12, r13), -yaw + np.arctan2(-r12, -r13))
+
+
+def seed001_R_IB(roll, pitch, yaw):
+    """Seed 001 (Euler note §5) inertial→body matrix ``R_I^B = R_{v2}^B(φ) R_{v1}^{v2}(θ) R_I^{v1}(ψ)``, passive.
+
+    Equals ``euler_to_dcm([roll, pitch, yaw]).T``; see :func:`dcm_from_seed001`.
+    """
+    roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
+    return frame_rot_x(roll) @ frame_rot_y(pitch) @ frame_rot_z(yaw)     # (001 Euler §5)
+
+
+def dcm_from_seed001(R_IB):
+    """Our body→nav ``C_bn`` from seed 001's inertial→body ``R_I^B`` (NED): the transpose."""
+    R = validate.matrices(R_IB, "R_IB")
+    return np.swapaxes(R, -1, -2)
+
+
+def dcm_to_seed001(C_bn):
+    """Seed 001's ``R_I^B`` from our ``C_bn``: the transpose."""
+    C = validate.matrices(C_bn, "C_bn")
+    return np.swapaxes(C, -1, -2)
+
+
+def seed001_quat_to_euler(q):
+    """Seed 001 quaternion note §4 formulas, with atan2 as the note advises; returns ``[roll, pitch, yaw]``.
+
+    ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``, ``ψ = atan2(2(ad + bc), a² + b² - c² - d²)``.
+    They are right only for a **body→inertial** quaternion (our ``q``); the note's text calls its quaternion
+    inertial→body, for which they return nonsense (erratum, digest §6.5).
+    """
+    q = validate.quaternions(q, "q")
+    a, b, c, d = (q[..., i] for i in range(4))
+    roll = np.arctan2(2 * (a * b + c * d), a * a - b * b - c * c + d * d)
+    pitch = -np.arcsin(np.clip(2 * (b * d - a * c), -1, 1))
+    yaw = np.arctan2(2 * (a * d + b * c), a * a + b * b - c * c - d * d)
+    return np.stack([roll, pitch, yaw], -1)
+
+
+_SEED002_FRAMES = {"NED": "NED", "Android": "ENU", "Win8": "ENU"}
+
+
+def quat_from_seed002(q, frame="NED", nav=None):
+    """Our body→nav quaternion from seed 002's (Freescale) orientation quaternion.
+
+    The note describes its ``q`` as a rotation of the *coordinate frame* from global to sensor, ``v_S = q* v_G q``
+    with ``R(q)`` of its eq 34 mapping global→sensor. That matrix is ``quat_to_dcm(q).T``, so the note's ``q`` is
+    the same four numbers as ours: "rotate the frame global→sensor" and "rotate vectors body→nav" are one
+    quaternion. What changes with ``frame`` is the global frame: NED for ``'NED'``, ENU for ``'Android'`` and
+    ``'Win8'``.
+
+    Parameters
+    ----------
+    q : (..., 4) unit quaternion in the note's convention
+    frame : 'NED', 'Android' or 'Win8' -- the note's coordinate system
+    nav : None, 'NED' or 'ENU' -- navigation frame of the result (default: the note's own global frame)
+    """
+    q = validate.quaternions(q, "q")
+    return _seed002_nav(q, frame, nav)
+
+
+def quat_to_seed002(q, frame="NED", nav=None):
+    """Inverse of :func:`quat_from_seed002`: seed 002's quaternion from ours.
+
+    ``nav`` is the navigation frame ``q`` is written in (default: the note's global frame for ``frame``).
+    """
+    q = validate.quaternions(q, "q")
+    return _seed002_nav(q, frame, nav)
+
+
+def _seed002_nav(q, frame, nav):
+    """Swap NED/ENU when ``nav`` differs from the global frame of seed 002's ``frame`` (the swap is an involution)."""
+    if frame not in _SEED002_FRAMES:
+        raise ValueError(f"frame must be one of {sorted(_SEED002_FRAMES)}; got {frame!r}")
+    if nav not in (None, "NED", "ENU"):
+        raise ValueError(f"nav must be None, 'NED' or 'ENU'; got {nav!r}")
+    return quat_nav_swap(q) if nav is not None and nav != _SEED002_FRAMES[frame] else q
+
+
+def dcm_from_seed004(C_bn):
+    """Seed 004's ``C_b^n`` (NED, Z-Y-X, eq 2.x in its ch. 2) is our ``C_bn``: checked and returned unchanged.
+
+    What differs in seed 004 is the accelerometer sign (+g on z when level), handled where its filters read
+    accelerometers, not here.
+    """
+    C = validate.matrices(C_bn, "C_bn")
+    _require_rotation(C, "C_bn")
+    return C

@@ -1,0 +1,62 @@
+"""The solutions → labs pipeline: labs are generated, never hand-edited, and grading works end to end."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import nbformat
+import pytest
+from nbgrader.api import Gradebook
+
+from conftest import LABS, ROOT, nbgrader
+
+
+def test_every_lab_has_a_solution_and_a_release():
+    released = sorted(p.name for p in (ROOT / "labs").iterdir() if p.is_dir())
+    assert LABS, "no solutions/NN_name folders found"
+    assert released == LABS, f"labs/ {released} does not match solutions/ {LABS}: run `make labs`"
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_committed_lab_is_what_nbgrader_generates(course, lab):
+    generated = json.loads((course / "labs" / lab / f"{lab}.ipynb").read_text())
+    committed = json.loads((ROOT / "labs" / lab / f"{lab}.ipynb").read_text())
+    assert committed == generated, f"labs/{lab} differs from the solution it is generated from: run `make labs`"
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_release_hides_solutions_and_hidden_tests(course, lab):
+    nb = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    text = "\n".join(c.source for c in nb.cells)
+    assert "### BEGIN SOLUTION" not in text and "### BEGIN HIDDEN TESTS" not in text
+    assert "exercise not attempted yet" in text, "the student stub message is missing"
+    assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), "release must have no outputs"
+
+
+def _autograde(course, lab, submissions):
+    """Submit notebooks ({student: NotebookNode}) and autograde; returns {student: (auto score, auto max)}."""
+    for student, nb in submissions.items():
+        dest = course / "submitted" / student / lab
+        if dest.exists():
+            shutil.rmtree(dest)
+        dest.mkdir(parents=True)
+        nbformat.write(nb, dest / f"{lab}.ipynb")
+    nbgrader(["autograde", lab, "--force"], cwd=course)
+    out = {}
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+        for student in submissions:
+            sub = gb.find_submission_notebook(lab, lab, student)
+            auto = [g for g in sub.grades if g.auto_score is not None]
+            out[student] = (sum(g.score for g in auto), sum(g.max_score for g in auto))
+    return out
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_solution_scores_full_marks_and_untouched_lab_scores_zero(course, lab):
+    solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    release = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    scores = _autograde(course, lab, {"solution_student": solution, "untouched_student": release})
+    got, total = scores["solution_student"]
+    assert total > 0 and got == total, f"the solution scored {got}/{total} autograded points"
+    got, total = scores["untouched_student"]
+    assert got == 0 and total > 0, f"the untouched lab scored {got}/{total}; its tests must fail on the stubs"

@@ -1,0 +1,172 @@
+"""Figures (fusionlab.plotting) and the Euler viewer widget (fusionlab.widgets), without a front end."""
+import matplotlib
+
+matplotlib.use("Agg")
+
+import ipywidgets as W  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from fusionlab import plotting, rotations, widgets  # noqa: E402
+
+EULER = np.radians([10.0, -10.0, 40.0])
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def _tip(ax, gid):
+    """End point (display coords) of the arrow shaft with this gid."""
+    lines = [ln for ln in ax.get_lines() if ln.get_gid() == gid]
+    assert len(lines) == 1, f"expected one line with gid {gid!r}, found {len(lines)}"
+    return np.array(lines[0].get_data_3d())[:, -1]
+
+
+def test_ned_to_display_draws_down_down_without_mirroring():
+    north, east, down = np.eye(3)
+    np.testing.assert_allclose(plotting.ned_to_display(north), [0, 1, 0])
+    np.testing.assert_allclose(plotting.ned_to_display(east), [1, 0, 0])
+    np.testing.assert_allclose(plotting.ned_to_display(down), [0, 0, -1])      # Down points down on screen
+    assert np.linalg.det(plotting.NED_TO_DISPLAY) == pytest.approx(1.0)        # a rotation, not a mirror
+
+
+def test_plot_euler_frames_has_four_panels_with_the_right_arrows():
+    fig = plotting.plot_euler_frames(EULER)
+    assert isinstance(fig, Figure)
+    assert len(fig.axes) == 4
+    F = plotting.euler_frames(EULER)
+    C_bn = rotations.euler_to_dcm(EULER)
+    np.testing.assert_allclose(F["B"], C_bn, atol=1e-15)
+    body = fig.axes[3]
+    for k, name in enumerate("xyz"):
+        np.testing.assert_allclose(_tip(body, f"B:{name}"), plotting.ned_to_display(C_bn[:, k]), atol=1e-12)
+    # the yaw panel: v1 x axis is (cos ψ, sin ψ, 0) in NED, and the inertial frame is drawn grey beside it
+    np.testing.assert_allclose(_tip(fig.axes[1], "v1:x"),
+                               plotting.ned_to_display([np.cos(EULER[2]), np.sin(EULER[2]), 0]), atol=1e-12)
+    grey = [ln for ln in fig.axes[1].get_lines() if ln.get_gid() == "I:x"][0]
+    red = [ln for ln in body.get_lines() if ln.get_gid() == "B:x"][0]
+    assert matplotlib.colors.to_hex(grey.get_color()) == matplotlib.colors.to_hex(plotting.GREY)
+    assert matplotlib.colors.to_hex(red.get_color()) == matplotlib.colors.to_hex("tab:red")
+
+
+def test_plot_euler_frames_titles_and_labels_state_the_angles():
+    fig = plotting.plot_euler_frames(EULER)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert "yaw ψ = 40°" in titles[1] and "$z_{I}$" in titles[1]
+    assert "pitch θ = -10°" in titles[2] and "$y_{v1}$" in titles[2]
+    assert "roll φ = 10°" in titles[3] and "$x_{v2}$" in titles[3]
+    for ax in fig.axes:
+        assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("East", "North", "Up (= -Down)")
+    assert len([ln for ln in fig.axes[3].get_lines() if ln.get_gid() == "aircraft"]) == 1   # aircraft in body panel
+    assert not any(ln.get_gid() == "aircraft" for ax in fig.axes[:3] for ln in ax.get_lines())
+
+
+def test_plot_euler_frames_single_panel():
+    fig = plotting.plot_euler_frames(EULER, stages=False)
+    assert len(fig.axes) == 1
+    np.testing.assert_allclose(_tip(fig.axes[0], "B:z"),
+                               plotting.ned_to_display(rotations.euler_to_dcm(EULER)[:, 2]), atol=1e-12)
+
+
+@pytest.mark.parametrize("bad, match", [
+    ([0.1, 0.2], r"euler must have shape"),
+    ([[0.1, 0.2, 0.3]], r"euler must have shape \(3,\)"),
+    ([0.1, np.nan, 0.3], r"euler must hold finite"),
+    ([10.0, -10.0, 40.0], r"euler must be in radians"),        # degrees passed by mistake
+])
+def test_plot_euler_frames_rejects_bad_euler(bad, match):
+    with pytest.raises(ValueError, match=match):
+        plotting.plot_euler_frames(bad)
+
+
+def test_draw_triad_rejects_non_3x3():
+    fig = plt.figure()
+    ax = plotting.setup_ned_axes(fig.add_subplot(projection="3d"))
+    with pytest.raises(ValueError, match="C must have shape"):
+        plotting.draw_triad(ax, np.eye(4))
+
+
+@pytest.mark.parametrize("pitch_deg", [90.0, -90.0])
+def test_plot_gimbal_lock_two_pairs_same_triad(pitch_deg):
+    roll, yaw = np.radians(30.0), np.radians(50.0)
+    fig = plotting.plot_gimbal_lock(roll, yaw, np.radians(pitch_deg))
+    assert isinstance(fig, Figure) and len(fig.axes) == 3
+    A = np.array([_tip(fig.axes[0], f"A:{n}") for n in "xyz"])
+    B = np.array([_tip(fig.axes[1], f"B:{n}") for n in "xyz"])
+    np.testing.assert_allclose(A, B, atol=1e-12)
+    combo = "φ − ψ" if pitch_deg > 0 else "φ + ψ"
+    expected = "-20°" if pitch_deg > 0 else "80°"                 # 30 - 50 and 30 + 50
+    assert combo in fig.get_suptitle() and "same attitude" in fig.get_suptitle()
+    assert f"{combo} = {expected}" in fig.axes[0].get_title()
+    assert f"{combo} = {expected}" in fig.axes[1].get_title()
+    assert "ψ = 0°" in fig.axes[1].get_title()                    # pair B is what dcm_to_euler reports
+
+
+def test_plot_gimbal_lock_away_from_lock_pairs_differ():
+    fig = plotting.plot_gimbal_lock(np.radians(30.0), np.radians(50.0), np.radians(60.0))
+    A, B = _tip(fig.axes[0], "A:x"), _tip(fig.axes[1], "B:x")
+    assert np.max(np.abs(A - B)) > 0.1
+    assert "different attitudes" in fig.get_suptitle()
+
+
+def test_plot_gimbal_lock_rejects_array_roll():
+    with pytest.raises(ValueError, match="roll must be a scalar"):
+        plotting.plot_gimbal_lock([0.1, 0.2], 0.3)
+
+
+def test_viewer_state_at_lock_recovers_only_roll_minus_yaw():
+    st = widgets.viewer_state(25.0, -10.0, 70.0, lock=True)
+    np.testing.assert_allclose(st["euler_deg"], [25.0, 90.0, 70.0])
+    roll_b, pitch_b, yaw_b = st["euler_readback_deg"]
+    assert yaw_b == 0.0
+    assert pitch_b == pytest.approx(90.0, abs=1e-9)
+    assert roll_b == pytest.approx(25.0 - 70.0, abs=1e-9)
+    np.testing.assert_allclose(st["C_bn"], rotations.euler_to_dcm(np.radians([25.0, 90.0, 70.0])), atol=1e-15)
+    assert st["det"] == pytest.approx(1.0, abs=1e-12)
+    assert "φ − ψ = -45.0°" in st["html"]
+
+
+def test_viewer_state_away_from_lock_reads_back_the_sliders():
+    st = widgets.viewer_state(10.0, -10.0, 40.0, lock=False)
+    np.testing.assert_allclose(st["euler_readback_deg"], [10.0, -10.0, 40.0], atol=1e-9)
+    C = st["C_bn"]
+    assert f"{C[0, 0]:.3f}" in st["html"] and f"{C[2, 1]:.3f}" in st["html"]
+    assert "Gimbal lock" not in st["html"]
+
+
+def _controls(box):
+    by_desc = {c.description: c for c in box.children if hasattr(c, "description")}
+    html = [c for c in box.children if isinstance(c, W.HTML)]
+    return by_desc["ψ yaw (°)"], by_desc["θ pitch (°)"], by_desc["gimbal lock (θ = 90°)"], html[0]
+
+
+def test_euler_viewer_builds_headless_and_lock_pins_pitch():
+    box = widgets.euler_viewer()
+    assert isinstance(box, W.VBox)
+    yaw, pitch, lock, readout = _controls(box)
+    sliders = [c for c in box.children if isinstance(c, W.FloatSlider)]
+    assert len(sliders) == 3 and not any(s.continuous_update for s in sliders)
+    assert (yaw.min, yaw.max, pitch.min, pitch.max) == (-180, 180, -90, 90)
+    assert readout.value == widgets.viewer_state(10, -10, 40, False)["html"]
+    assert [c for c in box.children if isinstance(c, W.Output)]
+
+    lock.value = True
+    assert pitch.disabled and pitch.value == 90.0
+    assert readout.value == widgets.viewer_state(10, 90, 40, True)["html"]
+    assert "φ − ψ = -30.0°" in readout.value
+    lock.value = False
+    assert not pitch.disabled and pitch.value == -10.0             # the pitch before the lock comes back
+
+
+def test_euler_viewer_yaw_slider_updates_readout():
+    box = widgets.euler_viewer()
+    yaw, _, _, readout = _controls(box)
+    before = readout.value
+    yaw.value = -30.0
+    assert readout.value != before
+    assert readout.value == widgets.viewer_state(10, -10, -30, False)["html"]
