@@ -34,7 +34,7 @@ env: $(VENV)/.installed  ## create .venv and install environment.txt
 
 lab: env  ## start JupyterLab on labs/ (prints the URL; no browser needed)
 	@echo "==> JupyterLab on labs/ -- open the URL printed below; Ctrl-C to stop"
-	@$(BIN)/jupyter lab --no-browser --notebook-dir=labs
+	@$(BIN)/jupyter lab --no-browser --notebook-dir=labs $(if $(filter 0,$(shell id -u)),--allow-root)
 
 test: env  ## the whole test suite: unit tests, lab sync, strict nbval on every solution, autograde
 	@echo "==> unit and pipeline tests"

@@ -59,12 +59,12 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU"):
         raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
     if frame not in FRAMES:
         raise ValueError(f"frame must be 'ENU' or 'NED'; got {frame!r}")
-    gyr = _samples(gyr, "gyr")
-    acc = _samples(acc, "acc")
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
     fs = validate.positive(fs, "fs")
     entry = _REGISTRY[name]
     if mag is not None:
-        mag = _samples(mag, "mag")
+        mag = validate.samples(mag, "mag")
     elif entry["uses_mag"]:
         raise ValueError(f"estimator {name!r} uses the magnetometer: pass mag=(N, 3) array")
     validate.same_length(gyr=gyr, acc=acc, mag=mag)
@@ -75,13 +75,6 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU"):
                          "-- use np.radians(...)")
     q_ned = entry["fn"](gyr, acc, mag, fs)
     return q_ned if frame == "NED" else rotations.quat_nav_swap(q_ned)
-
-
-def _samples(x, name):
-    a = validate.array(x, name, shape=(None, 3))
-    if a.ndim != 2:
-        raise ValueError(f"{name} must have shape (N, 3); got {a.shape}")
-    return a
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -320,8 +320,8 @@ def quat_angle_between(q1, q2):
     """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter."""
     q1 = validate.quaternions(q1, "q1")
     q2 = validate.quaternions(q2, "q2")
-    dot = np.abs(np.sum(q1 * q2, axis=-1))
-    return 2 * np.arccos(np.clip(dot, 0.0, 1.0))
+    d = quat_multiply(quat_conjugate(q1), q2)                            # q1* ⊗ q2: the relative rotation
+    return 2 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))   # exact near 0, unlike acos
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -476,9 +476,7 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     (N + 1, 3, 3) array -- ``C0`` and the attitude after every step
     """
     C = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
-    gyr = validate.array(gyr, "gyr", shape=(None, 3))
-    if gyr.ndim != 2:
-        raise ValueError(f"gyr must have shape (N, 3); got {gyr.shape}")
+    gyr = validate.samples(gyr, "gyr")
     dt = validate.positive(dt, "dt")
     if renormalize not in (None, "columns", "rows"):
         raise ValueError(f"renormalize must be 'columns', 'rows' or None; got {renormalize!r}")
@@ -504,9 +502,7 @@ def integrate_gyro_quat(q0, gyr, dt):
     (N + 1, 4) array
     """
     q = validate.quaternions(q0, "q0").reshape(4)
-    gyr = validate.array(gyr, "gyr", shape=(None, 3))
-    if gyr.ndim != 2:
-        raise ValueError(f"gyr must have shape (N, 3); got {gyr.shape}")
+    gyr = validate.samples(gyr, "gyr")
     dt = validate.positive(dt, "dt")
     dq = rotvec_to_quat(gyr * dt)
     out = np.empty((len(gyr) + 1, 4))

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["array", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad"]
+__all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad"]
 
 
-def _shape_text(shape):
-    return "(" + ", ".join("N" if s is None else str(s) for s in shape) + (",)" if len(shape) == 1 else ")")
+def _shape_text(shape, lead=""):
+    return "(" + lead + ", ".join("N" if s is None else str(s) for s in shape) + ")"
 
 
 def array(x, name, shape=None, finite=True, dtype=float):
@@ -41,12 +41,19 @@ def array(x, name, shape=None, finite=True, dtype=float):
         trail = a.shape[a.ndim - n:] if a.ndim >= n else None
         ok = trail is not None and all(s is None or s == t for s, t in zip(shape, trail))
         if not ok:
-            lead = "(..., " + _shape_text(shape)[1:] if n else "()"
-            raise ValueError(f"{name} must have shape {lead}; got {a.shape}")
+            raise ValueError(f"{name} must have shape {_shape_text(shape, '..., ')}; got {a.shape}")
     if finite and not np.all(np.isfinite(a)):
         bad = int(np.size(a) - np.count_nonzero(np.isfinite(a)))
         raise ValueError(f"{name} must hold finite numbers; got {bad} NaN or infinite value(s)")
     return a
+
+
+def samples(x, name, n=3):
+    """``x`` as a recording: exactly two axes, shape ``(N, n)`` (one row per sample)."""
+    a = array(x, name, finite=False)
+    if a.ndim != 2 or a.shape[1] != n:
+        raise ValueError(f"{name} must have shape (N, {n}), one row per sample; got {a.shape}")
+    return array(a, name)
 
 
 def vectors(x, name, n=3):

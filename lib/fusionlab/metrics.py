@@ -1,0 +1,247 @@
+"""Orientation error metrics of the BROAD benchmark (Laidig, Caruso, Cereatti, Seel, *Data* 6(7):72, 2021).
+
+Not from a seed: none of the four seeds tests on real data with a ground truth. The definitions are those of the
+dataset authors (``../shared/data/broad/README.md`` and their published evaluation code), written here with the
+library's quaternion functions:
+
+* error quaternion in the **earth** frame: ``q_err = q_est ⊗ conj(q_ref)`` -- the rotation that takes the reference
+  attitude to the estimate, written in navigation coordinates (both quaternions body→nav, same nav frame);
+* total error ``2·acos(|w|)``; heading error ``2·atan(|z / w|)``; inclination error ``2·acos(√(w² + z²))``,
+  with ``[w, x, y, z] = q_err`` and ``z`` the **vertical** axis of the navigation frame (ENU for BROAD; for NED the
+  same formulas hold because the vertical is again the z axis);
+* each as an RMS in degrees over the samples of the movement phase, ignoring samples whose reference is lost (NaN).
+
+Why heading and inclination split like this: any ``q_err`` factors as ``q_z(δ) ⊗ q_tilt`` with ``q_tilt`` having
+no z part, so ``z/w = tan(δ/2)`` (the heading part) and ``√(w² + z²) = cos(ε/2)`` (the tilt part, ε the angle
+between the estimated and true vertical). Inclination is therefore blind to a constant heading offset.
+
+Heading offset. The authors' evaluation removes **no** heading offset: the optical reference was aligned with the
+IMU's magnetic East-North-Up frame when the dataset was made (on the eight shared trials the heading error of a good
+9-axis filter at the initial rest is below 1° on the undisturbed trials). A 6-axis filter has no heading reference at
+all, so its total and heading errors mostly measure an arbitrary start heading; :func:`broad_rmse` can remove the
+constant heading offset (``heading_offset='mean'``, our addition, not the authors' metric) to compare such filters
+on total error too. Inclination is the same either way.
+
+Radians inside; the RMSE record carries degrees, as the dataset authors report them (names end in ``_deg``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import rotations, validate
+
+__all__ = ["error_quaternion", "total_error", "heading_error", "inclination_error", "signed_heading_error",
+           "mean_heading_offset", "remove_heading_offset", "rms", "OrientationRMSE", "broad_rmse"]
+
+
+def _quats_with_nan(q, name):
+    """(N, 4) quaternions whose rows are either all finite and unit, or hold NaN (a lost reference sample)."""
+    q = validate.array(q, name, shape=(4,), finite=False)
+    if q.ndim != 2:
+        raise ValueError(f"{name} must have shape (N, 4), one quaternion per sample; got {q.shape}")
+    if np.any(np.isinf(q)):
+        raise ValueError(f"{name} must hold finite numbers or NaN (lost samples); got infinite values")
+    lost = np.isnan(q).any(axis=-1)
+    validate.quaternions(q[~lost], name)
+    q = q.copy()
+    q[lost] = np.nan                                   # a row with one NaN is lost as a whole
+    return q
+
+
+def error_quaternion(q_est, q_ref):
+    """Orientation error in the earth frame, ``q_err = q_est ⊗ conj(q_ref)`` (BROAD, Laidig et al. 2021).
+
+    Parameters
+    ----------
+    q_est : (N, 4) array -- estimated body→nav unit quaternions ``[w, x, y, z]`` (finite)
+    q_ref : (N, 4) array -- reference body→nav unit quaternions in the same nav frame; NaN rows where lost
+    Returns
+    -------
+    (N, 4) array -- unit error quaternions, NaN rows where ``q_ref`` is lost
+    """
+    q_est = validate.samples(q_est, "q_est", n=4)
+    validate.quaternions(q_est, "q_est")
+    q_ref = _quats_with_nan(q_ref, "q_ref")
+    validate.same_length(q_est=q_est, q_ref=q_ref)
+    return _error_quaternion(q_est, q_ref)
+
+
+def _error_quaternion(q_est, q_ref):
+    ok = ~np.isnan(q_ref).any(axis=-1)
+    q = np.full(q_ref.shape, np.nan)
+    q[ok] = rotations.quat_multiply(q_est[ok], rotations.quat_conjugate(q_ref[ok]))   # (BROAD: q_err)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)         # exact unit length before acos
+
+
+def _turn_heading(q, offset):
+    """``q_z(-offset) ⊗ q`` on the rows of ``q`` that are not NaN."""
+    ok = ~np.isnan(q).any(axis=-1)
+    out = q.copy()
+    out[ok] = rotations.quat_multiply(rotations.euler_to_quat([0.0, 0.0, -offset]), q[ok])
+    return out
+
+
+def _error_parts(q_err):
+    q_err = validate.array(q_err, "q_err", shape=(4,), finite=False)
+    return q_err[..., 0], q_err[..., 3]
+
+
+def total_error(q_err):
+    """Total error angle (rad, in [0, π]): ``2·acos(|w|)`` of the error quaternion. NaN in, NaN out.
+
+    Parameters
+    ----------
+    q_err : (..., 4) array -- unit error quaternions (:func:`error_quaternion`)
+    """
+    w, _ = _error_parts(q_err)
+    return 2 * np.arccos(np.clip(np.abs(w), 0.0, 1.0))                         # (BROAD: total)
+
+
+def heading_error(q_err):
+    """Heading error angle (rad, in [0, π]): ``2·atan(|z / w|)``, the rotation about the vertical.
+
+    Written ``2·atan2(|z|, |w|)``: the same value, and π (not a division by zero) when ``w = 0``.
+    """
+    w, z = _error_parts(q_err)
+    return 2 * np.arctan2(np.abs(z), np.abs(w))                                # (BROAD: heading)
+
+
+def inclination_error(q_err):
+    """Inclination error angle (rad, in [0, π]): ``2·acos(√(w² + z²))``, the angle between the two vertical axes."""
+    w, z = _error_parts(q_err)
+    return 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))           # (BROAD: inclination)
+
+
+def signed_heading_error(q_err):
+    """Signed heading error (rad, in (-π, π]): ``2·atan2(z, w)`` with ``w >= 0``; its magnitude is
+    :func:`heading_error`. Positive: the estimate is turned counter-clockwise about the nav z axis."""
+    w, z = _error_parts(q_err)
+    s = np.where(w < 0, -1.0, 1.0)                     # q and -q are one rotation
+    return 2 * np.arctan2(s * z, s * w)
+
+
+def mean_heading_offset(q_err, mask=None):
+    """Constant heading offset (rad) of an estimate: the circular mean of :func:`signed_heading_error` over the
+    samples where ``mask`` is true and the error is defined.
+
+    This is the offset a 6-axis filter (no heading reference) carries from its arbitrary start heading.
+
+    Parameters
+    ----------
+    q_err : (N, 4) array -- error quaternions, NaN rows allowed
+    mask : (N,) bool array or None -- samples to average over (default: all)
+    """
+    q_err = validate.array(q_err, "q_err", shape=(4,), finite=False)
+    ok = _mask(mask, len(q_err)) & ~np.isnan(q_err).any(axis=-1)
+    if not ok.any():
+        raise ValueError("mask must select at least one sample with a valid reference; got none")
+    d = signed_heading_error(q_err[ok])
+    return float(np.arctan2(np.mean(np.sin(d)), np.mean(np.cos(d))))
+
+
+def remove_heading_offset(q_est, offset):
+    """Turn estimates by ``-offset`` (rad) about the nav z axis: ``q_z(-offset) ⊗ q_est``.
+
+    The error quaternion becomes ``q_z(-offset) ⊗ q_err``: its heading part shifts by ``-offset``, its
+    inclination is unchanged.
+    """
+    q_est = validate.quaternions(q_est, "q_est")
+    offset = float(validate.angles_rad(offset, "offset"))
+    return _turn_heading(q_est, offset)
+
+
+def rms(x, mask=None):
+    """Root mean square of ``x`` over the samples where ``mask`` is true, ignoring NaN samples.
+
+    Parameters
+    ----------
+    x : (N,) array -- NaN where undefined
+    mask : (N,) bool array or None
+    Raises
+    ------
+    ValueError -- when no sample is both selected and defined
+    """
+    x = validate.array(x, "x", finite=False)
+    if x.ndim != 1:
+        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    ok = _mask(mask, len(x)) & ~np.isnan(x)
+    if not ok.any():
+        raise ValueError("mask must select at least one sample where x is defined (not NaN); got none")
+    return float(np.sqrt(np.mean(x[ok] ** 2)))
+
+
+def _mask(mask, n):
+    if mask is None:
+        return np.ones(n, dtype=bool)
+    m = np.asarray(mask)
+    if m.dtype != bool:
+        try:
+            mf = validate.array(m, "mask")
+        except ValueError:
+            raise ValueError(f"mask must be a boolean array of shape ({n},); got dtype {m.dtype}") from None
+        if not np.all((mf == 0) | (mf == 1)):
+            raise ValueError(f"mask must be boolean (or 0/1); got values other than 0 and 1")
+        m = mf.astype(bool)
+    m = m.reshape(-1) if m.ndim == 2 and m.shape[1] == 1 else m          # MATLAB's (N, 1) column
+    if m.shape != (n,):
+        raise ValueError(f"mask must have shape ({n},), one flag per sample; got {np.shape(mask)}")
+    return m
+
+
+@dataclass(frozen=True)
+class OrientationRMSE:
+    """RMS orientation errors (degrees) of one estimate against a reference, as BROAD reports them.
+
+    ``n_samples``: samples that entered the RMS (in the mask, reference valid). ``heading_offset_deg``: the
+    constant heading turned out of the estimate before scoring (0 unless asked for).
+    """
+    total_deg: float
+    heading_deg: float
+    inclination_deg: float
+    n_samples: int
+    heading_offset_deg: float = 0.0
+
+
+def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
+    """Total, heading and inclination RMSE (degrees) of an orientation estimate, as the BROAD authors define them.
+
+    Parameters
+    ----------
+    q_est : (N, 4) array -- estimated body→nav unit quaternions ``[w, x, y, z]``
+    q_ref : (N, 4) array -- reference body→nav unit quaternions, same nav frame; NaN rows where markers were lost
+    movement : (N,) bool array or None -- samples to score (BROAD: the movement phase); default all
+    heading_offset : None, 'mean' or float (rad)
+        None (the authors' metric): score the estimate as it is. 'mean': first remove the estimate's constant
+        heading offset (:func:`mean_heading_offset` over the scored samples) -- for 6-axis filters, whose heading is
+        arbitrary. A float: remove that offset.
+    Returns
+    -------
+    OrientationRMSE
+    Raises
+    ------
+    ValueError -- bad shapes, non-unit quaternions, a non-boolean mask, or no sample to score
+    """
+    q_est = validate.samples(q_est, "q_est", n=4)
+    validate.quaternions(q_est, "q_est")
+    q_ref = _quats_with_nan(q_ref, "q_ref")
+    validate.same_length(q_est=q_est, q_ref=q_ref)
+    mask = _mask(movement, len(q_est))
+    q_err = _error_quaternion(q_est, q_ref)
+    scored = mask & ~np.isnan(q_err).any(axis=-1)
+    if not scored.any():
+        raise ValueError("movement must select at least one sample where q_ref is valid (not NaN); got none")
+    if heading_offset is None:
+        offset = 0.0
+    elif isinstance(heading_offset, str):
+        if heading_offset != "mean":
+            raise ValueError(f"heading_offset must be None, 'mean' or a number (rad); got {heading_offset!r}")
+        offset = mean_heading_offset(q_err, scored)
+    else:
+        offset = float(validate.angles_rad(heading_offset, "heading_offset"))
+    if offset != 0.0:
+        q_err = _turn_heading(q_err, offset)       # q_z(-δ) ⊗ q_est ⊗ conj(q_ref) = q_z(-δ) ⊗ q_err
+    rad = [rms(f(q_err), scored) for f in (total_error, heading_error, inclination_error)]
+    return OrientationRMSE(*np.degrees(rad).tolist(), n_samples=int(scored.sum()),
+                           heading_offset_deg=float(np.degrees(offset)))
