@@ -18,7 +18,7 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: help lab test solutions labs env clean
+.PHONY: help lab test solutions labs env bench clean
 
 help:  ## list the targets
 	@grep -E '^[a-z]+:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -51,6 +51,10 @@ solutions: env  ## re-execute every solution notebook in place (authors; one lab
 labs: env  ## regenerate the student notebooks in labs/ from solutions/
 	@db=$$(mktemp -d)/gradebook.db; for lab in $(LABS); do echo "==> generating labs/$$lab"; \
 	  $(BIN)/nbgrader generate_assignment $$lab --force --log-level=ERROR --db=sqlite:///$$db || exit 1; done
+
+bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
+	@echo "==> benchmark (trials from FUSIONLAB_BROAD_DIR, the cache, or ../shared/data/broad when present)"
+	@$(BIN)/python -m fusionlab.bench $(if $(wildcard ../shared/data/broad/*.mat),--folder ../shared/data/broad) --out .bench
 
 clean:  ## remove grading scratch folders (keeps .venv)
 	rm -rf submitted autograded feedback gradebook.db .pytest_cache

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import rotations
 
-__all__ = ["Feedback", "check_euler_to_dcm", "check_close", "check_renormalize", "check_rodrigues",
+__all__ = ["Feedback", "friendly_errors", "check_euler_to_dcm", "check_close", "check_renormalize", "check_rodrigues",
            "check_sequence_angles", "check_lock_roll", "diagnose_dcm"]
 
 
@@ -22,6 +22,37 @@ class Feedback(AssertionError):
 
 def _ok(msg):
     print("✓ " + msg)
+
+
+def _answered(name, value):
+    """Stop with a clear message while an exercise's answer is still the ``None`` placeholder."""
+    if value is None:
+        raise Feedback(f"{name} is still None: finish the exercise that sets it (replace the line "
+                       f"`raise NotImplementedError(...)`) and run that cell, then this one.")
+    return value
+
+
+_HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
+         "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
+         "cell again.")
+
+
+def friendly_errors():
+    """In a notebook, add a hint to ``NameError``: in a lab it nearly always means an unfinished exercise above.
+
+    Called once in each lab's import cell; does nothing outside IPython.
+    """
+    try:
+        ip = get_ipython()  # noqa: F821 (defined inside IPython only)
+    except NameError:
+        return
+
+    def handler(shell, etype, evalue, tb, tb_offset=None):
+        if _HINT not in str(evalue):
+            evalue = etype(f"{evalue}{_HINT}")
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+
+    ip.set_custom_exc((NameError,), handler)
 
 
 def _call(fn, *args, what):
@@ -77,7 +108,7 @@ def check_euler_to_dcm(fn):
 
 def check_close(name, value, expected, tol, hint=""):
     """Check that ``value`` is ``expected`` within ``tol`` (absolute), with an optional hint on failure."""
-    value = np.asarray(value, dtype=float)
+    value = np.asarray(_answered(name, value), dtype=float)
     expected = np.asarray(expected, dtype=float)
     if value.shape != expected.shape:
         raise Feedback(f"{name} should have shape {expected.shape}; got {value.shape}")
@@ -129,7 +160,7 @@ def check_rodrigues(fn):
 
 def check_sequence_angles(angles_deg, seq, C_bn, tol=1e-3):
     """Check that ``angles_deg`` (degrees, in the order applied) in intrinsic sequence ``seq`` give ``C_bn``."""
-    a = np.asarray(angles_deg, dtype=float)
+    a = np.asarray(_answered(f"the {seq} angles", angles_deg), dtype=float)
     if a.shape != (3,):
         raise Feedback(f"give three angles for {seq}; got shape {a.shape}")
     if np.allclose(rotations.sequence_to_dcm(np.radians(a), seq), C_bn, atol=tol):
@@ -159,3 +190,658 @@ def check_lock_roll(fn):
             raise Feedback(f"at pitch {pitch:+.0f}°, yaw {yaw_deg:.0f}°: your roll {np.degrees(got):.2f}° does not "
                            f"rebuild the matrix{hint}")
     _ok("roll at gimbal lock is right for θ = +90° and θ = -90°.")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 02: Kalman filter from first principles (seed 000 §4.3-4.4)
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import kalman as _kalman  # noqa: E402  (row 3 module; checks sit above it)
+
+__all__ += ["check_joseph", "check_state_space", "check_predict", "check_update"]
+
+
+def _outputs(out, n, what):
+    """A student's tuple return as a list of float arrays, checking there are ``n`` of them."""
+    if out is None:
+        raise Feedback(f"{what} returned None -- did you forget the `return` statement?")
+    if not isinstance(out, (tuple, list)) or len(out) != n:
+        got = f"a {type(out).__name__}" + (f" of length {len(out)}" if isinstance(out, (tuple, list)) else "")
+        raise Feedback(f"{what} must return {n} things (a tuple); it returned {got}.")
+    return [np.asarray(o, dtype=float) for o in out]
+
+
+def _call_tuple(fn, args, n, what):
+    try:
+        out = fn(*args)
+    except NotImplementedError:
+        raise Feedback(f"{what} is not written yet: replace `raise NotImplementedError(...)` with your code.") from None
+    return _outputs(out, n, what)
+
+
+def _same(a, b, tol=1e-9):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return a.shape == b.shape and bool(np.allclose(a, b, atol=tol, rtol=1e-9))
+
+
+def _first_match(value, guesses):
+    for cand, msg in guesses:
+        if _same(value, cand):
+            return msg
+    return None
+
+
+def _kf_case():
+    """A small non-trivial case: n = 2 states, m = 1 measurement (position only), correlated prior."""
+    P = np.array([[5.0, 0.7], [0.7, 4.8]])
+    H = np.array([[1.0, 0.0]])
+    R = np.array([[144.0]])
+    return P, H, R
+
+
+def check_joseph(fn):
+    """Check a student's Joseph-form covariance ``fn(P, K, H, R) -> P_post`` (seed 000 eq 4.17)."""
+    P, H, R = _kf_case()
+    cases = [(P, _kalman.kalman_gain(P, H, R), H, R),                              # optimal gain
+             (P, np.array([[0.3], [-0.2]]), H, R),                                 # a gain that is not optimal
+             (np.array([[5.0, 0.7], [0.7, 4.8]]), np.array([[0.2, 0.05], [0.01, 0.3]]),
+              np.array([[1.0, 0.5], [0.0, 1.0]]), 2.0 * np.eye(2))]                # square H, non-symmetric K
+    for P_, K_, H_, R_ in cases:
+        try:
+            out = fn(P_, K_, H_, R_)
+        except NotImplementedError:
+            raise Feedback("your function is not written yet: replace `raise NotImplementedError(...)` with your "
+                           "code.") from None
+        if out is None:
+            raise Feedback("your function returned None -- did you forget the `return` statement?")
+        out = np.asarray(out, dtype=float)
+        ref = _kalman.joseph_covariance(P_, K_, H_, R_)
+        if out.shape != ref.shape:
+            raise Feedback(f"P_post must have the shape of P, {ref.shape}; got {out.shape}.")
+        if _same(out, ref):
+            continue
+        I_KH = np.eye(2) - K_ @ H_
+        guesses = [(I_KH @ P_, "this is the short form (I - KH)P: it equals the Joseph form only at the optimal "
+                               "gain. Eq 4.17 is (I - KH) P (I - KH)ᵀ + K R Kᵀ and holds for any K."),
+                   (I_KH @ P_ @ I_KH.T, "the measurement-noise term K R Kᵀ is missing."),
+                   (I_KH @ P_ @ I_KH + K_ @ R_ @ K_.T, "the second (I - KH) needs a transpose: (I - KH)ᵀ."),
+                   (I_KH.T @ P_ @ I_KH + K_ @ R_ @ K_.T, "the transpose is on the wrong factor: "
+                                                         "(I - KH) P (I - KH)ᵀ, transpose on the right."),
+                   ((I_KH @ P_ @ I_KH.T + K_.T @ R_ @ K_) if K_.shape[0] == K_.shape[1] else None,
+                    "the noise term is K R Kᵀ (K first), not Kᵀ R K.")]
+        if H_.shape[0] == H_.shape[1]:
+            guesses.append((_kalman.seed000_eq427_printed(P_, K_, H_, R_),
+                            "this is eq 4.27 as printed, whose factors are in the wrong order (erratum): "
+                            "P - KHP - PHᵀKᵀ + K(HPHᵀ + R)Kᵀ is the correct expansion."))
+        msg = _first_match(out, [(c, m) for c, m in guesses if c is not None])
+        kind = "the optimal gain" if _same(K_, _kalman.kalman_gain(P_, H_, R_)) else "a non-optimal gain"
+        raise Feedback(f"with {kind}: " + (msg or f"P_post differs from eq 4.17 by up to "
+                                                  f"{np.max(np.abs(out - ref)):.3g}."))
+    _ok("Joseph form is right, for the optimal gain and for gains that are not optimal.")
+
+
+def check_state_space(fn):
+    """Check a student's ``fn(k, m, g, dt) -> (A, B, u)`` for the falling body (seed 000 §4.4.2)."""
+    for k, m, g, dt in ((0.25, 10.0, 9.8, 0.01), (0.5, 2.0, 9.81, 0.1)):
+        A, B, u = _call_tuple(fn, (k, m, g, dt), 3, "your function")
+        Ar, Br, ur = _kalman.falling_body_state_space(k, m, g, dt)
+        where = f"(k, m, g, dt) = ({k}, {m}, {g}, {dt})"
+        if A.shape != (2, 2):
+            raise Feedback(f"{where}: A must be 2×2; got shape {A.shape}.")
+        if not _same(A, Ar):
+            msg = _first_match(A, [
+                (Ar.T, "A is transposed: the first row is x_t = x_{t-1} + dt·v_{t-1}, so A = [[1, dt], [0, ...]]."),
+                (np.array([[1, dt], [0, 1 + k / m * dt]]), "the drag term has the wrong sign: v_t = v_{t-1} - "
+                                                           "(k/m) v_{t-1} dt, so A[1, 1] = 1 - (k/m) dt."),
+                (np.array([[1, dt], [0, 1 - m / k * dt]]), "k/m is upside down: the drag acceleration is (k/m) v."),
+                (np.array([[1, dt], [0, -k / m * dt]]), "A[1, 1] lost the 1: v_t = v_{t-1} + (...) dt."),
+            ])
+            raise Feedback(f"{where}: " + (msg or f"A is not [[1, dt], [0, 1 - (k/m) dt]]; got {A.round(5)}."))
+        Bu = B @ u if B.ndim == 2 and u.shape == (B.shape[1],) else None
+        if Bu is None:
+            raise Feedback(f"{where}: B @ u is not defined for B of shape {B.shape} and u of shape {u.shape}; "
+                           "the thesis uses B (2×2) and u (2,).")
+        if not _same(Bu, Br @ ur):
+            msg = _first_match(Bu, [
+                (np.array([0, g * dt]), "gravity enters with the wrong sign: B u = [0, -g·dt] (x is up)."),
+                (np.array([0, -g]), "B u is the change over one step, -g·dt, not -g."),
+                (np.array([-g * dt, 0]), "gravity is acting on the position row; it belongs to the velocity row."),
+            ])
+            raise Feedback(f"{where}: " + (msg or f"B @ u should be [0, -g·dt] = {Br @ ur}; got {Bu}."))
+    note = "" if (_same(B, Br) and _same(u, ur)) else " (your B, u differ from the thesis' but B @ u is the same)"
+    _ok("A and B @ u are right for the lab's parameters and another set" + note + ".")
+
+
+def check_predict(fn):
+    """Check a student's projection ``fn(x, P, A, Q, B, u) -> (x', P')`` (seed 000 eqs 4.32 + G u, 4.36)."""
+    A, B, u = _kalman.falling_body_state_space(0.25, 10.0, 9.8, 0.1)
+    x = np.array([150.0, -12.0])
+    P = np.array([[5.0, 0.7], [0.7, 4.8]])
+    Q = np.diag([0.16, 0.25])
+    xp, Pp = _call_tuple(fn, (x, P, A, Q, B, u), 2, "your predict")
+    xr, Pr = _kalman.predict(x, P, A, Q, B, u)
+    if not _same(xp, xr):
+        msg = _first_match(xp, [
+            (A @ x, "the control term is missing: x' = A x + B u. Eq 4.32 prints x' = F x, but the falling body "
+                    "needs B u -- it is how gravity gets in (erratum)."),
+            (A.T @ x + B @ u, "use A, not its transpose: x' = A @ x + B @ u."),
+            (x, "x was not projected at all -- that is the printed lab code's bug (no s.x = s.A*s.x + s.B*s.u)."),
+        ])
+        raise Feedback(msg or f"x' should be {xr.round(4)}; got {np.round(xp, 4)}.")
+    if not _same(Pp, Pr):
+        msg = _first_match(Pp, [
+            (A @ P @ A.T, "Q is missing: P' = A P Aᵀ + Q (the process noise adds uncertainty every step)."),
+            (A.T @ P @ A + Q, "the transposes are swapped: P' = A P Aᵀ + Q."),
+            (A @ P @ A + Q, "the second A needs a transpose: P' = A P Aᵀ + Q."),
+            (P + Q, "P must be carried through the dynamics: P' = A P Aᵀ + Q."),
+        ])
+        raise Feedback(msg or f"P' should be {Pr.round(4)}; got {np.round(Pp, 4)}.")
+    _ok("predict: x' = A x + B u and P' = A P Aᵀ + Q.")
+
+
+def check_update(fn):
+    """Check a student's update ``fn(x, P, z, H, R) -> (x_post, P_post, K)`` (seed 000 eqs 4.31, 4.8, 4.17)."""
+    P, H, R = _kf_case()
+    x = np.array([150.0, -12.0])
+    z = np.array([162.0])
+    cases = [(x, P, z, H, R), (x, 144.0 * np.eye(2), np.array([165.0, -20.0]), np.eye(2), 144.0 * np.eye(2))]
+    for xc, Pc, zc, Hc, Rc in cases:
+        xo, Po, Ko = _call_tuple(fn, (xc, Pc, zc, Hc, Rc), 3, "your update")
+        xr, Pr, Kr = _kalman.update(xc, Pc, zc, Hc, Rc)
+        where = f"H = {Hc.tolist()}"
+        if not _same(Ko, Kr):
+            S = Hc @ Pc @ Hc.T
+            msg = _first_match(Ko, [
+                (Pc @ Hc.T @ np.linalg.inv(S), "R is missing from the gain: K = P Hᵀ (H P Hᵀ + R)⁻¹."),
+                (Pc @ Hc.T @ (S + Rc), "the bracket must be inverted: K = P Hᵀ (H P Hᵀ + R)⁻¹ (np.linalg.inv)."),
+                (Pc @ Hc.T @ np.linalg.inv(S + Rc) @ Hc if Hc.shape[0] == Hc.shape[1] else None, "an extra H: "
+                 "K = P Hᵀ (H P Hᵀ + R)⁻¹."),
+            ])
+            raise Feedback(f"{where}: " + (msg or f"K should be {Kr.round(5).tolist()}; got "
+                                                  f"{np.round(Ko, 5).tolist()} (eq 4.31)."))
+        if not _same(xo, xr):
+            msg = _first_match(xo, [
+                (xc + Kr @ (Hc @ xc - zc), "the innovation has the wrong sign: x̂ = x̂ + K (z - H x̂)."),
+                (xc + Kr @ zc, "use the innovation z - H x̂, not z alone (eq 4.8)."),
+                (Kr @ zc, "eq 4.8 adds a correction to the prior: x̂ = x̂ + K (z - H x̂)."),
+            ])
+            raise Feedback(f"{where}: " + (msg or f"x_post should be {xr.round(4)}; got {np.round(xo, 4)}."))
+        if not _same(Po, Pr):
+            msg = _first_match(Po, [
+                (Pc, "P was not updated: the measurement must shrink the covariance (eq 4.17)."),
+                ((np.eye(2) - Kr @ Hc) @ Pc @ (np.eye(2) - Kr @ Hc).T, "the K R Kᵀ term of eq 4.17 is missing."),
+            ])
+            raise Feedback(f"{where}: " + (msg or f"P_post should be {Pr.round(4).tolist()}; got "
+                                                  f"{np.round(Po, 4).tolist()}."))
+    _ok("update: gain (4.31), state (4.8) and covariance (4.17) are right, for H = [1, 0] and H = I.")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 00 -- MEMS sensors (seed 000 §3.1-3.2, seed 001 sensors/attitude notes); reference: fusionlab.sensors
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import sensors as _sensors  # noqa: E402  (appended section: checks sits above sensors in the import order)
+
+__all__ += ["check_smd_magnitude", "check_accel_from_bridge", "check_adc_to_physical", "check_atan2",
+            "check_roll_pitch", "check_coriolis_force", "check_integrate_rate"]
+
+
+def _call_raw(fn, *args, what):
+    """Like :func:`_call` but keeps the value as returned (complex, shapes), for checks that diagnose the type."""
+    try:
+        out = fn(*args)
+    except NotImplementedError:
+        raise Feedback(f"{what} is not written yet: replace `raise NotImplementedError(...)` with your code.") from None
+    if out is None:
+        raise Feedback(f"{what} returned None -- did you forget the `return` statement?")
+    return np.asarray(out)
+
+
+def check_smd_magnitude(fn):
+    """Check a student's ``fn(omega, m, k, b) -> |H(jω)|`` (seed 000 eq 3.5) against the library."""
+    m = 1e-9
+    k = m * (2 * np.pi * 5e3) ** 2
+    wn = np.sqrt(k / m)
+    omega = np.array([0.0, 0.3, 0.9, 1.0, 1.2, 4.0]) * wn
+    for zeta in (0.05, 0.7):
+        b = 2 * zeta * np.sqrt(k * m)
+        out = _call_raw(fn, omega, m, k, b, what="your function")
+        if np.iscomplexobj(out):
+            raise Feedback("your function returns complex numbers: that is H(jω) itself. Fig 4 plots the amplitude "
+                           "-- return np.abs(H).")
+        out = np.asarray(out, dtype=float)
+        if out.shape != omega.shape:
+            raise Feedback(f"give one amplitude per frequency: expected shape {omega.shape}, got {out.shape}")
+        ref = np.abs(_sensors.smd_transfer(omega, m, k, b))
+        if np.allclose(out, ref, rtol=1e-6, atol=0):
+            continue
+        if np.allclose(out, -ref, rtol=1e-6):
+            raise Feedback("your amplitudes are negative: |H| is a magnitude (the minus sign of eq 3.5 is a phase).")
+        if np.allclose(out, m / k, rtol=1e-6):
+            raise Feedback("you returned the DC gain m/k at every frequency; evaluate eq 3.5 at s = jω.")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            undamped = 1 / np.abs(k / m - omega**2 + 0j)
+            if np.allclose(out[omega != wn], undamped[omega != wn], rtol=1e-6):
+                raise Feedback("the damping term (b/m)·jω is missing: without it the peak at ω_n is infinite.")
+        if np.allclose(out[0], m / k, rtol=1e-6):
+            raise Feedback(f"right at ω = 0 but off near resonance (ζ = {zeta}): check the damping term (b/m)·jω "
+                           "and that (jω)² = -ω².")
+        raise Feedback(f"at ζ = {zeta} your amplitude differs from |H(jω)| by up to "
+                       f"{np.max(np.abs(out / ref - 1)):.3g} (relative). At ω = 0 it must be m/k = {m / k:.4g} s².")
+    _ok("|H(jω)| is right for light and heavy damping, from DC through resonance.")
+
+
+def check_accel_from_bridge(fn):
+    """Check a student's ``fn(v_out, v_in, x0, m, k) -> a`` (seed 000 eq 3.13 corrected: a = -(k/m)·x0·2·Vout/Vin)."""
+    m = 1e-9
+    k = m * (2 * np.pi * 5e3) ** 2
+    for v_out, v_in, x0 in ((1e-3, 3.0, 2e-6), (-4e-3, 5.0, 1.5e-6)):
+        got = float(_call(fn, v_out, v_in, x0, m, k, what="your function"))
+        ref = float(_sensors.accel_from_bridge(v_out, v_in, x0, m, k))
+        if np.isclose(got, ref, rtol=1e-9):
+            continue
+        delta = 2 * v_out / v_in
+        if np.isclose(got, -(m / k) * x0 * delta, rtol=1e-6):
+            raise Feedback("that is eq 3.13 as printed, with m/k. The thesis' eq 3.7 is an erratum: x = -(m/k)·a "
+                           "inverts to a = -(k/m)·x. Check the units: only k/m (1/s²) turns metres into m/s².")
+        if np.isclose(got, -ref, rtol=1e-9):
+            raise Feedback("the sign is flipped: a = -(k/m)·x (the mass lags behind the case).")
+        if np.isclose(got, ref / 2, rtol=1e-9) or np.isclose(got, ref / 4, rtol=1e-9):
+            raise Feedback("a factor of 2 is missing: Vout = δ·Vin/2, so δ = 2·Vout/Vin.")
+        raise Feedback(f"for Vout = {v_out} V, Vin = {v_in} V, x0 = {x0} m your a = {got:.4g} m/s²; expected "
+                       f"{ref:.4g}. Chain: δ = 2·Vout/Vin, x = x0·δ, a = -(k/m)·x.")
+    _ok("a = -(k/m)·x0·2·Vout/Vin -- the bridge voltage is turned back into acceleration correctly.")
+
+
+def check_adc_to_physical(fn):
+    """Check a student's ``fn(counts, zero_level, sensitivity, v_ref, bits) -> reading`` (seed 000 eqs 3.14-3.16)."""
+    cases = [(508, 1.35, 0.300, 3.0, 10), (508, 1.35, 0.0091, 3.0, 10), (700, 1.5, 0.300, 3.3, 10),
+             (2048, 1.65, 0.33, 3.3, 12)]
+    for counts, zero, sens, v_ref, bits in cases:
+        got = float(_call(fn, counts, zero, sens, v_ref, bits, what="your function"))
+        ref = float(_sensors.adc_to_physical(counts, zero, sens, v_ref, bits))
+        if np.isclose(got, ref, rtol=1e-9, atol=1e-12):
+            continue
+        where = f"for counts = {counts}, zero = {zero} V, sensitivity = {sens} V/unit, Vref = {v_ref} V, {bits} bits"
+        if np.isclose(got, (counts * v_ref / 2**bits - zero) / sens, rtol=1e-9):
+            raise Feedback(f"{where}: you divided by 2**bits; the thesis' ADC resolution is 2**bits - 1 "
+                           f"({2**bits - 1} for {bits} bits).")
+        if np.isclose(got, counts * v_ref / (2**bits - 1) / sens, rtol=1e-9):
+            raise Feedback(f"{where}: the zero level is not subtracted (eq 3.15) -- a level axis must read ≈ 0.")
+        if np.isclose(got, (counts * v_ref / (2**bits - 1) - zero) * sens, rtol=1e-9):
+            raise Feedback(f"{where}: multiply by the sensitivity? Divide: volts / (volts per unit) = units.")
+        if bits != 10 and np.isclose(got, (counts * v_ref / 1023 - zero) / sens, rtol=1e-9):
+            raise Feedback(f"{where}: 1023 is hard-coded; use 2**bits - 1 so other ADCs work too.")
+        raise Feedback(f"{where}: you return {got:.6g}, expected {ref:.6g}. "
+                       "Formula: (counts·Vref/(2**bits - 1) - zero) / sensitivity.")
+    _ok("the ADC conversion is right (including a 12-bit ADC); the thesis' example gives "
+        f"{float(_sensors.adc_to_physical(508, 1.35, 0.3)):.4f} g at 3.0 V.")
+
+
+def check_atan2(fn):
+    """Check a student's four-quadrant ``fn(y, x)`` (seed 000 eq 3.21, corrected), away from the origin."""
+    pts = [(1.0, 2.0), (2.0, -1.0), (-1.0, -3.0), (-2.0, 0.5), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 2.0),
+           (-1e-3, -1.0)]
+    for y, x in pts:
+        got = float(_call(fn, y, x, what="your function"))
+        ref = float(np.arctan2(y, x))
+        if np.isclose(got, ref, atol=1e-12):
+            continue
+        if np.isnan(got) and y < 0 and x < 0:
+            raise Feedback(f"atan2({y}, {x}) gave NaN: no case covers y < 0, x < 0. That is the typo of eq 3.21 "
+                           "as printed (its third case repeats 'y ≥ 0, x < 0'); it should read y < 0, x < 0.")
+        if y < 0 and x < 0 and np.isclose(got, ref + 2 * np.pi, atol=1e-12):
+            raise Feedback(f"atan2({y}, {x}) = {got:.4f} is outside (-π, π]: in the third quadrant subtract π, "
+                           "do not add it (eq 3.21, third case, corrected to y < 0, x < 0).")
+        if np.isclose(got, np.degrees(ref), atol=1e-9):
+            raise Feedback("your result is in degrees; return radians.")
+        if np.isclose(got, np.arctan2(x, y), atol=1e-12):
+            raise Feedback("the arguments are swapped: this is Excel's order ATAN2(x, y). In numpy, C and eq 3.21 "
+                           "y comes first: atan2(y, x) is the angle of the point (x, y).")
+        raise Feedback(f"atan2({y}, {x}) should be {ref:.6f} rad; you return {got:.6f}.")
+    _ok("four quadrants and both axes are right.")
+
+
+def check_roll_pitch(fn):
+    """Check a student's ``fn(acc) -> (roll, pitch)`` for a forward-right-down sensor at rest (seed 001, full range)."""
+    cases = [(10.0, 20.0, 1.0), (120.0, -45.0, 1.0), (-150.0, 60.0, 1.0), (179.0, 5.0, 1.0), (-60.0, 30.0, 0.1)]
+    for roll_d, pitch_d, scale in cases:
+        e = np.radians([roll_d, pitch_d, 0.0])
+        acc = scale * _sensors.specific_force(rotations.euler_to_dcm(e))
+        got = _call(fn, acc, what="your function")
+        if got.shape != (2,):
+            raise Feedback(f"return two numbers (roll, pitch); got shape {got.shape}")
+        err = np.angle(np.exp(1j * (got - e[:2])))
+        if np.all(np.abs(err) < 1e-9):
+            continue
+        where = f"at roll {roll_d:g}°, pitch {pitch_d:g}°"
+        r, p = got
+        if np.allclose(got, np.degrees(e[:2]), atol=1e-6):
+            raise Feedback(f"{where}: your angles are in degrees; return radians.")
+        if np.allclose(got[::-1], e[:2], atol=1e-9):
+            raise Feedback(f"{where}: roll and pitch are swapped -- return (roll, pitch).")
+        if abs(np.angle(np.exp(1j * (r - e[0] + np.pi)))) < 1e-9:
+            raise Feedback(f"{where}: roll is off by 180°. At rest a level sensor reads a_z = -g (+g on the axis "
+                           "that points up, and z points down), so the naive atan2(a_y, a_z) is off by π; "
+                           "use atan2(-a_y, -a_z).")
+        if abs(r - np.arctan(acc[1] / acc[2])) < 1e-9 and abs(roll_d) > 90:
+            raise Feedback(f"{where}: arctan(a_y/a_z) (seed 001 as printed) only covers |roll| < 90°; "
+                           "atan2(-a_y, -a_z) covers the full circle.")
+        if abs(err[0]) < 1e-9 and scale != 1.0:
+            raise Feedback(f"{where}, reading in units of {scale:g}·m/s²: pitch is wrong when |a| ≠ g. asin(a_x/g) "
+                           "needs |a| = g; atan2(a_x, √(a_y² + a_z²)) works in any unit.")
+        if abs(err[0]) < 1e-9 and abs(p + e[1]) < 1e-9:
+            raise Feedback(f"{where}: pitch has the wrong sign: nose up (θ > 0) makes a_x = +g·sin θ.")
+        raise Feedback(f"{where}: you return roll {np.degrees(r):.2f}°, pitch {np.degrees(p):.2f}°.")
+    _ok("roll over the full circle and pitch are right, in any unit of acceleration.")
+
+
+def check_coriolis_force(fn):
+    """Check a student's ``fn(m, omega, v) -> F`` (seed 000 eq 3.34, corrected: F = -2 m Ω × v)."""
+    cases = [(2e-9, [0.0, 0.0, 1.7], [1.2, 0.0, 0.0]), (0.5, [0.3, -0.2, 0.9], [-1.0, 2.0, 0.5])]
+    for m, w, v in cases:
+        got = _call(fn, m, np.asarray(w), np.asarray(v), what="your function")
+        ref = _sensors.coriolis_force(m, w, v)
+        if got.shape != (3,):
+            raise Feedback(f"return a 3-vector; got shape {got.shape}")
+        scale = np.max(np.abs(ref))
+        if np.allclose(got, ref, rtol=1e-9, atol=1e-12 * scale):
+            continue
+        if np.allclose(got, -ref, rtol=1e-9, atol=1e-12 * scale):
+            raise Feedback("the sign is that of eq 3.34 as printed, +2M(Ω × v): the force the suspension must "
+                           "supply. The Coriolis force seen in the rotating frame is -2m Ω × v (= 2m v × Ω); "
+                           "the thesis' own right-hand rule says the middle finger points *opposite* to it.")
+        if np.allclose(got, ref / 2, rtol=1e-9, atol=1e-12 * scale):
+            raise Feedback("a factor of 2 is missing: F = -2 m Ω × v.")
+        if np.allclose(got, ref / m, rtol=1e-9):
+            raise Feedback("you returned an acceleration; multiply by the mass to get the force.")
+        raise Feedback(f"for m = {m}, Ω = {w}, v = {v} you return {got}; expected {ref}.")
+    _ok("F = -2 m Ω × v, with the sign the thesis' right-hand rule implies.")
+
+
+def check_integrate_rate(fn):
+    """Check a student's forward-Euler ``fn(rate, dt, angle0) -> angle`` (seed 001 attitude note §3)."""
+    rate = np.array([1.0, 2.0, 0.5, -1.0, 3.0])
+    dt, a0 = 0.1, 5.0
+    got = _call(fn, rate, dt, a0, what="your function")
+    ref = _sensors.integrate_rate(rate, dt, a0)
+    if got.shape == (len(rate) + 1,):
+        raise Feedback("your result has one value more than the input: return one angle per sample, θ[0] = angle0 "
+                       "at t = 0, and drop the angle after the last sample.")
+    if got.shape != ref.shape:
+        raise Feedback(f"return one angle per rate sample: expected shape {ref.shape}, got {got.shape}")
+    if np.allclose(got, ref, atol=1e-12):
+        _ok("forward Euler: θ[0] = angle0, θ[n+1] = θ[n] + dt·ω[n].")
+        return
+    if np.allclose(got, a0 + np.cumsum(rate) * dt, atol=1e-12):
+        raise Feedback("off by one sample: θ[0] must be angle0 (nothing integrated yet); the rate ω[n] moves the "
+                       "angle from θ[n] to θ[n+1].")
+    if np.allclose(got, ref - a0, atol=1e-12):
+        raise Feedback("angle0 is ignored: start the integral at angle0.")
+    if np.allclose(got[1:], a0 + np.cumsum((rate[1:] + rate[:-1]) / 2) * dt, atol=1e-12):
+        raise Feedback("that is the trapezoidal rule -- more accurate, but this exercise asks for seed 001's forward "
+                       "Euler, θ[n+1] = θ[n] + dt·ω[n].")
+    raise Feedback(f"for rate {rate}, dt = {dt}, angle0 = {a0} you return {np.round(got, 4)}; "
+                   f"expected {np.round(ref, 4)}.")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 04 (seed 002, least-squares eCompass)
+# ---------------------------------------------------------------------------------------------------------------
+
+def _fz():
+    from . import freescale                              # row 3; imported lazily so checks stay light to import
+    return freescale
+
+
+def _unit_pairs(seed):
+    rng = np.random.default_rng(seed)
+    s = rng.standard_normal((2, 3))
+    r = rng.standard_normal((2, 3))
+    return s / np.linalg.norm(s, axis=1, keepdims=True), r / np.linalg.norm(r, axis=1, keepdims=True)
+
+
+def check_profile_matrix(fn):
+    """Check a student's ``fn(s, r, alpha) -> B = Σ α_k s_k r_kᵀ`` (seed 002 eq 29)."""
+    s, r = _unit_pairs(41)
+    alpha = np.array([0.3, 0.7])
+    B = _call(fn, s, r, alpha, what="your profile matrix")
+    ref = np.einsum("k,ki,kj->ij", alpha, s, r)
+    if B.shape != (3, 3):
+        raise Feedback(f"B should be a 3×3 matrix; got shape {B.shape}")
+    if np.allclose(B, ref.T, atol=1e-12):
+        raise Feedback("your B is transposed: eq 29 has the *measured* vector s on the left, B = Σ α s rᵀ "
+                       "(np.outer(s_k, r_k)).")
+    if np.allclose(B, np.einsum("ki,kj->ij", s, r), atol=1e-12):
+        raise Feedback("the weights α_k are missing: B = Σ α_k s_k r_kᵀ.")
+    if not np.allclose(B, ref, atol=1e-12):
+        raise Feedback(f"B differs from Σ α s rᵀ by up to {np.max(np.abs(B - ref)):.3g}.")
+    _ok("B = Σ α_k s_k r_kᵀ is right.")
+
+
+def check_kappa(fn):
+    """Check a student's ``fn(s, r, alpha) -> κ`` (seed 002 eq 41, corrected) on random vector pairs."""
+    fz = _fz()
+    for seed in (42, 43):
+        s, r = _unit_pairs(seed)
+        alpha = np.array([0.35, 0.65])
+        K = _call(fn, s, r, alpha, what="your κ")
+        if K.shape != (4, 4):
+            raise Feedback(f"κ should be 4×4; got shape {K.shape}")
+        ref = fz.kappa_general(s, r, alpha)
+        if np.allclose(K, ref, atol=1e-12):
+            continue
+        if np.allclose(K, fz.kappa_general(r, s, alpha), atol=1e-12):
+            raise Feedback("s and r are swapped: κ is built from B = Σ α s rᵀ with s measured (sensor frame) and r "
+                           "the reference (global frame); swapping them gives the inverse rotation.")
+        if np.allclose(K, fz.kappa_general(s, r, [1.0, 1.0]), atol=1e-12):
+            raise Feedback("the weights α_k are missing.")
+        if not np.allclose(K, K.T, atol=1e-12):
+            raise Feedback("your κ is not symmetric -- eq 40 proves it must be; the printed eq 41 has typos at "
+                           "(0,2), (1,1), (1,2) and in the last two rows (see the erratum below).")
+        if abs(np.trace(K)) > 1e-9:
+            raise Feedback(f"trace(κ) = {np.trace(K):.3g}; κ is traceless: the three lower diagonal entries sum to "
+                           "-σ where σ = tr B is the (0,0) entry.")
+        z = np.sum(alpha[:, None] * np.cross(s, r), axis=0)
+        if np.allclose(K[0, 1:], -z, atol=1e-12):
+            raise Feedback("the first row has the wrong sign: z = Σ α (s × r), not r × s.")
+        raise Feedback(f"κ differs from the correct matrix by up to {np.max(np.abs(K - ref)):.3g}; compare with "
+                       "the compact form [[σ, zᵀ], [z, B + Bᵀ - σI]].")
+    _ok("κ is right (symmetric, traceless, and equal to Davenport's form).")
+
+
+def check_largest_eigenvector(fn):
+    """Check a student's ``fn(kappa) -> q`` (largest-eigenvalue eigenvector, q0 >= 0; seed 002 eqs 46-47)."""
+    fz = _fz()
+    rng = np.random.default_rng(46)
+    for _ in range(3):
+        q_true = rng.standard_normal(4)
+        q_true = q_true / np.linalg.norm(q_true) * np.sign(q_true[0])
+        G, B = fz.accel_model(q_true), fz.mag_model(q_true, 50.0, 1.0)
+        K = fz.kappa(fz.measured_gravity(G), B / np.linalg.norm(B), 1.0, 0.5, 0.5)
+        q = _call(fn, K, what="your function")
+        if q.shape != (4,):
+            raise Feedback(f"q should have shape (4,); got {q.shape}")
+        if np.allclose(q, q_true, atol=1e-9):
+            continue
+        if np.allclose(q, -q_true, atol=1e-9):
+            raise Feedback("right eigenvector, wrong sign: flip it so that q0 >= 0.")
+        if np.allclose(np.abs(q[[3, 0, 1, 2]]), np.abs(q_true), atol=1e-9):
+            raise Feedback("your quaternion is in [x, y, z, w] order; the note and the library use [q0, q1, q2, q3] "
+                           "with the scalar first -- numpy's eigh gives the eigenvector in that order already.")
+        lam, vec = np.linalg.eigh(K)
+        if any(np.allclose(np.abs(q), np.abs(vec[:, i]), atol=1e-9) for i in range(3)):
+            raise Feedback("that is an eigenvector of another eigenvalue: E = 1 - λ is smallest for the *largest* "
+                           "λ (np.linalg.eigh sorts ascending, so take the last column, vec[:, -1]).")
+        if np.allclose(np.abs(q), np.abs(vec[-1]), atol=1e-9):
+            raise Feedback("you took a row of the eigenvector matrix; eigenvectors are its *columns*: vec[:, -1].")
+        raise Feedback("q is not the eigenvector of the largest eigenvalue of κ.")
+    _ok("q is the largest-eigenvalue eigenvector with q0 >= 0 (it recovers the true attitude).")
+
+
+def check_weights(fn):
+    """Check a student's ``fn(G, B_c, B) -> (alpha_g, alpha_m)`` (seed 002 eqs 9, 15, 64-65, with the 0/0 guard)."""
+    fz = _fz()
+    cases = [([0.1, 0.2, 1.1], [30.0, 5.0, 44.0], 50.0), ([1.5, 0.0, 0.5], [20.0, 0.0, 45.0], 50.0),
+             ([0.0, 0.6, 0.8], [30.0, 0.0, 40.0], 50.0)]
+    for G, Bc, B in cases:
+        out = _call(fn, np.array(G), np.array(Bc), B, what="your weights")
+        if out.shape != (2,):
+            raise Feedback(f"return the pair (alpha_g, alpha_m); got shape {out.shape}")
+        ref = np.array(fz.weights(fz.accel_noise(G), fz.mag_noise(Bc, B), B), dtype=float)
+        if np.allclose(out, ref, atol=1e-9):
+            continue
+        if not np.all(np.isfinite(out)):
+            raise Feedback(f"G = {G}, B_c = {Bc}: both readings are exactly on their spheres, so eq 64 is 0/0. Guard "
+                           "it: use α_g = α_m = 0.5 when the denominator is 0.")
+        if np.allclose(out, ref[::-1], atol=1e-9):
+            raise Feedback("α_g and α_m are swapped: each vector is weighted by the *other* sensor's noise "
+                           "(α_g ∝ magnetometer noise, eq 64).")
+        qa = abs(np.dot(G, G) - 1)
+        qd_unscaled = abs(np.dot(Bc, Bc) - B * B)
+        if np.isclose(out[0], qd_unscaled / (qa + qd_unscaled), atol=1e-9):
+            raise Feedback("the magnetometer noise must be divided by B² (eq 64) so both are dimensionless.")
+        raise Feedback(f"G = {G}, B_c = {Bc}: expected (α_g, α_m) = {ref.round(6)}; got {out.round(6)}.")
+    _ok("the weights follow eqs 64-65, including the noise-free 0/0 case.")
+
+
+def check_heading(fn):
+    """Check a student's ``fn(G, B_c) -> heading`` (rad; tilt-compensated compass, NED)."""
+    fz = _fz()
+    for e in np.array([[0.0, 0.0, 0.5], [0.3, -0.2, 2.5], [-2.0, 0.4, -1.0]]):
+        q = rotations.euler_to_quat(e)
+        G, Bc = fz.accel_model(q), fz.mag_model(q, 50.0, 1.1)
+        h = float(_call(fn, G, Bc, what="your heading"))
+        if np.isclose(np.cos(h - e[2]), 1.0, atol=1e-9):
+            continue
+        if abs(h) > 2 * np.pi + 1e-9:
+            raise Feedback("your heading looks like degrees; return radians.")
+        if np.isclose(np.cos(h + e[2]), 1.0, atol=1e-9):
+            raise Feedback("the heading has the wrong sign: ψ = atan2(-B_hy, B_hx) of the levelled field.")
+        raise Feedback(f"at roll, pitch, yaw = {np.degrees(e).round(1)} deg you return {np.degrees(h):.2f}°; "
+                       "level the field with the roll and pitch from G before taking atan2.")
+    _ok("the tilt-compensated heading is right at three attitudes, including upside down.")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 05 (seed 002, the 6DOF / 9DOF indirect Kalman filters)
+# ---------------------------------------------------------------------------------------------------------------
+
+def check_measurement_matrix(fn):
+    """Check a student's ``fn(dt) -> C`` (7×10; seed 002 eq 141 as reconstructed from eqs 137-139)."""
+    fz = _fz()
+    for dt in (0.04, 0.01):
+        C = _call(fn, dt, what="your C")
+        ref = fz.measurement_matrix(dt, 9)
+        if C.shape != (7, 10):
+            raise Feedback(f"C maps the 10 error states to the 7 measurements: shape (7, 10); got {C.shape}")
+        if np.allclose(C, ref, atol=1e-15):
+            continue
+        a2 = fz.alpha(dt) / 2
+        if np.isclose(C[0, 6], a2):
+            raise Feedback("the offset block has the wrong sign: an over-estimated offset *under*-estimates the rate "
+                           "(eq 101), so it is -(α/2) I3.")
+        if np.isclose(abs(C[0, 6]), 2 * a2):
+            raise Feedback("use α/2, not α: the quaternion vector is a half angle (eq 137).")
+        if np.isclose(abs(C[0, 6]), dt / 2):
+            raise Feedback("α = π δt / 180 (eq 140): the offset is in °/s and the quaternion error in radians.")
+        raise Feedback(f"C differs from eq 141 by up to {np.max(np.abs(C - ref)):.3g}: blocks [I3 0 -(α/2)I3 0], "
+                       "[0 I3 -(α/2)I3 0], [0 0 0 1].")
+    _ok("C is the 7×10 matrix of eqs 137-139.")
+
+
+def check_process_noise(fn):
+    """Check a student's ``fn(x_prev, dt) -> Q_w`` (10×10; seed 002 eqs 142-159, v5.00 constants)."""
+    fz = _fz()
+    rng = np.random.default_rng(142)
+    for x in (np.zeros(10), np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [1.5]])):
+        Q = _call(fn, x, 0.04, what="your Q_w")
+        ref = fz.process_noise(x, 0.04)
+        if Q.shape != (10, 10):
+            raise Feedback(f"Q_w is 10×10; got {Q.shape}")
+        if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
+            continue
+        if not np.allclose(Q, Q.T):
+            raise Feedback("Q_w must be symmetric: put Q_gb in both the (g, b) and the (b, g) blocks.")
+        if np.isclose(Q[0, 6], fz.alpha(0.04) / 2 * 0.5 + x[0] * x[6]):
+            raise Feedback("the (g, b) block is Q_gb = diag(q_g b_ε) - (α/2) Q_wb: minus, not plus (eq 151).")
+        if not np.isclose(Q[9, 9], x[9] ** 2 + 20.0):
+            raise Feedback("Q_δδ = δ_ε² + Q_wδ with Q_wδ = 20 deg² (eqs 157-158).")
+        if not np.isclose(Q[6, 6], x[6] ** 2 + 0.5):
+            raise Feedback("Q_bb = diag(b_ε²) + Q_wb I3 with Q_wb = 0.5 (°/s)² (eqs 155-156).")
+        raise Feedback(f"Q_w differs from eqs 142-159 by up to {np.max(np.abs(Q - ref)):.3g} (largest at "
+                       f"{np.unravel_index(np.argmax(np.abs(Q - ref)), Q.shape)}); Q_gg = diag(q_g²) + (α/2)²"
+                       "(diag(b_ε²) + (Q_vY + Q_wb) I3).")
+    _ok("Q_w matches eqs 142-159 at zero and non-zero previous errors.")
+
+
+def check_measurement_noise(fn):
+    """Check a student's ``fn(qvgqa, qvbqd, dt) -> Q_v`` (7×7; seed 002 eqs 160-165 with the 7 µT² floor)."""
+    fz = _fz()
+    for qa, qd in ((0.0, 0.0), (0.006, 50.0), (1.0, 3.0)):
+        Q = _call(fn, qa, qd, 0.04, what="your Q_v")
+        ref = fz.measurement_noise(qa, qd, 0.04)
+        if Q.shape != (7, 7):
+            raise Feedback(f"Q_v is 7×7; got {Q.shape}")
+        if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
+            continue
+        if qd < 7 and np.isclose(Q[3, 3], 0.25 * qd / 2500 + ref[0, 0] - 0.25 * qa, rtol=1e-9):
+            raise Feedback("apply the floor: max(QvBQd, 7 µT²) (FQVBQD_MIN_9DOF_GBY_KALMAN, §2.3).")
+        if np.isclose(Q[0, 0], qa + (ref[0, 0] - 0.25 * qa)) and qa > 0:
+            raise Feedback("the accelerometer term is ¼ QvGQa: the quaternion vector is a half angle (eq 162).")
+        if not np.isclose(Q[6, 6], ref[6, 6]):
+            raise Feedback(f"Q_v(δ) should be (180/π)² (QvGQa + max(QvBQd, 7)/B²) = {ref[6, 6]:.5g} deg² (eq 164); "
+                           f"got {Q[6, 6]:.5g}.")
+        raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v differs from eqs 162-164 by up to "
+                       f"{np.max(np.abs(Q - ref)):.3g}.")
+    _ok("Q_v matches eqs 162-164, including the 7 µT² floor.")
+
+
+def check_gain(fn):
+    """Check a student's ``fn(Q_w, C, Q_v) -> K`` (seed 002 eq 170)."""
+    fz = _fz()
+    C, Qw, Qv = fz.measurement_matrix(0.04), fz.process_noise(np.zeros(10), 0.04), fz.measurement_noise(0.0, 0.0, 0.04)
+    K = _call(fn, Qw, C, Qv, what="your gain")
+    ref = fz.kalman_gain(Qw, C, Qv)
+    if K.shape != (10, 7):
+        raise Feedback(f"K maps 7 measurements to 10 states: shape (10, 7); got {K.shape}")
+    if not np.allclose(K, ref, rtol=1e-9, atol=1e-15):
+        if np.allclose(K, Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T), rtol=1e-6):
+            raise Feedback("Q_v is missing from the innovation covariance C Q_w Cᵀ + Q_v.")
+        raise Feedback("K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ (eq 170; P⁻ = Q_w because A = 0).")
+    _ok(f"K is right: K_gg = {K[0, 0]:.7f}, K_bg = {K[6, 0]:.7f}, K_δ = {K[9, 6]:.7f}.")
+
+
+def check_step(fn):
+    """Check a student's ``fn(kf, gyr_dps, G, B_c)`` that advances a ``freescale.Kalman9`` one step in place."""
+    fz = _fz()
+    import copy
+    rng = np.random.default_rng(170)
+    n = 25
+    w = np.tile([5.0, -3.0, 8.0], (8 * n, 1))
+    rec = fz.synthetic_recording(w, rotations.euler_to_quat([0.3, -0.2, 0.9]), "NED", bias_dps=(1.0, -0.5, 0.3),
+                                 sigma_gyr=0.1, sigma_acc=0.003, sigma_mag=1.0, seed=int(rng.integers(1000)))
+    mine, ref = fz.Kalman9("NED"), fz.Kalman9("NED")
+    mine.lock(rec["acc"][:8].mean(0), rec["mag"][:8].mean(0))
+    ref.lock(rec["acc"][:8].mean(0), rec["mag"][:8].mean(0))
+    ref.delta_deg = mine.delta_deg = 55.0                                 # so the inclination path is exercised
+    for k in range(n):
+        sl = slice(8 * k, 8 * k + 8)
+        args = (rec["gyr"][sl], rec["acc"][sl].mean(0), rec["mag"][sl].mean(0))
+        before = copy.deepcopy(mine)
+        try:
+            fn(mine, *args)
+        except NotImplementedError:
+            raise Feedback("your step is not written yet: replace `raise NotImplementedError(...)` with your code.") \
+                from None
+        ref.step(*args)
+        dq = float(np.degrees(rotations.quat_angle_between(mine.q, ref.q)))
+        if dq < 1e-7 and np.allclose(mine.b_dps, ref.b_dps, atol=1e-9) and abs(mine.delta_deg - ref.delta_deg) < 1e-9:
+            continue
+        if k == 0 and np.allclose(mine.q, before.q):
+            raise Feedback("kf.q did not change: store the new a posteriori quaternion in kf.q (and b̂, δ̂, x_err).")
+        raise Feedback(f"step {k + 1}: q differs by {dq:.3g}°, b̂ by {np.max(np.abs(mine.b_dps - ref.b_dps)):.3g} °/s, "
+                       f"δ̂ by {abs(mine.delta_deg - ref.delta_deg):.3g}°. Usual slips: the gyro offset not subtracted "
+                       "before integrating; the eCompass built with δ6 instead of the previous δ̂; the correction "
+                       "quaternion not conjugated ((√(1-|v|²), -v)); b̂ and δ̂ updated with + instead of -.")
+    _ok(f"{n} steps agree with fusionlab.freescale.Kalman9 (quaternion, offset and inclination).")

@@ -121,3 +121,33 @@ def _norm(v, name):
           summary="accelerometer + magnetometer snapshot (TRIAD) at every sample, no gyro")
 def _triad(gyr, acc, mag, fs):
     return rotations.dcm_to_quat(triad(acc, mag))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Seed 002: the Freescale / NXP v5.00 indirect Kalman filters (Labs 04-05)
+# ---------------------------------------------------------------------------------------------------------------
+from . import freescale as _freescale  # noqa: E402  (row 3 module; appended block)
+
+
+def _freescale_units(gyr, acc):
+    """rad/s → °/s; m/s² reading +g up → the note's NED gravity-positive g (a level sensor reads (0, 0, +1))."""
+    return np.degrees(gyr), -acc / sensors.G
+
+
+@register("freescale9", uses_mag=True, seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
+          summary="Freescale 9DOF indirect Kalman filter: 10 error states, eCompass + gyro, ~25 Hz steps")
+def _freescale9(gyr, acc, mag, fs):
+    """Magnetometer assumed in µT (the 7 µT² floor); the field strength B is the median |mag| of the recording
+    (v5.00 takes it from its magnetic calibration)."""
+    Y, G = _freescale_units(gyr, acc)
+    B = float(np.median(np.linalg.norm(mag, axis=1)))
+    q = _freescale.run_fast9(Y, G, mag, fs, frame="NED", B=B)["q"]
+    return rotations.quat_from_seed002(q, "NED", nav="NED")
+
+
+@register("freescale6", uses_mag=False, seed="002 §8 (v5.00 fRun_6DOF_GY_KALMAN)",
+          summary="Freescale 6DOF indirect Kalman filter: 6 error states, accelerometer + gyro, ~25 Hz steps")
+def _freescale6(gyr, acc, mag, fs):
+    Y, G = _freescale_units(gyr, acc)
+    q = _freescale.run_fast6(Y, G, fs, frame="NED")["q"]
+    return rotations.quat_from_seed002(q, "NED", nav="NED")

@@ -109,7 +109,7 @@ def heading_error(q_err):
 
 
 def inclination_error(q_err):
-    """Inclination error angle (rad, in [0, π]): ``2·acos(√(w² + z²))``, the angle between the two vertical axes."""
+    """Inclination error angle (rad, in [0, π]): ``2·acos(√(w² + z²))``, the angle between the two verticals."""
     w, z = _error_parts(q_err)
     return 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))           # (BROAD: inclination)
 
@@ -182,7 +182,7 @@ def _mask(mask, n):
         except ValueError:
             raise ValueError(f"mask must be a boolean array of shape ({n},); got dtype {m.dtype}") from None
         if not np.all((mf == 0) | (mf == 1)):
-            raise ValueError(f"mask must be boolean (or 0/1); got values other than 0 and 1")
+            raise ValueError("mask must be boolean (or 0/1); got values other than 0 and 1")
         m = mf.astype(bool)
     m = m.reshape(-1) if m.ndim == 2 and m.shape[1] == 1 else m          # MATLAB's (N, 1) column
     if m.shape != (n,):

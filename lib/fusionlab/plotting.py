@@ -313,3 +313,98 @@ def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
     fig.suptitle(finding, fontsize=12)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.82, wspace=0.02)
     return fig
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 02: Kalman-filter figures (seed 000 §4.2-4.4)
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import kalman as _kalman  # noqa: E402  (row 3 module; plotting sits above it)
+
+__all__ += ["plot_gaussian_product", "plot_kf_run"]
+
+
+def _gauss_pdf(x, mu, var):
+    return np.exp(-0.5 * (x - mu) ** 2 / var) / np.sqrt(2 * np.pi * var)
+
+
+def plot_gaussian_product(mu1, var1, mu2, var2, ax=None, labels=("prediction", "measurement")):
+    """Two 1-D Gaussians and their normalised product (seed 000 figs 24-25), on one axis.
+
+    Parameters
+    ----------
+    mu1, var1 : float -- mean and variance of the first (the prediction)
+    mu2, var2 : float -- of the second (the measurement); same unit as ``mu1``
+    ax : matplotlib Axes or None -- draw here (a new figure otherwise)
+    labels : (str, str) -- legend names of the two inputs
+    Returns
+    -------
+    matplotlib Figure -- lines carry gids ``'g1'``, ``'g2'``, ``'product'``
+    """
+    mu, var = _kalman.gaussian_product(mu1, var1, mu2, var2)
+    sd = np.sqrt([var1, var2])
+    lo = min(mu1 - 4 * sd[0], mu2 - 4 * sd[1])
+    hi = max(mu1 + 4 * sd[0], mu2 + 4 * sd[1])
+    x = np.linspace(lo, hi, 600)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+    else:
+        fig = ax.figure
+    ax.plot(x, _gauss_pdf(x, mu1, var1), color="tab:blue", gid="g1",
+            label=f"{labels[0]}: μ = {mu1:.2f}, σ² = {var1:.2f}")
+    ax.plot(x, _gauss_pdf(x, mu2, var2), color="tab:red", gid="g2",
+            label=f"{labels[1]}: μ = {mu2:.2f}, σ² = {var2:.2f}")
+    ax.plot(x, _gauss_pdf(x, mu, var), color="tab:green", lw=2.5, gid="product",
+            label=f"product: μ = {mu:.2f}, σ² = {var:.2f}")
+    ax.axvline(mu, color="tab:green", ls=":", lw=1)
+    ax.set_xlabel("position (m)")
+    ax.set_ylabel("probability density (1/m)")
+    ax.set_title("The product is narrower than either input and sits nearer the sharper one")
+    ax.legend(fontsize=9, loc="upper right")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title=None):
+    """One filter run: truth, measurements and estimate (top) and the estimate's error with its ±2σ band (bottom).
+
+    Parameters
+    ----------
+    t : (N,) array, s -- times of the measurements
+    truth, z, x : (N, n) arrays -- true state, measurement (H = I) and posterior estimate at those times
+    P : (N, n, n) array -- the filter's posterior covariance
+    component : int -- which state to draw (0 = position, 1 = velocity for the falling body)
+    name, unit : str -- for the labels
+    Returns
+    -------
+    matplotlib Figure with two axes
+    """
+    t = validate.array(t, "t")
+    truth, z, x = (validate.array(a, nm) for a, nm in ((truth, "truth"), (z, "z"), (x, "x")))
+    P = validate.array(P, "P")
+    N = len(t)
+    for a, nm in ((truth, "truth"), (z, "z"), (x, "x")):
+        if a.ndim != 2 or a.shape[0] != N:
+            raise ValueError(f"{nm} must have shape ({N}, n) to match t; got {a.shape}")
+    if P.shape != (N, x.shape[1], x.shape[1]):
+        raise ValueError(f"P must have shape ({N}, {x.shape[1]}, {x.shape[1]}); got {P.shape}")
+    c = component
+    sd2 = 2 * np.sqrt(P[:, c, c])
+    fig, (ax0, ax1) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+    ax0.plot(t, z[:, c], ".", color="tab:red", ms=3, alpha=0.6, label=f"measured {name}")
+    ax0.plot(t, truth[:, c], color="tab:blue", lw=2, label=f"true {name}")
+    ax0.plot(t, x[:, c], color="tab:green", lw=1.5, label="filtered estimate")
+    ax0.fill_between(t, x[:, c] - sd2, x[:, c] + sd2, color="tab:green", alpha=0.2, label="estimate ± 2σ")
+    ax0.set_ylabel(f"{name} ({unit})")
+    ax0.legend(fontsize=9)
+    ax0.grid(alpha=0.3)
+    ax0.set_title(title or f"Falling object: the filter follows the true {name} through the measurement noise")
+    ax1.plot(t, x[:, c] - truth[:, c], color="tab:green", label="estimate error")
+    ax1.fill_between(t, -sd2, sd2, color="tab:green", alpha=0.2, label="± 2σ from P")
+    ax1.axhline(0, color="k", lw=0.8)
+    ax1.set_xlabel("time (s)")
+    ax1.set_ylabel(f"error ({unit})")
+    ax1.legend(fontsize=8, ncol=3, loc="lower right")
+    ax1.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig

@@ -1,19 +1,583 @@
-"""Sensor models and the quantities read straight off a sensor: tilt from the accelerometer.
+"""Sensor models and the quantities read straight off a sensor (seed 000 §3.1-3.2; seed 001 sensors and attitude notes).
 
-Body frame: the sensor's own axes. The accelerometer reads *specific force* -- at rest it reads +g on the axis
-that points up (seed 001 sensors note: "accelerometers never measure gravity directly -- they measure the normal
-forces"). With a forward-right-down body frame, a level sensor at rest therefore reads ``(0, 0, -g)``.
+What is here, in the order of Lab 00:
+
+1. **The accelerometer as a spring, a mass and a damper** (seed 000 eqs 3.1-3.7): the frequency response
+   :func:`smd_transfer`, its DC gain :func:`smd_dc_gain` and the displacement→acceleration law
+   :func:`accel_from_displacement` (eq 3.7 corrected; the printed form is kept as :func:`seed000_eq37_printed`).
+2. **Capacitive sensing** (eqs 3.8-3.13): :func:`parallel_plate_capacitance`, :func:`differential_capacitances`,
+   the exact divider :func:`bridge_output`, its small-δ form :func:`half_bridge_output` (Vout = δ·Vin/2) and
+   :func:`accel_from_bridge`; the output filter :func:`adxl335_bandwidth`.
+3. **ADC conversion** (eqs 3.14-3.16, 3.35; 5.1-5.3, 5.11-5.12) exactly as the thesis does it (divide by
+   2^bits − 1): :func:`adc_to_volts`, :func:`adc_to_physical`, its inverse the quantiser :func:`physical_to_adc`,
+   the step size :func:`adc_step` and the level-surface null :func:`null_offset`. The two devices of the thesis are
+   described by :class:`AnalogSensor` records (:data:`ADXL335`, :data:`IDG500`, :data:`IDG500_XOUT`).
+4. **Tilt from gravity** (eqs 3.17-3.21; seed 001 attitude note §2): :func:`tilt_2d`, :func:`tilt_3d`,
+   the piecewise :func:`atan2_piecewise` (eq 3.21 corrected; printed form :func:`seed000_eq321_printed`),
+   :func:`excel_atan2` (Excel's argument order), the seed 001 formulas as printed
+   (:func:`seed001_tilt_printed`) and full range (:func:`tilt_from_accel`), and the accelerometer model
+   :func:`specific_force`.
+5. **The gyroscope**: the Coriolis force with its sign (eqs 3.32-3.34 corrected: :func:`coriolis_acceleration`,
+   :func:`coriolis_force`, :func:`rotating_frame_acceleration`; printed form :func:`seed000_eq334_printed`), and the
+   drift of an integrated gyro (:func:`gyro_measure`, :func:`integrate_rate`, :func:`integration_drift`).
+
+Frames and units at this module's edge
+--------------------------------------
+* SI inside (m, s, kg, V, rad, rad/s). The ADC functions return the unit of the sensitivity they are given (g for
+  the ADXL335 in V/g, °/s for the IDG-500 in V/(°/s)), as the thesis does at the sensor edge.
+* The library body frame is forward-right-down; the accelerometer reads *specific force*: at rest it reads +g on
+  the axis that points up (seed 001: "accelerometers never measure gravity directly -- they measure the normal
+  forces"), so a level sensor reads ``(0, 0, -g)``. :func:`tilt_from_accel` and :func:`specific_force` use it.
+* The thesis' own tilt formulas (:func:`tilt_2d`, :func:`tilt_3d`) are written for its sensor frame: **Z up**, a
+  level sensor reads +1 g on Z (seed 000 §3.1.3). Each says so in its docstring.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from . import validate
 
-__all__ = ["G", "tilt_from_accel"]
+__all__ = [
+    "G", "EPS0",
+    # 1. spring-mass-damper
+    "smd_transfer", "smd_natural_frequency", "smd_damping_ratio", "smd_dc_gain",
+    "accel_from_displacement", "seed000_eq37_printed",
+    # 2. capacitive sensing
+    "parallel_plate_capacitance", "differential_capacitances", "bridge_output", "half_bridge_output",
+    "accel_from_bridge", "adxl335_bandwidth",
+    # 3. ADC
+    "AnalogSensor", "adxl335", "ADXL335", "IDG500", "IDG500_XOUT", "ADC_BITS",
+    "adc_full_scale", "adc_to_volts", "adc_to_physical", "physical_to_adc", "adc_step", "null_offset",
+    # 4. tilt
+    "tilt_2d", "tilt_3d", "atan2_piecewise", "seed000_eq321_printed", "excel_atan2",
+    "seed001_tilt_printed", "tilt_from_accel", "specific_force",
+    # 5. gyroscope
+    "coriolis_acceleration", "coriolis_force", "seed000_eq334_printed", "rotating_frame_acceleration",
+    "gyro_measure", "integrate_rate", "integration_drift",
+]
 
 #: Standard gravity, m/s^2 (seed 001 uses 9.8; the labs say which they use).
 G = 9.80665
+#: Vacuum permittivity, F/m.
+EPS0 = 8.8541878128e-12
+
+
+def _nonnegative(x, name):
+    a = validate.array(x, name)
+    if np.any(a < 0):
+        raise ValueError(f"{name} must be >= 0; got {float(np.min(a)):g}")
+    return a
+
+
+def _positive_array(x, name):
+    a = validate.array(x, name)
+    if np.any(a <= 0):
+        raise ValueError(f"{name} must be > 0; got {float(np.min(a)):g}")
+    return a
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 1. The accelerometer as a spring-mass-damper (seed 000 §3.1, eqs 3.1-3.7)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def smd_transfer(omega, m, k, b):
+    """Frequency response of the proof mass, ``H(jω) = X/A = -1 / ((jω)² + (b/m) jω + k/m)`` (seed 000 eq 3.5).
+
+    ``x`` is the displacement of the mass relative to the case, ``a`` the acceleration of the case (eq 3.2:
+    ``ẍ + (b/m)ẋ + (k/m)x = -a``). The amplitude ``|H|`` is flat at ``m/k`` far below ``ω_n = √(k/m)`` and peaks near
+    ``ω_n`` when the damping is light (seed 000 fig 4).
+
+    Parameters
+    ----------
+    omega : (...) array, rad/s -- angular frequency, >= 0
+    m : float, kg -- proof mass, > 0
+    k : float, N/m -- spring constant, > 0
+    b : float or (...) array, N·s/m -- damping coefficient, >= 0 (broadcasts against ``omega``)
+    Returns
+    -------
+    (...) complex array, m per (m/s²) = s² -- take ``np.abs`` for the amplitude of fig 4
+    """
+    w = _nonnegative(omega, "omega")
+    m = validate.positive(m, "m")
+    k = validate.positive(k, "k")
+    b = _nonnegative(b, "b")
+    s = 1j * w
+    return -1.0 / (s**2 + (b / m) * s + k / m)                                    # (000 eq 3.5)
+
+
+def smd_natural_frequency(m, k):
+    """Undamped natural frequency ``ω_n = √(k/m)``, rad/s: the "knee" of seed 000 fig 4 (000 §3.1, after eq 3.5)."""
+    return np.sqrt(validate.positive(k, "k") / validate.positive(m, "m"))
+
+
+def smd_damping_ratio(m, k, b):
+    """Damping ratio ``ζ = b / (2√(k m))`` (dimensionless); ``b = 2ζ√(km)`` gives the damping for a chosen ζ.
+
+    Parameters
+    ----------
+    m : float, kg; k : float, N/m; b : float or array, N·s/m (>= 0)
+    """
+    m = validate.positive(m, "m")
+    k = validate.positive(k, "k")
+    return _nonnegative(b, "b") / (2.0 * np.sqrt(k * m))
+
+
+def smd_dc_gain(m, k):
+    """Low-frequency gain of the proof mass, ``H(0) = -m/k`` in s² (seed 000 eq 3.6).
+
+    A static acceleration ``a`` deflects the mass by ``x = H(0)·a = -(m/k)·a``.
+    """
+    return -validate.positive(m, "m") / validate.positive(k, "k")                 # (000 eq 3.6)
+
+
+def accel_from_displacement(x, m, k):
+    """Case acceleration from the proof-mass displacement in the flat band, ``a = -(k/m)·x`` (seed 000 eq 3.7, corrected).
+
+    The thesis prints ``a = -(m/k)·x`` (:func:`seed000_eq37_printed`); inverting ``x = -(m/k)·a`` (eq 3.6) gives
+    ``k/m``, and only ``k/m`` (1/s²) turns metres into m/s².
+
+    Parameters
+    ----------
+    x : (...) array, m -- displacement of the mass relative to the case
+    m : float, kg; k : float, N/m
+    Returns
+    -------
+    (...) array, m/s²
+    """
+    x = validate.array(x, "x")
+    return -(validate.positive(k, "k") / validate.positive(m, "m")) * x           # (000 eq 3.7, corrected)
+
+
+def seed000_eq37_printed(x, m, k):
+    """Seed 000 eq 3.7 **as printed**, ``a = -(m/k)·x`` -- wrong (units m·s², not m/s²); kept to show the erratum."""
+    x = validate.array(x, "x")
+    return -(validate.positive(m, "m") / validate.positive(k, "k")) * x
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 2. Capacitive sensing (seed 000 §3.1, eqs 3.8-3.13; §3.1.1 bandwidth)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def parallel_plate_capacitance(eps, area, gap):
+    """Parallel-plate capacitance ``C = ε·A/x`` in farads (seed 000 eq 3.8).
+
+    ``eps`` is the *absolute* permittivity ``ε0·εr`` (F/m); the thesis calls ``ε0ε`` the "relative permittivity",
+    a misnomer (the relative permittivity εr is dimensionless).
+
+    Parameters
+    ----------
+    eps : float, F/m (> 0); area : float or array, m² (> 0); gap : float or array, m (> 0)
+    """
+    eps = validate.positive(eps, "eps")
+    return eps * _positive_array(area, "area") / _positive_array(gap, "gap")     # (000 eq 3.8)
+
+
+def differential_capacitances(c0, delta):
+    """The two gaps of a differential sensor, ``C1 = C0/(1+δ)`` and ``C2 = C0/(1-δ)`` with ``δ = x/x0`` (000 eqs 3.9-3.10).
+
+    Parameters
+    ----------
+    c0 : float, F -- capacitance at rest (> 0)
+    delta : (...) array -- relative displacement ``x/x0``, |δ| < 1 (the plates touch at ±1)
+    Returns
+    -------
+    (C1, C2) : two (...) arrays, F
+    """
+    c0 = validate.positive(c0, "c0")
+    d = validate.array(delta, "delta")
+    if np.any(np.abs(d) >= 1):
+        raise ValueError(f"delta must satisfy |delta| < 1 (the plates touch at ±1); got {float(np.max(np.abs(d))):g}")
+    return c0 / (1 + d), c0 / (1 - d)                                             # (000 eqs 3.9, 3.10)
+
+
+def bridge_output(c1, c2, v_in):
+    """Exact output of the capacitive half bridge of seed 000 fig 6, in volts.
+
+    The excitation ``v_in`` drives ``C1`` and ``C2`` in series; the reference leg (``C0``, ``C0``) sits at
+    ``v_in/2``. The output is the voltage across ``C1`` minus the reference: with impedances ``1/(jωC)``,
+    ``Vout = v_in·C2/(C1 + C2) - v_in/2``. For the differential pair of eqs 3.9-3.10 this is exactly ``δ·v_in/2``
+    (:func:`half_bridge_output`, eq 3.11) for every |δ| < 1; with only one moving plate it is not linear.
+
+    Parameters
+    ----------
+    c1, c2 : float or (...) arrays, F (> 0); v_in : float, V (amplitude of the excitation)
+    Returns
+    -------
+    (...) array, V
+    """
+    c1 = _positive_array(c1, "c1")
+    c2 = _positive_array(c2, "c2")
+    v_in = validate.array(v_in, "v_in")
+    return v_in * c2 / (c1 + c2) - v_in / 2
+
+
+def half_bridge_output(delta, v_in):
+    """Half-bridge output ``Vout = δ·Vin/2`` (seed 000 eq 3.11).
+
+    The thesis derives it for δ ≪ 1; for a differential pair it is exact (see :func:`bridge_output`).
+
+    Parameters
+    ----------
+    delta : (...) array -- ``x/x0``; v_in : float, V
+    Returns
+    -------
+    (...) array, V
+    """
+    d = validate.array(delta, "delta")
+    return 0.5 * d * validate.array(v_in, "v_in")                                 # (000 eq 3.11)
+
+
+def accel_from_bridge(v_out, v_in, x0, m, k):
+    """Acceleration from the bridge voltage, ``a = -(k/m)·x0·(2·Vout/Vin)`` (seed 000 eqs 3.12-3.13, corrected).
+
+    The thesis prints ``-(m/k)`` here as in eq 3.7 (the same erratum); ``x = x0·δ`` and ``δ = 2·Vout/Vin``.
+
+    Parameters
+    ----------
+    v_out : (...) array, V; v_in : float, V (≠ 0); x0 : float, m -- rest gap (> 0); m : kg; k : N/m
+    Returns
+    -------
+    (...) array, m/s²
+    """
+    v_out = validate.array(v_out, "v_out")
+    v_in = validate.array(v_in, "v_in")
+    if np.any(v_in == 0):
+        raise ValueError("v_in must not be 0: the bridge output is read as a fraction of the excitation")
+    x0 = validate.positive(x0, "x0")
+    delta = 2.0 * v_out / v_in                                                    # (000 eq 3.11 inverted)
+    return accel_from_displacement(x0 * delta, m, k)                              # (000 eqs 3.12-3.13, corrected)
+
+
+def adxl335_bandwidth(c, r=32e3):
+    """-3 dB bandwidth of an ADXL335 output, ``1 / (2π · 32 kΩ · C)`` in Hz (seed 000 §3.1.1, from the datasheet).
+
+    Parameters
+    ----------
+    c : float or array, F -- the external capacitor on XOUT/YOUT/ZOUT (0.1 µF gives ≈ 50 Hz)
+    r : float, Ω -- the internal output resistor (≈ 32 kΩ)
+    """
+    return 1.0 / (2 * np.pi * validate.positive(r, "r") * _positive_array(c, "c"))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 3. ADC conversion (seed 000 §3.1.2 and §3.2.2, eqs 3.14-3.16, 3.35; §5.3.1 eqs 5.1-5.3, 5.11-5.12)
+# ----------------------------------------------------------------------------------------------------------------
+
+#: The NanoCore12 ADC of the thesis: 10 bits.
+ADC_BITS = 10
+
+
+@dataclass(frozen=True)
+class AnalogSensor:
+    """Datasheet numbers of a ratiometric analog sensor axis, as the ADC conversion needs them.
+
+    Attributes
+    ----------
+    name : str
+    sensitivity : float -- volts per unit of ``unit`` (0.300 V/g; 0.0091 V/(°/s))
+    zero_level : float, V -- output at zero input (zero-g bias / zero-rate output)
+    supply : float, V -- the supply the numbers hold for
+    unit : str -- 'g' or 'deg/s'
+    full_scale : float -- the sensor's specified range, ± in ``unit``
+    """
+    name: str
+    sensitivity: float
+    zero_level: float
+    supply: float
+    unit: str
+    full_scale: float
+
+
+def adxl335(vs=3.0):
+    """ADXL335 accelerometer numbers at supply ``vs`` (V): ratiometric, so zero-g level ``Vs/2`` and ≈ ``0.1·Vs`` V/g.
+
+    At 3 V the datasheet gives 300 mV/g and 1.5 V (typical); it quotes 360 mV/g at 3.6 V and 195 mV/g at 2 V,
+    so ``0.1·Vs`` is a nominal scaling, not a guarantee. Range ±3 g. The thesis' worked example uses 1.35 V instead
+    of ``Vs/2`` (the IDG-500's zero-rate level).
+    """
+    vs = validate.positive(vs, "vs")
+    return AnalogSensor("ADXL335", sensitivity=0.1 * vs, zero_level=vs / 2, supply=vs, unit="g", full_scale=3.0)
+
+
+#: ADXL335 at Vs = 3 V (the thesis' supply): 0.300 V/g, zero-g level 1.5 V.
+ADXL335 = adxl335(3.0)
+#: IDG-500 gyro, X4.5OUT/Y4.5OUT pins (the output the thesis' example uses): 9.1 mV/(°/s), 1.35 V, ±110 °/s.
+IDG500 = AnalogSensor("IDG-500 (X4.5OUT)", sensitivity=0.0091, zero_level=1.35, supply=3.0, unit="deg/s",
+                      full_scale=110.0)
+#: IDG-500 gyro, XOUT/YOUT pins: 2.0 mV/(°/s), 1.35 V, ±500 °/s.
+IDG500_XOUT = AnalogSensor("IDG-500 (XOUT)", sensitivity=0.002, zero_level=1.35, supply=3.0, unit="deg/s",
+                           full_scale=500.0)
+
+
+def _bits(bits):
+    if isinstance(bits, bool) or not float(bits).is_integer() or not 1 <= int(bits) <= 32:
+        raise ValueError(f"bits must be a whole number of ADC bits between 1 and 32; got {bits!r}")
+    return int(bits)
+
+
+def adc_full_scale(bits=ADC_BITS):
+    """The thesis' "ADC Resolution": the largest count, ``2**bits - 1`` (1023 for 10 bits) (seed 000 eq 3.14).
+
+    Many converters define one count as ``Vref / 2**bits`` instead; the thesis divides by ``2**bits - 1`` and so do we.
+    """
+    return 2 ** _bits(bits) - 1
+
+
+def _counts(counts, bits):
+    c = validate.array(counts, "counts")
+    top = adc_full_scale(bits)
+    if np.any(c < 0) or np.any(c > top):
+        raise ValueError(f"counts must lie in 0..{top} for a {bits}-bit ADC; got {float(np.min(c)):g}.."
+                         f"{float(np.max(c)):g} (a hex log? convert with int(text, 16) first)")
+    return c
+
+
+def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
+    """ADC result to volts, ``V = counts · Vref / (2**bits - 1)`` (seed 000 eq 3.14).
+
+    Parameters
+    ----------
+    counts : (...) array -- ADC results, 0..2**bits - 1
+    v_ref : float, V -- the ADC voltage scale (the thesis: "V_ADC")
+    bits : int -- ADC resolution in bits
+    Returns
+    -------
+    (...) array, V
+    """
+    c = _counts(counts, bits)
+    return c * validate.positive(v_ref, "v_ref") / adc_full_scale(bits)            # (000 eq 3.14)
+
+
+def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, null_offset=0.0):
+    """ADC result to the sensor's unit, ``(counts·Vref/(2**bits-1) - zero) / sensitivity + NullOffset``.
+
+    Seed 000 eq 3.16 (accelerometer, g) and eq 3.35 (gyro, °/s) are this formula; eqs 5.1-5.3 and 5.11-5.12 add the
+    ``NullOffset`` found on a level surface (:func:`null_offset`) -- *added*, as the thesis writes it.
+
+    Parameters
+    ----------
+    counts : (...) array -- ADC results
+    zero_level : float, V -- zero-g bias / zero-rate output
+    sensitivity : float, V per unit (> 0) -- e.g. 0.300 V/g, 0.0091 V/(°/s); **volts**, not mV
+    v_ref : float, V; bits : int
+    null_offset : float or (...) array, in the sensor's unit
+    Returns
+    -------
+    (...) array, in the unit of ``sensitivity`` (g, °/s)
+
+    Examples
+    --------
+    The thesis' worked examples (10-bit, 3.0 V, 1.35 V):
+
+    >>> round(float(adc_to_physical(508, 1.35, 0.300)), 4)      # printed as 0.96 g: an erratum
+    0.4658
+    >>> round(float(adc_to_physical(508, 1.35, 0.0091)), 4)     # printed as 15.35 °/s
+    15.3556
+    """
+    volts = adc_to_volts(counts, v_ref, bits)                                     # (000 eq 3.14)
+    zero = validate.array(zero_level, "zero_level")
+    sens = _positive_array(sensitivity, "sensitivity")
+    off = validate.array(null_offset, "null_offset")
+    return (volts - zero) / sens + off                                            # (000 eqs 3.15-3.16, 3.35, 5.1)
+
+
+def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
+    """The ADC a simulator needs: a reading in the sensor's unit to the integer count the MCU would print.
+
+    Inverse of :func:`adc_to_physical` (without NullOffset), rounded to the nearest count and clipped to
+    ``0..2**bits - 1`` (an input beyond the ADC window saturates, as on the board).
+
+    Parameters
+    ----------
+    value : (...) array -- in the unit of ``sensitivity``
+    zero_level : float, V; sensitivity : float, V per unit; v_ref : float, V; bits : int
+    Returns
+    -------
+    (...) int64 array
+    """
+    x = validate.array(value, "value")
+    zero = validate.array(zero_level, "zero_level")
+    sens = _positive_array(sensitivity, "sensitivity")
+    top = adc_full_scale(bits)
+    volts = zero + sens * x
+    return np.clip(np.rint(volts / validate.positive(v_ref, "v_ref") * top), 0, top).astype(np.int64)
+
+
+def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
+    """Quantisation step: one ADC count in the sensor's unit, ``Vref / (2**bits - 1) / sensitivity``.
+
+    10 bits at 3.0 V: 9.78 mg for the ADXL335 (0.300 V/g), 0.322 °/s for the IDG-500 X4.5OUT (9.1 mV/(°/s)).
+    """
+    return validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / _positive_array(sensitivity, "sensitivity")
+
+
+def null_offset(readings, expected=0.0):
+    """NullOffset of seed 000 eqs 5.1-5.3 and 5.11-5.12: ``expected - mean(readings)`` over a still, level record.
+
+    The thesis nulls the sensors on a level surface ("Initialize/Null/Zero") but does not say how; the natural
+    reading is the mean of a still record per axis. The offset is *added* to later conversions.
+
+    Parameters
+    ----------
+    readings : (N,) or (N, n) array -- converted readings of a still, level record (g or °/s)
+    expected : float or (n,) array -- what the axis should read there (0 for a gyro or a horizontal accelerometer
+        axis, +1 g for the up axis in the thesis' frame)
+    Returns
+    -------
+    float or (n,) array
+    """
+    r = validate.array(readings, "readings")
+    if r.ndim == 0 or len(r) == 0:
+        raise ValueError(f"readings must hold at least one sample along axis 0; got shape {r.shape}")
+    return validate.array(expected, "expected") - r.mean(axis=0)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 4. Tilt from gravity (seed 000 §3.1.3, eqs 3.17-3.21; seed 001 attitude note §2)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def tilt_2d(a_x, a_y):
+    """Angle of the in-plane reading, ``θ = arctan(Ay/Ax)`` in rad, as printed (seed 000 eq 3.17).
+
+    The angle of the measured vector from the sensor's X axis in the X-Y plane (fig 12). ``arctan`` of a ratio
+    forgets the quadrant: it returns -90°..90° only, so readings ``(Ax, Ay)`` and ``(-Ax, -Ay)`` give the same angle
+    (:func:`atan2_piecewise` keeps it). ``Ax = 0`` gives ±90°.
+
+    Parameters
+    ----------
+    a_x, a_y : (...) arrays -- readings in any one unit (g)
+    Returns
+    -------
+    (...) array, rad
+    """
+    ax = validate.array(a_x, "a_x")
+    ay = validate.array(a_y, "a_y")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.arctan(ay / ax)                                                 # (000 eq 3.17)
+
+
+def tilt_3d(acc):
+    """The three tilt angles of seed 000 eqs 3.18-3.20, with ``arctan`` as printed, in rad.
+
+    Thesis sensor frame: **Z up**, a level sensor reads ``(0, 0, +1 g)``. The reading is the up-pointing reaction
+    to gravity, so
+
+    * ``θx = arctan(Ax / √(Ay² + Az²))`` is the elevation of the X axis above the horizontal (eq 3.19);
+    * ``θy = arctan(Ay / √(Ax² + Az²))`` is the elevation of the Y axis (eq 3.20);
+    * ``θz = arctan(√(Ax² + Ay²) / Az)`` is the angle of the Z axis from the vertical (eq 3.18) -- but only while
+      ``Az > 0``: upside down the printed ``arctan`` returns a negative angle (150° reads as -30°);
+      ``np.arctan2(√(Ax² + Ay²), Az)`` gives 0..180°.
+
+    θx and θy never need ``atan2``: their denominators are norms, never negative.
+
+    Parameters
+    ----------
+    acc : (..., 3) array -- ``[Ax, Ay, Az]`` in any one unit, not all zero
+    Returns
+    -------
+    (..., 3) array, rad -- ``[θx, θy, θz]``
+    """
+    a = validate.vectors(acc, "acc")
+    if np.any(np.linalg.norm(a, axis=-1) == 0):
+        raise ValueError("acc must not be zero: a sensor in free fall reads 0 and has no tilt information")
+    ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        theta_z = np.arctan(np.hypot(ax, ay) / az)                                # (000 eq 3.18)
+    theta_x = np.arctan2(ax, np.hypot(ay, az))                                    # (000 eq 3.19), arctan of a ratio
+    theta_y = np.arctan2(ay, np.hypot(ax, az))                                    # (000 eq 3.20)   with den >= 0
+    return np.stack([theta_x, theta_y, theta_z], -1)
+
+
+def atan2_piecewise(y, x):
+    """Four-quadrant arctangent built from ``arctan(y/x)`` case by case (seed 000 eq 3.21, corrected), in rad.
+
+    ==================  =========================
+    ``arctan(y/x)``      x > 0
+    ``arctan(y/x) + π``  y >= 0, x < 0
+    ``arctan(y/x) - π``  **y < 0**, x < 0  (the thesis prints "y >= 0, x < 0" again)
+    ``+π/2``             y > 0, x = 0
+    ``-π/2``             y < 0, x = 0
+    undefined (NaN)      y = 0, x = 0
+    ==================  =========================
+
+    Equals ``np.arctan2(y, x)`` everywhere except (0, 0), where numpy returns 0 and eq 3.21 says "undefined".
+    Result in (-π, π].
+
+    Parameters
+    ----------
+    y, x : (...) arrays (broadcast) -- **y first**, as in C, MATLAB and numpy
+    Returns
+    -------
+    (...) array, rad
+    """
+    y = validate.array(y, "y")
+    x = validate.array(x, "x")
+    y, x = np.broadcast_arrays(y, x)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        base = np.arctan(y / x)
+    return np.select([x > 0, (y >= 0) & (x < 0), (y < 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
+                     [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2], default=np.nan)  # (000 eq 3.21)
+
+
+def seed000_eq321_printed(y, x):
+    """Seed 000 eq 3.21 **as printed**: the third case repeats "y >= 0, x < 0", so y < 0, x < 0 matches no case.
+
+    Returns NaN in the third quadrant (no rule applies); elsewhere it equals :func:`atan2_piecewise`.
+    """
+    y = validate.array(y, "y")
+    x = validate.array(x, "x")
+    y, x = np.broadcast_arrays(y, x)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        base = np.arctan(y / x)
+    return np.select([x > 0, (y >= 0) & (x < 0), (y >= 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
+                     [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2], default=np.nan)
+
+
+def excel_atan2(x_num, y_num):
+    """Excel's and LibreOffice's ``ATAN2(x_num; y_num)``: **x first**, so ``ATAN2(a, b) == np.arctan2(b, a)``, in rad.
+
+    The thesis did its analysis in Excel, so its ``atan2(Az, Ay)`` is most probably Excel order: the angle of
+    ``Ay`` against ``Az``, 0 when level -- whereas ``np.arctan2(Az, Ay)`` is ≈ 90° when level. Excel returns
+    ``#DIV/0!`` for (0, 0); this returns NaN there.
+
+    Parameters
+    ----------
+    x_num, y_num : (...) arrays (broadcast)
+    Returns
+    -------
+    (...) array, rad
+    """
+    x = validate.array(x_num, "x_num")
+    y = validate.array(y_num, "y_num")
+    out = np.arctan2(y, x)
+    return np.where((x == 0) & (y == 0), np.nan, out)
+
+
+def seed001_tilt_printed(acc, g=G):
+    """Seed 001 attitude note §2 **as printed**: ``θ = arcsin(a_x/g)``, ``φ = arctan(a_y/a_z)``, in rad.
+
+    Body frame forward-right-down (a level sensor reads ``(0, 0, -g)``). The roll formula is right only for
+    |φ| < 90° (at φ = 2.5 rad it returns -0.64 rad); the pitch needs ``|a| = g`` and returns NaN when
+    ``|a_x| > g``. :func:`tilt_from_accel` is the full-range form.
+
+    Parameters
+    ----------
+    acc : (..., 3) array, same unit as ``g``; g : float (> 0)
+    Returns
+    -------
+    (..., 2) array, rad -- ``[roll, pitch]``
+    """
+    a = validate.vectors(acc, "acc")
+    g = validate.positive(g, "g")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        roll = np.arctan(a[..., 1] / a[..., 2])                                   # (001 attitude §2, printed)
+        pitch = np.arcsin(a[..., 0] / g)
+    return np.stack([roll, pitch], -1)
 
 
 def tilt_from_accel(acc):
@@ -37,3 +601,163 @@ def tilt_from_accel(acc):
     roll = np.arctan2(-a[..., 1], -a[..., 2])                              # (001 attitude §2, atan2 form)
     pitch = np.arctan2(a[..., 0], np.hypot(a[..., 1], a[..., 2]))
     return np.stack([roll, pitch], -1)
+
+
+def specific_force(C_bn, acc_nav=None, g=G):
+    """What an ideal accelerometer reads, ``f_b = C_bnᵀ (a_n - g_n)`` with ``g_n = (0, 0, g)`` in NED.
+
+    Seed 001 sensors note: ``a_m = (1/m)(F - F_g)`` -- the sum of forces minus gravity. At rest (``a_n = 0``) a
+    level sensor reads ``(0, 0, -g)``: +g on the axis that points up. In free fall (``a_n = g_n``) it reads 0.
+
+    Parameters
+    ----------
+    C_bn : (..., 3, 3) array -- attitude, body→NED (:mod:`fusionlab.rotations`)
+    acc_nav : (..., 3) array, m/s², optional -- acceleration of the sensor in NED (default 0: at rest)
+    g : float, m/s²
+    Returns
+    -------
+    (..., 3) array, m/s² -- in the body frame
+    """
+    C = validate.matrices(C_bn, "C_bn")
+    g_n = np.array([0.0, 0.0, validate.positive(g, "g")])
+    a_n = np.zeros(3) if acc_nav is None else validate.vectors(acc_nav, "acc_nav")
+    f_n = a_n - g_n                                                               # (001 sensors: a_m = (F - F_g)/m)
+    return np.einsum("...ji,...j->...i", C, np.broadcast_to(f_n, np.broadcast_shapes(f_n.shape, C.shape[:-1])))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 5. The gyroscope: Coriolis (seed 000 §3.2, eqs 3.26-3.34) and integration drift (seed 001 §7.2, attitude §3)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def coriolis_acceleration(omega, v):
+    """Apparent Coriolis acceleration in a frame rotating at ``omega``: ``-2 Ω × v`` in m/s² (seed 000 eq 3.33, corrected).
+
+    Parameters
+    ----------
+    omega : (..., 3) array, rad/s -- rotation rate of the frame
+    v : (..., 3) array, m/s -- velocity relative to the rotating frame
+    Returns
+    -------
+    (..., 3) array, m/s²
+    """
+    w = validate.vectors(omega, "omega")
+    v = validate.vectors(v, "v")
+    return -2.0 * np.cross(w, v)                                                  # (000 eq 3.33, corrected sign)
+
+
+def coriolis_force(mass, omega, v):
+    """Coriolis force on a mass moving at ``v`` in a frame rotating at ``omega``: ``F = -2 m Ω × v`` in N (000 eq 3.34, corrected).
+
+    This is the apparent force an observer *in the rotating frame* (the gyro's proof mass, the aircraft) sees
+    deflect the mass. The thesis prints ``F = 2M(Ω × v)`` (:func:`seed000_eq334_printed`), which is the force the
+    suspension must supply to keep the mass on its track -- the opposite vector. Its own right-hand rule ("middle
+    finger opposite the Coriolis force") agrees with the minus sign.
+
+    Parameters
+    ----------
+    mass : float, kg (> 0); omega : (..., 3) rad/s; v : (..., 3) m/s
+    Returns
+    -------
+    (..., 3) array, N
+    """
+    m = validate.positive(mass, "mass")
+    return m * coriolis_acceleration(omega, v)                                    # (000 eq 3.34, corrected sign)
+
+
+def seed000_eq334_printed(mass, omega, v):
+    """Seed 000 eq 3.34 **as printed**, ``F = 2M(Ω × v)`` -- the opposite of the Coriolis force; kept for the erratum."""
+    m = validate.positive(mass, "mass")
+    return 2.0 * m * np.cross(validate.vectors(omega, "omega"), validate.vectors(v, "v"))
+
+
+def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
+    """Acceleration seen in a rotating frame, from seed 000 eq 3.32 solved for it (with the Ω̇ term corrected).
+
+    Eq 3.32: ``A_space = a_rot + 2 Ω×v + Ω×(Ω×r) + Ω̇×r`` (the thesis writes ``α̇×R`` for the last term), so
+    ``a_rot = A_space - 2 Ω×v - Ω×(Ω×r) - Ω̇×r``: Coriolis, centrifugal and Euler terms.
+
+    Parameters
+    ----------
+    a_inertial : (..., 3) array, m/s² -- acceleration in the inertial frame, expressed in rotating-frame axes
+    omega : (..., 3) array, rad/s; r : (..., 3) array, m -- position; v : (..., 3) array, m/s -- velocity relative
+        to the rotating frame; omega_dot : (..., 3) array, rad/s², optional (default 0)
+    Returns
+    -------
+    (..., 3) array, m/s²
+    """
+    A = validate.vectors(a_inertial, "a_inertial")
+    w = validate.vectors(omega, "omega")
+    r = validate.vectors(r, "r")
+    wd = np.zeros(3) if omega_dot is None else validate.vectors(omega_dot, "omega_dot")
+    return (A + coriolis_acceleration(w, v) - np.cross(w, np.cross(w, r))         # (000 eq 3.32, solved for a_rot)
+            - np.cross(wd, r))
+
+
+def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
+    """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §2).
+
+    Seed 001's full model also has a scale factor, misalignment and temperature drift (``p = S⁻¹(M⁻¹ p_m + β(T))``);
+    this keeps the two errors that make an integrated gyro drift. Units are the caller's (rad/s or °/s).
+
+    Parameters
+    ----------
+    rate_true : (N,) or (N, n) array -- the true rate, one row per sample
+    bias : float or (n,) array -- constant bias
+    noise_std : float (>= 0) -- standard deviation of the white noise of each sample
+    rng : numpy.random.Generator or int, optional -- seed it for reproducible noise
+    Returns
+    -------
+    array shaped like ``rate_true``
+    """
+    w = validate.array(rate_true, "rate_true")
+    b = validate.array(bias, "bias")
+    sd = float(_nonnegative(noise_std, "noise_std"))
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    return w + b + sd * rng.standard_normal(w.shape)
+
+
+def integrate_rate(rate, dt, angle0=0.0):
+    """Angle from a rate by forward Euler, ``θ[n+1] = θ[n] + dt·ω[n]`` (seed 001 attitude note §3: ``φ⁺ = φ + Tφ̇``).
+
+    The angle at each sample time ``t_n = n·dt``: ``θ[0] = angle0`` and ``θ[n] = angle0 + dt·Σ_{k<n} ω[k]``, so the
+    output is aligned with the input (the last rate sample moves the angle beyond the record). A constant bias ``b``
+    in ``ω`` makes ``θ`` drift by ``b·t``; white noise makes it wander like ``√t`` (:func:`integration_drift`).
+
+    Parameters
+    ----------
+    rate : (N,) or (N, n) array -- one row per sample (rad/s or °/s)
+    dt : float, s (> 0)
+    angle0 : float or (n,) array -- the angle at t = 0 (same angle unit)
+    Returns
+    -------
+    array shaped like ``rate``
+    """
+    w = validate.array(rate, "rate")
+    if w.ndim == 0 or len(w) == 0:
+        raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
+    dt = validate.positive(dt, "dt")
+    a0 = validate.array(angle0, "angle0")
+    steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
+    return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
+
+
+def integration_drift(t, bias, noise_std, dt):
+    """Mean and standard deviation of the angle error of an integrated gyro after time ``t``.
+
+    A constant bias ``b`` gives a mean error ``b·t``; white noise of standard deviation ``σ`` per sample, integrated
+    with step ``dt``, gives a random walk of standard deviation ``σ·dt·√(t/dt) = σ·√(dt·t)`` (the *angle random
+    walk* coefficient is ``σ·√dt``).
+
+    Parameters
+    ----------
+    t : (...) array, s (>= 0); bias : float (rate unit); noise_std : float (>= 0, rate unit); dt : float, s (> 0)
+    Returns
+    -------
+    (mean, std) : two (...) arrays, in the angle unit of the rate (rad for rad/s, ° for °/s)
+    """
+    t = _nonnegative(t, "t")
+    b = validate.array(bias, "bias")
+    sd = _nonnegative(noise_std, "noise_std")
+    dt = validate.positive(dt, "dt")
+    return b * t, sd * np.sqrt(dt * t)

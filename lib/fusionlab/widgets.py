@@ -123,3 +123,67 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
     lock.observe(on_lock, names="value")
     redraw()
     return W.VBox([s_yaw, s_pitch, s_roll, lock, readout, out])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 02: product of two Gaussians (seed 000 §4.2, figs 24-25)
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import kalman as _kalman  # noqa: E402  (row 3 module; widgets sit above it)
+
+__all__ += ["gaussian_product_state", "gaussian_product_explorer"]
+
+
+def gaussian_product_state(mu1, var1, mu2, var2):
+    """What the Gaussian-product explorer shows for one slider setting (pure; testable without a browser).
+
+    Parameters
+    ----------
+    mu1, var1 : float -- prediction mean (m) and variance (m²); mu2, var2 : float -- measurement
+    Returns
+    -------
+    dict with ``'mu'``, ``'var'`` (the product, :func:`fusionlab.kalman.gaussian_product`), ``'K'`` -- the scalar
+    Kalman gain ``var1 / (var1 + var2)`` that moves the mean from ``mu1`` toward ``mu2`` -- and ``'html'``
+    """
+    mu1, var1, mu2, var2 = (_scalar(v, n) for v, n in ((mu1, "mu1"), (var1, "var1"), (mu2, "mu2"),
+                                                         (var2, "var2")))
+    mu, var = _kalman.gaussian_product(mu1, var1, mu2, var2)
+    K = var1 / (var1 + var2)
+    html = (f"product: μ = {_fmt(mu, 2)}, σ² = {_fmt(var, 2)} (σ = {_fmt(np.sqrt(var), 2)})<br>"
+            f"as a Kalman update: K = σ₁²/(σ₁² + σ₂²) = {_fmt(K, 3)}, "
+            f"μ = μ₁ + K (μ₂ − μ₁) = {_fmt(mu1, 2)} + {_fmt(K, 3)} × ({_fmt(mu2 - mu1, 2)})")
+    return {"mu": mu, "var": var, "K": K, "html": html}
+
+
+def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
+    """Sliders for the two means and variances; the product and its Kalman-gain reading update as they move.
+
+    Building it needs no front end (a headless run constructs it, draws once and returns).
+
+    Returns
+    -------
+    ipywidgets.VBox -- children: four ``FloatSlider`` (μ₁, σ₁², μ₂, σ₂²), the readout ``HTML``, the figure ``Output``
+    """
+    st = gaussian_product_state(mu1, var1, mu2, var2)             # validates the start values
+    opts = dict(step=0.1, continuous_update=False, readout_format=".1f", style={"description_width": "12em"},
+                layout=W.Layout(width="30em"))
+    s_mu1 = W.FloatSlider(value=mu1, min=-10, max=10, description="prediction mean μ₁ (m)", **opts)
+    s_var1 = W.FloatSlider(value=var1, min=0.1, max=25, description="prediction variance σ₁² (m²)", **opts)
+    s_mu2 = W.FloatSlider(value=mu2, min=-10, max=10, description="measurement mean μ₂ (m)", **opts)
+    s_var2 = W.FloatSlider(value=var2, min=0.1, max=25, description="measurement variance σ₂² (m²)", **opts)
+    readout = W.HTML(st["html"])
+    out = W.Output()
+
+    def redraw(_change=None):
+        st = gaussian_product_state(s_mu1.value, s_var1.value, s_mu2.value, s_var2.value)
+        readout.value = st["html"]
+        with out:
+            out.clear_output(wait=True)
+            fig = plotting.plot_gaussian_product(s_mu1.value, s_var1.value, s_mu2.value, s_var2.value)
+            display(fig)
+            plt.close(fig)
+
+    for s in (s_mu1, s_var1, s_mu2, s_var2):
+        s.observe(redraw, names="value")
+    redraw()
+    return W.VBox([s_mu1, s_var1, s_mu2, s_var2, readout, out])

@@ -1,0 +1,362 @@
+"""Benchmark: every orientation filter of the suite on real data (BROAD), side by side with the state of the art.
+
+::
+
+    python -m fusionlab.bench                       # every registered estimator on every locally available trial
+    python -m fusionlab.bench --trials 2 7 --out .bench --max-samples 20000
+
+For each trial (:mod:`fusionlab.datasets`) and each contender it runs the filter on the whole recording, times it,
+and scores it with the BROAD metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination RMSE in
+degrees over the movement phase). It prints a table, and writes to ``--out``:
+
+* ``bench_trials.csv`` -- one row per (estimator, trial);
+* ``bench_groups.csv`` -- the mean over the trials of each BROAD trial group, per estimator (as the dataset authors
+  average: the mean of the per-trial RMSEs);
+* ``bench.png`` -- total / heading / inclination RMSE per trial group and samples per second.
+
+Contenders: every estimator registered in :mod:`fusionlab.estimators`, and, when the optional ``bench`` extra is
+installed (``pip install -e ".[bench]"``), VQF 9D and 6D (``vqf``, Laidig & Seel 2023) and Madgwick's filter 9D and
+6D from the ``ahrs`` package, so every number is a ratio measured in the same run on the same machine.
+
+Frames (every estimate is scored as body→ENU ``[w, x, y, z]``, the reference's frame):
+
+* fusionlab estimators: ``estimators.run(..., frame='ENU')``;
+* VQF: its quaternions are already body→ENU (z up, y to magnetic north for 9D; arbitrary heading for 6D);
+* ahrs Madgwick: body→**NWU** (its gradient step expects gravity on earth +z and the magnetic field in the earth
+  x-z plane, i.e. x north, y west, z up), so ``q_ENU = q_z(+90°) ⊗ q_NWU``; see :func:`_madgwick`.
+
+6-axis filters have no heading reference, so their total and heading errors mostly measure an arbitrary start
+heading. The column ``total_aligned_deg`` scores every estimate once more after removing its constant heading
+offset (``heading_offset='mean'`` of :func:`fusionlab.metrics.broad_rmse`; our addition, not the authors' metric).
+Compare 6-axis filters on inclination (or on the aligned total), 9-axis filters on total.
+
+The run is deterministic (no random numbers); only the timing columns vary between runs.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib.util
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import datasets, estimators, metrics, rotations, sensors
+
+__all__ = ["Contender", "contenders", "run_benchmark", "group_means", "format_table", "write_csv", "plot",
+           "main", "TRIAL_COLUMNS", "GROUP_COLUMNS"]
+
+TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
+                 "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg", "heading_offset_deg",
+                 "seconds", "samples_per_s", "error")
+GROUP_COLUMNS = ("estimator", "source", "sensors", "group", "n_trials", "total_rmse_deg", "heading_rmse_deg",
+                 "inclination_rmse_deg", "total_aligned_deg", "samples_per_s")
+METRICS = (("total_rmse_deg", "total"), ("heading_rmse_deg", "heading"), ("inclination_rmse_deg", "inclination"))
+
+
+@dataclass(frozen=True)
+class Contender:
+    """A filter in the benchmark: ``run(trial) -> (N, 4)`` body→ENU quaternions."""
+    name: str
+    source: str              # 'fusionlab', 'vqf' or 'ahrs'
+    uses_mag: bool
+    summary: str
+    run: Callable
+
+    @property
+    def sensors(self):
+        return "9D" if self.uses_mag else "6D"
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Contenders
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def _registered(name, uses_mag):
+    def run(trial):
+        return estimators.run(name, gyr=trial.gyr, acc=trial.acc, fs=trial.fs,
+                              mag=trial.mag if uses_mag else None, frame="ENU")
+    return run
+
+
+def _vqf(uses_mag):
+    def run(trial):
+        from vqf import VQF
+        # VQF's compiled batch update wants C-contiguous, writable float64 arrays (ours are read-only views)
+        gyr, acc, mag = (np.array(a, dtype=float, order="C") for a in (trial.gyr, trial.acc, trial.mag))
+        f = VQF(1.0 / trial.fs)
+        if uses_mag:
+            return f.updateBatch(gyr, acc, mag)["quat9D"]         # body→ENU, heading from the magnetometer
+        return f.updateBatch(gyr, acc)["quat6D"]                  # body→(z up, arbitrary heading)
+    return run
+
+
+# ahrs' Madgwick earth frame is NWU (x north, y west, z up); turning NWU coordinates by +90° about z gives ENU:
+# Rz(90°) [n, w, u] = [-w, n, u] = [east, north, up].
+_Q_ENU_NWU = rotations.euler_to_quat([0.0, 0.0, np.pi / 2])
+
+
+def _madgwick(uses_mag):
+    def run(trial):
+        from ahrs.filters import Madgwick
+        # Convention check (ahrs 0.4.0, filters/madgwick.py): q̇ = ½ q ⊗ (0, ω) and the objective f_g is the third
+        # row of C(q) minus the normalised accelerometer, so q is body→earth (Hamilton, [w, x, y, z]) with earth z
+        # up (acc reads +g up); the field reference b = (b_x, 0, b_z) puts magnetic north on earth x: NWU.
+        # ahrs ignores q0 in 9D mode (it starts from its own ecompass), so we step the filter ourselves from an
+        # explicit start: the first sample's TRIAD (9D) or accelerometer tilt (6D), converted NED→ENU→NWU.
+        gyr, acc, mag = (np.array(a, dtype=float) for a in (trial.gyr, trial.acc, trial.mag))
+        if uses_mag:
+            q0_ned = rotations.dcm_to_quat(estimators.triad(acc[0], mag[0]))
+        else:
+            roll, pitch = sensors.tilt_from_accel(acc[0])
+            q0_ned = rotations.euler_to_quat([roll, pitch, 0.0])
+        q0_nwu = rotations.quat_multiply(rotations.quat_conjugate(_Q_ENU_NWU), rotations.quat_nav_swap(q0_ned))
+        f = Madgwick(frequency=trial.fs)              # default gains: 0.041 (9D), 0.033 (6D), as the paper suggests
+        Q = np.empty((len(gyr), 4))
+        Q[0] = q0_nwu
+        step = f.updateMARG if uses_mag else f.updateIMU
+        for t in range(1, len(gyr)):
+            args = (Q[t - 1], gyr[t], acc[t], mag[t]) if uses_mag else (Q[t - 1], gyr[t], acc[t])
+            Q[t] = step(*args)
+        return rotations.quat_multiply(_Q_ENU_NWU, Q)              # q_ENU = q_z(90°) ⊗ q_NWU
+    return run
+
+
+def contenders(names=None, include_external=True):
+    """The filters to benchmark: every registered estimator, then VQF and ahrs Madgwick when installed.
+
+    Parameters
+    ----------
+    names : list of str or None -- keep only these (registered names, 'vqf9', 'vqf6', 'madgwick9', 'madgwick6')
+    include_external : bool -- add the vqf / ahrs contenders when their packages are importable
+    """
+    out = [Contender(n, "fusionlab", info["uses_mag"], info["summary"], _registered(n, info["uses_mag"]))
+           for n, info in estimators.available().items()]
+    if include_external:
+        if importlib.util.find_spec("vqf") is not None:
+            out += [Contender("vqf9", "vqf", True, "VQF 9D (Laidig & Seel 2023), causal, default parameters",
+                              _vqf(True)),
+                    Contender("vqf6", "vqf", False, "VQF 6D (Laidig & Seel 2023), causal, default parameters",
+                              _vqf(False))]
+        if importlib.util.find_spec("ahrs") is not None:
+            out += [Contender("madgwick9", "ahrs", True, "ahrs Madgwick MARG, gain 0.041", _madgwick(True)),
+                    Contender("madgwick6", "ahrs", False, "ahrs Madgwick IMU, gain 0.033", _madgwick(False))]
+    if names is not None:
+        known = {c.name for c in out}
+        unknown = [n for n in names if n not in known]
+        if unknown:
+            raise ValueError(f"estimators must be among {', '.join(sorted(known))}; got unknown "
+                             f"{', '.join(map(repr, unknown))}")
+        out = [c for c in out if c.name in names]
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Running and scoring
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def _score(contender, trial):
+    row = dict(estimator=contender.name, source=contender.source, sensors=contender.sensors, trial=trial.name,
+               groups="|".join(trial.groups), n_samples=len(trial), n_scored=0, error="")
+    t0 = time.perf_counter()
+    try:
+        q = contender.run(trial)
+    except Exception as exc:                 # one broken filter must not stop the benchmark; its row says why
+        row.update({k: np.nan for k in TRIAL_COLUMNS if k not in row}, error=f"{type(exc).__name__}: {exc}")
+        return row
+    seconds = time.perf_counter() - t0
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    as_is = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
+    aligned = metrics.broad_rmse(q, trial.quat_ref, trial.movement, heading_offset="mean")
+    row.update(n_scored=as_is.n_samples, total_rmse_deg=as_is.total_deg, heading_rmse_deg=as_is.heading_deg,
+               inclination_rmse_deg=as_is.inclination_deg, total_aligned_deg=aligned.total_deg,
+               heading_offset_deg=aligned.heading_offset_deg, seconds=seconds,
+               samples_per_s=len(trial) / seconds if seconds > 0 else np.inf)
+    return row
+
+
+def run_benchmark(trials=None, folder=None, names=None, include_external=True, max_samples=None,
+                  progress=True):
+    """Run every contender on every trial; one result row (dict with :data:`TRIAL_COLUMNS`) per pair.
+
+    Parameters
+    ----------
+    trials : list of int or str, or None -- default: every trial available without a download
+    folder : str or Path or None -- where the trials are (see :func:`fusionlab.datasets.load_trial`)
+    names : list of str or None -- contender names (default: all, see :func:`contenders`)
+    include_external : bool -- include VQF / ahrs when installed
+    max_samples : int or None -- use only the first ``max_samples`` samples of each trial (quick runs)
+    progress : bool -- tqdm bar over the (trial, estimator) pairs
+    """
+    from tqdm.auto import tqdm
+
+    if trials is None:
+        trials = datasets.available_trials(folder)
+        if not trials:
+            raise FileNotFoundError(f"no BROAD trial is available locally -- set {datasets.ENV_DIR} to a folder of "
+                                    "BROAD .mat files, pass folder=, or name trials to download them")
+    trial_names = sorted({datasets.trial_name(t) for t in trials})
+    if max_samples is not None and (int(max_samples) != max_samples or max_samples < 1):
+        raise ValueError(f"max_samples must be a positive integer or None; got {max_samples!r}")
+    cs = contenders(names, include_external)
+    rows = []
+    with tqdm(total=len(trial_names) * len(cs), desc="bench", unit="run", disable=not progress) as bar:
+        for name in trial_names:
+            trial = datasets.load_trial(name, folder=folder, progress=progress)
+            if max_samples is not None:
+                trial = trial.slice(0, int(max_samples))
+            for c in cs:
+                bar.set_postfix_str(f"{name[:2]} {c.name}")
+                rows.append(_score(c, trial))
+                bar.update()
+    return rows
+
+
+def group_means(rows):
+    """Mean of each metric over the trials of each BROAD group, per estimator (rows with :data:`GROUP_COLUMNS`).
+
+    Samples per second is pooled: all samples over all seconds of the group's trials.
+    """
+    order = datasets.group_names()
+    by_est = {}
+    for r in rows:
+        by_est.setdefault(r["estimator"], []).append(r)
+    out = []
+    for est, rs in by_est.items():
+        for g in order:
+            sel = [r for r in rs if g in r["groups"].split("|") and not r["error"]]
+            if not sel:
+                continue
+            secs = sum(r["seconds"] for r in sel)
+            row = dict(estimator=est, source=sel[0]["source"], sensors=sel[0]["sensors"], group=g,
+                       n_trials=len(sel), samples_per_s=sum(r["n_samples"] for r in sel) / secs if secs else np.inf)
+            for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg"):
+                row[k] = float(np.mean([r[k] for r in sel]))
+            out.append(row)
+    return out
+
+
+def format_table(rows):
+    """Text table: per estimator, the mean RMSEs over all benchmarked trials and the samples per second;
+    then the total RMSE (9D) or inclination RMSE (6D) per trial."""
+    means = [g for g in group_means(rows) if g["group"] == "all_trials"]
+    lines = [f"{'estimator':<12} {'src':<9} {'sens':<4} {'trials':>6} {'total':>8} {'heading':>8} {'incl':>8} "
+             f"{'total*':>8} {'samples/s':>11}"]
+    for g in means:
+        lines.append(f"{g['estimator']:<12} {g['source']:<9} {g['sensors']:<4} {g['n_trials']:>6d} "
+                     f"{g['total_rmse_deg']:>8.2f} {g['heading_rmse_deg']:>8.2f} {g['inclination_rmse_deg']:>8.2f} "
+                     f"{g['total_aligned_deg']:>8.2f} {g['samples_per_s']:>11,.0f}")
+    lines.append("RMSE in degrees over the movement phase, mean over trials; total* = total after removing the "
+                 "constant heading offset")
+    trials = sorted({r["trial"] for r in rows})
+    ests = list(dict.fromkeys(r["estimator"] for r in rows))
+    lines.append("")
+    lines.append("per trial: total RMSE (9D) / inclination RMSE (6D), degrees")
+    lines.append(f"{'trial':<38}" + "".join(f"{e:>11}" for e in ests))
+    cell = {(r["trial"], r["estimator"]): r for r in rows}
+    for t in trials:
+        vals = []
+        for e in ests:
+            r = cell.get((t, e))
+            if r is None or r["error"]:
+                vals.append(f"{'error' if r else '-':>11}")
+            else:
+                v = r["total_rmse_deg"] if r["sensors"] == "9D" else r["inclination_rmse_deg"]
+                vals.append(f"{v:>11.2f}")
+        lines.append(f"{t:<38}" + "".join(vals))
+    errors = [r for r in rows if r["error"]]
+    for r in errors:
+        lines.append(f"error: {r['estimator']} on {r['trial']}: {r['error']}")
+    return "\n".join(lines)
+
+
+def write_csv(rows, path, columns=TRIAL_COLUMNS):
+    """Write result rows to ``path`` (CSV with a header; floats with 6 significant digits)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in columns])
+    return path
+
+
+def plot(rows, path=None):
+    """Figure: total, heading and inclination RMSE per trial group (grouped bars, one per estimator) and samples
+    per second per estimator. Saved to ``path`` when given; returns the figure."""
+    import matplotlib.pyplot as plt
+
+    gm = group_means(rows)
+    groups = [g for g in datasets.group_names() if any(r["group"] == g for r in gm)]
+    ests = list(dict.fromkeys(r["estimator"] for r in gm))
+    cell = {(r["estimator"], r["group"]): r for r in gm}
+    hatch = {r["estimator"]: "//" if r["sensors"] == "6D" else None for r in gm}   # 6D: heading is arbitrary
+    fig, axes = plt.subplots(2, 2, figsize=(14, 8.5), constrained_layout=True)
+    width = 0.8 / max(1, len(ests))
+    x = np.arange(len(groups))
+    colors = plt.get_cmap("tab10")
+    for ax, (key, label) in zip(axes.flat, METRICS):
+        for i, e in enumerate(ests):
+            vals = [cell[(e, g)][key] if (e, g) in cell else np.nan for g in groups]
+            ax.bar(x + (i - (len(ests) - 1) / 2) * width, vals, width, label=e, color=colors(i % 10),
+                   hatch=hatch[e], edgecolor="white", linewidth=0)
+        ax.set_xticks(x, groups, rotation=35, ha="right")
+        ax.set_yscale("log")
+        ax.set_ylabel(f"{label} RMSE (deg, log scale)")
+        ax.set_title(f"{label} RMSE per trial group (mean over its trials)")
+        ax.grid(axis="y", which="both", alpha=0.3)
+    ax = axes.flat[3]
+    speed = [next(r["samples_per_s"] for r in gm if r["estimator"] == e and r["group"] == "all_trials") for e in ests]
+    ax.bar(np.arange(len(ests)), speed, color=[colors(i % 10) for i in range(len(ests))])
+    ax.set_xticks(np.arange(len(ests)), ests, rotation=35, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("samples per second (log scale)")
+    ax.set_title("speed: samples processed per second")
+    ax.grid(axis="y", which="both", alpha=0.3)
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, [f"{e} ({cell[(e, 'all_trials')]['sensors']})" for e in labels], loc="outside lower center",
+               ncol=min(len(ests), 8), fontsize=9)
+    fig.suptitle("BROAD benchmark: 9D filters compare on total error, 6D filters (hatched) on inclination")
+    if path is not None:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+    return fig
+
+
+def main(argv=None):
+    """Command line: ``python -m fusionlab.bench [--trials ...] [--out DIR] ...``; returns the exit code."""
+    p = argparse.ArgumentParser(prog="python -m fusionlab.bench", description=__doc__.split("\n")[0])
+    p.add_argument("--trials", nargs="+", help="trial numbers or names (default: every trial available locally)")
+    p.add_argument("--out", default=".bench", help="output folder for the CSV files and the figure (default .bench)")
+    p.add_argument("--folder", help=f"folder holding the BROAD .mat files (default: {datasets.ENV_DIR}, cache, "
+                                    "download)")
+    p.add_argument("--estimators", nargs="+", help="only these contenders (default: all)")
+    p.add_argument("--no-external", action="store_true", help="skip VQF and ahrs even when installed")
+    p.add_argument("--max-samples", type=int, help="use only the first N samples of each trial (quick runs)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    a = p.parse_args(argv)
+    import matplotlib
+    matplotlib.use("Agg")                                  # a file, never a window
+    out = Path(a.out)
+    print(f"==> BROAD benchmark: results to {out}/ (bench_trials.csv, bench_groups.csv, bench.png)")
+    rows = run_benchmark(a.trials, folder=a.folder, names=a.estimators, include_external=not a.no_external,
+                         max_samples=a.max_samples, progress=not a.no_progress)
+    print(format_table(rows))
+    write_csv(rows, out / "bench_trials.csv")
+    write_csv(group_means(rows), out / "bench_groups.csv", GROUP_COLUMNS)
+    import matplotlib.pyplot as plt
+    plt.close(plot(rows, out / "bench.png"))
+    return 1 if any(r["error"] for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,468 @@
+"""Real recordings with a ground truth: the BROAD benchmark (Berlin Robust Orientation Estimation Assessment Dataset).
+
+    D. Laidig, M. Caruso, A. Cereatti, T. Seel. BROAD - A Benchmark for Robust Inertial Orientation Estimation.
+    Data 6(7):72, 2021. doi:10.3390/data6070072. Data CC BY 4.0, published at https://github.com/dlaidig/broad.
+
+39 trials of a handheld IMU (myon aktos-t, about 286 Hz) with an optical motion-capture reference: undisturbed
+rotation / translation / combined motion, slow and fast, with and without breaks, and disturbed trials (tapping,
+vibration, magnets, an office). None of the suite's seeds tests on real data; this module brings it in.
+
+::
+
+    from fusionlab import datasets
+    datasets.broad.list_trials()                 # 39 TrialInfo(number, name, description, groups)
+    trial = datasets.broad.load_trial(2)          # BroadTrial: gyr, acc, mag, fs, quat_ref, movement, ...
+
+Units and frames at this edge (as the dataset stores them, nothing converted): ``gyr`` rad/s, ``acc`` m/s² (+g on
+the up axis at rest, as :mod:`fusionlab.estimators` expects), ``mag`` µT, all in the sensor frame; ``quat_ref`` is
+the body→**ENU** unit quaternion ``[w, x, y, z]`` of the library convention (:mod:`fusionlab.rotations`), NaN
+rows where the optical markers were lost; ``movement`` marks the samples that the error metrics score.
+
+Where a trial comes from, in this order:
+
+1. ``folder=`` given to :func:`load_trial`: the file must be there (``<folder>/<name>.mat``);
+2. the folder named by the environment variable ``FUSIONLAB_BROAD_DIR`` (a local mirror, possibly partial);
+3. the user cache, ``~/.cache/fusionlab/broad`` on Linux (``~/Library/Caches/fusionlab/broad`` on macOS,
+   ``%LOCALAPPDATA%/fusionlab/Cache/broad`` on Windows; ``$FUSIONLAB_CACHE/broad`` when that variable is set);
+4. a download from the published ``data_mat/`` folder (``FUSIONLAB_BROAD_URL`` replaces that address, e.g. by a
+   local mirror) into the cache, with a progress bar, written to a temporary file and renamed only once complete.
+
+Every file is checked against the SHA-256 sums shipped in ``fusionlab/data/broad_sha256.txt``. A mismatch in a
+folder of yours is an error (we never overwrite your files); a corrupt or truncated file in the cache is
+re-fetched; a download that is truncated or fails its checksum is retried once and then refused. A trial whose
+checksum fusionlab does not know is kept but reported with a warning, and its hash is stored beside it in the
+cache so that later corruption is still caught.
+"""
+from __future__ import annotations
+
+import difflib
+import hashlib
+import http.client
+import json
+import os
+import sys
+import tempfile
+import types
+import urllib.error
+import urllib.request
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from . import validate
+
+__all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "TrialInfo", "BroadTrial", "list_trials",
+           "group_names", "trial_name", "known_sha256", "cache_dir", "available_trials", "fetch_trial",
+           "load_trial", "broad"]
+
+#: Published address of the dataset's ``.mat`` files (a trial is ``BROAD_URL + name + '.mat'``).
+BROAD_URL = "https://github.com/dlaidig/broad/raw/main/data_mat/"
+ENV_DIR = "FUSIONLAB_BROAD_DIR"
+ENV_CACHE = "FUSIONLAB_CACHE"
+ENV_URL = "FUSIONLAB_BROAD_URL"
+
+_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "sampling_rate", "movement")
+_CHUNK = 1 << 16
+
+
+class _BadDownload(Exception):
+    """A download that arrived truncated or with the wrong checksum (retried once, then reported)."""
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The trial list (a copy of the dataset's trials.json, shipped in the package)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TrialInfo:
+    """One trial of BROAD as ``trials.json`` lists it."""
+    number: int
+    name: str
+    description: str
+    groups: tuple
+
+
+@lru_cache(maxsize=1)
+def _catalogue():
+    text = (resources.files("fusionlab") / "data" / "broad_trials.json").read_text(encoding="utf-8")
+    info = json.loads(text)
+    trials = tuple(TrialInfo(int(name[:2]), name, t["description"], tuple(t["groups"]))
+                   for name, t in sorted(info["trials"].items()))
+    groups = tuple(g["name"] for g in info["groups"])
+    return trials, groups
+
+
+@lru_cache(maxsize=1)
+def _known_sums():
+    text = (resources.files("fusionlab") / "data" / "broad_sha256.txt").read_text(encoding="utf-8")
+    sums = {}
+    for line in text.splitlines():
+        line = line.strip()
+        if line and not line.startswith("#"):
+            digest, fname = line.split(maxsplit=1)
+            sums[fname.strip().lstrip("*")] = digest.lower()
+    return sums
+
+
+def list_trials(group=None):
+    """The 39 trials of BROAD, in order, optionally only those of one ``group`` (see :func:`group_names`).
+
+    Returns
+    -------
+    list of TrialInfo
+    """
+    trials, groups = _catalogue()
+    if group is None:
+        return list(trials)
+    if group not in groups:
+        raise ValueError(f"group must be one of {', '.join(groups)}; got {group!r}")
+    return [t for t in trials if group in t.groups]
+
+
+def group_names():
+    """Names of the trial groups, as ``trials.json`` orders them (``all_trials``, ``undisturbed``, ...)."""
+    return list(_catalogue()[1])
+
+
+def trial_name(name_or_number):
+    """Full trial name from a number (``2``, ``'2'``, ``'02'``) or a name (with or without ``.mat``).
+
+    Raises
+    ------
+    ValueError -- for a number outside 1..39 or a name that is not a BROAD trial (the message suggests close names)
+    """
+    trials, _ = _catalogue()
+    names = [t.name for t in trials]
+    if isinstance(name_or_number, (int, np.integer)) and not isinstance(name_or_number, bool):
+        number = int(name_or_number)
+    elif isinstance(name_or_number, str):
+        key = name_or_number.strip()
+        key = key[:-4] if key.endswith(".mat") else key
+        if key in names:
+            return key
+        if not key.isdigit():
+            close = difflib.get_close_matches(key, names, n=3, cutoff=0.5)
+            hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
+            raise ValueError(f"name_or_number must be a BROAD trial name or number 1-{len(names)}; got {key!r}"
+                             f"{hint} (datasets.broad.list_trials() lists them)")
+        number = int(key)
+    else:
+        raise ValueError(f"name_or_number must be a trial number (int) or name (str); "
+                         f"got {type(name_or_number).__name__}")
+    for t in trials:
+        if t.number == number:
+            return t.name
+    raise ValueError(f"name_or_number must be a trial number from 1 to {len(names)}; got {number} "
+                     "(datasets.broad.list_trials() lists them)")
+
+
+def known_sha256(name_or_number):
+    """The SHA-256 (hex) fusionlab knows for a trial's ``.mat`` file, or None if it knows none."""
+    return _known_sums().get(trial_name(name_or_number) + ".mat")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Where files live: folder, FUSIONLAB_BROAD_DIR, cache, download
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def cache_dir():
+    """The folder downloaded trials are kept in (it need not exist yet).
+
+    ``$FUSIONLAB_CACHE/broad`` if that variable is set, else the platform's user cache: ``$XDG_CACHE_HOME`` or
+    ``~/.cache`` on Linux, ``~/Library/Caches`` on macOS, ``%LOCALAPPDATA%`` on Windows, then ``fusionlab/broad``.
+    """
+    env = os.environ.get(ENV_CACHE)
+    if env:
+        return Path(env).expanduser() / "broad"
+    if sys.platform.startswith("win"):
+        base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local") / "fusionlab" / "Cache"
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches" / "fusionlab"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "fusionlab"
+    return base / "broad"
+
+
+def _env_dir():
+    env = os.environ.get(ENV_DIR)
+    if not env:
+        return None
+    d = Path(env).expanduser()
+    if not d.is_dir():
+        raise FileNotFoundError(f"{ENV_DIR} names a folder that does not exist: {d} -- point it at the folder that "
+                                f"holds the BROAD .mat files, or unset it")
+    return d
+
+
+def _folder(folder):
+    if folder is None:
+        return None
+    try:
+        d = Path(folder).expanduser()
+    except TypeError:
+        raise ValueError(f"folder must be a path (str or Path) or None; got {type(folder).__name__}") from None
+    if not d.is_dir():
+        raise FileNotFoundError(f"folder does not exist: {d} -- pass the folder that holds the BROAD .mat files, "
+                                f"or folder=None to use {ENV_DIR}, the cache or a download")
+    return d
+
+
+def _sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(_CHUNK), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _sidecar(path):
+    return path.with_name(path.name + ".sha256")
+
+
+def _check_user_file(path, expected):
+    """A file in a folder of the user's: verify it when the checksum is known; never touch it."""
+    if expected is not None:
+        got = _sha256(path)
+        if got != expected:
+            raise ValueError(f"checksum mismatch for {path}: sha256 is {got}, expected {expected} -- the file is "
+                             "corrupt or truncated; copy it again from the published dataset")
+    return path
+
+
+def available_trials(folder=None):
+    """Names of the trials present without a download (in ``folder``, ``FUSIONLAB_BROAD_DIR`` or the cache)."""
+    dirs = [d for d in (_folder(folder), _env_dir(), cache_dir()) if d is not None]
+    return [t.name for t in list_trials() if any((d / f"{t.name}.mat").is_file() for d in dirs)]
+
+
+def fetch_trial(name_or_number, folder=None, download=True, progress=True):
+    """Path of a verified copy of a trial's ``.mat`` file, downloading it into the cache if needed.
+
+    Parameters
+    ----------
+    name_or_number : int or str -- see :func:`trial_name`
+    folder : str or Path or None -- look only here (the file must be there)
+    download : bool -- allow a download when the trial is in neither ``FUSIONLAB_BROAD_DIR`` nor the cache
+    progress : bool -- show a tqdm bar while downloading
+    Returns
+    -------
+    pathlib.Path
+    Raises
+    ------
+    ValueError -- unknown trial; a file of yours (``folder``, ``FUSIONLAB_BROAD_DIR``) fails its checksum;
+        a download still truncated or failing its checksum after one retry
+    FileNotFoundError -- the file is not where it was asked for, or it is nowhere and cannot be downloaded
+    """
+    name = trial_name(name_or_number)
+    fname = name + ".mat"
+    expected = known_sha256(name)
+    d = _folder(folder)
+    if d is not None:
+        path = d / fname
+        if not path.is_file():
+            raise FileNotFoundError(f"trial {name} not found in folder {d} (expected {path}) -- pass the folder "
+                                    f"that holds it, or folder=None to use {ENV_DIR}, the cache or a download")
+        return _check_user_file(path, expected)
+    env = _env_dir()
+    if env is not None and (env / fname).is_file():
+        return _check_user_file(env / fname, expected)
+    cache = cache_dir()
+    path = cache / fname
+    if path.is_file():
+        want = expected or (_sidecar(path).read_text().split()[0] if _sidecar(path).is_file() else None)
+        if want is None or _sha256(path) == want:
+            return path
+        warnings.warn(f"cached file {path} fails its checksum (corrupt or truncated); fetching it again",
+                      stacklevel=2)
+        path.unlink()
+    looked = ", ".join(str(p) for p in ([env] if env else []) + [cache])
+    if not download:
+        raise FileNotFoundError(f"trial {name} is not available locally (looked in {looked}) and download=False -- "
+                                f"set {ENV_DIR} to a folder holding {fname}, or allow the download")
+    url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
+    cache.mkdir(parents=True, exist_ok=True)
+    digest = None
+    for attempt in (1, 2):
+        try:
+            digest = _download(url, path, expected, progress)
+            break
+        except _BadDownload as exc:
+            if attempt == 2:
+                raise ValueError(f"download of trial {name} from {url} failed verification twice ({exc}); "
+                                 f"nothing was kept -- try again later, or set {ENV_DIR} to a verified copy") from None
+        except (urllib.error.URLError, http.client.HTTPException, OSError) as exc:
+            if isinstance(exc, urllib.error.HTTPError):
+                exc.close()                                # an HTTP error carries an open response
+                reason = exc
+            else:
+                reason = getattr(exc, "reason", None) or exc
+            raise FileNotFoundError(f"trial {name} is not available locally (looked in {looked}) and the download "
+                                    f"from {url} failed: {reason} -- connect to the internet, or set {ENV_DIR} to "
+                                    f"a folder holding {fname}") from None
+    if expected is None:
+        _sidecar(path).write_text(f"{digest}  {fname}\n")
+        warnings.warn(f"trial {name} downloaded from {url} has no checksum known to fusionlab; kept in {path} "
+                      f"unverified (sha256 {digest})", stacklevel=2)
+    return path
+
+
+def _download(url, dest, expected, progress):
+    """Stream ``url`` to a temporary file beside ``dest``, check length and SHA-256, then rename it into place."""
+    from tqdm.auto import tqdm
+
+    fd, tmp = tempfile.mkstemp(dir=dest.parent, prefix=dest.name + ".", suffix=".part")
+    try:
+        h = hashlib.sha256()
+        got = 0
+        with os.fdopen(fd, "wb") as out, urllib.request.urlopen(url, timeout=30) as resp:
+            length = resp.headers.get("Content-Length")
+            length = int(length) if length and length.isdigit() else None
+            with tqdm(total=length, unit="B", unit_scale=True, unit_divisor=1024, desc=dest.name,
+                      disable=not progress, leave=False) as bar:
+                while True:
+                    try:
+                        chunk = resp.read(_CHUNK)
+                    except http.client.IncompleteRead as exc:
+                        raise _BadDownload(f"connection closed early: {exc}") from None
+                    if not chunk:
+                        break
+                    out.write(chunk)
+                    h.update(chunk)
+                    got += len(chunk)
+                    bar.update(len(chunk))
+        if length is not None and got != length:
+            raise _BadDownload(f"truncated: received {got} of {length} bytes")
+        digest = h.hexdigest()
+        if expected is not None and digest != expected:
+            raise _BadDownload(f"checksum mismatch: sha256 {digest}, expected {expected}")
+        os.replace(tmp, dest)                              # atomic: dest is either absent or complete
+        return digest
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# One trial as a record
+# ----------------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class BroadTrial:
+    """One BROAD trial (arrays read-only).
+
+    Attributes
+    ----------
+    name : str; groups : tuple of str; description : str
+    fs : float, Hz
+    gyr : (N, 3) rad/s; acc : (N, 3) m/s² (+g up at rest); mag : (N, 3) µT -- sensor frame
+    quat_ref : (N, 4) -- optical reference, body→ENU ``[w, x, y, z]``, NaN rows where lost
+    movement : (N,) bool -- samples scored by the BROAD metrics
+    """
+    name: str
+    groups: tuple
+    description: str
+    fs: float
+    gyr: np.ndarray
+    acc: np.ndarray
+    mag: np.ndarray
+    quat_ref: np.ndarray
+    movement: np.ndarray
+
+    def __len__(self):
+        return len(self.gyr)
+
+    @property
+    def t(self):
+        """Time of each sample, s, from 0."""
+        return np.arange(len(self)) / self.fs
+
+    @property
+    def duration(self):
+        """Length of the recording, s."""
+        return len(self) / self.fs
+
+    def slice(self, start=None, stop=None):
+        """The same trial cut to samples ``start:stop`` (for a quick look or a fast test)."""
+        s = slice(start, stop)
+        n = len(self.gyr[s])
+        if n == 0:
+            raise ValueError(f"start, stop must select at least one sample of {len(self)}; got {start}:{stop}")
+        return _make_trial(self.name, self.groups, self.description, self.fs, self.gyr[s], self.acc[s],
+                           self.mag[s], self.quat_ref[s], self.movement[s])
+
+    def __repr__(self):
+        lost = int(np.isnan(self.quat_ref).any(axis=-1).sum())
+        return (f"BroadTrial({self.name!r}, {len(self)} samples at {self.fs:.2f} Hz ({self.duration:.1f} s), "
+                f"movement {int(self.movement.sum())} samples, reference lost in {lost})")
+
+
+def _frozen(a, dtype=float):
+    a = np.array(a, dtype=dtype)                          # a private copy, then locked
+    a.setflags(write=False)
+    return a
+
+
+def _make_trial(name, groups, description, fs, gyr, acc, mag, quat_ref, movement):
+    return BroadTrial(name, tuple(groups), description, float(fs), _frozen(gyr), _frozen(acc), _frozen(mag),
+                      _frozen(quat_ref), _frozen(movement, bool))
+
+
+def _read_mat(path, name):
+    import scipy.io
+
+    try:
+        m = scipy.io.loadmat(str(path))
+    except Exception as exc:                               # scipy raises several kinds on a damaged file
+        raise ValueError(f"{path} is not a readable BROAD .mat file ({type(exc).__name__}: {exc}) -- delete it and "
+                         "load the trial again") from None
+    missing = [k for k in _KEYS if k not in m]
+    if missing:
+        raise ValueError(f"{path} is not a BROAD trial file: missing {', '.join(missing)}")
+    n = len(m["imu_gyr"])
+    gyr = validate.samples(m["imu_gyr"], f"{name}: imu_gyr")
+    acc = validate.samples(m["imu_acc"], f"{name}: imu_acc")
+    mag = validate.samples(m["imu_mag"], f"{name}: imu_mag")
+    quat = validate.array(m["opt_quat"], f"{name}: opt_quat", shape=(None, 4), finite=False)
+    movement = np.asarray(m["movement"]).reshape(-1)
+    validate.same_length(imu_gyr=gyr, imu_acc=acc, imu_mag=mag, opt_quat=quat, movement=movement)
+    quat = quat.copy()
+    quat[np.isnan(quat).any(axis=-1)] = np.nan             # a partly lost sample is lost
+    fs = validate.positive(np.asarray(m["sampling_rate"]).reshape(-1)[0], f"{name}: sampling_rate")
+    return n, fs, gyr, acc, mag, quat, movement.astype(bool)
+
+
+def load_trial(name_or_number, folder=None, download=True, progress=True):
+    """Load one BROAD trial (from ``folder``, ``FUSIONLAB_BROAD_DIR``, the cache, or a download; see module doc).
+
+    Parameters
+    ----------
+    name_or_number : int or str -- e.g. ``2``, ``'02'`` or ``'02_undisturbed_slow_rotation_B'``
+    folder : str or Path or None -- a folder holding the ``.mat`` files (the file must be there)
+    download : bool -- allow a download into the cache when the trial is not found locally
+    progress : bool -- show a progress bar while downloading
+    Returns
+    -------
+    BroadTrial
+    Raises
+    ------
+    ValueError, FileNotFoundError -- see :func:`fetch_trial`; ValueError also for a file that is not a BROAD trial
+    """
+    name = trial_name(name_or_number)
+    path = fetch_trial(name, folder=folder, download=download, progress=progress)
+    _, fs, gyr, acc, mag, quat, movement = _read_mat(path, name)
+    info = next(t for t in list_trials() if t.name == name)
+    return _make_trial(name, info.groups, info.description, fs, gyr, acc, mag, quat, movement)
+
+
+#: The BROAD part of this module under one name: ``datasets.broad.load_trial(2)``.
+broad = types.SimpleNamespace(
+    URL=BROAD_URL, TrialInfo=TrialInfo, Trial=BroadTrial, list_trials=list_trials, group_names=group_names,
+    trial_name=trial_name, known_sha256=known_sha256, cache_dir=cache_dir, available_trials=available_trials,
+    fetch_trial=fetch_trial, load_trial=load_trial)

@@ -1,0 +1,142 @@
+"""The BROAD benchmark (fusionlab.bench): contenders, scoring rows, group means, CSV/figure output and the command
+line, on a short slice of one shared trial so the file stays fast. Real-data tests skip when the data is absent."""
+from __future__ import annotations
+
+import csv
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fusionlab import bench, datasets, estimators, metrics
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
+needs_data = pytest.mark.skipif(not (SHARED / "SHA256SUMS").is_file(),
+                                reason=f"BROAD subset not found at {SHARED}: benchmark tests skipped")
+HAS_VQF = importlib.util.find_spec("vqf") is not None
+HAS_AHRS = importlib.util.find_spec("ahrs") is not None
+N = 15000          # trial 02: rest, then the first 12 s of slow rotation (3551 scored samples)
+
+
+@pytest.fixture(autouse=True)
+def offline(monkeypatch, tmp_path):
+    monkeypatch.delenv(datasets.ENV_DIR, raising=False)
+    monkeypatch.setenv(datasets.ENV_CACHE, str(tmp_path / "cache"))
+    monkeypatch.setenv(datasets.ENV_URL, "http://127.0.0.1:9/")
+
+
+@pytest.fixture(scope="module")
+def rows():
+    if not (SHARED / "SHA256SUMS").is_file():
+        pytest.skip(f"BROAD subset not found at {SHARED}")
+    return bench.run_benchmark([2], folder=SHARED, max_samples=N, progress=False)
+
+
+def test_contenders_are_the_registry_then_the_installed_libraries():
+    cs = bench.contenders()
+    names = [c.name for c in cs]
+    assert names[:len(estimators.available())] == list(estimators.available())
+    assert ("vqf9" in names) == HAS_VQF and ("madgwick9" in names) == HAS_AHRS
+    assert {c.source for c in bench.contenders(include_external=False)} == {"fusionlab"}
+    assert [c.sensors for c in bench.contenders(["gyro", "triad"])] == ["6D", "9D"]
+    with pytest.raises(ValueError, match="estimators must be among .* got unknown 'kalman9'"):
+        bench.contenders(["gyro", "kalman9"])
+
+
+@needs_data
+def test_rows_have_every_column_and_match_the_metrics_module(rows):
+    assert len(rows) == len(bench.contenders())
+    trial = datasets.load_trial(2, folder=SHARED).slice(0, N)
+    scored = int((trial.movement & ~np.isnan(trial.quat_ref).any(axis=1)).sum())
+    for r in rows:
+        assert set(r) == set(bench.TRIAL_COLUMNS) and r["error"] == ""
+        assert r["n_samples"] == N and r["n_scored"] == scored == 3551
+        assert r["samples_per_s"] > 0 and r["total_aligned_deg"] <= r["total_rmse_deg"] + 1e-9
+    gyro = next(r for r in rows if r["estimator"] == "gyro")
+    q = estimators.run("gyro", trial.gyr, trial.acc, trial.fs, frame="ENU")
+    ref = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
+    assert gyro["inclination_rmse_deg"] == pytest.approx(ref.inclination_deg, rel=1e-12)
+
+
+@needs_data
+@pytest.mark.skipif(not HAS_VQF, reason="vqf not installed (optional bench extra)")
+def test_vqf_is_scored_in_the_reference_frame(rows):
+    r = {x["estimator"]: x for x in rows}
+    assert r["vqf9"]["total_rmse_deg"] < 3.0                 # a wrong frame would give tens of degrees
+    assert r["vqf6"]["inclination_rmse_deg"] < 1.5
+
+
+@needs_data
+@pytest.mark.skipif(not HAS_AHRS, reason="ahrs not installed (optional bench extra)")
+def test_ahrs_madgwick_nwu_is_converted_to_enu(rows):
+    r = {x["estimator"]: x for x in rows}
+    assert r["madgwick9"]["total_rmse_deg"] < 5.0            # without the NWU->ENU turn: about 90 degrees
+    assert abs(r["madgwick9"]["heading_offset_deg"]) < 5.0
+    assert r["madgwick6"]["inclination_rmse_deg"] < 2.0
+
+
+@needs_data
+def test_benchmark_is_deterministic(rows):
+    again = bench.run_benchmark([2], folder=SHARED, max_samples=N, names=["gyro", "triad"], progress=False)
+    first = {r["estimator"]: r for r in rows}
+    for r in again:
+        for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg"):
+            assert r[k] == first[r["estimator"]][k]
+
+
+def test_group_means_average_per_trial_rmse_over_each_group():
+    def row(trial, groups, total, n=1000, seconds=0.5):
+        return dict(estimator="x", source="fusionlab", sensors="9D", trial=trial, groups=groups, n_samples=n,
+                    total_rmse_deg=total, heading_rmse_deg=total / 2, inclination_rmse_deg=1.0,
+                    total_aligned_deg=total, seconds=seconds, error="")
+    rows = [row("a", "all_trials|undisturbed|slow", 2.0), row("b", "all_trials|undisturbed|fast", 4.0),
+            row("c", "all_trials|disturbed|tapping", 9.0, n=3000)]
+    g = {r["group"]: r for r in bench.group_means(rows)}
+    assert g["all_trials"]["total_rmse_deg"] == pytest.approx(5.0) and g["all_trials"]["n_trials"] == 3
+    assert g["undisturbed"]["total_rmse_deg"] == pytest.approx(3.0)
+    assert g["tapping"]["heading_rmse_deg"] == pytest.approx(4.5)
+    assert g["all_trials"]["samples_per_s"] == pytest.approx(5000 / 1.5)
+    assert "rotation" not in g
+
+
+@needs_data
+def test_a_failing_contender_gives_an_error_row_not_a_crash():
+    def broken(trial):
+        raise RuntimeError("diverged")
+    trial = datasets.load_trial(2, folder=SHARED).slice(0, 2000)
+    r = bench._score(bench.Contender("broken", "fusionlab", True, "", broken), trial)
+    assert r["error"] == "RuntimeError: diverged" and np.isnan(r["total_rmse_deg"])
+    assert "error: broken on 02_undisturbed_slow_rotation_B" in bench.format_table([r])
+
+
+@needs_data
+def test_bad_arguments_are_value_errors():
+    with pytest.raises(ValueError, match="max_samples must be a positive integer"):
+        bench.run_benchmark([2], folder=SHARED, max_samples=0, progress=False)
+    with pytest.raises(ValueError, match="name_or_number"):
+        bench.run_benchmark([99], folder=SHARED, progress=False)
+
+
+def test_no_local_trial_is_a_clear_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no BROAD trial is available locally"):
+        bench.run_benchmark(folder=tmp_path, progress=False)
+
+
+@needs_data
+def test_command_line_writes_csv_with_expected_columns_and_a_figure(tmp_path, capsys):
+    out = tmp_path / "out"
+    code = bench.main(["--trials", "2", "--folder", str(SHARED), "--max-samples", str(N), "--estimators", "gyro",
+                       "triad", "--out", str(out), "--no-progress"])
+    assert code == 0
+    with open(out / "bench_trials.csv", newline="") as f:
+        table = list(csv.reader(f))
+    assert tuple(table[0]) == bench.TRIAL_COLUMNS and len(table) == 3
+    assert {row[0] for row in table[1:]} == {"gyro", "triad"}
+    with open(out / "bench_groups.csv", newline="") as f:
+        groups = list(csv.DictReader(f))
+    assert tuple(groups[0]) == bench.GROUP_COLUMNS
+    assert {g["group"] for g in groups} == {"all_trials", "undisturbed", "rotation", "slow", "no_breaks"}
+    assert (out / "bench.png").stat().st_size > 10_000
+    text = capsys.readouterr().out
+    assert "gyro" in text and "triad" in text and "02_undisturbed_slow_rotation_B" in text

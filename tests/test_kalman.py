@@ -1,0 +1,365 @@
+"""fusionlab.kalman: the falling body of thesis lab 2 and the Kalman filter from first principles (seed 000 §4)."""
+import matplotlib
+
+matplotlib.use("Agg")
+
+import ipywidgets as W  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from filterpy.kalman import KalmanFilter  # noqa: E402
+from filterpy.stats import NEES as filterpy_NEES  # noqa: E402
+
+from fusionlab import checks, plotting, widgets  # noqa: E402
+from fusionlab import kalman as kf  # noqa: E402
+
+A, B, U = kf.falling_body_state_space()
+Q, R, H = 0.16 * np.eye(2), 144.0 * np.eye(2), np.eye(2)
+
+
+def random_spd(rng, n):
+    M = rng.standard_normal((n, n))
+    return M @ M.T + n * np.eye(n)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+# ---------------------------------------------------------------- Part A
+def test_printed_loop_runs_199_steps_and_ends_at_thesis_values():
+    X, V = kf.seed000_labcode_falling_body()
+    assert X.shape == V.shape == (200,)
+    assert round(X[-1], 3) == 181.006 and round(V[-1], 3) == -19.027
+    t, s = kf.falling_body_euler(1.99)                        # the fix, asked for the same 1.99 s, agrees
+    assert len(t) == 200 and t[-1] == pytest.approx(1.99)
+    np.testing.assert_allclose(s[:, 0], X, atol=1e-12)
+    np.testing.assert_allclose(s[:, 1], V, atol=1e-12)
+
+
+@pytest.mark.parametrize("k, m, x_end, v_end", [(0.5, 10, 181.312, -18.568), (1, 1, 188.972, -8.474),
+                                                (0.25, 1, 183.509, -15.379)])
+def test_printed_loop_other_k_m_pairs_match_digest_table(k, m, x_end, v_end):
+    X, V = kf.seed000_labcode_falling_body(k=k, m=m)
+    assert (round(X[-1], 3), round(V[-1], 3)) == (x_end, v_end)
+
+
+def test_fixed_loop_over_200_seconds_falls_through_the_ground():
+    t, s = kf.falling_body_euler(200.0)
+    assert len(t) == 20001
+    assert s[-1, 0] == pytest.approx(-62625.6, abs=0.1) and s[-1, 1] == pytest.approx(-389.36, abs=0.01)
+    assert t[np.argmax(s[:, 0] < 0)] == pytest.approx(6.57)
+
+
+def test_terminal_velocity_and_time_constant():
+    assert kf.terminal_velocity(0.25, 10) == pytest.approx(-392.0)
+    assert kf.time_constant(0.25, 10) == pytest.approx(40.0)
+    assert kf.falling_body_exact(1e4)[1] == pytest.approx(-392.0)      # v → v_T
+
+
+def test_euler_converges_to_closed_form_at_first_order():
+    errs = []
+    for dt in (0.01, 0.005):
+        t, s = kf.falling_body_euler(2.0, dt=dt)
+        errs.append(abs(s[-1, 0] - kf.falling_body_exact(2.0)[0]))
+    assert errs[0] == pytest.approx(0.0937, abs=1e-3)
+    assert errs[0] / errs[1] == pytest.approx(2.0, rel=0.01)
+
+
+def test_quadratic_drag_matches_its_closed_form_and_hits_ground():
+    vT = kf.quadratic_terminal_velocity()
+    assert vT == pytest.approx(-83.28, abs=0.01)
+    t = np.linspace(0, 5, 11)
+    sol = kf.falling_body_quadratic(5.0, t_eval=t, stop_at_ground=False)
+    c = -vT
+    np.testing.assert_allclose(sol.y[1], -c * np.tanh(9.8 * t / c), atol=1e-7)         # from rest
+    np.testing.assert_allclose(sol.y[0], 200 - c ** 2 / 9.8 * np.log(np.cosh(9.8 * t / c)), atol=1e-6)
+    hit = kf.falling_body_quadratic(30.0)
+    assert hit.t_events[0][0] == pytest.approx(6.694, abs=1e-3) and abs(hit.y[0, -1]) < 1e-6
+
+
+# ---------------------------------------------------------------- Part B
+def test_state_space_equals_part_a_to_machine_precision():
+    X, V = kf.seed000_labcode_falling_body()
+    x = np.array([200.0, 0.0])
+    out = [x]
+    for _ in range(199):
+        x = A @ x + B @ U
+        out.append(x)
+    out = np.array(out)
+    assert np.max(np.abs(out - np.column_stack([X, V]))) < 1e-12
+    np.testing.assert_allclose(B @ U, [0, -0.098])
+    assert A[1, 1] == pytest.approx(1 - 0.025 * 0.01)
+
+
+def test_mass_spring_damper_poles_and_static_gain():
+    m, b, k = 2.0, 0.8, 50.0
+    A_, B_, C_, D_ = kf.mass_spring_damper_ss(m, b, k)
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A_)), np.sort_complex(np.roots([m, b, k])))
+    assert (-C_ @ np.linalg.solve(A_, B_) + D_).item() == pytest.approx(1 / k)           # x = F / k at rest
+    _, Bb, _, _ = kf.mass_spring_damper_ss(m, b, k, input="base_accel")
+    assert (-C_ @ np.linalg.solve(A_, Bb)).item() == pytest.approx(-m / k)                # (000 eq 3.6)
+
+
+# ---------------------------------------------------------------- foundations
+def test_gaussian_product_is_a_scalar_kalman_update():
+    mu, var = kf.gaussian_product(0.0, 4.0, 3.0, 1.0)
+    assert (mu, var) == pytest.approx((2.4, 0.8))
+    x, P, K = kf.update([0.0], [[4.0]], [3.0], [[1.0]], [[1.0]])
+    assert (x[0], P[0, 0], K[0, 0]) == pytest.approx((2.4, 0.8, 0.8))
+    assert kf.gaussian_product(3.0, 1.0, 0.0, 4.0) == pytest.approx((mu, var))           # symmetric
+
+
+def test_rls_with_no_prior_is_the_running_mean():
+    y = np.random.default_rng(1).normal(5.0, 2.0, 50)
+    x_hat, P, K = kf.rls_scalar(y, R=4.0)
+    np.testing.assert_allclose(x_hat, np.cumsum(y) / np.arange(1, 51), atol=1e-12)
+    np.testing.assert_allclose(P, 4.0 / np.arange(1, 51), rtol=1e-12)
+    np.testing.assert_allclose(K, 1 / np.arange(1, 51), rtol=1e-12)
+
+
+def test_three_covariance_forms_agree_at_optimal_gain_only():
+    rng = np.random.default_rng(3)
+    for n, m in ((2, 2), (2, 1), (4, 2)):
+        P, Rm = random_spd(rng, n), random_spd(rng, m)
+        Hm = rng.standard_normal((m, n))
+        K = kf.kalman_gain(P, Hm, Rm)
+        J = kf.joseph_covariance(P, K, Hm, Rm)
+        np.testing.assert_allclose(kf.short_covariance(P, K, Hm), J, atol=1e-10)
+        np.testing.assert_allclose(kf.information_covariance(P, Hm, Rm), J, atol=1e-10)
+        np.testing.assert_allclose(kf.gain_from_posterior(J, Hm, Rm), K, atol=1e-10)
+        np.testing.assert_allclose(kf.expanded_covariance(P, K, Hm, Rm), J, atol=1e-10)
+        K2 = K + 0.1 * rng.standard_normal(K.shape)
+        assert np.max(np.abs(kf.short_covariance(P, K2, Hm) - kf.joseph_covariance(P, K2, Hm, Rm))) > 1e-3
+
+
+def test_joseph_form_is_the_true_error_covariance_for_any_gain():
+    rng = np.random.default_rng(4)
+    P, Rm, Hm = random_spd(rng, 2), random_spd(rng, 2), rng.standard_normal((2, 2))
+    K = rng.standard_normal((2, 2))
+    e0 = rng.multivariate_normal(np.zeros(2), P, 200_000)
+    v = rng.multivariate_normal(np.zeros(2), Rm, 200_000)
+    e1 = e0 - (e0 @ Hm.T + v) @ K.T                                   # error of x̂ + K(y - Hx̂), eq 4.10
+    J = kf.joseph_covariance(P, K, Hm, Rm)
+    sd = np.sqrt((np.outer(np.diag(J), np.diag(J)) + J ** 2) / len(e1))   # sampling std of each entry
+    assert np.all(np.abs(np.cov(e1.T) - J) < 4 * sd)
+    assert np.any(np.abs(np.cov(e1.T) - kf.short_covariance(P, K, Hm)) > 20 * sd)   # short form is not it
+
+
+def test_optimal_gain_minimises_trace_and_zeroes_its_gradient():
+    rng = np.random.default_rng(5)
+    P, Rm, Hm = random_spd(rng, 3), random_spd(rng, 2), rng.standard_normal((2, 3))
+    K = kf.kalman_gain(P, Hm, Rm)
+    tr0 = np.trace(kf.joseph_covariance(P, K, Hm, Rm))
+    for _ in range(20):
+        D = rng.standard_normal(K.shape)
+        assert np.trace(kf.joseph_covariance(P, K + 1e-2 * D, Hm, Rm)) > tr0
+    assert np.max(np.abs(kf.trace_gradient(P, K, Hm, Rm))) < 1e-10
+    K2 = K + rng.standard_normal(K.shape)                             # finite differences at another K
+    eps, G = 1e-6, np.zeros_like(K2)
+    for i in np.ndindex(K2.shape):
+        dK = np.zeros_like(K2)
+        dK[i] = eps
+        G[i] = (np.trace(kf.joseph_covariance(P, K2 + dK, Hm, Rm))
+                - np.trace(kf.joseph_covariance(P, K2 - dK, Hm, Rm))) / (2 * eps)
+    np.testing.assert_allclose(kf.trace_gradient(P, K2, Hm, Rm), G, rtol=1e-6, atol=1e-6)
+
+
+def test_printed_eq427_is_wrong_in_general_but_hides_at_the_lab_matrices():
+    P_ss, K_ss, _ = kf.steady_state(A, H, Q, R)
+    np.testing.assert_allclose(kf.seed000_eq427_printed(P_ss, K_ss, H, R), kf.joseph_covariance(P_ss, K_ss, H, R),
+                               atol=1e-12)                              # R = r·I: K commutes with P
+    Hg, Kg = np.array([[1.0, 0.5], [0.0, 1.0]]), np.array([[0.2, 0.05], [0.01, 0.3]])
+    diff = np.abs(kf.seed000_eq427_printed(P_ss, Kg, Hg, R) - kf.joseph_covariance(P_ss, Kg, Hg, R)).max()
+    assert diff > 0.1
+    with pytest.raises(ValueError, match="H must be square"):
+        kf.seed000_eq427_printed(P_ss, np.ones((2, 1)), np.array([[1.0, 0.0]]), [[144.0]])
+
+
+# ---------------------------------------------------------------- Part C: the filter
+def _filterpy_run(z, x0):
+    f = KalmanFilter(dim_x=2, dim_z=2)
+    f.F, f.B, f.H, f.Q, f.R = A, B, H, Q, R
+    f.x, f.P = np.array(x0, dtype=float)[:, None], 144.0 * np.eye(2)
+    xs, Ps = [], []
+    for zz in z:
+        f.update(zz)
+        xs.append(f.x[:, 0].copy())
+        Ps.append(f.P.copy())
+        f.predict(u=U[:, None])
+    return np.array(xs), np.array(Ps)
+
+
+@pytest.mark.parametrize("x0", [(200.0, 0.0), (185.0, 0.0)])
+def test_thesis_filter_agrees_with_filterpy(x0):
+    _, z = kf.simulate_falling_body(1, seed=7)
+    ours = kf.ThesisKF.falling_body(x0=x0).run(z[0])
+    xs, Ps = _filterpy_run(z[0], x0)
+    assert np.max(np.abs(ours["x"] - xs)) < 1e-12
+    assert np.max(np.abs(ours["P"] - Ps)) < 1e-12
+
+
+def test_printed_code_variant_is_the_verbatim_matlab_function():
+    _, z = kf.simulate_falling_body(1, seed=8)
+    ours = kf.ThesisKF.falling_body(project_state=False, covariance="short").run(z[0])
+    x, P = np.array([200.0, 0.0]), 144.0 * np.eye(2)
+    for i, zz in enumerate(z[0]):
+        x, P = kf.seed000_labcode_kalman(x, P, zz, A, Q, H, R)
+        np.testing.assert_allclose(x, ours["x"][i], atol=1e-10, rtol=0)     # P - KHP vs (I - KH)P: rounding
+    np.testing.assert_allclose(P, kf.predict(ours["x"][-1], ours["P"][-1], A, Q)[1], atol=1e-10, rtol=0)
+
+
+@pytest.mark.parametrize("opts", [{}, {"project_state": False, "covariance": "short"}, {"control": False},
+                                  {"covariance": "information"}])
+def test_batched_filter_equals_per_step_filter(opts):
+    _, z = kf.simulate_falling_body(4, seed=9)
+    x0 = np.array([[200.0, 0.0], [185.0, 0.0], [0.0, 0.0], [210.0, -3.0]])
+    b = kf.kf_batch(z, A, B, U, Q, R, H, x0, 144.0 * np.eye(2), **opts)
+    for r in range(4):
+        one = kf.ThesisKF(A, B, U, Q, R, H, x0[r], 144.0 * np.eye(2), **opts).run(z[r])
+        np.testing.assert_allclose(b["x"][r], one["x"], atol=1e-12, rtol=0)
+        np.testing.assert_allclose(b["x_prior"][r], one["x_prior"], atol=1e-12, rtol=0)
+        np.testing.assert_allclose(b["P"], one["P"], atol=1e-12, rtol=0)
+
+
+def test_noise_free_filter_tracks_truth_exactly():
+    truth, z = kf.simulate_falling_body(2, seed=1, pn_std=0.0, mn_std=0.0)
+    prior1 = A @ truth[0, 0] + B @ U                       # the exact prior for the first measurement, tru(2)
+    res = kf.kf_batch(z, A, B, U, Q, R, H, prior1, 144.0 * np.eye(2))
+    assert np.max(np.abs(res["x"] - truth[:, 1:])) < 1e-9
+    # the lab starts from tru(1) = [x0, v0], one step early: a g·dt velocity offset the filter then removes
+    lab = kf.kf_batch(z, A, B, U, Q, R, H, truth[0, 0], 144.0 * np.eye(2))
+    assert lab["x"][0, 0, 1] - truth[0, 1, 1] == pytest.approx(0.049)          # K = 1/2 halves the 0.098 m/s
+    assert np.max(np.abs(lab["x"][:, -1] - truth[:, -1])) < 1e-4
+    printed = kf.kf_batch(z, A, B, U, Q, R, H, prior1, 144.0 * np.eye(2), project_state=False)
+    assert np.max(np.abs(printed["x"] - truth[:, 1:])) > 1.0            # even without noise it lags
+
+
+def test_simulation_runs_do_not_depend_on_the_batch():
+    t_all, z_all = kf.simulate_falling_body(6, seed=11)
+    t_b, z_b = kf.simulate_falling_body(3, seed=11, first_run=3)
+    np.testing.assert_array_equal(z_all[3:], z_b)
+    np.testing.assert_array_equal(t_all[3:], t_b)
+    assert t_all.shape == (6, 200, 2) and z_all.shape == (6, 199, 2)
+
+
+def test_monte_carlo_reproduces_thesis_lab_figures():
+    mc = kf.monte_carlo(200, seed=2, batch=50, progress=False)
+    filt, printed = mc["variants"]["thesis filter"]["rms"], mc["variants"]["printed code"]["rms"]
+    assert mc["meas_rms"][0] == pytest.approx(12.0, rel=0.1)
+    assert filt[0] == pytest.approx(2.4, rel=0.1) and printed[0] == pytest.approx(3.3, rel=0.1)
+    assert filt[0] < 0.35 * mc["meas_rms"][0] and printed[0] > 1.25 * filt[0]
+    assert (round(mc["meas_rms"][0], 2), round(filt[0], 2), round(printed[0], 2)) == (12.0, 2.46, 3.41)
+    mc2 = kf.monte_carlo(200, seed=2, batch=200, progress=False)           # batching changes nothing
+    np.testing.assert_allclose(mc2["variants"]["thesis filter"]["rms"], filt, rtol=1e-12)
+
+
+def test_steady_state_gain_matches_dare_and_the_running_filter():
+    P, K, P_post = kf.steady_state(A, H, Q, R)
+    np.testing.assert_allclose(K, [[0.0338, 0.0046], [0.0046, 0.0322]], atol=5e-5)
+    np.testing.assert_allclose(P, [[5.04, 0.71], [0.71, 4.79]], atol=5e-3)
+    _, z = kf.simulate_falling_body(1, seed=2)
+    run = kf.ThesisKF.falling_body().run(z[0])
+    assert np.max(np.abs(run["K"][-1] - K)) < 1e-6
+    np.testing.assert_allclose(run["P_prior"][-1], P, atol=1e-4)
+
+
+def test_nees_matches_filterpy_and_flags_mis_set_noise():
+    truth, z = kf.simulate_falling_body(1, seed=3)
+    run = kf.ThesisKF.falling_body().run(z[0])
+    np.testing.assert_allclose(kf.nees(run["x"] - truth[0, 1:], run["P"]),
+                               filterpy_NEES(truth[0, 1:], run["x"], run["P"]), rtol=1e-10)
+    lo, hi = kf.nees_bounds(200, 2)
+    assert (round(lo, 2), round(hi, 2)) == (1.73, 2.29)
+    v = {"right": {}, "Q x 10": {"Q": 10 * Q}, "Q / 10": {"Q": Q / 10}, "R x 10": {"R": 10 * R},
+         "R / 10": {"R": R / 10}}
+    mc = kf.monte_carlo(200, seed=2, progress=False, variants=v)
+    steady = {k: m["nees_t"][-100:].mean() for k, m in mc["variants"].items()}
+    assert lo < steady["right"] < hi
+    assert steady["Q x 10"] < lo and steady["R x 10"] < lo                 # pessimistic
+    assert steady["Q / 10"] > 4 * hi and steady["R / 10"] > 4 * hi         # over-confident
+
+
+# ---------------------------------------------------------------- bad input
+@pytest.mark.parametrize("call, match", [
+    (lambda: kf.update([200.0, 0.0], np.eye(3), [1.0, 2.0], H, R), r"x must have shape \(3,\)"),
+    (lambda: kf.update([200.0, 0.0], np.eye(2), [1.0, 2.0], np.eye(3), R), r"H must have shape \(m, 2\)"),
+    (lambda: kf.update([200.0, 0.0], np.eye(2), [1.0, 2.0], H, np.eye(3)), r"R must have shape \(2, 2\)"),
+    (lambda: kf.update([200.0, 0.0], np.eye(2), [1.0], H, R), r"z must have shape \(2,\)"),
+    (lambda: kf.update([200.0, 0.0], np.ones((2, 3)), [1.0, 2.0], H, R), r"P must be a square matrix"),
+    (lambda: kf.update([200.0, 0.0], np.eye(2), [1.0, 2.0], H, R, covariance="jospeh"), r"covariance must be"),
+    (lambda: kf.predict([1.0, 2.0], np.eye(2), np.eye(3), Q), r"A must have shape \(2, 2\)"),
+    (lambda: kf.predict([1.0, 2.0], np.eye(2), A, Q, B=B), r"B and u must be given together"),
+    (lambda: kf.predict([1.0, 2.0], np.eye(2), A, Q, B=B, u=[1.0]), r"u must have shape \(2,\)"),
+    (lambda: kf.ThesisKF(A, np.ones((3, 2)), U, Q, R, H, [200, 0], R), r"B must have shape \(2, p\)"),
+    (lambda: kf.ThesisKF.falling_body().run(np.ones((5, 3))), r"zs must have shape"),
+    (lambda: kf.ThesisKF.falling_body().step([1.0, 2.0, 3.0]), r"z must have shape \(2,\)"),
+    (lambda: kf.kf_batch(np.ones((5, 2)), A, B, U, Q, R, H, [200, 0], R), r"zs must have shape \(R, N, 2\)"),
+    (lambda: kf.kf_batch(np.ones((3, 5, 2)), A, B, U, Q, R, H, np.ones((2, 2)), R), r"x0 must have shape"),
+    (lambda: kf.joseph_covariance(np.eye(2), np.ones((2, 3)), H, R), r"K must have shape \(2, 2\)"),
+    (lambda: kf.nees(np.ones((5, 2)), np.eye(3)), r"P must have shape"),
+    (lambda: kf.seed000_labcode_falling_body(TMAX=0), r"TMAX must be an integer >= 1"),
+    (lambda: kf.falling_body_euler(1.234, dt=0.01), r"duration must be a whole number of steps"),
+    (lambda: kf.falling_body_state_space(k=-1), r"k must be > 0"),
+    (lambda: kf.gaussian_product(0, -1.0, 1, 1), r"var1 must be > 0"),
+    (lambda: kf.rls_scalar([1.0, 2.0], R=1.0, P0=0.0), r"P0 must be > 0"),
+    (lambda: kf.mass_spring_damper_ss(1, 0.1, 1, input="torque"), r"input must be"),
+    (lambda: kf.simulate_falling_body(0, seed=1), r"n_runs must be an integer >= 1"),
+    (lambda: kf.steady_state(A, np.eye(3), Q, R), r"H must have shape \(m, 2\)"),
+])
+def test_bad_input_names_the_argument(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+# ---------------------------------------------------------------- checks, widget and figures of lab 02
+def test_checks_accept_the_library_and_name_the_slips():
+    checks.check_joseph(kf.joseph_covariance)
+    checks.check_state_space(kf.falling_body_state_space)
+    checks.check_predict(kf.predict)
+    checks.check_update(lambda *a: kf.update(*a))
+    with pytest.raises(checks.Feedback, match="short form"):
+        checks.check_joseph(lambda P, K, H_, R_: (np.eye(len(P)) - K @ H_) @ P)
+    with pytest.raises(checks.Feedback, match="control term is missing"):
+        checks.check_predict(lambda x, P, A_, Q_, B_, u: (A_ @ x, A_ @ P @ A_.T + Q_))
+    with pytest.raises(checks.Feedback, match="Q is missing"):
+        checks.check_predict(lambda x, P, A_, Q_, B_, u: (A_ @ x + B_ @ u, A_ @ P @ A_.T))
+    with pytest.raises(checks.Feedback, match="wrong sign"):
+        checks.check_update(lambda x, P, z, H_, R_: (x + kf.kalman_gain(P, H_, R_) @ (H_ @ x - z),
+                                                     *kf.update(x, P, z, H_, R_)[1:]))
+    with pytest.raises(checks.Feedback, match="R is missing"):
+        checks.check_update(lambda x, P, z, H_, R_: (x, P, P @ H_.T @ np.linalg.inv(H_ @ P @ H_.T)))
+    with pytest.raises(checks.Feedback, match="gravity enters with the wrong sign"):
+        checks.check_state_space(lambda k, m, g, dt: (np.array([[1, dt], [0, 1 - k / m * dt]]),
+                                                      np.array([[1, 0], [0, g * dt]]), np.array([0, 1])))
+    with pytest.raises(checks.Feedback, match="A is transposed"):
+        checks.check_state_space(lambda k, m, g, dt: (kf.falling_body_state_space(k, m, g, dt)[0].T,
+                                                      *kf.falling_body_state_space(k, m, g, dt)[1:]))
+
+
+def test_gaussian_product_explorer_builds_headless_and_updates():
+    box = widgets.gaussian_product_explorer(0.0, 4.0, 3.0, 1.0)
+    sliders = [c for c in box.children if isinstance(c, W.FloatSlider)]
+    readout = [c for c in box.children if isinstance(c, W.HTML)][0]
+    assert len(sliders) == 4 and not any(s.continuous_update for s in sliders)
+    assert readout.value == widgets.gaussian_product_state(0, 4, 3, 1)["html"]
+    assert "μ = 2.40, σ² = 0.80" in readout.value
+    sliders[3].value = 4.0                                                 # equal variances: halfway
+    assert "μ = 1.50, σ² = 2.00" in readout.value
+    st = widgets.gaussian_product_state(0, 4, 3, 4)
+    assert st["K"] == pytest.approx(0.5)
+
+
+def test_lab02_figures_draw_what_they_claim():
+    fig = plotting.plot_gaussian_product(0.0, 4.0, 3.0, 1.0)
+    prod = [ln for ln in fig.axes[0].get_lines() if ln.get_gid() == "product"][0]
+    xs, ys = prod.get_data()
+    assert xs[np.argmax(ys)] == pytest.approx(2.4, abs=0.03)
+    truth, z = kf.simulate_falling_body(1, seed=2)
+    run = kf.ThesisKF.falling_body().run(z[0])
+    fig = plotting.plot_kf_run(np.arange(1, 200) * 0.01, truth[0, 1:], z[0], run["x"], run["P"])
+    assert len(fig.axes) == 2 and fig.axes[1].get_xlabel() == "time (s)"
+    with pytest.raises(ValueError, match="P must have shape"):
+        plotting.plot_kf_run(np.arange(199) * 0.01, truth[0, 1:], z[0], run["x"], run["P"][:10])
