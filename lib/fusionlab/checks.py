@@ -55,14 +55,16 @@ def friendly_errors():
     ip.set_custom_exc((NameError,), handler)
 
 
-def _call(fn, *args, what):
+def _call(fn, *args, what, dtype=float):
+    """Call a student's function; stop with a clear message for the stub, a missing return. ``dtype=None`` keeps
+    the returned type (complex values, for checks that diagnose it)."""
     try:
         out = fn(*args)
     except NotImplementedError:
         raise Feedback(f"{what} is not written yet: replace `raise NotImplementedError(...)` with your code.") from None
     if out is None:
         raise Feedback(f"{what} returned None -- did you forget the `return` statement?")
-    return np.asarray(out, dtype=float)
+    return np.asarray(out, dtype=dtype)
 
 
 def diagnose_dcm(C, euler, tol=1e-6):
@@ -386,17 +388,6 @@ __all__ += ["check_smd_magnitude", "check_accel_from_bridge", "check_adc_to_phys
             "check_roll_pitch", "check_coriolis_force", "check_integrate_rate"]
 
 
-def _call_raw(fn, *args, what):
-    """Like :func:`_call` but keeps the value as returned (complex, shapes), for checks that diagnose the type."""
-    try:
-        out = fn(*args)
-    except NotImplementedError:
-        raise Feedback(f"{what} is not written yet: replace `raise NotImplementedError(...)` with your code.") from None
-    if out is None:
-        raise Feedback(f"{what} returned None -- did you forget the `return` statement?")
-    return np.asarray(out)
-
-
 def check_smd_magnitude(fn):
     """Check a student's ``fn(omega, m, k, b) -> |H(jω)|`` (seed 000 eq 3.5) against the library."""
     m = 1e-9
@@ -405,7 +396,7 @@ def check_smd_magnitude(fn):
     omega = np.array([0.0, 0.3, 0.9, 1.0, 1.2, 4.0]) * wn
     for zeta in (0.05, 0.7):
         b = 2 * zeta * np.sqrt(k * m)
-        out = _call_raw(fn, omega, m, k, b, what="your function")
+        out = _call(fn, omega, m, k, b, what="your function", dtype=None)
         if np.iscomplexobj(out):
             raise Feedback("your function returns complex numbers: that is H(jω) itself. Fig 4 plots the amplitude "
                            "-- return np.abs(H).")
@@ -845,3 +836,102 @@ def check_step(fn):
                        "before integrating; the eCompass built with δ6 instead of the previous δ̂; the correction "
                        "quaternion not conjugated ((√(1-|v|²), -v)); b̂ and δ̂ updated with + instead of -.")
     _ok(f"{n} steps agree with fusionlab.freescale.Kalman9 (quaternion, offset and inclination).")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 11 (BROAD): heading and inclination error from an error quaternion, RMSE over the movement phase
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _broad_error_cases():
+    """Error quaternions ``q_z(δ) ⊗ q_tilt(ε about a horizontal axis)`` with known δ, ε; some with w < 0."""
+    rng = np.random.default_rng(1111)
+    n = 40
+    delta = rng.uniform(-2.5, 2.5, n)                                  # heading part, rad
+    eps = rng.uniform(0.0, 1.2, n)                                     # tilt angle, rad
+    axis_az = rng.uniform(-np.pi, np.pi, n)                            # tilt axis in the horizontal plane
+    q_tilt = np.stack([np.cos(eps / 2), np.sin(eps / 2) * np.cos(axis_az), np.sin(eps / 2) * np.sin(axis_az),
+                       np.zeros(n)], axis=-1)
+    q_z = np.stack([np.cos(delta / 2), np.zeros(n), np.zeros(n), np.sin(delta / 2)], axis=-1)
+    q = rotations.quat_multiply(q_z, q_tilt)
+    q[::3] *= -1                                                       # -q is the same rotation
+    return q, np.abs(delta), eps
+
+
+def _broad_angle_check(fn, what, ref_fn, truth):
+    from . import metrics
+    q, abs_delta, eps = _broad_error_cases()
+    got = _call(fn, q, what=what).reshape(-1)
+    ref = ref_fn(q)
+    if got.shape != ref.shape:
+        raise Feedback(f"{what} must return one angle per error quaternion: shape {ref.shape}; got {got.shape}")
+    if np.allclose(got, ref, atol=1e-9):
+        return got, ref
+    if np.allclose(got, np.degrees(ref), atol=1e-6):
+        raise Feedback(f"{what} returns degrees: return radians (np.degrees only for display).")
+    if np.allclose(got, ref / 2, atol=1e-9):
+        raise Feedback(f"{what} is half the angle: a quaternion holds half angles, so the angle is 2·(...).")
+    w, x, y, z = q.T
+    if np.allclose(np.abs(got), ref, atol=1e-9) or np.any(got < -1e-12):
+        raise Feedback(f"{what} has the wrong sign for some quaternions: q and -q are the same rotation, so use "
+                       "|w| and |z| (the angle is always between 0 and π).")
+    qx = np.stack([z, w, x, y], axis=-1)          # what q[..., 0] and q[..., 3] mean when read as [x, y, z, w]
+    if np.allclose(got, ref_fn(qx), atol=1e-9):
+        raise Feedback(f"{what} reads the quaternion as [x, y, z, w]: the suite's order is [w, x, y, z], so w = "
+                       "q[..., 0] and z = q[..., 3].")
+    for name, comp in (("x", 1), ("y", 2)):
+        qs = q.copy()
+        qs[:, 3] = q[:, comp]
+        if np.allclose(got, ref_fn(qs), atol=1e-9):
+            raise Feedback(f"{what} uses the {name} component: the heading axis is the vertical, the nav z axis, "
+                           "so use z = q[..., 3].")
+    if truth is not None and np.allclose(got, truth, atol=1e-9):
+        return got, ref
+    raise Feedback(f"{what} differs from the BROAD definition by up to {np.max(np.abs(got - ref)):.3g} rad; "
+                   "check the formula against the markdown above.")
+
+
+def check_broad_heading(fn):
+    """Check a student's ``fn(q_err) -> (N,) rad``: heading error ``2·atan(|z/w|)`` (BROAD, Laidig et al. 2021)."""
+    from . import metrics
+    q, abs_delta, _ = _broad_error_cases()
+    _broad_angle_check(fn, "your heading error", metrics.heading_error, abs_delta)
+    _ok(f"heading error right on {len(q)} error quaternions (q and -q alike): it recovers |δ| of q_z(δ) ⊗ q_tilt.")
+
+
+def check_broad_inclination(fn):
+    """Check a student's ``fn(q_err) -> (N,) rad``: inclination error ``2·acos(√(w² + z²))`` (BROAD)."""
+    from . import metrics
+    q, _, eps = _broad_error_cases()
+    got = _call(fn, q, what="your inclination error").reshape(-1)
+    w, _, _, z = q.T
+    if got.shape == eps.shape and np.allclose(got, 2 * np.arccos(np.clip(w * w + z * z, 0, 1)), atol=1e-9):
+        raise Feedback("your inclination error takes acos(w² + z²): the square root is missing, "
+                       "cos(ε/2) = √(w² + z²).")
+    _broad_angle_check(fn, "your inclination error", metrics.inclination_error, eps)
+    _ok(f"inclination error right on {len(q)} error quaternions: it recovers the tilt ε and ignores the heading δ.")
+
+
+def check_broad_rmse(fn):
+    """Check a student's ``fn(angle_rad, movement) -> float`` degrees: RMS over the mask, NaN samples ignored."""
+    from . import metrics
+    rng = np.random.default_rng(1112)
+    x = rng.uniform(0.0, 0.3, 200)
+    x[rng.choice(200, 20, replace=False)] = np.nan
+    m = rng.random(200) < 0.6
+    got = float(_call(fn, x, m, what="your RMSE"))
+    ref = np.degrees(metrics.rms(x, m))
+    if np.isclose(got, ref, rtol=1e-9):
+        _ok(f"RMSE over the movement mask, NaN samples skipped: {ref:.4f}° on the test data.")
+        return
+    if np.isnan(got):
+        raise Feedback("your RMSE is NaN: skip the samples whose reference is lost (np.isnan), e.g. np.nanmean or "
+                       "a mask ok = movement & ~np.isnan(angle).")
+    if np.isclose(got, metrics.rms(x, m), rtol=1e-9):
+        raise Feedback("your RMSE is in radians: the BROAD tables are in degrees (np.degrees at the end).")
+    if np.isclose(got, np.degrees(metrics.rms(x)), rtol=1e-9):
+        raise Feedback("your RMSE uses every sample: keep only those where movement is True.")
+    if np.isclose(got, np.degrees(np.nanmean(np.abs(x[m]))), rtol=1e-9):
+        raise Feedback("that is the mean absolute error: the RMSE is the square root of the mean of the squares.")
+    raise Feedback(f"your RMSE is {got:.4f}°, expected {ref:.4f}°: sqrt(mean(angle²)) over movement & ~isnan, in "
+                   "degrees.")
