@@ -1,0 +1,581 @@
+"""The thesis' "correlation" fusion (seed 000 §5.3.1 and Lab 3 §5.4.3), step by step, and two baselines.
+
+The thesis fuses the accelerometer tilt and the gyro rate with a per-sample weight, the "ratio" of the gyro rate to
+the accelerometer term (eqs 5.15-5.16): a complementary filter whose weight adapts to how noisy the accelerometer
+is. Lab 3 does it in a spreadsheet, one column per step a)-l). Here each step is one function, and
+:func:`pipeline` lays them out as the spreadsheet's columns, twice:
+
+* **as printed** -- the equations as the thesis prints them: C-order ``atan2(z, y)`` (≈ 90° when level, eqs
+  5.4-5.5), the difference-of-rates "integral" ``(R[n] - R[n-1])·Δt`` (eqs 5.13-5.14, an erratum), and the
+  accelerometer *angle* in the ratio (eqs 5.15-5.16, ° against °/s);
+* **as meant** -- the reading the prose supports (digest §2.12): Excel-order ``ATAN2`` (the tilt), the
+  rectangular increment ``R[n]·Δt``, and the *rate* of the moving-averaged accelerometer angle in the ratio.
+
+The weighting direction is itself ambiguous (digest §6 item 17): eq 5.17 weights the accelerometer angle by the
+ratio, lab step j) says "accelerometer weight is 1-Ratio". Both are offered (``accel_weight``).
+
+Also here, and **not from the thesis**: :class:`ComplementaryFilter` (fixed weight) and :class:`TiltKalman2` (a
+2-state angle/bias Kalman filter, the comparison the thesis' §5.6 future work asks for).
+
+Frames and units at this module's edge
+--------------------------------------
+The thesis sensor frame (Z up, level reads +1 g on Z; see :mod:`fusionlab.simulate`). Like the spreadsheet, the
+pipeline works in g, degrees and °/s (eq 5.6 converts to degrees before any other step); the step functions are
+unit-agnostic except where their docstrings say otherwise. Axis pairing (digest §2.12 step 7): the Y-Z angle is
+rotation about X and goes with the X gyro (``axis='x'``); the X-Z angle goes with the Y gyro (``axis='y'``).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import sensors, validate
+
+__all__ = ["LogParseError", "parse_terminal_sessions", "parse_terminal_log",
+           "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
+           "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "write_spreadsheet", "ComplementaryFilter", "TiltKalman2"]
+
+HEADER = ("AX", "AY", "AZ", "GX", "GY")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The terminal log (seed 000 §5.4 Part 2-3: space-delimited hex ADC values between menu text)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+class LogParseError(ValueError):
+    """A terminal log that cannot be read; the message names the line number and shows the line."""
+
+
+def _read_text(log):
+    if isinstance(log, (bytes, bytearray)):
+        raw = bytes(log)
+    elif isinstance(log, Path) or (isinstance(log, str) and "\n" not in log and Path(log).is_file()):
+        raw = Path(log).read_bytes()
+    elif isinstance(log, str):
+        return log
+    else:
+        raise ValueError(f"log must be a path, str or bytes; got {type(log).__name__}")
+    return raw.decode("latin-1")
+
+
+def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
+    """Every "Get RAW Sensor Data" section of a terminal log, as ADC counts.
+
+    A section starts at the column header line ``AX AY AZ GX GY`` and ends at the stop key (a line ``0``), a
+    ``Stopped.`` line, or the end of the file. Inside a section every line must hold exactly five hex values in
+    ``0 .. 2**bits - 1``; anything else (bad hex, a short or truncated line, binary junk, a value beyond the ADC) raises
+    :class:`LogParseError` naming the line number -- nothing is dropped silently. Blank lines are allowed.
+
+    Parameters
+    ----------
+    log : path, str (the text) or bytes
+    bits : int -- ADC resolution (10 on the NanoCore12)
+    Returns
+    -------
+    list of (N_i, 5) int64 arrays -- AX AY AZ GX GY counts, one per section
+    Raises
+    ------
+    LogParseError
+        if a data line is malformed, or if the text holds no ``AX AY AZ GX GY`` header (not a terminal log).
+    """
+    text = _read_text(log)
+    top = 2 ** int(bits) - 1
+    sections, rows, inside = [], None, False
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if tuple(s.split()) == HEADER:
+            if inside:
+                sections.append(rows)
+            rows, inside = [], True
+            continue
+        if not inside:
+            continue
+        if s in ("0", "Stopped.") or s.startswith("Stopped"):
+            sections.append(rows)
+            inside = False
+            continue
+        if not s:
+            continue
+        if any(not (32 <= ord(ch) < 127) for ch in s):
+            raise LogParseError(f"line {lineno}: non-text (binary) characters in a data line: {line[:40]!r}")
+        tokens = s.split()
+        if len(tokens) != 5:
+            raise LogParseError(f"line {lineno}: expected 5 hex values (AX AY AZ GX GY), got {len(tokens)}: "
+                                f"{line[:60]!r} (truncated or merged line?)")
+        try:
+            vals = [int(tok, 16) for tok in tokens]
+        except ValueError:
+            raise LogParseError(f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r}") from None
+        if any(v > top for v in vals):
+            raise LogParseError(f"line {lineno}: value above the {bits}-bit ADC range 0..{top:X}: {line[:60]!r}")
+        rows.append(vals)
+    if inside:
+        sections.append(rows)
+    if not sections:
+        raise LogParseError("not a NanoCore12 terminal log: no 'AX AY AZ GX GY' header line was found")
+    return [np.array(r, dtype=np.int64).reshape(-1, 5) for r in sections]
+
+
+def parse_terminal_log(log, bits=sensors.ADC_BITS):
+    """The one "Get RAW Sensor Data" section of a terminal log, as an (N, 5) int64 array of counts.
+
+    See :func:`parse_terminal_sessions` for the format and the errors; this one also raises if the log holds more
+    than one section (clear the screen between recordings, as the lab says, or use the plural function).
+    """
+    sections = parse_terminal_sessions(log, bits)
+    if len(sections) != 1:
+        raise LogParseError(f"log holds {len(sections)} data sections; expected 1 (use parse_terminal_sessions)")
+    if len(sections[0]) == 0:
+        raise LogParseError("log holds a data header but no data lines")
+    return sections[0]
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The spreadsheet steps a)-l) (seed 000 §5.4.3; equations of §5.3.1)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
+    """Step a): accelerometer counts to g, ``(ADC·Vscale/Res - ZeroGBias)/Sensitivity + NullOffset`` (000 eqs 5.1-5.3).
+
+    Parameters
+    ----------
+    counts : (...) array -- ADC counts; null_offset : float or (n,) array, g
+    sensor : :class:`fusionlab.sensors.AnalogSensor` (ADXL335 at 3 V: 1.5 V, 0.300 V/g)
+    Returns
+    -------
+    (...) array, g
+    """
+    return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.1-5.3)
+                                   null_offset=null_offset)
+
+
+def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
+    """Step f): gyro counts to °/s, the same form with the IDG-500 numbers (000 eqs 5.11-5.12).
+
+    Returns
+    -------
+    (...) array, °/s
+    """
+    return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.11-5.12)
+                                   null_offset=null_offset)
+
+
+def accel_angle(z, other, order="excel"):
+    """Step b): the accelerometer angle ``atan2(z, y)`` / ``atan2(z, x)`` in rad (000 eqs 5.4-5.5).
+
+    ``order='c'`` reads the printed ``atan2(z, y)`` in C/numpy order, ``arctan2(z, y)``: ≈ π/2 when level (the
+    **as printed** reading, digest §6 item 5). ``order='excel'`` reads it as Excel's ``ATAN2(x_num, y_num)``,
+    i.e. ``arctan2(y, z)``: the tilt, 0 when level (:func:`fusionlab.sensors.excel_atan2`).
+
+    Parameters
+    ----------
+    z : (N,) array -- Z reading (g); other : (N,) array -- the Y (or X) reading (g)
+    order : 'excel' or 'c'
+    Returns
+    -------
+    (N,) array, rad
+    """
+    z = validate.array(z, "z")
+    other = validate.array(other, "other")
+    if order == "excel":
+        return sensors.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
+    if order == "c":
+        return np.arctan2(z, other)                                               # (000 eqs 5.4-5.5, C order)
+    raise ValueError(f"order must be 'excel' or 'c'; got {order!r}")
+
+
+def moving_average(x, n):
+    """Steps d) and l): causal moving average ``A_AVG[m] = (1/N) Σ_{k=0}^{N-1} A[m-k]`` (000 eqs 5.7-5.8, 5.19-5.20).
+
+    The thesis defines it for ``m >= N`` only; here the first ``N-1`` outputs average the samples available so far
+    (an expanding mean), so the column has no gap. Output ``m`` uses inputs ``<= m`` only (causal). Eq 5.19 writes
+    ``FX`` on both sides; this is the separate output column of step l), **not** fed back into the recursion.
+
+    Parameters
+    ----------
+    x : (N,) array; n : int >= 1 -- window length (the thesis' only value is 12, from the feasibility study)
+    Returns
+    -------
+    (N,) array, unit of ``x``
+    """
+    x = validate.array(x, "x")
+    if x.ndim != 1:
+        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    if isinstance(n, bool) or int(n) != n or n < 1:
+        raise ValueError(f"n must be a whole number >= 1; got {n!r}")
+    n = int(n)
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    m = np.arange(1, len(x) + 1)
+    lo = np.maximum(m - n, 0)
+    return (c[m] - c[lo]) / (m - lo)                                              # (000 eq 5.7)
+
+
+def derivative(a, dt):
+    """Step e): backward difference ``dA/dt[n] = (A[n] - A[n-1]) / dt`` (000 eqs 5.9-5.10); ``dA/dt[0] = 0``.
+
+    Parameters
+    ----------
+    a : (N,) array, deg (or rad); dt : float, s
+    Returns
+    -------
+    (N,) array, deg/s (or rad/s)
+    """
+    a = validate.array(a, "a")
+    dt = validate.positive(dt, "dt")
+    return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
+
+
+def gyro_increment(rate, dt, rule="rectangular"):
+    """Step h): the per-step gyro "integral" with no accumulation (000 eqs 5.13-5.14), three readings.
+
+    * ``'printed'``: ``I[n] = (R[n] - R[n-1])·Δt`` as printed -- an erratum: a difference of rates times Δt is not an
+      angle increment, and its sum telescopes to ``(R[n] - R[0])·Δt`` (digest §6 item 15);
+    * ``'rectangular'``: ``I[n] = R[n]·Δt`` (the likely intent, as in §3.3);
+    * ``'trapezoid'``: ``I[n] = (R[n] + R[n-1])·Δt/2``.
+    ``I[0] = 0`` for the two-sample rules.
+
+    Parameters
+    ----------
+    rate : (N,) array, °/s; dt : float, s; rule : 'printed', 'rectangular' or 'trapezoid'
+    Returns
+    -------
+    (N,) array, deg
+    """
+    r = validate.array(rate, "rate")
+    dt = validate.positive(dt, "dt")
+    if rule == "printed":
+        return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)
+    if rule == "rectangular":
+        return r * dt                                                             # (000 eq 5.13, corrected)
+    if rule == "trapezoid":
+        return np.concatenate([[0.0], (r[1:] + r[:-1]) * dt / 2])                 # (000 eq 5.13, trapezoid)
+    raise ValueError(f"rule must be 'printed', 'rectangular' or 'trapezoid'; got {rule!r}")
+
+
+def cumulative_integral(increment, angle0=0.0):
+    """Step g): the cumulative gyro integral kept for plotting only, ``Σ_{k<=n} I[k]`` (000 §5.4.3 g)).
+
+    With rectangular increments this is gyro-only dead reckoning; the fusion uses only the per-step increment.
+    """
+    return validate.array(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
+
+
+def ratio(gyro_rate, accel_term, eps=1e-9):
+    """Step i): the weighting ratio ``|R_gyro| / (|R_gyro| + |A| + ε)`` (000 eqs 5.15-5.16).
+
+    As printed, ``accel_term`` is the accelerometer **angle** (° against °/s: digest §6 item 16); as meant it is the
+    rate of the accelerometer angle (°/s). ``ε`` resolves the 0/0 case (both zero gives 0: trust the gyro); the
+    thesis does not say. The result lies in [0, 1) and is ½ when the two magnitudes are equal.
+
+    Parameters
+    ----------
+    gyro_rate : (N,) array, °/s; accel_term : (N,) array; eps : float > 0
+    Returns
+    -------
+    (N,) array, dimensionless
+    """
+    g = np.abs(validate.array(gyro_rate, "gyro_rate"))
+    a = np.abs(validate.array(accel_term, "accel_term"))
+    validate.same_length(gyro_rate=g, accel_term=a)
+    return g / (g + a + validate.positive(eps, "eps"))                            # (000 eqs 5.15-5.16)
+
+
+def fuse(accel_deg, increment, weight, f0=None):
+    """Step k): ``F[n] = w[n]·A[n] + (1 - w[n])·(F[n-1] + I[n])`` with ``w`` the accelerometer weight (000 eqs 5.17-5.18).
+
+    ``w`` is the ratio (eq 5.17) or 1 - ratio (lab step j): choose before calling (:func:`pipeline` does). ``w ≡ 0``
+    is pure gyro integration from ``f0``; ``w ≡ 1`` returns the accelerometer angle. ``F[-1] = f0`` (default: the
+    first accelerometer angle; the thesis does not say).
+
+    Parameters
+    ----------
+    accel_deg : (N,) array, deg; increment : (N,) array, deg; weight : (N,) array in [0, 1]; f0 : float, deg
+    Returns
+    -------
+    (N,) array, deg
+    """
+    a = validate.array(accel_deg, "accel_deg")
+    inc = validate.array(increment, "increment")
+    w = validate.array(weight, "weight")
+    validate.same_length(accel_deg=a, increment=inc, weight=w)
+    if np.any((w < 0) | (w > 1)):
+        raise ValueError("weight must lie in [0, 1]")
+    prev = float(a[0]) if f0 is None else float(f0)
+    out = np.empty_like(a)
+    for n in range(len(a)):
+        prev = w[n] * a[n] + (1 - w[n]) * (prev + inc[n])                         # (000 eq 5.17)
+        out[n] = prev
+    return out
+
+
+def printed_to_tilt(angle_deg, axis="x"):
+    """Map a C-order angle (≈ 90° level) to the tilt: ``90 - A`` for the Y-Z angle, ``A - 90`` for the X-Z angle.
+
+    With ``atan2(z, y)`` in C order, ``A_YZ = 90° - φ`` runs against the X gyro; ``A_XZ = 90° + θ`` runs with the
+    Y gyro (digest §6 item 5; the signs of the thesis frame of :mod:`fusionlab.simulate`).
+    """
+    a = validate.array(angle_deg, "angle_deg")
+    if axis == "x":
+        return 90.0 - a
+    if axis == "y":
+        return a - 90.0
+    raise ValueError(f"axis must be 'x' or 'y'; got {axis!r}")
+
+
+def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0,
+             eps=1e-9):
+    """The spreadsheet of Lab 3 (000 §5.4.3): one column per step a)-l), as a pandas DataFrame.
+
+    Parameters
+    ----------
+    counts : (N, 5) int array -- AX AY AZ GX GY (from :func:`parse_terminal_log`)
+    dt : float, s -- sample interval (the thesis gives none; the synthetic logs use 1/50 s)
+    axis : 'x' (Y-Z angle with the X gyro, as the lab's steps a)-k)) or 'y' (X-Z angle with the Y gyro, question 2)
+    variant : 'meant' or 'printed' (see the module docstring)
+    n_ma : int -- window of steps d) and l), and of the derivative smoothing in 'meant' (fig 27's 12 points)
+    accel_weight : 'ratio' (eq 5.17) or 'one_minus_ratio' (lab step j))
+    acc_null : (3,) g; gyro_null : (2,) °/s -- NullOffset of eqs 5.1-5.3 and 5.11-5.12
+    Returns
+    -------
+    DataFrame with columns ``a_acc_<axis>_g, a_acc_z_g, b_angle_rad, c_angle_deg, d_angle_ma_deg, e_dangle_dps,
+    f_gyro_dps, g_gyro_cum_deg, h_gyro_inc_deg, i_ratio, j_accel_weight, k_fused_deg, l_fused_ma_deg`` and
+    ``tilt_deg`` (step k mapped to the tilt, 0 when level, same sign as the gyro).
+    """
+    import pandas as pd
+
+    c = validate.samples(counts, "counts", 5)
+    dt = validate.positive(dt, "dt")
+    if variant not in ("meant", "printed"):
+        raise ValueError(f"variant must be 'meant' or 'printed'; got {variant!r}")
+    if accel_weight not in ("ratio", "one_minus_ratio"):
+        raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
+    if axis not in ("x", "y"):
+        raise ValueError(f"axis must be 'x' or 'y'; got {axis!r}")
+    acc = adc_to_g(c[:, :3], acc_null)                                            # a)
+    other = acc[:, 1] if axis == "x" else acc[:, 0]
+    z = acc[:, 2]
+    if variant == "printed":
+        ang = accel_angle(z, other, order="c")                                    # b) C order, ≈ 90° level
+    else:
+        # 'y': the X reading is -sin θ in the thesis frame; flip it so the tilt runs with the Y gyro (digest §6.5)
+        ang = accel_angle(z, other if axis == "x" else -other, order="excel")    # b) Excel order: the tilt
+    deg = np.degrees(ang)                                                         # c) (000 eq 5.6)
+    deg_ma = moving_average(deg, n_ma)                                            # d)
+    dA = derivative(deg_ma, dt)                                                   # e)
+    rate = adc_to_dps(c[:, 3:], gyro_null)[:, 0 if axis == "x" else 1]          # f)
+    inc = gyro_increment(rate, dt, "printed" if variant == "printed" else "rectangular")   # h)
+    cum = cumulative_integral(gyro_increment(rate, dt, "rectangular"))           # g) for plotting only
+    if variant == "printed":
+        r = ratio(rate, deg, eps)                                                 # i) angle in the ratio
+        accel_for_fusion = deg
+    else:
+        r = ratio(rate, moving_average(dA, n_ma), eps)                           # i) rate vs rate
+        accel_for_fusion = deg_ma
+    w = r if accel_weight == "ratio" else 1.0 - r                                 # j)
+    fused = fuse(accel_for_fusion, inc, w)                                       # k)
+    fused_ma = moving_average(fused, n_ma)                                        # l)
+    tilt = printed_to_tilt(fused, axis) if variant == "printed" else fused
+    name = "y" if axis == "x" else "x"
+    return pd.DataFrame({
+        f"a_acc_{name}_g": other, "a_acc_z_g": z, "b_angle_rad": ang, "c_angle_deg": deg,
+        "d_angle_ma_deg": deg_ma, "e_dangle_dps": dA, "f_gyro_dps": rate, "g_gyro_cum_deg": cum,
+        "h_gyro_inc_deg": inc, "i_ratio": r, "j_accel_weight": w, "k_fused_deg": fused,
+        "l_fused_ma_deg": fused_ma, "tilt_deg": tilt})
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Baselines: NOT from the thesis (digest §5.1 item 6)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+class ComplementaryFilter:
+    """Fixed-weight complementary filter on one tilt axis -- **not from the thesis** (a baseline for Lab 3).
+
+    ``θ[n] = α·(θ[n-1] + ω[n]·Δt) + (1 - α)·θ_acc[n]``: eq 5.17 with a constant accelerometer weight ``1 - α``.
+
+    Parameters
+    ----------
+    alpha : float in [0, 1] -- gyro weight (0.98 is the common choice); dt : float, s; angle0 : float (angle unit)
+    """
+
+    def __init__(self, alpha=0.98, dt=0.02, angle0=0.0):
+        if not 0.0 <= float(alpha) <= 1.0:
+            raise ValueError(f"alpha must lie in [0, 1]; got {alpha!r}")
+        self.alpha = float(alpha)
+        self.dt = validate.positive(dt, "dt")
+        self.angle = float(angle0)
+
+    def step(self, rate, accel_angle):
+        """One sample: gyro ``rate`` (angle unit / s) and accelerometer angle; returns the new angle."""
+        self.angle = self.alpha * (self.angle + rate * self.dt) + (1 - self.alpha) * accel_angle
+        return self.angle
+
+    def run(self, rate, accel_angle):
+        """A whole record: (N,) rates and (N,) accelerometer angles; returns (N,) angles."""
+        r = validate.array(rate, "rate")
+        a = validate.array(accel_angle, "accel_angle")
+        validate.same_length(rate=r, accel_angle=a)
+        return np.array([self.step(ri, ai) for ri, ai in zip(r, a)])
+
+
+class TiltKalman2:
+    """Two-state (angle, gyro bias) linear Kalman filter on one tilt axis -- **not from the thesis** (baseline).
+
+    State ``x = [θ, b]``; predict ``θ⁺ = θ + (ω - b)·Δt``, ``b⁺ = b``; measure ``θ_acc = θ + v``. Built on
+    ``filterpy.kalman.KalmanFilter``.
+
+    Parameters
+    ----------
+    dt : float, s; q_angle : float -- angle process noise variance per step; q_bias : float -- bias random-walk
+    variance per step; r_angle : float -- accelerometer-angle variance; angle0, bias0 : initial state;
+    p0 : float -- initial variance of both states. Units: whatever angle unit the inputs use (degrees in Lab 3).
+    """
+
+    def __init__(self, dt=0.02, q_angle=1e-3, q_bias=1e-5, r_angle=100.0, angle0=0.0, bias0=0.0, p0=100.0):
+        from filterpy.kalman import KalmanFilter
+
+        dt = validate.positive(dt, "dt")
+        kf = KalmanFilter(dim_x=2, dim_z=1, dim_u=1)
+        kf.F = np.array([[1.0, -dt], [0.0, 1.0]])
+        kf.B = np.array([[dt], [0.0]])
+        kf.H = np.array([[1.0, 0.0]])
+        kf.Q = np.diag([validate.positive(q_angle, "q_angle"), validate.positive(q_bias, "q_bias")])
+        kf.R = np.array([[validate.positive(r_angle, "r_angle")]])
+        kf.x = np.array([[float(angle0)], [float(bias0)]])
+        kf.P = np.eye(2) * validate.positive(p0, "p0")
+        self.kf = kf
+
+    def step(self, rate, accel_angle):
+        """One sample; returns (angle, bias)."""
+        self.kf.predict(u=np.array([[float(rate)]]))
+        self.kf.update(np.array([[float(accel_angle)]]))
+        return float(self.kf.x[0, 0]), float(self.kf.x[1, 0])
+
+    def run(self, rate, accel_angle):
+        """A whole record; returns (N, 2) array of (angle, bias)."""
+        r = validate.array(rate, "rate")
+        a = validate.array(accel_angle, "accel_angle")
+        validate.same_length(rate=r, accel_angle=a)
+        return np.array([self.step(ri, ai) for ri, ai in zip(r, a)])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The live spreadsheet (seed 000 §5.4 Part 3: "Data Analysis in Excel")
+# ----------------------------------------------------------------------------------------------------------------
+
+#: Column letter and header of each step in the ``fusion`` sheet of :func:`write_spreadsheet`.
+SHEET_COLUMNS = {
+    "A": "AY counts", "B": "AZ counts", "C": "GX counts", "D": "a) Ay (g)", "E": "a) Az (g)",
+    "F": "b) ATAN2 (rad)", "G": "c) angle (deg)", "H": "d) angle MA (deg)", "I": "e) dA/dt (deg/s)",
+    "J": "f) GX (deg/s)", "K": "g) gyro cumulative (deg)", "L": "h) gyro increment (deg)",
+    "M": "e') dA/dt MA (deg/s)", "N": "i) ratio", "O": "j) accel weight", "P": "k) fused (deg)",
+    "Q": "l) fused MA (deg)",
+}
+#: The pipeline column each spreadsheet column must equal (``None``: a raw count, or the smoothed derivative).
+SHEET_TO_PIPELINE = {"D": "a_acc_y_g", "E": "a_acc_z_g", "F": "b_angle_rad", "G": "c_angle_deg",
+                     "H": "d_angle_ma_deg", "I": "e_dangle_dps", "J": "f_gyro_dps", "K": "g_gyro_cum_deg",
+                     "L": "h_gyro_inc_deg", "N": "i_ratio", "O": "j_accel_weight", "P": "k_fused_deg",
+                     "Q": "l_fused_ma_deg"}
+
+
+def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9):
+    """Write the Lab 3 spreadsheet: the raw log, parameters, and steps a)-l) as **live formulas** (seed 000 §5.4.3).
+
+    Sheets: ``log`` (the hex text split into columns AX..GY, as *Text to Columns* leaves it), ``params`` (dt,
+    Vref, ADC full scale, zero levels, sensitivities, N, ε -- change one and every formula follows) and ``fusion``
+    (one column per step, :data:`SHEET_COLUMNS`) for the X axis, "as meant" (Excel ``ATAN2(z, y)`` = the tilt,
+    rectangular increments, averaged derivative in the ratio). The formulas use only functions Excel and
+    LibreOffice share (HEX2DEC, ATAN2, DEGREES, AVERAGE, OFFSET, MIN, ABS, ROW). After recalculation every column
+    equals the matching column of :func:`pipeline` (``variant='meant'``), see :data:`SHEET_TO_PIPELINE`.
+    The file is byte-identical for the same inputs (fixed timestamps inside the zip).
+
+    Parameters
+    ----------
+    counts : (N, 5) int array; path : str or Path (.xlsx); dt : float, s; n_ma : int; accel_weight : 'ratio' or
+    'one_minus_ratio'; eps : float
+    """
+    import io
+    import zipfile
+    import re
+    from openpyxl import Workbook
+
+    c = validate.samples(counts, "counts", 5).astype(np.int64)
+    dt = validate.positive(dt, "dt")
+    if accel_weight not in ("ratio", "one_minus_ratio"):
+        raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
+    wb = Workbook()
+    log = wb.active
+    log.title = "log"
+    log.append(list(HEADER))
+    for row in c:
+        log.append([f"{v:03X}" for v in row])
+    par = wb.create_sheet("params")
+    acc, gyr = sensors.ADXL335, sensors.IDG500
+    for name, value in [("dt (s)", dt), ("Vref (V)", 3.0), ("ADC full scale (2^bits - 1)", 1023),
+                        ("accel zero-g level (V)", acc.zero_level), ("accel sensitivity (V/g)", acc.sensitivity),
+                        ("gyro zero-rate level (V)", gyr.zero_level), ("gyro sensitivity (V/(deg/s))", gyr.sensitivity),
+                        ("N moving average", int(n_ma)), ("epsilon", eps)]:
+        par.append([name, value])
+    P = {k: f"params!$B${i}" for i, k in enumerate(["dt", "vref", "fs", "az", "as", "gz", "gs", "n", "eps"], 1)}
+    ws = wb.create_sheet("fusion")
+    ws.append(list(SHEET_COLUMNS.values()))
+
+    def ma(col, r):
+        k = f"MIN({P['n']},ROW()-1)"
+        return f"=AVERAGE(OFFSET({col}{r},1-{k},0,{k},1))"
+
+    for i in range(len(c)):
+        r = i + 2
+        f = {
+            "A": f"=HEX2DEC(log!B{r})", "B": f"=HEX2DEC(log!C{r})", "C": f"=HEX2DEC(log!D{r})",
+            "D": f"=(A{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",                 # a) (000 eq 5.2)
+            "E": f"=(B{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",                 # a) (000 eq 5.3)
+            "F": f"=ATAN2(E{r},D{r})",                                                 # b) (000 eq 5.5, Excel order)
+            "G": f"=DEGREES(F{r})",                                                    # c) (000 eq 5.6)
+            "H": ma("G", r),                                                           # d) (000 eq 5.7)
+            "I": "=0" if i == 0 else f"=(H{r}-H{r - 1})/{P['dt']}",                    # e) (000 eq 5.9)
+            "J": f"=(C{r}*{P['vref']}/{P['fs']}-{P['gz']})/{P['gs']}",                 # f) (000 eq 5.11)
+            "K": f"=J{r}*{P['dt']}" if i == 0 else f"=K{r - 1}+J{r}*{P['dt']}",        # g)
+            "L": f"=J{r}*{P['dt']}",                                                   # h) (000 eq 5.13, corrected)
+            "M": ma("I", r),
+            "N": f"=ABS(J{r})/(ABS(J{r})+ABS(M{r})+{P['eps']})",                      # i) (000 eq 5.15)
+            "O": f"=N{r}" if accel_weight == "ratio" else f"=1-N{r}",                   # j)
+            "P": (f"=O{r}*H{r}+(1-O{r})*(H{r}+L{r})" if i == 0                          # k) (000 eq 5.17), F[-1] = H2
+                  else f"=O{r}*H{r}+(1-O{r})*(P{r - 1}+L{r})"),
+            "Q": ma("P", r),                                                           # l) (000 eq 5.19)
+        }
+        for col, formula in f.items():
+            ws[f"{col}{r}"] = formula
+    buf = io.BytesIO()
+    wb.save(buf)
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(buf.getvalue())) as zin, \
+            zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in sorted(zin.infolist(), key=lambda z: z.filename):
+            data = zin.read(item.filename)
+            if item.filename == "docProps/core.xml":
+                data = re.sub(rb"(<dcterms:(created|modified)[^>]*>)[^<]*", rb"\g<1>2000-01-01T00:00:00Z", data)
+            zout.writestr(zipfile.ZipInfo(item.filename, date_time=(2000, 1, 1, 0, 0, 0)), data,
+                          compress_type=zipfile.ZIP_DEFLATED)
+    Path(path).write_bytes(out.getvalue())
+    return Path(path)
+
+
+def main(argv=None):
+    """``python -m fusionlab.correlation --xlsx data/lab03_fusion.xlsx``: the Lab 3 spreadsheet of the motion log."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m fusionlab.correlation",
+                                     description="Write the Lab 03 spreadsheet (raw log + live formulas a)-l)).")
+    parser.add_argument("--log", default="data/lab03/motion.log")
+    parser.add_argument("--xlsx", default="data/lab03_fusion.xlsx")
+    parser.add_argument("--dt", type=float, default=0.02)
+    args = parser.parse_args(argv)
+    print(f"wrote {write_spreadsheet(parse_terminal_log(args.log), args.xlsx, args.dt)}")
+
+
+if __name__ == "__main__":
+    main()
