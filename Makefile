@@ -18,7 +18,7 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: help lab test solutions labs env bench clean
+.PHONY: help lab test solutions labs env data bench clean
 
 help:  ## list the targets
 	@grep -E '^[a-z]+:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -51,6 +51,11 @@ solutions: env  ## re-execute every solution notebook in place (authors; one lab
 labs: env  ## regenerate the student notebooks in labs/ from solutions/
 	@db=$$(mktemp -d)/gradebook.db; for lab in $(LABS); do echo "==> generating labs/$$lab"; \
 	  $(BIN)/nbgrader generate_assignment $$lab --force --log-level=ERROR --db=sqlite:///$$db || exit 1; done
+
+data: env  ## regenerate the datasets in data/ (byte-identical; checksums in data/README.md)
+	@echo "==> regenerating data/lab03 (terminal logs, true angles) and the Lab 03 spreadsheet"
+	@$(BIN)/python -m fusionlab.simulate --out data/
+	@$(BIN)/python -m fusionlab.correlation --log data/lab03/motion.log --xlsx data/lab03_fusion.xlsx
 
 bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
 	@echo "==> benchmark (trials from FUSIONLAB_BROAD_DIR, the cache, or ../shared/data/broad when present)"

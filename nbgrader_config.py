@@ -7,6 +7,9 @@ autograded/, feedback/           -- grading results (not committed)
 """
 import os
 
+from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
+from nbgrader.preprocessors import ClearHiddenTests, GetGrades
+
 c = get_config()  # noqa: F821 (provided by nbgrader)
 
 c.CourseDirectory.root = os.path.dirname(os.path.abspath(__file__))
@@ -27,3 +30,6 @@ c.ClearHiddenTests.enabled = True
 # Autograding: each cell may run at most this long (an infinite loop costs only that cell's points).
 c.Execute.timeout = 60
 c.Execute.interrupt_on_timeout = True
+
+# Feedback HTML must not reveal the hidden tests (nbgrader 0.9.6 keeps them by default).
+c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, CSSHTMLHeaderPreprocessor]

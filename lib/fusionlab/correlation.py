@@ -54,6 +54,8 @@ def _read_text(log):
     elif isinstance(log, Path) or (isinstance(log, str) and "\n" not in log and Path(log).is_file()):
         raw = Path(log).read_bytes()
     elif isinstance(log, str):
+        if "\n" not in log and tuple(log.split()) != HEADER:
+            raise FileNotFoundError(f"log: no such file {log!r} (pass a path to a terminal log, or its text)")
         return log
     else:
         raise ValueError(f"log must be a path, str or bytes; got {type(log).__name__}")

@@ -1,0 +1,281 @@
+"""Seeded synthetic recordings for the labs, and the NanoCore12 terminal logs of seed 000 Lab 3 (§5.3-5.4).
+
+The thesis ships no data and states no sample rate, vibration, or bias (digest §3.5, §6 items 18-19), so the
+records here are built from the documented assumptions below (digest §5.2). Everything is seeded: the same call
+gives the same numbers, and ``python -m fusionlab.simulate --out data/`` writes byte-identical files.
+
+What is here
+------------
+* :func:`motion_profile` -- the Lab 3 motion test: ≈1 s still, rotation about X within ±70° for ≈8 s, back to level
+  for 2 s (true angle and rate).
+* :func:`imu_record` -- specific force (g) and rate (°/s) of the 5DOF board for given true angles, plus
+  unbalanced-motor vibration, translation, noise and gyro bias; :func:`adc_record` quantises it to 10-bit counts with
+  the ADXL335 / IDG-500 numbers of :mod:`fusionlab.sensors`.
+* :func:`lab03_records` -- the three Lab 3 records (``stationary``, ``motion``, ``translation``);
+  :func:`terminal_log` formats one as the MCU would print it (menu text around space-delimited hex
+  ``AX AY AZ GX GY``); :func:`truth_csv` the true angles beside it; :func:`write_lab03` writes them all.
+
+Frames and units at this module's edge
+--------------------------------------
+The thesis sensor frame (seed 000 §3.1.3): **Z up**, a level board reads ``(0, 0, +1 g)``. For a rotation
+``φ`` about X (roll, the "YZ angle") and ``θ`` about Y, the accelerometer reads
+``ax = -sin θ, ay = sin φ cos θ, az = cos φ cos θ`` (the third row of seed 000 eq 3.40), so
+``atan2(ay, az) = φ`` and the X gyro reads ``dφ/dt``; ``atan2(ax, az) = -θ`` for small ``φ``, and the Y gyro reads
+``dθ/dt`` (the thesis' sign conventions are unclear here, digest §6 item 5). Accelerations are in g, rates in °/s and
+angles in degrees at this edge (the units of the MCU log and of the spreadsheet); radians inside any filter.
+
+Documented assumptions (none of them is in the thesis)
+------------------------------------------------------
+========================  =====================================================================================
+sample rate               50 Hz (:data:`FS`), the only rate the thesis mentions ("50Hz" in the Lab 1 code)
+unbalanced motor          13 Hz (:data:`VIB_FREQ`), 0.5 g amplitude on each accelerometer axis, independent phases
+                          (:data:`VIB_AMP`); none on the gyro (IDG-500 vibration rejection)
+accelerometer noise       0.03 g white (:data:`ACC_NOISE`)
+gyro bias                 +2.0 °/s on X, -1.0 °/s on Y (:data:`GYRO_BIAS`), constant, not removed by the MCU
+gyro noise                0.3 °/s white (:data:`GYRO_NOISE`)
+ADC                       10 bits, Vref = 3.0 V; ADXL335 at 3 V (0.300 V/g, zero-g 1.5 V = Vs/2);
+                          IDG-500 X4.5OUT (9.1 mV/(°/s), 1.35 V)
+translation shaking       horizontal (X and Y) random acceleration, white noise through a 3 Hz first-order
+                          low-pass, 0.4 g RMS per axis (:data:`SHAKE_RMS`), motor off, no rotation
+========================  =====================================================================================
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from . import sensors, validate
+
+__all__ = ["FS", "VIB_FREQ", "VIB_AMP", "ACC_NOISE", "GYRO_BIAS", "GYRO_NOISE", "SHAKE_RMS", "SHAKE_CUTOFF",
+           "LAB03_SEED", "LOG_COLUMNS", "motion_profile", "imu_record", "adc_record", "lab03_records",
+           "terminal_log", "truth_csv", "write_lab03", "sha256_file"]
+
+#: Sample rate of every synthetic Lab 3 record, Hz (assumption: the thesis states none).
+FS = 50.0
+#: Unbalanced-motor vibration frequency, Hz, and amplitude per accelerometer axis, g.
+VIB_FREQ = 13.0
+VIB_AMP = 0.5
+#: Accelerometer white noise, g (standard deviation per sample).
+ACC_NOISE = 0.03
+#: Constant gyro bias (X, Y), °/s; and gyro white noise, °/s.
+GYRO_BIAS = (2.0, -1.0)
+GYRO_NOISE = 0.3
+#: Translation-only shaking: RMS horizontal acceleration per axis, g, and the low-pass corner, Hz.
+SHAKE_RMS = 0.4
+SHAKE_CUTOFF = 3.0
+#: Seed of the committed Lab 3 records.
+LAB03_SEED = 3
+#: Column order of a raw terminal line (assumption: the thesis gives none).
+LOG_COLUMNS = ("AX", "AY", "AZ", "GX", "GY")
+
+
+def _smoothstep(u):
+    """Cosine ramp 0 -> 1 on u in [0, 1], zero slope at both ends."""
+    u = np.clip(u, 0.0, 1.0)
+    return 0.5 - 0.5 * np.cos(np.pi * u)
+
+
+def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 60.0), (7.0, -40.0),
+                                     (9.0, 0.0), (11.0, 0.0))):
+    """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; digest §5.2), cosine ramps between waypoints.
+
+    Default: level 0-1 s, to +60° over 1-3 s, hold, to -40° over 5-7 s, back to 0 over 7-9 s, level 9-11 s.
+
+    Parameters
+    ----------
+    fs : float, Hz -- sample rate
+    waypoints : sequence of (t, angle) -- seconds and degrees, increasing t, |angle| <= 70
+    Returns
+    -------
+    t : (N,) array, s; angle : (N,) array, deg; rate : (N,) array, °/s (the exact derivative of ``angle``)
+    """
+    fs = validate.positive(fs, "fs")
+    wp = validate.array(waypoints, "waypoints", shape=(2,))
+    if wp.ndim != 2 or len(wp) < 2 or np.any(np.diff(wp[:, 0]) <= 0):
+        raise ValueError(f"waypoints must be (t, angle) pairs with increasing t; got shape {wp.shape}")
+    if np.any(np.abs(wp[:, 1]) > 70):
+        raise ValueError("waypoints must stay within ±70° (the lab protocol); got "
+                         f"{float(np.max(np.abs(wp[:, 1]))):g}°")
+    n = int(round((wp[-1, 0] - wp[0, 0]) * fs))
+    t = wp[0, 0] + np.arange(n) / fs
+    angle = np.full(n, wp[0, 1])
+    rate = np.zeros(n)
+    for (t0, a0), (t1, a1) in zip(wp[:-1], wp[1:]):
+        inside = (t >= t0) & (t < t1)
+        u = (t[inside] - t0) / (t1 - t0)
+        angle[inside] = a0 + (a1 - a0) * _smoothstep(u)
+        rate[inside] = (a1 - a0) * 0.5 * np.pi * np.sin(np.pi * u) / (t1 - t0)
+    return t, angle, rate
+
+
+def imu_record(roll_deg, pitch_deg, fs=FS, rng=None, vib_amp=VIB_AMP, vib_freq=VIB_FREQ, acc_noise=ACC_NOISE,
+               gyro_bias=GYRO_BIAS, gyro_noise=GYRO_NOISE, translation_g=None):
+    """Readings of the 5DOF board (thesis frame, Z up) for a true attitude history; g and °/s.
+
+    Specific force ``ax = -sin θ, ay = sin φ cos θ, az = cos φ cos θ`` (seed 000 eq 3.40, third row) plus
+    translation, motor vibration ``A sin(2π f t + phase)`` (independent random phase per axis) and white noise.
+    Gyro rates are the numerical derivative of the true angles (small-angle body rates: X reads ``φ̇``, Y ``θ̇``)
+    plus bias and white noise.
+
+    Parameters
+    ----------
+    roll_deg, pitch_deg : (N,) arrays, deg -- true rotation about X and about Y
+    fs : float, Hz; rng : numpy.random.Generator or int -- seed it
+    vib_amp : float, g; vib_freq : float, Hz; acc_noise : float, g; gyro_bias : (2,) °/s; gyro_noise : float, °/s
+    translation_g : (N, 3) array, g, optional -- external (non-gravity) acceleration added to the reading
+    Returns
+    -------
+    acc : (N, 3) array, g -- AX AY AZ;  gyr : (N, 2) array, °/s -- GX GY
+    """
+    phi = np.radians(validate.array(roll_deg, "roll_deg"))
+    theta = np.radians(validate.array(pitch_deg, "pitch_deg"))
+    validate.same_length(roll_deg=phi, pitch_deg=theta)
+    fs = validate.positive(fs, "fs")
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    n = len(phi)
+    t = np.arange(n) / fs
+    acc = np.stack([-np.sin(theta), np.sin(phi) * np.cos(theta), np.cos(phi) * np.cos(theta)], axis=1)
+    if translation_g is not None:
+        acc = acc + validate.samples(translation_g, "translation_g")
+    phase = rng.uniform(0, 2 * np.pi, size=3)
+    acc = acc + vib_amp * np.sin(2 * np.pi * vib_freq * t[:, None] + phase)
+    acc = acc + acc_noise * rng.standard_normal((n, 3))
+    rate = np.stack([np.gradient(np.degrees(phi), 1 / fs), np.gradient(np.degrees(theta), 1 / fs)], axis=1)
+    gyr = sensors.gyro_measure(rate, bias=np.asarray(gyro_bias, float), noise_std=gyro_noise, rng=rng)
+    return acc, gyr
+
+
+def adc_record(acc, gyr, accel=sensors.ADXL335, gyro=sensors.IDG500, v_ref=3.0, bits=sensors.ADC_BITS):
+    """Quantise g and °/s to the counts the NanoCore12 prints (seed 000 eqs 5.1-5.3 and 5.11-5.12, inverted).
+
+    Uses :func:`fusionlab.sensors.physical_to_adc` (round to nearest, saturate at 0 and ``2**bits - 1``).
+
+    Parameters
+    ----------
+    acc : (N, 3) array, g; gyr : (N, 2) array, °/s
+    Returns
+    -------
+    (N, 5) int64 array -- AX AY AZ GX GY counts
+    """
+    acc = validate.samples(acc, "acc", 3)
+    gyr = validate.samples(gyr, "gyr", 2)
+    validate.same_length(acc=acc, gyr=gyr)
+    a = sensors.physical_to_adc(acc, accel.zero_level, accel.sensitivity, v_ref, bits)
+    g = sensors.physical_to_adc(gyr, gyro.zero_level, gyro.sensitivity, v_ref, bits)
+    return np.concatenate([a, g], axis=1)
+
+
+def _shaking(n, fs, rng, rms=SHAKE_RMS, cutoff=SHAKE_CUTOFF):
+    """Horizontal random acceleration: white noise through a first-order low-pass, scaled to ``rms`` g per axis."""
+    alpha = 1.0 - np.exp(-2 * np.pi * cutoff / fs)
+    w = rng.standard_normal((n, 2))
+    out = np.zeros_like(w)
+    for k in range(1, n):
+        out[k] = out[k - 1] + alpha * (w[k] - out[k - 1])
+    out *= rms / np.sqrt(np.mean(out**2, axis=0))
+    return np.concatenate([out, np.zeros((n, 1))], axis=1)
+
+
+def lab03_records(seed=LAB03_SEED, fs=FS):
+    """The three Lab 3 records: ``stationary`` (10 s level, motor on), ``motion`` (the test, motor on) and
+    ``translation`` (10 s horizontal shaking, no rotation, motor off).
+
+    Returns
+    -------
+    dict name -> dict with ``t`` (N,) s, ``roll_deg``, ``pitch_deg`` (N,) true angles, ``acc`` (N, 3) g,
+    ``gyr`` (N, 2) °/s, ``counts`` (N, 5) int
+    """
+    fs = validate.positive(fs, "fs")
+    rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3)]
+    out = {}
+    n10 = int(round(10 * fs))
+    zero = np.zeros(n10)
+    t, roll, _ = motion_profile(fs)
+    specs = {
+        "stationary": (zero, zero, dict()),
+        "motion": (roll, np.zeros_like(roll), dict()),
+        "translation": (zero, zero, dict(vib_amp=0.0, translation_g=_shaking(n10, fs, rngs[2]))),
+    }
+    for (name, (r, p, kw)), rng in zip(specs.items(), rngs):
+        acc, gyr = imu_record(r, p, fs=fs, rng=rng, **kw)
+        out[name] = dict(t=np.arange(len(r)) / fs, roll_deg=r, pitch_deg=p, acc=acc, gyr=gyr,
+                         counts=adc_record(acc, gyr))
+    return out
+
+
+_MENU = ("\r\n"
+         "NanoCore12 MC9S12C32 -- 5DOF IMU (ADXL335 + IDG-500)\r\n"
+         "=================== Main Menu ===================\r\n"
+         "  1) Initialize / Null / Zero\r\n"
+         "  2) Get RAW Sensor Data\r\n"
+         "  0) Stop\r\n"
+         "Select option: ")
+
+
+def terminal_log(counts, title="Get RAW Sensor Data"):
+    """The Tera Term text of one recording: menu, header, one line of space-delimited 3-digit hex per sample, stop.
+
+    Lines end with CR LF as a terminal log does. Columns: :data:`LOG_COLUMNS`.
+
+    Parameters
+    ----------
+    counts : (N, 5) int array -- ADC counts in 0..1023
+    Returns
+    -------
+    str
+    """
+    c = validate.samples(counts, "counts", 5)
+    if np.any(c < 0) or np.any(c > 1023) or np.any(c != np.rint(c)):
+        raise ValueError("counts must be whole 10-bit ADC counts in 0..1023")
+    c = c.astype(np.int64)
+    body = "".join(" ".join(f"{v:03X}" for v in row) + "\r\n" for row in c)
+    return (_MENU + "2\r\n"
+            + f"{title} -- press 0 to stop\r\n"
+            + " ".join(LOG_COLUMNS) + "\r\n"
+            + body
+            + "0\r\nStopped.\r\n" + _MENU)
+
+
+def truth_csv(rec):
+    """CSV text of the true angles beside a log: ``sample,t_s,angle_x_deg,angle_y_deg`` (rotation about X and Y)."""
+    lines = ["sample,t_s,angle_x_deg,angle_y_deg"]
+    for k, (t, r, p) in enumerate(zip(rec["t"], rec["roll_deg"], rec["pitch_deg"])):
+        lines.append(f"{k},{t:.3f},{r:.6f},{p:.6f}")
+    return "\n".join(lines) + "\n"
+
+
+def sha256_file(path):
+    """SHA-256 hex digest of a file's bytes."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def write_lab03(out, seed=LAB03_SEED):
+    """Write ``<out>/lab03/{name}.log``, ``{name}_truth.csv`` and ``SHA256SUMS``; returns the written paths."""
+    folder = Path(out) / "lab03"
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, rec in lab03_records(seed).items():
+        for path, text in ((folder / f"{name}.log", terminal_log(rec["counts"])),
+                           (folder / f"{name}_truth.csv", truth_csv(rec))):
+            path.write_bytes(text.encode("ascii"))
+            paths.append(path)
+    sums = "".join(f"{sha256_file(p)}  {p.name}\n" for p in paths)
+    (folder / "SHA256SUMS").write_bytes(sums.encode("ascii"))
+    return paths + [folder / "SHA256SUMS"]
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m fusionlab.simulate",
+                                     description="Write the synthetic Lab 03 terminal logs and true-angle CSVs.")
+    parser.add_argument("--out", default="data", help="output folder (files go to OUT/lab03/)")
+    parser.add_argument("--seed", type=int, default=LAB03_SEED)
+    args = parser.parse_args(argv)
+    for p in write_lab03(args.out, args.seed):
+        print(f"wrote {p}")
+
+
+if __name__ == "__main__":
+    main()
