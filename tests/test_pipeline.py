@@ -60,3 +60,19 @@ def test_solution_scores_full_marks_and_untouched_lab_scores_zero(course, lab):
     assert total > 0 and got == total, f"the solution scored {got}/{total} autograded points"
     got, total = scores["untouched_student"]
     assert got == 0 and total > 0, f"the untouched lab scored {got}/{total}; its tests must fail on the stubs"
+    _assert_only_unfinished_exercise_errors(course / "autograded" / "untouched_student" / lab / f"{lab}.ipynb")
+
+
+EXPECTED_ERRORS = {"NotImplementedError", "Feedback", "AssertionError"}
+
+
+def _assert_only_unfinished_exercise_errors(path):
+    """An untouched lab fails only where an exercise is unfinished; a NameError always says which cell to finish."""
+    nb = nbformat.read(path, as_version=4)
+    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []) if o.output_type == "error"]
+    assert errors, "the untouched lab ran without a single unfinished-exercise error"
+    for e in errors:
+        if e.ename == "NameError":
+            assert "made by an earlier cell" in e.evalue, f"NameError without the hint: {e.evalue}"
+        else:
+            assert e.ename in EXPECTED_ERRORS, f"unexpected {e.ename} in the untouched lab: {e.evalue[:300]}"

@@ -104,3 +104,18 @@ def test_bad_inputs_name_the_argument():
         simulate.terminal_log(np.full((3, 5), 1024))
     with pytest.raises(ValueError, match="gyr"):
         simulate.adc_record(np.zeros((4, 3)), np.zeros((4, 3)))
+
+
+def test_lab03_data_finds_the_repository_copy_from_any_folder(tmp_path):
+    from fusionlab import simulate
+    found = simulate.lab03_data(search_from=tmp_path)          # not above tmp_path: found above the package
+    assert (found / "motion.log").is_file() and found.parent.name == "data"
+
+
+def test_lab03_data_regenerates_identical_files_where_there_is_no_data_folder(tmp_path, monkeypatch):
+    from fusionlab import simulate
+    monkeypatch.setenv("FUSIONLAB_CACHE", str(tmp_path / "cache"))
+    made = simulate.lab03_data(search_from=tmp_path, search_package=False)
+    assert made.is_relative_to(tmp_path / "cache")
+    repo = simulate.lab03_data()
+    assert (made / "SHA256SUMS").read_bytes() == (repo / "SHA256SUMS").read_bytes()

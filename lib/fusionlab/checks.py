@@ -40,7 +40,8 @@ _HINT = ("\n→ This name is made by an earlier cell that has not run successful
 def friendly_errors():
     """In a notebook, add a hint to ``NameError``: in a lab it nearly always means an unfinished exercise above.
 
-    Called once in each lab's import cell; does nothing outside IPython.
+    Runs when this module is imported (every lab imports it); calling it again is harmless. Does nothing outside
+    IPython.
     """
     try:
         ip = get_ipython()  # noqa: F821 (defined inside IPython only)
@@ -53,6 +54,9 @@ def friendly_errors():
         shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
 
     ip.set_custom_exc((NameError,), handler)
+
+
+friendly_errors()                        # every lab imports checks: its NameErrors then say what to do
 
 
 def _call(fn, *args, what, dtype=float):

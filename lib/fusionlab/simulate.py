@@ -267,6 +267,27 @@ def write_lab03(out, seed=LAB03_SEED):
     return paths + [folder / "SHA256SUMS"]
 
 
+def lab03_data(search_from=None, search_package=True):
+    """The folder of Lab 03's terminal logs: the repository's ``data/lab03`` when it can be found, else a fresh copy.
+
+    Looks in ``data/lab03`` above ``search_from`` (default: the working directory) and above this package -- a
+    notebook may run from ``solutions/``, ``labs/`` or an nbgrader ``autograded/<student>/`` folder. Where none is
+    found (a course copy without ``data/``), the records are regenerated with :func:`write_lab03` into a user cache
+    folder (``FUSIONLAB_CACHE`` or ``~/.cache/fusionlab``); regeneration is byte-identical, so the lab sees the
+    same files either way. Returns a :class:`pathlib.Path`.
+    """
+    import os
+    starts = [Path(search_from or Path.cwd()).resolve()] + ([Path(__file__).resolve().parent] if search_package else [])
+    for start in starts:
+        for folder in (start, *start.parents):
+            if (folder / "data" / "lab03" / "SHA256SUMS").is_file():
+                return folder / "data" / "lab03"
+    cache = Path(os.environ.get("FUSIONLAB_CACHE", Path.home() / ".cache" / "fusionlab")) / "generated"
+    if not (cache / "lab03" / "SHA256SUMS").is_file():
+        write_lab03(cache)
+    return cache / "lab03"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m fusionlab.simulate",
                                      description="Write the synthetic Lab 03 terminal logs and true-angle CSVs.")
