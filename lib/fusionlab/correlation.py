@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import sensors, validate
+from . import rotations, sensors, validate
 
 __all__ = ["LogParseError", "parse_terminal_sessions", "parse_terminal_log",
            "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
@@ -581,3 +581,52 @@ def main(argv=None):
 
 if __name__ == "__main__":
     main()
+
+
+def complementary_attitude(gyr, acc, fs, tau=1.0):
+    """Three-axis complementary filter -- **not from the thesis**: the 3-D generalisation of
+    :class:`ComplementaryFilter` (eq 5.17 with a constant weight), registered in :mod:`fusionlab.estimators`.
+
+    Each sample the gyro rotates the attitude (exact increment), then the attitude is turned, about the horizontal
+    axis that separates them, by the fraction ``k = dt/(τ + dt)`` of the angle between the measured specific force
+    and the vertical. About one axis this is exactly ``θ = α(θ + ω dt) + (1 - α) θ_acc`` with ``α = 1 - k``
+    (α = 0.98 at 50 Hz is τ = 0.98 s). Yaw is never corrected: gravity has no heading.
+
+    Parameters
+    ----------
+    gyr : (N, 3) rad/s; acc : (N, 3) m/s², +g on the up axis at rest; fs : Hz; tau : s, the crossover time constant
+    Returns
+    -------
+    (N, 4) array -- body→NED quaternions, yaw starting at 0
+    """
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    validate.same_length(gyr=gyr, acc=acc)
+    dt = 1.0 / validate.positive(fs, "fs")
+    k = dt / (validate.positive(tau, "tau") + dt)
+    roll, pitch = sensors.tilt_from_accel(acc[0])
+    w, x, y, z = rotations.euler_to_quat([roll, pitch, 0.0])
+    dq = rotations.rotvec_to_quat(gyr * dt)
+    out = np.empty((len(gyr), 4))
+    for n in range(len(gyr)):
+        a, b, c, d = dq[n]                                       # predict: q ⊗ Δq (body-frame increment)
+        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
+                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
+        fx, fy, fz = acc[n]                                      # specific force rotated to NED: C_bn f
+        nx = (1 - 2 * (y * y + z * z)) * fx + 2 * (x * y - w * z) * fy + 2 * (x * z + w * y) * fz
+        ny = 2 * (x * y + w * z) * fx + (1 - 2 * (x * x + z * z)) * fy + 2 * (y * z - w * x) * fz
+        nz = 2 * (x * z - w * y) * fx + 2 * (y * z + w * x) * fy + (1 - 2 * (x * x + y * y)) * fz
+        norm = (nx * nx + ny * ny + nz * nz) ** 0.5
+        if norm > 0:                                             # free fall: no tilt information this sample
+            ex, ey = -ny / norm, nx / norm                       # (f̂ × up), up = (0, 0, -1) in NED
+            s = (ex * ex + ey * ey) ** 0.5
+            if s > 1e-15:
+                ang = k * np.arctan2(s, -nz / norm)              # the fraction 1 - α of the tilt error
+                h = np.sin(ang / 2) / s
+                cw, cx, cy = np.cos(ang / 2), ex * h, ey * h     # correction about a horizontal nav axis: c ⊗ q
+                w, x, y, z = (cw * w - cx * x - cy * y, cw * x + cx * w - cy * z,
+                              cw * y + cx * z + cy * w, cw * z + cx * y - cy * x)
+        m = (w * w + x * x + y * y + z * z) ** 0.5
+        w, x, y, z = w / m, x / m, y / m, z / m
+        out[n] = (w, x, y, z)
+    return out

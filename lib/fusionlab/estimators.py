@@ -151,3 +151,10 @@ def _freescale6(gyr, acc, mag, fs):
     Y, G = _freescale_units(gyr, acc)
     q = _freescale.run_fast6(Y, G, fs, frame="NED")["q"]
     return rotations.quat_from_seed002(q, "NED", nav="NED")
+
+
+@register("complementary", uses_mag=False, seed="000 eq 5.17 generalised to 3-D (not from the thesis)",
+          summary="three-axis complementary filter: gyro increment, then 1/(1 + tau fs) of the tilt error, tau = 1 s")
+def _complementary(gyr, acc, mag, fs):
+    from . import correlation
+    return correlation.complementary_attitude(gyr, acc, fs, tau=1.0)
