@@ -292,14 +292,7 @@ def kappa_general(s, r, alpha=None):
     -------
     (..., 4, 4) symmetric, traceless matrix
     """
-    s = validate.vectors(s, "s")
-    r = validate.vectors(r, "r")
-    if s.shape != r.shape:
-        raise ValueError(f"s and r must have the same shape; got {s.shape} and {r.shape}")
-    if s.ndim == 1:
-        s, r = s[None], r[None]
-    w = (np.full(s.shape[:-1], 1.0 / s.shape[-2]) if alpha is None
-         else validate.array(alpha, "alpha") * np.ones(s.shape[:-1]))
+    s, r, w = _vector_pairs(s, r, alpha)
     sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
     rx, ry, rz = r[..., 0], r[..., 1], r[..., 2]
     k = np.stack([                                                         # (002 eq 41, corrected)
@@ -310,12 +303,8 @@ def kappa_general(s, r, alpha=None):
     return np.sum(w[..., None, None] * k, axis=-3)
 
 
-def kappa_davenport(s, r, alpha=None):
-    """Davenport's compact form of κ (the cross-check of eq 41): ``[[σ, zᵀ], [z, S - σ I]]`` with the attitude
-    profile matrix ``B = Σ α_k s_k r_kᵀ`` (002 eq 29), ``σ = tr B``, ``S = B + Bᵀ``, ``z = Σ α_k s_k × r_k``.
-
-    Same arguments and result as :func:`kappa_general`.
-    """
+def _vector_pairs(s, r, alpha):
+    """Checked (..., K, 3) sensor/reference vector pairs and their (..., K) weights (equal when ``alpha`` is None)."""
     s = validate.vectors(s, "s")
     r = validate.vectors(r, "r")
     if s.shape != r.shape:
@@ -324,6 +313,16 @@ def kappa_davenport(s, r, alpha=None):
         s, r = s[None], r[None]
     w = (np.full(s.shape[:-1], 1.0 / s.shape[-2]) if alpha is None
          else validate.array(alpha, "alpha") * np.ones(s.shape[:-1]))
+    return s, r, w
+
+
+def kappa_davenport(s, r, alpha=None):
+    """Davenport's compact form of κ (the cross-check of eq 41): ``[[σ, zᵀ], [z, S - σ I]]`` with the attitude
+    profile matrix ``B = Σ α_k s_k r_kᵀ`` (002 eq 29), ``σ = tr B``, ``S = B + Bᵀ``, ``z = Σ α_k s_k × r_k``.
+
+    Same arguments and result as :func:`kappa_general`.
+    """
+    s, r, w = _vector_pairs(s, r, alpha)
     Bm = np.einsum("...k,...ki,...kj->...ij", w, s, r)                    # (002 eq 29)
     sigma = np.trace(Bm, axis1=-2, axis2=-1)
     z = np.sum(w[..., None] * np.cross(s, r), axis=-2)
