@@ -1109,6 +1109,19 @@ def _outputs(N, n, M, steps_q, parts, tail):
     return out
 
 
+def _fast_setup(fs, tuning, N):
+    """Shared set-up of the fast paths: gyro samples per Kalman step ``n``, the tuning at this rate, the number of
+    whole steps ``M``, the Kalman and sensor periods, ``α/2`` and the gyro-noise variance of one step."""
+    n = block_size(fs)
+    t = replace(tuning, sensor_fs=fs, oversample=n)
+    M = N // n
+    if M == 0:
+        raise ValueError(f"gyr must hold at least one Kalman step ({n} samples at {fs:g} Hz); got {N}")
+    dt = t.dt
+    a = alpha(dt) / 2
+    return n, t, M, dt, 1.0 / fs, a, a * a * (t.Q_vY + t.Q_wb)
+
+
 def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_sample=True):
     """The 9DOF filter of :class:`Kalman9` at any sample rate, in scalar arithmetic (about 10× faster).
 
@@ -1130,16 +1143,9 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     fs = validate.positive(fs, "fs")
     _frame(frame)
     enu = _ENU[frame]
-    n = block_size(fs)
-    t = replace(tuning, sensor_fs=fs, oversample=n)
-    B = t.B if B is None else validate.positive(B, "B")
     N = len(gyr)
-    M = N // n
-    if M == 0:
-        raise ValueError(f"gyr must hold at least one Kalman step ({n} samples at {fs:g} Hz); got {N}")
-    dt, dtg = t.dt, 1.0 / fs
-    a = alpha(dt) / 2
-    gyro_var = a * a * (t.Q_vY + t.Q_wb)
+    n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
+    B = t.B if B is None else validate.positive(B, "B")
     B2 = B * B
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     Bm = mag[:M * n].reshape(M, n, 3).mean(axis=1)
@@ -1233,15 +1239,8 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True):
     gyr, acc, _ = _recording(gyr_dps, acc_g, None, need_mag=False)
     fs = validate.positive(fs, "fs")
     _frame(frame)
-    n = block_size(fs)
-    t = replace(tuning, sensor_fs=fs, oversample=n)
     N = len(gyr)
-    M = N // n
-    if M == 0:
-        raise ValueError(f"gyr must hold at least one Kalman step ({n} samples at {fs:g} Hz); got {N}")
-    dt, dtg = t.dt, 1.0 / fs
-    a = alpha(dt) / 2
-    gyro_var = a * a * (t.Q_vY + t.Q_wb)
+    n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     g2 = np.einsum("ij,ij->i", Gm, Gm)
     qa_all = np.abs(g2 - 1.0)
