@@ -140,3 +140,55 @@ def test_command_line_writes_csv_with_expected_columns_and_a_figure(tmp_path, ca
     assert (out / "bench.png").stat().st_size > 10_000
     text = capsys.readouterr().out
     assert "gyro" in text and "triad" in text and "02_undisturbed_slow_rotation_B" in text
+
+
+# --- tuning one option over a set of values (Lab 11, Part F) ---------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    if not (SHARED / "SHA256SUMS").is_file():
+        pytest.skip(f"BROAD subset not found at {SHARED}")
+    tr = datasets.load_trial(2, folder=SHARED, progress=False).slice(0, N)
+    return tr, bench.tuning_sweep([tr], "complementary", "tau", [0.05, 1.0, 30.0])
+
+
+def test_tuning_sweep_scores_each_value_as_the_front_door_run_would(sweep):
+    tr, sw = sweep
+    assert sw.metric == "inclination" and sw.rmse_deg.shape == (1, 3)
+    q = estimators.run("complementary", gyr=tr.gyr, acc=tr.acc, fs=tr.fs, tau=30.0)
+    assert sw.rmse_deg[0, 2] == pytest.approx(metrics.broad_rmse(q, tr.quat_ref, tr.movement).inclination_deg)
+    assert len(set(np.round(sw.rmse_deg[0], 6))) == 3               # the option really reaches the filter
+    assert sw.best(0) == 1.0                                        # the U: too fast and too slow both lose
+    assert sw.error_deg[0][1].shape == (N,)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(estimator="nope"), "estimator must be one of"),
+    (dict(option="alpha"), "option must be one of the options of 'complementary' \\(tau\\)"),
+    (dict(values=[]), "values must hold at least one value"),
+    (dict(values=[1.0, np.nan]), "values must hold finite numbers"),
+])
+def test_tuning_sweep_rejects_bad_arguments(sweep, kw, match):
+    tr, _ = sweep
+    args = dict(trials=[tr], estimator="complementary", option="tau", values=[1.0]) | kw
+    with pytest.raises(ValueError, match=match):
+        bench.tuning_sweep(**args)
+
+
+def test_tuning_sweep_wants_loaded_trials():
+    with pytest.raises(ValueError, match="trials must be a non-empty list of BroadTrial"):
+        bench.tuning_sweep([np.zeros((10, 3))], "complementary", "tau", [1.0])
+
+
+def test_tuning_explorer_builds_headless_and_the_slider_redraws(sweep):
+    from fusionlab import widgets
+    _, sw = sweep
+    box = widgets.tuning_explorer(sw, start=1.0)
+    slider, readout, _out = box.children
+    assert slider.value == 1.0 and "RMSE" in readout.value
+    before = readout.value
+    slider.value = 30.0
+    assert readout.value != before and f"{sw.rmse_deg[0, 2]:.2f}" in readout.value
+    with pytest.raises(ValueError, match="sweep must be a TuningSweep"):
+        widgets.tuning_explorer({"values": [1]})

@@ -45,9 +45,9 @@ from typing import Callable
 
 import numpy as np
 
-from . import datasets, estimators, metrics, rotations, sensors
+from . import datasets, estimators, metrics, rotations, sensors, validate
 
-__all__ = ["Contender", "contenders", "run_benchmark", "group_means", "format_table", "write_csv", "plot",
+__all__ = ["Contender", "contenders", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means", "format_table", "write_csv", "plot",
            "main", "TRIAL_COLUMNS", "GROUP_COLUMNS"]
 
 TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
@@ -217,6 +217,75 @@ def run_benchmark(trials=None, folder=None, names=None, include_external=True, m
                 rows.append(_score(c, trial))
                 bar.update()
     return rows
+
+
+@dataclass(frozen=True)
+class TuningSweep:
+    """Result of :func:`tuning_sweep`: one estimator, one option, several values, several trials.
+
+    ``rmse_deg[i, j]``: RMSE of trial ``i`` at ``values[j]`` -- inclination for a 6-axis filter, total for a
+    9-axis one (``metric`` says which); ``error_deg[i][j]``: that error per sample (NaN where the reference is
+    lost), with the trial's time axis ``t[i]`` and movement mask ``movement[i]``.
+    """
+
+    estimator: str
+    option: str
+    values: tuple
+    metric: str
+    trials: tuple
+    rmse_deg: np.ndarray
+    error_deg: list
+    t: list
+    movement: list
+
+    def best(self, i):
+        """The value with the smallest RMSE on trial ``i``."""
+        return self.values[int(np.nanargmin(self.rmse_deg[i]))]
+
+
+def tuning_sweep(trials, estimator, option, values, progress=False):
+    """Run one estimator over a set of values of one tuning option on each trial, and score every run.
+
+    Parameters
+    ----------
+    trials : list of BroadTrial (slices are fine) -- see :func:`fusionlab.datasets.load_trial`
+    estimator : str -- a registered estimator with the option (see :func:`fusionlab.estimators.options`)
+    option : str -- e.g. ``'tau'`` for ``'complementary'``
+    values : sequence of numbers -- at least one
+    progress : bool -- tqdm bar over the runs
+    Returns
+    -------
+    TuningSweep
+    """
+    from tqdm.auto import tqdm
+
+    if estimator not in estimators.available():
+        raise ValueError(f"estimator must be one of {', '.join(estimators.available())}; got {estimator!r}")
+    takes = estimators.options(estimator)
+    if option not in takes:
+        raise ValueError(f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); "
+                         f"got {option!r}")
+    values = tuple(float(v) for v in validate.array(values, "values").reshape(-1))
+    if not values:
+        raise ValueError("values must hold at least one value; got none")
+    trials = list(trials)
+    if not trials or not all(isinstance(t, datasets.BroadTrial) for t in trials):
+        raise ValueError("trials must be a non-empty list of BroadTrial (fusionlab.datasets.load_trial)")
+    uses_mag = estimators.available()[estimator]["uses_mag"]
+    metric = "total" if uses_mag else "inclination"
+    error_fn = metrics.total_error if uses_mag else metrics.inclination_error
+    rmse = np.full((len(trials), len(values)), np.nan)
+    errors = [[None] * len(values) for _ in trials]
+    with tqdm(total=rmse.size, desc=f"{estimator} {option}", unit="run", disable=not progress) as bar:
+        for i, tr in enumerate(trials):
+            for j, v in enumerate(values):
+                q = estimators.run(estimator, gyr=tr.gyr, acc=tr.acc, fs=tr.fs, mag=tr.mag if uses_mag else None,
+                                   frame="ENU", **{option: v})
+                rmse[i, j] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
+                errors[i][j] = np.degrees(error_fn(metrics.error_quaternion(q, tr.quat_ref)))
+                bar.update()
+    return TuningSweep(estimator, option, values, metric, tuple(t.name for t in trials), rmse, errors,
+                       [t.t for t in trials], [t.movement for t in trials])
 
 
 def group_means(rows):

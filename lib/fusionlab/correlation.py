@@ -34,7 +34,8 @@ from . import rotations, sensors, validate
 
 __all__ = ["LogParseError", "parse_terminal_sessions", "parse_terminal_log",
            "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
-           "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "write_spreadsheet", "ComplementaryFilter", "TiltKalman2"]
+           "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "write_spreadsheet", "ComplementaryFilter", "TiltKalman2",
+           "complementary_attitude", "correlation_attitude"]
 
 HEADER = ("AX", "AY", "AZ", "GX", "GY")
 
@@ -579,10 +580,6 @@ def main(argv=None):
     print(f"wrote {write_spreadsheet(parse_terminal_log(args.log), args.xlsx, args.dt)}")
 
 
-if __name__ == "__main__":
-    main()
-
-
 def complementary_attitude(gyr, acc, fs, tau=1.0):
     """Three-axis complementary filter -- **not from the thesis**: the 3-D generalisation of
     :class:`ComplementaryFilter` (eq 5.17 with a constant weight), registered in :mod:`fusionlab.estimators`.
@@ -604,6 +601,47 @@ def complementary_attitude(gyr, acc, fs, tau=1.0):
     validate.same_length(gyr=gyr, acc=acc)
     dt = 1.0 / validate.positive(fs, "fs")
     k = dt / (validate.positive(tau, "tau") + dt)
+    return _weighted_tilt_fusion(gyr, acc, dt, np.full(len(gyr), k))
+
+
+def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
+    """The thesis' correlation fusion *as meant*, generalised to three axes (000 eqs 5.7-5.17, §5.4.3 steps d)-k)).
+
+    Per sample, as in :func:`pipeline` with ``variant='meant'``: the accelerometer tilt (roll, pitch) is smoothed
+    with the ``n_ma``-point moving average (step d), differentiated (e) and smoothed again; the ratio (i) compares
+    the gyro's horizontal rate ``|(ω_x, ω_y)|`` with the rate of that tilt ``|d(φ, θ)/dt|`` (both rad/s); step k)
+    then turns the attitude by the fraction ``w`` (the ratio, eq 5.17, or ``1 - ratio``, lab step j) of the angle
+    between the smoothed specific force and the vertical -- about one axis exactly ``F = w A + (1 - w)(F + I)``.
+    The thesis works on two tilt angles separately; the 3-D form (one weight for both axes, the gyro increment
+    applied as a rotation, yaw left uncorrected) is ours.
+
+    Parameters
+    ----------
+    gyr : (N, 3) rad/s; acc : (N, 3) m/s², +g on the up axis at rest; fs : Hz
+    n_ma : int -- window of the moving averages (the thesis' 12)
+    accel_weight : 'ratio' (eq 5.17) or 'one_minus_ratio' (step j)
+    Returns
+    -------
+    (N, 4) array -- body→NED quaternions, yaw starting at 0
+    """
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    validate.same_length(gyr=gyr, acc=acc)
+    dt = 1.0 / validate.positive(fs, "fs")
+    if accel_weight not in ("ratio", "one_minus_ratio"):
+        raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
+    tilt = np.unwrap(sensors.tilt_from_accel(acc), axis=0)                                  # b)-c), no ±π jumps
+    tilt_ma = np.column_stack([moving_average(tilt[:, i], n_ma) for i in range(2)])          # d)
+    dtilt = np.column_stack([moving_average(derivative(tilt_ma[:, i], dt), n_ma) for i in range(2)])   # e)
+    r = ratio(np.hypot(gyr[:, 0], gyr[:, 1]), np.hypot(dtilt[:, 0], dtilt[:, 1]), eps)     # i) rate vs rate
+    w = r if accel_weight == "ratio" else 1.0 - r                                            # j)
+    roll, pitch = tilt_ma[:, 0], tilt_ma[:, 1]                # the smoothed tilt as a specific-force direction
+    target = np.column_stack([np.sin(pitch), -np.sin(roll) * np.cos(pitch), -np.cos(roll) * np.cos(pitch)])
+    return _weighted_tilt_fusion(gyr, target, dt, w)                                        # k)
+
+
+def _weighted_tilt_fusion(gyr, acc, dt, k):
+    """Gyro increment, then a turn by the fraction ``k[n]`` of the tilt error: eq 5.17 as a rotation, body→NED."""
     roll, pitch = sensors.tilt_from_accel(acc[0])
     w, x, y, z = rotations.euler_to_quat([roll, pitch, 0.0])
     dq = rotations.rotvec_to_quat(gyr * dt)
@@ -621,12 +659,16 @@ def complementary_attitude(gyr, acc, fs, tau=1.0):
             ex, ey = -ny / norm, nx / norm                       # (f̂ × up), up = (0, 0, -1) in NED
             s = (ex * ex + ey * ey) ** 0.5
             if s > 1e-15:
-                ang = k * np.arctan2(s, -nz / norm)              # the fraction 1 - α of the tilt error
+                ang = k[n] * np.arctan2(s, -nz / norm)           # the fraction k of the tilt error
                 h = np.sin(ang / 2) / s
                 cw, cx, cy = np.cos(ang / 2), ex * h, ey * h     # correction about a horizontal nav axis: c ⊗ q
-                w, x, y, z = (cw * w - cx * x - cy * y, cw * x + cx * w - cy * z,
-                              cw * y + cx * z + cy * w, cw * z + cx * y - cy * x)
+                w, x, y, z = (cw * w - cx * x - cy * y, cw * x + cx * w + cy * z,
+                              cw * y - cx * z + cy * w, cw * z + cx * y - cy * x)
         m = (w * w + x * x + y * y + z * z) ** 0.5
         w, x, y, z = w / m, x / m, y / m, z / m
         out[n] = (w, x, y, z)
     return out
+
+
+if __name__ == "__main__":
+    main()

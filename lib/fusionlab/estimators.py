@@ -15,22 +15,29 @@ Filters register themselves with :func:`register`; the labs add theirs (compleme
 """
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 
 from . import rotations, sensors, validate
 
-__all__ = ["register", "available", "run"]
+__all__ = ["register", "available", "options", "run"]
 
 _REGISTRY = {}
 FRAMES = ("NED", "ENU")
 
 
 def register(name, uses_mag, summary, seed):
-    """Decorator: register ``fn(gyr, acc, mag, fs) -> (N, 4) body→NED quaternions`` under ``name``."""
+    """Decorator: register ``fn(gyr, acc, mag, fs, **options) -> (N, 4) body→NED quaternions`` under ``name``.
+
+    Keyword parameters after ``fs`` (with their defaults) are the estimator's tuning options (:func:`options`).
+    """
     def deco(fn):
         if name in _REGISTRY:
             raise ValueError(f"estimator {name!r} is already registered")
-        _REGISTRY[name] = {"fn": fn, "uses_mag": bool(uses_mag), "summary": summary, "seed": seed}
+        params = list(inspect.signature(fn).parameters.values())[4:]     # after (gyr, acc, mag, fs)
+        _REGISTRY[name] = {"fn": fn, "uses_mag": bool(uses_mag), "summary": summary, "seed": seed,
+                           "options": {p.name: p.default for p in params}}
         return fn
     return deco
 
@@ -40,7 +47,14 @@ def available():
     return {k: {f: v[f] for f in ("uses_mag", "summary", "seed")} for k, v in sorted(_REGISTRY.items())}
 
 
-def run(name, gyr, acc, fs, mag=None, frame="ENU"):
+def options(name):
+    """``{option: default}`` of the tuning values estimator ``name`` accepts in :func:`run`."""
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
+    return dict(_REGISTRY[name]["options"])
+
+
+def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     """Run estimator ``name`` on one recording.
 
     Parameters
@@ -51,6 +65,7 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU"):
     fs : float, Hz
     mag : (N, 3) array or None -- required by estimators with ``uses_mag``
     frame : 'ENU' or 'NED' -- navigation frame of the result
+    **options -- tuning values the estimator accepts (see :func:`options`), e.g. ``tau=2.0`` for 'complementary'
     Returns
     -------
     (N, 4) array -- unit quaternions ``[w, x, y, z]``, body→``frame``
@@ -73,7 +88,11 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU"):
     if np.max(np.abs(gyr)) > 50:
         raise ValueError(f"gyr must be in rad/s; got a rate of {np.max(np.abs(gyr)):.4g}, which looks like deg/s "
                          "-- use np.radians(...)")
-    q_ned = entry["fn"](gyr, acc, mag, fs)
+    unknown = set(options) - set(entry["options"])
+    if unknown:
+        takes = ", ".join(f"{k}={v!r}" for k, v in entry["options"].items()) or "none"
+        raise ValueError(f"estimator {name!r} has no option {', '.join(sorted(unknown))}; its options: {takes}")
+    q_ned = entry["fn"](gyr, acc, mag, fs, **options)
     return q_ned if frame == "NED" else rotations.quat_nav_swap(q_ned)
 
 
@@ -155,6 +174,13 @@ def _freescale6(gyr, acc, mag, fs):
 
 @register("complementary", uses_mag=False, seed="000 eq 5.17 generalised to 3-D (not from the thesis)",
           summary="three-axis complementary filter: gyro increment, then 1/(1 + tau fs) of the tilt error, tau = 1 s")
-def _complementary(gyr, acc, mag, fs):
+def _complementary(gyr, acc, mag, fs, tau=1.0):
     from . import correlation
-    return correlation.complementary_attitude(gyr, acc, fs, tau=1.0)
+    return correlation.complementary_attitude(gyr, acc, fs, tau=tau)
+
+
+@register("correlation", uses_mag=False, seed="000 eqs 5.7-5.17 (§5.4.3, as meant), generalised to 3-D",
+          summary="the thesis' correlation fusion: accelerometer weight = |gyro rate| / (|gyro rate| + |tilt rate|)")
+def _correlation(gyr, acc, mag, fs, n_ma=12, accel_weight="ratio"):
+    from . import correlation
+    return correlation.correlation_attitude(gyr, acc, fs, n_ma=n_ma, accel_weight=accel_weight)

@@ -408,3 +408,38 @@ def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title
     ax1.grid(alpha=0.3)
     fig.tight_layout()
     return fig
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 11: tuning one filter on real data
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def plot_tuning_sweep(sweep, chosen=None, figsize=(11, 3.6)):
+    """Left: RMSE against the option's value, one line per trial (log axis), the chosen value marked.
+    Right: the error over time at the chosen value (default: the first value), movement phase shaded.
+
+    Parameters
+    ----------
+    sweep : fusionlab.bench.TuningSweep
+    chosen : float or None -- one of ``sweep.values``
+    Returns
+    -------
+    matplotlib Figure
+    """
+    j = 0 if chosen is None else int(np.argmin(np.abs(np.asarray(sweep.values) - float(chosen))))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=figsize, constrained_layout=True,
+                                 gridspec_kw={"width_ratios": [1, 1.6]})
+    for i, name in enumerate(sweep.trials):
+        line, = a1.plot(sweep.values, sweep.rmse_deg[i], "o-", label=name[:2] + " " + name[3:].replace("_", " "))
+        a1.plot(sweep.values[j], sweep.rmse_deg[i, j], "o", ms=11, mfc="none", color=line.get_color())
+        a2.plot(sweep.t[i], sweep.error_deg[i][j], lw=0.8, color=line.get_color(),
+                label=f"{name[:2]}: RMSE {sweep.rmse_deg[i, j]:.2f}°")
+    a1.axvline(sweep.values[j], color="0.6", ls="--", lw=1)
+    a1.set(xscale="log", xlabel=f"{sweep.option}", ylabel=f"{sweep.metric} RMSE (deg)",
+           title=f"{sweep.estimator}: RMSE over the movement phase")
+    a1.legend(fontsize=8)
+    a2.set(xlabel="time (s)", ylabel=f"{sweep.metric} error (deg)",
+           title=f"{sweep.estimator}, {sweep.option} = {sweep.values[j]:g}")
+    a2.legend(fontsize=8, loc="upper left")
+    return fig

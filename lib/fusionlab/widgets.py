@@ -187,3 +187,46 @@ def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
         s.observe(redraw, names="value")
     redraw()
     return W.VBox([s_mu1, s_var1, s_mu2, s_var2, readout, out])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 11: tune one filter parameter on real data and watch the RMSE
+# ----------------------------------------------------------------------------------------------------------------
+
+__all__ += ["tuning_explorer"]
+
+
+def tuning_explorer(sweep, start=None):
+    """A slider over the values of a :class:`fusionlab.bench.TuningSweep`; the figure and the RMSE readout follow.
+
+    Every run is done once, in :func:`fusionlab.bench.tuning_sweep`, so moving the slider only redraws. Building
+    it needs no front end (a headless run constructs it, draws once and returns).
+
+    Returns
+    -------
+    ipywidgets.VBox -- children: the ``SelectionSlider``, the readout ``HTML``, the figure ``Output``
+    """
+    from . import bench
+    if not isinstance(sweep, bench.TuningSweep):
+        raise ValueError(f"sweep must be a TuningSweep (fusionlab.bench.tuning_sweep); got {type(sweep).__name__}")
+    values = list(sweep.values)
+    start = values[0] if start is None else values[int(np.argmin(np.abs(np.asarray(values) - float(start))))]
+    slider = W.SelectionSlider(options=[(f"{v:g}", v) for v in values], value=start, continuous_update=False,
+                               description=f"{sweep.estimator} {sweep.option}",
+                               style={"description_width": "12em"}, layout=W.Layout(width="40em"))
+    readout = W.HTML()
+    out = W.Output()
+
+    def redraw(_change=None):
+        j = values.index(slider.value)
+        readout.value = "; ".join(f"trial {n[:2]}: {sweep.metric} RMSE {sweep.rmse_deg[i, j]:.2f}° "
+                                  f"(best {sweep.best(i):g})" for i, n in enumerate(sweep.trials))
+        with out:
+            out.clear_output(wait=True)
+            fig = plotting.plot_tuning_sweep(sweep, slider.value)
+            display(fig)
+            plt.close(fig)
+
+    slider.observe(redraw, names="value")
+    redraw()
+    return W.VBox([slider, readout, out])
