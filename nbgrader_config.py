@@ -8,7 +8,34 @@ autograded/, feedback/           -- grading results (not committed)
 import os
 
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
-from nbgrader.preprocessors import ClearHiddenTests, GetGrades
+from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearOutput, DeduplicateIds, GetGrades,
+                                    OverwriteCells, OverwriteKernelspec)
+
+
+class RestoreDeletedCells(OverwriteCells):
+    """OverwriteCells that puts a deleted autograder-test cell back where it was, then grades it as usual.
+
+    nbgrader 0.9.6 can re-add missing grade cells (``add_missing_cells``) but looks the new cell's neighbour up
+    among grade and solution cells only; in these labs a locked *check* cell sits between a solution and its tests,
+    so it fails with a KeyError. This version inserts each missing cell after the nearest earlier cell of the
+    source notebook that the submission still has (any nbgrader cell), or first if there is none.
+    """
+
+    def add_missing_grade_cells(self, nb, resources):
+        source_nb = self.gradebook.find_notebook(self.notebook_id, self.assignment_id)
+        source_cells = source_nb.source_cells
+        order = [cell.name for cell in source_cells]
+        solutions = {cell.name for cell in source_nb.solution_cells}
+        for grade_cell in sorted(source_nb.grade_cells, key=lambda c: order.index(c.name)):
+            present = [cell.metadata.get("nbgrader", {}).get("grade_id") for cell in nb.cells]
+            if grade_cell.name in present:
+                continue
+            self.log.warning("Deleted cell %s restored from the source notebook", grade_cell.name)
+            new = self.missing_cell_transform(source_cells[order.index(grade_cell.name)], grade_cell.max_score,
+                                              is_solution=grade_cell.name in solutions)
+            earlier = [name for name in order[:order.index(grade_cell.name)] if name in present]
+            nb.cells.insert(present.index(earlier[-1]) + 1 if earlier else 0, new)
+        return nb, resources
 
 c = get_config()  # noqa: F821 (provided by nbgrader)
 
@@ -30,6 +57,11 @@ c.ClearHiddenTests.enabled = True
 # Autograding: each cell may run at most this long (an infinite loop costs only that cell's points).
 c.Execute.timeout = 60
 c.Execute.interrupt_on_timeout = True
+
+# A deleted test cell is put back and graded with the original tests (a student cannot delete points away).
+c.Autograde.sanitize_preprocessors = [ClearOutput, DeduplicateIds, OverwriteKernelspec, RestoreDeletedCells,
+                                      CheckCellMetadata]
+c.RestoreDeletedCells.add_missing_cells = True
 
 # Feedback HTML must not reveal the hidden tests (nbgrader 0.9.6 keeps them by default).
 c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, CSSHTMLHeaderPreprocessor]

@@ -155,19 +155,18 @@ def test_test_cells_edited_to_pass_are_restored(graded):
     assert _total(graded, "full_pass") == FULL
 
 
-def test_deleting_test_cells_never_gains_points_and_is_flagged_for_the_instructor(graded):
+def test_deleted_test_cells_are_restored_and_graded_with_the_original_tests(graded):
     assert _total(graded, "stub_deleted") == 0
-    assert _total(graded, "partial_deleted") == 0  # not 5: a deleted test earns nothing until you grade it
-    assert graded["flagged"]["full_deleted"] == set(POINTS), "deleted test cells must need manual grading"
-    assert not graded["flagged"]["full"] - {"q1", "q2", "q3"}
-
-
-@pytest.mark.xfail(strict=True, reason="nbgrader 0.9.6 OverwriteCells.add_missing_cells crashes (KeyError) when a "
-                                       "locked check cell sits between a solution cell and its tests, so deleted "
-                                       "test cells are scored 0 and flagged rather than restored")
-def test_deleted_test_cells_are_restored(graded):
     assert graded["scores"]["partial_deleted"] == graded["scores"]["partial"]
     assert _total(graded, "full_deleted") == FULL
+    assert not graded["flagged"]["full_deleted"] - {"q1", "q2", "q3"}, "restored cells must grade themselves"
+    source = nbformat.read(ROOT / "solutions" / LAB / f"{LAB}.ipynb", as_version=4)
+    order = [_gid(c) for c in source.cells if _gid(c)]
+    nb = nbformat.read(graded["root"] / "autograded" / "partial_deleted" / LAB / f"{LAB}.ipynb", as_version=4)
+    assert [_gid(c) for c in nb.cells if _gid(c)] == order, "each test cell is back in its place, once"
+    for cell in nb.cells:
+        if _gid(cell) in POINTS:
+            assert "was missing from the submission" in cell.source and "### BEGIN HIDDEN TESTS" in cell.source
 
 
 def test_hidden_tests_removed_by_the_student_are_restored(graded):
