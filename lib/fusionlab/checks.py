@@ -1008,3 +1008,535 @@ def check_fuse(fn):
     if got.shape == ref.shape and np.allclose(got, nofeed):
         raise Feedback("the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n].")
     raise Feedback(f"expected {np.round(ref, 4)}, got {np.round(got, 4)} (F[-1] = f0 = 5).")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 06: the gyro-free IMU -- AIV map, quadratic Jacobian, correlated noise, correlated EKF update (seed 004 ch. 3)
+# ---------------------------------------------------------------------------------------------------------------
+from . import gfimu as _gfimu  # noqa: E402
+
+
+def check_aiv_map(fn):
+    """Check a student's ``fn() -> L`` (9×12, AIV = L a / d; seed 004 eqs 3.8–3.10 [R])."""
+    L = _call(fn, what="your L")
+    ref = _gfimu.aiv_map()
+    if L.shape != (9, 12):
+        raise Feedback(f"L maps the 12 readings to the 9 AIV terms: shape (9, 12); got {L.shape}")
+    if np.allclose(L, ref):
+        _ok("L reproduces α, the three cross terms and the three squares from noise-free lever-arm data.")
+        return
+    if np.allclose(L, 2 * ref):
+        raise Feedback("each term is half a sum or difference of two lever-arm differences: divide by 2 (eq 3.8).")
+    if np.allclose(np.abs(L[:3]), np.abs(ref[:3])) and not np.allclose(L[:3], ref[:3]):
+        raise Feedback("the α rows have a sign slip: α×p for p = d·e_y has +α_x on z and for p = d·e_z -α_x on y, "
+                       "so α_x = (ΔC_z - ΔD_y)/2 (and cyclically).")
+    if np.allclose(L[:, 3:], ref[:, 3:]) and not np.allclose(L[:, :3], ref[:, :3]):
+        raise Feedback("the columns of the central triad A are wrong: every difference is a^T - a^A, so A's "
+                       "column is minus the sum of the others in each row.")
+    if np.allclose(L[6:], -ref[6:]):
+        raise Feedback("the squares have the wrong sign: a^B_x - a^A_x = -d(ω_y²+ω_z²), so S_B = -ΔB_x/d.")
+    rows = [_gfimu.AIV_NAMES[i] for i in range(9) if not np.allclose(L[i], ref[i])]
+    raise Feedback(f"rows {', '.join(rows)} differ from eqs 3.8-3.10 (order [α_x, α_y, α_z, ω_xω_y, ω_xω_z, "
+                   "ω_yω_z, ω_x², ω_y², ω_z²], readings [A_x, A_y, A_z, B_x, ..., D_z]).")
+
+
+def check_quadratic_jacobian(fn):
+    """Check a student's ``fn(x) -> H`` (6×3, seed 004 eq 3.29)."""
+    for x in (np.array([0.0329, -0.002, 0.0066]), np.array([1.0, 2.0, 3.0])):
+        H = _call(fn, x, what="your H")
+        ref = _gfimu.quadratic_jacobian(x)
+        if H.shape != (6, 3):
+            raise Feedback(f"H is ∂h/∂x: 6 measurements by 3 states; got {H.shape}")
+        if np.allclose(H, ref):
+            continue
+        if np.allclose(H[3:], ref[3:] / 2):
+            raise Feedback("∂(x₁²)/∂x₁ = 2x₁: the square rows need the factor 2.")
+        if np.allclose(H, ref[:, ::-1]) or np.allclose(H[:3], ref[:3][:, ::-1]):
+            raise Feedback("the columns are in the wrong order: column j is ∂h/∂x_j.")
+        raise Feedback(f"at x = {x} H differs from eq 3.29 by up to {np.max(np.abs(H - ref)):.3g}.")
+    _ok("H = ∂h/∂x of the six quadratic terms (eq 3.29).")
+
+
+def check_three_state_noise(fn):
+    """Check a student's ``fn(noise_density, dt, d) -> (Q, R, M)`` (seed 004 eqs 3.24–3.25, 3.30–3.31, M corrected)."""
+    args = (500 * _gfimu.UG, 0.01, 1.0)
+    out = _call_tuple(fn, args, 3, "your noise matrices")
+    Q, R, M = (np.asarray(o, dtype=float) for o in out)
+    rQ, rR, rM = _gfimu.three_state_noise(*args)
+    unit = args[1] ** 2 * args[0] ** 2 * args[1] / args[2] ** 2       # Δt² R_a / d²: compare in this unit
+    Q, R, M, rQ, rR, rM = (m / unit for m in (Q, R, M, rQ, rR, rM))
+    shapes = {"Q": (Q.shape, (3, 3)), "R": (R.shape, (6, 6)), "M": (M.shape, (3, 6))}
+    for name, (got, want) in shapes.items():
+        if got != want:
+            raise Feedback(f"{name} should have shape {want}; got {got}")
+    for name, got, ref in (("Q", Q, rQ), ("R", R, rR)):
+        if np.allclose(got, ref, rtol=1e-9, atol=1e-12):
+            continue
+        if np.allclose(got * args[1] ** 2, ref, rtol=1e-9) or np.allclose(got / args[1] ** 2, ref, rtol=1e-9):
+            raise Feedback(f"{name}: R_a = N²Δt is the velocity-increment variance (3.24); the matrix carries one "
+                           "more Δt² (3.25, 3.30) because the state is an angle change Δθ = ωΔt.")
+        raise Feedback(f"{name} differs from Δt²(R_a/d²)·(block of L Lᵀ) by up to "
+                       f"{np.max(np.abs(got - ref)):.3g} × Δt²R_a/d².")
+    if np.allclose(M, -rM, rtol=1e-9, atol=1e-12):
+        raise Feedback("M has the thesis' printed sign (+E[n_u vᵀ]). The true state is x_k = x_{k-1} + u_k - n_u: "
+                       "the process noise is w = -n_u, so M = E[w vᵀ] = -Δt²(R_a/d²) C_αq.")
+    if not np.allclose(M, rM, rtol=1e-9, atol=1e-12):
+        raise Feedback("M is the cross block C[:3, 3:] of L Lᵀ, scaled like Q and R, with the sign of w = -n_u.")
+    _ok("Q, R and M (with the corrected sign) match eqs 3.25, 3.30 and 3.31.")
+
+
+def _update_case(seed):
+    rng = np.random.default_rng(seed)
+    x = np.array([0.0329, 0.0004, 0.0041]) + rng.normal(0, 1e-4, 3)
+    A = rng.normal(size=(3, 3))
+    P = 1e-8 * (A @ A.T + np.eye(3))
+    Q, R, M = _gfimu.three_state_noise(50 * _gfimu.UG, 0.01, 0.1)
+    y = _gfimu.quadratic_terms(x + rng.normal(0, 5e-5, 3)) + rng.normal(0, 1e-7, 6)
+    return x, P, y, R, M
+
+
+def _reference_update(x, P, y, R, M):
+    from filterpy.kalman import KalmanFilter
+
+    kf = KalmanFilter(dim_x=3, dim_z=6)
+    kf.x, kf.P, kf.R, kf.M = x.copy(), P.copy(), R, M
+    H = _gfimu.quadratic_jacobian(x)
+    kf.update_correlated(y - _gfimu.quadratic_terms(x) + H @ x, H=H)
+    return kf.x, kf.P
+
+
+def check_correlated_update(fn):
+    """Check a student's ``fn(x, P, y, R, M) -> (x_post, P_post)`` (seed 004 eqs 3.32–3.34 with h(x) of 3.28)."""
+    for seed in (32, 33):
+        x, P, y, R, M = _update_case(seed)
+        out = _call_tuple(fn, (x, P, y, R, M), 2, "your update")
+        xp, Pp = (np.asarray(o, dtype=float) for o in out)
+        rx, rP = _reference_update(x, P, y, R, M)
+        if xp.shape != (3,) or Pp.shape != (3, 3):
+            raise Feedback(f"return x (3,) and P (3, 3); got {xp.shape} and {Pp.shape}")
+        if np.allclose(xp, rx, rtol=0, atol=1e-12) and np.allclose(Pp, rP, rtol=1e-7, atol=1e-20):
+            continue
+        H = _gfimu.quadratic_jacobian(x)
+        K0 = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+        if np.allclose(xp, x + K0 @ (y - _gfimu.quadratic_terms(x)), atol=1e-12):
+            raise Feedback("you used the ordinary EKF update: with correlated noise the gain is (PHᵀ + M)(HPHᵀ + HM "
+                           "+ MᵀHᵀ + R)⁻¹ and P⁺ = P - K(HP + Mᵀ) (eqs 3.32-3.33).")
+        xm, _ = _reference_update(x, P, y, R, -M)
+        if np.allclose(xp, xm, atol=1e-12):
+            raise Feedback("the sign of M is flipped inside your update: use M exactly as given (eqs 3.32-3.33).")
+        S = H @ P @ H.T + H @ M + M.T @ H.T + R
+        K = (P @ H.T + M) @ np.linalg.inv(S)
+        if np.allclose(xp, x + K @ (y - H @ x), atol=1e-12):
+            raise Feedback("the residual is y - h(x), the six quadratic terms of the prior (eq 3.34), not y - Hx: "
+                           "the measurement is nonlinear (h(x) = ½Hx here).")
+        if np.allclose(xp, rx, atol=1e-12):
+            raise Feedback("x is right but P is not: P⁺ = P - K(HP + Mᵀ) (eq 3.33).")
+        raise Feedback(f"x differs from eqs 3.32-3.34 by up to {np.max(np.abs(xp - rx)):.3g} rad.")
+    _ok("your update matches filterpy's KalmanFilter.update_correlated (eqs 3.32-3.34).")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 12: sensor errors and calibration -- ellipsoid normal equations, ARW off the Allan curve, gravity removal
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _lab12_ellipsoid(seed, noise=0.0):
+    rng = np.random.default_rng(seed)
+    u = rng.normal(size=(200, 3))
+    b = 44.0 * u / np.linalg.norm(u, axis=1, keepdims=True)
+    D = np.array([[1.15, 0.08, -0.05], [0.08, 0.9, 0.06], [-0.05, 0.06, 1.02]])
+    return b @ D.T + np.array([12.0, -7.0, 20.0]) + noise * rng.normal(size=(200, 3))
+
+
+def check_quadric_fit(fn):
+    """Check a student's ``fn(mag) -> (9,)``: the normal equations ``(DᵀD) v = Dᵀ1`` of the quadric fit."""
+    from . import calibration
+    mag = _lab12_ellipsoid(1201, noise=0.3)
+    got = _call(fn, mag, what="your quadric fit").ravel()
+    ref = calibration.quadric_normal_equations(mag)
+    if got.shape != ref.shape:
+        raise Feedback(f"return the 9 coefficients [a, b, c, f, g, h, p, q, r]; got shape {got.shape}")
+    if np.allclose(got, ref, rtol=1e-6, atol=1e-12):
+        _ok("normal equations right: (DᵀD) v = Dᵀ1 with rows [x², y², z², 2yz, 2xz, 2xy, 2x, 2y, 2z].")
+        return
+    halves = ref * np.array([1, 1, 1, 2, 2, 2, 2, 2, 2])
+    if np.allclose(got, halves, rtol=1e-6):
+        raise Feedback("your cross and linear columns lack the factor 2: the rows are [x², y², z², 2yz, 2xz, 2xy, "
+                       "2x, 2y, 2z], so that f, g, h, p, q, r are the entries of A and of the centre equation.")
+    if np.allclose(-got, ref, rtol=1e-6):
+        raise Feedback("your coefficients have the wrong sign: the right-hand side is +1 (Dᵀ·ones).")
+    x, y, z = mag.T
+    alt = np.stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, 2 * x, 2 * y, 2 * z], 1)
+    if np.allclose(got, np.linalg.solve(alt.T @ alt, alt.T @ np.ones(len(mag))), rtol=1e-6):
+        raise Feedback("the cross-term columns are in another order: use 2yz, 2xz, 2xy (f, g, h) as in the markdown.")
+    raise Feedback(f"your coefficients differ from the normal-equation solution by up to "
+                   f"{np.max(np.abs(got - ref) / np.abs(ref)):.2g} (relative); build D row by row as in the "
+                   "markdown and solve np.linalg.solve(D.T @ D, D.T @ np.ones(N)).")
+
+
+def check_arw_reading(fn):
+    """Check a student's ``fn(taus, adev, tau_max) -> N``: slope −½ line through τ <= tau_max, read at τ = 1 s."""
+    from . import calibration
+    rng = np.random.default_rng(1202)
+    taus = np.logspace(-2, 2, 30)
+    adev = 3e-3 / np.sqrt(taus) * np.exp(rng.normal(0, 0.05, 30)) + 1e-4
+    got = float(_call(fn, taus, adev, 0.5, what="your ARW reading"))
+    ref = calibration.read_arw(taus, adev, 0.5)
+    if np.isclose(got, ref, rtol=1e-9):
+        _ok(f"ARW read off the slope −½ line at τ = 1 s: N = {ref:.4g} on the test curve.")
+        return
+    m = taus <= 0.5
+    if np.isclose(got, np.degrees(ref), rtol=1e-6) or np.isclose(got, np.degrees(ref) * 60, rtol=1e-6):
+        raise Feedback("your N is in degrees: keep the unit of adev (rad/s·√s); convert only for display.")
+    if np.isclose(got, np.mean(adev[m] * np.sqrt(taus[m])), rtol=1e-9):
+        raise Feedback("that is the arithmetic mean of σ√τ: a line fitted in log-log space averages the logs "
+                       "(np.exp(np.mean(np.log(...)))).")
+    if np.isclose(got, np.exp(np.mean(np.log(adev[m]) - 0.5 * np.log(taus[m]))), rtol=1e-9):
+        raise Feedback("wrong sign of the slope: on the ARW line σ = N/√τ, so N = σ·√τ (log N = log σ + ½ log τ).")
+    if np.isclose(got, np.exp(np.mean(np.log(adev * np.sqrt(taus)))), rtol=1e-9):
+        raise Feedback("you used every τ: fit only the white-noise part, τ <= tau_max.")
+    if np.isclose(got, np.exp(np.mean(np.log(adev[m]))), rtol=1e-9):
+        raise Feedback("you averaged σ itself: move each point along the −½ line to τ = 1 s first (σ·√τ).")
+    raise Feedback(f"expected N = {ref:.5g}, got {got:.5g}: N = exp(mean(log σ + ½ log τ)) over τ <= tau_max.")
+
+
+def check_remove_gravity(fn):
+    """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)`` (seed 001 §9.1)."""
+    from . import sensors
+    rng = np.random.default_rng(1203)
+    euler = np.stack([rng.uniform(-2, 2, 12), rng.uniform(-1.2, 1.2, 12), rng.uniform(-3, 3, 12)], 1)
+    q = rotations.quat_nav_swap(rotations.euler_to_quat(euler))          # body→ENU
+    a_true = rng.normal(0, 2, (12, 3))
+    acc = rotations.quat_rotate(rotations.quat_conjugate(q), a_true + [0, 0, 9.8])   # +g up at rest
+    got = _call(fn, q, acc, 9.8, what="your gravity removal")
+    ref = sensors.remove_gravity(q, acc, 9.8, frame="ENU")
+    if got.shape != ref.shape:
+        raise Feedback(f"return one ENU acceleration per sample, shape {ref.shape}; got {got.shape}")
+    if np.allclose(got, ref, atol=1e-9):
+        _ok("gravity removed: C_bn f − (0, 0, g) in ENU recovers the true acceleration (and 0 at rest).")
+        return
+    if np.allclose(got, ref + [0, 0, 2 * 9.8], atol=1e-9):
+        raise Feedback("gravity added instead of removed: in ENU the accelerometer reads +g up at rest, so subtract "
+                       "(0, 0, g) after rotating (in NED, where up is −z, the seed adds (0, 0, g)).")
+    if np.allclose(got[:, :2], ref[:, :2], atol=1e-9) and np.allclose(got[:, 2], -ref[:, 2], atol=1e-9):
+        raise Feedback("the vertical has the wrong sign: ENU's z points up.")
+    wrong = rotations.quat_rotate(rotations.quat_conjugate(q), acc) - [0, 0, 9.8]
+    if np.allclose(got, wrong, atol=1e-9):
+        raise Feedback("you rotated with the conjugate (nav→body): q_bn takes body vectors to the navigation frame, "
+                       "v_n = q ⊗ v_b ⊗ q* (rotations.quat_rotate(q, v)).")
+    if np.allclose(got, acc - [0, 0, 9.8], atol=1e-9):
+        raise Feedback("rotate the specific force into the navigation frame before removing gravity: gravity is "
+                       "(0, 0, −g) in ENU, not in the body frame.")
+    raise Feedback(f"your accelerations differ from C_bn f − (0, 0, g) by up to {np.max(np.abs(got - ref)):.3g} "
+                   "m/s²; check the quaternion order [w, x, y, z] and the frame (ENU).")
+
+
+__all__ += ["check_quadric_fit", "check_arw_reading", "check_remove_gravity"]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 08: rotating accelerometers and the north finder (seed 004 §4.3-4.5); reference: fusionlab.northfinder
+# ---------------------------------------------------------------------------------------------------------------
+from . import northfinder as _nf  # noqa: E402
+
+
+def check_omega_x(fn):
+    """Check a student's ``fn(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, omega_r) -> ω_x`` (seed 004 eq 4.15)."""
+    rng = np.random.default_rng(801)
+    d, rho, l, wr = 0.15, 0.02, 0.1, 50.0
+    a_A, w, al = rng.normal(size=(3, 3))
+    fixed = _nf.fixed_triad_outputs(a_A, w, al, d)
+    rot = _nf.rotating_outputs(a_A, w, al, 0.0, rho, l, wr)
+    args = (rot[2], fixed[0, 2], fixed[1, 2], fixed[2, 2], d, rho, l, wr)
+    got = float(_call(fn, *args, what="your ω_x"))
+    if np.isclose(got, w[0], atol=1e-9):
+        _ok(f"ω_x = {got:.6f} rad/s recovered from r_C and the fixed triads, sign included.")
+        return
+    k = 2 * rho * wr
+    base = rot[2] - fixed[0, 2]
+    dC, dB = fixed[2, 2] - fixed[0, 2], fixed[1, 2] - fixed[0, 2]
+    guesses = [((base - dB * l / d - dC * rho / d) / k, "the lever-arm and radius terms are swapped: l multiplies "
+                "(α_x + ω_yω_z) = (a^C_z - a^A_z)/d and ρ multiplies (ω_xω_z - α_y) = (a^B_z - a^A_z)/d."),
+               ((base - dC * l / d - dB * rho / d) / (rho * wr),
+                "the Coriolis term is 2ρω_r ω_x: divide by 2ρω_r."),
+               ((rot[2] - dC * l / d - dB * rho / d) / k,
+                "subtract the central accelerometer a^A_z: it carries gravity and the body's own acceleration."),
+               ((base - dC * l - dB * rho) / k, "the fixed-triad differences are d·(...): divide them by d."),
+               ((base + dC * l / d + dB * rho / d) / k, "the two fixed-triad terms are subtracted, not added.")]
+    msg = _first_match(got, guesses)
+    raise Feedback(msg or f"your ω_x is {got:.6f} rad/s; the true rate is {w[0]:.6f}. Eq 4.15: ω_x = [a^{{rC}}_z - "
+                          "a^A_z - (α_x + ω_yω_z) l - (ω_xω_z - α_y) ρ] / (2ρω_r).")
+
+
+def _noise_cases():
+    return [(0.02, 0.15, 0.1, 50.0), (0.05, 0.2, 0.3, 20.0), (0.03, 0.1, 0.05, 500.0)]
+
+
+def check_noise_printed(fn):
+    """Check a student's ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` as printed (seed 004 eq 4.44)."""
+    for case in _noise_cases():
+        got = float(_call(fn, *case, what="your coefficient"))
+        ref = _nf.rate_noise_coefficient(*case)
+        if np.isclose(got, ref, rtol=1e-9):
+            continue
+        if np.isclose(got, ref / 2, rtol=1e-9):
+            raise Feedback("you left out the factor 2: each difference (a^r - a^A, ...) has variance 2R_a.")
+        if np.isclose(got, _nf.rate_noise_coefficient_exact(*case), rtol=1e-9):
+            raise Feedback("that is the exact propagation (the next exercise); here write eq 4.44 as printed.")
+        raise Feedback(f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}. Eq 4.44: "
+                       "2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
+    _ok(f"eq 4.44 as printed: {_nf.rate_noise_coefficient(*_noise_cases()[0]):.4f} for Table 4.1.")
+
+
+def check_noise_exact(fn):
+    """Check a student's exact ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` (correction of seed 004 eq 4.44)."""
+    for case in _noise_cases():
+        got = float(_call(fn, *case, what="your coefficient"))
+        ref = _nf.rate_noise_coefficient_exact(*case)
+        if np.isclose(got, ref, rtol=1e-9):
+            continue
+        rho, d, l, wr = case
+        k2 = (2 * rho * wr) ** 2
+        if np.isclose(got, _nf.rate_noise_coefficient(*case), rtol=1e-9):
+            raise Feedback("that is the printed eq 4.44, which treats the three differences as independent; "
+                           "write ω_x as a weighted sum of the four accelerometers and add the squared weights.")
+        if np.isclose(got, (1 + (l / d) ** 2 + (rho / d) ** 2) / k2, rtol=1e-9):
+            raise Feedback("the central accelerometer a^A is missing: it appears in all three differences, with "
+                           "weight -1 + l/d + ρ/d in total.")
+        if np.isclose(got, (1 + (l / d) ** 2 + (rho / d) ** 2 + (1 + l / d + rho / d) ** 2) / k2, rtol=1e-9):
+            raise Feedback("the a^A weight has the wrong sign on the lever terms: -1 (from a^r - a^A) and then "
+                           "+l/d and +ρ/d (from subtracting -(a^C - a^A)l/d and -(a^B - a^A)ρ/d).")
+        raise Feedback(f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}.")
+    _ok(f"exact propagation: {_nf.rate_noise_coefficient_exact(*_noise_cases()[0]):.5f} for Table 4.1 "
+        "(169/450), against 0.7311 printed.")
+
+
+def _demod_cases():
+    """Records whose heading read-out tells the usual slips apart (clean, biased, odd harmonic, all quadrants)."""
+    out = []
+    for i, (deg, harm, bias) in enumerate(((-42.0, {}, 0.0), (150.0, {}, 0.0), (-120.0, {}, 9.81),
+                                           (35.0, {3: (0.8, 0.5)}, 0.0))):
+        rec = _nf.synthetic_record(np.radians(deg), duration=6.0, noise=0.0, harmonics=harm, bias=bias,
+                                   theta0=0.3 + 0.1 * i)
+        out.append((deg, rec["acc"] - (9.81 if bias == 0 else 0.0), rec["theta"]))
+    return out
+
+
+def _demod_variants(x, th):
+    """What the usual slips return on one record (x, th cut to whole turns inside)."""
+    sl = _nf.whole_turns(th)
+    x, th = x[sl], th[sl]
+    rc, rs = np.sign(np.cos(th)), np.sign(np.sin(th))
+    c, s = np.sum(x * (rc - rc.mean())), -np.sum(x * (rs - rs.mean()))
+    return [(np.arctan2(-s, c), "the sign is flipped: s_i = -∫ a sgn(sin ω_r t) dt has a minus (eq 4.30)."),
+            (np.arctan(s / c), "off by 180° in two quadrants: use np.arctan2(s_i, c_i), not np.arctan(s_i / c_i)."),
+            (np.arctan2(-np.sum(x * rs), np.sum(x * rc)),
+             "the sign references are not zero-mean over the window (a whole number of turns rarely holds a whole "
+             "number of samples), so a constant leaks in: subtract each reference's mean."),
+            (np.arctan2(-np.sum(x * np.sin(th)), np.sum(x * np.cos(th))),
+             "you used cos θ and sin θ as references; eq 4.28 uses their signs, np.sign(np.cos(theta)) ..."),
+            (np.arctan2(-np.sum(x * (np.sin(th) - np.sin(th).mean())), np.sum(x * (np.cos(th) - np.cos(th).mean()))),
+             "you used cos θ and sin θ as references; eq 4.28 uses their signs, np.sign(np.cos(theta)) ..."),
+            (np.degrees(np.arctan2(s, c)), "return radians (np.degrees only for display).")]
+
+
+def check_demodulate(fn):
+    """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.28-4.32 (sampled references)."""
+    for deg, x, th in _demod_cases():
+        got = float(_call(fn, x, th, what="your demodulation"))
+        ref = _nf.demodulate(x, th, "sampled")
+        if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
+            continue
+        where = f"heading {deg:.0f}°: you return {got:.6f} rad, expected {ref:.6f} rad: "
+        for cand, msg in _demod_variants(x, th):
+            if abs(got - cand) < 1e-9:
+                raise Feedback(where + msg)
+        raise Feedback(where + "Check eqs 4.28-4.32: c_i = Σ x·r_c, s_i = -Σ x·r_s with zero-mean sign references "
+                               "r_c = sgn(cos θ), r_s = sgn(sin θ), then ψ = atan2(s_i, c_i).")
+    _ok("synchronous demodulation right in all four quadrants, with a 2 g constant and with a third harmonic.")
+
+
+def check_sync_sampling(fn):
+    """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.33-4.35 (nearest samples)."""
+    for deg, x, th in _demod_cases()[:2] + [_demod_cases()[3]]:
+        got = float(_call(fn, x, th, what="your synchronous sampling"))
+        ref = _nf.synchronous_sampling(x, th)
+        if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
+            continue
+        where = f"heading {deg:.0f}°: you return {np.degrees(got):.3f}°, expected {np.degrees(ref):.3f}°. "
+        if abs(np.angle(np.exp(1j * (got + ref)))) < 1e-6:
+            raise Feedback(where + "The sign is flipped: a_90 = -A_c sin ψ, so ψ = atan2(-a_90, a_0) (eq 4.35).")
+        if abs(abs(np.angle(np.exp(1j * (got - ref)))) - np.pi) < 1e-6:
+            raise Feedback(where + "Off by 180°: use np.arctan2(-a_90, a_0).")
+        if abs(np.angle(np.exp(1j * (got - ref)))) < np.radians(0.5):
+            raise Feedback(where + "Close: take, for every whole turn k, the sample *nearest* θ = 2πk and the one "
+                                   "nearest 2πk + π/2 (turns with both inside the record), then average each set.")
+        raise Feedback(where + "Check eqs 4.33-4.35.")
+    _ok("synchronous sampling right (index-pulse and quarter-turn samples, averaged over the turns).")
+
+
+__all__ += ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_demodulate", "check_sync_sampling"]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 09 (seed 004 ch. 6): the DCM AHRS -- measurement matrices and the prediction step
+# ---------------------------------------------------------------------------------------------------------------
+from . import dcm as _dcm  # noqa: E402  (row 3 module; appended section)
+
+__all__ += ["check_dcm_measurement_matrices", "check_dcm_predict"]
+
+
+def check_dcm_measurement_matrices(fn_a, fn_m):
+    """Check ``fn_a(g) -> H_a`` and ``fn_m(inclination) -> H_m`` (3×9 each; seed 004 eqs 6.16, 6.19)."""
+    for g in (_dcm.G, 9.81):
+        H = _call(fn_a, g, what="your H_a")
+        ref = _dcm.accel_measurement_matrix(g)
+        if H.shape != (3, 9):
+            raise Feedback(f"H_a maps the 9 states [c1, c3, b_g] to the 3 accelerometer axes: shape (3, 9); got "
+                           f"{H.shape}")
+        if _same(H, ref):
+            continue
+        if _same(H, -ref):
+            raise Feedback("H_a has the sign of the specific force. The thesis writes the accelerometer as measured "
+                           "gravity, a_b = C_n^b [0, 0, g] = +g c3 (eq 6.15) -- the lab converts the real reading "
+                           "with dcm.accel_to_seed004 before the filter, so H_a is +g I3 on the c3 block.")
+        if _same(H[:, 0:3], g * np.eye(3)):
+            raise Feedback("gravity is along the third nav axis (down): the accelerometer sees row 3 of C_bn, the "
+                           "states 4-6 (c3), not c1.")
+        if _same(H[:, 3:6], np.eye(3)):
+            raise Feedback("scale the identity by g: a_b = g c3 is in m/s², the state c3 is a unit vector.")
+        raise Feedback(f"H_a differs from [0₃, g I₃, 0₃] by up to {np.max(np.abs(H - ref)):.3g}.")
+    for deg in (66.0, -30.0):
+        d = np.radians(deg)
+        H = _call(fn_m, d, what="your H_m")
+        ref = _dcm.mag_measurement_matrix(d)
+        if H.shape != (3, 9):
+            raise Feedback(f"H_m is 3×9; got {H.shape}")
+        if _same(H, ref):
+            continue
+        hN, hD = np.cos(d), np.sin(d)
+        if _same(H[:, 0:3], hD * np.eye(3)) and _same(H[:, 3:6], hN * np.eye(3)):
+            raise Feedback("cos and sin are swapped: h_n = [cos δ, 0, sin δ] (δ the inclination, down positive), so "
+                           "the c1 block is cos δ I3 and the c3 block sin δ I3.")
+        if _same(H[:, 0:3], np.cos(deg) * np.eye(3)) or _same(H[:, 0:3], np.cos(np.radians(d)) * np.eye(3)):
+            raise Feedback("the inclination is passed in radians: use np.cos(inclination) directly.")
+        if np.any(np.abs(H[:, 6:9]) > 0):
+            raise Feedback("the magnetometer does not depend on the gyro bias: the last block is zero.")
+        raise Feedback(f"at δ = {deg:g}°, H_m differs from [cos δ I₃, sin δ I₃, 0₃] by up to "
+                       f"{np.max(np.abs(H - ref)):.3g}.")
+    _ok("H_a = [0, g I, 0] and H_m = [cos δ I, sin δ I, 0]: both measurements are linear in the DCM rows.")
+
+
+def _dcm_predict_ref(x, P, gyr, dt, gyro_noise, bias_walk):
+    A = _dcm.A_matrix(np.asarray(gyr, float) * dt)
+    F = _dcm.ahrs_transition(x[0:3], x[3:6], A, dt)
+    Q = _dcm.ahrs_process_noise(x[0:3], x[3:6], dt, gyro_noise, bias_walk)
+    return F @ x, F @ P @ F.T + Q, F, Q, A
+
+
+def check_dcm_predict(fn):
+    """Check a student's ``fn(x, P, gyr, dt, gyro_noise, bias_walk) -> (x_pred, P_pred)`` (seed 004 eqs 6.11-6.13)."""
+    rng = np.random.default_rng(611)
+    C = rotations.euler_to_dcm([0.4, -0.3, 2.0])
+    x = np.concatenate([C[0], C[2], np.radians([2.0, -3.0, 1.5])])
+    L = rng.normal(0, 0.01, (9, 9))
+    P = L @ L.T + 1e-4 * np.eye(9)
+    gyr, dt, N, qb = np.array([0.8, -1.5, 2.5]), 0.01, np.radians(0.1), np.radians(0.01)
+    xp, Pp = _call_tuple(fn, (x.copy(), P.copy(), gyr.copy(), dt, N, qb), 2, "your prediction")
+    x_ref, P_ref, F, Q, A = _dcm_predict_ref(x, P, gyr, dt, N, qb)
+    if xp.shape != (9,) or Pp.shape != (9, 9):
+        raise Feedback(f"return x_pred with shape (9,) and P_pred with shape (9, 9); got {xp.shape}, {Pp.shape}")
+    if not _same(xp, x_ref, 1e-12):
+        c1, c3, b = x[0:3], x[3:6], x[6:9]
+        wrong_A = np.concatenate([A @ c1 - dt * np.cross(c1, b), A @ c3 - dt * np.cross(c3, b), b])
+        wrong_sign = np.concatenate([c1 @ A + dt * np.cross(c1, b), c3 @ A + dt * np.cross(c3, b), b])
+        no_bias = np.concatenate([c1 @ A, c3 @ A, b])
+        degs = np.concatenate([c1 @ _dcm.A_matrix(np.radians(gyr) * dt), c3 @ _dcm.A_matrix(np.radians(gyr) * dt), b])
+        msg = _first_match(xp, [
+            (wrong_A, "each row propagates with Ãᵀ: row i of C A is Aᵀ c_i (eq 6.11) -- you used Ã c_i."),
+            (wrong_sign, "the bias term has the wrong sign: c_k = Ãᵀ c - Δt [c×] b_g (the true A is Ã - [b Δt×])."),
+            (no_bias, "the bias term -Δt [ĉ×] b_g is missing: the increment Ã comes from the biased gyro."),
+            (degs, "gyr is already in rad/s: σ = gyr · dt, no np.radians."),
+        ])
+        raise Feedback(msg or f"x_pred differs from F x̂ (eqs 6.11-6.12) by up to {np.max(np.abs(xp - x_ref)):.3g}; "
+                              "F = [[Ãᵀ, 0, -Δt[ĉ1×]], [0, Ãᵀ, -Δt[ĉ3×]], [0, 0, I]] with Ã = A(gyr·dt).")
+    if not _same(Pp, P_ref, 1e-12):
+        msg = _first_match(Pp, [
+            (F @ P @ F.T, "Q is missing: P⁻ = F P Fᵀ + Q (eq 6.13)."),
+            (F.T @ P @ F + Q, "transposes swapped: P⁻ = F P Fᵀ + Q."),
+            (F @ P @ F.T + Q / dt ** 2, "Q scales with Δt (N² Δt), not with 1/Δt: per-sample σ = N/√Δt, times Δt."),
+        ])
+        raise Feedback(msg or f"P_pred differs by up to {np.max(np.abs(Pp - P_ref)):.3g}: DCM blocks of Q are "
+                              "N² Δt [ĉi×][ĉj×]ᵀ, the bias block q_b² Δt I.")
+    _ok("prediction matches eqs 6.11-6.13: x⁻ = F x̂ with the pseudo-linear bias term, P⁻ = F P Fᵀ + Q.")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Lab 10 (seed 004 ch. 7): the 21-state DCM GPS/INS transition and the thesis' 2n sigma points
+# ---------------------------------------------------------------------------------------------------------------
+
+__all__ += ["check_ins_transition", "check_sigma_points"]
+
+
+def check_ins_transition(fn):
+    """Check a student's ``fn(x, acc, A_tilde, dt) -> F`` (21×21; seed 004 eqs 7.12-7.14)."""
+    rng = np.random.default_rng(713)
+    C = rotations.euler_to_dcm([0.3, -0.1, 2.2])
+    x = np.concatenate([C.ravel(), rng.normal(0, 0.01, 3), rng.normal(0, 100, 3), [60.0, 5.0, -2.0],
+                        rng.normal(0, 0.01, 3)])
+    acc, A, dt = np.array([0.5, -1.2, -9.6]), _dcm.A_matrix([0.01, -0.02, 0.015]), 0.02
+    F = _call(fn, x.copy(), acc.copy(), A.copy(), dt, what="your F")
+    ref = _dcm.ins_transition(x, acc, A, dt)
+    if F.shape != (21, 21):
+        raise Feedback(f"F is 21×21 (9 DCM elements, b_g, r, v, b_a); got {F.shape}")
+    if _same(F, ref, 1e-12):
+        _ok("F matches eqs 7.12-7.14: F x̂ + g_c is exactly the direct propagation of eqs 7.7-7.11.")
+        return
+    blocks = [("DCM rows (rows 0-8, columns 0-8)", slice(0, 9), slice(0, 9),
+               "each row block is Ãᵀ: row i of C A is Aᵀ c_i."),
+              ("DCM / gyro bias (rows 0-8, columns 9-11)", slice(0, 9), slice(9, 12),
+               "row block i is -Δt [ĉ_i×] (eq 7.7), with the cross-product matrix of the *row* c_i."),
+              ("position / velocity (rows 12-14, columns 15-17)", slice(12, 15), slice(15, 18), "r ← r + v Δt."),
+              ("velocity / DCM (rows 15-17, columns 0-8)", slice(15, 18), slice(0, 9),
+               "v_i gets Δt c_i·ã, so row 15+i holds Δt ãᵀ in the columns of c_i: Δt blkdiag(ãᵀ, ãᵀ, ãᵀ)."),
+              ("velocity / accelerometer bias (rows 15-17, columns 18-20)", slice(15, 18), slice(18, 21),
+               "-Δt Ĉ: the bias is removed before rotating, C (ã - b_a)."),
+              ("diagonal blocks of b_g, r, v, b_a", slice(9, 21), slice(9, 12), "random walks and r, v keep "
+                                                                                 "identity blocks.")]
+    for name, rs, cs, hint in blocks:
+        if not _same(F[rs, cs], ref[rs, cs], 1e-12):
+            if name.startswith("DCM rows") and _same(F[0:3, 0:3], A, 1e-12):
+                hint = "you used Ã; each row block is Ãᵀ (row i of C A is Aᵀ c_i)."
+            if name.startswith("velocity / DCM") and _same(F[15:18, 0:9], dt * np.kron(acc, np.eye(3)), 1e-12):
+                hint = ("you multiplied column-wise; the state holds C row by row (c1, c2, c3), so v_i needs "
+                        "c_i·ã: row 15+i has Δt ãᵀ in columns 3i..3i+2.")
+            raise Feedback(f"the block {name} is wrong: {hint}")
+    raise Feedback(f"F differs from eqs 7.12-7.14 by up to {np.max(np.abs(F - ref)):.3g}.")
+
+
+def check_sigma_points(fn):
+    """Check a student's ``fn(x, P) -> (sigmas (2n, n), weights (2n,))`` (seed 004 eqs 7.24-7.26)."""
+    rng = np.random.default_rng(724)
+    L = rng.normal(size=(4, 4))
+    P, x = L @ L.T + 0.5 * np.eye(4), rng.normal(size=4)
+    sig, w = _call_tuple(fn, (x.copy(), P.copy()), 2, "your sigma points")
+    ref, wref = _dcm.sigma_points_2n(x, P)
+    if sig.shape != (8, 4) or w.shape != (8,):
+        raise Feedback(f"2n = 8 points of dimension 4 and 8 weights; got {sig.shape} and {w.shape}")
+    if _same(sig, ref, 1e-10) and _same(w, wref, 1e-14):
+        _ok("2n sigma points x ± rows of chol(nP), weights 1/(2n): they reproduce x and P exactly.")
+        return
+    from scipy.linalg import cholesky
+    if not _same(w, wref) and _same(sig, ref, 1e-10):
+        raise Feedback("the points are right; every weight is 1/(2n) (eq 7.26).")
+    if _same(sig, np.vstack([x + cholesky(P), x - cholesky(P)]), 1e-10):
+        raise Feedback("scale P by n before the Cholesky factor: x ± (√(nP))_i (eq 7.24).")
+    Lw = cholesky(4 * P, lower=True)
+    if _same(sig, np.vstack([x + Lw, x - Lw]), 1e-10):
+        raise Feedback("use the rows of the upper factor U (UᵀU = nP, Matlab chol / scipy.linalg.cholesky), or "
+                       "equivalently the columns of the lower one; you took rows of the lower factor.")
+    d = sig - x
+    if sig.shape == (8, 4) and _same((w[:, None] * d).T @ d, P, 1e-8):
+        raise Feedback("your points reproduce P but are not ordered as asked: first x + row i for i = 1..n, "
+                       "then x - row i.")
+    raise Feedback("the points do not reproduce P: Σ w_i (χ_i - x)(χ_i - x)ᵀ must equal P with w_i = 1/(2n).")

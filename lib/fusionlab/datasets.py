@@ -466,3 +466,31 @@ broad = types.SimpleNamespace(
     URL=BROAD_URL, TrialInfo=TrialInfo, Trial=BroadTrial, list_trials=list_trials, group_names=group_names,
     trial_name=trial_name, known_sha256=known_sha256, cache_dir=cache_dir, available_trials=available_trials,
     fetch_trial=fetch_trial, load_trial=load_trial)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 12 (dead reckoning): the optical reference position, which BroadTrial does not carry
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def load_reference_position(name_or_number, folder=None, download=True, progress=True):
+    """The optical reference position ``opt_pos`` of a BROAD trial, (N, 3) m, NaN rows where the markers were lost.
+
+    The same file, search order and checksum as :func:`load_trial` (so the rows match its samples). Frame: the
+    optical system's, whose axes were aligned with the IMU's East-North-Up frame (z up); its origin is arbitrary.
+    """
+    import scipy.io
+
+    name = trial_name(name_or_number)
+    path = fetch_trial(name, folder=folder, download=download, progress=progress)
+    m = scipy.io.loadmat(str(path))
+    if "opt_pos" not in m:
+        raise ValueError(f"{path} has no opt_pos: not a BROAD trial file")
+    pos = validate.array(m["opt_pos"], f"{name}: opt_pos", shape=(None, 3), finite=False).copy()
+    pos[np.isnan(pos).any(axis=-1)] = np.nan
+    pos.setflags(write=False)
+    return pos
+
+
+__all__.append("load_reference_position")
+broad.load_reference_position = load_reference_position

@@ -761,3 +761,273 @@ def integration_drift(t, bias, noise_std, dt):
     sd = _nonnegative(noise_std, "noise_std")
     dt = validate.positive(dt, "dt")
     return b * t, sd * np.sqrt(dt * t)
+
+
+# ================================================================================================================
+# Lab 12: sensor error models (seed 001 sensors note §1-4 = digest §7), gyro noise, gravity removal and dead
+# reckoning (seed 001 position note = digest §9), the fixed-gain observer with a biased gyro (digest §8.4)
+# ================================================================================================================
+#
+# Conventions of this section. Seed 001 writes each triad's model with three matrices: a misalignment ``M``
+# (temperature independent), a diagonal sensitivity ``S(T)`` and a bias ``β(T)``; the temperature dependence is
+# left to the caller (pass the values at the temperature of the reading). Readings are in the unit of the sensor's
+# input (m/s², rad/s, µT) so that ``S`` is dimensionless. Every forward model has its exact inverse (the seed's
+# "correction"), and ``correct(measure(x)) == x`` to rounding for any invertible ``M``, ``S``, ``D_s``.
+
+__all__ += [
+    "accel_measure", "accel_correct", "gyro_measure_full", "gyro_correct", "mag_measure", "mag_correct",
+    "seed001_mag_correct_printed", "gyro_noise", "allan_model",
+    "remove_gravity", "dead_reckon", "seed001_table1", "tilt_error_position", "gyro_bias_position",
+    "observer_steady_state_error",
+]
+
+
+def _triad_params(M, S, beta, who):
+    M = validate.matrices(M, f"{who} M")
+    if M.shape != (3, 3):
+        raise ValueError(f"{who} M must be one 3×3 matrix; got shape {M.shape}")
+    S = validate.array(S, f"{who} S")
+    S = np.diag(S) if S.shape == (3,) else S
+    if S.shape != (3, 3):
+        raise ValueError(f"{who} S must be the 3 sensitivities or a 3×3 diagonal matrix; got shape {S.shape}")
+    beta = validate.array(beta, f"{who} beta", shape=(3,))
+    for name, A in (("M", M), ("S", S)):
+        if abs(np.linalg.det(A)) < 1e-12:
+            raise ValueError(f"{who} {name} must be invertible; got det = {np.linalg.det(A):.3g}")
+    return M, S, beta
+
+
+def accel_measure(f, M, S, beta):
+    """Accelerometer forward model, seed 001 sensors note (digest §7.1): ``a_m = M_a (S_a(T) f − β(T))``.
+
+    ``f = (F − F_g)/m`` is the specific force (:func:`specific_force`); the seed writes ``(1/m) S_a (F − F_g)``.
+
+    Parameters
+    ----------
+    f : (..., 3) array, m/s² -- true specific force, body frame
+    M : (3, 3) misalignment; S : (3,) sensitivities or (3, 3) diagonal; beta : (3,) bias, m/s²
+    Returns
+    -------
+    (..., 3) array, m/s² -- the raw reading
+    """
+    f = validate.vectors(f, "f")
+    M, S, beta = _triad_params(M, S, beta, "accelerometer")
+    return (f @ S.T - beta) @ M.T                                        # (001 §7.1 model)
+
+
+def accel_correct(a_m, M, S, beta):
+    """Accelerometer correction, seed 001 (digest §7.1): ``a_c = S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T))``.
+
+    The exact inverse of :func:`accel_measure` (the seed writes the bias ``β`` in the model, ``β_a`` here).
+    """
+    a_m = validate.vectors(a_m, "a_m")
+    M, S, beta = _triad_params(M, S, beta, "accelerometer")
+    return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 §7.1 correction)
+
+
+def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
+    """Rate-gyro forward model with g-sensitivity, inverse of seed 001's correction (digest §7.2):
+    ``p_m = M_g (S_g(T) p − β_g(T) + C_g,a a_c)``.
+
+    Parameters
+    ----------
+    rate : (..., 3) rad/s -- true body rates p; M, S, beta -- as in :func:`accel_measure` (beta in rad/s)
+    C_ga : (3, 3) array, (rad/s)/(m/s²), optional -- sensitivity to specific force (default none)
+    a_c : (..., 3) m/s², optional -- the corrected specific force at each sample (needed with ``C_ga``)
+    """
+    p = validate.vectors(rate, "rate")
+    M, S, beta = _triad_params(M, S, beta, "gyro")
+    g_term = _g_sensitivity(C_ga, a_c)
+    return (p @ S.T - beta + g_term) @ M.T                               # (001 §7.2, solved for p_m)
+
+
+def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
+    """Rate-gyro correction, seed 001 (digest §7.2): ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``."""
+    p_m = validate.vectors(p_m, "p_m")
+    M, S, beta = _triad_params(M, S, beta, "gyro")
+    g_term = _g_sensitivity(C_ga, a_c)
+    return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 §7.2 correction)
+
+
+def _g_sensitivity(C_ga, a_c):
+    if C_ga is None:
+        return 0.0
+    C = validate.matrices(C_ga, "C_ga")
+    if a_c is None:
+        raise ValueError("a_c (the corrected specific force) is needed when C_ga is given")
+    return validate.vectors(a_c, "a_c") @ C.T
+
+
+def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
+    """Magnetometer forward model, the inverse of seed 001's corrected formula (digest §7.3):
+    ``b_m = M_b (S_b(T) D_s⁻¹ (b + β_h) − β_b(T))``.
+
+    Soft iron ``D_s`` turns the sphere of readings into an ellipsoid, hard iron ``β_h`` moves its centre. Note the
+    seed's form ``b_c = D_s b − β_h``: ``β_h`` is written in the *corrected* coordinates (the raw-frame centre of
+    the ellipsoid is ``D_s⁻¹ β_h``).
+
+    Parameters
+    ----------
+    b : (..., 3) µT -- true field in the body frame; M, S, beta -- sensor triad (beta in µT)
+    D_s : (3, 3), optional (identity) -- soft-iron correction matrix; beta_h : (3,) µT, optional (zero)
+    """
+    b = validate.vectors(b, "b")
+    M, S, beta = _triad_params(M, S, beta, "magnetometer")
+    D, h = _iron(D_s, beta_h)
+    return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 §7.3, solved for b_m)
+
+
+def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
+    """Magnetometer correction, seed 001 corrected (digest §7.3 and erratum 13):
+    ``b_c = D_s S_b⁻¹(T) (M_b⁻¹ b_m + β_b(T)) − β_h``. The printed form is :func:`seed001_mag_correct_printed`."""
+    b_m = validate.vectors(b_m, "b_m")
+    M, S, beta = _triad_params(M, S, beta, "magnetometer")
+    D, h = _iron(D_s, beta_h)
+    b = np.linalg.solve(S, (np.linalg.solve(M, b_m.T).T + beta).T).T     # S_b⁻¹(M_b⁻¹ b_m + β_b)
+    return b @ D.T - h                                                   # (001 §7.3: b_c = D_s b − β_h)
+
+
+def _iron(D_s, beta_h):
+    D = np.eye(3) if D_s is None else validate.matrices(D_s, "D_s")
+    if D.shape != (3, 3) or abs(np.linalg.det(D)) < 1e-12:
+        raise ValueError(f"D_s must be one invertible 3×3 matrix; got shape {D.shape}")
+    h = np.zeros(3) if beta_h is None else validate.array(beta_h, "beta_h", shape=(3,))
+    return D, h
+
+
+def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
+    """Seed 001's combined magnetometer formula **as printed** (digest erratum 13):
+    ``b_c = D_s S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T)) − β_h``.
+
+    Read literally it corrects the magnetometer with the *accelerometer's* misalignment, sensitivity and bias (and
+    the symbol ``a_m`` stands where ``b_m`` belongs). Kept only so a lab can show what the typo costs; use
+    :func:`mag_correct`.
+    """
+    return mag_correct(b_m, M_a, S_a, beta_a, D_s, beta_h)
+
+
+def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
+    """Synthetic gyro rate error with the three Allan-variance terms (seed 004 §2.1 vocabulary; IEEE Std 952).
+
+    * white rate noise, angle random walk ``N`` (rad/s/√Hz = rad/√s): each sample ``N·√fs·u``;
+    * flicker rate noise, bias instability ``B`` (rad/s): two-sided PSD ``B²/(2π f)`` (IEEE Std 952's form; one-sided
+      ``B²/(π f)``) from ``1/(n/fs)`` to ``fs/2``, made by shaping white noise in the frequency domain;
+    * rate random walk ``K`` (rad/s/√s), a random-walk bias (seed 004 eqs 2.5-2.10): ``b_k = b_{k-1} + K·√dt·u``.
+
+    Their Allan deviation is :func:`allan_model`. Parameters ``n`` samples at ``fs`` Hz; ``rng`` a Generator or seed.
+    Returns (n,) rad/s.
+    """
+    n = int(n)
+    if n < 2:
+        raise ValueError(f"n must be at least 2 samples; got {n}")
+    fs = validate.positive(fs, "fs")
+    N, B, K = (float(_nonnegative(v, name)) for v, name in ((arw, "arw"), (bias_instability, "bias_instability"),
+                                                              (rrw, "rrw")))
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    out = N * np.sqrt(fs) * rng.standard_normal(n)                      # white rate: ARW
+    if B > 0:
+        spec = np.fft.rfft(rng.standard_normal(n))
+        f = np.fft.rfftfreq(n, 1 / fs)
+        shape = np.zeros_like(f)
+        shape[1:] = np.sqrt(B ** 2 / (np.pi * f[1:]) * fs / 2)         # white of unit variance has PSD 2/fs
+        out += np.fft.irfft(spec * shape, n)
+    if K > 0:
+        out += np.cumsum(K * np.sqrt(1 / fs) * rng.standard_normal(n))  # (004 eq 2.6 random walk)
+    return out
+
+
+def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
+    """Allan deviation of white + flicker + random-walk rate noise (IEEE Std 952):
+    ``σ(τ)² = N²/τ + (2 ln2/π) B² + K² τ/3``. So ``σ(1 s) = N`` on the ARW line, the flat floor is ``0.664·B`` and
+    ``σ(3 s) = K`` on the RRW line. ``tau`` (...) s; returns (...) in the rate unit."""
+    tau = _positive_array(tau, "tau")
+    return np.sqrt(arw ** 2 / tau + 2 * np.log(2) / np.pi * bias_instability ** 2 + rrw ** 2 * tau / 3)
+
+
+def remove_gravity(q_bn, acc, g=G, frame="NED"):
+    """Acceleration in the navigation frame from the specific force, seed 001 position note §1 (digest §9.1):
+    ``a_I = R_B^I a_m + (0, 0, g)`` in NED (``a_m`` at rest reads ``(0, 0, −g)`` level), i.e. ``C_bn f + g_n``.
+
+    Parameters
+    ----------
+    q_bn : (..., 4) unit quaternions, body→``frame``; acc : (..., 3) m/s², +g on the up axis at rest
+    g : float, m/s²; frame : 'NED' (gravity (0, 0, +g)) or 'ENU' (gravity (0, 0, −g))
+    Returns
+    -------
+    (..., 3) m/s² -- the sensor's acceleration in the navigation frame (zero at rest)
+    """
+    from . import rotations
+    if frame not in ("NED", "ENU"):
+        raise ValueError(f"frame must be 'NED' or 'ENU'; got {frame!r}")
+    g = validate.positive(g, "g")
+    g_n = np.array([0.0, 0.0, g if frame == "NED" else -g])
+    return rotations.quat_rotate(q_bn, acc) + g_n                       # (001 position §1: a_I = R_B^I a_m + g)
+
+
+def dead_reckon(acc_nav, dt, v0=None, p0=None):
+    """Velocity and position by the seed's discrete scheme (seed 001 position note §2, digest §9.2):
+    ``v[k+1] = v[k] + T a[k]``, ``r[k+1] = r[k] + T v[k]``.
+
+    Parameters
+    ----------
+    acc_nav : (N, 3) m/s² -- navigation-frame acceleration (gravity removed); dt : s
+    v0, p0 : (3,) optional -- initial velocity (m/s) and position (m); zero by default
+    Returns
+    -------
+    (v, p) : two (N, 3) arrays, the values at each sample time (``v[0] = v0``, ``p[0] = p0``)
+    """
+    a = validate.samples(acc_nav, "acc_nav")
+    dt = validate.positive(dt, "dt")
+    v0 = np.zeros(3) if v0 is None else validate.array(v0, "v0", shape=(3,))
+    p0 = np.zeros(3) if p0 is None else validate.array(p0, "p0", shape=(3,))
+    v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])     # (001 §9.2, v update)
+    p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])     # (001 §9.2, r update)
+    return v, p
+
+
+def seed001_table1(angle_deg, t, g=9.8, printed=True):
+    """Seed 001's Table 1 (digest §9.3): acceleration, velocity and position error of a tilt error.
+
+    ``a = g·sin(δ)`` (inferred; the note states no model), ``v = a·t``; position as printed ``a·t²``
+    (``printed=True``, the table's factor-of-2 erratum, digest erratum 16) or kinematic ``½·a·t²``.
+
+    Parameters
+    ----------
+    angle_deg : (M,) attitude errors in degrees (the table's unit); t : (K,) s; g : m/s² (the note uses 9.8)
+    Returns
+    -------
+    (acc, vel, pos) : (M,), (M, K), (M, K)
+    """
+    d = np.radians(validate.array(angle_deg, "angle_deg")).reshape(-1)
+    t = _nonnegative(t, "t").reshape(-1)
+    a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
+    vel = a[:, None] * t
+    pos = a[:, None] * t ** 2 * (1.0 if printed else 0.5)               # printed a·t², kinematic ½·a·t²
+    return a, vel, pos
+
+
+def tilt_error_position(t, angle_err, g=G):
+    """Position error of a constant tilt error ``δ`` (rad): ``½ g sin(δ) t²`` -- grows like t²."""
+    t = _nonnegative(t, "t")
+    return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t ** 2
+
+
+def gyro_bias_position(t, bias, g=G):
+    """Position error of a constant gyro bias ``b`` (rad/s) about a level axis: the tilt grows as ``b t``, the
+    acceleration error as ``g b t`` (small angles), the position as ``g b t³/6`` -- grows like t³."""
+    t = _nonnegative(t, "t")
+    return validate.positive(g, "g") * validate.array(bias, "bias") * t ** 3 / 6
+
+
+def observer_steady_state_error(L, T, bias):
+    """Steady-state angle error of seed 001's fixed-gain observer with a constant gyro bias (digest §8.4):
+    predict ``θ⁺ = θ + T(ω + b)``, update ``θ = θ⁺ + L(θ_acc − θ⁺)`` gives ``e_ss = (1 − L)·T·b / L``.
+
+    Parameters
+    ----------
+    L : float in (0, 1]; T : s; bias : rate unit (the error comes out in its angle unit)
+    """
+    L = float(validate.array(L, "L"))
+    if not 0.0 < L <= 1.0:
+        raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); got {L}")
+    return (1 - L) * validate.positive(T, "T") * validate.array(bias, "bias") / L

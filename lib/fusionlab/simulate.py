@@ -300,3 +300,158 @@ def main(argv=None):
 
 if __name__ == "__main__":
     main()
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Seed 004 ch. 6 (Lab 09): a synthetic hand-motion AHRS record with the Table 6.1 sensor grades
+# ----------------------------------------------------------------------------------------------------------------
+
+#: Table 6.1 of seed 004 (Xsens MTi): accelerometer noise m/s²/√Hz, gyro noise rad/s/√Hz, magnetometer noise
+#: gauss/√Hz (0.5 mGauss), and the accelerometer bias stability, m/s².
+XSENS_ACC_NOISE = 0.002
+XSENS_GYRO_NOISE = np.radians(0.1)
+XSENS_MAG_NOISE = 0.5e-3
+XSENS_ACC_BIAS = 0.02
+
+
+def _window(t, t0, t1, ramp):
+    """0 outside [t0, t1], 1 inside with cosine ramps of length ``ramp``, zero slope at both ends."""
+    return _smoothstep((t - t0) / ramp) * _smoothstep((t1 - t) / ramp)
+
+
+def _body_rates(C):
+    """Rates (rad/s × dt) that carry ``C[k]`` exactly into ``C[k+1]`` through ``C[k+1] = C[k] @ A(σ_k)``."""
+    from . import rotations
+    q = rotations.dcm_to_quat(C)
+    dq = rotations.quat_multiply(rotations.quat_conjugate(q[:-1]), q[1:])
+    return rotations.quat_to_rotvec(rotations.quat_normalize(dq))
+
+
+def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 30.0), still=10.0,
+                       bias_dps=(2.0, -3.0, 1.5), inclination_deg=66.0, field_gauss=0.48, acc_bias=True):
+    """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1; digest §5.9) -- ours.
+
+    Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of
+    sinusoids (up to about 60°, 40°, 100° from the start, 0.05-0.4 Hz) and the hand moves about ±10 cm (up to ≈1 m/s²), faded in
+    and out with cosine ramps; the motion passes through the initial attitude near the middle of the run.
+    Sensors: Table 6.1 noise densities, a constant gyro bias (``bias_dps``, °/s, a "few °/s" as the thesis' GT1;
+    the filter starts it at 0), a random constant accelerometer bias of the Table 6.1 stability (``acc_bias``),
+    the field of Siegen (inclination 66°, 0.48 G). The gyro rates are exact: integrating the error-free rates with
+    :func:`fusionlab.dcm.A_matrix` reproduces the true attitude to machine precision.
+
+    Units at the edge: rad/s, m/s² **specific force** (+g on the up axis at rest, as a real accelerometer and as
+    :func:`fusionlab.estimators.run` expect), gauss; true attitude body→NED.
+
+    Returns
+    -------
+    dict with ``t`` (N,) s, ``gyr``, ``acc``, ``mag`` (N, 3); ``C_bn`` (N, 3, 3), ``euler`` (N, 3) rad, ``q``
+    (N, 4) -- the true attitude after each sample; ``C_init`` (3, 3) the attitude before the first sample;
+    ``gyr_true`` (N, 3); ``bias`` (3,) rad/s; ``acc_bias`` (3,) m/s²; ``inclination`` rad; ``field`` gauss; ``fs``
+    """
+    from . import rotations
+    fs = validate.positive(fs, "fs")
+    duration = validate.positive(duration, "duration")
+    rng = np.random.default_rng(seed)
+    n = int(round(duration * fs))
+    dt = 1.0 / fs
+    tt = np.arange(n + 1) * dt                                 # truth instants; sample k ends at tt[k + 1]
+    w = _window(tt, still, duration - still, 5.0)
+    u = tt - still
+    mid = (duration - 2 * still) / 2
+    e0 = np.radians(np.asarray(euler0_deg, float))
+    swing = np.stack([
+        np.radians(30) * np.sin(2 * np.pi * 0.11 * u) + np.radians(15) * np.sin(2 * np.pi * 0.37 * u + 1.0),
+        np.radians(20) * np.sin(2 * np.pi * 0.07 * u + 0.5) + np.radians(10) * np.sin(2 * np.pi * 0.29 * u),
+        np.radians(80) * np.sin(2 * np.pi * 0.05 * u) + np.radians(10) * np.sin(2 * np.pi * 0.23 * u + 2.0)], -1)
+    swing -= swing[np.argmin(np.abs(u - mid))]                 # passes through the start attitude mid-run
+    euler = e0 + w[:, None] * swing
+    C_all = rotations.euler_to_dcm(euler)
+    sigma = _body_rates(C_all)
+    gyr_true = sigma / dt
+    pos = 0.1 * w[:, None] * np.stack([np.sin(2 * np.pi * 0.3 * u), np.sin(2 * np.pi * 0.41 * u + 1),
+                                       np.sin(2 * np.pi * 0.53 * u + 2)], -1)
+    acc_n = np.gradient(np.gradient(pos, dt, axis=0), dt, axis=0)
+    C = C_all[1:]
+    f_b = sensors.specific_force(C, acc_n[1:])
+    b_g = np.radians(np.asarray(bias_dps, float))
+    b_a = rng.normal(0.0, XSENS_ACC_BIAS, 3) if acc_bias else np.zeros(3)
+    delta = np.radians(inclination_deg)
+    m_n = field_gauss * np.array([np.cos(delta), 0.0, np.sin(delta)])
+    gyr = gyr_true + b_g + XSENS_GYRO_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
+    acc = f_b + b_a + XSENS_ACC_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
+    mag = np.einsum("nji,j->ni", C, m_n) + XSENS_MAG_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
+    return dict(t=tt[1:], gyr=gyr, acc=acc, mag=mag, C_bn=C, euler=euler[1:], q=rotations.dcm_to_quat(C),
+                C_init=C_all[0], gyr_true=gyr_true, bias=b_g, acc_bias=b_a, inclination=delta, field=field_gauss,
+                fs=fs)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Seed 004 ch. 7 (Lab 10): a synthetic 68 s air-vehicle record with the Table 7.1 sensors and 2 Hz GPS
+# ----------------------------------------------------------------------------------------------------------------
+
+#: Table 7.1 of seed 004: GPS σ (m, m/s) and rate (Hz); IMU step (s); accelerometer noise (100 µg/√Hz in m/s²/√Hz);
+#: gyro ARW (3 °/√h in rad/s/√Hz); gyro bias (1500 °/h in rad/s) and accelerometer bias (1 mg in m/s²).
+T71_GPS_SIGMA_POS = 3.0
+T71_GPS_SIGMA_VEL = 0.5
+T71_GPS_HZ = 2.0
+T71_DT = 0.02
+T71_ACC_NOISE = 100e-6 * 9.80665
+T71_GYRO_NOISE = np.radians(3.0) / 60.0
+T71_GYRO_BIAS = np.radians(1500.0) / 3600.0
+T71_ACC_BIAS = 1e-3 * 9.80665
+
+
+def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(1500.0, -1500.0, 1500.0),
+                       acc_bias_mg=(1.0, -1.0, 1.0), speed=60.0, g=9.80665, noise=True):
+    """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1; digest §5.10) -- ours.
+
+    Coordinated turns (bank up to about 20°) left and right, two climbs and a descent (pitch up to about ±5°) and
+    speed changes of ±10 m/s around ``speed``; the heading stays within ±150° (the Euler UKF does not wrap yaw).
+    The thesis' own trajectory (mechanized "high-quality inertial data") is not published.
+
+    The record is built so that the thesis' discrete mechanization (004 eq 7.10 with the exact increment) is
+    *exact*: ``r_{k+1} = r_k + v_k Δt``, ``v_{k+1} = v_k + C_k f_k Δt + g_n Δt``, ``C_{k+1} = C_k A(ω_k Δt)``; so a
+    noise-free filter reproduces the truth and every error seen in the lab comes from the sensors. Sensors: Table 7.1
+    (IMU at 50 Hz with 100 µg/√Hz and 3 °/√h, the given constant biases; GPS position and velocity at 2 Hz with
+    3 m and 0.5 m/s white noise); ``noise=False`` leaves only the biases.
+
+    Returns
+    -------
+    dict with ``t`` (N,) s; ``gyr``, ``acc`` (N, 3) rad/s and m/s² (specific force); ``gps`` (N, 6) NED position
+    and velocity after sample k where a fix exists, NaN elsewhere; truth after each sample: ``r``, ``v`` (N, 3),
+    ``C_bn`` (N, 3, 3), ``euler`` (N, 3); the start: ``r0``, ``v0``, ``C0``; ``b_g``, ``b_a`` (3,); ``fs``, ``g``
+    """
+    from . import rotations
+    fs = validate.positive(fs, "fs")
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / fs
+    n = int(round(duration * fs))
+    tt = np.arange(n + 1) * dt
+    # heading rate: smooth turns (rad/s), then bank from the coordinated-turn condition tan φ = V ψ̇ / g
+    turns = ((6, 18, 3.5), (24, 40, -3.5), (46, 56, 3.0), (60, 66, -2.5))        # (start, end, deg/s)
+    psi_dot = np.zeros_like(tt)
+    for t0, t1, rate in turns:
+        psi_dot += np.radians(rate) * _window(tt, t0, t1, 2.0)
+    psi = np.radians(20.0) + np.concatenate([[0.0], np.cumsum(0.5 * (psi_dot[1:] + psi_dot[:-1]) * dt)])
+    V = speed + 10.0 * np.sin(2 * np.pi * tt / 40.0)
+    gamma = np.radians(5.0) * (_window(tt, 4, 22, 4.0) - _window(tt, 30, 48, 4.0) + _window(tt, 52, 66, 3.0))
+    phi = np.arctan(V * psi_dot / g)
+    euler = np.stack([phi, gamma, psi], -1)                                       # pitch = flight-path angle
+    C_all = rotations.euler_to_dcm(euler)
+    v_all = V[:, None] * np.stack([np.cos(gamma) * np.cos(psi), np.cos(gamma) * np.sin(psi), -np.sin(gamma)], -1)
+    r_all = np.concatenate([np.zeros((1, 3)), np.cumsum(v_all[:-1] * dt, axis=0)])   # r_{k+1} = r_k + v_k dt
+    g_n = np.array([0.0, 0.0, g])
+    f = np.einsum("nji,nj->ni", C_all[:-1], (v_all[1:] - v_all[:-1]) / dt - g_n)     # v_{k+1} = v_k + C_k f_k dt + g dt
+    gyr_true = _body_rates(C_all) / dt
+    b_g = np.radians(np.asarray(gyro_bias_dph, float)) / 3600.0
+    b_a = np.asarray(acc_bias_mg, float) * 1e-3 * g
+    w = 1.0 if noise else 0.0
+    gyr = gyr_true + b_g + w * T71_GYRO_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
+    acc = f + b_a + w * T71_ACC_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
+    every = int(round(fs / T71_GPS_HZ))
+    gps = np.full((n, 6), np.nan)
+    k = np.arange(every - 1, n, every)
+    gps[k, 0:3] = r_all[k + 1] + w * T71_GPS_SIGMA_POS * rng.standard_normal((len(k), 3))
+    gps[k, 3:6] = v_all[k + 1] + w * T71_GPS_SIGMA_VEL * rng.standard_normal((len(k), 3))
+    return dict(t=tt[1:], gyr=gyr, acc=acc, gps=gps, r=r_all[1:], v=v_all[1:], C_bn=C_all[1:], euler=euler[1:],
+                r0=r_all[0], v0=v_all[0], C0=C_all[0], b_g=b_g, b_a=b_a, gyr_true=gyr_true, f_true=f, fs=fs, g=g)

@@ -1,0 +1,905 @@
+"""DCM-based attitude (AHRS) and GPS/INS Kalman filters of seed 004 (GF-IMU / DCM thesis, chapters 6 and 7).
+
+The thesis estimates the **elements of the direction cosine matrix** ``C_b^n`` directly, instead of Euler angles or a
+quaternion. Its selling point: with the gyro-propagated increment ``Ã`` held fixed, each DCM row obeys a process
+model that is *linear* in the row (and bilinear in row × gyro bias, handled "pseudo-linearly" by evaluating the
+cross-product matrix at the last estimate), and the accelerometer and magnetometer measurements are *linear* in the
+rows. No trigonometry, no singularity.
+
+What is here
+------------
+* :func:`A_matrix` -- the DCM increment of a rotation vector, exact and second order (004 eqs 6.2-6.8);
+  :func:`A_with_gyro_error` -- the first-order effect of gyro bias and noise on it (004 eq 6.10).
+* :func:`row_propagate` -- one DCM row through a step (004 eq 6.11 / 7.7); :func:`ahrs_transition` and
+  :func:`ahrs_process_noise` -- the 9-state pseudo-linear model (004 eqs 6.11-6.13).
+* :func:`accel_measurement_matrix`, :func:`mag_reference`, :func:`mag_measurement_matrix` -- the linear measurement
+  models (004 eqs 6.15-6.19); :func:`orthogonality_pseudo_measurement` and :func:`orthogonality_covariance` -- the
+  constraint rows with decaying covariance (004 eqs 6.24-6.28).
+* :class:`DcmAhrs` -- the readable 9-state AHRS, one ``predict`` / ``update`` per call; :func:`run_ahrs` -- the same
+  filter as a fast path for whole recordings (measurement update every ``update_every`` samples, the prediction
+  over the block built from the product of the per-sample increments).
+* :func:`rows_to_dcm`, :func:`orthonormalize` -- read-out (004 eq 6.25; SVD, ours: the thesis never
+  orthonormalises the state).
+
+Conventions at this module's edge
+---------------------------------
+``C_bn`` is the library's body→NED DCM (:mod:`fusionlab.rotations`; seed 004's ``C_b^n`` is the same matrix,
+:func:`fusionlab.rotations.dcm_from_seed004`). ``c1``, ``c3`` are its first and third **rows** as 3-vectors.
+
+**Accelerometer sign.** Seed 004 writes the accelerometer as "measured gravity", ``a_b = C_n^b [0, 0, g]ᵀ = g c3``
+(eqs 4.21, 6.15, 7.18): a level sensor with z down reads **+g on z**. A real accelerometer reads the specific force,
+``f_b = C_n^b (a_n - g_n)``, which is ``-g c3`` at rest (+g on the axis that points *up*). The two differ by a sign.
+The AHRS functions here take the thesis' ``a_b``; convert a real reading once with :func:`accel_to_seed004`
+(``a_b = -f_b``). The GPS/INS mechanization (eqs 7.1, 7.10) uses the specific force itself.
+
+Which values are the thesis' and which are ours
+-----------------------------------------------
+The thesis gives the structure (states, F, H, the decay ``ρ = 0.92``) but **no numbers** for Q, R, the adaptive-R
+thresholds, the orthogonality covariances ``R_i`` and ``R_ss``, or the initial covariance (digest 004 §7 item 20).
+Every number in :class:`AhrsTuning` is ours; each field says what it is.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+import math as _m
+
+from scipy.linalg.lapack import dposv as _posv
+
+from . import rotations, validate
+
+__all__ = ["G", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition", "ahrs_process_noise",
+           "accel_to_seed004", "accel_measurement_matrix", "mag_reference", "mag_measurement_matrix",
+           "orthogonality_pseudo_measurement", "orthogonality_covariance", "rows_to_dcm", "orthonormalize",
+           "level_and_compass", "inclination_from", "trusted_mask", "AhrsTuning", "DcmAhrs", "run_ahrs"]
+
+#: The constant gravity of the thesis' AHRS and GPS/INS models, m/s² (standard gravity; the thesis gives no value).
+G = 9.80665
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# DCM update with the rotation vector (004 §6.2, eqs 6.2-6.10)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def A_matrix(sigma, order="exact"):
+    """DCM increment ``A`` of a body rotation vector: ``C_bn,k = C_bn,k-1 @ A_{k-1}`` (004 eqs 6.2-6.8).
+
+    ``order='exact'``: ``A = I + (sin σ/σ)[σ×] + ((1 - cos σ)/σ²)[σ×]²``; ``order='second'``:
+    ``A ≈ I + [σ×] + ½[σ×]²`` (004 eqs 6.7/6.8; the printed equations are lost in the seed text and reconstructed,
+    digest §2.5). The formula is the one of seed 000 eq 3.54 (corrected), so this calls
+    :func:`fusionlab.rotations.rodrigues_dcm`.
+
+    Parameters
+    ----------
+    sigma : (..., 3) array, rad -- rotation vector over the step, ``σ ≈ ω Δt`` (004 eq 6.5)
+    order : 'exact' or 'second'
+    Returns
+    -------
+    (..., 3, 3) array
+    """
+    if order not in ("exact", "second"):
+        raise ValueError(f"order must be 'exact' or 'second'; got {order!r}")
+    return rotations.rodrigues_dcm(sigma, order=order)
+
+
+def A_with_gyro_error(A, bias, dt, noise=None):
+    """The increment computed from a biased, noisy gyro, to first order: ``Ã = A + [(b Δt + w Δt)×]`` (004 eq 6.10).
+
+    Parameters
+    ----------
+    A : (3, 3) array -- the true increment
+    bias : (3,) array, rad/s -- gyro bias ``b_g``
+    dt : float, s
+    noise : (3,) array, rad/s, optional -- the gyro noise sample ``w_g`` of this step
+    """
+    A = validate.array(A, "A", shape=(3, 3))
+    b = validate.vectors(bias, "bias")
+    dt = validate.positive(dt, "dt")
+    e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt      # (004 eq 6.9)
+    return A + rotations.skew(e)                                                     # (004 eq 6.10)
+
+
+def row_propagate(c, A_tilde, bias, dt):
+    """One DCM row through one step, bias removed pseudo-linearly: ``c_k = Ãᵀ c_{k-1} - Δt [c_{k-1}×] b_g``
+    (004 eq 6.11; eq 7.7 for every row of the GPS/INS filter).
+
+    Row ``i`` of ``C_k = C_{k-1} A`` is ``Aᵀ c_i``; the true ``A = Ã - [bΔt×]`` (eq 6.10), so
+    ``Aᵀ c = Ãᵀ c + [bΔt×] c = Ãᵀ c - Δt [c×] b`` (a skew matrix changes sign when transposed).
+
+    Parameters
+    ----------
+    c : (..., 3) array -- DCM row(s), e.g. ``C_bn[0]``
+    A_tilde : (3, 3) array -- increment from the measured (biased) gyro
+    bias : (3,) array, rad/s -- estimated gyro bias
+    dt : float, s -- the time the increment spans
+    """
+    c = validate.vectors(c, "c")
+    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3))
+    b = validate.vectors(bias, "bias")
+    dt = validate.positive(dt, "dt")
+    return c @ A_tilde - dt * np.cross(c, b)                                          # (004 eq 6.11)
+
+
+def ahrs_transition(c1, c3, A_tilde, dt):
+    """The 9×9 pseudo-linear transition of the AHRS state ``x = [c1, c3, b_g]`` (004 eqs 6.11-6.12):
+
+    ``F = [[Ãᵀ, 0, -Δt[ĉ1×]], [0, Ãᵀ, -Δt[ĉ3×]], [0, 0, I]]``, so that ``x⁻ = F x̂`` reproduces
+    :func:`row_propagate` for both rows and a random-walk bias.
+    """
+    c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
+    c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
+    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    dt = validate.positive(dt, "dt")
+    return _transition(c1, c3, A_tilde, dt)
+
+
+def _transition(c1, c3, A_tilde, dt):
+    F = np.eye(9)
+    F[0:3, 0:3] = F[3:6, 3:6] = A_tilde.T                                            # (004 eq 6.11)
+    F[0:3, 6:9] = -dt * _skew(c1)
+    F[3:6, 6:9] = -dt * _skew(c3)                                                    # (004 eq 6.12: b_k = b_k-1)
+    return F
+
+
+def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
+    """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part"; the formula is lost, this is
+    the digest's reconstruction, ours in its numbers).
+
+    The gyro noise enters each row as ``-[c×] w_g Δt`` (eq 6.11 with noise), so with white noise of density
+    ``N`` (rad/s/√Hz, per-sample σ = N/√Δt): ``Q_{ci,cj} = N² Δt [ĉi×][ĉj×]ᵀ``; the bias random walk adds
+    ``q_b Δt I₃`` (``q_b`` in (rad/s)²/s).
+
+    Parameters
+    ----------
+    c1, c3 : (3,) arrays -- current row estimates
+    dt : float, s; gyro_noise : float, rad/s/√Hz; bias_walk : float, rad/s/√s
+    """
+    c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
+    c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
+    dt = validate.positive(dt, "dt")
+    gyro_noise = validate.array(gyro_noise, "gyro_noise")
+    bias_walk = validate.array(bias_walk, "bias_walk")
+    if gyro_noise < 0 or bias_walk < 0:
+        raise ValueError(f"gyro_noise and bias_walk must be >= 0; got {float(gyro_noise)}, {float(bias_walk)}")
+    return _process_noise(c1, c3, dt, float(gyro_noise) ** 2, float(bias_walk) ** 2)
+
+
+def _process_noise(c1, c3, dt, qg, qb):
+    S = np.zeros((6, 3))
+    S[0:3] = _skew(c1)
+    S[3:6] = _skew(c3)
+    Q = np.zeros((9, 9))
+    Q[0:6, 0:6] = qg * dt * (S @ S.T)                                                # (004 eq 6.13, DCM part)
+    Q[6:9, 6:9] = qb * dt * np.eye(3)                                                # (004 eq 6.13, bias part)
+    return Q
+
+
+def _skew(v):
+    x, y, z = v
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Measurements (004 §6.4, eqs 6.15-6.28)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def accel_to_seed004(acc):
+    """A real accelerometer reading (specific force, +g on the up axis at rest) in the thesis' sign: ``a_b = -f_b``.
+
+    Seed 004 eqs 4.21 / 6.15 / 7.18 model the accelerometer as "measured gravity" ``C_n^b [0, 0, g]ᵀ`` (+g on z when
+    level with z down); the specific force is ``C_n^b (a_n - g_n)``, i.e. ``-g c3`` at rest. Only the sign differs.
+
+    Parameters
+    ----------
+    acc : (..., 3) array -- specific force, any unit (m/s² for the filters here)
+    """
+    return -validate.vectors(acc, "acc")
+
+
+def accel_measurement_matrix(g=G):
+    """``H_a = [0₃, g I₃, 0₃]`` (3×9): the thesis' accelerometer ``a_b = g c3 + v`` is linear in c3 (004 eq 6.16)."""
+    g = validate.positive(g, "g")
+    H = np.zeros((3, 9))
+    H[:, 3:6] = g * np.eye(3)                                                        # (004 eq 6.16)
+    return H
+
+
+def mag_reference(inclination):
+    """Unit geomagnetic field in NED, ``h_n = [cos δ, 0, sin δ]`` (004 eq 6.17; δ the inclination, positive down)."""
+    d = validate.angles_rad(inclination, "inclination", limit=np.pi / 2 + 1e-12)
+    return np.stack([np.cos(d), np.zeros_like(d), np.sin(d)], -1)
+
+
+def mag_measurement_matrix(inclination):
+    """``H_m = [h_N I₃, h_D I₃, 0₃]`` (3×9): ``h_b = C_n^b h_n = h_N c1 + h_D c3`` (004 eqs 6.18-6.19).
+
+    There is no ``c2`` term because ``h_E = 0``; neither gravity nor the field has an east component, which is why
+    the AHRS estimates rows 1 and 3 only.
+    """
+    hN, _, hD = mag_reference(float(validate.array(inclination, "inclination")))
+    H = np.zeros((3, 9))
+    H[:, 0:3] = hN * np.eye(3)
+    H[:, 3:6] = hD * np.eye(3)                                                       # (004 eq 6.19)
+    return H
+
+
+def orthogonality_pseudo_measurement(c1, c3):
+    """The constraints ``|c1|² = 1``, ``|c3|² = 1``, ``c1·c3 = 0`` as a measurement (004 eqs 6.24-6.26, reconstructed).
+
+    Returns
+    -------
+    residual : (3,) array -- ``z - h_c(x̂)`` with ``z = [1, 1, 0]``, ``h_c = [|c1|², |c3|², c1·c3]``
+    H_c : (3, 9) array -- ``[[2c1ᵀ, 0, 0], [0, 2c3ᵀ, 0], [c3ᵀ, c1ᵀ, 0]]``
+    """
+    c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
+    c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
+    return _ortho(c1, c3)
+
+
+def _ortho(c1, c3):
+    r = np.array([1.0 - c1 @ c1, 1.0 - c3 @ c3, -(c1 @ c3)])                         # (004 eq 6.24)
+    H = np.zeros((3, 9))
+    H[0, 0:3] = 2 * c1
+    H[1, 3:6] = 2 * c3
+    H[2, 0:3] = c3
+    H[2, 3:6] = c1                                                                   # (004 eq 6.26)
+    return r, H
+
+
+def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
+    """Decaying pseudo-measurement variance ``R_c,k = ρ^k R_i + R_ss`` (004 eq 6.27; ρ = 0.92 is the thesis').
+
+    Large at first, so a wrong initial DCM is not forced orthonormal before it has converged; then steady at
+    ``R_ss``. ``R_i`` and ``R_ss`` are not given in the thesis ("found from consistency checks").
+
+    Parameters
+    ----------
+    k : int or array -- update count (0 at the first update)
+    R_i, R_ss : float >= 0; rho : float in (0, 1)
+    """
+    k = validate.array(k, "k")
+    if np.any(k < 0):
+        raise ValueError(f"k must be >= 0; got {float(np.min(k))}")
+    if not 0 < rho < 1:
+        raise ValueError(f"rho must be in (0, 1); got {rho!r}")
+    if R_i < 0 or R_ss < 0:
+        raise ValueError(f"R_i and R_ss must be >= 0; got {R_i!r}, {R_ss!r}")
+    return rho ** k * R_i + R_ss                                                     # (004 eq 6.27)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Read-out and initialisation
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def rows_to_dcm(c1, c3):
+    """``C = [c1; c3 × c1; c3]`` from the two estimated rows (004 eq 6.25: ``c2 = c3 × c1``). Shape (..., 3, 3)."""
+    c1 = validate.vectors(c1, "c1")
+    c3 = validate.vectors(c3, "c3")
+    return np.stack(np.broadcast_arrays(c1, np.cross(c3, c1), c3), -2)
+
+
+def orthonormalize(C):
+    """Nearest rotation matrix (SVD, ``U Vᵀ``) -- for read-out only; the filters keep the raw elements (ours)."""
+    C = validate.matrices(C, "C")
+    U, _, Vt = np.linalg.svd(C)
+    R = U @ Vt
+    neg = np.linalg.det(R) < 0
+    if np.any(neg):
+        U = U.copy()
+        U[..., :, 2] = np.where(neg[..., None], -U[..., :, 2], U[..., :, 2])
+        R = U @ Vt
+    return R
+
+
+def level_and_compass(acc_b, mag_b):
+    """Roll, pitch from the thesis' accelerometer and heading from a tilt-compensated compass (rad).
+
+    ``θ = asin(-a_x/|a|)`` (004 eq 4.22), ``φ = atan2(a_y, a_z)`` (eq 4.23) in the thesis sign ``a_b = +g c3``
+    (:func:`accel_to_seed004`); ``ψ = atan2(-m_y cφ + m_z sφ, m_x cθ + m_y sφ sθ + m_z cφ sθ)`` (the standard
+    compass the thesis compares with in eqs 6.22-6.23, which are lost in the seed text; ours). Heading is magnetic.
+
+    Parameters
+    ----------
+    acc_b : (..., 3) array -- thesis-sign accelerometer; mag_b : (..., 3) array, any unit
+    Returns
+    -------
+    (..., 3) array -- ``[roll, pitch, yaw]``
+    """
+    a = validate.vectors(acc_b, "acc_b")
+    m = validate.vectors(mag_b, "mag_b")
+    n = np.linalg.norm(a, axis=-1)
+    if np.any(n == 0):
+        raise ValueError("acc_b must not be zero-length")
+    pitch = np.arcsin(np.clip(-a[..., 0] / n, -1, 1))                                # (004 eq 4.22)
+    roll = np.arctan2(a[..., 1], a[..., 2])                                          # (004 eq 4.23)
+    sr, cr, sp, cp = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
+    yaw = np.arctan2(-m[..., 1] * cr + m[..., 2] * sr,
+                     m[..., 0] * cp + m[..., 1] * sr * sp + m[..., 2] * cr * sp)
+    return np.stack([roll, pitch, yaw], -1)
+
+
+def inclination_from(acc_b, mag_b):
+    """Geomagnetic inclination δ (rad, positive down) from an undisturbed static sample: ``sin δ = ĥ_b · ĉ3``,
+    ``ĉ3 = a_b/|a_b|`` in the thesis sign (004 §6.4: "transforming an undisturbed measurement")."""
+    a = validate.vectors(acc_b, "acc_b")
+    m = validate.vectors(mag_b, "mag_b")
+    s = np.sum(a * m, -1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(m, axis=-1))
+    return np.arcsin(np.clip(s, -1, 1))
+
+
+def trusted_mask(deviation, tol, hold):
+    """True where ``|deviation| < tol`` has held for at least ``hold`` consecutive samples (the current included).
+
+    The thesis trusts the accelerometer when ``|a| ≈ g`` "for a certain amount of time" and the magnetometer when
+    ``|h| ≈ 1`` (004 §6.4, refs 66-68, 59, 71); tolerance and hold time are ours.
+
+    Parameters
+    ----------
+    deviation : (N,) array; tol : float > 0; hold : int >= 1
+    """
+    d = validate.array(deviation, "deviation")
+    if d.ndim != 1:
+        raise ValueError(f"deviation must have shape (N,); got {d.shape}")
+    tol = validate.positive(tol, "tol")
+    hold = int(hold)
+    if hold < 1:
+        raise ValueError(f"hold must be >= 1 sample; got {hold}")
+    ok = np.abs(d) < tol
+    # run length of consecutive True ending at each sample
+    idx = np.arange(len(ok))
+    last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))
+    return ok & (idx - last_bad >= hold)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The 9-state AHRS (004 §6.4)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class AhrsTuning:
+    """Every number of the AHRS; **all ours** -- the thesis gives the structure but no values (digest §7 item 20).
+
+    Defaults are for an Xsens-MTi-grade unit (004 Table 6.1) in hand motion.
+    """
+    #: gyro white noise density, rad/s/√Hz (Table 6.1: 0.1 °/s/√Hz)
+    gyro_noise: float = np.radians(0.1)
+    #: gyro-bias random walk, rad/s/√s
+    bias_walk: float = np.radians(0.01)
+    #: accelerometer standard deviation when trusted, m/s² -- covers sensor noise *and* the hand's own acceleration
+    acc_sigma: float = 0.5
+    #: ... when not trusted, m/s²
+    acc_sigma_untrusted: float = 50.0
+    #: trust the accelerometer when ||a| - g| < acc_tol (m/s²) has held for ``hold`` seconds
+    acc_tol: float = 0.6
+    #: normalised-magnetometer standard deviation when trusted / not (the field normalised to |h| = 1)
+    mag_sigma: float = 0.05
+    mag_sigma_untrusted: float = 5.0
+    #: trust the magnetometer when ||h| - 1| < mag_tol has held for ``hold`` seconds
+    mag_tol: float = 0.1
+    hold: float = 0.1
+    #: orthogonality pseudo-measurement variances (004 eq 6.27): initial R_i, steady R_ss, decay rho (the thesis')
+    R_i: float = 1.0
+    R_ss: float = 1e-4
+    rho: float = 0.92
+    #: initial standard deviations: DCM elements, gyro bias (rad/s)
+    sigma_c0: float = 0.05
+    sigma_b0: float = np.radians(5.0)
+
+
+class DcmAhrs:
+    """The 9-state DCM AHRS of seed 004 §6.4, written to read like the thesis (one call = one filter step).
+
+    State ``x = [c1, c3, b_g]`` (004 eq 6.8): rows 1 and 3 of ``C_bn`` and the gyro bias (rad/s). Use
+    :meth:`step` per sample, or :meth:`predict` with any increment followed by :meth:`update`.
+
+    Parameters
+    ----------
+    C0 : (3, 3) array -- initial ``C_bn``; bias0 : (3,) array, rad/s
+    inclination : float, rad -- geomagnetic inclination (positive down)
+    dt : float, s -- time between updates (the hold times of the trust tests are counted in updates)
+    tuning : :class:`AhrsTuning`
+    """
+
+    def __init__(self, C0, inclination, dt, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(), g=G):
+        C0 = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
+        self.dt = validate.positive(dt, "dt")
+        self.hold = max(1, int(round(tuning.hold / self.dt)))
+        self.x = np.concatenate([C0[0], C0[2], validate.vectors(bias0, "bias0").reshape(3)])
+        self.tuning = tuning
+        self.g = validate.positive(g, "g")
+        self.inclination = float(validate.angles_rad(inclination, "inclination"))
+        self.P = np.diag([tuning.sigma_c0 ** 2] * 6 + [tuning.sigma_b0 ** 2] * 3)
+        self.k = 0                                  # update count, for the decaying R_c (eq 6.27)
+        self.acc_run = 0                            # consecutive samples with |a| ≈ g
+        self.mag_run = 0                            # ... with |h| ≈ 1
+        self.H_am = np.vstack([accel_measurement_matrix(self.g), mag_measurement_matrix(self.inclination)])
+
+    @property
+    def c1(self):
+        return self.x[0:3]
+
+    @property
+    def c3(self):
+        return self.x[3:6]
+
+    @property
+    def bias(self):
+        return self.x[6:9]
+
+    @property
+    def C_bn(self):
+        """Orthonormalised read-out of ``[c1; c3 × c1; c3]`` (004 eq 6.25)."""
+        return orthonormalize(rows_to_dcm(self.c1, self.c3))
+
+    def predict(self, A_tilde, dt):
+        """Time update with the increment ``Ã`` computed from the *measured* gyro over ``dt`` (004 eqs 6.11-6.13)."""
+        t = self.tuning
+        F = ahrs_transition(self.c1, self.c3, A_tilde, dt)                           # (004 eqs 6.11-6.12)
+        Q = ahrs_process_noise(self.c1, self.c3, dt, t.gyro_noise, t.bias_walk)      # (004 eq 6.13)
+        self.x = F @ self.x                                                          # pseudo-linear x⁻ = F x̂
+        self.P = F @ self.P @ F.T + Q
+
+    def update(self, acc_b, mag_b, acc_trusted=None, mag_trusted=None):
+        """Joint accelerometer + magnetometer + orthogonality update (004 eqs 6.15-6.28).
+
+        Parameters
+        ----------
+        acc_b : (3,) array, m/s² -- thesis sign, ``+g c3`` at rest (:func:`accel_to_seed004`)
+        mag_b : (3,) array -- magnetometer normalised to the local field strength (``|h| ≈ 1``)
+        acc_trusted, mag_trusted : bool or None -- override the built-in hold-time test
+        """
+        t = self.tuning
+        a = np.asarray(acc_b, float)
+        h = np.asarray(mag_b, float)
+        self.acc_run = self.acc_run + 1 if abs(np.linalg.norm(a) - self.g) < t.acc_tol else 0
+        self.mag_run = self.mag_run + 1 if abs(np.linalg.norm(h) - 1.0) < t.mag_tol else 0
+        acc_ok = self.acc_run >= self.hold if acc_trusted is None else acc_trusted
+        mag_ok = self.mag_run >= self.hold if mag_trusted is None else mag_trusted
+        r_c, H_c = orthogonality_pseudo_measurement(self.c1, self.c3)                # (004 eqs 6.24-6.26)
+        H = np.vstack([self.H_am, H_c])                                              # (004 eq 6.20)
+        innov = np.concatenate([a - self.H_am[0:3] @ self.x, h - self.H_am[3:6] @ self.x, r_c])
+        Ra = (t.acc_sigma if acc_ok else t.acc_sigma_untrusted) ** 2
+        Rm = (t.mag_sigma if mag_ok else t.mag_sigma_untrusted) ** 2
+        Rc = orthogonality_covariance(self.k, t.R_i, t.R_ss, t.rho)                  # (004 eq 6.27)
+        R = np.diag([Ra] * 3 + [Rm] * 3 + [float(Rc)] * 3)                           # (004 eq 6.21)
+        S = H @ self.P @ H.T + R
+        K = np.linalg.solve(S, H @ self.P).T                                         # K = P Hᵀ S⁻¹ (P, S symmetric)
+        self.x = self.x + K @ innov
+        P = self.P - K @ H @ self.P
+        self.P = 0.5 * (P + P.T)
+        self.k += 1
+
+    def step(self, gyr, acc_b, mag_b):
+        """One sample: predict with ``Ã = A(ω̃ Δt)`` (exact), then update (``Δt`` = ``self.dt``)."""
+        self.predict(A_matrix(np.asarray(gyr, float) * self.dt), self.dt)
+        self.update(acc_b, mag_b)
+
+
+def _prefix_products(A, M):
+    """For ``A`` of shape (nb, M, 3, 3): running products ``A[:, 0] @ ... @ A[:, i]`` for every i."""
+    P = A.copy()
+    for i in range(1, M):
+        P[:, i] = P[:, i - 1] @ A[:, i]
+    return P
+
+
+def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(),
+             update_every=1, init_seconds=0.5, g=G):
+    """The AHRS over a whole recording -- the fast path of :class:`DcmAhrs`.
+
+    What differs from one :meth:`DcmAhrs.step` per sample (and why): the measurement update runs every
+    ``update_every`` samples. The prediction over such a block uses the **same** pseudo-linear model (004 eq 6.11)
+    with ``Δt`` the block length and ``Ã`` the product of the per-sample increments of the measured gyro (computed
+    for all blocks at once, vectorised); the gates "trusted for a while" are computed vectorised before the loop;
+    the attitude of the samples inside a block is the last posterior propagated with the bias-corrected gyro, and
+    the SVD read-out runs once per block, vectorised after the loop. With ``update_every=1`` the result equals the
+    per-sample filter (tested); at 286 Hz, ``update_every=3`` (about 100 Hz, the thesis' AHRS rate) is fast enough
+    for real recordings in Python.
+
+    Parameters
+    ----------
+    gyr : (N, 3) array, rad/s
+    acc_b : (N, 3) array, m/s² -- thesis sign (+g c3 at rest; :func:`accel_to_seed004` converts a real reading)
+    mag_b : (N, 3) array -- normalised to the local field strength (|h| ≈ 1 when undisturbed)
+    fs : float, Hz
+    inclination : float, rad, optional -- default: from the first ``init_seconds`` (:func:`inclination_from`)
+    C0 : (3, 3) array, optional -- default: levelling + tilt-compensated compass over the first ``init_seconds``
+    bias0 : (3,) rad/s; tuning : :class:`AhrsTuning`; update_every : int >= 1
+    Returns
+    -------
+    dict -- ``C_bn`` (N, 3, 3) orthonormal attitude after each sample; ``q`` (N, 4) body→NED; ``bias`` (N, 3)
+    rad/s (the latest estimate); ``c1``, ``c3`` (nb, 3) raw rows after each update; ``P_diag`` (nb, 9);
+    ``t_update`` (nb,) s; ``inclination`` rad; ``acc_trusted``, ``mag_trusted`` (N,) bool
+    """
+    gyr = validate.samples(gyr, "gyr")
+    acc_b = validate.samples(acc_b, "acc_b")
+    mag_b = validate.samples(mag_b, "mag_b")
+    n = validate.same_length(gyr=gyr, acc_b=acc_b, mag_b=mag_b)
+    fs = validate.positive(fs, "fs")
+    g = validate.positive(g, "g")
+    M = int(update_every)
+    if M != update_every or M < 1:
+        raise ValueError(f"update_every must be a positive integer; got {update_every!r}")
+    if n == 0:
+        raise ValueError("gyr, acc_b, mag_b must hold at least one sample; got 0")
+    dt = 1.0 / fs
+    n0 = max(1, min(n, int(round(init_seconds * fs))))
+    a0, m0 = acc_b[:n0].mean(0), mag_b[:n0].mean(0)
+    if inclination is None:
+        inclination = float(inclination_from(a0, m0))
+    if C0 is None:
+        C0 = rotations.euler_to_dcm(level_and_compass(a0, m0))
+    C0 = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
+    t = tuning
+
+    nb = n // M                                        # full blocks: one update each
+    nbt = -(-n // M)                                   # blocks including a last partial one (no update)
+    pad = nbt * M - n
+    gp = np.concatenate([gyr, np.zeros((pad, 3))]) if pad else gyr
+    A_raw = _prefix_products(A_matrix(gp * dt).reshape(nbt, M, 3, 3), M)[:, -1]     # Ã of each block
+    hold = max(1, int(round(t.hold * fs)))
+    acc_ok = trusted_mask(np.linalg.norm(acc_b, axis=1) - g, t.acc_tol, hold)
+    mag_ok = trusted_mask(np.linalg.norm(mag_b, axis=1) - 1.0, t.mag_tol, hold)
+    last = np.arange(nb) * M + M - 1                   # the sample each update uses
+    Ra = np.where(acc_ok[last], t.acc_sigma, t.acc_sigma_untrusted) ** 2
+    Rm = np.where(mag_ok[last], t.mag_sigma, t.mag_sigma_untrusted) ** 2
+    Rc = orthogonality_covariance(np.arange(nb), t.R_i, t.R_ss, t.rho)
+
+    H = np.zeros((9, 9))
+    H[0:6] = np.vstack([accel_measurement_matrix(g), mag_measurement_matrix(inclination)])
+    Rd = np.repeat(np.stack([Ra, Rm, Rc], 1), 3, axis=1)                   # (nb, 9) diagonal of R (eq 6.21)
+    z = np.concatenate([acc_b[last], mag_b[last], np.tile([1.0, 1.0, 0.0], (nb, 1))], axis=1)   # eq 6.24: [1, 1, 0]
+    h_scale = np.array([1.0] * 6 + [0.5] * 3)                              # h_c(x) = ½ H_c x (eqs 6.24, 6.26)
+    x = np.concatenate([C0[0], C0[2], validate.vectors(bias0, "bias0").reshape(3)])
+    P = np.diag([t.sigma_c0 ** 2] * 6 + [t.sigma_b0 ** 2] * 3)
+    T = M * dt
+    qg, qb = t.gyro_noise ** 2 * T, t.bias_walk ** 2 * T
+    Q = np.zeros((9, 9))
+    Q[6:9, 6:9] = qb * np.eye(3)                                           # (004 eq 6.13, bias part)
+    xs = np.empty((nb + 1, 9))
+    xs[0] = x
+    Pd = np.empty((nb, 9))
+    F = np.eye(9)
+    for j in range(nb):
+        # --- prediction over the block (004 eqs 6.11-6.13), pseudo-linear; scalar arithmetic for the small parts
+        a1, a2, a3, b1, b2, b3 = x[0:6].tolist()
+        F[0:3, 0:3] = F[3:6, 3:6] = A_raw[j].T
+        Sg = np.array([[0.0, -a3, a2], [a3, 0.0, -a1], [-a2, a1, 0.0],
+                       [0.0, -b3, b2], [b3, 0.0, -b1], [-b2, b1, 0.0]])            # [ĉ1×]; [ĉ3×]
+        F[0:6, 6:9] = -T * Sg
+        x = F @ x
+        Q[0:6, 0:6] = qg * (Sg @ Sg.T)                                            # (004 eq 6.13, DCM part)
+        P = F @ P @ F.T + Q
+        # --- joint update (004 eqs 6.15-6.28): accelerometer, magnetometer, orthogonality rows
+        a1, a2, a3, b1, b2, b3 = x[0:6].tolist()
+        H[6:9, 0:6] = np.array([[2 * a1, 2 * a2, 2 * a3, 0.0, 0.0, 0.0],
+                                [0.0, 0.0, 0.0, 2 * b1, 2 * b2, 2 * b3],
+                                [b1, b2, b3, a1, a2, a3]])                            # (004 eq 6.26)
+        innov = z[j] - (H @ x) * h_scale                                          # (004 eqs 6.15-6.19, 6.24)
+        HP = H @ P
+        S = HP @ H.T
+        S.flat[::10] += Rd[j]
+        _, Kt, info = _posv(S, HP)                                       # Kᵀ = S⁻¹ H P (S symmetric positive)
+        if info:
+            raise np.linalg.LinAlgError(f"innovation covariance not positive definite at update {j}")
+        x = x + innov @ Kt
+        P = P - Kt.T @ HP
+        if j % 32 == 31:
+            P = 0.5 * (P + P.T)                                          # keep rounding from making P asymmetric
+        xs[j + 1] = x
+        Pd[j] = P.diagonal()
+
+    # --- read-out: posterior of each block, propagated through the next block with the bias-corrected gyro
+    Cpost = orthonormalize(rows_to_dcm(xs[:, 0:3], xs[:, 3:6]))        # (nb + 1, 3, 3); [0] is C0
+    b_blk = xs[np.minimum(np.arange(nbt), nb), 6:9]                     # bias known at the start of each block
+    A_cor = _prefix_products(A_matrix((gp.reshape(nbt, M, 3) - b_blk[:, None, :]) * dt), M)
+    start = Cpost[np.minimum(np.arange(nbt), nb)]
+    C_out = (start[:, None] @ A_cor)                                    # (nbt, M, 3, 3)
+    C_out[:nb, -1] = Cpost[1:]                                          # the update sample shows the posterior
+    C_out = C_out.reshape(nbt * M, 3, 3)[:n]
+    bias = xs[np.minimum((np.arange(n) + 1) // M, nb), 6:9]            # the latest estimate at each sample
+    return dict(C_bn=C_out, q=rotations.dcm_to_quat(C_out), bias=bias, c1=xs[1:, 0:3], c3=xs[1:, 3:6],
+                P_diag=Pd, t_update=(last + 1) * dt, inclination=inclination, acc_trusted=acc_ok,
+                mag_trusted=mag_ok)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Loosely coupled GPS/INS (004 ch. 7): the 21-state DCM filter and the 15-state Euler-angle UKF it is compared with
+# ----------------------------------------------------------------------------------------------------------------
+#
+# State of the DCM filter (004 eq 7.3): x = [c1, c2, c3 (all rows of C_bn), b_g, r (NED, m), v (NED, m/s), b_a].
+# The mechanization is the thesis' simplified one (eq 7.10): flat Earth, constant g, no Earth rate, no transport rate,
+# no Coriolis -- faithful to its 68 s simulation. The accelerometer here is the *specific force* (eq 7.1 / 7.10:
+# v̇ = C f + g with g_n = [0, 0, g]); a real accelerometer's reading goes in unchanged.
+
+INS_SLICES = dict(c=slice(0, 9), b_g=slice(9, 12), r=slice(12, 15), v=slice(15, 18), b_a=slice(18, 21))
+UKF_SLICES = dict(r=slice(0, 3), v=slice(3, 6), euler=slice(6, 9), b_a=slice(9, 12), b_g=slice(12, 15))
+
+__all__ += ["INS_SLICES", "UKF_SLICES", "ins_transition", "ins_propagate", "ins_process_noise",
+            "gps_measurement_matrix", "InsTuning", "run_gps_ins", "euler_ins_fx", "sigma_points_2n",
+            "run_euler_ukf"]
+
+
+def ins_propagate(x, acc, A_tilde, dt, g=G):
+    """The direct form of the 21-state mean propagation (004 eqs 7.7-7.11), cheaper than ``F x + g_c``.
+
+    ``c_i ← Ãᵀ c_i - Δt[c_i×] b_g``; ``r ← r + v Δt``; ``v ← v + C (ã - b_a) Δt + g_n Δt`` with the *previous* C;
+    biases unchanged. ``acc`` is the measured specific force (m/s²), ``A_tilde`` the increment of the measured gyro.
+    """
+    x = validate.array(x, "x", shape=(21,)).reshape(21)
+    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
+    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    dt = validate.positive(dt, "dt")
+    return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
+
+
+def ins_transition(x, acc, A_tilde, dt):
+    """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eqs 7.12-7.14, reconstructed):
+    ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows.
+
+    Blocks: ``F_{ci,ci} = Ãᵀ``, ``F_{ci,bg} = -Δt[ĉi×]``, ``F_{r,v} = Δt I``, ``F_{v,c} = Δt blkdiag(ãᵀ, ãᵀ, ãᵀ)``
+    (``C ã`` is linear in the nine DCM elements), ``F_{v,ba} = -Δt Ĉ``; identity elsewhere on the diagonal.
+
+    Parameters
+    ----------
+    x : (21,) array -- current estimate; acc : (3,) array, m/s² -- measured specific force ã;
+    A_tilde : (3, 3) array; dt : float, s
+    """
+    x = validate.array(x, "x", shape=(21,)).reshape(21)
+    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
+    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    dt = validate.positive(dt, "dt")
+    return _ins_F(x, acc, A_tilde, dt)
+
+
+def _ins_F(x, acc, A_tilde, dt):
+    F = np.eye(21)
+    At = A_tilde.T
+    for i in range(3):
+        s = slice(3 * i, 3 * i + 3)
+        F[s, s] = At                                                                  # (004 eq 7.13)
+        F[s, 9:12] = -dt * _skew(x[s])
+        F[15 + i, s] = dt * acc                                                       # (004 eq 7.14)
+    F[12:15, 15:18] = dt * np.eye(3)
+    F[15:18, 18:21] = -dt * x[0:9].reshape(3, 3)
+    return F
+
+
+def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise=0.0):
+    """Process noise of the 21-state filter (004 eq 7.15: "diagonal in the noise elements"; values not given, ours).
+
+    DCM rows: ``N_g² Δt [ĉi×][ĉj×]ᵀ`` (the gyro noise through eq 7.7); velocity ``N_a² Δt I`` (``C w_a Δt``
+    with C orthonormal); biases random walks; an optional position noise density ``pos_noise`` (m/√s).
+    Densities: rad/s/√Hz, m/s²/√Hz, rad/s/√s, m/s²/√s.
+    """
+    x = validate.array(x, "x", shape=(21,)).reshape(21)
+    dt = validate.positive(dt, "dt")
+    vals = dict(gyro_noise=gyro_noise, acc_noise=acc_noise, gyro_bias_walk=gyro_bias_walk,
+                acc_bias_walk=acc_bias_walk, pos_noise=pos_noise)
+    for k, v in vals.items():
+        if not np.isfinite(v) or v < 0:
+            raise ValueError(f"{k} must be a finite number >= 0; got {v!r}")
+    return _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise)
+
+
+def _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise):
+    S = np.vstack([_skew(x[0:3]), _skew(x[3:6]), _skew(x[6:9])])
+    Q = np.zeros((21, 21))
+    Q[0:9, 0:9] = gyro_noise ** 2 * dt * (S @ S.T)
+    d = np.zeros(21)
+    d[9:12] = gyro_bias_walk ** 2 * dt
+    d[12:15] = pos_noise ** 2 * dt
+    d[15:18] = acc_noise ** 2 * dt
+    d[18:21] = acc_bias_walk ** 2 * dt
+    Q[np.diag_indices(21)] += d
+    return Q
+
+
+def gps_measurement_matrix():
+    """Loosely coupled GPS position + velocity: ``H = [0_{6×12}, I₆, 0_{6×3}]`` (004 eq 7.17). Shape (6, 21)."""
+    H = np.zeros((6, 21))
+    H[:, 12:18] = np.eye(6)
+    return H
+
+
+@dataclass(frozen=True)
+class InsTuning:
+    """Noise values of both GPS/INS filters. Those marked *Table 7.1* are the thesis'; the rest are ours."""
+    #: gyro angle random walk, rad/s/√Hz (Table 7.1: 3 °/√h)
+    gyro_noise: float = np.radians(3.0) / 60.0
+    #: accelerometer white noise, m/s²/√Hz (Table 7.1: 100 µg/√Hz)
+    acc_noise: float = 100e-6 * 9.80665
+    #: bias random walks (ours): rad/s/√s and m/s²/√s
+    gyro_bias_walk: float = np.radians(1.0) / 3600.0
+    acc_bias_walk: float = 1e-5
+    #: position process noise, m/√s (ours; absorbs the first-order mechanization error)
+    pos_noise: float = 0.05
+    #: GPS noise (Table 7.1): 3 m, 0.5 m/s
+    sigma_pos: float = 3.0
+    sigma_vel: float = 0.5
+
+
+def _gps_rows(gps, n):
+    gps = validate.array(gps, "gps", shape=(6,), finite=False)
+    if gps.shape != (n, 6):
+        raise ValueError(f"gps must have shape (N, 6) = ({n}, 6), NaN rows where there is no fix; got {gps.shape}")
+    return np.all(np.isfinite(gps), axis=1)
+
+
+def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
+    """The 21-state loosely coupled DCM GPS/INS Kalman filter (004 §7.2) over a recording.
+
+    Per IMU sample: ``Ã = A(ω̃ Δt)``, mean by the direct form (:func:`ins_propagate`, eqs 7.7-7.11), covariance
+    ``P⁻ = F P Fᵀ + Q`` with the pseudo-linear F (eqs 7.12-7.16); where ``gps`` has a fix, the linear update with
+    ``H = [0, I₆, 0]`` (eq 7.17). No orthonormalisation of the state (the thesis lists it as future work); the
+    read-out ``C_bn`` is orthonormalised (SVD) for the Euler angles.
+
+    Parameters
+    ----------
+    gyr : (N, 3) rad/s; acc : (N, 3) m/s², specific force; gps : (N, 6) -- [r_NED m, v_NED m/s] after sample k, NaN
+    where no fix; fs : Hz; x0 : (21,) initial state; P0 : (21, 21) or (21,) diagonal
+    Returns
+    -------
+    dict -- ``x`` (N, 21) after each sample, ``sd`` (N, 21) standard deviations, ``C_bn`` (N, 3, 3) orthonormal,
+    ``euler`` (N, 3) rad, ``r``, ``v``, ``b_g``, ``b_a`` (N, 3)
+    """
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    n = validate.same_length(gyr=gyr, acc=acc)
+    fix = _gps_rows(gps, n)
+    fs = validate.positive(fs, "fs")
+    x = validate.array(x0, "x0", shape=(21,)).reshape(21).copy()
+    P = validate.array(P0, "P0")
+    P = np.diag(P) if P.shape == (21,) else P.copy()
+    if P.shape != (21, 21):
+        raise ValueError(f"P0 must have shape (21, 21) or (21,); got {P.shape}")
+    dt = 1.0 / fs
+    tu = tuning
+    A_all = A_matrix(gyr * dt)
+    R = np.diag([tu.sigma_pos ** 2] * 3 + [tu.sigma_vel ** 2] * 3)
+    Qd = np.zeros((21, 21))                                                       # constant part of eq 7.15
+    Qd[np.diag_indices(21)] = np.r_[[0.0] * 9, [tu.gyro_bias_walk ** 2 * dt] * 3, [tu.pos_noise ** 2 * dt] * 3,
+                                    [tu.acc_noise ** 2 * dt] * 3, [tu.acc_bias_walk ** 2 * dt] * 3]
+    qg = tu.gyro_noise ** 2 * dt
+    F = np.eye(21)
+    F[12:15, 15:18] = dt * np.eye(3)
+    gdt = g * dt
+    xs, sd = np.empty((n, 21)), np.empty((n, 21))
+    for k in range(n):
+        # --- F(x̂) (004 eqs 7.12-7.14) and Q (eq 7.15) at the previous estimate
+        c = x[0:9].tolist()
+        S = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0],
+                      [0.0, -c[5], c[4]], [c[5], 0.0, -c[3]], [-c[4], c[3], 0.0],
+                      [0.0, -c[8], c[7]], [c[8], 0.0, -c[6]], [-c[7], c[6], 0.0]])        # [ĉ1×]; [ĉ2×]; [ĉ3×]
+        At = A_all[k].T
+        F[0:3, 0:3] = F[3:6, 3:6] = F[6:9, 6:9] = At
+        F[0:9, 9:12] = -dt * S
+        a = dt * acc[k]
+        F[15, 0:3] = F[16, 3:6] = F[17, 6:9] = a
+        Cm = x[0:9].reshape(3, 3)
+        F[15:18, 18:21] = -dt * Cm
+        # --- mean, direct form (eqs 7.7-7.11), with the previous C
+        xn = x.copy()
+        xn[0:9] = (Cm @ A_all[k] - dt * (S @ x[9:12]).reshape(3, 3)).ravel()
+        xn[12:15] = x[12:15] + x[15:18] * dt
+        xn[15:18] = x[15:18] + Cm @ (acc[k] - x[18:21]) * dt
+        xn[17] += gdt
+        x = xn
+        Q = Qd.copy()
+        Q[0:9, 0:9] = qg * (S @ S.T)
+        P = F @ P @ F.T + Q                                                          # (004 eq 7.16)
+        if fix[k]:
+            PHt = P[:, 12:18]                                                        # P Hᵀ, H = [0, I6, 0] (eq 7.17)
+            K = np.linalg.solve(P[12:18, 12:18] + R, PHt.T).T
+            x = x + K @ (gps[k] - x[12:18])
+            P = P - K @ PHt.T
+            P = 0.5 * (P + P.T)
+        xs[k] = x
+        sd[k] = P.diagonal()
+    sd = np.sqrt(np.maximum(sd, 0.0))
+    C = orthonormalize(xs[:, 0:9].reshape(n, 3, 3))
+    return dict(x=xs, sd=sd, C_bn=C, euler=rotations.dcm_to_euler(C), r=xs[:, 12:15], v=xs[:, 15:18],
+                b_g=xs[:, 9:12], b_a=xs[:, 18:21])
+
+
+def _ins_propagate_raw(x, acc, A_tilde, dt, g):
+    C = x[0:9].reshape(3, 3)
+    out = x.copy()
+    out[0:9] = (C @ A_tilde - dt * np.cross(C, x[9:12])).ravel()                     # (004 eq 7.7)
+    out[12:15] = x[12:15] + x[15:18] * dt                                            # (004 eq 7.10)
+    out[15:18] = x[15:18] + C @ (acc - x[18:21]) * dt
+    out[17] += g * dt
+    return out
+
+
+def euler_ins_fx(x, dt, gyr, acc, g=G):
+    """Process model of the 15-state Euler-angle UKF (004 eq 7.23, lost in the seed text; reconstructed):
+    ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
+
+    State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step.
+    """
+    r1, r2, r3, v1, v2, v3, phi, th, psi, ba1, ba2, ba3, bg1, bg2, bg3 = x.tolist()
+    sf, cf, st, ct, sp, cp = _m.sin(phi), _m.cos(phi), _m.sin(th), _m.cos(th), _m.sin(psi), _m.cos(psi)
+    ax, ay, az = acc[0] - ba1, acc[1] - ba2, acc[2] - ba3
+    wx, wy, wz = gyr[0] - bg1, gyr[1] - bg2, gyr[2] - bg3
+    tt = st / ct
+    return np.array([
+        r1 + v1 * dt, r2 + v2 * dt, r3 + v3 * dt,
+        v1 + (cp * ct * ax + (-sp * cf + cp * st * sf) * ay + (sp * sf + cp * st * cf) * az) * dt,
+        v2 + (sp * ct * ax + (cp * cf + sp * st * sf) * ay + (-cp * sf + sp * st * cf) * az) * dt,
+        v3 + (-st * ax + ct * sf * ay + ct * cf * az + g) * dt,                      # (004 eq 7.10)
+        phi + (wx + sf * tt * wy + cf * tt * wz) * dt,                               # (004 eq 6.1)
+        th + (cf * wy - sf * wz) * dt,
+        psi + (sf / ct * wy + cf / ct * wz) * dt,
+        ba1, ba2, ba3, bg1, bg2, bg3])
+
+
+def sigma_points_2n(x, P):
+    """The thesis' 2n sigma points and weights (004 eqs 7.24-7.26, after Simon): ``x ± (√(nP))_iᵀ``, i = 1…n, with
+    ``√`` the upper Cholesky factor (Matlab ``chol``) and ``(·)_i`` its i-th row; every weight ``1/(2n)``.
+
+    Returns
+    -------
+    sigmas : (2n, n) array -- ``x + rows`` first, then ``x - rows``; weights : (2n,) array
+    """
+    from scipy.linalg import cholesky
+    x = validate.array(x, "x")
+    if x.ndim != 1:
+        raise ValueError(f"x must have shape (n,); got {x.shape}")
+    n = len(x)
+    P = validate.array(P, "P", shape=(n, n))
+    try:
+        U = cholesky(n * P)                                                          # upper: UᵀU = nP
+    except np.linalg.LinAlgError:
+        raise ValueError("P must be symmetric positive definite (its Cholesky factor failed)") from None
+    return np.vstack([x + U, x - U]), np.full(2 * n, 1.0 / (2 * n))                  # (004 eqs 7.24-7.25)
+
+
+def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
+    """The 15-state total-state Euler-angle UKF of seed 004 §7.3 ("EAUKF") on ``filterpy``.
+
+    Prediction: ``filterpy.kalman.UnscentedKalmanFilter`` with ``JulierSigmaPoints(15, kappa=0)`` -- the points
+    ``x ± rows of chol(n P)`` with weights 1/(2n) (the centre point gets weight 0), as eqs 7.24-7.26; the process
+    model :func:`euler_ins_fx`. Update: the GPS measurement is linear, so the thesis uses the linear KF update
+    (``filterpy.kalman.update``) with ``H = [I₆, 0]``. Yaw is not wrapped inside the filter: keep the trajectory
+    away from ±180° (the labs do).
+
+    Parameters and returns as :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
+    """
+    from filterpy.kalman import JulierSigmaPoints, UnscentedKalmanFilter, update
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    n = validate.same_length(gyr=gyr, acc=acc)
+    fix = _gps_rows(gps, n)
+    fs = validate.positive(fs, "fs")
+    x0 = validate.array(x0, "x0", shape=(15,)).reshape(15)
+    P0 = validate.array(P0, "P0")
+    P0 = np.diag(P0) if P0.shape == (15,) else P0
+    if P0.shape != (15, 15):
+        raise ValueError(f"P0 must have shape (15, 15) or (15,); got {P0.shape}")
+    dt = 1.0 / fs
+    tu = tuning
+    H = np.zeros((6, 15))
+    H[:, 0:6] = np.eye(6)
+    R = np.diag([tu.sigma_pos ** 2] * 3 + [tu.sigma_vel ** 2] * 3)
+    ukf = UnscentedKalmanFilter(dim_x=15, dim_z=6, dt=dt, hx=lambda s: s[0:6], fx=euler_ins_fx,
+                                points=JulierSigmaPoints(15, kappa=0.0))
+    ukf.x, ukf.P = x0.copy(), P0.copy()
+    ukf.Q = np.diag([tu.pos_noise ** 2 * dt] * 3 + [tu.acc_noise ** 2 * dt] * 3 + [tu.gyro_noise ** 2 * dt] * 3
+                    + [tu.acc_bias_walk ** 2 * dt] * 3 + [tu.gyro_bias_walk ** 2 * dt] * 3)
+    xs, sd = np.empty((n, 15)), np.empty((n, 15))
+    gyr_l, acc_l = gyr.tolist(), acc.tolist()
+    for k in range(n):
+        ukf.predict(gyr=gyr_l[k], acc=acc_l[k], g=g)                                 # (004 eqs 7.23-7.26)
+        if fix[k]:
+            ukf.x, ukf.P = update(ukf.x, ukf.P, gps[k], R, H)                        # linear KF update
+        xs[k] = ukf.x
+        sd[k] = np.sqrt(np.maximum(np.diag(ukf.P), 0.0))
+    return dict(x=xs, sd=sd, euler=xs[:, 6:9], r=xs[:, 0:3], v=xs[:, 3:6], b_a=xs[:, 9:12], b_g=xs[:, 12:15],
+                C_bn=rotations.euler_to_dcm(xs[:, 6:9]))

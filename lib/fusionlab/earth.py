@@ -1,0 +1,90 @@
+"""Earth model: WGS-84 constants, normal gravity and the Earth rate in NED.
+
+**None of this is from a seed.** Seed 004 (the GF-IMU / DCM thesis) uses a constant scalar ``g`` with
+``g_n = [0, 0, g]`` in NED, and the Earth rate ``ω_ie`` only in its north-finder equations; it prints no WGS-84
+constant and no gravity formula (digest 004 §2.7). The values here are the standard ones (NIMA TR8350.2, the
+WGS-84 definition), supplied so that the labs can say which ``g`` they use and how large the terms are that the
+thesis drops (Earth rate, transport rate, Coriolis).
+
+Units: metres, seconds, radians. Latitudes are geodetic, in radians (``np.radians`` at the display edge).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import validate
+
+__all__ = ["A", "F", "B", "E2", "OMEGA_IE", "GM", "GAMMA_E", "GAMMA_P", "SOMIGLIANA_K", "FREE_AIR",
+           "normal_gravity", "earth_rate_ned", "radii_of_curvature", "gravity_ned"]
+
+#: WGS-84 semi-major axis, m.
+A = 6378137.0
+#: WGS-84 flattening.
+F = 1.0 / 298.257223563
+#: WGS-84 semi-minor axis, m.
+B = A * (1.0 - F)
+#: First eccentricity squared, e² = f (2 - f) = 6.69437999014e-3.
+E2 = F * (2.0 - F)
+#: Earth rotation rate, rad/s.
+OMEGA_IE = 7.292115e-5
+#: Earth's gravitational constant (atmosphere included), m³/s².
+GM = 3.986004418e14
+#: Normal gravity at the equator and at the poles, m/s² (WGS-84).
+GAMMA_E = 9.7803253359
+GAMMA_P = 9.8321849378
+#: Somigliana's constant k = (b γ_p - a γ_e) / (a γ_e).
+SOMIGLIANA_K = 0.00193185265241
+#: Free-air gradient of normal gravity near the surface, (m/s²)/m.
+FREE_AIR = 3.086e-6
+
+
+def _latitude(lat):
+    return validate.angles_rad(lat, "lat", limit=np.pi / 2 + 1e-12)
+
+
+def normal_gravity(lat, h=0.0):
+    """Magnitude of normal gravity, m/s² (Somigliana's closed formula plus a linear free-air term; not from a seed).
+
+    ``γ(φ) = γ_e (1 + k sin²φ) / √(1 - e² sin²φ) - 3.086e-6 h``. The linear height term is good to about 1e-5 m/s²
+    below 10 km.
+
+    Parameters
+    ----------
+    lat : float or (N,) array, rad -- geodetic latitude
+    h : float or (N,) array, m -- height above the ellipsoid
+    Returns
+    -------
+    float or array, m/s²
+    """
+    lat = _latitude(lat)
+    h = validate.array(h, "h")
+    s2 = np.sin(lat) ** 2
+    return GAMMA_E * (1.0 + SOMIGLIANA_K * s2) / np.sqrt(1.0 - E2 * s2) - FREE_AIR * h
+
+
+def gravity_ned(lat, h=0.0):
+    """Normal-gravity vector in NED, ``[0, 0, γ(φ, h)]`` (m/s²); the thesis' ``g_n = [0, 0, g]`` with a model for g."""
+    g = normal_gravity(lat, h)
+    return np.stack([np.zeros_like(g), np.zeros_like(g), g], -1)
+
+
+def earth_rate_ned(lat):
+    """Earth rate in the NED frame, ``ω_ie^n = ω_ie [cos φ, 0, -sin φ]`` (rad/s; the form seed 004 eq 4.17 uses).
+
+    Parameters
+    ----------
+    lat : float or (N,) array, rad
+    Returns
+    -------
+    (..., 3) array, rad/s
+    """
+    lat = _latitude(lat)
+    return OMEGA_IE * np.stack([np.cos(lat), np.zeros_like(lat), -np.sin(lat)], -1)
+
+
+def radii_of_curvature(lat):
+    """Meridian and transverse (prime-vertical) radii of curvature, m: ``R_N = a(1-e²)/(1-e² sin²φ)^{3/2}``,
+    ``R_E = a/√(1-e² sin²φ)``. One metre north is ``1/(R_N + h)`` rad of latitude."""
+    lat = _latitude(lat)
+    w = 1.0 - E2 * np.sin(lat) ** 2
+    return A * (1.0 - E2) / w ** 1.5, A / np.sqrt(w)

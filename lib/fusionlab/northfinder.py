@@ -1,0 +1,518 @@
+"""Rotating accelerometers and the static north finder (seed 004, ch. 4: §4.3–4.5).
+
+A fixed accelerometer only ever sees the angular rate through the centripetal term ``ω×(ω×r)``, which is quadratic:
+``ω`` and ``-ω`` give the same outputs (the sign indeterminacy of the gyro-free IMU). An accelerometer carried round
+a circle at a known rate ``ω_r`` also feels the **Coriolis** term ``2 ω × v_or``, which is *linear* in ``ω``: with
+two or three rotating accelerometers beside the four fixed triads the rate comes out explicitly, sign included
+(eqs 4.13–4.15). Held still on a level table, one rotating accelerometer senses the horizontal Earth rate
+``ω_N = ω_ie cos Φ`` as a sinusoid at ``ω_r`` whose phase is the heading (eq 4.26): a north finder. Its amplitude
+is a few tens of µg under harmonics of the drive a hundred times larger, so the lab band-passes it (``firls``,
+eqs 4.47–4.48) and reads the phase by synchronous demodulation (eqs 4.28–4.32) or synchronous sampling
+(eqs 4.33–4.35).
+
+What is the seed's and what is ours
+-----------------------------------
+* Seed: the kinematics (4.3), the three rotating accelerometers (4.4)–(4.13), the rate extraction (4.15), the noise
+  formula (4.44) with Table 4.1's numbers, the leveled signal (4.24)–(4.27), the two heading read-outs and the FIR.
+* Erratum: (4.44) treats the three differences of (4.15) as independent; they share the central accelerometer
+  ``a^A``. The exact propagation :func:`rate_noise_coefficient_exact` gives 169/450 = 0.37556·R_a for Table 4.1, not
+  0.7311·R_a (the printed form overstates σ by 1.40×).
+* Ours: the synthetic 512 Hz record (harmonic amplitudes and phases, white-noise level, Siegen latitude, a 0.14 m
+  radius for the thesis' "separation distance 28 cm"), the firls band edges, removing the record mean before the
+  FIR (g is 3.6·10⁴ times the signal, more than any of these filters rejects), the zero-mean references and the
+  "exact" reference of :func:`demodulate` (the sign function integrated over each sample), and the nearest-sample
+  rule of :func:`synchronous_sampling`.
+
+Conventions
+-----------
+Body frame ``b`` as in the thesis (Fig. 4.1), navigation frame NED, heading ``ψ`` = yaw of ``C_bn`` (rad, north
+toward east). Inside this module the accelerometer outputs carry the thesis' *measured gravity* sign (``+g`` on a
+level z axis, eqs 4.21, 4.26). Accelerations m/s², rates rad/s, lengths m; 1 µg = 9.80665e-6 m/s².
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import earth, rotations, validate
+
+__all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS",
+           "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
+           "rate_from_rotating", "rate_noise_coefficient", "rate_noise_coefficient_exact", "rate_noise_density",
+           "rate_noise_monte_carlo", "coriolis_amplitude", "leveled_body_rate", "synthetic_record",
+           "bandpass_firls", "bandpass", "whole_turns", "demodulate", "synchronous_sampling", "north_finder",
+           "steps_experiment"]
+
+#: One micro-g in m/s².
+UG = 9.80665e-6
+
+#: Table 4.1, the design example (thesis units converted to SI): lever l, radius ρ, step Δt, noise density,
+#: bias, separation d, spin rate ω_r.
+TABLE_4_1 = dict(l=0.10, rho=0.02, dt=0.01, w_acc=1.0 * UG, b_a=2400 * UG, d=0.15, omega_r=50.0)
+
+#: Table 4.2 as printed: ω_r (rad/s) -> σ_g (°/h/√Hz). The exact value of (4.44) at 100 rad/s is 0.865.
+TABLE_4_2 = {50.0: 1.7, 100.0: 0.85, 500.0: 0.17}
+
+#: Table 4.3 as printed (degrees): step -> (order 2000 Syn. d. rect, trapz, Syn. s.; order 1000 ...; order 200 ...).
+TABLE_4_3 = np.array([
+    [-42.076, -42.282, -40.859, -42.058, -42.262, -41.805, -42.119, -42.290, -49.616],
+    [-51.560, -51.761, -49.986, -51.592, -51.791, -50.891, -51.563, -51.742, -53.798],
+    [-64.745, -64.902, -62.844, -64.780, -64.936, -63.519, -64.651, -64.772, -69.221],
+    [-73.859, -73.967, -71.715, -73.855, -73.961, -72.271, -73.660, -73.751, -75.406],
+    [-82.375, -82.425, -80.156, -82.399, -82.447, -80.604, -82.216, -82.245, -83.744]])
+
+#: Latitude of the thesis' experiments (Siegen, NRW), rad. The thesis does not print it; ours.
+SIEGEN_LAT = np.radians(50.87)
+
+#: Drive harmonics of the synthetic record (ours): multiple of ω_r -> (amplitude in units of A_c, phase in rad).
+#: The phases are fixed to the rotor angle, as mechanical harmonics are. The once-per-turn term is left out: the
+#: thesis' balanced two-sensor rod is there to cancel it, and at ω_r no filter could separate it from the signal.
+HARMONICS = {2: (1.5, 0.4), 3: (0.5, 1.1), 4: (4.0, 2.0), 5: (0.3, 0.3), 6: (6.0, -1.0), 12: (30.0, 0.7),
+             24: (15.0, 0.1)}
+
+
+def _scalar(x, name):
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number; got {x!r}") from None
+    if not np.isfinite(v):
+        raise ValueError(f"{name} must be finite; got {x!r}")
+    return v
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Fixed + rotating configuration (§4.3)
+# --------------------------------------------------------------------------------------------------------------
+
+def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
+    """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
+
+    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3). With
+    ``v_rel = a_rel = 0`` it is the lever-arm equation of a fixed accelerometer.
+
+    Parameters
+    ----------
+    a_o : (..., 3) array, m/s² -- what an accelerometer at the body origin senses
+    omega, alpha : (..., 3) arrays -- body rate (rad/s) and angular acceleration (rad/s²)
+    r : (..., 3) array, m -- the point's position in the body frame
+    v_rel, a_rel : (..., 3) arrays or None -- its velocity (m/s) and acceleration (m/s²) relative to the body
+    Returns
+    -------
+    (..., 3) array, m/s²
+    """
+    a_o, omega = validate.vectors(a_o, "a_o"), validate.vectors(omega, "omega")
+    alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
+    v_rel = np.zeros(3) if v_rel is None else validate.vectors(v_rel, "v_rel")
+    a_rel = np.zeros(3) if a_rel is None else validate.vectors(a_rel, "a_rel")
+    return (a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r)
+            + np.cross(omega, np.cross(omega, r)))                                   # (004 eq 4.3)
+
+
+def rotating_kinematics(t, rho, l, omega_r):
+    """Position, velocity and acceleration of the rotating accelerometers r_D, r_B, r_C (004 eqs 4.4–4.12).
+
+    r_D spins about x and senses x, r_B about y and senses y, r_C about z and senses z; each on radius ``rho``
+    around a centre at distance ``l`` from the body origin (Fig. 4.1). At ``t = 0`` each is at its index position.
+
+    Parameters
+    ----------
+    t : float or (N,) array, s
+    rho, l : float, m; omega_r : float, rad/s
+    Returns
+    -------
+    p, v, a : three (..., 3, 3) arrays -- [sensor r_D, r_B, r_C] × [x, y, z], in m, m/s, m/s²
+    """
+    t = validate.array(t, "t")
+    rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    c, s, z = np.cos(omega_r * t), np.sin(omega_r * t), np.zeros_like(t)
+    p = np.stack([np.stack([z, rho * c, rho * s + l], -1),                           # r_D (004 eq 4.4)
+                  np.stack([rho * s + l, z, rho * c], -1),                           # r_B (004 eq 4.7)
+                  np.stack([rho * c, rho * s + l, z], -1)], -2)                      # r_C (004 eq 4.10)
+    w = rho * omega_r
+    v = np.stack([np.stack([z, -w * s, w * c], -1), np.stack([w * c, z, -w * s], -1),
+                  np.stack([-w * s, w * c, z], -1)], -2)
+    a = -omega_r ** 2 * (p - np.stack([np.stack([z, z, z + l], -1), np.stack([z + l, z, z], -1),
+                                       np.stack([z, z + l, z], -1)], -2))
+    return p, v, a
+
+
+def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
+    """Outputs of the three rotating accelerometers, closed form (004 eq 4.13).
+
+    ``a^{rD}_x = a^A_x + 2ρω_r(ω_z sin ω_r t + ω_y cos ω_r t) + (ω_xω_y − α_z) ρ cos ω_r t
+    + (α_y + ω_xω_z)(ρ sin ω_r t + l)``, and cyclically for r_B (y) and r_C (z).
+
+    Parameters
+    ----------
+    a_A : (..., 3) array, m/s² -- the central triad A
+    omega, alpha : (..., 3) arrays -- rad/s, rad/s²
+    t : float or (...) array, s -- time since the index pulse
+    rho, l : float, m; omega_r : float, rad/s
+    Returns
+    -------
+    (..., 3) array -- [a^{rD}_x, a^{rB}_y, a^{rC}_z], m/s²
+    """
+    a_A, w, al = validate.vectors(a_A, "a_A"), validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
+    t = validate.array(t, "t")
+    rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    c, s = np.cos(omega_r * t), np.sin(omega_r * t)
+    wx, wy, wz = w[..., 0], w[..., 1], w[..., 2]
+    ax, ay, az = al[..., 0], al[..., 1], al[..., 2]
+    k = 2 * rho * omega_r
+    rD = a_A[..., 0] + k * (wz * s + wy * c) + (wx * wy - az) * rho * c + (ay + wx * wz) * (rho * s + l)
+    rB = a_A[..., 1] + k * (wx * s + wz * c) + (wy * wz - ax) * rho * c + (az + wx * wy) * (rho * s + l)
+    rC = a_A[..., 2] + k * (wy * s + wx * c) + (wx * wz - ay) * rho * c + (ax + wy * wz) * (rho * s + l)
+    return np.stack([rD, rB, rC], -1)                                                # (004 eq 4.13)
+
+
+def fixed_triad_outputs(a_A, omega, alpha, d):
+    """The four fixed triads A (origin), B, C, D (at ``d`` on x, y, z) of Fig. 4.1, from eq 4.3 with v_rel = 0.
+
+    Returns
+    -------
+    (..., 4, 3) array, m/s² -- rows A, B, C, D
+    """
+    d = validate.positive(d, "d")
+    a_A = validate.vectors(a_A, "a_A")
+    pos = np.array([[0.0, 0, 0], [d, 0, 0], [0, d, 0], [0, 0, d]])
+    return point_specific_force(a_A[..., None, :], np.asarray(omega, float)[..., None, :],
+                                np.asarray(alpha, float)[..., None, :], pos)
+
+
+def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
+    """Angular rate, sign included, from the rotating and fixed accelerometers sampled at ``sin ω_r t = 0``
+    (004 eq 4.15).
+
+    ``ω_y = [a^{rD}_x − a^A_x − (a^D_x − a^A_x) l/d − (a^C_x − a^A_x) ρ/d] / (2ρω_r)``, and cyclically
+    ``ω_z`` from r_B and ``ω_x`` from r_C; the fixed-triad differences stand for ``(α_y + ω_xω_z)`` and
+    ``(ω_xω_y − α_z)`` (the AIV relations of §3.3).
+
+    Parameters
+    ----------
+    a_rot : (..., 3) array -- [a^{rD}_x, a^{rB}_y, a^{rC}_z] at the index pulse (cos ω_r t = 1), m/s²
+    fixed : (..., 4, 3) array -- triads A, B, C, D, m/s²
+    d, rho, l : float, m; omega_r : float, rad/s
+    Returns
+    -------
+    (..., 3) array -- [ω_x, ω_y, ω_z], rad/s
+    """
+    a_rot, fixed = validate.vectors(a_rot, "a_rot"), validate.array(fixed, "fixed", shape=(4, 3))
+    d, rho = validate.positive(d, "d"), validate.positive(rho, "rho")
+    l, omega_r = _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    A, B, C, D = (fixed[..., i, :] for i in range(4))
+    k = 2 * rho * omega_r
+    w_y = (a_rot[..., 0] - A[..., 0] - (D[..., 0] - A[..., 0]) * l / d - (C[..., 0] - A[..., 0]) * rho / d) / k
+    w_z = (a_rot[..., 1] - A[..., 1] - (B[..., 1] - A[..., 1]) * l / d - (D[..., 1] - A[..., 1]) * rho / d) / k
+    w_x = (a_rot[..., 2] - A[..., 2] - (C[..., 2] - A[..., 2]) * l / d - (B[..., 2] - A[..., 2]) * rho / d) / k
+    return np.stack([w_x, w_y, w_z], -1)                                             # (004 eq 4.15)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# Rate noise (§4.5.1, Tables 4.1–4.2) and its erratum
+# --------------------------------------------------------------------------------------------------------------
+
+def _positive_values(x, name):
+    a = validate.array(x, name)
+    if np.any(a <= 0):
+        raise ValueError(f"{name} must be positive; got {x!r}")
+    return a if a.ndim else float(a)
+
+
+def _geometry(rho, d, l, omega_r):
+    """Geometry of eq 4.15 (scalars or broadcastable arrays, so a design can be swept)."""
+    return (_positive_values(rho, "rho"), _positive_values(d, "d"), validate.array(l, "l"),
+            _positive_values(omega_r, "omega_r"))
+
+
+def rate_noise_coefficient(rho, d, l, omega_r):
+    """σ_g² / R_a as printed (004 eq 4.44): ``2 [1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²]`` (s²/m²).
+
+    It treats the three differences of eq 4.15 as independent, each with variance 2R_a. For Table 4.1 it gives
+    0.7311 (eq 4.45). The exact value is :func:`rate_noise_coefficient_exact`.
+    """
+    rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
+    out = 2.0 * (1 / (2 * rho * omega_r) ** 2 + 1 / (2 * d * omega_r) ** 2
+                 + l ** 2 / (2 * d * rho * omega_r) ** 2)                            # (004 eq 4.44)
+    return out if np.ndim(out) else float(out)
+
+
+def rate_noise_coefficient_exact(rho, d, l, omega_r):
+    """σ_g² / R_a propagated exactly through eq 4.15 (the correction of 004 eq 4.44; ours).
+
+    Eq 4.15 weighs four independent accelerometers: ``a^r`` by 1, the lever-arm partner by −l/d, the other by −ρ/d
+    and the shared central ``a^A`` by ``−1 + l/d + ρ/d``, all over ``2ρω_r``. Hence
+    ``[1 + (l/d)² + (ρ/d)² + (1 − l/d − ρ/d)²] / (2ρω_r)²`` -- 169/450 = 0.37556 for Table 4.1.
+    """
+    rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
+    w_r, w_lever, w_radial, w_A = 1.0, -l / d, -rho / d, -1.0 + l / d + rho / d          # a^r, a^D, a^C, a^A
+    out = (w_r ** 2 + w_lever ** 2 + w_radial ** 2 + w_A ** 2) / (2 * rho * omega_r) ** 2
+    return out if np.ndim(out) else float(out)
+
+
+def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
+    """Rate noise density σ_g (rad/s/√Hz) for an accelerometer noise density ``w_acc`` (m/s²/√Hz) (004 eq 4.46).
+
+    ``σ_g = w_acc · sqrt(coefficient)``; the printed coefficient (eq 4.44) unless ``exact``.
+    """
+    w_acc = validate.positive(w_acc, "w_acc")
+    coef = rate_noise_coefficient_exact if exact else rate_noise_coefficient
+    return w_acc * np.sqrt(coef(rho, d, l, omega_r))
+
+
+def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
+    """Sample variance of eq 4.15 when every accelerometer carries independent unit white noise.
+
+    Fifteen accelerometers (four fixed triads, three rotating) get N(0, 1) samples; :func:`rate_from_rotating`
+    turns them into rates. With unit noise the sample variance *is* σ_g²/R_a, for each axis.
+
+    Returns
+    -------
+    (3,) array -- the sample variance of ω_x, ω_y, ω_z (s²/m² when R_a = 1 (m/s²)²)
+    """
+    n = int(n)
+    if n < 2:
+        raise ValueError(f"n must be an integer >= 2; got {n}")
+    rng = np.random.default_rng(seed)
+    w = rate_from_rotating(rng.standard_normal((n, 3)), rng.standard_normal((n, 4, 3)), d, rho, l, omega_r)
+    return w.var(axis=0, ddof=1)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# The leveled north finder (§4.4.2) and its synthetic record
+# --------------------------------------------------------------------------------------------------------------
+
+def coriolis_amplitude(rho, omega_r, lat):
+    """Amplitude of the Earth-rate line, ``A_c = 2 ρ ω_r ω_ie cos Φ`` (m/s²) (004 eq 4.26)."""
+    rho, omega_r = validate.positive(rho, "rho"), validate.positive(omega_r, "omega_r")
+    lat = validate.angles_rad(lat, "lat", limit=np.pi / 2 + 1e-12)
+    return 2 * rho * omega_r * earth.OMEGA_IE * np.cos(lat)
+
+
+def leveled_body_rate(heading, lat):
+    """Earth rate in a level body frame at ``heading`` (004 eq 4.24).
+
+    ``C_nb ω_ie^n = [ω_N cos ψ, −ω_N sin ψ, ω_D]`` with ``ω_ie^n`` from :func:`fusionlab.earth.earth_rate_ned`.
+    """
+    heading = validate.angles_rad(heading, "heading")
+    C_bn = rotations.euler_to_dcm(np.stack([np.zeros_like(heading), np.zeros_like(heading), heading], -1))
+    w_n = earth.earth_rate_ned(lat)
+    return np.einsum("...ji,...j->...i", C_bn, w_n)
+
+
+def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=SIEGEN_LAT, g=9.81, scale=1.0,
+                     bias=0.0, noise=0.2 * UG, harmonics=None, theta0=0.3, seed=0):
+    """A leveled rotating accelerometer on a turntable at ``heading`` (004 eqs 4.16, 4.24–4.27; the record is ours).
+
+    ``a = s_a (g + 2ρω_r(ω_y sin θ + ω_x cos θ) + Σ_k h_k A_c cos(kθ + φ_k)) + b_a + w_a`` with the rotor angle
+    ``θ = ω_r t + θ_0`` measured from the index pulse (θ = 2πk at each pulse) and ``ω^b`` from
+    :func:`leveled_body_rate`, so the Coriolis part is ``A_c cos(θ + ψ)`` (eq 4.26).
+
+    Parameters
+    ----------
+    heading : float, rad
+    duration : float, s; fs : float, Hz; rpm : float -- spin rate (200 rpm gives the thesis' 3.333 Hz)
+    rho : float, m -- radius (0.14 m: half the thesis' 28 cm separation, our reading); lat : float, rad
+    g : float, m/s²; scale : float -- s_a; bias : float, m/s² -- b_a (eq 4.27)
+    noise : float, m/s²/√Hz -- white noise density (per sample σ = noise·√fs)
+    harmonics : dict k -> (amplitude in A_c, phase rad) or None for :data:`HARMONICS`; ``{}`` for none
+    theta0 : float, rad -- rotor angle at the first sample (the index pulse is not tied to the ADC clock)
+    seed : int
+    Returns
+    -------
+    dict with ``t`` (N,), ``theta`` (N,) rad, ``acc`` (N,) m/s², ``fs``, ``f_r`` Hz, ``omega_r`` rad/s, ``A_c``
+    m/s², ``heading`` rad
+    """
+    heading = float(validate.angles_rad(heading, "heading"))
+    duration, fs, rpm = validate.positive(duration, "duration"), validate.positive(fs, "fs"), validate.positive(
+        rpm, "rpm")
+    scale, bias, g = _scalar(scale, "scale"), _scalar(bias, "bias"), _scalar(g, "g")
+    if scale == 0:
+        raise ValueError("scale must be non-zero; got 0")
+    noise = _scalar(noise, "noise")
+    if noise < 0:
+        raise ValueError(f"noise must be >= 0 (a density in m/s²/√Hz); got {noise}")
+    harmonics = HARMONICS if harmonics is None else dict(harmonics)
+    omega_r = rpm * 2 * np.pi / 60
+    n = int(round(duration * fs))
+    t = np.arange(n) / fs
+    theta = omega_r * t + _scalar(theta0, "theta0")
+    w_b = leveled_body_rate(heading, lat)
+    A_c = coriolis_amplitude(rho, omega_r, lat)
+    a = g + 2 * rho * omega_r * (w_b[1] * np.sin(theta) + w_b[0] * np.cos(theta))   # (004 eq 4.16)
+    for k, (amp, phase) in harmonics.items():
+        a = a + amp * A_c * np.cos(k * theta + phase)
+    rng = np.random.default_rng(seed)
+    a = scale * a + bias + noise * np.sqrt(fs) * rng.standard_normal(n)              # (004 eq 4.27)
+    return dict(t=t, theta=theta, acc=a, fs=fs, f_r=omega_r / (2 * np.pi), omega_r=omega_r, A_c=A_c,
+                heading=heading)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# FIR band-pass (§4.5.4) and the two heading read-outs (§4.4.2)
+# --------------------------------------------------------------------------------------------------------------
+
+def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
+    """Least-squares linear-phase FIR band-pass around ``f_r`` (004 eqs 4.47–4.48, Matlab ``firls``).
+
+    ``scipy.signal.firls`` with ``order + 1`` taps; pass band ``f_r ± pass_half_width``, stop bands below
+    ``f_r − stop_half_width`` and above ``f_r + stop_half_width`` (Hz; these edges are ours, the thesis gives none).
+
+    Returns
+    -------
+    (order + 1,) array -- the taps b_m of ``y(n) = Σ b_m x(n − m)``
+    """
+    from scipy.signal import firls
+
+    order = int(order)
+    if order < 2 or order % 2:
+        raise ValueError(f"order must be an even integer >= 2 (odd tap count, integer group delay); got {order}")
+    fs, f_r = validate.positive(fs, "fs"), validate.positive(f_r, "f_r")
+    p, s = validate.positive(pass_half_width, "pass_half_width"), validate.positive(stop_half_width,
+                                                                                      "stop_half_width")
+    if not (p < s < f_r and f_r + s < fs / 2):
+        raise ValueError(f"need pass_half_width < stop_half_width < f_r and f_r + stop_half_width < fs/2; got "
+                         f"{p}, {s}, f_r = {f_r}, fs = {fs}")
+    key = (order, fs, f_r, p, s)
+    if key not in _TAPS:                    # a 2001-tap design solves a 1001×1001 system: keep the few we use
+        _TAPS[key] = firls(order + 1, [0, f_r - s, f_r - p, f_r + p, f_r + s, fs / 2], [0, 0, 1, 1, 0, 0], fs=fs)
+    return _TAPS[key].copy()
+
+
+_TAPS = {}
+
+
+def bandpass(x, theta, taps, remove_mean=True):
+    """Apply the FIR (004 eq 4.47) and keep its steady-state part, aligned with the rotor angle.
+
+    The causal filter delays by ``order/2`` samples (linear phase) and needs ``order`` samples to fill; the output
+    is therefore returned only where the filter is full, shifted back by the delay, together with the matching
+    ``theta``. The record mean is removed first (ours): g is 3.6·10⁴ A_c, beyond the DC rejection of these filters.
+
+    Returns
+    -------
+    y, theta_y : (N - order,) arrays
+    """
+    from scipy.signal import oaconvolve
+
+    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
+    taps = validate.array(taps, "taps")
+    if x.ndim != 1 or theta.shape != x.shape:
+        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    m = len(taps) - 1
+    if len(x) <= m:
+        raise ValueError(f"x must be longer than the filter order {m}; got {len(x)} samples")
+    if remove_mean:
+        x = x - x.mean()
+    y = oaconvolve(x, taps, mode="valid")                                            # (004 eq 4.47)
+    return y, theta[m // 2: len(theta) - m // 2]
+
+
+def whole_turns(theta):
+    """Slice of the samples from the first index pulse (θ = 2πk) to the last one: a whole number of turns."""
+    theta = validate.array(theta, "theta")
+    k0, k1 = np.ceil(theta[0] / (2 * np.pi)), np.floor(theta[-1] / (2 * np.pi))
+    if k1 - k0 < 1:
+        raise ValueError("theta must span at least one whole turn (two index pulses)")
+    return slice(int(np.searchsorted(theta, 2 * np.pi * k0)), int(np.searchsorted(theta, 2 * np.pi * k1)))
+
+
+def demodulate(x, theta, reference="sampled"):
+    """Heading by synchronous demodulation with sign-function references (004 eqs 4.28–4.32).
+
+    ``c_i = ∫ a sgn(cos ω_r t) dt ≈ s_a A_c (4/ω_r) cos ψ``,
+    ``s_i = −∫ a sgn(sin ω_r t) dt ≈ s_a A_c (4/ω_r) sin ψ``, ``ψ = atan2(s_i, c_i)``, over the whole turns of the
+    record (:func:`whole_turns`). The result does not depend on the scale factor, and not on a constant bias because
+    each reference is made zero-mean over the window (in discrete time a whole number of turns rarely holds a whole
+    number of samples, so the sign samples do not sum to exactly zero).
+
+    reference : ``"sampled"`` -- sgn evaluated at each sample (the rectangular rule, eq 4.28 discretised);
+        ``"exact"`` -- the sign function averaged over each sample interval, ``[F(θ + h/2) − F(θ − h/2)]/h`` with
+        ``F = asin(sin θ)`` for sgn(cos) and ``−asin(cos θ)`` for sgn(sin) (ours): no bias from where the index
+        pulse falls between samples.
+    Returns
+    -------
+    float, rad
+    """
+    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
+    if x.ndim != 1 or theta.shape != x.shape:
+        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    sl = whole_turns(theta)
+    x, th = x[sl], theta[sl]
+    if reference == "sampled":
+        rc, rs = np.sign(np.cos(th)), np.sign(np.sin(th))
+    elif reference == "exact":
+        h = float(np.median(np.diff(th)))
+        rc = (np.arcsin(np.sin(th + h / 2)) - np.arcsin(np.sin(th - h / 2))) / h
+        rs = (np.arcsin(np.cos(th - h / 2)) - np.arcsin(np.cos(th + h / 2))) / h
+    else:
+        raise ValueError(f"reference must be 'sampled' or 'exact'; got {reference!r}")
+    rc, rs = rc - rc.mean(), rs - rs.mean()
+    c_i = np.sum(x * rc)                                                             # (004 eq 4.28)
+    s_i = -np.sum(x * rs)                                                            # (004 eq 4.30)
+    return float(np.arctan2(s_i, c_i))                                               # (004 eq 4.32)
+
+
+def synchronous_sampling(x, theta):
+    """Heading by synchronous sampling (004 eqs 4.33–4.35): ``ψ = atan2(−a_90, a_0)``.
+
+    For every whole turn k in the record, ``a_0`` is the sample nearest the index pulse θ = 2πk and ``a_90`` the
+    sample nearest θ = 2πk + π/2 (the nearest-sample rule is ours: the pulses do not fall on the 512 Hz clock);
+    each is averaged over the turns. ``x`` must already be free of its constant part (band-passed).
+
+    Returns
+    -------
+    float, rad
+    """
+    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
+    if x.ndim != 1 or theta.shape != x.shape:
+        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    k = np.arange(np.ceil(theta[0] / (2 * np.pi)), np.floor((theta[-1] - np.pi / 2) / (2 * np.pi)) + 1)
+    if len(k) < 1:
+        raise ValueError("theta must contain at least one index pulse and the quarter turn after it")
+
+    def nearest(target):
+        i = np.clip(np.searchsorted(theta, target), 1, len(theta) - 1)
+        return np.where(np.abs(theta[i - 1] - target) <= np.abs(theta[i] - target), i - 1, i)
+
+    a0 = x[nearest(2 * np.pi * k)].mean()                                            # (004 eq 4.33)
+    a90 = x[nearest(2 * np.pi * k + np.pi / 2)].mean()                               # (004 eq 4.34)
+    return float(np.arctan2(-a90, a0))                                               # (004 eq 4.35)
+
+
+def north_finder(record, order, method="demodulation", reference="sampled", **band):
+    """The whole chain on one record: band-pass of ``order`` then a heading read-out (rad).
+
+    method : ``"demodulation"`` (:func:`demodulate` with ``reference``) or ``"sampling"``
+    (:func:`synchronous_sampling`); ``band`` goes to :func:`bandpass_firls`.
+    """
+    taps = bandpass_firls(order, record["fs"], record["f_r"], **band)
+    y, th = bandpass(record["acc"], record["theta"], taps)
+    if method == "demodulation":
+        return demodulate(y, th, reference)
+    if method == "sampling":
+        return synchronous_sampling(y, th)
+    raise ValueError(f"method must be 'demodulation' or 'sampling'; got {method!r}")
+
+
+def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
+    """A Table 4.3 analogue: one synthetic record per turntable position, each read out three ways per order.
+
+    Parameters
+    ----------
+    headings : (S,) array, rad -- the true turntable positions
+    orders : FIR orders
+    seed : int -- record ``s`` uses ``seed + s``
+    **record : passed to :func:`synthetic_record`
+    Returns
+    -------
+    (S, len(orders), 3) array, rad -- [demodulation sampled, demodulation exact, synchronous sampling]
+    """
+    headings = validate.angles_rad(np.atleast_1d(headings), "headings")
+    out = np.empty((len(headings), len(orders), 3))
+    for s, psi in enumerate(headings):
+        rec = synthetic_record(psi, seed=seed + s, **record)
+        for j, order in enumerate(orders):
+            taps = bandpass_firls(order, rec["fs"], rec["f_r"])
+            y, th = bandpass(rec["acc"], rec["theta"], taps)
+            out[s, j] = demodulate(y, th, "sampled"), demodulate(y, th, "exact"), synchronous_sampling(y, th)
+    return out
