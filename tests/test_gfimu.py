@@ -376,3 +376,16 @@ def test_constraints_bias_a_tumbling_motion():
     ru = np.sqrt(np.mean((xu[:, m, :3] - rec.dtheta[m]) ** 2))
     assert ru < 5e-5 and rc > 20 * ru
 
+
+def test_lab07_checks_accept_the_library():
+    import sympy as sp
+    from fusionlab import checks
+
+    checks.check_dynamic_jacobian(lambda x: g.aiv_measurement_jacobian(x)[1])
+    checks.check_lie_derivative(lambda L, f, x: L.jacobian(x) * f)
+    checks.check_constraints(lambda x: (g.constraints(x), g.constraint_jacobian(x)))
+    with pytest.raises(checks.Feedback, match="opposite sign"):
+        checks.check_constraints(lambda x: (-g.constraints(x), g.constraint_jacobian(x)))
+    with pytest.raises(checks.Feedback, match="returned h itself"):
+        checks.check_lie_derivative(lambda L, f, x: L)
+    assert sp  # sympy is importable for the lab
