@@ -115,7 +115,7 @@ def _calibration_rig(seed):
     rng = np.random.default_rng(seed)
     M = np.eye(3) + rng.normal(0, 0.01, (4, 3, 3))
     b = rng.normal(0, 0.05, (4, 3))
-    ref = g.static_positions()
+    ref = calibration.six_positions(g.GRAVITY)
     true = np.stack([ref @ M[t].T + b[t] for t in range(4)], axis=1).reshape(6, 12)
     return M, b, ref, true
 

@@ -359,3 +359,14 @@ def test_drift_helpers_reject_bad_input():
         sen.gyro_measure([0.0], noise_std=-1)
     with pytest.raises(ValueError, match="rate must hold at least one sample"):
         sen.integrate_rate([], 0.1)
+
+
+def test_point_acceleration_undoes_the_rotating_frame_acceleration_of_eq_3_32():
+    rng = np.random.default_rng(7)
+    A, w, r, v, wd = rng.normal(size=(5, 10, 3))
+    a_rot = sen.rotating_frame_acceleration(A, w, r, v, wd)       # eq 3.32 solved for the rotating frame
+    assert np.allclose(sen.point_acceleration(np.zeros(3), w, wd, r, v, a_rot), A, atol=1e-12)
+    fixed = sen.point_acceleration(A[0], w[0], wd[0], r[0])       # lever arm: no relative motion
+    assert np.allclose(fixed, A[0] + np.cross(wd[0], r[0]) + np.cross(w[0], np.cross(w[0], r[0])))
+    with pytest.raises(ValueError, match="r must"):
+        sen.point_acceleration(A[0], w[0], wd[0], [1.0, 2.0])

@@ -596,10 +596,7 @@ def complementary_attitude(gyr, acc, fs, tau=1.0):
     -------
     (N, 4) array -- body→NED quaternions, yaw starting at 0
     """
-    gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
-    validate.same_length(gyr=gyr, acc=acc)
-    dt = 1.0 / validate.positive(fs, "fs")
+    gyr, acc, dt = _imu_args(gyr, acc, fs)
     k = dt / (validate.positive(tau, "tau") + dt)
     return _weighted_tilt_fusion(gyr, acc, dt, np.full(len(gyr), k))
 
@@ -624,10 +621,7 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     -------
     (N, 4) array -- body→NED quaternions, yaw starting at 0
     """
-    gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
-    validate.same_length(gyr=gyr, acc=acc)
-    dt = 1.0 / validate.positive(fs, "fs")
+    gyr, acc, dt = _imu_args(gyr, acc, fs)
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     tilt = np.unwrap(sensors.tilt_from_accel(acc), axis=0)                                  # b)-c), no ±π jumps
@@ -638,6 +632,14 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     roll, pitch = tilt_ma[:, 0], tilt_ma[:, 1]                # the smoothed tilt as a specific-force direction
     target = np.column_stack([np.sin(pitch), -np.sin(roll) * np.cos(pitch), -np.cos(roll) * np.cos(pitch)])
     return _weighted_tilt_fusion(gyr, target, dt, w)                                        # k)
+
+
+def _imu_args(gyr, acc, fs):
+    """Checked (N, 3) gyro and accelerometer arrays of one length, and the sample interval 1/fs."""
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    validate.same_length(gyr=gyr, acc=acc)
+    return gyr, acc, 1.0 / validate.positive(fs, "fs")
 
 
 def _weighted_tilt_fusion(gyr, acc, dt, k):

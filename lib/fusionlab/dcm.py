@@ -20,6 +20,11 @@ What is here
   over the block built from the product of the per-sample increments).
 * :func:`rows_to_dcm`, :func:`orthonormalize` -- read-out (004 eq 6.25; SVD, ours: the thesis never
   orthonormalises the state).
+* GPS/INS (ch. 7): :func:`ins_propagate` (eqs 7.7-7.11), :func:`ins_transition` (the 21×21 pseudo-linear F, eqs
+  7.12-7.14), :func:`ins_process_noise` (eq 7.15), :func:`gps_measurement_matrix` (eq 7.17), :func:`run_gps_ins`
+  (the 21-state loosely coupled DCM filter); the comparison filter: :func:`euler_ins_fx` (eq 7.23),
+  :func:`sigma_points_2n` (eqs 7.24-7.26) and :func:`run_euler_ukf` (the 15-state Euler-angle UKF on
+  ``filterpy.kalman.UnscentedKalmanFilter``). :class:`InsTuning` says which noise values are Table 7.1's.
 
 Conventions at this module's edge
 ---------------------------------
@@ -36,16 +41,16 @@ Which values are the thesis' and which are ours
 -----------------------------------------------
 The thesis gives the structure (states, F, H, the decay ``ρ = 0.92``) but **no numbers** for Q, R, the adaptive-R
 thresholds, the orthogonality covariances ``R_i`` and ``R_ss``, or the initial covariance (digest 004 §7 item 20).
-Every number in :class:`AhrsTuning` is ours; each field says what it is.
+Every number in :class:`AhrsTuning` is ours; each field says what it is. The GPS/INS sensor and GPS noise values
+are Table 7.1's; the bias random walks and position process noise are ours. No Earth model is used (as in the
+thesis); :mod:`fusionlab.earth` has the WGS-84 one for comparison.
 """
 from __future__ import annotations
 
+import math as _m
 from dataclasses import dataclass
 
 import numpy as np
-
-import math as _m
-
 from scipy.linalg.lapack import dposv as _posv
 
 from . import rotations, validate
@@ -383,7 +388,8 @@ class AhrsTuning:
     #: trust the magnetometer when ||h| - 1| < mag_tol has held for ``hold`` seconds
     mag_tol: float = 0.1
     hold: float = 0.1
-    #: orthogonality pseudo-measurement variances (004 eq 6.27): initial R_i, steady R_ss, decay rho (the thesis')
+    #: orthogonality pseudo-measurement variances (004 eq 6.27): initial R_i, steady R_ss, decay rho (the thesis').
+    #: R_ss = 1e-4 keeps |c1|, |c3| within 1e-3 of 1; 1e-8 makes the filter overconfident (Lab 09, Part F)
     R_i: float = 1.0
     R_ss: float = 1e-4
     rho: float = 0.92

@@ -42,13 +42,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import calibration, validate
+from . import calibration, sensors, validate
 from .rotations import skew
 
 __all__ = ["GRAVITY", "UG", "ARW_UNIT", "AIV_NAMES", "TABLE_3_1", "TABLE_4_4", "TABLE_5_1", "TABLE_5_2", "TABLE_5_3",
            "triad_positions", "lever_arm", "specific_forces", "aiv_map", "aiv", "aiv_true", "aiv_covariance",
            "three_state_noise", "quadratic_terms", "quadratic_jacobian", "GFRecord", "simulate_gfimu",
-           "static_positions", "calibrate_triads", "apply_calibration", "trajectory_ch3", "trajectory_ch5",
+           "calibrate_triads", "apply_calibration", "trajectory_ch3", "trajectory_ch5",
            "trajectory_constant", "trajectory_tumbling", "ThreeStateEKF", "HybridEKF", "three_state_batch",
            "hybrid_batch", "nees", "caa_model", "DynamicEKF", "aiv_measurement_jacobian",
            "observability_matrix", "observability_rank", "constraints", "constraint_jacobian", "sckf_project",
@@ -118,7 +118,8 @@ def triad_positions(d):
 def lever_arm(a_o, omega, alpha, p):
     """Specific force of a triad at lever arm ``p``: ``a_o + α×p + ω×(ω×p)`` (seed 004 eq 3.4).
 
-    The gravity gradient over the lever arm is neglected (eq 3.3).
+    The gravity gradient over the lever arm is neglected (eq 3.3). One implementation serves this, the rotating
+    accelerometers of Lab 08 and seed 000's eq 3.32: :func:`fusionlab.sensors.point_acceleration`.
 
     Parameters
     ----------
@@ -129,9 +130,7 @@ def lever_arm(a_o, omega, alpha, p):
     -------
     (..., 3) array, m/s²
     """
-    a_o, omega = validate.vectors(a_o, "a_o"), validate.vectors(omega, "omega")
-    alpha, p = validate.vectors(alpha, "alpha"), validate.vectors(p, "p")
-    return a_o + np.cross(alpha, p) + np.cross(omega, np.cross(omega, p))          # (004 eq 3.4)
+    return sensors.point_acceleration(a_o, omega, alpha, p)                          # (004 eq 3.4)
 
 
 def specific_forces(omega, alpha, d, a_o=None):
@@ -373,18 +372,12 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
     return GFRecord(acc=acc, acc_true=true, bias=bias, omega=omega, alpha=alpha, dt=dt, d=d)
 
 
-def static_positions(g=GRAVITY):
-    """The six calibration positions P1–P6: specific force ±g on each body axis (seed 004 §3.4, §3.7.2), (6, 3)."""
-    g = validate.positive(g, "g")
-    return np.vstack([g * np.eye(3), -g * np.eye(3)])
-
-
 def calibrate_triads(reference, readings):
     """Calibrate each of the four triads with :func:`fusionlab.calibration.fit_triad` (seed 004 eqs 3.11–3.15).
 
     Parameters
     ----------
-    reference : (P, 3) array -- specific force of each static position (e.g. :func:`static_positions`)
+    reference : (P, 3) array -- specific force of each static position (e.g. :func:`fusionlab.calibration.six_positions`)
     readings : (P, 12) array -- the twelve (averaged) readings in each position
     Returns
     -------

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import earth, rotations, validate
+from . import earth, rotations, sensors, validate
 
 __all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS",
            "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
@@ -87,7 +87,8 @@ def _scalar(x, name):
 def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
 
-    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3). With
+    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3): the one implementation is
+    :func:`fusionlab.sensors.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration). With
     ``v_rel = a_rel = 0`` it is the lever-arm equation of a fixed accelerometer.
 
     Parameters
@@ -100,12 +101,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     -------
     (..., 3) array, m/s²
     """
-    a_o, omega = validate.vectors(a_o, "a_o"), validate.vectors(omega, "omega")
-    alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
-    v_rel = np.zeros(3) if v_rel is None else validate.vectors(v_rel, "v_rel")
-    a_rel = np.zeros(3) if a_rel is None else validate.vectors(a_rel, "a_rel")
-    return (a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r)
-            + np.cross(omega, np.cross(omega, r)))                                   # (004 eq 4.3)
+    return sensors.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
 
 
 def rotating_kinematics(t, rho, l, omega_r):

@@ -694,6 +694,32 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
             - np.cross(wd, r))
 
 
+def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
+    """Acceleration of a point moving inside a rotating body: seed 000 eq 3.32 plus the origin's own acceleration.
+
+    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` -- transport, relative, Coriolis, Euler and centripetal terms.
+    It is seed 004 eq 4.3 (a rotating accelerometer) and, with ``v_rel = a_rel = 0``, the lever-arm equation of a
+    fixed triad, seed 004 eq 3.4 (the gravity gradient over the arm neglected, eq 3.3). Specific forces obey it
+    too: gravity is the same at every point and sits in ``a_o``.
+
+    Parameters
+    ----------
+    a_o : (..., 3) array, m/s² -- at the body origin
+    omega, alpha : (..., 3) arrays -- body rate (rad/s) and angular acceleration (rad/s²)
+    r : (..., 3) array, m -- the point's position in the body frame
+    v_rel, a_rel : (..., 3) arrays or None -- its velocity (m/s) and acceleration (m/s²) relative to the body
+    Returns
+    -------
+    (..., 3) array, m/s²
+    """
+    a_o, omega = validate.vectors(a_o, "a_o"), validate.vectors(omega, "omega")
+    alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
+    v_rel = np.zeros(3) if v_rel is None else validate.vectors(v_rel, "v_rel")
+    a_rel = np.zeros(3) if a_rel is None else validate.vectors(a_rel, "a_rel")
+    return (a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r)
+            + np.cross(omega, np.cross(omega, r)))                                   # (000 eq 3.32; 004 eqs 3.4, 4.3)
+
+
 def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §2).
 
