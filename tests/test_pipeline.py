@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 
 import nbformat
@@ -76,3 +77,18 @@ def _assert_only_unfinished_exercise_errors(path):
             assert "made by an earlier cell" in e.evalue, f"NameError without the hint: {e.evalue}"
         else:
             assert e.ename in EXPECTED_ERRORS, f"unexpected {e.ename} in the untouched lab: {e.evalue[:300]}"
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_header_states_goals_time_seed_and_points_that_add_up(lab):
+    nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    header = nb.cells[0].source
+    for field in ("**Follows**", "**Time**", "**Points**", "**You will be able to**"):
+        assert field in header, f"{lab}: the first cell has no {field}"
+    graded = [c.metadata["nbgrader"] for c in nb.cells if c.metadata.get("nbgrader", {}).get("grade")]
+    auto = sum(g["points"] for g in graded if not g.get("solution"))
+    written = sum(g["points"] for g in graded if g.get("solution"))
+    m = re.search(r"\*\*Points\*\* \| (\d+) auto\w* .*?\+ (\d+) written.*?= \*\*(\d+)\*\*", header)
+    assert m, f"{lab}: the Points line must read 'A autograded ... + W written ... = **T**'"
+    assert tuple(map(int, m.groups())) == (auto, written, auto + written), \
+        f"{lab}: header says {m.groups()}, the graded cells hold {auto} autograded + {written} written"
