@@ -105,7 +105,7 @@ def test_a_failing_contender_gives_an_error_row_not_a_crash():
     def broken(trial):
         raise RuntimeError("diverged")
     trial = datasets.load_trial(2, folder=SHARED).slice(0, 2000)
-    r = bench._score(bench.Contender("broken", "fusionlab", True, "", broken), trial)
+    r = bench.score(bench.Contender("broken", "fusionlab", True, "", broken), trial)
     assert r["error"] == "RuntimeError: diverged" and np.isnan(r["total_rmse_deg"])
     assert "error: broken on 02_undisturbed_slow_rotation_B" in bench.format_table([r])
 
@@ -165,7 +165,7 @@ def test_tuning_sweep_scores_each_value_as_the_front_door_run_would(sweep):
 
 @pytest.mark.parametrize("kw, match", [
     (dict(estimator="nope"), "estimator must be one of"),
-    (dict(option="alpha"), "option must be one of the options of 'complementary' \\(tau\\)"),
+    (dict(option="alpha"), "option must be one of the options of 'complementary' \\(tau, acc_sigma, acc_hold\\)"),
     (dict(values=[]), "values must hold at least one value"),
     (dict(values=[1.0, np.nan]), "values must hold finite numbers"),
 ])

@@ -23,7 +23,7 @@ def test_one_axis_motion_reproduces_the_one_axis_filter_of_eq_5_17():
     t = np.arange(500) / FS
     roll = 0.8 * np.sin(0.7 * t)
     gyr, acc, _ = _record(np.stack([roll, 0 * t, 0 * t], 1), bias=(0.05, 0, 0))
-    q = co.complementary_attitude(gyr, acc, FS, tau=0.98)
+    q = co.complementary_attitude(gyr, acc, FS, tau=0.98, acc_sigma=None)      # the plain constant weight
     alpha = 1 - (1 / FS) / (0.98 + 1 / FS)
     ref = co.ComplementaryFilter(alpha=alpha, dt=1 / FS, angle0=np.arctan2(-acc[0, 1], -acc[0, 2]))
     roll_ref = [ref.step(w, a) for w, a in zip(gyr[:, 0], np.arctan2(-acc[:, 1], -acc[:, 2]))]
@@ -99,15 +99,63 @@ def test_a_large_tilt_error_converges_whatever_the_heading():
 def test_options_reach_the_filter_through_the_front_door_and_unknown_ones_are_refused():
     t = np.arange(400) / FS
     gyr, acc, _ = _record(np.stack([0.5 * np.sin(t), 0 * t, 0 * t], 1), bias=(0.05, 0, 0))
-    assert estimators.options("complementary") == {"tau": 1.0}
+    assert estimators.options("complementary") == {"tau": 1.0, "acc_sigma": 2.0, "acc_hold": 0.5}
     assert estimators.options("correlation") == {"n_ma": 12, "accel_weight": "ratio"}
     q1 = estimators.run("complementary", gyr=gyr, acc=acc, fs=FS)
     q5 = estimators.run("complementary", gyr=gyr, acc=acc, fs=FS, tau=5.0)
     assert np.allclose(q5, rotations.quat_nav_swap(co.complementary_attitude(gyr, acc, FS, tau=5.0)))
     assert not np.allclose(q1, q5)
-    with pytest.raises(ValueError, match="has no option alpha; its options: tau=1.0"):
+    with pytest.raises(ValueError, match="has no option alpha; its options: tau=1.0, acc_sigma=2.0, acc_hold=0.5"):
         estimators.run("complementary", gyr=gyr, acc=acc, fs=FS, alpha=0.98)
     with pytest.raises(ValueError, match="has no option tau; its options: none"):
         estimators.run("gyro", gyr=gyr, acc=acc, fs=FS, tau=1.0)
     with pytest.raises(ValueError, match="unknown estimator"):
         estimators.options("nope")
+
+
+# --- disturbance down-weighting of the complementary filter (ours, not the thesis') ----------------------------------
+
+
+def _shaken(amplitude=10.0, freq=1.0, seconds=20.0):
+    """A level sensor (z down) shaken sideways along x: zero gyro, specific force (a_x, 0, -g)."""
+    t = np.arange(int(seconds * FS)) / FS
+    acc = np.column_stack([amplitude * np.sin(2 * np.pi * freq * t), 0 * t, 0 * t - co.sensors.G])
+    return np.zeros_like(acc), acc
+
+
+def _tilt_deg(q):
+    return np.degrees(np.arccos(np.clip(rotations.quat_to_dcm(q)[:, 2, 2], -1, 1)))
+
+
+def test_disturbance_is_the_largest_deviation_of_the_hold_window_and_causal():
+    acc = np.tile([0.0, 0.0, co.sensors.G], (10, 1))
+    acc[4, 2] += 3.0                                              # one sample 3 m/s² too long
+    d = co.accel_disturbance(acc, hold=3)
+    assert np.allclose(d[:4], 0, atol=1e-12)                      # nothing before the spike (causal)
+    assert np.allclose(d[4:7], 3.0) and np.allclose(d[7:], 0, atol=1e-12)   # held for 3 samples, then gone
+    with pytest.raises(ValueError, match="hold must be >= 1"):
+        co.accel_disturbance(acc, hold=0)
+
+
+def test_a_shaken_sensor_keeps_its_tilt_when_the_accelerometer_is_down_weighted():
+    gyr, acc = _shaken()
+    plain = _tilt_deg(co.complementary_attitude(gyr, acc, FS, acc_sigma=None))
+    gated = _tilt_deg(co.complementary_attitude(gyr, acc, FS))
+    assert plain.max() > 5.0                                      # 1 g sideways: the plain filter tips over
+    assert gated.max() < 0.4 * plain.max(), (gated.max(), plain.max())
+
+
+def test_at_rest_the_down_weighting_changes_nothing():
+    t = np.arange(200) / FS
+    gyr, acc, _ = _record(np.stack([0.3 + 0 * t, -0.2 + 0 * t, 0 * t], 1), bias=(0.01, 0, 0))
+    acc = acc / 9.81 * co.sensors.G                               # |a| = g exactly
+    assert np.allclose(co.complementary_attitude(gyr, acc, FS), co.complementary_attitude(gyr, acc, FS,
+                                                                                          acc_sigma=None))
+
+
+@pytest.mark.parametrize("kw, match", [(dict(acc_sigma=0.0), "acc_sigma must be a positive"),
+                                       (dict(acc_hold=-1.0), "acc_hold must be a finite number"),
+                                       (dict(acc_hold=np.inf), "acc_hold must be a finite number")])
+def test_rejects_bad_disturbance_options(kw, match):
+    with pytest.raises(ValueError, match=match):
+        co.complementary_attitude(np.zeros((3, 3)), np.tile([0, 0, 9.81], (3, 1)), FS, **kw)

@@ -60,3 +60,59 @@ def test_real_slow_rotation_trial_beats_five_degrees():
     trial = datasets.load_trial("02", folder=BROAD, progress=False)
     q = estimators.run("dcm_ahrs", trial.gyr, trial.acc, trial.fs, mag=trial.mag, frame="ENU")
     assert metrics.broad_rmse(q, trial.quat_ref, trial.movement).total_deg < 5.0
+
+
+# --- the same AHRS without the magnetometer: 'dcm_ahrs6' (rows c3 and gyro bias observed; ours) ---------------------
+
+
+def _inclination_deg(q, q_true):
+    return np.degrees(metrics.inclination_error(metrics.error_quaternion(q, q_true)))
+
+
+def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
+    info = estimators.available()["dcm_ahrs6"]
+    assert info["uses_mag"] is False and info["seed"].startswith("004")
+    assert estimators.options("dcm_ahrs6") == estimators.options("dcm_ahrs") == {
+        "acc_sigma_untrusted": dcm.HANDHELD.acc_sigma_untrusted, "hold": dcm.HANDHELD.hold}
+
+
+@pytest.mark.parametrize("euler", [[0.3, -0.2, 1.0], [-2.5, 0.6, -2.0]])
+def test_6d_static_tilt_is_recovered_with_heading_zero_whatever_the_true_heading(euler):
+    gyr, acc, mag = _still(euler)
+    q = estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, frame="NED")
+    assert np.max(_inclination_deg(q, np.tile(rotations.euler_to_quat(euler), (len(q), 1)))) < 1e-7
+    assert np.max(np.abs(rotations.quat_to_euler(q)[:, 2])) < 1e-9                # yaw starts (and stays) at 0
+    gyr2, acc2, _ = _still([euler[0], euler[1], euler[2] + 1.0])                 # turned about the vertical
+    assert np.allclose(estimators.run("dcm_ahrs6", gyr=gyr2, acc=acc2, fs=100.0), estimators.run(
+        "dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0), atol=1e-12)
+    with_mag = estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, mag=mag + 50.0)   # a magnet: ignored
+    assert np.allclose(with_mag, estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0))
+
+
+def test_6d_learns_the_horizontal_gyro_bias_and_bounds_the_tilt_of_a_biased_gyro():
+    rec = simulate.hand_motion_record(seed=3)                        # 2-3 °/s gyro bias, the filter starts at 0
+    q = estimators.run("dcm_ahrs6", rec["gyr"], rec["acc"], rec["fs"], frame="NED")
+    incl = _inclination_deg(q, rec["q"])
+    gyro = _inclination_deg(estimators.run("gyro", rec["gyr"], rec["acc"], rec["fs"], frame="NED"), rec["q"])
+    assert np.sqrt(np.mean(incl ** 2)) < 3.0 and incl.max() < 6.0 and gyro.max() > 90.0
+    out = dcm.run_ahrs(rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2,
+                       tuning=dcm.HANDHELD)
+    err_nav = out["C_bn"][-1] @ (out["bias"][-1] - rec["bias"])          # bias error in N, E, D at the end (still)
+    assert np.all(np.abs(np.degrees(err_nav[:2])) < 0.1), np.degrees(err_nav)   # horizontal: learnt
+    assert not out["mag_trusted"].any()
+
+
+def test_run_ahrs_without_magnetometer_still_checks_its_inputs():
+    gyr, acc, _ = _still([0.1, 0.2, 0.3], n=20)
+    with pytest.raises(ValueError, match="same length|same number|length"):
+        dcm.run_ahrs(gyr, dcm.accel_to_seed004(acc[:10]), None, 100.0)
+    with pytest.raises(ValueError, match="acc_sigma_untrusted must be a positive"):
+        estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, acc_sigma_untrusted=0.0)
+
+
+@pytest.mark.skipif(not (BROAD / "SHA256SUMS").is_file(), reason=f"BROAD subset not found at {BROAD}")
+def test_real_slow_rotation_trial_6d_inclination_beats_one_and_a_half_degrees():
+    from fusionlab import datasets
+    trial = datasets.load_trial("02", folder=BROAD, progress=False)
+    q = estimators.run("dcm_ahrs6", trial.gyr, trial.acc, trial.fs, frame="ENU")
+    assert metrics.broad_rmse(q, trial.quat_ref, trial.movement).inclination_deg < 1.5

@@ -371,3 +371,57 @@ def test_bad_inputs_raise_value_errors_naming_the_argument():
         fz.Kalman6(tuning={"Q_vY": 1})
     with pytest.raises(ValueError, match="dof"):
         fz.measurement_matrix(0.04, dof=7)
+
+
+# ------------------------------------------------------- held accelerometer noise (ours, not v5.00's; BROAD trial 16)
+
+
+def test_held_accel_noise_is_the_causal_maximum_of_the_window():
+    qa = np.zeros(12)
+    qa[5] = 3.0                                                            # one step 2 g: | |G|² - 1 | = 3
+    d = fz.held_accel_noise(qa, dt=0.04, hold=0.12)                        # 0.12 s = 3 steps back: 4 steps
+    assert np.allclose(d[:5], 0) and np.allclose(d[5:9], 3.0) and np.allclose(d[9:], 0)
+    assert np.array_equal(fz.held_accel_noise(qa, 0.04, 0.0), qa)
+    with pytest.raises(ValueError, match="hold must be a finite number"):
+        fz.held_accel_noise(qa, 0.04, -0.1)
+    with pytest.raises(ValueError, match="qvgqa must be a"):
+        fz.held_accel_noise(-qa, 0.04, 0.1)
+
+
+def _shaken_g(seconds=20.0, fs=200.0, amplitude_g=1.0, freq=1.0):
+    """A level sensor (NED, gravity-positive: flat reads (0, 0, 1) g) shaken along the diagonal of x and z, so
+    ``|G|`` passes 1 g while the reading is tilted (at the trough ``G = (-1, 0, 0)``: 1 g and 90° off, the note's
+    own warning); zero gyro."""
+    t = np.arange(int(seconds * fs)) / fs
+    s = amplitude_g * np.sin(2 * np.pi * freq * t)
+    G = np.column_stack([s, 0 * t, 1 + s])
+    mag = np.tile([20.0, 0.0, 45.0], (len(t), 1)) + np.random.default_rng(16).normal(0, 0.5, (len(t), 3))
+    return np.zeros_like(G), G, mag
+
+
+def test_holding_the_accelerometer_noise_keeps_a_shaken_sensor_level():
+    Y, G, _ = _shaken_g()
+    tilt = lambda q: np.degrees(fz.tilt_error(q, np.tile([1.0, 0, 0, 0], (len(q), 1))))
+    seed = tilt(fz.run_fast6(Y, G, 200.0)["q"])
+    held = tilt(fz.run_fast6(Y, G, 200.0, accel_hold=0.5)["q"])
+    assert seed.max() > 30.0                                               # v5.00 trusts the 1 g crossings
+    assert held.max() < 0.25 * seed.max(), (held.max(), seed.max())
+
+
+def test_accel_hold_changes_nothing_at_one_g_and_reaches_the_estimators():
+    rec = _scenario(4, omega=np.zeros((800, 3)))                           # at rest: |G| = 1 exactly
+    for hold in (0.0, 0.5):
+        assert np.allclose(fz.run_fast6(rec["gyr"], rec["acc"], 200, accel_hold=hold)["q"],
+                           fz.run_fast6(rec["gyr"], rec["acc"], 200)["q"], atol=1e-12)
+        assert np.allclose(fz.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200, accel_hold=hold)["q"],
+                           fz.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200)["q"], atol=1e-12)
+    assert estimators.options("freescale6") == {"accel_hold": 0.5}
+    assert estimators.options("freescale9") == {"accel_hold": 0.0}
+    Y, G, mag = _shaken_g(seconds=4.0, amplitude_g=0.5)
+    gyr, acc = np.radians(Y), -G * 9.80665                                 # the door's units: rad/s, +g up
+    B = float(np.median(np.linalg.norm(mag, axis=1)))                     # the door's field strength
+    for name, fast in (("freescale6", lambda h: fz.run_fast6(Y, G, 200.0, accel_hold=h)["q"]),
+                       ("freescale9", lambda h: fz.run_fast9(Y, G, mag, 200.0, B=B, accel_hold=h)["q"])):
+        for h in (0.0, 0.5):
+            q = estimators.run(name, gyr, acc, 200.0, mag=mag, frame="NED", accel_hold=h)
+            assert np.allclose(q, rotations.quat_from_seed002(fast(h), "NED", nav="NED"), atol=1e-9)

@@ -47,7 +47,7 @@ import numpy as np
 
 from . import datasets, estimators, metrics, rotations, sensors, validate
 
-__all__ = ["Contender", "contenders", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means", "format_table", "write_csv", "plot",
+__all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means", "format_table", "write_csv", "plot",
            "main", "TRIAL_COLUMNS", "GROUP_COLUMNS"]
 
 TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
@@ -161,7 +161,11 @@ def contenders(names=None, include_external=True):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def _score(contender, trial):
+def score(contender, trial):
+    """Run one contender on one trial (a whole trial or a slice) and score it: a row with :data:`TRIAL_COLUMNS`.
+
+    A contender that raises gets a row of NaN with the error text, so one broken filter never stops a benchmark.
+    """
     row = dict(estimator=contender.name, source=contender.source, sensors=contender.sensors, trial=trial.name,
                groups="|".join(trial.groups), n_samples=len(trial), n_scored=0, error="")
     t0 = time.perf_counter()
@@ -214,7 +218,7 @@ def run_benchmark(trials=None, folder=None, names=None, include_external=True, m
                 trial = trial.slice(0, int(max_samples))
             for c in cs:
                 bar.set_postfix_str(f"{name[:2]} {c.name}")
-                rows.append(_score(c, trial))
+                rows.append(score(c, trial))
                 bar.update()
     return rows
 

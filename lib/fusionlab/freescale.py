@@ -55,7 +55,7 @@ __all__ = [
     "EcompassResult", "ecompass", "inclination", "wahba_error", "tilt_compensated_heading", "heading",
     "qrot", "gravity_tilt_error", "geomag_tilt_error", "delta_quat",
     "alpha", "measurement_matrix", "process_noise", "measurement_noise", "kalman_gain", "nominal_gain",
-    "Kalman9", "Kalman6", "run_fast9", "run_fast6", "block_size",
+    "Kalman9", "Kalman6", "run_fast9", "run_fast6", "block_size", "held_accel_noise",
     "tilt_error", "synthetic_recording",
 ]
 
@@ -1122,7 +1122,35 @@ def _fast_setup(fs, tuning, N):
     return n, t, M, dt, 1.0 / fs, a, a * a * (t.Q_vY + t.Q_wb)
 
 
-def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_sample=True):
+def held_accel_noise(qvgqa, dt, hold):
+    """v5.00's accelerometer noise held over a window -- **ours, not the seed's**: for each Kalman step, the largest
+    ``QvGQa = | |G|² - 1 |`` (002 eq 9, g²) of the steps in the last ``hold`` seconds (causal).
+
+    Why: v5.00 takes the accelerometer noise from the distance of one averaged reading to the 1 g sphere, and the
+    note itself warns that the estimate "can fail for a single sample" (a 2 g downward acceleration reads 1 g).
+    During a fast back-and-forth motion ``|G|`` crosses 1 g many times while the sensor still accelerates; each
+    crossing gives the filter its nominal gain (0.5 per step for the 6DOF), and it turns towards the disturbed
+    direction. Holding the largest noise of the last ``hold`` seconds keeps the gain low for the whole movement
+    and gives it back once the readings have stayed near 1 g for ``hold`` seconds.
+
+    Parameters
+    ----------
+    qvgqa : (M,) array, g² -- v5.00's noise of each Kalman step; dt : float, s -- Kalman interval;
+    hold : float >= 0, s (0: unchanged)
+    """
+    from scipy.ndimage import maximum_filter1d
+
+    qa = validate.array(qvgqa, "qvgqa")
+    if qa.ndim != 1 or np.any(qa < 0):
+        raise ValueError(f"qvgqa must be a (M,) array of values >= 0; got shape {qa.shape}")
+    dt = validate.positive(dt, "dt")
+    if not np.isfinite(hold) or hold < 0:
+        raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
+    h = int(round(hold / dt)) + 1
+    return maximum_filter1d(qa, h, origin=(h - 1) // 2, mode="nearest")
+
+
+def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_sample=True, accel_hold=0.0):
     """The 9DOF filter of :class:`Kalman9` at any sample rate, in scalar arithmetic (about 10× faster).
 
     Gyro samples are grouped ``n = block_size(fs)`` per Kalman step (δt = n/fs, ≈ 25 Hz), accelerometer and
@@ -1135,6 +1163,10 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     per_sample : bool -- return one quaternion per *sample* (inside a block the gyro-propagated a priori partial
         products from the previous q̂⁺, at a block's last sample q̂⁺; after the last full block, gyro only);
         otherwise one per Kalman step
+    accel_hold : float >= 0, s -- 0 (default) is v5.00: the accelerometer noise QvGQa = | |G|² - 1 | of each
+        step's averaged reading (002 eq 9). A positive value is **ours, not the seed's**: each step uses the largest
+        QvGQa of the steps in the last ``accel_hold`` seconds (:func:`held_accel_noise` says why). In the 9DOF it
+        sets the Kalman ``Q_v`` only; the eCompass weights (eqs 64-65) keep v5.00's value
     Returns
     -------
     dict -- ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3), ``delta_deg`` (M,), ``t`` (M,) s
@@ -1149,9 +1181,11 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     B2 = B * B
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     Bm = mag[:M * n].reshape(M, n, 3).mean(axis=1)
-    qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)
+    qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
     qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2)
     ag_all, am_all = weights(qa_all, qd_all, B)
+    if accel_hold:                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
+        qa_all = held_accel_noise(qa_all, dt, accel_hold)
     sg_all = measured_gravity(Gm, frame)
     sm_all = Bm / _nonzero(Bm, "mag")[:, None]
     d6_all = np.degrees(inclination(Gm, Bm, frame))
@@ -1229,8 +1263,11 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     return res
 
 
-def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True):
+def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, accel_hold=0.0):
     """The 6DOF filter of :class:`Kalman6` at any sample rate, in scalar arithmetic (see :func:`run_fast9`).
+
+    ``accel_hold`` as in :func:`run_fast9`: 0 is v5.00; a positive value (ours) holds the largest accelerometer
+    noise of the last ``accel_hold`` seconds (:func:`held_accel_noise`).
 
     Returns
     -------
@@ -1243,7 +1280,9 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True):
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     g2 = np.einsum("ij,ij->i", Gm, Gm)
-    qa_all = np.abs(g2 - 1.0)
+    qa_all = np.abs(g2 - 1.0)                                              # (002 eq 9)
+    if accel_hold:
+        qa_all = held_accel_noise(qa_all, dt, accel_hold)                  # ours
     sgn = -1.0 if frame == "Android" else 1.0
     sg_all = np.where(g2[:, None] == 0, [0.0, 0.0, 1.0], sgn * Gm / np.sqrt(np.where(g2 == 0, 1.0, g2))[:, None])
     rz = -1.0 if _ENU[frame] else 1.0                                      # r_g = (0, 0, rz)
