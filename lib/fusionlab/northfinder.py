@@ -87,19 +87,9 @@ def _scalar(x, name):
 def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
 
-    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3): the one implementation is
-    :func:`fusionlab.sensors.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration). With
-    ``v_rel = a_rel = 0`` it is the lever-arm equation of a fixed accelerometer.
-
-    Parameters
-    ----------
-    a_o : (..., 3) array, m/s² -- what an accelerometer at the body origin senses
-    omega, alpha : (..., 3) arrays -- body rate (rad/s) and angular acceleration (rad/s²)
-    r : (..., 3) array, m -- the point's position in the body frame
-    v_rel, a_rel : (..., 3) arrays or None -- its velocity (m/s) and acceleration (m/s²) relative to the body
-    Returns
-    -------
-    (..., 3) array, m/s²
+    ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3); with ``v_rel = a_rel = 0``
+    it is the lever-arm equation of a fixed accelerometer. Arguments, units and the one implementation:
+    :func:`fusionlab.sensors.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration).
     """
     return sensors.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
 
@@ -412,6 +402,14 @@ def whole_turns(theta):
     return slice(int(np.searchsorted(theta, 2 * np.pi * k0)), int(np.searchsorted(theta, 2 * np.pi * k1)))
 
 
+def _signal_and_angle(x, theta):
+    """A record and its rotation angle: two checked 1-D arrays of one length."""
+    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
+    if x.ndim != 1 or theta.shape != x.shape:
+        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    return x, theta
+
+
 def demodulate(x, theta, reference="sampled"):
     """Heading by synchronous demodulation with sign-function references (004 eqs 4.28–4.32).
 
@@ -429,9 +427,7 @@ def demodulate(x, theta, reference="sampled"):
     -------
     float, rad
     """
-    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
-    if x.ndim != 1 or theta.shape != x.shape:
-        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    x, theta = _signal_and_angle(x, theta)
     sl = whole_turns(theta)
     x, th = x[sl], theta[sl]
     if reference == "sampled":
@@ -459,9 +455,7 @@ def synchronous_sampling(x, theta):
     -------
     float, rad
     """
-    x, theta = validate.array(x, "x"), validate.array(theta, "theta")
-    if x.ndim != 1 or theta.shape != x.shape:
-        raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
+    x, theta = _signal_and_angle(x, theta)
     k = np.arange(np.ceil(theta[0] / (2 * np.pi)), np.floor((theta[-1] - np.pi / 2) / (2 * np.pi)) + 1)
     if len(k) < 1:
         raise ValueError("theta must contain at least one index pulse and the quarter turn after it")
