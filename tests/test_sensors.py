@@ -370,3 +370,11 @@ def test_point_acceleration_undoes_the_rotating_frame_acceleration_of_eq_3_32():
     assert np.allclose(fixed, A[0] + np.cross(wd[0], r[0]) + np.cross(w[0], np.cross(w[0], r[0])))
     with pytest.raises(ValueError, match="r must"):
         sen.point_acceleration(A[0], w[0], wd[0], [1.0, 2.0])
+
+
+def test_trailing_max_is_causal_and_checks_its_window():
+    x = np.array([0.0, 3.0, 1.0, 0.0, 0.0, 2.0, 0.0])
+    assert np.array_equal(sen.trailing_max(x, 3), [0.0, 3.0, 3.0, 3.0, 1.0, 2.0, 2.0])
+    assert np.array_equal(sen.trailing_max(x, 1), x)
+    with pytest.raises(ValueError, match="n must be a whole number"):
+        sen.trailing_max(x, 0)

@@ -628,14 +628,11 @@ def accel_disturbance(acc, hold, g=sensors.G):
     ----------
     acc : (N, 3) array, m/s²; hold : int >= 1, samples; g : float, m/s²
     """
-    from scipy.ndimage import maximum_filter1d
-
     acc = validate.samples(acc, "acc")
     hold = int(hold)
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
-    d = np.abs(np.linalg.norm(acc, axis=1) - g)
-    return maximum_filter1d(d, hold, origin=(hold - 1) // 2, mode="nearest")
+    return sensors.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
 
 
 def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):

@@ -45,7 +45,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import rotations, validate
+from . import rotations, sensors, validate
 
 __all__ = [
     "FRAMES", "Tuning", "V500",
@@ -1138,16 +1138,13 @@ def held_accel_noise(qvgqa, dt, hold):
     qvgqa : (M,) array, g² -- v5.00's noise of each Kalman step; dt : float, s -- Kalman interval;
     hold : float >= 0, s (0: unchanged)
     """
-    from scipy.ndimage import maximum_filter1d
-
     qa = validate.array(qvgqa, "qvgqa")
     if qa.ndim != 1 or np.any(qa < 0):
         raise ValueError(f"qvgqa must be a (M,) array of values >= 0; got shape {qa.shape}")
     dt = validate.positive(dt, "dt")
     if not np.isfinite(hold) or hold < 0:
         raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
-    h = int(round(hold / dt)) + 1
-    return maximum_filter1d(qa, h, origin=(h - 1) // 2, mode="nearest")
+    return sensors.trailing_max(qa, int(round(hold / dt)) + 1)
 
 
 def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_sample=True, accel_hold=0.0):

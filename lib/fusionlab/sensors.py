@@ -720,6 +720,23 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
             + np.cross(omega, np.cross(omega, r)))                                   # (000 eq 3.32; 004 eqs 3.4, 4.3)
 
 
+def trailing_max(x, n):
+    """Causal running maximum: ``out[k] = max(x[k-n+1 … k])`` (fewer samples at the start), for a (N,) array.
+
+    The one window both accelerometer-disturbance holds use (the complementary filter's and the Freescale fast
+    paths', ours, not the seeds').
+    """
+    from scipy.ndimage import maximum_filter1d
+
+    x = validate.array(x, "x")
+    if x.ndim != 1:
+        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    if isinstance(n, bool) or int(n) != n or n < 1:
+        raise ValueError(f"n must be a whole number of samples >= 1; got {n!r}")
+    n = int(n)
+    return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
+
+
 def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §2).
 
