@@ -1,5 +1,5 @@
 """The BROAD benchmark (fusionlab.bench): contenders, scoring rows, group means, CSV/figure output and the command
-line, on a short slice of one shared trial so the file stays fast. Real-data tests skip when the data is absent."""
+line, on a short slice of trial 2 (shipped in data/broad/) so the file stays fast."""
 from __future__ import annotations
 
 import csv
@@ -11,9 +11,7 @@ import pytest
 
 from fusionlab import bench, datasets, estimators, metrics
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
-needs_data = pytest.mark.skipif(not (SHARED / "SHA256SUMS").is_file(),
-                                reason=f"BROAD subset not found at {SHARED}: benchmark tests skipped")
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 HAS_VQF = importlib.util.find_spec("vqf") is not None
 HAS_AHRS = importlib.util.find_spec("ahrs") is not None
 N = 15000          # trial 02: rest, then the first 12 s of slow rotation (3551 scored samples)
@@ -28,9 +26,7 @@ def offline(monkeypatch, tmp_path):
 
 @pytest.fixture(scope="module")
 def rows():
-    if not (SHARED / "SHA256SUMS").is_file():
-        pytest.skip(f"BROAD subset not found at {SHARED}")
-    return bench.run_benchmark([2], folder=SHARED, max_samples=N, progress=False)
+    return bench.run_benchmark([2], folder=BROAD, max_samples=N, progress=False)
 
 
 def test_contenders_are_the_registry_then_the_installed_libraries():
@@ -44,10 +40,9 @@ def test_contenders_are_the_registry_then_the_installed_libraries():
         bench.contenders(["gyro", "kalman9"])
 
 
-@needs_data
 def test_rows_have_every_column_and_match_the_metrics_module(rows):
     assert len(rows) == len(bench.contenders())
-    trial = datasets.load_trial(2, folder=SHARED).slice(0, N)
+    trial = datasets.load_trial(2, folder=BROAD).slice(0, N)
     scored = int((trial.movement & ~np.isnan(trial.quat_ref).any(axis=1)).sum())
     for r in rows:
         assert set(r) == set(bench.TRIAL_COLUMNS) and r["error"] == ""
@@ -59,7 +54,6 @@ def test_rows_have_every_column_and_match_the_metrics_module(rows):
     assert gyro["inclination_rmse_deg"] == pytest.approx(ref.inclination_deg, rel=1e-12)
 
 
-@needs_data
 @pytest.mark.skipif(not HAS_VQF, reason="vqf not installed (optional bench extra)")
 def test_vqf_is_scored_in_the_reference_frame(rows):
     r = {x["estimator"]: x for x in rows}
@@ -67,7 +61,6 @@ def test_vqf_is_scored_in_the_reference_frame(rows):
     assert r["vqf6"]["inclination_rmse_deg"] < 1.5
 
 
-@needs_data
 @pytest.mark.skipif(not HAS_AHRS, reason="ahrs not installed (optional bench extra)")
 def test_ahrs_madgwick_nwu_is_converted_to_enu(rows):
     r = {x["estimator"]: x for x in rows}
@@ -76,9 +69,8 @@ def test_ahrs_madgwick_nwu_is_converted_to_enu(rows):
     assert r["madgwick6"]["inclination_rmse_deg"] < 2.0
 
 
-@needs_data
 def test_benchmark_is_deterministic(rows):
-    again = bench.run_benchmark([2], folder=SHARED, max_samples=N, names=["gyro", "triad"], progress=False)
+    again = bench.run_benchmark([2], folder=BROAD, max_samples=N, names=["gyro", "triad"], progress=False)
     first = {r["estimator"]: r for r in rows}
     for r in again:
         for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg"):
@@ -100,22 +92,20 @@ def test_group_means_average_per_trial_rmse_over_each_group():
     assert "rotation" not in g
 
 
-@needs_data
 def test_a_failing_contender_gives_an_error_row_not_a_crash():
     def broken(trial):
         raise RuntimeError("diverged")
-    trial = datasets.load_trial(2, folder=SHARED).slice(0, 2000)
+    trial = datasets.load_trial(2, folder=BROAD).slice(0, 2000)
     r = bench.score(bench.Contender("broken", "fusionlab", True, "", broken), trial)
     assert r["error"] == "RuntimeError: diverged" and np.isnan(r["total_rmse_deg"])
     assert "error: broken on 02_undisturbed_slow_rotation_B" in bench.format_table([r])
 
 
-@needs_data
 def test_bad_arguments_are_value_errors():
     with pytest.raises(ValueError, match="max_samples must be a positive integer"):
-        bench.run_benchmark([2], folder=SHARED, max_samples=0, progress=False)
+        bench.run_benchmark([2], folder=BROAD, max_samples=0, progress=False)
     with pytest.raises(ValueError, match="name_or_number"):
-        bench.run_benchmark([99], folder=SHARED, progress=False)
+        bench.run_benchmark([99], folder=BROAD, progress=False)
 
 
 def test_no_local_trial_is_a_clear_error(tmp_path):
@@ -123,10 +113,9 @@ def test_no_local_trial_is_a_clear_error(tmp_path):
         bench.run_benchmark(folder=tmp_path, progress=False)
 
 
-@needs_data
 def test_command_line_writes_csv_with_expected_columns_and_a_figure(tmp_path, capsys):
     out = tmp_path / "out"
-    code = bench.main(["--trials", "2", "--folder", str(SHARED), "--max-samples", str(N), "--estimators", "gyro",
+    code = bench.main(["--trials", "2", "--folder", str(BROAD), "--max-samples", str(N), "--estimators", "gyro",
                        "triad", "--out", str(out), "--no-progress"])
     assert code == 0
     with open(out / "bench_trials.csv", newline="") as f:
@@ -147,9 +136,7 @@ def test_command_line_writes_csv_with_expected_columns_and_a_figure(tmp_path, ca
 
 @pytest.fixture(scope="module")
 def sweep():
-    if not (SHARED / "SHA256SUMS").is_file():
-        pytest.skip(f"BROAD subset not found at {SHARED}")
-    tr = datasets.load_trial(2, folder=SHARED, progress=False).slice(0, N)
+    tr = datasets.load_trial(2, folder=BROAD, progress=False).slice(0, N)
     return tr, bench.tuning_sweep([tr], "complementary", "tau", [0.05, 1.0, 30.0])
 
 

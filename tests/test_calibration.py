@@ -1,5 +1,5 @@
 """fusionlab.calibration: the triad solver (seed 004 eqs 3.11-3.15), gyro bias at rest, the magnetometer
-ellipsoid fit and the Allan-deviation reading; the bad-input errors; the real BROAD trials where present."""
+ellipsoid fit and the Allan-deviation reading; the bad-input errors; the real BROAD trials shipped in data/broad/."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,9 +9,7 @@ import pytest
 
 from fusionlab import calibration as cal, datasets, sensors
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
-needs_data = pytest.mark.skipif(not (SHARED / "SHA256SUMS").is_file(),
-                                reason=f"BROAD subset not found at {SHARED}: real-data tests skipped")
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 
 
 def _accel_truth(seed):
@@ -199,9 +197,8 @@ def test_allan_bad_input():
 
 # ------------------------------------------------------------------------------------------------- real BROAD --
 
-@needs_data
 def test_real_trial_magnetometer_distortion_is_recovered():
-    tr = datasets.load_trial(2, folder=SHARED, progress=False)
+    tr = datasets.load_trial(2, folder=BROAD, progress=False)
     norm = np.linalg.norm(tr.mag, axis=1)
     assert norm.mean() == pytest.approx(44.3, abs=0.1) and norm.std() < 1.0
     raw = tr.mag @ SOFT.T + HARD
@@ -211,9 +208,8 @@ def test_real_trial_magnetometer_distortion_is_recovered():
     assert corrected.std() < 1.0 < np.linalg.norm(raw, axis=1).std()
 
 
-@needs_data
 def test_real_rest_phase_arw_is_tactical_grade():
-    tr = datasets.load_trial(2, folder=SHARED, progress=False)
+    tr = datasets.load_trial(2, folder=BROAD, progress=False)
     rest = tr.gyr[: int(np.argmax(tr.movement)) - 100]
     for axis in range(3):
         taus, adev, _ = cal.allan_deviation(rest[:, axis], tr.fs)

@@ -1,9 +1,10 @@
-"""BROAD loader (fusionlab.datasets): trial list, names, loading the eight shared trials from a folder and from
-FUSIONLAB_BROAD_DIR, and the download path against a local HTTP server on 127.0.0.1 that serves the shared folder
-(checksums, corrupt cache re-fetched, truncated download refused, unknown checksum reported, offline errors).
+"""BROAD loader (fusionlab.datasets): trial list, names, the eight trials shipped in data/broad/ (found with nothing
+set and no network), loading from a folder and from FUSIONLAB_BROAD_DIR, and the download path against a local
+HTTP server on 127.0.0.1 that serves data/broad/ (checksums, corrupt cache re-fetched, truncated download refused,
+unknown checksum reported, a missing trial says how to get it).
 
 No test needs the internet: an autouse fixture points the download address at a closed local port unless a test
-starts its own server. Real-data tests skip when ../shared/data/broad is absent.
+starts its own server, and hides the course's data/broad/ from the loader unless a test is about it.
 """
 from __future__ import annotations
 
@@ -21,12 +22,11 @@ import pytest
 
 from fusionlab import datasets
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
-needs_data = pytest.mark.skipif(not (SHARED / "SHA256SUMS").is_file(),
-                                reason=f"BROAD subset not found at {SHARED}: real-data tests skipped")
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ROOT / "data" / "broad"                # the eight trials the course ships
 EIGHT = [2, 7, 11, 16, 25, 27, 29, 33]
 NAME2 = "02_undisturbed_slow_rotation_B"
-NAME1 = "01_undisturbed_slow_rotation_A"        # not in the shared folder, no known checksum
+NAME1 = "01_undisturbed_slow_rotation_A"        # not shipped, no known checksum
 
 
 def closed_port():
@@ -39,7 +39,10 @@ def closed_port():
 
 @pytest.fixture(autouse=True)
 def isolated(monkeypatch, tmp_path):
-    """Empty cache in tmp, no FUSIONLAB_BROAD_DIR, downloads aimed at a closed local port (fails at once)."""
+    """Empty cache in tmp, no FUSIONLAB_BROAD_DIR, the course's data/broad/ hidden, downloads aimed at a closed
+    local port (fails at once)."""
+    monkeypatch.setattr(datasets, "SHIPPED_DIR", tmp_path / "no-course-data")
+    monkeypatch.setattr(datasets, "_MISSING", {})
     monkeypatch.delenv(datasets.ENV_DIR, raising=False)
     monkeypatch.setenv(datasets.ENV_CACHE, str(tmp_path / "cache"))
     monkeypatch.setenv(datasets.ENV_URL, f"http://127.0.0.1:{closed_port()}/")
@@ -87,7 +90,7 @@ class Mirror:
 
 @pytest.fixture
 def mirror(monkeypatch):
-    m = Mirror(SHARED)
+    m = Mirror(SHIPPED)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     yield m
     m.close()
@@ -133,23 +136,69 @@ def test_cache_dir_follows_fusionlab_cache_and_xdg(monkeypatch, tmp_path):
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# Loading the eight shared trials
+# Loading the eight shipped trials
 # ----------------------------------------------------------------------------------------------------------------
 
 
-@needs_data
-def test_shipped_checksums_are_those_of_the_shared_folder():
-    listed = dict(reversed(line.split()) for line in (SHARED / "SHA256SUMS").read_text().splitlines() if line)
-    assert len(listed) == 8
-    for fname, digest in listed.items():
-        assert datasets.known_sha256(fname) == digest
+def test_the_shipped_files_are_the_published_ones_and_the_readme_lists_their_checksums():
+    files = sorted(p.name for p in SHIPPED.glob("*.mat"))
+    assert files == [datasets.trial_name(n) + ".mat" for n in EIGHT]
+    readme = (SHIPPED / "README.md").read_text(encoding="utf-8")
+    for fname in files:
+        expected = datasets.known_sha256(fname)
+        assert sha256(SHIPPED / fname) == expected, fname
+        assert f"{expected}  {fname}" in readme
     assert datasets.known_sha256(1) is None
+    for needed in ("doi.org/10.3390/data6070072", "CC BY 4.0", "unmodified", "github.com/dlaidig/broad"):
+        assert needed in readme
 
 
-@needs_data
+def test_shipped_mat_files_are_binary_for_git():
+    attributes = (ROOT / ".gitattributes").read_text().split("\n")
+    assert "*.mat binary" in attributes
+
+
+def test_the_course_folder_is_found_from_the_package_location():
+    assert datasets._course_data_dir() == SHIPPED
+
+
+def test_shipped_trials_load_with_nothing_set_an_empty_cache_and_no_network(monkeypatch, isolated):
+    monkeypatch.setattr(datasets, "SHIPPED_DIR", datasets._course_data_dir())
+    assert os.environ.get(datasets.ENV_DIR) is None
+
+    def no_network(*args, **kwargs):
+        raise AssertionError("the loader tried the network for a shipped trial")
+
+    monkeypatch.setattr(datasets, "_download", no_network)
+    monkeypatch.setattr(datasets.urllib.request, "urlopen", no_network)
+    isolated.mkdir(parents=True)                             # the cache: an empty folder
+    monkeypatch.chdir(isolated)                              # the working folder plays no part
+    assert datasets.available_trials() == [datasets.trial_name(n) for n in EIGHT]
+    for number in EIGHT:
+        assert datasets.fetch_trial(number) == SHIPPED / (datasets.trial_name(number) + ".mat")
+    tr = datasets.load_trial(2)
+    assert len(tr) == 53240 and tr.name == NAME2
+    assert datasets.load_reference_position(11).shape == (54214, 3)
+    assert list(isolated.iterdir()) == []                    # nothing copied to the cache
+    assert datasets.missing_trials() == {}
+
+
+def test_shipped_folder_comes_before_the_env_folder_and_is_checked(monkeypatch, tmp_path):
+    course = tmp_path / "course"
+    course.mkdir()
+    data = bytearray((SHIPPED / f"{NAME2}.mat").read_bytes())
+    data[5000] ^= 0xFF
+    (course / f"{NAME2}.mat").write_bytes(bytes(data))
+    monkeypatch.setattr(datasets, "SHIPPED_DIR", course)
+    monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))
+    with pytest.raises(ValueError, match=f"checksum mismatch for {course / NAME2}.mat"):
+        datasets.load_trial(2)                               # the course copy is used first, and verified
+    assert datasets.fetch_trial(7) == SHIPPED / "07_undisturbed_fast_rotation_B.mat"   # then the env folder
+
+
 @pytest.mark.parametrize("number", EIGHT)
-def test_load_each_shared_trial_from_a_folder(number):
-    tr = datasets.load_trial(number, folder=SHARED)
+def test_load_each_shipped_trial_from_a_folder(number):
+    tr = datasets.load_trial(number, folder=SHIPPED)
     n = len(tr)
     assert tr.name.startswith(f"{number:02d}_") and "all_trials" in tr.groups
     assert tr.fs == pytest.approx(2000 / 7)                  # 285.714 Hz
@@ -166,9 +215,8 @@ def test_load_each_shared_trial_from_a_folder(number):
         tr.gyr[0, 0] = 1.0                                   # the record is read-only
 
 
-@needs_data
 def test_trial_numbers_known_from_the_data():
-    tr = datasets.load_trial(2, folder=SHARED)
+    tr = datasets.load_trial(2, folder=SHIPPED)
     assert len(tr) == 53240 and int(tr.movement.sum()) == 32280
     assert int(np.isnan(tr.quat_ref).any(axis=1).sum()) == 1706
     assert repr(tr).startswith("BroadTrial('02_undisturbed_slow_rotation_B', 53240 samples at 285.71 Hz")
@@ -179,14 +227,14 @@ def test_trial_numbers_known_from_the_data():
         tr.slice(10, 10)
 
 
-@needs_data
-def test_env_var_folder_is_used_without_download(monkeypatch):
-    monkeypatch.setenv(datasets.ENV_DIR, str(SHARED))
+def test_env_var_folder_is_used_without_download(monkeypatch, tmp_path):
+    monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))
     a = datasets.load_trial(7)
-    b = datasets.load_trial(7, folder=SHARED)
+    b = datasets.load_trial(7, folder=SHIPPED)
     np.testing.assert_array_equal(a.gyr, b.gyr)
     assert datasets.available_trials() == [datasets.trial_name(n) for n in EIGHT]
     assert not datasets.cache_dir().exists()                 # nothing downloaded
+    assert datasets.available_trials(tmp_path) == []          # a folder given: only what load_trial would find there
 
 
 def test_env_var_naming_a_missing_folder_says_so(monkeypatch, tmp_path):
@@ -195,18 +243,16 @@ def test_env_var_naming_a_missing_folder_says_so(monkeypatch, tmp_path):
         datasets.load_trial(2)
 
 
-@needs_data
 def test_missing_file_in_the_given_folder_is_file_not_found(tmp_path):
     with pytest.raises(FileNotFoundError, match=f"trial {NAME1} not found in folder"):
-        datasets.load_trial(1, folder=SHARED)
+        datasets.load_trial(1, folder=SHIPPED)
     with pytest.raises(FileNotFoundError, match="folder does not exist"):
         datasets.load_trial(2, folder=tmp_path / "nowhere")
 
 
-@needs_data
 def test_checksum_mismatch_in_a_user_folder_is_an_error_and_the_file_is_left_alone(tmp_path):
     bad = tmp_path / f"{NAME2}.mat"
-    data = bytearray((SHARED / f"{NAME2}.mat").read_bytes())
+    data = bytearray((SHIPPED / f"{NAME2}.mat").read_bytes())
     data[5000] ^= 0xFF
     bad.write_bytes(bytes(data))
     with pytest.raises(ValueError, match="checksum mismatch"):
@@ -219,7 +265,6 @@ def test_checksum_mismatch_in_a_user_folder_is_an_error_and_the_file_is_left_alo
 # ----------------------------------------------------------------------------------------------------------------
 
 
-@needs_data
 def test_download_verifies_and_caches_atomically(mirror, isolated):
     tr = datasets.load_trial(2, progress=False)
     cached = isolated / f"{NAME2}.mat"
@@ -232,7 +277,6 @@ def test_download_verifies_and_caches_atomically(mirror, isolated):
     assert datasets.available_trials() == [NAME2]
 
 
-@needs_data
 def test_corrupt_cached_file_is_detected_and_fetched_again(mirror, isolated):
     datasets.load_trial(2, progress=False)
     cached = isolated / f"{NAME2}.mat"
@@ -242,7 +286,6 @@ def test_corrupt_cached_file_is_detected_and_fetched_again(mirror, isolated):
     assert len(mirror.requests) == 2 and sha256(cached) == datasets.known_sha256(2)
 
 
-@needs_data
 def test_truncated_download_is_refused_and_nothing_is_kept(mirror, isolated):
     mirror.truncate = True
     with pytest.raises(ValueError, match="failed verification twice .*(truncated|closed early)"):
@@ -251,11 +294,10 @@ def test_truncated_download_is_refused_and_nothing_is_kept(mirror, isolated):
     assert list(isolated.iterdir()) == []
 
 
-@needs_data
 def test_download_with_wrong_content_fails_its_checksum(monkeypatch, isolated, tmp_path):
     root = tmp_path / "mirror"
     root.mkdir()
-    (root / f"{NAME2}.mat").write_bytes((SHARED / f"{NAME2}.mat").read_bytes()[:-10])   # consistent length, bad sum
+    (root / f"{NAME2}.mat").write_bytes((SHIPPED / f"{NAME2}.mat").read_bytes()[:-10])   # consistent length, bad sum
     m = Mirror(root)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
@@ -266,11 +308,10 @@ def test_download_with_wrong_content_fails_its_checksum(monkeypatch, isolated, t
     assert list(isolated.iterdir()) == []
 
 
-@needs_data
 def test_unknown_checksum_is_kept_but_reported_then_guarded_by_its_recorded_hash(monkeypatch, isolated, tmp_path):
     root = tmp_path / "mirror"
     root.mkdir()
-    shutil.copy(SHARED / f"{NAME2}.mat", root / f"{NAME1}.mat")    # stands in for a trial we hold no sum for
+    shutil.copy(SHIPPED / f"{NAME2}.mat", root / f"{NAME1}.mat")    # stands in for a trial we hold no sum for
     m = Mirror(root)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
@@ -292,12 +333,23 @@ def test_unknown_checksum_is_kept_but_reported_then_guarded_by_its_recorded_hash
         m.close()
 
 
-def test_offline_download_failure_says_what_is_missing_and_how_to_fix():
-    with pytest.raises(FileNotFoundError, match=f"trial {NAME2} is not available locally .* download .* failed") as e:
+def test_offline_download_failure_says_what_is_missing_and_how_to_get_it(monkeypatch, tmp_path):
+    course = tmp_path / "course"
+    course.mkdir()
+    monkeypatch.setattr(datasets, "SHIPPED_DIR", course)
+    with pytest.raises(datasets.DataMissing, match=f"BROAD trial {NAME2} is missing: it is not on this computer") as e:
         datasets.load_trial(2, progress=False)
-    assert e.match("FUSIONLAB_BROAD_DIR")
-    with pytest.raises(FileNotFoundError, match="download=False"):
-        datasets.load_trial(2, download=False)
+    assert isinstance(e.value, FileNotFoundError) and e.value.trial == NAME2
+    assert e.match("download from http://127.0.0.1:.* failed") and e.match("To get it: connect to the internet")
+    assert e.match(f"put it in {course}") and e.match("FUSIONLAB_BROAD_DIR")
+    assert e.value._render_traceback_() == [f"DataMissing: {e.value}"]      # IPython shows the remedy, no traceback
+    assert list(datasets.missing_trials()) == [NAME2]
+    with pytest.raises(datasets.DataMissing, match="download=False"):
+        datasets.load_trial(7, download=False)
+    assert sorted(datasets.missing_trials()) == [NAME2, "07_undisturbed_fast_rotation_B"]
+    monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))                       # the data arrives
+    datasets.load_trial(2)
+    assert list(datasets.missing_trials()) == ["07_undisturbed_fast_rotation_B"]
 
 
 def test_missing_file_on_the_server_is_reported_with_its_http_status(monkeypatch, tmp_path):

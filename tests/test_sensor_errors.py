@@ -148,15 +148,12 @@ from pathlib import Path  # noqa: E402
 
 from fusionlab import datasets  # noqa: E402
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "broad"
-needs_data = pytest.mark.skipif(not (SHARED / "SHA256SUMS").is_file(),
-                                reason=f"BROAD subset not found at {SHARED}: real-data tests skipped")
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 
 
-@needs_data
 def test_dead_reckoning_a_real_translation_trial_drifts_past_1_m_within_seconds():
-    tr = datasets.load_trial(11, folder=SHARED, progress=False)
-    pos = datasets.load_reference_position(11, folder=SHARED)
+    tr = datasets.load_trial(11, folder=BROAD, progress=False)
+    pos = datasets.load_reference_position(11, folder=BROAD)
     assert pos.shape == (len(tr), 3)
     start = int(np.argmax(tr.movement)) - int(tr.fs)                   # 1 s before the motion starts, at rest
     sl = slice(start, start + int(20 * tr.fs))

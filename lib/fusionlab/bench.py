@@ -410,8 +410,8 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python -m fusionlab.bench", description=__doc__.split("\n")[0])
     p.add_argument("--trials", nargs="+", help="trial numbers or names (default: every trial available locally)")
     p.add_argument("--out", default=".bench", help="output folder for the CSV files and the figure (default .bench)")
-    p.add_argument("--folder", help=f"folder holding the BROAD .mat files (default: {datasets.ENV_DIR}, cache, "
-                                    "download)")
+    p.add_argument("--folder", help=f"folder holding the BROAD .mat files (default: the course's data/broad/, "
+                                    f"{datasets.ENV_DIR}, cache, download)")
     p.add_argument("--estimators", nargs="+", help="only these contenders (default: all)")
     p.add_argument("--no-external", action="store_true", help="skip VQF and ahrs even when installed")
     p.add_argument("--max-samples", type=int, help="use only the first N samples of each trial (quick runs)")

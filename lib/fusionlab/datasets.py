@@ -5,7 +5,9 @@
 
 39 trials of a handheld IMU (myon aktos-t, about 286 Hz) with an optical motion-capture reference: undisturbed
 rotation / translation / combined motion, slow and fast, with and without breaks, and disturbed trials (tapping,
-vibration, magnets, an office). None of the suite's seeds tests on real data; this module brings it in.
+vibration, magnets, an office). None of the course's source documents tests on real data; this module brings it in.
+Eight trials (2, 7, 11, 16, 25, 27, 29, 33: the ones Labs 11 and 12 and ``make bench`` use) ship with the course,
+unmodified, in ``data/broad/`` (licence and attribution in ``data/broad/README.md``); the others download on demand.
 
 ::
 
@@ -21,10 +23,12 @@ rows where the optical markers were lost; ``movement`` marks the samples that th
 Where a trial comes from, in this order:
 
 1. ``folder=`` given to :func:`load_trial`: the file must be there (``<folder>/<name>.mat``);
-2. the folder named by the environment variable ``FUSIONLAB_BROAD_DIR`` (a local mirror, possibly partial);
-3. the user cache, ``~/.cache/fusionlab/broad`` on Linux (``~/Library/Caches/fusionlab/broad`` on macOS,
+2. the course's own copy, :data:`SHIPPED_DIR` = ``data/broad/`` beside ``lib/`` (the repository and the student
+   release keep ``lib/`` and ``data/`` side by side; a copy of the package installed elsewhere has none);
+3. the folder named by the environment variable ``FUSIONLAB_BROAD_DIR`` (a local mirror, possibly partial);
+4. the user cache, ``~/.cache/fusionlab/broad`` on Linux (``~/Library/Caches/fusionlab/broad`` on macOS,
    ``%LOCALAPPDATA%/fusionlab/Cache/broad`` on Windows; ``$FUSIONLAB_CACHE/broad`` when that variable is set);
-4. a download from the published ``data_mat/`` folder (``FUSIONLAB_BROAD_URL`` replaces that address, e.g. by a
+5. a download from the published ``data_mat/`` folder (``FUSIONLAB_BROAD_URL`` replaces that address, e.g. by a
    local mirror) into the cache, with a progress bar, written to a temporary file and renamed only once complete.
 
 Every file is checked against the SHA-256 sums shipped in ``fusionlab/data/broad_sha256.txt``. A mismatch in a
@@ -32,6 +36,10 @@ folder of yours is an error (we never overwrite your files); a corrupt or trunca
 re-fetched; a download that is truncated or fails its checksum is retried once and then refused. A trial whose
 checksum fusionlab does not know is kept but reported with a warning, and its hash is stored beside it in the
 cache so that later corruption is still caught.
+
+A trial that is nowhere and cannot be downloaded raises :class:`DataMissing` (a ``FileNotFoundError``) whose
+message says where the loader looked and how to get the file; :func:`missing_trials` lists those of the session,
+so that a notebook can tell a student that a later cell failed for want of data, not for an unfinished exercise.
 """
 from __future__ import annotations
 
@@ -55,9 +63,9 @@ import numpy as np
 
 from . import validate
 
-__all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "TrialInfo", "BroadTrial", "list_trials",
-           "group_names", "trial_name", "known_sha256", "cache_dir", "available_trials", "fetch_trial",
-           "load_trial", "broad"]
+__all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "SHIPPED_DIR", "DataMissing", "TrialInfo",
+           "BroadTrial", "list_trials", "group_names", "trial_name", "known_sha256", "cache_dir", "shipped_dir",
+           "available_trials", "missing_trials", "fetch_trial", "load_trial", "broad"]
 
 #: Published address of the dataset's ``.mat`` files (a trial is ``BROAD_URL + name + '.mat'``).
 BROAD_URL = "https://github.com/dlaidig/broad/raw/main/data_mat/"
@@ -65,12 +73,45 @@ ENV_DIR = "FUSIONLAB_BROAD_DIR"
 ENV_CACHE = "FUSIONLAB_CACHE"
 ENV_URL = "FUSIONLAB_BROAD_URL"
 
+
+
+def _course_data_dir():
+    """``<course>/data/broad`` when this package is ``<course>/lib/fusionlab``, else None (installed elsewhere)."""
+    package = Path(__file__).resolve().parent
+    course = package.parents[1]
+    return course / "data" / "broad" if (course / "lib" / "fusionlab").resolve() == package else None
+
+
+#: The course's copy of the shipped trials, ``<course>/data/broad`` (repository or student release), or None.
+#: Located from this file, so it holds whatever the working directory; tests point it elsewhere.
+SHIPPED_DIR = _course_data_dir()
+
 _KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "sampling_rate", "movement")
 _CHUNK = 1 << 16
 
 
 class _BadDownload(Exception):
     """A download that arrived truncated or with the wrong checksum (retried once, then reported)."""
+
+
+class DataMissing(FileNotFoundError):
+    """A trial that is not on this computer and could not be downloaded: the message says how to get it.
+
+    Attributes
+    ----------
+    trial : str -- the trial's full name
+    """
+
+    def __init__(self, trial, message):
+        super().__init__(message)
+        self.trial = trial
+
+    def _render_traceback_(self):
+        # IPython shows this instead of a traceback through the loader: the student needs the remedy, not our code.
+        return [f"DataMissing: {self}"]
+
+
+_MISSING = {}                                              # trial name -> message, for this session
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -104,8 +145,8 @@ def _known_sums():
     for line in text.splitlines():
         line = line.strip()
         if line and not line.startswith("#"):
-            digest, fname = line.split(maxsplit=1)
-            sums[fname.strip().lstrip("*")] = digest.lower()
+            sha, fname = line.split(maxsplit=1)
+            sums[fname.strip().lstrip("*")] = sha.lower()
     return sums
 
 
@@ -235,9 +276,29 @@ def _check_user_file(path, expected):
     return path
 
 
+def shipped_dir():
+    """The course's ``data/broad/`` folder if it exists (see :data:`SHIPPED_DIR`), else None."""
+    return SHIPPED_DIR if SHIPPED_DIR is not None and Path(SHIPPED_DIR).is_dir() else None
+
+
+def missing_trials():
+    """Trials that a load of this session could not find nor download: ``{name: message}`` (a copy)."""
+    return dict(_MISSING)
+
+
+def _missing(name, message):
+    _MISSING[name] = message
+    return DataMissing(name, message)
+
+
 def available_trials(folder=None):
-    """Names of the trials present without a download (in ``folder``, ``FUSIONLAB_BROAD_DIR`` or the cache)."""
-    dirs = [d for d in (_folder(folder), _env_dir(), cache_dir()) if d is not None]
+    """Names of the trials present without a download: those in ``folder`` when it is given (where
+    :func:`load_trial` would then look), else those in the course's ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the
+    cache."""
+    if folder is not None:
+        dirs = [_folder(folder)]
+    else:
+        dirs = [d for d in (shipped_dir(), _env_dir(), cache_dir()) if d is not None]
     return [t.name for t in list_trials() if any((d / f"{t.name}.mat").is_file() for d in dirs)]
 
 
@@ -248,7 +309,8 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
     ----------
     name_or_number : int or str -- see :func:`trial_name`
     folder : str or Path or None -- look only here (the file must be there)
-    download : bool -- allow a download when the trial is in neither ``FUSIONLAB_BROAD_DIR`` nor the cache
+    download : bool -- allow a download when the trial is not in ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the
+        cache
     progress : bool -- show a tqdm bar while downloading
     Returns
     -------
@@ -257,9 +319,16 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
     ------
     ValueError -- unknown trial; a file of yours (``folder``, ``FUSIONLAB_BROAD_DIR``) fails its checksum;
         a download still truncated or failing its checksum after one retry
-    FileNotFoundError -- the file is not where it was asked for, or it is nowhere and cannot be downloaded
+    FileNotFoundError -- the file is not in the ``folder`` given
+    DataMissing -- (a FileNotFoundError) the trial is nowhere on this computer and cannot be downloaded
     """
     name = trial_name(name_or_number)
+    path = _fetch(name, folder, download, progress)
+    _MISSING.pop(name, None)                               # found after all (e.g. downloaded once back online)
+    return path
+
+
+def _fetch(name, folder, download, progress):
     fname = name + ".mat"
     expected = known_sha256(name)
     d = _folder(folder)
@@ -269,6 +338,9 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
             raise FileNotFoundError(f"trial {name} not found in folder {d} (expected {path}) -- pass the folder "
                                     f"that holds it, or folder=None to use {ENV_DIR}, the cache or a download")
         return _check_user_file(path, expected)
+    shipped = shipped_dir()
+    if shipped is not None and (shipped / fname).is_file():
+        return _check_user_file(shipped / fname, expected)
     env = _env_dir()
     if env is not None and (env / fname).is_file():
         return _check_user_file(env / fname, expected)
@@ -281,16 +353,20 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
         warnings.warn(f"cached file {path} fails its checksum (corrupt or truncated); fetching it again",
                       stacklevel=2)
         path.unlink()
-    looked = ", ".join(str(p) for p in ([env] if env else []) + [cache])
-    if not download:
-        raise FileNotFoundError(f"trial {name} is not available locally (looked in {looked}) and download=False -- "
-                                f"set {ENV_DIR} to a folder holding {fname}, or allow the download")
+    looked = ", ".join(str(p) for p in [d for d in (shipped, env) if d is not None] + [cache])
     url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
+    get_it = (f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once "
+              f"and checked), or download {url} yourself and put it in "
+              f"{shipped if shipped is not None else 'a folder'}" + ("" if env else f" (or a folder named by the "
+              f"environment variable {ENV_DIR})") + ".")
+    if not download:
+        raise _missing(name, f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) and "
+                             f"download=False. {get_it}")
     cache.mkdir(parents=True, exist_ok=True)
-    digest = None
+    sha = None
     for attempt in (1, 2):
         try:
-            digest = _download(url, path, expected, progress)
+            sha = _download(url, path, expected, progress)
             break
         except _BadDownload as exc:
             if attempt == 2:
@@ -302,13 +378,12 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
                 reason = exc
             else:
                 reason = getattr(exc, "reason", None) or exc
-            raise FileNotFoundError(f"trial {name} is not available locally (looked in {looked}) and the download "
-                                    f"from {url} failed: {reason} -- connect to the internet, or set {ENV_DIR} to "
-                                    f"a folder holding {fname}") from None
+            raise _missing(name, f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) "
+                                 f"and the download from {url} failed ({reason}). {get_it}") from None
     if expected is None:
-        _sidecar(path).write_text(f"{digest}  {fname}\n")
+        _sidecar(path).write_text(f"{sha}  {fname}\n")
         warnings.warn(f"trial {name} downloaded from {url} has no checksum known to fusionlab; kept in {path} "
-                      f"unverified (sha256 {digest})", stacklevel=2)
+                      f"unverified (sha256 {sha})", stacklevel=2)
     return path
 
 
@@ -338,11 +413,11 @@ def _download(url, dest, expected, progress):
                     bar.update(len(chunk))
         if length is not None and got != length:
             raise _BadDownload(f"truncated: received {got} of {length} bytes")
-        digest = h.hexdigest()
-        if expected is not None and digest != expected:
-            raise _BadDownload(f"checksum mismatch: sha256 {digest}, expected {expected}")
+        sha = h.hexdigest()
+        if expected is not None and sha != expected:
+            raise _BadDownload(f"checksum mismatch: sha256 {sha}, expected {expected}")
         os.replace(tmp, dest)                              # atomic: dest is either absent or complete
-        return digest
+        return sha
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
@@ -439,7 +514,8 @@ def _read_mat(path, name):
 
 
 def load_trial(name_or_number, folder=None, download=True, progress=True):
-    """Load one BROAD trial (from ``folder``, ``FUSIONLAB_BROAD_DIR``, the cache, or a download; see module doc).
+    """Load one BROAD trial (from ``folder``, ``data/broad/``, ``FUSIONLAB_BROAD_DIR``, the cache, or a download;
+    see the module doc).
 
     Parameters
     ----------
@@ -452,7 +528,8 @@ def load_trial(name_or_number, folder=None, download=True, progress=True):
     BroadTrial
     Raises
     ------
-    ValueError, FileNotFoundError -- see :func:`fetch_trial`; ValueError also for a file that is not a BROAD trial
+    ValueError, FileNotFoundError, DataMissing -- see :func:`fetch_trial`; ValueError also for a file that is not
+        a BROAD trial
     """
     name = trial_name(name_or_number)
     path = fetch_trial(name, folder=folder, download=download, progress=progress)
@@ -463,8 +540,9 @@ def load_trial(name_or_number, folder=None, download=True, progress=True):
 
 #: The BROAD part of this module under one name: ``datasets.broad.load_trial(2)``.
 broad = types.SimpleNamespace(
-    URL=BROAD_URL, TrialInfo=TrialInfo, Trial=BroadTrial, list_trials=list_trials, group_names=group_names,
-    trial_name=trial_name, known_sha256=known_sha256, cache_dir=cache_dir, available_trials=available_trials,
+    URL=BROAD_URL, TrialInfo=TrialInfo, Trial=BroadTrial, DataMissing=DataMissing, list_trials=list_trials,
+    group_names=group_names, trial_name=trial_name, known_sha256=known_sha256, cache_dir=cache_dir,
+    shipped_dir=shipped_dir, available_trials=available_trials, missing_trials=missing_trials,
     fetch_trial=fetch_trial, load_trial=load_trial)
 
 
