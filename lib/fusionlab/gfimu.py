@@ -24,7 +24,7 @@ The filters
 * :class:`ThreeStateEKF` -- state Δθ = ω Δt, Euler-integration prediction driven by the measured α, the six
   quadratic AIV terms as measurement, correlated process/measurement noise through
   ``filterpy.kalman.KalmanFilter.update_correlated`` (eqs 3.16–3.34). The cross-covariance enters with the sign
-  *opposite* to the printed M (3.31): see :func:`three_state_noise` and the erratum in Lab 06.
+  *opposite* to the M the thesis uses (3.31; its sign inferred from Table 5.3): see :func:`three_state_noise` and the erratum in Lab 06.
 * :class:`HybridEKF` -- the same filter with three gyro rows added to the measurement (eqs 4.50–4.54).
 * :class:`DynamicEKF` -- the 15-state augmented (ω, α, 9 AIV biases) and the 6-state reduced (ω, α) models of
   §5.4–5.5 with a Wiener-process (CAA) angular acceleration.
@@ -242,8 +242,9 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
 
     **Erratum.** In Simon's correlated-noise filter (3.32)–(3.34) M is E[w vᵀ] with w the noise of the *true*
     state equation. Because the estimate is driven by the noisy input, the truth is ``x_k = x_{k−1} + u_k − n_u``,
-    so w = −n_u and the M to use is ``−M₃₁`` (``m_sign=-1``, the default). ``m_sign=+1`` is the thesis' literal
-    sign (the filter is then inconsistent, NEES ≈ 5 instead of 3); ``m_sign=0`` ignores the correlation.
+    so w = −n_u and the M to use is ``−M₃₁`` (``m_sign=-1``, the default). ``m_sign=+1`` is the sign that
+    reproduces the thesis' Table 5.3 (the signs of 3.31 are not legible, so the thesis' +M is inferred from that
+    table; the filter is then inconsistent, NEES ≈ 5 instead of 3); ``m_sign=0`` ignores the correlation.
 
     Parameters
     ----------
@@ -257,7 +258,7 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
     N = _nonneg(noise_density, "noise_density")
     dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
     if m_sign not in (-1, 0, 1):
-        raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (as printed); got {m_sign!r}")
+        raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (the sign inferred from Table 5.3); got {m_sign!r}")
     Ra = N ** 2 * dt                                             # (004 eq 3.24)
     C = aiv_covariance()
     s = dt ** 2 * Ra / d ** 2
@@ -494,7 +495,7 @@ class ThreeStateEKF:
     ----------
     dt : s; d : m; noise_density : m/s²/√Hz (the filter's assumption)
     x0 : (3,) initial estimate of Δθ at the first sample, rad; P0 : (3, 3) or float (times I), rad²
-    m_sign : -1 (corrected, default), 0, or +1 (as printed)
+    m_sign : -1 (corrected, default), 0, or +1 (the sign inferred from Table 5.3)
     """
 
     def __init__(self, dt, d, noise_density, x0, P0, m_sign=-1):
@@ -1027,7 +1028,7 @@ def _wiener6(dt, q):
     F = np.eye(6)
     F[:3, 3:] = dt * np.eye(3)                                   # (004 eq 5.42)
     G = np.vstack([dt * np.eye(3), np.eye(3)])
-    return F, q ** 2 * G @ G.T                                   # (004 eqs 5.43-5.44)
+    return F, np.asarray(q, dtype=float) ** 2 * (G @ G.T)        # (004 eqs 5.43-5.44); q scalar or (R, 1, 1)
 
 
 def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0,
@@ -1037,6 +1038,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     Parameters
     ----------
     acc : (R, N, 12) array, m/s²; noise_density : float or (R,) array (one grade per run allowed)
+    q_dw : float or (R,) array, rad/s per step (one process-noise tuning per run allowed)
     x0 : (6,) or (R, 6); P0 : float or (6, 6); progress : bool -- a tqdm bar over the samples
     t_on : float, None (never constrain) or (R,) array (one switch-on time per run; ``np.inf`` for never)
     Returns
@@ -1055,7 +1057,10 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     if t_on.shape not in ((), (runs,)) or np.any(np.isnan(t_on)):
         raise ValueError(f"t_on must be a time in s, None, or one per run ({runs},); got shape {t_on.shape}")
     t_on = np.broadcast_to(t_on, (runs,))
-    F, Q = _wiener6(dt, _nonneg(q_dw, "q_dw"))
+    q_dw = _per_run(q_dw, "q_dw", runs)
+    if np.any(np.asarray(q_dw) < 0):
+        raise ValueError(f"q_dw must be >= 0 (rad/s per step); got {np.min(q_dw)!r}")
+    F, Q = _wiener6(dt, q_dw)
     R = np.asarray(N, dtype=float) ** 2 * _constrained_noise(1.0, dt, d)
     v = acc @ _L.T / d
     y = np.concatenate([v[..., :3] * dt, v[..., 3:] * dt ** 2], -1)             # (004 eq 5.46)
@@ -1087,20 +1092,24 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
 
 
 def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "consumer"), q_dw=1e-5, alpha_f=0.1,
-                        s_th=100.0, t_on=10.0, window=(15.0, 20.0), m_sign=1, progress=True):
+                        s_th=100.0, t_on=10.0, window=(15.0, 20.0), m_sign=1, q_sweep=(), progress=True):
     """Reproduce Table 5.3: steady-state RMSE of Δθ, three-state vs constrained 6-state, per accelerometer grade.
 
     Setup of seed 004 §5.11 (eq 5.52): ω = 3.29·[1, 1, 1] rad/s constant, d = 1 m, Δt = 0.01 s, T = 20 s, white
     noise of Table 5.2, constraints from t = 10 s. Every grade's runs go through one batched filter per model.
     Tuning values the thesis does not give (ours): q_dw = 1e-5 rad/s per step, α_f = 0.1, s_th = 100, x̂₀ = the
     true Δθ₀ with Δω̂₀ = 0, P₀ = diag(1e-8 I, 1e-6 I); the RMSE is over t ∈ ``window`` and all runs. The three-state
-    filter uses ``m_sign`` (default +1, the printed M of eq 3.31, which is what reproduces the printed column).
+    filter uses ``m_sign`` (default +1: the sign of M in eq 3.31 is not legible in the thesis; +1 is the sign that
+    reproduces the printed column, so it is inferred from Table 5.3). The same runs are also filtered with the other
+    sign and with M = 0. ``q_sweep`` adds the constrained filter with other values of q_dw on the same runs (one
+    batch), to show how much the constrained column depends on that free tuning value.
 
     Returns
     -------
-    dict grade -> {'unconstrained', 'constrained', 'other sign of M': (norm, x, y, z) RMSE; the same names + " vs t":
-    the RMSE of ‖Δθ‖ over runs at each sample (N,); 'residual': median max|e(x̂)| over the 5 s before t_on and over
-    the window}, plus 'n_runs', 'seed', 't'
+    dict grade -> {'unconstrained', 'constrained', 'other sign of M', 'M = 0': (norm, x, y, z) RMSE; the same names
+    + " vs t": the RMSE of ‖Δθ‖ over runs at each sample (N,); 'residual': median max|e(x̂)| over the 5 s before t_on
+    and over the window; 'q sweep': {q: ‖Δθ‖ RMSE of the constrained filter} for q_dw and every q in q_sweep},
+    plus 'n_runs', 'seed', 't'
     """
     n_runs = _count(n_runs, "n_runs")
     for gr in grades:
@@ -1113,12 +1122,15 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     acc = specific_forces(om, al, d) + dens[:, None, None] / np.sqrt(dt) * white
     truth = om * dt
     R = len(dens)
-    signs = np.concatenate([np.full(R, m_sign), np.full(R, -m_sign if m_sign else -1)])
-    x3, _ = three_state_batch(np.concatenate([acc, acc]), dt, d, np.concatenate([dens, dens]), truth[0], 1e-8,
-                              m_sign=signs)
+    other = -m_sign if m_sign else -1
+    signs = np.concatenate([np.full(R, m_sign), np.full(R, other), np.full(R, 0)])
+    x3, _ = three_state_batch(np.concatenate([acc] * 3), dt, d, np.tile(dens, 3), truth[0], 1e-8, m_sign=signs)
     P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
-    x6, _, _ = constrained_batch(acc, dt, d, dens, q_dw, np.concatenate([truth[0], np.zeros(3)]), P0,
+    qs = [float(q_dw)] + [float(q) for q in q_sweep]
+    x6, _, _ = constrained_batch(np.concatenate([acc] * len(qs)), dt, d, np.tile(dens, len(qs)),
+                                 np.repeat(qs, R), np.concatenate([truth[0], np.zeros(3)]), P0,
                                  alpha_f=alpha_f, s_th=s_th, t_on=t_on, progress=progress)
+    x6s, x6 = x6[:, :, :3], x6[:R]
     m = (t >= window[0]) & (t <= window[1])
     before = (t >= t_on - 5) & (t < t_on) if t_on is not None else m
     out = {"n_runs": n_runs, "seed": seed, "t": t}
@@ -1126,11 +1138,13 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
         sl = slice(i * n_runs, (i + 1) * n_runs)
         res = {}
         for name, xe in (("unconstrained", x3[:R][sl]), ("constrained", x6[sl, :, :3]),
-                         ("other sign of M", x3[R:][sl])):
+                         ("other sign of M", x3[R:2 * R][sl]), ("M = 0", x3[2 * R:][sl])):
             err2 = (xe - truth) ** 2
             r = np.sqrt(np.mean(err2[:, m], axis=(0, 1)))
             res[name] = (float(np.sqrt(np.sum(r ** 2))), *map(float, r))
             res[name + " vs t"] = np.sqrt(np.mean(np.sum(err2, -1), axis=0))
+        res["q sweep"] = {q: float(np.sqrt(np.mean(np.sum((x6s[j * R:(j + 1) * R][sl][:, m] - truth[m]) ** 2, -1))))
+                          for j, q in enumerate(qs)}
         e = np.abs(_e(x6[sl])).max(-1)
         res["residual"] = (float(np.median(e[:, before])), float(np.median(e[:, m])))
         out[gr] = res
