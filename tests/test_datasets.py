@@ -367,3 +367,37 @@ def test_a_cached_file_that_is_not_a_mat_file_is_a_clear_error(isolated):
     (isolated / f"{NAME1}.mat").write_bytes(b"not a mat file")          # no known sum, no recorded hash
     with pytest.raises(ValueError, match="is not a readable BROAD .mat file"):
         datasets.load_trial(1)
+
+
+def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missing_not_an_exercise(capsys):
+    """A kernel where trial 2 is nowhere: the loading cell shows the remedy without a traceback, and the cells that
+    then lack its names (directly or through another such cell) say that data is missing; a name no loading cell
+    made still gets the unfinished-exercise hint."""
+    from IPython.core.interactiveshell import InteractiveShell
+
+    from fusionlab import checks
+
+    shell = InteractiveShell.instance()
+    try:
+        def run(code):
+            capsys.readouterr()
+            shell.run_cell(code, store_history=True)
+            return capsys.readouterr().out
+
+        run("from fusionlab import checks, datasets\nchecks.friendly_errors()")
+        out = run("trial = datasets.load_trial(2, progress=False)\nfs = trial.fs")
+        assert f"DataMissing: BROAD trial {NAME2} is missing" in out and "To get it" in out
+        assert "Traceback" not in out and "fetch_trial" not in out
+        assert {"trial", "fs"} <= checks._DATA_NAMES
+        out = run("q = trial.gyr * 2")
+        assert "name 'trial' is not defined" in out and "could not run because data is missing" in out
+        assert f"BROAD trial {NAME2} is missing" in out and "To get it" in out
+        assert "exercise" not in out
+        out = run("r = q + 1")                               # one step further down the chain
+        assert "name 'q' is not defined" in out and "data is missing" in out and "exercise" not in out
+        out = run("y = my_answer + 1")
+        assert "name 'my_answer' is not defined" in out and "an exercise that is not finished" in out
+        assert "data is missing" not in out
+    finally:
+        checks._DATA_NAMES.clear()
+        InteractiveShell.clear_instance()

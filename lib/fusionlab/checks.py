@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import rotations
+from . import datasets, rotations
 
 __all__ = ["Feedback", "friendly_errors", "check_euler_to_dcm", "check_close", "check_renormalize", "check_rodrigues",
            "check_sequence_angles", "check_lock_roll", "diagnose_dcm"]
@@ -37,11 +37,38 @@ _HINT = ("\n→ This name is made by an earlier cell that has not run successful
          "cell again.")
 
 
-def friendly_errors():
-    """In a notebook, add a hint to ``NameError``: in a lab it nearly always means an unfinished exercise above.
+_DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
 
-    Runs when this module is imported (every lab imports it); calling it again is harmless. Does nothing outside
-    IPython.
+
+def _assigned_names(source):
+    """Every name a cell's code binds (assignments, loops, imports, definitions); empty if it does not parse."""
+    import ast
+
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:                  # IPython magics and the like: nothing to learn
+        return set()
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+    names |= {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    names |= {(a.asname or a.name).split(".")[0] for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
+              for a in n.names}
+    return names
+
+
+def _data_hint(missing):
+    return ("\n→ This name is made by an earlier cell that could not run because data is missing, not because of "
+            "your code:\n" + "\n".join(missing.values()) + "\nOnce the data is there, run the notebook again from "
+            "the top.")
+
+
+def friendly_errors():
+    """In a notebook, add a hint to ``NameError``: in a lab it nearly always means an unfinished exercise above --
+    unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
+
+    A cell that raises :class:`fusionlab.datasets.DataMissing` has the names it would have made remembered; a
+    ``NameError`` on one of them says that data is missing and how to get it (and passes the remembering on to the
+    cell it stops, so the knock-on cells say it too). Runs when this module is imported (every lab imports it);
+    calling it again is harmless. Does nothing outside IPython.
     """
     try:
         ip = get_ipython()  # noqa: F821 (defined inside IPython only)
@@ -49,11 +76,19 @@ def friendly_errors():
         return
 
     def handler(shell, etype, evalue, tb, tb_offset=None):
-        if _HINT not in str(evalue):
+        hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
+        missing = datasets.missing_trials()
+        if issubclass(etype, datasets.DataMissing):
+            _DATA_NAMES.update(_assigned_names(hist[-1]))
+        elif missing and getattr(evalue, "name", None) in _DATA_NAMES:
+            _DATA_NAMES.update(_assigned_names(hist[-1]))
+            if "data is missing" not in str(evalue):
+                evalue = etype(f"{evalue}{_data_hint(missing)}")
+        elif _HINT not in str(evalue):
             evalue = etype(f"{evalue}{_HINT}")
         shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
 
-    ip.set_custom_exc((NameError,), handler)
+    ip.set_custom_exc((NameError, datasets.DataMissing), handler)
 
 
 friendly_errors()                        # every lab imports checks: its NameErrors then say what to do

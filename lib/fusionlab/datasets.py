@@ -355,10 +355,11 @@ def _fetch(name, folder, download, progress):
         path.unlink()
     looked = ", ".join(str(p) for p in [d for d in (shipped, env) if d is not None] + [cache])
     url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
-    get_it = (f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once "
-              f"and checked), or download {url} yourself and put it in "
-              f"{shipped if shipped is not None else 'a folder'}" + ("" if env else f" (or a folder named by the "
-              f"environment variable {ENV_DIR})") + ".")
+    target = shipped or env
+    put = (f"put it in {target}" + ("" if env else f" (or in a folder named by the environment variable {ENV_DIR})")
+           if target is not None else f"put it in a folder and set the environment variable {ENV_DIR} to that folder")
+    get_it = (f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once and "
+              f"checked), or download {url} yourself and {put}.")
     if not download:
         raise _missing(name, f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) and "
                              f"download=False. {get_it}")
