@@ -472,3 +472,79 @@ def test_lab10_checks_accept_the_library_and_name_the_usual_slips():
         return np.vstack([x + U, x - U]), np.full(2 * len(x), 0.5 / len(x))
     with pytest.raises(checks.Feedback, match="scale P by n"):
         checks.check_sigma_points(unscaled)
+
+
+def test_plain_ukf_gives_filterpys_estimates_without_the_unused_sigma_points(monkeypatch):
+    """Lab 10's fair timing: the plain UKF pushes 2n points a step and factors P once; filterpy pushes 2n + 1 and
+    factors twice (it recomputes sigma points after predict for an update the linear GPS update never uses)."""
+    import scipy.linalg
+    from filterpy.kalman import JulierSigmaPoints
+    rec = simulate.air_vehicle_record(duration=4.0, model="full")
+    x0, P0 = _proper_start(rec, np.random.default_rng(4))
+    xu0 = np.concatenate([x0[12:18], rotations.dcm_to_euler(rec["C0"]), x0[18:21], x0[9:12]])
+    Pu0 = np.r_[P0[12:18], [np.radians(0.06) ** 2] * 3, P0[18:21], P0[9:12]]
+    calls = {"fx": 0, "sqrt": 0}
+    fx, chol, sp = dcm.euler_ins_fx, scipy.linalg.cholesky, JulierSigmaPoints.sigma_points
+
+    def counted_fx(*a, **k):
+        calls["fx"] += 1
+        return fx(*a, **k)
+
+    def counted_chol(*a, **k):
+        calls["sqrt"] += 1
+        return chol(*a, **k)
+
+    def counted_sp(self, *a, **k):
+        calls["sqrt"] += 1
+        return sp(self, *a, **k)
+
+    monkeypatch.setattr(dcm, "euler_ins_fx", counted_fx)
+    monkeypatch.setattr(scipy.linalg, "cholesky", counted_chol)
+    monkeypatch.setattr(JulierSigmaPoints, "sigma_points", counted_sp)
+    n = len(rec["t"])
+    plain = dcm.run_euler_ukf(rec["gyr"], rec["acc"], rec["gps"], rec["fs"], xu0, Pu0, engine="plain")
+    assert calls == {"fx": 30 * n, "sqrt": n}
+    calls.update(fx=0, sqrt=0)
+    fp = dcm.run_euler_ukf(rec["gyr"], rec["acc"], rec["gps"], rec["fs"], xu0, Pu0)
+    assert calls["fx"] == 31 * n and calls["sqrt"] == 2 * n
+    assert np.max(np.abs(plain["x"] - fp["x"])) < 1e-9 and np.max(np.abs(plain["sd"] - fp["sd"])) < 1e-9
+    with pytest.raises(ValueError, match="engine must be 'filterpy' or 'plain'"):
+        dcm.run_euler_ukf(rec["gyr"], rec["acc"], rec["gps"], rec["fs"], xu0, Pu0, engine="matlab")
+
+
+def test_full_model_flight_adds_the_terms_the_thesis_drops():
+    from fusionlab import earth
+    a = simulate.air_vehicle_record(duration=5.0, noise=False)
+    b = simulate.air_vehicle_record(duration=5.0, noise=False, model="full", lat_deg=50.87)
+    assert np.array_equal(a["r"], b["r"]) and np.array_equal(a["C_bn"], b["C_bn"])
+    lat = np.radians(50.87)
+    C0 = a["C0"]
+    w_ie = earth.earth_rate_ned(lat)
+    R_N, R_E = earth.radii_of_curvature(lat)
+    v = a["v0"]
+    w_en = np.array([v[1] / R_E, -v[0] / R_N, -v[1] * np.tan(lat) / R_E])
+    assert np.allclose(b["gyr"][0] - a["gyr"][0], C0.T @ (w_ie + w_en), rtol=1e-12, atol=1e-18)
+    extra = np.cross(2 * w_ie + w_en, v) - [0, 0, earth.normal_gravity(lat) - a["g"]]
+    assert np.allclose(b["acc"][0] - a["acc"][0], C0.T @ extra, rtol=1e-12, atol=1e-15)
+    assert 14.9 < np.degrees(np.linalg.norm(b["gyr"][0] - a["gyr"][0])) * 3600 < 17.5      # about 15 °/h + 2 °/h
+    with pytest.raises(ValueError, match="model must be 'thesis'"):
+        simulate.air_vehicle_record(duration=1.0, model="earth")
+    with pytest.raises(ValueError, match="lat_deg must be one latitude"):
+        simulate.air_vehicle_record(duration=1.0, model="full", lat_deg=95.0)
+
+
+def test_outage_error_matches_the_predicted_covariance_over_flights():
+    """Lab 10 Part F: the error at the end of a 10 s outage is consistent with the filter's σ over 8 flights."""
+    P0 = np.r_[[1e-6] * 9, [np.radians(100 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(0.2e-3 * 9.80665) ** 2] * 3]
+    rng, sq, var = np.random.default_rng(11), [], []
+    for s in range(100, 108):
+        r = simulate.air_vehicle_record(seed=s, duration=50.0, model="full")
+        gps = r["gps"].copy()
+        gps[r["t"] >= 40] = np.nan
+        x0 = _ins_x(r["C0"], r["b_g"], r["r0"] + 3 * rng.standard_normal(3), r["v0"] + 0.5 * rng.standard_normal(3),
+                    r["b_a"])
+        k = dcm.run_gps_ins(r["gyr"], r["acc"], gps, r["fs"], x0, P0)
+        sq.append(np.sum((k["r"][-1] - r["r"][-1]) ** 2))
+        var.append(np.sum(k["sd"][-1, 12:15] ** 2))
+    ratio = np.sqrt(np.mean(sq) / np.mean(var))
+    assert ratio == pytest.approx(5.8 / 6.5, abs=0.02)          # Lab 10's stored numbers: 5.8 m against 6.5 m

@@ -902,14 +902,20 @@ def sigma_points_2n(x, P):
     return np.vstack([x + U, x - U]), np.full(2 * n, 1.0 / (2 * n))                  # (004 eqs 7.24-7.25)
 
 
-def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
-    """The 15-state total-state Euler-angle UKF of seed 004 §7.3 ("EAUKF") on ``filterpy``.
+def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G, engine="filterpy"):
+    """The 15-state total-state Euler-angle UKF of seed 004 §7.3 ("EAUKF").
 
-    Prediction: ``filterpy.kalman.UnscentedKalmanFilter`` with ``JulierSigmaPoints(15, kappa=0)`` -- the points
-    ``x ± rows of chol(n P)`` with weights 1/(2n) (the centre point gets weight 0), as eqs 7.24-7.26; the process
-    model :func:`euler_ins_fx`. Update: the GPS measurement is linear, so the thesis uses the linear KF update
-    (``filterpy.kalman.update``) with ``H = [I₆, 0]``. Yaw is not wrapped inside the filter: keep the trajectory
+    Prediction with the points ``x ± rows of chol(n P)`` and weights 1/(2n) (eqs 7.24-7.26) through the process
+    model :func:`euler_ins_fx`, ``P⁻ = Σ wᵢ(χᵢ − x̂⁻)(χᵢ − x̂⁻)ᵀ + Q``. Update: the GPS measurement is linear, so the
+    thesis uses the linear KF update with ``H = [I₆, 0]``. Yaw is not wrapped inside the filter: keep the trajectory
     away from ±180° (the labs do).
+
+    ``engine='filterpy'``: ``filterpy.kalman.UnscentedKalmanFilter`` with ``JulierSigmaPoints(15, kappa=0)`` (the
+    same 2n points plus a centre point of weight 0, which is still pushed through the model) and
+    ``filterpy.kalman.update``. filterpy's ``predict`` also recomputes the sigma points after adding Q (a second
+    Cholesky factor per step) for an unscented update that the linear GPS update never uses.
+    ``engine='plain'``: the same equations written out -- 2n points, one Cholesky factor per step, no unused sigma
+    points: the cost of the method, not of the tool. Both give the same estimates (to rounding).
 
     Parameters and returns as :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
     """
@@ -924,18 +930,42 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
     P0 = np.diag(P0) if P0.shape == (15,) else P0
     if P0.shape != (15, 15):
         raise ValueError(f"P0 must have shape (15, 15) or (15,); got {P0.shape}")
+    if engine not in ("filterpy", "plain"):
+        raise ValueError(f"engine must be 'filterpy' or 'plain'; got {engine!r}")
     dt = 1.0 / fs
     tu = tuning
     H = np.zeros((6, 15))
     H[:, 0:6] = np.eye(6)
     R = np.diag([tu.sigma_pos ** 2] * 3 + [tu.sigma_vel ** 2] * 3)
-    ukf = UnscentedKalmanFilter(dim_x=15, dim_z=6, dt=dt, hx=lambda s: s[0:6], fx=euler_ins_fx,
-                                points=JulierSigmaPoints(15, kappa=0.0))
-    ukf.x, ukf.P = x0.copy(), P0.copy()
-    ukf.Q = np.diag([tu.pos_noise ** 2 * dt] * 3 + [tu.acc_noise ** 2 * dt] * 3 + [tu.gyro_noise ** 2 * dt] * 3
-                    + [tu.acc_bias_walk ** 2 * dt] * 3 + [tu.gyro_bias_walk ** 2 * dt] * 3)
+    Q = np.diag([tu.pos_noise ** 2 * dt] * 3 + [tu.acc_noise ** 2 * dt] * 3 + [tu.gyro_noise ** 2 * dt] * 3
+                + [tu.acc_bias_walk ** 2 * dt] * 3 + [tu.gyro_bias_walk ** 2 * dt] * 3)
     xs, sd = np.empty((n, 15)), np.empty((n, 15))
     gyr_l, acc_l = gyr.tolist(), acc.tolist()
+    if engine == "plain":
+        from scipy.linalg import cholesky
+        x, P = x0.copy(), P0.copy()
+        w = 1.0 / 30.0                                                               # 1/(2n), n = 15
+        chi = np.empty((30, 15))
+        for k in range(n):
+            U = cholesky(15.0 * P)                                                   # (004 eqs 7.24-7.25)
+            for i, s in enumerate(np.vstack([x + U, x - U])):
+                chi[i] = euler_ins_fx(s, dt, gyr_l[k], acc_l[k], g)                   # (004 eq 7.23)
+            x = w * chi.sum(0)
+            d = chi - x
+            P = w * (d.T @ d) + Q                                                    # (004 eq 7.26)
+            if fix[k]:
+                PHt = P[:, 0:6]                                                      # P Hᵀ, H = [I₆, 0]
+                K = np.linalg.solve(P[0:6, 0:6] + R, PHt.T).T
+                x = x + K @ (gps[k] - x[0:6])
+                P = P - K @ PHt.T
+                P = 0.5 * (P + P.T)
+            xs[k] = x
+            sd[k] = np.sqrt(np.maximum(np.diag(P), 0.0))
+        return dict(x=xs, sd=sd, euler=xs[:, 6:9], r=xs[:, 0:3], v=xs[:, 3:6], b_a=xs[:, 9:12], b_g=xs[:, 12:15],
+                    C_bn=rotations.euler_to_dcm(xs[:, 6:9]))
+    ukf = UnscentedKalmanFilter(dim_x=15, dim_z=6, dt=dt, hx=lambda s: s[0:6], fx=euler_ins_fx,
+                                points=JulierSigmaPoints(15, kappa=0.0))
+    ukf.x, ukf.P, ukf.Q = x0.copy(), P0.copy(), Q
     for k in range(n):
         ukf.predict(gyr=gyr_l[k], acc=acc_l[k], g=g)                                 # (004 eqs 7.23-7.26)
         if fix[k]:

@@ -402,7 +402,8 @@ T71_ACC_BIAS = 1e-3 * 9.80665
 
 
 def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(1500.0, -1500.0, 1500.0),
-                       acc_bias_mg=(1.0, -1.0, 1.0), speed=60.0, g=9.80665, noise=True):
+                       acc_bias_mg=(1.0, -1.0, 1.0), speed=60.0, g=9.80665, noise=True, model="thesis",
+                       lat_deg=50.87):
     """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1; digest §5.10) -- ours.
 
     Coordinated turns (bank up to about 20°) left and right, two climbs and a descent (pitch up to about ±5°) and
@@ -414,6 +415,13 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
     noise-free filter reproduces the truth and every error seen in the lab comes from the sensors. Sensors: Table 7.1
     (IMU at 50 Hz with 100 µg/√Hz and 3 °/√h, the given constant biases; GPS position and velocity at 2 Hz with
     3 m and 0.5 m/s white noise); ``noise=False`` leaves only the biases.
+
+    ``model='full'`` keeps the same trajectory but gives the sensors the readings of the full NED equations (004
+    eq 7.1) at latitude ``lat_deg`` (WGS-84, :mod:`fusionlab.earth`; ours, the thesis has no Earth model): the gyros
+    also sense ``C_nᵇ(ω_ie + ω_en)`` (Earth and transport rate), and the accelerometers
+    ``C_nᵇ[(2ω_ie + ω_en)×v − (γ(φ) − g) e_D]`` (Coriolis, and normal gravity instead of the constant ``g``). A filter
+    built on the thesis' simplified mechanization then meets the terms it drops (to first order in Δt; the local
+    NED frame of the record stands for the navigation frame over the 68 s).
 
     Returns
     -------
@@ -443,6 +451,24 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
     g_n = np.array([0.0, 0.0, g])
     f = np.einsum("nji,nj->ni", C_all[:-1], (v_all[1:] - v_all[:-1]) / dt - g_n)     # v_{k+1} = v_k + C_k f_k dt + g dt
     gyr_true = _body_rates(C_all) / dt
+    if model not in ("thesis", "full"):
+        raise ValueError(f"model must be 'thesis' (the simplified mechanization is exact) or 'full' (eq 7.1); "
+                         f"got {model!r}")
+    if model == "full":
+        from . import earth
+        lat_deg = validate.array(lat_deg, "lat_deg")
+        if lat_deg.ndim or abs(lat_deg) >= 90:
+            raise ValueError(f"lat_deg must be one latitude in (-90, 90) degrees; got {lat_deg!r}")
+        lat = np.radians(float(lat_deg))
+        w_ie = earth.earth_rate_ned(lat)
+        R_N, R_E = earth.radii_of_curvature(lat)
+        v = v_all[:-1]
+        w_en = np.stack([v[:, 1] / R_E, -v[:, 0] / R_N, -v[:, 1] * np.tan(lat) / R_E], -1)   # transport rate
+        C = C_all[:-1]
+        gyr_true = gyr_true + np.einsum("nji,nj->ni", C, w_ie + w_en)             # ω_ib = ω_nb + C_nᵇ ω_in
+        extra = np.cross(2 * w_ie + w_en, v)                                      # Coriolis and transport
+        extra[:, 2] -= earth.normal_gravity(lat) - g                              # γ(φ) instead of g
+        f = f + np.einsum("nji,nj->ni", C, extra)
     b_g = np.radians(np.asarray(gyro_bias_dph, float)) / 3600.0
     b_a = np.asarray(acc_bias_mg, float) * 1e-3 * g
     w = 1.0 if noise else 0.0
