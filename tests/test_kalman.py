@@ -41,7 +41,7 @@ def test_printed_loop_runs_199_steps_and_ends_at_thesis_values():
 
 @pytest.mark.parametrize("k, m, x_end, v_end", [(0.5, 10, 181.312, -18.568), (1, 1, 188.972, -8.474),
                                                 (0.25, 1, 183.509, -15.379)])
-def test_printed_loop_other_k_m_pairs_match_digest_table(k, m, x_end, v_end):
+def test_printed_loop_other_k_m_pairs_match_worked_table(k, m, x_end, v_end):
     X, V = kf.seed000_labcode_falling_body(k=k, m=m)
     assert (round(X[-1], 3), round(V[-1], 3)) == (x_end, v_end)
 

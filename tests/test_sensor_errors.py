@@ -1,5 +1,5 @@
-"""Seed 001's sensor error models (digest §7), gravity removal and dead reckoning (§9), the observer with a biased
-gyro (§8.4), and the synthetic gyro noise behind Lab 12's Allan-deviation part."""
+"""Seed 001's sensor error models (sensors note §2-4), gravity removal and dead reckoning (position note §2-4), the
+observer with a biased gyro (attitude note §4), and the synthetic gyro noise behind Lab 12's Allan-deviation part."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,7 +1,7 @@
 """Tests of :mod:`fusionlab.sensors`: the MEMS sensor models of seed 000 §3.1-3.2 and seed 001's sensor notes.
 
-Reference values: the thesis' worked ADC examples as corrected in /work/shared/notes/CORRECTIONS.md (0.4658 g at
-3.0 V, 0.9624 g at 3.3 V, 15.3556 °/s), the digest 000 §2.1-2.4 and §6, and seed 001 digest §8.2 (φ = 2.5 rad
+Reference values: the thesis' worked ADC examples (seed 000 §3.1.2, §3.2.2) as corrected in Lab 00 (0.4658 g at
+3.0 V, 0.9624 g at 3.3 V, 15.3556 °/s), seed 000 §3.1-3.2, and seed 001's attitude note §2 (φ = 2.5 rad
 reads -0.64 rad with arctan; naive atan2 at φ = 0.3 reads -2.84). Random inputs use fixed seeds.
 """
 from __future__ import annotations
@@ -126,7 +126,7 @@ def test_thesis_accelerometer_example_gives_0_4658_g_at_3_0_v_and_0_9624_g_at_3_
 
 
 def test_alternative_readings_of_the_0_96_g_example():
-    # CORRECTIONS.md: a 1.202 V zero-g level or 145.6 mV/g would also give 0.96 at 3.0 V
+    # other readings of the printed example: a 1.202 V zero-g level or 145.6 mV/g would also give 0.96 at 3.0 V
     assert round(float(sen.adc_to_physical(508, 1.202, 0.300)), 2) == 0.96
     assert round(float(sen.adc_to_physical(508, 1.35, 0.1456)), 2) == 0.96
     # with the ADXL335's own zero-g level Vs/2 the same count is almost level

@@ -30,15 +30,15 @@ def records():
 def test_regeneration_is_byte_identical_to_committed_checksums(regenerated):
     committed = _sums(DATA)
     assert sorted(committed) == sorted(f"{n}{s}" for n in NAMES for s in (".log", "_truth.csv"))
-    for name, digest in committed.items():
-        assert hashlib.sha256((regenerated / name).read_bytes()).hexdigest() == digest, name
-        assert hashlib.sha256((DATA / name).read_bytes()).hexdigest() == digest, f"committed {name} was edited"
+    for name, sha in committed.items():
+        assert hashlib.sha256((regenerated / name).read_bytes()).hexdigest() == sha, name
+        assert hashlib.sha256((DATA / name).read_bytes()).hexdigest() == sha, f"committed {name} was edited"
 
 
 def test_readme_lists_the_committed_checksums():
     readme = (DATA.parent / "README.md").read_text()
-    for name, digest in _sums(DATA).items():
-        assert f"{digest}  {name}" in readme
+    for name, sha in _sums(DATA).items():
+        assert f"{sha}  {name}" in readme
 
 
 def test_committed_logs_parse_back_to_the_simulated_counts(records):

@@ -7,7 +7,7 @@ specific force of a static position, or any known vector). Rearranged as ``z = O
 positions (3.14) and solved by least squares (3.15). The gyro-free IMU lab and the sensor-error lab both call
 :func:`fit_triad`; nothing else in the suite solves this system.
 
-Lab 12 adds (the sensor-error lab, seed 001 sensors note = digest §7, seed 004 §2.1):
+Lab 12 adds (the sensor-error lab, seed 001 sensors note §2-4, seed 004 §2.1):
 
 * :func:`six_positions` -- the references of the classic six-position test (±g on each axis), for :func:`fit_triad`;
 * :func:`gyro_bias_from_rest` -- the gyro bias as the mean of a rest phase, with its standard error;

@@ -8,10 +8,10 @@ is. Lab 3 does it in a spreadsheet, one column per step a)-l). Here each step is
 * **as printed** -- the equations as the thesis prints them: C-order ``atan2(z, y)`` (≈ 90° when level, eqs
   5.4-5.5), the difference-of-rates "integral" ``(R[n] - R[n-1])·Δt`` (eqs 5.13-5.14, an erratum), and the
   accelerometer *angle* in the ratio (eqs 5.15-5.16, ° against °/s);
-* **as meant** -- the reading the prose supports (digest §2.12): Excel-order ``ATAN2`` (the tilt), the
+* **as meant** -- the reading the prose supports (our reading of §5.3.1 and step j)): Excel-order ``ATAN2`` (the tilt), the
   rectangular increment ``R[n]·Δt``, and the *rate* of the moving-averaged accelerometer angle in the ratio.
 
-The weighting direction is itself ambiguous (digest §6 item 17): eq 5.17 weights the accelerometer angle by the
+The weighting direction is itself ambiguous: eq 5.17 weights the accelerometer angle by the
 ratio, lab step j) says "accelerometer weight is 1-Ratio". Both are offered (``accel_weight``).
 
 Also here, and **not from the thesis**: :class:`ComplementaryFilter` (fixed weight) and :class:`TiltKalman2` (a
@@ -21,7 +21,7 @@ Frames and units at this module's edge
 --------------------------------------
 The thesis sensor frame (Z up, level reads +1 g on Z; see :mod:`fusionlab.simulate`). Like the spreadsheet, the
 pipeline works in g, degrees and °/s (eq 5.6 converts to degrees before any other step); the step functions are
-unit-agnostic except where their docstrings say otherwise. Axis pairing (digest §2.12 step 7): the Y-Z angle is
+unit-agnostic except where their docstrings say otherwise. Axis pairing (our reading of §5.3.1): the Y-Z angle is
 rotation about X and goes with the X gyro (``axis='x'``); the X-Z angle goes with the Y gyro (``axis='y'``).
 """
 from __future__ import annotations
@@ -170,7 +170,7 @@ def accel_angle(z, other, order="excel"):
     """Step b): the accelerometer angle ``atan2(z, y)`` / ``atan2(z, x)`` in rad (000 eqs 5.4-5.5).
 
     ``order='c'`` reads the printed ``atan2(z, y)`` in C/numpy order, ``arctan2(z, y)``: ≈ π/2 when level (the
-    **as printed** reading, digest §6 item 5). ``order='excel'`` reads it as Excel's ``ATAN2(x_num, y_num)``,
+    **as printed** reading). ``order='excel'`` reads it as Excel's ``ATAN2(x_num, y_num)``,
     i.e. ``arctan2(y, z)``: the tilt, 0 when level (:func:`fusionlab.sensors.excel_atan2`).
 
     Parameters
@@ -235,7 +235,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     """Step h): the per-step gyro "integral" with no accumulation (000 eqs 5.13-5.14), three readings.
 
     * ``'printed'``: ``I[n] = (R[n] - R[n-1])·Δt`` as printed -- an erratum: a difference of rates times Δt is not an
-      angle increment, and its sum telescopes to ``(R[n] - R[0])·Δt`` (digest §6 item 15);
+      angle increment, and its sum telescopes to ``(R[n] - R[0])·Δt`` (eqs 5.13-5.14);
     * ``'rectangular'``: ``I[n] = R[n]·Δt`` (the likely intent, as in §3.3);
     * ``'trapezoid'``: ``I[n] = (R[n] + R[n-1])·Δt/2``.
     ``I[0] = 0`` for the two-sample rules.
@@ -269,7 +269,7 @@ def cumulative_integral(increment, angle0=0.0):
 def ratio(gyro_rate, accel_term, eps=1e-9):
     """Step i): the weighting ratio ``|R_gyro| / (|R_gyro| + |A| + ε)`` (000 eqs 5.15-5.16).
 
-    As printed, ``accel_term`` is the accelerometer **angle** (° against °/s: digest §6 item 16); as meant it is the
+    As printed, ``accel_term`` is the accelerometer **angle** (° against °/s, eqs 5.15-5.16); as meant it is the
     rate of the accelerometer angle (°/s). ``ε`` resolves the 0/0 case (both zero gives 0: trust the gyro); the
     thesis does not say. The result lies in [0, 1) and is ½ when the two magnitudes are equal.
 
@@ -318,7 +318,7 @@ def printed_to_tilt(angle_deg, axis="x"):
     """Map a C-order angle (≈ 90° level) to the tilt: ``90 - A`` for the Y-Z angle, ``A - 90`` for the X-Z angle.
 
     With ``atan2(z, y)`` in C order, ``A_YZ = 90° - φ`` runs against the X gyro; ``A_XZ = 90° + θ`` runs with the
-    Y gyro (digest §6 item 5; the signs of the thesis frame of :mod:`fusionlab.simulate`).
+    Y gyro (the signs of the thesis frame of :mod:`fusionlab.simulate`).
     """
     a = validate.array(angle_deg, "angle_deg")
     if axis == "x":
@@ -363,7 +363,7 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     if variant == "printed":
         ang = accel_angle(z, other, order="c")                                    # b) C order, ≈ 90° level
     else:
-        # 'y': the X reading is -sin θ in the thesis frame; flip it so the tilt runs with the Y gyro (digest §6.5)
+        # 'y': the X reading is -sin θ in the thesis frame; flip it so the tilt runs with the Y gyro
         ang = accel_angle(z, other if axis == "x" else -other, order="excel")    # b) Excel order: the tilt
     deg = np.degrees(ang)                                                         # c) (000 eq 5.6)
     deg_ma = moving_average(deg, n_ma)                                            # d)
@@ -390,7 +390,7 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# Baselines: NOT from the thesis (digest §5.1 item 6)
+# Baselines: NOT from the thesis (its §5.6 future work asks for the comparison)
 # ----------------------------------------------------------------------------------------------------------------
 
 

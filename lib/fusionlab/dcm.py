@@ -42,7 +42,7 @@ The AHRS functions here take the thesis' ``a_b``; convert a real reading once wi
 Which values are the thesis' and which are ours
 -----------------------------------------------
 The thesis gives the structure (states, F, H, the decay ``ρ = 0.92``) but **no numbers** for Q, R, the adaptive-R
-thresholds, the orthogonality covariances ``R_i`` and ``R_ss``, or the initial covariance (digest 004 §7 item 20).
+thresholds, the orthogonality covariances ``R_i`` and ``R_ss``, or the initial covariance.
 Every number in :class:`AhrsTuning` and :data:`HANDHELD` is ours; each field says what it is. The GPS/INS sensor
 and GPS noise values are Table 7.1's; the bias random walks and position process noise are ours. No Earth model is used (as in the
 thesis); :mod:`fusionlab.earth` has the WGS-84 one for comparison.
@@ -75,8 +75,8 @@ def A_matrix(sigma, order="exact"):
     """DCM increment ``A`` of a body rotation vector: ``C_bn,k = C_bn,k-1 @ A_{k-1}`` (004 eqs 6.2-6.8).
 
     ``order='exact'``: ``A = I + (sin σ/σ)[σ×] + ((1 - cos σ)/σ²)[σ×]²``; ``order='second'``:
-    ``A ≈ I + [σ×] + ½[σ×]²`` (004 eqs 6.7/6.8; the printed equations are lost in the seed text and reconstructed,
-    digest §2.5). The formula is the one of seed 000 eq 3.54 (corrected), so this calls
+    ``A ≈ I + [σ×] + ½[σ×]²`` (004 eqs 6.7/6.8, not legible in the copy this course was written from: our
+    reconstruction). The formula is the one of seed 000 eq 3.54 (corrected), so this calls
     :func:`fusionlab.rotations.rodrigues_dcm`.
 
     Parameters
@@ -152,8 +152,8 @@ def _transition(c1, c3, A_tilde, dt):
 
 
 def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
-    """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part"; the formula is lost, this is
-    the digest's reconstruction, ours in its numbers).
+    """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part"; the formula is not legible, this is
+    our reconstruction, derived in Lab 09 Part A, and ours in its numbers).
 
     The gyro noise enters each row as ``-[c×] w_g Δt`` (eq 6.11 with noise), so with white noise of density
     ``N`` (rad/s/√Hz, per-sample σ = N/√Δt): ``Q_{ci,cj} = N² Δt [ĉi×][ĉj×]ᵀ``; the bias random walk adds
@@ -308,7 +308,7 @@ def level_and_compass(acc_b, mag_b):
 
     ``θ = asin(-a_x/|a|)`` (004 eq 4.22), ``φ = atan2(a_y, a_z)`` (eq 4.23) in the thesis sign ``a_b = +g c3``
     (:func:`accel_to_seed004`); ``ψ = atan2(-m_y cφ + m_z sφ, m_x cθ + m_y sφ sθ + m_z cφ sθ)`` (the standard
-    compass the thesis compares with in eqs 6.22-6.23, which are lost in the seed text; ours). Heading is magnetic.
+    compass the thesis compares with in eqs 6.22-6.23, which are not legible in our copy; ours). Heading is magnetic.
 
     Parameters
     ----------
@@ -370,7 +370,7 @@ def trusted_mask(deviation, tol, hold):
 
 @dataclass(frozen=True)
 class AhrsTuning:
-    """Every number of the AHRS; **all ours** -- the thesis gives the structure but no values (digest §7 item 20).
+    """Every number of the AHRS; **all ours** -- the thesis gives the structure but no values.
 
     Defaults are for an Xsens-MTi-grade unit (004 Table 6.1) in hand motion.
     """
@@ -860,7 +860,8 @@ def _ins_propagate_raw(x, acc, A_tilde, dt, g):
 
 
 def euler_ins_fx(x, dt, gyr, acc, g=G):
-    """Process model of the 15-state Euler-angle UKF (004 eq 7.23, lost in the seed text; reconstructed):
+    """Process model of the 15-state Euler-angle UKF (004 eq 7.23, not legible in our copy; our reconstruction,
+    docs/derivations.md §5):
     ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
 
     State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step.

@@ -2,7 +2,7 @@
 
 **None of this is from a seed.** Seed 004 (the GF-IMU / DCM thesis) uses a constant scalar ``g`` with
 ``g_n = [0, 0, g]`` in NED, and the Earth rate ``ω_ie`` only in its north-finder equations; it prints no WGS-84
-constant and no gravity formula (digest 004 §2.7). The values here are the standard ones (NIMA TR8350.2, the
+constant and no gravity formula. The values here are the standard ones (NIMA TR8350.2, the
 WGS-84 definition), supplied so that the labs can say which ``g`` they use and how large the terms are that the
 thesis drops (Earth rate, transport rate, Coriolis).
 

@@ -14,8 +14,9 @@ What this module holds, in the order of the note:
 * §7-8 the 9DOF (10 states, 7 measurements) and 6DOF (6 states, 3 measurements) indirect Kalman filters, exactly
   as the v5.00 library runs them: gyro samples integrated one by one inside each Kalman step, A = 0 so P⁻ = Q_w,
   ``K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹``, the 7 µT² floor, ±5 °/s offset clamp, ±90° inclination clamp, 90° correction
-  limit and the first accel/mag orientation lock. The 9DOF ``C`` (eq 141) is missing from the seed text and ``Q_w``
-  (eq 142) is garbled: both follow the digest's reconstruction from the component equations (137)-(139), (144)-(159);
+  limit and the first accel/mag orientation lock. The 9DOF ``C`` (eq 141) and ``Q_w`` (eq 142) are not legible in the
+  copy this course was written from: both are our reconstruction from the component equations (137)-(139),
+  (144)-(159), derived in docs/derivations.md §2;
   ``Q_gδ = Q_mδ = 0``.
 
 Conventions at the edge
@@ -773,7 +774,7 @@ def kalman_gain(Q_w, C, Q_v):
 
 
 def nominal_gain(dof=9, tuning=V500, qvgqa=0.0, qvbqd=0.0, B=None):
-    """Gain of the first step (all previous errors zero) for given noise estimates (digest §6.9 table).
+    """Gain of the first step (all previous errors zero) for given noise estimates (derived in docs/derivations.md §1).
 
     With the v5.00 defaults: K_gg 0.4999875, K_mm 0.3884274, K_bg -0.1432132, K_bm -0.1112568, K_δ 0.6851226
     (9DOF); 0.4999875 / -0.1432215 (6DOF).
@@ -859,7 +860,7 @@ class Kalman9:
         self.locked = True
 
     def step(self, gyr_dps, G, B_c):
-        """One Kalman step (digest §6.8).
+        """One Kalman step (seed 002 §7.4-7.11, in the order the v5.00 library runs them).
 
         Parameters
         ----------
@@ -1320,7 +1321,7 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# Synthetic recordings and an error metric (digest §9.1)
+# Synthetic recordings and an error metric (ours: the note has no test data)
 # ----------------------------------------------------------------------------------------------------------------
 
 
@@ -1344,7 +1345,7 @@ def tilt_error(q_est, q_true, frame="NED"):
 def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.0, bias_dps=(0.0, 0.0, 0.0),
                         sigma_gyr=0.0, sigma_acc=0.0, sigma_mag=0.0, B=50.0, delta=np.radians(60.0),
                         a_S=None, d_S=None, seed=0):
-    """A recording in the note's units and frame (digest §9.1): truth stepped ``q ← q ⊗ Δq(ω δt)`` at ``fs``.
+    """A recording in the note's units and frame (ours): truth stepped ``q ← q ⊗ Δq(ω δt)`` at ``fs``.
 
     Parameters
     ----------

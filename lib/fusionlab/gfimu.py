@@ -1,7 +1,7 @@
 """Gyro-free IMU (GF-IMU): angular motion from twelve distributed accelerometers (seed 004, chapters 3–5).
 
 Four accelerometer triads, all aligned with the body axes: **A** at the origin, **B**, **C** and **D** at distance
-``d`` on the +x, +y and +z axes (seed 004 Fig. 3.2; the axis assignment is a reconstruction, digest §3.2). A triad at
+``d`` on the +x, +y and +z axes (seed 004 Fig. 3.2; the axis assignment is our reconstruction, docs/derivations.md §3). A triad at
 lever arm ``p`` reads ``a_p = a_o + ([α×] + [ω×]²) p`` (eq 3.4), so the differences to A are linear in the *angular
 information vector* (AIV)
 
@@ -13,10 +13,10 @@ its α–α, quadratic and cross blocks are the matrices of eqs 3.25, 3.30 and 3
 
 Reconstructed equations
 -----------------------
-The seed text lost equations 3.5–3.10 (the AIV formulas), the state-space matrices of chapter 5 (5.3, 5.9,
+The copy of the thesis this course was written from does not show equations 3.5–3.10 (the AIV formulas), the state-space matrices of chapter 5 (5.3, 5.9,
 5.15–5.18, 5.20, 5.22, 5.24, 5.28–5.30, 5.34, 5.36–5.39) and the smoothly constrained Kalman filter (5.50, 5.51).
 Every function that implements one of them says "[R]" in its docstring; those marked "[R][V]" were checked
-numerically against the thesis' tables (digest 004 §3, §5). Equations 3.4, 3.11–3.15, 3.19–3.34, 4.50–4.54,
+numerically against the thesis' tables (Labs 06 and 07). Equations 3.4, 3.11–3.15, 3.19–3.34, 4.50–4.54,
 5.19, 5.21, 5.23, 5.25–5.27, 5.40–5.49 survived.
 
 The filters
@@ -62,7 +62,7 @@ AIV_NAMES = ("α_x", "α_y", "α_z", "ω_xω_y", "ω_xω_z", "ω_yω_z", "ω_x²
 
 #: Table 3.1: the three-state simulation (trajectory 3.35)
 TABLE_3_1 = dict(omega_x=3.29, omega_z=0.658, f=0.1, dt=0.01, noise_ug=50.0, d=0.1, T=20.0)
-#: Table 4.4: the hybrid IMU (gyro ARW printed "3 °/h", read as 3 °/√h, digest §7 item 9)
+#: Table 4.4: the hybrid IMU (gyro ARW printed "3 °/h", read as 3 °/√h, the unit of an angle random walk)
 TABLE_4_4 = dict(omega_x=3.29, omega_z=0.658, f=1.0, dt=0.01, noise_ug=50.0, arw_deg_sqrt_h=3.0, d=0.2, T=10.0)
 #: Table 5.1: the augmented 15-state simulation (trajectory 5.31–5.32)
 TABLE_5_1 = dict(omega_m=0.4112, f=0.5, dt=0.01, noise_ug=200.0, bias_ug=2400.0, d=0.4, T=20.0)
@@ -887,7 +887,7 @@ def _e(x):
 
 
 def constraint_jacobian(x):
-    """Jacobian (..., 2, 6) of :func:`constraints` (digest 004 §3.7, from eq 5.40)."""
+    """Jacobian (..., 2, 6) of :func:`constraints` (differentiated from eq 5.40)."""
     x = validate.array(x, "x", shape=(6,))
     return _E(x)
 

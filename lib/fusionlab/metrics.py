@@ -1,7 +1,7 @@
 """Orientation error metrics of the BROAD benchmark (Laidig, Caruso, Cereatti, Seel, *Data* 6(7):72, 2021).
 
 Not from a seed: none of the four seeds tests on real data with a ground truth. The definitions are those of the
-dataset authors (``../shared/data/broad/README.md`` and their published evaluation code), written here with the
+dataset authors (their article and published evaluation code; the file format in ``data/broad/README.md``), written here with the
 library's quaternion functions:
 
 * error quaternion in the **earth** frame: ``q_err = q_est ⊗ conj(q_ref)`` -- the rotation that takes the reference
@@ -16,7 +16,7 @@ no z part, so ``z/w = tan(δ/2)`` (the heading part) and ``√(w² + z²) = cos(
 between the estimated and true vertical). Inclination is therefore blind to a constant heading offset.
 
 Heading offset. The authors' evaluation removes **no** heading offset: the optical reference was aligned with the
-IMU's magnetic East-North-Up frame when the dataset was made (on the eight shared trials the heading error of a good
+IMU's magnetic East-North-Up frame when the dataset was made (on the eight shipped trials the heading error of a good
 9-axis filter at the initial rest is below 1° on the undisturbed trials). A 6-axis filter has no heading reference at
 all, so its total and heading errors mostly measure an arbitrary start heading; :func:`broad_rmse` can remove the
 constant heading offset (``heading_offset='mean'``, our addition, not the authors' metric) to compare such filters

@@ -269,7 +269,7 @@ def plot_euler_frames(euler, ax=None, stages=True):
 def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
     """Two (roll, yaw) pairs that give the same body triad at θ = ±90° (seed 001 Euler note §6, fig 5).
 
-    At θ = +90° only ``φ - ψ`` is observable, at θ = -90° only ``φ + ψ`` (digest §4). The second pair keeps that
+    At θ = +90° only ``φ - ψ`` is observable, at θ = -90° only ``φ + ψ`` (Lab 01 shows why). The second pair keeps that
     combination and sets yaw to 0 -- exactly what :func:`rotations.dcm_to_euler` reports at lock (if ``yaw`` is
     already 0 the second pair shifts roll and yaw by 60° instead). Away from ±90° the two pairs differ, and the
     figure says so.

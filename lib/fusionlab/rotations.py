@@ -450,7 +450,7 @@ def euler_rates_matrix(roll, pitch):
 def body_rates_matrix(roll, pitch):
     """Matrix ``W(φ, θ)`` mapping Euler-angle rates to body rates, the inverse of :func:`euler_rates_matrix`.
 
-    ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (derived in the seed 001 digest §5.3; not printed in the note).
+    ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (not printed in the note; derived in docs/derivations.md §4).
     """
     r = validate.array(roll, "roll")
     p = validate.array(pitch, "pitch")
@@ -595,7 +595,7 @@ def seed000_labcode_angles(R):
     """Seed 000 lab 1 Part B extraction, verbatim: ``Pitch = asin(R(3,2))``, ``Roll = atan2(R(3,1), R(3,3))``,
     ``Yaw = atan2(R(1,2), R(2,2))``. Returns ``(..., 3)`` = ``[pitch, roll, yaw]`` in radians, in the lab's names.
 
-    These are not (3.69)/(3.72)/(3.75): on the same matrix those give other numbers (CORRECTIONS: 41.630 /
+    These are not (3.69)/(3.72)/(3.75): on the same matrix those give other numbers (worked here: 41.630 /
     -18.374 / -7.037 deg for the Part B result). A non-zero initial pitch reads back with the wrong sign.
     """
     R = validate.matrices(R, "R")
@@ -639,7 +639,7 @@ def seed001_quat_to_euler(q):
 
     ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``, ``ψ = atan2(2(ad + bc), a² + b² - c² - d²)``.
     They are right only for a **body→inertial** quaternion (our ``q``); the note's text calls its quaternion
-    inertial→body, for which they return nonsense (erratum, digest §6.5).
+    inertial→body, for which they return nonsense (an erratum, shown in Lab 01).
     """
     q = validate.quaternions(q, "q")
     a, b, c, d = (q[..., i] for i in range(4))

@@ -807,8 +807,8 @@ def integration_drift(t, bias, noise_std, dt):
 
 
 # ================================================================================================================
-# Lab 12: sensor error models (seed 001 sensors note §1-4 = digest §7), gyro noise, gravity removal and dead
-# reckoning (seed 001 position note = digest §9), the fixed-gain observer with a biased gyro (digest §8.4)
+# Lab 12: sensor error models (seed 001 sensors note §2-4), gyro noise, gravity removal and dead reckoning
+# (seed 001 position note §2-4), the fixed-gain observer with a biased gyro (seed 001 attitude note §4)
 # ================================================================================================================
 #
 # Conventions of this section. Seed 001 writes each triad's model with three matrices: a misalignment ``M``
@@ -841,7 +841,7 @@ def _triad_params(M, S, beta, who):
 
 
 def accel_measure(f, M, S, beta):
-    """Accelerometer forward model, seed 001 sensors note (digest §7.1): ``a_m = M_a (S_a(T) f − β(T))``.
+    """Accelerometer forward model, seed 001 sensors note §2: ``a_m = M_a (S_a(T) f − β(T))``.
 
     ``f = (F − F_g)/m`` is the specific force (:func:`specific_force`); the seed writes ``(1/m) S_a (F − F_g)``.
 
@@ -859,7 +859,7 @@ def accel_measure(f, M, S, beta):
 
 
 def accel_correct(a_m, M, S, beta):
-    """Accelerometer correction, seed 001 (digest §7.1): ``a_c = S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T))``.
+    """Accelerometer correction, seed 001 sensors note §2: ``a_c = S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T))``.
 
     The exact inverse of :func:`accel_measure` (the seed writes the bias ``β`` in the model, ``β_a`` here).
     """
@@ -869,7 +869,7 @@ def accel_correct(a_m, M, S, beta):
 
 
 def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
-    """Rate-gyro forward model with g-sensitivity, inverse of seed 001's correction (digest §7.2):
+    """Rate-gyro forward model with g-sensitivity, inverse of seed 001's correction (sensors note §3):
     ``p_m = M_g (S_g(T) p − β_g(T) + C_g,a a_c)``.
 
     Parameters
@@ -885,7 +885,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
 
 
 def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
-    """Rate-gyro correction, seed 001 (digest §7.2): ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``."""
+    """Rate-gyro correction, seed 001 sensors note §3: ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``."""
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c)
@@ -902,7 +902,7 @@ def _g_sensitivity(C_ga, a_c):
 
 
 def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
-    """Magnetometer forward model, the inverse of seed 001's corrected formula (digest §7.3):
+    """Magnetometer forward model, the inverse of seed 001's corrected formula (sensors note §4):
     ``b_m = M_b (S_b(T) D_s⁻¹ (b + β_h) − β_b(T))``.
 
     Soft iron ``D_s`` turns the sphere of readings into an ellipsoid, hard iron ``β_h`` moves its centre. Note the
@@ -921,7 +921,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
 
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
-    """Magnetometer correction, seed 001 corrected (digest §7.3 and erratum 13):
+    """Magnetometer correction, seed 001 sensors note §4, corrected (Lab 12's erratum):
     ``b_c = D_s S_b⁻¹(T) (M_b⁻¹ b_m + β_b(T)) − β_h``. The printed form is :func:`seed001_mag_correct_printed`."""
     b_m = validate.vectors(b_m, "b_m")
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
@@ -939,7 +939,7 @@ def _iron(D_s, beta_h):
 
 
 def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
-    """Seed 001's combined magnetometer formula **as printed** (digest erratum 13):
+    """Seed 001's combined magnetometer formula **as printed** (sensors note §4; the erratum of Lab 12):
     ``b_c = D_s S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T)) − β_h``.
 
     Read literally it corrects the magnetometer with the *accelerometer's* misalignment, sensitivity and bias (and
@@ -988,7 +988,7 @@ def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
 
 
 def remove_gravity(q_bn, acc, g=G, frame="NED"):
-    """Acceleration in the navigation frame from the specific force, seed 001 position note §1 (digest §9.1):
+    """Acceleration in the navigation frame from the specific force, seed 001 position note §2:
     ``a_I = R_B^I a_m + (0, 0, g)`` in NED (``a_m`` at rest reads ``(0, 0, −g)`` level), i.e. ``C_bn f + g_n``.
 
     Parameters
@@ -1008,7 +1008,7 @@ def remove_gravity(q_bn, acc, g=G, frame="NED"):
 
 
 def dead_reckon(acc_nav, dt, v0=None, p0=None):
-    """Velocity and position by the seed's discrete scheme (seed 001 position note §2, digest §9.2):
+    """Velocity and position by the seed's discrete scheme (seed 001 position note §3):
     ``v[k+1] = v[k] + T a[k]``, ``r[k+1] = r[k] + T v[k]``.
 
     Parameters
@@ -1029,10 +1029,10 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
 
 
 def seed001_table1(angle_deg, t, g=9.8, printed=True):
-    """Seed 001's Table 1 (digest §9.3): acceleration, velocity and position error of a tilt error.
+    """Seed 001's Table 1 (position note §4): acceleration, velocity and position error of a tilt error.
 
     ``a = g·sin(δ)`` (inferred; the note states no model), ``v = a·t``; position as printed ``a·t²``
-    (``printed=True``, the table's factor-of-2 erratum, digest erratum 16) or kinematic ``½·a·t²``.
+    (``printed=True``, the table's factor-of-2 erratum, shown in Lab 12) or kinematic ``½·a·t²``.
 
     Parameters
     ----------
@@ -1063,7 +1063,7 @@ def gyro_bias_position(t, bias, g=G):
 
 
 def observer_steady_state_error(L, T, bias):
-    """Steady-state angle error of seed 001's fixed-gain observer with a constant gyro bias (digest §8.4):
+    """Steady-state angle error of seed 001's fixed-gain observer with a constant gyro bias (attitude note §4):
     predict ``θ⁺ = θ + T(ω + b)``, update ``θ = θ⁺ + L(θ_acc − θ⁺)`` gives ``e_ss = (1 − L)·T·b / L``.
 
     Parameters

@@ -1,7 +1,7 @@
 """Seeded synthetic recordings for the labs, and the NanoCore12 terminal logs of seed 000 Lab 3 (§5.3-5.4).
 
-The thesis ships no data and states no sample rate, vibration, or bias (digest §3.5, §6 items 18-19), so the
-records here are built from the documented assumptions below (digest §5.2). Everything is seeded: the same call
+The thesis ships no data and states no sample rate, vibration, or bias, so the records here are built from
+the documented assumptions below (ours; data/README.md lists them). Everything is seeded: the same call
 gives the same numbers, and ``python -m fusionlab.simulate --out data/`` writes byte-identical files.
 
 What is here
@@ -21,7 +21,7 @@ The thesis sensor frame (seed 000 §3.1.3): **Z up**, a level board reads ``(0, 
 ``φ`` about X (roll, the "YZ angle") and ``θ`` about Y, the accelerometer reads
 ``ax = -sin θ, ay = sin φ cos θ, az = cos φ cos θ`` (the third row of seed 000 eq 3.40), so
 ``atan2(ay, az) = φ`` and the X gyro reads ``dφ/dt``; ``atan2(ax, az) = -θ`` for small ``φ``, and the Y gyro reads
-``dθ/dt`` (the thesis' sign conventions are unclear here, digest §6 item 5). Accelerations are in g, rates in °/s and
+``dθ/dt`` (the thesis' sign conventions are unclear here). Accelerations are in g, rates in °/s and
 angles in degrees at this edge (the units of the MCU log and of the spreadsheet); radians inside any filter.
 
 Documented assumptions (none of them is in the thesis)
@@ -80,7 +80,7 @@ def _smoothstep(u):
 
 def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 60.0), (7.0, -40.0),
                                      (9.0, 0.0), (11.0, 0.0))):
-    """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; digest §5.2), cosine ramps between waypoints.
+    """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; the waypoints are ours), cosine ramps between waypoints.
 
     Default: level 0-1 s, to +60° over 1-3 s, hold, to -40° over 5-7 s, back to 0 over 7-9 s, level 9-11 s.
 
@@ -329,7 +329,7 @@ def _body_rates(C):
 
 def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 30.0), still=10.0,
                        bias_dps=(2.0, -3.0, 1.5), inclination_deg=66.0, field_gauss=0.48, acc_bias=True):
-    """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1; digest §5.9) -- ours.
+    """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1) -- ours.
 
     Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of
     sinusoids (up to about 60°, 40°, 100° from the start, 0.05-0.4 Hz) and the hand moves about ±10 cm (up to ≈1 m/s²), faded in
@@ -404,7 +404,7 @@ T71_ACC_BIAS = 1e-3 * 9.80665
 def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(1500.0, -1500.0, 1500.0),
                        acc_bias_mg=(1.0, -1.0, 1.0), speed=60.0, g=9.80665, noise=True, model="thesis",
                        lat_deg=50.87):
-    """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1; digest §5.10) -- ours.
+    """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1) -- ours.
 
     Coordinated turns (bank up to about 20°) left and right, two climbs and a descent (pitch up to about ±5°) and
     speed changes of ±10 m/s around ``speed``; the heading stays within ±150° (the Euler UKF does not wrap yaw).
