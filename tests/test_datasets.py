@@ -352,6 +352,18 @@ def test_offline_download_failure_says_what_is_missing_and_how_to_get_it(monkeyp
     assert list(datasets.missing_trials()) == ["07_undisturbed_fast_rotation_B"]
 
 
+def test_a_copy_of_the_course_without_its_data_folder_is_told_where_the_file_goes(isolated):
+    # the autouse fixture points the course folder at a path that does not exist: data/ was not copied
+    with pytest.raises(datasets.DataMissing) as e:
+        datasets.load_trial(29, progress=False)
+    message = str(e.value)
+    assert f"put it in {datasets.SHIPPED_DIR} (or in a folder named by" in message
+    assert message.endswith("a complete copy of the course has it in data/broad/.")
+    with pytest.raises(datasets.DataMissing) as e:
+        datasets.load_trial(1, progress=False)             # not a shipped trial: no such promise
+    assert "complete copy" not in str(e.value)
+
+
 def test_missing_file_on_the_server_is_reported_with_its_http_status(monkeypatch, tmp_path):
     m = Mirror(tmp_path)                                            # serves an empty folder
     monkeypatch.setenv(datasets.ENV_URL, m.url)

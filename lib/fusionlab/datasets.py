@@ -355,9 +355,11 @@ def _fetch(name, folder, download, progress):
         path.unlink()
     looked = ", ".join(str(p) for p in [d for d in (shipped, env) if d is not None] + [cache])
     url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
-    target = shipped or env
+    target = env or shipped or SHIPPED_DIR                 # the course's data/broad/ even when it was not copied
     put = (f"put it in {target}" + ("" if env else f" (or in a folder named by the environment variable {ENV_DIR})")
            if target is not None else f"put it in a folder and set the environment variable {ENV_DIR} to that folder")
+    if expected is not None and shipped is None:           # the trials with a known checksum are the shipped ones
+        put += "; a complete copy of the course has it in data/broad/"
     get_it = (f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once and "
               f"checked), or download {url} yourself and {put}.")
     if not download:
