@@ -8,8 +8,9 @@ autograded/, feedback/           -- grading results (not committed)
 import os
 
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
+from nbgrader.converters import Autograde
 from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearOutput, DeduplicateIds, GetGrades,
-                                    OverwriteCells, OverwriteKernelspec)
+                                    NbGraderPreprocessor, OverwriteCells, OverwriteKernelspec)
 
 
 class RestoreDeletedCells(OverwriteCells):
@@ -37,6 +38,23 @@ class RestoreDeletedCells(OverwriteCells):
             nb.cells.insert(present.index(earlier[-1]) + 1 if earlier else 0, new)
         return nb, resources
 
+class HideTestSource(NbGraderPreprocessor):
+    """Cut the traceback of a failed autograder-test cell down to its last line, ``ename: evalue``.
+
+    ClearHiddenTests clears a test cell's source, but the traceback in its outputs quotes the lines around the
+    failing assert -- the hidden tests themselves. The error output stays an error (the cell still scores 0);
+    only the quoted code goes.
+    """
+
+    def preprocess_cell(self, cell, resources, index):
+        nbgrader = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "code" and nbgrader.get("grade") and not nbgrader.get("solution"):
+            for output in cell.get("outputs", []):
+                if output.output_type == "error":
+                    output.traceback = [f"{output.ename}: {output.evalue}"]
+        return cell, resources
+
+
 c = get_config()  # noqa: F821 (provided by nbgrader)
 
 c.CourseDirectory.root = os.path.dirname(os.path.abspath(__file__))
@@ -63,5 +81,8 @@ c.Autograde.sanitize_preprocessors = [ClearOutput, DeduplicateIds, OverwriteKern
                                       CheckCellMetadata]
 c.RestoreDeletedCells.add_missing_cells = True
 
-# Feedback HTML must not reveal the hidden tests (nbgrader 0.9.6 keeps them by default).
-c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, CSSHTMLHeaderPreprocessor]
+# Neither the autograded notebook nor the feedback HTML made from it may reveal the hidden tests: nbgrader 0.9.6
+# keeps them in the feedback by default, and a failed test's traceback quotes them.
+c.Autograde.autograde_preprocessors = [*Autograde.class_traits()["autograde_preprocessors"].default(),
+                                       HideTestSource]
+c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, HideTestSource, CSSHTMLHeaderPreprocessor]
