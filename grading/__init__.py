@@ -1,0 +1,1 @@
+"""Instructor-only grading tools (never shipped in the student release)."""

@@ -1,0 +1,598 @@
+"""Integrity report: constructs in a submission's answer cells that no honest answer needs.
+
+    python -m grading.integrity LAB [--course .]
+
+scans ``submitted/*/LAB/*.ipynb`` against the source notebook ``solutions/LAB/LAB.ipynb`` and writes
+``integrity_LAB.md`` (a summary table, then each flag with its cell and line) and ``integrity_LAB.csv`` (one row per
+flag; a clean submission gets one row with no flag) to the course folder, beside ``grades.csv``.
+
+What is scanned: every code cell the student could change that still runs at grading time -- the answer (solution)
+cells, cells the student added, and provided cells the student edited. Locked cells are replaced by the
+instructor's version before grading, so they are not scanned. Each cell is parsed with ``ast`` (IPython magics are
+taken out first and judged on their own); a cell that does not parse is flagged ``syntax`` and scanned token by
+token instead.
+
+A flag does not change a grade. It lists the submission for REVIEW: read the cell before trusting the score.
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import csv
+import io
+import re
+import sys
+import tokenize
+from pathlib import Path
+
+import nbformat
+
+# Names every lab binds in its locked setup cell (aliases of modules) even when the scanner cannot see an import.
+MODULE_NAMES = {"np", "numpy", "plt", "matplotlib", "sp", "sympy", "scipy", "fusionlab", "builtins", "sys", "os",
+                "math", "IPython", "filterpy", "guard", "checks"}
+
+# kind -> why (one sentence a reviewer reads beside the offending line)
+WHY = {
+    "patch": "assigns or deletes an attribute of an imported module or object: it can change what the tests compare",
+    "rebind": "rebinds a name the locked setup cell or the tests rely on",
+    "reflection": "reflection (setattr/getattr/vars/globals, __code__, __dict__ ...) reaches code it should not touch",
+    "builtins": "touches the builtins every cell (and every test) uses",
+    "sys-hook": "changes interpreter machinery (sys.modules, sys.excepthook, settrace, import hooks, atexit)",
+    "ipython": "reaches the IPython shell (get_ipython, input/AST transformers, set_custom_exc, event callbacks)",
+    "exec": "runs code built at run time (exec, eval, compile, __import__, importlib)",
+    "reference": "uses the reference function this exercise asks you to write yourself",
+    "file": "writes a file, or reads the instructor's folders",
+    "process": "starts a process or a shell command",
+    "thread": "starts a thread or a timer that runs after the cell",
+    "network": "opens a network connection",
+    "ctypes": "calls native code (ctypes/cffi)",
+    "signal": "installs a signal handler",
+    "operator": "defines a class whose comparisons or conversions could fool an assert",
+    "foreign-cell": "carries nbgrader metadata with a grade_id this lab does not have (pasted from another lab?)",
+    "syntax": "does not parse as Python (scanned token by token instead)",
+    "unreadable": "the submission is not a readable notebook",
+}
+
+DUNDERS = {"__code__", "__dict__", "__globals__", "__closure__", "__defaults__", "__kwdefaults__", "__subclasses__",
+           "__bases__", "__mro__", "__loader__", "__spec__", "__func__", "__wrapped__", "__setattr__", "__delattr__",
+           "__getattribute__", "__class__", "__self__", "__reduce__", "__reduce_ex__", "__subclasshook__"}
+CALLS = {  # bare names that are suspicious when called
+    "setattr": "reflection", "delattr": "reflection", "getattr": "reflection", "vars": "reflection",
+    "globals": "reflection", "locals": "reflection", "exec": "exec", "eval": "exec", "compile": "exec",
+    "__import__": "exec", "get_ipython": "ipython", "breakpoint": "sys-hook",
+}
+IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input_transformer_manager",
+                 "ast_transformers", "set_custom_exc", "custom_exceptions", "CustomTB", "events", "register_magic_function",
+                 "register_magics", "run_cell", "run_cell_magic", "run_line_magic", "showtraceback",
+                 "_showtraceback", "showsyntaxerror", "InteractiveTB", "SyntaxTB", "user_ns", "user_global_ns",
+                 "set_hook", "prefilter_manager", "displayhook", "display_pub", "kernel", "shell"}
+SYS_ATTRS = {"modules", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks", "path_importer_cache",
+             "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
+             "breakpointhook", "audit"}
+MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
+    "builtins": "builtins", "ctypes": "ctypes", "cffi": "ctypes", "signal": "signal", "subprocess": "process",
+    "multiprocessing": "process", "pty": "process", "socket": "network", "urllib": "network", "requests": "network",
+    "http": "network", "httpx": "network", "ftplib": "network", "smtplib": "network", "urllib3": "network",
+    "aiohttp": "network", "websocket": "network", "importlib": "exec", "runpy": "exec", "code": "exec",
+    "codeop": "exec", "marshal": "exec", "types": "reflection", "inspect": "reflection", "gc": "reflection",
+    "atexit": "sys-hook", "threading": "thread", "_thread": "thread", "sched": "thread", "asyncio": "thread",
+    "shutil": "file", "tempfile": "file", "IPython": "ipython", "ipykernel": "ipython", "unittest": "reflection",
+    "concurrent": "process",
+}
+OS_CALLS = {"system": "process", "popen": "process", "fork": "process", "forkpty": "process", "kill": "process",
+            "killpg": "process", "spawnl": "process", "spawnv": "process", "spawnve": "process", "spawnlp": "process",
+            "execv": "process", "execve": "process", "execl": "process", "execlp": "process", "execvp": "process",
+            "posix_spawn": "process", "_exit": "process", "remove": "file", "unlink": "file", "rename": "file",
+            "replace": "file", "rmdir": "file", "removedirs": "file", "makedirs": "file", "mkdir": "file",
+            "chmod": "file", "chdir": "file", "symlink": "file", "link": "file", "truncate": "file",
+            "putenv": "process", "environ": "process"}
+WRITE_METHODS = {"write_text", "write_bytes", "savetxt", "savez", "savez_compressed", "tofile", "to_csv",
+                 "to_excel", "to_pickle", "savefig", "touch", "mkdir", "unlink", "rmdir", "rename", "symlink_to",
+                 "dump"}
+OPERATOR_DUNDERS = {"__eq__", "__ne__", "__lt__", "__le__", "__gt__", "__ge__", "__bool__", "__array__",
+                    "__array_ufunc__", "__array_function__", "__array_interface__", "__float__", "__complex__",
+                    "__abs__", "__len__", "__index__", "__int__", "__getattr__"}
+INSTRUCTOR_PATHS = re.compile(r"\.\.|^/|solution|gradebook|autograded|submitted|feedback|nbgrader_config")
+# Harmless magics; any other magic is flagged (``!cmd`` and shell cell magics as processes).
+SAFE_MAGICS = {"matplotlib", "timeit", "time", "precision", "pprint", "who", "whos", "pinfo", "pinfo2", "psearch"}
+SHELL_MAGICS = {"system", "sx", "bash", "sh", "script", "perl", "ruby", "python", "python3", "pypy", "sc", "run",
+                "load", "writefile", "env", "store", "cd", "pushd", "popd", "rm", "mkdir", "mv", "cp"}
+
+# Reference functions per lab and exercise, for labs whose test cells do not name them with guard.forbid / forbid=.
+FALLBACK_FORBID = {
+    "00_mems_sensors": {1: ["smd_transfer"], 2: ["accel_from_bridge"], 3: ["adc_to_physical"],
+                        6: ["arctan2", "atan2"], 7: ["tilt_from_accel"], 8: ["coriolis_force"], 9: ["integrate_rate"]},
+    "01_euler_rotations": {1: ["euler_to_dcm"], 4: ["dcm_renormalize"], 5: ["rodrigues_dcm"]},
+    "02_kalman_falling_body": {1: ["joseph_covariance"], 2: ["falling_body_state_space"], 3: ["predict"],
+                               4: ["update", "kalman_gain"]},
+    "03_correlation_fusion": {1: ["moving_average"], 2: ["ratio"], 3: ["fuse"]},
+    "04_ecompass": {2: ["kappa_general"], 4: ["weights"], 5: ["tilt_compensated_heading"]},
+    "05_freescale_kalman": {1: ["measurement_matrix"], 2: ["process_noise"], 3: ["measurement_noise"],
+                            4: ["kalman_gain"], 5: ["step"]},
+    "06_gfimu_aiv": {1: ["aiv_map"], 2: ["quadratic_jacobian"], 3: ["three_state_noise"], 4: ["update_correlated"]},
+    "07_gfimu_constraints": {1: ["aiv_measurement_jacobian"], 3: ["constraints", "constraint_jacobian"]},
+    "08_north_finder": {1: ["rate_from_rotating"], 2: ["rate_noise_coefficient"], 3: ["rate_noise_coefficient_exact"],
+                        4: ["demodulate"], 5: ["synchronous_sampling"]},
+    "09_dcm_ahrs": {1: ["accel_measurement_matrix", "mag_measurement_matrix"],
+                    2: ["ahrs_transition", "ahrs_process_noise"]},
+    "10_gps_ins": {1: ["ins_transition"], 2: ["JulierSigmaPoints", "sigma_points"]},
+    "11_real_data": {1: ["heading_error"], 2: ["inclination_error"], 3: ["rms"]},
+    "12_sensor_errors": {1: ["quadric_normal_equations"], 2: ["read_arw"], 3: ["remove_gravity"]},
+}
+
+
+def _nbg(cell):
+    return cell.metadata.get("nbgrader", {})
+
+
+def _exercise(grade_id):
+    """The exercise number of ``exN_...``, or None."""
+    m = re.match(r"ex(\d+)_", grade_id or "")
+    return int(m.group(1)) if m else None
+
+
+def _last_name(node):
+    if isinstance(node, ast.Attribute):
+        return node.attr
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value.rsplit(".", 1)[-1]
+    return None
+
+
+def _forbidden_in(source):
+    """Last names of the arguments of ``guard.forbid(...)`` and of every ``forbid=(...)`` in a test cell."""
+    try:
+        tree = ast.parse(_strip_magics(source)[0])
+    except SyntaxError:
+        return set()
+    names = set()
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call):
+            continue
+        if _last_name(node.func) == "forbid":
+            names |= {_last_name(a) for a in node.args}
+        for kw in node.keywords:
+            if kw.arg == "forbid":
+                items = kw.value.elts if isinstance(kw.value, (ast.Tuple, ast.List, ast.Set)) else [kw.value]
+                names |= {_last_name(a) for a in items}
+    return names - {None}
+
+
+class Source:
+    """What the scanner needs from the instructor's notebook of a lab."""
+
+    def __init__(self, nb, lab):
+        self.lab = lab
+        self.cells = {_nbg(c)["grade_id"]: c for c in nb.cells if _nbg(c).get("grade_id")}
+        self.provided = {c.source.strip() for c in nb.cells if c.cell_type == "code" and not _nbg(c).get("solution")}
+        self.forbid = {}  # exercise -> names of its reference functions
+        for gid, cell in self.cells.items():
+            if _nbg(cell).get("grade") and not _nbg(cell).get("solution") and _exercise(gid):
+                self.forbid.setdefault(_exercise(gid), set()).update(_forbidden_in(cell.source))
+        if not any(self.forbid.values()):
+            self.forbid = {k: set(v) for k, v in FALLBACK_FORBID.get(lab, {}).items()}
+        # names the locked cells bind at top level (imports, definitions, constants) and the tests read
+        bound, read = set(MODULE_NAMES), set()
+        self.imported = set(MODULE_NAMES)
+        self.import_of = {"np": "numpy", "plt": "matplotlib.pyplot", "sp": "sympy"}
+        for cell in nb.cells:
+            if cell.cell_type != "code":
+                continue
+            try:
+                tree = ast.parse(_strip_magics(cell.source)[0])
+            except SyntaxError:
+                continue
+            if _nbg(cell).get("grade") and not _nbg(cell).get("solution"):
+                read |= {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+            if _nbg(cell).get("solution"):
+                continue
+            for node in tree.body:
+                if isinstance(node, (ast.Import, ast.ImportFrom)):
+                    for a in node.names:
+                        name = a.asname or a.name.split(".")[0]
+                        self.import_of[name] = _import_target(node, a)
+                        self.imported.add(name)
+                        bound.add(name)
+                elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                    bound.add(node.name)
+                elif isinstance(node, ast.Assign):
+                    bound |= {n.id for t in node.targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+        self.protected = self.imported | (bound & read)
+
+    @property
+    def all_forbidden(self):
+        return set().union(*self.forbid.values()) if self.forbid else set()
+
+
+def _import_target(node, alias):
+    """What an import binds: 'numpy' for ``import numpy as np``, 'fusionlab.kalman' for ``from fusionlab import
+    kalman as kf``."""
+    if isinstance(node, ast.Import):
+        return alias.name if alias.asname else alias.name.split(".")[0]
+    return f"{'.' * node.level}{node.module or ''}.{alias.name}"
+
+
+def _strip_magics(source):
+    """(python source with magic lines blanked, [(line, magic name, is_shell)]), line numbers kept."""
+    out, magics = [], []
+    lines = source.splitlines()
+    for i, line in enumerate(lines, 1):
+        stripped = line.strip()
+        m = re.match(r"^(?:[\w\s,]+=\s*)?(%%|%|!!|!)\s*(\w*)", stripped)
+        if m and stripped[:1] in "%!" or (m and re.match(r"^[\w\s,]+=\s*[%!]", stripped)):
+            prefix, name = m.groups()
+            shell = prefix.startswith("!") or name in SHELL_MAGICS
+            magics.append((i, name or prefix, shell))
+            if prefix == "%%" and i == 1:  # a cell magic: the rest of the cell is its body
+                if name in ("timeit", "time", "capture"):
+                    out.append("")
+                    continue
+                return "\n".join([""] * len(lines)), magics
+            out.append(line[: len(line) - len(line.lstrip())] + "pass")
+        else:
+            out.append(line)
+    return "\n".join(out), magics
+
+
+class _Visitor(ast.NodeVisitor):
+    def __init__(self, source, forbidden, exercise, added):
+        self.src, self.forbidden, self.exercise, self.added = source, forbidden, exercise, added
+        self.flags = []
+        self.scopes = [set()]  # names local to the enclosing functions
+
+    def flag(self, node, kind, why=None):
+        self.flags.append((node.lineno, kind, why))
+
+    def _local(self, name):
+        return any(name in s for s in self.scopes[1:])
+
+    def _root(self, node):
+        while isinstance(node, (ast.Attribute, ast.Subscript, ast.Call)):
+            node = node.func if isinstance(node, ast.Call) else node.value
+        return node.id if isinstance(node, ast.Name) else None
+
+    def _store_target(self, target, node):
+        for t in ast.walk(target):
+            if isinstance(t, ast.Attribute) and isinstance(t.ctx, (ast.Store, ast.Del)):
+                root = self._root(t)
+                if root and root in self.src.imported and not self._local(root):
+                    self.flag(node, "patch")
+                elif self._root(t) is None and isinstance(t.value, ast.Call):
+                    self.flag(node, "patch")  # get_ipython().x = ..., some_module().x = ...
+            elif isinstance(t, ast.Name) and isinstance(t.ctx, ast.Store) and len(self.scopes) == 1:
+                if t.id in self.src.protected:
+                    self.flag(node, "rebind", f"rebinds `{t.id}`, which the locked cells or the tests use")
+
+    # functions: their parameters and assigned names shadow the notebook's names
+    def _function(self, node):
+        args = node.args
+        names = {a.arg for a in [*args.posonlyargs, *args.args, *args.kwonlyargs]}
+        names |= {a.arg for a in (args.vararg, args.kwarg) if a}
+        body = node.body if isinstance(node.body, list) else [node.body]
+        for sub in body:
+            for n in ast.walk(sub):
+                if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store):
+                    names.add(n.id)
+                elif isinstance(n, ast.Global):
+                    names -= set(n.names)
+                    for name in n.names:
+                        if name in self.src.protected:
+                            self.flag(n, "rebind", f"declares `{name}` global inside a function")
+        self.scopes.append(names)
+        self.generic_visit(node)
+        self.scopes.pop()
+
+    def visit_FunctionDef(self, node):
+        if len(self.scopes) == 1 and node.name in self.src.protected:
+            self.flag(node, "rebind", f"redefines `{node.name}`, which the locked cells or the tests use")
+        self._function(node)
+
+    visit_AsyncFunctionDef = visit_FunctionDef
+    visit_Lambda = _function
+
+    def visit_ClassDef(self, node):
+        if len(self.scopes) == 1 and node.name in self.src.protected:
+            self.flag(node, "rebind", f"redefines `{node.name}`, which the locked cells or the tests use")
+        for item in node.body:
+            if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)) and item.name in OPERATOR_DUNDERS:
+                self.flag(item, "operator", f"class `{node.name}` defines `{item.name}`")
+        self.generic_visit(node)
+
+    def visit_Assign(self, node):
+        for t in node.targets:
+            self._store_target(t, node)
+        self.generic_visit(node)
+
+    def visit_AugAssign(self, node):
+        self._store_target(node.target, node)
+        self.generic_visit(node)
+
+    def visit_AnnAssign(self, node):
+        self._store_target(node.target, node)
+        self.generic_visit(node)
+
+    def visit_Delete(self, node):
+        for t in node.targets:
+            self._store_target(t, node)
+        self.generic_visit(node)
+
+    def visit_For(self, node):
+        self._store_target(node.target, node)
+        self.generic_visit(node)
+
+    def visit_NamedExpr(self, node):
+        self._store_target(node.target, node)
+        self.generic_visit(node)
+
+    def visit_With(self, node):
+        for item in node.items:
+            if item.optional_vars is not None:
+                self._store_target(item.optional_vars, node)
+        self.generic_visit(node)
+
+    def visit_Global(self, node):
+        if len(self.scopes) == 1:
+            return
+        for name in node.names:
+            if name in self.src.protected:
+                self.flag(node, "rebind", f"declares `{name}` global inside a function")
+
+    def _import(self, node, modules, names):
+        for mod in modules:
+            top = mod.split(".")[0]
+            if top in MODULE_KINDS and not (top == "IPython" and mod.startswith("IPython.display")):
+                self.flag(node, MODULE_KINDS[top], f"imports `{mod}`")
+            elif mod in ("os", "sys") and names & (set(OS_CALLS) | SYS_ATTRS):
+                self.flag(node, "sys-hook" if mod == "sys" else OS_CALLS[min(names & set(OS_CALLS))],
+                          f"imports {', '.join(sorted(names))} from `{mod}`")
+        self._reference(node, names)
+
+    def _rebinds(self, node):
+        for a in node.names:
+            name = a.asname or a.name.split(".")[0]
+            if a.name == "*":
+                self.flag(node, "rebind", f"`from {node.module} import *` can rebind any name")
+            elif len(self.scopes) == 1 and name in self.src.protected and (
+                    self.src.import_of.get(name, name) != _import_target(node, a)):
+                self.flag(node, "rebind", f"binds `{name}` to `{_import_target(node, a)}`")
+
+    def visit_Import(self, node):
+        self._import(node, [a.name for a in node.names], set())
+        self._rebinds(node)
+
+    def visit_ImportFrom(self, node):
+        self._import(node, [node.module or ""], {a.name for a in node.names})
+        self._rebinds(node)
+
+    def _reference(self, node, names):
+        hit = sorted(names & self.forbidden)
+        if hit:
+            where = f"exercise {self.exercise}" if self.exercise else "an exercise"
+            extra = " (in a cell you added or edited)" if self.added else ""
+            self.flag(node, "reference", f"uses `{hit[0]}`, the reference {where} asks you to write{extra}")
+
+    def visit_Name(self, node):
+        if isinstance(node.ctx, ast.Load):
+            if node.id == "__builtins__":
+                self.flag(node, "builtins")
+            elif node.id in DUNDERS or node.id == "__import__":
+                self.flag(node, "exec" if node.id == "__import__" else "reflection")
+            if not self._local(node.id):
+                self._reference(node, {node.id})
+
+    def visit_Attribute(self, node):
+        root = self._root(node)
+        if node.attr in DUNDERS:
+            self.flag(node, "reflection", f"uses `{node.attr}`")
+        elif node.attr == "__builtins__" or (root == "builtins" and not self._local(root)):
+            self.flag(node, "builtins")
+        elif root == "sys" and node.attr in SYS_ATTRS and not self._local(root):
+            self.flag(node, "sys-hook", f"uses `sys.{node.attr}`")
+        elif root == "os" and node.attr in OS_CALLS and not self._local(root):
+            self.flag(node, OS_CALLS[node.attr], f"uses `os.{node.attr}`")
+        elif node.attr in IPYTHON_ATTRS and (root is None or root not in self.src.imported or root == "IPython"):
+            if node.attr not in ("kernel", "shell", "events", "displayhook") or root is None:
+                self.flag(node, "ipython", f"uses `.{node.attr}`")
+        elif node.attr in ("settrace", "setprofile", "excepthook") and not self._local(root or ""):
+            self.flag(node, "sys-hook", f"uses `.{node.attr}`")
+        if isinstance(node.ctx, ast.Load):
+            self._reference(node, {node.attr})
+        self.generic_visit(node)
+
+    def visit_Constant(self, node):
+        if isinstance(node.value, str) and node.value in self.forbidden:
+            self._reference(node, {node.value})
+
+    def visit_Call(self, node):
+        name = node.func.id if isinstance(node.func, ast.Name) else None
+        if name in CALLS and not self._local(name):
+            self.flag(node, CALLS[name], f"calls `{name}()`")
+        elif name == "open" and not self._local(name):
+            self._open(node)
+        elif isinstance(node.func, ast.Attribute):
+            attr = node.func.attr
+            if attr in WRITE_METHODS or (attr in ("save", "dump") and self._root(node.func) in ("np", "numpy",
+                                                                                             "json", "pickle")):
+                self.flag(node, "file", f"calls `.{attr}()`")
+            elif attr == "open" and self._root(node.func) not in (None,):
+                self._open(node)
+            elif attr in ("Thread", "Timer") or (attr == "start_new_thread"):
+                self.flag(node, "thread", f"calls `.{attr}()`")
+            elif attr in ("register",) and self._root(node.func) in ("atexit", "events"):
+                self.flag(node, "sys-hook" if self._root(node.func) == "atexit" else "ipython",
+                          f"calls `{self._root(node.func)}.register()`")
+        self.generic_visit(node)
+
+    def _open(self, node):
+        mode = node.args[1] if len(node.args) > 1 else next((k.value for k in node.keywords if k.arg == "mode"), None)
+        path = node.args[0] if node.args else None
+        if mode is not None and not (isinstance(mode, ast.Constant) and set(str(mode.value)) <= set("rbt")):
+            self.flag(node, "file", "opens a file for writing")
+        elif isinstance(path, ast.Constant) and INSTRUCTOR_PATHS.search(str(path.value)):
+            self.flag(node, "file", f"opens `{path.value}`")
+
+
+def _token_scan(source, forbidden):
+    """Flags for a cell that does not parse: suspicious names, found token by token (or word by word)."""
+    words = []
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(source).readline):
+            if tok.type == tokenize.NAME:
+                words.append((tok.start[0], tok.string))
+    except (tokenize.TokenError, IndentationError, SyntaxError):
+        words = [(i, w) for i, line in enumerate(source.splitlines(), 1) for w in re.findall(r"\w+", line)]
+    table = {**CALLS, **{d: "reflection" for d in DUNDERS}, "__builtins__": "builtins", "builtins": "builtins",
+             **{a: "ipython" for a in IPYTHON_ATTRS if a not in ("kernel", "shell", "events", "displayhook")},
+             **{m: k for m, k in MODULE_KINDS.items() if k != "reflection"}, "excepthook": "sys-hook",
+             "settrace": "sys-hook", "system": "process", "popen": "process", "fork": "process"}
+    flags = []
+    for line, word in words:
+        if word in table:
+            flags.append((line, table[word], f"`{word}` in a cell that does not parse"))
+        elif word in forbidden:
+            flags.append((line, "reference", f"`{word}`, a reference function, in a cell that does not parse"))
+    return flags
+
+
+def scan_source(source, src, exercise=None, added=False):
+    """Flags (line, kind, why) of one cell's code."""
+    code, magics = _strip_magics(source)
+    flags = []
+    for line, name, shell in magics:
+        if shell:
+            flags.append((line, "process", f"shell command or magic `{name}`"))
+        elif name not in SAFE_MAGICS:
+            flags.append((line, "ipython", f"IPython magic `%{name}`"))
+    forbidden = src.forbid.get(exercise, set()) if exercise else (src.all_forbidden if added else set())
+    try:
+        tree = ast.parse(code)
+    except SyntaxError as err:
+        return flags + [(err.lineno or 1, "syntax", None)] + _token_scan(code, forbidden)
+    visitor = _Visitor(src, forbidden, exercise, added)
+    visitor.visit(tree)
+    return flags + visitor.flags
+
+
+def _flags_of(src, nb):
+    rows = []
+    for index, cell in enumerate(nb.cells):
+        md = _nbg(cell)
+        gid = md.get("grade_id")
+        label = gid or f"cell {index + 1}"
+        if gid and gid not in src.cells:
+            rows.append(dict(cell=label, kind="foreign-cell", line=1, code=cell.source.split("\n", 1)[0][:120],
+                             why=WHY["foreign-cell"]))
+        if cell.cell_type != "code" or not cell.source.strip():
+            continue
+        if gid in src.cells:
+            original = src.cells[gid]
+            if not _nbg(original).get("solution"):
+                continue  # locked: nbgrader replaces it with the instructor's version before grading
+            found = scan_source(cell.source, src, exercise=_exercise(gid))
+        elif cell.source.strip() in src.provided:
+            continue  # a provided cell, untouched
+        else:
+            found = scan_source(cell.source, src, exercise=_exercise(gid), added=True)
+        lines = cell.source.splitlines()
+        seen = set()
+        for line, kind, why in found:
+            if (line, kind) in seen:
+                continue
+            seen.add((line, kind))
+            code = lines[line - 1].strip() if 0 < line <= len(lines) else ""
+            rows.append(dict(cell=label, kind=kind, line=line, code=code[:160], why=why or WHY[kind]))
+    return rows
+
+
+def scan_notebook(source_nb_path, submitted_nb_path):
+    """Flags of one submission: a list of {"cell", "kind", "line", "code", "why"} (empty when nothing is found)."""
+    source_nb_path = Path(source_nb_path)
+    src = Source(nbformat.read(source_nb_path, as_version=4), source_nb_path.parent.name)
+    try:
+        nb = nbformat.read(submitted_nb_path, as_version=4)
+    except Exception as err:  # noqa: BLE001 -- any unreadable file is reported, never a crash of the whole class
+        return [dict(cell="-", kind="unreadable", line=0, code=str(err).splitlines()[0][:160], why=WHY["unreadable"])]
+    return _flags_of(src, nb)
+
+
+def _md_cell(text):
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def write_report(rows, path_md, path_csv, scores=None):
+    """Write the Markdown report and the CSV of ``rows`` = [(student, lab, flags), ...].
+
+    ``scores`` (optional) maps a student to the autograded score to show beside the status.
+    """
+    rows = sorted(rows, key=lambda r: (not r[2], r[0], r[1]))  # flagged first
+    scores = scores or {}
+    flagged = [r for r in rows if r[2]]
+    labs = sorted({lab for _, lab, _ in rows})
+    md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
+          f"{len(rows)} submissions scanned; **{len(flagged)} to REVIEW**. A flag is a construct that no honest "
+          "answer needs, found in a cell that runs at grading time. It does not change the grade: read the cell "
+          "before trusting the score.", "",
+          "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
+    for student, lab, flags in rows:
+        kinds = sorted({f["kind"] for f in flags})
+        md.append(f"| {student} | {lab} | {'REVIEW' if flags else 'clean'} | {scores.get(student, '')} | "
+                  f"{len(flags)} | {', '.join(kinds)} |")
+    for student, lab, flags in flagged:
+        md += ["", f"## {student} ({lab})", "", "| cell | line | kind | code | why |", "|---|---|---|---|---|"]
+        md += [f"| {f['cell']} | {f['line']} | {f['kind']} | `{_md_cell(f['code'])}` | {_md_cell(f['why'])} |"
+               for f in flags]
+    Path(path_md).write_text("\n".join(md) + "\n")
+    with open(path_csv, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["student", "lab", "status", "cell", "line", "kind", "code", "why"])
+        for student, lab, flags in rows:
+            if not flags:
+                out.writerow([student, lab, "clean", "", "", "", "", ""])
+            for f in flags:
+                out.writerow([student, lab, "REVIEW", f["cell"], f["line"], f["kind"], f["code"], f["why"]])
+
+
+def _scores(course, lab):
+    """Autograded totals from the course's gradebook, if there is one."""
+    db = course / "gradebook.db"
+    if not db.exists():
+        return {}
+    from nbgrader.api import Gradebook, MissingEntry
+    out = {}
+    with Gradebook(f"sqlite:///{db}") as gb:
+        for student in gb.students:
+            try:
+                sub = gb.find_submission(lab, student.id)
+            except MissingEntry:
+                continue
+            out[student.id] = f"{sub.score:g} / {sub.max_score:g}"
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("lab", help="lab folder name, e.g. 02_kalman_falling_body")
+    parser.add_argument("--course", default=".", help="course folder (holds solutions/ and submitted/)")
+    args = parser.parse_args(argv)
+    course = Path(args.course).resolve()
+    source_dir = course / "solutions" / args.lab
+    if not source_dir.is_dir():
+        parser.error(f"no source notebook folder {source_dir}")
+    rows = []
+    for path in sorted(course.glob(f"submitted/*/{args.lab}/*.ipynb")):
+        source = source_dir / path.name
+        if not source.exists():
+            source = source_dir / f"{args.lab}.ipynb"
+        rows.append((path.parts[-3], args.lab, scan_notebook(source, path)))
+    md, csv_path = course / f"integrity_{args.lab}.md", course / f"integrity_{args.lab}.csv"
+    write_report(rows, md, csv_path, scores=_scores(course, args.lab))
+    flagged = sorted(student for student, _, flags in rows if flags)
+    print(f"{len(rows)} submissions of {args.lab} scanned, {len(flagged)} to review"
+          + (f": {', '.join(flagged)}" if flagged else "") + f"\n{md}\n{csv_path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

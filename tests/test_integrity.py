@@ -1,0 +1,190 @@
+"""The integrity scanner (grading/integrity.py): every construct no honest answer needs is flagged with its cell and
+line; every model answer and every untouched release of every lab is clean; the report lists flagged students for
+REVIEW."""
+from __future__ import annotations
+
+import csv
+import textwrap
+
+import nbformat
+import pytest
+
+from conftest import LABS, ROOT
+from grading import integrity
+
+LAB = "02_kalman_falling_body"
+SOURCE = ROOT / "solutions" / LAB / f"{LAB}.ipynb"
+MODEL = "def my_joseph(P, K, H, R):\n    I_KH = np.eye(P.shape[0]) - K @ H\n    return I_KH @ P @ I_KH.T + K @ R @ K.T"
+
+# (what a cheater appends to the answer of exercise 1, the kind it must raise)
+CONSTRUCTS = [
+    ("np.allclose = lambda *a, **k: True", "patch"),
+    ("np.linalg.norm = abs", "patch"),
+    ("del np.isclose", "patch"),
+    ("checks.check_close = print", "patch"),
+    ("kf.joseph_covariance = my_joseph", "patch"),
+    ("import builtins\nbuiltins.abs = lambda x: 0", "builtins"),
+    ("__builtins__.abs = None", "builtins"),
+    ("setattr(np, 'allclose', print)", "reflection"),
+    ("my_joseph.__code__ = print.__code__", "reflection"),
+    ("np.__dict__['allclose'] = print", "reflection"),
+    ("globals()['np'] = None", "reflection"),
+    ("vars(np)['allclose'] = print", "reflection"),
+    ("import sys\nsys.modules['numpy'] = None", "sys-hook"),
+    ("import sys\nsys.excepthook = print", "sys-hook"),
+    ("import sys\nsys.settrace(print)", "sys-hook"),
+    ("import atexit\natexit.register(print)", "sys-hook"),
+    ("ip = get_ipython()", "ipython"),
+    ("get_ipython().input_transformers_cleanup.append(lambda lines: [])", "ipython"),
+    ("get_ipython().ast_transformers.append(None)", "ipython"),
+    ("get_ipython().set_custom_exc((AssertionError,), print)", "ipython"),
+    ("get_ipython().events.register('post_run_cell', print)", "ipython"),
+    ("%load_ext autoreload", "ipython"),
+    ("exec('P = 0')", "exec"),
+    ("x = eval('1 + 1')", "exec"),
+    ("c = compile('1', 'f', 'eval')", "exec"),
+    ("import importlib", "exec"),
+    ("J = kf.joseph_covariance(P, K, H, R)", "reference"),
+    ("from fusionlab.kalman import joseph_covariance as jc", "reference"),
+    ("f = getattr(kf, 'joseph_covariance')", "reference"),
+    ("open('answers.txt', 'w').write('x')", "file"),
+    ("np.save('P.npy', np.eye(2))", "file"),
+    ("from pathlib import Path\nPath('x.txt').write_text('y')", "file"),
+    ("src = open('../../solutions/02_kalman_falling_body/02_kalman_falling_body.ipynb').read()", "file"),
+    ("import subprocess", "process"),
+    ("import os\nos.system('ls')", "process"),
+    ("import multiprocessing", "process"),
+    ("import os\npid = os.fork()", "process"),
+    ("!ls ../..", "process"),
+    ("import threading", "thread"),
+    ("import socket", "network"),
+    ("import urllib.request", "network"),
+    ("import requests", "network"),
+    ("import ctypes", "ctypes"),
+    ("import signal", "signal"),
+    ("class Yes:\n    def __eq__(self, other):\n        return True", "operator"),
+    ("kf = None", "rebind"),
+    ("def my_state_space(*a):\n    return kf.falling_body_state_space(*a)", "reference"),
+]
+
+
+def _gid(cell):
+    return cell.metadata.get("nbgrader", {}).get("grade_id")
+
+
+def _submission(tmp_path, edit, name="sub"):
+    nb = nbformat.read(SOURCE, as_version=4)
+    edit(nb)
+    path = tmp_path / f"{name}.ipynb"
+    nbformat.write(nb, path)
+    return path
+
+
+def _answer(nb, gid, code):
+    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    cell.source = code
+
+
+@pytest.mark.parametrize("construct, kind", CONSTRUCTS, ids=[c[0].splitlines()[-1][:40] for c in CONSTRUCTS])
+def test_every_construct_is_flagged_with_its_cell_and_line(tmp_path, construct, kind):
+    if construct.startswith("def my_state_space"):  # exercise 2's reference, in exercise 2's answer cell
+        gid, code = "ex2_solution", construct
+    else:
+        gid, code = "ex1_solution", MODEL + "\n" + construct
+    path = _submission(tmp_path, lambda nb: _answer(nb, gid, code))
+    flags = integrity.scan_notebook(SOURCE, path)
+    assert kind in {f["kind"] for f in flags}, flags
+    [flag] = [f for f in flags if f["kind"] == kind][:1]
+    lines = code.splitlines()
+    assert flag["cell"] == gid
+    assert flag["code"] == lines[flag["line"] - 1].strip()
+    assert flag["line"] > (3 if gid == "ex1_solution" else 0), "the model answer above it is not flagged"
+    assert flag["why"]
+
+
+def test_an_honest_answer_is_not_flagged(tmp_path):
+    honest = MODEL + "\nimport numpy as np\nfrom scipy.linalg import cholesky\nK2 = np.eye(2)\nprint(K2)"
+    path = _submission(tmp_path, lambda nb: _answer(nb, "ex1_solution", honest))
+    assert integrity.scan_notebook(SOURCE, path) == []
+
+
+def test_a_cell_that_does_not_parse_is_flagged_and_scanned_by_tokens(tmp_path):
+    code = "def my_joseph(P, K, H, R:\n    exec('return 0')\n    return kf.joseph_covariance(P, K, H, R)"
+    path = _submission(tmp_path, lambda nb: _answer(nb, "ex1_solution", code))
+    flags = {(f["kind"], f["line"]) for f in integrity.scan_notebook(SOURCE, path)}
+    assert ("syntax", 1) in flags and ("exec", 2) in flags and ("reference", 3) in flags
+
+
+def test_added_edited_and_pasted_cells_are_scanned(tmp_path):
+    def edit(nb):
+        nb.cells.insert(3, nbformat.v4.new_code_cell("np.allclose = lambda *a, **k: True"))
+        provided = next(c for c in nb.cells if c.cell_type == "code" and not c.metadata.get("nbgrader"))
+        provided.source += "\nimport socket"
+        pasted = nbformat.v4.new_code_cell("x = 1")
+        pasted.metadata["nbgrader"] = {"grade": False, "grade_id": "ex9_solution", "locked": False,
+                                       "schema_version": 3, "solution": True, "task": False}
+        nb.cells.append(pasted)
+        # locked cells are replaced at grading time: a cheat in one is inert and not reported
+        [test] = [c for c in nb.cells if _gid(c) == "ex1_tests"]
+        test.source = "import socket"
+    flags = integrity.scan_notebook(SOURCE, _submission(tmp_path, edit))
+    assert {(f["cell"], f["kind"]) for f in flags} == {("cell 4", "patch"), ("ex9_solution", "foreign-cell")} | {
+        (f["cell"], "network") for f in flags if f["kind"] == "network"}
+    assert sum(f["kind"] == "network" for f in flags) == 1
+    assert all(f["cell"] != "ex1_tests" for f in flags)
+
+
+def test_reference_names_come_from_guard_forbid_and_forbid_keywords(tmp_path):
+    nb = nbformat.read(SOURCE, as_version=4)
+    [t1] = [c for c in nb.cells if _gid(c) == "ex1_tests"]
+    t1.source = "with guard.forbid(kf.joseph_covariance, np.linalg.multi_dot, exercise='1'):\n    my_joseph(1, 2, 3, 4)"
+    [t3] = [c for c in nb.cells if _gid(c) == "ex3_tests"]
+    t3.source = "guard.grade(my_predict, kf.predict, [()], forbid=(kf.predict, KalmanFilter.predict), what='x')"
+    src = integrity.Source(nb, LAB)
+    assert src.forbid[1] == {"joseph_covariance", "multi_dot"}
+    assert src.forbid[3] == {"predict"}
+    assert not src.forbid.get(2), "with guard.forbid in the tests the fallback table is not used"
+    # the extracted names are what the answer of that exercise is checked against
+    assert [k for _, k, _ in integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=1)] == ["reference"]
+    assert integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=3) == []
+    # without any forbid in the tests, the fallback table names them
+    assert integrity.Source(nbformat.read(SOURCE, as_version=4), LAB).forbid[1] >= {"joseph_covariance"}
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_model_answers_and_the_untouched_release_are_clean(lab):
+    source = ROOT / "solutions" / lab / f"{lab}.ipynb"
+    assert integrity.scan_notebook(source, source) == []
+    assert integrity.scan_notebook(source, ROOT / "labs" / lab / f"{lab}.ipynb") == []
+    assert integrity.Source(nbformat.read(source, as_version=4), lab).all_forbidden, "no reference names for " + lab
+
+
+def test_report_and_cli(tmp_path):
+    course = tmp_path / "course"
+    (course / "solutions" / LAB).mkdir(parents=True)
+    (course / "solutions" / LAB / f"{LAB}.ipynb").write_bytes(SOURCE.read_bytes())
+    for student, code in {"ada": MODEL, "eve": MODEL + "\nnp.allclose = lambda *a, **k: True"}.items():
+        (course / "submitted" / student / LAB).mkdir(parents=True)
+        nb = nbformat.read(SOURCE, as_version=4)
+        _answer(nb, "ex1_solution", code)
+        nbformat.write(nb, course / "submitted" / student / LAB / f"{LAB}.ipynb")
+    (course / "submitted" / "bad" / LAB).mkdir(parents=True)
+    (course / "submitted" / "bad" / LAB / f"{LAB}.ipynb").write_text("{ not json")
+    assert integrity.main([LAB, "--course", str(course)]) == 0
+    md = (course / f"integrity_{LAB}.md").read_text()
+    assert "3 submissions scanned; **2 to REVIEW**" in md
+    assert "| eve | 02_kalman_falling_body | REVIEW |" in md and "| ada | 02_kalman_falling_body | clean |" in md
+    assert "| ex1_solution | 4 | patch | `np.allclose = lambda *a, **k: True` |" in md
+    assert "| bad | 02_kalman_falling_body | REVIEW |" in md and "unreadable" in md
+    with open(course / f"integrity_{LAB}.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [(r["student"], r["status"], r["kind"]) for r in rows] == [
+        ("bad", "REVIEW", "unreadable"), ("eve", "REVIEW", "patch"), ("ada", "clean", "")]
+    assert rows[1]["line"] == "4" and rows[1]["cell"] == "ex1_solution"
+
+
+def test_report_text_is_short_and_explains_each_kind():
+    assert set(integrity.WHY) >= {"patch", "reflection", "ipython", "exec", "reference", "file", "process",
+                                  "network", "ctypes", "signal", "foreign-cell", "syntax"}
+    assert all(len(why) < 120 for why in integrity.WHY.values())
+    assert textwrap.dedent(integrity.__doc__).startswith("Integrity report")
