@@ -18,7 +18,7 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: help lab test solutions labs env data bench clean
+.PHONY: help lab test solutions labs env data bench release clean
 
 help:  ## list the targets
 	@grep -E '^[a-z]+:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -61,5 +61,8 @@ bench: env  ## every filter on every available BROAD trial: table, CSV and figur
 	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"
 	@$(BIN)/python -m fusionlab.bench --out .bench
 
-clean:  ## remove grading scratch folders (keeps .venv)
-	rm -rf submitted autograded feedback gradebook.db .pytest_cache
+release: env  ## the student course: release/course/ and release/fusionlab-course.tar.gz (no solutions, no grading)
+	@$(BIN)/python -m grading.release --out release
+
+clean:  ## remove grading scratch folders and the release (keeps .venv)
+	rm -rf submitted autograded feedback gradebook.db .pytest_cache release

@@ -1,0 +1,132 @@
+"""The student release: ``make release`` (or ``python -m grading.release``) builds what students get.
+
+    release/course/                 the course folder (git-ignored), ready to publish as its own repository
+    release/fusionlab-course.tar.gz the same folder as one archive (top folder ``fusionlab-course/``)
+
+It holds the release notebooks (labs/), the library (lib/fusionlab with its data files), data/, environment.txt,
+pyproject.toml, the student JupyterLab view (jupyter/, when the repository has one) and, from grading/student/,
+the student README, Makefile (env, lab, test) and tests. It never holds solutions/, grading/, docs/, tests/,
+nbgrader_config.py or a gradebook: the builder copies a fixed list and refuses a notebook that still carries a
+solution or hidden-test region. ``tests/test_release.py`` checks the result line by line against every solution.
+"""
+from __future__ import annotations
+
+import argparse
+import gzip
+import io
+import re
+import shutil
+import sys
+import tarfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDENT = Path(__file__).resolve().parent / "student"
+ARCHIVE = "fusionlab-course.tar.gz"
+TOP = "fusionlab-course"
+
+# (source in the repository, destination in the release); a missing optional entry is skipped
+SHIP = [("labs", "labs", True), ("lib/fusionlab", "lib/fusionlab", True), ("data", "data", True),
+        ("environment.txt", "environment.txt", True), ("pyproject.toml", "pyproject.toml", True),
+        ("jupyter", "jupyter", False)]
+FROM_TEMPLATES = [("Makefile", "Makefile"), ("tests", "tests"), ("gitignore", ".gitignore")]
+IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", ".ipynb_checkpoints", "*.egg-info", ".DS_Store")
+MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
+README_SECTIONS = ("Labs", "Conventions")  # taken from the repository README for the student one
+
+
+def _section(readme, title):
+    """The body of the ``## title...`` section of a Markdown text (without its heading), or None."""
+    m = re.search(rf"^## {re.escape(title)}[^\n]*\n(.*?)(?=^## |\Z)", readme, flags=re.S | re.M)
+    return m.group(1).strip() if m else None
+
+
+def student_readme(root=ROOT):
+    """The student README: grading/student/README.md with the lab table, the conventions and the references of the
+    repository README filled in."""
+    readme = (root / "README.md").read_text()
+    parts = {}
+    for title in README_SECTIONS:
+        body = _section(readme, title)
+        if body is None:
+            raise SystemExit(f"README.md has no '## {title}' section to copy into the student README")
+        parts[title.lower()] = body
+    refs = _section(readme, "References") or _section(readme, "The seeds")
+    if refs is None:
+        raise SystemExit("README.md has no '## References' (or '## The seeds') section for the student README")
+    parts["references"] = refs
+    text = (STUDENT / "README.md").read_text()
+    for key, body in parts.items():
+        text = text.replace("{{" + key + "}}", body)
+    return text
+
+
+def _check_notebooks(course):
+    for nb in sorted((course / "labs").rglob("*.ipynb")):
+        text = nb.read_text()
+        for marker in MARKERS:
+            if marker in text:
+                raise SystemExit(f"{nb.relative_to(course)} still holds '{marker}': regenerate it with `make labs`")
+
+
+def _archive(course, path):
+    """A reproducible .tar.gz of ``course`` under the top folder ``TOP`` (sorted, no owners, no times)."""
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as tar:
+        for item in [course, *sorted(course.rglob("*"))]:
+            info = tar.gettarinfo(item, arcname=str(Path(TOP) / item.relative_to(course)))
+            info.uid = info.gid = 0
+            info.uname = info.gname = ""
+            info.mtime = 0
+            if item.is_file():
+                with open(item, "rb") as fh:
+                    tar.addfile(info, fh)
+            else:
+                tar.addfile(info)
+    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0, filename="") as gz:
+        gz.write(buf.getvalue())
+
+
+def build(out=None, root=ROOT):
+    """Build ``out/course`` and ``out/fusionlab-course.tar.gz`` from the repository ``root``; return both paths."""
+    out = Path(out or root / "release").resolve()
+    course = out / "course"
+    if course.exists():
+        shutil.rmtree(course)
+    course.mkdir(parents=True)
+    for src, dest, required in SHIP:
+        src = root / src
+        if not src.exists():
+            if required:
+                raise SystemExit(f"{src} is missing")
+            continue
+        (course / dest).parent.mkdir(parents=True, exist_ok=True)
+        if src.is_dir():
+            shutil.copytree(src, course / dest, ignore=IGNORE)
+        else:
+            shutil.copy2(src, course / dest)
+    for src, dest in FROM_TEMPLATES:
+        if (STUDENT / src).is_dir():
+            shutil.copytree(STUDENT / src, course / dest, ignore=IGNORE)
+        else:
+            shutil.copy2(STUDENT / src, course / dest)
+    (course / "README.md").write_text(student_readme(root))
+    _check_notebooks(course)
+    archive = out / ARCHIVE
+    _archive(course, archive)
+    return course, archive
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", default=str(ROOT / "release"), help="output folder (default: release/)")
+    args = parser.parse_args(argv)
+    course, archive = build(args.out)
+    files = sum(1 for p in course.rglob("*") if p.is_file())
+    print(f"student course: {course} ({files} files)\narchive:        {archive} "
+          f"({archive.stat().st_size / 1e6:.1f} MB)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

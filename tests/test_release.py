@@ -1,0 +1,239 @@
+"""The student release (`make release`, grading/release.py): it holds the course a student needs, not one line of a
+hidden test or of a model answer, and the course works from inside it (`make lab` serves the labs, `make test`
+passes and catches a provided cell that crashes)."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tarfile
+import time
+import urllib.request
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from conftest import LABS, ROOT
+from grading import release
+
+VENV = Path(sys.prefix).resolve()  # the environment running the tests, reused by `make` in the release
+STUDENT_LABS = ["01_euler_rotations", "02_kalman_falling_body"]  # the student test on two labs keeps this short
+TOP = {".gitignore", "Makefile", "README.md", "data", "environment.txt", "labs", "lib", "pyproject.toml", "tests"}
+NEVER = {"solutions", "grading", "docs", "submitted", "autograded", "feedback", "release", "nbgrader_config.py",
+         "gradebook.db", "grades.csv", "authoring.md", "instructors.md", "conftest.py"}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("release")
+    course, archive = release.build(out)
+    return course, archive
+
+
+def _files(folder):
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+
+
+def test_release_holds_the_course_and_nothing_of_the_instructor(built):
+    course, _ = built
+    assert {p.name for p in course.iterdir()} == TOP | ({"jupyter"} if (ROOT / "jupyter").is_dir() else set())
+    files = _files(course)
+    assert not [f for f in files if set(Path(f).parts) & NEVER or f.startswith("integrity_")]
+    assert [f for f in files if f.startswith("labs/")] == sorted(f"labs/{lab}/{lab}.ipynb" for lab in LABS)
+    lib = [f for f in _files(ROOT / "lib" / "fusionlab") if "__pycache__" not in f and not f.endswith(".pyc")]
+    assert [f for f in files if f.startswith("lib/")] == [f"lib/fusionlab/{f}" for f in lib]
+    assert "lib/fusionlab/data/broad_trials.json" in files
+    data = [f for f in _files(ROOT / "data") if "__pycache__" not in f]
+    assert [f for f in files if f.startswith("data/")] == [f"data/{f}" for f in data]
+    assert [f for f in files if f.startswith("tests/")] == ["tests/test_course.py"]
+    for name in ("environment.txt", "pyproject.toml"):
+        assert (course / name).read_bytes() == (ROOT / name).read_bytes()
+    for lab in LABS:  # the release notebooks are the generated ones, byte for byte
+        path = f"labs/{lab}/{lab}.ipynb"
+        assert (course / path).read_bytes() == (ROOT / path).read_bytes(), path
+
+
+def test_archive_is_the_folder_and_is_reproducible(built, tmp_path):
+    course, archive = built
+    with tarfile.open(archive) as tar:
+        members = {m.name: m for m in tar.getmembers()}
+        files = sorted(name.split("/", 1)[1] for name, m in members.items() if m.isfile())
+        assert files == _files(course)
+        assert all(name.startswith("fusionlab-course") for name in members)
+        readme = tar.extractfile("fusionlab-course/README.md").read()
+    assert readme == (course / "README.md").read_bytes()
+    _, again = release.build(tmp_path)
+    assert hashlib.sha256(again.read_bytes()).digest() == hashlib.sha256(archive.read_bytes()).digest()
+
+
+def _regions(cell):
+    """(hidden-test lines, model-answer lines, text left visible in the release) of one solution cell."""
+    src = cell.source
+    hidden = re.findall(r"### BEGIN HIDDEN TESTS(.*?)### END HIDDEN TESTS", src, flags=re.S)
+    answers = re.findall(r"### BEGIN SOLUTION(.*?)### END SOLUTION", src, flags=re.S)
+    visible = re.sub(r"### BEGIN (SOLUTION|HIDDEN TESTS).*?### END \1", "", src, flags=re.S)
+    meta = cell.metadata.get("nbgrader", {})
+    if cell.cell_type == "markdown" and meta.get("solution"):  # a manually graded answer: all of it is the answer
+        answers, visible = [src], ""
+    return hidden, answers, visible
+
+
+def secret_lines():
+    """{line: (kind, where)} for every line of a hidden-test region and of a model answer (a solution region or a
+    manually graded answer cell) of every solution notebook that says something: 12 characters or more, not a
+    comment, and not also written in a part of a solution notebook the release keeps (a visible test that repeats
+    a hidden one, say)."""
+    secrets, visible = {}, []
+    for lab in LABS:
+        nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+        for cell in nb.cells:
+            hidden, answers, shown = _regions(cell)
+            visible.append(shown)
+            for kind, regions in (("hidden test", hidden), ("model answer", answers)):
+                for line in "\n".join(regions).splitlines():
+                    line = line.strip()
+                    if len(line) >= 12 and not line.startswith("#"):
+                        secrets.setdefault(line, (kind, f"{lab}/{cell.metadata.get('nbgrader', {}).get('grade_id')}"))
+    shown = "\n".join(visible)
+    return {line: where for line, where in secrets.items() if line not in shown}
+
+
+def leaks(course, secrets):
+    """[(file, kind, where, line)] of every secret line found in the release tree.
+
+    The library is the reference every lab compares with (what each exercise forbids calling), so its code matches
+    model answers line by line by design; in lib/ only hidden-test lines count.
+    """
+    found = []
+    for path in sorted(p for p in course.rglob("*") if p.is_file()):
+        rel = str(path.relative_to(course))
+        texts = [path.read_bytes().decode("utf-8", errors="ignore")]
+        if path.suffix == ".ipynb":
+            nb = nbformat.read(path, as_version=4)
+            texts.append("\n".join(c.source for c in nb.cells))
+        text = "\n".join(texts)
+        for line, (kind, where) in secrets.items():
+            if kind == "model answer" and rel.startswith("lib/"):
+                continue
+            if line in text:
+                found.append((rel, kind, where, line))
+    return found
+
+
+def test_no_hidden_test_or_model_answer_line_ships(built):
+    course, _ = built
+    secrets = secret_lines()
+    kinds = [kind for kind, _ in secrets.values()]
+    assert kinds.count("hidden test") > 200 and kinds.count("model answer") > 300, "too few lines to mean anything"
+    found = leaks(course, secrets)
+    assert not found, "\n".join(f"{f}: {k} of {w}: {line}" for f, k, w, line in found[:20])
+
+
+def test_the_leak_check_finds_a_planted_line(built, tmp_path):
+    course, _ = built
+    secrets = secret_lines()
+    copy = tmp_path / "course"
+    shutil.copytree(course, copy)
+    hidden = next(line for line, (kind, _) in secrets.items() if kind == "hidden test")
+    answer = next(line for line, (kind, where) in secrets.items() if kind == "model answer" and "/q" in where)
+    nb = nbformat.read(copy / "labs" / LABS[0] / f"{LABS[0]}.ipynb", as_version=4)
+    nb.cells[-1].source += "\n" + hidden
+    nbformat.write(nb, copy / "labs" / LABS[0] / f"{LABS[0]}.ipynb")
+    (copy / "data" / "notes.md").write_text(f"{answer}\n")
+    assert sorted((f, k) for f, k, _, _ in leaks(copy, secrets)) == [
+        ("data/notes.md", "model answer"), (f"labs/{LABS[0]}/{LABS[0]}.ipynb", "hidden test")]
+
+
+def test_student_readme(built):
+    course, _ = built
+    text = (course / "README.md").read_text()
+    for needed in ("make lab", "make test", "Validate", "Hand in", "labs/NN_name/NN_name.ipynb", "## Labs",
+                   "## References and licences", "CC BY 4.0", "## Conventions"):
+        assert needed in text, needed
+    assert "{{" not in text
+    assert sum(f"](labs/{lab}/{lab}.ipynb)" in text for lab in LABS) == len(LABS)
+    for target in re.findall(r"\]\(([^)#]+)\)", text):
+        if not re.match(r"[a-z]+:", target):
+            assert (course / target).exists(), f"the student README links to {target}, which is not in the release"
+    for instructor_only in ("solutions/", "nbgrader_config", "instructors.md", "authoring.md", "gradebook",
+                            "autograde", "formgrader"):
+        assert instructor_only not in text, instructor_only
+
+
+def _make(course, *args, timeout=900, **kwargs):
+    """`make` in the release with this environment (VENV=...) and without reinstalling it (-o)."""
+    if sys.prefix == sys.base_prefix:
+        pytest.skip("the tests do not run in a virtual environment that `make` in the release could reuse")
+    env = dict(os.environ, PATH=f"{VENV / 'bin'}{os.pathsep}{os.environ['PATH']}")
+    env.pop("PYTHONPATH", None)
+    cmd = ["make", "-o", f"{VENV}/.installed", f"VENV={VENV}", *args]
+    if kwargs.pop("background", False):
+        return subprocess.Popen(cmd, cwd=course, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, start_new_session=True)
+    return subprocess.run(cmd, cwd=course, env=env, capture_output=True, text=True, timeout=timeout)
+
+
+def test_make_lab_serves_the_labs(built):
+    course, _ = built
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    token = "release-test"
+    proc = _make(course, "lab", f"ARGS=--port={port} --ServerApp.port_retries=0 --ServerApp.token={token} "
+                                "--ServerApp.ip=127.0.0.1", background=True)
+    try:
+        listing, deadline = None, time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/contents?token={token}", timeout=5) as r:
+                    listing = json.load(r)
+                break
+            except OSError:
+                time.sleep(1)
+        assert listing is not None, f"JupyterLab did not answer on port {port} (exit {proc.poll()})"
+        assert sorted(item["name"] for item in listing["content"]) == LABS, "the server's root is not labs/"
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/lab?token={token}", timeout=10) as r:
+            assert r.status == 200 and "JupyterLab" in r.read().decode()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGTERM)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+def test_make_test_passes_in_the_release(built):
+    course, _ = built
+    run = _make(course, "test", f"LABS={' '.join(STUDENT_LABS)}")
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert re.search(rf"\b{len(STUDENT_LABS) + 3} passed", run.stdout), run.stdout[-2000:]
+
+
+def test_make_test_in_the_release_catches_a_crash_in_provided_code(built):
+    course, _ = built
+    lab = course / "labs" / "99_canary"
+    lab.mkdir()
+    try:
+        nb = nbformat.v4.new_notebook(metadata={"kernelspec": {"name": "python3", "display_name": "Python 3",
+                                                               "language": "python"}})
+        answer = nbformat.v4.new_code_cell("raise NotImplementedError('exercise 1 not attempted yet')")
+        answer.metadata["nbgrader"] = {"solution": True, "grade": False, "locked": False, "grade_id": "ex1_solution",
+                                       "schema_version": 3, "task": False}
+        nb.cells = [answer, nbformat.v4.new_code_cell("print(answer_of_exercise_1)"),
+                    nbformat.v4.new_code_cell("1 / 0")]
+        nbformat.write(nb, lab / "99_canary.ipynb")
+        run = _make(course, "test", "LABS=99_canary")
+        assert run.returncode != 0
+        assert "cell 3: ZeroDivisionError: division by zero" in run.stdout
+        assert "cell 1" not in run.stdout and "cell 2" not in run.stdout  # unfinished exercise, and what follows
+    finally:
+        shutil.rmtree(lab)
