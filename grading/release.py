@@ -4,9 +4,9 @@
     release/fusionlab-course.tar.gz the same folder as one archive (top folder ``fusionlab-course/``)
 
 It holds the release notebooks (labs/), the library (lib/fusionlab with its data files), data/, environment.txt,
-pyproject.toml, the student JupyterLab view (jupyter/, when the repository has one) and, from grading/student/,
-the student README, Makefile (env, lab, test) and tests. It never holds solutions/, grading/, docs/, tests/,
-nbgrader_config.py or a gradebook: the builder copies a fixed list and refuses a notebook that still carries a
+pyproject.toml, the derivations the labs link to (docs/derivations.md) and the student JupyterLab view (jupyter/),
+when the repository has them, and, from grading/student/, the student README, Makefile (env, lab, test) and tests.
+It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.py or a gradebook: the builder copies a fixed list and refuses a notebook that still carries a
 solution or hidden-test region. ``tests/test_release.py`` checks the result line by line against every solution.
 """
 from __future__ import annotations
@@ -28,7 +28,7 @@ TOP = "fusionlab-course"
 # (source in the repository, destination in the release); a missing optional entry is skipped
 SHIP = [("labs", "labs", True), ("lib/fusionlab", "lib/fusionlab", True), ("data", "data", True),
         ("environment.txt", "environment.txt", True), ("pyproject.toml", "pyproject.toml", True),
-        ("jupyter", "jupyter", False)]
+        ("docs/derivations.md", "docs/derivations.md", False), ("jupyter", "jupyter", False)]
 FROM_TEMPLATES = [("Makefile", "Makefile"), ("tests", "tests"), ("gitignore", ".gitignore")]
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", ".ipynb_checkpoints", "*.egg-info", ".DS_Store")
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
