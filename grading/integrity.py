@@ -142,22 +142,35 @@ def _last_name(node):
 
 
 def _forbidden_in(source):
-    """Last names of the arguments of ``guard.forbid(...)`` and of every ``forbid=(...)`` in a test cell."""
+    """Last names of the arguments of ``guard.forbid(...)`` and of every ``forbid=...`` in a test cell; a name bound
+    in the cell to a tuple (``_forbid = (kf.update, ...)``, then ``forbid=_forbid`` or ``guard.forbid(*_forbid)``)
+    stands for its items."""
     try:
         tree = ast.parse(_strip_magics(source)[0])
     except SyntaxError:
         return set()
-    names = set()
+    bound = {node.targets[0].id: node.value for node in ast.walk(tree)
+             if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)}
+
+    def names(node, depth=0):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            return set().union(*(names(e, depth) for e in node.elts)) if node.elts else set()
+        if isinstance(node, ast.Starred):
+            return names(node.value, depth)
+        if isinstance(node, ast.Name) and node.id in bound and depth < 5:
+            return names(bound[node.id], depth + 1)
+        return {_last_name(node)}
+
+    found = set()
     for node in ast.walk(tree):
         if not isinstance(node, ast.Call):
             continue
         if _last_name(node.func) == "forbid":
-            names |= {_last_name(a) for a in node.args}
+            found |= set().union(*(names(a) for a in node.args)) if node.args else set()
         for kw in node.keywords:
             if kw.arg == "forbid":
-                items = kw.value.elts if isinstance(kw.value, (ast.Tuple, ast.List, ast.Set)) else [kw.value]
-                names |= {_last_name(a) for a in items}
-    return names - {None}
+                found |= names(kw.value)
+    return found - {None}
 
 
 class Source:
@@ -184,7 +197,8 @@ class Source:
                 tree = ast.parse(_strip_magics(cell.source)[0])
             except SyntaxError:
                 continue
-            if _nbg(cell).get("grade") and not _nbg(cell).get("solution"):
+            test = _nbg(cell).get("grade") and not _nbg(cell).get("solution")
+            if test:
                 read |= {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
             if _nbg(cell).get("solution"):
                 continue
@@ -195,6 +209,8 @@ class Source:
                         self.import_of[name] = _import_target(node, a)
                         self.imported.add(name)
                         bound.add(name)
+                elif test:
+                    continue  # a test cell sets its own names before it reads them
                 elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
                     bound.add(node.name)
                 elif isinstance(node, ast.Assign):

@@ -140,9 +140,14 @@ def test_reference_names_come_from_guard_forbid_and_forbid_keywords(tmp_path):
     t1.source = "with guard.forbid(kf.joseph_covariance, np.linalg.multi_dot, exercise='1'):\n    my_joseph(1, 2, 3, 4)"
     [t3] = [c for c in nb.cells if _gid(c) == "ex3_tests"]
     t3.source = "guard.grade(my_predict, kf.predict, [()], forbid=(kf.predict, KalmanFilter.predict), what='x')"
+    [t4] = [c for c in nb.cells if _gid(c) == "ex4_tests"]
+    t4.source = ("_forbid = (kf.update, filterpy.kalman.KalmanFilter.update)\n_more = [kf.kalman_gain, *_forbid]\n"
+                 "guard.grade(my_update, kf.update, [()], forbid=_forbid)\nwith guard.forbid(*_more, kf._gain):\n"
+                 "    pass")
     src = integrity.Source(nb, LAB)
     assert src.forbid[1] == {"joseph_covariance", "multi_dot"}
     assert src.forbid[3] == {"predict"}
+    assert src.forbid[4] == {"update", "kalman_gain", "_gain"}
     assert not src.forbid.get(2), "with guard.forbid in the tests the fallback table is not used"
     # the extracted names are what the answer of that exercise is checked against
     assert [k for _, k, _ in integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=1)] == ["reference"]
