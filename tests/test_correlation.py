@@ -176,3 +176,63 @@ def test_baselines_reduce_to_their_inputs():
 def test_missing_file_is_not_mistaken_for_log_text():
     with pytest.raises(FileNotFoundError, match="no such file"):
         co.parse_terminal_log("data/lab03/no_such.log")
+
+
+# --- the parser accepts exactly what the MCU writes, and drops nothing silently --------------------------------------
+
+MOTION = (DATA / "motion.log").read_bytes().decode("latin-1")
+LINES = MOTION.split("\r\n")
+FIRST = LINES.index("AX AY AZ GX GY") + 1               # index of the first data line
+
+
+def _with(line_index, text):
+    lines = list(LINES)
+    lines[line_index] = text
+    return "\r\n".join(lines)
+
+
+@pytest.mark.parametrize("bad, what", [
+    ("0", r"a lone '0' inside the data, not followed by 'Stopped\.'"),
+    ("Stopped", r"expected 5 hex values .* got 1: 'Stopped'"),
+    ("0x25D 1D8 25D 1D2 1C9", r"'0x25D': the MCU prints each count as exactly 3 hex digits"),
+    ("+25D 1D8 25D 1D2 1C9", r"'\+25D'"),
+    ("2_5D 1D8 25D 1D2 1C9", r"'2_5D'"),
+    ("-1 1D8 25D 1D2 1C9", r"'-1'"),
+    ("25D 1D8 25D 1D2 1C9\f", r"control characters \\x0c"),
+])
+def test_a_line_truncated_or_not_in_the_mcu_format_is_reported_not_dropped(bad, what):
+    with pytest.raises(co.LogParseError, match=rf"^line {FIRST + 101}: .*{what}"):
+        co.parse_terminal_log(_with(FIRST + 100, bad))
+
+
+def test_the_stop_sequence_and_the_mcu_variants_parse_in_full():
+    n = len(co.parse_terminal_log(MOTION))
+    assert n == 550
+    assert len(co.parse_terminal_log(MOTION.replace(" ", "\t"))) == n                    # tab-separated
+    assert len(co.parse_terminal_log(b"\xef\xbb\xbf" + MOTION.encode())) == n            # UTF-8 BOM
+    assert len(co.parse_terminal_log("\ufeff" + MOTION)) == n
+    assert len(co.parse_terminal_log(MOTION.replace("\r\n", "\n"))) == n                 # LF line ends
+
+
+def test_a_form_feed_in_the_menu_does_not_shift_line_numbers():
+    text = _with(2, LINES[2] + "\f")                                         # inside the menu text: ignored
+    text = text.split("\r\n")
+    text[FIRST + 200] = "1FF 2G0 266 1C3 1C4"
+    with pytest.raises(co.LogParseError, match=rf"^line {FIRST + 201}: not a hexadecimal ADC value"):
+        co.parse_terminal_log("\r\n".join(text))
+
+
+def test_every_unusable_line_is_counted_and_the_first_few_are_shown():
+    lines = list(LINES)
+    for k in (10, 20, 30, 40, 50, 60, 70):
+        lines[FIRST + k] = "1FF 200"
+    with pytest.raises(co.LogParseError, match=rf"^7 lines of the log cannot be used: line {FIRST + 11}: expected 5 "
+                                               r".*\.\.\. and 2 more$"):
+        co.parse_terminal_log("\r\n".join(lines))
+
+
+def test_data_after_the_stop_without_a_header_is_reported():
+    text = MOTION + "\r\n1FF 200 266 1C3 1C4\r\n"                    # the log ends at the menu prompt
+    last = len(MOTION.split("\r\n")) + 1
+    with pytest.raises(co.LogParseError, match=rf"line {last}: data line outside a recording"):
+        co.parse_terminal_log(text)

@@ -26,6 +26,7 @@ rotation about X and goes with the X gyro (``axis='x'``); the X-Z angle goes wit
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -57,23 +58,35 @@ def _read_text(log):
     elif isinstance(log, str):
         if "\n" not in log and tuple(log.split()) != HEADER:
             raise FileNotFoundError(f"log: no such file {log!r} (pass a path to a terminal log, or its text)")
-        return log
+        return log.removeprefix("\ufeff")
     else:
         raise ValueError(f"log must be a path, str or bytes; got {type(log).__name__}")
-    return raw.decode("latin-1")
+    return raw.removeprefix(b"\xef\xbb\xbf").decode("latin-1")         # a UTF-8 byte-order mark is not text
+
+
+#: Line ends of a terminal capture: CR LF (Tera Term), LF or CR. Nothing else splits a line (str.splitlines would
+#: also split at a form feed or a vertical tab and shift every later line number).
+_LINE_END = re.compile(r"\r\n|\r|\n")
+_MAX_REPORTED = 5
 
 
 def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
     """Every "Get RAW Sensor Data" section of a terminal log, as ADC counts.
 
-    A section starts at the column header line ``AX AY AZ GX GY`` and ends at the stop key (a line ``0``), a
-    ``Stopped.`` line, or the end of the file. Inside a section every line must hold exactly five hex values in
-    ``0 .. 2**bits - 1``; anything else (bad hex, a short or truncated line, binary junk, a value beyond the ADC) raises
-    :class:`LogParseError` naming the line number -- nothing is dropped silently. Blank lines are allowed.
+    The format is exactly what the MCU prints (:func:`fusionlab.simulate.terminal_log`): a section starts at the
+    column header line ``AX AY AZ GX GY``; every data line holds five counts, each written as exactly
+    ``ceil(bits / 4)`` hex digits (``25D`` for 10 bits; no ``0x``, sign or ``_``), separated by spaces (tabs are
+    accepted too); the section ends at the stop key the MCU echoes, a line ``0`` followed by ``Stopped.``, or at
+    the end of the file. Blank lines are allowed. Text outside the sections (the menu) is skipped.
+
+    Nothing is dropped silently: every line that cannot be used -- bad hex, a short, merged or truncated line
+    (including one truncated to ``0`` or ``Stopped``), control characters, a value beyond the ADC, or a data line
+    outside any section -- is reported by one :class:`LogParseError` that gives the count and the first few lines
+    with their line numbers (counted at CR LF, LF or CR line ends only).
 
     Parameters
     ----------
-    log : path, str (the text) or bytes
+    log : path, str (the text) or bytes (a UTF-8 byte-order mark is ignored)
     bits : int -- ADC resolution (10 on the NanoCore12)
     Returns
     -------
@@ -81,41 +94,78 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
     Raises
     ------
     LogParseError
-        if a data line is malformed, or if the text holds no ``AX AY AZ GX GY`` header (not a terminal log).
+        if a line is unusable (see above), or if the text holds no ``AX AY AZ GX GY`` header (not a terminal log).
     """
     text = _read_text(log)
-    top = 2 ** int(bits) - 1
-    sections, rows, inside = [], None, False
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
+    bits = sensors._bits(bits)
+    top = 2 ** bits - 1
+    digits = -(-bits // 4)
+    token = re.compile(rf"[0-9A-Fa-f]{{{digits}}}")
+    lines = _LINE_END.split(text)
+    sections, rows, inside, problems = [], None, False, []
+    i = 0
+    while i < len(lines):
+        lineno, line = i + 1, lines[i]
+        i += 1
+        s = line.strip(" \t")
         if tuple(s.split()) == HEADER:
             if inside:
                 sections.append(rows)
             rows, inside = [], True
             continue
         if not inside:
-            continue
-        if s in ("0", "Stopped.") or s.startswith("Stopped"):
-            sections.append(rows)
-            inside = False
+            tokens = s.split()
+            if len(tokens) >= 3 and all(token.fullmatch(t) for t in tokens):
+                problems.append(f"line {lineno}: data line outside a recording (no 'AX AY AZ GX GY' header "
+                                f"before it since the last stop): {line[:60]!r}")
             continue
         if not s:
             continue
-        if any(not (32 <= ord(ch) < 127) for ch in s):
-            raise LogParseError(f"line {lineno}: non-text (binary) characters in a data line: {line[:40]!r}")
+        if s == "0":                                   # the stop key, echoed; the MCU then prints "Stopped."
+            j = i
+            while j < len(lines) and not lines[j].strip():
+                j += 1
+            if j == len(lines) or lines[j].strip() == "Stopped.":
+                sections.append(rows)
+                inside = False
+                i = j + 1
+                continue
+            problems.append(f"line {lineno}: a lone '0' inside the data, not followed by 'Stopped.' (a truncated "
+                            "data line? the MCU ends a recording with '0' then 'Stopped.')")
+            continue
+        if any(not (32 <= ord(ch) < 127 or ch == "\t") for ch in s):
+            bad = sorted({ch for ch in s if not (32 <= ord(ch) < 127 or ch == "\t")})
+            kind = ("non-text (binary) characters" if any(ord(ch) >= 127 or ch == "\x00" for ch in bad)
+                    else "control characters " + "".join(repr(ch)[1:-1] for ch in bad))
+            problems.append(f"line {lineno}: {kind} in a data line: {line[:40]!r}")
+            continue
         tokens = s.split()
         if len(tokens) != 5:
-            raise LogParseError(f"line {lineno}: expected 5 hex values (AX AY AZ GX GY), got {len(tokens)}: "
-                                f"{line[:60]!r} (truncated or merged line?)")
+            problems.append(f"line {lineno}: expected 5 hex values (AX AY AZ GX GY), got {len(tokens)}: "
+                            f"{line[:60]!r} (truncated or merged line?)")
+            continue
         try:
             vals = [int(tok, 16) for tok in tokens]
         except ValueError:
-            raise LogParseError(f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r}") from None
+            problems.append(f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r}")
+            continue
+        odd = [tok for tok in tokens if not token.fullmatch(tok)]
+        if odd:
+            problems.append(f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r} ({odd[0]!r}: the MCU "
+                            f"prints each count as exactly {digits} hex digits)")
+            continue
         if any(v > top for v in vals):
-            raise LogParseError(f"line {lineno}: value above the {bits}-bit ADC range 0..{top:X}: {line[:60]!r}")
+            problems.append(f"line {lineno}: value above the {bits}-bit ADC range 0..{top:X}: {line[:60]!r}")
+            continue
         rows.append(vals)
     if inside:
         sections.append(rows)
+    if problems:
+        if len(problems) == 1:
+            raise LogParseError(problems[0])
+        more = f"; ... and {len(problems) - _MAX_REPORTED} more" if len(problems) > _MAX_REPORTED else ""
+        raise LogParseError(f"{len(problems)} lines of the log cannot be used: "
+                            + "; ".join(problems[:_MAX_REPORTED]) + more)
     if not sections:
         raise LogParseError("not a NanoCore12 terminal log: no 'AX AY AZ GX GY' header line was found")
     return [np.array(r, dtype=np.int64).reshape(-1, 5) for r in sections]
