@@ -376,5 +376,5 @@ def test_trailing_max_is_causal_and_checks_its_window():
     x = np.array([0.0, 3.0, 1.0, 0.0, 0.0, 2.0, 0.0])
     assert np.array_equal(sen.trailing_max(x, 3), [0.0, 3.0, 3.0, 3.0, 1.0, 2.0, 2.0])
     assert np.array_equal(sen.trailing_max(x, 1), x)
-    with pytest.raises(ValueError, match="n must be a whole number"):
+    with pytest.raises(ValueError, match="n must be an integer >= 1"):
         sen.trailing_max(x, 0)

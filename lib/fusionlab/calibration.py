@@ -318,8 +318,23 @@ def allan_deviation(rate, fs, taus=None):
         taus = np.unique(np.round(np.logspace(0, np.log10(max(len(x) / 4, 1.0)), 60))) / fs
     else:
         taus = validate.array(taus, "taus")
+        if taus.ndim != 1 or not len(taus) or np.any(taus <= 0) or np.max(taus) > len(x) / fs / 2:
+            raise ValueError(f"taus must be averaging times in s, shape (M,), each > 0 and at most half the record "
+                             f"({len(x) / fs / 2:g} s); got {np.array2string(np.atleast_1d(taus), precision=3)}")
     t, ad, err, _ = allantools.oadev(x, rate=fs, data_type="freq", taus=taus)
     return np.asarray(t), np.asarray(ad), np.asarray(err)
+
+
+def _curve(taus, adev):
+    """An Allan curve: τ (s) and σ, one axis each, of one length, all > 0 (their logarithms are taken)."""
+    t = validate.array(taus, "taus")
+    a = validate.array(adev, "adev")
+    for name, v in (("taus", t), ("adev", a)):
+        if v.ndim != 1 or not len(v) or np.any(v <= 0):
+            raise ValueError(f"{name} must be a non-empty (M,) array of values > 0; got shape {v.shape}"
+                             + (f", min {float(np.min(v)):.3g}" if v.size else ""))
+    validate.same_length(taus=t, adev=a)
+    return t, a
 
 
 def read_arw(taus, adev, tau_max):
@@ -333,9 +348,7 @@ def read_arw(taus, adev, tau_max):
     -------
     float -- N in (rate unit)·√s, e.g. rad/s/√Hz = rad/√s (× 60·180/π for °/√h)
     """
-    t = validate.array(taus, "taus")
-    a = validate.array(adev, "adev")
-    validate.same_length(taus=t, adev=a)
+    t, a = _curve(taus, adev)
     sel = t <= validate.positive(tau_max, "tau_max")
     if not np.any(sel):
         raise ValueError(f"tau_max: no τ at or below {tau_max} s (the smallest is {t.min():.3g} s)")
@@ -385,11 +398,9 @@ def read_allan(taus, adev, adev_err=None):
     """
     from scipy.optimize import nnls
 
-    t = validate.array(taus, "taus")
-    a = validate.array(adev, "adev")
-    validate.same_length(taus=t, adev=a)
-    if t.ndim != 1 or len(t) < 3 or np.any(t <= 0) or np.any(a <= 0):
-        raise ValueError(f"taus, adev: need at least 3 points with τ > 0 and σ > 0; got {len(t)}")
+    t, a = _curve(taus, adev)
+    if len(t) < 3:
+        raise ValueError(f"taus, adev: need at least 3 points; got {len(t)}")
     w = np.ones_like(a)
     if adev_err is not None:
         e = validate.array(adev_err, "adev_err")

@@ -69,15 +69,30 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     Returns
     -------
     (N, 4) array -- unit quaternions ``[w, x, y, z]``, body→``frame``
+    Raises
+    ------
+    ValueError
+        naming the argument: a bad shape or a NaN; lengths that differ; ``fs`` outside 1 Hz – 100 kHz; a gyro that
+        looks like °/s (peak above 50 rad/s or median above 10 rad/s) or an accelerometer that looks like g (median
+        magnitude 0.5–2); a record that starts in free fall (no initial tilt); a zero magnetometer for a filter that
+        uses it. During the record every filter trusts its gyro while ``|acc|`` is below
+        :data:`fusionlab.sensors.FREE_FALL` (0.05 g), except 'triad', which has no gyro and refuses free fall.
+    TypeError (also a ValueError)
+        an option the estimator does not have (:func:`options` lists them).
     """
-    if name not in _REGISTRY:
-        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
+    if not isinstance(name, str) or name not in _REGISTRY:
+        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))} (the name "
+                         "argument picks one)")
     if frame not in FRAMES:
         raise ValueError(f"frame must be 'ENU' or 'NED'; got {frame!r}")
+    entry = _REGISTRY[name]
+    takes = ", ".join(f"{k}={v!r}" for k, v in entry["options"].items()) or "none"
+    unknown = sorted(set(options) - set(entry["options"]))
+    if unknown:
+        raise validate.UnknownOption(f"estimator {name!r} has no option {', '.join(unknown)}; its options: {takes}")
     gyr = validate.samples(gyr, "gyr")
     acc = validate.samples(acc, "acc")
-    fs = validate.positive(fs, "fs")
-    entry = _REGISTRY[name]
+    fs = validate.sample_rate(fs, "fs")
     if mag is not None:
         mag = validate.samples(mag, "mag")
     elif entry["uses_mag"]:
@@ -85,15 +100,44 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     validate.same_length(gyr=gyr, acc=acc, mag=mag)
     if len(gyr) == 0:
         raise ValueError("gyr, acc must hold at least one sample; got 0")
-    if np.max(np.abs(gyr)) > 50:
-        raise ValueError(f"gyr must be in rad/s; got a rate of {np.max(np.abs(gyr)):.4g}, which looks like deg/s "
-                         "-- use np.radians(...)")
-    unknown = set(options) - set(entry["options"])
-    if unknown:
-        takes = ", ".join(f"{k}={v!r}" for k, v in entry["options"].items()) or "none"
-        raise ValueError(f"estimator {name!r} has no option {', '.join(sorted(unknown))}; its options: {takes}")
+    validate.gyro_rad(gyr, "gyr")
+    validate.accel_ms2(acc, "acc")
+    _check_start(acc, fs)
+    if mag is not None and entry["uses_mag"]:
+        _check_field(mag)
     q_ned = entry["fn"](gyr, acc, mag, fs, **options)
     return q_ned if frame == "NED" else rotations.quat_nav_swap(q_ned)
+
+
+#: Below this specific force (m/s², 0.05 g) the accelerometer holds no usable direction of gravity: free fall.
+FREE_FALL = sensors.FREE_FALL
+
+
+def _check_start(acc, fs, seconds=0.5):
+    """Every filter levels its start on the accelerometer: refuse a record that starts in free fall.
+
+    During the record free fall is the filters' business (each trusts its gyro while ``|acc|`` is far from g);
+    at the start there is nothing to trust yet, and a levelling on a near-zero vector returns an arbitrary (often
+    upside-down) attitude.
+    """
+    n = max(1, min(len(acc), int(round(seconds * fs))))
+    f0 = float(np.linalg.norm(acc[:n].mean(axis=0)))
+    first = float(np.linalg.norm(acc[0]))
+    if f0 < FREE_FALL or first < FREE_FALL:
+        raise ValueError(f"acc reads free fall at the start (|mean acc| over the first {seconds:g} s = {f0:.3g} "
+                         f"m/s², first sample {first:.3g} m/s²): the initial tilt is unobservable -- start the "
+                         "record at rest or in slow motion (|acc| near 9.81 m/s²)")
+
+
+def _check_field(mag):
+    """A magnetometer that reads (nearly) nothing has no heading to give."""
+    med = float(np.median(np.linalg.norm(mag, axis=1)))
+    if not med > 0:
+        raise ValueError("mag must measure a magnetic field; got a median magnitude of 0 (a disconnected sensor?)")
+    low = np.linalg.norm(mag, axis=1) < 1e-6 * med
+    if np.any(low):
+        raise ValueError(f"mag must measure a magnetic field at every sample; got {int(low.sum())} sample(s) of "
+                         f"zero magnitude (first at index {int(np.argmax(low))})")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -139,6 +183,11 @@ def _norm(v, name):
 @register("triad", uses_mag=True, seed="(baseline, not from a seed)",
           summary="accelerometer + magnetometer snapshot (TRIAD) at every sample, no gyro")
 def _triad(gyr, acc, mag, fs):
+    free = np.linalg.norm(acc, axis=1) < FREE_FALL
+    if np.any(free):
+        raise ValueError(f"acc reads free fall at {int(free.sum())} sample(s) (first at index {int(np.argmax(free))}"
+                         "): the TRIAD snapshot has no gyro to carry the attitude through it -- use a filter that "
+                         "integrates the gyro (e.g. 'complementary', 'dcm_ahrs')")
     return rotations.dcm_to_quat(triad(acc, mag))
 
 

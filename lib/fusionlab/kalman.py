@@ -86,60 +86,71 @@ def _scalar(x, name, positive=False):
 
 
 def _count(x, name, minimum=1):
-    try:
-        n = int(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an integer; got {x!r}") from None
-    if n != x or n < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}")
-    return n
+    return validate.count(x, name, minimum)
 
 
-def _model(P=None, H=None, R=None, A=None, Q=None, B=None, u=None, x=None, z=None, K=None):
-    """Check a set of Kalman-filter matrices against each other; returns them as arrays in the same order."""
-    out = {}
+_KEYS = ("P", "H", "R", "A", "Q", "B", "u", "x", "z", "K")
+
+
+def _model(names=None, optional=(), **given):
+    """Check a set of Kalman-filter matrices against each other; returns them as arrays in a dict.
+
+    ``given`` uses the canonical names ``P H R A Q B u x z K``; ``names`` maps them to the caller's argument names
+    (``{'P': 'P0'}``) so that a message names what the caller typed. Every given key is required (None is an
+    error naming it) unless listed in ``optional``. P, R and Q are checked as covariances (symmetric, positive
+    semi-definite).
+    """
+    nm = {k: k for k in _KEYS}
+    nm.update(names or {})
+    for key, val in given.items():
+        if val is None and key not in optional:
+            raise ValueError(f"{nm[key]} is required (an array); got None")
+    P, H, R, A, Q, B, u, x, z, K = (given.get(k) for k in _KEYS)
     n = m = None
     if P is not None:
-        P = _square(P, "P")
+        P = validate.covariance(P, nm["P"])
         n = P.shape[0]
     if A is not None:
-        A = _square(A, "A")
+        A = _square(A, nm["A"])
         if n is not None and A.shape != (n, n):
-            raise ValueError(f"A must have shape ({n}, {n}) to match P; got {A.shape}")
+            raise ValueError(f"{nm['A']} must have shape ({n}, {n}) to match {nm['P']}; got {A.shape}")
         n = A.shape[0]
     if x is not None:
-        x = validate.array(x, "x")
+        x = validate.array(x, nm["x"])
         if n is None:
             n = x.shape[0] if x.ndim == 1 else None
         if x.shape != (n,):
-            raise ValueError(f"x must have shape ({n},); got {x.shape}")
+            raise ValueError(f"{nm['x']} must have shape ({n},); got {x.shape}")
     if H is not None:
-        H = validate.array(H, "H")
+        H = validate.array(H, nm["H"])
         if H.ndim != 2 or (n is not None and H.shape[1] != n):
-            raise ValueError(f"H must have shape (m, {n}); got {H.shape}")
+            raise ValueError(f"{nm['H']} must have shape (m, {n}); got {H.shape}")
         m = H.shape[0]
     if R is not None:
-        R = _square(R, "R")
+        R = validate.covariance(R, nm["R"])
         if m is not None and R.shape != (m, m):
-            raise ValueError(f"R must have shape ({m}, {m}) to match H; got {R.shape}")
+            raise ValueError(f"{nm['R']} must have shape ({m}, {m}) to match {nm['H']}; got {R.shape}")
         m = R.shape[0]
     if Q is not None:
-        Q = _exact(Q, "Q", (n, n))
+        Q = validate.covariance(Q, nm["Q"], n=n)
     if z is not None:
-        z = _exact(z, "z", (m,))
+        z = _exact(z, nm["z"], (m,))
     if K is not None:
-        K = _exact(K, "K", (n, m))
+        K = validate.array(K, nm["K"])
+        if K.shape != (n, m):
+            raise ValueError(f"{nm['K']} must have shape ({n}, {m}) to match {nm['P']} and {nm['H']} (n = {n} "
+                             f"states, m = {m} measurements); got {K.shape}")
     if B is not None or u is not None:
         if B is None or u is None:
-            raise ValueError("B and u must be given together (the control term is B @ u)")
-        B = validate.array(B, "B")
+            raise ValueError(f"{nm['B']} and {nm['u']} must be given together (the control term is B @ u)")
+        B = validate.array(B, nm["B"])
         if B.ndim != 2 or B.shape[0] != n:
-            raise ValueError(f"B must have shape ({n}, p); got {B.shape}")
-        u = _exact(u, "u", (B.shape[1],))
-    for key, val in (("P", P), ("H", H), ("R", R), ("A", A), ("Q", Q), ("B", B), ("u", u), ("x", x),
-                     ("z", z), ("K", K)):
-        out[key] = val
-    return out
+            raise ValueError(f"{nm['B']} must have shape ({n}, p); got {B.shape}")
+        u = validate.array(u, nm["u"])
+        if u.shape != (B.shape[1],):
+            raise ValueError(f"{nm['u']} must have shape ({B.shape[1]},) to match {nm['B']} {B.shape}; "
+                             f"got {u.shape}")
+    return dict(P=P, H=H, R=R, A=A, Q=Q, B=B, u=u, x=x, z=z, K=K)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -375,6 +386,7 @@ def gaussian_product(mu1, var1, mu2, var2):
     """
     mu1, mu2 = validate.array(mu1, "mu1"), validate.array(mu2, "mu2")
     var1, var2 = validate.array(var1, "var1"), validate.array(var2, "var2")
+    validate.broadcast(mu1=mu1, var1=var1, mu2=mu2, var2=var2)
     for v, name in ((var1, "var1"), (var2, "var2")):
         if np.any(v <= 0):
             raise ValueError(f"{name} must be > 0 (a variance); got min {float(np.min(v))!r}")
@@ -476,7 +488,7 @@ def information_covariance(P, H, R):
 
 def gain_from_posterior(P_post, H, R):
     """The alternate gain ``K = P_k Hᵀ R⁻¹`` (000 §4.3.1), written with the *posterior* covariance ``P_k``."""
-    d = _model(P=P_post, H=H, R=R)
+    d = _model(P=P_post, H=H, R=R, names={"P": "P_post"})
     return d["P"] @ d["H"].T @ np.linalg.inv(d["R"])                 # (000 §4.3.1, alternate form)
 
 
@@ -573,7 +585,7 @@ def predict(x, P, A, Q, B=None, u=None):
     -------
     x_prior : (n,); P_prior : (n, n)
     """
-    d = _model(x=x, P=P, A=A, Q=Q, B=B, u=u)
+    d = _model(x=x, P=P, A=A, Q=Q, B=B, u=u, optional=("B", "u"))
     Bu = None if B is None else d["B"] @ d["u"]
     return _predict(d["x"], d["P"], d["A"], d["Q"], Bu)
 
@@ -628,7 +640,7 @@ class ThesisKF:
     """
 
     def __init__(self, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=True, control=True):
-        d = _model(x=x0, P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u)
+        d = _model(x=x0, P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u, names={"x": "x0", "P": "P0"})
         self.A, self.B, self.u, self.Q, self.R, self.H = (d[k] for k in ("A", "B", "u", "Q", "R", "H"))
         self.x, self.P = d["x"].copy(), d["P"].copy()
         self.covariance = _check_form(covariance)
@@ -686,7 +698,7 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
     dict -- ``x`` (R, N, n) posteriors, ``x_prior`` (R, N, n), ``P`` (N, n, n) posterior covariances,
     ``P_prior`` (N, n, n), ``K`` (N, n, m)
     """
-    d = _model(P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u)
+    d = _model(P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u, names={"P": "P0"})
     A, Q, H, Rm, P = d["A"], d["Q"], d["H"], d["R"], d["P"]
     n, m = H.shape[1], H.shape[0]
     zs = validate.array(zs, "zs")
@@ -740,7 +752,8 @@ def simulate_falling_body(n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0
     n_runs, n_steps = _count(n_runs, "n_runs"), _count(n_steps, "n_steps")
     seed, first_run = _count(seed, "seed", 0), _count(first_run, "first_run", 0)
     A, B, u = falling_body_state_space(k, m, g, dt)
-    pn_std, mn_std = _scalar(pn_std, "pn_std"), _scalar(mn_std, "mn_std")
+    pn_std, mn_std = validate.scalar(pn_std, "pn_std", nonnegative=True), validate.scalar(mn_std, "mn_std",
+                                                                                          nonnegative=True)
     noise = np.stack([np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(r,)))
                       .standard_normal((n_steps, 4)) for r in range(first_run, first_run + n_runs)])
     truth = np.empty((n_runs, n_steps + 1, 2))
@@ -770,6 +783,7 @@ def nees(err, P):
     if err.ndim < 1 or P.ndim < 2 or P.shape[-2:] != (err.shape[-1], err.shape[-1]):
         raise ValueError(f"P must have shape (..., {err.shape[-1] if err.ndim else 'n'}, "
                          f"{err.shape[-1] if err.ndim else 'n'}) to match err {err.shape}; got {P.shape}")
+    validate.broadcast({"err": 1, "P": 2}, err=err, P=P)
     sol = np.linalg.solve(P, err[..., None])[..., 0]
     return np.einsum("...i,...i->...", err, sol)
 
@@ -828,6 +842,10 @@ def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_st
     from tqdm.auto import tqdm
 
     n_runs, batch = _count(n_runs, "n_runs"), _count(batch, "batch")
+    n_steps, seed = _count(n_steps, "n_steps"), _count(seed, "seed", 0)
+    validate.options(model, [k_ for k_ in LAB2 if k_ != "tmax"], "monte_carlo")
+    model = {k_: validate.scalar(v, k_, positive=k_ in ("k", "m", "dt", "mn_std"),
+                                 nonnegative=k_ == "pn_std") for k_, v in model.items()}
     p = dict(LAB2)
     p.update(model)
     A, B, u = falling_body_state_space(p["k"], p["m"], p["g"], p["dt"])
@@ -835,6 +853,11 @@ def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_st
                 x0=np.array([p["x0"], p["v0"]]), P0=p["mn_std"] ** 2 * np.eye(2))
     if variants is None:
         variants = {"thesis filter": {}, "printed code": {"project_state": False, "covariance": "short"}}
+    if not isinstance(variants, dict) or not variants:
+        raise ValueError(f"variants must be a non-empty dict name -> kf_batch options; got {variants!r}")
+    for name, opts in variants.items():
+        validate.options(opts, ("covariance", "project_state", "control", "x0", "P0", "Q", "R"),
+                         f"monte_carlo variant {name!r}")
     sims = {k_: p[k_] for k_ in ("x0", "v0", "k", "m", "g", "dt", "pn_std", "mn_std")}
     sq_meas = np.zeros(2)
     acc = {name: {"sq": np.zeros((n_steps, 2)), "err": np.zeros((n_steps, 2)), "nees": np.zeros(n_steps)}

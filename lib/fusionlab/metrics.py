@@ -38,16 +38,16 @@ __all__ = ["error_quaternion", "total_error", "heading_error", "inclination_erro
 
 def _quats_with_nan(q, name):
     """(N, 4) quaternions whose rows are either all finite and unit, or hold NaN (a lost reference sample)."""
-    q = validate.array(q, name, shape=(4,), finite=False)
+    q = validate.quaternions_or_nan(q, name)
     if q.ndim != 2:
         raise ValueError(f"{name} must have shape (N, 4), one quaternion per sample; got {q.shape}")
-    if np.any(np.isinf(q)):
-        raise ValueError(f"{name} must hold finite numbers or NaN (lost samples); got infinite values")
-    lost = np.isnan(q).any(axis=-1)
-    validate.quaternions(q[~lost], name)
-    q = q.copy()
-    q[lost] = np.nan                                   # a row with one NaN is lost as a whole
     return q
+
+
+def _offset(x, name):
+    """A heading offset in radians, within ±π: a constant heading offset is only defined modulo 2π, so a larger
+    value is almost always degrees."""
+    return validate.scalar(validate.angles_rad(x, name, limit=np.pi + 1e-9), name)
 
 
 def error_quaternion(q_est, q_ref):
@@ -84,7 +84,7 @@ def _turn_heading(q, offset):
 
 
 def _error_parts(q_err):
-    q_err = validate.array(q_err, "q_err", shape=(4,), finite=False)
+    q_err = validate.quaternions_or_nan(q_err, "q_err")          # NaN anywhere in a row: NaN out
     return q_err[..., 0], q_err[..., 3]
 
 
@@ -133,8 +133,8 @@ def mean_heading_offset(q_err, mask=None):
     q_err : (N, 4) array -- error quaternions, NaN rows allowed
     mask : (N,) bool array or None -- samples to average over (default: all)
     """
-    q_err = validate.array(q_err, "q_err", shape=(4,), finite=False)
-    ok = _mask(mask, len(q_err)) & ~np.isnan(q_err).any(axis=-1)
+    q_err = _quats_with_nan(q_err, "q_err")
+    ok = _mask(mask, len(q_err), of="q_err") & ~np.isnan(q_err).any(axis=-1)
     if not ok.any():
         raise ValueError("mask must select at least one sample with a valid reference; got none")
     d = signed_heading_error(q_err[ok])
@@ -148,7 +148,7 @@ def remove_heading_offset(q_est, offset):
     inclination is unchanged.
     """
     q_est = validate.quaternions(q_est, "q_est")
-    offset = float(validate.angles_rad(offset, "offset"))
+    offset = _offset(offset, "offset")
     return _turn_heading(q_est, offset)
 
 
@@ -166,27 +166,27 @@ def rms(x, mask=None):
     x = validate.array(x, "x", finite=False)
     if x.ndim != 1:
         raise ValueError(f"x must have shape (N,); got {x.shape}")
-    ok = _mask(mask, len(x)) & ~np.isnan(x)
+    ok = _mask(mask, len(x), of="x") & ~np.isnan(x)
     if not ok.any():
         raise ValueError("mask must select at least one sample where x is defined (not NaN); got none")
     return float(np.sqrt(np.mean(x[ok] ** 2)))
 
 
-def _mask(mask, n):
+def _mask(mask, n, of, name="mask"):
     if mask is None:
         return np.ones(n, dtype=bool)
     m = np.asarray(mask)
     if m.dtype != bool:
         try:
-            mf = validate.array(m, "mask")
+            mf = validate.array(m, name)
         except ValueError:
-            raise ValueError(f"mask must be a boolean array of shape ({n},); got dtype {m.dtype}") from None
+            raise ValueError(f"{name} must be a boolean array of shape ({n},); got dtype {m.dtype}") from None
         if not np.all((mf == 0) | (mf == 1)):
-            raise ValueError("mask must be boolean (or 0/1); got values other than 0 and 1")
+            raise ValueError(f"{name} must be boolean (or 0/1); got values other than 0 and 1")
         m = mf.astype(bool)
     m = m.reshape(-1) if m.ndim == 2 and m.shape[1] == 1 else m          # MATLAB's (N, 1) column
     if m.shape != (n,):
-        raise ValueError(f"mask must have shape ({n},), one flag per sample; got {np.shape(mask)}")
+        raise ValueError(f"{name} must have shape ({n},), one flag per sample of {of}; got {np.shape(mask)}")
     return m
 
 
@@ -212,7 +212,7 @@ def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
     q_est : (N, 4) array -- estimated body→nav unit quaternions ``[w, x, y, z]``
     q_ref : (N, 4) array -- reference body→nav unit quaternions, same nav frame; NaN rows where markers were lost
     movement : (N,) bool array or None -- samples to score (BROAD: the movement phase); default all
-    heading_offset : None, 'mean' or float (rad)
+    heading_offset : None, 'mean' or float (rad, within ±π)
         None (the authors' metric): score the estimate as it is. 'mean': first remove the estimate's constant
         heading offset (:func:`mean_heading_offset` over the scored samples) -- for 6-axis filters, whose heading is
         arbitrary. A float: remove that offset.
@@ -227,7 +227,7 @@ def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
     validate.quaternions(q_est, "q_est")
     q_ref = _quats_with_nan(q_ref, "q_ref")
     validate.same_length(q_est=q_est, q_ref=q_ref)
-    mask = _mask(movement, len(q_est))
+    mask = _mask(movement, len(q_est), of="q_est", name="movement")
     q_err = _error_quaternion(q_est, q_ref)
     scored = mask & ~np.isnan(q_err).any(axis=-1)
     if not scored.any():
@@ -239,7 +239,7 @@ def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
             raise ValueError(f"heading_offset must be None, 'mean' or a number (rad); got {heading_offset!r}")
         offset = mean_heading_offset(q_err, scored)
     else:
-        offset = float(validate.angles_rad(heading_offset, "heading_offset"))
+        offset = _offset(heading_offset, "heading_offset")
     if offset != 0.0:
         q_err = _turn_heading(q_err, offset)       # q_z(-δ) ⊗ q_est ⊗ conj(q_ref) = q_z(-δ) ⊗ q_err
     rad = [rms(f(q_err), scored) for f in (total_error, heading_error, inclination_error)]

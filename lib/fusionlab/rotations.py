@@ -77,7 +77,11 @@ def skew(v):
 
 
 def _elementary(angle, name, axis):
-    a = validate.array(angle, name)
+    return _elem(validate.angles_rad(angle, name), axis)
+
+
+def _elem(a, axis):
+    """The active elementary rotation about ``axis`` of already checked angles ``a`` (rad)."""
     c, s = np.cos(a), np.sin(a)
     o, i = np.zeros_like(a), np.ones_like(a)
     rows = {0: [[i, o, o], [o, c, -s], [o, s, c]],
@@ -131,8 +135,8 @@ def euler_to_dcm(euler):
     -------
     C_bn : (..., 3, 3) array -- ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``
     """
-    e = validate.vectors(euler, "euler")
-    return rot_z(e[..., 2]) @ rot_y(e[..., 1]) @ rot_x(e[..., 0])        # (000 eq 3.40)
+    e = validate.euler_rad(euler, "euler")
+    return _elem(e[..., 2], 2) @ _elem(e[..., 1], 1) @ _elem(e[..., 0], 0)   # (000 eq 3.40): Rz Ry Rx
 
 
 def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
@@ -148,11 +152,14 @@ def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
 
     Parameters
     ----------
-    C_bn : (..., 3, 3) array -- a rotation matrix
+    C_bn : (..., 3, 3) array -- a rotation matrix (checked: orthonormal with det +1 within 0.05, so a slightly
+        drifted DCM is read, a reflection or a zero matrix is refused)
     yaw_at_lock : float, rad -- the yaw to report when the pitch is at ±90°
     lock_tol : float -- ``cos θ`` below this is treated as gimbal lock
     """
-    C = validate.matrices(C_bn, "C_bn")
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)      # a drifted DCM still reads (to ~2°); a reflection does not
+    yaw_at_lock = validate.scalar(validate.angles_rad(yaw_at_lock, "yaw_at_lock"), "yaw_at_lock")
+    lock_tol = validate.positive(lock_tol, "lock_tol")
     r11, r21, r31 = C[..., 0, 0], C[..., 1, 0], C[..., 2, 0]
     cos_pitch = np.hypot(r11, r21)
     pitch = np.arctan2(-r31, cos_pitch)                                   # (000 eq 3.69), robust near ±1
@@ -180,10 +187,10 @@ def sequence_to_dcm(angles, seq):
     angles : (..., 3) array, rad -- in the order the rotations are applied
     seq : str -- three letters from 'XYZ', e.g. 'XYZ', 'ZXY', 'YXZ' (consecutive letters must differ)
     """
-    a = validate.vectors(angles, "angles")
+    a = validate.vectors(angles, "angles")        # any magnitude: Lab 01's check tries an answer both ways
     _check_seq(seq)
-    elem = {"X": rot_x, "Y": rot_y, "Z": rot_z}
-    return elem[seq[0]](a[..., 0]) @ elem[seq[1]](a[..., 1]) @ elem[seq[2]](a[..., 2])
+    ax = {"X": 0, "Y": 1, "Z": 2}
+    return _elem(a[..., 0], ax[seq[0]]) @ _elem(a[..., 1], ax[seq[1]]) @ _elem(a[..., 2], ax[seq[2]])
 
 
 def dcm_to_sequence(C, seq):
@@ -259,7 +266,7 @@ def dcm_to_quat(C_bn):
 
 def euler_to_quat(euler):
     """Quaternion of Z-Y-X Euler angles: ``q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`` (same rotation as :func:`euler_to_dcm`)."""
-    e = validate.vectors(euler, "euler")
+    e = validate.euler_rad(euler, "euler")
     h = e / 2
     o = np.zeros_like(h[..., 0])
     qx = np.stack([np.cos(h[..., 0]), np.sin(h[..., 0]), o, o], -1)
@@ -277,6 +284,7 @@ def quat_multiply(p, q):
     """Hamilton product ``p ⊗ q`` of scalar-first quaternions (seed 001 quaternion note §2). Shapes broadcast."""
     p = validate.array(p, "p", shape=(4,))
     q = validate.array(q, "q", shape=(4,))
+    validate.broadcast({"p": 1, "q": 1}, p=p, q=q)
     pw, px, py, pz = (p[..., i] for i in range(4))
     qw, qx, qy, qz = (q[..., i] for i in range(4))
     return np.stack([pw * qw - px * qx - py * qy - pz * qz,
@@ -312,6 +320,7 @@ def quat_rotate(q, v):
     """
     q = validate.quaternions(q, "q")
     v = validate.vectors(v, "v")
+    validate.broadcast({"q": 1, "v": 1}, q=q, v=v)
     v4 = np.concatenate([np.zeros(v.shape[:-1] + (1,)), v], -1)
     return quat_multiply(quat_multiply(q, v4), quat_conjugate(q))[..., 1:]
 
@@ -320,6 +329,7 @@ def quat_angle_between(q1, q2):
     """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter."""
     q1 = validate.quaternions(q1, "q1")
     q2 = validate.quaternions(q2, "q2")
+    validate.broadcast({"q1": 1, "q2": 1}, q1=q1, q2=q2)
     d = quat_multiply(quat_conjugate(q1), q2)                            # q1* ⊗ q2: the relative rotation
     return 2 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))   # exact near 0, unlike acos
 
@@ -402,7 +412,7 @@ def dcm_renormalize(C, axis="columns"):
     C : (..., 3, 3) array -- nearly orthonormal
     axis : 'columns' or 'rows'
     """
-    C = validate.matrices(C, "C")
+    C = validate.rotation(C, "C", tol=0.25)      # drifted, not degenerate: a zero or reflected C has no fix
     if axis not in ("columns", "rows"):
         raise ValueError(f"axis must be 'columns' or 'rows'; got {axis!r}")
     M = np.swapaxes(C, -1, -2) if axis == "columns" else C
@@ -418,18 +428,20 @@ def dcm_renormalize(C, axis="columns"):
 def is_rotation(C, tol=1e-6):
     """True where ``C`` is orthonormal with determinant +1 within ``tol``."""
     C = validate.matrices(C, "C")
+    tol = validate.scalar(tol, "tol", positive=True)
     ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)), axis=(-2, -1))
     return (ortho < tol) & (np.abs(np.linalg.det(C) - 1) < tol)
 
 
 def _require_rotation(C, name, tol=1e-6):
-    ok = is_rotation(C, tol)
-    if not np.all(ok):
-        ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)))
-        det = np.linalg.det(C)
-        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1); got max|C Cᵀ - I| = {ortho:.3g},"
-                         f" det = {np.min(det):.6g} -- a transposed or reflected matrix, or one that needs "
-                         f"dcm_renormalize?")
+    validate.rotation(C, name, tol)
+
+
+def _roll_pitch(roll, pitch):
+    r = validate.angles_rad(roll, "roll")
+    p = validate.angles_rad(pitch, "pitch", limit=np.pi + 1e-9)
+    validate.broadcast(roll=r, pitch=p)
+    return r, p
 
 
 def euler_rates_matrix(roll, pitch):
@@ -438,8 +450,7 @@ def euler_rates_matrix(roll, pitch):
     ``[φ̇, θ̇, ψ̇] = D @ [p, q, r]``. It does not depend on yaw (the note's ``D(φ, θ, ψ)`` is a misnomer) and both
     its first row (tan θ) and last row (1/cos θ) diverge at θ = ±90°.
     """
-    r = validate.array(roll, "roll")
-    p = validate.array(pitch, "pitch")
+    r, p = _roll_pitch(roll, pitch)
     sr, cr, tp, cp = np.sin(r), np.cos(r), np.tan(p), np.cos(p)
     o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
     return np.stack([np.stack([i, sr * tp, cr * tp], -1),
@@ -452,8 +463,7 @@ def body_rates_matrix(roll, pitch):
 
     ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (not printed in the note; derived in docs/derivations.md §4).
     """
-    r = validate.array(roll, "roll")
-    p = validate.array(pitch, "pitch")
+    r, p = _roll_pitch(roll, pitch)
     sr, cr, sp, cp = np.sin(r), np.cos(r), np.sin(p), np.cos(p)
     o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
     return np.stack([np.stack([i, o, -sp + o], -1),
@@ -475,8 +485,8 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     -------
     (N + 1, 3, 3) array -- ``C0`` and the attitude after every step
     """
-    C = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
-    gyr = validate.samples(gyr, "gyr")
+    C = validate.rotation(validate.array(C0, "C0", shape=(3, 3)), "C0", tol=1e-3).reshape(3, 3)
+    gyr = validate.gyro_rad(gyr, "gyr")
     dt = validate.positive(dt, "dt")
     if renormalize not in (None, "columns", "rows"):
         raise ValueError(f"renormalize must be 'columns', 'rows' or None; got {renormalize!r}")
@@ -501,8 +511,10 @@ def integrate_gyro_quat(q0, gyr, dt):
     -------
     (N + 1, 4) array
     """
-    q = validate.quaternions(q0, "q0").reshape(4)
-    gyr = validate.samples(gyr, "gyr")
+    q = validate.quaternions(q0, "q0")
+    if q.shape != (4,):
+        raise ValueError(f"q0 must be one quaternion, shape (4,); got {q.shape}")
+    gyr = validate.gyro_rad(gyr, "gyr")
     dt = validate.positive(dt, "dt")
     dq = rotvec_to_quat(gyr * dt)
     out = np.empty((len(gyr) + 1, 4))
@@ -528,7 +540,7 @@ _Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])            # the q
 
 def dcm_nav_swap(C_bn):
     """The same attitude with the navigation frame changed NED ↔ ENU: ``NED_ENU @ C_bn`` (body axes unchanged)."""
-    C = validate.matrices(C_bn, "C_bn")
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)
     return NED_ENU @ C
 
 
@@ -544,14 +556,18 @@ def quat_nav_swap(q):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def _angles(scalar=False, **named):
-    """Validate named angle (or rate) arguments; with ``scalar`` each must be a single number."""
+def _angles(scalar=False, rates=False, **named):
+    """Validate named angle arguments (radians, within ±2π; pitch within ±π) or, with ``rates``, body rates
+    (rad/s, not checked for degrees); with ``scalar`` each must be a single number. Array arguments must broadcast."""
     out = []
     for name, v in named.items():
-        a = validate.array(v, name)
-        if scalar and a.ndim != 0:
-            raise ValueError(f"{name} must be a single number; got shape {a.shape}")
-        out.append(float(a) if scalar else a)
+        if scalar:
+            out.append(validate.scalar(v, name))
+            continue
+        limit = np.pi + 1e-9 if name == "pitch" else 2 * np.pi + 1e-9
+        out.append(validate.array(v, name) if rates else validate.angles_rad(v, name, limit=limit))
+    if not scalar:
+        validate.broadcast(**dict(zip(named, out)))
     return out
 
 
@@ -587,7 +603,7 @@ def seed000_labcode_omega(wx, wy, wz):
 def seed000_labcode_rates(wx, wy, wz):
     """Convert the lab code's gyro inputs to our body rates: its ``R*(I + Omega dt)`` is our
     ``C_bn @ (I + skew(ω) dt)`` with ``ω = (Wx, -Wy, -Wz)``. Shapes broadcast; returns ``(..., 3)``."""
-    wx, wy, wz = np.broadcast_arrays(*_angles(wx=wx, wy=wy, wz=wz))
+    wx, wy, wz = np.broadcast_arrays(*_angles(wx=wx, wy=wy, wz=wz, rates=True))
     return np.stack([wx, -wy, -wz], -1)
 
 
@@ -598,7 +614,7 @@ def seed000_labcode_angles(R):
     These are not (3.69)/(3.72)/(3.75): on the same matrix those give other numbers (worked here: 41.630 /
     -18.374 / -7.037 deg for the Part B result). A non-zero initial pitch reads back with the wrong sign.
     """
-    R = validate.matrices(R, "R")
+    R = validate.rotation(R, "R", tol=0.25)     # the lab reads its drifted, unrenormalised matrix too
     pitch = np.arcsin(np.clip(R[..., 2, 1], -1, 1))
     roll = np.arctan2(R[..., 2, 0], R[..., 2, 2])
     yaw = np.arctan2(R[..., 0, 1], R[..., 1, 1])
@@ -608,7 +624,8 @@ def seed000_labcode_angles(R):
 def seed000_eq379_381_printed(C_bn, yaw=0.0):
     """Seed 000 eqs 3.79 and 3.81 *as printed* (swapped): θ=-90° → ``φ = ψ + atan2(r12, r13)``,
     θ=+90° → ``φ = -ψ + atan2(-r12, -r13)``. Returns the roll (rad) the printed rule gives at gimbal lock."""
-    C = validate.matrices(C_bn, "C_bn")
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)
+    yaw = validate.scalar(validate.angles_rad(yaw, "yaw"), "yaw")
     r12, r13, r31 = C[..., 0, 1], C[..., 0, 2], C[..., 2, 0]
     return np.where(r31 > 0, yaw + np.arctan2(r12, r13), -yaw + np.arctan2(-r12, -r13))
 
@@ -624,13 +641,13 @@ def seed001_R_IB(roll, pitch, yaw):
 
 def dcm_from_seed001(R_IB):
     """Our body→nav ``C_bn`` from seed 001's inertial→body ``R_I^B`` (NED): the transpose."""
-    R = validate.matrices(R_IB, "R_IB")
+    R = validate.rotation(R_IB, "R_IB", tol=0.05)
     return np.swapaxes(R, -1, -2)
 
 
 def dcm_to_seed001(C_bn):
     """Seed 001's ``R_I^B`` from our ``C_bn``: the transpose."""
-    C = validate.matrices(C_bn, "C_bn")
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)
     return np.swapaxes(C, -1, -2)
 
 

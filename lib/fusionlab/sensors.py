@@ -40,7 +40,7 @@ import numpy as np
 from . import validate
 
 __all__ = [
-    "G", "EPS0",
+    "G", "EPS0", "FREE_FALL",
     # 1. spring-mass-damper
     "smd_transfer", "smd_natural_frequency", "smd_damping_ratio", "smd_dc_gain",
     "accel_from_displacement", "seed000_eq37_printed",
@@ -62,6 +62,9 @@ __all__ = [
 G = 9.80665
 #: Vacuum permittivity, F/m.
 EPS0 = 8.8541878128e-12
+#: Below this specific force (m/s², 0.05 g) an accelerometer is in free fall: its reading is noise and bias, not
+#: the direction of gravity. The filters trust their gyro there (and refuse a record that starts in it).
+FREE_FALL = 0.05 * G
 
 
 def _nonnegative(x, name):
@@ -104,6 +107,7 @@ def smd_transfer(omega, m, k, b):
     m = validate.positive(m, "m")
     k = validate.positive(k, "k")
     b = _nonnegative(b, "b")
+    validate.broadcast(omega=w, b=b)
     s = 1j * w
     return -1.0 / (s**2 + (b / m) * s + k / m)                                    # (000 eq 3.5)
 
@@ -173,7 +177,9 @@ def parallel_plate_capacitance(eps, area, gap):
     eps : float, F/m (> 0); area : float or array, m² (> 0); gap : float or array, m (> 0)
     """
     eps = validate.positive(eps, "eps")
-    return eps * _positive_array(area, "area") / _positive_array(gap, "gap")     # (000 eq 3.8)
+    area, gap = _positive_array(area, "area"), _positive_array(gap, "gap")
+    validate.broadcast(area=area, gap=gap)
+    return eps * area / gap     # (000 eq 3.8)
 
 
 def differential_capacitances(c0, delta):
@@ -212,6 +218,7 @@ def bridge_output(c1, c2, v_in):
     c1 = _positive_array(c1, "c1")
     c2 = _positive_array(c2, "c2")
     v_in = validate.array(v_in, "v_in")
+    validate.broadcast(c1=c1, c2=c2, v_in=v_in)
     return v_in * c2 / (c1 + c2) - v_in / 2
 
 
@@ -228,7 +235,9 @@ def half_bridge_output(delta, v_in):
     (...) array, V
     """
     d = validate.array(delta, "delta")
-    return 0.5 * d * validate.array(v_in, "v_in")                                 # (000 eq 3.11)
+    v_in = validate.array(v_in, "v_in")
+    validate.broadcast(delta=d, v_in=v_in)
+    return 0.5 * d * v_in                                 # (000 eq 3.11)
 
 
 def accel_from_bridge(v_out, v_in, x0, m, k):
@@ -245,6 +254,7 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
     """
     v_out = validate.array(v_out, "v_out")
     v_in = validate.array(v_in, "v_in")
+    validate.broadcast(v_out=v_out, v_in=v_in)
     if np.any(v_in == 0):
         raise ValueError("v_in must not be 0: the bridge output is read as a fraction of the excitation")
     x0 = validate.positive(x0, "x0")
@@ -314,7 +324,12 @@ IDG500_XOUT = AnalogSensor("IDG-500 (XOUT)", sensitivity=0.002, zero_level=1.35,
 
 
 def _bits(bits):
-    if isinstance(bits, bool) or not float(bits).is_integer() or not 1 <= int(bits) <= 32:
+    try:
+        ok = (not isinstance(bits, (bool, str, bytes)) and np.ndim(bits) == 0 and np.isfinite(float(bits))
+              and float(bits).is_integer() and 1 <= int(bits) <= 32)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
         raise ValueError(f"bits must be a whole number of ADC bits between 1 and 32; got {bits!r}")
     return int(bits)
 
@@ -433,7 +448,9 @@ def null_offset(readings, expected=0.0):
     r = validate.array(readings, "readings")
     if r.ndim == 0 or len(r) == 0:
         raise ValueError(f"readings must hold at least one sample along axis 0; got shape {r.shape}")
-    return validate.array(expected, "expected") - r.mean(axis=0)
+    e = validate.array(expected, "expected")
+    validate.broadcast(readings=r[0], expected=e)         # one value per axis of a sample
+    return e - r.mean(axis=0)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -457,6 +474,7 @@ def tilt_2d(a_x, a_y):
     """
     ax = validate.array(a_x, "a_x")
     ay = validate.array(a_y, "a_y")
+    validate.broadcast(a_x=ax, a_y=ay)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.arctan(ay / ax)                                                 # (000 eq 3.17)
 
@@ -517,6 +535,7 @@ def atan2_piecewise(y, x):
     """
     y = validate.array(y, "y")
     x = validate.array(x, "x")
+    validate.broadcast(y=y, x=x)
     y, x = np.broadcast_arrays(y, x)
     with np.errstate(divide="ignore", invalid="ignore"):
         base = np.arctan(y / x)
@@ -531,6 +550,7 @@ def seed000_eq321_printed(y, x):
     """
     y = validate.array(y, "y")
     x = validate.array(x, "x")
+    validate.broadcast(y=y, x=x)
     y, x = np.broadcast_arrays(y, x)
     with np.errstate(divide="ignore", invalid="ignore"):
         base = np.arctan(y / x)
@@ -554,6 +574,7 @@ def excel_atan2(x_num, y_num):
     """
     x = validate.array(x_num, "x_num")
     y = validate.array(y_num, "y_num")
+    validate.broadcast(x_num=x, y_num=y)
     out = np.arctan2(y, x)
     return np.where((x == 0) & (y == 0), np.nan, out)
 
@@ -574,6 +595,8 @@ def seed001_tilt_printed(acc, g=G):
     """
     a = validate.vectors(acc, "acc")
     g = validate.positive(g, "g")
+    if np.any(np.linalg.norm(a, axis=-1) == 0):
+        raise ValueError("acc must not be zero: a sensor in free fall reads 0 and has no tilt information")
     with np.errstate(divide="ignore", invalid="ignore"):
         roll = np.arctan(a[..., 1] / a[..., 2])                                   # (001 attitude §2, printed)
         pitch = np.arcsin(a[..., 0] / g)
@@ -618,9 +641,10 @@ def specific_force(C_bn, acc_nav=None, g=G):
     -------
     (..., 3) array, m/s² -- in the body frame
     """
-    C = validate.matrices(C_bn, "C_bn")
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)
     g_n = np.array([0.0, 0.0, validate.positive(g, "g")])
     a_n = np.zeros(3) if acc_nav is None else validate.vectors(acc_nav, "acc_nav")
+    validate.broadcast({"C_bn": 2, "acc_nav": 1}, C_bn=C, acc_nav=a_n)
     f_n = a_n - g_n                                                               # (001 sensors: a_m = (F - F_g)/m)
     return np.einsum("...ji,...j->...i", C, np.broadcast_to(f_n, np.broadcast_shapes(f_n.shape, C.shape[:-1])))
 
@@ -643,6 +667,7 @@ def coriolis_acceleration(omega, v):
     """
     w = validate.vectors(omega, "omega")
     v = validate.vectors(v, "v")
+    validate.broadcast({"omega": 1, "v": 1}, omega=w, v=v)
     return -2.0 * np.cross(w, v)                                                  # (000 eq 3.33, corrected sign)
 
 
@@ -668,7 +693,9 @@ def coriolis_force(mass, omega, v):
 def seed000_eq334_printed(mass, omega, v):
     """Seed 000 eq 3.34 **as printed**, ``F = 2M(Ω × v)`` -- the opposite of the Coriolis force; kept for the erratum."""
     m = validate.positive(mass, "mass")
-    return 2.0 * m * np.cross(validate.vectors(omega, "omega"), validate.vectors(v, "v"))
+    w, v = validate.vectors(omega, "omega"), validate.vectors(v, "v")
+    validate.broadcast({"omega": 1, "v": 1}, omega=w, v=v)
+    return 2.0 * m * np.cross(w, v)
 
 
 def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
@@ -690,6 +717,9 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     w = validate.vectors(omega, "omega")
     r = validate.vectors(r, "r")
     wd = np.zeros(3) if omega_dot is None else validate.vectors(omega_dot, "omega_dot")
+    v = validate.vectors(v, "v")
+    validate.broadcast({k: 1 for k in ("a_inertial", "omega", "r", "v", "omega_dot")}, a_inertial=A, omega=w, r=r,
+                       v=v, omega_dot=wd)
     return (A + coriolis_acceleration(w, v) - np.cross(w, np.cross(w, r))         # (000 eq 3.32, solved for a_rot)
             - np.cross(wd, r))
 
@@ -716,6 +746,8 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
     v_rel = np.zeros(3) if v_rel is None else validate.vectors(v_rel, "v_rel")
     a_rel = np.zeros(3) if a_rel is None else validate.vectors(a_rel, "a_rel")
+    validate.broadcast({k: 1 for k in ("a_o", "omega", "alpha", "r", "v_rel", "a_rel")}, a_o=a_o, omega=omega,
+                       alpha=alpha, r=r, v_rel=v_rel, a_rel=a_rel)
     return (a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r)
             + np.cross(omega, np.cross(omega, r)))                                   # (000 eq 3.32; 004 eqs 3.4, 4.3)
 
@@ -731,9 +763,7 @@ def trailing_max(x, n):
     x = validate.array(x, "x")
     if x.ndim != 1:
         raise ValueError(f"x must have shape (N,); got {x.shape}")
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be a whole number of samples >= 1; got {n!r}")
-    n = int(n)
+    n = validate.count(n, "n", 1)
     return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
 
 
@@ -755,7 +785,8 @@ def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     """
     w = validate.array(rate_true, "rate_true")
     b = validate.array(bias, "bias")
-    sd = float(_nonnegative(noise_std, "noise_std"))
+    validate.broadcast(rate_true=w, bias=b)
+    sd = validate.scalar(noise_std, "noise_std", nonnegative=True)
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     return w + b + sd * rng.standard_normal(w.shape)
 
@@ -781,6 +812,7 @@ def integrate_rate(rate, dt, angle0=0.0):
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
     dt = validate.positive(dt, "dt")
     a0 = validate.array(angle0, "angle0")
+    validate.broadcast(rate=w[0], angle0=a0)                  # one start angle per axis of a sample
     steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
     return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
 
@@ -803,6 +835,7 @@ def integration_drift(t, bias, noise_std, dt):
     b = validate.array(bias, "bias")
     sd = _nonnegative(noise_std, "noise_std")
     dt = validate.positive(dt, "dt")
+    validate.broadcast(t=t, bias=b, noise_std=sd)
     return b * t, sd * np.sqrt(dt * t)
 
 
@@ -825,18 +858,21 @@ __all__ += [
 ]
 
 
-def _triad_params(M, S, beta, who):
-    M = validate.matrices(M, f"{who} M")
+def _triad_params(M, S, beta, who, names=("M", "S", "beta")):
+    nM, nS, nb = (f"{who} {n}" for n in names)
+    M = validate.matrices(M, nM)
     if M.shape != (3, 3):
-        raise ValueError(f"{who} M must be one 3×3 matrix; got shape {M.shape}")
-    S = validate.array(S, f"{who} S")
+        raise ValueError(f"{nM} must be one 3×3 matrix; got shape {M.shape}")
+    S = validate.array(S, nS)
     S = np.diag(S) if S.shape == (3,) else S
     if S.shape != (3, 3):
-        raise ValueError(f"{who} S must be the 3 sensitivities or a 3×3 diagonal matrix; got shape {S.shape}")
-    beta = validate.array(beta, f"{who} beta", shape=(3,))
-    for name, A in (("M", M), ("S", S)):
+        raise ValueError(f"{nS} must be the 3 sensitivities or a 3×3 diagonal matrix; got shape {S.shape}")
+    beta = validate.array(beta, nb, shape=(3,))
+    if beta.shape != (3,):
+        raise ValueError(f"{nb} must be one bias vector, shape (3,); got {beta.shape}")
+    for name, A in ((nM, M), (nS, S)):
         if abs(np.linalg.det(A)) < 1e-12:
-            raise ValueError(f"{who} {name} must be invertible; got det = {np.linalg.det(A):.3g}")
+            raise ValueError(f"{name} must be invertible; got det = {np.linalg.det(A):.3g}")
     return M, S, beta
 
 
@@ -880,7 +916,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     """
     p = validate.vectors(rate, "rate")
     M, S, beta = _triad_params(M, S, beta, "gyro")
-    g_term = _g_sensitivity(C_ga, a_c)
+    g_term = _g_sensitivity(C_ga, a_c, rate=p)
     return (p @ S.T - beta + g_term) @ M.T                               # (001 §7.2, solved for p_m)
 
 
@@ -888,17 +924,23 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     """Rate-gyro correction, seed 001 sensors note §3: ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``."""
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
-    g_term = _g_sensitivity(C_ga, a_c)
+    g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
     return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 §7.2 correction)
 
 
-def _g_sensitivity(C_ga, a_c):
+def _g_sensitivity(C_ga, a_c, **rates):
     if C_ga is None:
+        if a_c is not None:
+            validate.vectors(a_c, "a_c")
         return 0.0
     C = validate.matrices(C_ga, "C_ga")
+    if C.shape != (3, 3):
+        raise ValueError(f"C_ga must be one 3×3 matrix; got shape {C.shape}")
     if a_c is None:
         raise ValueError("a_c (the corrected specific force) is needed when C_ga is given")
-    return validate.vectors(a_c, "a_c") @ C.T
+    a_c = validate.vectors(a_c, "a_c")
+    validate.broadcast({"a_c": 1, **{k: 1 for k in rates}}, a_c=a_c, **rates)
+    return a_c @ C.T
 
 
 def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
@@ -946,6 +988,7 @@ def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
     the symbol ``a_m`` stands where ``b_m`` belongs). Kept only so a lab can show what the typo costs; use
     :func:`mag_correct`.
     """
+    _triad_params(M_a, S_a, beta_a, "seed 001's printed formula:", names=("M_a", "S_a", "beta_a"))
     return mag_correct(b_m, M_a, S_a, beta_a, D_s, beta_h)
 
 
@@ -960,12 +1003,10 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     Their Allan deviation is :func:`allan_model`. Parameters ``n`` samples at ``fs`` Hz; ``rng`` a Generator or seed.
     Returns (n,) rad/s.
     """
-    n = int(n)
-    if n < 2:
-        raise ValueError(f"n must be at least 2 samples; got {n}")
+    n = validate.count(n, "n", 2)
     fs = validate.positive(fs, "fs")
-    N, B, K = (float(_nonnegative(v, name)) for v, name in ((arw, "arw"), (bias_instability, "bias_instability"),
-                                                              (rrw, "rrw")))
+    N, B, K = (validate.scalar(v, name, nonnegative=True) for v, name in
+               ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     out = N * np.sqrt(fs) * rng.standard_normal(n)                      # white rate: ARW
     if B > 0:
@@ -984,6 +1025,8 @@ def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
     ``σ(τ)² = N²/τ + (2 ln2/π) B² + K² τ/3``. So ``σ(1 s) = N`` on the ARW line, the flat floor is ``0.664·B`` and
     ``σ(3 s) = K`` on the RRW line. ``tau`` (...) s; returns (...) in the rate unit."""
     tau = _positive_array(tau, "tau")
+    arw, bias_instability, rrw = (validate.scalar(v, name, nonnegative=True) for v, name in
+                                  ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
     return np.sqrt(arw ** 2 / tau + 2 * np.log(2) / np.pi * bias_instability ** 2 + rrw ** 2 * tau / 3)
 
 
@@ -1003,6 +1046,9 @@ def remove_gravity(q_bn, acc, g=G, frame="NED"):
     if frame not in ("NED", "ENU"):
         raise ValueError(f"frame must be 'NED' or 'ENU'; got {frame!r}")
     g = validate.positive(g, "g")
+    q_bn = validate.quaternions(q_bn, "q_bn")
+    acc = validate.accel_ms2(acc, "acc", g=g, per_sample=False)
+    validate.broadcast({"q_bn": 1, "acc": 1}, q_bn=q_bn, acc=acc)
     g_n = np.array([0.0, 0.0, g if frame == "NED" else -g])
     return rotations.quat_rotate(q_bn, acc) + g_n                       # (001 position §1: a_I = R_B^I a_m + g)
 
@@ -1070,7 +1116,7 @@ def observer_steady_state_error(L, T, bias):
     ----------
     L : float in (0, 1]; T : s; bias : rate unit (the error comes out in its angle unit)
     """
-    L = float(validate.array(L, "L"))
+    L = validate.scalar(L, "L")
     if not 0.0 < L <= 1.0:
         raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); got {L}")
     return (1 - L) * validate.positive(T, "T") * validate.array(bias, "bias") / L

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad"]
+__all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
+           "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
+           "quaternions_or_nan", "count", "UnknownOption"]
 
 
 def _shape_text(shape, lead=""):
@@ -70,11 +72,14 @@ def quaternions(q, name, unit=True, tol=1e-6):
     """``q`` as scalar-first quaternions ``(..., 4)``; with ``unit`` they must have norm 1 within ``tol``.
 
     A common slip is passing ``[x, y, z, w]`` (scipy's order) or a quaternion that has drifted off the unit sphere;
-    the message says which.
+    the message says which. A zero quaternion encodes no rotation and is named as such.
     """
     q = array(q, name, shape=(4,))
     if unit:
         norm = np.linalg.norm(q, axis=-1)
+        if norm.size and float(np.min(norm)) < 1e-12:
+            raise ValueError(f"{name} must be unit quaternions [w, x, y, z]; got a zero quaternion (norm 0), "
+                             "which encodes no rotation")
         worst = float(np.max(np.abs(norm - 1.0))) if norm.size else 0.0
         if worst > tol:
             raise ValueError(f"{name} must be unit quaternions [w, x, y, z] (norm 1 within {tol:g}); "
@@ -82,8 +87,44 @@ def quaternions(q, name, unit=True, tol=1e-6):
     return q
 
 
+def quaternions_or_nan(q, name, tol=1e-6):
+    """Quaternions ``(..., 4)`` that are each either unit (within ``tol``) or hold NaN (an undefined sample).
+
+    A row with any NaN component is returned as all NaN, so that NaN in gives NaN out whatever component it sits
+    in; infinite values, zero and non-unit rows are errors.
+    """
+    q = array(q, name, shape=(4,), finite=False)
+    if np.any(np.isinf(q)):
+        raise ValueError(f"{name} must hold finite numbers or NaN (undefined samples); got infinite values")
+    lost = np.isnan(q).any(axis=-1)
+    quaternions(q[~lost], name, tol=tol)
+    if np.any(lost):
+        q = q.copy()
+        q[lost] = np.nan
+    return q
+
+
+def scalar(x, name, positive=False, nonnegative=False):
+    """One finite number (optionally > 0 or >= 0), as a float; a list, array, string or None names ``name``."""
+    if isinstance(x, (str, bytes, bool)) or x is None or np.ndim(x) != 0:
+        raise ValueError(f"{name} must be a single number; got {_show(x)}")
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a single number; got {x!r}") from None
+    if not np.isfinite(v):
+        raise ValueError(f"{name} must be a finite number; got {x!r}")
+    if positive and v <= 0:
+        raise ValueError(f"{name} must be > 0; got {x!r}")
+    if nonnegative and v < 0:
+        raise ValueError(f"{name} must be >= 0; got {x!r}")
+    return v
+
+
 def positive(x, name):
     """A finite scalar > 0 (sample rates, time steps, masses)."""
+    if isinstance(x, (str, bytes, bool)) or np.ndim(x) != 0:
+        raise ValueError(f"{name} must be a positive number; got {_show(x)}")
     try:
         v = float(x)
     except (TypeError, ValueError):
@@ -93,9 +134,29 @@ def positive(x, name):
     return v
 
 
+def _show(x):
+    """A short description of a bad argument for an error message."""
+    if np.ndim(x) != 0:
+        return f"{type(x).__name__} of shape {np.shape(x)}"
+    return repr(x)
+
+
+def count(x, name, minimum=0):
+    """A whole number >= ``minimum`` (sample counts, seeds); ``3.0`` is accepted, ``3.5`` and ``True`` are not."""
+    if isinstance(x, (bool, str, bytes)) or np.ndim(x) != 0:
+        raise ValueError(f"{name} must be an integer >= {minimum}; got {_show(x)}")
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}") from None
+    if not np.isfinite(v) or v != int(v) or v < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}")
+    return int(v)
+
+
 def same_length(**arrays):
     """Check that every given array has the same first-axis length; returns that length."""
-    lengths = {k: len(v) for k, v in arrays.items() if v is not None}
+    lengths = {k: (len(v) if np.ndim(v) else 0) for k, v in arrays.items() if v is not None}
     if len(set(lengths.values())) > 1:
         detail = ", ".join(f"{k} has {n}" for k, n in lengths.items())
         raise ValueError(f"{', '.join(lengths)} must have the same number of samples; {detail}")
@@ -106,6 +167,162 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
     """Angles in radians; values beyond ±``limit`` almost always mean degrees were passed."""
     a = array(x, name)
     if a.size and float(np.max(np.abs(a))) > limit:
-        raise ValueError(f"{name} must be in radians; got a value of {float(np.max(np.abs(a))):.4g}, "
-                         f"which looks like degrees -- use np.radians(...)")
+        raise ValueError(f"{name} must be in radians (|angle| <= {limit:.4g}); got a value of "
+                         f"{float(np.max(np.abs(a))):.4g}, which looks like degrees -- use np.radians(...)")
+    return a
+
+
+def euler_rad(x, name="euler"):
+    """Euler angles ``(..., 3)`` = ``[roll, pitch, yaw]`` in radians: roll and yaw within ±2π, pitch within ±π.
+
+    Pitch lives in [-π/2, π/2] by the Z-Y-X convention (±π still allows a pitch "over the top"); a pitch beyond ±π
+    or a roll or yaw beyond a full turn fits degrees far better than radians.
+    """
+    e = vectors(x, name)
+    if e.size:
+        big = np.abs(e) > np.array([2 * np.pi, np.pi, 2 * np.pi]) + 1e-9
+        if np.any(big):
+            j = int(np.argmax(big.reshape(-1, 3).any(axis=0)))
+            v = float(np.max(np.abs(e[..., j])))
+            raise ValueError(f"{name} must be [roll, pitch, yaw] in radians (roll and yaw within ±2π, pitch within "
+                             f"±π); got {('roll', 'pitch', 'yaw')[j]} = {v:.4g}, which looks like degrees -- use "
+                             "np.radians(...)")
+    return e
+
+
+def broadcast(core=None, **arrays):
+    """Check that the named arrays broadcast together; returns the broadcast batch shape.
+
+    ``core`` maps a name to the number of trailing axes that belong to one item (1 for a 3-vector or a
+    quaternion, 2 for a matrix, 0 by default); only the leading (batch) axes must broadcast. Replaces numpy's
+    "operands could not be broadcast" (which names no argument) by a message that names them and their shapes.
+    """
+    core = core or {}
+    batch = {k: np.shape(v)[:np.ndim(v) - core.get(k, 0)] for k, v in arrays.items() if v is not None}
+    try:
+        return np.broadcast_shapes(*batch.values())
+    except ValueError:
+        detail = ", ".join(f"{k} {np.shape(arrays[k])}" for k in batch)
+        raise ValueError(f"{', '.join(batch)} must have matching (broadcastable) numbers of items; got shapes "
+                         f"{detail}") from None
+
+
+class UnknownOption(TypeError, ValueError):
+    """An unknown keyword option: a TypeError as Python raises for a bad keyword, and a ValueError as every other
+    input check of the library, so that either ``except`` catches it."""
+
+
+def options(given, allowed, where):
+    """Unknown keyword options are errors: a misspelt ``mn_sdt=`` must not be silently ignored.
+
+    Parameters
+    ----------
+    given : mapping or iterable of str -- the keywords that were passed
+    allowed : iterable of str -- the keywords ``where`` accepts
+    where : str -- the function (or estimator) for the message
+    """
+    unknown = sorted(set(given) - set(allowed))
+    if unknown:
+        import difflib
+        hints = []
+        for u in unknown:
+            close = difflib.get_close_matches(u, list(allowed), n=1)
+            hints.append(f"{u!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        raise UnknownOption(f"{where} got unknown keyword option(s) {', '.join(hints)}; it accepts: "
+                        f"{', '.join(sorted(allowed)) or 'none'}")
+
+
+def covariance(P, name, n=None, tol=1e-9, definite=False):
+    """A covariance matrix: square ``(n, n)``, finite, symmetric and positive semi-definite within ``tol``.
+
+    ``tol`` is relative to the largest diagonal entry (rounding in a Joseph or short-form update leaves asymmetry
+    and negative eigenvalues of order 1e-16 of the scale, which are accepted). With ``definite`` the smallest
+    eigenvalue must be > 0 (a matrix that is inverted).
+    """
+    P = array(P, name)
+    if P.ndim != 2 or P.shape[0] != P.shape[1] or (n is not None and P.shape != (n, n)):
+        want = f"({n}, {n})" if n is not None else "(n, n)"
+        raise ValueError(f"{name} must be a square matrix {want} (a covariance); got shape {P.shape}")
+    if P.size == 0:
+        raise ValueError(f"{name} must be a covariance matrix with at least one state; got shape {P.shape}")
+    scale = max(float(np.max(np.abs(np.diag(P)))), float(np.max(np.abs(P))), 1e-300)
+    asym = float(np.max(np.abs(P - P.T)))
+    if asym > tol * scale:
+        raise ValueError(f"{name} must be a symmetric covariance matrix; got max|{name} - {name}ᵀ| = {asym:.3g} "
+                         f"(relative {asym / scale:.2g})")
+    low = float(np.min(np.linalg.eigvalsh(0.5 * (P + P.T))))
+    if low < -tol * scale or (definite and low <= 0):
+        raise ValueError(f"{name} must be a positive {'definite' if definite else 'semi-definite'} covariance "
+                         f"matrix (variances cannot be negative); got smallest eigenvalue {low:.3g}")
+    return P
+
+
+def rotation(C, name, tol=1e-6):
+    """``C`` as rotation matrices ``(..., 3, 3)``: orthonormal with det +1 within ``tol``.
+
+    A reflection (det -1), a zero matrix or a drifted DCM gives numbers that look like angles but describe no
+    attitude; the message says which (and points at ``dcm_renormalize`` for drift).
+    """
+    C = matrices(C, name)
+    if C.size == 0:
+        return C
+    ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)), axis=(-2, -1))
+    det = np.linalg.det(C)
+    bad = (ortho >= tol) | (np.abs(det - 1) >= tol)
+    if np.any(bad):
+        what = ("a reflection (det -1: one axis flipped)" if np.any(np.abs(det[bad] + 1) < 1e-3) else
+                "drifted off a rotation (renormalise it: rotations.dcm_renormalize)" if np.max(ortho) < 0.05 else
+                "not a rotation (a transposed product, a typo, or a zero matrix?)")
+        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1 within {tol:g}); got "
+                         f"max|C Cᵀ - I| = {float(np.max(ortho)):.3g}, det = {float(np.min(det)):.6g} -- {what}")
+    return C
+
+
+def sample_rate(fs, name="fs", low=1.0, high=1e5):
+    """A sample rate in Hz between ``low`` and ``high`` (1 Hz – 100 kHz: every IMU of the course is in it).
+
+    A value outside is almost always a unit slip: a sample *interval* in s passed as the rate (0.01), a rate in kHz
+    or MHz, or a timestamp.
+    """
+    v = positive(fs, name)
+    if not low <= v <= high:
+        hint = (f" -- a sample interval dt in s? the rate is 1/dt = {1 / v:g} Hz" if v < low else
+                " -- a rate in the wrong unit, or a timestamp?")
+        raise ValueError(f"{name} must be a sample rate in Hz between {low:g} and {high:g}; got {v:g}{hint}")
+    return v
+
+
+def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0):
+    """Gyro rates ``(N, 3)`` in rad/s, refusing records that look like °/s.
+
+    Two tests, both far outside a body's motion in rad/s and squarely inside it in °/s: a peak rate above ``peak``
+    (50 rad/s = 2900 °/s, beyond the range of the MEMS gyros of the course), or a *median* rate above ``typical``
+    (10 rad/s = 570 °/s sustained over half the record: a hand or a vehicle turning in °/s gives 10-100).
+    """
+    g = samples(gyr, name)
+    if len(g):
+        mag = np.linalg.norm(g, axis=1)
+        top, med = float(np.max(mag)), float(np.median(mag))
+        if top > peak or med > typical:
+            what = f"a peak rate of {top:.4g}" if top > peak else f"a median rate of {med:.4g}"
+            raise ValueError(f"{name} must be in rad/s; got {what}, which looks like deg/s "
+                             f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
+                             f"turning body) -- use np.radians(...)")
+    return g
+
+
+def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
+    """Accelerometer specific force ``(N, 3)`` (``(..., 3)`` with ``per_sample=False``) in m/s², refusing records
+    that look like g.
+
+    The median magnitude of any record with a rest or slow phase is near 9.81 m/s²; a median between 0.5 and 2
+    means the readings are in g (multiply by 9.80665). A record in free fall throughout (median near 0) passes
+    here; the filters say what they do with it.
+    """
+    a = samples(acc, name) if per_sample else vectors(acc, name)
+    if a.size:
+        med = float(np.median(np.linalg.norm(a, axis=-1)))
+        if 0.5 <= med <= 2.0:
+            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.3g}, which looks like g "
+                             f"(at rest it should be {g:.4g}) -- multiply by {g}")
     return a
