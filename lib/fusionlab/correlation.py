@@ -668,7 +668,21 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
         if not np.isfinite(acc_hold) or acc_hold < 0:
             raise ValueError(f"acc_hold must be a finite number of seconds >= 0; got {acc_hold!r}")
         k = k / (1.0 + (accel_disturbance(acc, round(acc_hold / dt) + 1) / acc_sigma) ** 2)
+    k[_free_fall(acc)] = 0.0                             # no gravity direction: trust the gyro
     return _weighted_tilt_fusion(gyr, acc, dt, k)
+
+
+#: Below this specific force (m/s²) a sample is in free fall: its direction is noise, not gravity.
+FREE_FALL = sensors.FREE_FALL
+
+
+def _free_fall(acc):
+    """Samples whose specific force is too small to give a direction of gravity; the start must not be one."""
+    free = np.linalg.norm(acc, axis=1) < FREE_FALL
+    if len(free) and free[0]:
+        raise ValueError(f"acc reads free fall at the first sample (|acc| = {np.linalg.norm(acc[0]):.3g} m/s²): "
+                         "the initial tilt is unobservable -- start the record at rest")
+    return free
 
 
 def accel_disturbance(acc, hold, g=sensors.G):
@@ -708,11 +722,14 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     gyr, acc, dt = _imu_args(gyr, acc, fs)
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
-    tilt = np.unwrap(sensors.tilt_from_accel(acc), axis=0)                                  # b)-c), no ±π jumps
+    free = _free_fall(acc)                          # ours: free-fall samples hold the last tilt and get no weight
+    keep = np.maximum.accumulate(np.where(free, 0, np.arange(len(acc))))
+    tilt = np.unwrap(sensors.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
     tilt_ma = np.column_stack([moving_average(tilt[:, i], n_ma) for i in range(2)])          # d)
     dtilt = np.column_stack([moving_average(derivative(tilt_ma[:, i], dt), n_ma) for i in range(2)])   # e)
     r = ratio(np.hypot(gyr[:, 0], gyr[:, 1]), np.hypot(dtilt[:, 0], dtilt[:, 1]), eps)     # i) rate vs rate
     w = r if accel_weight == "ratio" else 1.0 - r                                            # j)
+    w = np.where(free, 0.0, w)
     roll, pitch = tilt_ma[:, 0], tilt_ma[:, 1]                # the smoothed tilt as a specific-force direction
     target = np.column_stack([np.sin(pitch), -np.sin(roll) * np.cos(pitch), -np.cos(roll) * np.cos(pitch)])
     return _weighted_tilt_fusion(gyr, target, dt, w)                                        # k)

@@ -1148,6 +1148,12 @@ def held_accel_noise(qvgqa, dt, hold):
     return sensors.trailing_max(qa, int(round(hold / dt)) + 1)
 
 
+#: Below this averaged accelerometer reading (g) a Kalman step is in free fall: the gravity direction is
+#: undefined, so the fast paths skip the measurement update and carry the gyro's attitude (ours, not v5.00's,
+#: which would level the sensor on noise and can return it upside down).
+FREE_FALL_G = sensors.FREE_FALL / sensors.G
+
+
 def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_sample=True, accel_hold=0.0):
     """The 9DOF filter of :class:`Kalman9` at any sample rate, in scalar arithmetic (about 10× faster).
 
@@ -1184,6 +1190,10 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     ag_all, am_all = weights(qa_all, qd_all, B)
     if accel_hold:                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
+    free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
+    if free[0]:
+        raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
+    Gm = np.where(free[:, None], [0.0, 0.0, 1.0], Gm)                  # placeholder, never used for an update
     sg_all = measured_gravity(Gm, frame)
     sm_all = Bm / _nonzero(Bm, "mag")[:, None]
     d6_all = np.degrees(inclination(Gm, Bm, frame))
@@ -1234,6 +1244,8 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
             x[6 + i] = Kb[2][0] * zg[i] + Kb[2][1] * zm[i]
         Pdd = e[9] * e[9] + t.Q_wdelta
         x[9] = Pdd / (Pdd + vd) * zd
+        if free[k]:                                                        # ours: free fall, trust the gyro
+            x = [0.0] * 10
         qpost = qp
         for j in (0, 3):                                                   # (002 eq 123) with the 90° limit
             v0, v1, v2 = x[j], x[j + 1], x[j + 2]
@@ -1278,6 +1290,9 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     g2 = np.einsum("ij,ij->i", Gm, Gm)
+    free = g2 < FREE_FALL_G ** 2                                           # ours: no gravity direction in free fall
+    if free[0]:
+        raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
     qa_all = np.abs(g2 - 1.0)                                              # (002 eq 9)
     if accel_hold:
         qa_all = held_accel_noise(qa_all, dt, accel_hold)                  # ours
@@ -1304,6 +1319,8 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
             S = g - 2 * a * gb + a * a * bb + vg
             x[i] = (g - a * gb) / S * z[i]
             x[3 + i] = (gb - a * bb) / S * z[i]
+        if free[k]:                                                        # ours: free fall, trust the gyro
+            x = [0.0] * 6
         n2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
         q = _qnorm_pos(_qmul(qp, (math.sqrt(1.0 - n2) if n2 <= 1.0 else 0.0, -x[0], -x[1], -x[2])))   # (002 eq 177)
         b = [b[i] - x[3 + i] for i in range(3)]                            # (002 eq 178)
