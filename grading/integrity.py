@@ -62,10 +62,10 @@ CALLS = {  # bare names that are suspicious when called
     "__import__": "exec", "get_ipython": "ipython", "breakpoint": "sys-hook",
 }
 IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input_transformer_manager",
-                 "ast_transformers", "set_custom_exc", "custom_exceptions", "CustomTB", "events", "register_magic_function",
+                 "ast_transformers", "set_custom_exc", "custom_exceptions", "CustomTB", "register_magic_function",
                  "register_magics", "run_cell", "run_cell_magic", "run_line_magic", "showtraceback",
                  "_showtraceback", "showsyntaxerror", "InteractiveTB", "SyntaxTB", "user_ns", "user_global_ns",
-                 "set_hook", "prefilter_manager", "displayhook", "display_pub", "kernel", "shell"}
+                 "set_hook", "prefilter_manager", "display_pub"}
 SYS_ATTRS = {"modules", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks", "path_importer_cache",
              "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
              "breakpointhook", "audit"}
@@ -179,7 +179,15 @@ class Source:
     def __init__(self, nb, lab):
         self.lab = lab
         self.cells = {_nbg(c)["grade_id"]: c for c in nb.cells if _nbg(c).get("grade_id")}
-        self.provided = {c.source.strip() for c in nb.cells if c.cell_type == "code" and not _nbg(c).get("solution")}
+        provided = [c.source for c in nb.cells if c.cell_type == "code" and not _nbg(c).get("solution")]
+        self.provided = {text.strip() for text in provided}
+        # an edited provided cell is judged by what the student wrote: lines of the course's own cells, and the
+        # library functions those cells call, are not flags there
+        self.provided_lines = {line.strip() for text in provided for line in text.splitlines()}
+        self.provided_names = set()
+        for c in nb.cells:
+            if c.cell_type == "code" and not _nbg(c).get("solution") and not _nbg(c).get("grade"):
+                self.provided_names |= set(re.findall(r"\w+", c.source))
         self.forbid = {}  # exercise -> names of its reference functions
         for gid, cell in self.cells.items():
             if _nbg(cell).get("grade") and not _nbg(cell).get("solution") and _exercise(gid):
@@ -275,8 +283,6 @@ class _Visitor(ast.NodeVisitor):
                 root = self._root(t)
                 if root and root in self.src.imported and not self._local(root):
                     self.flag(node, "patch")
-                elif self._root(t) is None and isinstance(t.value, ast.Call):
-                    self.flag(node, "patch")  # get_ipython().x = ..., some_module().x = ...
             elif isinstance(t, ast.Name) and isinstance(t.ctx, ast.Store) and len(self.scopes) == 1:
                 if t.id in self.src.protected:
                     self.flag(node, "rebind", f"rebinds `{t.id}`, which the locked cells or the tests use")
@@ -400,18 +406,18 @@ class _Visitor(ast.NodeVisitor):
 
     def visit_Attribute(self, node):
         root = self._root(node)
+        local = root is not None and self._local(root)
         if node.attr in DUNDERS:
             self.flag(node, "reflection", f"uses `{node.attr}`")
-        elif node.attr == "__builtins__" or (root == "builtins" and not self._local(root)):
+        elif node.attr == "__builtins__" or (root == "builtins" and not local):
             self.flag(node, "builtins")
-        elif root == "sys" and node.attr in SYS_ATTRS and not self._local(root):
+        elif root == "sys" and not local and node.attr in SYS_ATTRS:
             self.flag(node, "sys-hook", f"uses `sys.{node.attr}`")
-        elif root == "os" and node.attr in OS_CALLS and not self._local(root):
+        elif root == "os" and not local and node.attr in OS_CALLS:
             self.flag(node, OS_CALLS[node.attr], f"uses `os.{node.attr}`")
-        elif node.attr in IPYTHON_ATTRS and (root is None or root not in self.src.imported or root == "IPython"):
-            if node.attr not in ("kernel", "shell", "events", "displayhook") or root is None:
-                self.flag(node, "ipython", f"uses `.{node.attr}`")
-        elif node.attr in ("settrace", "setprofile", "excepthook") and not self._local(root or ""):
+        elif node.attr in IPYTHON_ATTRS:
+            self.flag(node, "ipython", f"uses `.{node.attr}`")
+        elif node.attr in ("settrace", "setprofile", "excepthook") and not local:
             self.flag(node, "sys-hook", f"uses `.{node.attr}`")
         if isinstance(node.ctx, ast.Load):
             self._reference(node, {node.attr})
@@ -422,28 +428,32 @@ class _Visitor(ast.NodeVisitor):
             self._reference(node, {node.value})
 
     def visit_Call(self, node):
-        name = node.func.id if isinstance(node.func, ast.Name) else None
-        if name in CALLS and not self._local(name):
-            self.flag(node, CALLS[name], f"calls `{name}()`")
-        elif name == "open" and not self._local(name):
-            self._open(node)
-        elif isinstance(node.func, ast.Attribute):
-            attr = node.func.attr
-            if attr in WRITE_METHODS or (attr in ("save", "dump") and self._root(node.func) in ("np", "numpy",
-                                                                                             "json", "pickle")):
+        func = node.func
+        if isinstance(func, ast.Name) and not self._local(func.id):
+            if func.id in CALLS:
+                self.flag(node, CALLS[func.id], f"calls `{func.id}()`")
+            elif func.id == "open":
+                self._open(node, node.args[0] if node.args else None, node.args[1:2])
+        elif isinstance(func, ast.Attribute):
+            attr, root = func.attr, self._root(func)
+            if attr in WRITE_METHODS or (attr in ("save", "dump") and root in ("np", "numpy", "json", "pickle")):
                 self.flag(node, "file", f"calls `.{attr}()`")
-            elif attr == "open" and self._root(node.func) not in (None,):
-                self._open(node)
-            elif attr in ("Thread", "Timer") or (attr == "start_new_thread"):
+            elif attr == "open":  # Path(p).open(mode); io.open(p, mode), os.open(p, flags)
+                if isinstance(func.value, ast.Call) and func.value.args:
+                    self._open(node, func.value.args[0], node.args[:1])
+                else:
+                    self._open(node, node.args[0] if node.args else None, node.args[1:2])
+            elif attr in ("Thread", "Timer", "start_new_thread"):
                 self.flag(node, "thread", f"calls `.{attr}()`")
-            elif attr in ("register",) and self._root(node.func) in ("atexit", "events"):
-                self.flag(node, "sys-hook" if self._root(node.func) == "atexit" else "ipython",
-                          f"calls `{self._root(node.func)}.register()`")
+            elif attr == "get_ipython":
+                self.flag(node, "ipython", "calls `get_ipython()`")
+            elif attr == "register" and (root == "atexit" or isinstance(func.value, ast.Attribute)
+                                         and func.value.attr == "events"):
+                self.flag(node, "sys-hook" if root == "atexit" else "ipython", f"calls `.{attr}()` of {root}")
         self.generic_visit(node)
 
-    def _open(self, node):
-        mode = node.args[1] if len(node.args) > 1 else next((k.value for k in node.keywords if k.arg == "mode"), None)
-        path = node.args[0] if node.args else None
+    def _open(self, node, path, mode_args):
+        mode = mode_args[0] if mode_args else next((k.value for k in node.keywords if k.arg == "mode"), None)
         if mode is not None and not (isinstance(mode, ast.Constant) and set(str(mode.value)) <= set("rbt")):
             self.flag(node, "file", "opens a file for writing")
         elif isinstance(path, ast.Constant) and INSTRUCTOR_PATHS.search(str(path.value)):
@@ -460,7 +470,7 @@ def _token_scan(source, forbidden):
     except (tokenize.TokenError, IndentationError, SyntaxError):
         words = [(i, w) for i, line in enumerate(source.splitlines(), 1) for w in re.findall(r"\w+", line)]
     table = {**CALLS, **{d: "reflection" for d in DUNDERS}, "__builtins__": "builtins", "builtins": "builtins",
-             **{a: "ipython" for a in IPYTHON_ATTRS if a not in ("kernel", "shell", "events", "displayhook")},
+             **{a: "ipython" for a in IPYTHON_ATTRS},
              **{m: k for m, k in MODULE_KINDS.items() if k != "reflection"}, "excepthook": "sys-hook",
              "settrace": "sys-hook", "system": "process", "popen": "process", "fork": "process"}
     flags = []
@@ -481,7 +491,8 @@ def scan_source(source, src, exercise=None, added=False):
             flags.append((line, "process", f"shell command or magic `{name}`"))
         elif name not in SAFE_MAGICS:
             flags.append((line, "ipython", f"IPython magic `%{name}`"))
-    forbidden = src.forbid.get(exercise, set()) if exercise else (src.all_forbidden if added else set())
+    forbidden = src.forbid.get(exercise, set()) if exercise else (
+        src.all_forbidden - src.provided_names if added else set())
     try:
         tree = ast.parse(code)
     except SyntaxError as err:
@@ -511,6 +522,8 @@ def _flags_of(src, nb):
             continue  # a provided cell, untouched
         else:
             found = scan_source(cell.source, src, exercise=_exercise(gid), added=True)
+            found = [f for f in found if not (0 < f[0] <= len(cell.source.splitlines())
+                                              and cell.source.splitlines()[f[0] - 1].strip() in src.provided_lines)]
         lines = cell.source.splitlines()
         seen = set()
         for line, kind, why in found:
@@ -540,10 +553,13 @@ def _md_cell(text):
 def write_report(rows, path_md, path_csv, scores=None):
     """Write the Markdown report and the CSV of ``rows`` = [(student, lab, flags), ...].
 
-    ``scores`` (optional) maps a student to the autograded score to show beside the status.
+    ``scores`` maps (student, lab) to the autograded score shown beside the status; by default they are read from
+    the ``gradebook.db`` beside the report, when there is one.
     """
     rows = sorted(rows, key=lambda r: (not r[2], r[0], r[1]))  # flagged first
-    scores = scores or {}
+    if scores is None:
+        scores = {(student, lab): score for lab in {r[1] for r in rows}
+                  for student, score in _scores(Path(path_md).resolve().parent, lab).items()}
     flagged = [r for r in rows if r[2]]
     labs = sorted({lab for _, lab, _ in rows})
     md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
@@ -553,7 +569,7 @@ def write_report(rows, path_md, path_csv, scores=None):
           "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
     for student, lab, flags in rows:
         kinds = sorted({f["kind"] for f in flags})
-        md.append(f"| {student} | {lab} | {'REVIEW' if flags else 'clean'} | {scores.get(student, '')} | "
+        md.append(f"| {student} | {lab} | {'REVIEW' if flags else 'clean'} | {scores.get((student, lab), '')} | "
                   f"{len(flags)} | {', '.join(kinds)} |")
     for student, lab, flags in flagged:
         md += ["", f"## {student} ({lab})", "", "| cell | line | kind | code | why |", "|---|---|---|---|---|"]
@@ -603,7 +619,7 @@ def main(argv=None):
             source = source_dir / f"{args.lab}.ipynb"
         rows.append((path.parts[-3], args.lab, scan_notebook(source, path)))
     md, csv_path = course / f"integrity_{args.lab}.md", course / f"integrity_{args.lab}.csv"
-    write_report(rows, md, csv_path, scores=_scores(course, args.lab))
+    write_report(rows, md, csv_path)
     flagged = sorted(student for student, _, flags in rows if flags)
     print(f"{len(rows)} submissions of {args.lab} scanned, {len(flagged)} to review"
           + (f": {', '.join(flagged)}" if flagged else "") + f"\n{md}\n{csv_path}")

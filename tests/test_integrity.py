@@ -50,6 +50,10 @@ CONSTRUCTS = [
     ("open('answers.txt', 'w').write('x')", "file"),
     ("np.save('P.npy', np.eye(2))", "file"),
     ("from pathlib import Path\nPath('x.txt').write_text('y')", "file"),
+    ("from pathlib import Path\nf = Path('x.txt').open('a')", "file"),
+    ("import IPython\nIPython.get_ipython().run_cell('x = 1')", "ipython"),
+    ("shell = get_ipython()\n", "ipython"),
+    ("ip.events.register('pre_run_cell', print)", "ipython"),
     ("src = open('../../solutions/02_kalman_falling_body/02_kalman_falling_body.ipynb').read()", "file"),
     ("import subprocess", "process"),
     ("import os\nos.system('ls')", "process"),
@@ -132,6 +136,25 @@ def test_added_edited_and_pasted_cells_are_scanned(tmp_path):
         (f["cell"], "network") for f in flags if f["kind"] == "network"}
     assert sum(f["kind"] == "network" for f in flags) == 1
     assert all(f["cell"] != "ex1_tests" for f in flags)
+
+
+def test_an_honestly_edited_provided_cell_is_judged_by_the_new_lines_only(tmp_path):
+    nb = nbformat.read(SOURCE, as_version=4)
+    # a provided cell that uses a reference function itself (the lab shows the library's version beside the student's)
+    cell = next(c for c in nb.cells if c.cell_type == "code" and not c.metadata.get("nbgrader")
+                and "kf.joseph_covariance(" in c.source)
+
+    def edit(nb):
+        mine = next(c for c in nb.cells if c.source == cell.source)
+        mine.source = (cell.source.replace("J = kf.joseph_covariance(", "J  =  kf.joseph_covariance(", 1)
+                       + "\nJ2 = kf.joseph_covariance(P_prior, Kg, Hg, 3.0 * Rg)\nprint('my own look', J2)")
+    assert integrity.scan_notebook(SOURCE, _submission(tmp_path, edit)) == []
+
+    def cheat(nb):
+        mine = next(c for c in nb.cells if c.source == cell.source)
+        mine.source = cell.source + "\nnp.allclose = lambda *a, **k: True"
+    [flag] = integrity.scan_notebook(SOURCE, _submission(tmp_path, cheat, "cheat"))
+    assert flag["kind"] == "patch" and flag["line"] == len(cell.source.splitlines()) + 1
 
 
 def test_reference_names_come_from_guard_forbid_and_forbid_keywords(tmp_path):
