@@ -94,7 +94,7 @@ def failed_everything(tmp_path_factory):
             sub = gb.find_submission_notebook(lab, lab, "wrong")
             tests = {g.name: (g.score, g.max_score) for g in sub.grades if g.name.endswith("_tests")}
         out[lab] = dict(
-            tests=tests, solution=solutions[lab],
+            root=root, tests=tests, solution=solutions[lab],
             autograded=nbformat.read(root / "autograded" / "wrong" / lab / f"{lab}.ipynb", as_version=4),
             html=(root / "feedback" / "wrong" / lab / f"{lab}.html").read_text())
     return out
@@ -136,3 +136,13 @@ def test_feedback_html_shows_the_failure_messages(failed_everything):
     # the messages of visible asserts (lab 01 exercise 1, lab 02 exercise 2) are what a student needs to see
     assert "AssertionError: C_bn at (10, -10, 40) deg is not right" in _text(failed_everything[LABS[0]]["html"])
     assert "AssertionError: A at the lab's values is not right" in _text(failed_everything[LABS[1]]["html"])
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_integrity_report_of_the_class_shows_the_autograded_score(failed_everything, lab):
+    from grading import integrity
+    root = failed_everything[lab]["root"]
+    assert integrity.main([lab, "--course", str(root)]) == 0
+    md = (root / f"integrity_{lab}.md").read_text()
+    # wrong answers are not dishonest ones: clean, with the score the gradebook holds
+    assert re.search(rf"^\| wrong \| {lab} \| clean \| 0 / \d+ \| 0 \|", md, flags=re.M), md
