@@ -365,7 +365,7 @@ class _Visitor(ast.NodeVisitor):
         for mod in modules:
             top = mod.split(".")[0]
             if top in MODULE_KINDS and not (top == "IPython" and mod.startswith("IPython.display")):
-                self.flag(node, MODULE_KINDS[top], f"imports `{mod}`")
+                self.flag(node, MODULE_KINDS[top], f"imports `{mod}`: {WHY[MODULE_KINDS[top]]}")
             elif mod in ("os", "sys") and names & (set(OS_CALLS) | SYS_ATTRS):
                 self.flag(node, "sys-hook" if mod == "sys" else OS_CALLS[min(names & set(OS_CALLS))],
                           f"imports {', '.join(sorted(names))} from `{mod}`")
@@ -563,7 +563,7 @@ def write_report(rows, path_md, path_csv, scores=None):
     flagged = [r for r in rows if r[2]]
     labs = sorted({lab for _, lab, _ in rows})
     md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
-          f"{len(rows)} submissions scanned; **{len(flagged)} to REVIEW**. A flag is a construct that no honest "
+          f"{len(rows)} submission{'s' * (len(rows) != 1)} scanned; **{len(flagged)} to REVIEW**. A flag is a construct that no honest "
           "answer needs, found in a cell that runs at grading time. It does not change the grade: read the cell "
           "before trusting the score.", "",
           "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
@@ -621,7 +621,7 @@ def main(argv=None):
     md, csv_path = course / f"integrity_{args.lab}.md", course / f"integrity_{args.lab}.csv"
     write_report(rows, md, csv_path)
     flagged = sorted(student for student, _, flags in rows if flags)
-    print(f"{len(rows)} submissions of {args.lab} scanned, {len(flagged)} to review"
+    print(f"{len(rows)} submission{'s' * (len(rows) != 1)} of {args.lab} scanned, {len(flagged)} to review"
           + (f": {', '.join(flagged)}" if flagged else "") + f"\n{md}\n{csv_path}")
     return 0
 
