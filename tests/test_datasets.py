@@ -308,10 +308,19 @@ def test_download_with_wrong_content_fails_its_checksum(monkeypatch, isolated, t
     assert list(isolated.iterdir()) == []
 
 
+def _stand_in(path):
+    """Trial 2's data relabelled as trial 1 (its info text names trial 1), for a trial without a known checksum."""
+    import scipy.io
+    m = scipy.io.loadmat(str(SHIPPED / f"{NAME2}.mat"))
+    data = {k: v for k, v in m.items() if not k.startswith("__")}
+    data["info"] = np.array([str(m["info"][0]).replace(NAME2, NAME1)])
+    scipy.io.savemat(str(path), data)
+
+
 def test_unknown_checksum_is_kept_but_reported_then_guarded_by_its_recorded_hash(monkeypatch, isolated, tmp_path):
     root = tmp_path / "mirror"
     root.mkdir()
-    shutil.copy(SHIPPED / f"{NAME2}.mat", root / f"{NAME1}.mat")    # stands in for a trial we hold no sum for
+    _stand_in(root / f"{NAME1}.mat")                                # a trial we hold no sum for
     m = Mirror(root)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
@@ -413,3 +422,45 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
     finally:
         checks._DATA_NAMES.clear()
         InteractiveShell.clear_instance()
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Damaged, misnamed and stale: nothing loads silently wrong, nothing is fatal that need not be
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def test_an_unverified_damaged_file_is_a_value_error_for_the_reference_position_too(isolated):
+    isolated.mkdir(parents=True)
+    (isolated / f"{NAME1}.mat").write_bytes(b"MATLAB 5.0 MAT-file, damaged" + bytes(200))   # no known sum
+    for load in (datasets.load_trial, datasets.load_reference_position):
+        with pytest.raises(ValueError, match=f"{NAME1}.mat is not a readable BROAD .mat file"):
+            load(1)
+
+
+def test_an_intact_trial_saved_under_another_trials_name_is_refused(isolated):
+    isolated.mkdir(parents=True)
+    shutil.copy(SHIPPED / f"{NAME2}.mat", isolated / f"{NAME1}.mat")      # trial 1 has no known checksum
+    for load in (datasets.load_trial, datasets.load_reference_position):
+        with pytest.raises(ValueError, match=rf"holds BROAD trial '{NAME2}', not '{NAME1}'"):
+            load(1)
+
+
+def test_download_false_never_deletes_nor_refetches_a_corrupt_cached_file(mirror, isolated):
+    datasets.load_trial(2, progress=False)
+    cached = isolated / f"{NAME2}.mat"
+    damaged = cached.read_bytes()[:100_000]
+    cached.write_bytes(damaged)
+    with pytest.raises(ValueError, match="fails its checksum .* and download=False, so it is not fetched again"):
+        datasets.load_trial(2, download=False)
+    assert len(mirror.requests) == 1 and cached.read_bytes() == damaged
+
+
+def test_a_stale_env_folder_is_not_fatal_when_the_trial_is_cached(mirror, isolated, monkeypatch, tmp_path):
+    datasets.load_trial(2, progress=False)                                   # now in the cache
+    monkeypatch.setenv(datasets.ENV_DIR, str(tmp_path / "moved-away"))
+    with pytest.warns(UserWarning, match="FUSIONLAB_BROAD_DIR names a folder that does not exist.*loaded from the "
+                                         "cache"):
+        tr = datasets.load_trial(2, download=False)
+    assert len(tr) > 0 and len(mirror.requests) == 1
+    with pytest.warns(UserWarning, match="ignored"):
+        assert datasets.available_trials() == [NAME2]

@@ -35,7 +35,11 @@ Every file is checked against the SHA-256 sums shipped in ``fusionlab/data/broad
 folder of yours is an error (we never overwrite your files); a corrupt or truncated file in the cache is
 re-fetched; a download that is truncated or fails its checksum is retried once and then refused. A trial whose
 checksum fusionlab does not know is kept but reported with a warning, and its hash is stored beside it in the
-cache so that later corruption is still caught.
+cache so that later corruption is still caught. Every file must also name its own trial (the ``Trial:`` line of its
+``info`` text): a trial saved under another trial's name is refused, as is a damaged file, whichever loader reads
+it. With ``download=False`` nothing is deleted or fetched: a cached file that fails its checksum is an error. A
+``FUSIONLAB_BROAD_DIR`` that names no folder is skipped with a warning when the trial is found elsewhere, and is
+the error when it is not.
 
 A trial that is nowhere and cannot be downloaded raises :class:`DataMissing` (a ``FileNotFoundError``) whose
 message says where the loader looked and how to get the file; :func:`missing_trials` lists those of the session,
@@ -230,14 +234,21 @@ def cache_dir():
     return base / "broad"
 
 
-def _env_dir():
+def _env_dir(strict=True):
+    """The folder named by FUSIONLAB_BROAD_DIR, None when unset. A name that is no folder raises with ``strict``;
+    otherwise it is skipped with a warning (the trial may still be in the cache: a stale variable is no reason to
+    fail a load that does not need it)."""
     env = os.environ.get(ENV_DIR)
     if not env:
         return None
     d = Path(env).expanduser()
     if not d.is_dir():
-        raise FileNotFoundError(f"{ENV_DIR} names a folder that does not exist: {d} -- point it at the folder that "
-                                f"holds the BROAD .mat files, or unset it")
+        msg = (f"{ENV_DIR} names a folder that does not exist: {d} -- point it at the folder that holds the BROAD "
+               f".mat files, or unset it")
+        if strict:
+            raise FileNotFoundError(msg)
+        warnings.warn(msg + "; it is ignored", stacklevel=3)
+        return None
     return d
 
 
@@ -298,7 +309,7 @@ def available_trials(folder=None):
     if folder is not None:
         dirs = [_folder(folder)]
     else:
-        dirs = [d for d in (shipped_dir(), _env_dir(), cache_dir()) if d is not None]
+        dirs = [d for d in (shipped_dir(), _env_dir(strict=False), cache_dir()) if d is not None]
     return [t.name for t in list_trials() if any((d / f"{t.name}.mat").is_file() for d in dirs)]
 
 
@@ -341,7 +352,10 @@ def _fetch(name, folder, download, progress):
     shipped = shipped_dir()
     if shipped is not None and (shipped / fname).is_file():
         return _check_user_file(shipped / fname, expected)
-    env = _env_dir()
+    try:
+        env, env_problem = _env_dir(), None
+    except FileNotFoundError as exc:                       # fatal only if the trial is nowhere else (below)
+        env, env_problem = None, str(exc)
     if env is not None and (env / fname).is_file():
         return _check_user_file(env / fname, expected)
     cache = cache_dir()
@@ -349,10 +363,19 @@ def _fetch(name, folder, download, progress):
     if path.is_file():
         want = expected or (_sidecar(path).read_text().split()[0] if _sidecar(path).is_file() else None)
         if want is None or _sha256(path) == want:
+            if env_problem:
+                warnings.warn(f"{env_problem}; it is ignored, trial {name} is loaded from the cache", stacklevel=3)
             return path
+        if not download:                                   # never delete nor re-fetch what we may not replace
+            raise ValueError(f"cached file {path} fails its checksum (corrupt or truncated) and download=False, so "
+                             "it is not fetched again -- delete it and load with download=True, or point "
+                             f"{ENV_DIR} at a verified copy")
         warnings.warn(f"cached file {path} fails its checksum (corrupt or truncated); fetching it again",
                       stacklevel=2)
         path.unlink()
+    if env_problem:
+        raise _missing(name, f"BROAD trial {name} is missing: {env_problem}, and the trial is not in the course's "
+                             f"data/broad/ nor the cache ({cache})")
     looked = ", ".join(str(p) for p in [d for d in (shipped, env) if d is not None] + [cache])
     url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
     target = env or shipped or SHIPPED_DIR                 # the course's data/broad/ even when it was not copied
@@ -492,14 +515,29 @@ def _make_trial(name, groups, description, fs, gyr, acc, mag, quat_ref, movement
                       _frozen(quat_ref), _frozen(movement, bool))
 
 
-def _read_mat(path, name):
+def _loadmat(path, name):
+    """The variables of a trial file, refusing a damaged file and a file that holds another trial than ``name``.
+
+    A file whose checksum fusionlab does not know is not verified on disk, so its own ``info`` text (which names
+    its trial) is the only guard against a trial saved under another trial's name.
+    """
     import scipy.io
 
     try:
         m = scipy.io.loadmat(str(path))
-    except Exception as exc:                               # scipy raises several kinds on a damaged file
+    except Exception as exc:                               # scipy raises several kinds (OSError, ValueError...)
         raise ValueError(f"{path} is not a readable BROAD .mat file ({type(exc).__name__}: {exc}) -- delete it and "
                          "load the trial again") from None
+    info = " ".join(str(x) for x in np.asarray(m.get("info", [])).reshape(-1))
+    said = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("Trial:")), None)
+    if said is not None and said != name:
+        raise ValueError(f"{path} holds BROAD trial {said!r}, not {name!r} (its info text says so): a file saved "
+                         f"under another trial's name -- rename it to {said}.mat or fetch {name} again")
+    return m
+
+
+def _read_mat(path, name):
+    m = _loadmat(path, name)
     missing = [k for k in _KEYS if k not in m]
     if missing:
         raise ValueError(f"{path} is not a BROAD trial file: missing {', '.join(missing)}")
@@ -560,11 +598,9 @@ def load_reference_position(name_or_number, folder=None, download=True, progress
     The same file, search order and checksum as :func:`load_trial` (so the rows match its samples). Frame: the
     optical system's, whose axes were aligned with the IMU's East-North-Up frame (z up); its origin is arbitrary.
     """
-    import scipy.io
-
     name = trial_name(name_or_number)
     path = fetch_trial(name, folder=folder, download=download, progress=progress)
-    m = scipy.io.loadmat(str(path))
+    m = _loadmat(path, name)
     if "opt_pos" not in m:
         raise ValueError(f"{path} has no opt_pos: not a BROAD trial file")
     pos = validate.array(m["opt_pos"], f"{name}: opt_pos", shape=(None, 3), finite=False).copy()
