@@ -313,7 +313,7 @@ def allan_deviation(rate, fs, taus=None):
     x = validate.array(rate, "rate")
     if x.ndim != 1 or len(x) < 3:
         raise ValueError(f"rate must be one axis, shape (N,) with N >= 3; got {x.shape}")
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     if taus is None:
         taus = np.unique(np.round(np.logspace(0, np.log10(max(len(x) / 4, 1.0)), 60))) / fs
     else:

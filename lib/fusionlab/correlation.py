@@ -740,7 +740,7 @@ def _imu_args(gyr, acc, fs):
     gyr = validate.samples(gyr, "gyr")
     acc = validate.samples(acc, "acc")
     validate.same_length(gyr=gyr, acc=acc)
-    return gyr, acc, 1.0 / validate.positive(fs, "fs")
+    return gyr, acc, 1.0 / validate.sample_rate(fs, "fs")
 
 
 def _weighted_tilt_fusion(gyr, acc, dt, k):

@@ -1004,7 +1004,7 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     Returns (n,) rad/s.
     """
     n = validate.count(n, "n", 2)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     N, B, K = (validate.scalar(v, name, nonnegative=True) for v, name in
                ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
