@@ -202,7 +202,12 @@ def test_make_lab_serves_the_labs(built):
         assert listing is not None, f"JupyterLab did not answer on port {port} (exit {proc.poll()})"
         assert sorted(item["name"] for item in listing["content"]) == LABS, "the server's root is not labs/"
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/lab?token={token}", timeout=10) as r:
-            assert r.status == 200 and "JupyterLab" in r.read().decode()
+            page = r.read().decode()
+            assert r.status == 200 and "JupyterLab" in page
+        page_config = course / "jupyter" / "labconfig" / "page_config.json"
+        if page_config.exists():  # the student's view is in effect: the instructor's panels are switched off
+            hidden = [k for k, off in json.loads(page_config.read_text()).get("disabledExtensions", {}).items() if off]
+            assert hidden and all(f'"{name}"' in page for name in hidden), hidden
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGTERM)
