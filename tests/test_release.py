@@ -111,7 +111,8 @@ def leaks(course, secrets):
     """[(file, kind, where, line)] of every secret line found in the release tree.
 
     The library is the reference every lab compares with (what each exercise forbids calling), so its code matches
-    model answers line by line by design; in lib/ only hidden-test lines count.
+    model answers line by line by design, and a short line of a hidden test (``return kf.x, kf.P``) recurs in it by
+    coincidence: in lib/ only hidden-test lines of 40 characters or more count.
     """
     found = []
     for path in sorted(p for p in course.rglob("*") if p.is_file()):
@@ -122,7 +123,7 @@ def leaks(course, secrets):
             texts.append("\n".join(c.source for c in nb.cells))
         text = "\n".join(texts)
         for line, (kind, where) in secrets.items():
-            if kind == "model answer" and rel.startswith("lib/"):
+            if rel.startswith("lib/") and (kind == "model answer" or len(line) < 40):
                 continue
             if line in text:
                 found.append((rel, kind, where, line))
