@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import warnings
 from collections import Counter
 
@@ -587,7 +588,7 @@ def classify(case, arg, label, value, expect, reference):
         got = _call(case, {arg: value})
     except (ValueError, TypeError) as exc:
         msg = str(exc)
-        if arg in msg or (arg == "zz_unknown" and "zz_unknown" in msg):
+        if re.search(rf"(?<![A-Za-z0-9_]){re.escape(arg)}(?![A-Za-z0-9_])", msg):      # the name as a word
             return "clear", msg
         return "obscure", f"{type(exc).__name__} not naming {arg!r}: {msg[:150]}"
     except Exception as exc:                                                    # noqa: BLE001 -- counted

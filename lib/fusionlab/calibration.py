@@ -405,6 +405,8 @@ def read_allan(taus, adev, adev_err=None):
     if adev_err is not None:
         e = validate.array(adev_err, "adev_err")
         validate.same_length(taus=t, adev_err=e)
+        if np.any(e < 0):
+            raise ValueError(f"adev_err must be >= 0 (1-σ errors; 0 where unknown); got min {float(np.min(e)):.3g}")
         w = a / np.where(e > 0, e, a)
     A = np.stack([1 / t, np.full_like(t, BIAS_INSTABILITY_FACTOR ** 2), t / 3], axis=1) / a[:, None] ** 2
     coef, _ = nnls(A * w[:, None], w)
