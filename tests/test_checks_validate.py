@@ -100,3 +100,103 @@ def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
     assert np.allclose(np.degrees(sensors.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
     with pytest.raises(ValueError, match="free fall"):
         sensors.tilt_from_accel([0.0, 0.0, 0.0])
+
+
+# ---- visible checks test the general case their hidden tests test; they hold the expected values themselves ----
+
+def test_check_update_rejects_an_update_that_ignores_H(capsys):
+    from fusionlab import kalman as kf
+
+    def ignores_H(x, P, z, H, R):                                  # right for H = [1, 0] and H = I only
+        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+        return x + K @ (z - x[:len(z)]), kf.joseph_covariance(P, K, H, R), K
+
+    with pytest.raises(checks.Feedback, match=r"z - H @ x̂, not z - x̂\[:m\]"):
+        checks.check_update(ignores_H)
+    checks.check_update(kf.update)
+    assert "dense H" in capsys.readouterr().out
+
+
+def test_check_joseph_and_predict_reject_the_lab_sizes_hard_coded():
+    from fusionlab import kalman as kf
+
+    def two_states(P, K, H, R):
+        I_KH = np.eye(2) - K @ H
+        return I_KH @ P @ I_KH.T + K @ R @ K.T
+
+    with pytest.raises(checks.Feedback, match=r"assume 2 states \(np.eye\(2\)\)"):
+        checks.check_joseph(two_states)
+    with pytest.raises(checks.Feedback, match="general model"):
+        checks.check_predict(lambda x, P, A, Q, B, u: (A @ x + (B @ u)[:2].sum() * np.array([0, 1])[:len(x)]
+                                                       if len(x) == 2 else A @ x, A @ P @ A.T + Q))
+    checks.check_joseph(kf.joseph_covariance)
+    checks.check_predict(kf.predict)
+
+
+def test_lab00_and_lab01_value_checks_hold_the_expected_values(capsys):
+    checks.check_adc_096((0.96 * 0.3 + 1.35) * 1023 / 508, 508 * 3.0 / 1023 - 0.288, (508 * 3.0 / 1023 - 1.35) / 0.96)
+    with pytest.raises(checks.Feedback, match=r"v_ref_096 = 3.3: with it, count 508 reads 0.9624 g"):
+        checks.check_adc_096(3.3, 508 * 3.0 / 1023 - 0.288, (508 * 3.0 / 1023 - 1.35) / 0.96)
+    checks.check_adc_step(1e3 * 3.0 / 1023 / 0.3, 3.0 / 1023 / 0.0091)
+    with pytest.raises(checks.Feedback, match="factor of 1000"):
+        checks.check_adc_step(3.0 / 1023 / 0.3, 3.0 / 1023 / 0.0091)
+    still = np.r_[np.full(500, 0.8), np.full(500, 2.0)]
+    checks.check_gyro_bias(0.8, still)
+    with pytest.raises(checks.Feedback, match="whole record"):
+        checks.check_gyro_bias(1.4, still)
+    with pytest.raises(checks.Feedback, match="wrong sign"):
+        checks.check_gyro_bias(-0.8, still)
+    C = rotations.euler_to_dcm(np.radians([10, -10, 40]))
+    checks.check_body_gravity(C.T @ [0, 0, -9.80665], C)
+    with pytest.raises(checks.Feedback, match="use the transpose"):
+        checks.check_body_gravity(C @ [0, 0, -9.80665], C)
+    assert capsys.readouterr().out.count("✓") == 4
+
+
+@pytest.mark.parametrize("check, wrong, match", [
+    ("check_integrate_rate", lambda r, dt, a0=0.0: a0 + np.r_[0, np.cumsum(np.ravel(r))[:-1]] * dt, "axis 0"),
+    ("check_moving_average", lambda x, n: np.array([np.mean(x[max(0, i - 2):i + 1]) for i in range(len(x))]),
+     "Use N, not 3"),
+    ("check_profile_matrix", lambda s, r, a: a[0] * np.outer(s[0], r[0]) + a[1] * np.outer(s[1], r[1]),
+     "three vector pairs"),
+    ("check_remove_gravity", lambda q, f, g: rotations.quat_rotate(q, f) - [0, 0, 9.8], "not 9.8"),
+])
+def test_visible_checks_catch_answers_that_only_fit_the_labs_own_case(check, wrong, match):
+    with pytest.raises(checks.Feedback, match=match):
+        getattr(checks, check)(wrong)
+
+
+def test_freescale_checks_test_other_constants_and_a_full_gain():
+    from fusionlab import freescale as fz
+
+    def v500_only(x, dt, Q_vY=1e4, Q_wb=0.5, Q_wdelta=20.0):
+        return fz.process_noise(x, dt)                             # ignores the constants it is given
+
+    with pytest.raises(checks.Feedback, match="Use the arguments dt, Q_vY"):
+        checks.check_process_noise(v500_only)
+    with pytest.raises(checks.Feedback, match="B = 45"):
+        checks.check_measurement_noise(lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt))
+
+    with pytest.raises(checks.Feedback, match="non-zero previous errors"):
+        checks.check_gain(lambda Qw, C, Qv: fz.nominal_gain(9))  # the nominal numbers, whatever the input
+    checks.check_process_noise(lambda x, dt, *a: fz.process_noise(
+        x, dt, __import__("dataclasses").replace(fz.V500, **dict(zip(("Q_vY", "Q_wb", "Q_wdelta"), a)))))
+    checks.check_gain(fz.kalman_gain)
+
+
+def test_no_visible_check_cell_computes_the_expected_value():
+    """A check cell is one call of a checks function on names: no expression that gives the answer away."""
+    import ast
+    import json
+    from pathlib import Path
+
+    for path in sorted(Path(__file__).parents[1].glob("solutions/*/*.ipynb")):
+        for cell in json.loads(path.read_text())["cells"]:
+            gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
+            if cell["cell_type"] != "code" or not gid.endswith("_check") or "BEGIN SOLUTION" in "".join(cell["source"]):
+                continue
+            for stmt in ast.parse("".join(cell["source"])).body:
+                call = stmt.value
+                assert isinstance(call, ast.Call) and ast.unparse(call.func).startswith("checks.check_"), (path, gid)
+                for arg in [*call.args, *(k.value for k in call.keywords)]:
+                    assert isinstance(arg, (ast.Name, ast.Constant)), (path.name, gid, ast.unparse(arg))

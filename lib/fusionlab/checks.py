@@ -13,7 +13,7 @@ import numpy as np
 from . import datasets, rotations
 
 __all__ = ["Feedback", "friendly_errors", "check_euler_to_dcm", "check_close", "check_renormalize", "check_rodrigues",
-           "check_sequence_angles", "check_lock_roll", "diagnose_dcm"]
+           "check_sequence_angles", "check_lock_roll", "diagnose_dcm", "check_body_gravity"]
 
 
 class Feedback(AssertionError):
@@ -199,6 +199,25 @@ def check_rodrigues(fn):
     _ok("the Rodrigues increment equals the matrix exponential, including σ → 0.")
 
 
+def check_body_gravity(f_body, C_bn):
+    """Lab 01 exercise 2: the accelerometer reading of a body at rest with attitude ``C_bn`` (NED, m/s²): the
+    reaction to gravity, (0, 0, -g) in NED, carried into the body frame. The expected value is computed here."""
+    v = np.asarray(_answered("f_body", f_body), dtype=float)
+    C = np.asarray(C_bn, dtype=float)
+    up = np.array([0.0, 0.0, -9.80665])
+    if v.shape != (3,):
+        raise Feedback(f"f_body should be a 3-vector (m/s²); got shape {v.shape}")
+    if np.allclose(v, C.T @ up, atol=1e-6):
+        _ok("f_body is right (within 1e-06).")
+        return
+    for cand, msg in ((C @ up, "use the transpose: v_b = C_bn.T @ v_n (C_bn maps body to navigation)."),
+                      (-(C.T @ up), "the sign is wrong: an accelerometer at rest reads +g *up*, (0, 0, -g) in NED."),
+                      (C.T @ (-up), "the sign is wrong: an accelerometer at rest reads +g *up*, (0, 0, -g) in NED.")):
+        if np.allclose(v, cand, atol=1e-6):
+            raise Feedback(msg)
+    raise Feedback("Use the transpose: v_b = C_bn.T @ v_n; and the reading is +g *up* = (0, 0, -g) in NED.")
+
+
 def check_sequence_angles(angles_deg, seq, C_bn, tol=1e-3):
     """Check that ``angles_deg`` (degrees, in the order applied) in intrinsic sequence ``seq`` give ``C_bn``."""
     a = np.asarray(_answered(f"the {seq} angles", angles_deg), dtype=float)
@@ -272,12 +291,42 @@ def _first_match(value, guesses):
     return None
 
 
+def _general_case(got, ref, case, advice, rtol=1e-9, atol=1e-12):
+    """The last step of a check: the student's answer on a general case like the hidden test's (other sizes,
+    other constants), after the lab's own cases. ``got`` is a zero-argument callable (the student's call)."""
+    try:
+        out = got()
+    except NotImplementedError:
+        raise Feedback("your function is not written yet: replace `raise NotImplementedError(...)`.") from None
+    except (ValueError, IndexError, TypeError) as exc:
+        raise Feedback(f"right on the lab's cases, but on {case} your function fails ({type(exc).__name__}: "
+                       f"{exc}). {advice}") from None
+    out, ref = np.asarray(out, dtype=float), np.asarray(ref, dtype=float)
+    if out.shape != ref.shape or not np.allclose(out, ref, rtol=rtol, atol=atol):
+        raise Feedback(f"right on the lab's cases, but not on {case}. {advice}")
+
+
 def _kf_case():
     """A small non-trivial case: n = 2 states, m = 1 measurement (position only), correlated prior."""
     P = np.array([[5.0, 0.7], [0.7, 4.8]])
     H = np.array([[1.0, 0.0]])
     R = np.array([[144.0]])
     return P, H, R
+
+
+def _general_kf_cases(seed, shapes=((3, 2), (2, 1), (4, 4))):
+    """Random general cases like the hidden tests': full P and R, a dense H (m × n), a random x and z.
+
+    A function that only works for the lab's own sizes or for H = I (e.g. ``np.eye(2)`` or ``z - x[:m]``) fails
+    here, in the visible check, instead of in the hidden test."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for n, m in shapes:
+        M = rng.standard_normal((n, n))
+        N = rng.standard_normal((m, m))
+        out.append(dict(n=n, m=m, P=M @ M.T + np.eye(n), R=N @ N.T + np.eye(m), H=rng.standard_normal((m, n)),
+                        x=rng.standard_normal(n), z=rng.standard_normal(m), K=rng.standard_normal((n, m))))
+    return out
 
 
 def check_joseph(fn):
@@ -287,12 +336,18 @@ def check_joseph(fn):
              (P, np.array([[0.3], [-0.2]]), H, R),                                 # a gain that is not optimal
              (np.array([[5.0, 0.7], [0.7, 4.8]]), np.array([[0.2, 0.05], [0.01, 0.3]]),
               np.array([[1.0, 0.5], [0.0, 1.0]]), 2.0 * np.eye(2))]                # square H, non-symmetric K
+    for c in _general_kf_cases(11):                                                # other sizes, dense H
+        cases += [(c["P"], _kalman.kalman_gain(c["P"], c["H"], c["R"]), c["H"], c["R"]), (c["P"], c["K"], c["H"], c["R"])]
     for P_, K_, H_, R_ in cases:
         try:
             out = fn(P_, K_, H_, R_)
         except NotImplementedError:
             raise Feedback("your function is not written yet: replace `raise NotImplementedError(...)` with your "
                            "code.") from None
+        except (ValueError, IndexError) as exc:
+            raise Feedback(f"with n = {len(P_)} states and m = {len(R_)} measurements your function fails "
+                           f"({type(exc).__name__}: {exc}) -- does it assume 2 states (np.eye(2))? "
+                           "Use np.eye(len(P)).") from None
         if out is None:
             raise Feedback("your function returned None -- did you forget the `return` statement?")
         out = np.asarray(out, dtype=float)
@@ -301,7 +356,7 @@ def check_joseph(fn):
             raise Feedback(f"P_post must have the shape of P, {ref.shape}; got {out.shape}.")
         if _same(out, ref):
             continue
-        I_KH = np.eye(2) - K_ @ H_
+        I_KH = np.eye(len(P_)) - K_ @ H_
         guesses = [(I_KH @ P_, "this is the short form (I - KH)P: it equals the Joseph form only at the optimal "
                                "gain. Eq 4.17 is (I - KH) P (I - KH)ᵀ + K R Kᵀ and holds for any K."),
                    (I_KH @ P_ @ I_KH.T, "the measurement-noise term K R Kᵀ is missing."),
@@ -316,9 +371,11 @@ def check_joseph(fn):
                             "P - KHP - PHᵀKᵀ + K(HPHᵀ + R)Kᵀ is the correct expansion."))
         msg = _first_match(out, [(c, m) for c, m in guesses if c is not None])
         kind = "the optimal gain" if _same(K_, _kalman.kalman_gain(P_, H_, R_)) else "a non-optimal gain"
-        raise Feedback(f"with {kind}: " + (msg or f"P_post differs from eq 4.17 by up to "
-                                                  f"{np.max(np.abs(out - ref)):.3g}."))
-    _ok("Joseph form is right, for the optimal gain and for gains that are not optimal.")
+        size = f"n = {len(P_)} states, m = {len(R_)} measurements"
+        raise Feedback(f"with {kind} ({size}): " + (msg or f"P_post differs from eq 4.17 by up to "
+                                                          f"{np.max(np.abs(out - ref)):.3g} -- does your code "
+                                                          "assume 2 states (np.eye(2))? Use np.eye(len(P))."))
+    _ok("Joseph form is right, for the optimal gain and for gains that are not optimal, with 1 to 4 states.")
 
 
 def check_state_space(fn):
@@ -377,7 +434,18 @@ def check_predict(fn):
             (P + Q, "P must be carried through the dynamics: P' = A P Aᵀ + Q."),
         ])
         raise Feedback(msg or f"P' should be {Pr.round(4)}; got {np.round(Pp, 4)}.")
-    _ok("predict: x' = A x + B u and P' = A P Aᵀ + Q.")
+    rng = np.random.default_rng(12)                                               # a general case: 3 states, 2 inputs
+    A3, B3, u3, x3 = rng.standard_normal((3, 3)), rng.standard_normal((3, 2)), rng.standard_normal(2), \
+        rng.standard_normal(3)
+    M = rng.standard_normal((3, 3))
+    P3, Q3 = M @ M.T + np.eye(3), np.diag([0.2, 0.5, 0.9])
+    xp, Pp = _call_tuple(fn, (x3, P3, A3, Q3, B3, u3), 2, "your predict")
+    xr, Pr = _kalman.predict(x3, P3, A3, Q3, B3, u3)
+    if not (_same(xp, xr) and _same(Pp, Pr)):
+        raise Feedback("right for the falling body, wrong for a general model (3 states, B 3×2, u (2,), dense A): "
+                       "use matrix products (@) and no sizes of the lab's model: x' = A @ x + B @ u, "
+                       "P' = A @ P @ A.T + Q.")
+    _ok("predict: x' = A x + B u and P' = A P Aᵀ + Q, for the falling body and a general 3-state model.")
 
 
 def check_update(fn):
@@ -386,10 +454,11 @@ def check_update(fn):
     x = np.array([150.0, -12.0])
     z = np.array([162.0])
     cases = [(x, P, z, H, R), (x, 144.0 * np.eye(2), np.array([165.0, -20.0]), np.eye(2), 144.0 * np.eye(2))]
+    cases += [(c["x"], c["P"], c["z"], c["H"], c["R"]) for c in _general_kf_cases(13, ((3, 2), (2, 1), (2, 2)))]
     for xc, Pc, zc, Hc, Rc in cases:
         xo, Po, Ko = _call_tuple(fn, (xc, Pc, zc, Hc, Rc), 3, "your update")
         xr, Pr, Kr = _kalman.update(xc, Pc, zc, Hc, Rc)
-        where = f"H = {Hc.tolist()}"
+        where = f"H = {np.round(Hc, 3).tolist()}"
         if not _same(Ko, Kr):
             S = Hc @ Pc @ Hc.T
             msg = _first_match(Ko, [
@@ -405,16 +474,20 @@ def check_update(fn):
                 (xc + Kr @ (Hc @ xc - zc), "the innovation has the wrong sign: x̂ = x̂ + K (z - H x̂)."),
                 (xc + Kr @ zc, "use the innovation z - H x̂, not z alone (eq 4.8)."),
                 (Kr @ zc, "eq 4.8 adds a correction to the prior: x̂ = x̂ + K (z - H x̂)."),
+                (xc + Kr @ (zc - xc[:len(zc)]), "the innovation must use H: z - H @ x̂, not z - x̂[:m] (which is "
+                                                "right only when H picks the first states)."),
             ])
             raise Feedback(f"{where}: " + (msg or f"x_post should be {xr.round(4)}; got {np.round(xo, 4)}."))
         if not _same(Po, Pr):
             msg = _first_match(Po, [
                 (Pc, "P was not updated: the measurement must shrink the covariance (eq 4.17)."),
-                ((np.eye(2) - Kr @ Hc) @ Pc @ (np.eye(2) - Kr @ Hc).T, "the K R Kᵀ term of eq 4.17 is missing."),
+                ((np.eye(len(Pc)) - Kr @ Hc) @ Pc @ (np.eye(len(Pc)) - Kr @ Hc).T,
+                 "the K R Kᵀ term of eq 4.17 is missing."),
             ])
             raise Feedback(f"{where}: " + (msg or f"P_post should be {Pr.round(4).tolist()}; got "
                                                   f"{np.round(Po, 4).tolist()}."))
-    _ok("update: gain (4.31), state (4.8) and covariance (4.17) are right, for H = [1, 0] and H = I.")
+    _ok("update: gain (4.31), state (4.8) and covariance (4.17) are right, for H = [1, 0], H = I and dense H "
+        "with 1 to 3 states.")
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -424,7 +497,61 @@ def check_update(fn):
 from . import sensors as _sensors  # noqa: E402  (appended section: checks sits above sensors in the import order)
 
 __all__ += ["check_smd_magnitude", "check_accel_from_bridge", "check_adc_to_physical", "check_atan2",
-            "check_roll_pitch", "check_coriolis_force", "check_integrate_rate"]
+            "check_roll_pitch", "check_coriolis_force", "check_integrate_rate", "check_adc_096", "check_adc_step",
+            "check_gyro_bias"]
+
+
+def check_adc_096(v_ref_096, zero_096, sens_096):
+    """Lab 00 exercise 4: the three single-parameter changes that make count 508 read 0.96 g (seed 000 §3.1.2).
+
+    The expected values are computed here, so the student's notebook does not show them."""
+    volts = 508 * 3.0 / 1023                                     # count 508 on the printed 3.0 V scale
+    for name, value, expected, tol, read, hint in (
+            ("v_ref_096", v_ref_096, (0.96 * 0.300 + 1.35) * 1023 / 508, 1e-4,
+             lambda v: _sensors.adc_to_physical(508, 1.35, 0.300, v_ref=v),
+             "Solve 0.96 = (508·V/1023 - 1.35)/0.300 for V."),
+            ("zero_096", zero_096, volts - 0.96 * 0.300, 1e-4,
+             lambda v: _sensors.adc_to_physical(508, v, 0.300), "Solve 0.96 = (508·3.0/1023 - Z)/0.300 for Z."),
+            ("sens_096", sens_096, (volts - 1.35) / 0.96, 1e-5,
+             lambda v: _sensors.adc_to_physical(508, 1.35, v) if v else np.nan,
+             "Solve 0.96 = (508·3.0/1023 - 1.35)/S for S, in V/g (not mV/g).")):
+        v = float(np.asarray(_answered(name, value), dtype=float))
+        if not np.isfinite(v) or abs(v - expected) > tol:
+            raise Feedback(f"{name} = {v:.6g}: with it, count 508 reads {float(read(v)):.4f} g, not 0.96 g. {hint}")
+    _ok("v_ref_096, zero_096 and sens_096 each make count 508 read 0.96 g.")
+
+
+def check_adc_step(lsb_accel_mg, lsb_gyro_dps):
+    """Lab 00 exercise 5: one ADC count of the ADXL335 (mg) and of the IDG-500 X4.5OUT (°/s), 10 bits at 3.0 V."""
+    for name, value, expected, tol, hint in (
+            ("lsb_accel_mg", lsb_accel_mg, 1e3 * _sensors.adc_step(0.300), 1e-3,
+             "One count is Vref/1023 volts; divide by the sensitivity (V/g), then g -> mg."),
+            ("lsb_gyro_dps", lsb_gyro_dps, _sensors.adc_step(0.0091), 1e-4,
+             "One count is Vref/1023 volts; divide by 0.0091 V per deg/s.")):
+        v = float(np.asarray(_answered(name, value), dtype=float))
+        if not np.isfinite(v) or abs(v - expected) > tol:
+            ratio = v / expected if expected else np.nan
+            why = (" (off by a factor of 1000: mg, not g?)" if abs(ratio - 1e-3) < 1e-3 or abs(ratio - 1e3) < 1
+                   else " (2**10 = 1024 levels give 1023 steps: divide by 1023)" if abs(ratio - 1023 / 1024) < 1e-4
+                   else "")
+            raise Feedback(f"{name} = {v:.6g} is not one count{why}. {hint}")
+    _ok("one count: lsb_accel_mg and lsb_gyro_dps are right.")
+
+
+def check_gyro_bias(bias_hat, still, fs=100.0, seconds=5.0):
+    """Lab 00 exercise 10: the gyro bias from the first ``seconds`` of the still record ``still`` (°/s)."""
+    v = float(np.asarray(_answered("bias_hat", bias_hat), dtype=float))
+    n = int(round(seconds * fs))
+    expected = float(np.mean(np.asarray(still, dtype=float)[:n]))
+    if np.isfinite(v) and abs(v - expected) <= 1e-9:
+        _ok("bias_hat is right (the mean of the first 5 s).")
+        return
+    if abs(v + expected) <= 1e-9:
+        raise Feedback("bias_hat has the wrong sign: the bias is the mean reading at rest; the NullOffset is its "
+                       "negative.")
+    if abs(v - float(np.mean(still))) <= 1e-9:
+        raise Feedback("you averaged the whole record; the exercise asks for the first 5 s only.")
+    raise Feedback("Average the first 5 s (500 samples at 100 Hz) of `still`; the true rate there is 0.")
 
 
 def check_smd_magnitude(fn):
@@ -601,7 +728,11 @@ def check_integrate_rate(fn):
     if got.shape != ref.shape:
         raise Feedback(f"return one angle per rate sample: expected shape {ref.shape}, got {got.shape}")
     if np.allclose(got, ref, atol=1e-12):
-        _ok("forward Euler: θ[0] = angle0, θ[n+1] = θ[n] + dt·ω[n].")
+        r2 = np.random.default_rng(9).normal(size=(6, 4))
+        _general_case(lambda: fn(r2, 0.01), _sensors.integrate_rate(r2, 0.01),
+                      "a (6, 4) array (4 channels, time along axis 0) with the default angle0",
+                      "Integrate along axis 0 (np.cumsum(..., axis=0)) and give angle0 a default of 0.")
+        _ok("forward Euler: θ[0] = angle0, θ[n+1] = θ[n] + dt·ω[n], also for several channels at once.")
         return
     if np.allclose(got, a0 + np.cumsum(rate) * dt, atol=1e-12):
         raise Feedback("off by one sample: θ[0] must be angle0 (nothing integrated yet); the rate ω[n] moves the "
@@ -624,10 +755,10 @@ def _fz():
     return freescale
 
 
-def _unit_pairs(seed):
+def _unit_pairs(seed, k=2):
     rng = np.random.default_rng(seed)
-    s = rng.standard_normal((2, 3))
-    r = rng.standard_normal((2, 3))
+    s = rng.standard_normal((k, 3))
+    r = rng.standard_normal((k, 3))
     return s / np.linalg.norm(s, axis=1, keepdims=True), r / np.linalg.norm(r, axis=1, keepdims=True)
 
 
@@ -646,7 +777,11 @@ def check_profile_matrix(fn):
         raise Feedback("the weights α_k are missing: B = Σ α_k s_k r_kᵀ.")
     if not np.allclose(B, ref, atol=1e-12):
         raise Feedback(f"B differs from Σ α s rᵀ by up to {np.max(np.abs(B - ref)):.3g}.")
-    _ok("B = Σ α_k s_k r_kᵀ is right.")
+    s3, r3 = _unit_pairs(44, 3)
+    a3 = np.array([0.2, 0.5, 0.3])
+    _general_case(lambda: fn(s3, r3, a3), np.einsum("k,ki,kj->ij", a3, s3, r3), "three vector pairs",
+                  "Sum over every pair k (a loop over len(alpha), or np.einsum), not over the lab's two.")
+    _ok("B = Σ α_k s_k r_kᵀ is right, for two and three vector pairs.")
 
 
 def check_kappa(fn):
@@ -677,7 +812,11 @@ def check_kappa(fn):
             raise Feedback("the first row has the wrong sign: z = Σ α (s × r), not r × s.")
         raise Feedback(f"κ differs from the correct matrix by up to {np.max(np.abs(K - ref)):.3g}; compare with "
                        "the compact form [[σ, zᵀ], [z, B + Bᵀ - σI]].")
-    _ok("κ is right (symmetric, traceless, and equal to Davenport's form).")
+    s3, r3 = _unit_pairs(45, 3)
+    a3 = np.array([0.2, 0.5, 0.3])
+    _general_case(lambda: fn(s3, r3, a3), fz.kappa_general(s3, r3, a3), "three vector pairs",
+                  "Sum over every pair k, not over the lab's two.")
+    _ok("κ is right (symmetric, traceless, and equal to Davenport's form), for two and three vector pairs.")
 
 
 def check_largest_eigenvector(fn):
@@ -732,7 +871,11 @@ def check_weights(fn):
         if np.isclose(out[0], qd_unscaled / (qa + qd_unscaled), atol=1e-9):
             raise Feedback("the magnetometer noise must be divided by B² (eq 64) so both are dimensionless.")
         raise Feedback(f"G = {G}, B_c = {Bc}: expected (α_g, α_m) = {ref.round(6)}; got {out.round(6)}.")
-    _ok("the weights follow eqs 64-65, including the noise-free 0/0 case.")
+    G4, B4 = np.array([0.2, -0.3, 0.9]), np.array([25.0, 10.0, -38.0])
+    _general_case(lambda: fn(G4, B4, 47.0), fz.weights(fz.accel_noise(G4), fz.mag_noise(B4, 47.0), 47.0),
+                  "a field of B = 47 µT", "Use the argument B, not 50 µT, in the magnetometer noise (eq 64).",
+                  atol=1e-9)
+    _ok("the weights follow eqs 64-65, including the noise-free 0/0 case and another field strength.")
 
 
 def check_heading(fn):
@@ -802,7 +945,13 @@ def check_process_noise(fn):
         raise Feedback(f"Q_w differs from eqs 142-159 by up to {np.max(np.abs(Q - ref)):.3g} (largest at "
                        f"{np.unravel_index(np.argmax(np.abs(Q - ref)), Q.shape)}); Q_gg = diag(q_g²) + (α/2)²"
                        "(diag(b_ε²) + (Q_vY + Q_wb) I3).")
-    _ok("Q_w matches eqs 142-159 at zero and non-zero previous errors.")
+    import dataclasses
+    x5 = np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [0.7]])
+    tun = dataclasses.replace(fz.V500, Q_vY=1e3, Q_wb=2.0, Q_wdelta=5.0)
+    _general_case(lambda: fn(x5, 0.02, 1e3, 2.0, 5.0), fz.process_noise(x5, 0.02, tun),
+                  "dt = 0.02 s with Q_vY = 1e3, Q_wb = 2, Q_wδ = 5", "Use the arguments dt, Q_vY, Q_wb and "
+                  "Q_wdelta, not the v5.00 numbers, inside your function.", rtol=1e-9, atol=1e-15)
+    _ok("Q_w matches eqs 142-159 at zero and non-zero previous errors, and for other constants.")
 
 
 def check_measurement_noise(fn):
@@ -824,7 +973,10 @@ def check_measurement_noise(fn):
                            f"got {Q[6, 6]:.5g}.")
         raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v differs from eqs 162-164 by up to "
                        f"{np.max(np.abs(Q - ref)):.3g}.")
-    _ok("Q_v matches eqs 162-164, including the 7 µT² floor.")
+    _general_case(lambda: fn(0.5, 900.0, 0.04, B=45.0), fz.measurement_noise(0.5, 900.0, 0.04, B=45.0),
+                  "a field of B = 45 µT (keyword B)", "Give your function the keyword B (default 50 µT) and use it "
+                  "in QvBQd/B².", rtol=1e-9, atol=1e-15)
+    _ok("Q_v matches eqs 162-164, including the 7 µT² floor and another field strength.")
 
 
 def check_gain(fn):
@@ -839,6 +991,11 @@ def check_gain(fn):
         if np.allclose(K, Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T), rtol=1e-6):
             raise Feedback("Q_v is missing from the innovation covariance C Q_w Cᵀ + Q_v.")
         raise Feedback("K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ (eq 170; P⁻ = Q_w because A = 0).")
+    x7 = np.concatenate([np.random.default_rng(170).normal(0, 0.05, 6), [0.4, -0.8, 1.1], [2.0]])
+    Qw7, Qv7 = fz.process_noise(x7, 0.04), fz.measurement_noise(0.02, 40.0, 0.04)
+    _general_case(lambda: fn(Qw7, C, Qv7), fz.kalman_gain(Qw7, C, Qv7), "non-zero previous errors and noisy "
+                  "sensors (a full, not block-diagonal, Q_w)", "Use the matrix formula K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ "
+                  "with np.linalg.inv or solve, not per-axis scalars.", rtol=1e-9, atol=1e-14)
     _ok(f"K is right: K_gg = {K[0, 0]:.7f}, K_bg = {K[6, 0]:.7f}, K_δ = {K[9, 6]:.7f}.")
 
 
@@ -991,7 +1148,11 @@ def check_moving_average(fn):
         raise Feedback(f"return one value per sample ({len(x)}); you return {got.shape[0]} -- pad the start with the "
                        "mean of the samples available so far (an expanding mean), do not drop it.")
     if np.allclose(got, ref):
-        _ok("causal 3-point moving average, expanding start: right.")
+        x2 = np.random.default_rng(5).normal(size=20)
+        for n in (1, 5):
+            _general_case(lambda: np.ravel(fn(x2, n)), _correlation.moving_average(x2, n),
+                          f"N = {n} points on 20 samples", "Use N, not 3, everywhere (window and expanding start).")
+        _ok("causal N-point moving average, expanding start: right for N = 3, 1 and 5.")
         return
     centred = np.convolve(x, np.ones(3) / 3, mode="same")
     if np.allclose(got[1:-1], centred[1:-1]):
@@ -1117,7 +1278,12 @@ def check_three_state_noise(fn):
                        "the process noise is w = -n_u, so M = E[w vᵀ] = -Δt²(R_a/d²) C_αq.")
     if not np.allclose(M, rM, rtol=1e-9, atol=1e-12):
         raise Feedback("M is the cross block C[:3, 3:] of L Lᵀ, scaled like Q and R, with the sign of w = -n_u.")
-    _ok("Q, R and M (with the corrected sign) match eqs 3.25, 3.30 and 3.31.")
+    a8 = (50 * _gfimu.UG, 0.005, 0.66)
+    for got8, ref8, nm in zip(_call_tuple(fn, a8, 3, "your noise matrices"), _gfimu.three_state_noise(*a8), "QRM"):
+        _general_case(lambda: got8, ref8, f"{nm} for N = 50 µg/√Hz, Δt = 0.005 s, d = 0.66 m",
+                      "Use the arguments N, dt and d everywhere (R_a = N²Δt, the factor Δt²R_a/d²).",
+                      rtol=1e-9, atol=1e-30)
+    _ok("Q, R and M (with the corrected sign) match eqs 3.25, 3.30 and 3.31, for two sets of N, Δt, d.")
 
 
 def _update_case(seed):
@@ -1218,6 +1384,9 @@ def check_arw_reading(fn):
     got = float(_call(fn, taus, adev, 0.5, what="your ARW reading"))
     ref = calibration.read_arw(taus, adev, 0.5)
     if np.isclose(got, ref, rtol=1e-9):
+        for tmax in (0.05, 1.0):
+            _general_case(lambda: fn(taus, adev, tmax), calibration.read_arw(taus, adev, tmax),
+                          f"tau_max = {tmax} s", "Fit the points with τ <= tau_max (the argument), not a fixed range.")
         _ok(f"ARW read off the slope −½ line at τ = 1 s: N = {ref:.4g} on the test curve.")
         return
     m = taus <= 0.5
@@ -1248,6 +1417,8 @@ def check_remove_gravity(fn):
     if got.shape != ref.shape:
         raise Feedback(f"return one ENU acceleration per sample, shape {ref.shape}; got {got.shape}")
     if np.allclose(got, ref, atol=1e-9):
+        _general_case(lambda: fn(q, acc, 9.81), sensors.remove_gravity(q, acc, 9.81, frame="ENU"), "g = 9.81 m/s²",
+                      "Use the argument g, not 9.8.", rtol=0, atol=1e-9)
         _ok("gravity removed: C_bn f − (0, 0, g) in ENU recovers the true acceleration (and 0 at rest).")
         return
     if np.allclose(got, ref + [0, 0, 2 * 9.8], atol=1e-9):
@@ -1595,6 +1766,9 @@ def check_ins_transition(fn):
     if F.shape != (21, 21):
         raise Feedback(f"F is 21×21 (9 DCM elements, b_g, r, v, b_a); got {F.shape}")
     if _same(F, ref, 1e-12):
+        A1 = _dcm.A_matrix([0.005, 0.01, -0.02])
+        _general_case(lambda: fn(x.copy(), acc.copy(), A1.copy(), 0.01), _dcm.ins_transition(x, acc, A1, 0.01),
+                      "Δt = 0.01 s", "Use the argument dt everywhere.", rtol=0, atol=1e-12)
         _ok("F matches eqs 7.12-7.14: F x̂ + g_c is exactly the direct propagation of eqs 7.7-7.11.")
         return
     blocks = [("DCM rows (rows 0-8, columns 0-8)", slice(0, 9), slice(0, 9),
@@ -1629,7 +1803,13 @@ def check_sigma_points(fn):
     if sig.shape != (8, 4) or w.shape != (8,):
         raise Feedback(f"2n = 8 points of dimension 4 and 8 weights; got {sig.shape} and {w.shape}")
     if _same(sig, ref, 1e-10) and _same(w, wref, 1e-14):
-        _ok("2n sigma points x ± rows of chol(nP), weights 1/(2n): they reproduce x and P exactly.")
+        for n in (2, 15):
+            Ln = rng.normal(size=(n, n))
+            Pn, xn = Ln @ Ln.T + 0.1 * np.eye(n), rng.normal(size=n)
+            _general_case(lambda: np.concatenate([np.ravel(o) for o in fn(xn.copy(), Pn.copy())]),
+                          np.concatenate([np.ravel(o) for o in _dcm.sigma_points_2n(xn, Pn)]), f"n = {n} states",
+                          "Use n = len(x), not 4.", rtol=0, atol=1e-10)
+        _ok("2n sigma points x ± rows of chol(nP), weights 1/(2n): they reproduce x and P exactly (n = 4, 2, 15).")
         return
     from scipy.linalg import cholesky
     if not _same(w, wref) and _same(sig, ref, 1e-10):
