@@ -548,3 +548,19 @@ def test_outage_error_matches_the_predicted_covariance_over_flights():
         var.append(np.sum(k["sd"][-1, 12:15] ** 2))
     ratio = np.sqrt(np.mean(sq) / np.mean(var))
     assert ratio == pytest.approx(5.8 / 6.5, abs=0.02)          # Lab 10's stored numbers: 5.8 m against 6.5 m
+
+
+def test_euler_ukf_learns_the_gyro_bias_from_a_zero_start_like_the_dcm_filter():
+    """Lab 10 Part E: the improper start (gyro bias 0 instead of [1000, 500, -1500] °/h) for the plain Euler UKF."""
+    rec = simulate.air_vehicle_record(gyro_bias_dph=(1000.0, 500.0, -1500.0), model="full")
+    rng = np.random.default_rng(2)
+    x0 = _ins_x(rec["C0"], np.zeros(3), rec["r0"] + 3 * rng.standard_normal(3), rec["v0"], rec["b_a"])
+    P0 = np.r_[[1e-4] * 9, [np.radians(2000 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(0.2e-3 * 9.8) ** 2] * 3]
+    xu0 = np.concatenate([x0[12:18], rotations.dcm_to_euler(rec["C0"]), x0[18:21], np.zeros(3)])
+    Pu0 = np.r_[P0[12:18], [np.radians(0.6) ** 2] * 3, P0[18:21], P0[9:12]]
+    u = dcm.run_euler_ukf(rec["gyr"], rec["acc"], rec["gps"], rec["fs"], xu0, Pu0, engine="plain")
+    t = rec["t"]
+    b_err = np.degrees(u["b_g"] - rec["b_g"]) * 3600
+    assert np.max(np.abs(b_err[t < 1])) > 900 and np.max(np.abs(b_err[t > 60])) < 100
+    e = np.degrees(np.angle(np.exp(1j * (u["euler"] - rec["euler"]))))
+    assert np.max(np.abs(e[t > 30])) < 1.5

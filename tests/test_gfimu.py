@@ -434,3 +434,43 @@ def test_lab07_checks_accept_the_library():
     with pytest.raises(checks.Feedback, match="returned h itself"):
         checks.check_lie_derivative(lambda L, f, x: L)
     assert sp  # sympy is importable for the lab
+
+
+def test_singer_model_is_a_stationary_first_order_markov_process():
+    dt, beta, sigma = 0.01, 0.5, 0.9
+    F, Q = g.singer_model(dt, beta, sigma)
+    phi, q = F[3, 3], np.sqrt(Q[3, 3])
+    assert phi == pytest.approx(np.exp(-beta * dt), rel=1e-15)                 # (5.5)
+    assert q ** 2 / (1 - phi ** 2) == pytest.approx(sigma ** 2, rel=1e-12)      # steady-state variance σ²
+    F1, Q1 = g.singer_model(dt, beta, sigma, first_order=True)                # (5.7)
+    assert F1[3, 3] == pytest.approx(1 - beta * dt) and np.sqrt(Q1[3, 3]) == pytest.approx(sigma * np.sqrt(2 * beta * dt))
+    assert abs(F1[3, 3] - phi) < (beta * dt) ** 2 and F[0, 3] == dt
+    # β → 0 at a fixed noise per step is the Wiener (CAA) model
+    Fc, Qc = g.caa_model(dt, 0.05)
+    Fs, Qs = g.singer_model(dt, 1e-12, 0.05 / np.sqrt(-np.expm1(-2e-12 * dt)))
+    assert np.allclose(Fs, Fc, atol=1e-13) and np.allclose(Qs, Qc, rtol=1e-6, atol=0)
+    # the autocorrelation σ² e^{-β|τ|} (5.8), from a long simulated sequence
+    rng = np.random.default_rng(58)
+    a = np.empty(200_000)
+    a[0] = sigma * rng.standard_normal()
+    u = rng.standard_normal(len(a))
+    for k in range(1, len(a)):
+        a[k] = phi * a[k - 1] + q * u[k]
+    lag = 200                                                                 # τ = 2 s = 1/β
+    assert np.mean(a * a) == pytest.approx(sigma ** 2, rel=0.1)
+    assert np.mean(a[:-lag] * a[lag:]) == pytest.approx(sigma ** 2 * np.exp(-1), rel=0.2)
+    with pytest.raises(ValueError, match="beta"):
+        g.singer_model(dt, -1.0, sigma)
+
+
+def test_dynamic_ekf_takes_the_singer_model():
+    t, om, al = g.trajectory_ch5(T=4.0)
+    rec = g.simulate_gfimu(om, al, 0.01, 0.4, 200 * g.UG, seed=3)
+    x0 = np.concatenate([om[0], al[0]])
+    caa, _ = g.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.05, x0, 1e-3).run(rec.acc)
+    same, _ = g.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=g.caa_model(0.01, 0.05, 0)).run(rec.acc)
+    assert np.array_equal(caa, same)
+    sing, _ = g.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=g.singer_model(0.01, 2.0, 0.9, 0)).run(rec.acc)
+    assert 0 < np.max(np.abs(sing - caa)) and np.sqrt(np.mean((sing[:, :3] - om) ** 2)) < 0.03
+    with pytest.raises(ValueError, match="F must have shape"):
+        g.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=g.singer_model(0.01, 2.0, 0.9))

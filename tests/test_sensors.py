@@ -378,3 +378,20 @@ def test_trailing_max_is_causal_and_checks_its_window():
     assert np.array_equal(sen.trailing_max(x, 1), x)
     with pytest.raises(ValueError, match="n must be an integer >= 1"):
         sen.trailing_max(x, 0)
+
+
+def test_precession_rate_matches_a_simulated_top_at_any_tilt():
+    """Seed 000 eqs 3.22-3.25: dL/dt = r × Mg turns L about the vertical at M g D / (I ω), whatever the tilt."""
+    M, D, r, spin = 0.1, 0.03, 0.025, 2 * np.pi * 50.0
+    inertia = 0.5 * M * r ** 2
+    wp = sen.precession_rate(M, D, inertia, spin)
+    assert wp == pytest.approx(M * sen.G * D / (inertia * spin), rel=1e-15)
+    for tilt in (0.3, 1.0):
+        L = inertia * spin * np.array([np.sin(tilt), 0.0, np.cos(tilt)])
+        dt, steps = 1e-4, 5000
+        for _ in range(steps):                                   # midpoint rule on dL/dt = (D L/|L|) × (0, 0, -M g)
+            half = L + 0.5 * dt * np.cross(D * L / np.linalg.norm(L), [0, 0, -M * sen.G])
+            L = L + dt * np.cross(D * half / np.linalg.norm(half), [0, 0, -M * sen.G])
+        assert np.arctan2(L[1], L[0]) / (steps * dt) == pytest.approx(wp, rel=1e-4)    # about +z, the same rate
+    with pytest.raises(ValueError, match="spin must be > 0"):
+        sen.precession_rate(M, D, inertia, 0.0)

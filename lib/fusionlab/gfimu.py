@@ -51,7 +51,8 @@ __all__ = ["GRAVITY", "UG", "ARW_UNIT", "AIV_NAMES", "TABLE_3_1", "TABLE_4_4", "
            "calibrate_triads", "apply_calibration", "trajectory_ch3", "trajectory_ch5",
            "trajectory_constant", "trajectory_tumbling", "ThreeStateEKF", "HybridEKF", "three_state_batch",
            "hybrid_batch", "nees", "caa_model", "DynamicEKF", "aiv_measurement_jacobian",
-           "observability_matrix", "observability_rank", "constraints", "constraint_jacobian", "sckf_project",
+           "observability_matrix", "observability_rank", "singer_model", "constraints", "constraint_jacobian",
+           "sckf_project",
            "ConstrainedEKF", "constrained_batch", "table53_monte_carlo"]
 
 GRAVITY = 9.80665                    # m/s², standard gravity (1 g)
@@ -738,6 +739,36 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
     return F, Q
 
 
+def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
+    """F and Q of the first-order Markov ("Singer") angular acceleration model (seed 004 §5.2.2, eqs 5.4–5.9).
+
+    ``α̇ = −β α + w`` (5.4): a zero-mean stationary process with steady-state variance σ² and autocorrelation
+    ``σ² e^{−β|τ|}`` (5.8). Discretely ``α_k = e^{−βΔt} α_{k−1} + σ √(1 − e^{−2βΔt}) u_k`` with unit-variance u
+    (5.5); to first order in βΔt (5.6–5.7, ``first_order=True``) ``α_k = (1 − βΔt) α_{k−1} + σ √(2βΔt) u_k``. The
+    3-D matrix (5.9) is lost; reconstruction [R], in the layout of :func:`caa_model`:
+    ``F = [[I, Δt I, 0], [0, φ I, 0], [0, 0, I]]`` with φ the factor above, ``Q = G q² Gᵀ``, ``G = [Δt I; I]``, q the
+    noise std per step, plus ``q_b² I`` on the biases. β → 0 at fixed q is the Wiener (CAA) model. The thesis names
+    this model in the titles of §5.4–5.5 but gives no β or σ (it picks σ² from a "ternary-uniform mixture").
+
+    Parameters
+    ----------
+    dt : s; beta : 1/s (reciprocal correlation time, >= 0); sigma : rad/s² (steady-state std)
+    n_bias : 0 or 9; q_bias : std per step; first_order : bool -- eq 5.7 instead of the exact 5.5
+    Returns
+    -------
+    F, Q : (6 + n_bias, 6 + n_bias) arrays
+    """
+    dt = validate.positive(dt, "dt")
+    beta, sigma = _nonneg(beta, "beta"), _nonneg(sigma, "sigma")
+    if first_order:
+        phi, q = 1.0 - beta * dt, sigma * np.sqrt(2.0 * beta * dt)                 # (004 eq 5.7)
+    else:
+        phi, q = np.exp(-beta * dt), sigma * np.sqrt(-np.expm1(-2.0 * beta * dt))   # (004 eq 5.5)
+    F, Q = caa_model(dt, q, n_bias, q_bias)
+    F[3:6, 3:6] = phi * np.eye(3)                                                 # (004 eq 5.9) [R]
+    return F, Q
+
+
 def aiv_measurement_jacobian(x):
     """Measurement function and Jacobian of the dynamic models (seed 004 eqs 5.18–5.19, 5.23–5.24).
 
@@ -778,9 +809,11 @@ class DynamicEKF:
     dt : s; d : m; noise_density : m/s²/√Hz
     q_alpha : rad/s² per step; q_bias : AIV-bias random walk per step (augmented model only)
     x0 : (6,) or (15,) array -- initial state (its length picks the model); P0 : (n, n) array or float
+    process : (F, Q) pair, optional -- another process model of the same size, e.g. :func:`singer_model`
+        (then q_alpha and q_bias are not used)
     """
 
-    def __init__(self, dt, d, noise_density, q_alpha, x0, P0, q_bias=0.0):
+    def __init__(self, dt, d, noise_density, q_alpha, x0, P0, q_bias=0.0, process=None):
         from filterpy.kalman import ExtendedKalmanFilter
 
         x0 = validate.array(x0, "x0")
@@ -790,7 +823,10 @@ class DynamicEKF:
         self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
         sa2 = _nonneg(noise_density, "noise_density") ** 2 / self.dt
         self.ekf = ExtendedKalmanFilter(dim_x=n, dim_z=9)
-        self.ekf.F, self.ekf.Q = caa_model(self.dt, q_alpha, n - 6, q_bias)
+        if process is None:
+            self.ekf.F, self.ekf.Q = caa_model(self.dt, q_alpha, n - 6, q_bias)
+        else:
+            self.ekf.F, self.ekf.Q = (validate.matrices(m, name, n).copy() for m, name in zip(process, ("F", "Q")))
         self.ekf.R = sa2 / self.d ** 2 * aiv_covariance()       # (004 eq 5.20) [R]
         self.ekf.x = x0.copy()
         self.ekf.P = np.eye(n) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0", n).copy()

@@ -671,6 +671,25 @@ def coriolis_acceleration(omega, v):
     return -2.0 * np.cross(w, v)                                                  # (000 eq 3.33, corrected sign)
 
 
+def precession_rate(mass, arm, inertia, spin, g=G):
+    """Precession rate of a spinning top (a mechanical gyro), ``ω_p = M g D / (I ω)`` rad/s (seed 000 eqs 3.22-3.25).
+
+    The gravity torque ``τ = dL/dt = M g D sin θ`` (3.22) turns the angular momentum ``L = I ω`` about the vertical
+    by ``dφ = dL / (L sin θ)`` (3.24), so ``ω_p = dφ/dt = τ / (L sin θ)`` (3.23, 3.25): independent of the tilt θ,
+    and slower the faster the disk spins (the fast-top approximation: the spin momentum dominates).
+
+    Parameters
+    ----------
+    mass : kg; arm : m (pivot to centre of mass, D); inertia : kg·m² (about the spin axis); spin : rad/s; g : m/s²
+    Returns
+    -------
+    float or array, rad/s
+    """
+    mass, arm = _positive_array(mass, "mass"), _positive_array(arm, "arm")
+    inertia, spin = _positive_array(inertia, "inertia"), _positive_array(spin, "spin")
+    return mass * g * arm / (inertia * spin)                      # (000 eq 3.25)
+
+
 def coriolis_force(mass, omega, v):
     """Coriolis force on a mass moving at ``v`` in a frame rotating at ``omega``: ``F = -2 m Ω × v`` in N (000 eq 3.34, corrected).
 
@@ -850,6 +869,7 @@ def integration_drift(t, bias, noise_std, dt):
 # input (m/s², rad/s, µT) so that ``S`` is dimensionless. Every forward model has its exact inverse (the seed's
 # "correction"), and ``correct(measure(x)) == x`` to rounding for any invertible ``M``, ``S``, ``D_s``.
 
+__all__ += ["precession_rate"]
 __all__ += [
     "accel_measure", "accel_correct", "gyro_measure_full", "gyro_correct", "mag_measure", "mag_correct",
     "seed001_mag_correct_printed", "gyro_noise", "allan_model",
