@@ -222,3 +222,22 @@ def test_lab08_checks_pass_the_library_and_catch_the_usual_slips():
     checks.check_sync_sampling(nf.synchronous_sampling)
     with pytest.raises(checks.Feedback, match="flipped"):
         checks.check_sync_sampling(lambda x, th: -nf.synchronous_sampling(x, th))
+
+
+def test_tilted_heading_recovers_the_heading_and_the_level_formula_errs_by_tan_lat_times_tilt():
+    """004 §4.4.3 (eqs 4.36-4.43): exact for any tilt; read as level, a pitch θ costs up to tan Φ · θ of heading."""
+    from fusionlab import earth, rotations
+    rng = np.random.default_rng(443)
+    lat = nf.SIEGEN_LAT
+    for _ in range(50):
+        roll, pitch, psi = rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-np.pi, np.pi)
+        w = rotations.euler_to_dcm([roll, pitch, psi]).T @ earth.earth_rate_ned(lat)
+        zeta = np.arctan2(w[0], w[1])
+        assert abs(np.angle(np.exp(1j * (nf.tilted_heading(zeta, roll, pitch, lat) - psi)))) < 1e-9
+    errs = []
+    for psi in np.radians(np.arange(-180, 180, 5)):
+        w = rotations.euler_to_dcm([0.0, np.radians(1.0), psi]).T @ earth.earth_rate_ned(lat)
+        errs.append(np.angle(np.exp(1j * (nf.tilted_heading(np.arctan2(w[0], w[1]), 0.0, 0.0, lat) - psi))))
+    assert np.degrees(np.max(np.abs(errs))) == pytest.approx(np.tan(lat), rel=2e-3)
+    with pytest.raises(ValueError, match="lat"):
+        nf.tilted_heading(0.1, 0.0, 0.0, np.pi / 2)

@@ -38,7 +38,7 @@ from . import earth, rotations, sensors, validate
 __all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS",
            "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
            "rate_from_rotating", "rate_noise_coefficient", "rate_noise_coefficient_exact", "rate_noise_density",
-           "rate_noise_monte_carlo", "coriolis_amplitude", "leveled_body_rate", "synthetic_record",
+           "rate_noise_monte_carlo", "coriolis_amplitude", "leveled_body_rate", "tilted_heading", "synthetic_record",
            "bandpass_firls", "bandpass", "whole_turns", "demodulate", "synchronous_sampling", "north_finder",
            "steps_experiment"]
 
@@ -283,6 +283,44 @@ def leveled_body_rate(heading, lat):
     C_bn = rotations.euler_to_dcm(np.stack([np.zeros_like(heading), np.zeros_like(heading), heading], -1))
     w_n = earth.earth_rate_ned(lat)
     return np.einsum("...ji,...j->...i", C_bn, w_n)
+
+
+def tilted_heading(zeta, roll, pitch, lat):
+    """Heading of a *non-level* rotating-accelerometer north finder from the phase of its Earth-rate line (004 §4.4.3,
+    eqs 4.36–4.43; the closed form after the thesis' ref. [45], reconstructed and checked here).
+
+    Tilted by roll φ and pitch θ (known, e.g. from the accelerometers, eqs 4.22–4.23), the body rate is
+    ``ω^b = C_nᵇ [ω_N, 0, ω_D]`` (4.36) and the line is ``2ρω_r √(ω_x² + ω_y²) sin(ω_r t + ζ)`` with
+    ``ζ = atan2(ω_x, ω_y)`` (4.38–4.39). ``ω_x = tan ζ · ω_y`` is linear in cos ψ and sin ψ:
+    ``I cos ψ + J sin ψ = K`` (4.41) with ``I = ω_ie cos Φ (sθ sφ tan ζ − cθ)``, ``J = −ω_ie cos Φ cφ tan ζ``,
+    ``K = ω_ie sin Φ (sθ + cθ sφ tan ζ)``; so ``√(I² + J²) sin(ψ + V) = K`` with ``V = atan2(I, J)`` and
+    ``ψ = arcsin(K / √(I² + J²)) − V`` (4.42–4.43). The arcsine has two roots; the one whose predicted phase
+    ``atan2(ω_x, ω_y)`` equals ζ is returned (the thesis leaves the choice open).
+
+    Parameters
+    ----------
+    zeta : float, rad -- phase of the line; roll, pitch : float, rad; lat : float, rad
+    Returns
+    -------
+    float, rad, in (−π, π]
+    """
+    zeta, roll, pitch = (validate.angles_rad(a, n) for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch")))
+    lat = validate.angles_rad(lat, "lat", limit=np.pi / 2 - 1e-9)
+    sf, cf, st, ct = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
+    tz = np.tan(zeta)
+    W = earth.OMEGA_IE
+    I = W * np.cos(lat) * (st * sf * tz - ct)                                       # (004 eq 4.41) [R]
+    J = -W * np.cos(lat) * cf * tz
+    K = W * np.sin(lat) * (st + ct * sf * tz)
+    V = np.arctan2(I, J)                                                            # (004 eq 4.42) [R]
+    a = np.arcsin(np.clip(K / np.hypot(I, J), -1.0, 1.0))
+    best, err = 0.0, np.inf
+    for psi in (a - V, np.pi - a - V):                                              # (004 eq 4.43), both roots
+        w = np.einsum("ji,j->i", rotations.euler_to_dcm([roll, pitch, psi]), earth.earth_rate_ned(lat))
+        e = abs(np.angle(np.exp(1j * (np.arctan2(w[0], w[1]) - zeta))))
+        if e < err:
+            best, err = psi, e
+    return float(np.angle(np.exp(1j * best)))
 
 
 def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=SIEGEN_LAT, g=9.81, scale=1.0,
