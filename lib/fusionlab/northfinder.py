@@ -315,7 +315,7 @@ def tilted_heading(zeta, roll, pitch, lat):
     V = np.arctan2(I, J)                                                            # (004 eq 4.42) [R]
     a = np.arcsin(np.clip(K / np.hypot(I, J), -1.0, 1.0))
     best, err = 0.0, np.inf
-    for psi in (a - V, np.pi - a - V):                                              # (004 eq 4.43), both roots
+    for psi in np.angle(np.exp(1j * np.array([a - V, np.pi - a - V]))):            # (004 eq 4.43), both roots
         w = np.einsum("ji,j->i", rotations.euler_to_dcm([roll, pitch, psi]), earth.earth_rate_ned(lat))
         e = abs(np.angle(np.exp(1j * (np.arctan2(w[0], w[1]) - zeta))))
         if e < err:
