@@ -650,7 +650,7 @@ ARRAY_ARGS = [(case, name) for cases in MODULES.values() for case in cases for n
               and np.asarray(a.value).dtype != bool and np.asarray(a.value).size]
 
 
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=250, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(ARRAY_ARGS), st.data())
 def test_a_non_finite_value_anywhere_is_named(case_arg, data):
     case, name = case_arg
@@ -668,7 +668,7 @@ BATCH_FUNCS = [
 ]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, database=None)
 @given(st.sampled_from(BATCH_FUNCS), st.integers(0, 7),
        st.lists(st.floats(-1.5, 1.5, allow_nan=False), min_size=3, max_size=3))
 def test_any_batch_size_works_and_matches_item_by_item(fn_make, n, e):
@@ -680,7 +680,7 @@ def test_any_batch_size_works_and_matches_item_by_item(fn_make, n, e):
         np.testing.assert_allclose(batch[k], fn(**{name: make(euler[k])}), atol=1e-12)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40, deadline=None, database=None)
 @given(st.floats(1.0, 10.0), st.sampled_from(sorted(estimators.available())))
 def test_gyro_in_deg_per_s_or_acc_in_g_is_refused_by_every_filter(scale, name):
     mag = MAG if estimators.available()[name]["uses_mag"] else None

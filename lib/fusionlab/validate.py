@@ -4,6 +4,13 @@ Every public function checks its arguments once, at the door, with these helpers
 list of the wrong length, a matrix in place of a vector, degrees where radians were meant, or a NaN from a broken log
 gets a ``ValueError`` that names the argument, what was expected and what came, instead of a broadcasting error
 three calls deeper.
+
+Beyond shapes and finiteness: :func:`broadcast` names the arguments whose batch sizes do not fit, :func:`options`
+refuses an unknown keyword, :func:`covariance` and :func:`rotation` check what a matrix must be, and the unit doors
+:func:`angles_rad`, :func:`euler_rad`, :func:`gyro_rad`, :func:`accel_ms2` and :func:`sample_rate` refuse values
+that fit degrees, °/s, g or a sample interval far better than the documented unit. ``tests/test_bad_input.py``
+checks every public function of rotations, sensors, kalman, calibration, metrics and ``estimators.run`` against
+them, one bad argument at a time.
 """
 from __future__ import annotations
 
