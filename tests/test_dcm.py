@@ -565,3 +565,22 @@ def test_euler_ukf_learns_the_gyro_bias_from_a_zero_start_like_the_dcm_filter():
     e = np.degrees(np.angle(np.exp(1j * (u["euler"] - rec["euler"]))))
     assert np.max(np.abs(e[t < 12])) > 2.0                             # started off by degrees
     assert np.max(np.abs(e[t > 30])) < 2.0 and np.max(np.abs(e[t > 63])) < 0.5
+
+
+def test_static_accelerometer_updates_correct_the_tilt_at_stops():
+    """004 eqs 7.18-7.19 on a car drive with three stops and two tunnels (simulate.car_record; the true stops)."""
+    car = simulate.car_record()
+    t, fs = car["t"], car["fs"]
+    rng = np.random.default_rng(12)
+    x0 = _ins_x(car["C0"], np.zeros(3), car["r0"] + 3 * rng.standard_normal(3), car["v0"] + 0.5 * rng.standard_normal(3),
+                np.zeros(3))
+    P0 = np.r_[[1e-4] * 9, [np.radians(2000 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(2e-3 * 9.80665) ** 2] * 3]
+    tilt = {}
+    for name, still in (("gps", None), ("static", car["static"])):
+        k = dcm.run_gps_ins(car["gyr"], car["acc"], car["gps"], fs, x0, P0, static=still)
+        e = np.degrees(np.angle(np.exp(1j * (k["euler"] - car["euler"]))))
+        tilt[name] = np.max(np.abs(e[t > 10, :2]))
+    assert car["static"].sum() / fs == pytest.approx(28.0, abs=0.1) and np.isnan(car["gps"][:, 0]).sum() / fs > 15
+    assert tilt["static"] < 0.5 * tilt["gps"] and tilt["static"] < 1.0, tilt
+    with pytest.raises(ValueError, match="static must be one flag per sample"):
+        dcm.run_gps_ins(car["gyr"], car["acc"], car["gps"], fs, x0, P0, static=car["static"][:-1])

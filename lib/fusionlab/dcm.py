@@ -773,7 +773,7 @@ def _gps_rows(gps, n):
     return np.all(np.isfinite(gps), axis=1)
 
 
-def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
+def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G, static=None, acc_sigma=0.02, still_speed=1.0):
     """The 21-state loosely coupled DCM GPS/INS Kalman filter (004 §7.2) over a recording.
 
     Per IMU sample: ``Ã = A(ω̃ Δt)``, mean by the direct form (:func:`ins_propagate`, eqs 7.7-7.11), covariance
@@ -781,10 +781,17 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
     ``H = [0, I₆, 0]`` (eq 7.17). No orthonormalisation of the state (the thesis lists it as future work); the
     read-out ``C_bn`` is orthonormalised (SVD) for the Euler angles.
 
+    Static accelerometer update (eqs 7.18–7.19): where ``static`` is True *and* the predicted speed is below
+    ``still_speed`` (the thesis checks both the accelerometer and the predicted speed), the reading is gravity plus
+    the bias, a linear measurement of the third DCM row: ``f̃ = −g c₃ + b_a + w`` (specific force, NED; the thesis
+    writes the "measured gravity" ``C_nᵇ gⁿ + b_a`` with the opposite sign, as in Lab 09), so
+    ``H = [0, 0, −g I₃, 0₃ₓ₉, I₃]`` and ``R = acc_sigma² I``. It corrects the tilt and the accelerometer bias at stops.
+
     Parameters
     ----------
     gyr : (N, 3) rad/s; acc : (N, 3) m/s², specific force; gps : (N, 6) -- [r_NED m, v_NED m/s] after sample k, NaN
     where no fix; fs : Hz; x0 : (21,) initial state; P0 : (21, 21) or (21,) diagonal
+    static : (N,) bool, optional -- samples detected as standing still; acc_sigma : m/s²; still_speed : m/s
     Returns
     -------
     dict -- ``x`` (N, 21) after each sample, ``sd`` (N, 21) standard deviations, ``C_bn`` (N, 3, 3) orthonormal,
@@ -800,6 +807,13 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
     P = np.diag(P) if P.shape == (21,) else P.copy()
     if P.shape != (21, 21):
         raise ValueError(f"P0 must have shape (21, 21) or (21,); got {P.shape}")
+    still = np.zeros(n, bool) if static is None else validate.array(static, "static", dtype=bool).reshape(-1)
+    if still.shape != (n,):
+        raise ValueError(f"static must be one flag per sample, shape ({n},); got {still.shape}")
+    Ra = validate.positive(acc_sigma, "acc_sigma") ** 2 * np.eye(3)
+    Ha = np.zeros((3, 21))
+    Ha[:, 6:9] = -g * np.eye(3)                                                   # (004 eq 7.19), specific force
+    Ha[:, 18:21] = np.eye(3)
     dt = 1.0 / fs
     tu = tuning
     A_all = A_matrix(gyr * dt)
@@ -839,6 +853,12 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G):
             PHt = P[:, 12:18]                                                        # P Hᵀ, H = [0, I6, 0] (eq 7.17)
             K = np.linalg.solve(P[12:18, 12:18] + R, PHt.T).T
             x = x + K @ (gps[k] - x[12:18])
+            P = P - K @ PHt.T
+            P = 0.5 * (P + P.T)
+        if still[k] and np.linalg.norm(x[15:18]) < still_speed:                     # (004 eqs 7.18-7.19)
+            PHt = P @ Ha.T
+            K = np.linalg.solve(Ha @ PHt + Ra, PHt.T).T
+            x = x + K @ (acc[k] - Ha @ x)
             P = P - K @ PHt.T
             P = 0.5 * (P + P.T)
         xs[k] = x
