@@ -687,6 +687,8 @@ def precession_rate(mass, arm, inertia, spin, g=G):
     """
     mass, arm = _positive_array(mass, "mass"), _positive_array(arm, "arm")
     inertia, spin = _positive_array(inertia, "inertia"), _positive_array(spin, "spin")
+    g = validate.positive(g, "g")
+    validate.broadcast(mass=mass, arm=arm, inertia=inertia, spin=spin)
     return mass * g * arm / (inertia * spin)                      # (000 eq 3.25)
 
 
