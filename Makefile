@@ -61,6 +61,19 @@ bench: env  ## every filter on every available BROAD trial: table, CSV and figur
 	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"
 	@$(BIN)/python -m fusionlab.bench --out .bench
 
+# Grading: the course's own gradebook.db (the instructor's, git-ignored), student code run only in the sandbox.
+WORKERS ?= 2
+.PHONY: gradebook grade
+
+gradebook: env  ## record the labs (or LABS=...) in the course's gradebook.db for grading; labs/ is left as it is
+	@rel=$$(mktemp -d); for lab in $(LABS); do echo "==> recording $$lab in gradebook.db"; \
+	  $(BIN)/nbgrader generate_assignment $$lab --force --log-level=ERROR \
+	    --CourseDirectory.release_directory=$$rel || { rm -rf $$rel; exit 1; }; done; rm -rf $$rel
+
+grade: env  ## sandboxed autograde of a class: make grade LAB=02_kalman_falling_body [WORKERS=2] [STUDENT=id]
+	@test -n "$(LAB)" || { echo "usage: make grade LAB=NN_name [WORKERS=2] [STUDENT=id]"; exit 2; }
+	@$(BIN)/python -m grading.classgrade $(LAB) --workers $(WORKERS) $(if $(STUDENT),--student $(STUDENT))
+
 release: env  ## the student course: release/course/ and release/fusionlab-course.tar.gz (no solutions, no grading)
 	@$(BIN)/python -m grading.release --out release
 
