@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import inspect
 import json
 import os
 import re
@@ -255,7 +256,10 @@ def integrity(course: Path, lab: str, results: list[Result]):
             r.flags = [{"cell": "-", "kind": "unreadable", "line": 0, "code": "", "why": f"{type(e).__name__}: {e}"}]
         rows.append((r.student, lab, r.flags))
     md, csv = course / f"integrity_{lab}.md", course / f"integrity_{lab}.csv"
-    scanner.write_report(rows, md, csv)
+    extra = {}
+    if "scores" in inspect.signature(scanner.write_report).parameters:  # the report can show each score
+        extra["scores"] = {r.student: f"{r.score:g} / {r.max_score:g}" for r in results if r.ok}
+    scanner.write_report(rows, md, csv, **extra)
     return md
 
 
@@ -334,6 +338,8 @@ def main(argv=None):
     elif not (course / "gradebook.db").is_file():
         raise SystemExit("gradebook.db does not exist: run without --no-generate (or `make gradebook`)")
 
+    # the sandbox mounts lib/ read-only: compile it once here, or every kernel compiles it again
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(course / "lib")], capture_output=True)
     t0 = time.monotonic()
     scratch = Path(tempfile.mkdtemp(prefix="cg-"))  # short: the kernel's socket paths must fit in 107 bytes
     results = []
