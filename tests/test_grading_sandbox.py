@@ -4,8 +4,9 @@ One scratch course (config, library, data, grading tools, solutions of labs 01 a
 gradebook) receives a generated class of lab 02: three honest students (complete, partly done, untouched) and one
 attacker per attack, each a copy of the release with the attack in a solution cell (after the model answer where
 the attack should cost nothing).  A single ``classgrade`` run with two workers grades them all, as an instructor
-would; the tests below read what it left behind.  The per-cell limit is 10 s and an unanswered interrupt is given 3 s
-(the course uses 60 s and 10 s) so the stuck student costs seconds.
+would; the tests below read what it left behind.  The per-cell limit is 30 s and an unanswered interrupt is given 5 s
+(the course uses 60 s and 10 s) so the stuck student costs less than a minute; 30 s leaves room for the first cell's
+imports on a busy machine (a cell over the limit would be restarted as stuck).
 """
 from __future__ import annotations
 
@@ -204,7 +205,7 @@ def graded(tmp_path_factory):
         shutil.copytree(ROOT / name, root / name, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "nbgrader_config.py", root)
     with open(root / "nbgrader_config.py", "a") as f:
-        f.write("\nc.Execute.timeout = 10\nc.SandboxExecute.interrupt_grace = 3\n")
+        f.write("\nc.Execute.timeout = 30\nc.SandboxExecute.interrupt_grace = 5\n")
     for lab in (OTHER, LAB):
         shutil.copytree(ROOT / "solutions" / lab, root / "solutions" / lab)
         nbgrader(["generate_assignment", lab, "--force"], cwd=root)
@@ -367,3 +368,13 @@ def test_cells_pasted_from_another_lab_are_ignored_and_the_rest_graded(graded):
     assert "grade_id 'ex6_solution' is not a cell of this lab" in line
     assert "grade_id 'ex6_tests' is not a cell of this lab" in line
     assert "grade_id 'ex1_tests' appears 3 times" in line
+
+
+def test_the_integrity_report_marks_the_attackers_and_not_the_honest_students(graded):
+    assert (graded["root"] / f"integrity_{LAB}.md").is_file() and (graded["root"] / f"integrity_{LAB}.csv").is_file()
+    lines = {ln.split()[0]: ln for ln in graded["run"].stdout.splitlines()
+             if ln.split() and ln.split()[0] in graded["students"] and " / " in ln}
+    for student in ("write_root", "write_lib", "background", "network"):
+        assert "INTEGRITY:" in lines[student], lines[student]
+    for student in ("full", "partial", "stub"):
+        assert "INTEGRITY" not in lines[student], lines[student]
