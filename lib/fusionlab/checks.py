@@ -256,7 +256,7 @@ def check_lock_roll(fn):
 # Lab 02: Kalman filter from first principles (seed 000 §4.3-4.4)
 # ----------------------------------------------------------------------------------------------------------------
 
-from . import kalman as _kalman  # noqa: E402  (row 3 module; checks sit above it)
+from . import kalman as _kalman  # noqa: E402  (a seed-method module; checks sit above it)
 
 __all__ += ["check_joseph", "check_state_space", "check_predict", "check_update"]
 
@@ -751,7 +751,7 @@ def check_integrate_rate(fn):
 # ---------------------------------------------------------------------------------------------------------------
 
 def _fz():
-    from . import freescale                              # row 3; imported lazily so checks stay light to import
+    from . import freescale                              # a seed method; imported lazily so checks stay light to import
     return freescale
 
 
@@ -1587,7 +1587,7 @@ __all__ += ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_
 # ---------------------------------------------------------------------------------------------------------------
 # Lab 09 (seed 004 ch. 6): the DCM AHRS -- measurement matrices and the prediction step
 # ---------------------------------------------------------------------------------------------------------------
-from . import dcm as _dcm  # noqa: E402  (row 3 module; appended section)
+from . import dcm as _dcm  # noqa: E402  (a seed-method module; appended section)
 
 __all__ += ["check_dcm_measurement_matrices", "check_dcm_predict"]
 

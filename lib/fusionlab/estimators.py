@@ -194,7 +194,7 @@ def _triad(gyr, acc, mag, fs):
 # ---------------------------------------------------------------------------------------------------------------
 # Seed 002: the Freescale / NXP v5.00 indirect Kalman filters (Labs 04-05)
 # ---------------------------------------------------------------------------------------------------------------
-from . import freescale as _freescale  # noqa: E402  (row 3 module; appended block)
+from . import freescale as _freescale  # noqa: E402  (a seed-method module; appended block)
 
 
 def _freescale_units(gyr, acc):
@@ -252,7 +252,7 @@ def _correlation(gyr, acc, mag, fs, n_ma=12, accel_weight="ratio"):
 # ---------------------------------------------------------------------------------------------------------------
 # Seed 004 ch. 6: the 9-state DCM AHRS (Lab 09)
 # ---------------------------------------------------------------------------------------------------------------
-from . import dcm as _dcm  # noqa: E402  (row 3 module; appended block)
+from . import dcm as _dcm  # noqa: E402  (a seed-method module; appended block)
 
 #: Measurement-update rate of the registered DCM AHRS, Hz: every ``round(fs / 50)``-th sample (the prediction uses
 #: every gyro sample). The thesis updates at its 100 Hz sample rate; 50 Hz keeps real 286 Hz recordings fast.

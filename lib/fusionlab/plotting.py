@@ -319,7 +319,7 @@ def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
 # Lab 02: Kalman-filter figures (seed 000 §4.2-4.4)
 # ----------------------------------------------------------------------------------------------------------------
 
-from . import kalman as _kalman  # noqa: E402  (row 3 module; plotting sits above it)
+from . import kalman as _kalman  # noqa: E402  (a seed-method module; plotting sits above it)
 
 __all__ += ["plot_gaussian_product", "plot_kf_run"]
 

@@ -129,7 +129,7 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
 # Lab 02: product of two Gaussians (seed 000 §4.2, figs 24-25)
 # ----------------------------------------------------------------------------------------------------------------
 
-from . import kalman as _kalman  # noqa: E402  (row 3 module; widgets sit above it)
+from . import kalman as _kalman  # noqa: E402  (a seed-method module; widgets sit above it)
 
 __all__ += ["gaussian_product_state", "gaussian_product_explorer"]
 
