@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import validate
+from . import simulate, validate
 
 __all__ = [
     "G", "EPS0", "FREE_FALL",
