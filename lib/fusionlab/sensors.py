@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import simulate, validate
+from . import validate
 
 __all__ = [
     "G", "EPS0", "FREE_FALL",
