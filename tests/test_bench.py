@@ -179,3 +179,50 @@ def test_tuning_explorer_builds_headless_and_the_slider_redraws(sweep):
     assert readout.value != before and f"{sw.rmse_deg[0, 2]:.2f}" in readout.value
     with pytest.raises(ValueError, match="sweep must be a TuningSweep"):
         widgets.tuning_explorer({"values": [1]})
+
+
+# --- leave one trial out: options chosen on the other trials (data-free: simulated trials) -----------------------
+
+
+@pytest.fixture(scope="module")
+def sim_trials():
+    from fusionlab import rotations, simulate
+    out = []
+    for seed in (1, 2, 3):
+        rec = simulate.hand_motion_record(seed=seed, duration=30.0, still=5.0)
+        n = len(rec["gyr"])
+        out.append(datasets._make_trial(f"sim{seed}", ("all_trials",), "simulated", rec["fs"], rec["gyr"], rec["acc"],
+                                        rec["mag"] * 100.0, rotations.quat_nav_swap(rec["q"]), np.ones(n, bool)))
+    return out
+
+
+def test_leave_one_out_chooses_on_the_other_trials_and_scores_the_one_left_out(sim_trials):
+    r = bench.leave_one_out(sim_trials, "complementary", {"tau": (0.5, 1.0, 4.0)})
+    assert r.metric == "inclination" and r.options == ("tau",) and r.combos == ((0.5,), (1.0,), (4.0,))
+    tr = sim_trials[1]
+    q = estimators.run("complementary", tr.gyr, tr.acc, tr.fs, frame="ENU", tau=4.0)
+    assert r.rmse_deg[1, 2] == pytest.approx(metrics.broad_rmse(q, tr.quat_ref, tr.movement).inclination_deg, rel=1e-12)
+    for i in range(3):
+        others = np.delete(r.rmse_deg, i, axis=0).mean(axis=0)
+        assert r.chosen[i] == r.combos[int(np.argmin(others))]
+        assert r.loo_deg[i] == r.rmse_deg[i, int(np.argmin(others))]
+    assert np.array_equal(r.default_deg, r.rmse_deg[:, 1])                      # the registered tau = 1 s
+    assert r.loo_mean == pytest.approx(np.mean(r.loo_deg)) and r.loo_mean >= np.min(r.rmse_deg, axis=1).mean()
+    text = bench.format_loo([r], [dict(estimator="vqf6", inclination_rmse_deg=0.5, error="")])
+    assert "complementary" in text and f"{r.default_mean / 0.5:.2f} / {r.loo_mean / 0.5:.2f} x vqf6 (0.50)" in text
+    assert "chosen without each trial -- si: tau=" in text
+
+
+def test_leave_one_out_refuses_a_grid_without_the_default_and_a_single_trial(sim_trials):
+    with pytest.raises(ValueError, match="grid must hold the registered default of tau"):
+        bench.leave_one_out(sim_trials, "complementary", {"tau": (0.5, 2.0)})
+    with pytest.raises(ValueError, match="trials must be a list of at least two BroadTrial; got 1"):
+        bench.leave_one_out(sim_trials[:1], "complementary", {"tau": (1.0,)})
+    with pytest.raises(ValueError, match="grid must name options of 'gyro'"):
+        bench.leave_one_out(sim_trials, "gyro", {"tau": (1.0,)})
+
+
+def test_every_tuned_grid_holds_the_registered_defaults():
+    for name, grid in bench.TUNED.items():
+        defaults = estimators.options(name)
+        assert all(defaults[k] in v for k, v in grid.items()), name

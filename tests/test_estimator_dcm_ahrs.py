@@ -51,7 +51,8 @@ def test_hand_motion_through_the_door_stays_within_two_degrees():
     rec = simulate.hand_motion_record(seed=3)
     q = estimators.run("dcm_ahrs", rec["gyr"], rec["acc"], rec["fs"], mag=rec["mag"], frame="NED")
     err = np.degrees(rotations.quat_angle_between(q, rec["q"]))
-    assert np.max(err) < 2.5 and np.sqrt(np.mean(err ** 2)) < 1.0
+    # the start comes from the first sample alone (causal; the 0.5 s mean it replaced gave an RMS of 0.80°)
+    assert np.max(err) < 2.5 and np.sqrt(np.mean(err ** 2)) < 1.1
 
 
 def test_real_slow_rotation_trial_beats_five_degrees():
@@ -71,8 +72,9 @@ def _inclination_deg(q, q_true):
 def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
     info = estimators.available()["dcm_ahrs6"]
     assert info["uses_mag"] is False and info["seed"].startswith("004")
-    assert estimators.options("dcm_ahrs6") == estimators.options("dcm_ahrs") == {
-        "acc_sigma_untrusted": dcm.HANDHELD.acc_sigma_untrusted, "hold": dcm.HANDHELD.hold}
+    assert estimators.options("dcm_ahrs") == {"acc_sigma_untrusted": dcm.HANDHELD.acc_sigma_untrusted,
+                                              "hold": dcm.HANDHELD.hold, "acc_lp_tau": dcm.HANDHELD.acc_lp_tau}
+    assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0}
 
 
 @pytest.mark.parametrize("euler", [[0.3, -0.2, 1.0], [-2.5, 0.6, -2.0]])

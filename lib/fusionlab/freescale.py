@@ -1100,6 +1100,8 @@ def _axis_gain(a, g, m, gb, mb, bb, vg, vm):
 
 
 def _outputs(N, n, M, steps_q, parts, tail):
+    """Per-sample quaternions: inside block k the gyro-propagated partial products (``parts[k]``), at its last
+    sample the posterior. ``parts[0]`` must start from the first sample alone (see :func:`_first_block`)."""
     out = np.empty((N, 4))
     for k in range(M):
         blk = parts[k]
@@ -1108,6 +1110,13 @@ def _outputs(N, n, M, steps_q, parts, tail):
     if tail:
         out[M * n:] = tail
     return out
+
+
+def _first_block(q_first, gyr_l, n, b, dtg):
+    """Outputs of the samples of the first block before its Kalman step: v5.00 locks on the block's *averaged*
+    readings, which a sample inside the block does not have yet; so these samples show the lock of the first
+    sample alone, propagated by the gyro (ours: the output at sample k uses no later sample)."""
+    return _gyro_chain(tuple(q_first), gyr_l[0:n], b, dtg)[1]
 
 
 def _fast_setup(fs, tuning, N):
@@ -1163,7 +1172,9 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     Parameters
     ----------
     gyr_dps, acc_g, mag_uT : (N, 3) arrays, °/s, g, µT; fs : Hz
-    frame, tuning, B : as :class:`Kalman9`
+    frame, tuning : as :class:`Kalman9`
+    B : µT, optional -- the field strength (default ``tuning.B``), or an (N,) array of it, one per sample: a running
+        estimate (v5.00 updates B from its background magnetic calibration); each step uses its last sample's value
     per_sample : bool -- return one quaternion per *sample* (inside a block the gyro-propagated a priori partial
         products from the previous q̂⁺, at a block's last sample q̂⁺; after the last full block, gyro only);
         otherwise one per Kalman step
@@ -1181,13 +1192,20 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     enu = _ENU[frame]
     N = len(gyr)
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
-    B = t.B if B is None else validate.positive(B, "B")
-    B2 = B * B
+    if B is not None and np.ndim(B) == 1:
+        B_all = validate.array(B, "B")
+        if B_all.shape != (N,) or np.any(B_all <= 0):
+            raise ValueError(f"B must be a positive number or an ({N},) array of positive values; got shape "
+                             f"{B_all.shape}")
+        B_all = B_all[n - 1:M * n:n]                                       # the value at each step's last sample
+    else:
+        B_all = np.full(M, t.B if B is None else validate.positive(B, "B"))
+    B2_all = B_all * B_all
     Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
     Bm = mag[:M * n].reshape(M, n, 3).mean(axis=1)
     qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
-    qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2)
-    ag_all, am_all = weights(qa_all, qd_all, B)
+    qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)               # (002 eq 15)
+    ag_all, am_all = weights(qa_all, qd_all / B2_all, 1.0)                # (002 eqs 64-65): only QvBQd/B² enters
     if accel_hold:                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
     free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
@@ -1207,7 +1225,8 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     b = [0.0, 0.0, 0.0]
     e = [0.0] * 10
     delta = float(d6_all[0])
-    q = tuple(ecompass(Gm[0], Bm[0], math.radians(delta), frame, B).q)
+    q = tuple(ecompass(Gm[0], Bm[0], math.radians(delta), frame, B_all[0]).q)
+    first = ecompass(acc[0], mag[0], inclination(acc[0], mag[0], frame), frame, B_all[0]).q
     lim_b, lim_d = t.gyro_offset_max, t.delta_max
     qs, parts_all, bs, ds = [], [], np.empty((M, 3)), np.empty(M)
     for k in range(M):
@@ -1231,6 +1250,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
         zd = delta - d6_all[k]                                             # (002 eq 113)
         qa = qa_all[k]
         qd = max(qd_all[k], t.qvbqd_min)
+        B2 = B2_all[k]
         vg = 0.25 * qa + gyro_var                                          # (002 eq 162)
         vmn = 0.25 * qd / B2 + gyro_var                                    # (002 eq 163)
         vd = _R2D * _R2D * (qa + qd / B2)                                  # (002 eq 164)
@@ -1267,6 +1287,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
     res = {"b_dps": bs, "delta_deg": ds, "t": (np.arange(M) + 1) * dt}
     if per_sample:
         _, tail = _gyro_chain(q, gyr_l[M * n:], b, dtg)
+        parts_all[0] = _first_block(first, gyr_l, n, [0.0, 0.0, 0.0], dtg)
         res["q"] = _outputs(N, n, M, qs, parts_all, tail)
     else:
         res["q"] = np.array(qs)
@@ -1303,6 +1324,8 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
     b = [0.0, 0.0, 0.0]
     e = [0.0] * 6
     q = tuple(qrot(np.array([0.0, 0.0, rz]), sg_all[0]))
+    g0 = float(acc[0] @ acc[0])
+    first = qrot(np.array([0.0, 0.0, rz]), sgn * acc[0] / math.sqrt(g0) if g0 > 0 else np.array([0.0, 0.0, 1.0]))
     qs, parts_all, bs = [], [], np.empty((M, 3))
     for k in range(M):
         q, parts = _gyro_chain(q, gyr_l[k * n:(k + 1) * n], b, dtg)       # (002 eq 175)
@@ -1331,6 +1354,7 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
     res = {"b_dps": bs, "t": (np.arange(M) + 1) * dt}
     if per_sample:
         _, tail = _gyro_chain(q, gyr_l[M * n:], b, dtg)
+        parts_all[0] = _first_block(first, gyr_l, n, [0.0, 0.0, 0.0], dtg)
         res["q"] = _outputs(N, n, M, qs, parts_all, tail)
     else:
         res["q"] = np.array(qs)

@@ -20,6 +20,12 @@ What is here, in the order of Lab 00:
 5. **The gyroscope**: the Coriolis force with its sign (eqs 3.32-3.34 corrected: :func:`coriolis_acceleration`,
    :func:`coriolis_force`, :func:`rotating_frame_acceleration`; printed form :func:`seed000_eq334_printed`), and the
    drift of an integrated gyro (:func:`gyro_measure`, :func:`integrate_rate`, :func:`integration_drift`).
+6. **Reading a real recording as it arrives** (not from a seed; the filters of :mod:`fusionlab.dcm` and
+   :mod:`fusionlab.freescale` use them): the causal windows :func:`trailing_max`, :func:`held_true` and
+   :func:`lowpass`; rest detection (:func:`rest_detect`) and a running reference of the geomagnetic field strength
+   that ignores disturbances (:func:`field_reference`), after the ideas of VQF (D. Laidig, T. Seel, "VQF: Highly
+   accurate IMU orientation estimation with bias estimation and magnetic disturbance rejection", Information
+   Fusion 91, 2023, §4.3 and §4.4). Every one of them uses no sample after the one it answers for.
 
 Frames and units at this module's edge
 --------------------------------------
@@ -56,6 +62,8 @@ __all__ = [
     # 5. gyroscope
     "coriolis_acceleration", "coriolis_force", "seed000_eq334_printed", "rotating_frame_acceleration",
     "gyro_measure", "integrate_rate", "integration_drift",
+    # 6. causal helpers for real recordings
+    "trailing_max", "held_true", "lowpass", "rest_detect", "RestDetector", "field_reference",
 ]
 
 #: Standard gravity, m/s^2 (seed 001 uses 9.8; the labs say which they use).
@@ -773,21 +781,6 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
             + np.cross(omega, np.cross(omega, r)))                                   # (000 eq 3.32; 004 eqs 3.4, 4.3)
 
 
-def trailing_max(x, n):
-    """Causal running maximum: ``out[k] = max(x[k-n+1 … k])`` (fewer samples at the start), for a (N,) array.
-
-    The one window both accelerometer-disturbance holds use (the complementary filter's and the Freescale fast
-    paths', ours, not the seeds').
-    """
-    from scipy.ndimage import maximum_filter1d
-
-    x = validate.array(x, "x")
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
-    n = validate.count(n, "n", 1)
-    return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
-
-
 def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §2).
 
@@ -1142,3 +1135,181 @@ def observer_steady_state_error(L, T, bias):
     if not 0.0 < L <= 1.0:
         raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); got {L}")
     return (1 - L) * validate.positive(T, "T") * validate.array(bias, "bias") / L
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 6. Reading a real recording as it arrives: causal windows, rest, the field strength (not from a seed)
+# ----------------------------------------------------------------------------------------------------------------
+
+
+def trailing_max(x, n):
+    """Causal running maximum: ``out[k] = max(x[k-n+1 … k])`` (fewer samples at the start), for a (N,) array.
+
+    The one window both accelerometer-disturbance holds use (the complementary filter's and the Freescale fast
+    paths', ours, not the seeds').
+    """
+    from scipy.ndimage import maximum_filter1d
+
+    x = validate.array(x, "x")
+    if x.ndim != 1:
+        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    n = validate.count(n, "n", 1)
+    return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
+
+
+def held_true(ok, n):
+    """True where ``ok`` has held for at least ``n`` consecutive samples, the current one included (causal).
+
+    Parameters
+    ----------
+    ok : (N,) bool array; n : int >= 1, samples
+    """
+    ok = np.asarray(ok, dtype=bool)
+    if ok.ndim != 1:
+        raise ValueError(f"ok must have shape (N,); got {ok.shape}")
+    n = validate.count(n, "n", 1)
+    idx = np.arange(len(ok))
+    last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))          # the latest sample where ok failed
+    return ok & (idx - last_bad >= n)
+
+
+def lowpass(x, fs, tau):
+    """First-order causal low-pass along the first axis: ``y_k = y_{k-1} + a (x_k - y_{k-1})``,
+    ``a = 1 - exp(-1/(fs tau))``, started at ``y_0 = x_0`` (no transient from zero).
+
+    Written out over chunks so that numpy does the work: inside a chunk ``y_i = r^(i+1) y_prev +
+    a r^i Σ_{j<=i} r^(-j) x_j`` with ``r = 1 - a`` (a cumulative sum, so ``y_i`` still uses no later sample); a
+    chunk is short enough that ``r^(-j)`` stays below 10³, which keeps the rounding near 1e-13 relative.
+    :class:`RestDetector` runs the recursion itself, one sample at a time; a test checks that both agree.
+
+    Parameters
+    ----------
+    x : (N,) or (N, m) array; fs : Hz; tau : s, time constant
+    Returns
+    -------
+    array shaped like ``x``
+    """
+    x = validate.array(x, "x")
+    if x.ndim not in (1, 2) or len(x) == 0:
+        raise ValueError(f"x must have shape (N,) or (N, m) with N >= 1; got {x.shape}")
+    a = 1.0 - np.exp(-1.0 / (validate.sample_rate(fs) * validate.positive(tau, "tau")))
+    r = 1.0 - a
+    size = max(1, int(np.log(1e3) / -np.log(r))) if r > 0 else 1
+    y = np.empty_like(x)
+    prev = x[0]
+    for s in range(0, len(x), size):
+        xc = x[s:s + size]
+        p = r ** np.arange(len(xc))
+        p = p[:, None] if x.ndim == 2 else p
+        y[s:s + size] = r * p * prev + a * p * np.cumsum(xc / p, axis=0)
+        prev = y[s + len(xc) - 1]
+    return y
+
+
+def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5,
+                bias_max=np.radians(2.0)):
+    """Rest detection on a recording, causal; at rest the low-passed gyro *is* the gyro bias.
+
+    The idea is VQF's (Laidig & Seel 2023, §4.4 "rest detection"; written here from the paper, not from its code):
+    low-pass the gyro and the accelerometer with time constant ``tau``; the sensor is *quiet* while every sample
+    stays close to its low-passed value (``|ω - ω_lp| < gyr_tol``, ``|a - a_lp| < acc_tol``) and the low-passed
+    rate is small enough to be a bias (``|ω_lp| < bias_max``: a steady turn is not rest); it is *at rest* once it
+    has been quiet for ``min_time``. The defaults are the values the VQF paper publishes (2 °/s, 0.5 m/s², 1.5 s,
+    0.5 s, 2 °/s), not fitted to any data of this course.
+
+    Parameters
+    ----------
+    gyr : (N, 3) rad/s; acc : (N, 3) m/s²; fs : Hz
+    gyr_tol : rad/s; acc_tol : m/s²; min_time : s; tau : s; bias_max : rad/s
+    Returns
+    -------
+    rest : (N,) bool -- at rest at sample k (from samples <= k)
+    gyr_lp : (N, 3) rad/s -- the low-passed gyro (the bias estimate where ``rest``)
+    """
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.samples(acc, "acc")
+    validate.same_length(gyr=gyr, acc=acc)
+    fs = validate.sample_rate(fs)
+    gyr_lp, acc_lp = lowpass(gyr, fs, tau), lowpass(acc, fs, tau)
+    quiet = ((np.linalg.norm(gyr - gyr_lp, axis=1) < validate.positive(gyr_tol, "gyr_tol"))
+             & (np.linalg.norm(acc - acc_lp, axis=1) < validate.positive(acc_tol, "acc_tol"))
+             & (np.linalg.norm(gyr_lp, axis=1) < validate.positive(bias_max, "bias_max")))
+    return held_true(quiet, max(1, int(round(validate.positive(min_time, "min_time") * fs)))), gyr_lp
+
+
+class RestDetector:
+    """:func:`rest_detect` one sample at a time -- the readable form (a test checks that both agree).
+
+    Parameters as :func:`rest_detect`. :meth:`update` takes one gyro (rad/s) and accelerometer (m/s²) sample and
+    returns ``(rest, gyr_lp)`` for it.
+    """
+
+    def __init__(self, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
+        fs = validate.sample_rate(fs)
+        self.a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))     # the step of :func:`lowpass`
+        self.gyr_tol, self.acc_tol, self.bias_max = gyr_tol, acc_tol, bias_max
+        self.n_min = max(1, int(round(validate.positive(min_time, "min_time") * fs)))
+        self.gyr_lp = self.acc_lp = None
+        self.quiet_run = 0                                   # consecutive quiet samples
+
+    def update(self, gyr, acc):
+        gyr, acc = np.asarray(gyr, float), np.asarray(acc, float)
+        if self.gyr_lp is None:                              # the low-passes start at the first sample
+            self.gyr_lp, self.acc_lp = gyr.copy(), acc.copy()
+        else:
+            self.gyr_lp = self.gyr_lp + self.a * (gyr - self.gyr_lp)
+            self.acc_lp = self.acc_lp + self.a * (acc - self.acc_lp)
+        quiet = (np.linalg.norm(gyr - self.gyr_lp) < self.gyr_tol and np.linalg.norm(acc - self.acc_lp) < self.acc_tol
+                 and np.linalg.norm(self.gyr_lp) < self.bias_max)
+        self.quiet_run = self.quiet_run + 1 if quiet else 0
+        return self.quiet_run >= self.n_min, self.gyr_lp.copy()
+
+
+def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
+    """A running reference of the geomagnetic field strength that disturbances do not pull, causal.
+
+    A real-time filter cannot know the field strength of the whole recording (its median, say); it can learn it
+    as it goes. The reference starts at the first sample's ``|m|``. A sample is *undisturbed* while
+    ``| |m| / ref - 1 | < tol``; then the reference follows ``|m|`` with time constant ``tau`` (the field of a room
+    changes slowly). A disturbed sample leaves it alone. If the norm stays at a new value (within ``tol`` of a
+    candidate that follows it) for ``new_time`` seconds, the candidate becomes the reference: the first sample may
+    have been disturbed, or the sensor moved to another place. This is the field-norm half of VQF's magnetic
+    disturbance detection (Laidig & Seel 2023, §4.3: norm and dip against a reference, a candidate accepted after
+    a while; written here from the paper); the dip half needs the attitude, so the filter does it
+    (:func:`fusionlab.dcm.run_ahrs`). Defaults: VQF's published 10 %, 20 s and 20 s, not fitted here.
+
+    Parameters
+    ----------
+    mag : (N, 3) array, any unit; fs : Hz; tol : relative norm tolerance; tau : s; new_time : s
+    Returns
+    -------
+    ref : (N,) array -- the reference after sample k, unit of ``mag``
+    undisturbed : (N,) bool -- sample k's norm within ``tol`` of the reference before it
+    """
+    mag = validate.samples(mag, "mag")
+    fs = validate.sample_rate(fs)
+    tol = validate.positive(tol, "tol")
+    a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))
+    n_new = validate.positive(new_time, "new_time") * fs
+    norm = np.linalg.norm(mag, axis=1).tolist()
+    ref = np.empty(len(norm))
+    ok = np.zeros(len(norm), dtype=bool)
+    r = cand = norm[0] if norm else 1.0
+    if r <= 0:
+        raise ValueError("mag must not start with a zero vector: the field strength is unknown")
+    run = 0
+    for k, b in enumerate(norm):
+        if abs(b - r) < tol * r:                       # undisturbed: follow slowly
+            ok[k] = True
+            r += a * (b - r)
+            cand, run = r, 0
+        else:                                          # disturbed: leave r alone, watch for a new steady field
+            if abs(b - cand) < tol * cand:
+                cand += a * (b - cand)
+                run += 1
+                if run >= n_new:
+                    r, run = cand, 0
+            else:
+                cand, run = b, 0
+        ref[k] = r
+    return ref, ok

@@ -1,0 +1,154 @@
+"""The steps beyond the seeds that let the DCM AHRS run on real hand-held data, each on synthetic data that
+isolates it: rest detection and the gyro bias measured at rest, the running field strength and the dip test that
+reject a magnet, and the accelerometer low-passed in an almost inertial frame (ideas of VQF, Laidig & Seel 2023,
+written from the paper), and the readable per-step forms against the fast paths."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fusionlab import dcm, rotations, sensors
+
+FS = 100.0
+C_TILT = rotations.euler_to_dcm(np.radians([15.0, -10.0, 40.0]))
+FIELD_NED = 48.0 * dcm.mag_reference(np.radians(66.0))                   # µT, Siegen-like field
+
+
+def _static(seconds, bias_dps=(0.0, 0.0, 0.0), seed=0, C=C_TILT):
+    """A still sensor: gyro = bias + 0.01 °/s noise, accelerometer 0.02 m/s² noise, magnetometer 0.2 µT noise."""
+    rng = np.random.default_rng(seed)
+    n = int(seconds * FS)
+    gyr = np.radians(np.asarray(bias_dps)) + np.radians(0.01) * rng.standard_normal((n, 3))
+    acc = sensors.specific_force(C) + 0.02 * rng.standard_normal((n, 3))
+    mag = C.T @ FIELD_NED + 0.2 * rng.standard_normal((n, 3))
+    return gyr, acc, mag
+
+
+def _ahrs(gyr, acc, mag, tuning, fs=FS):
+    h = None if mag is None else mag / sensors.field_reference(mag, fs)[0][:, None]
+    return dcm.run_ahrs(gyr, dcm.accel_to_seed004(acc), h, fs, tuning=tuning, init_seconds=0.0)
+
+
+# --- causal helpers ------------------------------------------------------------------------------------------------
+
+
+def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_its_readable_form():
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal((3000, 3))
+    a = 1 - np.exp(-1 / (FS * 0.5))
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(1, len(x)):
+        y[k] = y[k - 1] + a * (x[k] - y[k - 1])
+    assert np.max(np.abs(sensors.lowpass(x, FS, 0.5) - y)) < 1e-12
+    gyr, acc, _ = _static(20.0, (0.3, -0.2, 0.4))
+    gyr[800:1200] += np.radians(30.0) * np.sin(np.arange(400) / 20.0)[:, None]     # 4 s of motion
+    rest, lp = sensors.rest_detect(gyr, acc, FS)
+    det = sensors.RestDetector(FS)
+    steps = [det.update(g, f) for g, f in zip(gyr, acc)]
+    assert np.array_equal(rest, [r for r, _ in steps])
+    assert np.max(np.abs(lp - np.array([v for _, v in steps]))) < 1e-12
+
+
+def test_rest_is_found_after_min_time_of_quiet_and_never_during_motion():
+    gyr, acc, _ = _static(30.0, (0.3, -0.2, 0.4))
+    move = slice(1000, 1800)                                                       # 10-18 s: turning
+    gyr[move] += np.radians(40.0) * np.sin(np.arange(800) / 15.0)[:, None]
+    rest, lp = sensors.rest_detect(gyr, acc, FS)
+    assert not rest[:149].any() and rest[150:1000].all()                          # 1.5 s of quiet first
+    assert not rest[1001:1800].any()                                              # (sin 0 = 0 at 1000)
+    back = np.flatnonzero(rest[1800:])[0] / FS                                    # quiet again after the motion
+    assert 1.5 <= back < 4.0
+    assert np.max(np.abs(np.degrees(lp[rest]) - [0.3, -0.2, 0.4])) < 0.05        # at rest the low-pass is the bias
+
+
+def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_accelerometer_cannot_see():
+    bias = np.array([0.3, -0.2, 0.4])
+    gyr, acc, _ = _static(60.0, bias)
+    with_rest = _ahrs(gyr, acc, None, dcm.HANDHELD)
+    without = _ahrs(gyr, acc, None, replace(dcm.HANDHELD, bias_sigma_rest=None))
+    err = lambda out: C_TILT @ (np.degrees(out["bias"][-1]) - bias)               # bias error in N, E, D, °/s
+    assert np.all(np.abs(err(with_rest)) < 0.01), err(with_rest)
+    assert abs(err(without)[2]) > 0.2 and np.all(np.abs(err(without)[:2]) < 0.02), err(without)
+
+
+# --- the magnetometer: a magnet's window is detected and ignored --------------------------------------------------
+
+
+def test_field_reference_flags_a_magnet_window_keeps_its_value_and_accepts_a_lasting_new_field():
+    _, _, mag = _static(120.0)
+    mag[2000:3500] += [25.0, -10.0, 8.0]                                           # a magnet from 20 s to 35 s
+    ref, ok = sensors.field_reference(mag, FS)
+    assert not ok[2000:3500].any() and ok[3600:5000].all()
+    assert np.max(np.abs(ref[2000:3500] / 48.0 - 1)) < 0.01                       # the reference did not follow
+    mag[6000:] *= 1.3                                                              # moved: a new field, 30 % stronger
+    ref, ok = sensors.field_reference(mag, FS)
+    assert abs(ref[6000 + 1990] / 48.0 - 1) < 0.02                                # not yet after 19.9 s
+    assert abs(ref[6000 + 2010] / (1.3 * 48.0) - 1) < 0.02                        # accepted after 20 s
+
+
+def _turned_field(seconds, window, angle_deg):
+    """Still sensor; during ``window`` the field turns by ``angle_deg`` about east (dip changes, |h| does not)."""
+    gyr, acc, mag = _static(seconds, seed=3)
+    R = rotations.euler_to_dcm([0.0, np.radians(angle_deg), 0.0])                # about the east (y) axis
+    mag[window] = (C_TILT.T @ R @ FIELD_NED) + 0.2 * np.random.default_rng(9).standard_normal((len(mag[window]), 3))
+    return gyr, acc, mag
+
+
+def test_the_dip_test_ignores_a_field_that_turns_while_keeping_its_strength():
+    window = slice(3000, 4500)                                                     # 30-45 s
+    gyr, acc, mag = _turned_field(60.0, window, 25.0)
+    err = {}
+    for label, tu in (("dip", dcm.HANDHELD), ("norm only", replace(dcm.HANDHELD, dip_tol=None))):
+        out = _ahrs(gyr, acc, mag, tu)
+        err[label] = np.degrees(rotations.quat_angle_between(out["q"], rotations.dcm_to_quat(C_TILT)))
+        if label == "dip":
+            assert not out["mag_trusted"][window][100:].any() and out["mag_trusted"][5000:].all()
+    assert err["dip"][window].max() < 0.5, err["dip"][window].max()
+    assert err["norm only"][window].max() > 5.0, err["norm only"][window].max()
+
+
+# --- the accelerometer: a hand's back-and-forth acceleration averages out -----------------------------------------
+
+
+def test_the_accelerometer_low_passed_in_an_almost_inertial_frame_averages_a_translation_out():
+    rng = np.random.default_rng(7)
+    n = int(60 * FS)
+    t = np.arange(n) / FS
+    a_nav = np.zeros((n, 3))
+    a_nav[1000:, 0] = 3.0 * np.sin(2 * np.pi * 0.5 * t[1000:])                    # ±3 m/s² north, 0.5 Hz, from 10 s
+    acc = sensors.specific_force(C_TILT, a_nav) + 0.02 * rng.standard_normal((n, 3))
+    gyr = np.radians(0.01) * rng.standard_normal((n, 3))
+    tilt = {}
+    for label, tau in (("low-passed", dcm.HANDHELD.acc_lp_tau), ("raw", None)):
+        out = _ahrs(gyr, acc, None, replace(dcm.HANDHELD, acc_lp_tau=tau))
+        c3 = out["C_bn"][:, 2]
+        tilt[label] = np.degrees(np.arccos(np.clip(c3 @ C_TILT[2], -1, 1)))[2000:]   # angle of the estimated down
+    rms = {k: np.sqrt(np.mean(v ** 2)) for k, v in tilt.items()}
+    assert rms["low-passed"] < 0.6 and rms["raw"] > 2.5 * rms["low-passed"], rms       # 0.50° against 1.56°
+
+
+# --- the readable filter and the fast path agree, with every step on ---------------------------------------------
+
+
+@pytest.mark.parametrize("with_mag", [True, False])
+def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag):
+    gyr, acc, mag = _turned_field(30.0, slice(1500, 2200), 25.0)
+    gyr = gyr + np.radians(20.0) * np.sin(np.arange(len(gyr)) / 50.0)[:, None] * (np.arange(len(gyr)) > 800)[:, None]
+    acc_b = dcm.accel_to_seed004(acc)
+    h = mag / sensors.field_reference(mag, FS)[0][:, None] if with_mag else None
+    fast = dcm.run_ahrs(gyr, acc_b, h, FS, tuning=dcm.HANDHELD, init_seconds=0.0)
+    C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[0], h[0] if with_mag else [1.0, 0.0, 0.0])
+                                * ([1.0, 1.0, 1.0] if with_mag else [1.0, 1.0, 0.0]))
+    incl = float(dcm.inclination_from(acc_b[0], h[0])) if with_mag else 0.0
+    f = dcm.DcmAhrs(C0, incl, 1 / FS, tuning=dcm.HANDHELD, g=dcm.G)
+    xs = []
+    for k in range(len(gyr)):
+        f.step(gyr[k], acc_b[k], h[k] if with_mag else None)
+        xs.append(f.x.copy())
+    xs = np.array(xs)
+    assert np.max(np.abs(xs[:, 0:3] - fast["c1"])) < 1e-9
+    assert np.max(np.abs(xs[:, 3:6] - fast["c3"])) < 1e-9
+    assert np.max(np.abs(xs[-1, 6:9] - fast["bias"][-1])) < 1e-10
