@@ -359,7 +359,11 @@ def trusted_mask(deviation, tol, hold):
     hold = int(hold)
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
-    return sensors.held_true(np.abs(d) < tol, hold)
+    ok = np.abs(d) < tol
+    # run length of consecutive True ending at each sample
+    idx = np.arange(len(ok))
+    last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))
+    return ok & (idx - last_bad >= hold)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -397,19 +401,21 @@ class AhrsTuning:
     #: initial standard deviations: DCM elements, gyro bias (rad/s)
     sigma_c0: float = 0.05
     sigma_b0: float = np.radians(5.0)
-    #: **rest: the gyro bias measured directly** (not the thesis'; the idea is VQF's, Laidig & Seel 2023, §4.4):
-    #: while :func:`fusionlab.sensors.rest_detect` finds the sensor at rest, the low-passed gyro is a measurement of
-    #: the bias, ``z = ω_lp``, ``H = [0, 0, I]``, with this standard deviation (rad/s). None: off (the thesis).
-    #: All three bias axes become observable at rest, heading's too, which the accelerometer never sees.
+    #: **rest: the gyro bias measured directly** (not the thesis'; the idea is VQF's rest bias estimation, Laidig &
+    #: Seel 2023): while :func:`fusionlab.sensors.rest_detect` finds the sensor at rest, the low-passed gyro is a
+    #: measurement of the bias, ``z = ω_lp``, ``H = [0, 0, I]``, with this standard deviation (rad/s). None: off
+    #: (the thesis). All three bias axes become observable at rest, heading's too, which the accelerometer never
+    #: sees.
     bias_sigma_rest: float | None = None
-    #: **magnetic disturbance by the dip angle** (not the thesis'; VQF §4.3): the magnetometer is trusted only
-    #: while, besides ``||h| - 1| < mag_tol``, its dip ``asin(ĉ3·h/|h|)`` (with the predicted ``ĉ3``) is within
-    #: ``dip_tol`` (rad) of a running reference, both held for ``hold`` seconds. The reference follows the trusted
-    #: dip with time constant ``dip_tau`` (s) and sets ``H_m`` (the thesis fixes the inclination once, at the
-    #: start). A magnet that keeps ``|h|`` near 1 but turns the field is caught by its dip. None: off (the thesis).
+    #: **magnetic disturbance by the dip angle** (not the thesis'; VQF's magnetic disturbance detection): the
+    #: magnetometer is trusted only while, besides ``||h| - 1| < mag_tol``, its dip ``asin(ĉ3·h/|h|)`` (with the
+    #: predicted ``ĉ3``) is within ``dip_tol`` (rad) of a running reference, both held for ``hold`` seconds. The
+    #: reference follows the trusted dip with time constant ``dip_tau`` (s) and sets ``H_m`` (the thesis fixes the
+    #: inclination once, at the start). A magnet that keeps ``|h|`` near 1 but turns the field is caught by its
+    #: dip. None: off (the thesis).
     dip_tol: float | None = None
     dip_tau: float = 20.0
-    #: **the accelerometer low-passed in an almost inertial frame** (not the thesis'; the idea is VQF's, §4.2):
+    #: **the accelerometer low-passed in an almost inertial frame** (not the thesis'; the idea is VQF's):
     #: each accelerometer reading is turned into the frame of a gyro-only strapdown attitude (bias-corrected with the
     #: filter's estimate), low-passed there with this time constant (s), and turned back into the body frame; the
     #: update then sees gravity with the hand's accelerations averaged out (a hand cannot keep accelerating one way:
@@ -510,10 +516,10 @@ class DcmAhrs:
         mag_b : (3,) array or None -- magnetometer normalised to the local field strength (``|h| ≈ 1``); None: no
             magnetometer (the 6D filter of :func:`run_ahrs`)
         acc_trusted, mag_trusted : bool or None -- override the built-in hold-time test
-        bias_at_rest : (3,) array, rad/s, or None -- the low-passed gyro when the sensor is at rest (ours, VQF
-            §4.4; used when ``tuning.bias_sigma_rest`` is set)
+        bias_at_rest : (3,) array, rad/s, or None -- the low-passed gyro when the sensor is at rest (ours, after
+            VQF; used when ``tuning.bias_sigma_rest`` is set)
         acc_lp : (3,) array, m/s², or None -- the accelerometer low-passed in the almost inertial frame (ours,
-            VQF §4.2; ``tuning.acc_lp_tau``): the measurement then, while ``acc_b`` still sets the trust test
+            after VQF; ``tuning.acc_lp_tau``): the measurement then, while ``acc_b`` still sets the trust test
         """
         t = self.tuning
         a = np.asarray(acc_b, float)
@@ -526,7 +532,7 @@ class DcmAhrs:
             h = np.asarray(mag_b, float)
             self.mag_run = self.mag_run + 1 if abs(np.linalg.norm(h) - 1.0) < t.mag_tol else 0
             mag_ok = self.mag_run >= self.hold
-            if t.dip_tol is not None:                                                # ours, VQF §4.3
+            if t.dip_tol is not None:                                                # ours, after VQF
                 dip = _m.asin(max(-1.0, min(1.0, (self.c3 @ h) / (np.linalg.norm(self.c3) * np.linalg.norm(h)))))
                 self.dip_run = self.dip_run + 1 if abs(dip - self.inclination) < t.dip_tol else 0
                 mag_ok = mag_ok and self.dip_run >= self.hold
@@ -547,7 +553,7 @@ class DcmAhrs:
         self.x = self.x + K @ innov
         P = self.P - K @ H @ self.P
         self.P = 0.5 * (P + P.T)
-        if bias_at_rest is not None and t.bias_sigma_rest is not None:              # ours, VQF §4.4
+        if bias_at_rest is not None and t.bias_sigma_rest is not None:              # ours, after VQF
             S = self.P[6:9, 6:9] + t.bias_sigma_rest ** 2 * np.eye(3)                 # H = [0, 0, I]
             K = np.linalg.solve(S, self.P[6:9]).T
             self.x = self.x + K @ (np.asarray(bias_at_rest, float) - self.bias)
@@ -568,7 +574,7 @@ class DcmAhrs:
         acc_lp = None
         if self.tuning.acc_lp_tau is not None and np.trace(self.P[6:9, 6:9]) > self.tuning.acc_lp_bias_gate ** 2:
             self.C_g, self.v_lp, self.n_g = self.C_bn, None, 0          # bias unknown: restart from the estimate
-        elif self.tuning.acc_lp_tau is not None:       # ours, VQF §4.2: low-pass in an almost inertial frame
+        elif self.tuning.acc_lp_tau is not None:       # ours, after VQF: low-pass in an almost inertial frame
             v = self.C_g @ A @ np.asarray(acc_b, float)                  # the reading in the strapdown frame
             self.C_g = self.C_g @ A - self.dt * (self.C_g @ _skew(self.bias))   # gyro only, bias-corrected
             self.n_g += 1
@@ -672,11 +678,11 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         H[3:6] = 0.0
         Rm = np.ones(nb)
     Rd = np.repeat(np.stack([Ra, Rm, Rc], 1), 3, axis=1)                   # (nb, 9) diagonal of R (eq 6.21)
-    dip_on = use_mag and t.dip_tol is not None                             # ours, VQF §4.3: see AhrsTuning
+    dip_on = use_mag and t.dip_tol is not None                             # ours, after VQF: see AhrsTuning
     dip_ref, dip_run, hold_u = float(inclination), 0, max(1, int(round(t.hold * fs / M)))
     a_dip = 1.0 - _m.exp(-M * dt / t.dip_tau)
     mag_upd = mag_ok[last].copy()
-    rest_on = t.bias_sigma_rest is not None                                # ours, VQF §4.4: see AhrsTuning
+    rest_on = t.bias_sigma_rest is not None                                # ours, after VQF: see AhrsTuning
     if rest_on:
         rest, gyr_lp = sensors.rest_detect(gyr, acc_b, fs)
         rest_u, zb, Rb = rest[last].tolist(), gyr_lp[last], t.bias_sigma_rest ** 2 * np.eye(3)
@@ -692,7 +698,7 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     xs[0] = x
     Pd = np.empty((nb, 9))
     F = np.eye(9)
-    lp_on = t.acc_lp_tau is not None                                       # ours, VQF §4.2: see AhrsTuning
+    lp_on = t.acc_lp_tau is not None                                       # ours, after VQF: see AhrsTuning
     if lp_on:
         # the block's readings turned to the body frame at the block's start (gyro increments), then averaged
         a_blk = np.einsum("jmab,jmb->ja", A_pre[:nb], acc_b[:nb * M].reshape(nb, M, 3)) / M

@@ -21,11 +21,12 @@ What is here, in the order of Lab 00:
    :func:`coriolis_force`, :func:`rotating_frame_acceleration`; printed form :func:`seed000_eq334_printed`), and the
    drift of an integrated gyro (:func:`gyro_measure`, :func:`integrate_rate`, :func:`integration_drift`).
 6. **Reading a real recording as it arrives** (not from a seed; the filters of :mod:`fusionlab.dcm` and
-   :mod:`fusionlab.freescale` use them): the causal windows :func:`trailing_max`, :func:`held_true` and
-   :func:`lowpass`; rest detection (:func:`rest_detect`) and a running reference of the geomagnetic field strength
+   :mod:`fusionlab.freescale` use them): the causal windows :func:`trailing_max` and :func:`lowpass`; rest
+   detection (:func:`rest_detect`, :class:`RestDetector`) and a running reference of the geomagnetic field strength
    that ignores disturbances (:func:`field_reference`), after the ideas of VQF (D. Laidig, T. Seel, "VQF: Highly
    accurate IMU orientation estimation with bias estimation and magnetic disturbance rejection", Information
-   Fusion 91, 2023, §4.3 and §4.4). Every one of them uses no sample after the one it answers for.
+   Fusion 91, 2023: its rest detection and magnetic disturbance detection). None of them uses a sample after the
+   one it answers for.
 
 Frames and units at this module's edge
 --------------------------------------
@@ -63,7 +64,7 @@ __all__ = [
     "coriolis_acceleration", "coriolis_force", "seed000_eq334_printed", "rotating_frame_acceleration",
     "gyro_measure", "integrate_rate", "integration_drift",
     # 6. causal helpers for real recordings
-    "trailing_max", "held_true", "lowpass", "rest_detect", "RestDetector", "field_reference",
+    "trailing_max", "lowpass", "rest_detect", "RestDetector", "field_reference",
 ]
 
 #: Standard gravity, m/s^2 (seed 001 uses 9.8; the labs say which they use).
@@ -1157,16 +1158,16 @@ def trailing_max(x, n):
     return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
 
 
-def held_true(ok, n):
+def _held_true(ok, n):
     """True where ``ok`` has held for at least ``n`` consecutive samples, the current one included (causal).
 
     Parameters
     ----------
     ok : (N,) bool array; n : int >= 1, samples
     """
-    ok = np.asarray(ok, dtype=bool)
-    if ok.ndim != 1:
-        raise ValueError(f"ok must have shape (N,); got {ok.shape}")
+    ok = np.asarray(ok)
+    if ok.dtype != bool or ok.ndim != 1:
+        raise ValueError(f"ok must be a boolean array of shape (N,); got {ok.dtype} of shape {ok.shape}")
     n = validate.count(n, "n", 1)
     idx = np.arange(len(ok))
     last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))          # the latest sample where ok failed
@@ -1184,14 +1185,14 @@ def lowpass(x, fs, tau):
 
     Parameters
     ----------
-    x : (N,) or (N, m) array; fs : Hz; tau : s, time constant
+    x : (N,) or (N, 3) array; fs : Hz; tau : s, time constant
     Returns
     -------
     array shaped like ``x``
     """
     x = validate.array(x, "x")
-    if x.ndim not in (1, 2) or len(x) == 0:
-        raise ValueError(f"x must have shape (N,) or (N, m) with N >= 1; got {x.shape}")
+    if x.ndim not in (1, 2) or len(x) == 0 or (x.ndim == 2 and x.shape[1] != 3):
+        raise ValueError(f"x must have shape (N,) or (N, 3) with N >= 1; got {x.shape}")
     a = 1.0 - np.exp(-1.0 / (validate.sample_rate(fs) * validate.positive(tau, "tau")))
     r = 1.0 - a
     size = max(1, int(np.log(1e3) / -np.log(r))) if r > 0 else 1
@@ -1210,7 +1211,7 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
                 bias_max=np.radians(2.0)):
     """Rest detection on a recording, causal; at rest the low-passed gyro *is* the gyro bias.
 
-    The idea is VQF's (Laidig & Seel 2023, §4.4 "rest detection"; written here from the paper, not from its code):
+    The idea is VQF's (Laidig & Seel 2023, its rest detection; written here from the paper, not from its code):
     low-pass the gyro and the accelerometer with time constant ``tau``; the sensor is *quiet* while every sample
     stays close to its low-passed value (``|ω - ω_lp| < gyr_tol``, ``|a - a_lp| < acc_tol``) and the low-passed
     rate is small enough to be a bias (``|ω_lp| < bias_max``: a steady turn is not rest); it is *at rest* once it
@@ -1226,15 +1227,17 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
     rest : (N,) bool -- at rest at sample k (from samples <= k)
     gyr_lp : (N, 3) rad/s -- the low-passed gyro (the bias estimate where ``rest``)
     """
-    gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
+    gyr = validate.gyro_rad(gyr, "gyr")
+    acc = validate.accel_ms2(acc, "acc")
     validate.same_length(gyr=gyr, acc=acc)
+    if len(gyr) == 0:
+        raise ValueError("gyr, acc must hold at least one sample; got 0")
     fs = validate.sample_rate(fs)
     gyr_lp, acc_lp = lowpass(gyr, fs, tau), lowpass(acc, fs, tau)
     quiet = ((np.linalg.norm(gyr - gyr_lp, axis=1) < validate.positive(gyr_tol, "gyr_tol"))
              & (np.linalg.norm(acc - acc_lp, axis=1) < validate.positive(acc_tol, "acc_tol"))
              & (np.linalg.norm(gyr_lp, axis=1) < validate.positive(bias_max, "bias_max")))
-    return held_true(quiet, max(1, int(round(validate.positive(min_time, "min_time") * fs)))), gyr_lp
+    return _held_true(quiet, max(1, int(round(validate.positive(min_time, "min_time") * fs)))), gyr_lp
 
 
 class RestDetector:
@@ -1247,7 +1250,8 @@ class RestDetector:
     def __init__(self, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
         fs = validate.sample_rate(fs)
         self.a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))     # the step of :func:`lowpass`
-        self.gyr_tol, self.acc_tol, self.bias_max = gyr_tol, acc_tol, bias_max
+        self.gyr_tol, self.acc_tol = validate.positive(gyr_tol, "gyr_tol"), validate.positive(acc_tol, "acc_tol")
+        self.bias_max = validate.positive(bias_max, "bias_max")
         self.n_min = max(1, int(round(validate.positive(min_time, "min_time") * fs)))
         self.gyr_lp = self.acc_lp = None
         self.quiet_run = 0                                   # consecutive quiet samples
@@ -1274,7 +1278,7 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
     changes slowly). A disturbed sample leaves it alone. If the norm stays at a new value (within ``tol`` of a
     candidate that follows it) for ``new_time`` seconds, the candidate becomes the reference: the first sample may
     have been disturbed, or the sensor moved to another place. This is the field-norm half of VQF's magnetic
-    disturbance detection (Laidig & Seel 2023, §4.3: norm and dip against a reference, a candidate accepted after
+    disturbance detection (Laidig & Seel 2023: norm and dip against a reference, a candidate accepted after
     a while; written here from the paper); the dip half needs the attitude, so the filter does it
     (:func:`fusionlab.dcm.run_ahrs`). Defaults: VQF's published 10 %, 20 s and 20 s, not fitted here.
 
@@ -1287,6 +1291,8 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
     undisturbed : (N,) bool -- sample k's norm within ``tol`` of the reference before it
     """
     mag = validate.samples(mag, "mag")
+    if len(mag) == 0:
+        raise ValueError("mag must hold at least one sample; got 0")
     fs = validate.sample_rate(fs)
     tol = validate.positive(tol, "tol")
     a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))
@@ -1294,7 +1300,7 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
     norm = np.linalg.norm(mag, axis=1).tolist()
     ref = np.empty(len(norm))
     ok = np.zeros(len(norm), dtype=bool)
-    r = cand = norm[0] if norm else 1.0
+    r = cand = norm[0]
     if r <= 0:
         raise ValueError("mag must not start with a zero vector: the field strength is unknown")
     run = 0
