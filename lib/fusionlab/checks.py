@@ -8,16 +8,55 @@ Notebooks call these in the visible test cell right after an exercise; the hidde
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from . import datasets, rotations
 
-__all__ = ["Feedback", "friendly_errors", "check_euler_to_dcm", "check_close", "check_renormalize", "check_rodrigues",
-           "check_sequence_angles", "check_lock_roll", "diagnose_dcm", "check_body_gravity"]
+__all__ = ["Feedback", "friendly_errors", "describe_difference", "check_euler_to_dcm", "check_close",
+           "check_renormalize", "check_rodrigues", "check_sequence_angles", "check_lock_roll", "diagnose_dcm",
+           "check_body_gravity"]
 
 
 class Feedback(AssertionError):
-    """A failed check, with a message meant for the student."""
+    """A failed check, with a message meant for the student.
+
+    IPython shows it as one short box -- the message and its numbers, no traceback through this library -- by
+    calling ``_render_traceback_``. The full traceback stays one step away: ``%tb`` in the next cell shows it (every
+    rendering after the first one is the full traceback).
+    """
+
+    def _render_traceback_(self):
+        if getattr(self, "_shown", False):             # %tb asks again: the curious get the whole traceback
+            return _full_traceback(self)
+        self._shown = True
+        return _box("✗ " + str(self), "(%tb in a new cell shows where the check stopped)")
+
+
+_RED, _DIM, _END = "\x1b[1;31m", "\x1b[2m", "\x1b[0m"
+
+
+def _box(message, footnote=None):
+    """The lines IPython shows for a student-facing error: the message in bold red, an optional dim footnote."""
+    lines = [_RED + line + _END for line in str(message).splitlines() or [""]]
+    return lines + ([_DIM + footnote + _END] if footnote else [])
+
+
+def _full_traceback(exc):
+    """The usual IPython traceback of ``exc`` (plain Python formatting outside IPython)."""
+    ip = _ipython()
+    if ip is not None:
+        return ip.InteractiveTB.structured_traceback(type(exc), exc, exc.__traceback__)
+    import traceback
+    return traceback.format_exception(type(exc), exc, exc.__traceback__)
+
+
+def _ipython():
+    try:
+        return get_ipython()  # noqa: F821 (defined inside IPython only)
+    except NameError:
+        return None
 
 
 def _ok(msg):
@@ -32,12 +71,78 @@ def _answered(name, value):
     return value
 
 
+def _num(x):
+    return f"{float(x):.4g}" if np.isfinite(x) else str(float(x))
+
+
+def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e-9):
+    """Where ``got`` differs from ``expected``, in words a student can act on; None when they agree.
+
+    Names the one row or column that is wrong when only one is, otherwise up to three entries with both values;
+    says so when the wrong entries only have their sign flipped, or the matrix is the transpose. Indices are
+    Python's (from 0), as the student writes them: "entry [1, 0] of P_post is 0.3 (expected 0.25)".
+    """
+    got, exp = np.asarray(got, dtype=float), np.asarray(expected, dtype=float)
+    if got.shape != exp.shape:
+        return f"{name} has shape {got.shape}; expected {exp.shape}"
+    bad = ~np.isclose(got, exp, atol=atol, rtol=rtol)
+    if not bad.any():
+        return None
+    if got.ndim == 0:
+        return f"{name} is {_num(got)} (expected {_num(exp)})"
+    if got.ndim == 2 and got.shape[0] == got.shape[1] and got.shape[0] > 1 and np.allclose(got, exp.T, atol=atol,
+                                                                                            rtol=rtol):
+        return f"{name} is the transpose of the expected matrix"
+    flipped = bool(np.allclose(got[bad], -exp[bad], atol=atol, rtol=rtol))
+    sign = " has the wrong sign" if flipped else " is wrong"
+
+    def vec(v):
+        return "[" + ", ".join(_num(x) for x in v) + "]"
+
+    if got.ndim == 2 and got.shape[1] > 1:
+        rows, cols = np.flatnonzero(bad.any(axis=1)), np.flatnonzero(bad.any(axis=0))
+        if len(rows) == 1 and len(cols) > 1:
+            r = rows[0]
+            return f"row [{r}, :] of {name}{sign}: {vec(got[r])} (expected {vec(exp[r])}); the other rows are right"
+        if len(cols) == 1 and len(rows) > 1:
+            c = cols[0]
+            return (f"column [:, {c}] of {name}{sign}: {vec(got[:, c])} (expected {vec(exp[:, c])}); the other "
+                    f"columns are right")
+    idx = list(zip(*np.nonzero(bad)))
+    where = [f"[{', '.join(str(int(i)) for i in ix)}]" for ix in idx]
+    if len(idx) == 1:
+        return f"entry {where[0]} of {name}{sign}: {_num(got[idx[0]])} (expected {_num(exp[idx[0]])})"
+    shown = "; ".join(f"{w} is {_num(got[ix])} (expected {_num(exp[ix])})" for w, ix in zip(where[:3], idx[:3]))
+    return (f"{len(idx)} of the {got.size} entries of {name} {'have the wrong sign' if flipped else 'differ'}: "
+            f"{shown}{'; ...' if len(idx) > 3 else ''}")
+
+
+def _where(got, expected, name, **tol):
+    """:func:`describe_difference` for a result already known to be wrong (its largest error if no entry stands
+    out at the given tolerance)."""
+    return describe_difference(got, expected, name, **tol) or (
+        f"{name} differs by up to {np.max(np.abs(np.asarray(got, float) - np.asarray(expected, float))):.3g}")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Unfinished exercises and the NameErrors they cause downstream
+# ---------------------------------------------------------------------------------------------------------------
+# The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (nbgrader_config.py names the
+# exercise). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
+# NameError looks up the last cell that assigns the missing name, and if that cell stopped at an exercise, says
+# which one. Run All (whose cells are tagged raises-exception in the release) then reads as a to-do list.
+
 _HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
          "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
          "cell again.")
+_STUB = re.compile(r"\b(exercise|question)\s+([0-9]+[a-z]?)\s+not attempted yet")
+_stopped = {}                            # execution count of a cell that stopped -> the exercises it waits for
 
 
-_DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
+def _unfinished(evalue):
+    """``'exercise 4'`` when ``evalue`` is a release stub's NotImplementedError, else None."""
+    m = _STUB.search(str(evalue))
+    return f"{m.group(1)} {m.group(2)}" if m else None
 
 
 def _assigned_names(source):
@@ -55,40 +160,87 @@ def _assigned_names(source):
     return names
 
 
+_DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
+
+
 def _data_hint(missing):
     return ("\n→ This name is made by an earlier cell that could not run because data is missing, not because of "
             "your code:\n" + "\n".join(missing.values()) + "\nOnce the data is there, run the notebook again from "
             "the top.")
 
 
+def _waits_for(shell, name, count):
+    """The exercises the last cell before ``count`` that assigns ``name`` stopped at (empty if none is known)."""
+    history = shell.user_ns.get("In", [])
+    for k in range(min(count, len(history)) - 1, 0, -1):
+        if name in _assigned_names(shell.transform_cell(history[k]) if "%" in history[k] else history[k]):
+            return _stopped.get(k, [])
+    return []
+
+
+def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
+    """IPython handler for NameError, NotImplementedError and DataMissing (see the section comment)."""
+    count = shell.execution_count - 1                         # IPython counts the running cell before it runs
+    hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
+    if issubclass(etype, datasets.DataMissing):               # its own short message (_render_traceback_)
+        _DATA_NAMES.update(_assigned_names(hist[-1]))
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    if issubclass(etype, NameError):
+        name = getattr(evalue, "name", None) or (re.findall(r"'([^']+)'", str(evalue)) or [""])[0]
+        missing = datasets.missing_trials()
+        if missing and name in _DATA_NAMES:                   # the name waits for data, not for an exercise
+            _DATA_NAMES.update(_assigned_names(hist[-1]))
+            if "data is missing" not in str(evalue):
+                evalue = etype(f"{evalue}{_data_hint(missing)}")
+            shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+            return None
+        waits = _waits_for(shell, name, count) if name else []
+        if waits:
+            _stopped[count] = waits
+        if _HINT.split("—")[0] not in str(evalue):
+            todo = " and ".join(waits)
+            hint = (_HINT if not waits else
+                    _HINT.split("—")[0] + f"— it stopped because {todo} is not finished yet. Finish {todo} (its "
+                    f"answer cell above), run it, then run this cell again.")
+            evalue = etype(f"{evalue}{hint}")
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    what = _unfinished(evalue)
+    if what is None:                                          # a NotImplementedError of the student's own
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    _stopped[count] = [what]
+    last = tb
+    while last.tb_next is not None:
+        last = last.tb_next
+    here = last.tb_frame.f_code.co_name == "<module>"           # the stub line of this very cell
+    msg = (f"✗ {what.capitalize()} is not done yet: replace the line `raise NotImplementedError(...)` in this cell "
+           f"with your answer, then run the cell again." if here else
+           f"✗ This cell uses your answer to {what}, which is not written yet: finish {what} (above), run it, "
+           f"then run this cell again.")
+    shell._get_exc_info((etype, evalue, tb))                  # so that %tb shows the whole traceback
+    shell._showtraceback(etype, evalue, _box(msg, "(%tb in a new cell shows the full traceback)"))
+    return None
+
+
 def friendly_errors():
-    """In a notebook, add a hint to ``NameError``: in a lab it nearly always means an unfinished exercise above --
+    """In a notebook, explain unfinished exercises: a stub's NotImplementedError becomes one line saying which
+    exercise to finish, and a ``NameError`` says which earlier cell (and exercise) should have made the name --
     unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
 
     A cell that raises :class:`fusionlab.datasets.DataMissing` has the names it would have made remembered; a
     ``NameError`` on one of them says that data is missing and how to get it (and passes the remembering on to the
-    cell it stops, so the knock-on cells say it too). Runs when this module is imported (every lab imports it);
-    calling it again is harmless. Does nothing outside IPython.
+    cell it stops, so the knock-on cells say it too).
+
+    Runs when this module is imported (every lab imports it); calling it again changes nothing. Does nothing
+    outside IPython.
     """
-    try:
-        ip = get_ipython()  # noqa: F821 (defined inside IPython only)
-    except NameError:
+    ip = _ipython()
+    if ip is None or getattr(ip, "_fusionlab_custom_tb", None) is ip.CustomTB:
         return
-
-    def handler(shell, etype, evalue, tb, tb_offset=None):
-        hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
-        missing = datasets.missing_trials()
-        if issubclass(etype, datasets.DataMissing):
-            _DATA_NAMES.update(_assigned_names(hist[-1]))
-        elif missing and getattr(evalue, "name", None) in _DATA_NAMES:
-            _DATA_NAMES.update(_assigned_names(hist[-1]))
-            if "data is missing" not in str(evalue):
-                evalue = etype(f"{evalue}{_data_hint(missing)}")
-        elif _HINT not in str(evalue):
-            evalue = etype(f"{evalue}{_HINT}")
-        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
-
-    ip.set_custom_exc((NameError, datasets.DataMissing), handler)
+    ip.set_custom_exc((NameError, NotImplementedError, datasets.DataMissing), _show_unfinished)
+    ip._fusionlab_custom_tb = ip.CustomTB
 
 
 friendly_errors()                        # every lab imports checks: its NameErrors then say what to do
@@ -133,7 +285,7 @@ def diagnose_dcm(C, euler, tol=1e-6):
         return "det(C) = -1: a reflection, not a rotation -- a sign is wrong in one elementary matrix (sin terms)."
     if not rotations.is_rotation(C, 1e-3):
         return "your matrix is not orthonormal (C @ C.T != I): check every entry of the elementary matrices."
-    return f"the matrix differs from C_bn by up to {np.max(np.abs(C - ref)):.3g}; compare entry by entry with eq 3.40."
+    return f"{_where(C, ref, 'your C_bn', atol=tol)}; compare it with eq 3.40."
 
 
 def check_euler_to_dcm(fn):
@@ -195,7 +347,7 @@ def check_rodrigues(fn):
         if not np.all(np.isfinite(A)):
             raise Feedback(f"σ = {sigma}: the result is not finite -- guard the 0/0 at σ → 0 with the series "
                            "sin σ/σ ≈ 1 - σ²/6, (1 - cos σ)/σ² ≈ 1/2 - σ²/24.")
-        raise Feedback(f"σ = {sigma}: A differs from the matrix exponential by {np.max(np.abs(A - ref)):.3g}.")
+        raise Feedback(f"σ = {sigma}: A is not the matrix exponential: {_where(A, ref, 'A')}.")
     _ok("the Rodrigues increment equals the matrix exponential, including σ → 0.")
 
 
@@ -360,6 +512,12 @@ def check_joseph(fn):
         guesses = [(I_KH @ P_, "this is the short form (I - KH)P: it equals the Joseph form only at the optimal "
                                "gain. Eq 4.17 is (I - KH) P (I - KH)ᵀ + K R Kᵀ and holds for any K."),
                    (I_KH @ P_ @ I_KH.T, "the measurement-noise term K R Kᵀ is missing."),
+                   (I_KH @ P_ @ I_KH.T - K_ @ R_ @ K_.T, "the K R Kᵀ term has the wrong sign: eq 4.17 adds it, "
+                                                         "(I - KH) P (I - KH)ᵀ + K R Kᵀ."),
+                   (I_KH @ P_ @ I_KH.T + K_ @ K_.T, "R is missing from the second term: it is K R Kᵀ."),
+                   (K_ @ R_ @ K_.T, "the first term (I - KH) P (I - KH)ᵀ is missing; only K R Kᵀ is there."),
+                   ((np.eye(len(P_)) + K_ @ H_) @ P_ @ (np.eye(len(P_)) + K_ @ H_).T + K_ @ R_ @ K_.T,
+                    "the sign inside the brackets: (I - KH), not (I + KH)."),
                    (I_KH @ P_ @ I_KH + K_ @ R_ @ K_.T, "the second (I - KH) needs a transpose: (I - KH)ᵀ."),
                    (I_KH.T @ P_ @ I_KH + K_ @ R_ @ K_.T, "the transpose is on the wrong factor: "
                                                          "(I - KH) P (I - KH)ᵀ, transpose on the right."),
@@ -372,9 +530,9 @@ def check_joseph(fn):
         msg = _first_match(out, [(c, m) for c, m in guesses if c is not None])
         kind = "the optimal gain" if _same(K_, _kalman.kalman_gain(P_, H_, R_)) else "a non-optimal gain"
         size = f"n = {len(P_)} states, m = {len(R_)} measurements"
-        raise Feedback(f"with {kind} ({size}): " + (msg or f"P_post differs from eq 4.17 by up to "
-                                                          f"{np.max(np.abs(out - ref)):.3g} -- does your code "
-                                                          "assume 2 states (np.eye(2))? Use np.eye(len(P))."))
+        raise Feedback(f"with {kind} ({size}): " + (msg or f"P_post is not eq 4.17: {_where(out, ref, 'P_post')} -- does "
+                                                          "your code assume 2 states (np.eye(2))? Use "
+                                                          "np.eye(len(P))."))
     _ok("Joseph form is right, for the optimal gain and for gains that are not optimal, with 1 to 4 states.")
 
 
@@ -776,7 +934,7 @@ def check_profile_matrix(fn):
     if np.allclose(B, np.einsum("ki,kj->ij", s, r), atol=1e-12):
         raise Feedback("the weights α_k are missing: B = Σ α_k s_k r_kᵀ.")
     if not np.allclose(B, ref, atol=1e-12):
-        raise Feedback(f"B differs from Σ α s rᵀ by up to {np.max(np.abs(B - ref)):.3g}.")
+        raise Feedback(f"B is not Σ α s rᵀ: {_where(B, ref, 'B', atol=1e-12)}.")
     s3, r3 = _unit_pairs(44, 3)
     a3 = np.array([0.2, 0.5, 0.3])
     _general_case(lambda: fn(s3, r3, a3), np.einsum("k,ki,kj->ij", a3, s3, r3), "three vector pairs",
@@ -810,7 +968,7 @@ def check_kappa(fn):
         z = np.sum(alpha[:, None] * np.cross(s, r), axis=0)
         if np.allclose(K[0, 1:], -z, atol=1e-12):
             raise Feedback("the first row has the wrong sign: z = Σ α (s × r), not r × s.")
-        raise Feedback(f"κ differs from the correct matrix by up to {np.max(np.abs(K - ref)):.3g}; compare with "
+        raise Feedback(f"κ is not right: {_where(K, ref, 'κ', atol=1e-12)}; compare with "
                        "the compact form [[σ, zᵀ], [z, B + Bᵀ - σI]].")
     s3, r3 = _unit_pairs(45, 3)
     a3 = np.array([0.2, 0.5, 0.3])
@@ -918,7 +1076,7 @@ def check_measurement_matrix(fn):
             raise Feedback("use α/2, not α: the quaternion vector is a half angle (eq 137).")
         if np.isclose(abs(C[0, 6]), dt / 2):
             raise Feedback("α = π δt / 180 (eq 140): the offset is in °/s and the quaternion error in radians.")
-        raise Feedback(f"C differs from eq 141 by up to {np.max(np.abs(C - ref)):.3g}: blocks [I3 0 -(α/2)I3 0], "
+        raise Feedback(f"C is not eq 141: {_where(C, ref, 'C', atol=1e-15)}. Blocks [I3 0 -(α/2)I3 0], "
                        "[0 I3 -(α/2)I3 0], [0 0 0 1].")
     _ok("C is the 7×10 matrix of eqs 137-139.")
 
@@ -942,8 +1100,7 @@ def check_process_noise(fn):
             raise Feedback("Q_δδ = δ_ε² + Q_wδ with Q_wδ = 20 deg² (eqs 157-158).")
         if not np.isclose(Q[6, 6], x[6] ** 2 + 0.5):
             raise Feedback("Q_bb = diag(b_ε²) + Q_wb I3 with Q_wb = 0.5 (°/s)² (eqs 155-156).")
-        raise Feedback(f"Q_w differs from eqs 142-159 by up to {np.max(np.abs(Q - ref)):.3g} (largest at "
-                       f"{np.unravel_index(np.argmax(np.abs(Q - ref)), Q.shape)}); Q_gg = diag(q_g²) + (α/2)²"
+        raise Feedback(f"Q_w is not eqs 142-159: {_where(Q, ref, 'Q_w', atol=1e-15)}. Q_gg = diag(q_g²) + (α/2)²"
                        "(diag(b_ε²) + (Q_vY + Q_wb) I3).")
     import dataclasses
     x5 = np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [0.7]])
@@ -971,8 +1128,8 @@ def check_measurement_noise(fn):
         if not np.isclose(Q[6, 6], ref[6, 6]):
             raise Feedback(f"Q_v(δ) should be (180/π)² (QvGQa + max(QvBQd, 7)/B²) = {ref[6, 6]:.5g} deg² (eq 164); "
                            f"got {Q[6, 6]:.5g}.")
-        raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v differs from eqs 162-164 by up to "
-                       f"{np.max(np.abs(Q - ref)):.3g}.")
+        raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v is not eqs 162-164: "
+                       f"{_where(Q, ref, 'Q_v', atol=1e-15)}.")
     _general_case(lambda: fn(0.5, 900.0, 0.04, B=45.0), fz.measurement_noise(0.5, 900.0, 0.04, B=45.0),
                   "a field of B = 45 µT (keyword B)", "Give your function the keyword B (default 50 µT) and use it "
                   "in QvBQd/B².", rtol=1e-9, atol=1e-15)
@@ -1249,7 +1406,7 @@ def check_quadratic_jacobian(fn):
             raise Feedback("∂(x₁²)/∂x₁ = 2x₁: the square rows need the factor 2.")
         if np.allclose(H, ref[:, ::-1]) or np.allclose(H[:3], ref[:3][:, ::-1]):
             raise Feedback("the columns are in the wrong order: column j is ∂h/∂x_j.")
-        raise Feedback(f"at x = {x} H differs from eq 3.29 by up to {np.max(np.abs(H - ref)):.3g}.")
+        raise Feedback(f"at x = {x} H is not eq 3.29: {_where(H, ref, 'H')}.")
     _ok("H = ∂h/∂x of the six quadratic terms (eq 3.29).")
 
 
@@ -1332,7 +1489,7 @@ def check_correlated_update(fn):
                            "the measurement is nonlinear (h(x) = ½Hx here).")
         if np.allclose(xp, rx, atol=1e-12):
             raise Feedback("x is right but P is not: P⁺ = P - K(HP + Mᵀ) (eq 3.33).")
-        raise Feedback(f"x differs from eqs 3.32-3.34 by up to {np.max(np.abs(xp - rx)):.3g} rad.")
+        raise Feedback(f"x is not eqs 3.32-3.34: {_where(xp, rx, 'x')} (rad).")
     _ok("your update matches filterpy's KalmanFilter.update_correlated (eqs 3.32-3.34).")
 
 
@@ -1611,7 +1768,7 @@ def check_dcm_measurement_matrices(fn_a, fn_m):
                            "states 4-6 (c3), not c1.")
         if _same(H[:, 3:6], np.eye(3)):
             raise Feedback("scale the identity by g: a_b = g c3 is in m/s², the state c3 is a unit vector.")
-        raise Feedback(f"H_a differs from [0₃, g I₃, 0₃] by up to {np.max(np.abs(H - ref)):.3g}.")
+        raise Feedback(f"H_a is not [0₃, g I₃, 0₃]: {_where(H, ref, 'H_a')}.")
     for deg in (66.0, -30.0):
         d = np.radians(deg)
         H = _call(fn_m, d, what="your H_m")
@@ -1628,8 +1785,8 @@ def check_dcm_measurement_matrices(fn_a, fn_m):
             raise Feedback("the inclination is passed in radians: use np.cos(inclination) directly.")
         if np.any(np.abs(H[:, 6:9]) > 0):
             raise Feedback("the magnetometer does not depend on the gyro bias: the last block is zero.")
-        raise Feedback(f"at δ = {deg:g}°, H_m differs from [cos δ I₃, sin δ I₃, 0₃] by up to "
-                       f"{np.max(np.abs(H - ref)):.3g}.")
+        raise Feedback(f"at δ = {deg:g}°, H_m is not [cos δ I₃, sin δ I₃, 0₃]: "
+                       f"{_where(H, ref, 'H_m')}.")
     _ok("H_a = [0, g I, 0] and H_m = [cos δ I, sin δ I, 0]: both measurements are linear in the DCM rows.")
 
 
@@ -1664,7 +1821,7 @@ def check_dcm_predict(fn):
             (no_bias, "the bias term -Δt [ĉ×] b_g is missing: the increment Ã comes from the biased gyro."),
             (degs, "gyr is already in rad/s: σ = gyr · dt, no np.radians."),
         ])
-        raise Feedback(msg or f"x_pred differs from F x̂ (eqs 6.11-6.12) by up to {np.max(np.abs(xp - x_ref)):.3g}; "
+        raise Feedback(msg or f"x_pred is not F x̂ (eqs 6.11-6.12): {_where(xp, x_ref, 'x_pred', atol=1e-12)}; "
                               "F = [[Ãᵀ, 0, -Δt[ĉ1×]], [0, Ãᵀ, -Δt[ĉ3×]], [0, 0, I]] with Ã = A(gyr·dt).")
     if not _same(Pp, P_ref, 1e-12):
         msg = _first_match(Pp, [
@@ -1672,7 +1829,7 @@ def check_dcm_predict(fn):
             (F.T @ P @ F + Q, "transposes swapped: P⁻ = F P Fᵀ + Q."),
             (F @ P @ F.T + Q / dt ** 2, "Q scales with Δt (N² Δt), not with 1/Δt: per-sample σ = N/√Δt, times Δt."),
         ])
-        raise Feedback(msg or f"P_pred differs by up to {np.max(np.abs(Pp - P_ref)):.3g}: DCM blocks of Q are "
+        raise Feedback(msg or f"P_pred is not F P Fᵀ + Q: {_where(Pp, P_ref, 'P_pred', atol=1e-12)}. DCM blocks of Q are "
                               "N² Δt [ĉi×][ĉj×]ᵀ, the bias block q_b² Δt I.")
     _ok("prediction matches eqs 6.11-6.13: x⁻ = F x̂ with the pseudo-linear bias term, P⁻ = F P Fᵀ + Q.")
 
@@ -1698,7 +1855,7 @@ def check_dynamic_jacobian(fn):
             raise Feedback("the first three measurements are α itself: ∂h/∂α = I₃ in rows 1-3.")
         if np.allclose(H[3:, :3], ref[3:, :3] / 2):
             raise Feedback("the square rows: ∂(ω_x²)/∂ω_x = 2ω_x.")
-        raise Feedback(f"H differs from eq 5.19 by up to {np.max(np.abs(H - ref)):.3g}: "
+        raise Feedback(f"H is not eq 5.19: {_where(H, ref, 'H', atol=1e-8)}. It is "
                        "[[0, I₃, I₃, 0], [H_q(ω), 0, 0, I₆]].")
     _ok("H of the augmented model (eq 5.19) is right.")
 
@@ -1790,7 +1947,7 @@ def check_ins_transition(fn):
                 hint = ("you multiplied column-wise; the state holds C row by row (c1, c2, c3), so v_i needs "
                         "c_i·ã: row 15+i has Δt ãᵀ in columns 3i..3i+2.")
             raise Feedback(f"the block {name} is wrong: {hint}")
-    raise Feedback(f"F differs from eqs 7.12-7.14 by up to {np.max(np.abs(F - ref)):.3g}.")
+    raise Feedback(f"F is not eqs 7.12-7.14: {_where(F, ref, 'F', atol=1e-12)}.")
 
 
 def check_sigma_points(fn):

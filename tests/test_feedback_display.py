@@ -1,0 +1,170 @@
+"""How a failed check and an unfinished exercise look to a student: one short box, no traceback into the library.
+
+The display is tested in a real kernel (nbclient runs one small notebook, as JupyterLab or nbgrader would), because
+only IPython calls ``_render_traceback_`` and the custom exception handler of ``fusionlab.checks``.
+"""
+from __future__ import annotations
+
+import re
+
+import nbclient
+import nbformat
+import numpy as np
+import pytest
+
+from fusionlab import checks, kalman
+
+ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+CELLS = {
+    "setup": "import numpy as np\nfrom fusionlab import checks",
+    "stub_fn": "def my_euler_to_dcm(roll, pitch, yaw):\n    # YOUR CODE HERE\n"
+               "    raise NotImplementedError('exercise 1 not attempted yet')",
+    "check_stub": "checks.check_euler_to_dcm(my_euler_to_dcm)",
+    "tb": "%tb",
+    "wrong": "checks.check_euler_to_dcm(lambda r, p, y: np.eye(3)[:, ::-1])",
+    "stub_cell": "before = 1\nraise NotImplementedError('exercise 2 not attempted yet')\nafter = 2",
+    "uses_stub": "C = my_euler_to_dcm(0.1, 0.2, 0.3)",
+    "uses_after": "twice = after * 2",
+    "uses_twice": "print(twice)",
+    "student_name_error": "def mine(r, p, y):\n    return np.eye(3) + undefined_thing\n"
+                          "checks.check_euler_to_dcm(mine)",
+    "student_type_error": "def mine2(r, p, y):\n    return len(r)\nchecks.check_euler_to_dcm(mine2)",
+    "own_not_implemented": "raise NotImplementedError('my own abstract method')",
+    "again": "checks.friendly_errors()\nprint(get_ipython().CustomTB is get_ipython()._fusionlab_custom_tb)",
+}
+
+
+@pytest.fixture(scope="module")
+def run():
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(src) for src in CELLS.values()])
+    nbclient.NotebookClient(nb, allow_errors=True, kernel_name="python3", timeout=120).execute()
+    out = {}
+    for name, cell in zip(CELLS, nb.cells):
+        [error] = [o for o in cell.outputs if o.output_type == "error"] or [None]
+        out[name] = {"error": error, "shown": ANSI.sub("", "\n".join(error.traceback)) if error else "",
+                     "stdout": "".join(o.text for o in cell.outputs if o.output_type == "stream")}
+    return out
+
+
+def test_a_failed_check_is_one_short_box_without_library_frames(run):
+    for name in ("check_stub", "wrong"):
+        shown = run[name]["shown"]
+        assert run[name]["error"].ename == "Feedback"
+        assert shown.startswith("✗ "), shown
+        assert "Traceback" not in shown and "checks.py" not in shown and "File " not in shown, shown
+        assert len(shown.splitlines()) == 2, shown                   # the message and the %tb footnote
+    assert "your function is not written yet" in run["check_stub"]["shown"]
+    assert "det(C) = -1: a reflection" in run["wrong"]["shown"]
+
+
+def test_percent_tb_shows_the_full_traceback_of_the_last_check(run):
+    shown = run["tb"]["shown"]
+    assert "Traceback" in shown and "checks.py" in shown and "check_euler_to_dcm" in shown, shown
+    assert "your function is not written yet" in shown
+
+
+def test_a_stub_in_its_own_cell_says_which_exercise_to_finish(run):
+    shown = run["stub_cell"]["shown"]
+    assert run["stub_cell"]["error"].ename == "NotImplementedError"
+    assert shown.startswith("✗ Exercise 2 is not done yet: replace the line `raise NotImplementedError(...)`"), shown
+    assert "Traceback" not in shown
+
+
+def test_a_cell_that_calls_an_unfinished_answer_names_the_exercise(run):
+    shown = run["uses_stub"]["shown"]
+    assert shown.startswith("✗ This cell uses your answer to exercise 1, which is not written yet"), shown
+    assert "Traceback" not in shown
+
+
+def test_a_name_missing_because_of_an_unfinished_exercise_names_it_through_a_chain_of_cells(run):
+    for name in ("uses_after", "uses_twice"):
+        err = run[name]["error"]
+        assert err.ename == "NameError"
+        assert "This name is made by an earlier cell" in err.evalue
+        assert "it stopped because exercise 2 is not finished yet" in err.evalue, err.evalue
+
+
+def test_a_students_own_errors_keep_their_traceback(run):
+    shown = run["student_name_error"]["shown"]
+    assert run["student_name_error"]["error"].ename == "NameError"
+    assert "Traceback" in shown and "undefined_thing" in shown and "return np.eye(3) + undefined_thing" in shown
+    shown = run["student_type_error"]["shown"]
+    assert run["student_type_error"]["error"].ename == "TypeError"
+    assert "Traceback" in shown and "return len(r)" in shown and "has no len()" in shown
+    shown = run["own_not_implemented"]["shown"]
+    assert "Traceback" in shown and "my own abstract method" in shown and "✗" not in shown
+
+
+def test_friendly_errors_twice_keeps_the_same_handler(run):
+    assert run["again"]["error"] is None and run["again"]["stdout"].strip() == "True"
+
+
+def test_render_traceback_outside_ipython_is_the_box_then_the_full_traceback():
+    try:
+        checks.check_close("x", 1.0, 2.0, 1e-6)
+    except checks.Feedback as e:
+        first, second = e._render_traceback_(), e._render_traceback_()
+    lines = [ANSI.sub("", s) for s in first]
+    assert lines == ["✗ x is off by 1 (tolerance 1e-06).", "(%tb in a new cell shows where the check stopped)"]
+    assert "Traceback" in "".join(second) and "check_close" in "".join(second)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Feedback that points at the entry or the term
+# ---------------------------------------------------------------------------------------------------------------
+
+A = np.arange(1.0, 10.0).reshape(3, 3)
+
+
+@pytest.mark.parametrize("edit, expected", [
+    (lambda B: B.__setitem__((1, slice(None)), 7.0),
+     "row [1, :] of C is wrong: [7, 7, 7] (expected [4, 5, 6]); the other rows are right"),
+    (lambda B: B.__setitem__((slice(None), 2), -B[:, 2]),
+     "column [:, 2] of C has the wrong sign: [-3, -6, -9] (expected [3, 6, 9]); the other columns are right"),
+    (lambda B: B.__setitem__((1, 0), 0.3), "entry [1, 0] of C is wrong: 0.3 (expected 4)"),
+    (lambda B: B.__setitem__((0, 0), np.nan), "entry [0, 0] of C is wrong: nan (expected 1)"),
+    (lambda B: (B.__setitem__((0, 1), -2.0), B.__setitem__((1, 0), -4.0)),
+     "2 of the 9 entries of C have the wrong sign: [0, 1] is -2 (expected 2); [1, 0] is -4 (expected 4)"),
+])
+def test_describe_difference_points_at_the_row_column_or_entry(edit, expected):
+    B = A.copy()
+    edit(B)
+    assert checks.describe_difference(B, A, "C") == expected
+
+
+def test_describe_difference_transpose_shape_vector_and_agreement():
+    assert checks.describe_difference(A.T, A, "C") == "C is the transpose of the expected matrix"
+    assert checks.describe_difference(A[:2], A, "C") == "C has shape (2, 3); expected (3, 3)"
+    assert checks.describe_difference([1.0, 2.0, 3.5], [1.0, 2.0, 3.0], "x") == "entry [2] of x is wrong: 3.5 " \
+                                                                                 "(expected 3)"
+    assert checks.describe_difference(A + 1e-12, A, "C") is None
+    many = checks.describe_difference(A + 0.5, A, "P")
+    assert many.startswith("9 of the 9 entries of P differ: [0, 0] is 1.5 (expected 1);") and many.endswith("; ...")
+
+
+def _joseph_feedback(fn):
+    with pytest.raises(checks.Feedback) as e:
+        checks.check_joseph(fn)
+    return str(e.value)
+
+
+def test_joseph_names_the_term_that_is_wrong():
+    def minus_noise(P, K, H, R):
+        I_KH = np.eye(2) - K @ H
+        return I_KH @ P @ I_KH.T - K @ R @ K.T
+    assert "the K R Kᵀ term has the wrong sign" in _joseph_feedback(minus_noise)
+
+    def no_r(P, K, H, R):
+        I_KH = np.eye(2) - K @ H
+        return I_KH @ P @ I_KH.T + K @ K.T
+    assert "R is missing from the second term" in _joseph_feedback(no_r)
+
+
+def test_joseph_unrecognised_slip_says_which_entry_differs():
+    def off_diagonal_slip(P, K, H, R):
+        out = kalman.joseph_covariance(P, K, H, R).copy()
+        out[1, 0] += 0.5                                                   # one entry, no known slip
+        return out
+    msg = _joseph_feedback(off_diagonal_slip)
+    assert "P_post is not eq 4.17: entry [1, 0] of P_post is wrong:" in msg, msg
