@@ -139,8 +139,12 @@ def test_viewer_state_away_from_lock_reads_back_the_sliders():
     assert "Gimbal lock" not in st["html"]
 
 
+def _leaves(box):
+    return [w for c in box.children for w in (_leaves(c) if isinstance(c, W.Box) else [c])]
+
+
 def _controls(box):
-    by_desc = {c.description: c for c in box.children if hasattr(c, "description")}
+    by_desc = {c.description: c for c in _leaves(box) if getattr(c, "description", "")}
     html = [c for c in box.children if isinstance(c, W.HTML)]
     return by_desc["ψ yaw (°)"], by_desc["θ pitch (°)"], by_desc["gimbal lock (θ = 90°)"], html[0]
 
@@ -149,11 +153,12 @@ def test_euler_viewer_builds_headless_and_lock_pins_pitch():
     box = widgets.euler_viewer()
     assert isinstance(box, W.VBox)
     yaw, pitch, lock, readout = _controls(box)
-    sliders = [c for c in box.children if isinstance(c, W.FloatSlider)]
-    assert len(sliders) == 3 and not any(s.continuous_update for s in sliders)
+    sliders = [c for c in _leaves(box) if isinstance(c, W.FloatSlider)]
+    assert len(sliders) == 3 and all(s.continuous_update and s.step == 1 for s in sliders)
     assert (yaw.min, yaw.max, pitch.min, pitch.max) == (-180, 180, -90, 90)
     assert readout.value == widgets.viewer_state(10, -10, 40, False)["html"]
-    assert [c for c in box.children if isinstance(c, W.Output)]
+    [out] = [c for c in box.children if isinstance(c, W.Output)]
+    assert len(out.outputs) == 1 and "image/png" in out.outputs[0]["data"]      # drawn once, headless
 
     lock.value = True
     assert pitch.disabled and pitch.value == 90.0
@@ -161,6 +166,24 @@ def test_euler_viewer_builds_headless_and_lock_pins_pitch():
     assert "φ − ψ = -30.0°" in readout.value
     lock.value = False
     assert not pitch.disabled and pitch.value == -10.0             # the pitch before the lock comes back
+
+
+def test_euler_viewer_typed_angle_moves_the_slider_and_redraws():
+    box = widgets.euler_viewer()
+    yaw_row, pitch_row = box.children[0], box.children[1]
+    slider, typed = pitch_row.children
+    assert isinstance(typed, W.BoundedFloatText) and (typed.min, typed.max, typed.step) == (-90, 90, 0.1)
+    [out] = [c for c in box.children if isinstance(c, W.Output)]
+    before = out.outputs[0]["data"]["image/png"]
+    typed.value = 89.5
+    assert slider.value == 89.5
+    assert _controls(box)[3].value == widgets.viewer_state(10, 89.5, 40, False)["html"]
+    assert out.outputs[0]["data"]["image/png"] != before
+    yaw_row.children[0].value = 120.0
+    assert yaw_row.children[1].value == 120.0
+    box_lock = _controls(box)[2]
+    box_lock.value = True
+    assert typed.disabled and typed.value == 90.0
 
 
 def test_euler_viewer_yaw_slider_updates_readout():

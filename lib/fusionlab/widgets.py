@@ -73,38 +73,79 @@ def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
     return {"euler_deg": euler_deg, "C_bn": C_bn, "euler_readback_deg": back, "det": det, "html": html}
 
 
+def _figure_output(fig):
+    """A matplotlib figure as one ``display_data`` output (PNG), for :attr:`ipywidgets.Output.outputs`.
+
+    Setting the outputs directly (instead of ``with out: display(fig)``) needs no kernel message to route the
+    image, so a redraw scheduled on the event loop lands in the right widget too.
+    """
+    import base64
+    import io
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", bbox_inches="tight")
+    plt.close(fig)                                            # no second copy from the inline backend
+    return ({"output_type": "display_data", "metadata": {},
+             "data": {"image/png": base64.b64encode(buf.getvalue()).decode("ascii"),
+                      "text/plain": "<the Euler-sequence figure>"}},)
+
+
+def _soon(callback, delay=0.15):
+    """Run ``callback`` after ``delay`` seconds on the kernel's event loop, replacing the one still waiting (a
+    drag sends many values; only the last is drawn). Without a running loop (a headless run) it runs now."""
+    import asyncio
+    try:
+        loop = asyncio.get_running_loop()
+    except RuntimeError:
+        callback()
+        return None
+    return loop.call_later(delay, callback)
+
+
 def euler_viewer(roll=10, pitch=-10, yaw=40):
     """Sliders for ψ, θ, φ (degrees), a gimbal-lock toggle, the C_bn readout and the Euler-sequence figure.
+
+    The sliders move in 1° steps (arrow keys too) and follow a drag continuously: the C_bn readout is redrawn at
+    every step, the figure once the slider rests for a moment. Each slider has a box beside it to type an angle
+    (to the tenth of a degree, e.g. 89.5° to creep up on gimbal lock).
 
     Parameters
     ----------
     roll, pitch, yaw : float, degrees -- initial slider values
     Returns
     -------
-    ipywidgets.VBox -- children, in order: yaw, pitch and roll ``FloatSlider``, the lock ``ToggleButton``, the
-    readout ``HTML`` and the figure ``Output``
+    ipywidgets.VBox -- children, in order: three ``HBox`` rows (yaw, pitch, roll), each a ``FloatSlider`` and the
+    ``BoundedFloatText`` linked to it; the lock ``ToggleButton``; the readout ``HTML``; the figure ``Output``
     """
     roll, pitch, yaw = (_scalar(v, n) for v, n in ((roll, "roll"), (pitch, "pitch"), (yaw, "yaw")))
-    opts = dict(step=1, continuous_update=False, readout_format=".0f", style={"description_width": "7em"},
-                layout=W.Layout(width="28em"))
+    opts = dict(step=1, continuous_update=True, readout=False, style={"description_width": "7em"},
+                layout=W.Layout(width="36em"))
     s_yaw = W.FloatSlider(value=yaw, min=-180, max=180, description="ψ yaw (°)", **opts)
     s_pitch = W.FloatSlider(value=pitch, min=-90, max=90, description="θ pitch (°)", **opts)
     s_roll = W.FloatSlider(value=roll, min=-180, max=180, description="φ roll (°)", **opts)
+    rows = []
+    for s in (s_yaw, s_pitch, s_roll):
+        box = W.BoundedFloatText(value=s.value, min=s.min, max=s.max, step=0.1, layout=W.Layout(width="6em"))
+        W.link((s, "value"), (box, "value"))                 # type an angle, or drag: both stay in step
+        W.link((s, "disabled"), (box, "disabled"))
+        rows.append(W.HBox([s, box]))
     lock = W.ToggleButton(value=False, description="gimbal lock (θ = 90°)", layout=W.Layout(width="14em"))
     readout = W.HTML()
     out = W.Output()
-    state = {"pitch": s_pitch.value, "busy": False}           # pitch to restore after the lock; re-entry guard
+    state = {"pitch": s_pitch.value, "busy": False, "timer": None}   # pitch before the lock; re-entry guard
+
+    def draw_figure():
+        state["timer"] = None
+        out.outputs = _figure_output(plotting.plot_euler_frames(np.radians([s_roll.value, s_pitch.value
+                                                                           if not lock.value else LOCK_PITCH_DEG,
+                                                                           s_yaw.value])))
 
     def redraw(_change=None):
         if state["busy"]:
             return
-        st = viewer_state(s_roll.value, s_pitch.value, s_yaw.value, lock.value)
-        readout.value = st["html"]
-        with out:
-            out.clear_output(wait=True)
-            fig = plotting.plot_euler_frames(np.radians(st["euler_deg"]))
-            display(fig)
-            plt.close(fig)                                    # no second copy from the inline backend
+        readout.value = viewer_state(s_roll.value, s_pitch.value, s_yaw.value, lock.value)["html"]
+        if state["timer"] is not None:
+            state["timer"].cancel()
+        state["timer"] = _soon(draw_figure)
 
     def on_lock(change):
         state["busy"] = True                                  # one redraw for the whole change, not two
@@ -122,7 +163,7 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
         s.observe(redraw, names="value")
     lock.observe(on_lock, names="value")
     redraw()
-    return W.VBox([s_yaw, s_pitch, s_roll, lock, readout, out])
+    return W.VBox([*rows, lock, readout, out])
 
 
 # ----------------------------------------------------------------------------------------------------------------
