@@ -18,7 +18,7 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: help lab test solutions labs env data bench release clean
+.PHONY: help lab formgrader test solutions labs env data bench release clean
 
 help:  ## list the targets
 	@grep -E '^[a-z]+:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -32,9 +32,18 @@ $(VENV)/.installed: environment.txt pyproject.toml
 
 env: $(VENV)/.installed  ## create .venv and install environment.txt
 
-lab: env  ## start JupyterLab on labs/ (prints the URL; no browser needed)
+# The student's view: jupyter/ (see jupyter/README.md) turns nbgrader's instructor tools and the news pop-up off.
+STUDENT_VIEW := JUPYTER_CONFIG_PATH=$(CURDIR)/jupyter$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))
+ALLOW_ROOT   := $(if $(filter 0,$(shell id -u)),--allow-root)
+
+lab: env  ## start JupyterLab on labs/ as a student sees it (prints the URL; no browser needed)
 	@echo "==> JupyterLab on labs/ -- open the URL printed below; Ctrl-C to stop"
-	@$(BIN)/jupyter lab --no-browser --notebook-dir=labs $(if $(filter 0,$(shell id -u)),--allow-root)
+	@$(STUDENT_VIEW) $(BIN)/jupyter lab --no-browser --notebook-dir=labs \
+	  --LabApp.app_settings_dir=$(CURDIR)/jupyter/lab/settings $(ALLOW_ROOT)
+
+formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
+	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
+	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
 
 test: env  ## the whole test suite: unit tests, lab sync, strict nbval on every solution, autograde
 	@echo "==> unit and pipeline tests"
