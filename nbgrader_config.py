@@ -5,12 +5,15 @@ labs/NN_name/NN_name.ipynb       -- the release notebooks students open (generat
 submitted/<student>/NN_name/     -- collected submissions (not committed)
 autograded/, feedback/           -- grading results (not committed)
 """
+import ast
 import os
+import re
 
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
-from nbgrader.converters import Autograde
-from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearOutput, DeduplicateIds, GetGrades,
-                                    NbGraderPreprocessor, OverwriteCells, OverwriteKernelspec)
+from IPython.core.inputtransformer2 import TransformerManager
+from nbgrader.converters import Autograde, GenerateAssignment
+from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearOutput, ClearSolutions, DeduplicateIds,
+                                    GetGrades, NbGraderPreprocessor, OverwriteCells, OverwriteKernelspec)
 
 
 class RestoreDeletedCells(OverwriteCells):
@@ -54,6 +57,74 @@ class HideTestSource(NbGraderPreprocessor):
                     output.traceback = [f"{output.ename}: {output.evalue}"]
         return cell, resources
 
+class ClearSolutionsForRunAll(ClearSolutions):
+    """ClearSolutions for a release that Run All goes through, stopping nowhere.
+
+    * Each stub names its exercise: the ``{exercise}`` of ``ClearSolutions.code_stub`` becomes "exercise 4" for the
+      cell ``ex4_solution`` ("question 2" for ``q2_...``), so a later cell that needs the answer can say which
+      exercise to finish (``fusionlab.checks`` reads it back).
+    * Every code cell that can fail in an untouched lab gets the tag ``raises-exception``, on which JupyterLab's
+      Run All goes on instead of stopping: the answer, check and test cells, and every cell that uses a name an
+      answer cell makes, directly or through another such cell (read from the solution source, before clearing).
+      The tag changes nothing in grading (nbgrader runs every cell anyway) and the solutions do not carry it.
+    """
+
+    TAG = "raises-exception"
+
+    @staticmethod
+    def exercise(cell):
+        m = re.match(r"(ex|q)(\d+[a-z]?)_", cell.metadata.get("nbgrader", {}).get("grade_id", ""))
+        return f"{'exercise' if m.group(1) == 'ex' else 'question'} {m.group(2)}" if m else "this exercise"
+
+    @staticmethod
+    def names(source):
+        """(names a cell reads from before it, names it binds at top level), of the cell as IPython runs it.
+
+        A name the cell binds anywhere (an assignment, a loop variable, a function's argument or local) does not
+        count as read from before: an approximation that is right for the cells of these labs.
+        """
+        try:
+            tree = ast.parse(TransformerManager().transform_cell(source))
+        except SyntaxError:
+            return None, set()
+        nodes = list(ast.walk(tree))
+        anywhere = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
+        anywhere |= {n.arg for n in nodes if isinstance(n, ast.arg)}
+        read = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - anywhere
+        bound = set()
+        for node in tree.body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                bound.add(node.name)
+            elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                bound.update((a.asname or a.name).split(".")[0] for a in node.names)
+            else:
+                bound.update(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store))
+        return read, bound
+
+    def preprocess(self, nb, resources):
+        tainted = set()                                     # names whose value depends on a student's answer
+        for cell in nb.cells:
+            if cell.cell_type != "code":
+                continue
+            meta = cell.metadata.get("nbgrader", {})
+            read, bound = self.names(cell.source)
+            if meta.get("solution") or meta.get("grade") or read is None or read & tainted:
+                tainted |= bound
+                tags = cell.metadata.setdefault("tags", [])
+                if self.TAG not in tags:
+                    tags.append(self.TAG)
+            else:
+                tainted -= bound                            # made afresh by a cell that cannot fail
+        return super().preprocess(nb, resources)
+
+    def preprocess_cell(self, cell, resources, cell_index):
+        stubs = self.code_stub
+        self.code_stub = {lang: stub.replace("{exercise}", self.exercise(cell)) for lang, stub in stubs.items()}
+        try:
+            return super().preprocess_cell(cell, resources, cell_index)
+        finally:
+            self.code_stub = stubs
+
 
 c = get_config()  # noqa: F821 (provided by nbgrader)
 
@@ -62,11 +133,15 @@ c.CourseDirectory.source_directory = "solutions"
 c.CourseDirectory.release_directory = "labs"
 c.CourseDirectory.db_url = "sqlite:///gradebook.db"
 
-# What a student sees where a solution was: say what to do, not just "raise NotImplementedError()".
-c.ClearSolutions.code_stub = {
+# What a student sees where a solution was: say what to do, not just "raise NotImplementedError()". {exercise} is
+# filled in per cell (ClearSolutionsForRunAll above), which also tags the cells Run All must not stop at.
+c.ClearSolutions.code_stub = c.ClearSolutionsForRunAll.code_stub = {
     "python": "# YOUR CODE HERE -- replace this line with your answer (see the exercise above)\n"
-              "raise NotImplementedError('exercise not attempted yet')"}
-c.ClearSolutions.text_stub = "YOUR ANSWER HERE (a few sentences; see the question above)"
+              "raise NotImplementedError('{exercise} not attempted yet')"}
+c.GenerateAssignment.preprocessors = [ClearSolutionsForRunAll if p is ClearSolutions else p
+                                      for p in GenerateAssignment.class_traits()["preprocessors"].default()]
+c.ClearSolutions.text_stub = c.ClearSolutionsForRunAll.text_stub = \
+    "YOUR ANSWER HERE (a few sentences; see the question above)"
 
 # Outputs are cleared in the release; hidden tests are stripped and restored at grading time.
 c.ClearOutput.enabled = True

@@ -30,7 +30,8 @@ def test_release_hides_solutions_and_hidden_tests(course, lab):
     nb = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
     text = "\n".join(c.source for c in nb.cells)
     assert "### BEGIN SOLUTION" not in text and "### BEGIN HIDDEN TESTS" not in text
-    assert "exercise not attempted yet" in text, "the student stub message is missing"
+    assert re.search(r"NotImplementedError\(.(exercise|question) \d+[a-z]? not attempted yet.\)", text), \
+        "the student stub message (naming its exercise) is missing"
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), "release must have no outputs"
 
 
@@ -92,3 +93,33 @@ def test_header_states_goals_time_seed_and_points_that_add_up(lab):
     assert m, f"{lab}: the Points line must read 'A autograded ... + W written ... = **T**'"
     assert tuple(map(int, m.groups())) == (auto, written, auto + written), \
         f"{lab}: header says {m.groups()}, the graded cells hold {auto} autograded + {written} written"
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_header_ends_with_what_to_hand_in_and_how_to_validate_it(lab):
+    header = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4).cells[0].source
+    rows = [line for line in header.splitlines() if line.startswith("|")]
+    assert rows[-1].startswith("| **Hand in** |"), f"{lab}: the last row of the header table is not **Hand in**"
+    for words in (f"`{lab}.ipynb`", "**Validate**", f"`nbgrader validate labs/{lab}/{lab}.ipynb`"):
+        assert words in rows[-1], f"{lab}: the Hand in row does not say {words}"
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_release_tags_every_cell_that_can_fail_so_run_all_goes_on(course, lab):
+    """Answer, check and test cells, and the cells that use an answer, carry raises-exception in the release (and
+    only there): JupyterLab's Run All does not stop at them. Their stubs name the exercise."""
+    release = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    code = [c for c in release.cells if c.cell_type == "code"]
+    tagged = ["raises-exception" in c.metadata.get("tags", []) for c in code]
+    meta = [c.metadata.get("nbgrader", {}) for c in code]
+    assert all(t for t, m in zip(tagged, meta) if m.get("solution") or m.get("grade")), lab
+    assert not tagged[0], f"{lab}: the setup cell cannot fail on an unfinished exercise; it must not be tagged"
+    assert 0 < sum(tagged) < len(code), f"{lab}: {sum(tagged)} of {len(code)} code cells tagged"
+    for cell, m in zip(code, meta):
+        if m.get("solution"):
+            number = re.match(r"(?:ex|q)(\d+)", m["grade_id"]).group(1)
+            assert re.search(rf"NotImplementedError\('(exercise|question) {number} not attempted yet'\)", cell.source), \
+                f"{lab}: the stub of {m['grade_id']} does not name its exercise"
+    solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    assert not any("raises-exception" in c.metadata.get("tags", []) for c in solution.cells), \
+        f"{lab}: the solution must not carry raises-exception (strict nbval would accept an error)"
