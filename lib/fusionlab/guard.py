@@ -1,0 +1,753 @@
+"""The grading guard: hidden tests that an answer cell cannot talk its way past.
+
+A lab's hidden tests compare the student's function with the library's. Three one-line cheats used to pass them:
+calling the library function that the test compares against, replacing ``np.allclose`` in an answer cell, and
+changing how later cells run (an IPython input or AST transformer that blanks the test cells, a custom exception
+handler that swallows ``AssertionError``, a patched ``fusionlab.checks``). This module is imported by every lab's
+locked setup cell (through ``fusionlab.checks``), before any student code runs, and closes those doors:
+
+* :func:`forbid` -- while active, the listed library functions (and methods, e.g. filterpy's
+  ``KalmanFilter.update``) raise "exercise N asks you to write this yourself". It swaps each function's
+  ``__code__``, so an alias made in an earlier cell (``f = kf.joseph_covariance``) and a library function that calls
+  it internally are caught too; on exit the block fails if any of them was called, even if the error was caught.
+  :func:`reserve` / :func:`release` do the same across cells, for exercises whose answer is a value.
+* :func:`assert_close`, :func:`assert_equal`, :func:`grade` -- comparisons made only with functions captured when
+  this module was imported (C functions and ufuncs, which an answer cell cannot patch in place).
+* :func:`intact` -- fails if numpy, the builtins, scipy, filterpy or fusionlab functions, or IPython's hooks (input
+  and AST transformers, custom exception handlers, event callbacks, ``sys.excepthook``, trace and profile functions)
+  changed since this module was imported. Before a grading cell (one that calls ``guard.intact()``) is even
+  transformed, the hooks are put back as they were and what was changed is remembered, so a transformer cannot blank
+  the cell that would report it.
+
+Only numpy and the standard library are imported here (row 1 of the import plan). Nothing in a kernel is proof
+against a student who rewrites the kernel itself; the integrity report of the grading tools reads the submitted
+source for that.
+"""
+from __future__ import annotations
+
+import builtins
+import re
+import sys
+import types
+
+import numpy as np
+import numpy.linalg    # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
+import numpy.testing   # noqa: F401
+
+__all__ = ["ForbiddenCall", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact",
+           "allow_handler"]
+
+# ---------------------------------------------------------------------------------------------------------------
+# Functions captured now, before any student code runs. C functions, ufuncs and ndarray methods: an answer cell can
+# rebind ``np.allclose`` but cannot change these objects.
+# ---------------------------------------------------------------------------------------------------------------
+_asarray = np.asarray
+_ndarray = np.ndarray
+_absolute = np.absolute
+_subtract = np.subtract
+_multiply = np.multiply
+_add = np.add
+_isnan = np.isnan
+_equal = np.equal
+_less_equal = np.less_equal
+_logical_or = np.logical_or
+_logical_and = np.logical_and
+_logical_not = np.logical_not
+_empty = np.empty
+_errstate = np.errstate
+_nd_any = _ndarray.any
+_nd_all = _ndarray.all
+_nd_argmax = _ndarray.argmax
+_nd_max = _ndarray.max
+_nd_ravel = _ndarray.ravel
+_nd_item = _ndarray.item
+_nd_copy = _ndarray.copy
+_complex, _bool = complex, bool
+_float, _int, _len, _tuple, _list, _dict, _str, _type, _id = float, int, len, tuple, list, dict, str, type, id
+_isinstance, _repr, _range, _zip, _enumerate, _getattr = isinstance, repr, range, zip, enumerate, getattr
+_divmod, _sorted, _set, _callable, _any, _vars = divmod, sorted, set, callable, any, vars
+_FunctionType, _MethodType, _ModuleType = types.FunctionType, types.MethodType, types.ModuleType
+_BuiltinTypes = (types.BuiltinFunctionType, types.BuiltinMethodType, np.ufunc)
+_re_search = re.search
+_MISSING = object()
+
+# Modules whose attributes an answer cell must leave alone (``np.allclose = ...``, ``checks.check_x = ...``).
+_WATCHED = ("numpy", "scipy", "filterpy", "fusionlab")
+_IGNORED_BUILTINS = {"_", "__", "___", "get_ipython", "exit", "quit", "input", "display"}  # set per cell by IPython
+
+
+class ForbiddenCall(AssertionError):
+    """A function the exercise asks the student to write was called while it was forbidden."""
+
+
+def _named(fn):
+    mod = _getattr(fn, "__module__", None) or ""
+    name = _getattr(fn, "__qualname__", None) or _getattr(fn, "__name__", "?")
+    short = mod.rsplit(".", 1)[-1] + "." if mod else ""
+    return short + name
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# forbid: swap __code__ for a raiser
+# ---------------------------------------------------------------------------------------------------------------
+_TOKEN = "__fusionlab_guard_hit__"
+_active = {}     # function -> [original code, list of forbid scopes (innermost last)]
+
+
+def _target(fn):
+    """The Python function object behind ``fn`` (a function, a bound or unbound method, a static/classmethod), or
+    ``fn`` itself for a C function or ufunc (``np.arctan2``, ``math.atan2``)."""
+    f = fn
+    if _isinstance(f, (staticmethod, classmethod)):
+        f = f.__func__
+    if _isinstance(f, _MethodType):
+        f = f.__func__
+    if not _isinstance(f, _FunctionType) and not _callable(f):
+        raise TypeError(f"guard.forbid takes functions or methods; got {_repr(fn)[:60]}")
+    return f
+
+
+def _sites(obj):
+    """Where a C function is bound by name: numpy/scipy/fusionlab modules, math, cmath and the notebook."""
+    out = []
+    for name, mod in _list(sys.modules.items()):
+        if _isinstance(mod, _ModuleType) and (_watched(name) or name in ("math", "cmath", "__main__")):
+            d = _vars(mod)
+            out += [(d, k) for k, v in _list(d.items()) if v is obj]
+    ip = _shell()
+    if ip is not None:
+        out += [(ip.user_ns, k) for k, v in _list(ip.user_ns.items()) if v is obj]
+    return out
+
+
+def _stand_in(func, hit):
+    def stand_in(*args, **kwargs):
+        raise hit()
+    stand_in.__name__ = stand_in.__qualname__ = _getattr(func, "__name__", "forbidden")
+    return stand_in
+
+
+class _Hit:
+    """Called by a raiser: counts the call and returns the error to raise."""
+
+    def __init__(self, func):
+        self.func = func
+
+    def __call__(self):
+        scopes = _active.get(self.func, (None, []))[1]
+        scope = scopes[-1] if scopes else None
+        if scope is not None:
+            scope.calls.append(self.func)
+            return ForbiddenCall(scope.message(self.func))
+        return ForbiddenCall(f"{_named(self.func)} is forbidden here")
+
+
+def _raiser_code(func, hit):
+    """A code object that raises, with the same free variables as ``func`` (so it can be its ``__code__``)."""
+    free = func.__code__.co_freevars
+    head = "".join(f"    {v} = None\n" for v in free)
+    touch = ("        " + ", ".join(free) + "\n") if free else ""
+    src = (f"def _outer():\n{head}    def _raiser(*args, **kwargs):\n{touch}"
+           f"        hit = {_TOKEN!r}\n        raise hit()\n    return _raiser\n")
+    ns = {}
+    exec(compile(src, f"<guard: {_named(func)} forbidden>", "exec"), ns)
+    code = ns["_outer"]().__code__
+    consts = _tuple(hit if c == _TOKEN else c for c in code.co_consts)
+    code = code.replace(co_consts=consts, co_name=func.__code__.co_name, co_qualname=func.__code__.co_qualname)
+    if code.co_freevars != free:   # the compiler orders cell variables its own way: match by position
+        raise TypeError(f"cannot build a stand-in for {_named(func)} (free variables {free} vs {code.co_freevars})")
+    return code
+
+
+class forbid:
+    """Context manager: while active, each listed function raises :class:`ForbiddenCall`, however it is reached.
+
+    Parameters
+    ----------
+    *functions : Python functions or methods (e.g. ``kf.joseph_covariance``, ``KalmanFilter.update``)
+    exercise : int or str, optional -- named in the message; by default the exercise of the running test cell
+        (its first line reads ``# Autograder: exercise N``)
+
+    On exit the functions are restored; if any of them was called and the error did not propagate (the student's
+    code caught it), the block raises :class:`ForbiddenCall` anyway.
+    """
+
+    def __init__(self, *functions, exercise=None):
+        self.functions = _tuple(_target(f) for f in functions)
+        self.exercise = exercise if exercise is not None else _state["exercise"]
+        self.calls = []
+
+    def message(self, func):
+        which = f"exercise {self.exercise}" if self.exercise is not None else "this exercise"
+        return (f"your answer called {_named(func)}, the library's own solution: {which} asks you to write it "
+                f"yourself (you may use numpy and the functions of earlier exercises).")
+
+    def __enter__(self):
+        done = []
+        try:
+            for f in self.functions:
+                entry = _active.get(f)
+                if entry is None and _isinstance(f, _FunctionType):
+                    entry = _active[f] = [f.__code__, []]
+                    f.__code__ = _raiser_code(f, _Hit(f))
+                elif entry is None:                   # a C function: rebind it by name where it can be reached
+                    sites, stand_in = _sites(f), _stand_in(f, _Hit(f))
+                    entry = _active[f] = [(sites, stand_in), []]
+                    for d, k in sites:
+                        d[k] = stand_in
+                entry[1].append(self)
+                done.append(f)
+        except BaseException:
+            self._undo(done)
+            raise
+        return self
+
+    def _undo(self, functions):
+        for f in functions:
+            entry = _active.get(f)
+            if entry is None:
+                continue
+            if self in entry[1]:
+                entry[1].remove(self)
+            if not entry[1]:
+                if _isinstance(f, _FunctionType):
+                    f.__code__ = entry[0]
+                else:
+                    sites, stand_in = entry[0]
+                    for d, k in sites:
+                        if d.get(k) is stand_in:
+                            d[k] = f
+                del _active[f]
+
+    def __exit__(self, etype, exc, tb):
+        self._undo(self.functions)
+        if self.calls and (etype is None or not _isinstance(exc, ForbiddenCall)):
+            names = ", ".join(_sorted(_set(_named(f) for f in self.calls)))
+            raise ForbiddenCall(self.message(self.calls[0]) + f" ({names} was called; the error was caught inside "
+                                                              "your code, but the call still counts)")
+        return False
+
+
+_reserved = {}   # exercise -> forbid scope entered by reserve()
+_violations = {}  # exercise -> what release() found
+
+
+def reserve(*functions, exercise):
+    """Forbid ``functions`` from now until ``release(exercise=...)``: for exercises whose answer is a value.
+
+    Called in a lab's setup cell; the exercise's test cell calls :func:`release` first thing.
+    """
+    release(exercise=exercise, check=False)
+    _violations.pop(exercise, None)
+    scope = forbid(*functions, exercise=exercise)
+    scope.__enter__()
+    _reserved[exercise] = scope
+
+
+def release(*functions, exercise, check=True):
+    """End :func:`reserve` for ``exercise``; fail if a reserved function was called in between.
+
+    ``functions`` are named again here only so a reader (and the integrity report) sees them in the test cell. A
+    visible check may release first; the test cell's release then repeats its verdict.
+    """
+    scope = _reserved.pop(exercise, None)
+    if scope is not None:
+        scope._undo(scope.functions)
+        if scope.calls:
+            names = ", ".join(_sorted(_set(_named(f) for f in scope.calls)))
+            _violations[exercise] = scope.message(scope.calls[0]) + f" ({names} was called before this test)"
+    if check and exercise in _violations:
+        raise ForbiddenCall(_violations[exercise])
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Comparisons
+# ---------------------------------------------------------------------------------------------------------------
+_PLAIN = (_ndarray, _list, _tuple, _int, _float, complex, bool, np.generic)
+
+
+def _numbers(value, what, role):
+    if value is None:
+        raise AssertionError(f"{what}: {role} is None -- did the function forget its `return`?")
+    if not _isinstance(value, _PLAIN):
+        raise AssertionError(f"{what}: {role} should be numbers (an array, a list or a float); got a "
+                             f"{_type(value).__name__}")
+    try:
+        arr = _asarray(value)
+        complex_ = arr.dtype.kind == "c"
+        return _asarray(value, dtype=_complex if complex_ else _float)
+    except (TypeError, ValueError) as err:
+        raise AssertionError(f"{what}: {role} cannot be read as numbers ({err})") from None
+
+
+def _index(flat, shape):
+    idx = []
+    for n in shape[::-1]:
+        flat, r = _divmod(flat, n)
+        idx.append(r)
+    return "[" + ", ".join(_str(i) for i in idx[::-1]) + "]"
+
+
+def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
+    """Fail unless ``actual`` equals ``expected`` within ``atol + rtol·|expected|``, element by element.
+
+    Shapes must agree (a scalar expected value is compared with every element). NaN must be where the reference
+    has NaN. Only functions captured at import are used: ``np.allclose = lambda *a, **k: True`` changes nothing.
+    The message says where and by how much: "P_post differs from the reference by up to 0.324 at [1, 0]".
+    """
+    e = _numbers(expected, what, "the reference")
+    a = _numbers(actual, what, "your result")
+    if a.shape != e.shape and e.shape != ():
+        raise AssertionError(f"{what} should have shape {e.shape}; got {a.shape}")
+    if a.size == 0:
+        return
+    if e.shape != a.shape:                                                    # a scalar reference
+        full = _empty(a.shape, dtype=e.dtype)
+        full[...] = e
+        e = full
+    shape = a.shape
+    a, e = _nd_ravel(a), _nd_ravel(e)                    # 1-d from here (0-d results would be numpy scalars)
+    with _errstate(all="ignore"):                                            # inf - inf: NaN, handled below
+        err = _absolute(_subtract(a, e))
+        tol = _add(atol, _multiply(rtol, _absolute(e)))
+    ok = _logical_or(_less_equal(err, tol), _equal(a, e))                     # equal also covers ±inf
+    both_nan = _logical_and(_isnan(a), _isnan(e))
+    ok = _logical_or(ok, both_nan)
+    if _nd_all(ok):
+        return
+    bad = _logical_not(ok)
+    with _errstate(all="ignore"):
+        excess = _asarray(_subtract(err, tol), dtype=_float)
+    excess[_logical_not(bad)] = -1.0
+    excess[_logical_and(bad, _isnan(excess))] = 1e308                           # NaN where a number was expected
+    flat = _int(_nd_argmax(excess))
+    where = _index(flat, shape) if _len(shape) else ""
+    got, want = _nd_item(a, flat), _nd_item(e, flat)
+    worst = _float(_nd_max(_asarray(err, dtype=_float)[bad])) if not _nd_any(_isnan(err[bad])) else _float("nan")
+    at = f" at {where}" if where else ""
+    if got != got or want != want:                                             # NaN on one side only
+        raise AssertionError(f"{what}{at} is {got:.6g} where the reference is {want:.6g}")
+    raise AssertionError(f"{what} differs from the reference by up to {worst:.3g}{at} (got {got:.6g}, expected "
+                         f"{want:.6g}; tolerance {atol:g} + {rtol:g}·|expected|)")
+
+
+def assert_equal(actual, expected, *, what="the result"):
+    """Fail unless ``actual`` equals ``expected`` exactly (numbers element by element, or plain str/bool/int)."""
+    if _isinstance(expected, (_str, bool)) or expected is None:
+        if _type(actual) is not _type(expected) or actual != expected:
+            raise AssertionError(f"{what} should be {expected!r}; got {_repr(actual)[:80]}")
+        return
+    assert_close(actual, expected, what=what, rtol=0.0, atol=0.0)
+
+
+def _copy(obj):
+    """A fresh copy of a test case's arguments, so neither side can change the other's inputs."""
+    if _isinstance(obj, _ndarray):
+        return _nd_copy(obj)
+    if _isinstance(obj, _list):
+        return [_copy(o) for o in obj]
+    if _isinstance(obj, _tuple):
+        return _tuple(_copy(o) for o in obj)
+    if _isinstance(obj, _dict):
+        return {k: _copy(v) for k, v in obj.items()}
+    return obj
+
+
+def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol=1e-9, atol=1e-12, exercise=None,
+          compare=None):
+    """Hidden test in one line: the reference on every case first, then the student's function under ``forbid``.
+
+    Parameters
+    ----------
+    student_fn, reference_fn : callables taking the same arguments
+    cases : iterable of argument tuples (or dicts of keyword arguments)
+    forbid : functions that compute the same answer (the library's, filterpy's); they raise while the student's
+        function runs
+    what : str, or a tuple naming the parts when the functions return a tuple (``("x_post", "P_post", "K")``)
+    rtol, atol : tolerances of :func:`assert_close`
+    compare : optional ``compare(actual, expected, what)`` for results that are not plain numbers (it must not use
+        anything an answer cell can rebind)
+    """
+    _intact()
+    cases = [c if _isinstance(c, (_tuple, _dict)) else (c,) for c in cases]
+    expected = [reference_fn(**_copy(c)) if _isinstance(c, _dict) else reference_fn(*_copy(c)) for c in cases]
+    actual = []
+    with _forbid_cls(*forbid, exercise=exercise):
+        for c in cases:
+            actual.append(student_fn(**_copy(c)) if _isinstance(c, _dict) else student_fn(*_copy(c)))
+    check = compare or (lambda a, e, w: assert_close(a, e, what=w, rtol=rtol, atol=atol))
+    for i, (a, e) in _enumerate(_zip(actual, expected)):
+        label = f" (case {i + 1} of {_len(cases)})" if _len(cases) > 1 else ""
+        if _isinstance(what, _tuple):
+            if not _isinstance(a, (_tuple, _list)) or _len(a) != _len(what):
+                raise AssertionError(f"your function must return {_len(what)} things ({', '.join(what)}); got "
+                                     f"{_type(a).__name__}" + (f" of length {_len(a)}"
+                                                               if _isinstance(a, (_tuple, _list)) else ""))
+            for name, ai, ei in _zip(what, a, e):
+                check(ai, ei, name + label)
+        else:
+            check(a, e, what + label)
+
+
+_forbid_cls = forbid
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# intact: nothing the grading relies on was changed by an answer cell
+# ---------------------------------------------------------------------------------------------------------------
+_state = {"excepthooks": [sys.__excepthook__], "exercise": None, "tampered": [], "user_ns": None, "custom": None}
+_baseline_modules = {}     # module name -> {attribute: (object, code or None)}
+_module_objs = {}          # module name -> the module object
+_baseline_classes = {}     # class -> {attribute: (object, code or None)}
+_allowed_handlers = []     # custom exception handlers the library itself installs (checks.friendly_errors)
+_allowed_callbacks = {     # event callbacks that the plotting back ends and IPython extensions register on demand
+    ("matplotlib_inline.backend_inline", "flush_figures"), ("matplotlib_inline.backend_inline", "configure_once"),
+    ("matplotlib.pyplot", "_draw_all_if_interactive"), ("matplotlib.pyplot", "post_execute"),
+    ("ipympl.backend_nbagg", "flush_figures"), ("IPython.extensions.autoreload", "pre_run_cell"),
+    ("IPython.extensions.autoreload", "post_execute_hook"), ("IPython.extensions.autoreload", "post_execute"),
+}
+
+
+def allow_handler(handler):
+    """Accept ``handler`` as a legitimate custom exception handler (the library's NameError hint)."""
+    if handler not in _allowed_handlers:
+        _allowed_handlers.append(handler)
+
+
+def _entry(obj):
+    for f, (saved, _scopes) in _list(_active.items()):       # a C function forbidden right now: its real self
+        if not _isinstance(f, _FunctionType) and obj is saved[1]:
+            return (f, None)
+    if not _isinstance(obj, _FunctionType):
+        return (obj, None)
+    active = _active.get(obj)
+    return (obj, active[0] if active else obj.__code__)          # a forbidden function: its real code
+
+
+def _watched(name):
+    parts = name.split(".")
+    return parts[0] in _WATCHED and not _any(p.startswith("_") for p in parts[1:])   # public modules only
+
+
+def _snapshot_new_modules():
+    """Record every watched module (and its Python classes) not seen before; cheap when nothing is new."""
+    for name, mod in _list(sys.modules.items()):
+        if name in _baseline_modules and name.startswith("fusionlab."):
+            known = _baseline_modules[name]         # a module seen while it was still importing: its later functions
+            for k, v in _list(_vars(mod).items()):
+                if k not in known and not _from_a_cell(v):
+                    known[k] = _entry(v)
+            continue
+        if name in _baseline_modules or not _isinstance(mod, _ModuleType) or not _watched(name):
+            continue
+        try:
+            attrs = _dict(_vars(mod))
+        except TypeError:
+            continue
+        _baseline_modules[name] = {k: _entry(v) for k, v in attrs.items()}
+        _module_objs[name] = mod
+        for v in attrs.values():
+            if _isinstance(v, _type) and _watched(_getattr(v, "__module__", "") or "") and v not in _baseline_classes:
+                _baseline_classes[v] = {k: _entry(o) for k, o in _vars(v).items() if _isinstance(o, _FunctionType)}
+
+
+def _from_a_cell(obj):
+    """True for a function defined in a notebook cell (its code lives in no library file)."""
+    f = obj.__func__ if _isinstance(obj, _MethodType) else obj
+    if not _isinstance(f, _FunctionType):
+        return False
+    fname = f.__code__.co_filename
+    return f.__module__ == "__main__" or fname.startswith("<ipython") or "ipykernel_" in fname
+
+
+def _module_problems():
+    out = []
+    for name, attrs in _list(_baseline_modules.items()):
+        current = _vars(_module_objs[name])
+        for k, (obj, code) in attrs.items():
+            now = current.get(k, _MISSING)
+            if now is _MISSING:
+                if _callable(obj):
+                    out.append(f"{name}.{k} was deleted")
+            elif now is not obj and (_callable(now) or _callable(obj)):
+                out.append(f"{name}.{k} was replaced")
+            elif code is not None and obj.__code__ is not code and obj not in _active:
+                out.append(f"the code of {name}.{k} was replaced")
+        for k, now in _list(current.items()):
+            if k not in attrs and _from_a_cell(now):
+                out.append(f"{name}.{k} was set by a notebook cell")
+    for cls, attrs in _list(_baseline_classes.items()):
+        current = _vars(cls)
+        for k, (obj, code) in attrs.items():
+            now = current.get(k, _MISSING)
+            if now is not obj:
+                out.append(f"{cls.__module__}.{cls.__qualname__}.{k} was replaced")
+            elif obj.__code__ is not code and obj not in _active:
+                out.append(f"the code of {cls.__module__}.{cls.__qualname__}.{k} was replaced")
+        for k, now in _list(current.items()):
+            if k not in attrs and _from_a_cell(now):
+                out.append(f"{cls.__module__}.{cls.__qualname__}.{k} was set by a notebook cell")
+    for name, mod in _list(_module_objs.items()):
+        if sys.modules.get(name, mod) is not mod:
+            out.append(f"sys.modules[{name!r}] was replaced")
+    return out
+
+
+_builtins_base = _dict(_vars(builtins))
+
+
+def _builtin_problems():
+    out = []
+    now = _vars(builtins)
+    for k, obj in _builtins_base.items():
+        cur = now.get(k, _MISSING)
+        if k not in _IGNORED_BUILTINS and cur is not obj and _callable(obj) and not (
+                _isinstance(obj, _MethodType) and cur == obj):         # the kernel's input(), bound again per cell
+            out.append(f"builtins.{k} was replaced")
+    return out
+
+
+# IPython ---------------------------------------------------------------------------------------------------------
+_SHELL_METHODS = ("run_cell", "run_cell_async", "_run_cell", "run_code", "run_ast_nodes", "transform_ast",
+                  "should_run_async", "showtraceback", "_showtraceback", "showsyntaxerror", "get_exception_only",
+                  "set_custom_exc", "ex", "ev", "transform_cell")
+_KERNEL_METHODS = ("do_execute", "execute_request", "dispatch_shell")
+
+
+def _shell():
+    try:
+        from IPython import get_ipython
+    except ImportError:      # plain Python: nothing to guard
+        return None
+    return get_ipython()
+
+
+def _custom_state(ip):
+    handler = None
+    tb = _getattr(ip, "CustomTB", None)
+    f = _getattr(tb, "__func__", None)
+    if f is not None and f.__closure__ and "handler" in f.__code__.co_freevars:
+        handler = f.__closure__[f.__code__.co_freevars.index("handler")].cell_contents
+    return _tuple(ip.custom_exceptions), handler
+
+
+def _callback_key(cb):
+    f = _getattr(cb, "__func__", cb)
+    return (_getattr(f, "__module__", None), _getattr(f, "__name__", None))
+
+
+def _hooks(ip):
+    """Everything in the shell that decides what a cell runs and how its errors are shown."""
+    itm = ip.input_transformer_manager
+    hooks = {
+        "input_transformer_manager": ip.input_transformer_manager,
+        "input_transformers_cleanup": _tuple(itm.cleanup_transforms),
+        "input_transformers_line": _tuple(itm.line_transforms),
+        "input_transformers_token": _tuple(itm.token_transformers),
+        "input_transformers_post": _tuple(ip.input_transformers_post),
+        "ast_transformers": _tuple(ip.ast_transformers),
+        "prefilter_transformers": _tuple(ip.prefilter_manager.transformers),
+        "events": ip.events,
+        "sys.excepthook": sys.excepthook,
+        "sys.settrace": sys.gettrace(),
+        "sys.setprofile": sys.getprofile(),
+        "InteractiveShell class": _type(ip),
+    }
+    for name in _SHELL_METHODS:
+        hooks[f"shell.{name}"] = (_vars(ip).get(name, _MISSING), _getattr(_type(ip), name, _MISSING))
+    kernel = _getattr(ip, "kernel", None)
+    if kernel is not None:
+        for name in _KERNEL_METHODS:
+            hooks[f"kernel.{name}"] = (_vars(kernel).get(name, _MISSING), _getattr(_type(kernel), name, _MISSING))
+        handlers = _getattr(kernel, "shell_handlers", None)
+        if _isinstance(handlers, _dict):
+            hooks["kernel.shell_handlers"] = _tuple(_sorted((k, _id(v)) for k, v in handlers.items()))
+    return hooks
+
+
+_ip_base = {}
+
+
+def _capture_ip_baseline():
+    ip = _shell()
+    if ip is None or _ip_base:
+        return ip
+    _ip_base["hooks"] = _hooks(ip)
+    _ip_base["callbacks"] = {k: _tuple(v) for k, v in ip.events.callbacks.items()}
+    _state["custom"] = _custom_state(ip)
+    return ip
+
+
+def _custom_ok(ip):
+    exc, handler = _custom_state(ip)
+    if (exc, handler) == _state["custom"]:
+        return True
+    if handler in _allowed_handlers and _set(exc) <= {NameError}:
+        _state["custom"] = (exc, handler)              # the library's own hint, installed again
+        return True
+    return False
+
+
+def _ip_problems(ip):
+    out = []
+    base = _ip_base["hooks"]
+    for k, v in _hooks(ip).items():
+        b = base.get(k, _MISSING)
+        if k == "sys.excepthook" and (v == _getattr(ip, "excepthook", None) or v in _state["excepthooks"]):
+            continue                      # IPython sets its own hook while a cell runs, the kernel's in between
+        same = v is b or ((v == b) if _isinstance(v, (_tuple, _MethodType)) else False)  # bound methods: equal
+        if not same:
+            out.append(f"IPython's {k} was changed")
+    for event, cbs in ip.events.callbacks.items():
+        old = _ip_base["callbacks"].get(event, ())
+        for cb in cbs:
+            if not _any(cb is o or cb == o for o in old) and _callback_key(cb) not in _allowed_callbacks:
+                out.append(f"a callback was added to IPython's {event!r} event ({_named(cb)})")
+    if not _custom_ok(ip):
+        names = ", ".join(_getattr(e, "__name__", "?") for e in ip.custom_exceptions)
+        out.append(f"a custom exception handler was installed for {names}")
+    return out
+
+
+def _restore_ip(ip):
+    """Put the shell's hooks back as they were when this module was imported."""
+    base = _ip_base["hooks"]
+    itm = base["input_transformer_manager"]
+    ip.input_transformer_manager = itm
+    itm.cleanup_transforms[:] = base["input_transformers_cleanup"]
+    itm.line_transforms[:] = base["input_transformers_line"]
+    itm.token_transformers[:] = base["input_transformers_token"]
+    ip.input_transformers_post[:] = base["input_transformers_post"]
+    ip.ast_transformers[:] = base["ast_transformers"]
+    ip.prefilter_manager.transformers[:] = base["prefilter_transformers"]
+    ip.events = base["events"]
+    for event, cbs in ip.events.callbacks.items():
+        old = _ip_base["callbacks"].get(event, ())
+        cbs[:] = [cb for cb in cbs if _any(cb is o or cb == o for o in old) or _callback_key(cb) in _allowed_callbacks]
+    if not _custom_ok(ip):
+        exc, handler = _state["custom"]
+        ip.set_custom_exc(exc, handler)
+    sys.excepthook = base["sys.excepthook"]
+    sys.settrace(base["sys.settrace"])
+    sys.setprofile(base["sys.setprofile"])
+    for name in _SHELL_METHODS:
+        inst, _cls = base[f"shell.{name}"]
+        if inst is _MISSING:
+            _vars(ip).pop(name, None)
+        else:
+            _vars(ip)[name] = inst
+
+
+def _restore_modules():
+    """Put back every library and builtin function an answer cell replaced (its code object too)."""
+    for name, attrs in _list(_baseline_modules.items()):
+        current = _vars(_module_objs[name])
+        for k, (obj, code) in attrs.items():
+            if current.get(k, _MISSING) is not obj and _callable(obj):
+                current[k] = obj
+            if code is not None and obj not in _active and obj.__code__ is not code:
+                obj.__code__ = code
+        for k, now in _list(current.items()):
+            if k not in attrs and _from_a_cell(now):
+                del current[k]
+        if sys.modules.get(name, _module_objs[name]) is not _module_objs[name]:
+            sys.modules[name] = _module_objs[name]
+    for cls, attrs in _list(_baseline_classes.items()):
+        for k, (obj, code) in attrs.items():
+            if _vars(cls).get(k, _MISSING) is not obj:
+                setattr(cls, k, obj)
+            if obj not in _active and obj.__code__ is not code:
+                obj.__code__ = code
+    now = _vars(builtins)
+    for k, obj in _builtins_base.items():
+        if k not in _IGNORED_BUILTINS and _callable(obj) and now.get(k, _MISSING) is not obj and not (
+                _isinstance(obj, _MethodType) and now.get(k) == obj):
+            now[k] = obj
+
+
+def _problems():
+    _snapshot_new_modules()
+    out = _list(_state["tampered"]) + _module_problems() + _builtin_problems()
+    ip = _shell()
+    if ip is not None and _ip_base:
+        out += _ip_problems(ip)
+    seen, unique = _set(), []
+    for p in out:
+        if p not in seen:
+            seen.add(p)
+            unique.append(p)
+    return unique
+
+
+def intact():
+    """Fail if an earlier cell changed what the grading relies on (see the module docstring for the list)."""
+    problems = _problems()
+    if problems:
+        more = f" (and {_len(problems) - 5} more)" if _len(problems) > 5 else ""
+        raise AssertionError("an earlier cell changed how this notebook runs or compares results, so it cannot be "
+                             "graded: " + "; ".join(problems[:5]) + more + ". Remove that code and run the notebook "
+                             "again from the top.")
+
+
+_intact = intact
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The kernel side: before a grading cell is transformed, put the hooks back and remember what was changed.
+# ---------------------------------------------------------------------------------------------------------------
+_MARK = "guard.intact()"
+_EXERCISE = re.compile(r"#\s*Autograder:\s*exercise\s+(\w+)")
+
+
+def _protect_names(ip, restore):
+    """Names the setup cell bound to modules and library functions (np, kf, euler_to_dcm...): a grading cell uses
+    the originals even if an answer cell rebound one (``kf = my_fake_module``)."""
+    if _state["user_ns"] is None:
+        _state["excepthooks"].append(sys.excepthook)          # the kernel's own, between cells
+        keep = {}
+        for k, v in ip.user_ns.items():
+            if k.startswith("_") or k in ("In", "Out", "get_ipython", "exit", "quit"):
+                continue
+            mod = _getattr(v, "__module__", None) if not _isinstance(v, _ModuleType) else v.__name__
+            if _isinstance(v, _ModuleType) or (_callable(v) and _isinstance(mod, _str) and
+                                               (_watched(mod) or mod.startswith("matplotlib"))):
+                keep[k] = v
+        _state["user_ns"] = keep
+        return
+    if not restore:
+        return
+    for k, v in _state["user_ns"].items():
+        if ip.user_ns.get(k, _MISSING) is not v:
+            ip.user_ns[k] = v
+
+
+def _install():
+    ip = _capture_ip_baseline()
+    if ip is None or _getattr(ip, "_fusionlab_guard", False):
+        return
+    original = ip.transform_cell
+
+    def transform_cell(raw_cell):
+        try:
+            _snapshot_new_modules()
+            grading = _MARK in raw_cell
+            m = _EXERCISE.search(raw_cell) if grading else None
+            _state["exercise"] = m.group(1) if m else None
+            if grading:
+                found = _ip_problems(ip) + _module_problems() + _builtin_problems()
+                if found:                   # put it all back, so this cell's own intact() runs and reports it
+                    _state["tampered"].extend(p for p in found if p not in _state["tampered"])
+                    _restore_ip(ip)
+                    _restore_modules()
+            _protect_names(ip, grading)
+        except Exception as err:  # never break the kernel; the cell's intact() reports what is wrong
+            _state["tampered"].append(f"the grading guard could not check this cell ({_type(err).__name__})")
+        return original(raw_cell)
+
+    ip.transform_cell = transform_cell
+    ip._fusionlab_guard = True
+    _ip_base["hooks"]["shell.transform_cell"] = (transform_cell, _type(ip).transform_cell)
+
+
+_snapshot_new_modules()
+_install()
