@@ -7,16 +7,23 @@ import pytest
 from fusionlab import checks, rotations, sensors, validate
 
 
-def good(r, p, y):
-    return rotations.euler_to_dcm([r, p, y])
+def good(r, p, y):                       # written as a student would: the library's euler_to_dcm is forbidden
+    return rotations.rot_z(y) @ rotations.rot_y(p) @ rotations.rot_x(r)
+
+
+def columns(R):                          # seed 000 eqs 3.59-3.65, as a student writes them
+    c1, c2 = R[:, 0], R[:, 1]
+    e = c1 @ c2
+    c1, c2 = c1 - e / 2 * c2, c2 - e / 2 * c1
+    return np.column_stack([(3 - c @ c) / 2 * c for c in (c1, c2, np.cross(c1, c2))])
 
 
 @pytest.mark.parametrize("fn, match", [
     (lambda r, p, y: good(r, p, y).T, "transpose of C_bn"),
-    (lambda r, p, y: rotations.euler_to_dcm(np.radians([r, p, y])), "radians twice"),
+    (lambda r, p, y: good(*np.radians([r, p, y])), "radians twice"),
     (lambda r, p, y: rotations.rot_x(r) @ rotations.rot_y(p) @ rotations.rot_z(y), "wrong order"),
     (lambda r, p, y: rotations.seed000_eq339(r, p, y), "eq 3.39 as printed"),
-    (lambda r, p, y: rotations.euler_to_dcm([p, r, y]), "roll and pitch are swapped"),
+    (lambda r, p, y: good(p, r, y), "roll and pitch are swapped"),
     (lambda r, p, y: None, "forget the `return`"),
     (lambda r, p, y: np.eye(2), "expected a 3×3 matrix"),
 ])
@@ -30,6 +37,23 @@ def test_check_euler_to_dcm_passes_the_right_answer(capsys):
     assert capsys.readouterr().out.startswith("✓")
 
 
+def test_a_check_refuses_the_library_s_own_answer_even_through_an_alias():
+    alias = rotations.euler_to_dcm
+    with pytest.raises(checks.Feedback, match=r"your answer called rotations\.euler_to_dcm, the library's own "
+                                              r"solution: this exercise asks you to write it yourself"):
+        checks.check_euler_to_dcm(lambda r, p, y: alias([r, p, y]))
+    assert np.allclose(rotations.euler_to_dcm([0.1, 0.2, 0.3]), good(0.1, 0.2, 0.3))   # restored afterwards
+
+
+def test_a_patched_allclose_earns_no_tick(monkeypatch, capsys):
+    monkeypatch.setattr(np, "allclose", lambda *a, **k: True)
+    with pytest.raises(checks.Feedback, match="cannot be trusted: numpy.allclose was replaced"):
+        checks.check_euler_to_dcm(lambda r, p, y: np.eye(3))
+    with pytest.raises(checks.Feedback, match="cannot be trusted"):
+        checks.check_renormalize(lambda R: R)
+    assert "✓" not in capsys.readouterr().out
+
+
 def test_unwritten_exercise_gets_a_not_written_message():
     def stub(*a):
         raise NotImplementedError("exercise not attempted yet")
@@ -39,8 +63,8 @@ def test_unwritten_exercise_gets_a_not_written_message():
 
 def test_check_renormalize_spots_rows_instead_of_columns():
     with pytest.raises(checks.Feedback, match="renormalised the rows"):
-        checks.check_renormalize(lambda R: rotations.dcm_renormalize(R, axis="rows"))
-    checks.check_renormalize(lambda R: rotations.dcm_renormalize(R, axis="columns"))
+        checks.check_renormalize(lambda R: columns(R.T).T)
+    checks.check_renormalize(columns)
 
 
 def test_check_rodrigues_spots_the_printed_coefficient():
@@ -50,7 +74,8 @@ def test_check_rodrigues_spots_the_printed_coefficient():
         return np.eye(3) + np.sin(s) / s * B + (1 - np.cos(s)) / s * B @ B
     with pytest.raises(checks.Feedback, match=r"printed coefficient \(1 - cos σ\)/σ"):
         checks.check_rodrigues(printed)
-    checks.check_rodrigues(rotations.rodrigues_dcm)
+    checks.check_rodrigues(lambda sigma: np.linalg.matrix_power(           # exp(B) by 2^20 squarings of I + B/2^20
+        np.eye(3) + rotations.skew(sigma) / 2**20 + rotations.skew(sigma) @ rotations.skew(sigma) / 2**41, 2**20))
 
 
 def test_check_sequence_angles_spots_radians_and_reversed_order():

@@ -430,7 +430,7 @@ def test_gps_ins_rejects_bad_input(flight):
 
 # ================================================================ the labs' visible checks (fusionlab.checks)
 
-def test_lab09_checks_accept_the_library_and_name_the_usual_slips():
+def test_lab09_checks_accept_the_library_and_name_the_usual_slips(library_as_student):
     from fusionlab import checks
     checks.check_dcm_measurement_matrices(dcm.accel_measurement_matrix, dcm.mag_measurement_matrix)
     with pytest.raises(checks.Feedback, match="sign of the specific force"):
@@ -453,7 +453,7 @@ def test_lab09_checks_accept_the_library_and_name_the_usual_slips():
         checks.check_dcm_predict(lambda *a: (_ for _ in ()).throw(NotImplementedError()))
 
 
-def test_lab10_checks_accept_the_library_and_name_the_usual_slips():
+def test_lab10_checks_accept_the_library_and_name_the_usual_slips(library_as_student):
     from scipy.linalg import cholesky
     from fusionlab import checks
     checks.check_ins_transition(dcm.ins_transition)

@@ -242,7 +242,7 @@ def test_hybrid_readable_and_batched_agree():
 
 # ------------------------------------------------------------------------------------------------------- checks --
 
-def test_lab06_checks_accept_the_library_and_name_the_slips():
+def test_lab06_checks_accept_the_library_and_name_the_slips(library_as_student):
     from fusionlab import checks
 
     checks.check_aiv_map(g.aiv_map)
@@ -422,7 +422,7 @@ def test_constraints_bias_a_tumbling_motion():
     assert ru < 5e-5 and rc > 20 * ru
 
 
-def test_lab07_checks_accept_the_library():
+def test_lab07_checks_accept_the_library(library_as_student):
     import sympy as sp
     from fusionlab import checks
 

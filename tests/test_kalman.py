@@ -315,7 +315,7 @@ def test_bad_input_names_the_argument(call, match):
 
 
 # ---------------------------------------------------------------- checks, widget and figures of lab 02
-def test_checks_accept_the_library_and_name_the_slips():
+def test_checks_accept_the_library_and_name_the_slips(library_as_student):
     checks.check_joseph(kf.joseph_covariance)
     checks.check_state_space(kf.falling_body_state_space)
     checks.check_predict(kf.predict)

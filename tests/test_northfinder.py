@@ -191,7 +191,7 @@ def test_bad_input_is_rejected_with_the_argument_named():
 
 # ---- the lab's visible checks accept the library and name the usual slips ----------------------------------------
 
-def test_lab08_checks_pass_the_library_and_catch_the_usual_slips():
+def test_lab08_checks_pass_the_library_and_catch_the_usual_slips(library_as_student):
     from fusionlab import checks
 
     def omega_x(a_rC, a_A, a_B, a_C, d, rho, l, wr):

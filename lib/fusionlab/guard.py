@@ -582,8 +582,8 @@ def _custom_ok(ip):
     exc, handler = _custom_state(ip)
     if (exc, handler) == _state["custom"]:
         return True
-    if handler in _allowed_handlers and _set(exc) <= {NameError}:
-        _state["custom"] = (exc, handler)              # the library's own hint, installed again
+    if handler in _allowed_handlers:                   # the library's own hint (it shows the error), installed again
+        _state["custom"] = (exc, handler)
         return True
     return False
 
