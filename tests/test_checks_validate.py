@@ -129,7 +129,7 @@ def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
 
 # ---- visible checks test the general case their hidden tests test; they hold the expected values themselves ----
 
-def test_check_update_rejects_an_update_that_ignores_H(capsys):
+def test_check_update_rejects_an_update_that_ignores_H(capsys, library_as_student):
     from fusionlab import kalman as kf
 
     def ignores_H(x, P, z, H, R):                                  # right for H = [1, 0] and H = I only
@@ -142,7 +142,7 @@ def test_check_update_rejects_an_update_that_ignores_H(capsys):
     assert "dense H" in capsys.readouterr().out
 
 
-def test_check_joseph_and_predict_reject_the_lab_sizes_hard_coded():
+def test_check_joseph_and_predict_reject_the_lab_sizes_hard_coded(library_as_student):
     from fusionlab import kalman as kf
 
     def two_states(P, K, H, R):
@@ -191,7 +191,7 @@ def test_visible_checks_catch_answers_that_only_fit_the_labs_own_case(check, wro
         getattr(checks, check)(wrong)
 
 
-def test_freescale_checks_test_other_constants_and_a_full_gain():
+def test_freescale_checks_test_other_constants_and_a_full_gain(library_as_student):
     from fusionlab import freescale as fz
 
     def v500_only(x, dt, Q_vY=1e4, Q_wb=0.5, Q_wdelta=20.0):

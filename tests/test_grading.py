@@ -222,7 +222,7 @@ def feedback(graded):
 
 def test_feedback_html_shows_the_scores_and_the_visible_tests(feedback):
     assert f"Score: {FULL:.1f} / {FULL + 6:.1f}" in feedback  # 12 auto + 6 written (not graded yet)
-    assert "is not right" in feedback  # the message of the visible test of exercise 1
+    assert "C_bn at (10, -10, 40) deg" in feedback  # the message of the visible test of exercise 1
 
 
 def test_feedback_html_does_not_reveal_hidden_tests(feedback):

@@ -1,0 +1,304 @@
+"""Red team: one-line cheats that used to earn full automatic marks now earn nothing.
+
+For every lab and every autograded exercise, a submission whose answer only calls the library's own solution (the
+"reference call": the solution region replaced by the line in ``CHEATS``) scores 0 on that exercise. Each lab is
+graded with two such students: one cheats on the odd exercises and answers the even ones with the model answer, the
+other the reverse, so every exercise is seen both cheated (0 points) and honestly solved (full points). Labs 01 and 02
+also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.testing.assert_allclose``, and Lab 02
+the cheats that change how later cells run (an input transformer and an AST transformer that blank the test cells, a
+custom exception handler that swallows errors, a monkeypatched ``fusionlab.checks`` and grading guard). The untouched
+release scoring 0 on every lab is tested in ``test_pipeline.py``.
+
+One scratch nbgrader course per lab; one ``nbgrader autograde`` run grades all of that lab's students.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+
+import nbformat
+import pytest
+from nbgrader.api import Gradebook
+
+from conftest import ROOT, nbgrader
+
+# The reference call of each exercise: it replaces the model answer between BEGIN/END SOLUTION (indented as it was;
+# a tuple gives one line per solution region of the cell).
+CHEATS = {
+    "00_mems_sensors": {
+        1: "return np.abs(sensors.smd_transfer(omega, m, k, b))",
+        2: "return sensors.accel_from_bridge(v_out, v_in, x0, m, k)",
+        3: "return sensors.adc_to_physical(counts, zero_level, sensitivity, v_ref, bits)",
+        6: "return np.nan if x == y == 0 else np.arctan2(y, x)",
+        7: "return tuple(sensors.tilt_from_accel(acc))",
+        8: "return sensors.coriolis_force(m, omega, v)",
+        9: "return sensors.integrate_rate(rate, dt, angle0)",
+    },
+    "01_euler_rotations": {
+        1: "return euler_to_dcm([roll, pitch, yaw])",
+        2: "f_body = sensors.specific_force(C_ex)",
+        3: 'angles_xyz = deg(rotations.dcm_to_sequence(C_ex, "XYZ"))\n'
+           'angles_yxz = deg(rotations.dcm_to_sequence(C_ex, "YXZ"))',
+        4: 'return rotations.dcm_renormalize(R, axis="columns")',
+        5: "return rotations.rodrigues_dcm(sigma)",
+        6: "return rotations.dcm_to_euler(C, yaw_at_lock=yaw)[0]",
+    },
+    "02_kalman_falling_body": {
+        1: "return kf.joseph_covariance(P, K, H, R)",
+        2: "return kf.falling_body_state_space(k, m, g, dt)",
+        3: "return kf.predict(x, P, A, Q, B, u)",
+        4: "f = KalmanFilter(dim_x=len(x), dim_z=len(z))\n"
+           "f.x, f.P, f.H, f.R = x.copy(), P.copy(), H, R\n"
+           "f.update(z)\n"
+           "return f.x, f.P, f.K",
+    },
+    "03_correlation_fusion": {
+        1: "return co.moving_average(x, n)",
+        2: "return co.ratio(gyro_rate, accel_term, eps)",
+        3: "return co.fuse(accel_deg, increment, weight, f0=f0)",
+    },
+    "04_ecompass": {
+        2: "return fz.kappa_general(s, r, alpha)",
+        4: "return fz.weights(fz.accel_noise(G), fz.mag_noise(B_c, B), B)",
+        5: "return fz.tilt_compensated_heading(G, B_c)",
+    },
+    "05_freescale_kalman": {
+        1: "return fz.measurement_matrix(dt, 9)",
+        2: "return fz.process_noise(x_prev, dt, dataclasses.replace(fz.V500, Q_vY=Q_vY, Q_wb=Q_wb, Q_wdelta=Q_wdelta))",
+        3: "return fz.measurement_noise(qvgqa, qvbqd, dt, dataclasses.replace(fz.V500, Q_vY=Q_vY, Q_wb=Q_wb), B=B)",
+        4: "return fz.kalman_gain(Q_w, C, Q_v)",
+        5: "fz.Kalman9.step(kf, gyr_dps, G, B_c)",
+    },
+    "06_gfimu_aiv": {
+        1: "return gfimu.aiv_map()",
+        2: "return gfimu.quadratic_jacobian(x)",
+        3: "return gfimu.three_state_noise(N, dt, d)",
+        4: "from filterpy.kalman import KalmanFilter\n"
+           "f = KalmanFilter(dim_x=3, dim_z=6)\n"
+           "f.x, f.P, f.R, f.M = x.copy(), P.copy(), R, M\n"
+           "H = gfimu.quadratic_jacobian(x)\n"
+           "f.update_correlated(y - gfimu.quadratic_terms(x) + H @ x, H=H)\n"
+           "return f.x, f.P",
+    },
+    "07_gfimu_constraints": {
+        1: "return gfimu.aiv_measurement_jacobian(x)[1]",
+        2: "lie = gfimu.observability_matrix(augmented=True, order=3)[2]\n"
+           "return next(b for a, b in zip(lie, lie[1:]) if sp.expand(L - a) == sp.zeros(*a.shape))",
+        3: "return gfimu.constraints(x), gfimu.constraint_jacobian(x)",
+    },
+    "08_north_finder": {
+        1: "fixed = np.array([[0, 0, a_Az], [0, 0, a_Bz], [0, 0, a_Cz], [0, 0, 0.0]])\n"
+           "return nf.rate_from_rotating([0.0, 0.0, a_rC], fixed, d, rho, l, omega_r)[0]",
+        2: "return nf.rate_noise_coefficient(rho, d, l, omega_r)",
+        3: "return nf.rate_noise_coefficient_exact(rho, d, l, omega_r)",
+        4: 'return nf.demodulate(x, theta, "sampled")',
+        5: "return nf.synchronous_sampling(x, theta)",
+    },
+    "09_dcm_ahrs": {
+        1: ("return dcm.accel_measurement_matrix(g)", "return dcm.mag_measurement_matrix(inclination)"),
+        2: "F = dcm.ahrs_transition(x[0:3], x[3:6], dcm.A_matrix(np.asarray(gyr) * dt), dt)\n"
+           "return F @ x, F @ P @ F.T + dcm.ahrs_process_noise(x[0:3], x[3:6], dt, gyro_noise, bias_walk)",
+    },
+    "10_gps_ins": {
+        1: "return dcm.ins_transition(x, acc, A_tilde, dt)",
+        2: "return dcm.sigma_points_2n(x, P)",
+    },
+    "11_real_data": {
+        1: "return metrics.heading_error(q_err)",
+        2: "return metrics.inclination_error(q_err)",
+        3: "return float(np.degrees(metrics.rms(angle, movement)))",
+    },
+    "12_sensor_errors": {
+        1: "return cal.quadric_normal_equations(mag)",
+        2: "return cal.read_arw(taus, adev, tau_max)",
+        3: 'return sensors.remove_gravity(q_bn, acc, g, frame="ENU")',
+    },
+}
+# Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh),
+# and Lab 00's value exercises 5 and 10, whose visible checks compute the expected value with the very function
+# (sensors.adc_step, sensors.null_offset), so it cannot be reserved across the answer: the integrity report of the
+# grading tools reads the submitted answer for that call instead.
+NO_REFERENCE = {("00_mems_sensors", 4), ("00_mems_sensors", 5), ("00_mems_sensors", 10), ("04_ecompass", 1),
+                ("04_ecompass", 3)}
+
+# Junk that has the right shapes (so the visible shape checks pass), for the patched-numpy students.
+JUNK = {
+    "01_euler_rotations": {1: "return np.eye(3)", 2: "f_body = np.zeros(3)", 3: "angles_xyz = angles_yxz = np.zeros(3)",
+                           4: "return R", 5: "return np.eye(3)", 6: "return 0.0"},
+    "02_kalman_falling_body": {1: "return P", 2: "return np.eye(2), np.eye(2), np.zeros(2)", 3: "return x, P",
+                               4: "return x, P, 0.5 * np.eye(2)"},
+}
+PATCH_NUMPY = ("np.allclose = lambda *a, **k: True\nnp.isclose = lambda *a, **k: True\n"
+               "np.testing.assert_allclose = lambda *a, **k: None\n")
+
+# Code in an answer cell that changes how later cells run (each put before the stub of exercise 1 of Lab 02).
+HOOKS = {
+    "input_transformer": """
+def _blank(lines):
+    return ["pass\\n"] if any("Autograder" in line for line in lines) else lines
+get_ipython().input_transformers_cleanup.append(_blank)
+""",
+    "ast_transformer": """
+import ast
+class _Blank(ast.NodeTransformer):
+    def visit_Module(self, node):
+        if "Autograder" in ast.unparse(node) or "guard" in ast.unparse(node):
+            node.body = [ast.Pass()]
+        return node
+get_ipython().ast_transformers.append(_Blank())
+""",
+    "custom_exception": """
+get_ipython().set_custom_exc((Exception,), lambda shell, etype, value, tb, tb_offset=None: [])
+""",
+}
+# The library monkeypatched from an answer cell (with junk answers, so only the patch could earn points).
+PATCH_CHECKS = """
+from fusionlab import checks as _c
+_c.check_joseph = _c.check_state_space = _c.check_predict = _c.check_update = lambda fn: print("✓")
+_c.guard.intact = _c.guard.release = lambda *a, **k: None
+_c.guard.grade = _c.guard.assert_close = lambda *a, **k: None
+"""
+
+
+def _gid(cell):
+    return cell.metadata.get("nbgrader", {}).get("grade_id")
+
+
+def _points(lab):
+    nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    out = {}
+    for cell in nb.cells:
+        m = re.fullmatch(r"ex(\d+)_tests", _gid(cell) or "")
+        if m:
+            out[int(m.group(1))] = cell.metadata["nbgrader"]["points"]
+    return out
+
+
+def _region(source, code):
+    """``source`` with its BEGIN/END SOLUTION regions replaced by ``code`` (indented like the markers)."""
+    codes = iter([code] if isinstance(code, str) else code)
+    lines, out, inside = source.splitlines(), [], False
+    for line in lines:
+        if "### BEGIN SOLUTION" in line:
+            indent = line[:len(line) - len(line.lstrip())]
+            out += [indent + c if c else c for c in next(codes).strip("\n").splitlines()]
+            inside = True
+        elif "### END SOLUTION" in line:
+            inside = False
+        elif not inside:
+            out.append(line)
+    return "\n".join(out)
+
+
+def _answered(release, solution, replace):
+    """The release with every exercise answered: the model answer, or ``replace[n]`` in its place for exercise n."""
+    nb = nbformat.from_dict(release)
+    answers = {_gid(c): c.source for c in solution.cells if _gid(c)}
+    for cell in nb.cells:
+        m = re.fullmatch(r"ex(\d+)_solution", _gid(cell) or "")
+        if m:
+            n = int(m.group(1))
+            src = answers[_gid(cell)]
+            cell.source = (_region(src, replace[n]) if n in replace
+                           else "\n".join(ln for ln in src.splitlines() if "### " not in ln))   # the model answer
+    return nb
+
+
+def _prepend(nb, gid, code):
+    nb = nbformat.from_dict(nb)
+    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    cell.source = code.strip("\n") + "\n" + cell.source
+    return nb
+
+
+def _students(lab, release, solution):
+    cheats = CHEATS[lab]
+    odd = {n: c for n, c in cheats.items() if n % 2}
+    even = {n: c for n, c in cheats.items() if not n % 2}
+    out = {"cheat_odd": _answered(release, solution, odd), "cheat_even": _answered(release, solution, even)}
+    if lab in JUNK:
+        junk = _answered(release, solution, JUNK[lab])
+        out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
+    if lab == "02_kalman_falling_body":
+        for name, code in HOOKS.items():
+            out[f"hook_{name}"] = _prepend(release, "ex1_solution", code)
+        out["hook_patched_checks"] = _prepend(_answered(release, solution, JUNK[lab]), "ex1_solution", PATCH_CHECKS)
+    return out
+
+
+_GRADED = {}
+
+
+@pytest.fixture
+def graded(tmp_path_factory):
+    def grade(lab):
+        if lab not in _GRADED:
+            root = tmp_path_factory.mktemp(f"cheats{lab[:2]}")
+            shutil.copy(ROOT / "nbgrader_config.py", root)
+            shutil.copytree(ROOT / "solutions" / lab, root / "solutions" / lab)
+            nbgrader(["generate_assignment", lab, "--force"], cwd=root)
+            release = nbformat.read(root / "labs" / lab / f"{lab}.ipynb", as_version=4)
+            solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+            students = _students(lab, release, solution)
+            for student, nb in students.items():
+                dest = root / "submitted" / student / lab
+                dest.mkdir(parents=True)
+                nbformat.write(nb, dest / f"{lab}.ipynb")
+            nbgrader(["autograde", lab], cwd=root, timeout=1800)
+            scores = {}
+            with Gradebook(f"sqlite:///{root / 'gradebook.db'}") as gb:
+                for student in students:
+                    sub = gb.find_submission_notebook(lab, lab, student)
+                    scores[student] = {int(g.name[2:-6]): g.score for g in sub.grades
+                                       if re.fullmatch(r"ex\d+_tests", g.name)}
+            _GRADED[lab] = dict(root=root, scores=scores)
+        return _GRADED[lab]
+    return grade
+
+
+def _errors(graded, lab, student, gid):
+    nb = nbformat.read(graded["root"] / "autograded" / student / lab / f"{lab}.ipynb", as_version=4)
+    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    return " ".join(f"{o.ename}: {o.evalue}" for o in cell.get("outputs", []) if o.output_type == "error")
+
+
+@pytest.mark.parametrize("lab", sorted(CHEATS))
+def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(graded, lab):
+    points = _points(lab)
+    assert sorted(CHEATS[lab]) == sorted(n for n in points if (lab, n) not in NO_REFERENCE), \
+        f"{lab}: a cheat for every autograded exercise {sorted(points)} that a library function answers"
+    g = graded(lab)
+    for student, cheated in (("cheat_odd", 1), ("cheat_even", 0)):
+        expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] else p) for n, p in points.items()}
+        assert g["scores"][student] == expected, (student, {n: _errors(g, lab, student, f"ex{n}_tests")[:300]
+                                                            for n in points})
+
+
+@pytest.mark.parametrize("lab", sorted(CHEATS))
+def test_the_reference_call_is_named_in_the_feedback(graded, lab):
+    g = graded(lab)
+    first = min(CHEATS[lab])
+    msg = _errors(g, lab, "cheat_odd", f"ex{first}_tests")
+    assert f"exercise {first} asks you to write it yourself" in msg, msg[:500]
+
+
+@pytest.mark.parametrize("lab", sorted(JUNK))
+def test_junk_answers_behind_a_patched_allclose_score_zero(graded, lab):
+    g = graded(lab)
+    assert g["scores"]["junk_patched_numpy"] == {n: 0 for n in _points(lab)}
+    msg = _errors(g, lab, "junk_patched_numpy", "ex1_tests")
+    assert "numpy.allclose was replaced" in msg and "numpy.testing.assert_allclose was replaced" in msg, msg[:500]
+
+
+@pytest.mark.parametrize("hook, reason", [
+    ("input_transformer", "IPython's input_transformers_cleanup was changed"),
+    ("ast_transformer", "IPython's ast_transformers was changed"),
+    ("custom_exception", "a custom exception handler was installed for Exception"),
+    ("patched_checks", "fusionlab.guard.release was replaced"),
+])
+def test_cheats_that_change_how_later_cells_run_score_zero(graded, hook, reason):
+    lab = "02_kalman_falling_body"
+    g = graded(lab)
+    assert g["scores"][f"hook_{hook}"] == {n: 0 for n in _points(lab)}
+    msg = _errors(g, lab, f"hook_{hook}", "ex4_tests")
+    assert reason in msg, msg[:500]
