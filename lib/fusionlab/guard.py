@@ -425,19 +425,26 @@ def _entry(obj):
 
 
 def _watched(name):
-    parts = name.split(".")
-    return parts[0] in _WATCHED and not _any(p.startswith("_") for p in parts[1:])   # public modules only
+    parts = name.split(".")                  # public modules only; numpy and scipy down to their subpackages
+    return (parts[0] in _WATCHED and not _any(p.startswith("_") for p in parts[1:])
+            and (_len(parts) <= 2 or parts[0] in ("fusionlab", "filterpy")))
+
+
+_sizes = {}                # module name -> size of its dict when last recorded
 
 
 def _snapshot_new_modules():
     """Record every watched module (and its Python classes) not seen before; cheap when nothing is new."""
-    for name, mod in _list(sys.modules.items()):
-        if name in _baseline_modules and name.startswith("fusionlab."):
-            known = _baseline_modules[name]         # a module seen while it was still importing: its later functions
-            for k, v in _list(_vars(mod).items()):
+    for name, known in _list(_baseline_modules.items()):
+        if name.startswith("fusionlab.") and _len(_vars(_module_objs[name])) != _sizes.get(name):
+            for k, v in _list(_vars(_module_objs[name]).items()):   # seen while still importing: its later functions
                 if k not in known and not _from_a_cell(v):
                     known[k] = _entry(v)
-            continue
+            _sizes[name] = _len(_vars(_module_objs[name]))
+    if _len(sys.modules) == _sizes.get("sys.modules"):
+        return
+    _sizes["sys.modules"] = _len(sys.modules)
+    for name, mod in _list(sys.modules.items()):
         if name in _baseline_modules or not _isinstance(mod, _ModuleType) or not _watched(name):
             continue
         try:
