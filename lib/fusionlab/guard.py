@@ -154,8 +154,8 @@ def _raiser_code(func, hit):
     code = ns["_outer"]().__code__
     consts = _tuple(hit if c == _TOKEN else c for c in code.co_consts)
     code = code.replace(co_consts=consts, co_name=func.__code__.co_name, co_qualname=func.__code__.co_qualname)
-    if code.co_freevars != free:   # the compiler orders cell variables its own way: match by position
-        raise TypeError(f"cannot build a stand-in for {_named(func)} (free variables {free} vs {code.co_freevars})")
+    if _len(code.co_freevars) != _len(free):  # __code__ needs as many free variables as the closure has cells
+        raise TypeError(f"cannot build a stand-in for {_named(func)} (free variables {free})")
     return code
 
 
@@ -180,7 +180,7 @@ class forbid:
     def message(self, func):
         which = f"exercise {self.exercise}" if self.exercise is not None else "this exercise"
         return (f"your answer called {_named(func)}, the library's own solution: {which} asks you to write it "
-                f"yourself (you may use numpy and the functions of earlier exercises).")
+                f"yourself (your own functions from earlier exercises are fine).")
 
     def __enter__(self):
         done = []
