@@ -277,7 +277,7 @@ def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(grad
 @pytest.mark.parametrize("lab", sorted(CHEATS))
 def test_the_reference_call_is_named_in_the_feedback(graded, lab):
     g = graded(lab)
-    first = min(CHEATS[lab])
+    first = min(n for n in CHEATS[lab] if n % 2)                # the first exercise the odd student cheats on
     msg = _errors(g, lab, "cheat_odd", f"ex{first}_tests")
     assert f"exercise {first} asks you to write it yourself" in msg, msg[:500]
 
