@@ -142,9 +142,9 @@ def _last_name(node):
 
 
 def _forbidden_in(source):
-    """Last names of the arguments of ``guard.forbid(...)`` and of every ``forbid=...`` in a test cell; a name bound
-    in the cell to a tuple (``_forbid = (kf.update, ...)``, then ``forbid=_forbid`` or ``guard.forbid(*_forbid)``)
-    stands for its items."""
+    """Last names of the arguments of ``guard.forbid(...)``, ``guard.release(...)`` and of every ``forbid=...`` in a
+    test cell; a name bound in the cell to a tuple (``_forbid = (kf.update, ...)``, then ``forbid=_forbid`` or
+    ``guard.forbid(*_forbid)``) stands for its items."""
     try:
         tree = ast.parse(_strip_magics(source)[0])
     except SyntaxError:
@@ -165,7 +165,7 @@ def _forbidden_in(source):
     for node in ast.walk(tree):
         if not isinstance(node, ast.Call):
             continue
-        if _last_name(node.func) == "forbid":
+        if _last_name(node.func) in ("forbid", "release"):   # release(...) ends a value exercise's reserve(...)
             found |= set().union(*(names(a) for a in node.args)) if node.args else set()
         for kw in node.keywords:
             if kw.arg == "forbid":

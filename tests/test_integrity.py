@@ -167,11 +167,13 @@ def test_reference_names_come_from_guard_forbid_and_forbid_keywords(tmp_path):
     t4.source = ("_forbid = (kf.update, filterpy.kalman.KalmanFilter.update)\n_more = [kf.kalman_gain, *_forbid]\n"
                  "guard.grade(my_update, kf.update, [()], forbid=_forbid)\nwith guard.forbid(*_more, kf._gain):\n"
                  "    pass")
+    [t2] = [c for c in nb.cells if _gid(c) == "ex2_tests"]
+    t2.source = "guard.release(kf.state_space_elsewhere, exercise=2)   # a value exercise: reserve(...) ... release(...)"
     src = integrity.Source(nb, LAB)
     assert src.forbid[1] == {"joseph_covariance", "multi_dot"}
     assert src.forbid[3] == {"predict"}
     assert src.forbid[4] == {"update", "kalman_gain", "_gain"}
-    assert not src.forbid.get(2), "with guard.forbid in the tests the fallback table is not used"
+    assert src.forbid[2] == {"state_space_elsewhere"}, "release(...) names it; the fallback table is not used"
     # the extracted names are what the answer of that exercise is checked against
     assert [k for _, k, _ in integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=1)] == ["reference"]
     assert integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=3) == []
