@@ -64,7 +64,8 @@ def _hidden_lines(solution):
         region, _, after = rest.partition("### END HIDDEN TESTS")
         visible |= {line.strip() for line in (before + after).splitlines()}
         hidden += [line.strip() for line in region.splitlines() if len(line.strip()) >= 12]
-    return [line for line in hidden if line not in visible]
+    # a hidden line that stands inside a visible one (an argument list such as `rtol=1e-5, atol=1e-9)`) is no secret
+    return [line for line in hidden if not any(line in seen for seen in visible)]
 
 
 def _text(page):
@@ -136,8 +137,8 @@ def test_feedback_html_shows_the_failure_messages(failed_everything):
     # the messages of visible asserts (lab 01 exercise 1, lab 02 exercise 2) are what a student needs to see
     assert ("AssertionError: C_bn at (10, -10, 40) deg differs from the reference by up to"
             in _text(failed_everything[LABS[0]]["html"]))
-    assert "AssertionError: A at the lab's values differs from the reference by up to 1 at [0, 0]" in \
-        _text(failed_everything[LABS[1]]["html"])
+    assert re.search(r"AssertionError: A at the lab's values differs from the reference by up to 1 at \[\d, \d\] "
+                     r"\(got 1, expected 0", _text(failed_everything[LABS[1]]["html"]))
 
 
 @pytest.mark.parametrize("lab", LABS)
