@@ -162,10 +162,22 @@ def terminal_velocity(k, m, g=9.8):
 
     Parameters
     ----------
-    k : float, kg/s -- linear drag coefficient; m : float, kg -- mass; g : float, m/s² -- gravity
+    k : float
+        Linear drag coefficient, kg/s (> 0).
+    m : float
+        Mass, kg (> 0).
+    g : float, optional
+        Gravity, m/s².
+
     Returns
     -------
-    float, m/s -- ``-m g / k`` (negative: downwards). Lab values: -392 m/s.
+    float
+        ``-m g / k`` in m/s (negative: downwards). Lab values: -392 m/s.
+
+    Examples
+    --------
+    >>> terminal_velocity(0.25, 10.0)
+    -392.0
     """
     k, m, g = _scalar(k, "k", True), _scalar(m, "m", True), _scalar(g, "g")
     return -m * g / k
@@ -175,6 +187,23 @@ def time_constant(k, m):
     """Time constant ``τ = m / k`` (s) of the linear-drag model: v approaches terminal as ``exp(-t/τ)``.
 
     Lab values: 40 s, so the lab's 1.99 s sees only 5 % of the approach.
+
+    Parameters
+    ----------
+    k : float
+        Linear drag coefficient, kg/s (> 0).
+    m : float
+        Mass, kg (> 0).
+
+    Returns
+    -------
+    float
+        ``τ`` in s.
+
+    Examples
+    --------
+    >>> time_constant(0.25, 10.0)
+    40.0
     """
     return _scalar(m, "m", True) / _scalar(k, "k", True)
 
@@ -196,12 +225,33 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
 
     Parameters
     ----------
-    k, m, g, dt, x0, v0 : float -- drag (kg/s), mass (kg), gravity (m/s²), step (s), start position (m) and
-        velocity (m/s)
-    TMAX : int -- the printed ``TMAX`` (array length)
+    k : float, optional
+        Linear drag coefficient, kg/s.
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    dt : float, optional
+        Time step, s.
+    TMAX : int, optional
+        The printed ``TMAX`` (array length, not seconds).
+    x0 : float, optional
+        Start position, m (up).
+    v0 : float, optional
+        Start velocity, m/s (up).
+
     Returns
     -------
-    X, V : (TMAX,) arrays -- position (m) and velocity (m/s) at sample indices 1..TMAX (MATLAB), 0..TMAX-1 here
+    X : ndarray, shape (TMAX,)
+        Position, m, at sample indices 1..TMAX (MATLAB), 0..TMAX-1 here.
+    V : ndarray, shape (TMAX,)
+        Velocity, m/s, at the same samples.
+
+    Examples
+    --------
+    >>> X, V = seed000_labcode_falling_body()
+    >>> len(X), round(float(X[-1]), 3), round(float(V[-1]), 3)
+    (200, 181.006, -19.027)
     """
     k, m, g = _scalar(k, "k", True), _scalar(m, "m", True), _scalar(g, "g")
     dt, x0, v0 = _scalar(dt, "dt", True), _scalar(x0, "x0"), _scalar(v0, "v0")
@@ -223,11 +273,27 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
 
     Parameters
     ----------
-    duration : float, s -- simulated time; must be a whole number of steps
-    k, m, g, dt, x0, v0 : float -- as :func:`seed000_labcode_falling_body`
+    duration : float
+        Simulated time, s; must be a whole number of steps ``dt``.
+    k : float, optional
+        Linear drag coefficient, kg/s.
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    dt : float, optional
+        Time step, s.
+    x0 : float, optional
+        Start position, m (up).
+    v0 : float, optional
+        Start velocity, m/s (up).
+
     Returns
     -------
-    t : (N + 1,) array, s; x : (N + 1, 2) array -- ``[position (m), velocity (m/s)]`` at each ``t``
+    t : ndarray, shape (N + 1,)
+        Sample times, s, with ``N = duration / dt``.
+    x : ndarray, shape (N + 1, 2)
+        ``[position (m), velocity (m/s)]`` at each ``t``.
     """
     duration, dt = _scalar(duration, "duration", True), _scalar(dt, "dt", True)
     k, m, g = _scalar(k, "k", True), _scalar(m, "m", True), _scalar(g, "g")
@@ -251,10 +317,23 @@ def falling_body_exact(t, k=0.25, m=10.0, g=9.8, x0=200.0, v0=0.0):
 
     Parameters
     ----------
-    t : (...,) array, s
+    t : array_like, shape (...)
+        Times, s.
+    k : float, optional
+        Linear drag coefficient, kg/s.
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    x0 : float, optional
+        Start position, m (up).
+    v0 : float, optional
+        Start velocity, m/s (up).
+
     Returns
     -------
-    (..., 2) array -- ``[position (m), velocity (m/s)]``
+    ndarray, shape (..., 2)
+        ``[position (m), velocity (m/s)]`` at each time.
     """
     t = validate.array(t, "t")
     vT, tau = terminal_velocity(k, m, g), time_constant(k, m)
@@ -270,6 +349,24 @@ def quadratic_terminal_velocity(m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD, a
 
     ``m g = ½ ρ C_D A v_T²`` gives ``v_T = -sqrt(2 m g / (ρ C_D A))``. With the module's assumed constants
     (10 kg sphere, 25 cm across, sea-level air): -83.3 m/s.
+
+    Parameters
+    ----------
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    rho : float, optional
+        Air density, kg/m³.
+    C_D : float, optional
+        Drag coefficient (dimensionless).
+    area : float, optional
+        Frontal area, m².
+
+    Returns
+    -------
+    float
+        ``v_T`` in m/s (negative: downwards).
     """
     m, g = _scalar(m, "m", True), _scalar(g, "g", True)
     rho, C_D, area = _scalar(rho, "rho", True), _scalar(C_D, "C_D", True), _scalar(area, "area", True)
@@ -286,16 +383,32 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
 
     Parameters
     ----------
-    duration : float, s -- end of the integration
-    x0, v0 : float -- start position (m) and velocity (m/s, up positive)
-    m, g, rho, C_D, area : float -- mass (kg), gravity (m/s²), air density (kg/m³), drag coefficient (-),
-        frontal area (m²)
-    stop_at_ground : bool -- stop when x reaches 0 (a terminal ``solve_ivp`` event)
-    t_eval : (N,) array or None -- times at which to report the solution (default: the solver's own steps)
+    duration : float
+        End of the integration, s.
+    x0 : float, optional
+        Start position, m.
+    v0 : float, optional
+        Start velocity, m/s (up positive).
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    rho : float, optional
+        Air density, kg/m³.
+    C_D : float, optional
+        Drag coefficient (dimensionless).
+    area : float, optional
+        Frontal area, m².
+    stop_at_ground : bool, optional
+        Stop when x reaches 0 (a terminal ``solve_ivp`` event).
+    t_eval : array_like, shape (N,), optional
+        Times, s, at which to report the solution (default: the solver's own steps).
+
     Returns
     -------
-    scipy.integrate OdeResult -- ``.t`` (s), ``.y`` (2, N) = position (m), velocity (m/s); ``.t_events[0]`` holds
-    the ground-impact time when ``stop_at_ground``
+    scipy.integrate OdeResult
+        ``.t`` (s), ``.y`` shape (2, N) = position (m), velocity (m/s); ``.t_events[0]`` holds the ground-impact
+        time when ``stop_at_ground``.
     """
     duration = _scalar(duration, "duration", True)
     m, g = _scalar(m, "m", True), _scalar(g, "g")
@@ -324,9 +437,31 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     ``A = [[1, dt], [0, 1 - (k/m) dt]]``, ``B = [[1, 0], [0, -g dt]]``, ``u = [0, 1]``, so ``B u = [0, -g dt]``:
     the thesis puts gravity in B and a constant unit "input" in u.
 
+    Parameters
+    ----------
+    k : float, optional
+        Linear drag coefficient, kg/s.
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    dt : float, optional
+        Time step, s.
+
     Returns
     -------
-    A : (2, 2) array; B : (2, 2) array; u : (2,) array
+    A : ndarray, shape (2, 2)
+        Transition matrix.
+    B : ndarray, shape (2, 2)
+        Input matrix.
+    u : ndarray, shape (2,)
+        Input vector.
+
+    Examples
+    --------
+    >>> A, B, u = falling_body_state_space()
+    >>> B @ u                                   # gravity enters as a velocity change of -g dt per step
+    array([ 0.   , -0.098])
     """
     k, m, g, dt = _scalar(k, "k", True), _scalar(m, "m", True), _scalar(g, "g"), _scalar(dt, "dt", True)
     A = np.array([[1.0, dt], [0.0, 1.0 - (k / m) * dt]])            # (000 §4.4.2)
@@ -350,10 +485,25 @@ def mass_spring_damper_ss(m, b, k, input="force"):
 
     Parameters
     ----------
-    m : float, kg; b : float, N s/m (damping); k : float, N/m (spring)
+    m : float
+        Mass, kg.
+    b : float
+        Damping, N s/m.
+    k : float
+        Spring stiffness, N/m.
+    input : {'force', 'base_accel'}, optional
+        What drives the mass (see above).
+
     Returns
     -------
-    A (2, 2), B (2, 1), C (1, 2), D (1, 1) arrays
+    A : ndarray, shape (2, 2)
+        State matrix.
+    B : ndarray, shape (2, 1)
+        Input matrix.
+    C : ndarray, shape (1, 2)
+        Output matrix.
+    D : ndarray, shape (1, 1)
+        Feed-through matrix.
     """
     m, k = _scalar(m, "m", True), _scalar(k, "k", True)
     b = _scalar(b, "b")
@@ -380,9 +530,31 @@ def gaussian_product(mu1, var1, mu2, var2):
     measurement N(μ₂, σ₂²). It is the scalar Kalman update with ``K = σ₁² / (σ₁² + σ₂²)``. (The thesis shows only
     the figures; the formulas are the standard ones.) Arrays broadcast.
 
+    Parameters
+    ----------
+    mu1 : float or array_like
+        Mean of the first Gaussian (the prediction), in the unit of the quantity.
+    var1 : float or array_like
+        Its variance, unit squared (> 0).
+    mu2 : float or array_like
+        Mean of the second Gaussian (the measurement).
+    var2 : float or array_like
+        Its variance (> 0).
+
     Returns
     -------
-    mu, var : arrays (or floats) of the broadcast shape
+    mu : float or ndarray
+        Mean of the product, of the broadcast shape.
+    var : float or ndarray
+        Its variance, always smaller than both ``var1`` and ``var2``.
+
+    Examples
+    --------
+    A prediction of 10 ± 2 and a measurement of 12 ± 1: the product leans to the better one.
+
+    >>> mu, var = gaussian_product(10.0, 4.0, 12.0, 1.0)
+    >>> round(float(mu), 3), round(float(var), 3)
+    (11.6, 0.8)
     """
     mu1, mu2 = validate.array(mu1, "mu1"), validate.array(mu2, "mu2")
     var1, var2 = validate.array(var1, "var1"), validate.array(var2, "var2")
@@ -404,12 +576,31 @@ def rls_scalar(y, R, x0=0.0, P0=np.inf):
 
     Parameters
     ----------
-    y : (N,) array -- measurements of the constant
-    R : float > 0 -- measurement variance
-    x0 : float -- initial estimate; P0 : float > 0 or inf -- its variance
+    y : array_like, shape (N,)
+        Measurements of the constant.
+    R : float
+        Measurement variance (> 0), unit of ``y`` squared.
+    x0 : float, optional
+        Initial estimate.
+    P0 : float, optional
+        Its variance (> 0, or inf for no prior knowledge).
+
     Returns
     -------
-    x_hat, P, K : (N,) arrays -- estimate, variance and gain after each measurement
+    x_hat : ndarray, shape (N,)
+        Estimate after each measurement.
+    P : ndarray, shape (N,)
+        Its variance.
+    K : ndarray, shape (N,)
+        The gain used at each measurement.
+
+    Examples
+    --------
+    With no prior the estimate is the running mean and ``P_k = R / k``:
+
+    >>> x_hat, P, K = rls_scalar([1.0, 3.0, 2.0], R=1.0)
+    >>> x_hat, np.round(P, 3)
+    (array([1., 2., 2.]), array([1.   , 0.5  , 0.333]))
     """
     y = validate.array(y, "y")
     if y.ndim != 1:
@@ -445,10 +636,22 @@ def kalman_gain(P, H, R):
 
     Parameters
     ----------
-    P : (n, n) prior covariance; H : (m, n); R : (m, m)
+    P : array_like, shape (n, n)
+        Prior covariance.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
     Returns
     -------
-    (n, m) array
+    ndarray, shape (n, m)
+        The gain ``K``.
+
+    Examples
+    --------
+    >>> kalman_gain([[4.0]], [[1.0]], [[1.0]])
+    array([[0.8]])
     """
     d = _model(P=P, H=H, R=R)
     return _gain(d["P"], d["H"], d["R"])
@@ -462,38 +665,110 @@ def joseph_covariance(P, K, H, R):
 
     Parameters
     ----------
-    P : (n, n) prior covariance; K : (n, m); H : (m, n); R : (m, m)
+    P : array_like, shape (n, n)
+        Prior covariance.
+    K : array_like, shape (n, m)
+        Gain.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
     Returns
     -------
-    (n, n) array
+    ndarray, shape (n, n)
+        Posterior covariance.
     """
     d = _model(P=P, H=H, R=R, K=K)
     return _joseph(d["P"], d["K"], d["H"], d["R"])
 
 
 def short_covariance(P, K, H):
-    """Posterior covariance, short form ``(I - K H) P`` (000 §4.3.1 alternate form; the lab code's
-    ``s.P = s.P - K*s.H*s.P``). Equals the Joseph form only at the optimal K."""
+    """Posterior covariance, short form ``(I - K H) P`` (000 §4.3.1 alternate form).
+
+    The lab code's ``s.P = s.P - K*s.H*s.P``. Equals the Joseph form only at the optimal K.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Prior covariance.
+    K : array_like, shape (n, m)
+        Gain.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Posterior covariance.
+    """
     d = _model(P=P, H=H, K=K)
     P, K, H = d["P"], d["K"], d["H"]
     return (np.eye(P.shape[0]) - K @ H) @ P                          # (000 §4.3.1, alternate form)
 
 
 def information_covariance(P, H, R):
-    """Posterior covariance, information form ``(P⁻¹ + Hᵀ R⁻¹ H)⁻¹`` (000 §4.3.1 alternate form)."""
+    """Posterior covariance, information form ``(P⁻¹ + Hᵀ R⁻¹ H)⁻¹`` (000 §4.3.1 alternate form).
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Prior covariance.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Posterior covariance.
+    """
     d = _model(P=P, H=H, R=R)
     P, H, R = d["P"], d["H"], d["R"]
     return np.linalg.inv(np.linalg.inv(P) + H.T @ np.linalg.inv(R) @ H)   # (000 §4.3.1, alternate form)
 
 
 def gain_from_posterior(P_post, H, R):
-    """The alternate gain ``K = P_k Hᵀ R⁻¹`` (000 §4.3.1), written with the *posterior* covariance ``P_k``."""
+    """The alternate gain ``K = P_k Hᵀ R⁻¹`` (000 §4.3.1), written with the *posterior* covariance ``P_k``.
+
+    Parameters
+    ----------
+    P_post : array_like, shape (n, n)
+        Posterior covariance ``P_k``.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        The gain.
+    """
     d = _model(P=P_post, H=H, R=R, names={"P": "P_post"})
     return d["P"] @ d["H"].T @ np.linalg.inv(d["R"])                 # (000 §4.3.1, alternate form)
 
 
 def expanded_covariance(P, K, H, R):
-    """Eq 4.27 corrected: ``P - K H P - P Hᵀ Kᵀ + K (H P Hᵀ + R) Kᵀ``, the Joseph form multiplied out."""
+    """Eq 4.27 corrected: ``P - K H P - P Hᵀ Kᵀ + K (H P Hᵀ + R) Kᵀ``, the Joseph form multiplied out.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Prior covariance.
+    K : array_like, shape (n, m)
+        Gain.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Posterior covariance.
+    """
     d = _model(P=P, H=H, R=R, K=K)
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
     return P - K @ H @ P - P @ H.T @ K.T + K @ (H @ P @ H.T + R) @ K.T    # (000 eq 4.27, corrected)
@@ -505,6 +780,22 @@ def seed000_eq427_printed(P, K, H, R):
     Erratum: the factors are in the wrong order (the correct expansion is :func:`expanded_covariance`). The printed
     terms are not even defined unless H is square; with H = I and R = r·I (the lab's case) K commutes with P and
     the slip is invisible, which is why the lab shows it with a general H.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        Prior covariance.
+    K : array_like, shape (n, m)
+        Gain.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        The printed expression's value (wrong in general).
     """
     d = _model(P=P, H=H, R=R, K=K)
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
@@ -518,10 +809,19 @@ def trace_gradient(P, K, H, R):
 
     Parameters
     ----------
-    P : (n, n) prior covariance; K : (n, m); H : (m, n); R : (m, m)
+    P : array_like, shape (n, n)
+        Prior covariance.
+    K : array_like, shape (n, m)
+        Gain.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
     Returns
     -------
-    (n, m) array
+    ndarray, shape (n, m)
+        The gradient of the trace of the posterior covariance with respect to ``K``.
     """
     d = _model(P=P, H=H, R=R, K=K)
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
@@ -554,12 +854,40 @@ def update(x, P, z, H, R, covariance="joseph"):
 
     Parameters
     ----------
-    x : (n,) prior state; P : (n, n) prior covariance; z : (m,) measurement; H : (m, n); R : (m, m)
-    covariance : {'joseph', 'short', 'information'} -- which form of the covariance update (all three agree at the
-        optimal gain; Joseph is the one printed in the theory and the one filterpy uses)
+    x : array_like, shape (n,)
+        Prior state.
+    P : array_like, shape (n, n)
+        Prior covariance.
+    z : array_like, shape (m,)
+        Measurement.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+    covariance : {'joseph', 'short', 'information'}, optional
+        Which form of the covariance update (all three agree at the optimal gain; Joseph is the one printed in the
+        theory and the one filterpy uses).
+
     Returns
     -------
-    x_post : (n,); P_post : (n, n); K : (n, m)
+    x_post : ndarray, shape (n,)
+        Posterior state.
+    P_post : ndarray, shape (n, n)
+        Posterior covariance.
+    K : ndarray, shape (n, m)
+        The gain used.
+
+    See Also
+    --------
+    predict : the projection that follows.
+
+    Examples
+    --------
+    One update of a 1-D filter: prior 0 with variance 4, measurement 1 with variance 1.
+
+    >>> x, P, K = update([0.0], [[4.0]], [1.0], H=[[1.0]], R=[[1.0]])
+    >>> np.round(x, 3), np.round(P, 3), np.round(K, 3)
+    (array([0.8]), array([[0.8]]), array([[0.8]]))
     """
     d = _model(x=x, P=P, z=z, H=H, R=R)
     return _update(d["x"], d["P"], d["z"], d["H"], d["R"], _check_form(covariance))
@@ -580,10 +908,37 @@ def predict(x, P, A, Q, B=None, u=None):
 
     Parameters
     ----------
-    x : (n,); P : (n, n); A : (n, n); Q : (n, n); B : (n, p) or None; u : (p,) or None
+    x : array_like, shape (n,)
+        Posterior state.
+    P : array_like, shape (n, n)
+        Posterior covariance.
+    A : array_like, shape (n, n)
+        Transition matrix.
+    Q : array_like, shape (n, n)
+        Process noise covariance.
+    B : array_like, shape (n, p), optional
+        Input matrix; give it with ``u`` or not at all.
+    u : array_like, shape (p,), optional
+        Input.
+
     Returns
     -------
-    x_prior : (n,); P_prior : (n, n)
+    x_prior : ndarray, shape (n,)
+        Projected state.
+    P_prior : ndarray, shape (n, n)
+        Projected covariance.
+
+    See Also
+    --------
+    update : the measurement update before it.
+
+    Examples
+    --------
+    The 1-D filter of :func:`update` projected one step with ``A = 1`` and process noise 0.5: the variance grows.
+
+    >>> x, P = predict([0.8], [[0.8]], A=[[1.0]], Q=[[0.5]])
+    >>> np.round(x, 3), np.round(P, 3)
+    (array([0.8]), array([[1.3]]))
     """
     d = _model(x=x, P=P, A=A, Q=Q, B=B, u=u, optional=("B", "u"))
     Bu = None if B is None else d["B"] @ d["u"]
@@ -600,7 +955,31 @@ def seed000_labcode_kalman(x, P, z, A, Q, H, R):
 
     Erratum: the state projection ``s.x = s.A*s.x + s.B*s.u`` is missing, so the estimate is never moved forward
     between measurements; the covariance is projected as if it were. The short form replaces the Joseph form that
-    the theory column shows (equal at this optimal K). Returns the new ``(x, P)``.
+    the theory column shows (equal at this optimal K).
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        State (``s.x``).
+    P : array_like, shape (n, n)
+        Covariance (``s.P``).
+    z : array_like, shape (m,)
+        Measurement (``s.z``).
+    A : array_like, shape (n, n)
+        Transition matrix (``s.A``).
+    Q : array_like, shape (n, n)
+        Process noise covariance (``s.Q``).
+    H : array_like, shape (m, n)
+        Measurement matrix (``s.H``).
+    R : array_like, shape (m, m)
+        Measurement noise covariance (``s.R``).
+
+    Returns
+    -------
+    x : ndarray, shape (n,)
+        The updated (never projected) state.
+    P : ndarray, shape (n, n)
+        The updated and projected covariance.
     """
     d = _model(x=x, P=P, z=z, A=A, Q=Q, H=H, R=R)
     x, P, z, A, Q, H, R = (d[k] for k in "x P z A Q H R".split())
@@ -625,18 +1004,43 @@ class ThesisKF:
 
     Parameters
     ----------
-    A : (n, n); B : (n, p); u : (p,); Q : (n, n); R : (m, m); H : (m, n) -- the model (the lab's ``s.A`` ...)
-    x0 : (n,) -- initial estimate, ``x̂₀ = E(x)`` (the thesis prints "E(0)", see the lab's erratum). It is the
+    A : array_like, shape (n, n)
+        Transition matrix (the lab's ``s.A``).
+    B : array_like, shape (n, p)
+        Input matrix (``s.B``).
+    u : array_like, shape (p,)
+        Input (``s.u``).
+    Q : array_like, shape (n, n)
+        Process noise covariance (``s.Q``).
+    R : array_like, shape (m, m)
+        Measurement noise covariance (``s.R``).
+    H : array_like, shape (m, n)
+        Measurement matrix (``s.H``).
+    x0 : array_like, shape (n,)
+        Initial estimate, ``x̂₀ = E(x)`` (the thesis prints "E(0)", see the lab's erratum). It is the
         prior for the *first measurement*. The lab passes ``[x0, v0]`` = ``tru(1)`` while its first measurement is
         of ``tru(2)``: a velocity offset of g·dt = 0.098 m/s that the filter removes within a few steps.
-    P0 : (n, n) -- its covariance
-    covariance : {'joseph', 'short', 'information'}
-    project_state : bool -- False reproduces the printed MATLAB code (no ``s.x = s.A*s.x + s.B*s.u``)
-    control : bool -- False reproduces eq 4.32 as printed (``x' = Φ x``, no ``G u``)
+    P0 : array_like, shape (n, n)
+        Its covariance.
+    covariance : {'joseph', 'short', 'information'}, optional
+        Form of the covariance update.
+    project_state : bool, optional
+        False reproduces the printed MATLAB code (no ``s.x = s.A*s.x + s.B*s.u``).
+    control : bool, optional
+        False reproduces eq 4.32 as printed (``x' = Φ x``, no ``G u``).
 
     Attributes
     ----------
-    x, P : the current prior; x_post, P_post, K : from the last step
+    x : ndarray, shape (n,)
+        The current prior state.
+    P : ndarray, shape (n, n)
+        The current prior covariance.
+    x_post : ndarray, shape (n,) or None
+        Posterior state of the last step.
+    P_post : ndarray, shape (n, n) or None
+        Posterior covariance of the last step.
+    K : ndarray, shape (n, m) or None
+        Gain of the last step.
     """
 
     def __init__(self, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=True, control=True):
@@ -650,14 +1054,54 @@ class ThesisKF:
     @classmethod
     def falling_body(cls, x0=(200.0, 0.0), P0=None, mn_std=12.0, pn_std=0.4, k=0.25, m=10.0, g=9.8, dt=0.01,
                      **options):
-        """The lab's filter (000 §4.4.3 step b): ``R = MNstd² I``, ``Q = PNstd² I``, ``H = I``, ``P0 = MNstd² I``."""
+        """The lab's filter (000 §4.4.3 step b): ``R = MNstd² I``, ``Q = PNstd² I``, ``H = I``, ``P0 = MNstd² I``.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (2,), optional
+            Initial estimate ``[position (m), velocity (m/s)]``.
+        P0 : array_like, shape (2, 2), optional
+            Its covariance (default ``mn_std² I``).
+        mn_std : float, optional
+            Measurement noise std (the printed ``MNstd``), m and m/s.
+        pn_std : float, optional
+            Process noise std (the printed ``PNstd``), m and m/s.
+        k : float, optional
+            Linear drag coefficient, kg/s.
+        m : float, optional
+            Mass, kg.
+        g : float, optional
+            Gravity, m/s².
+        dt : float, optional
+            Time step, s.
+        **options
+            ``covariance``, ``project_state``, ``control`` as in :class:`ThesisKF`.
+
+        Returns
+        -------
+        ThesisKF
+            The filter, ready for its first measurement.
+        """
         A, B, u = falling_body_state_space(k, m, g, dt)
         mn_std, pn_std = _scalar(mn_std, "mn_std", True), _scalar(pn_std, "pn_std", True)
         P0 = mn_std ** 2 * np.eye(2) if P0 is None else P0
         return cls(A, B, u, pn_std ** 2 * np.eye(2), mn_std ** 2 * np.eye(2), np.eye(2), x0, P0, **options)
 
     def step(self, z):
-        """One measurement ``z`` (m,): update, then project. Returns the posterior ``(x_post, P_post)``."""
+        """One measurement: update, then project.
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            The measurement.
+
+        Returns
+        -------
+        x_post : ndarray, shape (n,)
+            Posterior state.
+        P_post : ndarray, shape (n, n)
+            Posterior covariance.
+        """
         z = _exact(z, "z", (self.H.shape[0],))
         self.x_post, self.P_post, self.K = _update(self.x, self.P, z, self.H, self.R, self.covariance)
         Bu = self.B @ self.u if self.control else None
@@ -666,8 +1110,19 @@ class ThesisKF:
         return self.x_post, self.P_post
 
     def run(self, zs):
-        """All measurements ``zs`` (N, m). Returns a dict of arrays: ``x`` (N, n) and ``P`` (N, n, n) posteriors,
-        ``x_prior`` (N, n) and ``P_prior`` (N, n, n) the state each step started from, ``K`` (N, n, m)."""
+        """Filter all measurements, one :meth:`step` each.
+
+        Parameters
+        ----------
+        zs : array_like, shape (N, m)
+            The measurements.
+
+        Returns
+        -------
+        dict of ndarray
+            ``x`` (N, n) and ``P`` (N, n, n) posteriors, ``x_prior`` (N, n) and ``P_prior`` (N, n, n) the state each
+            step started from, ``K`` (N, n, m).
+        """
         zs = validate.array(zs, "zs", shape=(None, self.H.shape[0]))
         if zs.ndim != 2:
             raise ValueError(f"zs must have shape (N, {self.H.shape[0]}); got {zs.shape}")
@@ -689,14 +1144,36 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
 
     Parameters
     ----------
-    zs : (R, N, m) array -- R runs of N measurements
-    A, B, u, Q, R, H, P0 : as :class:`ThesisKF`
-    x0 : (n,) or (R, n) -- initial estimate, the same for every run or one per run
-    covariance, project_state, control : as :class:`ThesisKF`
+    zs : array_like, shape (R, N, m)
+        R runs of N measurements.
+    A : array_like, shape (n, n)
+        Transition matrix.
+    B : array_like, shape (n, p)
+        Input matrix.
+    u : array_like, shape (p,)
+        Input.
+    Q : array_like, shape (n, n)
+        Process noise covariance.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    x0 : array_like, shape (n,) or (R, n)
+        Initial estimate, the same for every run or one per run.
+    P0 : array_like, shape (n, n)
+        Its covariance.
+    covariance : {'joseph', 'short', 'information'}, optional
+        As :class:`ThesisKF`.
+    project_state : bool, optional
+        As :class:`ThesisKF`.
+    control : bool, optional
+        As :class:`ThesisKF`.
+
     Returns
     -------
-    dict -- ``x`` (R, N, n) posteriors, ``x_prior`` (R, N, n), ``P`` (N, n, n) posterior covariances,
-    ``P_prior`` (N, n, n), ``K`` (N, n, m)
+    dict of ndarray
+        ``x`` (R, N, n) posteriors, ``x_prior`` (R, N, n), ``P`` (N, n, n) posterior covariances,
+        ``P_prior`` (N, n, n), ``K`` (N, n, m).
     """
     d = _model(P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u, names={"P": "P0"})
     A, Q, H, Rm, P = d["A"], d["Q"], d["H"], d["R"], d["P"]
@@ -741,13 +1218,37 @@ def simulate_falling_body(n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0
 
     Parameters
     ----------
-    n_runs : int; seed : int -- the Monte-Carlo seed; n_steps : int -- measurements per run (199 as in the lab)
-    first_run : int -- index of the first run (for batches)
-    x0, v0, k, m, g, dt : float -- the model; pn_std, mn_std : float -- process and measurement noise std
+    n_runs : int
+        Number of runs.
+    seed : int
+        The Monte-Carlo seed.
+    n_steps : int, optional
+        Measurements per run (199 as in the lab).
+    first_run : int, optional
+        Index of the first run (for batches).
+    x0 : float, optional
+        Start position, m.
+    v0 : float, optional
+        Start velocity, m/s.
+    k : float, optional
+        Linear drag coefficient, kg/s.
+    m : float, optional
+        Mass, kg.
+    g : float, optional
+        Gravity, m/s².
+    dt : float, optional
+        Time step, s.
+    pn_std : float, optional
+        Process noise std, m and m/s per step.
+    mn_std : float, optional
+        Measurement noise std, m and m/s.
+
     Returns
     -------
-    truth : (n_runs, n_steps + 1, 2) array -- ``[x (m), v (m/s)]``, index 0 is ``tru(1)``
-    z : (n_runs, n_steps, 2) array -- ``z[:, i]`` measures ``truth[:, i + 1]``
+    truth : ndarray, shape (n_runs, n_steps + 1, 2)
+        ``[x (m), v (m/s)]``; index 0 is ``tru(1)``.
+    z : ndarray, shape (n_runs, n_steps, 2)
+        Measurements; ``z[:, i]`` measures ``truth[:, i + 1]``.
     """
     n_runs, n_steps = _count(n_runs, "n_runs"), _count(n_steps, "n_steps")
     seed, first_run = _count(seed, "seed", 0), _count(first_run, "first_run", 0)
@@ -772,11 +1273,20 @@ def nees(err, P):
 
     Parameters
     ----------
-    err : (..., n) array -- estimate minus truth
-    P : (..., n, n) array -- the filter's covariance for that estimate (broadcasts against err)
+    err : array_like, shape (..., n)
+        Estimate minus truth.
+    P : array_like, shape (..., n, n)
+        The filter's covariance for that estimate (broadcasts against ``err``).
+
     Returns
     -------
-    (...) array
+    ndarray, shape (...)
+        The NEES of each estimate (dimensionless).
+
+    Examples
+    --------
+    >>> float(nees([1.0, 2.0], np.diag([1.0, 4.0])))
+    2.0
     """
     err = validate.array(err, "err")
     P = validate.array(P, "P")
@@ -789,7 +1299,24 @@ def nees(err, P):
 
 
 def nees_bounds(n_runs, dim=2, prob=0.95):
-    """Two-sided ``prob`` interval of the *run-averaged* NEES of a consistent filter: ``χ²(n_runs·dim) / n_runs``."""
+    """Two-sided ``prob`` interval of the *run-averaged* NEES of a consistent filter: ``χ²(n_runs·dim) / n_runs``.
+
+    Parameters
+    ----------
+    n_runs : int
+        Number of Monte-Carlo runs averaged.
+    dim : int, optional
+        State dimension n.
+    prob : float, optional
+        Probability of the interval, in (0, 1).
+
+    Returns
+    -------
+    lo : float
+        Lower bound of the run-averaged NEES.
+    hi : float
+        Upper bound.
+    """
     n_runs, dim = _count(n_runs, "n_runs"), _count(dim, "dim")
     prob = _scalar(prob, "prob", True)
     if prob >= 1:
@@ -806,9 +1333,25 @@ def steady_state(A, H, Q, R):
     ``b = Hᵀ``; an addition, the thesis does not discuss the steady state). For the lab:
     K ≈ [[0.0338, 0.0046], [0.0046, 0.0322]], prior P ≈ [[5.04, 0.71], [0.71, 4.79]].
 
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Transition matrix.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    Q : array_like, shape (n, n)
+        Process noise covariance.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+
     Returns
     -------
-    P_prior : (n, n); K : (n, m); P_post : (n, n)
+    P_prior : ndarray, shape (n, n)
+        Steady-state prior covariance.
+    K : ndarray, shape (n, m)
+        Steady-state gain.
+    P_post : ndarray, shape (n, n)
+        Steady-state posterior covariance.
     """
     d = _model(A=A, H=H, Q=Q, R=R)
     A, H, Q, R = d["A"], d["H"], d["Q"], d["R"]
@@ -825,19 +1368,30 @@ def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_st
 
     Parameters
     ----------
-    n_runs : int; seed : int; batch : int
-    variants : dict name -> dict of :func:`kf_batch` options (``covariance``, ``project_state``, ``control``,
-        ``x0``, ``P0``, ``Q``, ``R``), or None for the lab's two: ``'thesis filter'`` (with the state projection)
-        and ``'printed code'`` (without it, short form)
-    progress : bool -- show the tqdm bar
-    n_steps : int -- measurements per run
-    **model : passed to :func:`simulate_falling_body` (``x0``, ``v0``, ``k``, ``m``, ``g``, ``dt``, ``pn_std``,
-        ``mn_std``); the filters use the same values unless a variant overrides them
+    n_runs : int, optional
+        Number of runs.
+    seed : int, optional
+        The Monte-Carlo seed.
+    batch : int, optional
+        Runs simulated and filtered together.
+    variants : dict, optional
+        Name -> dict of :func:`kf_batch` options (``covariance``, ``project_state``, ``control``, ``x0``, ``P0``,
+        ``Q``, ``R``), or None for the lab's two: ``'thesis filter'`` (with the state projection) and
+        ``'printed code'`` (without it, short form).
+    progress : bool, optional
+        Show the tqdm bar.
+    n_steps : int, optional
+        Measurements per run.
+    **model
+        Passed to :func:`simulate_falling_body` (``x0``, ``v0``, ``k``, ``m``, ``g``, ``dt``, ``pn_std``,
+        ``mn_std``); the filters use the same values unless a variant overrides them.
+
     Returns
     -------
-    dict -- ``'n_runs'``, ``'seed'``, ``'meas_rms'`` (2,) position (m) and velocity (m/s) RMS of the
-    measurements, and ``'variants'``: name -> dict with ``'rms'`` (2,), ``'rms_t'`` (N, 2) RMS over runs at each
-    step, ``'mean_err_t'`` (N, 2), ``'nees_t'`` (N,) mean NEES over runs, ``'P'`` (N, 2, 2)
+    dict
+        ``'n_runs'``, ``'seed'``, ``'meas_rms'`` (2,) position (m) and velocity (m/s) RMS of the measurements, and
+        ``'variants'``: name -> dict with ``'rms'`` (2,), ``'rms_t'`` (N, 2) RMS over runs at each step,
+        ``'mean_err_t'`` (N, 2), ``'nees_t'`` (N,) mean NEES over runs, ``'P'`` (N, 2, 2).
     """
     from tqdm.auto import tqdm
 
