@@ -71,7 +71,7 @@ _MAX_REPORTED = 5
 
 
 def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
-    """Every "Get RAW Sensor Data" section of a terminal log, as ADC counts.
+    r"""Every "Get RAW Sensor Data" section of a terminal log, as ADC counts.
 
     The format is exactly what the MCU prints (:func:`fusionlab.simulate.terminal_log`): a section starts at the
     column header line ``AX AY AZ GX GY``; every data line holds five counts, each written as exactly
@@ -86,15 +86,27 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
 
     Parameters
     ----------
-    log : path, str (the text) or bytes (a UTF-8 byte-order mark is ignored)
-    bits : int -- ADC resolution (10 on the NanoCore12)
+    log : str, pathlib.Path or bytes
+        A path to the log, or its text (str), or its bytes (UTF-8; a byte-order mark is ignored).
+    bits : int, optional
+        ADC resolution in bits (10 on the NanoCore12).
+
     Returns
     -------
-    list of (N_i, 5) int64 arrays -- AX AY AZ GX GY counts, one per section
+    list of ndarray
+        One int64 array of shape (N_i, 5) per section: AX AY AZ GX GY counts.
+
     Raises
     ------
     LogParseError
-        if a line is unusable (see above), or if the text holds no ``AX AY AZ GX GY`` header (not a terminal log).
+        If a line is unusable (see above), or if the text holds no ``AX AY AZ GX GY`` header (not a terminal log).
+
+    Examples
+    --------
+    >>> text = "menu\nAX AY AZ GX GY\n200 201 26C 1FF 200\n201 200 26B 200 1FE\n0\nStopped.\n"
+    >>> parse_terminal_sessions(text)
+    [array([[512, 513, 620, 511, 512],
+           [513, 512, 619, 512, 510]])]
     """
     text = _read_text(log)
     bits = sensors._bits(bits)
@@ -176,6 +188,23 @@ def parse_terminal_log(log, bits=sensors.ADC_BITS):
 
     See :func:`parse_terminal_sessions` for the format and the errors; this one also raises if the log holds more
     than one section (clear the screen between recordings, as the lab says, or use the plural function).
+
+    Parameters
+    ----------
+    log : str, pathlib.Path or bytes
+        A path to the log, or its text, or its bytes.
+    bits : int, optional
+        ADC resolution in bits.
+
+    Returns
+    -------
+    ndarray of int64, shape (N, 5)
+        AX AY AZ GX GY counts.
+
+    Raises
+    ------
+    LogParseError
+        As :func:`parse_terminal_sessions`, and if the log holds more than one section.
     """
     sections = parse_terminal_sessions(log, bits)
     if len(sections) != 1:
@@ -195,11 +224,26 @@ def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
 
     Parameters
     ----------
-    counts : (...) array -- ADC counts; null_offset : float or (n,) array, g
-    sensor : :class:`fusionlab.sensors.AnalogSensor` (ADXL335 at 3 V: 1.5 V, 0.300 V/g)
+    counts : array_like, shape (...)
+        ADC counts.
+    null_offset : float or array_like, shape (n,), optional
+        NullOffset, g (one per axis in the last dimension, or one for all).
+    sensor : fusionlab.sensors.AnalogSensor, optional
+        Zero level and sensitivity (ADXL335 at 3 V: 1.5 V, 0.300 V/g).
+    v_ref : float, optional
+        ADC reference voltage, V.
+
     Returns
     -------
-    (...) array, g
+    ndarray, shape (...)
+        Specific force, g.
+
+    Examples
+    --------
+    One count above mid-scale is 5 mg; 102 counts more is about 1 g:
+
+    >>> np.round(adc_to_g([512, 614]), 4)
+    array([0.0049, 1.002 ])
     """
     return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.1-5.3)
                                    null_offset=null_offset)
@@ -208,9 +252,21 @@ def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
 def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
     """Step f): gyro counts to °/s, the same form with the IDG-500 numbers (000 eqs 5.11-5.12).
 
+    Parameters
+    ----------
+    counts : array_like, shape (...)
+        ADC counts.
+    null_offset : float or array_like, shape (n,), optional
+        NullOffset, °/s.
+    sensor : fusionlab.sensors.AnalogSensor, optional
+        Zero level and sensitivity (IDG-500 by default).
+    v_ref : float, optional
+        ADC reference voltage, V.
+
     Returns
     -------
-    (...) array, °/s
+    ndarray, shape (...)
+        Angular rate, °/s.
     """
     return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.11-5.12)
                                    null_offset=null_offset)
@@ -225,11 +281,24 @@ def accel_angle(z, other, order="excel"):
 
     Parameters
     ----------
-    z : (N,) array -- Z reading (g); other : (N,) array -- the Y (or X) reading (g)
-    order : 'excel' or 'c'
+    z : array_like, shape (N,)
+        Z reading, g.
+    other : array_like, shape (N,)
+        The Y (or X) reading, g.
+    order : {'excel', 'c'}, optional
+        How the printed ``atan2`` is read (see above).
+
     Returns
     -------
-    (N,) array, rad
+    ndarray, shape (N,)
+        Angle, rad.
+
+    Examples
+    --------
+    Level (z = 1 g, y = 0): the C order gives 90°, Excel's order the tilt 0°.
+
+    >>> np.degrees(accel_angle([1.0], [0.0], order="c")), np.degrees(accel_angle([1.0], [0.0]))
+    (array([90.]), array([0.]))
     """
     z = validate.array(z, "z")
     other = validate.array(other, "other")
@@ -249,10 +318,22 @@ def moving_average(x, n):
 
     Parameters
     ----------
-    x : (N,) array; n : int >= 1 -- window length (the thesis' only value is 12, from the feasibility study)
+    x : array_like, shape (N,)
+        The samples, any unit.
+    n : int
+        Window length, >= 1 (the thesis' only value is 12, from the feasibility study).
+
     Returns
     -------
-    (N,) array, unit of ``x``
+    ndarray, shape (N,)
+        The averages, unit of ``x``.
+
+    Examples
+    --------
+    The first output is the first sample alone (the expanding start), then pairs:
+
+    >>> moving_average([1.0, 2.0, 3.0, 4.0, 5.0], 2)
+    array([1. , 1.5, 2.5, 3.5, 4.5])
     """
     x = validate.array(x, "x")
     if x.ndim != 1:
@@ -271,10 +352,20 @@ def derivative(a, dt):
 
     Parameters
     ----------
-    a : (N,) array, deg (or rad); dt : float, s
+    a : array_like, shape (N,)
+        Angle, deg (or rad).
+    dt : float
+        Sample interval, s.
+
     Returns
     -------
-    (N,) array, deg/s (or rad/s)
+    ndarray, shape (N,)
+        Rate, deg/s (or rad/s).
+
+    Examples
+    --------
+    >>> derivative([0.0, 1.0, 3.0], 0.5)
+    array([0., 2., 4.])
     """
     a = validate.array(a, "a")
     dt = validate.positive(dt, "dt")
@@ -288,14 +379,30 @@ def gyro_increment(rate, dt, rule="rectangular"):
       angle increment, and its sum telescopes to ``(R[n] - R[0])·Δt`` (eqs 5.13-5.14);
     * ``'rectangular'``: ``I[n] = R[n]·Δt`` (the likely intent, as in §3.3);
     * ``'trapezoid'``: ``I[n] = (R[n] + R[n-1])·Δt/2``.
+
     ``I[0] = 0`` for the two-sample rules.
 
     Parameters
     ----------
-    rate : (N,) array, °/s; dt : float, s; rule : 'printed', 'rectangular' or 'trapezoid'
+    rate : array_like, shape (N,)
+        Gyro rate, °/s.
+    dt : float
+        Sample interval, s.
+    rule : {'rectangular', 'printed', 'trapezoid'}, optional
+        Which reading (see above).
+
     Returns
     -------
-    (N,) array, deg
+    ndarray, shape (N,)
+        Angle increment per sample, deg.
+
+    Examples
+    --------
+    A steady 10 °/s turn that speeds up: the printed rule sees only the change of rate.
+
+    >>> rate = [10.0, 20.0, 30.0]
+    >>> gyro_increment(rate, 0.1), gyro_increment(rate, 0.1, rule="printed")
+    (array([1., 2., 3.]), array([0., 1., 1.]))
     """
     r = validate.array(rate, "rate")
     dt = validate.positive(dt, "dt")
@@ -312,6 +419,18 @@ def cumulative_integral(increment, angle0=0.0):
     """Step g): the cumulative gyro integral kept for plotting only, ``Σ_{k<=n} I[k]`` (000 §5.4.3 g)).
 
     With rectangular increments this is gyro-only dead reckoning; the fusion uses only the per-step increment.
+
+    Parameters
+    ----------
+    increment : array_like, shape (N,)
+        Per-sample angle increments, deg.
+    angle0 : float, optional
+        Angle before the first sample, deg.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Accumulated angle, deg.
     """
     return validate.array(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
 
@@ -325,10 +444,22 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
 
     Parameters
     ----------
-    gyro_rate : (N,) array, °/s; accel_term : (N,) array; eps : float > 0
+    gyro_rate : array_like, shape (N,)
+        Gyro rate, °/s.
+    accel_term : array_like, shape (N,)
+        The accelerometer term: its angle (deg, as printed) or that angle's rate (°/s, as meant).
+    eps : float, optional
+        Guard against 0/0 (> 0), in the unit of the terms.
+
     Returns
     -------
-    (N,) array, dimensionless
+    ndarray, shape (N,)
+        The ratio, dimensionless, in [0, 1).
+
+    Examples
+    --------
+    >>> np.round(ratio([1.0, 2.0, 0.0], [1.0, 0.0, 0.0]), 3)
+    array([0.5, 1. , 0. ])
     """
     g = np.abs(validate.array(gyro_rate, "gyro_rate"))
     a = np.abs(validate.array(accel_term, "accel_term"))
@@ -345,10 +476,26 @@ def fuse(accel_deg, increment, weight, f0=None):
 
     Parameters
     ----------
-    accel_deg : (N,) array, deg; increment : (N,) array, deg; weight : (N,) array in [0, 1]; f0 : float, deg
+    accel_deg : array_like, shape (N,)
+        Accelerometer angle, deg.
+    increment : array_like, shape (N,)
+        Gyro angle increment per sample, deg.
+    weight : array_like, shape (N,)
+        Accelerometer weight ``w``, in [0, 1].
+    f0 : float, optional
+        The fused angle before the first sample, deg (default ``accel_deg[0]``).
+
     Returns
     -------
-    (N,) array, deg
+    ndarray, shape (N,)
+        Fused angle, deg.
+
+    Examples
+    --------
+    Half weight each: the gyro's 1° per step pulls away from the accelerometer's 10°, by less each step.
+
+    >>> fuse([10.0, 10.0, 10.0], [1.0, 1.0, 1.0], [0.5, 0.5, 0.5])
+    array([10.5  , 10.75 , 10.875])
     """
     a = validate.array(accel_deg, "accel_deg")
     inc = validate.array(increment, "increment")
@@ -369,6 +516,18 @@ def printed_to_tilt(angle_deg, axis="x"):
 
     With ``atan2(z, y)`` in C order, ``A_YZ = 90° - φ`` runs against the X gyro; ``A_XZ = 90° + θ`` runs with the
     Y gyro (the signs of the thesis frame of :mod:`fusionlab.simulate`).
+
+    Parameters
+    ----------
+    angle_deg : array_like, shape (N,)
+        The C-order angle, deg.
+    axis : {'x', 'y'}, optional
+        ``'x'`` for the Y-Z angle (X gyro), ``'y'`` for the X-Z angle (Y gyro).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The tilt, deg, 0 when level, with the sign of the gyro.
     """
     a = validate.array(angle_deg, "angle_deg")
     if axis == "x":
@@ -384,18 +543,32 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
 
     Parameters
     ----------
-    counts : (N, 5) int array -- AX AY AZ GX GY (from :func:`parse_terminal_log`)
-    dt : float, s -- sample interval (the thesis gives none; the synthetic logs use 1/50 s)
-    axis : 'x' (Y-Z angle with the X gyro, as the lab's steps a)-k)) or 'y' (X-Z angle with the Y gyro, question 2)
-    variant : 'meant' or 'printed' (see the module docstring)
-    n_ma : int -- window of steps d) and l), and of the derivative smoothing in 'meant' (fig 27's 12 points)
-    accel_weight : 'ratio' (eq 5.17) or 'one_minus_ratio' (lab step j))
-    acc_null : (3,) g; gyro_null : (2,) °/s -- NullOffset of eqs 5.1-5.3 and 5.11-5.12
+    counts : array_like of int, shape (N, 5)
+        AX AY AZ GX GY counts (from :func:`parse_terminal_log`).
+    dt : float
+        Sample interval, s (the thesis gives none; the synthetic logs use 1/50 s).
+    axis : {'x', 'y'}, optional
+        ``'x'``: the Y-Z angle with the X gyro, as the lab's steps a)-k); ``'y'``: the X-Z angle with the Y gyro
+        (question 2).
+    variant : {'meant', 'printed'}, optional
+        Which reading of the steps (see the module docstring).
+    n_ma : int, optional
+        Window of steps d) and l), and of the derivative smoothing in 'meant' (fig 27's 12 points), samples.
+    accel_weight : {'ratio', 'one_minus_ratio'}, optional
+        ``'ratio'`` (eq 5.17) or ``'one_minus_ratio'`` (lab step j)).
+    acc_null : float or array_like, shape (3,), optional
+        Accelerometer NullOffset of eqs 5.1-5.3, g.
+    gyro_null : float or array_like, shape (2,), optional
+        Gyro NullOffset of eqs 5.11-5.12, °/s.
+    eps : float, optional
+        The ε of the ratio, step i).
+
     Returns
     -------
-    DataFrame with columns ``a_acc_<axis>_g, a_acc_z_g, b_angle_rad, c_angle_deg, d_angle_ma_deg, e_dangle_dps,
-    f_gyro_dps, g_gyro_cum_deg, h_gyro_inc_deg, i_ratio, j_accel_weight, k_fused_deg, l_fused_ma_deg`` and
-    ``tilt_deg`` (step k mapped to the tilt, 0 when level, same sign as the gyro).
+    pandas.DataFrame
+        Columns ``a_acc_<axis>_g, a_acc_z_g, b_angle_rad, c_angle_deg, d_angle_ma_deg, e_dangle_dps,
+        f_gyro_dps, g_gyro_cum_deg, h_gyro_inc_deg, i_ratio, j_accel_weight, k_fused_deg, l_fused_ma_deg`` and
+        ``tilt_deg`` (step k mapped to the tilt, 0 when level, same sign as the gyro); one row per sample.
     """
     import pandas as pd
 
@@ -451,7 +624,23 @@ class ComplementaryFilter:
 
     Parameters
     ----------
-    alpha : float in [0, 1] -- gyro weight (0.98 is the common choice); dt : float, s; angle0 : float (angle unit)
+    alpha : float, optional
+        Gyro weight in [0, 1] (0.98 is the common choice).
+    dt : float, optional
+        Sample interval, s.
+    angle0 : float, optional
+        Initial angle (angle unit of the inputs).
+
+    Attributes
+    ----------
+    angle : float
+        The current angle estimate.
+
+    Examples
+    --------
+    >>> cf = ComplementaryFilter(alpha=0.9, dt=0.1)
+    >>> round(cf.step(10.0, 0.0), 3)              # the gyro says +1, the accelerometer 0
+    0.9
     """
 
     def __init__(self, alpha=0.98, dt=0.02, angle0=0.0):
@@ -462,12 +651,38 @@ class ComplementaryFilter:
         self.angle = float(angle0)
 
     def step(self, rate, accel_angle):
-        """One sample: gyro ``rate`` (angle unit / s) and accelerometer angle; returns the new angle."""
+        """One sample.
+
+        Parameters
+        ----------
+        rate : float
+            Gyro rate, angle unit / s.
+        accel_angle : float
+            Accelerometer angle, angle unit.
+
+        Returns
+        -------
+        float
+            The new angle.
+        """
         self.angle = self.alpha * (self.angle + rate * self.dt) + (1 - self.alpha) * accel_angle
         return self.angle
 
     def run(self, rate, accel_angle):
-        """A whole record: (N,) rates and (N,) accelerometer angles; returns (N,) angles."""
+        """A whole record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        rate : array_like, shape (N,)
+            Gyro rates, angle unit / s.
+        accel_angle : array_like, shape (N,)
+            Accelerometer angles, angle unit.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The angle after each sample.
+        """
         r = validate.array(rate, "rate")
         a = validate.array(accel_angle, "accel_angle")
         validate.same_length(rate=r, accel_angle=a)
@@ -478,13 +693,29 @@ class TiltKalman2:
     """Two-state (angle, gyro bias) linear Kalman filter on one tilt axis -- **not from the thesis** (baseline).
 
     State ``x = [θ, b]``; predict ``θ⁺ = θ + (ω - b)·Δt``, ``b⁺ = b``; measure ``θ_acc = θ + v``. Built on
-    ``filterpy.kalman.KalmanFilter``.
+    ``filterpy.kalman.KalmanFilter``. Units: whatever angle unit the inputs use (degrees in Lab 3).
 
     Parameters
     ----------
-    dt : float, s; q_angle : float -- angle process noise variance per step; q_bias : float -- bias random-walk
-    variance per step; r_angle : float -- accelerometer-angle variance; angle0, bias0 : initial state;
-    p0 : float -- initial variance of both states. Units: whatever angle unit the inputs use (degrees in Lab 3).
+    dt : float, optional
+        Sample interval, s.
+    q_angle : float, optional
+        Angle process noise variance per step, angle unit squared.
+    q_bias : float, optional
+        Bias random-walk variance per step, (angle unit / s) squared.
+    r_angle : float, optional
+        Accelerometer-angle variance, angle unit squared.
+    angle0 : float, optional
+        Initial angle.
+    bias0 : float, optional
+        Initial gyro bias, angle unit / s.
+    p0 : float, optional
+        Initial variance of both states.
+
+    Attributes
+    ----------
+    kf : filterpy.kalman.KalmanFilter
+        The underlying filter (state ``kf.x``, covariance ``kf.P``).
     """
 
     def __init__(self, dt=0.02, q_angle=1e-3, q_bias=1e-5, r_angle=100.0, angle0=0.0, bias0=0.0, p0=100.0):
@@ -502,13 +733,41 @@ class TiltKalman2:
         self.kf = kf
 
     def step(self, rate, accel_angle):
-        """One sample; returns (angle, bias)."""
+        """One sample: predict with the gyro rate, update with the accelerometer angle.
+
+        Parameters
+        ----------
+        rate : float
+            Gyro rate, angle unit / s.
+        accel_angle : float
+            Accelerometer angle, angle unit.
+
+        Returns
+        -------
+        angle : float
+            The angle estimate.
+        bias : float
+            The gyro bias estimate, angle unit / s.
+        """
         self.kf.predict(u=np.array([[float(rate)]]))
         self.kf.update(np.array([[float(accel_angle)]]))
         return float(self.kf.x[0, 0]), float(self.kf.x[1, 0])
 
     def run(self, rate, accel_angle):
-        """A whole record; returns (N, 2) array of (angle, bias)."""
+        """A whole record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        rate : array_like, shape (N,)
+            Gyro rates, angle unit / s.
+        accel_angle : array_like, shape (N,)
+            Accelerometer angles, angle unit.
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+            ``(angle, bias)`` after each sample.
+        """
         r = validate.array(rate, "rate")
         a = validate.array(accel_angle, "accel_angle")
         validate.same_length(rate=r, accel_angle=a)
@@ -547,8 +806,23 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
 
     Parameters
     ----------
-    counts : (N, 5) int array; path : str or Path (.xlsx); dt : float, s; n_ma : int; accel_weight : 'ratio' or
-    'one_minus_ratio'; eps : float
+    counts : array_like of int, shape (N, 5)
+        AX AY AZ GX GY counts.
+    path : str or pathlib.Path
+        The .xlsx file to write.
+    dt : float
+        Sample interval, s.
+    n_ma : int, optional
+        Window of the moving averages, samples.
+    accel_weight : {'ratio', 'one_minus_ratio'}, optional
+        As :func:`pipeline`.
+    eps : float, optional
+        The ε of the ratio.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     import io
     import zipfile
@@ -631,8 +905,10 @@ def main(argv=None):
 
 
 def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
-    """Three-axis complementary filter -- **not from the thesis**: the 3-D generalisation of
-    :class:`ComplementaryFilter` (eq 5.17 with a constant weight), registered in :mod:`fusionlab.estimators`.
+    """Three-axis complementary filter -- **not from the thesis**.
+
+    The 3-D generalisation of :class:`ComplementaryFilter` (eq 5.17 with a constant weight), registered in
+    :mod:`fusionlab.estimators`.
 
     Each sample the gyro rotates the attitude (exact increment), then the attitude is turned, about the horizontal
     axis that separates them, by the fraction ``k = dt/(τ + dt)`` of the angle between the measured specific force
@@ -654,12 +930,23 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
 
     Parameters
     ----------
-    gyr : (N, 3) rad/s; acc : (N, 3) m/s², +g on the up axis at rest; fs : Hz; tau : s, the crossover time constant
-    acc_sigma : float > 0, m/s², or None -- disturbance that halves the accelerometer's weight (None: no gating)
-    acc_hold : float >= 0, s -- the disturbance is the largest over this past window (0: the current sample)
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s, body axes.
+    acc : array_like, shape (N, 3)
+        Specific force, m/s², +g on the up axis at rest.
+    fs : float
+        Sample rate, Hz.
+    tau : float, optional
+        The crossover time constant, s.
+    acc_sigma : float or None, optional
+        Disturbance that halves the accelerometer's weight, m/s² (> 0); None: no gating.
+    acc_hold : float, optional
+        The disturbance is the largest over this past window, s (>= 0; 0: the current sample).
+
     Returns
     -------
-    (N, 4) array -- body→NED quaternions, yaw starting at 0
+    ndarray, shape (N, 4)
+        Body→NED quaternions, yaw starting at 0.
     """
     gyr, acc, dt = _imu_args(gyr, acc, fs)
     k = np.full(len(gyr), dt / (validate.positive(tau, "tau") + dt))
@@ -690,7 +977,25 @@ def accel_disturbance(acc, hold, g=sensors.G):
 
     Parameters
     ----------
-    acc : (N, 3) array, m/s²; hold : int >= 1, samples; g : float, m/s²
+    acc : array_like, shape (N, 3)
+        Specific force, m/s².
+    hold : int
+        Window length, samples (>= 1).
+    g : float, optional
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The disturbance, m/s².
+
+    Examples
+    --------
+    A 1 m/s² bump in the second sample stays in a two-sample window for one more sample:
+
+    >>> acc = [[0, 0, 9.80665], [0, 0, 10.80665], [0, 0, 9.80665]]
+    >>> np.round(accel_disturbance(acc, 2, g=9.80665), 6)
+    array([0., 1., 1.])
     """
     acc = validate.samples(acc, "acc")
     hold = int(hold)
@@ -712,12 +1017,23 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
 
     Parameters
     ----------
-    gyr : (N, 3) rad/s; acc : (N, 3) m/s², +g on the up axis at rest; fs : Hz
-    n_ma : int -- window of the moving averages (the thesis' 12)
-    accel_weight : 'ratio' (eq 5.17) or 'one_minus_ratio' (step j)
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s, body axes.
+    acc : array_like, shape (N, 3)
+        Specific force, m/s², +g on the up axis at rest.
+    fs : float
+        Sample rate, Hz.
+    n_ma : int, optional
+        Window of the moving averages, samples (the thesis' 12).
+    accel_weight : {'ratio', 'one_minus_ratio'}, optional
+        ``'ratio'`` (eq 5.17) or ``'one_minus_ratio'`` (step j).
+    eps : float, optional
+        The ε of the ratio, rad/s.
+
     Returns
     -------
-    (N, 4) array -- body→NED quaternions, yaw starting at 0
+    ndarray, shape (N, 4)
+        Body→NED quaternions, yaw starting at 0.
     """
     gyr, acc, dt = _imu_args(gyr, acc, fs)
     if accel_weight not in ("ratio", "one_minus_ratio"):
