@@ -50,11 +50,26 @@ def normal_gravity(lat, h=0.0):
 
     Parameters
     ----------
-    lat : float or (N,) array, rad -- geodetic latitude
-    h : float or (N,) array, m -- height above the ellipsoid
+    lat : float or array_like, shape (N,)
+        Geodetic latitude, rad (±π/2 at most: degrees are rejected).
+    h : float or array_like, shape (N,), default 0.0
+        Height above the ellipsoid, m.
+
     Returns
     -------
-    float or array, m/s²
+    float or ndarray, shape (N,)
+        Normal gravity, m/s².
+
+    Examples
+    --------
+    Gravity grows from the equator to the poles, and falls by about 3 mm/s² per kilometre of height:
+
+    >>> import numpy as np
+    >>> from fusionlab import earth
+    >>> print(f"{earth.normal_gravity(0.0):.4f} {earth.normal_gravity(np.pi / 2):.4f}")
+    9.7803 9.8322
+    >>> print(f"{earth.normal_gravity(np.radians(50.87), h=1000.0):.4f}")
+    9.8084
     """
     lat = _latitude(lat)
     h = validate.array(h, "h")
@@ -63,7 +78,20 @@ def normal_gravity(lat, h=0.0):
 
 
 def gravity_ned(lat, h=0.0):
-    """Normal-gravity vector in NED, ``[0, 0, γ(φ, h)]`` (m/s²); the thesis' ``g_n = [0, 0, g]`` with a model for g."""
+    """Normal-gravity vector in NED, ``[0, 0, γ(φ, h)]`` (m/s²); the thesis' ``g_n = [0, 0, g]`` with a model for g.
+
+    Parameters
+    ----------
+    lat : float or array_like, shape (N,)
+        Geodetic latitude, rad.
+    h : float or array_like, shape (N,), default 0.0
+        Height above the ellipsoid, m.
+
+    Returns
+    -------
+    ndarray, shape (3,) or (N, 3)
+        Gravity in NED (down positive), m/s².
+    """
     g = normal_gravity(lat, h)
     return np.stack([np.zeros_like(g), np.zeros_like(g), g], -1)
 
@@ -73,10 +101,24 @@ def earth_rate_ned(lat):
 
     Parameters
     ----------
-    lat : float or (N,) array, rad
+    lat : float or array_like, shape (N,)
+        Geodetic latitude, rad.
+
     Returns
     -------
-    (..., 3) array, rad/s
+    ndarray, shape (3,) or (N, 3)
+        Earth rate ``[north, east, down]``, rad/s.
+
+    Examples
+    --------
+    At the equator the Earth rate points north; at the North Pole it points up (negative down):
+
+    >>> import numpy as np
+    >>> from fusionlab import earth
+    >>> w = earth.earth_rate_ned(np.radians([0.0, 90.0])) / earth.OMEGA_IE
+    >>> np.round(w, 12) + 0.0                 # + 0.0 prints -0.0 as 0.0
+    array([[ 1.,  0.,  0.],
+           [ 0.,  0., -1.]])
     """
     lat = _latitude(lat)
     return OMEGA_IE * np.stack([np.cos(lat), np.zeros_like(lat), -np.sin(lat)], -1)
@@ -84,7 +126,20 @@ def earth_rate_ned(lat):
 
 def radii_of_curvature(lat):
     """Meridian and transverse (prime-vertical) radii of curvature, m: ``R_N = a(1-e²)/(1-e² sin²φ)^{3/2}``,
-    ``R_E = a/√(1-e² sin²φ)``. One metre north is ``1/(R_N + h)`` rad of latitude."""
+    ``R_E = a/√(1-e² sin²φ)``. One metre north is ``1/(R_N + h)`` rad of latitude.
+
+    Parameters
+    ----------
+    lat : float or array_like, shape (N,)
+        Geodetic latitude, rad.
+
+    Returns
+    -------
+    R_N : float or ndarray, shape (N,)
+        Meridian radius of curvature, m.
+    R_E : float or ndarray, shape (N,)
+        Transverse (prime-vertical) radius of curvature, m.
+    """
     lat = _latitude(lat)
     w = 1.0 - E2 * np.sin(lat) ** 2
     return A * (1.0 - E2) / w ** 1.5, A / np.sqrt(w)
