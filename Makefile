@@ -45,9 +45,9 @@ formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's F
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
 	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
 
-test: env  ## the whole test suite: unit tests, lab sync, strict nbval on every solution, autograde
-	@echo "==> unit and pipeline tests"
-	@$(BIN)/python -m pytest tests -q
+test: env  ## the whole test suite: unit tests, the library's doctests, strict nbval on every solution, autograde
+	@echo "==> unit and pipeline tests, and the examples in the library's docstrings"
+	@$(BIN)/python -m pytest tests lib/fusionlab --doctest-modules -q
 	@echo "==> strict nbval on every solution notebook"
 	@$(BIN)/python -m pytest -q $(NBVAL) solutions
 
