@@ -70,16 +70,33 @@ _R2D = 180.0 / math.pi
 class Tuning:
     """Compile-time constants of the v5.00 library (fusion.h / build.h), not printed in the note (§7.12, §8.12).
 
-    Attributes
+    Each parameter is kept as the attribute of the same name (the dataclass is frozen).
+
+    Parameters
     ----------
-    Q_vY : (°/s)² -- gyro noise variance; a tuning knob (≈ 100 °/s rms), not the physical gyro noise
-    Q_wb : (°/s)² per Kalman step -- gyro-offset random walk
-    Q_wdelta : deg² per step -- inclination random walk (9DOF)
-    qvbqd_min : µT² -- floor on the magnetic noise in Q_v (the note's FQVBQD_MIN_9DOF_GBY_KALMAN = 7, §2.3)
-    gyro_offset_max : °/s -- the 9DOF offset clamp ±5 (§7.12)
-    delta_max : deg -- the inclination clamp ±90 (hard-coded in the source)
-    sensor_fs : Hz -- SENSORFS; oversample : gyro samples per Kalman step (OVERSAMPLE_RATIO)
-    B : µT -- geomagnetic field strength (DEFAULTB; normally from the magnetic calibration)
+    Q_vY : float, optional
+        Gyro noise variance, (°/s)²; a tuning knob (≈ 100 °/s rms), not the physical gyro noise.
+    Q_wb : float, optional
+        Gyro-offset random walk, (°/s)² per Kalman step.
+    Q_wdelta : float, optional
+        Inclination random walk, deg² per step (9DOF).
+    qvbqd_min : float, optional
+        Floor on the magnetic noise in Q_v, µT² (the note's FQVBQD_MIN_9DOF_GBY_KALMAN = 7, §2.3).
+    gyro_offset_max : float, optional
+        The 9DOF offset clamp ±5, °/s (§7.12).
+    delta_max : float, optional
+        The inclination clamp ±90, deg (hard-coded in the source).
+    sensor_fs : float, optional
+        SENSORFS, the sensor sample rate, Hz.
+    oversample : int, optional
+        Gyro samples per Kalman step (OVERSAMPLE_RATIO).
+    B : float, optional
+        Geomagnetic field strength, µT (DEFAULTB; normally from the magnetic calibration).
+
+    Examples
+    --------
+    >>> V500.dt                                  # 8 samples at 200 Hz: the Kalman filter runs at 25 Hz
+    0.04
     """
     Q_vY: float = 1e4
     Q_wb: float = 0.5
@@ -124,10 +141,13 @@ def rotation_matrix(q):
 
     Parameters
     ----------
-    q : (..., 4) unit quaternion ``[q0, q1, q2, q3]``
+    q : array_like, shape (..., 4)
+        Unit quaternion ``[q0, q1, q2, q3]``.
+
     Returns
     -------
-    (..., 3, 3) array -- equals ``rotations.quat_to_dcm(q).T`` (our ``C_bn`` transposed)
+    ndarray, shape (..., 3, 3)
+        ``R(q)``; equals ``rotations.quat_to_dcm(q).T`` (our ``C_bn`` transposed).
     """
     return np.swapaxes(rotations.quat_to_dcm(q), -1, -2)                  # (002 eq 34)
 
@@ -137,11 +157,23 @@ def reference_vectors(delta, frame="NED"):
 
     Parameters
     ----------
-    delta : float or (...,) array, rad -- inclination (positive: field dips below horizontal)
-    frame : 'NED', 'Android' or 'Win8'
+    delta : float or array_like, shape (...)
+        Inclination, rad (positive: field dips below horizontal).
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    r_g, r_m : (..., 3) arrays -- NED: (0, 0, 1) and (cos δ, 0, sin δ); Android/Win8: (0, 0, -1), (0, cos δ, -sin δ)
+    r_g : ndarray, shape (..., 3)
+        Gravity direction: (0, 0, 1) in NED, (0, 0, -1) in Android/Win8.
+    r_m : ndarray, shape (..., 3)
+        Field direction: (cos δ, 0, sin δ) in NED, (0, cos δ, -sin δ) in Android/Win8.
+
+    Examples
+    --------
+    >>> r_g, r_m = reference_vectors(np.radians(60.0))
+    >>> r_g, np.round(r_m, 4)
+    (array([0., 0., 1.]), array([0.5  , 0.   , 0.866]))
     """
     d = validate.angles_rad(delta, "delta")
     _frame(frame)
@@ -163,13 +195,19 @@ def accel_model(q, a_S=None, frame="NED", noise=None):
 
     Parameters
     ----------
-    q : (..., 4) unit quaternion (the note's orientation; the same numbers as ours)
-    a_S : (..., 3) array, g, optional -- linear acceleration in the sensor frame
-    frame : 'NED', 'Android' or 'Win8'
-    noise : (..., 3) array, g, optional -- ``v_G``, added with the sign of the model
+    q : array_like, shape (..., 4)
+        Unit quaternion ``[q0, q1, q2, q3]`` (the note's orientation; the same numbers as ours).
+    a_S : array_like, shape (..., 3), optional
+        Linear acceleration in the sensor frame, g.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    noise : array_like, shape (..., 3), optional
+        ``v_G``, g, added with the sign of the model.
+
     Returns
     -------
-    (..., 3) array, g
+    ndarray, shape (..., 3)
+        The reading, g.
     """
     q = validate.quaternions(q, "q")
     r_g, _ = reference_vectors(0.0, frame)
@@ -186,12 +224,23 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
 
     Parameters
     ----------
-    q : (..., 4) unit quaternion; B : µT; delta : rad; frame : see module
-    d_S : (..., 3) µT, optional -- disturbance that does not rotate with the sensor, in sensor coordinates
-    noise : (..., 3) µT, optional
+    q : array_like, shape (..., 4)
+        Unit quaternion ``[q0, q1, q2, q3]`` (the note's orientation; the same numbers as ours).
+    B : float, optional
+        Geomagnetic field strength, µT.
+    delta : float, optional
+        Inclination, rad.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    d_S : array_like, shape (..., 3), optional
+        Disturbance that does not rotate with the sensor, in sensor coordinates, µT.
+    noise : array_like, shape (..., 3), optional
+        ``v_B``, µT.
+
     Returns
     -------
-    (..., 3) array, µT
+    ndarray, shape (..., 3)
+        The reading, µT.
     """
     q = validate.quaternions(q, "q")
     B = validate.positive(B, "B")
@@ -207,10 +256,13 @@ def accel_noise(G):
 
     Parameters
     ----------
-    G : (..., 3) array, g
+    G : array_like, shape (..., 3)
+        Accelerometer reading, g.
+
     Returns
     -------
-    (...,) array, g² -- zero on the 1 g sphere, whatever the direction
+    ndarray, shape (...)
+        The noise estimate, g²: zero on the 1 g sphere, whatever the direction.
     """
     G = validate.vectors(G, "G")
     return np.abs(np.sum(G * G, axis=-1) - 1.0)                           # (002 eq 9)
@@ -221,10 +273,15 @@ def mag_noise(B_c, B=50.0):
 
     Parameters
     ----------
-    B_c : (..., 3) array, µT -- calibrated reading; B : float, µT -- geomagnetic field strength
+    B_c : array_like, shape (..., 3)
+        Calibrated magnetometer reading, µT.
+    B : float, optional
+        Geomagnetic field strength, µT.
+
     Returns
     -------
-    (...,) array, µT²
+    ndarray, shape (...)
+        The noise estimate, µT².
     """
     B_c = validate.vectors(B_c, "B_c")
     B = validate.positive(B, "B")
@@ -240,11 +297,29 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
 
     Parameters
     ----------
-    qvgqa : (...,) g² -- :func:`accel_noise`; qvbqd : (...,) µT² -- :func:`mag_noise`; B : µT
-    tol : float -- ``QvGQa`` and ``QvBQd/B²`` below this are treated as exactly 0
+    qvgqa : float or array_like, shape (...)
+        Accelerometer noise, g² (:func:`accel_noise`).
+    qvbqd : float or array_like, shape (...)
+        Magnetometer noise, µT² (:func:`mag_noise`).
+    B : float, optional
+        Geomagnetic field strength, µT.
+    tol : float, optional
+        ``QvGQa`` and ``QvBQd/B²`` below this are treated as exactly 0.
+
     Returns
     -------
-    alpha_g, alpha_m : (...,) arrays, summing to 1
+    alpha_g : ndarray, shape (...)
+        Weight of gravity.
+    alpha_m : ndarray, shape (...)
+        Weight of the field; ``alpha_g + alpha_m = 1``.
+
+    Examples
+    --------
+    A noisier magnetometer shifts the weight to gravity:
+
+    >>> a_g, a_m = weights(0.01, 75.0)           # 75 µT² / (50 µT)² = 0.03 against 0.01 g²
+    >>> round(float(a_g), 3), round(float(a_m), 3)
+    (0.75, 0.25)
     """
     a = validate.array(qvgqa, "qvgqa")
     m = validate.array(qvbqd, "qvbqd")
@@ -260,15 +335,21 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
 
 
 def measured_gravity(G, frame="NED"):
-    """Measured gravity direction ``s_g`` in the sensor frame: ``+G/|G|`` (NED, Win8) or ``-G/|G|`` (Android),
-    (002 eqs 50, 55, 60).
+    """Measured gravity direction ``s_g`` in the sensor frame (002 eqs 50, 55, 60).
+
+    ``+G/|G|`` for NED and Win8, ``-G/|G|`` for Android.
 
     Parameters
     ----------
-    G : (..., 3) array, g (non-zero)
+    G : array_like, shape (..., 3)
+        Accelerometer reading, g (non-zero).
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    (..., 3) unit vectors
+    ndarray, shape (..., 3)
+        Unit vectors.
     """
     G = validate.vectors(G, "G")
     _frame(frame)
@@ -286,12 +367,17 @@ def kappa_general(s, r, alpha=None):
 
     Parameters
     ----------
-    s : (..., K, 3) or (..., 3) -- measured unit vectors (sensor frame)
-    r : same shape -- reference unit vectors (global frame)
-    alpha : (..., K) weights summing to 1, optional (default: equal)
+    s : array_like, shape (..., K, 3) or (..., 3)
+        Measured unit vectors (sensor frame).
+    r : array_like, same shape as ``s``
+        Reference unit vectors (global frame).
+    alpha : array_like, shape (..., K), optional
+        Weights summing to 1 (default: equal).
+
     Returns
     -------
-    (..., 4, 4) symmetric, traceless matrix
+    ndarray, shape (..., 4, 4)
+        Symmetric, traceless matrix κ.
     """
     s, r, w = _vector_pairs(s, r, alpha)
     sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
@@ -318,10 +404,24 @@ def _vector_pairs(s, r, alpha):
 
 
 def kappa_davenport(s, r, alpha=None):
-    """Davenport's compact form of κ (the cross-check of eq 41): ``[[σ, zᵀ], [z, S - σ I]]`` with the attitude
-    profile matrix ``B = Σ α_k s_k r_kᵀ`` (002 eq 29), ``σ = tr B``, ``S = B + Bᵀ``, ``z = Σ α_k s_k × r_k``.
+    """Davenport's compact form of κ (the cross-check of eq 41).
 
-    Same arguments and result as :func:`kappa_general`.
+    ``[[σ, zᵀ], [z, S - σ I]]`` with the attitude profile matrix ``B = Σ α_k s_k r_kᵀ`` (002 eq 29), ``σ = tr B``,
+    ``S = B + Bᵀ``, ``z = Σ α_k s_k × r_k``. Same arguments and result as :func:`kappa_general`.
+
+    Parameters
+    ----------
+    s : array_like, shape (..., K, 3) or (..., 3)
+        Measured unit vectors (sensor frame).
+    r : array_like, same shape as ``s``
+        Reference unit vectors (global frame).
+    alpha : array_like, shape (..., K), optional
+        Weights summing to 1 (default: equal).
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        Symmetric, traceless matrix κ.
     """
     s, r, w = _vector_pairs(s, r, alpha)
     Bm = np.einsum("...k,...ki,...kj->...ij", w, s, r)                    # (002 eq 29)
@@ -343,12 +443,23 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
 
     Parameters
     ----------
-    s_g, s_m : (..., 3) unit vectors -- measured gravity (:func:`measured_gravity`) and field ``B_c/|B_c|``
-    delta : float or (...,) rad -- inclination used for the reference ``r_m``
-    alpha_g, alpha_m : float or (...,) -- weights (:func:`weights`)
+    s_g : array_like, shape (..., 3)
+        Measured gravity direction (:func:`measured_gravity`), unit vectors.
+    s_m : array_like, shape (..., 3)
+        Measured field direction ``B_c/|B_c|``, unit vectors.
+    delta : float or array_like, shape (...)
+        Inclination used for the reference ``r_m``, rad.
+    alpha_g : float or array_like, shape (...)
+        Weight of gravity (:func:`weights`).
+    alpha_m : float or array_like, shape (...)
+        Weight of the field.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    (..., 4, 4) array
+    ndarray, shape (..., 4, 4)
+        κ.
     """
     s_g = validate.vectors(s_g, "s_g")
     s_m = validate.vectors(s_m, "s_m")
@@ -383,6 +494,18 @@ def kappa_eq41_printed(s, r):
     the third row ``[s_z r_x - s_x r_z, s_y r_x + s_y r_y, -s_x r_z + s_y r_y - s_z r_z]`` and the fourth
     ``[s_x r_y - s_y r_x, s_x r_z + s_y r_y - s_z r_z, -s_x r_x - s_y r_y + s_z r_z]`` have three entries each (the
     last printed one is taken as the diagonal, the missing one is NaN). Compare :func:`kappa_general`.
+
+    Parameters
+    ----------
+    s : array_like, shape (3,)
+        Measured unit vector (sensor frame).
+    r : array_like, shape (3,)
+        Reference unit vector (global frame).
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        The printed matrix, NaN where an entry is missing.
     """
     sx, sy, sz = validate.vectors(s, "s").reshape(3)
     rx, ry, rz = validate.vectors(r, "r").reshape(3)
@@ -406,10 +529,23 @@ def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
 
     Parameters
     ----------
-    eq : 53, 58 or 63; the other arguments as :func:`kappa` (single vectors)
+    eq : {53, 58, 63}
+        Which printed equation.
+    s_g : array_like, shape (3,)
+        Measured gravity direction, unit vector.
+    s_m : array_like, shape (3,)
+        Measured field direction, unit vector.
+    delta : float
+        Inclination, rad.
+    alpha_g : float
+        Weight of gravity.
+    alpha_m : float
+        Weight of the field.
+
     Returns
     -------
-    (4, 4) array with NaN where the printed matrix has no entry
+    ndarray, shape (4, 4)
+        The printed matrix, NaN where it has no entry.
     """
     if eq not in (53, 58, 63):
         raise ValueError(f"eq must be 53, 58 or 63; got {eq!r}")
@@ -442,15 +578,25 @@ def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
 
 
 def wahba_error(q, s, r, alpha=None):
-    """Wahba's loss ``E = ½ Σ α_k |s_k - R(q) r_k|²`` (002 eq 22); equals ``1 - qᵀκq`` (eq 39) for unit vectors and
-    weights summing to 1.
+    """Wahba's loss ``E = ½ Σ α_k |s_k - R(q) r_k|²`` (002 eq 22).
+
+    Equals ``1 - qᵀκq`` (eq 39) for unit vectors and weights summing to 1.
 
     Parameters
     ----------
-    q : (4,) unit quaternion; s, r : (K, 3) unit vectors; alpha : (K,) weights (default equal)
+    q : array_like, shape (4,)
+        Unit quaternion.
+    s : array_like, shape (K, 3)
+        Measured unit vectors (sensor frame).
+    r : array_like, shape (K, 3)
+        Reference unit vectors (global frame).
+    alpha : array_like, shape (K,), optional
+        Weights (default equal).
+
     Returns
     -------
     float
+        The loss, dimensionless.
     """
     R = rotation_matrix(q).reshape(3, 3)
     s = validate.array(s, "s", shape=(None, 3)).reshape(-1, 3)
@@ -461,7 +607,25 @@ def wahba_error(q, s, r, alpha=None):
 
 
 class EcompassResult(NamedTuple):
-    """What :func:`ecompass` returns (arrays with the leading shape of the input)."""
+    """What :func:`ecompass` returns (arrays with the leading shape of the input).
+
+    Parameters
+    ----------
+    q : ndarray, shape (..., 4)
+        Orientation quaternion, q0 >= 0.
+    delta6 : ndarray, shape (...)
+        Inclination measured from this sample, rad (eqs 109-112).
+    qvgqa : ndarray, shape (...)
+        ``| |G|² - 1 |``, g².
+    qvbqd : ndarray, shape (...)
+        ``| |B_c|² - B² |`` (unfloored), µT².
+    alpha_g : ndarray, shape (...)
+        Weight of gravity.
+    alpha_m : ndarray, shape (...)
+        Weight of the field.
+    eigenvalues : ndarray, shape (..., 4)
+        Eigenvalues of κ, ascending (E = 1 - λ_max, eq 47).
+    """
     q: np.ndarray          #: (..., 4) orientation quaternion, q0 >= 0
     delta6: np.ndarray     #: (...,) rad, inclination measured from this sample (eqs 109-112)
     qvgqa: np.ndarray      #: (...,) g², | |G|² - 1 |
@@ -478,10 +642,17 @@ def inclination(G, B_c, frame="NED"):
 
     Parameters
     ----------
-    G : (..., 3) g; B_c : (..., 3) µT; frame : 'NED', 'Android' or 'Win8'
+    G : array_like, shape (..., 3)
+        Accelerometer reading, g.
+    B_c : array_like, shape (..., 3)
+        Calibrated magnetometer reading, µT.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    (...,) array, rad, in [-π/2, π/2]
+    ndarray, shape (...)
+        Inclination, rad, in [-π/2, π/2].
     """
     G = validate.vectors(G, "G")
     B_c = validate.vectors(B_c, "B_c")
@@ -500,14 +671,24 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
 
     Parameters
     ----------
-    G : (..., 3) array, g -- accelerometer; B_c : (..., 3) array, µT -- calibrated magnetometer (both non-zero)
-    delta : float or (...,) rad -- inclination of the reference field direction
-    frame : 'NED', 'Android' or 'Win8'; B : µT -- geomagnetic field strength
-    alpha : (alpha_g, alpha_m), optional -- fixed weights in place of eqs 64-65 (experiments)
+    G : array_like, shape (..., 3)
+        Accelerometer reading, g (non-zero).
+    B_c : array_like, shape (..., 3)
+        Calibrated magnetometer reading, µT (non-zero).
+    delta : float or array_like, shape (...)
+        Inclination of the reference field direction, rad.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    B : float, optional
+        Geomagnetic field strength, µT.
+    alpha : tuple of float, optional
+        ``(alpha_g, alpha_m)``: fixed weights in place of eqs 64-65 (experiments).
+
     Returns
     -------
-    EcompassResult -- ``q`` (the note's orientation quaternion = our body→nav quaternion in the frame's global
-    frame), the measured inclination, the noise estimates, the weights and the spectrum of κ
+    EcompassResult
+        ``q`` (the note's orientation quaternion = our body→nav quaternion in the frame's global frame), the
+        measured inclination, the noise estimates, the weights and the spectrum of κ.
     """
     G = validate.vectors(G, "G")
     B_c = validate.vectors(B_c, "B_c")
@@ -528,20 +709,24 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
 
 
 def tilt_compensated_heading(G, B_c):
-    """Classical tilt-compensated compass heading, NED, rad -- for comparison only (Freescale AN4248; *not* an
-    equation of seed 002).
+    """Classical tilt-compensated compass heading, NED, rad -- for comparison only.
 
-    Roll and pitch from the (gravity-positive) accelerometer, ``φ = atan2(G_y, G_z)``,
-    ``θ = atan2(-G_x, G_y sin φ + G_z cos φ)``; the field is de-rotated to the horizontal and
-    ``ψ = atan2(B_z sin φ - B_y cos φ, B_x cos θ + (B_y sin φ + B_z cos φ) sin θ)``. Gravity alone sets the tilt
+    Freescale AN4248; *not* an equation of seed 002. Roll and pitch from the (gravity-positive) accelerometer,
+    ``φ = atan2(G_y, G_z)``, ``θ = atan2(-G_x, G_y sin φ + G_z cos φ)``; the field is de-rotated to the horizontal
+    and ``ψ = atan2(B_z sin φ - B_y cos φ, B_x cos θ + (B_y sin φ + B_z cos φ) sin θ)``. Gravity alone sets the tilt
     and the magnetometer alone the heading: there is no weighting.
 
     Parameters
     ----------
-    G : (..., 3) array, g (NED convention, flat reading (0, 0, +1)); B_c : (..., 3) array, µT
+    G : array_like, shape (..., 3)
+        Accelerometer reading, g (NED convention, flat reading (0, 0, +1)).
+    B_c : array_like, shape (..., 3)
+        Calibrated magnetometer reading, µT.
+
     Returns
     -------
-    (...,) array, rad -- the yaw of the sensor (``quat_to_euler(q)[..., 2]`` of the true attitude when noise-free)
+    ndarray, shape (...)
+        Heading, rad: the yaw of the sensor (``quat_to_euler(q)[..., 2]`` of the true attitude when noise-free).
     """
     G = validate.vectors(G, "G")
     B_c = validate.vectors(B_c, "B_c")
@@ -559,6 +744,18 @@ def heading(q, frame="NED"):
 
     For NED it is the yaw of ``q`` (our body→NED quaternion); for Android/Win8 ``q`` is first re-expressed in NED
     with :func:`fusionlab.rotations.quat_from_seed002`.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternion ``[q0, q1, q2, q3]`` (the note's orientation; the same numbers as ours).
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Heading, rad.
     """
     q = validate.quaternions(q, "q")
     q_ned = rotations.quat_from_seed002(q, _frame(frame), nav="NED")
@@ -579,10 +776,25 @@ def qrot(u, v):
 
     Parameters
     ----------
-    u, v : (..., 3) arrays, non-zero; only directions matter
+    u : array_like, shape (..., 3)
+        First vector, non-zero; only its direction matters.
+    v : array_like, shape (..., 3)
+        Second vector, non-zero; only its direction matters.
+
     Returns
     -------
-    (..., 4) unit quaternions
+    ndarray, shape (..., 4)
+        Unit quaternions.
+
+    Examples
+    --------
+    From z to x: a 90° turn about -y, and ``R(q) u`` lands on v.
+
+    >>> q = qrot([0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    >>> np.round(q, 4) + 0.0
+    array([ 0.7071,  0.    , -0.7071,  0.    ])
+    >>> np.round(rotation_matrix(q) @ [0.0, 0.0, 1.0], 6) + 0.0
+    array([1., 0., 0.])
     """
     u = validate.vectors(u, "u")
     v = validate.vectors(v, "v")
@@ -602,16 +814,22 @@ def qrot(u, v):
 
 
 def gravity_tilt_error(R6, R_prior):
-    """Gravity tilt-error quaternion ``q_zgε`` (002 eqs 77-82): rotates the 6DOF gravity direction (z column of
-    ``R6``) onto the a priori one (z column of ``R_prior``). The ENU minus signs of eq 79 cancel (eq 67), so the
-    same columns serve every coordinate system (as v5.00 does).
+    """Gravity tilt-error quaternion ``q_zgε`` (002 eqs 77-82).
+
+    It rotates the 6DOF gravity direction (z column of ``R6``) onto the a priori one (z column of ``R_prior``). The
+    ENU minus signs of eq 79 cancel (eq 67), so the same columns serve every coordinate system (as v5.00 does).
 
     Parameters
     ----------
-    R6, R_prior : (..., 3, 3) rotation matrices of eq 34 (global→sensor)
+    R6 : array_like, shape (..., 3, 3)
+        Rotation matrix of eq 34 (global→sensor) of the 6DOF eCompass.
+    R_prior : array_like, shape (..., 3, 3)
+        Rotation matrix of the a priori orientation.
+
     Returns
     -------
-    (..., 4) quaternion; its vector part is the measurement ``z[0:3]``
+    ndarray, shape (..., 4)
+        Quaternion; its vector part is the measurement ``z[0:3]``.
     """
     R6 = validate.matrices(R6, "R6")
     Rp = validate.matrices(R_prior, "R_prior")
@@ -619,17 +837,27 @@ def gravity_tilt_error(R6, R_prior):
 
 
 def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
-    """Geomagnetic tilt-error quaternion ``q_zmε`` (002 eqs 83-88): rotates the 6DOF field direction ``R6 r_m`` onto
-    the a priori one ``R_prior r_m``, both built with the same inclination ``delta`` (the previous a posteriori one).
+    """Geomagnetic tilt-error quaternion ``q_zmε`` (002 eqs 83-88).
 
-    NED: ``c R[:, 0] + s R[:, 2]`` (eq 84); Android/Win8: ``c R[:, 1] - s R[:, 2]`` (eq 85).
+    It rotates the 6DOF field direction ``R6 r_m`` onto the a priori one ``R_prior r_m``, both built with the same
+    inclination ``delta`` (the previous a posteriori one). NED: ``c R[:, 0] + s R[:, 2]`` (eq 84); Android/Win8:
+    ``c R[:, 1] - s R[:, 2]`` (eq 85).
 
     Parameters
     ----------
-    R6, R_prior : (..., 3, 3); delta : rad; frame : 'NED', 'Android' or 'Win8'
+    R6 : array_like, shape (..., 3, 3)
+        Rotation matrix of eq 34 of the 6DOF eCompass.
+    R_prior : array_like, shape (..., 3, 3)
+        Rotation matrix of the a priori orientation.
+    delta : float
+        Inclination, rad.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    (..., 4) quaternion; its vector part is ``z[3:6]``
+    ndarray, shape (..., 4)
+        Quaternion; its vector part is ``z[3:6]``.
     """
     R6 = validate.matrices(R6, "R6")
     Rp = validate.matrices(R_prior, "R_prior")
@@ -642,11 +870,15 @@ def delta_quat(omega_dps, dt):
 
     Parameters
     ----------
-    omega_dps : (..., 3) array, °/s -- sensor-frame rate (offset already removed)
-    dt : float, s
+    omega_dps : array_like, shape (..., 3)
+        Sensor-frame angular rate, °/s (offset already removed).
+    dt : float
+        Interval, s.
+
     Returns
     -------
-    (..., 4) unit quaternions
+    ndarray, shape (..., 4)
+        Unit quaternions.
     """
     w = validate.vectors(omega_dps, "omega_dps")
     dt = validate.positive(dt, "dt")
@@ -659,7 +891,18 @@ def delta_quat(omega_dps, dt):
 
 
 def alpha(dt):
-    """``α = π δt / 180`` (002 eq 140): converts °/s over one Kalman step to radians (6.981317e-4 at 0.04 s)."""
+    """``α = π δt / 180`` (002 eq 140): converts °/s over one Kalman step to radians (6.981317e-4 at 0.04 s).
+
+    Parameters
+    ----------
+    dt : float
+        Kalman interval, s.
+
+    Returns
+    -------
+    float
+        ``α``, rad per °/s.
+    """
     return math.pi * validate.positive(dt, "dt") / 180.0                   # (002 eq 140)
 
 
@@ -673,6 +916,18 @@ def measurement_matrix(dt, dof=9):
          [0,  0,   0,        1]]
 
     6DOF (3×6): ``[I3, -(α/2) I3]``.
+
+    Parameters
+    ----------
+    dt : float
+        Kalman interval, s.
+    dof : {9, 6}, optional
+        Which filter.
+
+    Returns
+    -------
+    ndarray, shape (7, 10) or (3, 6)
+        ``C``.
     """
     a2 = alpha(dt) / 2
     if dof == 6:
@@ -688,18 +943,27 @@ def measurement_matrix(dt, dof=9):
 
 
 def process_noise(x_prev, dt, tuning=V500, dof=9):
-    """Process-noise covariance ``Q_w`` = ``P⁻`` from the previous a posteriori error estimate (002 eqs 142-159;
-    6DOF eqs 183-186). Second moments are approximated by the squares of the single previous estimate, off-diagonal
+    """Process-noise covariance ``Q_w`` = ``P⁻`` from the previous a posteriori error estimate (002 eqs 142-159).
+
+    6DOF: eqs 183-186. Second moments are approximated by the squares of the single previous estimate, off-diagonal
     terms within a block are ignored and ``Q_gm = Q_gδ = Q_mδ = Q_bδ = 0``; like the note and v5.00, the
     ``-(α/2)(Q_gb + Q_gbᵀ)`` and ``-(α/2)Q_bb`` terms of an exact expansion are dropped.
 
     Parameters
     ----------
-    x_prev : (10,) [q_gε, q_mε, b_ε (°/s), δ_ε (deg)] for 9DOF, (6,) [q_gε, b_ε] for 6DOF
-    dt : float, s -- Kalman interval; tuning : :class:`Tuning`
+    x_prev : array_like, shape (10,) or (6,)
+        ``[q_gε, q_mε, b_ε (°/s), δ_ε (deg)]`` for 9DOF, ``[q_gε, b_ε]`` for 6DOF.
+    dt : float
+        Kalman interval, s.
+    tuning : Tuning, optional
+        The constants.
+    dof : {9, 6}, optional
+        Which filter.
+
     Returns
     -------
-    (10, 10) or (6, 6) symmetric array
+    ndarray, shape (10, 10) or (6, 6)
+        Symmetric ``Q_w``.
     """
     n = 10 if dof == 9 else 6
     if dof not in (6, 9):
@@ -731,10 +995,23 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
 
     Parameters
     ----------
-    qvgqa : float, g²; qvbqd : float, µT² (unfloored; ignored for 6DOF); dt : s; B : µT (default ``tuning.B``)
+    qvgqa : float
+        Accelerometer noise, g².
+    qvbqd : float
+        Magnetometer noise, µT² (unfloored; ignored for 6DOF).
+    dt : float
+        Kalman interval, s.
+    tuning : Tuning, optional
+        The constants.
+    dof : {9, 6}, optional
+        Which filter.
+    B : float, optional
+        Field strength, µT (default ``tuning.B``).
+
     Returns
     -------
-    (7, 7) or (3, 3) array
+    ndarray, shape (7, 7) or (3, 3)
+        Diagonal ``Q_v``.
     """
     qa = float(validate.array(qvgqa, "qvgqa"))
     a2 = alpha(dt) / 2
@@ -752,15 +1029,23 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
 
 
 def kalman_gain(Q_w, C, Q_v):
-    """``K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹`` (002 eqs 167, 170; 6DOF eq 192): with A = 0 the a priori covariance is
-    ``Q_w``. Like v5.00, a singular innovation covariance gives ``K = 0``.
+    """``K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹`` (002 eqs 167, 170; 6DOF eq 192).
+
+    With A = 0 the a priori covariance is ``Q_w``. Like v5.00, a singular innovation covariance gives ``K = 0``.
 
     Parameters
     ----------
-    Q_w : (n, n); C : (m, n); Q_v : (m, m)
+    Q_w : array_like, shape (n, n)
+        A priori error covariance.
+    C : array_like, shape (m, n)
+        Measurement matrix.
+    Q_v : array_like, shape (m, m)
+        Measurement noise covariance.
+
     Returns
     -------
-    (n, m) array
+    ndarray, shape (n, m)
+        The gain.
     """
     Q_w = validate.array(Q_w, "Q_w", shape=(None, None))
     C = validate.array(C, "C", shape=(None, None))
@@ -778,6 +1063,30 @@ def nominal_gain(dof=9, tuning=V500, qvgqa=0.0, qvbqd=0.0, B=None):
 
     With the v5.00 defaults: K_gg 0.4999875, K_mm 0.3884274, K_bg -0.1432132, K_bm -0.1112568, K_δ 0.6851226
     (9DOF); 0.4999875 / -0.1432215 (6DOF).
+
+    Parameters
+    ----------
+    dof : {9, 6}, optional
+        Which filter.
+    tuning : Tuning, optional
+        The constants.
+    qvgqa : float, optional
+        Accelerometer noise, g².
+    qvbqd : float, optional
+        Magnetometer noise, µT².
+    B : float, optional
+        Field strength, µT (default ``tuning.B``).
+
+    Returns
+    -------
+    ndarray, shape (10, 7) or (6, 3)
+        The gain.
+
+    Examples
+    --------
+    >>> K = nominal_gain(dof=6)
+    >>> round(float(K[0, 0]), 7), round(float(K[3, 0]), 7)
+    (0.4999875, -0.1432215)
     """
     n = 10 if dof == 9 else 6
     dt = tuning.dt
@@ -807,28 +1116,60 @@ def _normalize_positive(q):
 
 
 def block_size(fs, kalman_hz=25.0):
-    """Gyro samples per Kalman step at sample rate ``fs``: ``round(fs / 25)``, at least 1 (8 at 200 Hz)."""
+    """Gyro samples per Kalman step at sample rate ``fs``: ``round(fs / 25)``, at least 1 (8 at 200 Hz).
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    kalman_hz : float, optional
+        Kalman rate aimed at, Hz.
+
+    Returns
+    -------
+    int
+        Samples per Kalman step.
+
+    Examples
+    --------
+    >>> block_size(200.0), block_size(50.0), block_size(10.0)
+    (8, 2, 1)
+    """
     fs = validate.positive(fs, "fs")
     return max(1, int(round(fs / kalman_hz)))
 
 
 class Kalman9:
-    """The 9DOF accel + mag + gyro indirect Kalman filter (002 §7; v5.00 ``fRun_9DOF_GBY_KALMAN``), one step at a
-    time, written to read like the note (full 10×10 / 7×7 matrices).
+    """The 9DOF accel + mag + gyro indirect Kalman filter (002 §7; v5.00 ``fRun_9DOF_GBY_KALMAN``).
 
-    Units are the note's: gyro °/s, accelerometer g, magnetometer µT, offsets °/s, inclination deg.
+    One step at a time, written to read like the note (full 10×10 / 7×7 matrices). Units are the note's: gyro
+    °/s, accelerometer g, magnetometer µT, offsets °/s, inclination deg.
 
     Parameters
     ----------
-    frame : 'NED', 'Android' or 'Win8'
-    tuning : :class:`Tuning` -- constants; ``tuning.sensor_fs`` and ``tuning.oversample`` set the sub-step and δt
-    B : µT, optional -- field strength (default ``tuning.B``)
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    tuning : Tuning, optional
+        Constants; ``tuning.sensor_fs`` and ``tuning.oversample`` set the sub-step and δt.
+    B : float, optional
+        Field strength, µT (default ``tuning.B``).
 
-    Attributes (after a step)
-    -------------------------
-    q : (4,) a posteriori orientation q̂⁺ (note's convention); b_dps : (3,) gyro offset b̂⁺; delta_deg : δ̂⁺
-    x_err : (10,) last a posteriori error estimate ``K z`` (after the 90° limit); z : (7,) last measurement;
-    K : (10, 7) last gain; q6 : last eCompass quaternion
+    Attributes
+    ----------
+    q : ndarray, shape (4,)
+        A posteriori orientation q̂⁺ (note's convention), after a step.
+    b_dps : ndarray, shape (3,)
+        Gyro offset b̂⁺, °/s.
+    delta_deg : float
+        Inclination δ̂⁺, deg.
+    x_err : ndarray, shape (10,)
+        Last a posteriori error estimate ``K z`` (after the 90° limit).
+    z : ndarray, shape (7,)
+        Last measurement.
+    K : ndarray, shape (10, 7)
+        Last gain.
+    q6 : ndarray, shape (4,)
+        Last eCompass quaternion.
     """
 
     dof = 9
@@ -852,7 +1193,15 @@ class Kalman9:
         self.q6 = self.q.copy()
 
     def lock(self, G, B_c):
-        """First accel/mag lock [SRC]: δ̂ = δ⁶ᴰᴼᶠ, then q̂ = eCompass(G, B_c, δ̂), b̂ = 0, errors 0."""
+        """First accel/mag lock [SRC]: δ̂ = δ⁶ᴰᴼᶠ, then q̂ = eCompass(G, B_c, δ̂), b̂ = 0, errors 0.
+
+        Parameters
+        ----------
+        G : array_like, shape (3,)
+            Accelerometer reading, g.
+        B_c : array_like, shape (3,)
+            Calibrated magnetometer reading, µT.
+        """
         self.delta_deg = float(np.degrees(inclination(G, B_c, self.frame)))
         self.q = ecompass(G, B_c, np.radians(self.delta_deg), self.frame, self.B).q
         self.b_dps = np.zeros(3)
@@ -864,11 +1213,17 @@ class Kalman9:
 
         Parameters
         ----------
-        gyr_dps : (n, 3) array, °/s -- the gyro samples of this step (n = ``tuning.oversample``)
-        G : (3,) array, g -- accelerometer averaged over the step; B_c : (3,) µT -- magnetometer averaged
+        gyr_dps : array_like, shape (n, 3)
+            The gyro samples of this step, °/s (n = ``tuning.oversample``).
+        G : array_like, shape (3,)
+            Accelerometer averaged over the step, g.
+        B_c : array_like, shape (3,)
+            Magnetometer averaged over the step, µT.
+
         Returns
         -------
-        (4,) array -- q̂⁺
+        ndarray, shape (4,)
+            q̂⁺.
         """
         gyr = validate.array(gyr_dps, "gyr_dps", shape=(None, 3)).reshape(-1, 3)
         G = validate.vectors(G, "G").reshape(3)
@@ -904,17 +1259,25 @@ class Kalman9:
         return self.q
 
     def run(self, gyr_dps, acc_g, mag_uT):
-        """Run over a recording sampled at ``tuning.sensor_fs``: every ``oversample`` samples make one step
-        (gyro integrated sample by sample, accelerometer and magnetometer averaged). A trailing partial block is
-        dropped.
+        """Run over a recording sampled at ``tuning.sensor_fs``.
+
+        Every ``oversample`` samples make one step (gyro integrated sample by sample, accelerometer and magnetometer
+        averaged). A trailing partial block is dropped.
 
         Parameters
         ----------
-        gyr_dps, acc_g, mag_uT : (N, 3) arrays in °/s, g, µT
+        gyr_dps : array_like, shape (N, 3)
+            Angular rate, °/s.
+        acc_g : array_like, shape (N, 3)
+            Accelerometer, g.
+        mag_uT : array_like, shape (N, 3)
+            Calibrated magnetometer, µT.
+
         Returns
         -------
-        dict of arrays, one row per Kalman step: ``q`` (M, 4), ``b_dps`` (M, 3), ``delta_deg`` (M,),
-        ``q6`` (M, 4) the eCompass orientation, ``t`` (M,) s, time at the end of each step
+        dict of ndarray
+            One row per Kalman step: ``q`` (M, 4), ``b_dps`` (M, 3), ``delta_deg`` (M,), ``q6`` (M, 4) the eCompass
+            orientation, ``t`` (M,) s, time at the end of each step.
         """
         gyr, acc, mag = _recording(gyr_dps, acc_g, mag_uT, need_mag=True)
         n = self.tuning.oversample
@@ -941,6 +1304,26 @@ class Kalman6:
     differs from v5.00's roll/pitch-with-zero-yaw; the 6DOF cannot observe heading anyway).
 
     Units: gyro °/s, accelerometer g, offsets °/s.
+
+    Parameters
+    ----------
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    tuning : Tuning, optional
+        Constants; ``tuning.sensor_fs`` and ``tuning.oversample`` set the sub-step and δt.
+
+    Attributes
+    ----------
+    q : ndarray, shape (4,)
+        A posteriori orientation q̂⁺ (note's convention).
+    b_dps : ndarray, shape (3,)
+        Gyro offset b̂⁺, °/s.
+    x_err : ndarray, shape (6,)
+        Last a posteriori error estimate.
+    z : ndarray, shape (3,)
+        Last measurement.
+    K : ndarray, shape (6, 3)
+        Last gain.
     """
 
     dof = 6
@@ -967,14 +1350,33 @@ class Kalman6:
         return measured_gravity(G, self.frame)
 
     def lock(self, G):
-        """Initial orientation from the accelerometer tilt: ``R(q) r_g = s_g``."""
+        """Initial orientation from the accelerometer tilt: ``R(q) r_g = s_g``.
+
+        Parameters
+        ----------
+        G : array_like, shape (3,)
+            Accelerometer reading, g.
+        """
         self.q = qrot(self.r_g, self._s_g(G))
         self.b_dps = np.zeros(3)
         self.x_err = np.zeros(6)
         self.locked = True
 
     def step(self, gyr_dps, G):
-        """One Kalman step: ``gyr_dps`` (n, 3) °/s samples, ``G`` (3,) g averaged. Returns q̂⁺."""
+        """One Kalman step.
+
+        Parameters
+        ----------
+        gyr_dps : array_like, shape (n, 3)
+            The gyro samples of this step, °/s.
+        G : array_like, shape (3,)
+            Accelerometer averaged over the step, g.
+
+        Returns
+        -------
+        ndarray, shape (4,)
+            q̂⁺.
+        """
         gyr = validate.array(gyr_dps, "gyr_dps", shape=(None, 3)).reshape(-1, 3)
         G = validate.vectors(G, "G").reshape(3)
         if not self.locked:
@@ -997,7 +1399,22 @@ class Kalman6:
         return self.q
 
     def run(self, gyr_dps, acc_g, mag_uT=None):
-        """Like :meth:`Kalman9.run` (``mag_uT`` ignored); returns ``q``, ``b_dps``, ``t``."""
+        """Like :meth:`Kalman9.run`, without the magnetometer.
+
+        Parameters
+        ----------
+        gyr_dps : array_like, shape (N, 3)
+            Angular rate, °/s.
+        acc_g : array_like, shape (N, 3)
+            Accelerometer, g.
+        mag_uT : array_like, optional
+            Ignored (the 6DOF has no magnetometer).
+
+        Returns
+        -------
+        dict of ndarray
+            ``q`` (M, 4), ``b_dps`` (M, 3), ``t`` (M,) s.
+        """
         gyr, acc, _ = _recording(gyr_dps, acc_g, None, need_mag=False)
         n = self.tuning.oversample
         M = len(gyr) // n
@@ -1133,8 +1550,10 @@ def _fast_setup(fs, tuning, N):
 
 
 def held_accel_noise(qvgqa, dt, hold):
-    """v5.00's accelerometer noise held over a window -- **ours, not the seed's**: for each Kalman step, the largest
-    ``QvGQa = | |G|² - 1 |`` (002 eq 9, g²) of the steps in the last ``hold`` seconds (causal).
+    """v5.00's accelerometer noise held over a window -- **ours, not the seed's**.
+
+    For each Kalman step, the largest ``QvGQa = | |G|² - 1 |`` (002 eq 9, g²) of the steps in the last ``hold``
+    seconds (causal).
 
     Why: v5.00 takes the accelerometer noise from the distance of one averaged reading to the 1 g sphere, and the
     note itself warns that the estimate "can fail for a single sample" (a 2 g downward acceleration reads 1 g).
@@ -1145,8 +1564,17 @@ def held_accel_noise(qvgqa, dt, hold):
 
     Parameters
     ----------
-    qvgqa : (M,) array, g² -- v5.00's noise of each Kalman step; dt : float, s -- Kalman interval;
-    hold : float >= 0, s (0: unchanged)
+    qvgqa : array_like, shape (M,)
+        v5.00's noise of each Kalman step, g².
+    dt : float
+        Kalman interval, s.
+    hold : float
+        Window, s (>= 0; 0: unchanged).
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        The held noise, g².
     """
     qa = validate.array(qvgqa, "qvgqa")
     if qa.ndim != 1 or np.any(qa < 0):
@@ -1171,20 +1599,35 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
 
     Parameters
     ----------
-    gyr_dps, acc_g, mag_uT : (N, 3) arrays, °/s, g, µT; fs : Hz
-    frame, tuning : as :class:`Kalman9`
-    B : µT, optional -- the field strength (default ``tuning.B``), or an (N,) array of it, one per sample: a running
-        estimate (v5.00 updates B from its background magnetic calibration); each step uses its last sample's value
-    per_sample : bool -- return one quaternion per *sample* (inside a block the gyro-propagated a priori partial
-        products from the previous q̂⁺, at a block's last sample q̂⁺; after the last full block, gyro only);
-        otherwise one per Kalman step
-    accel_hold : float >= 0, s -- 0 (default) is v5.00: the accelerometer noise QvGQa = | |G|² - 1 | of each
-        step's averaged reading (002 eq 9). A positive value is **ours, not the seed's**: each step uses the largest
-        QvGQa of the steps in the last ``accel_hold`` seconds (:func:`held_accel_noise` says why). In the 9DOF it
-        sets the Kalman ``Q_v`` only; the eCompass weights (eqs 64-65) keep v5.00's value
+    gyr_dps : array_like, shape (N, 3)
+        Angular rate, °/s.
+    acc_g : array_like, shape (N, 3)
+        Accelerometer, g.
+    mag_uT : array_like, shape (N, 3)
+        Calibrated magnetometer, µT.
+    fs : float
+        Sample rate, Hz.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        As :class:`Kalman9`.
+    tuning : Tuning, optional
+        As :class:`Kalman9`.
+    B : float or array_like, shape (N,), optional
+        The field strength, µT (default ``tuning.B``), or one per sample: a running estimate (v5.00 updates B from
+        its background magnetic calibration); each step uses its last sample's value.
+    per_sample : bool, optional
+        Return one quaternion per *sample* (inside a block the gyro-propagated a priori partial products from the
+        previous q̂⁺, at a block's last sample q̂⁺; after the last full block, gyro only); otherwise one per Kalman
+        step.
+    accel_hold : float, optional
+        Seconds, >= 0. 0 (default) is v5.00: the accelerometer noise QvGQa = | |G|² - 1 | of each step's averaged
+        reading (002 eq 9). A positive value is **ours, not the seed's**: each step uses the largest QvGQa of the
+        steps in the last ``accel_hold`` seconds (:func:`held_accel_noise` says why). In the 9DOF it sets the
+        Kalman ``Q_v`` only; the eCompass weights (eqs 64-65) keep v5.00's value.
+
     Returns
     -------
-    dict -- ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3), ``delta_deg`` (M,), ``t`` (M,) s
+    dict of ndarray
+        ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``delta_deg`` (M,), ``t`` (M,) s.
     """
     gyr, acc, mag = _recording(gyr_dps, acc_g, mag_uT, need_mag=True)
     fs = validate.positive(fs, "fs")
@@ -1297,12 +1740,28 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=V500, B=None, per_
 def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, accel_hold=0.0):
     """The 6DOF filter of :class:`Kalman6` at any sample rate, in scalar arithmetic (see :func:`run_fast9`).
 
-    ``accel_hold`` as in :func:`run_fast9`: 0 is v5.00; a positive value (ours) holds the largest accelerometer
-    noise of the last ``accel_hold`` seconds (:func:`held_accel_noise`).
+    Parameters
+    ----------
+    gyr_dps : array_like, shape (N, 3)
+        Angular rate, °/s.
+    acc_g : array_like, shape (N, 3)
+        Accelerometer, g.
+    fs : float
+        Sample rate, Hz.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        As :class:`Kalman6`.
+    tuning : Tuning, optional
+        As :class:`Kalman6`.
+    per_sample : bool, optional
+        One quaternion per sample, or one per Kalman step (as :func:`run_fast9`).
+    accel_hold : float, optional
+        As in :func:`run_fast9`, s: 0 is v5.00; a positive value (ours) holds the largest accelerometer noise of
+        the last ``accel_hold`` seconds (:func:`held_accel_noise`).
 
     Returns
     -------
-    dict -- ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3), ``t`` (M,) s
+    dict of ndarray
+        ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``t`` (M,) s.
     """
     gyr, acc, _ = _recording(gyr_dps, acc_g, None, need_mag=False)
     fs = validate.positive(fs, "fs")
@@ -1367,15 +1826,23 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=V500, per_sample=True, acc
 
 
 def tilt_error(q_est, q_true, frame="NED"):
-    """Tilt error, rad: the angle between the estimated and true gravity directions in the sensor frame,
+    """Tilt error, rad: the angle between the estimated and true gravity directions in the sensor frame.
+
     ``∠(R̂ r_g, R r_g)`` (heading errors do not count).
 
     Parameters
     ----------
-    q_est, q_true : (..., 4) unit quaternions (note's convention)
+    q_est : array_like, shape (..., 4)
+        Estimated unit quaternions (note's convention).
+    q_true : array_like, shape (..., 4)
+        True unit quaternions.
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+
     Returns
     -------
-    (...,) array, rad
+    ndarray, shape (...)
+        Tilt error, rad.
     """
     r_g, _ = reference_vectors(0.0, frame)
     a = rotation_matrix(q_est) @ r_g
@@ -1390,17 +1857,39 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
 
     Parameters
     ----------
-    omega_dps : (N, 3) array, °/s -- true sensor-frame angular rate of each sample
-    q0 : (4,) initial orientation (note's convention); frame : 'NED', 'Android' or 'Win8'; fs : Hz
-    bias_dps : (3,) gyro offset, °/s; sigma_gyr (°/s), sigma_acc (g), sigma_mag (µT) : white noise per axis (the
-        accelerometer noise enters with the sign of the frame's model, so one ``seed`` gives the *same physical*
-        recording in every frame)
-    B : µT; delta : rad; a_S : (N, 3) g linear acceleration; d_S : (N, 3) µT magnetic disturbance (sensor frame)
-    seed : int -- for ``np.random.default_rng``
+    omega_dps : array_like, shape (N, 3)
+        True sensor-frame angular rate of each sample, °/s.
+    q0 : array_like, shape (4,), optional
+        Initial orientation (note's convention).
+    frame : {'NED', 'Android', 'Win8'}, optional
+        Coordinate system of the note.
+    fs : float, optional
+        Sample rate, Hz.
+    bias_dps : array_like, shape (3,), optional
+        Gyro offset, °/s.
+    sigma_gyr : float, optional
+        Gyro white noise per axis, °/s.
+    sigma_acc : float, optional
+        Accelerometer white noise per axis, g (it enters with the sign of the frame's model, so one ``seed``
+        gives the *same physical* recording in every frame).
+    sigma_mag : float, optional
+        Magnetometer white noise per axis, µT.
+    B : float, optional
+        Field strength, µT.
+    delta : float, optional
+        Inclination, rad.
+    a_S : array_like, shape (N, 3), optional
+        Linear acceleration, g (sensor frame).
+    d_S : array_like, shape (N, 3), optional
+        Magnetic disturbance, µT (sensor frame).
+    seed : int, optional
+        Seed of ``np.random.default_rng``.
+
     Returns
     -------
-    dict -- ``q_true`` (N, 4) (orientation *after* each sample's rotation), ``gyr`` (°/s), ``acc`` (g),
-    ``mag`` (µT), each (N, 3), ``fs``
+    dict
+        ``q_true`` (N, 4) (orientation *after* each sample's rotation), ``gyr`` (°/s), ``acc`` (g), ``mag`` (µT),
+        each (N, 3), and ``fs``.
     """
     w = validate.array(omega_dps, "omega_dps", shape=(None, 3))
     if w.ndim != 2:
