@@ -28,6 +28,7 @@ numpydoc_validate = pytest.importorskip("numpydoc.validate")
 DOCUMENTED = [
     "earth",
     "metrics",
+    "validate",
 ]
 
 CODES = ("PR01", "PR02", "PR04", "PR10", "GL08", "GL07")

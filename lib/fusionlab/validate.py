@@ -31,15 +31,38 @@ def array(x, name, shape=None, finite=True, dtype=float):
     Parameters
     ----------
     x : array_like
-    name : str -- the argument's name, used in the error message
-    shape : tuple of int or None, optional -- the required trailing shape; ``None`` entries accept any length.
-        Leading axes beyond ``len(shape)`` are allowed (vectorised calls).
-    finite : bool -- reject NaN and inf
+        The argument to check.
+    name : str
+        The argument's name, used in the error message.
+    shape : tuple of int or None, optional
+        The required trailing shape; ``None`` entries accept any length. Leading axes beyond ``len(shape)`` are
+        allowed (vectorised calls).
+    finite : bool, default True
+        Reject NaN and inf.
+    dtype : data-type, default float
+        The dtype of the returned array.
+
+    Returns
+    -------
+    ndarray
+        ``x`` as an array of ``dtype``.
 
     Raises
     ------
     ValueError
-        if ``x`` cannot be read as numbers, has the wrong trailing shape, or holds non-finite values.
+        If ``x`` cannot be read as numbers, has the wrong trailing shape, or holds non-finite values.
+
+    Examples
+    --------
+    The message names the argument, what was expected and what came:
+
+    >>> from fusionlab import validate
+    >>> validate.array([[1.0, 2.0, 3.0]], "acc", shape=(3,))
+    array([[1., 2., 3.]])
+    >>> validate.array([1.0, 2.0], "acc", shape=(3,))
+    Traceback (most recent call last):
+        ...
+    ValueError: acc must have shape (..., 3); got (2,)
     """
     try:
         a = np.asarray(x, dtype=dtype)
@@ -58,7 +81,37 @@ def array(x, name, shape=None, finite=True, dtype=float):
 
 
 def samples(x, name, n=3):
-    """``x`` as a recording: exactly two axes, shape ``(N, n)`` (one row per sample)."""
+    """``x`` as a recording: exactly two axes, shape ``(N, n)`` (one row per sample).
+
+    Parameters
+    ----------
+    x : array_like, shape (N, n)
+        The recording, finite.
+    name : str
+        The argument's name, used in the error message.
+    n : int, default 3
+        The number of columns (components per sample).
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        ``x`` as a float array.
+
+    Raises
+    ------
+    ValueError
+        If ``x`` is not two-dimensional with ``n`` columns, or holds non-finite values.
+
+    Examples
+    --------
+    One sample is still a recording of one row, not a vector:
+
+    >>> from fusionlab import validate
+    >>> validate.samples([0.0, 0.0, 9.81], "acc")
+    Traceback (most recent call last):
+        ...
+    ValueError: acc must have shape (N, 3), one row per sample; got (3,)
+    """
     a = array(x, name, finite=False)
     if a.ndim != 2 or a.shape[1] != n:
         raise ValueError(f"{name} must have shape (N, {n}), one row per sample; got {a.shape}")
@@ -66,12 +119,42 @@ def samples(x, name, n=3):
 
 
 def vectors(x, name, n=3):
-    """``x`` as an array of ``n``-vectors, shape ``(..., n)``."""
+    """``x`` as an array of ``n``-vectors, shape ``(..., n)``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., n)
+        The vectors, finite.
+    name : str
+        The argument's name, used in the error message.
+    n : int, default 3
+        The length of one vector.
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        ``x`` as a float array.
+    """
     return array(x, name, shape=(n,))
 
 
 def matrices(x, name, n=3):
-    """``x`` as an array of ``n``×``n`` matrices, shape ``(..., n, n)``."""
+    """``x`` as an array of ``n``×``n`` matrices, shape ``(..., n, n)``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., n, n)
+        The matrices, finite.
+    name : str
+        The argument's name, used in the error message.
+    n : int, default 3
+        The size of one matrix.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        ``x`` as a float array.
+    """
     return array(x, name, shape=(n, n))
 
 
@@ -80,6 +163,30 @@ def quaternions(q, name, unit=True, tol=1e-6):
 
     A common slip is passing ``[x, y, z, w]`` (scipy's order) or a quaternion that has drifted off the unit sphere;
     the message says which. A zero quaternion encodes no rotation and is named as such.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions ``[w, x, y, z]``, finite.
+    name : str
+        The argument's name, used in the error message.
+    unit : bool, default True
+        Require norm 1.
+    tol : float, default 1e-6
+        Allowed deviation of the norm from 1.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``q`` as a float array (not normalised).
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.quaternions([1.0, 0.0, 0.0, 0.1], "q")
+    Traceback (most recent call last):
+        ...
+    ValueError: q must be unit quaternions [w, x, y, z] (norm 1 within 1e-06); worst norm error is 0.00499 -- normalise first (rotations.quat_normalize)
     """
     q = array(q, name, shape=(4,))
     if unit:
@@ -99,6 +206,20 @@ def quaternions_or_nan(q, name, tol=1e-6):
 
     A row with any NaN component is returned as all NaN, so that NaN in gives NaN out whatever component it sits
     in; infinite values, zero and non-unit rows are errors.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions ``[w, x, y, z]``; a row with a NaN is an undefined sample.
+    name : str
+        The argument's name, used in the error message.
+    tol : float, default 1e-6
+        Allowed deviation of the norm from 1 on the defined rows.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``q`` as a float array, each row holding a NaN made all NaN.
     """
     q = array(q, name, shape=(4,), finite=False)
     if np.any(np.isinf(q)):
@@ -112,7 +233,24 @@ def quaternions_or_nan(q, name, tol=1e-6):
 
 
 def scalar(x, name, positive=False, nonnegative=False):
-    """One finite number (optionally > 0 or >= 0), as a float; a list, array, string or None names ``name``."""
+    """One finite number (optionally > 0 or >= 0), as a float; a list, array, string or None names ``name``.
+
+    Parameters
+    ----------
+    x : float
+        The number (a 0-d array is accepted).
+    name : str
+        The argument's name, used in the error message.
+    positive : bool, default False
+        Require ``x > 0``.
+    nonnegative : bool, default False
+        Require ``x >= 0``.
+
+    Returns
+    -------
+    float
+        ``x`` as a Python float.
+    """
     if isinstance(x, (str, bytes, bool)) or x is None or np.ndim(x) != 0:
         raise ValueError(f"{name} must be a single number; got {_show(x)}")
     try:
@@ -129,7 +267,20 @@ def scalar(x, name, positive=False, nonnegative=False):
 
 
 def positive(x, name):
-    """A finite scalar > 0 (sample rates, time steps, masses)."""
+    """A finite scalar > 0 (sample rates, time steps, masses).
+
+    Parameters
+    ----------
+    x : float
+        The number.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    float
+        ``x`` as a Python float.
+    """
     if isinstance(x, (str, bytes, bool)) or np.ndim(x) != 0:
         raise ValueError(f"{name} must be a positive number; got {_show(x)}")
     try:
@@ -149,7 +300,22 @@ def _show(x):
 
 
 def count(x, name, minimum=0):
-    """A whole number >= ``minimum`` (sample counts, seeds); ``3.0`` is accepted, ``3.5`` and ``True`` are not."""
+    """A whole number >= ``minimum`` (sample counts, seeds); ``3.0`` is accepted, ``3.5`` and ``True`` are not.
+
+    Parameters
+    ----------
+    x : int or float
+        The number.
+    name : str
+        The argument's name, used in the error message.
+    minimum : int, default 0
+        The smallest value accepted.
+
+    Returns
+    -------
+    int
+        ``x`` as a Python int.
+    """
     if isinstance(x, (bool, str, bytes)) or np.ndim(x) != 0:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {_show(x)}")
     try:
@@ -162,7 +328,27 @@ def count(x, name, minimum=0):
 
 
 def same_length(**arrays):
-    """Check that every given array has the same first-axis length; returns that length."""
+    """Check that every given array has the same first-axis length; returns that length.
+
+    Parameters
+    ----------
+    **arrays : array_like or None
+        The arrays by argument name (``acc=acc, gyr=gyr``); None entries are skipped, a scalar counts as length 0.
+
+    Returns
+    -------
+    int
+        The common length (0 when no array was given).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import validate
+    >>> validate.same_length(acc=np.zeros((100, 3)), gyr=np.zeros((99, 3)))
+    Traceback (most recent call last):
+        ...
+    ValueError: acc, gyr must have the same number of samples; acc has 100, gyr has 99
+    """
     lengths = {k: (len(v) if np.ndim(v) else 0) for k, v in arrays.items() if v is not None}
     if len(set(lengths.values())) > 1:
         detail = ", ".join(f"{k} has {n}" for k, n in lengths.items())
@@ -171,7 +357,30 @@ def same_length(**arrays):
 
 
 def angles_rad(x, name, limit=2 * np.pi + 1e-9):
-    """Angles in radians; values beyond ±``limit`` almost always mean degrees were passed."""
+    """Angles in radians; values beyond ±``limit`` almost always mean degrees were passed.
+
+    Parameters
+    ----------
+    x : array_like
+        The angles, rad, finite.
+    name : str
+        The argument's name, used in the error message.
+    limit : float, default 2π + 1e-9
+        The largest magnitude accepted, rad.
+
+    Returns
+    -------
+    ndarray
+        ``x`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.angles_rad([0.1, 90.0], "yaw")
+    Traceback (most recent call last):
+        ...
+    ValueError: yaw must be in radians (|angle| <= 6.283); got a value of 90, which looks like degrees -- use np.radians(...)
+    """
     a = array(x, name)
     if a.size and float(np.max(np.abs(a))) > limit:
         raise ValueError(f"{name} must be in radians (|angle| <= {limit:.4g}); got a value of "
@@ -184,6 +393,18 @@ def euler_rad(x, name="euler"):
 
     Pitch lives in [-π/2, π/2] by the Z-Y-X convention (±π still allows a pitch "over the top"); a pitch beyond ±π
     or a roll or yaw beyond a full turn fits degrees far better than radians.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
+    name : str, default "euler"
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``x`` as a float array.
     """
     e = vectors(x, name)
     if e.size:
@@ -203,6 +424,18 @@ def broadcast(core=None, **arrays):
     ``core`` maps a name to the number of trailing axes that belong to one item (1 for a 3-vector or a
     quaternion, 2 for a matrix, 0 by default); only the leading (batch) axes must broadcast. Replaces numpy's
     "operands could not be broadcast" (which names no argument) by a message that names them and their shapes.
+
+    Parameters
+    ----------
+    core : dict of str to int, optional
+        Trailing (per-item) axes of each named array; 0 for a name not in it.
+    **arrays : array_like or None
+        The arrays by argument name; None entries are skipped.
+
+    Returns
+    -------
+    tuple of int
+        The broadcast batch shape.
     """
     core = core or {}
     batch = {k: np.shape(v)[:np.ndim(v) - core.get(k, 0)] for k, v in arrays.items() if v is not None}
@@ -224,9 +457,25 @@ def options(given, allowed, where):
 
     Parameters
     ----------
-    given : mapping or iterable of str -- the keywords that were passed
-    allowed : iterable of str -- the keywords ``where`` accepts
-    where : str -- the function (or estimator) for the message
+    given : mapping or iterable of str
+        The keywords that were passed.
+    allowed : iterable of str
+        The keywords ``where`` accepts.
+    where : str
+        The function (or estimator) for the message.
+
+    Raises
+    ------
+    UnknownOption
+        If a keyword of ``given`` is not in ``allowed``; the message suggests the closest allowed one.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.options({"mn_sdt": 0.1}, ["mn_std", "gyr_std"], "ekf")
+    Traceback (most recent call last):
+        ...
+    fusionlab.validate.UnknownOption: ekf got unknown keyword option(s) 'mn_sdt' (did you mean 'mn_std'?); it accepts: gyr_std, mn_std
     """
     unknown = sorted(set(given) - set(allowed))
     if unknown:
@@ -245,6 +494,24 @@ def covariance(P, name, n=None, tol=1e-9, definite=False):
     ``tol`` is relative to the largest diagonal entry (rounding in a Joseph or short-form update leaves asymmetry
     and negative eigenvalues of order 1e-16 of the scale, which are accepted). With ``definite`` the smallest
     eigenvalue must be > 0 (a matrix that is inverted).
+
+    Parameters
+    ----------
+    P : array_like, shape (n, n)
+        The covariance matrix (units of the state squared).
+    name : str
+        The argument's name, used in the error message.
+    n : int, optional
+        The required size; any square size when None.
+    tol : float, default 1e-9
+        Allowed asymmetry and negative eigenvalue, relative to the largest entry.
+    definite : bool, default False
+        Require positive definite (smallest eigenvalue > 0).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        ``P`` as a float array.
     """
     P = array(P, name)
     if P.ndim != 2 or P.shape[0] != P.shape[1] or (n is not None and P.shape != (n, n)):
@@ -269,6 +536,20 @@ def rotation(C, name, tol=1e-6):
 
     A reflection (det -1), a zero matrix or a drifted DCM gives numbers that look like angles but describe no
     attitude; the message says which (and points at ``dcm_renormalize`` for drift).
+
+    Parameters
+    ----------
+    C : array_like, shape (..., 3, 3)
+        The rotation matrices.
+    name : str
+        The argument's name, used in the error message.
+    tol : float, default 1e-6
+        Allowed deviation of ``C Cᵀ`` from I and of det C from 1.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``C`` as a float array.
     """
     C = matrices(C, name)
     if C.size == 0:
@@ -290,6 +571,30 @@ def sample_rate(fs, name="fs", low=1.0, high=1e5):
 
     A value outside is almost always a unit slip: a sample *interval* in s passed as the rate (0.01), a rate in kHz
     or MHz, or a timestamp.
+
+    Parameters
+    ----------
+    fs : float
+        The sample rate, Hz.
+    name : str, default "fs"
+        The argument's name, used in the error message.
+    low : float, default 1.0
+        The lowest rate accepted, Hz.
+    high : float, default 1e5
+        The highest rate accepted, Hz.
+
+    Returns
+    -------
+    float
+        ``fs`` as a Python float, Hz.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.sample_rate(0.01)
+    Traceback (most recent call last):
+        ...
+    ValueError: fs must be a sample rate in Hz between 1 and 100000; got 0.01 -- a sample interval dt in s? the rate is 1/dt = 100 Hz
     """
     v = positive(fs, name)
     if not low <= v <= high:
@@ -305,6 +610,22 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0):
     Two tests, both far outside a body's motion in rad/s and squarely inside it in °/s: a peak rate above ``peak``
     (50 rad/s = 2900 °/s, beyond the range of the MEMS gyros of the course), or a *median* rate above ``typical``
     (10 rad/s = 570 °/s sustained over half the record: a hand or a vehicle turning in °/s gives 10-100).
+
+    Parameters
+    ----------
+    gyr : array_like, shape (N, 3)
+        Angular rates, rad/s.
+    name : str, default "gyr"
+        The argument's name, used in the error message.
+    peak : float, default 50.0
+        The largest rate magnitude accepted, rad/s.
+    typical : float, default 10.0
+        The largest median rate magnitude accepted, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        ``gyr`` as a float array, rad/s.
     """
     g = samples(gyr, name)
     if len(g):
@@ -325,6 +646,30 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
     The median magnitude of any record with a rest or slow phase is near 9.81 m/s²; a median between 0.5 and 2
     means the readings are in g (multiply by 9.80665). A record in free fall throughout (median near 0) passes
     here; the filters say what they do with it.
+
+    Parameters
+    ----------
+    acc : array_like, shape (N, 3) or (..., 3)
+        Specific force, m/s² (``(..., 3)`` with ``per_sample=False``).
+    name : str, default "acc"
+        The argument's name, used in the error message.
+    g : float, default 9.80665
+        The gravity quoted in the message, m/s².
+    per_sample : bool, default True
+        Require a recording ``(N, 3)``; otherwise any ``(..., 3)``.
+
+    Returns
+    -------
+    ndarray, shape (N, 3) or (..., 3)
+        ``acc`` as a float array, m/s².
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.accel_ms2([[0.0, 0.0, 1.0], [0.0, 0.02, 0.99]], "acc")
+    Traceback (most recent call last):
+        ...
+    ValueError: acc must be in m/s²; got a median magnitude of 0.995, which looks like g (at rest it should be 9.807) -- multiply by 9.80665
     """
     a = samples(acc, name) if per_sample else vectors(acc, name)
     if a.size:
