@@ -145,6 +145,17 @@ def test_printed_kappa_matrices_are_wrong_by_the_errata_numbers():
         assert np.isnan(P[3]).all() and not np.isnan(P[:3]).any()          # fourth gravity row missing
 
 
+def test_printed_eq41_has_six_wrong_entries_and_two_lost():
+    # r_y != 0, so that no misprint coincides with the right value (with r_y = 0 entry (2,1) does)
+    s, r = np.array([0.48, 0.6, 0.64]), np.array([0.6, 0.48, 0.64])
+    P, C = fz.kappa_eq41_printed(s, r), fz.kappa_general(s, r, [1.0])
+    lost = [(i, j) for i in range(4) for j in range(4) if np.isnan(P[i, j])]
+    wrong = [(i, j) for i in range(4) for j in range(4) if not np.isnan(P[i, j]) and not np.isclose(P[i, j], C[i, j])]
+    assert lost == [(2, 3), (3, 2)]
+    assert wrong == [(0, 2), (1, 1), (1, 2), (2, 1), (2, 2), (3, 1)]
+    assert np.allclose([P[0, 2], P[2, 1], P[2, 2], P[3, 1]], [-0.0192, 0.648, -0.4288, 0.1856], atol=1e-12)
+
+
 # ---------------------------------------------------------------------------------------------------- qrot
 
 

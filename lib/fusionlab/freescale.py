@@ -493,7 +493,8 @@ def kappa_eq41_printed(s, r):
     Printed typos: (0,2) ``s_x r_x - s_x r_z``; (1,1) ``s_x r_z - s_y r_y - s_z r_z``; (1,2) ``s_x r_z + s_y r_x``;
     the third row ``[s_z r_x - s_x r_z, s_y r_x + s_y r_y, -s_x r_z + s_y r_y - s_z r_z]`` and the fourth
     ``[s_x r_y - s_y r_x, s_x r_z + s_y r_y - s_z r_z, -s_x r_x - s_y r_y + s_z r_z]`` have three entries each (the
-    last printed one is taken as the diagonal, the missing one is NaN). Compare :func:`kappa_general`.
+    last printed one is taken as the diagonal, the missing one is NaN), so (2,1), (2,2) and (3,1) are wrong too: six
+    wrong entries and two lost. Compare :func:`kappa_general`.
 
     Parameters
     ----------
