@@ -892,7 +892,14 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
 
 
 def main(argv=None):
-    """``python -m fusionlab.correlation --xlsx data/lab03_fusion.xlsx``: the Lab 3 spreadsheet of the motion log."""
+    """``python -m fusionlab.correlation --xlsx data/lab03_fusion.xlsx``: the Lab 3 spreadsheet of the motion log.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default: ``sys.argv[1:]``): ``--log`` the terminal log, ``--xlsx`` the spreadsheet
+        to write, ``--dt`` the sample interval in s.
+    """
     import argparse
 
     parser = argparse.ArgumentParser(prog="python -m fusionlab.correlation",
