@@ -29,6 +29,7 @@ DOCUMENTED = [
     "correlation",
     "earth",
     "freescale",
+    "gfimu",
     "kalman",
     "metrics",
     "validate",

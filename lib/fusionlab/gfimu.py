@@ -107,10 +107,21 @@ def triad_positions(d):
 
     Parameters
     ----------
-    d : float, m -- separation distance
+    d : float
+        Separation distance, m.
+
     Returns
     -------
-    (4, 3) array, m
+    ndarray, shape (4, 3)
+        Lever arms, m.
+
+    Examples
+    --------
+    >>> triad_positions(0.1)
+    array([[0. , 0. , 0. ],
+           [0.1, 0. , 0. ],
+           [0. , 0.1, 0. ],
+           [0. , 0. , 0.1]])
     """
     d = validate.positive(d, "d")
     return np.vstack([np.zeros(3), d * np.eye(3)])
@@ -124,12 +135,19 @@ def lever_arm(a_o, omega, alpha, p):
 
     Parameters
     ----------
-    a_o : (..., 3) array, m/s² -- specific force at the body origin (gravity and linear acceleration)
-    omega : (..., 3) array, rad/s; alpha : (..., 3) array, rad/s²
-    p : (..., 3) array, m -- lever arm in the body frame
+    a_o : array_like, shape (..., 3)
+        Specific force at the body origin (gravity and linear acceleration), m/s².
+    omega : array_like, shape (..., 3)
+        Angular rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    p : array_like, shape (..., 3)
+        Lever arm in the body frame, m.
+
     Returns
     -------
-    (..., 3) array, m/s²
+    ndarray, shape (..., 3)
+        Specific force at ``p``, m/s².
     """
     return sensors.point_acceleration(a_o, omega, alpha, p)                          # (004 eq 3.4)
 
@@ -139,12 +157,19 @@ def specific_forces(omega, alpha, d, a_o=None):
 
     Parameters
     ----------
-    omega, alpha : (..., 3) arrays, rad/s and rad/s²
-    d : float, m
-    a_o : (..., 3) array, m/s², optional -- common specific force (default 0; it cancels in the AIV)
+    omega : array_like, shape (..., 3)
+        Angular rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    d : float
+        Separation distance, m.
+    a_o : array_like, shape (..., 3), optional
+        Common specific force, m/s² (default 0; it cancels in the AIV).
+
     Returns
     -------
-    (..., 12) array, m/s²
+    ndarray, shape (..., 12)
+        Specific forces, m/s².
     """
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     a_o = np.zeros(3) if a_o is None else validate.vectors(a_o, "a_o")
@@ -165,7 +190,8 @@ def aiv_map():
 
     Returns
     -------
-    (9, 12) array
+    ndarray, shape (9, 12)
+        ``L`` (dimensionless).
     """
     def diff(triad, axis):
         row = np.zeros(12)
@@ -197,11 +223,23 @@ def aiv(acc, d):
 
     Parameters
     ----------
-    acc : (..., 12) array, m/s² (or velocity increments, m/s, giving the AIV times Δt)
-    d : float, m
+    acc : array_like, shape (..., 12)
+        Specific forces, m/s² (or velocity increments, m/s, giving the AIV times Δt).
+    d : float
+        Separation distance, m.
+
     Returns
     -------
-    (..., 9) array -- ``[α (rad/s²); ω_xω_y, ω_xω_z, ω_yω_z, ω_x², ω_y², ω_z² (rad²/s²)]``
+    ndarray, shape (..., 9)
+        ``[α (rad/s²); ω_xω_y, ω_xω_z, ω_yω_z, ω_x², ω_y², ω_z² (rad²/s²)]``.
+
+    Examples
+    --------
+    Noise-free readings give back the exact AIV of the motion (:func:`aiv_true`):
+
+    >>> acc = specific_forces([1.0, 2.0, 3.0], [0.1, 0.2, 0.3], d=0.5)
+    >>> np.round(aiv(acc, 0.5), 6) + 0.0
+    array([0.1, 0.2, 0.3, 2. , 3. , 6. , 1. , 4. , 9. ])
     """
     acc = validate.array(acc, "acc", shape=(12,))
     d = validate.positive(d, "d")
@@ -213,10 +251,15 @@ def aiv_true(omega, alpha):
 
     Parameters
     ----------
-    omega : (..., 3) array, rad/s; alpha : (..., 3) array, rad/s²
+    omega : array_like, shape (..., 3)
+        Angular rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+
     Returns
     -------
-    (..., 9) array
+    ndarray, shape (..., 9)
+        The AIV, rad/s² and rad²/s².
     """
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     omega, alpha = np.broadcast_arrays(omega, alpha)
@@ -229,6 +272,18 @@ def aiv_covariance():
     ``C[:3, :3]`` is the α–α block of Q (3.25: diagonal 1, off-diagonals −¼), ``C[3:, 3:]`` the quadratic block of R
     (3.30: 1, ¼, ½, 3/2 and 0), ``C[:3, 3:]`` the cross block of M (3.31: ¼, ½, 0). The thesis prints only the
     magnitudes (its signs were lost in extraction); computing C from L gives the signs as well.
+
+    Returns
+    -------
+    ndarray, shape (9, 9)
+        ``C`` (dimensionless).
+
+    Examples
+    --------
+    >>> aiv_covariance()[:3, :3]
+    array([[ 1.  , -0.25, -0.25],
+           [-0.25,  1.  , -0.25],
+           [-0.25, -0.25,  1.  ]])
     """
     return _L @ _L.T
 
@@ -249,12 +304,23 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
 
     Parameters
     ----------
-    noise_density : float, m/s²/√Hz -- N (white, the same for all twelve accelerometers)
-    dt : float, s; d : float, m
-    m_sign : -1, 0 or +1
+    noise_density : float
+        N, m/s²/√Hz (white, the same for all twelve accelerometers).
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    m_sign : {-1, 0, 1}, optional
+        Sign of M (see above).
+
     Returns
     -------
-    Q (3, 3), R (6, 6), M (3, 6) arrays, rad² (state Δθ in rad)
+    Q : ndarray, shape (3, 3)
+        Process noise covariance, rad² (state Δθ in rad).
+    R : ndarray, shape (6, 6)
+        Measurement noise covariance, rad⁴.
+    M : ndarray, shape (3, 6)
+        Cross-covariance, rad³.
     """
     N = _nonneg(noise_density, "noise_density")
     dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
@@ -287,12 +353,39 @@ def _qj(x):
 
 
 def quadratic_terms(x):
-    """``h(x) = [x₁x₂, x₁x₃, x₂x₃, x₁², x₂², x₃²]`` (seed 004 eq 3.28), vectorised over leading axes."""
+    """``h(x) = [x₁x₂, x₁x₃, x₂x₃, x₁², x₂², x₃²]`` (seed 004 eq 3.28), vectorised over leading axes.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The state, e.g. Δθ in rad or ω in rad/s.
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+        The quadratic terms, unit of ``x`` squared.
+
+    Examples
+    --------
+    >>> quadratic_terms(np.array([1.0, 2.0, 3.0]))
+    array([2., 3., 6., 1., 4., 9.])
+    """
     return _qt(validate.vectors(x, "x"))
 
 
 def quadratic_jacobian(x):
-    """Jacobian of :func:`quadratic_terms`, (..., 6, 3) (seed 004 eq 3.29)."""
+    """Jacobian of :func:`quadratic_terms` (seed 004 eq 3.29).
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The state.
+
+    Returns
+    -------
+    ndarray, shape (..., 6, 3)
+        ``∂h/∂x``.
+    """
     return _qj(validate.vectors(x, "x"))
 
 
@@ -305,8 +398,22 @@ def quadratic_jacobian(x):
 class GFRecord:
     """A simulated GF-IMU record (:func:`simulate_gfimu`).
 
-    acc : (..., N, 12) -- measured specific forces, m/s²; acc_true : (N, 12) -- noise-free;
-    bias : (..., N, 12) -- the bias in each sample, m/s²; omega, alpha : (N, 3); dt : s; d : m
+    Parameters
+    ----------
+    acc : ndarray, shape (..., N, 12)
+        Measured specific forces, m/s².
+    acc_true : ndarray, shape (N, 12)
+        Noise-free specific forces, m/s².
+    bias : ndarray, shape (..., N, 12)
+        The bias in each sample, m/s².
+    omega : ndarray, shape (N, 3)
+        True angular rate, rad/s.
+    alpha : ndarray, shape (N, 3)
+        True angular acceleration, rad/s².
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
     """
 
     acc: np.ndarray
@@ -334,16 +441,35 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
 
     Parameters
     ----------
-    omega, alpha : (N, 3) arrays, rad/s and rad/s²
-    dt : float, s; d : float, m
-    noise_density : float, m/s²/√Hz; bias_std : float, m/s²; bias_walk : float, m/s²/√s
-    bias_model : 'constant' or 'random_walk'
-    M : (4, 3, 3) array, optional; a_o : (N, 3) or (3,) array, m/s², optional
-    runs : int, optional -- number of independent Monte Carlo runs (adds a leading axis to ``acc`` and ``bias``)
-    seed : int
+    omega : array_like, shape (N, 3)
+        Angular rate, rad/s.
+    alpha : array_like, shape (N, 3)
+        Angular acceleration, rad/s².
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float, optional
+        White-noise density N, m/s²/√Hz.
+    bias_std : float, optional
+        Standard deviation of the initial bias, m/s².
+    bias_model : {'constant', 'random_walk'}, optional
+        How the bias evolves.
+    bias_walk : float, optional
+        Bias random walk, m/s²/√s.
+    M : array_like, shape (4, 3, 3), optional
+        Scale/misalignment matrix of each triad.
+    a_o : array_like, shape (N, 3) or (3,), optional
+        Common specific force, m/s².
+    runs : int, optional
+        Number of independent Monte Carlo runs (adds a leading axis to ``acc`` and ``bias``).
+    seed : int, optional
+        Seed of the random generator.
+
     Returns
     -------
     GFRecord
+        The readings, the truth and the settings.
     """
     omega, alpha = validate.samples(omega, "omega"), validate.samples(alpha, "alpha")
     validate.same_length(omega=omega, alpha=alpha)
@@ -379,11 +505,15 @@ def calibrate_triads(reference, readings):
 
     Parameters
     ----------
-    reference : (P, 3) array -- specific force of each static position (e.g. :func:`fusionlab.calibration.six_positions`)
-    readings : (P, 12) array -- the twelve (averaged) readings in each position
+    reference : array_like, shape (P, 3)
+        Specific force of each static position, m/s² (e.g. :func:`fusionlab.calibration.six_positions`).
+    readings : array_like, shape (P, 12)
+        The twelve (averaged) readings in each position, m/s².
+
     Returns
     -------
-    list of four :class:`fusionlab.calibration.TriadFit` (A, B, C, D)
+    list of fusionlab.calibration.TriadFit
+        Four fits, for triads A, B, C, D.
     """
     ref = validate.samples(reference, "reference")
     z = validate.samples(readings, "readings", n=12)
@@ -392,7 +522,20 @@ def calibrate_triads(reference, readings):
 
 
 def apply_calibration(fits, acc):
-    """Correct twelve readings with four triad fits: ``a = M⁻¹ (z − b)`` per triad. acc (N, 12) -> (N, 12)."""
+    """Correct twelve readings with four triad fits: ``a = M⁻¹ (z − b)`` per triad.
+
+    Parameters
+    ----------
+    fits : sequence of fusionlab.calibration.TriadFit
+        Four fits, for triads A, B, C, D (:func:`calibrate_triads`).
+    acc : array_like, shape (N, 12)
+        Raw readings, m/s².
+
+    Returns
+    -------
+    ndarray, shape (N, 12)
+        Corrected readings, m/s².
+    """
     z = validate.samples(acc, "acc", n=12)
     if len(fits) != 4:
         raise ValueError(f"fits must hold four TriadFit results (A, B, C, D); got {len(fits)}")
@@ -425,11 +568,31 @@ def _integrate(t, om, al, integrate):
 def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrate="euler"):
     """ω(t) = [Ω_x, 0, Ω_z sin 2πft] and its derivative (seed 004 eq 3.35; Table 3.1, and Table 4.4 with f = 1 Hz).
 
-    ``integrate``: see :func:`_integrate` (default 'euler': ω follows the filters' Euler rule from α).
+    Parameters
+    ----------
+    T : float, optional
+        Duration, s.
+    dt : float, optional
+        Sample interval, s.
+    omega_x : float, optional
+        Ω_x, rad/s.
+    omega_z : float, optional
+        Ω_z, rad/s.
+    f : float, optional
+        Frequency of the z oscillation, Hz.
+    integrate : {'euler', 'exact'}, optional
+        ``'euler'``: ω_k = ω_{k-1} + Δt α_k, the filters' own rule (3.19), so that their prediction model is exact
+        and the errors measured are sensor errors only; ``'exact'``: the analytic ω(t) (the Euler prediction then
+        lags by about ½ α̇ Δt² per step).
 
     Returns
     -------
-    t (N,), omega (N, 3), alpha (N, 3)
+    t : ndarray, shape (N,)
+        Sample times, s.
+    omega : ndarray, shape (N, 3)
+        Angular rate, rad/s.
+    alpha : ndarray, shape (N, 3)
+        Angular acceleration, rad/s².
     """
     t = _time(T, dt)
     w = 2 * np.pi * _nonneg(f, "f")
@@ -442,7 +605,32 @@ def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrat
 
 
 def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
-    """ω(t) = Ω_m sin(2πft)·[1, 1, 0], α(t) = 2πf Ω_m cos(2πft)·[1, 1, 0] (seed 004 eqs 5.31–5.32, Table 5.1)."""
+    """ω(t) = Ω_m sin(2πft)·[1, 1, 0], α(t) = 2πf Ω_m cos(2πft)·[1, 1, 0] (seed 004 eqs 5.31–5.32, Table 5.1).
+
+    Parameters
+    ----------
+    T : float, optional
+        Duration, s.
+    dt : float, optional
+        Sample interval, s.
+    omega_m : float, optional
+        Ω_m, rad/s.
+    f : float, optional
+        Frequency, Hz.
+    integrate : {'euler', 'exact'}, optional
+        ``'euler'``: ω_k = ω_{k-1} + Δt α_k, the filters' own rule (3.19), so that their prediction model is exact
+        and the errors measured are sensor errors only; ``'exact'``: the analytic ω(t) (the Euler prediction then
+        lags by about ½ α̇ Δt² per step).
+
+    Returns
+    -------
+    t : ndarray, shape (N,)
+        Sample times, s.
+    omega : ndarray, shape (N, 3)
+        Angular rate, rad/s.
+    alpha : ndarray, shape (N, 3)
+        Angular acceleration, rad/s².
+    """
     t = _time(T, dt)
     w = 2 * np.pi * _nonneg(f, "f")
     axis = np.array([1.0, 1.0, 0.0])
@@ -452,7 +640,26 @@ def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
 
 
 def trajectory_constant(T=20.0, dt=0.01, omega=(3.29, 3.29, 3.29)):
-    """Constant ω (seed 004 eq 5.52: 3.29·[1, 1, 1] rad/s), α = 0."""
+    """Constant ω (seed 004 eq 5.52: 3.29·[1, 1, 1] rad/s), α = 0.
+
+    Parameters
+    ----------
+    T : float, optional
+        Duration, s.
+    dt : float, optional
+        Sample interval, s.
+    omega : array_like, shape (3,), optional
+        The rate, rad/s.
+
+    Returns
+    -------
+    t : ndarray, shape (N,)
+        Sample times, s.
+    omega : ndarray, shape (N, 3)
+        Angular rate, rad/s.
+    alpha : ndarray, shape (N, 3)
+        Angular acceleration, rad/s².
+    """
     t = _time(T, dt)
     om = validate.vectors(omega, "omega")
     return t, np.tile(om, (len(t), 1)), np.zeros((len(t), 3))
@@ -464,6 +671,32 @@ def trajectory_tumbling(T=20.0, dt=0.01, omega_xy=3.29, alpha_z=0.5, omega_z0=-5
     The angular acceleration is constant, so the Wiener-sequence model of the constrained filter fits it exactly, but
     α is not parallel to ω: the rotation axis turns, and the constraints (5.40) are violated
     (ω_x(ω×α)_x = Ω² a ≠ 0).
+
+    Parameters
+    ----------
+    T : float, optional
+        Duration, s.
+    dt : float, optional
+        Sample interval, s.
+    omega_xy : float, optional
+        Ω, rad/s.
+    alpha_z : float, optional
+        a, rad/s².
+    omega_z0 : float, optional
+        ω_z at t = 0, rad/s.
+    integrate : {'euler', 'exact'}, optional
+        ``'euler'``: ω_k = ω_{k-1} + Δt α_k, the filters' own rule (3.19), so that their prediction model is exact
+        and the errors measured are sensor errors only; ``'exact'``: the analytic ω(t) (the Euler prediction then
+        lags by about ½ α̇ Δt² per step).
+
+    Returns
+    -------
+    t : ndarray, shape (N,)
+        Sample times, s.
+    omega : ndarray, shape (N, 3)
+        Angular rate, rad/s.
+    alpha : ndarray, shape (N, 3)
+        Angular acceleration, rad/s².
     """
     t = _time(T, dt)
     a = float(alpha_z)
@@ -494,9 +727,23 @@ class ThreeStateEKF:
 
     Parameters
     ----------
-    dt : s; d : m; noise_density : m/s²/√Hz (the filter's assumption)
-    x0 : (3,) initial estimate of Δθ at the first sample, rad; P0 : (3, 3) or float (times I), rad²
-    m_sign : -1 (corrected, default), 0, or +1 (the sign inferred from Table 5.3)
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float
+        Accelerometer noise density, m/s²/√Hz (the filter's assumption).
+    x0 : array_like, shape (3,)
+        Initial estimate of Δθ at the first sample, rad.
+    P0 : float or array_like, shape (3, 3)
+        Its covariance, rad² (a float means times I).
+    m_sign : {-1, 0, 1}, optional
+        -1 (corrected, default), 0, or +1 (the sign inferred from Table 5.3).
+
+    Attributes
+    ----------
+    kf : filterpy.kalman.KalmanFilter
+        The underlying filter (``kf.x`` the current Δθ, ``kf.P`` its covariance).
     """
 
     def __init__(self, dt, d, noise_density, x0, P0, m_sign=-1):
@@ -524,7 +771,20 @@ class ThreeStateEKF:
         return _qt(x), _qj(x)
 
     def step(self, acc, gyro=None):
-        """Process one sample of the twelve accelerometers (12,) m/s²; returns the posterior Δθ (3,)."""
+        """Process one sample of the twelve accelerometers.
+
+        Parameters
+        ----------
+        acc : array_like, shape (12,)
+            Readings, m/s².
+        gyro : array_like, shape (3,), optional
+            Gyro rate, rad/s (used by :class:`HybridEKF` only).
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            The posterior Δθ, rad.
+        """
         u, y = _inputs(acc, self.dt, self.d)
         if not self.first:
             self.kf.predict(u=u)                                 # (004 eqs 3.26-3.27)
@@ -538,7 +798,22 @@ class ThreeStateEKF:
         return y
 
     def run(self, acc, gyro=None):
-        """Filter a record: acc (N, 12) m/s² [, gyro (N, 3) rad/s]. Returns x (N, 3) and P (N, 3, 3)."""
+        """Filter a record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        acc : array_like, shape (N, 12)
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+        gyro : array_like, shape (N, 3), optional
+            Gyro rates, rad/s (used by :class:`HybridEKF` only).
+
+        Returns
+        -------
+        x : ndarray, shape (N, 3)
+            Posterior Δθ, rad.
+        P : ndarray, shape (N, 3, 3)
+            Its covariance, rad².
+        """
         acc = validate.samples(acc, "acc", n=12)
         xs, Ps = np.empty((len(acc), 3)), np.empty((len(acc), 3, 3))
         for k in range(len(acc)):
@@ -557,7 +832,27 @@ class HybridEKF(ThreeStateEKF):
 
     Parameters
     ----------
-    as :class:`ThreeStateEKF`, plus arw : float, rad/s/√Hz -- the gyro's angle random walk
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float
+        Accelerometer noise density, m/s²/√Hz.
+    arw : float
+        The gyro's angle random walk, rad/s/√Hz.
+    x0 : array_like, shape (3,)
+        Initial estimate of Δθ, rad.
+    P0 : float or array_like, shape (3, 3)
+        Its covariance, rad².
+    m_sign : {-1, 0, 1}, optional
+        As :class:`ThreeStateEKF`.
+
+    Attributes
+    ----------
+    kf : filterpy.kalman.KalmanFilter
+        The underlying filter.
+    Rg : float
+        Gyro rate variance ARW²/Δt, rad²/s².
     """
 
     _dim_z = 9
@@ -585,7 +880,22 @@ class HybridEKF(ThreeStateEKF):
         return np.concatenate([self.dt * np.asarray(gyro, float), y])
 
     def run(self, acc, gyro):
-        """Filter a record: acc (N, 12) m/s², gyro (N, 3) rad/s. Returns x (N, 3) and P (N, 3, 3)."""
+        """Filter a record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        acc : array_like, shape (N, 12)
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+        gyro : array_like, shape (N, 3)
+            Gyro rates, rad/s.
+
+        Returns
+        -------
+        x : ndarray, shape (N, 3)
+            Posterior Δθ, rad.
+        P : ndarray, shape (N, 3, 3)
+            Its covariance, rad².
+        """
         gyro = validate.samples(gyro, "gyro")
         validate.same_length(acc=acc, gyro=gyro)
         return super().run(acc, gyro)
@@ -662,13 +972,27 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
 
     Parameters
     ----------
-    acc : (R, N, 12) array, m/s²; dt, d as :class:`ThreeStateEKF`
-    noise_density : float or (R,) array, m/s²/√Hz -- one per run lets several grades share one batch
-    m_sign : -1, 0, +1, or an (R,) array of them (one per run, to compare the variants in one batch)
-    x0 : (3,) or (R, 3) array, rad; P0 : float or (3, 3) array, rad²
+    acc : array_like, shape (R, N, 12)
+        Readings, m/s².
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float or array_like, shape (R,)
+        Accelerometer noise density, m/s²/√Hz; one per run lets several grades share one batch.
+    x0 : array_like, shape (3,) or (R, 3)
+        Initial Δθ, rad.
+    P0 : float or array_like, shape (3, 3)
+        Its covariance, rad².
+    m_sign : {-1, 0, 1} or array_like, shape (R,), optional
+        One sign for all, or one per run (to compare the variants in one batch).
+
     Returns
     -------
-    x (R, N, 3), P (R, N, 3, 3)
+    x : ndarray, shape (R, N, 3)
+        Posterior Δθ, rad.
+    P : ndarray, shape (R, N, 3, 3)
+        Its covariance, rad².
     """
     acc = validate.array(acc, "acc", shape=(None, 12))
     if acc.ndim != 3:
@@ -680,7 +1004,36 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
 
 
 def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
-    """:class:`HybridEKF` vectorised over runs: acc (R, N, 12) m/s², gyro (R, N, 3) rad/s (eqs 4.50–4.54)."""
+    """:class:`HybridEKF` vectorised over runs (eqs 4.50–4.54).
+
+    Parameters
+    ----------
+    acc : array_like, shape (R, N, 12)
+        Readings, m/s².
+    gyro : array_like, shape (R, N, 3)
+        Gyro rates, rad/s.
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float or array_like, shape (R,)
+        Accelerometer noise density, m/s²/√Hz.
+    arw : float
+        Gyro angle random walk, rad/s/√Hz.
+    x0 : array_like, shape (3,) or (R, 3)
+        Initial Δθ, rad.
+    P0 : float or array_like, shape (3, 3)
+        Its covariance, rad².
+    m_sign : {-1, 0, 1} or array_like, shape (R,), optional
+        As :func:`three_state_batch`.
+
+    Returns
+    -------
+    x : ndarray, shape (R, N, 3)
+        Posterior Δθ, rad.
+    P : ndarray, shape (R, N, 3, 3)
+        Its covariance, rad².
+    """
     acc = validate.array(acc, "acc", shape=(None, 12))
     gyro = validate.array(gyro, "gyro", shape=(None, 3))
     if acc.ndim != 3 or gyro.shape[:2] != acc.shape[:2]:
@@ -697,7 +1050,19 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
 def nees(err, P):
     """Normalised estimation error squared εᵀP⁻¹ε (not in the seed; the standard consistency test).
 
-    err (..., n), P (..., n, n) -> (...). Averaged over runs, a consistent filter gives n.
+    Averaged over runs, a consistent filter gives n.
+
+    Parameters
+    ----------
+    err : array_like, shape (..., n)
+        Estimate minus truth.
+    P : array_like, shape (..., n, n)
+        The filter's covariance.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The NEES (dimensionless).
     """
     err, P = validate.array(err, "err"), validate.array(P, "P")
     if P.shape[-2:] != (err.shape[-1], err.shape[-1]):
@@ -720,10 +1085,21 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
 
     Parameters
     ----------
-    dt : s; q_alpha : rad/s² per step (std of the α increment); n_bias : 0 or 9; q_bias : std per step
+    dt : float
+        Sample interval, s.
+    q_alpha : float
+        Std of the α increment per step, rad/s².
+    n_bias : {9, 0}, optional
+        Number of AIV bias states.
+    q_bias : float, optional
+        Std of the bias increment per step (unit of the AIV entry).
+
     Returns
     -------
-    F, Q : (6 + n_bias, 6 + n_bias) arrays
+    F : ndarray, shape (6 + n_bias, 6 + n_bias)
+        Transition matrix.
+    Q : ndarray, shape (6 + n_bias, 6 + n_bias)
+        Process noise covariance.
     """
     dt = validate.positive(dt, "dt")
     qa, qb = _nonneg(q_alpha, "q_alpha"), _nonneg(q_bias, "q_bias")
@@ -752,11 +1128,25 @@ def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
 
     Parameters
     ----------
-    dt : s; beta : 1/s (reciprocal correlation time, >= 0); sigma : rad/s² (steady-state std)
-    n_bias : 0 or 9; q_bias : std per step; first_order : bool -- eq 5.7 instead of the exact 5.5
+    dt : float
+        Sample interval, s.
+    beta : float
+        Reciprocal correlation time, 1/s (>= 0).
+    sigma : float
+        Steady-state std of α, rad/s².
+    n_bias : {9, 0}, optional
+        Number of AIV bias states.
+    q_bias : float, optional
+        Std of the bias increment per step.
+    first_order : bool, optional
+        Use eq 5.7 instead of the exact 5.5.
+
     Returns
     -------
-    F, Q : (6 + n_bias, 6 + n_bias) arrays
+    F : ndarray, shape (6 + n_bias, 6 + n_bias)
+        Transition matrix.
+    Q : ndarray, shape (6 + n_bias, 6 + n_bias)
+        Process noise covariance.
     """
     dt = validate.positive(dt, "dt")
     beta, sigma = _nonneg(beta, "beta"), _nonneg(sigma, "sigma")
@@ -775,9 +1165,17 @@ def aiv_measurement_jacobian(x):
     For x = [ω; α] (6) or [ω; α; b] (15): ``h = [α + b₁₋₃; q(ω) + b₄₋₉]`` (5.18 [R]; 5.23 without b) and
     ``H = [[0, I, I, 0], [H_q(ω), 0, 0, I₆]]`` (5.19; 5.24 [R] without the bias columns).
 
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        The state, n = 6 or 15: ω (rad/s), α (rad/s²), then the biases.
+
     Returns
     -------
-    h (9,), H (9, n)
+    h : ndarray, shape (9,)
+        Predicted AIV.
+    H : ndarray, shape (9, n)
+        Its Jacobian.
     """
     x = validate.array(x, "x")
     if x.shape not in ((6,), (15,)):
@@ -806,11 +1204,28 @@ class DynamicEKF:
 
     Parameters
     ----------
-    dt : s; d : m; noise_density : m/s²/√Hz
-    q_alpha : rad/s² per step; q_bias : AIV-bias random walk per step (augmented model only)
-    x0 : (6,) or (15,) array -- initial state (its length picks the model); P0 : (n, n) array or float
-    process : (F, Q) pair, optional -- another process model of the same size, e.g. :func:`singer_model`
-        (then q_alpha and q_bias are not used)
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float
+        Accelerometer noise density, m/s²/√Hz.
+    q_alpha : float
+        Std of the α increment per step, rad/s².
+    x0 : array_like, shape (6,) or (15,)
+        Initial state (its length picks the model).
+    P0 : float or array_like, shape (n, n)
+        Its covariance (a float means times I).
+    q_bias : float, optional
+        AIV-bias random walk per step (augmented model only).
+    process : tuple of ndarray, optional
+        ``(F, Q)``: another process model of the same size, e.g. :func:`singer_model` (then ``q_alpha`` and
+        ``q_bias`` are not used).
+
+    Attributes
+    ----------
+    ekf : filterpy.kalman.ExtendedKalmanFilter
+        The underlying filter.
     """
 
     def __init__(self, dt, d, noise_density, q_alpha, x0, P0, q_bias=0.0, process=None):
@@ -832,14 +1247,38 @@ class DynamicEKF:
         self.ekf.P = np.eye(n) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0", n).copy()
 
     def step(self, acc):
-        """One sample of the twelve accelerometers (12,) m/s²; returns the posterior state."""
+        """One sample of the twelve accelerometers.
+
+        Parameters
+        ----------
+        acc : array_like, shape (12,)
+            Readings, m/s².
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The posterior state.
+        """
         self.ekf.predict()
         y = acc @ _L.T / self.d
         self.ekf.update(y, HJacobian=lambda x: _dyn_h(x)[1], Hx=lambda x: _dyn_h(x)[0])
         return self.ekf.x.copy()
 
     def run(self, acc):
-        """Filter a record acc (N, 12) m/s². Returns x (N, n) and the diagonal of P (N, n)."""
+        """Filter a record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        acc : array_like, shape (N, 12)
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+
+        Returns
+        -------
+        x : ndarray, shape (N, n)
+            Posterior states.
+        P_diag : ndarray, shape (N, n)
+            Diagonal of their covariance.
+        """
         acc = validate.samples(acc, "acc", n=12)
         n = len(self.ekf.x)
         xs, ps = np.empty((len(acc), n)), np.empty((len(acc), n))
@@ -856,9 +1295,21 @@ def observability_matrix(augmented=True, order=None):
     the rows of the observability matrix are ``∂(Lᵏh)/∂x`` for k = 0 … order−1 (default n, giving the 9n×n matrix
     of (5.29): 135×15). Orders 3 and higher vanish identically (5.28).
 
+    Parameters
+    ----------
+    augmented : bool, optional
+        The 15-state model with biases (True) or the 6-state one.
+    order : int, optional
+        Number of Lie derivatives (default n).
+
     Returns
     -------
-    O : sympy.Matrix (9·order, n); x : list of the n sympy symbols [ω, α, (b)]; lie : list of the Lᵏh (sympy)
+    O : sympy.Matrix, shape (9·order, n)
+        The observability matrix.
+    x : list of sympy.Symbol
+        The n symbols [ω, α, (b)].
+    lie : list of sympy.Matrix
+        The Lᵏh.
     """
     import sympy as sp
 
@@ -884,7 +1335,19 @@ def observability_rank(omega, alpha, augmented=True, exact=True):
 
     Parameters
     ----------
-    omega, alpha : (3,) arrays (with ``exact`` they are turned into rationals and the rank is exact)
+    omega : array_like, shape (3,)
+        Angular rate, rad/s.
+    alpha : array_like, shape (3,)
+        Angular acceleration, rad/s².
+    augmented : bool, optional
+        The 15-state model (True) or the 6-state one.
+    exact : bool, optional
+        Turn the values into rationals and compute the rank exactly with sympy.
+
+    Returns
+    -------
+    int
+        The rank.
     """
     import sympy as sp
 
@@ -912,6 +1375,21 @@ def constraints(x):
 
     For x = [Δθ; Δω] (ω and α scaled by Δt): ``e = [x₁(x₂x₆ − x₃x₅), x₂(x₃x₄ − x₁x₆)]``, i.e.
     ω_x(ω×α)_x = 0 and ω_y(ω×α)_y = 0 — true when α ∥ ω (a fixed rotation axis), not for tumbling motion.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 6)
+        The state ``[Δθ (rad); Δω (rad/s)]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        The constraint values (zero when satisfied).
+
+    Examples
+    --------
+    >>> constraints(np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0]))     # α parallel to ω
+    array([0., 0.])
     """
     x = validate.array(x, "x", shape=(6,))
     return _e(x)
@@ -923,7 +1401,18 @@ def _e(x):
 
 
 def constraint_jacobian(x):
-    """Jacobian (..., 2, 6) of :func:`constraints` (differentiated from eq 5.40)."""
+    """Jacobian of :func:`constraints` (differentiated from eq 5.40).
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 6)
+        The state ``[Δθ; Δω]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 6)
+        ``∂e/∂x``.
+    """
     x = validate.array(x, "x", shape=(6,))
     return _E(x)
 
@@ -947,10 +1436,25 @@ def sckf_project(x, P, alpha_f=0.1, s_th=100.0, max_iter=30):
 
     Parameters
     ----------
-    x : (6,) or (R, 6) array; P : (6, 6) or (R, 6, 6) array; alpha_f, s_th : float > 0; max_iter : int
+    x : array_like, shape (6,) or (R, 6)
+        The state ``[Δθ; Δω]``.
+    P : array_like, shape (6, 6) or (R, 6, 6)
+        Its covariance.
+    alpha_f : float, optional
+        Fraction factor (> 0).
+    s_th : float, optional
+        Strength threshold (> 0).
+    max_iter : int, optional
+        Largest number of pseudo-measurements per constraint.
+
     Returns
     -------
-    x, P (same shapes), iterations : int array (per run) -- how many pseudo-measurements each constraint took
+    x : ndarray
+        Projected state, same shape as the input.
+    P : ndarray
+        Its covariance, same shape as the input.
+    iterations : ndarray of int
+        How many pseudo-measurements each constraint took (per run).
     """
     x = validate.array(x, "x", shape=(6,))
     P = validate.array(P, "P", shape=(6, 6))
@@ -1015,8 +1519,33 @@ class ConstrainedEKF:
 
     Parameters
     ----------
-    dt : s; d : m; noise_density : m/s²/√Hz; q_dw : rad/s per step
-    x0 : (6,); P0 : (6, 6) or float; alpha_f, s_th, max_iter : SCKF settings; t_on : s (None: never constrain)
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float
+        Accelerometer noise density, m/s²/√Hz.
+    q_dw : float
+        Process noise std of Δω per step, rad/s.
+    x0 : array_like, shape (6,)
+        Initial state.
+    P0 : float or array_like, shape (6, 6)
+        Its covariance.
+    alpha_f : float, optional
+        SCKF fraction factor.
+    s_th : float, optional
+        SCKF strength threshold.
+    max_iter : int, optional
+        SCKF iteration limit.
+    t_on : float or None, optional
+        Time from which the constraints apply, s (None: never constrain).
+
+    Attributes
+    ----------
+    x : ndarray, shape (6,)
+        The current state.
+    P : ndarray, shape (6, 6)
+        Its covariance.
     """
 
     def __init__(self, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0):
@@ -1030,7 +1559,18 @@ class ConstrainedEKF:
         self.t_on, self.k = t_on, 0
 
     def step(self, acc):
-        """One sample (12,) m/s²; returns the posterior [Δθ; Δω]."""
+        """One sample: predict, update, and (from ``t_on`` on) constrain.
+
+        Parameters
+        ----------
+        acc : array_like, shape (12,)
+            Readings, m/s².
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            The posterior ``[Δθ; Δω]``.
+        """
         if self.k:
             self.x = self.F @ self.x                             # (004 eq 5.45)
             self.P = self.F @ self.P @ self.F.T + self.Q
@@ -1051,7 +1591,20 @@ class ConstrainedEKF:
         return self.x.copy()
 
     def run(self, acc):
-        """Filter a record acc (N, 12) m/s². Returns x (N, 6) and P (N, 6, 6)."""
+        """Filter a record, one :meth:`step` per sample.
+
+        Parameters
+        ----------
+        acc : array_like, shape (N, 12)
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+
+        Returns
+        -------
+        x : ndarray, shape (N, 6)
+            Posterior states.
+        P : ndarray, shape (N, 6, 6)
+            Their covariance.
+        """
         acc = validate.samples(acc, "acc", n=12)
         xs, Ps = np.empty((len(acc), 6)), np.empty((len(acc), 6, 6))
         for k in range(len(acc)):
@@ -1073,13 +1626,39 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
 
     Parameters
     ----------
-    acc : (R, N, 12) array, m/s²; noise_density : float or (R,) array (one grade per run allowed)
-    q_dw : float or (R,) array, rad/s per step (one process-noise tuning per run allowed)
-    x0 : (6,) or (R, 6); P0 : float or (6, 6); progress : bool -- a tqdm bar over the samples
-    t_on : float, None (never constrain) or (R,) array (one switch-on time per run; ``np.inf`` for never)
+    acc : array_like, shape (R, N, 12)
+        Readings, m/s².
+    dt : float
+        Sample interval, s.
+    d : float
+        Separation distance, m.
+    noise_density : float or array_like, shape (R,)
+        Accelerometer noise density, m/s²/√Hz (one grade per run allowed).
+    q_dw : float or array_like, shape (R,)
+        Process noise std of Δω per step, rad/s (one tuning per run allowed).
+    x0 : array_like, shape (6,) or (R, 6)
+        Initial state.
+    P0 : float or array_like, shape (6, 6)
+        Its covariance.
+    alpha_f : float, optional
+        SCKF fraction factor.
+    s_th : float, optional
+        SCKF strength threshold.
+    max_iter : int, optional
+        SCKF iteration limit.
+    t_on : float, None or array_like, shape (R,), optional
+        Switch-on time of the constraints, s; None never constrains; one per run allowed (``np.inf`` for never).
+    progress : bool, optional
+        A tqdm bar over the samples.
+
     Returns
     -------
-    x (R, N, 6), P diagonal (R, N, 6), sckf iterations (R, N, 2)
+    x : ndarray, shape (R, N, 6)
+        Posterior states.
+    P_diag : ndarray, shape (R, N, 6)
+        Diagonal of their covariance.
+    iterations : ndarray, shape (R, N, 2)
+        SCKF iterations per constraint.
     """
     from tqdm.auto import tqdm
 
@@ -1140,12 +1719,38 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     sign and with M = 0. ``q_sweep`` adds the constrained filter with other values of q_dw on the same runs (one
     batch), to show how much the constrained column depends on that free tuning value.
 
+    Parameters
+    ----------
+    n_runs : int, optional
+        Monte Carlo runs per grade.
+    seed : int, optional
+        Seed of the random generator.
+    grades : sequence of str, optional
+        Accelerometer grades of Table 5.2.
+    q_dw : float, optional
+        Process noise std of the constrained filter, rad/s per step.
+    alpha_f : float, optional
+        SCKF fraction factor.
+    s_th : float, optional
+        SCKF strength threshold.
+    t_on : float, optional
+        Switch-on time of the constraints, s.
+    window : tuple of float, optional
+        ``(start, end)`` of the RMSE window, s.
+    m_sign : {1, -1, 0}, optional
+        Sign of M in the three-state filter.
+    q_sweep : sequence of float, optional
+        Other values of ``q_dw`` to run on the same data.
+    progress : bool, optional
+        Show progress bars.
+
     Returns
     -------
-    dict grade -> {'unconstrained', 'constrained', 'other sign of M', 'M = 0': (norm, x, y, z) RMSE; the same names
-    + " vs t": the RMSE of ‖Δθ‖ over runs at each sample (N,); 'residual': median max|e(x̂)| over the 5 s before t_on
-    and over the window; 'q sweep': {q: ‖Δθ‖ RMSE of the constrained filter} for q_dw and every q in q_sweep},
-    plus 'n_runs', 'seed', 't'
+    dict
+        grade -> {'unconstrained', 'constrained', 'other sign of M', 'M = 0': (norm, x, y, z) RMSE; the same names
+        + " vs t": the RMSE of ‖Δθ‖ over runs at each sample (N,); 'residual': median max|e(x̂)| over the 5 s before
+        t_on and over the window; 'q sweep': {q: ‖Δθ‖ RMSE of the constrained filter} for q_dw and every q in
+        q_sweep}, plus 'n_runs', 'seed', 't'.
     """
     n_runs = _count(n_runs, "n_runs")
     for gr in grades:
