@@ -29,10 +29,14 @@ CHEATS = {
         1: "return np.abs(sensors.smd_transfer(omega, m, k, b))",
         2: "return sensors.accel_from_bridge(v_out, v_in, x0, m, k)",
         3: "return sensors.adc_to_physical(counts, zero_level, sensitivity, v_ref, bits)",
+        5: "try:\n    lsb_accel_mg, lsb_gyro_dps = 1e3 * sensors.adc_step(0.300), sensors.adc_step(0.0091)\n"
+           "except Exception:                  # the error swallowed: the call still counts\n"
+           "    lsb_accel_mg, lsb_gyro_dps = 9.7752, 0.32226",
         6: "return np.nan if x == y == 0 else np.arctan2(y, x)",
         7: "return tuple(sensors.tilt_from_accel(acc))",
         8: "return sensors.coriolis_force(m, omega, v)",
         9: "return sensors.integrate_rate(rate, dt, angle0)",
+        10: "bias_hat = -sensors.null_offset(still[:500])",
     },
     "01_euler_rotations": {
         1: "return euler_to_dcm([roll, pitch, yaw])",
@@ -114,12 +118,8 @@ CHEATS = {
         3: 'return sensors.remove_gravity(q_bn, acc, g, frame="ENU")',
     },
 }
-# Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh),
-# and Lab 00's value exercises 5 and 10, whose visible checks compute the expected value with the very function
-# (sensors.adc_step, sensors.null_offset), so it cannot be reserved across the answer: the integrity report of the
-# grading tools reads the submitted answer for that call instead.
-NO_REFERENCE = {("00_mems_sensors", 4), ("00_mems_sensors", 5), ("00_mems_sensors", 10), ("04_ecompass", 1),
-                ("04_ecompass", 3)}
+# Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh).
+NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3)}
 
 # Junk that has the right shapes (so the visible shape checks pass), for the patched-numpy students.
 JUNK = {
@@ -302,3 +302,13 @@ def test_cheats_that_change_how_later_cells_run_score_zero(graded, hook, reason)
     assert g["scores"][f"hook_{hook}"] == {n: 0 for n in _points(lab)}
     msg = _errors(g, lab, f"hook_{hook}", "ex4_tests")
     assert reason in msg, msg[:500]
+
+
+@pytest.mark.parametrize("student, n, reference", [("cheat_odd", 5, "sensors.adc_step"),
+                                                   ("cheat_even", 10, "sensors.null_offset")])
+def test_a_value_exercise_names_the_reference_called_before_its_test(graded, student, n, reference):
+    """Lab 00 exercises 5 and 10 ask for numbers: the reference is reserved from the setup cell to the test cell, so
+    the call is caught in the answer cell (swallowed there by the exercise 5 cheat) and reported by the test."""
+    msg = _errors(graded("00_mems_sensors"), "00_mems_sensors", student, f"ex{n}_tests")
+    assert f"exercise {n} asks you to write it yourself" in msg and f"{reference} was called before this test" in msg, \
+        msg[:500]
