@@ -98,29 +98,6 @@ SAFE_MAGICS = {"matplotlib", "timeit", "time", "precision", "pprint", "who", "wh
 SHELL_MAGICS = {"system", "sx", "bash", "sh", "script", "perl", "ruby", "python", "python3", "pypy", "sc", "run",
                 "load", "writefile", "env", "store", "cd", "pushd", "popd", "rm", "mkdir", "mv", "cp"}
 
-# Reference functions per lab and exercise, for exercises whose tests name none (guard.forbid, release, forbid=).
-FALLBACK_FORBID = {
-    "00_mems_sensors": {1: ["smd_transfer"], 2: ["accel_from_bridge"], 3: ["adc_to_physical"], 5: ["adc_step"],
-                        6: ["arctan2", "atan2"], 7: ["tilt_from_accel"], 8: ["coriolis_force"], 9: ["integrate_rate"],
-                        10: ["null_offset"]},
-    "01_euler_rotations": {1: ["euler_to_dcm"], 4: ["dcm_renormalize"], 5: ["rodrigues_dcm"]},
-    "02_kalman_falling_body": {1: ["joseph_covariance"], 2: ["falling_body_state_space"], 3: ["predict"],
-                               4: ["update", "kalman_gain"]},
-    "03_correlation_fusion": {1: ["moving_average"], 2: ["ratio"], 3: ["fuse"]},
-    "04_ecompass": {2: ["kappa_general"], 4: ["weights"], 5: ["tilt_compensated_heading"]},
-    "05_freescale_kalman": {1: ["measurement_matrix"], 2: ["process_noise"], 3: ["measurement_noise"],
-                            4: ["kalman_gain"], 5: ["step"]},
-    "06_gfimu_aiv": {1: ["aiv_map"], 2: ["quadratic_jacobian"], 3: ["three_state_noise"], 4: ["update_correlated"]},
-    "07_gfimu_constraints": {1: ["aiv_measurement_jacobian"], 3: ["constraints", "constraint_jacobian"]},
-    "08_north_finder": {1: ["rate_from_rotating"], 2: ["rate_noise_coefficient"], 3: ["rate_noise_coefficient_exact"],
-                        4: ["demodulate"], 5: ["synchronous_sampling"]},
-    "09_dcm_ahrs": {1: ["accel_measurement_matrix", "mag_measurement_matrix"],
-                    2: ["ahrs_transition", "ahrs_process_noise"]},
-    "10_gps_ins": {1: ["ins_transition"], 2: ["JulierSigmaPoints", "sigma_points"]},
-    "11_real_data": {1: ["heading_error"], 2: ["inclination_error"], 3: ["rms"]},
-    "12_sensor_errors": {1: ["quadric_normal_equations"], 2: ["read_arw"], 3: ["remove_gravity"]},
-}
-
 
 def _nbg(cell):
     return cell.metadata.get("nbgrader", {})
@@ -193,10 +170,6 @@ class Source:
         for gid, cell in self.cells.items():
             if _nbg(cell).get("grade") and not _nbg(cell).get("solution") and _exercise(gid):
                 self.forbid.setdefault(_exercise(gid), set()).update(_forbidden_in(cell.source))
-        # the table stands in for an exercise whose tests name nothing (a value the kernel guard cannot reserve)
-        for k, v in FALLBACK_FORBID.get(lab, {}).items():
-            if not self.forbid.get(k):
-                self.forbid[k] = set(v)
         # names the locked cells bind at top level (imports, definitions, constants) and the tests read
         bound, read = set(MODULE_NAMES), set()
         self.imported = set(MODULE_NAMES)
