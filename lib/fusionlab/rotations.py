@@ -63,10 +63,22 @@ def skew(v):
 
     Parameters
     ----------
-    v : (..., 3) array
+    v : array_like, shape (..., 3)
+        The vectors (any unit).
+
     Returns
     -------
-    (..., 3, 3) array -- seed 000 eq 3.50 (Ω) and 3.47 (δΨ) are this matrix of ω and of the small angles
+    ndarray, shape (..., 3, 3)
+        The skew-symmetric matrices; seed 000 eq 3.50 (Ω) and 3.47 (δΨ) are this matrix of ω and of the small
+        angles.
+
+    Examples
+    --------
+    >>> from fusionlab import rotations
+    >>> rotations.skew([1.0, 2.0, 3.0])
+    array([[ 0., -3.,  2.],
+           [ 3.,  0., -1.],
+           [-2.,  1.,  0.]])
     """
     v = validate.vectors(v, "v")
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
@@ -91,32 +103,107 @@ def _elem(a, axis):
 
 
 def rot_x(angle):
-    """Active rotation by ``angle`` (rad) about x: turns a vector counter-clockwise seen from +x. Shape (..., 3, 3)."""
+    """Active rotation by ``angle`` (rad) about x: turns a vector counter-clockwise seen from +x.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The rotation matrices.
+    """
     return _elementary(angle, "angle", 0)
 
 
 def rot_y(angle):
-    """Active rotation by ``angle`` (rad) about y. Shape (..., 3, 3)."""
+    """Active rotation by ``angle`` (rad) about y.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The rotation matrices.
+    """
     return _elementary(angle, "angle", 1)
 
 
 def rot_z(angle):
-    """Active rotation by ``angle`` (rad) about z. Shape (..., 3, 3)."""
+    """Active rotation by ``angle`` (rad) about z.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The rotation matrices.
+
+    Examples
+    --------
+    Turning x by 90° about z gives y:
+
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> np.round(rotations.rot_z(np.pi / 2) @ [1.0, 0.0, 0.0], 12) + 0.0     # + 0.0 prints -0.0 as 0.0
+    array([0., 1., 0.])
+    """
     return _elementary(angle, "angle", 2)
 
 
 def frame_rot_x(angle):
-    """Passive (frame) rotation about x, as seed 000 eq 3.38 and seed 001 §5 print it: ``rot_x(angle).T``."""
+    """Passive (frame) rotation about x, as seed 000 eq 3.38 and seed 001 §5 print it: ``rot_x(angle).T``.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle of the frame, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The frame rotation matrices.
+    """
     return np.swapaxes(rot_x(angle), -1, -2)
 
 
 def frame_rot_y(angle):
-    """Passive (frame) rotation about y, seed 000 eq 3.37 / seed 001 §4: ``rot_y(angle).T``."""
+    """Passive (frame) rotation about y, seed 000 eq 3.37 / seed 001 §4: ``rot_y(angle).T``.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle of the frame, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The frame rotation matrices.
+    """
     return np.swapaxes(rot_y(angle), -1, -2)
 
 
 def frame_rot_z(angle):
-    """Passive (frame) rotation about z, seed 000 eq 3.36 / seed 001 §3: ``rot_z(angle).T``."""
+    """Passive (frame) rotation about z, seed 000 eq 3.36 / seed 001 §3: ``rot_z(angle).T``.
+
+    Parameters
+    ----------
+    angle : float or array_like, shape (...)
+        Rotation angle of the frame, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The frame rotation matrices.
+    """
     return np.swapaxes(rot_z(angle), -1, -2)
 
 
@@ -130,10 +217,23 @@ def euler_to_dcm(euler):
 
     Parameters
     ----------
-    euler : (..., 3) array, rad -- ``[roll, pitch, yaw]``
+    euler : array_like, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
+
     Returns
     -------
-    C_bn : (..., 3, 3) array -- ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``
+    C_bn : ndarray, shape (..., 3, 3)
+        ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``, body→navigation.
+
+    Examples
+    --------
+    A yaw of 90° turns the nose from North to East: the body x axis, written in NED, is East.
+
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> C_bn = rotations.euler_to_dcm([0.0, 0.0, np.pi / 2])
+    >>> np.round(C_bn @ [1.0, 0.0, 0.0], 12) + 0.0                 # + 0.0 prints -0.0 as 0.0
+    array([0., 1., 0.])
     """
     e = validate.euler_rad(euler, "euler")
     return _elem(e[..., 2], 2) @ _elem(e[..., 1], 1) @ _elem(e[..., 0], 0)   # (000 eq 3.40): Rz Ry Rx
@@ -152,10 +252,29 @@ def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
 
     Parameters
     ----------
-    C_bn : (..., 3, 3) array -- a rotation matrix (checked: orthonormal with det +1 within 0.05, so a slightly
-        drifted DCM is read, a reflection or a zero matrix is refused)
-    yaw_at_lock : float, rad -- the yaw to report when the pitch is at ±90°
-    lock_tol : float -- ``cos θ`` below this is treated as gimbal lock
+    C_bn : array_like, shape (..., 3, 3)
+        A body→navigation rotation matrix (checked: orthonormal with det +1 within 0.05, so a slightly drifted DCM
+        is read, a reflection or a zero matrix is refused).
+    yaw_at_lock : float, default 0.0
+        The yaw to report when the pitch is at ±90°, rad.
+    lock_tol : float, default 1e-9
+        ``cos θ`` below this is treated as gimbal lock.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
+
+    Examples
+    --------
+    At a pitch of 90° a roll of 10° and a yaw of 30° cannot be told apart from a roll of -20° and no yaw: only
+    ``φ - ψ`` is observable, and the yaw is reported as ``yaw_at_lock``.
+
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> C_bn = rotations.euler_to_dcm(np.radians([10.0, 90.0, 30.0]))
+    >>> np.round(np.degrees(rotations.dcm_to_euler(C_bn)), 6) + 0.0
+    array([-20.,  90.,   0.])
     """
     C = validate.rotation(C_bn, "C_bn", tol=0.05)      # a drifted DCM still reads (to ~2°); a reflection does not
     yaw_at_lock = validate.scalar(validate.angles_rad(yaw_at_lock, "yaw_at_lock"), "yaw_at_lock")
@@ -184,8 +303,15 @@ def sequence_to_dcm(angles, seq):
 
     Parameters
     ----------
-    angles : (..., 3) array, rad -- in the order the rotations are applied
-    seq : str -- three letters from 'XYZ', e.g. 'XYZ', 'ZXY', 'YXZ' (consecutive letters must differ)
+    angles : array_like, shape (..., 3)
+        The three angles in the order the rotations are applied, rad.
+    seq : str
+        Three letters from 'XYZ', e.g. 'XYZ', 'ZXY', 'YXZ' (consecutive letters must differ).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The rotation matrices.
     """
     a = validate.vectors(angles, "angles")        # any magnitude: Lab 01's check tries an answer both ways
     _check_seq(seq)
@@ -198,6 +324,18 @@ def dcm_to_sequence(C, seq):
 
     Uses ``scipy.spatial.transform.Rotation`` (upper-case sequences are intrinsic there too); the middle angle is
     in [-90°, 90°] for Tait-Bryan sequences.
+
+    Parameters
+    ----------
+    C : array_like, shape (..., 3, 3)
+        Rotation matrices (orthonormal with det +1 within 1e-6).
+    seq : str
+        Three letters from 'XYZ' (consecutive letters must differ).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The angles in the order of ``seq``, rad.
     """
     from scipy.spatial.transform import Rotation
     C = validate.matrices(C, "C")
@@ -221,10 +359,13 @@ def quat_to_dcm(q):
 
     Parameters
     ----------
-    q : (..., 4) array -- unit quaternions
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→navigation.
+
     Returns
     -------
-    (..., 3, 3) array
+    ndarray, shape (..., 3, 3)
+        ``C_bn``.
     """
     q = validate.quaternions(q, "q")
     w, x, y, z = (q[..., i] for i in range(4))
@@ -240,10 +381,13 @@ def dcm_to_quat(C_bn):
 
     Parameters
     ----------
-    C_bn : (..., 3, 3) array -- a rotation matrix (checked: orthonormal with det +1 within 1e-6)
+    C_bn : array_like, shape (..., 3, 3)
+        A rotation matrix (checked: orthonormal with det +1 within 1e-6).
+
     Returns
     -------
-    (..., 4) array
+    ndarray, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
     """
     C = validate.matrices(C_bn, "C_bn")
     _require_rotation(C, "C_bn")
@@ -265,7 +409,26 @@ def dcm_to_quat(C_bn):
 
 
 def euler_to_quat(euler):
-    """Quaternion of Z-Y-X Euler angles: ``q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`` (same rotation as :func:`euler_to_dcm`)."""
+    """Quaternion of Z-Y-X Euler angles: ``q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`` (same rotation as :func:`euler_to_dcm`).
+
+    Parameters
+    ----------
+    euler : array_like, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→navigation.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> q = rotations.euler_to_quat(np.radians([10.0, 20.0, 30.0]))
+    >>> np.round(np.degrees(rotations.quat_to_euler(q)), 9)           # and back
+    array([10., 20., 30.])
+    """
     e = validate.euler_rad(euler, "euler")
     h = e / 2
     o = np.zeros_like(h[..., 0])
@@ -276,12 +439,47 @@ def euler_to_quat(euler):
 
 
 def quat_to_euler(q, yaw_at_lock=0.0):
-    """Euler angles ``[roll, pitch, yaw]`` (rad) of a unit quaternion; gimbal-lock aware (see :func:`dcm_to_euler`)."""
+    """Euler angles ``[roll, pitch, yaw]`` (rad) of a unit quaternion; gimbal-lock aware (see :func:`dcm_to_euler`).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→navigation.
+    yaw_at_lock : float, default 0.0
+        The yaw to report when the pitch is at ±90°, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
+    """
     return dcm_to_euler(quat_to_dcm(q), yaw_at_lock=yaw_at_lock)
 
 
 def quat_multiply(p, q):
-    """Hamilton product ``p ⊗ q`` of scalar-first quaternions (seed 001 quaternion note §2). Shapes broadcast."""
+    """Hamilton product ``p ⊗ q`` of scalar-first quaternions (seed 001 quaternion note §2). Shapes broadcast.
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 4)
+        Left factor ``[w, x, y, z]`` (need not be unit).
+    q : array_like, shape (..., 4)
+        Right factor ``[w, x, y, z]`` (need not be unit).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``p ⊗ q``; with unit factors, the rotation ``q`` followed by ``p``.
+
+    Examples
+    --------
+    The product does not commute: ``i ⊗ j = k`` but ``j ⊗ i = -k``.
+
+    >>> from fusionlab import rotations
+    >>> i, j = [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]
+    >>> rotations.quat_multiply(i, j), rotations.quat_multiply(j, i)
+    (array([0., 0., 0., 1.]), array([ 0.,  0.,  0., -1.]))
+    """
     p = validate.array(p, "p", shape=(4,))
     q = validate.array(q, "q", shape=(4,))
     validate.broadcast({"p": 1, "q": 1}, p=p, q=q)
@@ -294,13 +492,35 @@ def quat_multiply(p, q):
 
 
 def quat_conjugate(q):
-    """``q* = [w, -x, -y, -z]``: the inverse rotation of a unit quaternion."""
+    """``q* = [w, -x, -y, -z]``: the inverse rotation of a unit quaternion.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions ``[w, x, y, z]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The conjugates.
+    """
     q = validate.array(q, "q", shape=(4,))
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
 def quat_normalize(q):
-    """``q / |q|``; raises for a zero quaternion (it encodes no rotation)."""
+    """``q / |q|``; raises for a zero quaternion (it encodes no rotation).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Quaternions ``[w, x, y, z]``, non-zero.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions.
+    """
     q = validate.array(q, "q", shape=(4,))
     n = np.linalg.norm(q, axis=-1, keepdims=True)
     if np.any(n < 1e-12):
@@ -313,10 +533,23 @@ def quat_rotate(q, v):
 
     Parameters
     ----------
-    q : (..., 4) unit quaternions; v : (..., 3) vectors (shapes broadcast)
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→navigation (batch shape broadcasts with ``v``'s).
+    v : array_like, shape (..., 3)
+        Body vectors (any unit).
+
     Returns
     -------
-    (..., 3) array
+    ndarray, shape (..., 3)
+        The vectors in navigation coordinates, same unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> q = rotations.euler_to_quat([0.0, 0.0, np.pi / 2])             # yaw 90°
+    >>> np.round(rotations.quat_rotate(q, [1.0, 0.0, 0.0]), 12) + 0.0   # the same as euler_to_dcm's
+    array([0., 1., 0.])
     """
     q = validate.quaternions(q, "q")
     v = validate.vectors(v, "v")
@@ -326,7 +559,28 @@ def quat_rotate(q, v):
 
 
 def quat_angle_between(q1, q2):
-    """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter."""
+    """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter.
+
+    Parameters
+    ----------
+    q1 : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]`` (batch shape broadcasts with ``q2``'s).
+    q2 : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``.
+
+    Returns
+    -------
+    float or ndarray, shape (...)
+        Angle, rad.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> q = rotations.euler_to_quat(np.radians([0.0, 0.0, 30.0]))
+    >>> round(float(np.degrees(rotations.quat_angle_between([1.0, 0.0, 0.0, 0.0], -q))), 9)   # -q: the same attitude
+    30.0
+    """
     q1 = validate.quaternions(q1, "q1")
     q2 = validate.quaternions(q2, "q2")
     validate.broadcast({"q1": 1, "q2": 1}, q1=q1, q2=q2)
@@ -344,6 +598,28 @@ def rotvec_to_quat(sigma, order="exact"):
 
     ``order='exact'``: ``[cos(s/2), sin(s/2) σ/s]`` with ``s = |σ|`` (series near 0).
     ``order='first'``: the small-angle form ``[1, σ/2]`` -- *not* unit length; its norm error is ``s²/8``.
+
+    Parameters
+    ----------
+    sigma : array_like, shape (..., 3)
+        Rotation vectors (unit axis × angle), rad.
+    order : {'exact', 'first'}, default 'exact'
+        The exact quaternion or its small-angle form.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Quaternions ``[w, x, y, z]`` (unit for ``'exact'``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> np.round(rotations.rotvec_to_quat([0.0, 0.0, np.pi]), 12)          # half a turn about z
+    array([0., 0., 0., 1.])
+    >>> q = rotations.rotvec_to_quat([0.0, 0.0, 0.1], order="first")
+    >>> round(float(np.linalg.norm(q)) - 1, 6)                 # norm error ≈ s²/8 = 0.00125
+    0.001249
     """
     sigma = validate.vectors(sigma, "sigma")
     if order == "first":
@@ -358,7 +634,18 @@ def rotvec_to_quat(sigma, order="exact"):
 
 
 def quat_to_rotvec(q):
-    """Rotation vector (rad) of a unit quaternion, angle in [0, π] (``q`` and ``-q`` give the same answer)."""
+    """Rotation vector (rad) of a unit quaternion, angle in [0, π] (``q`` and ``-q`` give the same answer).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Rotation vectors (unit axis × angle), rad.
+    """
     q = validate.quaternions(q, "q")
     q = np.where(q[..., :1] < 0, -q, q)
     v = q[..., 1:]
@@ -378,10 +665,25 @@ def rodrigues_dcm(sigma, order="exact"):
 
     Parameters
     ----------
-    sigma : (..., 3) array, rad -- body rate × dt
+    sigma : array_like, shape (..., 3)
+        Body rotation vector over the step (body rate × dt), rad.
+    order : {'exact', 'second', 'first'}, default 'exact'
+        Rodrigues' formula, or its expansion to second or first order in ``B``.
+
     Returns
     -------
-    (..., 3, 3) array
+    ndarray, shape (..., 3, 3)
+        The increments ``A``.
+
+    Examples
+    --------
+    The first-order increment ``I + B`` of a 0.1 rad turn about z:
+
+    >>> from fusionlab import rotations
+    >>> rotations.rodrigues_dcm([0.0, 0.0, 0.1], order="first")
+    array([[ 1. , -0.1,  0. ],
+           [ 0.1,  1. ,  0. ],
+           [ 0. ,  0. ,  1. ]])
     """
     sigma = validate.vectors(sigma, "sigma")
     B = skew(sigma)                                                       # (000 eq 3.53)
@@ -409,8 +711,15 @@ def dcm_renormalize(C, axis="columns"):
 
     Parameters
     ----------
-    C : (..., 3, 3) array -- nearly orthonormal
-    axis : 'columns' or 'rows'
+    C : array_like, shape (..., 3, 3)
+        Nearly orthonormal matrices (within 0.25; a zero or reflected matrix has no fix and is refused).
+    axis : {'columns', 'rows'}, default 'columns'
+        Which pair to correct: the first two columns (the thesis' lab code) or rows (its text).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The corrected matrices, orthonormal to first order in the error.
     """
     C = validate.rotation(C, "C", tol=0.25)      # drifted, not degenerate: a zero or reflected C has no fix
     if axis not in ("columns", "rows"):
@@ -426,7 +735,20 @@ def dcm_renormalize(C, axis="columns"):
 
 
 def is_rotation(C, tol=1e-6):
-    """True where ``C`` is orthonormal with determinant +1 within ``tol``."""
+    """True where ``C`` is orthonormal with determinant +1 within ``tol``.
+
+    Parameters
+    ----------
+    C : array_like, shape (..., 3, 3)
+        The matrices.
+    tol : float, default 1e-6
+        Allowed deviation of ``C Cᵀ`` from I (largest entry) and of det C from 1.
+
+    Returns
+    -------
+    bool or ndarray of bool, shape (...)
+        Whether each matrix is a rotation.
+    """
     C = validate.matrices(C, "C")
     tol = validate.scalar(tol, "tol", positive=True)
     ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)), axis=(-2, -1))
@@ -449,6 +771,18 @@ def euler_rates_matrix(roll, pitch):
 
     ``[φ̇, θ̇, ψ̇] = D @ [p, q, r]``. It does not depend on yaw (the note's ``D(φ, θ, ψ)`` is a misnomer) and both
     its first row (tan θ) and last row (1/cos θ) diverge at θ = ±90°.
+
+    Parameters
+    ----------
+    roll : float or array_like, shape (...)
+        Roll φ, rad.
+    pitch : float or array_like, shape (...)
+        Pitch θ, rad (broadcasts with ``roll``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``D(φ, θ)``.
     """
     r, p = _roll_pitch(roll, pitch)
     sr, cr, tp, cp = np.sin(r), np.cos(r), np.tan(p), np.cos(p)
@@ -462,6 +796,18 @@ def body_rates_matrix(roll, pitch):
     """Matrix ``W(φ, θ)`` mapping Euler-angle rates to body rates, the inverse of :func:`euler_rates_matrix`.
 
     ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (not printed in the note; derived in docs/derivations.md §4).
+
+    Parameters
+    ----------
+    roll : float or array_like, shape (...)
+        Roll φ, rad.
+    pitch : float or array_like, shape (...)
+        Pitch θ, rad (broadcasts with ``roll``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``W(φ, θ)``.
     """
     r, p = _roll_pitch(roll, pitch)
     sr, cr, sp, cp = np.sin(r), np.cos(r), np.sin(p), np.cos(p)
@@ -476,14 +822,37 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
 
     Parameters
     ----------
-    C0 : (3, 3) array -- initial ``C_bn``
-    gyr : (N, 3) array, rad/s -- body rates, one row per step
-    dt : float, s
-    order : 'first' (I + B, the thesis lab), 'second' or 'exact' (Rodrigues), see :func:`rodrigues_dcm`
-    renormalize : 'columns', 'rows' or None -- apply :func:`dcm_renormalize` after every step
+    C0 : array_like, shape (3, 3)
+        Initial ``C_bn``.
+    gyr : array_like, shape (N, 3)
+        Body rates, one row per step, rad/s.
+    dt : float
+        Time step, s.
+    order : {'first', 'second', 'exact'}, default 'first'
+        ``'first'`` (I + B, the thesis lab), ``'second'`` or ``'exact'`` (Rodrigues), see :func:`rodrigues_dcm`.
+    renormalize : {'columns', 'rows', None}, default 'columns'
+        Apply :func:`dcm_renormalize` after every step (None: never).
+
     Returns
     -------
-    (N + 1, 3, 3) array -- ``C0`` and the attitude after every step
+    ndarray, shape (N + 1, 3, 3)
+        ``C0`` and the attitude after every step.
+
+    Examples
+    --------
+    One second at 90 °/s about z in 100 steps: the first-order update without renormalisation lets the matrix grow
+    (det 1.025), renormalising keeps it a rotation, and only the exact increment reaches the full 90°.
+
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> gyr = np.tile(np.radians([0.0, 0.0, 90.0]), (100, 1))
+    >>> for order, renorm in [("first", None), ("first", "columns"), ("exact", None)]:
+    ...     C = rotations.integrate_gyro_dcm(np.eye(3), gyr, 0.01, order=order, renormalize=renorm)[-1]
+    ...     yaw = np.degrees(rotations.dcm_to_euler(C)[2])
+    ...     print(f"{order:5s} {renorm!s:7s} det {np.linalg.det(C):.4f} yaw {yaw:.4f}")
+    first None    det 1.0250 yaw 89.9926
+    first columns det 1.0000 yaw 89.9926
+    exact None    det 1.0000 yaw 90.0000
     """
     C = validate.rotation(validate.array(C0, "C0", shape=(3, 3)), "C0", tol=1e-3).reshape(3, 3)
     gyr = validate.gyro_rad(gyr, "gyr")
@@ -506,10 +875,26 @@ def integrate_gyro_quat(q0, gyr, dt):
 
     Parameters
     ----------
-    q0 : (4,) unit quaternion; gyr : (N, 3) rad/s; dt : float, s
+    q0 : array_like, shape (4,)
+        Initial unit quaternion ``[w, x, y, z]``, body→navigation.
+    gyr : array_like, shape (N, 3)
+        Body rates, one row per step, rad/s.
+    dt : float
+        Time step, s.
+
     Returns
     -------
-    (N + 1, 4) array
+    ndarray, shape (N + 1, 4)
+        ``q0`` and the attitude after every step (unit quaternions).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import rotations
+    >>> gyr = np.tile(np.radians([0.0, 0.0, 90.0]), (100, 1))            # 1 s at 90 °/s about z
+    >>> q = rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], gyr, 0.01)
+    >>> q.shape, np.round(np.degrees(rotations.quat_to_euler(q[-1])), 9) + 0.0
+    ((101, 4), array([ 0.,  0., 90.]))
     """
     q = validate.quaternions(q0, "q0")
     if q.shape != (4,):
@@ -539,13 +924,35 @@ _Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])            # the q
 
 
 def dcm_nav_swap(C_bn):
-    """The same attitude with the navigation frame changed NED ↔ ENU: ``NED_ENU @ C_bn`` (body axes unchanged)."""
+    """The same attitude with the navigation frame changed NED ↔ ENU: ``NED_ENU @ C_bn`` (body axes unchanged).
+
+    Parameters
+    ----------
+    C_bn : array_like, shape (..., 3, 3)
+        Body→navigation rotation matrices (within 0.05 of a rotation).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The same attitudes, body→(the other navigation frame).
+    """
     C = validate.rotation(C_bn, "C_bn", tol=0.05)
     return NED_ENU @ C
 
 
 def quat_nav_swap(q):
-    """Quaternion form of :func:`dcm_nav_swap` (NED ↔ ENU navigation frame), ``w >= 0``."""
+    """Quaternion form of :func:`dcm_nav_swap` (NED ↔ ENU navigation frame), ``w >= 0``.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→navigation.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The same attitudes in the other navigation frame, ``w >= 0``.
+    """
     q = validate.quaternions(q, "q")
     out = quat_multiply(_Q_NED_ENU, q)
     return np.where(out[..., :1] < 0, -out, out)
@@ -576,6 +983,20 @@ def seed000_eq339(roll, pitch, yaw):
 
     Erratum: this is not the thesis' own (3.40), which is our ``C_bn`` and equals ``(R_x R_y R_z)ᵀ`` of the
     passive matrices. Kept so the lab can show the difference numerically.
+
+    Parameters
+    ----------
+    roll : float or array_like, shape (...)
+        Roll φ, rad.
+    pitch : float or array_like, shape (...)
+        Pitch θ, rad.
+    yaw : float or array_like, shape (...)
+        Yaw ψ, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The printed product.
     """
     roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
     return frame_rot_z(yaw) @ frame_rot_y(pitch) @ frame_rot_x(roll)     # (000 eq 3.39, as printed)
@@ -586,6 +1007,20 @@ def seed000_labcode_dcm(yaw, pitch, roll):
 
     The argument order (yaw, pitch, roll) follows the printed call. The matrix is *not* (3.40) at the same angles:
     the code mislabels the axes and multiplies in another order.
+
+    Parameters
+    ----------
+    yaw : float or array_like, shape (...)
+        The code's yaw, rad.
+    pitch : float or array_like, shape (...)
+        The code's "pitch" (about x), rad.
+    roll : float or array_like, shape (...)
+        The code's "roll" (about y), rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The code's ``R``.
     """
     yaw, pitch, roll = _angles(yaw=yaw, pitch=pitch, roll=roll)
     return frame_rot_z(yaw) @ frame_rot_x(pitch) @ frame_rot_y(roll)
@@ -595,6 +1030,20 @@ def seed000_labcode_omega(wx, wy, wz):
     """Seed 000 lab 1 Part B ``Omega = [0 Wz -Wy; -Wz 0 -Wx; Wy Wx 0]``, verbatim.
 
     It is skew-symmetric but equals ``skew([Wx, -Wy, -Wz])``: the opposite sign to eq 3.50 on y and z.
+
+    Parameters
+    ----------
+    wx : float
+        The code's ``Wx``, rad/s.
+    wy : float
+        The code's ``Wy``, rad/s.
+    wz : float
+        The code's ``Wz``, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        The code's ``Omega``.
     """
     wx, wy, wz = _angles(wx=wx, wy=wy, wz=wz, scalar=True)
     return np.array([[0.0, wz, -wy], [-wz, 0.0, -wx], [wy, wx, 0.0]])
@@ -602,7 +1051,22 @@ def seed000_labcode_omega(wx, wy, wz):
 
 def seed000_labcode_rates(wx, wy, wz):
     """Convert the lab code's gyro inputs to our body rates: its ``R*(I + Omega dt)`` is our
-    ``C_bn @ (I + skew(ω) dt)`` with ``ω = (Wx, -Wy, -Wz)``. Shapes broadcast; returns ``(..., 3)``."""
+    ``C_bn @ (I + skew(ω) dt)`` with ``ω = (Wx, -Wy, -Wz)``. Shapes broadcast.
+
+    Parameters
+    ----------
+    wx : float or array_like, shape (...)
+        The code's ``Wx``, rad/s.
+    wy : float or array_like, shape (...)
+        The code's ``Wy``, rad/s.
+    wz : float or array_like, shape (...)
+        The code's ``Wz``, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Body rates ``ω`` in the library's convention, rad/s.
+    """
     wx, wy, wz = np.broadcast_arrays(*_angles(wx=wx, wy=wy, wz=wz, rates=True))
     return np.stack([wx, -wy, -wz], -1)
 
@@ -613,6 +1077,16 @@ def seed000_labcode_angles(R):
 
     These are not (3.69)/(3.72)/(3.75): on the same matrix those give other numbers (worked here: 41.630 /
     -18.374 / -7.037 deg for the Part B result). A non-zero initial pitch reads back with the wrong sign.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        The lab's matrix (within 0.25 of a rotation: the lab reads its drifted, unrenormalised matrix too).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``[pitch, roll, yaw]``, rad.
     """
     R = validate.rotation(R, "R", tol=0.25)     # the lab reads its drifted, unrenormalised matrix too
     pitch = np.arcsin(np.clip(R[..., 2, 1], -1, 1))
@@ -623,7 +1097,20 @@ def seed000_labcode_angles(R):
 
 def seed000_eq379_381_printed(C_bn, yaw=0.0):
     """Seed 000 eqs 3.79 and 3.81 *as printed* (swapped): θ=-90° → ``φ = ψ + atan2(r12, r13)``,
-    θ=+90° → ``φ = -ψ + atan2(-r12, -r13)``. Returns the roll (rad) the printed rule gives at gimbal lock."""
+    θ=+90° → ``φ = -ψ + atan2(-r12, -r13)``.
+
+    Parameters
+    ----------
+    C_bn : array_like, shape (..., 3, 3)
+        Body→navigation rotation matrices at gimbal lock (within 0.05 of a rotation).
+    yaw : float, default 0.0
+        The yaw ψ the rule is given, rad.
+
+    Returns
+    -------
+    float or ndarray, shape (...)
+        The roll the printed rule gives, rad.
+    """
     C = validate.rotation(C_bn, "C_bn", tol=0.05)
     yaw = validate.scalar(validate.angles_rad(yaw, "yaw"), "yaw")
     r12, r13, r31 = C[..., 0, 1], C[..., 0, 2], C[..., 2, 0]
@@ -634,19 +1121,55 @@ def seed001_R_IB(roll, pitch, yaw):
     """Seed 001 (Euler note §5) inertial→body matrix ``R_I^B = R_{v2}^B(φ) R_{v1}^{v2}(θ) R_I^{v1}(ψ)``, passive.
 
     Equals ``euler_to_dcm([roll, pitch, yaw]).T``; see :func:`dcm_from_seed001`.
+
+    Parameters
+    ----------
+    roll : float or array_like, shape (...)
+        Roll φ, rad.
+    pitch : float or array_like, shape (...)
+        Pitch θ, rad.
+    yaw : float or array_like, shape (...)
+        Yaw ψ, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``R_I^B``, inertial (NED) → body.
     """
     roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
     return frame_rot_x(roll) @ frame_rot_y(pitch) @ frame_rot_z(yaw)     # (001 Euler §5)
 
 
 def dcm_from_seed001(R_IB):
-    """Our body→nav ``C_bn`` from seed 001's inertial→body ``R_I^B`` (NED): the transpose."""
+    """Our body→nav ``C_bn`` from seed 001's inertial→body ``R_I^B`` (NED): the transpose.
+
+    Parameters
+    ----------
+    R_IB : array_like, shape (..., 3, 3)
+        Seed 001's ``R_I^B`` (within 0.05 of a rotation).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``C_bn``.
+    """
     R = validate.rotation(R_IB, "R_IB", tol=0.05)
     return np.swapaxes(R, -1, -2)
 
 
 def dcm_to_seed001(C_bn):
-    """Seed 001's ``R_I^B`` from our ``C_bn``: the transpose."""
+    """Seed 001's ``R_I^B`` from our ``C_bn``: the transpose.
+
+    Parameters
+    ----------
+    C_bn : array_like, shape (..., 3, 3)
+        Body→navigation rotation matrices (within 0.05 of a rotation).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``R_I^B``.
+    """
     C = validate.rotation(C_bn, "C_bn", tol=0.05)
     return np.swapaxes(C, -1, -2)
 
@@ -657,6 +1180,16 @@ def seed001_quat_to_euler(q):
     ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``, ``ψ = atan2(2(ad + bc), a² + b² - c² - d²)``.
     They are right only for a **body→inertial** quaternion (our ``q``); the note's text calls its quaternion
     inertial→body, for which they return nonsense (an erratum, shown in Lab 01).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Unit quaternions ``[a, b, c, d] = [w, x, y, z]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
     """
     q = validate.quaternions(q, "q")
     a, b, c, d = (q[..., i] for i in range(4))
@@ -680,9 +1213,17 @@ def quat_from_seed002(q, frame="NED", nav=None):
 
     Parameters
     ----------
-    q : (..., 4) unit quaternion in the note's convention
-    frame : 'NED', 'Android' or 'Win8' -- the note's coordinate system
-    nav : None, 'NED' or 'ENU' -- navigation frame of the result (default: the note's own global frame)
+    q : array_like, shape (..., 4)
+        Unit quaternions in the note's convention.
+    frame : {'NED', 'Android', 'Win8'}, default 'NED'
+        The note's coordinate system.
+    nav : {None, 'NED', 'ENU'}, optional
+        Navigation frame of the result (default: the note's own global frame).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Body→navigation unit quaternions ``[w, x, y, z]``.
     """
     q = validate.quaternions(q, "q")
     return _seed002_nav(q, frame, nav)
@@ -691,7 +1232,19 @@ def quat_from_seed002(q, frame="NED", nav=None):
 def quat_to_seed002(q, frame="NED", nav=None):
     """Inverse of :func:`quat_from_seed002`: seed 002's quaternion from ours.
 
-    ``nav`` is the navigation frame ``q`` is written in (default: the note's global frame for ``frame``).
+    Parameters
+    ----------
+    q : array_like, shape (..., 4)
+        Body→navigation unit quaternions ``[w, x, y, z]``.
+    frame : {'NED', 'Android', 'Win8'}, default 'NED'
+        The note's coordinate system.
+    nav : {None, 'NED', 'ENU'}, optional
+        The navigation frame ``q`` is written in (default: the note's global frame for ``frame``).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Unit quaternions in the note's convention.
     """
     q = validate.quaternions(q, "q")
     return _seed002_nav(q, frame, nav)
@@ -711,6 +1264,16 @@ def dcm_from_seed004(C_bn):
 
     What differs in seed 004 is the accelerometer sign (+g on z when level), handled where its filters read
     accelerometers, not here.
+
+    Parameters
+    ----------
+    C_bn : array_like, shape (..., 3, 3)
+        Seed 004's ``C_b^n`` (orthonormal with det +1 within 1e-6).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``C_bn``, the same numbers.
     """
     C = validate.matrices(C_bn, "C_bn")
     _require_rotation(C, "C_bn")
