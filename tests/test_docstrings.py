@@ -31,6 +31,7 @@ DOCUMENTED = [
     "gfimu",
     "kalman",
     "metrics",
+    "northfinder",
     "rotations",
     "validate",
 ]

@@ -88,8 +88,28 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
 
     ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3); with ``v_rel = a_rel = 0``
-    it is the lever-arm equation of a fixed accelerometer. Arguments, units and the one implementation:
+    it is the lever-arm equation of a fixed accelerometer. The one implementation:
     :func:`fusionlab.sensors.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration).
+
+    Parameters
+    ----------
+    a_o : array_like, shape (..., 3)
+        Specific force at the body origin, m/s².
+    omega : array_like, shape (..., 3)
+        Body rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    r : array_like, shape (..., 3)
+        The point's position in the body frame, m.
+    v_rel : array_like, shape (..., 3), optional
+        Its velocity relative to the body, m/s (default 0).
+    a_rel : array_like, shape (..., 3), optional
+        Its acceleration relative to the body, m/s² (default 0).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Acceleration at the point, m/s².
     """
     return sensors.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
 
@@ -102,11 +122,23 @@ def rotating_kinematics(t, rho, l, omega_r):
 
     Parameters
     ----------
-    t : float or (N,) array, s
-    rho, l : float, m; omega_r : float, rad/s
+    t : float or array_like, shape (N,)
+        Time since the index pulse, s.
+    rho : float
+        Radius, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+
     Returns
     -------
-    p, v, a : three (..., 3, 3) arrays -- [sensor r_D, r_B, r_C] × [x, y, z], in m, m/s, m/s²
+    p : ndarray, shape (..., 3, 3)
+        Positions, m: [sensor r_D, r_B, r_C] × [x, y, z].
+    v : ndarray, shape (..., 3, 3)
+        Velocities relative to the body, m/s.
+    a : ndarray, shape (..., 3, 3)
+        Accelerations relative to the body, m/s².
     """
     t = validate.array(t, "t")
     rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
@@ -130,13 +162,25 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
 
     Parameters
     ----------
-    a_A : (..., 3) array, m/s² -- the central triad A
-    omega, alpha : (..., 3) arrays -- rad/s, rad/s²
-    t : float or (...) array, s -- time since the index pulse
-    rho, l : float, m; omega_r : float, rad/s
+    a_A : array_like, shape (..., 3)
+        Specific force at the central triad A, m/s².
+    omega : array_like, shape (..., 3)
+        Body rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    t : float or array_like, shape (...)
+        Time since the index pulse, s.
+    rho : float
+        Radius, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+
     Returns
     -------
-    (..., 3) array -- [a^{rD}_x, a^{rB}_y, a^{rC}_z], m/s²
+    ndarray, shape (..., 3)
+        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]``, m/s².
     """
     a_A, w, al = validate.vectors(a_A, "a_A"), validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     t = validate.array(t, "t")
@@ -154,9 +198,21 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
 def fixed_triad_outputs(a_A, omega, alpha, d):
     """The four fixed triads A (origin), B, C, D (at ``d`` on x, y, z) of Fig. 4.1, from eq 4.3 with v_rel = 0.
 
+    Parameters
+    ----------
+    a_A : array_like, shape (..., 3)
+        Specific force at the origin, m/s².
+    omega : array_like, shape (..., 3)
+        Body rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    d : float
+        Distance of triads B, C, D from the origin, m.
+
     Returns
     -------
-    (..., 4, 3) array, m/s² -- rows A, B, C, D
+    ndarray, shape (..., 4, 3)
+        Specific forces, m/s², rows A, B, C, D.
     """
     d = validate.positive(d, "d")
     a_A = validate.vectors(a_A, "a_A")
@@ -166,8 +222,7 @@ def fixed_triad_outputs(a_A, omega, alpha, d):
 
 
 def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
-    """Angular rate, sign included, from the rotating and fixed accelerometers sampled at ``sin ω_r t = 0``
-    (004 eq 4.15).
+    """Angular rate, sign included, from the rotating and fixed accelerometers at ``sin ω_r t = 0`` (004 eq 4.15).
 
     ``ω_y = [a^{rD}_x − a^A_x − (a^D_x − a^A_x) l/d − (a^C_x − a^A_x) ρ/d] / (2ρω_r)``, and cyclically
     ``ω_z`` from r_B and ``ω_x`` from r_C; the fixed-triad differences stand for ``(α_y + ω_xω_z)`` and
@@ -175,12 +230,23 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
 
     Parameters
     ----------
-    a_rot : (..., 3) array -- [a^{rD}_x, a^{rB}_y, a^{rC}_z] at the index pulse (cos ω_r t = 1), m/s²
-    fixed : (..., 4, 3) array -- triads A, B, C, D, m/s²
-    d, rho, l : float, m; omega_r : float, rad/s
+    a_rot : array_like, shape (..., 3)
+        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]`` at the index pulse (cos ω_r t = 1), m/s².
+    fixed : array_like, shape (..., 4, 3)
+        Triads A, B, C, D, m/s².
+    rho : float
+        Radius of the rotating accelerometers, m.
+    d : float
+        Distance of the fixed triads from the origin, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+
     Returns
     -------
-    (..., 3) array -- [ω_x, ω_y, ω_z], rad/s
+    ndarray, shape (..., 3)
+        ``[ω_x, ω_y, ω_z]``, rad/s.
     """
     a_rot, fixed = validate.vectors(a_rot, "a_rot"), validate.array(fixed, "fixed", shape=(4, 3))
     d, rho = validate.positive(d, "d"), validate.positive(rho, "rho")
@@ -215,6 +281,32 @@ def rate_noise_coefficient(rho, d, l, omega_r):
 
     It treats the three differences of eq 4.15 as independent, each with variance 2R_a. For Table 4.1 it gives
     0.7311 (eq 4.45). The exact value is :func:`rate_noise_coefficient_exact`.
+
+    Parameters
+    ----------
+    rho : float
+        Radius of the rotating accelerometers, m.
+    d : float
+        Distance of the fixed triads from the origin, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+
+    Returns
+    -------
+    float
+        The coefficient, s²/m².
+
+    Examples
+    --------
+    With Table 4.1 the printed coefficient is about twice the exact one:
+
+    >>> t = TABLE_4_1
+    >>> round(rate_noise_coefficient(t["rho"], t["d"], t["l"], t["omega_r"]), 4)
+    0.7311
+    >>> round(rate_noise_coefficient_exact(t["rho"], t["d"], t["l"], t["omega_r"]), 5)
+    0.37556
     """
     rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
     out = 2.0 * (1 / (2 * rho * omega_r) ** 2 + 1 / (2 * d * omega_r) ** 2
@@ -228,6 +320,22 @@ def rate_noise_coefficient_exact(rho, d, l, omega_r):
     Eq 4.15 weighs four independent accelerometers: ``a^r`` by 1, the lever-arm partner by −l/d, the other by −ρ/d
     and the shared central ``a^A`` by ``−1 + l/d + ρ/d``, all over ``2ρω_r``. Hence
     ``[1 + (l/d)² + (ρ/d)² + (1 − l/d − ρ/d)²] / (2ρω_r)²`` -- 169/450 = 0.37556 for Table 4.1.
+
+    Parameters
+    ----------
+    rho : float
+        Radius of the rotating accelerometers, m.
+    d : float
+        Distance of the fixed triads from the origin, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+
+    Returns
+    -------
+    float
+        The coefficient, s²/m².
     """
     rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
     w_r, w_lever, w_radial, w_A = 1.0, -l / d, -rho / d, -1.0 + l / d + rho / d          # a^r, a^D, a^C, a^A
@@ -239,6 +347,26 @@ def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
     """Rate noise density σ_g (rad/s/√Hz) for an accelerometer noise density ``w_acc`` (m/s²/√Hz) (004 eq 4.46).
 
     ``σ_g = w_acc · sqrt(coefficient)``; the printed coefficient (eq 4.44) unless ``exact``.
+
+    Parameters
+    ----------
+    w_acc : float
+        Accelerometer noise density, m/s²/√Hz.
+    rho : float
+        Radius of the rotating accelerometers, m.
+    d : float
+        Distance of the fixed triads from the origin, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+    exact : bool, optional
+        Use :func:`rate_noise_coefficient_exact` instead of the printed coefficient.
+
+    Returns
+    -------
+    float
+        σ_g, rad/s/√Hz.
     """
     w_acc = validate.positive(w_acc, "w_acc")
     coef = rate_noise_coefficient_exact if exact else rate_noise_coefficient
@@ -251,9 +379,25 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
     Fifteen accelerometers (four fixed triads, three rotating) get N(0, 1) samples; :func:`rate_from_rotating`
     turns them into rates. With unit noise the sample variance *is* σ_g²/R_a, for each axis.
 
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    rho : float
+        Radius of the rotating accelerometers, m.
+    d : float
+        Distance of the fixed triads from the origin, m.
+    l : float
+        Distance of each rotor centre from the body origin, m.
+    omega_r : float
+        Spin rate, rad/s.
+    seed : int, optional
+        Seed of the random generator.
+
     Returns
     -------
-    (3,) array -- the sample variance of ω_x, ω_y, ω_z (s²/m² when R_a = 1 (m/s²)²)
+    ndarray, shape (3,)
+        The sample variance of ω_x, ω_y, ω_z (s²/m² when R_a = 1 (m/s²)²).
     """
     n = int(n)
     if n < 2:
@@ -268,7 +412,22 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
 # --------------------------------------------------------------------------------------------------------------
 
 def coriolis_amplitude(rho, omega_r, lat):
-    """Amplitude of the Earth-rate line, ``A_c = 2 ρ ω_r ω_ie cos Φ`` (m/s²) (004 eq 4.26)."""
+    """Amplitude of the Earth-rate line, ``A_c = 2 ρ ω_r ω_ie cos Φ`` (m/s²) (004 eq 4.26).
+
+    Parameters
+    ----------
+    rho : float
+        Radius, m.
+    omega_r : float
+        Spin rate, rad/s.
+    lat : float
+        Latitude Φ, rad.
+
+    Returns
+    -------
+    float
+        ``A_c``, m/s².
+    """
     rho, omega_r = validate.positive(rho, "rho"), validate.positive(omega_r, "omega_r")
     lat = validate.angles_rad(lat, "lat", limit=np.pi / 2 + 1e-12)
     return 2 * rho * omega_r * earth.OMEGA_IE * np.cos(lat)
@@ -278,6 +437,25 @@ def leveled_body_rate(heading, lat):
     """Earth rate in a level body frame at ``heading`` (004 eq 4.24).
 
     ``C_nb ω_ie^n = [ω_N cos ψ, −ω_N sin ψ, ω_D]`` with ``ω_ie^n`` from :func:`fusionlab.earth.earth_rate_ned`.
+
+    Parameters
+    ----------
+    heading : float or array_like
+        Heading ψ, rad.
+    lat : float
+        Latitude, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Body rate, rad/s.
+
+    Examples
+    --------
+    At the equator facing north, the whole Earth rate is on the x axis:
+
+    >>> np.round(leveled_body_rate(0.0, 0.0) * 1e5, 4) + 0.0
+    array([7.2921, 0.    , 0.    ])
     """
     heading = validate.angles_rad(heading, "heading")
     C_bn = rotations.euler_to_dcm(np.stack([np.zeros_like(heading), np.zeros_like(heading), heading], -1))
@@ -286,8 +464,9 @@ def leveled_body_rate(heading, lat):
 
 
 def tilted_heading(zeta, roll, pitch, lat):
-    """Heading of a *non-level* rotating-accelerometer north finder from the phase of its Earth-rate line (004 §4.4.3,
-    eqs 4.36–4.43; the closed form after the thesis' ref. [45], reconstructed and checked here).
+    """Heading of a *non-level* rotating-accelerometer north finder from the phase of its Earth-rate line.
+
+    004 §4.4.3, eqs 4.36–4.43; the closed form after the thesis' ref. [45], reconstructed and checked here.
 
     Tilted by roll φ and pitch θ (known, e.g. from the accelerometers, eqs 4.22–4.23), the body rate is
     ``ω^b = C_nᵇ [ω_N, 0, ω_D]`` (4.36) and the line is ``2ρω_r √(ω_x² + ω_y²) sin(ω_r t + ζ)`` with
@@ -299,10 +478,19 @@ def tilted_heading(zeta, roll, pitch, lat):
 
     Parameters
     ----------
-    zeta : float, rad -- phase of the line; roll, pitch : float, rad; lat : float, rad
+    zeta : float
+        Phase of the line, rad.
+    roll : float
+        Roll φ, rad.
+    pitch : float
+        Pitch θ, rad.
+    lat : float
+        Latitude Φ, rad.
+
     Returns
     -------
-    float, rad, in (−π, π]
+    float
+        Heading ψ, rad, in (−π, π].
     """
     zeta, roll, pitch = (validate.angles_rad(a, n) for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch")))
     lat = validate.angles_rad(lat, "lat", limit=np.pi / 2 - 1e-9)
@@ -333,18 +521,38 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
 
     Parameters
     ----------
-    heading : float, rad
-    duration : float, s; fs : float, Hz; rpm : float -- spin rate (200 rpm gives the thesis' 3.333 Hz)
-    rho : float, m -- radius (0.14 m: half the thesis' 28 cm separation, our reading); lat : float, rad
-    g : float, m/s²; scale : float -- s_a; bias : float, m/s² -- b_a (eq 4.27)
-    noise : float, m/s²/√Hz -- white noise density (per sample σ = noise·√fs)
-    harmonics : dict k -> (amplitude in A_c, phase rad) or None for :data:`HARMONICS`; ``{}`` for none
-    theta0 : float, rad -- rotor angle at the first sample (the index pulse is not tied to the ADC clock)
-    seed : int
+    heading : float
+        True heading, rad.
+    duration : float, optional
+        Record length, s.
+    fs : float, optional
+        Sample rate, Hz.
+    rpm : float, optional
+        Spin rate, rev/min (200 rpm gives the thesis' 3.333 Hz).
+    rho : float, optional
+        Radius, m (0.14 m: half the thesis' 28 cm separation, our reading).
+    lat : float, optional
+        Latitude, rad.
+    g : float, optional
+        Gravity, m/s².
+    scale : float, optional
+        Scale factor s_a (dimensionless).
+    bias : float, optional
+        Bias b_a, m/s² (eq 4.27).
+    noise : float, optional
+        White noise density, m/s²/√Hz (per sample σ = noise·√fs).
+    harmonics : dict, optional
+        k -> (amplitude in A_c, phase rad); None for :data:`HARMONICS`, ``{}`` for none.
+    theta0 : float, optional
+        Rotor angle at the first sample, rad (the index pulse is not tied to the ADC clock).
+    seed : int, optional
+        Seed of the random generator.
+
     Returns
     -------
-    dict with ``t`` (N,), ``theta`` (N,) rad, ``acc`` (N,) m/s², ``fs``, ``f_r`` Hz, ``omega_r`` rad/s, ``A_c``
-    m/s², ``heading`` rad
+    dict
+        ``t`` (N,) s, ``theta`` (N,) rad, ``acc`` (N,) m/s², ``fs`` Hz, ``f_r`` Hz, ``omega_r`` rad/s, ``A_c``
+        m/s², ``heading`` rad.
     """
     heading = float(validate.angles_rad(heading, "heading"))
     duration, fs, rpm = validate.positive(duration, "duration"), validate.positive(fs, "fs"), validate.positive(
@@ -381,9 +589,23 @@ def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
     ``scipy.signal.firls`` with ``order + 1`` taps; pass band ``f_r ± pass_half_width``, stop bands below
     ``f_r − stop_half_width`` and above ``f_r + stop_half_width`` (Hz; these edges are ours, the thesis gives none).
 
+    Parameters
+    ----------
+    order : int
+        Filter order (even).
+    fs : float
+        Sample rate, Hz.
+    f_r : float
+        Centre frequency (the spin frequency), Hz.
+    pass_half_width : float, optional
+        Half width of the pass band, Hz.
+    stop_half_width : float, optional
+        Distance of the stop-band edges from ``f_r``, Hz.
+
     Returns
     -------
-    (order + 1,) array -- the taps b_m of ``y(n) = Σ b_m x(n − m)``
+    ndarray, shape (order + 1,)
+        The taps b_m of ``y(n) = Σ b_m x(n − m)``.
     """
     from scipy.signal import firls
 
@@ -412,9 +634,23 @@ def bandpass(x, theta, taps, remove_mean=True):
     is therefore returned only where the filter is full, shifted back by the delay, together with the matching
     ``theta``. The record mean is removed first (ours): g is 3.6·10⁴ A_c, beyond the DC rejection of these filters.
 
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The record, m/s².
+    theta : array_like, shape (N,)
+        Rotor angle of each sample, rad.
+    taps : array_like, shape (order + 1,)
+        FIR taps (:func:`bandpass_firls`).
+    remove_mean : bool, optional
+        Subtract the record mean first.
+
     Returns
     -------
-    y, theta_y : (N - order,) arrays
+    y : ndarray, shape (N - order,)
+        Filtered record, m/s².
+    theta_y : ndarray, shape (N - order,)
+        Its rotor angle, rad.
     """
     from scipy.signal import oaconvolve
 
@@ -432,7 +668,23 @@ def bandpass(x, theta, taps, remove_mean=True):
 
 
 def whole_turns(theta):
-    """Slice of the samples from the first index pulse (θ = 2πk) to the last one: a whole number of turns."""
+    """Slice of the samples from the first index pulse (θ = 2πk) to the last one: a whole number of turns.
+
+    Parameters
+    ----------
+    theta : array_like, shape (N,)
+        Rotor angle of each sample, rad, increasing.
+
+    Returns
+    -------
+    slice
+        The samples from the first pulse up to (not including) the last.
+
+    Examples
+    --------
+    >>> whole_turns(np.linspace(1.0, 20.0, 100))     # pulses at 2π and 6π
+    slice(28, 94, None)
+    """
     theta = validate.array(theta, "theta")
     k0, k1 = np.ceil(theta[0] / (2 * np.pi)), np.floor(theta[-1] / (2 * np.pi))
     if k1 - k0 < 1:
@@ -457,13 +709,22 @@ def demodulate(x, theta, reference="sampled"):
     each reference is made zero-mean over the window (in discrete time a whole number of turns rarely holds a whole
     number of samples, so the sign samples do not sum to exactly zero).
 
-    reference : ``"sampled"`` -- sgn evaluated at each sample (the rectangular rule, eq 4.28 discretised);
-        ``"exact"`` -- the sign function averaged over each sample interval, ``[F(θ + h/2) − F(θ − h/2)]/h`` with
-        ``F = asin(sin θ)`` for sgn(cos) and ``−asin(cos θ)`` for sgn(sin) (ours): no bias from where the index
-        pulse falls between samples.
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The (band-passed) record, m/s².
+    theta : array_like, shape (N,)
+        Rotor angle of each sample, rad.
+    reference : {'sampled', 'exact'}, optional
+        ``"sampled"``: sgn evaluated at each sample (the rectangular rule, eq 4.28 discretised); ``"exact"``: the
+        sign function averaged over each sample interval, ``[F(θ + h/2) − F(θ − h/2)]/h`` with ``F = asin(sin θ)``
+        for sgn(cos) and ``−asin(cos θ)`` for sgn(sin) (ours): no bias from where the index pulse falls between
+        samples.
+
     Returns
     -------
-    float, rad
+    float
+        Heading, rad.
     """
     x, theta = _signal_and_angle(x, theta)
     sl = whole_turns(theta)
@@ -489,9 +750,17 @@ def synchronous_sampling(x, theta):
     sample nearest θ = 2πk + π/2 (the nearest-sample rule is ours: the pulses do not fall on the 512 Hz clock);
     each is averaged over the turns. ``x`` must already be free of its constant part (band-passed).
 
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The band-passed record, m/s².
+    theta : array_like, shape (N,)
+        Rotor angle of each sample, rad.
+
     Returns
     -------
-    float, rad
+    float
+        Heading, rad.
     """
     x, theta = _signal_and_angle(x, theta)
     k = np.arange(np.ceil(theta[0] / (2 * np.pi)), np.floor((theta[-1] - np.pi / 2) / (2 * np.pi)) + 1)
@@ -510,8 +779,23 @@ def synchronous_sampling(x, theta):
 def north_finder(record, order, method="demodulation", reference="sampled", **band):
     """The whole chain on one record: band-pass of ``order`` then a heading read-out (rad).
 
-    method : ``"demodulation"`` (:func:`demodulate` with ``reference``) or ``"sampling"``
-    (:func:`synchronous_sampling`); ``band`` goes to :func:`bandpass_firls`.
+    Parameters
+    ----------
+    record : dict
+        A record of :func:`synthetic_record` (``acc``, ``theta``, ``fs``, ``f_r``).
+    order : int
+        FIR order.
+    method : {'demodulation', 'sampling'}, optional
+        :func:`demodulate` with ``reference``, or :func:`synchronous_sampling`.
+    reference : {'sampled', 'exact'}, optional
+        As :func:`demodulate`.
+    **band
+        Passed to :func:`bandpass_firls` (``pass_half_width``, ``stop_half_width``).
+
+    Returns
+    -------
+    float
+        Heading, rad.
     """
     taps = bandpass_firls(order, record["fs"], record["f_r"], **band)
     y, th = bandpass(record["acc"], record["theta"], taps)
@@ -527,13 +811,19 @@ def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
 
     Parameters
     ----------
-    headings : (S,) array, rad -- the true turntable positions
-    orders : FIR orders
-    seed : int -- record ``s`` uses ``seed + s``
-    **record : passed to :func:`synthetic_record`
+    headings : array_like, shape (S,)
+        The true turntable positions, rad.
+    orders : sequence of int, optional
+        FIR orders.
+    seed : int, optional
+        Record ``s`` uses ``seed + s``.
+    **record
+        Passed to :func:`synthetic_record`.
+
     Returns
     -------
-    (S, len(orders), 3) array, rad -- [demodulation sampled, demodulation exact, synchronous sampling]
+    ndarray, shape (S, len(orders), 3)
+        Headings, rad: [demodulation sampled, demodulation exact, synchronous sampling].
     """
     headings = validate.angles_rad(np.atleast_1d(headings), "headings")
     out = np.empty((len(headings), len(orders), 3))
