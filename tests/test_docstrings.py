@@ -26,6 +26,7 @@ from numpydoc import validate as numpydoc_validate     # pinned in environment.t
 # One module per line, so that engineers adding modules at the same time do not collide.
 DOCUMENTED = [
     "correlation",
+    "dcm",
     "earth",
     "freescale",
     "gfimu",

@@ -84,11 +84,24 @@ def A_matrix(sigma, order="exact"):
 
     Parameters
     ----------
-    sigma : (..., 3) array, rad -- rotation vector over the step, ``σ ≈ ω Δt`` (004 eq 6.5)
-    order : 'exact' or 'second'
+    sigma : array_like, shape (..., 3)
+        Rotation vector over the step, rad, ``σ ≈ ω Δt`` (004 eq 6.5).
+    order : {'exact', 'second'}, optional
+        Exact Rodrigues formula or its second-order expansion.
+
     Returns
     -------
-    (..., 3, 3) array
+    ndarray, shape (..., 3, 3)
+        The increment ``A``.
+
+    Examples
+    --------
+    A quarter turn about z:
+
+    >>> np.round(A_matrix([0.0, 0.0, np.pi / 2]), 6) + 0.0
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
     """
     if order not in ("exact", "second"):
         raise ValueError(f"order must be 'exact' or 'second'; got {order!r}")
@@ -100,10 +113,19 @@ def A_with_gyro_error(A, bias, dt, noise=None):
 
     Parameters
     ----------
-    A : (3, 3) array -- the true increment
-    bias : (3,) array, rad/s -- gyro bias ``b_g``
-    dt : float, s
-    noise : (3,) array, rad/s, optional -- the gyro noise sample ``w_g`` of this step
+    A : array_like, shape (3, 3)
+        The true increment.
+    bias : array_like, shape (3,)
+        Gyro bias ``b_g``, rad/s.
+    dt : float
+        Step, s.
+    noise : array_like, shape (3,), optional
+        The gyro noise sample ``w_g`` of this step, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``Ã``.
     """
     A = validate.array(A, "A", shape=(3, 3))
     b = validate.vectors(bias, "bias")
@@ -113,18 +135,27 @@ def A_with_gyro_error(A, bias, dt, noise=None):
 
 
 def row_propagate(c, A_tilde, bias, dt):
-    """One DCM row through one step, bias removed pseudo-linearly: ``c_k = Ãᵀ c_{k-1} - Δt [c_{k-1}×] b_g``
-    (004 eq 6.11; eq 7.7 for every row of the GPS/INS filter).
+    """One DCM row through one step, bias removed pseudo-linearly: ``c_k = Ãᵀ c_{k-1} - Δt [c_{k-1}×] b_g``.
 
-    Row ``i`` of ``C_k = C_{k-1} A`` is ``Aᵀ c_i``; the true ``A = Ã - [bΔt×]`` (eq 6.10), so
-    ``Aᵀ c = Ãᵀ c + [bΔt×] c = Ãᵀ c - Δt [c×] b`` (a skew matrix changes sign when transposed).
+    004 eq 6.11; eq 7.7 for every row of the GPS/INS filter. Row ``i`` of ``C_k = C_{k-1} A`` is ``Aᵀ c_i``; the true
+    ``A = Ã - [bΔt×]`` (eq 6.10), so ``Aᵀ c = Ãᵀ c + [bΔt×] c = Ãᵀ c - Δt [c×] b`` (a skew matrix changes sign when
+    transposed).
 
     Parameters
     ----------
-    c : (..., 3) array -- DCM row(s), e.g. ``C_bn[0]``
-    A_tilde : (3, 3) array -- increment from the measured (biased) gyro
-    bias : (3,) array, rad/s -- estimated gyro bias
-    dt : float, s -- the time the increment spans
+    c : array_like, shape (..., 3)
+        DCM row(s), e.g. ``C_bn[0]``.
+    A_tilde : array_like, shape (3, 3)
+        Increment from the measured (biased) gyro.
+    bias : array_like, shape (3,)
+        Estimated gyro bias, rad/s.
+    dt : float
+        The time the increment spans, s.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The propagated row(s).
     """
     c = validate.vectors(c, "c")
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3))
@@ -134,10 +165,26 @@ def row_propagate(c, A_tilde, bias, dt):
 
 
 def ahrs_transition(c1, c3, A_tilde, dt):
-    """The 9×9 pseudo-linear transition of the AHRS state ``x = [c1, c3, b_g]`` (004 eqs 6.11-6.12):
+    """The 9×9 pseudo-linear transition of the AHRS state ``x = [c1, c3, b_g]`` (004 eqs 6.11-6.12).
 
     ``F = [[Ãᵀ, 0, -Δt[ĉ1×]], [0, Ãᵀ, -Δt[ĉ3×]], [0, 0, I]]``, so that ``x⁻ = F x̂`` reproduces
     :func:`row_propagate` for both rows and a random-walk bias.
+
+    Parameters
+    ----------
+    c1 : array_like, shape (3,)
+        Current estimate of the first DCM row.
+    c3 : array_like, shape (3,)
+        Current estimate of the third DCM row.
+    A_tilde : array_like, shape (3, 3)
+        Increment from the measured gyro.
+    dt : float
+        The time the increment spans, s.
+
+    Returns
+    -------
+    ndarray, shape (9, 9)
+        ``F``.
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
@@ -155,17 +202,30 @@ def _transition(c1, c3, A_tilde, dt):
 
 
 def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
-    """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part"; the formula is not legible, this is
-    our reconstruction, derived in Lab 09 Part A, and ours in its numbers).
+    """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part").
 
+    The formula is not legible; this is our reconstruction, derived in Lab 09 Part A, and ours in its numbers.
     The gyro noise enters each row as ``-[c×] w_g Δt`` (eq 6.11 with noise), so with white noise of density
     ``N`` (rad/s/√Hz, per-sample σ = N/√Δt): ``Q_{ci,cj} = N² Δt [ĉi×][ĉj×]ᵀ``; the bias random walk adds
     ``q_b Δt I₃`` (``q_b`` in (rad/s)²/s).
 
     Parameters
     ----------
-    c1, c3 : (3,) arrays -- current row estimates
-    dt : float, s; gyro_noise : float, rad/s/√Hz; bias_walk : float, rad/s/√s
+    c1 : array_like, shape (3,)
+        Current estimate of the first DCM row.
+    c3 : array_like, shape (3,)
+        Current estimate of the third DCM row.
+    dt : float
+        Step, s.
+    gyro_noise : float
+        Gyro white noise density, rad/s/√Hz.
+    bias_walk : float
+        Gyro bias random walk, rad/s/√s.
+
+    Returns
+    -------
+    ndarray, shape (9, 9)
+        ``Q``.
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
@@ -205,13 +265,30 @@ def accel_to_seed004(acc):
 
     Parameters
     ----------
-    acc : (..., 3) array -- specific force, any unit (m/s² for the filters here)
+    acc : array_like, shape (..., 3)
+        Specific force, any unit (m/s² for the filters here).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The reading in the thesis' sign, same unit.
     """
     return -validate.vectors(acc, "acc")
 
 
 def accel_measurement_matrix(g=G):
-    """``H_a = [0₃, g I₃, 0₃]`` (3×9): the thesis' accelerometer ``a_b = g c3 + v`` is linear in c3 (004 eq 6.16)."""
+    """``H_a = [0₃, g I₃, 0₃]`` (3×9): the thesis' accelerometer ``a_b = g c3 + v`` is linear in c3 (004 eq 6.16).
+
+    Parameters
+    ----------
+    g : float, optional
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (3, 9)
+        ``H_a``.
+    """
     g = validate.positive(g, "g")
     H = np.zeros((3, 9))
     H[:, 3:6] = g * np.eye(3)                                                        # (004 eq 6.16)
@@ -219,7 +296,23 @@ def accel_measurement_matrix(g=G):
 
 
 def mag_reference(inclination):
-    """Unit geomagnetic field in NED, ``h_n = [cos δ, 0, sin δ]`` (004 eq 6.17; δ the inclination, positive down)."""
+    """Unit geomagnetic field in NED, ``h_n = [cos δ, 0, sin δ]`` (004 eq 6.17; δ the inclination, positive down).
+
+    Parameters
+    ----------
+    inclination : float
+        Inclination δ, rad.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        ``h_n`` (unit vector).
+
+    Examples
+    --------
+    >>> np.round(mag_reference(np.radians(60.0)), 4)
+    array([0.5  , 0.   , 0.866])
+    """
     d = validate.angles_rad(inclination, "inclination", limit=np.pi / 2 + 1e-12)
     return np.stack([np.cos(d), np.zeros_like(d), np.sin(d)], -1)
 
@@ -229,6 +322,16 @@ def mag_measurement_matrix(inclination):
 
     There is no ``c2`` term because ``h_E = 0``; neither gravity nor the field has an east component, which is why
     the AHRS estimates rows 1 and 3 only.
+
+    Parameters
+    ----------
+    inclination : float
+        Inclination δ, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 9)
+        ``H_m``.
     """
     hN, _, hD = mag_reference(float(validate.array(inclination, "inclination")))
     H = np.zeros((3, 9))
@@ -240,10 +343,27 @@ def mag_measurement_matrix(inclination):
 def orthogonality_pseudo_measurement(c1, c3):
     """The constraints ``|c1|² = 1``, ``|c3|² = 1``, ``c1·c3 = 0`` as a measurement (004 eqs 6.24-6.26, reconstructed).
 
+    Parameters
+    ----------
+    c1 : array_like, shape (3,)
+        Estimate of the first DCM row.
+    c3 : array_like, shape (3,)
+        Estimate of the third DCM row.
+
     Returns
     -------
-    residual : (3,) array -- ``z - h_c(x̂)`` with ``z = [1, 1, 0]``, ``h_c = [|c1|², |c3|², c1·c3]``
-    H_c : (3, 9) array -- ``[[2c1ᵀ, 0, 0], [0, 2c3ᵀ, 0], [c3ᵀ, c1ᵀ, 0]]``
+    residual : ndarray, shape (3,)
+        ``z - h_c(x̂)`` with ``z = [1, 1, 0]``, ``h_c = [|c1|², |c3|², c1·c3]``.
+    H_c : ndarray, shape (3, 9)
+        ``[[2c1ᵀ, 0, 0], [0, 2c3ᵀ, 0], [c3ᵀ, c1ᵀ, 0]]``.
+
+    Examples
+    --------
+    A first row 10 % too long gives a residual of -0.21 on ``|c1|²``:
+
+    >>> residual, H_c = orthogonality_pseudo_measurement([1.1, 0.0, 0.0], [0.0, 0.0, 1.0])
+    >>> np.round(residual, 3) + 0.0
+    array([-0.21,  0.  ,  0.  ])
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
@@ -268,8 +388,19 @@ def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
 
     Parameters
     ----------
-    k : int or array -- update count (0 at the first update)
-    R_i, R_ss : float >= 0; rho : float in (0, 1)
+    k : int or array_like of int
+        Update count (0 at the first update).
+    R_i : float
+        Initial variance (>= 0).
+    R_ss : float
+        Steady variance (>= 0).
+    rho : float, optional
+        Decay per update, in (0, 1).
+
+    Returns
+    -------
+    float or ndarray
+        ``R_c,k``, of the shape of ``k``.
     """
     k = validate.array(k, "k")
     if np.any(k < 0):
@@ -287,14 +418,38 @@ def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
 
 
 def rows_to_dcm(c1, c3):
-    """``C = [c1; c3 × c1; c3]`` from the two estimated rows (004 eq 6.25: ``c2 = c3 × c1``). Shape (..., 3, 3)."""
+    """``C = [c1; c3 × c1; c3]`` from the two estimated rows (004 eq 6.25: ``c2 = c3 × c1``).
+
+    Parameters
+    ----------
+    c1 : array_like, shape (..., 3)
+        First DCM row.
+    c3 : array_like, shape (..., 3)
+        Third DCM row.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``C`` (orthonormal only if the rows are).
+    """
     c1 = validate.vectors(c1, "c1")
     c3 = validate.vectors(c3, "c3")
     return np.stack(np.broadcast_arrays(c1, np.cross(c3, c1), c3), -2)
 
 
 def orthonormalize(C):
-    """Nearest rotation matrix (SVD, ``U Vᵀ``) -- for read-out only; the filters keep the raw elements (ours)."""
+    """Nearest rotation matrix (SVD, ``U Vᵀ``) -- for read-out only; the filters keep the raw elements (ours).
+
+    Parameters
+    ----------
+    C : array_like, shape (..., 3, 3)
+        A near-rotation matrix.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The nearest rotation matrix.
+    """
     C = validate.matrices(C, "C")
     U, _, Vt = np.linalg.svd(C)
     R = U @ Vt
@@ -315,10 +470,15 @@ def level_and_compass(acc_b, mag_b):
 
     Parameters
     ----------
-    acc_b : (..., 3) array -- thesis-sign accelerometer; mag_b : (..., 3) array, any unit
+    acc_b : array_like, shape (..., 3)
+        Accelerometer in the thesis' sign, any unit.
+    mag_b : array_like, shape (..., 3)
+        Magnetometer, any unit.
+
     Returns
     -------
-    (..., 3) array -- ``[roll, pitch, yaw]``
+    ndarray, shape (..., 3)
+        ``[roll, pitch, yaw]``, rad.
     """
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
@@ -334,8 +494,23 @@ def level_and_compass(acc_b, mag_b):
 
 
 def inclination_from(acc_b, mag_b):
-    """Geomagnetic inclination δ (rad, positive down) from an undisturbed static sample: ``sin δ = ĥ_b · ĉ3``,
-    ``ĉ3 = a_b/|a_b|`` in the thesis sign (004 §6.4: "transforming an undisturbed measurement")."""
+    """Geomagnetic inclination δ (rad, positive down) from an undisturbed static sample.
+
+    ``sin δ = ĥ_b · ĉ3``, ``ĉ3 = a_b/|a_b|`` in the thesis sign (004 §6.4: "transforming an undisturbed
+    measurement").
+
+    Parameters
+    ----------
+    acc_b : array_like, shape (..., 3)
+        Accelerometer in the thesis' sign, any unit.
+    mag_b : array_like, shape (..., 3)
+        Magnetometer, any unit.
+
+    Returns
+    -------
+    float or ndarray, shape (...)
+        Inclination δ, rad.
+    """
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
     s = np.sum(a * m, -1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(m, axis=-1))
@@ -350,7 +525,22 @@ def trusted_mask(deviation, tol, hold):
 
     Parameters
     ----------
-    deviation : (N,) array; tol : float > 0; hold : int >= 1
+    deviation : array_like, shape (N,)
+        Deviation of each sample, e.g. ``|a| - g`` in m/s².
+    tol : float
+        Tolerance (> 0), unit of ``deviation``.
+    hold : int
+        Samples the test must have held (>= 1).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        Where the sensor is trusted.
+
+    Examples
+    --------
+    >>> trusted_mask(np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]), tol=0.5, hold=2)
+    array([False,  True, False, False,  True,  True])
     """
     d = validate.array(deviation, "deviation")
     if d.ndim != 1:
@@ -375,7 +565,56 @@ def trusted_mask(deviation, tol, hold):
 class AhrsTuning:
     """Every number of the AHRS; **all ours** -- the thesis gives the structure but no values.
 
-    Defaults are for an Xsens-MTi-grade unit (004 Table 6.1) in hand motion.
+    Defaults are for an Xsens-MTi-grade unit (004 Table 6.1) in hand motion. Each parameter is kept as the
+    attribute of the same name (the dataclass is frozen); the comments beside the fields say more.
+
+    Parameters
+    ----------
+    gyro_noise : float, optional
+        Gyro white noise density, rad/s/√Hz (Table 6.1: 0.1 °/s/√Hz).
+    bias_walk : float, optional
+        Gyro-bias random walk, rad/s/√s.
+    acc_sigma : float, optional
+        Accelerometer standard deviation when trusted, m/s² -- covers sensor noise *and* the hand's own
+        acceleration.
+    acc_sigma_untrusted : float, optional
+        The same when not trusted, m/s².
+    acc_tol : float, optional
+        Trust the accelerometer when ``||a| - g| < acc_tol`` (m/s²) has held for ``hold`` seconds.
+    mag_sigma : float, optional
+        Normalised-magnetometer standard deviation when trusted (the field normalised to ``|h| = 1``).
+    mag_sigma_untrusted : float, optional
+        The same when not trusted.
+    mag_tol : float, optional
+        Trust the magnetometer when ``||h| - 1| < mag_tol`` has held for ``hold`` seconds.
+    hold : float, optional
+        Hold time of the trust tests, s.
+    R_i : float, optional
+        Initial orthogonality pseudo-measurement variance (004 eq 6.27).
+    R_ss : float, optional
+        Its steady value; 1e-4 keeps ``|c1|``, ``|c3|`` within 1e-3 of 1 (1e-8 makes the filter overconfident,
+        Lab 09, Part F).
+    rho : float, optional
+        Its decay per update (the thesis').
+    sigma_c0 : float, optional
+        Initial standard deviation of the DCM elements.
+    sigma_b0 : float, optional
+        Initial standard deviation of the gyro bias, rad/s.
+    bias_sigma_rest : float or None, optional
+        Rest bias measurement (not the thesis'; VQF's rest bias estimation, Laidig & Seel 2023): while
+        :func:`fusionlab.sensors.rest_detect` finds the sensor at rest, the low-passed gyro measures the bias with
+        this standard deviation, rad/s. None: off (the thesis).
+    dip_tol : float or None, optional
+        Magnetic disturbance by the dip angle (not the thesis'; VQF's): the magnetometer is trusted only while its
+        dip is within ``dip_tol`` (rad) of a running reference. None: off (the thesis).
+    dip_tau : float, optional
+        Time constant of the dip reference, s.
+    acc_lp_tau : float or None, optional
+        Time constant, s, of the accelerometer low-passed in an almost inertial frame (not the thesis'; the idea is
+        VQF's). None: off, the raw reading (the thesis).
+    acc_lp_bias_gate : float, optional
+        The low-passed reading is used only while the bias standard deviation of the filter (root of the trace of
+        its bias covariance) is below this, rad/s.
     """
     #: gyro white noise density, rad/s/√Hz (Table 6.1: 0.1 °/s/√Hz)
     gyro_noise: float = np.radians(0.1)
@@ -459,10 +698,25 @@ class DcmAhrs:
 
     Parameters
     ----------
-    C0 : (3, 3) array -- initial ``C_bn``; bias0 : (3,) array, rad/s
-    inclination : float, rad -- geomagnetic inclination (positive down)
-    dt : float, s -- time between updates (the hold times of the trust tests are counted in updates)
-    tuning : :class:`AhrsTuning`
+    C0 : array_like, shape (3, 3)
+        Initial ``C_bn``.
+    inclination : float
+        Geomagnetic inclination, rad (positive down).
+    dt : float
+        Time between updates, s (the hold times of the trust tests are counted in updates).
+    bias0 : array_like, shape (3,), optional
+        Initial gyro bias, rad/s.
+    tuning : AhrsTuning, optional
+        The filter's numbers.
+    g : float, optional
+        Gravity, m/s².
+
+    Attributes
+    ----------
+    x : ndarray, shape (9,)
+        The state ``[c1, c3, b_g]``.
+    P : ndarray, shape (9, 9)
+        Its covariance.
     """
 
     def __init__(self, C0, inclination, dt, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(), g=G):
@@ -484,23 +738,34 @@ class DcmAhrs:
 
     @property
     def c1(self):
+        """First row of ``C_bn`` in the state (raw, not orthonormalised), shape (3,)."""
         return self.x[0:3]
 
     @property
     def c3(self):
+        """Third row of ``C_bn`` in the state (raw, not orthonormalised), shape (3,)."""
         return self.x[3:6]
 
     @property
     def bias(self):
+        """Gyro bias estimate, rad/s, shape (3,)."""
         return self.x[6:9]
 
     @property
     def C_bn(self):
-        """Orthonormalised read-out of ``[c1; c3 × c1; c3]`` (004 eq 6.25)."""
+        """Orthonormalised read-out of ``[c1; c3 × c1; c3]`` (004 eq 6.25), shape (3, 3)."""
         return orthonormalize(rows_to_dcm(self.c1, self.c3))
 
     def predict(self, A_tilde, dt):
-        """Time update with the increment ``Ã`` computed from the *measured* gyro over ``dt`` (004 eqs 6.11-6.13)."""
+        """Time update with the increment ``Ã`` computed from the *measured* gyro over ``dt`` (004 eqs 6.11-6.13).
+
+        Parameters
+        ----------
+        A_tilde : array_like, shape (3, 3)
+            The increment ``Ã``.
+        dt : float
+            The time it spans, s.
+        """
         t = self.tuning
         F = ahrs_transition(self.c1, self.c3, A_tilde, dt)                           # (004 eqs 6.11-6.12)
         Q = ahrs_process_noise(self.c1, self.c3, dt, t.gyro_noise, t.bias_walk)      # (004 eq 6.13)
@@ -512,14 +777,21 @@ class DcmAhrs:
 
         Parameters
         ----------
-        acc_b : (3,) array, m/s² -- thesis sign, ``+g c3`` at rest (:func:`accel_to_seed004`)
-        mag_b : (3,) array or None -- magnetometer normalised to the local field strength (``|h| ≈ 1``); None: no
-            magnetometer (the 6D filter of :func:`run_ahrs`)
-        acc_trusted, mag_trusted : bool or None -- override the built-in hold-time test
-        bias_at_rest : (3,) array, rad/s, or None -- the low-passed gyro when the sensor is at rest (ours, after
-            VQF; used when ``tuning.bias_sigma_rest`` is set)
-        acc_lp : (3,) array, m/s², or None -- the accelerometer low-passed in the almost inertial frame (ours,
-            after VQF; ``tuning.acc_lp_tau``): the measurement then, while ``acc_b`` still sets the trust test
+        acc_b : array_like, shape (3,)
+            Accelerometer in the thesis' sign, m/s², ``+g c3`` at rest (:func:`accel_to_seed004`).
+        mag_b : array_like, shape (3,), or None
+            Magnetometer normalised to the local field strength (``|h| ≈ 1``); None: no magnetometer (the 6D filter
+            of :func:`run_ahrs`).
+        acc_trusted : bool or None, optional
+            Override the built-in hold-time test of the accelerometer.
+        mag_trusted : bool or None, optional
+            Override the built-in hold-time test of the magnetometer.
+        bias_at_rest : array_like, shape (3,), or None, optional
+            The low-passed gyro when the sensor is at rest, rad/s (ours, after VQF; used when
+            ``tuning.bias_sigma_rest`` is set).
+        acc_lp : array_like, shape (3,), or None, optional
+            The accelerometer low-passed in the almost inertial frame, m/s² (ours, after VQF; ``tuning.acc_lp_tau``):
+            the measurement then, while ``acc_b`` still sets the trust test.
         """
         t = self.tuning
         a = np.asarray(acc_b, float)
@@ -562,8 +834,19 @@ class DcmAhrs:
         self.k += 1
 
     def step(self, gyr, acc_b, mag_b):
-        """One sample: predict with ``Ã = A(ω̃ Δt)`` (exact), then update (``Δt`` = ``self.dt``); with
-        ``tuning.bias_sigma_rest`` set, a :class:`fusionlab.sensors.RestDetector` says whether it is at rest."""
+        """One sample: predict with ``Ã = A(ω̃ Δt)`` (exact), then update (``Δt`` = ``self.dt``).
+
+        With ``tuning.bias_sigma_rest`` set, a :class:`fusionlab.sensors.RestDetector` says whether it is at rest.
+
+        Parameters
+        ----------
+        gyr : array_like, shape (3,)
+            Measured angular rate, rad/s.
+        acc_b : array_like, shape (3,)
+            Accelerometer in the thesis' sign, m/s².
+        mag_b : array_like, shape (3,), or None
+            Normalised magnetometer, or None for none.
+        """
         bias_at_rest = None
         if self.tuning.bias_sigma_rest is not None:
             if self.rest is None:
@@ -613,24 +896,40 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
 
     Parameters
     ----------
-    gyr : (N, 3) array, rad/s
-    acc_b : (N, 3) array, m/s² -- thesis sign (+g c3 at rest; :func:`accel_to_seed004` converts a real reading)
-    mag_b : (N, 3) array or None -- normalised to the local field strength (|h| ≈ 1 when undisturbed). ``None``
-        runs the AHRS **without the magnetometer** (6D, ours: the thesis' filter always has one): only the
-        accelerometer and orthogonality rows update the state, so ``c3`` and the two horizontal components of the
-        gyro bias are observed; ``c1`` is carried along (gyro-propagated, held orthonormal to ``c3`` by the
-        pseudo-measurements) only to give the read-out a heading, which starts at 0 and drifts
-    fs : float, Hz
-    inclination : float, rad, optional -- default: from the first ``init_seconds`` (:func:`inclination_from`)
-    C0 : (3, 3) array, optional -- default: levelling + tilt-compensated compass over the first ``init_seconds``
-    init_seconds : float >= 0, s -- the mean of that many seconds of data sets the defaults above (0: the first
-        sample alone, so the output at sample k uses no later sample)
-    bias0 : (3,) rad/s; tuning : :class:`AhrsTuning`; update_every : int >= 1
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s.
+    acc_b : array_like, shape (N, 3)
+        Accelerometer in the thesis' sign, m/s² (+g c3 at rest; :func:`accel_to_seed004` converts a real reading).
+    mag_b : array_like, shape (N, 3), or None
+        Magnetometer normalised to the local field strength (|h| ≈ 1 when undisturbed). ``None`` runs the AHRS
+        **without the magnetometer** (6D, ours: the thesis' filter always has one): only the accelerometer and
+        orthogonality rows update the state, so ``c3`` and the two horizontal components of the gyro bias are
+        observed; ``c1`` is carried along (gyro-propagated, held orthonormal to ``c3`` by the pseudo-measurements)
+        only to give the read-out a heading, which starts at 0 and drifts.
+    fs : float
+        Sample rate, Hz.
+    inclination : float, optional
+        Inclination, rad; default: from the first ``init_seconds`` (:func:`inclination_from`).
+    C0 : array_like, shape (3, 3), optional
+        Initial ``C_bn``; default: levelling + tilt-compensated compass over the first ``init_seconds``.
+    bias0 : array_like, shape (3,), optional
+        Initial gyro bias, rad/s.
+    tuning : AhrsTuning, optional
+        The filter's numbers.
+    update_every : int, optional
+        Samples per measurement update (>= 1).
+    init_seconds : float, optional
+        Seconds (>= 0) of data whose mean sets the defaults above (0: the first sample alone, so the output at
+        sample k uses no later sample).
+    g : float, optional
+        Gravity, m/s².
+
     Returns
     -------
-    dict -- ``C_bn`` (N, 3, 3) orthonormal attitude after each sample; ``q`` (N, 4) body→NED; ``bias`` (N, 3)
-    rad/s (the latest estimate); ``c1``, ``c3`` (nb, 3) raw rows after each update; ``P_diag`` (nb, 9);
-    ``t_update`` (nb,) s; ``inclination`` rad; ``acc_trusted``, ``mag_trusted`` (N,) bool
+    dict
+        ``C_bn`` (N, 3, 3) orthonormal attitude after each sample; ``q`` (N, 4) body→NED; ``bias`` (N, 3) rad/s
+        (the latest estimate); ``c1``, ``c3`` (nb, 3) raw rows after each update; ``P_diag`` (nb, 9);
+        ``t_update`` (nb,) s; ``inclination`` rad; ``acc_trusted``, ``mag_trusted`` (N,) bool.
     """
     gyr = validate.samples(gyr, "gyr")
     acc_b = validate.samples(acc_b, "acc_b")
@@ -798,7 +1097,25 @@ def ins_propagate(x, acc, A_tilde, dt, g=G):
     """The direct form of the 21-state mean propagation (004 eqs 7.7-7.11), cheaper than ``F x + g_c``.
 
     ``c_i ← Ãᵀ c_i - Δt[c_i×] b_g``; ``r ← r + v Δt``; ``v ← v + C (ã - b_a) Δt + g_n Δt`` with the *previous* C;
-    biases unchanged. ``acc`` is the measured specific force (m/s²), ``A_tilde`` the increment of the measured gyro.
+    biases unchanged.
+
+    Parameters
+    ----------
+    x : array_like, shape (21,)
+        Current state (layout :data:`INS_SLICES`).
+    acc : array_like, shape (3,)
+        Measured specific force ã, m/s².
+    A_tilde : array_like, shape (3, 3)
+        Increment of the measured gyro.
+    dt : float
+        Step, s.
+    g : float, optional
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (21,)
+        The predicted state.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
@@ -808,16 +1125,27 @@ def ins_propagate(x, acc, A_tilde, dt, g=G):
 
 
 def ins_transition(x, acc, A_tilde, dt):
-    """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eqs 7.12-7.14, reconstructed):
-    ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows.
+    """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eqs 7.12-7.14, reconstructed).
 
+    ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows.
     Blocks: ``F_{ci,ci} = Ãᵀ``, ``F_{ci,bg} = -Δt[ĉi×]``, ``F_{r,v} = Δt I``, ``F_{v,c} = Δt blkdiag(ãᵀ, ãᵀ, ãᵀ)``
     (``C ã`` is linear in the nine DCM elements), ``F_{v,ba} = -Δt Ĉ``; identity elsewhere on the diagonal.
 
     Parameters
     ----------
-    x : (21,) array -- current estimate; acc : (3,) array, m/s² -- measured specific force ã;
-    A_tilde : (3, 3) array; dt : float, s
+    x : array_like, shape (21,)
+        Current estimate.
+    acc : array_like, shape (3,)
+        Measured specific force ã, m/s².
+    A_tilde : array_like, shape (3, 3)
+        Increment of the measured gyro.
+    dt : float
+        Step, s.
+
+    Returns
+    -------
+    ndarray, shape (21, 21)
+        ``F(x̂)``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
@@ -844,7 +1172,28 @@ def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_wal
 
     DCM rows: ``N_g² Δt [ĉi×][ĉj×]ᵀ`` (the gyro noise through eq 7.7); velocity ``N_a² Δt I`` (``C w_a Δt``
     with C orthonormal); biases random walks; an optional position noise density ``pos_noise`` (m/√s).
-    Densities: rad/s/√Hz, m/s²/√Hz, rad/s/√s, m/s²/√s.
+
+    Parameters
+    ----------
+    x : array_like, shape (21,)
+        Current estimate.
+    dt : float
+        Step, s.
+    gyro_noise : float
+        Gyro noise density, rad/s/√Hz.
+    acc_noise : float
+        Accelerometer noise density, m/s²/√Hz.
+    gyro_bias_walk : float
+        Gyro bias random walk, rad/s/√s.
+    acc_bias_walk : float
+        Accelerometer bias random walk, m/s²/√s.
+    pos_noise : float, optional
+        Position noise density, m/√s.
+
+    Returns
+    -------
+    ndarray, shape (21, 21)
+        ``Q``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     dt = validate.positive(dt, "dt")
@@ -870,7 +1219,13 @@ def _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_nois
 
 
 def gps_measurement_matrix():
-    """Loosely coupled GPS position + velocity: ``H = [0_{6×12}, I₆, 0_{6×3}]`` (004 eq 7.17). Shape (6, 21)."""
+    """Loosely coupled GPS position + velocity: ``H = [0_{6×12}, I₆, 0_{6×3}]`` (004 eq 7.17).
+
+    Returns
+    -------
+    ndarray, shape (6, 21)
+        ``H``.
+    """
     H = np.zeros((6, 21))
     H[:, 12:18] = np.eye(6)
     return H
@@ -878,7 +1233,27 @@ def gps_measurement_matrix():
 
 @dataclass(frozen=True)
 class InsTuning:
-    """Noise values of both GPS/INS filters. Those marked *Table 7.1* are the thesis'; the rest are ours."""
+    """Noise values of both GPS/INS filters. Those marked *Table 7.1* are the thesis'; the rest are ours.
+
+    Each parameter is kept as the attribute of the same name (the dataclass is frozen).
+
+    Parameters
+    ----------
+    gyro_noise : float, optional
+        Gyro angle random walk, rad/s/√Hz (Table 7.1: 3 °/√h).
+    acc_noise : float, optional
+        Accelerometer white noise, m/s²/√Hz (Table 7.1: 100 µg/√Hz).
+    gyro_bias_walk : float, optional
+        Gyro bias random walk, rad/s/√s (ours).
+    acc_bias_walk : float, optional
+        Accelerometer bias random walk, m/s²/√s (ours).
+    pos_noise : float, optional
+        Position process noise, m/√s (ours; absorbs the first-order mechanization error).
+    sigma_pos : float, optional
+        GPS position noise, m (Table 7.1: 3 m).
+    sigma_vel : float, optional
+        GPS velocity noise, m/s (Table 7.1: 0.5 m/s).
+    """
     #: gyro angle random walk, rad/s/√Hz (Table 7.1: 3 °/√h)
     gyro_noise: float = np.radians(3.0) / 60.0
     #: accelerometer white noise, m/s²/√Hz (Table 7.1: 100 µg/√Hz)
@@ -916,13 +1291,34 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G, static=None,
 
     Parameters
     ----------
-    gyr : (N, 3) rad/s; acc : (N, 3) m/s², specific force; gps : (N, 6) -- [r_NED m, v_NED m/s] after sample k, NaN
-    where no fix; fs : Hz; x0 : (21,) initial state; P0 : (21, 21) or (21,) diagonal
-    static : (N,) bool, optional -- samples detected as standing still; acc_sigma : m/s²; still_speed : m/s
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s.
+    acc : array_like, shape (N, 3)
+        Specific force, m/s².
+    gps : array_like, shape (N, 6)
+        ``[r_NED (m), v_NED (m/s)]`` after sample k, NaN where there is no fix.
+    fs : float
+        Sample rate, Hz.
+    x0 : array_like, shape (21,)
+        Initial state (layout :data:`INS_SLICES`).
+    P0 : array_like, shape (21, 21) or (21,)
+        Its covariance, or the diagonal of it.
+    tuning : InsTuning, optional
+        Noise values.
+    g : float, optional
+        Gravity, m/s².
+    static : array_like of bool, shape (N,), optional
+        Samples detected as standing still.
+    acc_sigma : float, optional
+        Standard deviation of the static accelerometer update, m/s².
+    still_speed : float, optional
+        Largest predicted speed for the static update, m/s.
+
     Returns
     -------
-    dict -- ``x`` (N, 21) after each sample, ``sd`` (N, 21) standard deviations, ``C_bn`` (N, 3, 3) orthonormal,
-    ``euler`` (N, 3) rad, ``r``, ``v``, ``b_g``, ``b_a`` (N, 3)
+    dict of ndarray
+        ``x`` (N, 21) after each sample, ``sd`` (N, 21) standard deviations, ``C_bn`` (N, 3, 3) orthonormal,
+        ``euler`` (N, 3) rad, ``r``, ``v``, ``b_g``, ``b_a`` (N, 3).
     """
     gyr = validate.samples(gyr, "gyr")
     acc = validate.samples(acc, "acc")
@@ -1007,11 +1403,29 @@ def _ins_propagate_raw(x, acc, A_tilde, dt, g):
 
 
 def euler_ins_fx(x, dt, gyr, acc, g=G):
-    """Process model of the 15-state Euler-angle UKF (004 eq 7.23, not legible in our copy; our reconstruction,
-    docs/derivations.md §5):
-    ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
+    """Process model of the 15-state Euler-angle UKF (004 eq 7.23, not legible in our copy; our reconstruction).
 
+    Derived in docs/derivations.md §5:
+    ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
     State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step.
+
+    Parameters
+    ----------
+    x : array_like, shape (15,)
+        State (layout :data:`UKF_SLICES`).
+    dt : float
+        Step, s.
+    gyr : array_like, shape (3,)
+        Measured angular rate ω̃, rad/s.
+    acc : array_like, shape (3,)
+        Measured specific force ã, m/s².
+    g : float, optional
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (15,)
+        The predicted state.
     """
     r1, r2, r3, v1, v2, v3, phi, th, psi, ba1, ba2, ba3, bg1, bg2, bg3 = x.tolist()
     sf, cf, st, ct, sp, cp = _m.sin(phi), _m.cos(phi), _m.sin(th), _m.cos(th), _m.sin(psi), _m.cos(psi)
@@ -1030,12 +1444,24 @@ def euler_ins_fx(x, dt, gyr, acc, g=G):
 
 
 def sigma_points_2n(x, P):
-    """The thesis' 2n sigma points and weights (004 eqs 7.24-7.26, after Simon): ``x ± (√(nP))_iᵀ``, i = 1…n, with
-    ``√`` the upper Cholesky factor (Matlab ``chol``) and ``(·)_i`` its i-th row; every weight ``1/(2n)``.
+    """The thesis' 2n sigma points and weights (004 eqs 7.24-7.26, after Simon).
+
+    ``x ± (√(nP))_iᵀ``, i = 1…n, with ``√`` the upper Cholesky factor (Matlab ``chol``) and ``(·)_i`` its i-th
+    row; every weight ``1/(2n)``.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Mean.
+    P : array_like, shape (n, n)
+        Covariance.
 
     Returns
     -------
-    sigmas : (2n, n) array -- ``x + rows`` first, then ``x - rows``; weights : (2n,) array
+    sigmas : ndarray, shape (2n, n)
+        ``x + rows`` first, then ``x - rows``.
+    weights : ndarray, shape (2n,)
+        All ``1/(2n)``.
     """
     from scipy.linalg import cholesky
     x = validate.array(x, "x")
@@ -1065,7 +1491,31 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=G, engine="fi
     ``engine='plain'``: the same equations written out -- 2n points, one Cholesky factor per step, no unused sigma
     points: the cost of the method, not of the tool. Both give the same estimates (to rounding).
 
-    Parameters and returns as :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
+    Parameters
+    ----------
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s.
+    acc : array_like, shape (N, 3)
+        Specific force, m/s².
+    gps : array_like, shape (N, 6)
+        ``[r_NED (m), v_NED (m/s)]`` after sample k, NaN where there is no fix.
+    fs : float
+        Sample rate, Hz.
+    x0 : array_like, shape (15,)
+        Initial state (layout :data:`UKF_SLICES`).
+    P0 : array_like, shape (15, 15) or (15,)
+        Its covariance, or the diagonal of it.
+    tuning : InsTuning, optional
+        Noise values.
+    g : float, optional
+        Gravity, m/s².
+    engine : {'filterpy', 'plain'}, optional
+        Which implementation (see above).
+
+    Returns
+    -------
+    dict of ndarray
+        As :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
     """
     from filterpy.kalman import JulierSigmaPoints, UnscentedKalmanFilter, update
     gyr = validate.samples(gyr, "gyr")
