@@ -36,16 +36,22 @@ __all__ = ["TriadFit", "fit_triad", "apply_triad", "observation_matrix",
 
 @dataclass(frozen=True)
 class TriadFit:
-    """Result of :func:`fit_triad`.
+    """Result of :func:`fit_triad`; each field is an attribute of the same name.
 
-    Attributes
+    Parameters
     ----------
-    M : (3, 3) array -- scale/misalignment matrix
-    b : (3,) array -- bias, in the unit of the readings
-    theta : (12,) array -- ``M`` row by row, then ``b`` (seed 004 eq 3.12)
-    cov : (12, 12) array -- covariance of ``theta`` from the residual variance (``nan`` when there is no redundancy)
-    residual_rms : float -- RMS of ``z − (M a + b)`` over all axes and positions
-    rank : int -- rank of the stacked observation matrix (12 when every parameter is observable)
+    M : ndarray, shape (3, 3)
+        Scale/misalignment matrix (dimensionless).
+    b : ndarray, shape (3,)
+        Bias, in the unit of the readings.
+    theta : ndarray, shape (12,)
+        ``M`` row by row, then ``b`` (seed 004 eq 3.12).
+    cov : ndarray, shape (12, 12)
+        Covariance of ``theta`` from the residual variance (``nan`` when there is no redundancy).
+    residual_rms : float
+        RMS of ``z − (M a + b)`` over all axes and positions, unit of the readings.
+    rank : int
+        Rank of the stacked observation matrix (12 when every parameter is observable).
     """
 
     M: np.ndarray
@@ -57,7 +63,7 @@ class TriadFit:
 
     @property
     def std(self):
-        """Standard error of each of the 12 parameters (``sqrt(diag(cov))``)."""
+        """ndarray, shape (12,): standard error of each of the 12 parameters (``sqrt(diag(cov))``)."""
         return np.sqrt(np.diag(self.cov))
 
 
@@ -65,6 +71,16 @@ def observation_matrix(reference):
     """Stacked observation matrix ``O`` of seed 004 eqs (3.13)–(3.14): (3N, 12) for N reference vectors.
 
     Row block ``i`` is ``[[aᵀ, 0, 0, 1, 0, 0], [0, aᵀ, 0, 0, 1, 0], [0, 0, aᵀ, 0, 0, 1]]`` with ``a = reference[i]``.
+
+    Parameters
+    ----------
+    reference : array_like, shape (N, 3)
+        The known input of each position (any unit, e.g. m/s²).
+
+    Returns
+    -------
+    ndarray, shape (3N, 12)
+        The stacked observation matrix.
     """
     a = validate.samples(reference, "reference")
     n = len(a)
@@ -91,16 +107,36 @@ def fit_triad(reference, measured):
 
     Parameters
     ----------
-    reference : (N, 3) array -- the known input of each position (e.g. gravity's specific force in the body frame)
-    measured : (N, 3) array -- the triad's (averaged) reading in each position, same unit
+    reference : array_like, shape (N, 3)
+        The known input of each position (e.g. gravity's specific force in the body frame, m/s²).
+    measured : array_like, shape (N, 3)
+        The triad's (averaged) reading in each position, same unit.
+
     Returns
     -------
     TriadFit
+        ``M``, ``b``, the 12 parameters with their covariance, the residual and the rank.
+
     Raises
     ------
     ValueError
-        if fewer than 4 positions are given, the lengths differ, a value is not finite, or the positions leave
+        If fewer than 4 positions are given, the lengths differ, a value is not finite, or the positions leave
         the 12 parameters unobservable (the message says how many axes they span).
+
+    Examples
+    --------
+    Six positions determine the 12 parameters of a triad exactly when the readings are noise-free:
+
+    >>> import numpy as np
+    >>> from fusionlab import calibration
+    >>> M = np.array([[1.02, 0.01, 0.0], [0.0, 0.98, 0.02], [0.0, 0.0, 1.01]])
+    >>> b = np.array([0.1, -0.2, 0.05])                              # m/s²
+    >>> a = calibration.six_positions()
+    >>> fit = calibration.fit_triad(a, a @ M.T + b)
+    >>> np.round(fit.M, 9) + 0.0, np.round(fit.b, 9), fit.rank
+    (array([[1.02, 0.01, 0.  ],
+           [0.  , 0.98, 0.02],
+           [0.  , 0.  , 1.01]]), array([ 0.1 , -0.2 ,  0.05]), 12)
     """
     a = validate.samples(reference, "reference")
     z = validate.samples(measured, "measured")
@@ -123,7 +159,20 @@ def fit_triad(reference, measured):
 
 
 def apply_triad(fit, measured):
-    """Invert the triad model: the corrected input ``a = M⁻¹ (z − b)`` for each reading ``z`` (N, 3)."""
+    """Invert the triad model: the corrected input ``a = M⁻¹ (z − b)`` for each reading ``z``.
+
+    Parameters
+    ----------
+    fit : TriadFit
+        The calibration (:func:`fit_triad`).
+    measured : array_like, shape (N, 3)
+        Raw readings ``z``, unit of the fit.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Corrected inputs ``a``, same unit.
+    """
     z = validate.samples(measured, "measured")
     return np.linalg.solve(fit.M, (z - fit.b).T).T
 
@@ -135,7 +184,29 @@ def apply_triad(fit, measured):
 
 def six_positions(g=9.80665):
     """Reference specific force of the six-position test, (6, 3): ``+g`` then ``−g`` on x, y, z in turn (the
-    thesis' P1-P6, seed 004 §3.4). The axis that points up reads ``+g``."""
+    thesis' P1-P6, seed 004 §3.4). The axis that points up reads ``+g``.
+
+    Parameters
+    ----------
+    g : float, default 9.80665
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (6, 3)
+        The six reference specific forces, m/s².
+
+    Examples
+    --------
+    >>> from fusionlab import calibration
+    >>> calibration.six_positions(g=1.0) + 0.0                  # + 0.0 prints -0.0 as 0.0
+    array([[ 1.,  0.,  0.],
+           [-1.,  0.,  0.],
+           [ 0.,  1.,  0.],
+           [ 0., -1.,  0.],
+           [ 0.,  0.,  1.],
+           [ 0.,  0., -1.]])
+    """
     g = validate.positive(g, "g")
     return g * np.concatenate([np.eye(3), -np.eye(3)])[[0, 3, 1, 4, 2, 5]]
 
@@ -148,10 +219,15 @@ def gyro_bias_from_rest(gyr):
 
     Parameters
     ----------
-    gyr : (N, 3) rad/s -- readings while the sensor does not rotate (N >= 2)
+    gyr : array_like, shape (N, 3)
+        Readings while the sensor does not rotate (N >= 2), rad/s.
+
     Returns
     -------
-    (bias, stderr) : two (3,) arrays, rad/s
+    bias : ndarray, shape (3,)
+        Mean reading, rad/s.
+    stderr : ndarray, shape (3,)
+        Its standard error ``std/√N``, rad/s.
     """
     w = validate.samples(gyr, "gyr")
     if len(w) < 2:
@@ -161,7 +237,18 @@ def gyro_bias_from_rest(gyr):
 
 def ellipsoid_design_matrix(mag):
     """Rows ``[x², y², z², 2yz, 2xz, 2xy, 2x, 2y, 2z, 1]`` of the quadric
-    ``a x² + b y² + c z² + 2f yz + 2g xz + 2h xy + 2p x + 2q y + 2r z + d = 0`` (Li & Griffiths 2004), (N, 10)."""
+    ``a x² + b y² + c z² + 2f yz + 2g xz + 2h xy + 2p x + 2q y + 2r z + d = 0`` (Li & Griffiths 2004).
+
+    Parameters
+    ----------
+    mag : array_like, shape (N, 3)
+        Magnetometer readings ``[x, y, z]`` (any unit, e.g. µT).
+
+    Returns
+    -------
+    ndarray, shape (N, 10)
+        One row per reading.
+    """
     m = validate.samples(mag, "mag")
     x, y, z = m.T
     return np.stack([x * x, y * y, z * z, 2 * y * z, 2 * x * z, 2 * x * y, 2 * x, 2 * y, 2 * z, np.ones_like(x)], 1)
@@ -186,6 +273,16 @@ def quadric_normal_equations(mag):
 
     Nothing forces the result to be an ellipsoid: readings that cover only part of the sphere can give a
     hyperboloid. :func:`fit_ellipsoid` adds the constraint.
+
+    Parameters
+    ----------
+    mag : array_like, shape (N, 3)
+        Magnetometer readings (N >= 9, spanning three axes), any unit.
+
+    Returns
+    -------
+    ndarray, shape (9,)
+        The coefficients ``[a, b, c, f, g, h, p, q, r]``.
     """
     m = validate.samples(mag, "mag")
     _check_spread(m, 9)
@@ -197,14 +294,21 @@ def quadric_normal_equations(mag):
 class EllipsoidFit:
     """Result of :func:`fit_ellipsoid`: ``|W (m − centre)| = radius`` for every reading ``m`` on the ellipsoid.
 
-    Attributes
+    Each field is an attribute of the same name.
+
+    Parameters
     ----------
-    centre : (3,) -- hard iron in the raw frame (the ellipsoid's centre), unit of the readings
-    W : (3, 3) symmetric positive definite -- soft-iron correction (seed 001's ``D_s``); a rotation after it is
-        unobservable from the readings alone, so the symmetric one is returned
-    radius : float -- the field strength the corrected readings lie on
-    residual_rms : float -- RMS of ``|W (m − centre)| − radius`` over the readings (unit of the readings)
-    coefficients : (10,) -- the quadric ``[a, b, c, f, g, h, p, q, r, d]``
+    centre : ndarray, shape (3,)
+        Hard iron in the raw frame (the ellipsoid's centre), unit of the readings (µT).
+    W : ndarray, shape (3, 3)
+        Soft-iron correction (seed 001's ``D_s``), symmetric positive definite; a rotation after it is unobservable
+        from the readings alone, so the symmetric one is returned.
+    radius : float
+        The field strength the corrected readings lie on, unit of the readings.
+    residual_rms : float
+        RMS of ``|W (m − centre)| − radius`` over the readings, unit of the readings.
+    coefficients : ndarray, shape (10,)
+        The quadric ``[a, b, c, f, g, h, p, q, r, d]``, unit norm.
     """
 
     centre: np.ndarray
@@ -215,7 +319,8 @@ class EllipsoidFit:
 
     @property
     def beta_h(self):
-        """Seed 001's hard-iron vector in ``b_c = D_s b − β_h`` (corrected coordinates): ``W @ centre``."""
+        """ndarray, shape (3,): seed 001's hard-iron vector in ``b_c = D_s b − β_h`` (corrected coordinates),
+        ``W @ centre``."""
         return self.W @ self.centre
 
 
@@ -240,17 +345,38 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
 
     Parameters
     ----------
-    mag : (N, 3) -- raw magnetometer readings (µT), N >= 10, covering the sphere in more than one plane
-    field_strength : float, optional -- the radius of the corrected sphere (e.g. the local field, 44.3 µT for
-        BROAD); by default the one that keeps the volume (det W = 1)
-    method : 'constrained' (Li & Griffiths, always an ellipsoid when one fits) or 'lsq'
-        (:func:`quadric_normal_equations`, may return a hyperboloid and then fails)
+    mag : array_like, shape (N, 3)
+        Raw magnetometer readings, µT; N >= 10, covering the sphere in more than one plane.
+    field_strength : float, optional
+        The radius of the corrected sphere, µT (e.g. the local field, 44.3 µT for BROAD); by default the one that
+        keeps the volume (det W = 1).
+    method : {'constrained', 'lsq'}, default 'constrained'
+        ``'constrained'``: Li & Griffiths, always an ellipsoid when one fits. ``'lsq'``:
+        :func:`quadric_normal_equations`, may return a hyperboloid and then fails.
+
     Returns
     -------
     EllipsoidFit
+        Centre (hard iron), ``W`` (soft iron), radius, residual and quadric coefficients.
+
     Raises
     ------
-    ValueError -- too few readings, NaN, readings on a plane or line, or a quadric that is not a real ellipsoid
+    ValueError
+        Too few readings, NaN, readings on a plane or line, or a quadric that is not a real ellipsoid.
+
+    Examples
+    --------
+    Readings on an ellipsoid of semi-axes 50, 45 and 40 µT centred at (10, -5, 3) µT come back on a sphere:
+
+    >>> import numpy as np
+    >>> from fusionlab import calibration
+    >>> d = np.random.default_rng(0).normal(size=(200, 3))
+    >>> mag = d / np.linalg.norm(d, axis=1, keepdims=True) * [50.0, 45.0, 40.0] + [10.0, -5.0, 3.0]
+    >>> fit = calibration.fit_ellipsoid(mag, field_strength=44.3)
+    >>> np.round(fit.centre, 6)
+    array([10., -5.,  3.])
+    >>> np.round(np.linalg.norm(calibration.apply_ellipsoid(fit, mag), axis=1)[:3], 6)
+    array([44.3, 44.3, 44.3])
     """
     m = validate.samples(mag, "mag")
     _check_spread(m, 10)
@@ -286,7 +412,20 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
 
 
 def apply_ellipsoid(fit, mag):
-    """Corrected readings ``W (m − centre)`` (= seed 001's ``D_s b − β_h``), (N, 3)."""
+    """Corrected readings ``W (m − centre)`` (= seed 001's ``D_s b − β_h``).
+
+    Parameters
+    ----------
+    fit : EllipsoidFit
+        The calibration (:func:`fit_ellipsoid`).
+    mag : array_like, shape (N, 3)
+        Raw magnetometer readings, unit of the fit (µT).
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Corrected readings, same unit.
+    """
     m = validate.samples(mag, "mag")
     return (m - fit.centre) @ fit.W.T
 
@@ -300,13 +439,34 @@ def allan_deviation(rate, fs, taus=None):
 
     Parameters
     ----------
-    rate : (N,) -- rate samples (e.g. a gyro axis at rest, rad/s), N >= 3
-    fs : float, Hz
-    taus : array of s, optional -- averaging times (rounded by allantools to multiples of 1/fs); by default 60
-        log-spaced values from 1/fs to a quarter of the record
+    rate : array_like, shape (N,)
+        Rate samples (e.g. a gyro axis at rest, rad/s), N >= 3.
+    fs : float
+        Sample rate, Hz.
+    taus : array_like, shape (M,), optional
+        Averaging times, s (rounded by allantools to multiples of 1/fs); by default 60 log-spaced values from
+        1/fs to a quarter of the record.
+
     Returns
     -------
-    (taus, adev, adev_err) : three (M,) arrays -- τ (s), σ(τ) and allantools' 1-σ error of each σ
+    taus : ndarray, shape (M,)
+        Averaging times τ, s.
+    adev : ndarray, shape (M,)
+        Allan deviation σ(τ), unit of ``rate``.
+    adev_err : ndarray, shape (M,)
+        Allantools' 1-σ error of each σ, unit of ``rate``.
+
+    Examples
+    --------
+    White rate noise of σ = 0.01 rad/s at 100 Hz is an angle random walk of N = σ/√fs = 0.001 rad/√s, which
+    :func:`read_arw` reads off the slope −½ part of the curve:
+
+    >>> import numpy as np
+    >>> from fusionlab import calibration
+    >>> rate = np.random.default_rng(0).normal(0.0, 0.01, 100_000)
+    >>> taus, adev, _ = calibration.allan_deviation(rate, 100.0)
+    >>> print(f"{calibration.read_arw(taus, adev, tau_max=1.0):.4f}")
+    0.0010
     """
     import allantools
 
@@ -343,10 +503,17 @@ def read_arw(taus, adev, tau_max):
 
     Parameters
     ----------
-    taus, adev : (M,) arrays -- τ (s) and σ(τ) (rate unit); tau_max : s -- the end of the white-noise region
+    taus : array_like, shape (M,)
+        Averaging times τ, s.
+    adev : array_like, shape (M,)
+        Allan deviation σ(τ), rate unit.
+    tau_max : float
+        The end of the white-noise region, s.
+
     Returns
     -------
-    float -- N in (rate unit)·√s, e.g. rad/s/√Hz = rad/√s (× 60·180/π for °/√h)
+    float
+        N in (rate unit)·√s, e.g. rad/s/√Hz = rad/√s (× 60·180/π for °/√h).
     """
     t, a = _curve(taus, adev)
     sel = t <= validate.positive(tau_max, "tau_max")
@@ -359,11 +526,20 @@ def read_arw(taus, adev, tau_max):
 class AllanReading:
     """The three numbers read off an Allan-deviation curve, and the lines they come from.
 
-    arw : N, rate·√s -- σ on the slope −½ line at τ = 1 s
-    bias_instability : B, rate unit -- the flat line's level / 0.664
-    rrw : K, rate/√s -- σ on the slope +½ line at τ = 3 s (0 when the curve never turns up)
-    tau_floor : s -- where the measured curve is lowest; floor_min : rate unit -- its minimum σ / 0.664 (the
-        by-hand reading of B, a little high where the lines overlap)
+    Each field is an attribute of the same name.
+
+    Parameters
+    ----------
+    arw : float
+        N, rate unit·√s: σ on the slope −½ line at τ = 1 s.
+    bias_instability : float
+        B, rate unit: the flat line's level / 0.664.
+    rrw : float
+        K, rate unit/√s: σ on the slope +½ line at τ = 3 s (0 when the curve never turns up).
+    tau_floor : float
+        Where the measured curve is lowest, s.
+    floor_min : float
+        Its minimum σ / 0.664, rate unit (the by-hand reading of B, a little high where the lines overlap).
     """
 
     arw: float
@@ -374,7 +550,22 @@ class AllanReading:
 
     def lines(self, taus):
         """The three lines at ``taus`` (s): (ARW ``N/√τ``, floor ``0.664 B``, RRW ``K√(τ/3)``), and their sum in
-        quadrature is the model :func:`fusionlab.sensors.allan_model`."""
+        quadrature is the model :func:`fusionlab.sensors.allan_model`.
+
+        Parameters
+        ----------
+        taus : array_like, shape (M,)
+            Averaging times τ, s.
+
+        Returns
+        -------
+        arw_line : ndarray, shape (M,)
+            ``N/√τ``, rate unit.
+        floor_line : ndarray, shape (M,)
+            ``0.664 B``, rate unit.
+        rrw_line : ndarray, shape (M,)
+            ``K√(τ/3)``, rate unit.
+        """
         t = np.asarray(taus, dtype=float)
         return (self.arw / np.sqrt(t), np.full_like(t, BIAS_INSTABILITY_FACTOR * self.bias_instability),
                 self.rrw * np.sqrt(t / 3))
@@ -391,10 +582,17 @@ def read_allan(taus, adev, adev_err=None):
 
     Parameters
     ----------
-    taus, adev : (M,) arrays, M >= 3 -- from :func:`allan_deviation`; adev_err : (M,) optional
+    taus : array_like, shape (M,)
+        Averaging times τ, s (M >= 3), from :func:`allan_deviation`.
+    adev : array_like, shape (M,)
+        Allan deviation σ(τ), rate unit.
+    adev_err : array_like, shape (M,), optional
+        1-σ error of each σ, rate unit (0 where unknown); weights the fit when given.
+
     Returns
     -------
     AllanReading
+        ARW, bias instability, RRW and where the curve is lowest.
     """
     from scipy.optimize import nnls
 
