@@ -35,6 +35,7 @@ DOCUMENTED = [
     "metrics",
     "northfinder",
     "rotations",
+    "simulate",
     "validate",
 ]
 

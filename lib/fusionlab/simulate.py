@@ -86,11 +86,26 @@ def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 
 
     Parameters
     ----------
-    fs : float, Hz -- sample rate
-    waypoints : sequence of (t, angle) -- seconds and degrees, increasing t, |angle| <= 70
+    fs : float, default FS (50 Hz)
+        Sample rate, Hz.
+    waypoints : sequence of (float, float)
+        ``(t, angle)`` pairs in seconds and degrees, increasing t, ``|angle| <= 70``.
+
     Returns
     -------
-    t : (N,) array, s; angle : (N,) array, deg; rate : (N,) array, °/s (the exact derivative of ``angle``)
+    t : ndarray, shape (N,)
+        Sample times, s.
+    angle : ndarray, shape (N,)
+        True angle, degrees.
+    rate : ndarray, shape (N,)
+        True rate, °/s (the exact derivative of ``angle``).
+
+    Examples
+    --------
+    >>> from fusionlab import simulate
+    >>> t, angle, rate = simulate.motion_profile()
+    >>> len(t), angle[[0, 150, 300]], round(float(rate.max()), 3)      # 11 s at 50 Hz; level, +60°, -40°...
+    (550, array([ 0., 60., 10.]), 47.124)
     """
     fs = validate.positive(fs, "fs")
     wp = validate.array(waypoints, "waypoints", shape=(2,))
@@ -122,13 +137,44 @@ def imu_record(roll_deg, pitch_deg, fs=FS, rng=None, vib_amp=VIB_AMP, vib_freq=V
 
     Parameters
     ----------
-    roll_deg, pitch_deg : (N,) arrays, deg -- true rotation about X and about Y
-    fs : float, Hz; rng : numpy.random.Generator or int -- seed it
-    vib_amp : float, g; vib_freq : float, Hz; acc_noise : float, g; gyro_bias : (2,) °/s; gyro_noise : float, °/s
-    translation_g : (N, 3) array, g, optional -- external (non-gravity) acceleration added to the reading
+    roll_deg : array_like, shape (N,)
+        True rotation about X, degrees.
+    pitch_deg : array_like, shape (N,)
+        True rotation about Y, degrees.
+    fs : float, default FS (50 Hz)
+        Sample rate, Hz.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed (seed it: None draws fresh entropy).
+    vib_amp : float, default VIB_AMP (0.5 g)
+        Motor vibration amplitude per accelerometer axis, g.
+    vib_freq : float, default VIB_FREQ (13 Hz)
+        Motor vibration frequency, Hz.
+    acc_noise : float, default ACC_NOISE (0.03 g)
+        Accelerometer white noise (standard deviation per sample), g.
+    gyro_bias : array_like, shape (2,), default GYRO_BIAS
+        Constant gyro bias on X and Y, °/s.
+    gyro_noise : float, default GYRO_NOISE (0.3 °/s)
+        Gyro white noise (standard deviation per sample), °/s.
+    translation_g : array_like, shape (N, 3), optional
+        External (non-gravity) acceleration added to the reading, g.
+
     Returns
     -------
-    acc : (N, 3) array, g -- AX AY AZ;  gyr : (N, 2) array, °/s -- GX GY
+    acc : ndarray, shape (N, 3)
+        Accelerometer readings AX AY AZ, g.
+    gyr : ndarray, shape (N, 2)
+        Gyro readings GX GY, °/s.
+
+    Examples
+    --------
+    With vibration and noise turned off, a level board at rest reads +1 g on Z and the gyro reads its bias:
+
+    >>> from fusionlab import simulate
+    >>> acc, gyr = simulate.imu_record([0.0, 0.0], [0.0, 0.0], rng=0, vib_amp=0.0, acc_noise=0.0, gyro_noise=0.0)
+    >>> acc, gyr
+    (array([[0., 0., 1.],
+           [0., 0., 1.]]), array([[ 2., -1.],
+           [ 2., -1.]]))
     """
     phi = np.radians(validate.array(roll_deg, "roll_deg"))
     theta = np.radians(validate.array(pitch_deg, "pitch_deg"))
@@ -155,10 +201,31 @@ def adc_record(acc, gyr, accel=sensors.ADXL335, gyro=sensors.IDG500, v_ref=3.0, 
 
     Parameters
     ----------
-    acc : (N, 3) array, g; gyr : (N, 2) array, °/s
+    acc : array_like, shape (N, 3)
+        Accelerometer readings, g.
+    gyr : array_like, shape (N, 2)
+        Gyro readings, °/s.
+    accel : sensors.AnalogSensor, default sensors.ADXL335
+        The accelerometer's zero level (V) and sensitivity (V/g).
+    gyro : sensors.AnalogSensor, default sensors.IDG500
+        The gyro's zero level (V) and sensitivity (V per °/s).
+    v_ref : float, default 3.0
+        ADC reference voltage, V.
+    bits : int, default sensors.ADC_BITS (10)
+        ADC resolution, bits.
+
     Returns
     -------
-    (N, 5) int64 array -- AX AY AZ GX GY counts
+    ndarray of int64, shape (N, 5)
+        AX AY AZ GX GY counts.
+
+    Examples
+    --------
+    A level board at rest: 0 g is mid-scale (1.5 V), +1 g is 0.300 V higher, 0 °/s is the gyro's 1.35 V:
+
+    >>> from fusionlab import simulate
+    >>> simulate.adc_record([[0.0, 0.0, 1.0]], [[0.0, 0.0]])
+    array([[512, 512, 614, 460, 460]])
     """
     acc = validate.samples(acc, "acc", 3)
     gyr = validate.samples(gyr, "gyr", 2)
@@ -183,10 +250,18 @@ def lab03_records(seed=LAB03_SEED, fs=FS):
     """The three Lab 3 records: ``stationary`` (10 s level, motor on), ``motion`` (the test, motor on) and
     ``translation`` (10 s horizontal shaking, no rotation, motor off).
 
+    Parameters
+    ----------
+    seed : int, default LAB03_SEED
+        Seed of the three records' random generators.
+    fs : float, default FS (50 Hz)
+        Sample rate, Hz.
+
     Returns
     -------
-    dict name -> dict with ``t`` (N,) s, ``roll_deg``, ``pitch_deg`` (N,) true angles, ``acc`` (N, 3) g,
-    ``gyr`` (N, 2) °/s, ``counts`` (N, 5) int
+    dict of str to dict
+        Per record name: ``t`` (N,) s, ``roll_deg``, ``pitch_deg`` (N,) true angles in degrees, ``acc`` (N, 3) g,
+        ``gyr`` (N, 2) °/s, ``counts`` (N, 5) int.
     """
     fs = validate.positive(fs, "fs")
     rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3)]
@@ -222,10 +297,22 @@ def terminal_log(counts, title="Get RAW Sensor Data"):
 
     Parameters
     ----------
-    counts : (N, 5) int array -- ADC counts in 0..1023
+    counts : array_like of int, shape (N, 5)
+        ADC counts AX AY AZ GX GY in 0..1023.
+    title : str, default "Get RAW Sensor Data"
+        The header line's text.
+
     Returns
     -------
     str
+        The log text, CR LF line ends.
+
+    Examples
+    --------
+    >>> from fusionlab import simulate
+    >>> log = simulate.terminal_log([[512, 512, 614, 460, 460]])
+    >>> log.splitlines()[7:10]
+    ['Get RAW Sensor Data -- press 0 to stop', 'AX AY AZ GX GY', '200 200 266 1CC 1CC']
     """
     c = validate.samples(counts, "counts", 5)
     if np.any(c < 0) or np.any(c > 1023) or np.any(c != np.rint(c)):
@@ -240,7 +327,26 @@ def terminal_log(counts, title="Get RAW Sensor Data"):
 
 
 def truth_csv(rec):
-    """CSV text of the true angles beside a log: ``sample,t_s,angle_x_deg,angle_y_deg`` (rotation about X and Y)."""
+    """CSV text of the true angles beside a log: ``sample,t_s,angle_x_deg,angle_y_deg`` (rotation about X and Y).
+
+    Parameters
+    ----------
+    rec : dict
+        A record of :func:`lab03_records`: ``t`` (N,) s, ``roll_deg`` and ``pitch_deg`` (N,) degrees.
+
+    Returns
+    -------
+    str
+        The CSV text, one line per sample after the header.
+
+    Examples
+    --------
+    >>> from fusionlab import simulate
+    >>> print(simulate.truth_csv(dict(t=[0.0, 0.02], roll_deg=[0.0, 0.5], pitch_deg=[0.0, 0.0])), end="")
+    sample,t_s,angle_x_deg,angle_y_deg
+    0,0.000,0.000000,0.000000
+    1,0.020,0.500000,0.000000
+    """
     lines = ["sample,t_s,angle_x_deg,angle_y_deg"]
     for k, (t, r, p) in enumerate(zip(rec["t"], rec["roll_deg"], rec["pitch_deg"])):
         lines.append(f"{k},{t:.3f},{r:.6f},{p:.6f}")
@@ -248,12 +354,36 @@ def truth_csv(rec):
 
 
 def sha256_file(path):
-    """SHA-256 hex digest of a file's bytes."""
+    """SHA-256 hex digest of a file's bytes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def write_lab03(out, seed=LAB03_SEED):
-    """Write ``<out>/lab03/{name}.log``, ``{name}_truth.csv`` and ``SHA256SUMS``; returns the written paths."""
+    """Write ``<out>/lab03/{name}.log``, ``{name}_truth.csv`` and ``SHA256SUMS``; returns the written paths.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The data folder; files go to ``<out>/lab03/`` (created if needed).
+    seed : int, default LAB03_SEED
+        Seed of the records (the committed files use the default).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The logs and truth CSVs, then ``SHA256SUMS``.
+    """
     folder = Path(out) / "lab03"
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -274,7 +404,19 @@ def lab03_data(search_from=None, search_package=True):
     notebook may run from ``solutions/``, ``labs/`` or an nbgrader ``autograded/<student>/`` folder. Where none is
     found (a course copy without ``data/``), the records are regenerated with :func:`write_lab03` into a user cache
     folder (``FUSIONLAB_CACHE`` or ``~/.cache/fusionlab``); regeneration is byte-identical, so the lab sees the
-    same files either way. Returns a :class:`pathlib.Path`.
+    same files either way.
+
+    Parameters
+    ----------
+    search_from : str or os.PathLike, optional
+        Where the search upwards starts (default: the working directory).
+    search_package : bool, default True
+        Search upwards from this package's folder too.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder holding the logs and ``SHA256SUMS``.
     """
     import os
     starts = [Path(search_from or Path.cwd()).resolve()] + ([Path(__file__).resolve().parent] if search_package else [])
@@ -289,6 +431,13 @@ def lab03_data(search_from=None, search_package=True):
 
 
 def main(argv=None):
+    """Command line ``python -m fusionlab.simulate [--out DATA] [--seed N]``: write the Lab 03 files.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+    """
     parser = argparse.ArgumentParser(prog="python -m fusionlab.simulate",
                                      description="Write the synthetic Lab 03 terminal logs and true-angle CSVs.")
     parser.add_argument("--out", default="data", help="output folder (files go to OUT/lab03/)")
@@ -342,11 +491,33 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
     Units at the edge: rad/s, m/s² **specific force** (+g on the up axis at rest, as a real accelerometer and as
     :func:`fusionlab.estimators.run` expect), gauss; true attitude body→NED.
 
+    Parameters
+    ----------
+    seed : int, default 9
+        Seed of the noise and of the accelerometer bias.
+    fs : float, default 100.0
+        Sample rate, Hz.
+    duration : float, default 120.0
+        Length of the record, s.
+    euler0_deg : array_like, shape (3,), default (4, -3, 30)
+        Attitude at rest ``[roll, pitch, yaw]``, degrees.
+    still : float, default 10.0
+        Rest at each end, s.
+    bias_dps : array_like, shape (3,), default (2, -3, 1.5)
+        Constant gyro bias, °/s.
+    inclination_deg : float, default 66.0
+        Magnetic inclination (dip), degrees.
+    field_gauss : float, default 0.48
+        Magnetic field strength, gauss.
+    acc_bias : bool, default True
+        Draw a constant accelerometer bias of the Table 6.1 stability (else none).
+
     Returns
     -------
-    dict with ``t`` (N,) s, ``gyr``, ``acc``, ``mag`` (N, 3); ``C_bn`` (N, 3, 3), ``euler`` (N, 3) rad, ``q``
-    (N, 4) -- the true attitude after each sample; ``C_init`` (3, 3) the attitude before the first sample;
-    ``gyr_true`` (N, 3); ``bias`` (3,) rad/s; ``acc_bias`` (3,) m/s²; ``inclination`` rad; ``field`` gauss; ``fs``
+    dict
+        ``t`` (N,) s, ``gyr``, ``acc``, ``mag`` (N, 3); ``C_bn`` (N, 3, 3), ``euler`` (N, 3) rad, ``q`` (N, 4) --
+        the true attitude after each sample; ``C_init`` (3, 3) the attitude before the first sample; ``gyr_true``
+        (N, 3); ``bias`` (3,) rad/s; ``acc_bias`` (3,) m/s²; ``inclination`` rad; ``field`` gauss; ``fs`` Hz.
     """
     from . import rotations
     fs = validate.positive(fs, "fs")
@@ -411,9 +582,33 @@ def car_record(seed=11, fs=1 / T71_DT, duration=120.0, stops=((0.0, 10.0), (55.0
     not zero at rest. Sensors as :func:`air_vehicle_record` (Table 7.1); the thesis' simplified mechanization is exact
     for the noise-free readings.
 
+    Parameters
+    ----------
+    seed : int, default 11
+        Seed of the sensor and GPS noise.
+    fs : float, default 50.0
+        IMU sample rate, Hz (1 / ``T71_DT``).
+    duration : float, default 120.0
+        Length of the record, s.
+    stops : sequence of (float, float)
+        ``(start, end)`` of each stand-still, s.
+    tunnels : sequence of (float, float)
+        ``(start, end)`` of each GPS outage, s.
+    mount_deg : array_like, shape (2,), default (2.0, -1.5)
+        Constant mounting roll and pitch of the IMU, degrees.
+    gyro_bias_dph : array_like, shape (3,), default (1500, -1500, 1500)
+        Constant gyro bias, °/h.
+    acc_bias_mg : array_like, shape (3,), default (1, -1, 1)
+        Constant accelerometer bias, mg.
+    speed : float, default 14.0
+        Cruising speed, m/s.
+    g : float, default 9.80665
+        Gravity of the mechanization, m/s².
+
     Returns
     -------
-    dict as :func:`air_vehicle_record`, plus ``static`` (N,) bool -- the car stands still after sample k
+    dict
+        As :func:`air_vehicle_record`, plus ``static`` (N,) bool: the car stands still after sample k.
     """
     from . import rotations
     fs = validate.positive(fs, "fs")
@@ -472,11 +667,36 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
     built on the thesis' simplified mechanization then meets the terms it drops (to first order in Δt; the local
     NED frame of the record stands for the navigation frame over the 68 s).
 
+    Parameters
+    ----------
+    seed : int, default 10
+        Seed of the sensor and GPS noise.
+    fs : float, default 50.0
+        IMU sample rate, Hz (1 / ``T71_DT``).
+    duration : float, default 68.0
+        Length of the flight, s.
+    gyro_bias_dph : array_like, shape (3,), default (1500, -1500, 1500)
+        Constant gyro bias, °/h.
+    acc_bias_mg : array_like, shape (3,), default (1, -1, 1)
+        Constant accelerometer bias, mg.
+    speed : float, default 60.0
+        Mean airspeed, m/s.
+    g : float, default 9.80665
+        Gravity of the simplified mechanization, m/s².
+    noise : bool, default True
+        Add the white sensor and GPS noise (False leaves only the biases).
+    model : {'thesis', 'full'}, default 'thesis'
+        Readings for the thesis' simplified mechanization, or for the full NED equations (004 eq 7.1).
+    lat_deg : float, default 50.87
+        Latitude of the ``'full'`` model, degrees.
+
     Returns
     -------
-    dict with ``t`` (N,) s; ``gyr``, ``acc`` (N, 3) rad/s and m/s² (specific force); ``gps`` (N, 6) NED position
-    and velocity after sample k where a fix exists, NaN elsewhere; truth after each sample: ``r``, ``v`` (N, 3),
-    ``C_bn`` (N, 3, 3), ``euler`` (N, 3); the start: ``r0``, ``v0``, ``C0``; ``b_g``, ``b_a`` (3,); ``fs``, ``g``
+    dict
+        ``t`` (N,) s; ``gyr``, ``acc`` (N, 3) rad/s and m/s² (specific force); ``gps`` (N, 6) NED position (m) and
+        velocity (m/s) after sample k where a fix exists, NaN elsewhere; truth after each sample: ``r``, ``v``
+        (N, 3), ``C_bn`` (N, 3, 3), ``euler`` (N, 3) rad; the start: ``r0``, ``v0``, ``C0``; ``b_g`` (3,) rad/s,
+        ``b_a`` (3,) m/s²; ``gyr_true``, ``f_true`` (N, 3); ``fs`` Hz, ``g`` m/s².
     """
     from . import rotations
     fs = validate.positive(fs, "fs")
