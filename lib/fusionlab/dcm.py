@@ -8,7 +8,7 @@ rows. No trigonometry, no singularity.
 
 What is here
 ------------
-* :func:`A_matrix` -- the DCM increment of a rotation vector, exact and second order (004 eqs 6.2-6.8);
+* :func:`A_matrix` -- the DCM increment of a rotation vector, exact and second order (004 eqs 6.2-6.7);
   :func:`A_with_gyro_error` -- the first-order effect of gyro bias and noise on it (004 eq 6.10).
 * :func:`row_propagate` -- one DCM row through a step (004 eq 6.11 / 7.7); :func:`ahrs_transition` and
   :func:`ahrs_process_noise` -- the 9-state pseudo-linear model (004 eqs 6.11-6.13).
@@ -70,12 +70,12 @@ G = 9.80665
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# DCM update with the rotation vector (004 §6.2, eqs 6.2-6.10)
+# DCM update with the rotation vector (004 §6.3, eqs 6.2-6.7, and §6.4.1, eqs 6.9-6.10)
 # ----------------------------------------------------------------------------------------------------------------
 
 
 def A_matrix(sigma, order="exact"):
-    """DCM increment ``A`` of a body rotation vector: ``C_bn,k = C_bn,k-1 @ A_{k-1}`` (004 eqs 6.2-6.8).
+    """DCM increment ``A`` of a body rotation vector: ``C_bn,k = C_bn,k-1 @ A_{k-1}`` (004 eqs 6.2-6.7).
 
     ``order='exact'``: ``A = I + (sin σ/σ)[σ×] + ((1 - cos σ)/σ²)[σ×]²``; ``order='second'``:
     ``A ≈ I + [σ×] + ½[σ×]²`` (004 eqs 6.7/6.8, not legible in the copy this course was written from: our

@@ -483,8 +483,8 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
     Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of
     sinusoids (up to about 60°, 40°, 100° from the start, 0.05-0.4 Hz) and the hand moves about ±10 cm (up to ≈1 m/s²), faded in
     and out with cosine ramps; the motion passes through the initial attitude near the middle of the run.
-    Sensors: Table 6.1 noise densities, a constant gyro bias (``bias_dps``, °/s, a "few °/s" as the thesis' GT1;
-    the filter starts it at 0), a random constant accelerometer bias of the Table 6.1 stability (``acc_bias``),
+    Sensors: Table 6.1 noise densities, a constant gyro bias (``bias_dps``, °/s, ours, within the
+    5 °/s bias stability of Table 6.1; the filter starts it at 0), a random constant accelerometer bias of the Table 6.1 stability (``acc_bias``),
     the field of Siegen (inclination 66°, 0.48 G). The gyro rates are exact: integrating the error-free rates with
     :func:`fusionlab.dcm.A_matrix` reproduces the true attitude to machine precision.
 
