@@ -29,6 +29,7 @@ DOCUMENTED = [
     "correlation",
     "dcm",
     "earth",
+    "estimators",
     "freescale",
     "gfimu",
     "kalman",

@@ -31,6 +31,22 @@ def register(name, uses_mag, summary, seed):
     """Decorator: register ``fn(gyr, acc, mag, fs, **options) -> (N, 4) body→NED quaternions`` under ``name``.
 
     Keyword parameters after ``fs`` (with their defaults) are the estimator's tuning options (:func:`options`).
+
+    Parameters
+    ----------
+    name : str
+        The estimator's name in :func:`run` (not yet registered).
+    uses_mag : bool
+        Whether it needs the magnetometer.
+    summary : str
+        One line saying what it is.
+    seed : str
+        The source it follows (document and section).
+
+    Returns
+    -------
+    callable
+        The decorator; it returns ``fn`` unchanged.
     """
     def deco(fn):
         if name in _REGISTRY:
@@ -43,12 +59,34 @@ def register(name, uses_mag, summary, seed):
 
 
 def available():
-    """``{name: {'uses_mag', 'summary', 'seed'}}`` of every registered estimator."""
+    """Every registered estimator and what it is.
+
+    Returns
+    -------
+    dict
+        ``{name: {'uses_mag', 'summary', 'seed'}}``.
+    """
     return {k: {f: v[f] for f in ("uses_mag", "summary", "seed")} for k, v in sorted(_REGISTRY.items())}
 
 
 def options(name):
-    """``{option: default}`` of the tuning values estimator ``name`` accepts in :func:`run`."""
+    """``{option: default}`` of the tuning values estimator ``name`` accepts in :func:`run`.
+
+    Parameters
+    ----------
+    name : str
+        A registered estimator (:func:`available`).
+
+    Returns
+    -------
+    dict
+        Option name -> default value.
+
+    Examples
+    --------
+    >>> options("complementary")
+    {'tau': 1.0, 'acc_sigma': 2.0, 'acc_hold': 0.5}
+    """
     if name not in _REGISTRY:
         raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
     return dict(_REGISTRY[name]["options"])
@@ -59,26 +97,36 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
 
     Parameters
     ----------
-    name : str -- one of :func:`available`
-    gyr : (N, 3) array, rad/s
-    acc : (N, 3) array, m/s² (+g on the up axis at rest)
-    fs : float, Hz
-    mag : (N, 3) array or None -- required by estimators with ``uses_mag``
-    frame : 'ENU' or 'NED' -- navigation frame of the result
-    **options -- tuning values the estimator accepts (see :func:`options`), e.g. ``tau=2.0`` for 'complementary'
+    name : str
+        One of :func:`available`.
+    gyr : array_like, shape (N, 3)
+        Angular rate, rad/s.
+    acc : array_like, shape (N, 3)
+        Specific force, m/s² (+g on the up axis at rest).
+    fs : float
+        Sample rate, Hz.
+    mag : array_like, shape (N, 3), optional
+        Magnetometer, any unit; required by estimators with ``uses_mag``.
+    frame : {'ENU', 'NED'}, optional
+        Navigation frame of the result.
+    **options
+        Tuning values the estimator accepts (see :func:`options`), e.g. ``tau=2.0`` for 'complementary'.
+
     Returns
     -------
-    (N, 4) array -- unit quaternions ``[w, x, y, z]``, body→``frame``
+    ndarray, shape (N, 4)
+        Unit quaternions ``[w, x, y, z]``, body→``frame``.
+
     Raises
     ------
     ValueError
-        naming the argument: a bad shape or a NaN; lengths that differ; ``fs`` outside 1 Hz – 100 kHz; a gyro that
+        Naming the argument: a bad shape or a NaN; lengths that differ; ``fs`` outside 1 Hz – 100 kHz; a gyro that
         looks like °/s (peak above 50 rad/s or median above 10 rad/s) or an accelerometer that looks like g (median
         magnitude 0.5–2); a record that starts in free fall (no initial tilt); a zero magnetometer for a filter that
         uses it. During the record every filter trusts its gyro while ``|acc|`` is below
         :data:`fusionlab.sensors.FREE_FALL` (0.05 g), except 'triad', which has no gyro and refuses free fall.
-    TypeError (also a ValueError)
-        an option the estimator does not have (:func:`options` lists them).
+    TypeError
+        An option the estimator does not have (:func:`options` lists them); it is also a ValueError.
     """
     if not isinstance(name, str) or name not in _REGISTRY:
         raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))} (the name "
@@ -163,6 +211,27 @@ def triad(acc, mag):
     """Accelerometer + magnetometer snapshot attitude (TRIAD): body→NED DCMs, one per sample.
 
     Down is opposite the specific force; east is down × field; north completes the triad. Heading is magnetic.
+
+    Parameters
+    ----------
+    acc : array_like, shape (..., 3)
+        Specific force, any unit (non-zero).
+    mag : array_like, shape (..., 3)
+        Magnetometer, any unit (not parallel to gravity).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Rows: north, east, down written in body coordinates.
+
+    Examples
+    --------
+    Level, z down, facing magnetic north: the identity.
+
+    >>> np.round(triad([0.0, 0.0, -9.81], [0.5, 0.0, 0.866]), 6) + 0.0
+    array([[1., 0., 0.],
+           [0., 1., 0.],
+           [0., 0., 1.]])
     """
     acc = validate.vectors(acc, "acc")
     mag = validate.vectors(mag, "mag")
