@@ -70,7 +70,21 @@ METRICS = (("total_rmse_deg", "total"), ("heading_rmse_deg", "heading"), ("incli
 
 @dataclass(frozen=True)
 class Contender:
-    """A filter in the benchmark: ``run(trial) -> (N, 4)`` body→ENU quaternions."""
+    """A filter in the benchmark: ``run(trial) -> (N, 4)`` body→ENU quaternions.
+
+    Parameters
+    ----------
+    name : str
+        Its name in the tables.
+    source : {'fusionlab', 'vqf', 'ahrs'}
+        Where it comes from.
+    uses_mag : bool
+        Whether it uses the magnetometer (9D) or not (6D).
+    summary : str
+        One line saying what it is.
+    run : callable
+        ``run(trial) -> ndarray, shape (N, 4)``, body→ENU quaternions.
+    """
     name: str
     source: str              # 'fusionlab', 'vqf' or 'ahrs'
     uses_mag: bool
@@ -79,6 +93,7 @@ class Contender:
 
     @property
     def sensors(self):
+        """``'9D'`` with the magnetometer, ``'6D'`` without."""
         return "9D" if self.uses_mag else "6D"
 
 
@@ -142,8 +157,15 @@ def contenders(names=None, include_external=True):
 
     Parameters
     ----------
-    names : list of str or None -- keep only these (registered names, 'vqf9', 'vqf6', 'madgwick9', 'madgwick6')
-    include_external : bool -- add the vqf / ahrs contenders when their packages are importable
+    names : list of str, optional
+        Keep only these (registered names, 'vqf9', 'vqf6', 'madgwick9', 'madgwick6').
+    include_external : bool, optional
+        Add the vqf / ahrs contenders when their packages are importable.
+
+    Returns
+    -------
+    list of Contender
+        The filters, registered ones first.
     """
     out = [Contender(n, "fusionlab", info["uses_mag"], info["summary"], _registered(n, info["uses_mag"]))
            for n, info in estimators.available().items()]
@@ -175,6 +197,18 @@ def score(contender, trial):
     """Run one contender on one trial (a whole trial or a slice) and score it: a row with :data:`TRIAL_COLUMNS`.
 
     A contender that raises gets a row of NaN with the error text, so one broken filter never stops a benchmark.
+
+    Parameters
+    ----------
+    contender : Contender
+        The filter.
+    trial : fusionlab.datasets.BroadTrial
+        The recording with its reference attitude.
+
+    Returns
+    -------
+    dict
+        One result row: errors in degrees, timing in seconds and samples per second.
     """
     row = dict(estimator=contender.name, source=contender.source, sensors=contender.sensors, trial=trial.name,
                groups="|".join(trial.groups), n_samples=len(trial), n_scored=0, error="")
@@ -202,12 +236,23 @@ def run_benchmark(trials=None, folder=None, names=None, include_external=True, m
 
     Parameters
     ----------
-    trials : list of int or str, or None -- default: every trial available without a download
-    folder : str or Path or None -- where the trials are (see :func:`fusionlab.datasets.load_trial`)
-    names : list of str or None -- contender names (default: all, see :func:`contenders`)
-    include_external : bool -- include VQF / ahrs when installed
-    max_samples : int or None -- use only the first ``max_samples`` samples of each trial (quick runs)
-    progress : bool -- tqdm bar over the (trial, estimator) pairs
+    trials : list of int or str, optional
+        Default: every trial available without a download.
+    folder : str or pathlib.Path, optional
+        Where the trials are (see :func:`fusionlab.datasets.load_trial`).
+    names : list of str, optional
+        Contender names (default: all, see :func:`contenders`).
+    include_external : bool, optional
+        Include VQF / ahrs when installed.
+    max_samples : int, optional
+        Use only the first ``max_samples`` samples of each trial (quick runs).
+    progress : bool, optional
+        A tqdm bar over the (trial, estimator) pairs.
+
+    Returns
+    -------
+    list of dict
+        The result rows.
     """
     from tqdm.auto import tqdm
 
@@ -237,9 +282,26 @@ def run_benchmark(trials=None, folder=None, names=None, include_external=True, m
 class TuningSweep:
     """Result of :func:`tuning_sweep`: one estimator, one option, several values, several trials.
 
-    ``rmse_deg[i, j]``: RMSE of trial ``i`` at ``values[j]`` -- inclination for a 6-axis filter, total for a
-    9-axis one (``metric`` says which); ``error_deg[i][j]``: that error per sample (NaN where the reference is
-    lost), with the trial's time axis ``t[i]`` and movement mask ``movement[i]``.
+    Parameters
+    ----------
+    estimator : str
+        The registered estimator.
+    option : str
+        The tuning option swept.
+    values : tuple
+        Its values.
+    metric : {'inclination', 'total'}
+        The error scored: inclination for a 6-axis filter, total for a 9-axis one.
+    trials : tuple
+        The trials' names.
+    rmse_deg : ndarray, shape (T, V)
+        ``rmse_deg[i, j]``: RMSE of trial ``i`` at ``values[j]``, deg.
+    error_deg : list of list of ndarray
+        ``error_deg[i][j]``: that error per sample, deg (NaN where the reference is lost).
+    t : list of ndarray
+        The time axis of each trial, s.
+    movement : list of ndarray
+        The movement mask of each trial (bool).
     """
 
     estimator: str
@@ -253,7 +315,18 @@ class TuningSweep:
     movement: list
 
     def best(self, i):
-        """The value with the smallest RMSE on trial ``i``."""
+        """The value with the smallest RMSE on trial ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Index of the trial.
+
+        Returns
+        -------
+        object
+            One of ``values``.
+        """
         return self.values[int(np.nanargmin(self.rmse_deg[i]))]
 
 
@@ -262,14 +335,21 @@ def tuning_sweep(trials, estimator, option, values, progress=False):
 
     Parameters
     ----------
-    trials : list of BroadTrial (slices are fine) -- see :func:`fusionlab.datasets.load_trial`
-    estimator : str -- a registered estimator with the option (see :func:`fusionlab.estimators.options`)
-    option : str -- e.g. ``'tau'`` for ``'complementary'``
-    values : sequence of numbers -- at least one
-    progress : bool -- tqdm bar over the runs
+    trials : list of fusionlab.datasets.BroadTrial
+        The trials (slices are fine), see :func:`fusionlab.datasets.load_trial`.
+    estimator : str
+        A registered estimator with the option (see :func:`fusionlab.estimators.options`).
+    option : str
+        E.g. ``'tau'`` for ``'complementary'``.
+    values : sequence of float
+        At least one value.
+    progress : bool, optional
+        A tqdm bar over the runs.
+
     Returns
     -------
     TuningSweep
+        The scores and the per-sample errors.
     """
     from tqdm.auto import tqdm
 
@@ -317,9 +397,26 @@ TUNED = {
 class LeaveOneOut:
     """Result of :func:`leave_one_out` for one estimator.
 
-    ``rmse_deg[i, c]``: the fair RMSE (``metric``: total for 9D, inclination for 6D) of trial ``i`` with the option
-    values ``combos[c]``; ``chosen[i]``: the combination chosen on the other trials; ``loo_deg[i]``: trial ``i``
-    scored with it; ``default_deg[i]``: trial ``i`` with the registered defaults.
+    Parameters
+    ----------
+    estimator : str
+        The registered estimator.
+    metric : {'total', 'inclination'}
+        The fair RMSE scored: total for 9D, inclination for 6D.
+    options : tuple of str
+        The tuned options.
+    combos : tuple of tuple
+        The combinations of their values.
+    trials : tuple
+        The trials' names.
+    rmse_deg : ndarray, shape (T, C)
+        ``rmse_deg[i, c]``: RMSE of trial ``i`` with the option values ``combos[c]``, deg.
+    chosen : tuple
+        ``chosen[i]``: the combination chosen on the other trials.
+    loo_deg : ndarray, shape (T,)
+        ``loo_deg[i]``: trial ``i`` scored with it, deg.
+    default_deg : ndarray, shape (T,)
+        ``default_deg[i]``: trial ``i`` with the registered defaults, deg.
     """
 
     estimator: str
@@ -334,12 +431,12 @@ class LeaveOneOut:
 
     @property
     def loo_mean(self):
-        """Mean over the trials of the score with options chosen without that trial (the honest figure)."""
+        """Mean over the trials of the score with options chosen without that trial (the honest figure), deg."""
         return float(np.mean(self.loo_deg))
 
     @property
     def default_mean(self):
-        """Mean over the trials with the registered defaults (chosen on all of them)."""
+        """Mean over the trials with the registered defaults (chosen on all of them), deg."""
         return float(np.mean(self.default_deg))
 
 
@@ -351,13 +448,19 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
 
     Parameters
     ----------
-    trials : list of BroadTrial -- at least two
-    estimator : str -- a registered estimator
-    grid : dict {option: values} or None -- default ``TUNED[estimator]``; must hold the registered defaults
-    progress : bool -- tqdm bar over the runs
+    trials : list of fusionlab.datasets.BroadTrial
+        At least two trials.
+    estimator : str
+        A registered estimator.
+    grid : dict, optional
+        ``{option: values}``; default ``TUNED[estimator]``; must hold the registered defaults.
+    progress : bool, optional
+        A tqdm bar over the runs.
+
     Returns
     -------
     LeaveOneOut
+        The scores.
     """
     from tqdm.auto import tqdm
 
@@ -396,8 +499,23 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
 
 
 def format_loo(results, rows=()):
-    """Text: per tuned estimator, the eight-trial score (defaults), the leave-one-out score, their ratios to VQF
-    (the mean over the same trials in ``rows``, when VQF ran), and the options chosen when each trial was out."""
+    """Text: per tuned estimator, the eight-trial score (defaults) and the leave-one-out score.
+
+    Also their ratios to VQF (the mean over the same trials in ``rows``, when VQF ran), and the options chosen when
+    each trial was out.
+
+    Parameters
+    ----------
+    results : list of LeaveOneOut
+        One per tuned estimator.
+    rows : sequence of dict, optional
+        Result rows of :func:`run_benchmark` (:data:`TRIAL_COLUMNS`).
+
+    Returns
+    -------
+    str
+        The text.
+    """
     vqf = {}
     for name, key in (("vqf9", "total_rmse_deg"), ("vqf6", "inclination_rmse_deg")):
         vals = [r[key] for r in rows if r["estimator"] == name and not r["error"]]
@@ -427,6 +545,16 @@ def group_means(rows):
     """Mean of each metric over the trials of each BROAD group, per estimator (rows with :data:`GROUP_COLUMNS`).
 
     Samples per second is pooled: all samples over all seconds of the group's trials.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Result rows of :func:`run_benchmark` (:data:`TRIAL_COLUMNS`).
+
+    Returns
+    -------
+    list of dict
+        One row per (estimator, group).
     """
     order = datasets.group_names()
     by_est = {}
@@ -448,8 +576,20 @@ def group_means(rows):
 
 
 def format_table(rows):
-    """Text table: per estimator, the mean RMSEs over all benchmarked trials and the samples per second;
-    then the total RMSE (9D) or inclination RMSE (6D) per trial."""
+    """Text table: per estimator, the mean RMSEs over all benchmarked trials and the samples per second.
+
+    Then the total RMSE (9D) or inclination RMSE (6D) per trial.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Result rows of :func:`run_benchmark` (:data:`TRIAL_COLUMNS`).
+
+    Returns
+    -------
+    str
+        The table.
+    """
     means = [g for g in group_means(rows) if g["group"] == "all_trials"]
     lines = [f"{'estimator':<12} {'src':<9} {'sens':<4} {'trials':>6} {'total':>8} {'heading':>8} {'incl':>8} "
              f"{'total*':>8} {'samples/s':>11}"]
@@ -482,7 +622,22 @@ def format_table(rows):
 
 
 def write_csv(rows, path, columns=TRIAL_COLUMNS):
-    """Write result rows to ``path`` (CSV with a header; floats with 6 significant digits)."""
+    """Write result rows to ``path`` (CSV with a header; floats with 6 significant digits).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Result rows.
+    path : str or pathlib.Path
+        The file to write.
+    columns : sequence of str, optional
+        The columns, in order.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
@@ -494,8 +649,22 @@ def write_csv(rows, path, columns=TRIAL_COLUMNS):
 
 
 def plot(rows, path=None):
-    """Figure: total, heading and inclination RMSE per trial group (grouped bars, one per estimator) and samples
-    per second per estimator. Saved to ``path`` when given; returns the figure."""
+    """Figure: total, heading and inclination RMSE per trial group, and samples per second per estimator.
+
+    Grouped bars, one per estimator.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Result rows of :func:`run_benchmark` (:data:`TRIAL_COLUMNS`).
+    path : str or pathlib.Path, optional
+        Save the figure there.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     import matplotlib.pyplot as plt
 
     gm = group_means(rows)
@@ -537,7 +706,18 @@ def plot(rows, path=None):
 
 
 def main(argv=None):
-    """Command line: ``python -m fusionlab.bench [--trials ...] [--out DIR] ...``; returns the exit code."""
+    """Command line: ``python -m fusionlab.bench [--trials ...] [--out DIR] ...``; returns the exit code.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
     p = argparse.ArgumentParser(prog="python -m fusionlab.bench", description=__doc__.split("\n")[0])
     p.add_argument("--trials", nargs="+", help="trial numbers or names (default: every trial available locally)")
     p.add_argument("--out", default=".bench", help="output folder for the CSV files and the figure (default .bench)")
