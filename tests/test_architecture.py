@@ -27,15 +27,20 @@ LAYERS = (
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}
 
 
-def fusionlab_imports(source: str):
-    """(module, line, text) for every import of a fusionlab module in ``source``, at any depth (functions too)."""
+def fusionlab_imports(source: str, depth: int = 0):
+    """(module, line, text) for every import of a fusionlab module in ``source``, at any depth (functions too).
+
+    ``depth`` is 1 for a file inside a package of the library (fusionlab/checks/): there ``..`` is fusionlab and
+    ``.`` the package itself (reported as ``"."``)."""
     found = []
     for node in ast.walk(ast.parse(source)):
         targets = []
         if isinstance(node, ast.ImportFrom):
-            if node.level == 1 and node.module is None:                   # from . import x, y
+            if 0 < node.level <= depth:                                   # from . import x, from ._core import y
+                targets = ["."]
+            elif node.level == depth + 1 and node.module is None:         # from . import x, y (.. in a package)
                 targets = [a.name for a in node.names]
-            elif node.level == 1:                                         # from .x import y
+            elif node.level == depth + 1:                                 # from .x import y (..x in a package)
                 targets = [node.module.split(".")[0]]
             elif node.level == 0 and node.module == "fusionlab":          # from fusionlab import x
                 targets = [a.name for a in node.names]
@@ -48,34 +53,45 @@ def fusionlab_imports(source: str):
 
 
 def plan_violations(sources: dict[str, str]) -> list[str]:
-    """One line per module without a row and per import that does not go strictly down the rows."""
+    """One line per module without a row and per import that does not go strictly down the rows.
+
+    ``sources`` maps a module name (``"kalman"``) or a file of a package (``"checks/_core"``) to its source; a
+    package is one module of the plan, its files import each other freely."""
     problems = []
-    for module, source in sorted(sources.items()):
-        if module == "__init__":
+    for key, source in sorted(sources.items()):
+        module, depth, path = key.split("/")[0], key.count("/"), f"fusionlab/{key}.py"
+        if key == "__init__":
             problems += [f"fusionlab/__init__.py:{line} `{text}`: the package imports none of its modules "
                          f"(`import fusionlab` stays light and cannot close a circle)"
                          for _, line, text in fusionlab_imports(source)]
             continue
         if module not in ROW:
-            problems.append(f"fusionlab.{module} has no row in the import plan: place it in LAYERS "
-                            f"(tests/test_architecture.py) and in README.md, Layout")
+            problem = (f"fusionlab.{module} has no row in the import plan: place it in LAYERS "
+                       f"(tests/test_architecture.py) and in README.md, Layout")
+            problems += [problem] if problem not in problems else []
             continue
-        for target, line, text in fusionlab_imports(source):
-            if target == module:
+        for target, line, text in fusionlab_imports(source, depth):
+            if target in (module, "."):
                 continue
             if target not in ROW:
-                problems.append(f"fusionlab/{module}.py:{line} `{text}`: fusionlab.{target} has no row in the plan")
+                problems.append(f"{path}:{line} `{text}`: fusionlab.{target} has no row in the plan")
             elif ROW[target] >= ROW[module]:
                 where = "the same row" if ROW[target] == ROW[module] else "a row above"
-                problems.append(f"fusionlab/{module}.py:{line} `{text}`: {module} (row {ROW[module]}) imports "
+                problems.append(f"{path}:{line} `{text}`: {module} (row {ROW[module]}) imports "
                                 f"{target} (row {ROW[target]}, {where}); a module imports only from rows below "
                                 f"its own")
     return problems
 
 
+def library_sources() -> dict[str, str]:
+    """Every file of the library: ``"kalman"`` for fusionlab/kalman.py, ``"checks/_core"`` for a package's file."""
+    files = sorted(LIB.glob("*.py")) + sorted(LIB.glob("*/*.py"))
+    return {p.relative_to(LIB).with_suffix("").as_posix(): p.read_text(encoding="utf-8") for p in files}
+
+
 def test_every_library_import_goes_down_the_rows():
-    sources = {p.stem: p.read_text(encoding="utf-8") for p in sorted(LIB.glob("*.py"))}
-    assert "rotations" in sources and "estimators" in sources, f"no library found at {LIB}"
+    sources = library_sources()
+    assert "rotations" in sources and "checks/_core" in sources, f"no library found at {LIB}"
     problems = plan_violations(sources)
     assert not problems, "the library breaks its import plan:\n  " + "\n  ".join(problems)
 
@@ -89,8 +105,13 @@ def test_the_checker_sees_every_form_of_import_and_a_module_without_a_row():
         "kalman": "from fusionlab.widgets import slider\n",                           # upward, from a submodule
         "validate": "import numpy as np\nfrom . import guard\n",                      # same row
         "newcomer": "import numpy\n",
+        "checks/lab02": "from .. import kalman\nfrom ._core import Feedback\nfrom . import lab01\n"    # fine
+                        "from ..widgets import slider\n",                                 # same row, from a file
+        "checks/__init__": "from .. import guard\n",                                  # not fusionlab/__init__.py
     }
     assert plan_violations(sources) == [
+        "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 8) imports widgets (row 8, the same "
+        "row); a module imports only from rows below its own",
         "fusionlab/earth.py:1 `from fusionlab import metrics`: earth (row 3) imports metrics (row 3, the same row); "
         "a module imports only from rows below its own",
         "fusionlab/kalman.py:1 `from fusionlab.widgets import slider`: kalman (row 5) imports widgets (row 8, a row "

@@ -409,7 +409,7 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
         out = run("trial = datasets.load_trial(2, progress=False)\nfs = trial.fs")
         assert f"DataMissing: BROAD trial {NAME2} is missing" in out and "To get it" in out
         assert "Traceback" not in out and "fetch_trial" not in out
-        assert {"trial", "fs"} <= checks._DATA_NAMES
+        assert {"trial", "fs"} <= checks._core._DATA_NAMES
         out = run("q = trial.gyr * 2")
         assert "name 'trial' is not defined" in out and "could not run because data is missing" in out
         assert f"BROAD trial {NAME2} is missing" in out and "To get it" in out
@@ -420,7 +420,7 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
         assert "name 'my_answer' is not defined" in out and "an exercise that is not finished" in out
         assert "data is missing" not in out
     finally:
-        checks._DATA_NAMES.clear()
+        checks._core._DATA_NAMES.clear()
         InteractiveShell.clear_instance()
 
 

@@ -52,7 +52,7 @@ def test_a_failed_check_is_one_short_box_without_library_frames(run):
         shown = run[name]["shown"]
         assert run[name]["error"].ename == "Feedback"
         assert shown.startswith("✗ "), shown
-        assert "Traceback" not in shown and "checks.py" not in shown and "File " not in shown, shown
+        assert "Traceback" not in shown and "fusionlab/checks" not in shown and "File " not in shown, shown
         assert len(shown.splitlines()) == 2, shown                   # the message and the %tb footnote
     assert "your function is not written yet" in run["check_stub"]["shown"]
     assert "det(C) = -1: a reflection" in run["wrong"]["shown"]
@@ -60,7 +60,7 @@ def test_a_failed_check_is_one_short_box_without_library_frames(run):
 
 def test_percent_tb_shows_the_full_traceback_of_the_last_check(run):
     shown = run["tb"]["shown"]
-    assert "Traceback" in shown and "checks.py" in shown and "check_euler_to_dcm" in shown, shown
+    assert "Traceback" in shown and "fusionlab/checks/" in shown and "check_euler_to_dcm" in shown, shown
     assert "your function is not written yet" in shown
 
 

@@ -144,7 +144,7 @@ os.symlink({str(root / 'gradebook.db')!r}, '{LAB}.ipynb')  # the trusted side ne
 print('ATTACK symlink made')
 """),
         "write_lib": _guarded("lib", f"""
-with open({str(root / 'lib' / 'fusionlab' / 'checks.py')!r}, 'a') as f:
+with open({str(root / 'lib' / 'fusionlab' / 'checks' / '__init__.py')!r}, 'a') as f:
     f.write('\\nraise SystemExit\\n')
 print('ATTACK lib DONE')
 """),
@@ -313,7 +313,7 @@ def test_files_written_in_the_sandbox_land_in_a_private_folder(graded):
 
 def test_course_files_are_unchanged(graded):
     assert _tree_hash(graded["root"], skip=graded["keep"]) == graded["before"]["tree"]
-    checks = (graded["root"] / "lib" / "fusionlab" / "checks.py").read_text()
+    checks = (graded["root"] / "lib" / "fusionlab" / "checks" / "__init__.py").read_text()
     assert not checks.rstrip().endswith("raise SystemExit")
 
 

@@ -425,8 +425,9 @@ def _entry(obj):
 
 
 def _watched(name):
-    parts = name.split(".")                  # public modules only; numpy and scipy down to their subpackages
-    return (parts[0] in _WATCHED and not _any(p.startswith("_") for p in parts[1:])
+    parts = name.split(".")                  # public modules only (all of fusionlab's, fusionlab.checks._core too);
+    return (parts[0] in _WATCHED             # numpy and scipy down to their subpackages
+            and (parts[0] == "fusionlab" or not _any(p.startswith("_") for p in parts[1:]))
             and (_len(parts) <= 2 or parts[0] in ("fusionlab", "filterpy")))
 
 

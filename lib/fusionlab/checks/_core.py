@@ -1,0 +1,369 @@
+"""The shared part of the checks: :class:`Feedback`, how a student's function is called and compared, the hints
+for unfinished exercises, and :func:`forbids`, which keeps the library's own answer out of reach while a check runs.
+
+Nothing here knows a lab; the per-lab files (``lab00_mems_sensors.py`` ...) hold the checks themselves.
+"""
+from __future__ import annotations
+
+import ast
+import functools
+import importlib
+import re
+import traceback
+
+import numpy as np
+
+from .. import datasets, guard
+
+__all__ = ["Feedback", "friendly_errors", "describe_difference", "check_close"]
+
+class Feedback(AssertionError):
+    """A failed check, with a message meant for the student.
+
+    IPython shows it as one short box -- the message and its numbers, no traceback through this library -- by
+    calling ``_render_traceback_``. The full traceback stays one step away: ``%tb`` in the next cell shows it (every
+    rendering after the first one is the full traceback).
+    """
+
+    def _render_traceback_(self):
+        if getattr(self, "_shown", False):             # %tb asks again: the curious get the whole traceback
+            return _full_traceback(self)
+        self._shown = True
+        return _box("✗ " + str(self), "(%tb in a new cell shows where the check stopped)")
+
+
+_RED, _DIM, _END = "\x1b[1;31m", "\x1b[2m", "\x1b[0m"
+
+
+def _box(message, footnote=None):
+    """The lines IPython shows for a student-facing error: the message in bold red, an optional dim footnote."""
+    lines = [_RED + line + _END for line in str(message).splitlines() or [""]]
+    return lines + ([_DIM + footnote + _END] if footnote else [])
+
+
+def _full_traceback(exc):
+    """The usual IPython traceback of ``exc`` (plain Python formatting outside IPython)."""
+    ip = _ipython()
+    if ip is not None:
+        return ip.InteractiveTB.structured_traceback(type(exc), exc, exc.__traceback__)
+    return traceback.format_exception(type(exc), exc, exc.__traceback__)
+
+
+def _ipython():
+    try:
+        return get_ipython()  # noqa: F821 (defined inside IPython only)
+    except NameError:
+        return None
+
+
+def _ok(msg):
+    problems = guard._problems()          # a patched np.allclose (or a notebook hook) must not earn a ✓
+    if problems:
+        raise Feedback("this check cannot be trusted: " + "; ".join(problems[:3]) + ". Remove the code that does "
+                       "this and run the notebook again from the top.")
+    print("✓ " + msg)
+
+
+def _answered(name, value):
+    """Stop with a clear message while an exercise's answer is still the ``None`` placeholder."""
+    if value is None:
+        raise Feedback(f"{name} is still None: finish the exercise that sets it (replace the line "
+                       f"`raise NotImplementedError(...)`) and run that cell, then this one.")
+    return value
+
+
+def _num(x):
+    return f"{float(x):.4g}" if np.isfinite(x) else str(float(x))
+
+
+def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e-9):
+    """Where ``got`` differs from ``expected``, in words a student can act on; None when they agree.
+
+    Names the one row or column that is wrong when only one is, otherwise up to three entries with both values;
+    says so when the wrong entries only have their sign flipped, or the matrix is the transpose. Indices are
+    Python's (from 0), as the student writes them: "entry [1, 0] of P_post is 0.3 (expected 0.25)".
+    """
+    got, exp = np.asarray(got, dtype=float), np.asarray(expected, dtype=float)
+    if got.shape != exp.shape:
+        return f"{name} has shape {got.shape}; expected {exp.shape}"
+    bad = ~np.isclose(got, exp, atol=atol, rtol=rtol)
+    if not bad.any():
+        return None
+    if got.ndim == 0:
+        return f"{name} is {_num(got)} (expected {_num(exp)})"
+    if got.ndim == 2 and got.shape[0] == got.shape[1] and got.shape[0] > 1 and np.allclose(got, exp.T, atol=atol,
+                                                                                            rtol=rtol):
+        return f"{name} is the transpose of the expected matrix"
+    flipped = bool(np.allclose(got[bad], -exp[bad], atol=atol, rtol=rtol))
+    sign = " has the wrong sign" if flipped else " is wrong"
+
+    def vec(v):
+        return "[" + ", ".join(_num(x) for x in v) + "]"
+
+    if got.ndim == 2 and got.shape[1] > 1:
+        rows, cols = np.flatnonzero(bad.any(axis=1)), np.flatnonzero(bad.any(axis=0))
+        if len(rows) == 1 and len(cols) > 1:
+            r = rows[0]
+            return f"row [{r}, :] of {name}{sign}: {vec(got[r])} (expected {vec(exp[r])}); the other rows are right"
+        if len(cols) == 1 and len(rows) > 1:
+            c = cols[0]
+            return (f"column [:, {c}] of {name}{sign}: {vec(got[:, c])} (expected {vec(exp[:, c])}); the other "
+                    f"columns are right")
+    idx = list(zip(*np.nonzero(bad)))
+    where = [f"[{', '.join(str(int(i)) for i in ix)}]" for ix in idx]
+    if len(idx) == 1:
+        return f"entry {where[0]} of {name}{sign}: {_num(got[idx[0]])} (expected {_num(exp[idx[0]])})"
+    shown = "; ".join(f"{w} is {_num(got[ix])} (expected {_num(exp[ix])})" for w, ix in zip(where[:3], idx[:3]))
+    return (f"{len(idx)} of the {got.size} entries of {name} {'have the wrong sign' if flipped else 'differ'}: "
+            f"{shown}{'; ...' if len(idx) > 3 else ''}")
+
+
+def _where(got, expected, name, **tol):
+    """:func:`describe_difference` for a result already known to be wrong (its largest error if no entry stands
+    out at the given tolerance)."""
+    return describe_difference(got, expected, name, **tol) or (
+        f"{name} differs by up to {np.max(np.abs(np.asarray(got, float) - np.asarray(expected, float))):.3g}")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Unfinished exercises and the NameErrors they cause downstream
+# ---------------------------------------------------------------------------------------------------------------
+# The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (nbgrader_config.py names the
+# exercise). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
+# NameError looks up the last cell that assigns the missing name, and if that cell stopped at an exercise, says
+# which one. Run All (whose cells are tagged raises-exception in the release) then reads as a to-do list.
+
+_HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
+         "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
+         "cell again.")
+_STUB = re.compile(r"\b(exercise|question)\s+([0-9]+[a-z]?)\s+not attempted yet")
+_stopped = {}                            # execution count of a cell that stopped -> the exercises it waits for
+
+
+def _unfinished(evalue):
+    """``'exercise 4'`` when ``evalue`` is a release stub's NotImplementedError, else None."""
+    m = _STUB.search(str(evalue))
+    return f"{m.group(1)} {m.group(2)}" if m else None
+
+
+def _assigned_names(source):
+    """Every name a cell's code binds (assignments, loops, imports, definitions); empty if it does not parse."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:                  # IPython magics and the like: nothing to learn
+        return set()
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+    names |= {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    names |= {(a.asname or a.name).split(".")[0] for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
+              for a in n.names}
+    return names
+
+
+_DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
+
+
+def _data_hint(missing):
+    return ("\n→ This name is made by an earlier cell that could not run because data is missing, not because of "
+            "your code:\n" + "\n".join(missing.values()) + "\nOnce the data is there, run the notebook again from "
+            "the top.")
+
+
+def _waits_for(shell, name, count):
+    """The exercises the last cell before ``count`` that assigns ``name`` stopped at (empty if none is known)."""
+    history = shell.user_ns.get("In", [])
+    for k in range(min(count, len(history)) - 1, 0, -1):
+        if name in _assigned_names(shell.transform_cell(history[k]) if "%" in history[k] else history[k]):
+            return _stopped.get(k, [])
+    return []
+
+
+def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
+    """IPython handler for NameError, NotImplementedError and DataMissing (see the section comment)."""
+    count = shell.execution_count - 1                         # IPython counts the running cell before it runs
+    hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
+    if issubclass(etype, datasets.DataMissing):               # its own short message (_render_traceback_)
+        _DATA_NAMES.update(_assigned_names(hist[-1]))
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    if issubclass(etype, NameError):
+        name = getattr(evalue, "name", None) or (re.findall(r"'([^']+)'", str(evalue)) or [""])[0]
+        missing = datasets.missing_trials()
+        if missing and name in _DATA_NAMES:                   # the name waits for data, not for an exercise
+            _DATA_NAMES.update(_assigned_names(hist[-1]))
+            if "data is missing" not in str(evalue):
+                evalue = etype(f"{evalue}{_data_hint(missing)}")
+            shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+            return None
+        waits = _waits_for(shell, name, count) if name else []
+        if waits:
+            _stopped[count] = waits
+        if _HINT.split("—")[0] not in str(evalue):
+            todo = " and ".join(waits)
+            hint = (_HINT if not waits else
+                    _HINT.split("—")[0] + f"— it stopped because {todo} is not finished yet. Finish {todo} (its "
+                    f"answer cell above), run it, then run this cell again.")
+            evalue = etype(f"{evalue}{hint}")
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    what = _unfinished(evalue)
+    if what is None:                                          # a NotImplementedError of the student's own
+        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    _stopped[count] = [what]
+    last = tb
+    while last.tb_next is not None:
+        last = last.tb_next
+    here = last.tb_frame.f_code.co_name == "<module>"           # the stub line of this very cell
+    msg = (f"✗ {what.capitalize()} is not done yet: replace the line `raise NotImplementedError(...)` in this cell "
+           f"with your answer, then run the cell again." if here else
+           f"✗ This cell uses your answer to {what}, which is not written yet: finish {what} (above), run it, "
+           f"then run this cell again.")
+    shell._get_exc_info((etype, evalue, tb))                  # so that %tb shows the whole traceback
+    shell._showtraceback(etype, evalue, _box(msg, "(%tb in a new cell shows the full traceback)"))
+    return None
+
+
+def friendly_errors():
+    """In a notebook, explain unfinished exercises: a stub's NotImplementedError becomes one line saying which
+    exercise to finish, and a ``NameError`` says which earlier cell (and exercise) should have made the name --
+    unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
+
+    A cell that raises :class:`fusionlab.datasets.DataMissing` has the names it would have made remembered; a
+    ``NameError`` on one of them says that data is missing and how to get it (and passes the remembering on to the
+    cell it stops, so the knock-on cells say it too).
+
+    Runs when this module is imported (every lab imports it); calling it again changes nothing. Does nothing
+    outside IPython.
+    """
+    ip = _ipython()
+    if ip is None or getattr(ip, "_fusionlab_custom_tb", None) is ip.CustomTB:
+        return
+    ip.set_custom_exc((NameError, NotImplementedError, datasets.DataMissing), _show_unfinished)
+    ip._fusionlab_custom_tb = ip.CustomTB
+
+
+guard.allow_handler(_show_unfinished)   # the grading guard accepts this one custom exception handler
+friendly_errors()                        # every lab imports checks: its NameErrors then say what to do
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Calling the student's function: one place for the unfinished stub and the forgotten return
+# ---------------------------------------------------------------------------------------------------------------
+
+def _answer(fn, *args, what, returns=True):
+    """``fn(*args)``, stopping with a clear message when it is still the stub or (if ``returns``) returns None."""
+    try:
+        out = fn(*args)
+    except NotImplementedError:
+        raise Feedback(f"{what} is not written yet: replace `raise NotImplementedError(...)` with your code.") from None
+    if returns and out is None:
+        raise Feedback(f"{what} returned None -- did you forget the `return` statement?")
+    return out
+
+
+def _call(fn, *args, what, dtype=float):
+    """A student's function's result as an array (see :func:`_answer`). ``dtype=None`` keeps the returned type
+    (complex values, for checks that diagnose it)."""
+    return np.asarray(_answer(fn, *args, what=what), dtype=dtype)
+
+
+def _call_tuple(fn, args, n, what):
+    """A student's tuple return as a list of ``n`` float arrays (see :func:`_answer`)."""
+    out = _answer(fn, *args, what=what)
+    if not isinstance(out, (tuple, list)) or len(out) != n:
+        got = f"a {type(out).__name__}" + (f" of length {len(out)}" if isinstance(out, (tuple, list)) else "")
+        raise Feedback(f"{what} must return {n} things (a tuple); it returned {got}.")
+    return [np.asarray(o, dtype=float) for o in out]
+
+
+def _same(a, b, tol=1e-9):
+    try:                                   # through the guard: an answer cell cannot patch this comparison
+        guard.assert_close(a, b, what="", rtol=1e-9, atol=tol)
+    except AssertionError:
+        return False
+    return np.shape(a) == np.shape(b)
+
+
+def _first_match(value, guesses):
+    for cand, msg in guesses:
+        if _same(value, cand):
+            return msg
+    return None
+
+
+def _general_case(got, ref, case, advice, rtol=1e-9, atol=1e-12):
+    """The last step of a check: the student's answer on a general case like the hidden test's (other sizes,
+    other constants), after the lab's own cases. ``got`` is a zero-argument callable (the student's call)."""
+    try:
+        out = _answer(got, what="your function")
+    except (ValueError, IndexError, TypeError) as exc:
+        raise Feedback(f"right on the lab's cases, but on {case} your function fails ({type(exc).__name__}: "
+                       f"{exc}). {advice}") from None
+    out, ref = np.asarray(out, dtype=float), np.asarray(ref, dtype=float)
+    if out.shape != ref.shape or not np.allclose(out, ref, rtol=rtol, atol=atol):
+        raise Feedback(f"right on the lab's cases, but not on {case}. {advice}")
+
+
+def check_close(name, value, expected, tol, hint=""):
+    """Check that ``value`` is ``expected`` within ``tol`` (absolute), with an optional hint on failure."""
+    value = np.asarray(_answered(name, value), dtype=float)
+    expected = np.asarray(expected, dtype=float)
+    if value.shape != expected.shape:
+        raise Feedback(f"{name} should have shape {expected.shape}; got {value.shape}")
+    err = float(np.max(np.abs(value - expected))) if value.size else 0.0
+    if not np.isfinite(err) or err > tol:
+        raise Feedback(f"{name} is off by {err:.3g} (tolerance {tol:g}). {hint}".strip())
+    _ok(f"{name} is right (within {tol:g}).")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Every check runs the student's function with the library's own answer out of reach: while it runs, the functions
+# a check names in @forbids(...) raise "exercise N asks you to write this yourself" (fusionlab.guard.forbid), so a
+# check cannot print ✓ for an answer that only calls them.
+# ---------------------------------------------------------------------------------------------------------------
+_REFERENCES = {}                         # check name -> the dotted names it forbids (filled by @forbids)
+
+
+def _resolve(dotted):
+    """``"kalman.update"`` -> fusionlab.kalman.update; other packages by their full name (``"numpy.arctan2"``)."""
+    parts = dotted.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        for prefix in ("fusionlab.", ""):
+            try:
+                obj = importlib.import_module(prefix + ".".join(parts[:i]))
+            except ImportError:
+                continue
+            for attr in parts[i:]:
+                obj = getattr(obj, attr)
+            return obj
+    raise ImportError(dotted)
+
+
+def forbids(*references):
+    """Decorate a check so that every function it is given runs with ``references`` forbidden.
+
+    ``references`` are dotted names: ``"kalman.update"`` is fusionlab's, ``"numpy.arctan2"`` a package's. They are
+    looked up when the check runs (the table is :data:`_REFERENCES`, which a test may empty to hand the library's
+    own functions to a check)."""
+    def decorate(check):
+        _REFERENCES[check.__name__] = references
+
+        def guarded(fn):
+            if not callable(fn):
+                return fn
+
+            @functools.wraps(fn)
+            def call(*args, **kwargs):
+                try:
+                    names = _REFERENCES.get(check.__name__, ())
+                    with guard.forbid(*(_resolve(n) for n in names), exercise=None):
+                        return fn(*args, **kwargs)
+                except guard.ForbiddenCall as err:
+                    raise Feedback(str(err)) from None
+            return call
+
+        @functools.wraps(check)
+        def run(*args, **kwargs):
+            return check(*(guarded(a) for a in args), **kwargs)
+        return run
+    return decorate

@@ -1,0 +1,141 @@
+"""Lab 05, the 6DOF / 9DOF indirect Kalman filters (seed 002): the visible checks of its exercises (see
+:mod:`fusionlab.checks`).
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+
+from .. import freescale as fz, rotations
+from ._core import Feedback, _answer, _call, forbids, _general_case, _ok, _where
+
+__all__ = ["check_measurement_matrix", "check_process_noise", "check_measurement_noise", "check_gain", "check_step"]
+
+
+@forbids("freescale.measurement_matrix")
+def check_measurement_matrix(fn):
+    """Check a student's ``fn(dt) -> C`` (7×10; seed 002 eq 141 as reconstructed from eqs 137-139)."""
+    for dt in (0.04, 0.01):
+        C = _call(fn, dt, what="your C")
+        ref = fz.measurement_matrix(dt, 9)
+        if C.shape != (7, 10):
+            raise Feedback(f"C maps the 10 error states to the 7 measurements: shape (7, 10); got {C.shape}")
+        if np.allclose(C, ref, atol=1e-15):
+            continue
+        a2 = fz.alpha(dt) / 2
+        if np.isclose(C[0, 6], a2):
+            raise Feedback("the offset block has the wrong sign: an over-estimated offset *under*-estimates the rate "
+                           "(eq 101), so it is -(α/2) I3.")
+        if np.isclose(abs(C[0, 6]), 2 * a2):
+            raise Feedback("use α/2, not α: the quaternion vector is a half angle (eq 137).")
+        if np.isclose(abs(C[0, 6]), dt / 2):
+            raise Feedback("α = π δt / 180 (eq 140): the offset is in °/s and the quaternion error in radians.")
+        raise Feedback(f"C is not eq 141: {_where(C, ref, 'C', atol=1e-15)}. Blocks [I3 0 -(α/2)I3 0], "
+                       "[0 I3 -(α/2)I3 0], [0 0 0 1].")
+    _ok("C is the 7×10 matrix of eqs 137-139.")
+
+
+@forbids("freescale.process_noise")
+def check_process_noise(fn):
+    """Check a student's ``fn(x_prev, dt) -> Q_w`` (10×10; seed 002 eqs 142-159, v5.00 constants)."""
+    rng = np.random.default_rng(142)
+    for x in (np.zeros(10), np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [1.5]])):
+        Q = _call(fn, x, 0.04, what="your Q_w")
+        ref = fz.process_noise(x, 0.04)
+        if Q.shape != (10, 10):
+            raise Feedback(f"Q_w is 10×10; got {Q.shape}")
+        if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
+            continue
+        if not np.allclose(Q, Q.T):
+            raise Feedback("Q_w must be symmetric: put Q_gb in both the (g, b) and the (b, g) blocks.")
+        if np.isclose(Q[0, 6], fz.alpha(0.04) / 2 * 0.5 + x[0] * x[6]):
+            raise Feedback("the (g, b) block is Q_gb = diag(q_g b_ε) - (α/2) Q_wb: minus, not plus (eq 151).")
+        if not np.isclose(Q[9, 9], x[9] ** 2 + 20.0):
+            raise Feedback("Q_δδ = δ_ε² + Q_wδ with Q_wδ = 20 deg² (eqs 157-158).")
+        if not np.isclose(Q[6, 6], x[6] ** 2 + 0.5):
+            raise Feedback("Q_bb = diag(b_ε²) + Q_wb I3 with Q_wb = 0.5 (°/s)² (eqs 155-156).")
+        raise Feedback(f"Q_w is not eqs 142-159: {_where(Q, ref, 'Q_w', atol=1e-15)}. Q_gg = diag(q_g²) + (α/2)²"
+                       "(diag(b_ε²) + (Q_vY + Q_wb) I3).")
+    x5 = np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [0.7]])
+    tun = dataclasses.replace(fz.V500, Q_vY=1e3, Q_wb=2.0, Q_wdelta=5.0)
+    _general_case(lambda: fn(x5, 0.02, 1e3, 2.0, 5.0), fz.process_noise(x5, 0.02, tun),
+                  "dt = 0.02 s with Q_vY = 1e3, Q_wb = 2, Q_wδ = 5", "Use the arguments dt, Q_vY, Q_wb and "
+                  "Q_wdelta, not the v5.00 numbers, inside your function.", rtol=1e-9, atol=1e-15)
+    _ok("Q_w matches eqs 142-159 at zero and non-zero previous errors, and for other constants.")
+
+
+@forbids("freescale.measurement_noise")
+def check_measurement_noise(fn):
+    """Check a student's ``fn(qvgqa, qvbqd, dt) -> Q_v`` (7×7; seed 002 eqs 160-165 with the 7 µT² floor)."""
+    for qa, qd in ((0.0, 0.0), (0.006, 50.0), (1.0, 3.0)):
+        Q = _call(fn, qa, qd, 0.04, what="your Q_v")
+        ref = fz.measurement_noise(qa, qd, 0.04)
+        if Q.shape != (7, 7):
+            raise Feedback(f"Q_v is 7×7; got {Q.shape}")
+        if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
+            continue
+        if qd < 7 and np.isclose(Q[3, 3], 0.25 * qd / 2500 + ref[0, 0] - 0.25 * qa, rtol=1e-9):
+            raise Feedback("apply the floor: max(QvBQd, 7 µT²) (FQVBQD_MIN_9DOF_GBY_KALMAN, §2.3).")
+        if np.isclose(Q[0, 0], qa + (ref[0, 0] - 0.25 * qa)) and qa > 0:
+            raise Feedback("the accelerometer term is ¼ QvGQa: the quaternion vector is a half angle (eq 162).")
+        if not np.isclose(Q[6, 6], ref[6, 6]):
+            raise Feedback(f"Q_v(δ) should be (180/π)² (QvGQa + max(QvBQd, 7)/B²) = {ref[6, 6]:.5g} deg² (eq 164); "
+                           f"got {Q[6, 6]:.5g}.")
+        raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v is not eqs 162-164: "
+                       f"{_where(Q, ref, 'Q_v', atol=1e-15)}.")
+    _general_case(lambda: fn(0.5, 900.0, 0.04, B=45.0), fz.measurement_noise(0.5, 900.0, 0.04, B=45.0),
+                  "a field of B = 45 µT (keyword B)", "Give your function the keyword B (default 50 µT) and use it "
+                  "in QvBQd/B².", rtol=1e-9, atol=1e-15)
+    _ok("Q_v matches eqs 162-164, including the 7 µT² floor and another field strength.")
+
+
+@forbids("freescale.kalman_gain")
+def check_gain(fn):
+    """Check a student's ``fn(Q_w, C, Q_v) -> K`` (seed 002 eq 170)."""
+    C, Qw, Qv = fz.measurement_matrix(0.04), fz.process_noise(np.zeros(10), 0.04), fz.measurement_noise(0.0, 0.0, 0.04)
+    K = _call(fn, Qw, C, Qv, what="your gain")
+    ref = fz.kalman_gain(Qw, C, Qv)
+    if K.shape != (10, 7):
+        raise Feedback(f"K maps 7 measurements to 10 states: shape (10, 7); got {K.shape}")
+    if not np.allclose(K, ref, rtol=1e-9, atol=1e-15):
+        if np.allclose(K, Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T), rtol=1e-6):
+            raise Feedback("Q_v is missing from the innovation covariance C Q_w Cᵀ + Q_v.")
+        raise Feedback("K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ (eq 170; P⁻ = Q_w because A = 0).")
+    x7 = np.concatenate([np.random.default_rng(170).normal(0, 0.05, 6), [0.4, -0.8, 1.1], [2.0]])
+    Qw7, Qv7 = fz.process_noise(x7, 0.04), fz.measurement_noise(0.02, 40.0, 0.04)
+    _general_case(lambda: fn(Qw7, C, Qv7), fz.kalman_gain(Qw7, C, Qv7), "non-zero previous errors and noisy "
+                  "sensors (a full, not block-diagonal, Q_w)", "Use the matrix formula K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ "
+                  "with np.linalg.inv or solve, not per-axis scalars.", rtol=1e-9, atol=1e-14)
+    _ok(f"K is right: K_gg = {K[0, 0]:.7f}, K_bg = {K[6, 0]:.7f}, K_δ = {K[9, 6]:.7f}.")
+
+
+@forbids("freescale.Kalman9.step", "freescale.run_fast9")
+def check_step(fn):
+    """Check a student's ``fn(kf, gyr_dps, G, B_c)`` that advances a ``freescale.Kalman9`` one step in place."""
+    rng = np.random.default_rng(170)
+    n = 25
+    w = np.tile([5.0, -3.0, 8.0], (8 * n, 1))
+    rec = fz.synthetic_recording(w, rotations.euler_to_quat([0.3, -0.2, 0.9]), "NED", bias_dps=(1.0, -0.5, 0.3),
+                                 sigma_gyr=0.1, sigma_acc=0.003, sigma_mag=1.0, seed=int(rng.integers(1000)))
+    mine, ref = fz.Kalman9("NED"), fz.Kalman9("NED")
+    mine.lock(rec["acc"][:8].mean(0), rec["mag"][:8].mean(0))
+    ref.lock(rec["acc"][:8].mean(0), rec["mag"][:8].mean(0))
+    ref.delta_deg = mine.delta_deg = 55.0                                 # so the inclination path is exercised
+    for k in range(n):
+        sl = slice(8 * k, 8 * k + 8)
+        args = (rec["gyr"][sl], rec["acc"][sl].mean(0), rec["mag"][sl].mean(0))
+        before = copy.deepcopy(mine)
+        _answer(fn, mine, *args, what="your step", returns=False)          # it advances kf in place
+        ref.step(*args)
+        dq = float(np.degrees(rotations.quat_angle_between(mine.q, ref.q)))
+        if dq < 1e-7 and np.allclose(mine.b_dps, ref.b_dps, atol=1e-9) and abs(mine.delta_deg - ref.delta_deg) < 1e-9:
+            continue
+        if k == 0 and np.allclose(mine.q, before.q):
+            raise Feedback("kf.q did not change: store the new a posteriori quaternion in kf.q (and b̂, δ̂, x_err).")
+        raise Feedback(f"step {k + 1}: q differs by {dq:.3g}°, b̂ by {np.max(np.abs(mine.b_dps - ref.b_dps)):.3g} °/s, "
+                       f"δ̂ by {abs(mine.delta_deg - ref.delta_deg):.3g}°. Usual slips: the gyro offset not subtracted "
+                       "before integrating; the eCompass built with δ6 instead of the previous δ̂; the correction "
+                       "quaternion not conjugated ((√(1-|v|²), -v)); b̂ and δ̂ updated with + instead of -.")
+    _ok(f"{n} steps agree with fusionlab.freescale.Kalman9 (quaternion, offset and inclination).")
