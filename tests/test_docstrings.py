@@ -28,6 +28,7 @@ DOCUMENTED = [
     "bench",
     "calibration",
     "correlation",
+    "datasets",
     "dcm",
     "earth",
     "estimators",

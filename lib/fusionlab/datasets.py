@@ -101,9 +101,12 @@ class _BadDownload(Exception):
 class DataMissing(FileNotFoundError):
     """A trial that is not on this computer and could not be downloaded: the message says how to get it.
 
-    Attributes
+    Parameters
     ----------
-    trial : str -- the trial's full name
+    trial : str
+        The trial's full name (kept as the attribute ``trial``).
+    message : str
+        Where the loader looked and how to get the file.
     """
 
     def __init__(self, trial, message):
@@ -125,7 +128,19 @@ _MISSING = {}                                              # trial name -> messa
 
 @dataclass(frozen=True)
 class TrialInfo:
-    """One trial of BROAD as ``trials.json`` lists it."""
+    """One trial of BROAD as ``trials.json`` lists it; each field is an attribute of the same name.
+
+    Parameters
+    ----------
+    number : int
+        Trial number, 1-39.
+    name : str
+        Full name, e.g. ``'02_undisturbed_slow_rotation_B'``.
+    description : str
+        The dataset's description of the trial.
+    groups : tuple of str
+        The groups the trial belongs to (see :func:`group_names`).
+    """
     number: int
     name: str
     description: str
@@ -157,9 +172,23 @@ def _known_sums():
 def list_trials(group=None):
     """The 39 trials of BROAD, in order, optionally only those of one ``group`` (see :func:`group_names`).
 
+    Parameters
+    ----------
+    group : str, optional
+        Keep only the trials of this group (default: all).
+
     Returns
     -------
     list of TrialInfo
+        Number, name, description and groups of each trial.
+
+    Examples
+    --------
+    >>> from fusionlab import datasets
+    >>> len(datasets.list_trials()), len(datasets.list_trials("undisturbed"))
+    (39, 23)
+    >>> datasets.list_trials()[1].name
+    '02_undisturbed_slow_rotation_B'
     """
     trials, groups = _catalogue()
     if group is None:
@@ -170,16 +199,43 @@ def list_trials(group=None):
 
 
 def group_names():
-    """Names of the trial groups, as ``trials.json`` orders them (``all_trials``, ``undisturbed``, ...)."""
+    """Names of the trial groups, as ``trials.json`` orders them (``all_trials``, ``undisturbed``, ...).
+
+    Returns
+    -------
+    list of str
+        The group names.
+    """
     return list(_catalogue()[1])
 
 
 def trial_name(name_or_number):
     """Full trial name from a number (``2``, ``'2'``, ``'02'``) or a name (with or without ``.mat``).
 
+    Parameters
+    ----------
+    name_or_number : int or str
+        A trial number 1-39 (int or digits) or a trial name.
+
+    Returns
+    -------
+    str
+        The full trial name.
+
     Raises
     ------
-    ValueError -- for a number outside 1..39 or a name that is not a BROAD trial (the message suggests close names)
+    ValueError
+        For a number outside 1..39 or a name that is not a BROAD trial (the message suggests close names).
+
+    Examples
+    --------
+    >>> from fusionlab import datasets
+    >>> datasets.trial_name(2) == datasets.trial_name("02.mat") == "02_undisturbed_slow_rotation_B"
+    True
+    >>> datasets.trial_name(40)
+    Traceback (most recent call last):
+        ...
+    ValueError: name_or_number must be a trial number from 1 to 39; got 40 (datasets.broad.list_trials() lists them)
     """
     trials, _ = _catalogue()
     names = [t.name for t in trials]
@@ -207,7 +263,18 @@ def trial_name(name_or_number):
 
 
 def known_sha256(name_or_number):
-    """The SHA-256 (hex) fusionlab knows for a trial's ``.mat`` file, or None if it knows none."""
+    """The SHA-256 (hex) fusionlab knows for a trial's ``.mat`` file, or None if it knows none.
+
+    Parameters
+    ----------
+    name_or_number : int or str
+        A trial number or name (see :func:`trial_name`).
+
+    Returns
+    -------
+    str or None
+        64 hexadecimal digits, or None.
+    """
     return _known_sums().get(trial_name(name_or_number) + ".mat")
 
 
@@ -221,6 +288,11 @@ def cache_dir():
 
     ``$FUSIONLAB_CACHE/broad`` if that variable is set, else the platform's user cache: ``$XDG_CACHE_HOME`` or
     ``~/.cache`` on Linux, ``~/Library/Caches`` on macOS, ``%LOCALAPPDATA%`` on Windows, then ``fusionlab/broad``.
+
+    Returns
+    -------
+    pathlib.Path
+        The cache folder.
     """
     env = os.environ.get(ENV_CACHE)
     if env:
@@ -288,12 +360,24 @@ def _check_user_file(path, expected):
 
 
 def shipped_dir():
-    """The course's ``data/broad/`` folder if it exists (see :data:`SHIPPED_DIR`), else None."""
+    """The course's ``data/broad/`` folder if it exists (see :data:`SHIPPED_DIR`), else None.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder.
+    """
     return SHIPPED_DIR if SHIPPED_DIR is not None and Path(SHIPPED_DIR).is_dir() else None
 
 
 def missing_trials():
-    """Trials that a load of this session could not find nor download: ``{name: message}`` (a copy)."""
+    """Trials that a load of this session could not find nor download: ``{name: message}`` (a copy).
+
+    Returns
+    -------
+    dict of str to str
+        Trial name to the message of its :class:`DataMissing`.
+    """
     return dict(_MISSING)
 
 
@@ -305,7 +389,18 @@ def _missing(name, message):
 def available_trials(folder=None):
     """Names of the trials present without a download: those in ``folder`` when it is given (where
     :func:`load_trial` would then look), else those in the course's ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the
-    cache."""
+    cache.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        Look only here (it must exist).
+
+    Returns
+    -------
+    list of str
+        Full names of the trials found, in trial order.
+    """
     if folder is not None:
         dirs = [_folder(folder)]
     else:
@@ -318,20 +413,29 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
 
     Parameters
     ----------
-    name_or_number : int or str -- see :func:`trial_name`
-    folder : str or Path or None -- look only here (the file must be there)
-    download : bool -- allow a download when the trial is not in ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the
-        cache
-    progress : bool -- show a tqdm bar while downloading
+    name_or_number : int or str
+        A trial number or name (see :func:`trial_name`).
+    folder : str or os.PathLike, optional
+        Look only here (the file must be there).
+    download : bool, default True
+        Allow a download when the trial is not in ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the cache.
+    progress : bool, default True
+        Show a tqdm bar while downloading.
+
     Returns
     -------
     pathlib.Path
+        The verified ``.mat`` file.
+
     Raises
     ------
-    ValueError -- unknown trial; a file of yours (``folder``, ``FUSIONLAB_BROAD_DIR``) fails its checksum;
-        a download still truncated or failing its checksum after one retry
-    FileNotFoundError -- the file is not in the ``folder`` given
-    DataMissing -- (a FileNotFoundError) the trial is nowhere on this computer and cannot be downloaded
+    ValueError
+        Unknown trial; a file of yours (``folder``, ``FUSIONLAB_BROAD_DIR``) fails its checksum; a download still
+        truncated or failing its checksum after one retry.
+    FileNotFoundError
+        The file is not in the ``folder`` given.
+    DataMissing
+        (A FileNotFoundError.) The trial is nowhere on this computer and cannot be downloaded.
     """
     name = trial_name(name_or_number)
     path = _fetch(name, folder, download, progress)
@@ -456,15 +560,28 @@ def _download(url, dest, expected, progress):
 
 @dataclass(frozen=True, eq=False, repr=False)
 class BroadTrial:
-    """One BROAD trial (arrays read-only).
+    """One BROAD trial (arrays read-only); each field is an attribute of the same name.
 
-    Attributes
+    Parameters
     ----------
-    name : str; groups : tuple of str; description : str
-    fs : float, Hz
-    gyr : (N, 3) rad/s; acc : (N, 3) m/s² (+g up at rest); mag : (N, 3) µT -- sensor frame
-    quat_ref : (N, 4) -- optical reference, body→ENU ``[w, x, y, z]``, NaN rows where lost
-    movement : (N,) bool -- samples scored by the BROAD metrics
+    name : str
+        Full trial name.
+    groups : tuple of str
+        The groups the trial belongs to.
+    description : str
+        The dataset's description of the trial.
+    fs : float
+        Sample rate, Hz.
+    gyr : ndarray, shape (N, 3)
+        Gyro readings, rad/s, sensor frame.
+    acc : ndarray, shape (N, 3)
+        Accelerometer readings, m/s² (+g on the up axis at rest), sensor frame.
+    mag : ndarray, shape (N, 3)
+        Magnetometer readings, µT, sensor frame.
+    quat_ref : ndarray, shape (N, 4)
+        Optical reference, body→ENU ``[w, x, y, z]``, NaN rows where the markers were lost.
+    movement : ndarray of bool, shape (N,)
+        Samples scored by the BROAD metrics.
     """
     name: str
     groups: tuple
@@ -481,16 +598,29 @@ class BroadTrial:
 
     @property
     def t(self):
-        """Time of each sample, s, from 0."""
+        """ndarray, shape (N,): time of each sample, s, from 0."""
         return np.arange(len(self)) / self.fs
 
     @property
     def duration(self):
-        """Length of the recording, s."""
+        """float: length of the recording, s."""
         return len(self) / self.fs
 
     def slice(self, start=None, stop=None):
-        """The same trial cut to samples ``start:stop`` (for a quick look or a fast test)."""
+        """The same trial cut to samples ``start:stop`` (for a quick look or a fast test).
+
+        Parameters
+        ----------
+        start : int, optional
+            First sample (Python slice semantics: negative counts from the end).
+        stop : int, optional
+            One past the last sample.
+
+        Returns
+        -------
+        BroadTrial
+            The cut trial (at least one sample).
+        """
         s = slice(start, stop)
         n = len(self.gyr[s])
         if n == 0:
@@ -560,17 +690,39 @@ def load_trial(name_or_number, folder=None, download=True, progress=True):
 
     Parameters
     ----------
-    name_or_number : int or str -- e.g. ``2``, ``'02'`` or ``'02_undisturbed_slow_rotation_B'``
-    folder : str or Path or None -- a folder holding the ``.mat`` files (the file must be there)
-    download : bool -- allow a download into the cache when the trial is not found locally
-    progress : bool -- show a progress bar while downloading
+    name_or_number : int or str
+        E.g. ``2``, ``'02'`` or ``'02_undisturbed_slow_rotation_B'``.
+    folder : str or os.PathLike, optional
+        A folder holding the ``.mat`` files (the file must be there).
+    download : bool, default True
+        Allow a download into the cache when the trial is not found locally.
+    progress : bool, default True
+        Show a progress bar while downloading.
+
     Returns
     -------
     BroadTrial
+        The recording, its reference and its movement mask.
+
     Raises
     ------
-    ValueError, FileNotFoundError, DataMissing -- see :func:`fetch_trial`; ValueError also for a file that is not
-        a BROAD trial
+    ValueError
+        See :func:`fetch_trial`; also for a file that is not a BROAD trial.
+    FileNotFoundError
+        See :func:`fetch_trial`.
+    DataMissing
+        See :func:`fetch_trial`.
+
+    Examples
+    --------
+    Trial 2 ships with the course in ``data/broad/``:
+
+    >>> from fusionlab import datasets
+    >>> trial = datasets.load_trial(2, download=False)
+    >>> trial
+    BroadTrial('02_undisturbed_slow_rotation_B', 53240 samples at 285.71 Hz (186.3 s), movement 32280 samples, reference lost in 1706)
+    >>> trial.gyr.shape, trial.quat_ref.shape
+    ((53240, 3), (53240, 4))
     """
     name = trial_name(name_or_number)
     path = fetch_trial(name, folder=folder, download=download, progress=progress)
@@ -597,6 +749,22 @@ def load_reference_position(name_or_number, folder=None, download=True, progress
 
     The same file, search order and checksum as :func:`load_trial` (so the rows match its samples). Frame: the
     optical system's, whose axes were aligned with the IMU's East-North-Up frame (z up); its origin is arbitrary.
+
+    Parameters
+    ----------
+    name_or_number : int or str
+        A trial number or name (see :func:`trial_name`).
+    folder : str or os.PathLike, optional
+        A folder holding the ``.mat`` files (the file must be there).
+    download : bool, default True
+        Allow a download into the cache when the trial is not found locally.
+    progress : bool, default True
+        Show a progress bar while downloading.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        Reference position, m (read-only), NaN rows where the markers were lost.
     """
     name = trial_name(name_or_number)
     path = fetch_trial(name, folder=folder, download=download, progress=progress)
