@@ -34,6 +34,7 @@ DOCUMENTED = [
     "estimators",
     "freescale",
     "gfimu",
+    "guard",
     "kalman",
     "metrics",
     "northfinder",

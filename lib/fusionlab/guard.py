@@ -162,14 +162,33 @@ def _raiser_code(func, hit):
 class forbid:
     """Context manager: while active, each listed function raises :class:`ForbiddenCall`, however it is reached.
 
-    Parameters
-    ----------
-    *functions : Python functions or methods (e.g. ``kf.joseph_covariance``, ``KalmanFilter.update``)
-    exercise : int or str, optional -- named in the message; by default the exercise of the running test cell
-        (its first line reads ``# Autograder: exercise N``)
-
     On exit the functions are restored; if any of them was called and the error did not propagate (the student's
     code caught it), the block raises :class:`ForbiddenCall` anyway.
+
+    Parameters
+    ----------
+    *functions : callable
+        Python functions or methods (e.g. ``kf.joseph_covariance``, ``KalmanFilter.update``), or C functions and
+        ufuncs (rebound by name where they can be reached).
+    exercise : int or str, optional
+        Named in the message; by default the exercise of the running test cell (its first line reads
+        ``# Autograder: exercise N``).
+
+    Examples
+    --------
+    A call that the student's code catches still counts when the block ends:
+
+    >>> from fusionlab import guard, rotations
+    >>> with guard.forbid(rotations.skew, exercise=3):
+    ...     try:
+    ...         rotations.skew([1.0, 2.0, 3.0])
+    ...     except guard.ForbiddenCall:
+    ...         pass
+    Traceback (most recent call last):
+        ...
+    fusionlab.guard.ForbiddenCall: your answer called rotations.skew, the library's own solution: exercise 3 asks you to write it yourself (your own functions from earlier exercises are fine). (rotations.skew was called; the error was caught inside your code, but the call still counts)
+    >>> float(rotations.skew([1.0, 2.0, 3.0])[0, 1])               # restored on exit
+    -3.0
     """
 
     def __init__(self, *functions, exercise=None):
@@ -178,6 +197,18 @@ class forbid:
         self.calls = []
 
     def message(self, func):
+        """The sentence a forbidden call of ``func`` is reported with.
+
+        Parameters
+        ----------
+        func : callable
+            The forbidden function that was called.
+
+        Returns
+        -------
+        str
+            The message, naming the function and the exercise.
+        """
         which = f"exercise {self.exercise}" if self.exercise is not None else "this exercise"
         return (f"your answer called {_named(func)}, the library's own solution: {which} asks you to write it "
                 f"yourself (your own functions from earlier exercises are fine).")
@@ -236,6 +267,13 @@ def reserve(*functions, exercise):
     """Forbid ``functions`` from now until ``release(exercise=...)``: for exercises whose answer is a value.
 
     Called in a lab's setup cell; the exercise's test cell calls :func:`release` first thing.
+
+    Parameters
+    ----------
+    *functions : callable
+        The functions to forbid (as :class:`forbid` takes them).
+    exercise : int or str
+        The exercise whose answer is being written; its :func:`release` ends the reservation.
     """
     release(exercise=exercise, check=False)
     _violations.pop(exercise, None)
@@ -249,6 +287,20 @@ def release(*functions, exercise, check=True):
 
     ``functions`` are named again here only so a reader (and the integrity report) sees them in the test cell. A
     visible check may release first; the test cell's release then repeats its verdict.
+
+    Parameters
+    ----------
+    *functions : callable
+        The reserved functions, for the reader; not used.
+    exercise : int or str
+        The exercise given to :func:`reserve`.
+    check : bool, default True
+        Raise :class:`ForbiddenCall` if a reserved function was called before the release.
+
+    Raises
+    ------
+    ForbiddenCall
+        With ``check``, if a reserved function was called between :func:`reserve` and now.
     """
     scope = _reserved.pop(exercise, None)
     if scope is not None:
@@ -294,6 +346,36 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     Shapes must agree (a scalar expected value is compared with every element). NaN must be where the reference
     has NaN. Only functions captured at import are used: ``np.allclose = lambda *a, **k: True`` changes nothing.
     The message says where and by how much: "P_post differs from the reference by up to 0.324 at [1, 0]".
+
+    Parameters
+    ----------
+    actual : array_like or float
+        The student's result.
+    expected : array_like or float
+        The reference result (a scalar is compared with every element of ``actual``).
+    what : str, default "the result"
+        What is compared, for the message.
+    rtol : float, default 1e-9
+        Relative tolerance.
+    atol : float, default 1e-12
+        Absolute tolerance, unit of the values.
+
+    Raises
+    ------
+    AssertionError
+        If a value is off, a shape differs, NaN is misplaced, or ``actual`` is not numbers (e.g. None).
+
+    Examples
+    --------
+    >>> from fusionlab import guard
+    >>> guard.assert_close([[1.0, 0.0], [0.5, 1.0]], [[1.0, 0.0], [0.176, 1.0]], what="P_post")
+    Traceback (most recent call last):
+        ...
+    AssertionError: P_post differs from the reference by up to 0.324 at [1, 0] (got 0.5, expected 0.176; tolerance 1e-12 + 1e-09·|expected|)
+    >>> guard.assert_close(None, [1.0], what="x_post")
+    Traceback (most recent call last):
+        ...
+    AssertionError: x_post: your result is None -- did the function forget its `return`?
     """
     e = _numbers(expected, what, "the reference")
     a = _numbers(actual, what, "your result")
@@ -332,7 +414,22 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
 
 
 def assert_equal(actual, expected, *, what="the result"):
-    """Fail unless ``actual`` equals ``expected`` exactly (numbers element by element, or plain str/bool/int)."""
+    """Fail unless ``actual`` equals ``expected`` exactly (numbers element by element, or plain str/bool/int).
+
+    Parameters
+    ----------
+    actual : object
+        The student's result.
+    expected : array_like, float, str, bool or None
+        The reference; a str, bool or None must match in type and value.
+    what : str, default "the result"
+        What is compared, for the message.
+
+    Raises
+    ------
+    AssertionError
+        If they differ.
+    """
     if _isinstance(expected, (_str, bool)) or expected is None:
         if _type(actual) is not _type(expected) or actual != expected:
             raise AssertionError(f"{what} should be {expected!r}; got {_repr(actual)[:80]}")
@@ -359,14 +456,34 @@ def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol
 
     Parameters
     ----------
-    student_fn, reference_fn : callables taking the same arguments
-    cases : iterable of argument tuples (or dicts of keyword arguments)
-    forbid : functions that compute the same answer (the library's, filterpy's); they raise while the student's
-        function runs
-    what : str, or a tuple naming the parts when the functions return a tuple (``("x_post", "P_post", "K")``)
-    rtol, atol : tolerances of :func:`assert_close`
-    compare : optional ``compare(actual, expected, what)`` for results that are not plain numbers (it must not use
-        anything an answer cell can rebind)
+    student_fn : callable
+        The student's function.
+    reference_fn : callable
+        The reference, taking the same arguments.
+    cases : iterable of tuple or dict
+        Argument tuples (or dicts of keyword arguments); a single non-tuple value is one positional argument.
+    forbid : sequence of callable, default ()
+        Functions that compute the same answer (the library's, filterpy's); they raise while the student's
+        function runs.
+    what : str or tuple of str, default "the result"
+        What is compared, or a tuple naming the parts when the functions return a tuple
+        (``("x_post", "P_post", "K")``).
+    rtol : float, default 1e-9
+        Relative tolerance of :func:`assert_close`.
+    atol : float, default 1e-12
+        Absolute tolerance of :func:`assert_close`.
+    exercise : int or str, optional
+        Named in a forbidden-call message (default: the running test cell's exercise).
+    compare : callable, optional
+        ``compare(actual, expected, what)`` for results that are not plain numbers (it must not use anything an
+        answer cell can rebind).
+
+    Raises
+    ------
+    AssertionError
+        If a result differs from the reference, or the grading environment was tampered with.
+    ForbiddenCall
+        If the student's function called a forbidden one.
     """
     _intact()
     cases = [c if _isinstance(c, (_tuple, _dict)) else (c,) for c in cases]
@@ -409,7 +526,13 @@ _allowed_callbacks = {     # event callbacks that the plotting back ends and IPy
 
 
 def allow_handler(handler):
-    """Accept ``handler`` as a legitimate custom exception handler (the library's NameError hint)."""
+    """Accept ``handler`` as a legitimate custom exception handler (the library's NameError hint).
+
+    Parameters
+    ----------
+    handler : callable
+        The handler, as passed to IPython's ``set_custom_exc``.
+    """
     if handler not in _allowed_handlers:
         _allowed_handlers.append(handler)
 
