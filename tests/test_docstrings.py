@@ -38,6 +38,7 @@ DOCUMENTED = [
     "kalman",
     "metrics",
     "northfinder",
+    "plotting",
     "rotations",
     "simulate",
     "validate",

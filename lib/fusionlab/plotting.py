@@ -40,10 +40,18 @@ def ned_to_display(v):
 
     Parameters
     ----------
-    v : (..., 3) array -- vectors or points in NED
+    v : array_like, shape (..., 3)
+        Vectors or points in NED.
+
     Returns
     -------
-    (..., 3) array -- ``[v_E, v_N, -v_D]``
+    ndarray, shape (..., 3)
+        ``[v_E, v_N, -v_D]``.
+
+    Examples
+    --------
+    >>> ned_to_display([1.0, 2.0, 3.0])        # 1 north, 2 east, 3 down
+    array([ 2.,  1., -3.])
     """
     v = validate.vectors(v, "v")
     return v @ NED_TO_DISPLAY.T
@@ -54,10 +62,15 @@ def setup_ned_axes(ax, lim=1.2, elev=25, azim=-70):
 
     Parameters
     ----------
-    ax : mpl_toolkits.mplot3d.Axes3D
-    lim : float -- half-width of the cube shown, in the units of the data
-    elev, azim : float, degrees -- camera elevation and azimuth (default: from the south, slightly east and above:
-        East to the right, North into the page, Down down)
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        The axis to set up.
+    lim : float, optional
+        Half-width of the cube shown, in the units of the data.
+    elev : float, optional
+        Camera elevation, degrees.
+    azim : float, optional
+        Camera azimuth, degrees (default: from the south, slightly east and above: East to the right, North into
+        the page, Down down).
     """
     lim = validate.positive(lim, "lim")
     ax.set(xlim=(-lim, lim), ylim=(-lim, lim), zlim=(-lim, lim),
@@ -80,17 +93,29 @@ def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.
 
     Parameters
     ----------
-    ax : Axes3D -- set up with :func:`setup_ned_axes`
-    C : (3, 3) array -- columns are the frame's unit axes in NED (e.g. ``C_bn``)
-    origin : (3,) array -- NED point the arrows start from
-    colors : str or 3 colours -- one colour for the whole triad, or one per axis
-    label : str or None -- frame name used as subscript (``'B'`` gives x_B ...) and in the artists' gid
-    alpha, length, lw : float -- opacity, arrow length (data units), line width
-    label_at : float -- axis labels sit at ``label_at * length`` along each axis (move them apart when two
-        triads share an axis)
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        A 3-D axis set up with :func:`setup_ned_axes`.
+    C : array_like, shape (3, 3)
+        Columns are the frame's unit axes in NED (e.g. ``C_bn``).
+    origin : array_like, shape (3,), optional
+        NED point the arrows start from, data units.
+    colors : str or sequence of str, optional
+        One colour for the whole triad, or one per axis.
+    label : str, optional
+        Frame name used as subscript (``'B'`` gives x_B ...) and in the artists' gid.
+    alpha : float, optional
+        Opacity.
+    length : float, optional
+        Arrow length, data units.
+    lw : float, optional
+        Line width, points.
+    label_at : float, optional
+        Axis labels sit at ``label_at * length`` along each axis (move them apart when two triads share an axis).
+
     Returns
     -------
-    list of artists -- shaft lines (gid ``'{label}:x'`` ...), arrow heads and labels
+    list of matplotlib.artist.Artist
+        Shaft lines (gid ``'{label}:x'`` ...), arrow heads and labels.
     """
     C = validate.matrices(C, "C")
     if C.shape != (3, 3):
@@ -128,12 +153,19 @@ def draw_aircraft(ax, C_bn, scale=1.0, color="lightsteelblue"):
 
     Parameters
     ----------
-    ax : Axes3D -- set up with :func:`setup_ned_axes`
-    C_bn : (3, 3) array -- body→NED attitude
-    scale : float -- half-length of the fuselage is about ``0.9 * scale`` (data units)
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        A 3-D axis set up with :func:`setup_ned_axes`.
+    C_bn : array_like, shape (3, 3)
+        Body→NED attitude.
+    scale : float, optional
+        Half-length of the fuselage is about ``0.9 * scale`` (data units).
+    color : str, optional
+        Colour of the airframe.
+
     Returns
     -------
-    list of artists
+    list of matplotlib.artist.Artist
+        The airframe, the fin and the wing-tip lights.
     """
     C_bn = validate.matrices(C_bn, "C_bn")
     scale = validate.positive(scale, "scale")
@@ -179,10 +211,13 @@ def euler_frames(euler):
 
     Parameters
     ----------
-    euler : (3,) array, rad -- ``[roll, pitch, yaw]``
+    euler : array_like, shape (3,)
+        ``[roll, pitch, yaw]``, rad.
+
     Returns
     -------
-    dict -- ``{'I': I, 'v1': Rz(ψ), 'v2': Rz(ψ) Ry(θ), 'B': Rz(ψ) Ry(θ) Rx(φ) = C_bn}``, each (3, 3)
+    dict of ndarray
+        ``{'I': I, 'v1': Rz(ψ), 'v2': Rz(ψ) Ry(θ), 'B': Rz(ψ) Ry(θ) Rx(φ) = C_bn}``, each of shape (3, 3).
     """
     roll, pitch, yaw = _euler(euler)
     v1 = rotations.rot_z(yaw)                                # yaw about z_I        (001 Euler §3)
@@ -215,17 +250,23 @@ def plot_euler_frames(euler, ax=None, stages=True):
 
     Parameters
     ----------
-    euler : (3,) array, rad -- ``[roll, pitch, yaw]``
-    ax : None, or 4 Axes3D (``stages=True``), or one Axes3D (``stages=False``) -- where to draw
-    stages : bool -- True: four panels, each the previous frame in grey and the new one in red, with the arc the
-        moving axis sweeps; False: one panel with all four frames and the aircraft.
+    euler : array_like, shape (3,)
+        ``[roll, pitch, yaw]``, rad.
+    ax : Axes3D or sequence of 4 Axes3D, optional
+        Where to draw: 4 axes (``stages=True``) or one (``stages=False``); a new figure when None.
+    stages : bool, optional
+        True: four panels, each the previous frame in grey and the new one in red, with the arc the moving axis
+        sweeps; False: one panel with all four frames and the aircraft.
+
     Returns
     -------
-    matplotlib.figure.Figure -- not shown (end the notebook line with ``;``)
+    matplotlib.figure.Figure
+        Not shown (end the notebook line with ``;``).
 
     Raises
     ------
-    ValueError -- if ``euler`` is not a finite (3,) array in radians
+    ValueError
+        If ``euler`` is not a finite (3,) array in radians.
     """
     roll, pitch, yaw = _euler(euler)
     F = euler_frames([roll, pitch, yaw])
@@ -276,11 +317,17 @@ def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
 
     Parameters
     ----------
-    roll, yaw : float, rad -- the first pair
-    pitch : float, rad -- the pitch shared by both pairs
+    roll : float
+        Roll of the first pair, rad.
+    yaw : float
+        Yaw of the first pair, rad.
+    pitch : float, optional
+        The pitch shared by both pairs, rad.
+
     Returns
     -------
-    matplotlib.figure.Figure -- three panels: pair A, pair B, both triads overlaid
+    matplotlib.figure.Figure
+        Three panels: pair A, pair B, both triads overlaid.
     """
     roll, yaw, pitch = _angle(roll, "roll"), _angle(yaw, "yaw"), _angle(pitch, "pitch")
     s = 1.0 if pitch >= 0 else -1.0                          # +90°: φ - ψ kept; -90°: φ + ψ kept
@@ -333,13 +380,23 @@ def plot_gaussian_product(mu1, var1, mu2, var2, ax=None, labels=("prediction", "
 
     Parameters
     ----------
-    mu1, var1 : float -- mean and variance of the first (the prediction)
-    mu2, var2 : float -- of the second (the measurement); same unit as ``mu1``
-    ax : matplotlib Axes or None -- draw here (a new figure otherwise)
-    labels : (str, str) -- legend names of the two inputs
+    mu1 : float
+        Mean of the first (the prediction).
+    var1 : float
+        Its variance, unit of ``mu1`` squared.
+    mu2 : float
+        Mean of the second (the measurement), same unit as ``mu1``.
+    var2 : float
+        Its variance.
+    ax : matplotlib.axes.Axes, optional
+        Draw here (a new figure otherwise).
+    labels : tuple of str, optional
+        Legend names of the two inputs.
+
     Returns
     -------
-    matplotlib Figure -- lines carry gids ``'g1'``, ``'g2'``, ``'product'``
+    matplotlib.figure.Figure
+        Lines carry gids ``'g1'``, ``'g2'``, ``'product'``.
     """
     mu, var = _kalman.gaussian_product(mu1, var1, mu2, var2)
     sd = np.sqrt([var1, var2])
@@ -370,14 +427,29 @@ def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title
 
     Parameters
     ----------
-    t : (N,) array, s -- times of the measurements
-    truth, z, x : (N, n) arrays -- true state, measurement (H = I) and posterior estimate at those times
-    P : (N, n, n) array -- the filter's posterior covariance
-    component : int -- which state to draw (0 = position, 1 = velocity for the falling body)
-    name, unit : str -- for the labels
+    t : array_like, shape (N,)
+        Times of the measurements, s.
+    truth : array_like, shape (N, n)
+        True state at those times.
+    z : array_like, shape (N, n)
+        Measurements (H = I).
+    x : array_like, shape (N, n)
+        Posterior estimates.
+    P : array_like, shape (N, n, n)
+        The filter's posterior covariance.
+    component : int, optional
+        Which state to draw (0 = position, 1 = velocity for the falling body).
+    name : str, optional
+        Name of the state, for the labels.
+    unit : str, optional
+        Its unit, for the labels.
+    title : str, optional
+        Title of the top panel (default: a sentence naming the state).
+
     Returns
     -------
-    matplotlib Figure with two axes
+    matplotlib.figure.Figure
+        Two axes.
     """
     t = validate.array(t, "t")
     truth, z, x = (validate.array(a, nm) for a, nm in ((truth, "truth"), (z, "z"), (x, "x")))
@@ -417,15 +489,22 @@ def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title
 
 def plot_tuning_sweep(sweep, chosen=None, figsize=(11, 3.6)):
     """Left: RMSE against the option's value, one line per trial (log axis), the chosen value marked.
+
     Right: the error over time at the chosen value (default: the first value), movement phase shaded.
 
     Parameters
     ----------
     sweep : fusionlab.bench.TuningSweep
-    chosen : float or None -- one of ``sweep.values``
+        The runs to show.
+    chosen : float, optional
+        One of ``sweep.values`` (the nearest is taken).
+    figsize : tuple of float, optional
+        Figure size, inches.
+
     Returns
     -------
-    matplotlib Figure
+    matplotlib.figure.Figure
+        Two axes.
     """
     j = 0 if chosen is None else int(np.argmin(np.abs(np.asarray(sweep.values) - float(chosen))))
     fig, (a1, a2) = plt.subplots(1, 2, figsize=figsize, constrained_layout=True,
