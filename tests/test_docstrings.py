@@ -42,6 +42,7 @@ DOCUMENTED = [
     "rotations",
     "simulate",
     "validate",
+    "widgets",
 ]
 
 CODES = ("PR01", "PR02", "PR04", "PR10", "GL08", "GL07")

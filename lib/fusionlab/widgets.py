@@ -39,17 +39,30 @@ def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
 
     Parameters
     ----------
-    roll_deg, pitch_deg, yaw_deg : float, degrees -- the slider values φ, θ, ψ
-    lock : bool -- gimbal-lock toggle; when True the pitch is pinned to 90° and ``pitch_deg`` is ignored
+    roll_deg : float
+        Slider value φ, degrees.
+    pitch_deg : float
+        Slider value θ, degrees.
+    yaw_deg : float
+        Slider value ψ, degrees.
+    lock : bool, optional
+        Gimbal-lock toggle; when True the pitch is pinned to 90° and ``pitch_deg`` is ignored.
+
     Returns
     -------
-    dict with
-        ``'euler_deg'`` : (3,) array -- the angles used, ``[roll, pitch, yaw]`` in degrees
-        ``'C_bn'`` : (3, 3) array -- body→NED DCM
-        ``'euler_readback_deg'`` : (3,) array -- ``dcm_to_euler(C_bn)`` in degrees; at lock yaw is 0 and the roll
-        holds the only observable combination, φ − ψ
-        ``'det'`` : float -- det C_bn (1 for a rotation)
-        ``'html'`` : str -- the readout shown in the widget
+    dict
+        ``'euler_deg'``: (3,) array, the angles used, ``[roll, pitch, yaw]`` in degrees; ``'C_bn'``: (3, 3) array,
+        body→NED DCM; ``'euler_readback_deg'``: (3,) array, ``dcm_to_euler(C_bn)`` in degrees (at lock yaw is 0 and
+        the roll holds the only observable combination, φ − ψ); ``'det'``: float, det C_bn (1 for a rotation);
+        ``'html'``: str, the readout shown in the widget.
+
+    Examples
+    --------
+    At lock only roll minus yaw survives the round trip:
+
+    >>> state = viewer_state(30.0, 0.0, 10.0, lock=True)
+    >>> state["euler_deg"], np.round(state["euler_readback_deg"], 6) + 0.0
+    (array([30., 90., 10.]), array([20., 90.,  0.]))
     """
     roll, pitch, yaw = (_scalar(v, n) for v, n in ((roll_deg, "roll_deg"), (pitch_deg, "pitch_deg"),
                                                    (yaw_deg, "yaw_deg")))
@@ -110,11 +123,18 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
 
     Parameters
     ----------
-    roll, pitch, yaw : float, degrees -- initial slider values
+    roll : float, optional
+        Initial roll, degrees.
+    pitch : float, optional
+        Initial pitch, degrees.
+    yaw : float, optional
+        Initial yaw, degrees.
+
     Returns
     -------
-    ipywidgets.VBox -- children, in order: three ``HBox`` rows (yaw, pitch, roll), each a ``FloatSlider`` and the
-    ``BoundedFloatText`` linked to it; the lock ``ToggleButton``; the readout ``HTML``; the figure ``Output``
+    ipywidgets.VBox
+        Children, in order: three ``HBox`` rows (yaw, pitch, roll), each a ``FloatSlider`` and the
+        ``BoundedFloatText`` linked to it; the lock ``ToggleButton``; the readout ``HTML``; the figure ``Output``.
     """
     roll, pitch, yaw = (_scalar(v, n) for v, n in ((roll, "roll"), (pitch, "pitch"), (yaw, "yaw")))
     opts = dict(step=1, continuous_update=True, readout=False, style={"description_width": "7em"},
@@ -180,11 +200,26 @@ def gaussian_product_state(mu1, var1, mu2, var2):
 
     Parameters
     ----------
-    mu1, var1 : float -- prediction mean (m) and variance (m²); mu2, var2 : float -- measurement
+    mu1 : float
+        Prediction mean, m.
+    var1 : float
+        Prediction variance, m².
+    mu2 : float
+        Measurement mean, m.
+    var2 : float
+        Measurement variance, m².
+
     Returns
     -------
-    dict with ``'mu'``, ``'var'`` (the product, :func:`fusionlab.kalman.gaussian_product`), ``'K'`` -- the scalar
-    Kalman gain ``var1 / (var1 + var2)`` that moves the mean from ``mu1`` toward ``mu2`` -- and ``'html'``
+    dict
+        ``'mu'``, ``'var'`` (the product, :func:`fusionlab.kalman.gaussian_product`), ``'K'`` -- the scalar
+        Kalman gain ``var1 / (var1 + var2)`` that moves the mean from ``mu1`` toward ``mu2`` -- and ``'html'``.
+
+    Examples
+    --------
+    >>> state = gaussian_product_state(0.0, 4.0, 3.0, 1.0)
+    >>> round(state["K"], 3), round(state["mu"], 3)          # mu = mu1 + K (mu2 - mu1)
+    (0.8, 2.4)
     """
     mu1, var1, mu2, var2 = (_scalar(v, n) for v, n in ((mu1, "mu1"), (var1, "var1"), (mu2, "mu2"),
                                                          (var2, "var2")))
@@ -201,9 +236,21 @@ def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
 
     Building it needs no front end (a headless run constructs it, draws once and returns).
 
+    Parameters
+    ----------
+    mu1 : float, optional
+        Initial prediction mean, m.
+    var1 : float, optional
+        Initial prediction variance, m².
+    mu2 : float, optional
+        Initial measurement mean, m.
+    var2 : float, optional
+        Initial measurement variance, m².
+
     Returns
     -------
-    ipywidgets.VBox -- children: four ``FloatSlider`` (μ₁, σ₁², μ₂, σ₂²), the readout ``HTML``, the figure ``Output``
+    ipywidgets.VBox
+        Children: four ``FloatSlider`` (μ₁, σ₁², μ₂, σ₂²), the readout ``HTML``, the figure ``Output``.
     """
     st = gaussian_product_state(mu1, var1, mu2, var2)             # validates the start values
     opts = dict(step=0.1, continuous_update=False, readout_format=".1f", style={"description_width": "12em"},
@@ -243,9 +290,17 @@ def tuning_explorer(sweep, start=None):
     Every run is done once, in :func:`fusionlab.bench.tuning_sweep`, so moving the slider only redraws. Building
     it needs no front end (a headless run constructs it, draws once and returns).
 
+    Parameters
+    ----------
+    sweep : fusionlab.bench.TuningSweep
+        The runs to explore.
+    start : float, optional
+        Initial value (the nearest of ``sweep.values``; default the first).
+
     Returns
     -------
-    ipywidgets.VBox -- children: the ``SelectionSlider``, the readout ``HTML``, the figure ``Output``
+    ipywidgets.VBox
+        Children: the ``SelectionSlider``, the readout ``HTML``, the figure ``Output``.
     """
     from . import bench
     if not isinstance(sweep, bench.TuningSweep):
