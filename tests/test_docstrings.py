@@ -40,6 +40,7 @@ DOCUMENTED = [
     "northfinder",
     "plotting",
     "rotations",
+    "sensors",
     "simulate",
     "validate",
     "widgets",

@@ -104,13 +104,29 @@ def smd_transfer(omega, m, k, b):
 
     Parameters
     ----------
-    omega : (...) array, rad/s -- angular frequency, >= 0
-    m : float, kg -- proof mass, > 0
-    k : float, N/m -- spring constant, > 0
-    b : float or (...) array, N·s/m -- damping coefficient, >= 0 (broadcasts against ``omega``)
+    omega : array_like, shape (...)
+        Angular frequency, rad/s, >= 0.
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+    b : float or array_like, shape (...)
+        Damping coefficient, N·s/m, >= 0 (broadcasts against ``omega``).
+
     Returns
     -------
-    (...) complex array, m per (m/s²) = s² -- take ``np.abs`` for the amplitude of fig 4
+    ndarray of complex, shape (...)
+        ``H(jω)``, m per (m/s²) = s²; take ``np.abs`` for the amplitude of fig 4.
+
+    Examples
+    --------
+    Far below the knee the amplitude is the DC gain ``m/k``:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> m, k = 1e-9, 1e-3                                   # 1 µg proof mass, ω_n = 1000 rad/s
+    >>> np.round(np.abs(sensors.smd_transfer(np.array([0.0, 10.0]), m, k, 0.0)) / (m / k), 6)
+    array([1.    , 1.0001])
     """
     w = _nonnegative(omega, "omega")
     m = validate.positive(m, "m")
@@ -122,7 +138,20 @@ def smd_transfer(omega, m, k, b):
 
 
 def smd_natural_frequency(m, k):
-    """Undamped natural frequency ``ω_n = √(k/m)``, rad/s: the "knee" of seed 000 fig 4 (000 §3.1, after eq 3.5)."""
+    """Undamped natural frequency ``ω_n = √(k/m)``, rad/s: the "knee" of seed 000 fig 4 (000 §3.1, after eq 3.5).
+
+    Parameters
+    ----------
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+
+    Returns
+    -------
+    float
+        ``ω_n``, rad/s.
+    """
     return np.sqrt(validate.positive(k, "k") / validate.positive(m, "m"))
 
 
@@ -131,7 +160,17 @@ def smd_damping_ratio(m, k, b):
 
     Parameters
     ----------
-    m : float, kg; k : float, N/m; b : float or array, N·s/m (>= 0)
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+    b : float or array_like
+        Damping coefficient, N·s/m, >= 0.
+
+    Returns
+    -------
+    float or ndarray
+        ``ζ``, dimensionless (shape of ``b``).
     """
     m = validate.positive(m, "m")
     k = validate.positive(k, "k")
@@ -142,6 +181,18 @@ def smd_dc_gain(m, k):
     """Low-frequency gain of the proof mass, ``H(0) = -m/k`` in s² (seed 000 eq 3.6).
 
     A static acceleration ``a`` deflects the mass by ``x = H(0)·a = -(m/k)·a``.
+
+    Parameters
+    ----------
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+
+    Returns
+    -------
+    float
+        ``H(0)``, s² (m of deflection per m/s²).
     """
     return -validate.positive(m, "m") / validate.positive(k, "k")                 # (000 eq 3.6)
 
@@ -154,18 +205,49 @@ def accel_from_displacement(x, m, k):
 
     Parameters
     ----------
-    x : (...) array, m -- displacement of the mass relative to the case
-    m : float, kg; k : float, N/m
+    x : array_like, shape (...)
+        Displacement of the mass relative to the case, m.
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+
     Returns
     -------
-    (...) array, m/s²
+    ndarray, shape (...)
+        Case acceleration, m/s².
+
+    Examples
+    --------
+    With ``m/k = 1e-6 s²`` a deflection of -9.8 µm is 1 g; the printed ``-(m/k)·x`` is off by ``(m/k)²``:
+
+    >>> from fusionlab import sensors
+    >>> m, k = 1e-9, 1e-3
+    >>> x = sensors.smd_dc_gain(m, k) * sensors.G                      # deflection under 1 g, m
+    >>> print(f"{sensors.accel_from_displacement(x, m, k):.6g} {sensors.seed000_eq37_printed(x, m, k):.6g}")
+    9.80665 9.80665e-12
     """
     x = validate.array(x, "x")
     return -(validate.positive(k, "k") / validate.positive(m, "m")) * x           # (000 eq 3.7, corrected)
 
 
 def seed000_eq37_printed(x, m, k):
-    """Seed 000 eq 3.7 **as printed**, ``a = -(m/k)·x`` -- wrong (units m·s², not m/s²); kept to show the erratum."""
+    """Seed 000 eq 3.7 **as printed**, ``a = -(m/k)·x`` -- wrong (units m·s², not m/s²); kept to show the erratum.
+
+    Parameters
+    ----------
+    x : array_like, shape (...)
+        Displacement of the mass relative to the case, m.
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The printed formula's value, m·s².
+    """
     x = validate.array(x, "x")
     return -(validate.positive(m, "m") / validate.positive(k, "k")) * x
 
@@ -183,7 +265,17 @@ def parallel_plate_capacitance(eps, area, gap):
 
     Parameters
     ----------
-    eps : float, F/m (> 0); area : float or array, m² (> 0); gap : float or array, m (> 0)
+    eps : float
+        Absolute permittivity ``ε0·εr``, F/m, > 0.
+    area : float or array_like
+        Plate area, m², > 0.
+    gap : float or array_like
+        Plate gap, m, > 0 (broadcasts with ``area``).
+
+    Returns
+    -------
+    float or ndarray
+        Capacitance, F.
     """
     eps = validate.positive(eps, "eps")
     area, gap = _positive_array(area, "area"), _positive_array(gap, "gap")
@@ -196,11 +288,17 @@ def differential_capacitances(c0, delta):
 
     Parameters
     ----------
-    c0 : float, F -- capacitance at rest (> 0)
-    delta : (...) array -- relative displacement ``x/x0``, |δ| < 1 (the plates touch at ±1)
+    c0 : float
+        Capacitance at rest, F, > 0.
+    delta : array_like, shape (...)
+        Relative displacement ``x/x0``, dimensionless, ``|δ| < 1`` (the plates touch at ±1).
+
     Returns
     -------
-    (C1, C2) : two (...) arrays, F
+    C1 : ndarray, shape (...)
+        Capacitance of the widening gap, F.
+    C2 : ndarray, shape (...)
+        Capacitance of the narrowing gap, F.
     """
     c0 = validate.positive(c0, "c0")
     d = validate.array(delta, "delta")
@@ -219,10 +317,26 @@ def bridge_output(c1, c2, v_in):
 
     Parameters
     ----------
-    c1, c2 : float or (...) arrays, F (> 0); v_in : float, V (amplitude of the excitation)
+    c1 : float or array_like, shape (...)
+        Capacitance of the first leg, F, > 0.
+    c2 : float or array_like, shape (...)
+        Capacitance of the second leg, F, > 0.
+    v_in : float or array_like
+        Amplitude of the excitation, V.
+
     Returns
     -------
-    (...) array, V
+    ndarray, shape (...)
+        Bridge output, V.
+
+    Examples
+    --------
+    A differential pair at δ = 0.1 under 3 V gives exactly ``δ·Vin/2`` = 0.15 V:
+
+    >>> from fusionlab import sensors
+    >>> c1, c2 = sensors.differential_capacitances(1e-12, 0.1)
+    >>> round(float(sensors.bridge_output(c1, c2, 3.0)), 12), round(float(sensors.half_bridge_output(0.1, 3.0)), 12)
+    (0.15, 0.15)
     """
     c1 = _positive_array(c1, "c1")
     c2 = _positive_array(c2, "c2")
@@ -238,10 +352,15 @@ def half_bridge_output(delta, v_in):
 
     Parameters
     ----------
-    delta : (...) array -- ``x/x0``; v_in : float, V
+    delta : array_like, shape (...)
+        Relative displacement ``x/x0``, dimensionless.
+    v_in : float or array_like
+        Amplitude of the excitation, V.
+
     Returns
     -------
-    (...) array, V
+    ndarray, shape (...)
+        Bridge output, V.
     """
     d = validate.array(delta, "delta")
     v_in = validate.array(v_in, "v_in")
@@ -256,10 +375,21 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
 
     Parameters
     ----------
-    v_out : (...) array, V; v_in : float, V (≠ 0); x0 : float, m -- rest gap (> 0); m : kg; k : N/m
+    v_out : array_like, shape (...)
+        Bridge output, V.
+    v_in : float or array_like
+        Amplitude of the excitation, V, not 0.
+    x0 : float
+        Rest gap, m, > 0.
+    m : float
+        Proof mass, kg, > 0.
+    k : float
+        Spring constant, N/m, > 0.
+
     Returns
     -------
-    (...) array, m/s²
+    ndarray, shape (...)
+        Case acceleration, m/s².
     """
     v_out = validate.array(v_out, "v_out")
     v_in = validate.array(v_in, "v_in")
@@ -276,8 +406,21 @@ def adxl335_bandwidth(c, r=32e3):
 
     Parameters
     ----------
-    c : float or array, F -- the external capacitor on XOUT/YOUT/ZOUT (0.1 µF gives ≈ 50 Hz)
-    r : float, Ω -- the internal output resistor (≈ 32 kΩ)
+    c : float or array_like
+        The external capacitor on XOUT/YOUT/ZOUT, F (0.1 µF gives ≈ 50 Hz).
+    r : float, default 32e3
+        The internal output resistor, Ω.
+
+    Returns
+    -------
+    float or ndarray
+        -3 dB bandwidth, Hz.
+
+    Examples
+    --------
+    >>> from fusionlab import sensors
+    >>> round(float(sensors.adxl335_bandwidth(0.1e-6)), 2)
+    49.74
     """
     return 1.0 / (2 * np.pi * validate.positive(r, "r") * _positive_array(c, "c"))
 
@@ -294,14 +437,22 @@ ADC_BITS = 10
 class AnalogSensor:
     """Datasheet numbers of a ratiometric analog sensor axis, as the ADC conversion needs them.
 
-    Attributes
+    Each field is an attribute of the same name.
+
+    Parameters
     ----------
     name : str
-    sensitivity : float -- volts per unit of ``unit`` (0.300 V/g; 0.0091 V/(°/s))
-    zero_level : float, V -- output at zero input (zero-g bias / zero-rate output)
-    supply : float, V -- the supply the numbers hold for
-    unit : str -- 'g' or 'deg/s'
-    full_scale : float -- the sensor's specified range, ± in ``unit``
+        The device (and output pin).
+    sensitivity : float
+        Volts per unit of ``unit`` (0.300 V/g; 0.0091 V/(°/s)).
+    zero_level : float
+        Output at zero input (zero-g bias / zero-rate output), V.
+    supply : float
+        The supply the numbers hold for, V.
+    unit : str
+        ``'g'`` or ``'deg/s'``.
+    full_scale : float
+        The sensor's specified range, ± in ``unit``.
     """
     name: str
     sensitivity: float
@@ -317,6 +468,16 @@ def adxl335(vs=3.0):
     At 3 V the datasheet gives 300 mV/g and 1.5 V (typical); it quotes 360 mV/g at 3.6 V and 195 mV/g at 2 V,
     so ``0.1·Vs`` is a nominal scaling, not a guarantee. Range ±3 g. The thesis' worked example uses 1.35 V instead
     of ``Vs/2`` (the IDG-500's zero-rate level).
+
+    Parameters
+    ----------
+    vs : float, default 3.0
+        Supply voltage, V.
+
+    Returns
+    -------
+    AnalogSensor
+        Sensitivity (V/g), zero-g level (V), supply, unit ``'g'`` and range ±3 g.
     """
     vs = validate.positive(vs, "vs")
     return AnalogSensor("ADXL335", sensitivity=0.1 * vs, zero_level=vs / 2, supply=vs, unit="g", full_scale=3.0)
@@ -347,6 +508,16 @@ def adc_full_scale(bits=ADC_BITS):
     """The thesis' "ADC Resolution": the largest count, ``2**bits - 1`` (1023 for 10 bits) (seed 000 eq 3.14).
 
     Many converters define one count as ``Vref / 2**bits`` instead; the thesis divides by ``2**bits - 1`` and so do we.
+
+    Parameters
+    ----------
+    bits : int, default ADC_BITS (10)
+        ADC resolution, 1-32 bits.
+
+    Returns
+    -------
+    int
+        ``2**bits - 1``.
     """
     return 2 ** _bits(bits) - 1
 
@@ -365,12 +536,23 @@ def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
 
     Parameters
     ----------
-    counts : (...) array -- ADC results, 0..2**bits - 1
-    v_ref : float, V -- the ADC voltage scale (the thesis: "V_ADC")
-    bits : int -- ADC resolution in bits
+    counts : array_like, shape (...)
+        ADC results, 0..2**bits - 1.
+    v_ref : float, default 3.0
+        The ADC voltage scale (the thesis: "V_ADC"), V.
+    bits : int, default ADC_BITS (10)
+        ADC resolution, bits.
+
     Returns
     -------
-    (...) array, V
+    ndarray, shape (...)
+        Voltages, V.
+
+    Examples
+    --------
+    >>> from fusionlab import sensors
+    >>> sensors.adc_to_volts([0, 512, 1023])                   # the top count is Vref, not one step below it
+    array([0.        , 1.50146628, 3.        ])
     """
     c = _counts(counts, bits)
     return c * validate.positive(v_ref, "v_ref") / adc_full_scale(bits)            # (000 eq 3.14)
@@ -384,14 +566,23 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
 
     Parameters
     ----------
-    counts : (...) array -- ADC results
-    zero_level : float, V -- zero-g bias / zero-rate output
-    sensitivity : float, V per unit (> 0) -- e.g. 0.300 V/g, 0.0091 V/(°/s); **volts**, not mV
-    v_ref : float, V; bits : int
-    null_offset : float or (...) array, in the sensor's unit
+    counts : array_like, shape (...)
+        ADC results, 0..2**bits - 1.
+    zero_level : float or array_like
+        Zero-g bias / zero-rate output, V.
+    sensitivity : float or array_like
+        V per unit, > 0 -- e.g. 0.300 V/g, 0.0091 V/(°/s); **volts**, not mV.
+    v_ref : float, default 3.0
+        The ADC voltage scale, V.
+    bits : int, default ADC_BITS (10)
+        ADC resolution, bits.
+    null_offset : float or array_like, shape (...), default 0.0
+        NullOffset added to the result, in the sensor's unit.
+
     Returns
     -------
-    (...) array, in the unit of ``sensitivity`` (g, °/s)
+    ndarray, shape (...)
+        Readings in the unit of ``sensitivity`` (g, °/s).
 
     Examples
     --------
@@ -417,11 +608,29 @@ def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
 
     Parameters
     ----------
-    value : (...) array -- in the unit of ``sensitivity``
-    zero_level : float, V; sensitivity : float, V per unit; v_ref : float, V; bits : int
+    value : array_like, shape (...)
+        Readings in the unit of ``sensitivity`` (g, °/s).
+    zero_level : float or array_like
+        Output at zero input, V.
+    sensitivity : float or array_like
+        V per unit, > 0.
+    v_ref : float, default 3.0
+        The ADC voltage scale, V.
+    bits : int, default ADC_BITS (10)
+        ADC resolution, bits.
+
     Returns
     -------
-    (...) int64 array
+    ndarray of int64, shape (...)
+        Counts, 0..2**bits - 1.
+
+    Examples
+    --------
+    The ADXL335 at 3 V (1.5 V at 0 g, 0.300 V/g): ±1 g is ±102 counts around mid-scale, 6 g saturates:
+
+    >>> from fusionlab import sensors
+    >>> sensors.physical_to_adc([0.0, 1.0, -1.0, 6.0], 1.5, 0.300)
+    array([ 512,  614,  409, 1023])
     """
     x = validate.array(value, "value")
     zero = validate.array(zero_level, "zero_level")
@@ -435,6 +644,20 @@ def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
     """Quantisation step: one ADC count in the sensor's unit, ``Vref / (2**bits - 1) / sensitivity``.
 
     10 bits at 3.0 V: 9.78 mg for the ADXL335 (0.300 V/g), 0.322 °/s for the IDG-500 X4.5OUT (9.1 mV/(°/s)).
+
+    Parameters
+    ----------
+    sensitivity : float or array_like
+        V per unit of the sensor, > 0.
+    v_ref : float, default 3.0
+        The ADC voltage scale, V.
+    bits : int, default ADC_BITS (10)
+        ADC resolution, bits.
+
+    Returns
+    -------
+    float or ndarray
+        One count, in the sensor's unit.
     """
     return validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / _positive_array(sensitivity, "sensitivity")
 
@@ -447,12 +670,22 @@ def null_offset(readings, expected=0.0):
 
     Parameters
     ----------
-    readings : (N,) or (N, n) array -- converted readings of a still, level record (g or °/s)
-    expected : float or (n,) array -- what the axis should read there (0 for a gyro or a horizontal accelerometer
-        axis, +1 g for the up axis in the thesis' frame)
+    readings : array_like, shape (N,) or (N, n)
+        Converted readings of a still, level record (g or °/s).
+    expected : float or array_like, shape (n,), default 0.0
+        What each axis should read there (0 for a gyro or a horizontal accelerometer axis, +1 g for the up axis in
+        the thesis' frame).
+
     Returns
     -------
-    float or (n,) array
+    float or ndarray, shape (n,)
+        The offset to add to later readings, in their unit.
+
+    Examples
+    --------
+    >>> from fusionlab import sensors
+    >>> sensors.null_offset([[0.02, -0.01, 0.98], [0.04, 0.01, 1.00]], expected=[0.0, 0.0, 1.0])
+    array([-0.03,  0.  ,  0.01])
     """
     r = validate.array(readings, "readings")
     if r.ndim == 0 or len(r) == 0:
@@ -476,10 +709,24 @@ def tilt_2d(a_x, a_y):
 
     Parameters
     ----------
-    a_x, a_y : (...) arrays -- readings in any one unit (g)
+    a_x : array_like, shape (...)
+        X reading, any unit (g).
+    a_y : array_like, shape (...)
+        Y reading, same unit.
+
     Returns
     -------
-    (...) array, rad
+    ndarray, shape (...)
+        Angle, rad, in -π/2..π/2.
+
+    Examples
+    --------
+    Opposite readings give the same angle: the quadrant is lost.
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> np.degrees(sensors.tilt_2d([1.0, -1.0], [1.0, -1.0]))
+    array([45., 45.])
     """
     ax = validate.array(a_x, "a_x")
     ay = validate.array(a_y, "a_y")
@@ -504,10 +751,23 @@ def tilt_3d(acc):
 
     Parameters
     ----------
-    acc : (..., 3) array -- ``[Ax, Ay, Az]`` in any one unit, not all zero
+    acc : array_like, shape (..., 3)
+        ``[Ax, Ay, Az]`` in any one unit, not all zero.
+
     Returns
     -------
-    (..., 3) array, rad -- ``[θx, θy, θz]``
+    ndarray, shape (..., 3)
+        ``[θx, θy, θz]``, rad.
+
+    Examples
+    --------
+    Tilted 150° about X (upside down), the printed θz reads -30°:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> a = [0.0, np.sin(np.radians(150.0)), np.cos(np.radians(150.0))]
+    >>> np.round(np.degrees(sensors.tilt_3d(a)), 6)
+    array([  0.,  30., -30.])
     """
     a = validate.vectors(acc, "acc")
     if np.any(np.linalg.norm(a, axis=-1) == 0):
@@ -537,10 +797,22 @@ def atan2_piecewise(y, x):
 
     Parameters
     ----------
-    y, x : (...) arrays (broadcast) -- **y first**, as in C, MATLAB and numpy
+    y : array_like, shape (...)
+        Ordinate, **first**, as in C, MATLAB and numpy.
+    x : array_like, shape (...)
+        Abscissa, same unit (broadcasts with ``y``).
+
     Returns
     -------
-    (...) array, rad
+    ndarray, shape (...)
+        Angle, rad, in (-π, π]; NaN at (0, 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> np.degrees(sensors.atan2_piecewise([1.0, -1.0, -1.0, 0.0], [-1.0, -1.0, 1.0, 0.0]))
+    array([ 135., -135.,  -45.,   nan])
     """
     y = validate.array(y, "y")
     x = validate.array(x, "x")
@@ -556,6 +828,18 @@ def seed000_eq321_printed(y, x):
     """Seed 000 eq 3.21 **as printed**: the third case repeats "y >= 0, x < 0", so y < 0, x < 0 matches no case.
 
     Returns NaN in the third quadrant (no rule applies); elsewhere it equals :func:`atan2_piecewise`.
+
+    Parameters
+    ----------
+    y : array_like, shape (...)
+        Ordinate.
+    x : array_like, shape (...)
+        Abscissa, same unit (broadcasts with ``y``).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Angle, rad; NaN where no printed case applies.
     """
     y = validate.array(y, "y")
     x = validate.array(x, "x")
@@ -576,10 +860,22 @@ def excel_atan2(x_num, y_num):
 
     Parameters
     ----------
-    x_num, y_num : (...) arrays (broadcast)
+    x_num : array_like, shape (...)
+        Abscissa, **first** (Excel's order).
+    y_num : array_like, shape (...)
+        Ordinate, same unit (broadcasts with ``x_num``).
+
     Returns
     -------
-    (...) array, rad
+    ndarray, shape (...)
+        Angle, rad; NaN at (0, 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> float(np.degrees(sensors.excel_atan2(1.0, 0.0))), float(np.degrees(np.arctan2(1.0, 0.0)))
+    (0.0, 90.0)
     """
     x = validate.array(x_num, "x_num")
     y = validate.array(y_num, "y_num")
@@ -597,10 +893,15 @@ def seed001_tilt_printed(acc, g=G):
 
     Parameters
     ----------
-    acc : (..., 3) array, same unit as ``g``; g : float (> 0)
+    acc : array_like, shape (..., 3)
+        Specific force, body frame, same unit as ``g``, not zero.
+    g : float, default G
+        Gravity, > 0 (m/s², or 1 for readings in g).
+
     Returns
     -------
-    (..., 2) array, rad -- ``[roll, pitch]``
+    ndarray, shape (..., 2)
+        ``[roll, pitch]``, rad.
     """
     a = validate.vectors(acc, "acc")
     g = validate.positive(g, "g")
@@ -621,10 +922,23 @@ def tilt_from_accel(acc):
 
     Parameters
     ----------
-    acc : (..., 3) array -- specific force in any unit (m/s² or g)
+    acc : array_like, shape (..., 3)
+        Specific force in the body frame, any unit (m/s² or g), not zero.
+
     Returns
     -------
-    (..., 2) array, rad -- ``[roll, pitch]``
+    ndarray, shape (..., 2)
+        ``[roll, pitch]``, rad.
+
+    Examples
+    --------
+    At a roll of 2.5 rad (143°) the full-range form reads it back; the printed ``arctan(a_y/a_z)`` does not:
+
+    >>> import numpy as np
+    >>> from fusionlab import rotations, sensors
+    >>> f = sensors.specific_force(rotations.euler_to_dcm([2.5, 0.3, 0.0]))
+    >>> np.round(sensors.tilt_from_accel(f), 12), np.round(sensors.seed001_tilt_printed(f), 4)
+    (array([2.5, 0.3]), array([-0.6416,  0.3   ]))
     """
     a = validate.vectors(acc, "acc")
     norm = np.linalg.norm(a, axis=-1)
@@ -643,12 +957,26 @@ def specific_force(C_bn, acc_nav=None, g=G):
 
     Parameters
     ----------
-    C_bn : (..., 3, 3) array -- attitude, body→NED (:mod:`fusionlab.rotations`)
-    acc_nav : (..., 3) array, m/s², optional -- acceleration of the sensor in NED (default 0: at rest)
-    g : float, m/s²
+    C_bn : array_like, shape (..., 3, 3)
+        Attitude, body→NED (:mod:`fusionlab.rotations`).
+    acc_nav : array_like, shape (..., 3), optional
+        Acceleration of the sensor in NED, m/s² (default 0: at rest).
+    g : float, default G
+        Gravity, m/s².
+
     Returns
     -------
-    (..., 3) array, m/s² -- in the body frame
+    ndarray, shape (..., 3)
+        Specific force in the body frame, m/s².
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> sensors.specific_force(np.eye(3))                          # level, at rest: +g on the up axis (-z)
+    array([ 0.     ,  0.     , -9.80665])
+    >>> sensors.specific_force(np.eye(3), acc_nav=[0.0, 0.0, sensors.G])   # free fall reads nothing
+    array([0., 0., 0.])
     """
     C = validate.rotation(C_bn, "C_bn", tol=0.05)
     g_n = np.array([0.0, 0.0, validate.positive(g, "g")])
@@ -668,11 +996,26 @@ def coriolis_acceleration(omega, v):
 
     Parameters
     ----------
-    omega : (..., 3) array, rad/s -- rotation rate of the frame
-    v : (..., 3) array, m/s -- velocity relative to the rotating frame
+    omega : array_like, shape (..., 3)
+        Rotation rate of the frame, rad/s.
+    v : array_like, shape (..., 3)
+        Velocity relative to the rotating frame, m/s.
+
     Returns
     -------
-    (..., 3) array, m/s²
+    ndarray, shape (..., 3)
+        Coriolis acceleration, m/s².
+
+    Examples
+    --------
+    Moving along x at 1 m/s on a table turning at 1 rad/s counter-clockwise (about +z), the mass is pushed to -y,
+    to its right; the printed eq 3.34 gives the opposite vector:
+
+    >>> from fusionlab import sensors
+    >>> sensors.coriolis_acceleration([0.0, 0.0, 1.0], [1.0, 0.0, 0.0]) + 0.0      # + 0.0 prints -0.0 as 0.0
+    array([ 0., -2.,  0.])
+    >>> sensors.seed000_eq334_printed(1.0, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]) + 0.0
+    array([0., 2., 0.])
     """
     w = validate.vectors(omega, "omega")
     v = validate.vectors(v, "v")
@@ -689,10 +1032,21 @@ def precession_rate(mass, arm, inertia, spin, g=G):
 
     Parameters
     ----------
-    mass : kg; arm : m (pivot to centre of mass, D); inertia : kg·m² (about the spin axis); spin : rad/s; g : m/s²
+    mass : float or array_like
+        Mass M, kg, > 0.
+    arm : float or array_like
+        Pivot to centre of mass, D, m, > 0.
+    inertia : float or array_like
+        Moment of inertia about the spin axis, kg·m², > 0.
+    spin : float or array_like
+        Spin rate ω, rad/s, > 0.
+    g : float, default G
+        Gravity, m/s².
+
     Returns
     -------
-    float or array, rad/s
+    float or ndarray
+        Precession rate, rad/s.
     """
     mass, arm = _positive_array(mass, "mass"), _positive_array(arm, "arm")
     inertia, spin = _positive_array(inertia, "inertia"), _positive_array(spin, "spin")
@@ -711,17 +1065,39 @@ def coriolis_force(mass, omega, v):
 
     Parameters
     ----------
-    mass : float, kg (> 0); omega : (..., 3) rad/s; v : (..., 3) m/s
+    mass : float
+        Mass, kg, > 0.
+    omega : array_like, shape (..., 3)
+        Rotation rate of the frame, rad/s.
+    v : array_like, shape (..., 3)
+        Velocity relative to the rotating frame, m/s.
+
     Returns
     -------
-    (..., 3) array, N
+    ndarray, shape (..., 3)
+        Coriolis force, N.
     """
     m = validate.positive(mass, "mass")
     return m * coriolis_acceleration(omega, v)                                    # (000 eq 3.34, corrected sign)
 
 
 def seed000_eq334_printed(mass, omega, v):
-    """Seed 000 eq 3.34 **as printed**, ``F = 2M(Ω × v)`` -- the opposite of the Coriolis force; kept for the erratum."""
+    """Seed 000 eq 3.34 **as printed**, ``F = 2M(Ω × v)`` -- the opposite of the Coriolis force; kept for the erratum.
+
+    Parameters
+    ----------
+    mass : float
+        Mass M, kg, > 0.
+    omega : array_like, shape (..., 3)
+        Rotation rate of the frame, rad/s.
+    v : array_like, shape (..., 3)
+        Velocity relative to the rotating frame, m/s.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The printed force, N.
+    """
     m = validate.positive(mass, "mass")
     w, v = validate.vectors(omega, "omega"), validate.vectors(v, "v")
     validate.broadcast({"omega": 1, "v": 1}, omega=w, v=v)
@@ -736,12 +1112,21 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
 
     Parameters
     ----------
-    a_inertial : (..., 3) array, m/s² -- acceleration in the inertial frame, expressed in rotating-frame axes
-    omega : (..., 3) array, rad/s; r : (..., 3) array, m -- position; v : (..., 3) array, m/s -- velocity relative
-        to the rotating frame; omega_dot : (..., 3) array, rad/s², optional (default 0)
+    a_inertial : array_like, shape (..., 3)
+        Acceleration in the inertial frame, expressed in rotating-frame axes, m/s².
+    omega : array_like, shape (..., 3)
+        Rotation rate of the frame, rad/s.
+    r : array_like, shape (..., 3)
+        Position in the rotating frame, m.
+    v : array_like, shape (..., 3)
+        Velocity relative to the rotating frame, m/s.
+    omega_dot : array_like, shape (..., 3), optional
+        Angular acceleration of the frame, rad/s² (default 0).
+
     Returns
     -------
-    (..., 3) array, m/s²
+    ndarray, shape (..., 3)
+        Acceleration seen in the rotating frame, m/s².
     """
     A = validate.vectors(a_inertial, "a_inertial")
     w = validate.vectors(omega, "omega")
@@ -764,13 +1149,31 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
 
     Parameters
     ----------
-    a_o : (..., 3) array, m/s² -- at the body origin
-    omega, alpha : (..., 3) arrays -- body rate (rad/s) and angular acceleration (rad/s²)
-    r : (..., 3) array, m -- the point's position in the body frame
-    v_rel, a_rel : (..., 3) arrays or None -- its velocity (m/s) and acceleration (m/s²) relative to the body
+    a_o : array_like, shape (..., 3)
+        Acceleration (or specific force) at the body origin, m/s².
+    omega : array_like, shape (..., 3)
+        Body rate, rad/s.
+    alpha : array_like, shape (..., 3)
+        Angular acceleration, rad/s².
+    r : array_like, shape (..., 3)
+        The point's position in the body frame, m.
+    v_rel : array_like, shape (..., 3), optional
+        Its velocity relative to the body, m/s (default 0).
+    a_rel : array_like, shape (..., 3), optional
+        Its acceleration relative to the body, m/s² (default 0).
+
     Returns
     -------
-    (..., 3) array, m/s²
+    ndarray, shape (..., 3)
+        Acceleration of the point, m/s².
+
+    Examples
+    --------
+    A point 0.1 m out on an arm turning at 10 rad/s feels 10 m/s² towards the axis:
+
+    >>> from fusionlab import sensors
+    >>> sensors.point_acceleration([0.0, 0.0, 0.0], [0.0, 0.0, 10.0], [0.0, 0.0, 0.0], [0.1, 0.0, 0.0]) + 0.0
+    array([-10.,   0.,   0.])
     """
     a_o, omega = validate.vectors(a_o, "a_o"), validate.vectors(omega, "omega")
     alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
@@ -790,13 +1193,19 @@ def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
 
     Parameters
     ----------
-    rate_true : (N,) or (N, n) array -- the true rate, one row per sample
-    bias : float or (n,) array -- constant bias
-    noise_std : float (>= 0) -- standard deviation of the white noise of each sample
-    rng : numpy.random.Generator or int, optional -- seed it for reproducible noise
+    rate_true : array_like, shape (N,) or (N, n)
+        The true rate, one row per sample (rad/s or °/s).
+    bias : float or array_like, shape (n,), default 0.0
+        Constant bias, same unit.
+    noise_std : float, default 0.0
+        Standard deviation of the white noise of each sample, same unit, >= 0.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed; seed it for reproducible noise.
+
     Returns
     -------
-    array shaped like ``rate_true``
+    ndarray
+        The readings, shaped like ``rate_true``.
     """
     w = validate.array(rate_true, "rate_true")
     b = validate.array(bias, "bias")
@@ -815,12 +1224,25 @@ def integrate_rate(rate, dt, angle0=0.0):
 
     Parameters
     ----------
-    rate : (N,) or (N, n) array -- one row per sample (rad/s or °/s)
-    dt : float, s (> 0)
-    angle0 : float or (n,) array -- the angle at t = 0 (same angle unit)
+    rate : array_like, shape (N,) or (N, n)
+        One row per sample (rad/s or °/s).
+    dt : float
+        Sample interval, s, > 0.
+    angle0 : float or array_like, shape (n,), default 0.0
+        The angle at t = 0 (the rate's angle unit).
+
     Returns
     -------
-    array shaped like ``rate``
+    ndarray
+        The angle at each sample time, shaped like ``rate``.
+
+    Examples
+    --------
+    A constant 1 °/s sampled every 0.5 s; the angle at sample n uses the rates before it:
+
+    >>> from fusionlab import sensors
+    >>> sensors.integrate_rate([1.0, 1.0, 1.0, 1.0], 0.5)
+    array([0. , 0.5, 1. , 1.5])
     """
     w = validate.array(rate, "rate")
     if w.ndim == 0 or len(w) == 0:
@@ -841,10 +1263,31 @@ def integration_drift(t, bias, noise_std, dt):
 
     Parameters
     ----------
-    t : (...) array, s (>= 0); bias : float (rate unit); noise_std : float (>= 0, rate unit); dt : float, s (> 0)
+    t : array_like, shape (...)
+        Time since the start, s, >= 0.
+    bias : float or array_like
+        Constant bias, rate unit.
+    noise_std : float or array_like
+        White-noise standard deviation per sample, rate unit, >= 0.
+    dt : float
+        Sample interval, s, > 0.
+
     Returns
     -------
-    (mean, std) : two (...) arrays, in the angle unit of the rate (rad for rad/s, ° for °/s)
+    mean : ndarray, shape (...)
+        Mean angle error, in the angle unit of the rate (rad for rad/s, ° for °/s).
+    std : ndarray, shape (...)
+        Its standard deviation, same unit.
+
+    Examples
+    --------
+    A bias of 0.01 °/s and 0.1 °/s of noise at 100 Hz: after 1 s the two are equal; after 100 s the bias has grown
+    a hundredfold, the noise only tenfold:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> sensors.integration_drift(np.array([1.0, 100.0]), bias=0.01, noise_std=0.1, dt=0.01)
+    (array([0.01, 1.  ]), array([0.01, 0.1 ]))
     """
     t = _nonnegative(t, "t")
     b = validate.array(bias, "bias")
@@ -899,11 +1342,33 @@ def accel_measure(f, M, S, beta):
 
     Parameters
     ----------
-    f : (..., 3) array, m/s² -- true specific force, body frame
-    M : (3, 3) misalignment; S : (3,) sensitivities or (3, 3) diagonal; beta : (3,) bias, m/s²
+    f : array_like, shape (..., 3)
+        True specific force, body frame, m/s².
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them (dimensionless, invertible).
+    beta : array_like, shape (3,)
+        Bias, m/s².
+
     Returns
     -------
-    (..., 3) array, m/s² -- the raw reading
+    ndarray, shape (..., 3)
+        The raw reading, m/s².
+
+    Examples
+    --------
+    :func:`accel_correct` undoes the model exactly:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> M = [[1.0, 0.01, 0.0], [0.0, 1.0, 0.02], [0.0, 0.0, 1.0]]
+    >>> S, beta = [1.01, 0.99, 1.0], [0.1, -0.2, 0.05]
+    >>> a_m = sensors.accel_measure([0.0, 0.0, -sensors.G], M, S, beta)
+    >>> print(" ".join(f"{v:.3f}" for v in a_m))                  # the raw reading, m/s²
+    -0.098 0.003 -9.857
+    >>> np.round(sensors.accel_correct(a_m, M, S, beta), 12) + 0.0
+    array([ 0.     ,  0.     , -9.80665])
     """
     f = validate.vectors(f, "f")
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
@@ -914,6 +1379,22 @@ def accel_correct(a_m, M, S, beta):
     """Accelerometer correction, seed 001 sensors note §2: ``a_c = S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T))``.
 
     The exact inverse of :func:`accel_measure` (the seed writes the bias ``β`` in the model, ``β_a`` here).
+
+    Parameters
+    ----------
+    a_m : array_like, shape (..., 3)
+        Raw readings, m/s².
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them.
+    beta : array_like, shape (3,)
+        Bias, m/s².
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Corrected specific force, m/s².
     """
     a_m = validate.vectors(a_m, "a_m")
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
@@ -926,9 +1407,23 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
 
     Parameters
     ----------
-    rate : (..., 3) rad/s -- true body rates p; M, S, beta -- as in :func:`accel_measure` (beta in rad/s)
-    C_ga : (3, 3) array, (rad/s)/(m/s²), optional -- sensitivity to specific force (default none)
-    a_c : (..., 3) m/s², optional -- the corrected specific force at each sample (needed with ``C_ga``)
+    rate : array_like, shape (..., 3)
+        True body rates p, rad/s.
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them.
+    beta : array_like, shape (3,)
+        Bias, rad/s.
+    C_ga : array_like, shape (3, 3), optional
+        Sensitivity to specific force, (rad/s)/(m/s²) (default none).
+    a_c : array_like, shape (..., 3), optional
+        The corrected specific force at each sample, m/s² (needed with ``C_ga``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The raw reading ``p_m``, rad/s.
     """
     p = validate.vectors(rate, "rate")
     M, S, beta = _triad_params(M, S, beta, "gyro")
@@ -937,7 +1432,28 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
 
 
 def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
-    """Rate-gyro correction, seed 001 sensors note §3: ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``."""
+    """Rate-gyro correction, seed 001 sensors note §3: ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``.
+
+    Parameters
+    ----------
+    p_m : array_like, shape (..., 3)
+        Raw readings, rad/s.
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them.
+    beta : array_like, shape (3,)
+        Bias, rad/s.
+    C_ga : array_like, shape (3, 3), optional
+        Sensitivity to specific force, (rad/s)/(m/s²) (default none).
+    a_c : array_like, shape (..., 3), optional
+        The corrected specific force at each sample, m/s² (needed with ``C_ga``).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Corrected body rates, rad/s.
+    """
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
@@ -969,8 +1485,23 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
 
     Parameters
     ----------
-    b : (..., 3) µT -- true field in the body frame; M, S, beta -- sensor triad (beta in µT)
-    D_s : (3, 3), optional (identity) -- soft-iron correction matrix; beta_h : (3,) µT, optional (zero)
+    b : array_like, shape (..., 3)
+        True field in the body frame, µT.
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them.
+    beta : array_like, shape (3,)
+        Sensor bias, µT.
+    D_s : array_like, shape (3, 3), optional
+        Soft-iron correction matrix (default identity).
+    beta_h : array_like, shape (3,), optional
+        Hard iron in corrected coordinates, µT (default zero).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The raw reading ``b_m``, µT.
     """
     b = validate.vectors(b, "b")
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
@@ -980,7 +1511,28 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     """Magnetometer correction, seed 001 sensors note §4, corrected (Lab 12's erratum):
-    ``b_c = D_s S_b⁻¹(T) (M_b⁻¹ b_m + β_b(T)) − β_h``. The printed form is :func:`seed001_mag_correct_printed`."""
+    ``b_c = D_s S_b⁻¹(T) (M_b⁻¹ b_m + β_b(T)) − β_h``. The printed form is :func:`seed001_mag_correct_printed`.
+
+    Parameters
+    ----------
+    b_m : array_like, shape (..., 3)
+        Raw readings, µT.
+    M : array_like, shape (3, 3)
+        Misalignment (dimensionless, invertible).
+    S : array_like, shape (3,) or (3, 3)
+        Sensitivities, or the diagonal matrix of them.
+    beta : array_like, shape (3,)
+        Sensor bias, µT.
+    D_s : array_like, shape (3, 3), optional
+        Soft-iron correction matrix (default identity).
+    beta_h : array_like, shape (3,), optional
+        Hard iron in corrected coordinates, µT (default zero).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Corrected field ``b_c``, µT.
+    """
     b_m = validate.vectors(b_m, "b_m")
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
@@ -1003,6 +1555,26 @@ def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
     Read literally it corrects the magnetometer with the *accelerometer's* misalignment, sensitivity and bias (and
     the symbol ``a_m`` stands where ``b_m`` belongs). Kept only so a lab can show what the typo costs; use
     :func:`mag_correct`.
+
+    Parameters
+    ----------
+    b_m : array_like, shape (..., 3)
+        Raw magnetometer readings, µT.
+    M_a : array_like, shape (3, 3)
+        The accelerometer's misalignment, as printed.
+    S_a : array_like, shape (3,) or (3, 3)
+        The accelerometer's sensitivities, as printed.
+    beta_a : array_like, shape (3,)
+        The accelerometer's bias, as printed (applied to µT).
+    D_s : array_like, shape (3, 3), optional
+        Soft-iron correction matrix (default identity).
+    beta_h : array_like, shape (3,), optional
+        Hard iron in corrected coordinates, µT (default zero).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        What the printed formula gives, µT.
     """
     _triad_params(M_a, S_a, beta_a, "seed 001's printed formula:", names=("M_a", "S_a", "beta_a"))
     return mag_correct(b_m, M_a, S_a, beta_a, D_s, beta_h)
@@ -1016,8 +1588,27 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
       ``B²/(π f)``) from ``1/(n/fs)`` to ``fs/2``, made by shaping white noise in the frequency domain;
     * rate random walk ``K`` (rad/s/√s), a random-walk bias (seed 004 eqs 2.5-2.10): ``b_k = b_{k-1} + K·√dt·u``.
 
-    Their Allan deviation is :func:`allan_model`. Parameters ``n`` samples at ``fs`` Hz; ``rng`` a Generator or seed.
-    Returns (n,) rad/s.
+    Their Allan deviation is :func:`allan_model`.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples, >= 2.
+    fs : float
+        Sample rate, Hz.
+    arw : float, default 0.0
+        Angle random walk N, rad/√s (rad/s/√Hz).
+    bias_instability : float, default 0.0
+        Bias instability B, rad/s.
+    rrw : float, default 0.0
+        Rate random walk K, rad/s/√s.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Rate error, rad/s.
     """
     n = validate.count(n, "n", 2)
     fs = validate.sample_rate(fs, "fs")
@@ -1039,7 +1630,30 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
 def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
     """Allan deviation of white + flicker + random-walk rate noise (IEEE Std 952):
     ``σ(τ)² = N²/τ + (2 ln2/π) B² + K² τ/3``. So ``σ(1 s) = N`` on the ARW line, the flat floor is ``0.664·B`` and
-    ``σ(3 s) = K`` on the RRW line. ``tau`` (...) s; returns (...) in the rate unit."""
+    ``σ(3 s) = K`` on the RRW line.
+
+    Parameters
+    ----------
+    tau : array_like, shape (...)
+        Averaging times, s, > 0.
+    arw : float, default 0.0
+        Angle random walk N, rate unit·√s.
+    bias_instability : float, default 0.0
+        Bias instability B, rate unit.
+    rrw : float, default 0.0
+        Rate random walk K, rate unit/√s.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Allan deviation σ(τ), rate unit.
+
+    Examples
+    --------
+    >>> from fusionlab import sensors
+    >>> sensors.allan_model([1.0], arw=0.01), sensors.allan_model([3.0], rrw=0.001)   # N at 1 s, K at 3 s
+    (array([0.01]), array([0.001]))
+    """
     tau = _positive_array(tau, "tau")
     arw, bias_instability, rrw = (validate.scalar(v, name, nonnegative=True) for v, name in
                                   ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
@@ -1052,11 +1666,25 @@ def remove_gravity(q_bn, acc, g=G, frame="NED"):
 
     Parameters
     ----------
-    q_bn : (..., 4) unit quaternions, body→``frame``; acc : (..., 3) m/s², +g on the up axis at rest
-    g : float, m/s²; frame : 'NED' (gravity (0, 0, +g)) or 'ENU' (gravity (0, 0, −g))
+    q_bn : array_like, shape (..., 4)
+        Unit quaternions ``[w, x, y, z]``, body→``frame``.
+    acc : array_like, shape (..., 3)
+        Specific force, m/s², +g on the up axis at rest.
+    g : float, default G
+        Gravity, m/s².
+    frame : {'NED', 'ENU'}, default 'NED'
+        Navigation frame: gravity is (0, 0, +g) in NED, (0, 0, −g) in ENU.
+
     Returns
     -------
-    (..., 3) m/s² -- the sensor's acceleration in the navigation frame (zero at rest)
+    ndarray, shape (..., 3)
+        The sensor's acceleration in the navigation frame, m/s² (zero at rest).
+
+    Examples
+    --------
+    >>> from fusionlab import sensors
+    >>> sensors.remove_gravity([1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -sensors.G])      # level and at rest in NED
+    array([0., 0., 0.])
     """
     from . import rotations
     if frame not in ("NED", "ENU"):
@@ -1075,11 +1703,31 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
 
     Parameters
     ----------
-    acc_nav : (N, 3) m/s² -- navigation-frame acceleration (gravity removed); dt : s
-    v0, p0 : (3,) optional -- initial velocity (m/s) and position (m); zero by default
+    acc_nav : array_like, shape (N, 3)
+        Navigation-frame acceleration (gravity removed), m/s².
+    dt : float
+        Sample interval, s.
+    v0 : array_like, shape (3,), optional
+        Initial velocity, m/s (default zero).
+    p0 : array_like, shape (3,), optional
+        Initial position, m (default zero).
+
     Returns
     -------
-    (v, p) : two (N, 3) arrays, the values at each sample time (``v[0] = v0``, ``p[0] = p0``)
+    v : ndarray, shape (N, 3)
+        Velocity at each sample time, m/s (``v[0] = v0``).
+    p : ndarray, shape (N, 3)
+        Position at each sample time, m (``p[0] = p0``).
+
+    Examples
+    --------
+    1 m/s² along x, 1 s steps: the position lags the exact ``½ t²`` (0, 0.5, 2, 4.5) by the explicit scheme:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> v, p = sensors.dead_reckon(np.tile([1.0, 0.0, 0.0], (4, 1)), 1.0)
+    >>> v[:, 0], p[:, 0]
+    (array([0., 1., 2., 3.]), array([0., 0., 1., 3.]))
     """
     a = validate.samples(acc_nav, "acc_nav")
     dt = validate.positive(dt, "dt")
@@ -1098,10 +1746,32 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
 
     Parameters
     ----------
-    angle_deg : (M,) attitude errors in degrees (the table's unit); t : (K,) s; g : m/s² (the note uses 9.8)
+    angle_deg : array_like, shape (M,)
+        Attitude errors, degrees (the table's unit).
+    t : array_like, shape (K,)
+        Times, s, >= 0.
+    g : float, default 9.8
+        Gravity, m/s² (the note uses 9.8).
+    printed : bool, default True
+        Position as printed (``a·t²``) or kinematic (``½·a·t²``).
+
     Returns
     -------
-    (acc, vel, pos) : (M,), (M, K), (M, K)
+    acc : ndarray, shape (M,)
+        Acceleration error, m/s².
+    vel : ndarray, shape (M, K)
+        Velocity error, m/s.
+    pos : ndarray, shape (M, K)
+        Position error, m.
+
+    Examples
+    --------
+    1° of tilt for 10 s: the printed table's position is twice the kinematic one:
+
+    >>> from fusionlab import sensors
+    >>> acc, vel, pos = sensors.seed001_table1([1.0], [10.0])
+    >>> round(float(acc[0]), 4), round(float(pos[0, 0]), 3), round(float(sensors.tilt_error_position(10.0, 0.0174533, g=9.8)), 3)
+    (0.171, 17.103, 8.552)
     """
     d = np.radians(validate.array(angle_deg, "angle_deg")).reshape(-1)
     t = _nonnegative(t, "t").reshape(-1)
@@ -1112,14 +1782,44 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
 
 
 def tilt_error_position(t, angle_err, g=G):
-    """Position error of a constant tilt error ``δ`` (rad): ``½ g sin(δ) t²`` -- grows like t²."""
+    """Position error of a constant tilt error ``δ`` (rad): ``½ g sin(δ) t²`` -- grows like t².
+
+    Parameters
+    ----------
+    t : array_like, shape (...)
+        Time, s, >= 0.
+    angle_err : float or array_like
+        Tilt error δ, rad.
+    g : float, default G
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Position error, m.
+    """
     t = _nonnegative(t, "t")
     return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t ** 2
 
 
 def gyro_bias_position(t, bias, g=G):
     """Position error of a constant gyro bias ``b`` (rad/s) about a level axis: the tilt grows as ``b t``, the
-    acceleration error as ``g b t`` (small angles), the position as ``g b t³/6`` -- grows like t³."""
+    acceleration error as ``g b t`` (small angles), the position as ``g b t³/6`` -- grows like t³.
+
+    Parameters
+    ----------
+    t : array_like, shape (...)
+        Time, s, >= 0.
+    bias : float or array_like
+        Gyro bias b, rad/s.
+    g : float, default G
+        Gravity, m/s².
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Position error, m.
+    """
     t = _nonnegative(t, "t")
     return validate.positive(g, "g") * validate.array(bias, "bias") * t ** 3 / 6
 
@@ -1130,7 +1830,25 @@ def observer_steady_state_error(L, T, bias):
 
     Parameters
     ----------
-    L : float in (0, 1]; T : s; bias : rate unit (the error comes out in its angle unit)
+    L : float
+        Observer gain, in (0, 1].
+    T : float
+        Sample interval, s, > 0.
+    bias : float or array_like
+        Gyro bias, rate unit (the error comes out in its angle unit).
+
+    Returns
+    -------
+    float or ndarray
+        Steady-state angle error, angle unit of ``bias``.
+
+    Examples
+    --------
+    A 1 °/s bias at 100 Hz with L = 0.02 leaves 0.49° of error:
+
+    >>> from fusionlab import sensors
+    >>> round(float(sensors.observer_steady_state_error(0.02, 0.01, 1.0)), 12)
+    0.49
     """
     L = validate.scalar(L, "L")
     if not 0.0 < L <= 1.0:
@@ -1148,6 +1866,25 @@ def trailing_max(x, n):
 
     The one window both accelerometer-disturbance holds use (the complementary filter's and the Freescale fast
     paths', ours, not the seeds').
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The signal.
+    n : int
+        Window length, samples, >= 1.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The running maximum.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> sensors.trailing_max(np.array([0.0, 3.0, 1.0, 0.0, 0.0, 2.0, 0.0]), 3)   # a peak holds for 3 samples
+    array([0., 3., 3., 3., 1., 2., 2.])
     """
     from scipy.ndimage import maximum_filter1d
 
@@ -1185,10 +1922,26 @@ def lowpass(x, fs, tau):
 
     Parameters
     ----------
-    x : (N,) or (N, 3) array; fs : Hz; tau : s, time constant
+    x : array_like, shape (N,) or (N, 3)
+        The signal, N >= 1.
+    fs : float
+        Sample rate, Hz.
+    tau : float
+        Time constant, s, > 0.
+
     Returns
     -------
-    array shaped like ``x``
+    ndarray
+        The filtered signal, shaped like ``x``.
+
+    Examples
+    --------
+    A unit step after the first sample reaches 1 - 1/e after one time constant (here one sample):
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> np.round(sensors.lowpass(np.r_[0.0, np.ones(3)], fs=10.0, tau=0.1), 6)
+    array([0.      , 0.632121, 0.864665, 0.950213])
     """
     x = validate.array(x, "x")
     if x.ndim not in (1, 2) or len(x) == 0 or (x.ndim == 2 and x.shape[1] != 3):
@@ -1220,12 +1973,29 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
 
     Parameters
     ----------
-    gyr : (N, 3) rad/s; acc : (N, 3) m/s²; fs : Hz
-    gyr_tol : rad/s; acc_tol : m/s²; min_time : s; tau : s; bias_max : rad/s
+    gyr : array_like, shape (N, 3)
+        Gyro readings, rad/s.
+    acc : array_like, shape (N, 3)
+        Accelerometer readings, m/s².
+    fs : float
+        Sample rate, Hz.
+    gyr_tol : float, default 2 °/s in rad/s
+        Largest deviation of the gyro from its low-pass, rad/s.
+    acc_tol : float, default 0.5
+        Largest deviation of the accelerometer from its low-pass, m/s².
+    min_time : float, default 1.5
+        How long the sensor must be quiet to be at rest, s.
+    tau : float, default 0.5
+        Time constant of the low-passes, s.
+    bias_max : float, default 2 °/s in rad/s
+        Largest low-passed rate that can be a bias, rad/s.
+
     Returns
     -------
-    rest : (N,) bool -- at rest at sample k (from samples <= k)
-    gyr_lp : (N, 3) rad/s -- the low-passed gyro (the bias estimate where ``rest``)
+    rest : ndarray of bool, shape (N,)
+        At rest at sample k (from samples <= k).
+    gyr_lp : ndarray, shape (N, 3)
+        The low-passed gyro, rad/s (the bias estimate where ``rest``).
     """
     gyr = validate.gyro_rad(gyr, "gyr")
     acc = validate.accel_ms2(acc, "acc")
@@ -1243,8 +2013,22 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
 class RestDetector:
     """:func:`rest_detect` one sample at a time -- the readable form (a test checks that both agree).
 
-    Parameters as :func:`rest_detect`. :meth:`update` takes one gyro (rad/s) and accelerometer (m/s²) sample and
-    returns ``(rest, gyr_lp)`` for it.
+    :meth:`update` takes one gyro (rad/s) and accelerometer (m/s²) sample and returns ``(rest, gyr_lp)`` for it.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    gyr_tol : float, default 2 °/s in rad/s
+        Largest deviation of the gyro from its low-pass, rad/s.
+    acc_tol : float, default 0.5
+        Largest deviation of the accelerometer from its low-pass, m/s².
+    min_time : float, default 1.5
+        How long the sensor must be quiet to be at rest, s.
+    tau : float, default 0.5
+        Time constant of the low-passes, s.
+    bias_max : float, default 2 °/s in rad/s
+        Largest low-passed rate that can be a bias, rad/s.
     """
 
     def __init__(self, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
@@ -1257,6 +2041,22 @@ class RestDetector:
         self.quiet_run = 0                                   # consecutive quiet samples
 
     def update(self, gyr, acc):
+        """Take the next sample.
+
+        Parameters
+        ----------
+        gyr : array_like, shape (3,)
+            Gyro reading, rad/s.
+        acc : array_like, shape (3,)
+            Accelerometer reading, m/s².
+
+        Returns
+        -------
+        rest : bool
+            At rest at this sample.
+        gyr_lp : ndarray, shape (3,)
+            The low-passed gyro, rad/s (the bias estimate at rest).
+        """
         gyr, acc = np.asarray(gyr, float), np.asarray(acc, float)
         if self.gyr_lp is None:                              # the low-passes start at the first sample
             self.gyr_lp, self.acc_lp = gyr.copy(), acc.copy()
@@ -1284,11 +2084,33 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
 
     Parameters
     ----------
-    mag : (N, 3) array, any unit; fs : Hz; tol : relative norm tolerance; tau : s; new_time : s
+    mag : array_like, shape (N, 3)
+        Magnetometer readings, any unit.
+    fs : float
+        Sample rate, Hz.
+    tol : float, default 0.1
+        Relative norm tolerance.
+    tau : float, default 20.0
+        Time constant of the reference, s.
+    new_time : float, default 20.0
+        How long a new steady norm must last to replace the reference, s.
+
     Returns
     -------
-    ref : (N,) array -- the reference after sample k, unit of ``mag``
-    undisturbed : (N,) bool -- sample k's norm within ``tol`` of the reference before it
+    ref : ndarray, shape (N,)
+        The reference after sample k, unit of ``mag``.
+    undisturbed : ndarray of bool, shape (N,)
+        Sample k's norm within ``tol`` of the reference before it.
+
+    Examples
+    --------
+    A magnet passing by for two samples does not move the reference:
+
+    >>> import numpy as np
+    >>> from fusionlab import sensors
+    >>> mag = np.array([[50.0, 0.0, 0.0]] * 3 + [[80.0, 0.0, 0.0]] * 2 + [[50.0, 0.0, 0.0]])
+    >>> sensors.field_reference(mag, fs=10.0)
+    (array([50., 50., 50., 50., 50., 50.]), array([ True,  True,  True, False, False,  True]))
     """
     mag = validate.samples(mag, "mag")
     if len(mag) == 0:
