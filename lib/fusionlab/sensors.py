@@ -987,7 +987,7 @@ def specific_force(C_bn, acc_nav=None, g=G):
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# 5. The gyroscope: Coriolis (seed 000 §3.2, eqs 3.26-3.34) and integration drift (seed 001 §7.2, attitude §3)
+# 5. The gyroscope: Coriolis (seed 000 §3.2, eqs 3.26-3.34) and integration drift (seed 001 sensors note §3, attitude note §3)
 # ----------------------------------------------------------------------------------------------------------------
 
 
@@ -1186,7 +1186,7 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
 
 
 def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
-    """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §2).
+    """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §3).
 
     Seed 001's full model also has a scale factor, misalignment and temperature drift (``p = S⁻¹(M⁻¹ p_m + β(T))``);
     this keeps the two errors that make an integrated gyro drift. Units are the caller's (rad/s or °/s).
@@ -1372,7 +1372,7 @@ def accel_measure(f, M, S, beta):
     """
     f = validate.vectors(f, "f")
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return (f @ S.T - beta) @ M.T                                        # (001 §7.1 model)
+    return (f @ S.T - beta) @ M.T                                        # (001 sensors §2, model)
 
 
 def accel_correct(a_m, M, S, beta):
@@ -1398,7 +1398,7 @@ def accel_correct(a_m, M, S, beta):
     """
     a_m = validate.vectors(a_m, "a_m")
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 §7.1 correction)
+    return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 sensors §2, correction)
 
 
 def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
@@ -1428,7 +1428,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     p = validate.vectors(rate, "rate")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, rate=p)
-    return (p @ S.T - beta + g_term) @ M.T                               # (001 §7.2, solved for p_m)
+    return (p @ S.T - beta + g_term) @ M.T                               # (001 sensors §3, solved for p_m)
 
 
 def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
@@ -1457,7 +1457,7 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
-    return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 §7.2 correction)
+    return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 sensors §3, correction)
 
 
 def _g_sensitivity(C_ga, a_c, **rates):
@@ -1506,7 +1506,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     b = validate.vectors(b, "b")
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 §7.3, solved for b_m)
+    return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 sensors §4, solved for b_m)
 
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
@@ -1537,7 +1537,7 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
     b = np.linalg.solve(S, (np.linalg.solve(M, b_m.T).T + beta).T).T     # S_b⁻¹(M_b⁻¹ b_m + β_b)
-    return b @ D.T - h                                                   # (001 §7.3: b_c = D_s b − β_h)
+    return b @ D.T - h                                                   # (001 sensors §4: b_c = D_s b − β_h)
 
 
 def _iron(D_s, beta_h):
@@ -1733,8 +1733,8 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     dt = validate.positive(dt, "dt")
     v0 = np.zeros(3) if v0 is None else validate.array(v0, "v0", shape=(3,))
     p0 = np.zeros(3) if p0 is None else validate.array(p0, "p0", shape=(3,))
-    v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])     # (001 §9.2, v update)
-    p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])     # (001 §9.2, r update)
+    v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])     # (001 position §3, v update)
+    p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])     # (001 position §3, r update)
     return v, p
 
 
