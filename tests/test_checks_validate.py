@@ -225,3 +225,58 @@ def test_no_visible_check_cell_computes_the_expected_value():
                 assert isinstance(call, ast.Call) and ast.unparse(call.func).startswith("checks.check_"), (path, gid)
                 for arg in [*call.args, *(k.value for k in call.keywords)]:
                     assert isinstance(arg, (ast.Name, ast.Constant)), (path.name, gid, ast.unparse(arg))
+
+
+# ---- Lab 01 exercises 7 and 8: the quaternion product and C(q) ----
+
+def hamilton(p, q):                      # the note's product, written out as a student would
+    pw, pv, qw, qv = p[0], np.asarray(p[1:]), q[0], np.asarray(q[1:])
+    return np.r_[pw * qw - pv @ qv, pw * qv + qw * pv + np.cross(pv, qv)]
+
+
+def c_of_q(q):                           # C(q): column j is e_j turned by q ⊗ (0, e_j) ⊗ q*
+    conj = np.r_[q[0], -np.asarray(q[1:])]
+    return np.column_stack([hamilton(hamilton(q, np.r_[0.0, e]), conj)[1:] for e in np.eye(3)])
+
+
+@pytest.mark.parametrize("fn, match", [
+    (lambda p, q: hamilton(q, p), r"you computed q ⊗ p: the product does not commute"),
+    (lambda p, q: np.roll(hamilton(np.roll(p, 1), np.roll(q, 1)), -1), r"reads the quaternions as \[x, y, z, w\]"),
+    (lambda p, q: np.r_[p[0] * q[0] + np.dot(p[1:], q[1:]), hamilton(p, q)[1:]], "wrong sign of the dot product"),
+    (lambda p, q: hamilton(p, q) * [1, -1, -1, -1], r"you returned the conjugate \(p ⊗ q\)\*"),
+    (lambda p, q: hamilton(p, q) / np.linalg.norm(hamilton(p, q)), "do not normalise"),
+    (lambda p, q: hamilton(p, q)[1:], r"shape \(4,\); got \(3,\)"),
+    (lambda p, q: hamilton(p, q) + [0, 0, 0, 1e-3], r"entry \[3\] of p ⊗ q is wrong"),
+])
+def test_check_quat_multiply_names_the_slip(fn, match):
+    with pytest.raises(checks.Feedback, match=match):
+        checks.check_quat_multiply(fn)
+
+
+def test_check_quat_multiply_passes_the_note_s_product_and_refuses_the_library_s(capsys):
+    checks.check_quat_multiply(hamilton)
+    assert capsys.readouterr().out.startswith("✓ p ⊗ q is right for 5 pairs")
+    with pytest.raises(checks.Feedback, match=r"called rotations\.quat_multiply"):
+        checks.check_quat_multiply(rotations.quat_multiply)
+
+
+@pytest.mark.parametrize("fn, match", [
+    (lambda q: c_of_q(q).T, r"transpose of C_bn: it maps navigation to body. That is q\* ⊗ \(0, v\) ⊗ q"),
+    (lambda q: c_of_q(np.roll(q, 1)), r"reads q as \[x, y, z, w\] \(scalar last"),
+    (lambda q: c_of_q(np.roll(q, 1)).T, r"two slips: the scalar is read last"),
+    (lambda q: c_of_q(q) * [[1, 1, 1], [1, 1, 1], [1, 1, -1]], "not orthonormal"),
+    (lambda q: np.eye(3), r"q = \[ 0\.8013 .*entries of C\(q\) differ: \[0, 0\] is 1 \(expected 0\.4698\)"),
+    (lambda q: c_of_q(q)[:2], r"3×3 matrix; got shape \(2, 3\)"),
+])
+def test_check_quat_to_dcm_names_the_slip(fn, match):
+    with pytest.raises(checks.Feedback, match=match):
+        checks.check_quat_to_dcm(fn)
+
+
+def test_check_quat_to_dcm_passes_c_of_q_and_refuses_the_library_s(capsys):
+    checks.check_quat_to_dcm(c_of_q)
+    assert capsys.readouterr().out.startswith("✓ C(q) is right for 5 quaternions")
+    for ref, name in ((rotations.quat_to_dcm, "quat_to_dcm"), (lambda q: np.column_stack(
+            [rotations.quat_rotate(q, e) for e in np.eye(3)]), "quat_rotate")):
+        with pytest.raises(checks.Feedback, match=rf"called rotations\.{name}"):
+            checks.check_quat_to_dcm(ref)

@@ -46,6 +46,8 @@ CHEATS = {
         4: 'return rotations.dcm_renormalize(R, axis="columns")',
         5: "return rotations.rodrigues_dcm(sigma)",
         6: "return rotations.dcm_to_euler(C, yaw_at_lock=yaw)[0]",
+        7: "return rotations.quat_multiply(p, q)",
+        8: "return rotations.quat_to_dcm(q)",
     },
     "02_kalman_falling_body": {
         1: "return kf.joseph_covariance(P, K, H, R)",
@@ -124,7 +126,8 @@ NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3)}
 # Junk that has the right shapes (so the visible shape checks pass), for the patched-numpy students.
 JUNK = {
     "01_euler_rotations": {1: "return np.eye(3)", 2: "f_body = np.zeros(3)", 3: "angles_xyz = angles_yxz = np.zeros(3)",
-                           4: "return R", 5: "return np.eye(3)", 6: "return 0.0"},
+                           4: "return R", 5: "return np.eye(3)", 6: "return 0.0", 7: "return np.r_[1.0, 0, 0, 0]",
+                           8: "return np.eye(3)"},
     "02_kalman_falling_body": {1: "return P", 2: "return np.eye(2), np.eye(2), np.zeros(2)", 3: "return x, P",
                                4: "return x, P, 0.5 * np.eye(2)"},
 }

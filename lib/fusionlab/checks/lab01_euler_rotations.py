@@ -7,10 +7,10 @@ import numpy as np
 from scipy.linalg import expm
 
 from .. import rotations
-from ._core import Feedback, _answered, _call, forbids, _ok, _where
+from ._core import Feedback, _answered, _call, _first_match, forbids, _ok, _same, _where
 
 __all__ = ["diagnose_dcm", "check_euler_to_dcm", "check_renormalize", "check_rodrigues", "check_body_gravity",
-           "check_sequence_angles", "check_lock_roll"]
+           "check_sequence_angles", "check_lock_roll", "check_quat_multiply", "check_quat_to_dcm"]
 
 
 def diagnose_dcm(C, euler, tol=1e-6):
@@ -148,3 +148,78 @@ def check_lock_roll(fn):
             raise Feedback(f"at pitch {pitch:+.0f}°, yaw {yaw_deg:.0f}°: your roll {np.degrees(got):.2f}° does not "
                            f"rebuild the matrix{hint}")
     _ok("roll at gimbal lock is right for θ = +90° and θ = -90°.")
+
+
+@forbids("rotations.quat_multiply", "freescale._qmul")
+def check_quat_multiply(fn):
+    """Lab 01 exercise 7: a student's Hamilton product ``fn(p, q) -> p ⊗ q`` of scalar-first quaternions (seed 001
+    quaternion note §2). Cases are general (not unit) quaternions, so a normalised result shows up too."""
+    rng = np.random.default_rng(71)
+    cases = [(np.array([1.0, 0, 0, 0]), np.array([0.5, 0.5, 0.5, 0.5])),          # the identity on the left
+             (np.array([0.0, 1, 0, 0]), np.array([0.0, 0, 1, 0])),                # i ⊗ j = k
+             *[tuple(rng.normal(size=(2, 4))) for _ in range(3)]]
+    for p, q in cases:
+        got = _call(fn, p.copy(), q.copy(), what="your product")
+        ref = rotations.quat_multiply(p, q)
+        if got.shape != (4,):
+            raise Feedback(f"p ⊗ q is a quaternion: shape (4,); got {got.shape} (for p = {p.round(3)}, "
+                           f"q = {q.round(3)})")
+        if _same(got, ref):
+            continue
+        guesses = [
+            (rotations.quat_multiply(q, p), "you computed q ⊗ p: the product does not commute. In p ⊗ q the vector "
+                                            "part has + p_v × q_v (with p_v × q_v written out, check its signs)."),
+            (np.roll(rotations.quat_multiply(np.roll(p, 1), np.roll(q, 1)), -1),      # [x, y, z, w] in and out
+             "your formula reads the quaternions as [x, y, z, w] (scalar last, scipy's order); ours are [w, x, y, z] "
+             "with the scalar first."),
+            (np.r_[p[0] * q[0] + p[1:] @ q[1:], ref[1:]], "the scalar part has the wrong sign of the dot product: "
+                                                         "(p ⊗ q)_w = p_w q_w - p_v · q_v."),
+            (rotations.quat_conjugate(ref), "you returned the conjugate (p ⊗ q)*: the vector part is "
+                                            "p_w q_v + q_w p_v + p_v × q_v."),
+            (ref / np.linalg.norm(ref), "do not normalise: the product of two quaternions is exact as it is "
+                                        "(|p ⊗ q| = |p||q|), and the check uses quaternions that are not unit."),
+        ]
+        msg = _first_match(got, guesses)
+        if msg:
+            raise Feedback(msg)
+        raise Feedback(f"p = {p.round(3)}, q = {q.round(3)}: {_where(got, ref, 'p ⊗ q')}. The note's product: "
+                       "(p_w q_w - p_v·q_v,  p_w q_v + q_w p_v + p_v × q_v).")
+    _ok(f"p ⊗ q is right for {len(cases)} pairs (i ⊗ j = k, and quaternions that are not unit).")
+
+
+@forbids("rotations.quat_to_dcm", "rotations.quat_rotate", "freescale.rotation_matrix", "freescale._R")
+def check_quat_to_dcm(fn):
+    """Lab 01 exercise 8: a student's ``fn(q) -> C_bn`` of a unit body→navigation quaternion ``[w, x, y, z]``:
+    ``C(q) v = vector part of q ⊗ (0, v) ⊗ q*`` (seed 001 quaternion note §3). Diagnoses the transpose (the note's
+    literal ``q* ⊗ v ⊗ q``, or seed 002's R(q)) and the scalar-last reading."""
+    rng = np.random.default_rng(72)
+    qs = [rotations.euler_to_quat(np.radians([30.0, -20.0, 60.0])), np.array([0.0, 0.6, 0.0, -0.8]),   # 180° turn
+          *rotations.quat_normalize(rng.normal(size=(3, 4)))]
+    qs[-1] = -qs[-1] if qs[-1][0] > 0 else qs[-1]                     # one with w < 0: q and -q are one rotation
+    for q in qs:
+        C = _call(fn, q.copy(), what="your C(q)")
+        ref = rotations.quat_to_dcm(q)
+        if C.shape != (3, 3):
+            raise Feedback(f"C(q) is a 3×3 matrix; got shape {C.shape}")
+        if _same(C, ref):
+            continue
+        wl = rotations.quat_to_dcm(np.roll(q, 1))                  # q[3] taken for the scalar: [x, y, z, w]
+        guesses = [
+            (ref.T, "your matrix is the transpose of C_bn: it maps navigation to body. That is q* ⊗ (0, v) ⊗ q (the "
+                    "note's v_B = q⁻¹ v_I q read for our quaternion), or seed 002's R(q). Ours is body→navigation: "
+                    "C(q) v = q ⊗ (0, v) ⊗ q*."),
+            (wl, "your formula reads q as [x, y, z, w] (scalar last, scipy's order); ours is [w, x, y, z]."),
+            (wl.T, "two slips: the scalar is read last ([x, y, z, w]; ours is [w, x, y, z]) and the matrix is "
+                   "transposed (navigation→body)."),
+        ]
+        msg = _first_match(C, guesses)
+        if msg:
+            raise Feedback(f"q = {q.round(4)}: {msg}")
+        if not np.all(np.isfinite(C)):
+            raise Feedback(f"q = {q.round(4)}: your C(q) is not finite.")
+        if not np.allclose(C @ C.T, np.eye(3), atol=1e-6):
+            raise Feedback(f"q = {q.round(4)}: your C(q) is not orthonormal (C Cᵀ ≠ I): check the products of two "
+                           "components, e.g. entry [0, 1] = 2(xy - wz).")
+        raise Feedback(f"q = {q.round(4)}: {_where(C, ref, 'C(q)')}. Column j of C(q) is the unit vector e_j turned by "
+                       "q ⊗ (0, e_j) ⊗ q*.")
+    _ok(f"C(q) is right for {len(qs)} quaternions (a 180° turn, and one with w < 0).")
