@@ -184,7 +184,8 @@ def apply_triad(fit, measured):
 
 def six_positions(g=9.80665):
     """Reference specific force of the six-position test, (6, 3): ``+g`` then ``−g`` on x, y, z in turn (the
-    thesis' P1-P6, seed 004 §3.4). The axis that points up reads ``+g``.
+    classic choice; seed 004 §3.7.2 calibrates with six positions P1-P6, figs 3.9-3.10, whose orientations are not
+    legible in our copy). The axis that points up reads ``+g``.
 
     Parameters
     ----------
