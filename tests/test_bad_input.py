@@ -441,6 +441,11 @@ MET = [
                                                                          batch=True))),
     Case("remove_heading_offset", metrics.remove_heading_offset, dict(q_est=quat(Q5), offset=S(0.3, unit="rad"))),
     Case("rms", metrics.rms, dict(x=arr(ANG5, nan_ok="ignored"), mask=A(np.array([1, 1, 0, 1, 1], bool), batch=True))),
+    Case("rms over axes", metrics.rms, dict(x=A(np.stack([ANG5, -ANG5], axis=1), batch=True, nan_ok="ignored"),
+                                            mask=A(np.array([1, 1, 0, 1, 1], bool), batch=True), axis=choice(0))),
+    # any number of turns on purpose: wrapping is what the function is for, so no degrees test here
+    Case("wrap_deg", metrics.wrap_deg, dict(a=arr(ANG5 * 4, nan_ok=True))),
+    Case("small", metrics.small, dict(x=S(3e-13), tol=S(1e-12, positive=True))),
     Case("broad_rmse", metrics.broad_rmse, dict(q_est=quat(Q5), q_ref=quat(Q5[::-1].copy(), nan_ok="ignored"),
                                                 movement=A(np.array([1, 1, 0, 1, 1], bool), batch=True),
                                                 heading_offset=S(0.3, unit="rad"))),

@@ -165,3 +165,78 @@ def test_all_reference_lost_in_the_mask_is_an_error_not_a_nan():
         metrics.broad_rmse(np.tile([1.0, 0, 0, 0], (3, 1)), q_ref)
     with pytest.raises(ValueError, match="x must have shape"):
         metrics.rms(np.ones((3, 2)))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The small helpers the notebooks share: rms over chosen axes, wrap_deg, small
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_rms_over_axes_is_numpys_formula_and_skips_nan_per_column():
+    rng = np.random.default_rng(4)
+    e = rng.normal(size=(4, 50, 3))
+    np.testing.assert_array_equal(metrics.rms(e, axis=(0, 1)), np.sqrt(np.mean(np.square(e), axis=(0, 1))))
+    np.testing.assert_array_equal(metrics.rms(e[0], axis=0), np.sqrt(np.mean(np.square(e[0]), axis=0)))
+    assert metrics.rms(e, axis=(0, 1, 2)) == np.sqrt(np.mean(np.square(e)))
+    assert isinstance(metrics.rms(e, axis=(0, 1, 2)), float)
+    x = np.array([[3.0, 1.0], [np.nan, 1.0], [4.0, np.nan]])          # NaN: left out of its own column only
+    np.testing.assert_allclose(metrics.rms(x, axis=0), [np.sqrt(12.5), 1.0], rtol=1e-15)
+    np.testing.assert_allclose(metrics.rms(x, [True, True, False], axis=0), [3.0, 1.0], rtol=1e-15)
+    assert metrics.rms([3.0, -4.0, np.nan]) == pytest.approx(np.sqrt(12.5), rel=1e-15)
+
+
+@pytest.mark.parametrize("args, kwargs, match", [
+    ((np.ones((3, 2)),), {}, r"x must have shape \(N,\), or give axis="),
+    ((np.ones((3, 2)),), dict(axis=2), "axis must name distinct axes of x, which has 2; got 2"),
+    ((np.ones((3, 2)),), dict(axis=(0, -2)), "axis must name distinct axes"),
+    ((np.ones((3, 2)),), dict(axis=1.0), "axis must be None, an integer or a tuple of integers; got 1.0"),
+    ((np.ones((3, 2)),), dict(axis=True), "axis must be None, an integer"),
+    ((np.array(2.0),), dict(axis=0), "x must have at least one axis"),
+    ((np.array([[1.0, np.nan], [2.0, np.nan]]),), dict(axis=0), "mask must select at least one sample where x is"),
+    ((np.ones((3, 2)), [True, False]), dict(axis=0), r"mask must have shape \(3,\), one flag per sample of x"),
+])
+def test_rms_refuses_what_it_cannot_average(args, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        metrics.rms(*args, **kwargs)
+
+
+def test_wrap_deg_takes_the_short_way_round():
+    a = np.radians([179.0, 181.0, -181.0, 370.0, -725.0, 0.0])
+    np.testing.assert_allclose(metrics.wrap_deg(a), [179.0, -179.0, 179.0, 10.0, -5.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(metrics.wrap_deg(np.radians(45.0)), 45.0, rtol=1e-14)
+    assert metrics.wrap_deg(np.radians([[350.0, np.nan]])).shape == (1, 2)
+    assert np.isnan(metrics.wrap_deg(np.nan))
+    big = np.random.default_rng(2).uniform(-50, 50, 1000)                # any number of turns
+    w = metrics.wrap_deg(big)
+    assert np.all(np.abs(w) <= 180.0)
+    np.testing.assert_allclose(np.cos(np.radians(w)), np.cos(big), atol=1e-12)
+    np.testing.assert_allclose(np.sin(np.radians(w)), np.sin(big), atol=1e-12)
+
+
+@pytest.mark.parametrize("a, match", [
+    ([0.1, np.inf], r"a must hold finite angles \(rad\) or NaN; got 1 infinite value"),
+    ("north", "a must be an array of numbers; got str"),
+    (None, r"a must be an angle or an array of angles \(rad\); got None"),
+])
+def test_wrap_deg_refuses_infinite_or_text(a, match):
+    with pytest.raises(ValueError, match=match):
+        metrics.wrap_deg(a)
+
+
+def test_small_shows_machine_precision_as_a_bound_and_the_rest_in_full():
+    assert metrics.small(3e-17) == "< 1e-12"
+    assert metrics.small(-4e-13) == "< 1e-12"
+    assert metrics.small(np.float64(2.5e-4)) == "2.50e-04"
+    assert metrics.small(-1e-12) == "-1.00e-12"                   # at the threshold: not below it, printed
+    assert metrics.small(1e-10, tol=1e-8) == "< 1e-08"
+    assert metrics.small(0) == "< 1e-12"
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(x=np.array([1e-13, 2e-13])), r"x must be a single number; got ndarray of shape \(2,\)"),
+    (dict(x=np.nan), "x must be a finite number; got nan"),
+    (dict(x=1e-13, tol=0.0), "tol must be > 0; got 0.0"),
+    (dict(x=1e-13, tol="1e-12"), "tol must be a single number; got '1e-12'"),
+])
+def test_small_refuses_what_it_cannot_print(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        metrics.small(**kwargs)

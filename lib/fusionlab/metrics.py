@@ -33,7 +33,8 @@ import numpy as np
 from . import rotations, validate
 
 __all__ = ["error_quaternion", "total_error", "heading_error", "inclination_error", "signed_heading_error",
-           "mean_heading_offset", "remove_heading_offset", "rms", "OrientationRMSE", "broad_rmse"]
+           "mean_heading_offset", "remove_heading_offset", "rms", "wrap_deg", "small", "OrientationRMSE",
+           "broad_rmse"]
 
 
 def _quats_with_nan(q, name):
@@ -226,25 +227,30 @@ def remove_heading_offset(q_est, offset):
     return _turn_heading(q_est, offset)
 
 
-def rms(x, mask=None):
+def rms(x, mask=None, *, axis=None):
     """Root mean square of ``x`` over the samples where ``mask`` is true, ignoring NaN samples.
 
     Parameters
     ----------
-    x : array_like, shape (N,)
+    x : array_like, shape (N,), or shape (N, ...) when ``axis`` is given
         The samples (any unit; the result has the same), NaN where undefined.
     mask : array_like of bool, shape (N,), optional
-        Samples to include (default: all).
+        Samples to include, one flag per entry of the first axis of ``x`` (default: all).
+    axis : None, int or tuple of int, optional
+        None (the default): ``x`` must be one series of shape (N,). Otherwise the axes of ``x`` to average over,
+        as in ``np.mean``: ``axis=0`` for one RMS per column of an (N, 3) error, ``axis=(0, 1)`` for one per
+        component of a (runs, N, 3) stack. Naming the axes makes a many-axis ``x`` a choice, not a slip.
 
     Returns
     -------
-    float
+    float, or ndarray of the shape of ``x`` without the averaged axes
         ``√(mean(x²))`` over the selected, defined samples.
 
     Raises
     ------
     ValueError
-        When no sample is both selected and defined.
+        When ``x`` has more than one axis and ``axis`` is None, when ``axis`` does not fit ``x``, or when no
+        sample (of any output entry) is both selected and defined.
 
     Examples
     --------
@@ -256,14 +262,110 @@ def rms(x, mask=None):
     3.0
     >>> metrics.rms([3.0, 100.0, -3.0], mask=[True, False, True])
     3.0
+    >>> metrics.rms(np.array([[1.0, 2.0], [-1.0, 2.0]]), axis=0)          # one RMS per column
+    array([1., 2.])
     """
     x = validate.array(x, "x", finite=False)
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
-    ok = _mask(mask, len(x), of="x") & ~np.isnan(x)
-    if not ok.any():
+    if axis is None and x.ndim != 1:
+        raise ValueError(f"x must have shape (N,), or give axis= to average over several axes; got {x.shape}")
+    if x.ndim == 0:
+        raise ValueError("x must have at least one axis (one entry per sample); got a single number")
+    if axis is not None:
+        axis = _axes(axis, x.ndim)
+    ok = _mask(mask, len(x), of="x")
+    if not ok.all():
+        x = x[ok]
+    defined = ~np.isnan(x)
+    if not defined.any(axis=axis).all():
         raise ValueError("mask must select at least one sample where x is defined (not NaN); got none")
-    return float(np.sqrt(np.mean(x[ok] ** 2)))
+    if defined.all():
+        out = np.sqrt(np.mean(np.square(x), axis=axis))
+    else:
+        out = np.sqrt(np.nanmean(np.square(x), axis=axis))
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def _axes(axis, ndim):
+    """``axis`` (int or tuple of int) as a tuple of distinct axes of an ``ndim``-axis array."""
+    axes = axis if isinstance(axis, tuple) else (axis,)
+    if not axes or any(isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer)) for a in axes):
+        raise ValueError(f"axis must be None, an integer or a tuple of integers; got {axis!r}")
+    out = tuple(int(a) + ndim if a < 0 else int(a) for a in axes)
+    if any(not 0 <= a < ndim for a in out) or len(set(out)) != len(out):
+        raise ValueError(f"axis must name distinct axes of x, which has {ndim}; got {axis!r}")
+    return out
+
+
+def wrap_deg(a):
+    """An angle or angle difference in radians as degrees within [-180, 180].
+
+    The difference of two headings (or of two Euler angles) jumps by 360° where one of them crosses ±180°; wrapped,
+    it is the short way round. Computed as ``degrees(angle(exp(1j·a)))``, exact to rounding for any size of ``a``; an
+    exact half turn comes out as +180 or -180, whichever side the rounding of ``exp`` falls on.
+
+    Parameters
+    ----------
+    a : float or array_like, any shape
+        Angles in radians, any size (several turns are allowed); NaN where undefined.
+
+    Returns
+    -------
+    ndarray or numpy float, the shape of ``a``
+        Degrees in [-180, 180]; NaN where ``a`` is NaN.
+
+    Raises
+    ------
+    ValueError
+        When ``a`` is None, is not numbers, or holds an infinite value.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fusionlab import metrics
+    >>> metrics.wrap_deg(np.radians([179.0, 181.0, -350.0]))
+    array([ 179., -179.,   10.])
+    """
+    if a is None:                                       # np.asarray(None, float) would be a silent NaN
+        raise ValueError("a must be an angle or an array of angles (rad); got None")
+    a = validate.array(a, "a", finite=False)
+    if np.isinf(a).any():
+        raise ValueError(f"a must hold finite angles (rad) or NaN; got {int(np.isinf(a).sum())} infinite value(s)")
+    return np.degrees(np.angle(np.exp(1j * a)))
+
+
+def small(x, tol=1e-12):
+    """Text for a number that should vanish up to rounding: ``'< 1e-12'`` below ``tol``, else ``'%.2e'``.
+
+    Two computations that agree to machine precision differ by a few 1e-16 that change with the platform and the
+    library versions; printed as ``< 1e-12``, the agreement is what the notebook shows, and its output stays the
+    same everywhere. A difference that is not small prints in full (``'3.10e-04'``), so a real disagreement shows.
+
+    Parameters
+    ----------
+    x : float
+        The difference (any unit), usually a largest absolute difference.
+    tol : float, optional
+        The threshold, > 0, in the unit of ``x`` (default 1e-12).
+
+    Returns
+    -------
+    str
+        ``f"< {tol:.0e}"`` when ``|x| < tol``, else ``f"{x:.2e}"``.
+
+    Raises
+    ------
+    ValueError
+        When ``x`` or ``tol`` is not a single finite number, or ``tol`` is not > 0.
+
+    Examples
+    --------
+    >>> from fusionlab import metrics
+    >>> metrics.small(3e-17), metrics.small(2.5e-4), metrics.small(1e-10, tol=1e-8)
+    ('< 1e-12', '2.50e-04', '< 1e-08')
+    """
+    x = validate.scalar(x, "x")
+    tol = validate.scalar(tol, "tol", positive=True)
+    return f"< {tol:.0e}" if abs(x) < tol else f"{x:.2e}"
 
 
 def _mask(mask, n, of, name="mask"):
