@@ -276,18 +276,35 @@ def _call_tuple(fn, args, n, what):
     return [np.asarray(o, dtype=float) for o in out]
 
 
-def _same(a, b, tol=1e-9):
-    try:                                   # through the guard: an answer cell cannot patch this comparison
-        guard.assert_close(a, b, what="", rtol=1e-9, atol=tol)
+def _same(a, b, tol=1e-9, rtol=1e-9):
+    """``a`` equals ``b`` (same shape, within ``tol + rtol·|b|``), compared through the guard: an answer cell cannot
+    patch this comparison."""
+    try:
+        guard.assert_close(a, b, what="", rtol=rtol, atol=tol)
     except AssertionError:
         return False
     return np.shape(a) == np.shape(b)
 
 
-def _first_match(value, guesses):
-    for cand, msg in guesses:
-        if _same(value, cand):
-            return msg
+def _first_match(value, slips, *, rtol=1e-9, atol=1e-9):
+    """The message of the first slip that ``value`` shows, or None: a check's slips are data, read by this one
+    matcher.
+
+    ``slips`` is a table of ``(wrong version, message)`` in the order they are tried. The wrong version is what
+    the slip computes on the check's case -- ``value`` shows it when it has its shape and equals it within
+    ``atol + rtol·|wrong|`` --, or None where the slip does not apply to the case, or a predicate
+    ``value -> bool`` for a slip that no single value describes (a NaN where 0/0 was not guarded, a right answer
+    in the wrong unit only on some entries)."""
+    for wrong, message in slips:
+        if wrong is None:
+            continue
+        if callable(wrong):
+            with np.errstate(all="ignore"):
+                hit = bool(wrong(value))
+        else:
+            hit = _same(value, np.asarray(wrong, dtype=float), atol, rtol)
+        if hit:
+            return message
     return None
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import rotations, sensors as _sensors
-from ._core import Feedback, _answered, _call, forbids, _general_case, _ok
+from ._core import Feedback, _answered, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_adc_096", "check_adc_step", "check_gyro_bias", "check_smd_magnitude", "check_accel_from_bridge",
            "check_adc_to_physical", "check_atan2", "check_roll_pitch", "check_coriolis_force", "check_integrate_rate"]
@@ -61,12 +61,12 @@ def check_gyro_bias(bias_hat, still, fs=100.0, seconds=5.0):
     if np.isfinite(v) and abs(v - expected) <= 1e-9:
         _ok("bias_hat is right (the mean of the first 5 s).")
         return
-    if abs(v + expected) <= 1e-9:
-        raise Feedback("bias_hat has the wrong sign: the bias is the mean reading at rest; the NullOffset is its "
-                       "negative.")
-    if abs(v - float(np.mean(still))) <= 1e-9:
-        raise Feedback("you averaged the whole record; the exercise asks for the first 5 s only.")
-    raise Feedback("Average the first 5 s (500 samples at 100 Hz) of `still`; the true rate there is 0.")
+    msg = _first_match(v, [
+        (-expected, "bias_hat has the wrong sign: the bias is the mean reading at rest; the NullOffset is its "
+                    "negative."),
+        (float(np.mean(still)), "you averaged the whole record; the exercise asks for the first 5 s only."),
+    ], rtol=0, atol=1e-9)
+    raise Feedback(msg or "Average the first 5 s (500 samples at 100 Hz) of `still`; the true rate there is 0.")
 
 
 @forbids("sensors.smd_transfer")
@@ -76,6 +76,7 @@ def check_smd_magnitude(fn):
     k = m * (2 * np.pi * 5e3) ** 2
     wn = np.sqrt(k / m)
     omega = np.array([0.0, 0.3, 0.9, 1.0, 1.2, 4.0]) * wn
+    off_peak = omega != wn
     for zeta in (0.05, 0.7):
         b = 2 * zeta * np.sqrt(k * m)
         out = _call(fn, omega, m, k, b, what="your function", dtype=None)
@@ -88,19 +89,20 @@ def check_smd_magnitude(fn):
         ref = np.abs(_sensors.smd_transfer(omega, m, k, b))
         if np.allclose(out, ref, rtol=1e-6, atol=0):
             continue
-        if np.allclose(out, -ref, rtol=1e-6):
-            raise Feedback("your amplitudes are negative: |H| is a magnitude (the minus sign of eq 3.5 is a phase).")
-        if np.allclose(out, m / k, rtol=1e-6):
-            raise Feedback("you returned the DC gain m/k at every frequency; evaluate eq 3.5 at s = jω.")
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore"):
             undamped = 1 / np.abs(k / m - omega**2 + 0j)
-            if np.allclose(out[omega != wn], undamped[omega != wn], rtol=1e-6):
-                raise Feedback("the damping term (b/m)·jω is missing: without it the peak at ω_n is infinite.")
-        if np.allclose(out[0], m / k, rtol=1e-6):
-            raise Feedback(f"right at ω = 0 but off near resonance (ζ = {zeta}): check the damping term (b/m)·jω "
-                           "and that (jω)² = -ω².")
-        raise Feedback(f"at ζ = {zeta} your amplitude differs from |H(jω)| by up to "
-                       f"{np.max(np.abs(out / ref - 1)):.3g} (relative). At ω = 0 it must be m/k = {m / k:.4g} s².")
+        msg = _first_match(out, [
+            (-ref, "your amplitudes are negative: |H| is a magnitude (the minus sign of eq 3.5 is a phase)."),
+            (np.full_like(ref, m / k), "you returned the DC gain m/k at every frequency; evaluate eq 3.5 at s = jω."),
+            (lambda o: np.allclose(o[off_peak], undamped[off_peak], rtol=1e-6, atol=0),
+             "the damping term (b/m)·jω is missing: without it the peak at ω_n is infinite."),
+            (lambda o: np.isclose(o[0], m / k, rtol=1e-6, atol=0),
+             f"right at ω = 0 but off near resonance (ζ = {zeta}): check the damping term (b/m)·jω and that "
+             "(jω)² = -ω²."),
+        ], rtol=1e-6, atol=0)
+        raise Feedback(msg or f"at ζ = {zeta} your amplitude differs from |H(jω)| by up to "
+                              f"{np.max(np.abs(out / ref - 1)):.3g} (relative). At ω = 0 it must be m/k = "
+                              f"{m / k:.4g} s².")
     _ok("|H(jω)| is right for light and heavy damping, from DC through resonance.")
 
 
@@ -112,18 +114,18 @@ def check_accel_from_bridge(fn):
     for v_out, v_in, x0 in ((1e-3, 3.0, 2e-6), (-4e-3, 5.0, 1.5e-6)):
         got = float(_call(fn, v_out, v_in, x0, m, k, what="your function"))
         ref = float(_sensors.accel_from_bridge(v_out, v_in, x0, m, k))
-        if np.isclose(got, ref, rtol=1e-9):
+        if np.isclose(got, ref, rtol=1e-9, atol=0):
             continue
-        delta = 2 * v_out / v_in
-        if np.isclose(got, -(m / k) * x0 * delta, rtol=1e-6):
-            raise Feedback("that is eq 3.13 as printed, with m/k. The thesis' eq 3.7 is an erratum: x = -(m/k)·a "
-                           "inverts to a = -(k/m)·x. Check the units: only k/m (1/s²) turns metres into m/s².")
-        if np.isclose(got, -ref, rtol=1e-9):
-            raise Feedback("the sign is flipped: a = -(k/m)·x (the mass lags behind the case).")
-        if np.isclose(got, ref / 2, rtol=1e-9) or np.isclose(got, ref / 4, rtol=1e-9):
-            raise Feedback("a factor of 2 is missing: Vout = δ·Vin/2, so δ = 2·Vout/Vin.")
-        raise Feedback(f"for Vout = {v_out} V, Vin = {v_in} V, x0 = {x0} m your a = {got:.4g} m/s²; expected "
-                       f"{ref:.4g}. Chain: δ = 2·Vout/Vin, x = x0·δ, a = -(k/m)·x.")
+        msg = _first_match(got, [
+            (-(m / k) * x0 * 2 * v_out / v_in, "that is eq 3.13 as printed, with m/k. The thesis' eq 3.7 is an "
+             "erratum: x = -(m/k)·a inverts to a = -(k/m)·x. Check the units: only k/m (1/s²) turns metres into "
+             "m/s²."),
+            (-ref, "the sign is flipped: a = -(k/m)·x (the mass lags behind the case)."),
+            (ref / 2, "a factor of 2 is missing: Vout = δ·Vin/2, so δ = 2·Vout/Vin."),
+            (ref / 4, "a factor of 2 is missing: Vout = δ·Vin/2, so δ = 2·Vout/Vin."),
+        ], rtol=1e-6, atol=0)
+        raise Feedback(msg or f"for Vout = {v_out} V, Vin = {v_in} V, x0 = {x0} m your a = {got:.4g} m/s²; expected "
+                              f"{ref:.4g}. Chain: δ = 2·Vout/Vin, x = x0·δ, a = -(k/m)·x.")
     _ok("a = -(k/m)·x0·2·Vout/Vin -- the bridge voltage is turned back into acceleration correctly.")
 
 
@@ -138,17 +140,17 @@ def check_adc_to_physical(fn):
         if np.isclose(got, ref, rtol=1e-9, atol=1e-12):
             continue
         where = f"for counts = {counts}, zero = {zero} V, sensitivity = {sens} V/unit, Vref = {v_ref} V, {bits} bits"
-        if np.isclose(got, (counts * v_ref / 2**bits - zero) / sens, rtol=1e-9):
-            raise Feedback(f"{where}: you divided by 2**bits; the thesis' ADC resolution is 2**bits - 1 "
-                           f"({2**bits - 1} for {bits} bits).")
-        if np.isclose(got, counts * v_ref / (2**bits - 1) / sens, rtol=1e-9):
-            raise Feedback(f"{where}: the zero level is not subtracted (eq 3.15) -- a level axis must read ≈ 0.")
-        if np.isclose(got, (counts * v_ref / (2**bits - 1) - zero) * sens, rtol=1e-9):
-            raise Feedback(f"{where}: multiply by the sensitivity? Divide: volts / (volts per unit) = units.")
-        if bits != 10 and np.isclose(got, (counts * v_ref / 1023 - zero) / sens, rtol=1e-9):
-            raise Feedback(f"{where}: 1023 is hard-coded; use 2**bits - 1 so other ADCs work too.")
-        raise Feedback(f"{where}: you return {got:.6g}, expected {ref:.6g}. "
-                       "Formula: (counts·Vref/(2**bits - 1) - zero) / sensitivity.")
+        volts = counts * v_ref / (2**bits - 1)
+        msg = _first_match(got, [
+            ((counts * v_ref / 2**bits - zero) / sens, f"you divided by 2**bits; the thesis' ADC resolution is "
+                                                       f"2**bits - 1 ({2**bits - 1} for {bits} bits)."),
+            (volts / sens, "the zero level is not subtracted (eq 3.15) -- a level axis must read ≈ 0."),
+            ((volts - zero) * sens, "multiply by the sensitivity? Divide: volts / (volts per unit) = units."),
+            ((counts * v_ref / 1023 - zero) / sens if bits != 10 else None,
+             "1023 is hard-coded; use 2**bits - 1 so other ADCs work too."),
+        ], rtol=1e-9, atol=0)
+        raise Feedback(f"{where}: " + (msg or f"you return {got:.6g}, expected {ref:.6g}. Formula: "
+                                              "(counts·Vref/(2**bits - 1) - zero) / sensitivity."))
     _ok("the ADC conversion is right (including a 12-bit ADC); the thesis' example gives "
         f"{float(_sensors.adc_to_physical(508, 1.35, 0.3)):.4f} g at 3.0 V.")
 
@@ -164,18 +166,17 @@ def check_atan2(fn):
         ref = float(np.arctan2(y, x))
         if np.isclose(got, ref, atol=1e-12):
             continue
-        if np.isnan(got) and y < 0 and x < 0:
-            raise Feedback(f"atan2({y}, {x}) gave NaN: no case covers y < 0, x < 0. That is the typo of eq 3.21 "
-                           "as printed (its third case repeats 'y ≥ 0, x < 0'); it should read y < 0, x < 0.")
-        if y < 0 and x < 0 and np.isclose(got, ref + 2 * np.pi, atol=1e-12):
-            raise Feedback(f"atan2({y}, {x}) = {got:.4f} is outside (-π, π]: in the third quadrant subtract π, "
-                           "do not add it (eq 3.21, third case, corrected to y < 0, x < 0).")
-        if np.isclose(got, np.degrees(ref), atol=1e-9):
-            raise Feedback("your result is in degrees; return radians.")
-        if np.isclose(got, np.arctan2(x, y), atol=1e-12):
-            raise Feedback("the arguments are swapped: this is Excel's order ATAN2(x, y). In numpy, C and eq 3.21 "
-                           "y comes first: atan2(y, x) is the angle of the point (x, y).")
-        raise Feedback(f"atan2({y}, {x}) should be {ref:.6f} rad; you return {got:.6f}.")
+        third = y < 0 and x < 0
+        msg = _first_match(got, [
+            (lambda g: third and np.isnan(g), f"atan2({y}, {x}) gave NaN: no case covers y < 0, x < 0. That is the "
+             "typo of eq 3.21 as printed (its third case repeats 'y ≥ 0, x < 0'); it should read y < 0, x < 0."),
+            (ref + 2 * np.pi if third else None, f"atan2({y}, {x}) = {got:.4f} is outside (-π, π]: in the third "
+             "quadrant subtract π, do not add it (eq 3.21, third case, corrected to y < 0, x < 0)."),
+            (np.degrees(ref), "your result is in degrees; return radians."),
+            (np.arctan2(x, y), "the arguments are swapped: this is Excel's order ATAN2(x, y). In numpy, C and eq "
+             "3.21 y comes first: atan2(y, x) is the angle of the point (x, y)."),
+        ], rtol=0, atol=1e-9)
+        raise Feedback(msg or f"atan2({y}, {x}) should be {ref:.6f} rad; you return {got:.6f}.")
     _ok("four quadrants and both axes are right.")
 
 
@@ -183,34 +184,38 @@ def check_atan2(fn):
 def check_roll_pitch(fn):
     """Check a student's ``fn(acc) -> (roll, pitch)`` for a forward-right-down sensor at rest (seed 001, full range)."""
     cases = [(10.0, 20.0, 1.0), (120.0, -45.0, 1.0), (-150.0, 60.0, 1.0), (179.0, 5.0, 1.0), (-60.0, 30.0, 0.1)]
+
+    def wrapped(a):                                                  # an angle into (-π, π]
+        return np.angle(np.exp(1j * np.asarray(a, dtype=float)))
+
     for roll_d, pitch_d, scale in cases:
         e = np.radians([roll_d, pitch_d, 0.0])
         acc = scale * _sensors.specific_force(rotations.euler_to_dcm(e))
         got = _call(fn, acc, what="your function")
         if got.shape != (2,):
             raise Feedback(f"return two numbers (roll, pitch); got shape {got.shape}")
-        err = np.angle(np.exp(1j * (got - e[:2])))
+        err = wrapped(got - e[:2])
         if np.all(np.abs(err) < 1e-9):
             continue
-        where = f"at roll {roll_d:g}°, pitch {pitch_d:g}°"
+        roll_ok = abs(err[0]) < 1e-9
+        msg = _first_match(got, [
+            (np.degrees(e[:2]), "your angles are in degrees; return radians."),
+            (e[1::-1], "roll and pitch are swapped -- return (roll, pitch)."),
+            # before the 180° slip: past |roll| = 90° the printed arctan is off by exactly 180° too
+            (lambda g: abs(roll_d) > 90 and abs(g[0] - np.arctan(acc[1] / acc[2])) < 1e-9,
+             "arctan(a_y/a_z) (seed 001 as printed) only covers |roll| < 90°; atan2(-a_y, -a_z) covers the full "
+             "circle."),
+            (lambda g: abs(wrapped(g[0] - e[0] + np.pi)) < 1e-9,
+             "roll is off by 180°. At rest a level sensor reads a_z = -g (+g on the axis that points up, and z "
+             "points down), so the naive atan2(a_y, a_z) is off by π; use atan2(-a_y, -a_z)."),
+            (lambda g: roll_ok and scale != 1.0, f"reading in units of {scale:g}·m/s²: pitch is wrong when |a| ≠ g. "
+             "asin(a_x/g) needs |a| = g; atan2(a_x, √(a_y² + a_z²)) works in any unit."),
+            (lambda g: roll_ok and abs(g[1] + e[1]) < 1e-9,
+             "pitch has the wrong sign: nose up (θ > 0) makes a_x = +g·sin θ."),
+        ], rtol=0, atol=1e-6)
         r, p = got
-        if np.allclose(got, np.degrees(e[:2]), atol=1e-6):
-            raise Feedback(f"{where}: your angles are in degrees; return radians.")
-        if np.allclose(got[::-1], e[:2], atol=1e-9):
-            raise Feedback(f"{where}: roll and pitch are swapped -- return (roll, pitch).")
-        if abs(np.angle(np.exp(1j * (r - e[0] + np.pi)))) < 1e-9:
-            raise Feedback(f"{where}: roll is off by 180°. At rest a level sensor reads a_z = -g (+g on the axis "
-                           "that points up, and z points down), so the naive atan2(a_y, a_z) is off by π; "
-                           "use atan2(-a_y, -a_z).")
-        if abs(r - np.arctan(acc[1] / acc[2])) < 1e-9 and abs(roll_d) > 90:
-            raise Feedback(f"{where}: arctan(a_y/a_z) (seed 001 as printed) only covers |roll| < 90°; "
-                           "atan2(-a_y, -a_z) covers the full circle.")
-        if abs(err[0]) < 1e-9 and scale != 1.0:
-            raise Feedback(f"{where}, reading in units of {scale:g}·m/s²: pitch is wrong when |a| ≠ g. asin(a_x/g) "
-                           "needs |a| = g; atan2(a_x, √(a_y² + a_z²)) works in any unit.")
-        if abs(err[0]) < 1e-9 and abs(p + e[1]) < 1e-9:
-            raise Feedback(f"{where}: pitch has the wrong sign: nose up (θ > 0) makes a_x = +g·sin θ.")
-        raise Feedback(f"{where}: you return roll {np.degrees(r):.2f}°, pitch {np.degrees(p):.2f}°.")
+        raise Feedback(f"at roll {roll_d:g}°, pitch {pitch_d:g}°: " + (
+            msg or f"you return roll {np.degrees(r):.2f}°, pitch {np.degrees(p):.2f}°."))
     _ok("roll over the full circle and pitch are right, in any unit of acceleration.")
 
 
@@ -226,15 +231,14 @@ def check_coriolis_force(fn):
         scale = np.max(np.abs(ref))
         if np.allclose(got, ref, rtol=1e-9, atol=1e-12 * scale):
             continue
-        if np.allclose(got, -ref, rtol=1e-9, atol=1e-12 * scale):
-            raise Feedback("the sign is that of eq 3.34 as printed, +2M(Ω × v): the force the suspension must "
-                           "supply. The Coriolis force seen in the rotating frame is -2m Ω × v (= 2m v × Ω); "
-                           "the thesis' own right-hand rule says the middle finger points *opposite* to it.")
-        if np.allclose(got, ref / 2, rtol=1e-9, atol=1e-12 * scale):
-            raise Feedback("a factor of 2 is missing: F = -2 m Ω × v.")
-        if np.allclose(got, ref / m, rtol=1e-9):
-            raise Feedback("you returned an acceleration; multiply by the mass to get the force.")
-        raise Feedback(f"for m = {m}, Ω = {w}, v = {v} you return {got}; expected {ref}.")
+        msg = _first_match(got, [
+            (-ref, "the sign is that of eq 3.34 as printed, +2M(Ω × v): the force the suspension must supply. The "
+                   "Coriolis force seen in the rotating frame is -2m Ω × v (= 2m v × Ω); the thesis' own right-hand "
+                   "rule says the middle finger points *opposite* to it."),
+            (ref / 2, "a factor of 2 is missing: F = -2 m Ω × v."),
+            (ref / m, "you returned an acceleration; multiply by the mass to get the force."),
+        ], rtol=1e-9, atol=1e-12 * scale)
+        raise Feedback(msg or f"for m = {m}, Ω = {w}, v = {v} you return {got}; expected {ref}.")
     _ok("F = -2 m Ω × v, with the sign the thesis' right-hand rule implies.")
 
 
@@ -257,13 +261,13 @@ def check_integrate_rate(fn):
                       "Integrate along axis 0 (np.cumsum(..., axis=0)) and give angle0 a default of 0.")
         _ok("forward Euler: θ[0] = angle0, θ[n+1] = θ[n] + dt·ω[n], also for several channels at once.")
         return
-    if np.allclose(got, a0 + np.cumsum(rate) * dt, atol=1e-12):
-        raise Feedback("off by one sample: θ[0] must be angle0 (nothing integrated yet); the rate ω[n] moves the "
-                       "angle from θ[n] to θ[n+1].")
-    if np.allclose(got, ref - a0, atol=1e-12):
-        raise Feedback("angle0 is ignored: start the integral at angle0.")
-    if np.allclose(got[1:], a0 + np.cumsum((rate[1:] + rate[:-1]) / 2) * dt, atol=1e-12):
-        raise Feedback("that is the trapezoidal rule -- more accurate, but this exercise asks for seed 001's forward "
-                       "Euler, θ[n+1] = θ[n] + dt·ω[n].")
-    raise Feedback(f"for rate {rate}, dt = {dt}, angle0 = {a0} you return {np.round(got, 4)}; "
-                   f"expected {np.round(ref, 4)}.")
+    trapezoid = np.r_[a0, a0 + np.cumsum((rate[1:] + rate[:-1]) / 2) * dt]
+    msg = _first_match(got, [
+        (a0 + np.cumsum(rate) * dt, "off by one sample: θ[0] must be angle0 (nothing integrated yet); the rate ω[n] "
+                                    "moves the angle from θ[n] to θ[n+1]."),
+        (ref - a0, "angle0 is ignored: start the integral at angle0."),
+        (lambda g: np.allclose(g[1:], trapezoid[1:], atol=1e-12), "that is the trapezoidal rule -- more accurate, "
+         "but this exercise asks for seed 001's forward Euler, θ[n+1] = θ[n] + dt·ω[n]."),
+    ], rtol=0, atol=1e-12)
+    raise Feedback(msg or f"for rate {rate}, dt = {dt}, angle0 = {a0} you return {np.round(got, 4)}; "
+                          f"expected {np.round(ref, 4)}.")

@@ -43,7 +43,8 @@ def check_joseph(fn):
              (np.array([[5.0, 0.7], [0.7, 4.8]]), np.array([[0.2, 0.05], [0.01, 0.3]]),
               np.array([[1.0, 0.5], [0.0, 1.0]]), 2.0 * np.eye(2))]                # square H, non-symmetric K
     for c in _general_kf_cases(11):                                                # other sizes, dense H
-        cases += [(c["P"], _kalman.kalman_gain(c["P"], c["H"], c["R"]), c["H"], c["R"]), (c["P"], c["K"], c["H"], c["R"])]
+        optimal = _kalman.kalman_gain(c["P"], c["H"], c["R"])
+        cases += [(c["P"], optimal, c["H"], c["R"]), (c["P"], c["K"], c["H"], c["R"])]
     for P_, K_, H_, R_ in cases:
         try:
             out = _call(fn, P_, K_, H_, R_, what="your function")
@@ -78,8 +79,8 @@ def check_joseph(fn):
         msg = _first_match(out, [(c, m) for c, m in guesses if c is not None])
         kind = "the optimal gain" if _same(K_, _kalman.kalman_gain(P_, H_, R_)) else "a non-optimal gain"
         size = f"n = {len(P_)} states, m = {len(R_)} measurements"
-        raise Feedback(f"with {kind} ({size}): " + (msg or f"P_post is not eq 4.17: {_where(out, ref, 'P_post')} -- does "
-                                                          "your code assume 2 states (np.eye(2))? Use "
+        raise Feedback(f"with {kind} ({size}): " + (msg or f"P_post is not eq 4.17: {_where(out, ref, 'P_post')} -- "
+                                                          "does your code assume 2 states (np.eye(2))? Use "
                                                           "np.eye(len(P))."))
     _ok("Joseph form is right, for the optimal gain and for gains that are not optimal, with 1 to 4 states.")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import correlation as _correlation
-from ._core import Feedback, _call, forbids, _general_case, _ok
+from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_moving_average", "check_ratio", "check_fuse"]
 
@@ -15,7 +15,7 @@ __all__ = ["check_moving_average", "check_ratio", "check_fuse"]
 def check_moving_average(fn):
     """Check a student's causal ``fn(x, n)`` against seed 000 eq 5.7 with an expanding start."""
     x = np.array([4.0, 8.0, 0.0, 2.0, 6.0, 10.0, 1.0, 3.0])
-    got = np.asarray(_call(fn, x, 3, what="your moving average"), dtype=float).ravel()
+    got = _call(fn, x, 3, what="your moving average").ravel()
     ref = _correlation.moving_average(x, 3)
     if got.shape != ref.shape:
         raise Feedback(f"return one value per sample ({len(x)}); you return {got.shape[0]} -- pad the start with the "
@@ -28,15 +28,14 @@ def check_moving_average(fn):
         _ok("causal N-point moving average, expanding start: right for N = 3, 1 and 5.")
         return
     centred = np.convolve(x, np.ones(3) / 3, mode="same")
-    if np.allclose(got[1:-1], centred[1:-1]):
-        raise Feedback("your average is centred (it uses the next sample): eq 5.7 averages A[m], A[m-1], ... A[m-N+1] "
-                       "only -- a causal filter, as a live MCU would need.")
-    if np.allclose(got[2:], ref[2:]):
-        raise Feedback("right from m = N-1 on; the first N-1 samples should be the mean of the samples so far "
-                       f"(expected {np.round(ref[:2], 3)}, got {np.round(got[:2], 3)}).")
-    if np.allclose(got[2:], 3 * ref[2:]):
-        raise Feedback("you sum the window but do not divide by N (eq 5.7 has 1/N).")
-    raise Feedback(f"expected {np.round(ref, 3)}, got {np.round(got, 3)}.")
+    msg = _first_match(got, [
+        (lambda g: np.allclose(g[1:-1], centred[1:-1]), "your average is centred (it uses the next sample): eq 5.7 "
+         "averages A[m], A[m-1], ... A[m-N+1] only -- a causal filter, as a live MCU would need."),
+        (lambda g: np.allclose(g[2:], ref[2:]), "right from m = N-1 on; the first N-1 samples should be the mean of "
+         f"the samples so far (expected {np.round(ref[:2], 3)}, got {np.round(got[:2], 3)})."),
+        (lambda g: np.allclose(g[2:], 3 * ref[2:]), "you sum the window but do not divide by N (eq 5.7 has 1/N)."),
+    ])
+    raise Feedback(msg or f"expected {np.round(ref, 3)}, got {np.round(got, 3)}.")
 
 
 @forbids("correlation.ratio")
@@ -44,21 +43,23 @@ def check_ratio(fn):
     """Check a student's ``fn(gyro_rate, accel_term) -> ratio`` (seed 000 eqs 5.15-5.16 with ε for 0/0)."""
     g = np.array([10.0, -10.0, 5.0, 0.0, 3.0, 0.0])
     a = np.array([10.0, 30.0, -15.0, 4.0, 0.0, 0.0])
-    got = np.asarray(_call(fn, g, a, what="your ratio"), dtype=float).ravel()
+    got = _call(fn, g, a, what="your ratio").ravel()
     ref = _correlation.ratio(g, a)
     if got.shape == ref.shape and np.allclose(got, ref, atol=1e-6):
         _ok("ratio: ½ when the magnitudes match, → 0 when the accelerometer term is large, 0 for 0/0.")
         return
-    if got.shape == ref.shape and np.all(np.isfinite(got[:5])) and np.allclose(got[:5], ref[:5], atol=1e-6):
-        raise Feedback(f"both inputs 0 gives {got[5]} -- the 0/0 case: add a small ε to the denominator (it gives 0, "
-                       "trust the gyro).")
     with np.errstate(all="ignore"):
-        if np.allclose(got[:5], (g / (g + a))[:5], atol=1e-6):
-            raise Feedback("take magnitudes: |gyro| / (|gyro| + |accel term|) -- a negative rate must not give a "
-                           "negative weight.")
-    if np.allclose(got[:5], 1 - ref[:5], atol=1e-6):
-        raise Feedback("you return 1 - ratio: the gyro magnitude goes in the numerator (eq 5.15).")
-    raise Feedback(f"expected {np.round(ref, 4)}, got {np.round(got, 4)}.")
+        signed = g / (g + a)
+    msg = _first_match(got, [                           # the first five samples: the last one is the 0/0 case
+        (lambda v: v.shape == ref.shape and np.all(np.isfinite(v[:5])) and np.allclose(v[:5], ref[:5], atol=1e-6),
+         f"both inputs 0 gives {got[-1] if got.size else got} -- the 0/0 case: add a small ε to the denominator (it "
+         "gives 0, trust the gyro)."),
+        (lambda v: np.allclose(v[:5], signed[:5], atol=1e-6), "take magnitudes: |gyro| / (|gyro| + |accel term|) -- a "
+         "negative rate must not give a negative weight."),
+        (lambda v: np.allclose(v[:5], 1 - ref[:5], atol=1e-6), "you return 1 - ratio: the gyro magnitude goes in the "
+         "numerator (eq 5.15)."),
+    ])
+    raise Feedback(msg or f"expected {np.round(ref, 4)}, got {np.round(got, 4)}.")
 
 
 @forbids("correlation.fuse")
@@ -67,15 +68,14 @@ def check_fuse(fn):
     a = np.array([10.0, 12.0, 8.0, 11.0, 9.0])
     inc = np.array([0.5, -0.2, 0.1, 0.3, -0.4])
     w = np.array([0.2, 0.5, 0.0, 1.0, 0.3])
-    got = np.asarray(_call(fn, a, inc, w, 5.0, what="your fusion"), dtype=float).ravel()
+    got = _call(fn, a, inc, w, 5.0, what="your fusion").ravel()
     ref = _correlation.fuse(a, inc, w, f0=5.0)
     if got.shape == ref.shape and np.allclose(got, ref):
         _ok("eq 5.17: the weight multiplies the accelerometer angle, 1 - weight the gyro prediction F[n-1] + I[n].")
         return
-    swapped = _correlation.fuse(a, inc, 1 - w, f0=5.0)
-    if got.shape == ref.shape and np.allclose(got, swapped):
-        raise Feedback("the weights are swapped: in eq 5.17 the ratio multiplies the accelerometer angle A[n].")
-    nofeed = w * a + (1 - w) * inc
-    if got.shape == ref.shape and np.allclose(got, nofeed):
-        raise Feedback("the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n].")
-    raise Feedback(f"expected {np.round(ref, 4)}, got {np.round(got, 4)} (F[-1] = f0 = 5).")
+    msg = _first_match(got, [
+        (_correlation.fuse(a, inc, 1 - w, f0=5.0), "the weights are swapped: in eq 5.17 the ratio multiplies the "
+                                                   "accelerometer angle A[n]."),
+        (w * a + (1 - w) * inc, "the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n]."),
+    ], rtol=1e-5, atol=1e-8)
+    raise Feedback(msg or f"expected {np.round(ref, 4)}, got {np.round(got, 4)} (F[-1] = f0 = 5).")

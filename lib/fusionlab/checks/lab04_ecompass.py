@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import freescale as fz, rotations
-from ._core import Feedback, _call, forbids, _general_case, _ok, _where
+from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok, _where
 
 __all__ = ["check_profile_matrix", "check_kappa", "check_largest_eigenvector", "check_weights", "check_heading"]
 
@@ -24,13 +24,13 @@ def check_profile_matrix(fn):
     ref = np.einsum("k,ki,kj->ij", alpha, s, r)
     if B.shape != (3, 3):
         raise Feedback(f"B should be a 3×3 matrix; got shape {B.shape}")
-    if np.allclose(B, ref.T, atol=1e-12):
-        raise Feedback("your B is transposed: eq 29 has the *measured* vector s on the left, B = Σ α s rᵀ "
-                       "(np.outer(s_k, r_k)).")
-    if np.allclose(B, np.einsum("ki,kj->ij", s, r), atol=1e-12):
-        raise Feedback("the weights α_k are missing: B = Σ α_k s_k r_kᵀ.")
     if not np.allclose(B, ref, atol=1e-12):
-        raise Feedback(f"B is not Σ α s rᵀ: {_where(B, ref, 'B', atol=1e-12)}.")
+        msg = _first_match(B, [
+            (ref.T, "your B is transposed: eq 29 has the *measured* vector s on the left, B = Σ α s rᵀ "
+                    "(np.outer(s_k, r_k))."),
+            (np.einsum("ki,kj->ij", s, r), "the weights α_k are missing: B = Σ α_k s_k r_kᵀ."),
+        ], rtol=0, atol=1e-12)
+        raise Feedback(msg or f"B is not Σ α s rᵀ: {_where(B, ref, 'B', atol=1e-12)}.")
     s3, r3 = _unit_pairs(44, 3)
     a3 = np.array([0.2, 0.5, 0.3])
     _general_case(lambda: fn(s3, r3, a3), np.einsum("k,ki,kj->ij", a3, s3, r3), "three vector pairs",
@@ -50,22 +50,22 @@ def check_kappa(fn):
         ref = fz.kappa_general(s, r, alpha)
         if np.allclose(K, ref, atol=1e-12):
             continue
-        if np.allclose(K, fz.kappa_general(r, s, alpha), atol=1e-12):
-            raise Feedback("s and r are swapped: κ is built from B = Σ α s rᵀ with s measured (sensor frame) and r "
-                           "the reference (global frame); swapping them gives the inverse rotation.")
-        if np.allclose(K, fz.kappa_general(s, r, [1.0, 1.0]), atol=1e-12):
-            raise Feedback("the weights α_k are missing.")
-        if not np.allclose(K, K.T, atol=1e-12):
-            raise Feedback("your κ is not symmetric -- eq 40 proves it must be; the printed eq 41 has typos at "
-                           "(0,2), (1,1), (1,2) and in the last two rows (see the erratum below).")
-        if abs(np.trace(K)) > 1e-9:
-            raise Feedback(f"trace(κ) = {np.trace(K):.3g}; κ is traceless: the three lower diagonal entries sum to "
-                           "-σ where σ = tr B is the (0,0) entry.")
         z = np.sum(alpha[:, None] * np.cross(s, r), axis=0)
-        if np.allclose(K[0, 1:], -z, atol=1e-12):
-            raise Feedback("the first row has the wrong sign: z = Σ α (s × r), not r × s.")
-        raise Feedback(f"κ is not right: {_where(K, ref, 'κ', atol=1e-12)}; compare with "
-                       "the compact form [[σ, zᵀ], [z, B + Bᵀ - σI]].")
+        msg = _first_match(K, [
+            (fz.kappa_general(r, s, alpha), "s and r are swapped: κ is built from B = Σ α s rᵀ with s measured "
+                                            "(sensor frame) and r the reference (global frame); swapping them gives "
+                                            "the inverse rotation."),
+            (fz.kappa_general(s, r, [1.0, 1.0]), "the weights α_k are missing."),
+            # before symmetry: a first row of -z (the column right) is not symmetric either
+            (lambda k: np.allclose(k[0, 1:], -z, atol=1e-12), "the first row has the wrong sign: z = Σ α (s × r), "
+                                                              "not r × s."),
+            (lambda k: not np.allclose(k, k.T, atol=1e-12), "your κ is not symmetric -- eq 40 proves it must be; the "
+             "printed eq 41 has typos at (0,2), (1,1), (1,2) and in the last two rows (see the erratum below)."),
+            (lambda k: abs(np.trace(k)) > 1e-9, f"trace(κ) = {np.trace(K):.3g}; κ is traceless: the three lower "
+             "diagonal entries sum to -σ where σ = tr B is the (0,0) entry."),
+        ], rtol=0, atol=1e-12)
+        raise Feedback(msg or f"κ is not right: {_where(K, ref, 'κ', atol=1e-12)}; compare with the compact form "
+                              "[[σ, zᵀ], [z, B + Bᵀ - σI]].")
     s3, r3 = _unit_pairs(45, 3)
     a3 = np.array([0.2, 0.5, 0.3])
     _general_case(lambda: fn(s3, r3, a3), fz.kappa_general(s3, r3, a3), "three vector pairs",
@@ -86,18 +86,19 @@ def check_largest_eigenvector(fn):
             raise Feedback(f"q should have shape (4,); got {q.shape}")
         if np.allclose(q, q_true, atol=1e-9):
             continue
-        if np.allclose(q, -q_true, atol=1e-9):
-            raise Feedback("right eigenvector, wrong sign: flip it so that q0 >= 0.")
-        if np.allclose(np.abs(q[[3, 0, 1, 2]]), np.abs(q_true), atol=1e-9):
-            raise Feedback("your quaternion is in [x, y, z, w] order; the note and the library use [q0, q1, q2, q3] "
-                           "with the scalar first -- numpy's eigh gives the eigenvector in that order already.")
         lam, vec = np.linalg.eigh(K)
-        if any(np.allclose(np.abs(q), np.abs(vec[:, i]), atol=1e-9) for i in range(3)):
-            raise Feedback("that is an eigenvector of another eigenvalue: E = 1 - λ is smallest for the *largest* "
-                           "λ (np.linalg.eigh sorts ascending, so take the last column, vec[:, -1]).")
-        if np.allclose(np.abs(q), np.abs(vec[-1]), atol=1e-9):
-            raise Feedback("you took a row of the eigenvector matrix; eigenvectors are its *columns*: vec[:, -1].")
-        raise Feedback("q is not the eigenvector of the largest eigenvalue of κ.")
+        msg = _first_match(q, [
+            (-q_true, "right eigenvector, wrong sign: flip it so that q0 >= 0."),
+            (lambda v: np.allclose(np.abs(v[[3, 0, 1, 2]]), np.abs(q_true), atol=1e-9), "your quaternion is in "
+             "[x, y, z, w] order; the note and the library use [q0, q1, q2, q3] with the scalar first -- numpy's "
+             "eigh gives the eigenvector in that order already."),
+            (lambda v: any(np.allclose(np.abs(v), np.abs(vec[:, i]), atol=1e-9) for i in range(3)), "that is an "
+             "eigenvector of another eigenvalue: E = 1 - λ is smallest for the *largest* λ (np.linalg.eigh sorts "
+             "ascending, so take the last column, vec[:, -1])."),
+            (lambda v: np.allclose(np.abs(v), np.abs(vec[-1]), atol=1e-9), "you took a row of the eigenvector "
+             "matrix; eigenvectors are its *columns*: vec[:, -1]."),
+        ], rtol=0, atol=1e-9)
+        raise Feedback(msg or "q is not the eigenvector of the largest eigenvalue of κ.")
     _ok("q is the largest-eigenvalue eigenvector with q0 >= 0 (it recovers the true attitude).")
 
 
@@ -113,17 +114,17 @@ def check_weights(fn):
         ref = np.array(fz.weights(fz.accel_noise(G), fz.mag_noise(Bc, B), B), dtype=float)
         if np.allclose(out, ref, atol=1e-9):
             continue
-        if not np.all(np.isfinite(out)):
-            raise Feedback(f"G = {G}, B_c = {Bc}: both readings are exactly on their spheres, so eq 64 is 0/0. Guard "
-                           "it: use α_g = α_m = 0.5 when the denominator is 0.")
-        if np.allclose(out, ref[::-1], atol=1e-9):
-            raise Feedback("α_g and α_m are swapped: each vector is weighted by the *other* sensor's noise "
-                           "(α_g ∝ magnetometer noise, eq 64).")
         qa = abs(np.dot(G, G) - 1)
         qd_unscaled = abs(np.dot(Bc, Bc) - B * B)
-        if np.isclose(out[0], qd_unscaled / (qa + qd_unscaled), atol=1e-9):
-            raise Feedback("the magnetometer noise must be divided by B² (eq 64) so both are dimensionless.")
-        raise Feedback(f"G = {G}, B_c = {Bc}: expected (α_g, α_m) = {ref.round(6)}; got {out.round(6)}.")
+        msg = _first_match(out, [
+            (lambda v: not np.all(np.isfinite(v)), f"G = {G}, B_c = {Bc}: both readings are exactly on their "
+             "spheres, so eq 64 is 0/0. Guard it: use α_g = α_m = 0.5 when the denominator is 0."),
+            (ref[::-1], "α_g and α_m are swapped: each vector is weighted by the *other* sensor's noise (α_g ∝ "
+                        "magnetometer noise, eq 64)."),
+            (lambda v: np.isclose(v[0], qd_unscaled / (qa + qd_unscaled), atol=1e-9), "the magnetometer noise must "
+             "be divided by B² (eq 64) so both are dimensionless."),
+        ], rtol=0, atol=1e-9)
+        raise Feedback(msg or f"G = {G}, B_c = {Bc}: expected (α_g, α_m) = {ref.round(6)}; got {out.round(6)}.")
     G4, B4 = np.array([0.2, -0.3, 0.9]), np.array([25.0, 10.0, -38.0])
     _general_case(lambda: fn(G4, B4, 47.0), fz.weights(fz.accel_noise(G4), fz.mag_noise(B4, 47.0), 47.0),
                   "a field of B = 47 µT", "Use the argument B, not 50 µT, in the magnetometer noise (eq 64).",
@@ -140,10 +141,11 @@ def check_heading(fn):
         h = float(_call(fn, G, Bc, what="your heading"))
         if np.isclose(np.cos(h - e[2]), 1.0, atol=1e-9):
             continue
-        if abs(h) > 2 * np.pi + 1e-9:
-            raise Feedback("your heading looks like degrees; return radians.")
-        if np.isclose(np.cos(h + e[2]), 1.0, atol=1e-9):
-            raise Feedback("the heading has the wrong sign: ψ = atan2(-B_hy, B_hx) of the levelled field.")
-        raise Feedback(f"at roll, pitch, yaw = {np.degrees(e).round(1)} deg you return {np.degrees(h):.2f}°; "
-                       "level the field with the roll and pitch from G before taking atan2.")
+        msg = _first_match(h, [
+            (lambda v: abs(v) > 2 * np.pi + 1e-9, "your heading looks like degrees; return radians."),
+            (lambda v: np.isclose(np.cos(v + e[2]), 1.0, atol=1e-9), "the heading has the wrong sign: ψ = "
+                                                                     "atan2(-B_hy, B_hx) of the levelled field."),
+        ])
+        raise Feedback(msg or f"at roll, pitch, yaw = {np.degrees(e).round(1)} deg you return {np.degrees(h):.2f}°; "
+                              "level the field with the roll and pitch from G before taking atan2.")
     _ok("the tilt-compensated heading is right at three attitudes, including upside down.")

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 
 from .. import freescale as fz, rotations
-from ._core import Feedback, _answer, _call, forbids, _general_case, _ok, _where
+from ._core import Feedback, _answer, _call, _first_match, forbids, _general_case, _ok, _where
 
 __all__ = ["check_measurement_matrix", "check_process_noise", "check_measurement_noise", "check_gain", "check_step"]
 
@@ -25,15 +25,15 @@ def check_measurement_matrix(fn):
         if np.allclose(C, ref, atol=1e-15):
             continue
         a2 = fz.alpha(dt) / 2
-        if np.isclose(C[0, 6], a2):
-            raise Feedback("the offset block has the wrong sign: an over-estimated offset *under*-estimates the rate "
-                           "(eq 101), so it is -(α/2) I3.")
-        if np.isclose(abs(C[0, 6]), 2 * a2):
-            raise Feedback("use α/2, not α: the quaternion vector is a half angle (eq 137).")
-        if np.isclose(abs(C[0, 6]), dt / 2):
-            raise Feedback("α = π δt / 180 (eq 140): the offset is in °/s and the quaternion error in radians.")
-        raise Feedback(f"C is not eq 141: {_where(C, ref, 'C', atol=1e-15)}. Blocks [I3 0 -(α/2)I3 0], "
-                       "[0 I3 -(α/2)I3 0], [0 0 0 1].")
+        msg = _first_match(C[0, 6], [                   # the offset block, read off its first entry
+            (a2, "the offset block has the wrong sign: an over-estimated offset *under*-estimates the rate (eq 101), "
+                 "so it is -(α/2) I3."),
+            (lambda c: np.isclose(abs(c), 2 * a2), "use α/2, not α: the quaternion vector is a half angle (eq 137)."),
+            (lambda c: np.isclose(abs(c), dt / 2), "α = π δt / 180 (eq 140): the offset is in °/s and the quaternion "
+                                                   "error in radians."),
+        ], rtol=1e-5, atol=1e-8)
+        raise Feedback(msg or f"C is not eq 141: {_where(C, ref, 'C', atol=1e-15)}. Blocks [I3 0 -(α/2)I3 0], "
+                              "[0 I3 -(α/2)I3 0], [0 0 0 1].")
     _ok("C is the 7×10 matrix of eqs 137-139.")
 
 
@@ -48,16 +48,18 @@ def check_process_noise(fn):
             raise Feedback(f"Q_w is 10×10; got {Q.shape}")
         if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
             continue
-        if not np.allclose(Q, Q.T):
-            raise Feedback("Q_w must be symmetric: put Q_gb in both the (g, b) and the (b, g) blocks.")
-        if np.isclose(Q[0, 6], fz.alpha(0.04) / 2 * 0.5 + x[0] * x[6]):
-            raise Feedback("the (g, b) block is Q_gb = diag(q_g b_ε) - (α/2) Q_wb: minus, not plus (eq 151).")
-        if not np.isclose(Q[9, 9], x[9] ** 2 + 20.0):
-            raise Feedback("Q_δδ = δ_ε² + Q_wδ with Q_wδ = 20 deg² (eqs 157-158).")
-        if not np.isclose(Q[6, 6], x[6] ** 2 + 0.5):
-            raise Feedback("Q_bb = diag(b_ε²) + Q_wb I3 with Q_wb = 0.5 (°/s)² (eqs 155-156).")
-        raise Feedback(f"Q_w is not eqs 142-159: {_where(Q, ref, 'Q_w', atol=1e-15)}. Q_gg = diag(q_g²) + (α/2)²"
-                       "(diag(b_ε²) + (Q_vY + Q_wb) I3).")
+        msg = _first_match(Q, [
+            (lambda q: not np.allclose(q, q.T), "Q_w must be symmetric: put Q_gb in both the (g, b) and the (b, g) "
+                                                "blocks."),
+            (lambda q: np.isclose(q[0, 6], fz.alpha(0.04) / 2 * 0.5 + x[0] * x[6]), "the (g, b) block is Q_gb = "
+             "diag(q_g b_ε) - (α/2) Q_wb: minus, not plus (eq 151)."),
+            (lambda q: not np.isclose(q[9, 9], x[9] ** 2 + 20.0), "Q_δδ = δ_ε² + Q_wδ with Q_wδ = 20 deg² "
+                                                                  "(eqs 157-158)."),
+            (lambda q: not np.isclose(q[6, 6], x[6] ** 2 + 0.5), "Q_bb = diag(b_ε²) + Q_wb I3 with Q_wb = 0.5 (°/s)² "
+                                                                 "(eqs 155-156)."),
+        ])
+        raise Feedback(msg or f"Q_w is not eqs 142-159: {_where(Q, ref, 'Q_w', atol=1e-15)}. Q_gg = diag(q_g²) + "
+                              "(α/2)²(diag(b_ε²) + (Q_vY + Q_wb) I3).")
     x5 = np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [0.7]])
     tun = dataclasses.replace(fz.V500, Q_vY=1e3, Q_wb=2.0, Q_wdelta=5.0)
     _general_case(lambda: fn(x5, 0.02, 1e3, 2.0, 5.0), fz.process_noise(x5, 0.02, tun),
@@ -76,15 +78,16 @@ def check_measurement_noise(fn):
             raise Feedback(f"Q_v is 7×7; got {Q.shape}")
         if np.allclose(Q, ref, rtol=1e-9, atol=1e-15):
             continue
-        if qd < 7 and np.isclose(Q[3, 3], 0.25 * qd / 2500 + ref[0, 0] - 0.25 * qa, rtol=1e-9):
-            raise Feedback("apply the floor: max(QvBQd, 7 µT²) (FQVBQD_MIN_9DOF_GBY_KALMAN, §2.3).")
-        if np.isclose(Q[0, 0], qa + (ref[0, 0] - 0.25 * qa)) and qa > 0:
-            raise Feedback("the accelerometer term is ¼ QvGQa: the quaternion vector is a half angle (eq 162).")
-        if not np.isclose(Q[6, 6], ref[6, 6]):
-            raise Feedback(f"Q_v(δ) should be (180/π)² (QvGQa + max(QvBQd, 7)/B²) = {ref[6, 6]:.5g} deg² (eq 164); "
-                           f"got {Q[6, 6]:.5g}.")
-        raise Feedback(f"QvGQa = {qa}, QvBQd = {qd}: Q_v is not eqs 162-164: "
-                       f"{_where(Q, ref, 'Q_v', atol=1e-15)}.")
+        msg = _first_match(Q, [
+            (lambda q: qd < 7 and np.isclose(q[3, 3], 0.25 * qd / 2500 + ref[0, 0] - 0.25 * qa, rtol=1e-9),
+             "apply the floor: max(QvBQd, 7 µT²) (FQVBQD_MIN_9DOF_GBY_KALMAN, §2.3)."),
+            (lambda q: qa > 0 and np.isclose(q[0, 0], qa + (ref[0, 0] - 0.25 * qa)), "the accelerometer term is ¼ "
+             "QvGQa: the quaternion vector is a half angle (eq 162)."),
+            (lambda q: not np.isclose(q[6, 6], ref[6, 6]), f"Q_v(δ) should be (180/π)² (QvGQa + max(QvBQd, 7)/B²) = "
+                                                           f"{ref[6, 6]:.5g} deg² (eq 164); got {Q[6, 6]:.5g}."),
+        ])
+        raise Feedback(msg or f"QvGQa = {qa}, QvBQd = {qd}: Q_v is not eqs 162-164: "
+                              f"{_where(Q, ref, 'Q_v', atol=1e-15)}.")
     _general_case(lambda: fn(0.5, 900.0, 0.04, B=45.0), fz.measurement_noise(0.5, 900.0, 0.04, B=45.0),
                   "a field of B = 45 µT (keyword B)", "Give your function the keyword B (default 50 µT) and use it "
                   "in QvBQd/B².", rtol=1e-9, atol=1e-15)
@@ -100,9 +103,10 @@ def check_gain(fn):
     if K.shape != (10, 7):
         raise Feedback(f"K maps 7 measurements to 10 states: shape (10, 7); got {K.shape}")
     if not np.allclose(K, ref, rtol=1e-9, atol=1e-15):
-        if np.allclose(K, Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T), rtol=1e-6):
-            raise Feedback("Q_v is missing from the innovation covariance C Q_w Cᵀ + Q_v.")
-        raise Feedback("K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ (eq 170; P⁻ = Q_w because A = 0).")
+        msg = _first_match(K, [
+            (Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T), "Q_v is missing from the innovation covariance C Q_w Cᵀ + Q_v."),
+        ], rtol=1e-6, atol=1e-8)
+        raise Feedback(msg or "K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ (eq 170; P⁻ = Q_w because A = 0).")
     x7 = np.concatenate([np.random.default_rng(170).normal(0, 0.05, 6), [0.4, -0.8, 1.1], [2.0]])
     Qw7, Qv7 = fz.process_noise(x7, 0.04), fz.measurement_noise(0.02, 40.0, 0.04)
     _general_case(lambda: fn(Qw7, C, Qv7), fz.kalman_gain(Qw7, C, Qv7), "non-zero previous errors and noisy "

@@ -94,6 +94,6 @@ def check_dcm_predict(fn):
             (F.T @ P @ F + Q, "transposes swapped: P⁻ = F P Fᵀ + Q."),
             (F @ P @ F.T + Q / dt ** 2, "Q scales with Δt (N² Δt), not with 1/Δt: per-sample σ = N/√Δt, times Δt."),
         ])
-        raise Feedback(msg or f"P_pred is not F P Fᵀ + Q: {_where(Pp, P_ref, 'P_pred', atol=1e-12)}. DCM blocks of Q are "
-                              "N² Δt [ĉi×][ĉj×]ᵀ, the bias block q_b² Δt I.")
+        raise Feedback(msg or f"P_pred is not F P Fᵀ + Q: {_where(Pp, P_ref, 'P_pred', atol=1e-12)}. DCM blocks of Q "
+                              "are N² Δt [ĉi×][ĉj×]ᵀ, the bias block q_b² Δt I.")
     _ok("prediction matches eqs 6.11-6.13: x⁻ = F x̂ with the pseudo-linear bias term, P⁻ = F P Fᵀ + Q.")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import calibration, rotations, sensors
-from ._core import Feedback, _call, forbids, _general_case, _ok
+from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_quadric_fit", "check_arw_reading", "check_remove_gravity"]
 
@@ -30,17 +30,17 @@ def check_quadric_fit(fn):
     if np.allclose(got, ref, rtol=1e-6, atol=1e-12):
         _ok("normal equations right: (DᵀD) v = Dᵀ1 with rows [x², y², z², 2yz, 2xz, 2xy, 2x, 2y, 2z].")
         return
-    halves = ref * np.array([1, 1, 1, 2, 2, 2, 2, 2, 2])
-    if np.allclose(got, halves, rtol=1e-6):
-        raise Feedback("your cross and linear columns lack the factor 2: the rows are [x², y², z², 2yz, 2xz, 2xy, "
-                       "2x, 2y, 2z], so that f, g, h, p, q, r are the entries of A and of the centre equation.")
-    if np.allclose(-got, ref, rtol=1e-6):
-        raise Feedback("your coefficients have the wrong sign: the right-hand side is +1 (Dᵀ·ones).")
     x, y, z = mag.T
     alt = np.stack([x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, 2 * x, 2 * y, 2 * z], 1)
-    if np.allclose(got, np.linalg.solve(alt.T @ alt, alt.T @ np.ones(len(mag))), rtol=1e-6):
-        raise Feedback("the cross-term columns are in another order: use 2yz, 2xz, 2xy (f, g, h) as in the markdown.")
-    raise Feedback(f"your coefficients differ from the normal-equation solution by up to "
+    msg = _first_match(got, [
+        (ref * np.array([1, 1, 1, 2, 2, 2, 2, 2, 2]), "your cross and linear columns lack the factor 2: the rows are "
+         "[x², y², z², 2yz, 2xz, 2xy, 2x, 2y, 2z], so that f, g, h, p, q, r are the entries of A and of the centre "
+         "equation."),
+        (-ref, "your coefficients have the wrong sign: the right-hand side is +1 (Dᵀ·ones)."),
+        (np.linalg.solve(alt.T @ alt, alt.T @ np.ones(len(mag))), "the cross-term columns are in another order: use "
+         "2yz, 2xz, 2xy (f, g, h) as in the markdown."),
+    ], rtol=1e-6, atol=1e-8)
+    raise Feedback(msg or f"your coefficients differ from the normal-equation solution by up to "
                    f"{np.max(np.abs(got - ref) / np.abs(ref)):.2g} (relative); build D row by row as in the "
                    "markdown and solve np.linalg.solve(D.T @ D, D.T @ np.ones(N)).")
 
@@ -60,18 +60,20 @@ def check_arw_reading(fn):
         _ok(f"ARW read off the slope −½ line at τ = 1 s: N = {ref:.4g} on the test curve.")
         return
     m = taus <= 0.5
-    if np.isclose(got, np.degrees(ref), rtol=1e-6) or np.isclose(got, np.degrees(ref) * 60, rtol=1e-6):
-        raise Feedback("your N is in degrees: keep the unit of adev (rad/s·√s); convert only for display.")
-    if np.isclose(got, np.mean(adev[m] * np.sqrt(taus[m])), rtol=1e-9):
-        raise Feedback("that is the arithmetic mean of σ√τ: a line fitted in log-log space averages the logs "
-                       "(np.exp(np.mean(np.log(...)))).")
-    if np.isclose(got, np.exp(np.mean(np.log(adev[m]) - 0.5 * np.log(taus[m]))), rtol=1e-9):
-        raise Feedback("wrong sign of the slope: on the ARW line σ = N/√τ, so N = σ·√τ (log N = log σ + ½ log τ).")
-    if np.isclose(got, np.exp(np.mean(np.log(adev * np.sqrt(taus)))), rtol=1e-9):
-        raise Feedback("you used every τ: fit only the white-noise part, τ <= tau_max.")
-    if np.isclose(got, np.exp(np.mean(np.log(adev[m]))), rtol=1e-9):
-        raise Feedback("you averaged σ itself: move each point along the −½ line to τ = 1 s first (σ·√τ).")
-    raise Feedback(f"expected N = {ref:.5g}, got {got:.5g}: N = exp(mean(log σ + ½ log τ)) over τ <= tau_max.")
+    degrees = "your N is in degrees: keep the unit of adev (rad/s·√s); convert only for display."
+    msg = _first_match(got, [
+        (np.degrees(ref), degrees),
+        (np.degrees(ref) * 60, degrees),
+        (np.mean(adev[m] * np.sqrt(taus[m])), "that is the arithmetic mean of σ√τ: a line fitted in log-log space "
+                                              "averages the logs (np.exp(np.mean(np.log(...))))."),
+        (np.exp(np.mean(np.log(adev[m]) - 0.5 * np.log(taus[m]))), "wrong sign of the slope: on the ARW line "
+         "σ = N/√τ, so N = σ·√τ (log N = log σ + ½ log τ)."),
+        (np.exp(np.mean(np.log(adev * np.sqrt(taus)))), "you used every τ: fit only the white-noise part, "
+                                                         "τ <= tau_max."),
+        (np.exp(np.mean(np.log(adev[m]))), "you averaged σ itself: move each point along the −½ line to τ = 1 s "
+                                           "first (σ·√τ)."),
+    ], rtol=1e-6, atol=0)
+    raise Feedback(msg or f"expected N = {ref:.5g}, got {got:.5g}: N = exp(mean(log σ + ½ log τ)) over τ <= tau_max.")
 
 
 @forbids("sensors.remove_gravity")
@@ -91,17 +93,15 @@ def check_remove_gravity(fn):
                       "Use the argument g, not 9.8.", rtol=0, atol=1e-9)
         _ok("gravity removed: C_bn f − (0, 0, g) in ENU recovers the true acceleration (and 0 at rest).")
         return
-    if np.allclose(got, ref + [0, 0, 2 * 9.8], atol=1e-9):
-        raise Feedback("gravity added instead of removed: in ENU the accelerometer reads +g up at rest, so subtract "
-                       "(0, 0, g) after rotating (in NED, where up is −z, the seed adds (0, 0, g)).")
-    if np.allclose(got[:, :2], ref[:, :2], atol=1e-9) and np.allclose(got[:, 2], -ref[:, 2], atol=1e-9):
-        raise Feedback("the vertical has the wrong sign: ENU's z points up.")
-    wrong = rotations.quat_rotate(rotations.quat_conjugate(q), acc) - [0, 0, 9.8]
-    if np.allclose(got, wrong, atol=1e-9):
-        raise Feedback("you rotated with the conjugate (nav→body): q_bn takes body vectors to the navigation frame, "
-                       "v_n = q ⊗ v_b ⊗ q* (rotations.quat_rotate(q, v)).")
-    if np.allclose(got, acc - [0, 0, 9.8], atol=1e-9):
-        raise Feedback("rotate the specific force into the navigation frame before removing gravity: gravity is "
-                       "(0, 0, −g) in ENU, not in the body frame.")
-    raise Feedback(f"your accelerations differ from C_bn f − (0, 0, g) by up to {np.max(np.abs(got - ref)):.3g} "
+    msg = _first_match(got, [
+        (ref + [0, 0, 2 * 9.8], "gravity added instead of removed: in ENU the accelerometer reads +g up at rest, so "
+                                "subtract (0, 0, g) after rotating (in NED, where up is −z, the seed adds (0, 0, g))."),
+        (ref * [1, 1, -1], "the vertical has the wrong sign: ENU's z points up."),
+        (rotations.quat_rotate(rotations.quat_conjugate(q), acc) - [0, 0, 9.8], "you rotated with the conjugate "
+         "(nav→body): q_bn takes body vectors to the navigation frame, v_n = q ⊗ v_b ⊗ q* "
+         "(rotations.quat_rotate(q, v))."),
+        (acc - [0, 0, 9.8], "rotate the specific force into the navigation frame before removing gravity: gravity is "
+                            "(0, 0, −g) in ENU, not in the body frame."),
+    ], rtol=0, atol=1e-9)
+    raise Feedback(msg or f"your accelerations differ from C_bn f − (0, 0, g) by up to {np.max(np.abs(got - ref)):.3g} "
                    "m/s²; check the quaternion order [w, x, y, z] and the frame (ENU).")

@@ -1,0 +1,33 @@
+"""Input validation names the argument, what was expected and what came; the accelerometer tilt covers the full
+circle. (The visible checks' own tests are in tests/checks/, one file per lab.)"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fusionlab import rotations, sensors, validate
+
+
+def test_validate_messages_name_argument_expected_and_got():
+    with pytest.raises(ValueError, match=r"^gyr must have shape \(\.\.\., 3\); got \(100, 4\)$"):
+        validate.vectors(np.zeros((100, 4)), "gyr")
+    with pytest.raises(ValueError, match="q must be unit quaternions"):
+        validate.quaternions([1.0, 1.0, 0.0, 0.0], "q")
+    with pytest.raises(ValueError, match="must be an array of numbers"):
+        validate.array("abc", "x")
+    with pytest.raises(ValueError, match="looks like degrees"):
+        validate.angles_rad([0.0, 45.0], "roll")
+    with pytest.raises(ValueError, match="dt must be a positive"):
+        validate.positive(float("inf"), "dt")
+
+@pytest.mark.parametrize("euler_deg", [[30, 20, 0], [170, -60, 0], [-100, 10, 0], [0, 89, 0]])
+def test_tilt_from_accel_is_full_range(euler_deg):
+    e = np.radians(euler_deg)
+    f = rotations.euler_to_dcm(e).T @ [0.0, 0.0, -sensors.G]
+    assert np.allclose(sensors.tilt_from_accel(f), e[:2])
+
+def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
+    a = [3.351797, -4.604494, -7.975217]                      # worked by hand: φ = 30°, θ = 20°, g = 9.8
+    assert np.allclose(np.degrees(sensors.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
+    with pytest.raises(ValueError, match="free fall"):
+        sensors.tilt_from_accel([0.0, 0.0, 0.0])
