@@ -428,52 +428,6 @@ def test_gps_ins_rejects_bad_input(flight):
         dcm.run_euler_ukf(flight["gyr"], flight["acc"], flight["gps"], flight["fs"], x0, P0)
 
 
-# ================================================================ the labs' visible checks (fusionlab.checks)
-
-def test_lab09_checks_accept_the_library_and_name_the_usual_slips(library_as_student):
-    from fusionlab import checks
-    checks.check_dcm_measurement_matrices(dcm.accel_measurement_matrix, dcm.mag_measurement_matrix)
-    with pytest.raises(checks.Feedback, match="sign of the specific force"):
-        checks.check_dcm_measurement_matrices(lambda g: -dcm.accel_measurement_matrix(g), dcm.mag_measurement_matrix)
-    swapped = lambda d: dcm.mag_measurement_matrix(np.pi / 2 - d)
-    with pytest.raises(checks.Feedback, match="cos and sin are swapped"):
-        checks.check_dcm_measurement_matrices(dcm.accel_measurement_matrix, swapped)
-
-    def predict(x, P, gyr, dt, N, qb, with_Q=True, transpose=False):
-        A = dcm.A_matrix(gyr * dt)
-        F = dcm.ahrs_transition(x[0:3], x[3:6], A.T if transpose else A, dt)
-        Q = dcm.ahrs_process_noise(x[0:3], x[3:6], dt, N, qb) if with_Q else 0
-        return F @ x, F @ P @ F.T + Q
-    checks.check_dcm_predict(predict)
-    with pytest.raises(checks.Feedback, match="Q is missing"):
-        checks.check_dcm_predict(lambda *a: predict(*a, with_Q=False))
-    with pytest.raises(checks.Feedback, match="propagates with Ãᵀ"):
-        checks.check_dcm_predict(lambda *a: predict(*a, transpose=True))
-    with pytest.raises(checks.Feedback, match="not written yet"):
-        checks.check_dcm_predict(lambda *a: (_ for _ in ()).throw(NotImplementedError()))
-
-
-def test_lab10_checks_accept_the_library_and_name_the_usual_slips(library_as_student):
-    from scipy.linalg import cholesky
-    from fusionlab import checks
-    checks.check_ins_transition(dcm.ins_transition)
-    with pytest.raises(checks.Feedback, match="you used Ã"):
-        checks.check_ins_transition(lambda x, a, A, dt: dcm.ins_transition(x, a, A.T, dt))
-    checks.check_sigma_points(dcm.sigma_points_2n)
-
-    def lower(x, P):
-        L = cholesky(len(x) * P, lower=True)
-        return np.vstack([x + L, x - L]), np.full(2 * len(x), 0.5 / len(x))
-    with pytest.raises(checks.Feedback, match="rows of the lower factor"):
-        checks.check_sigma_points(lower)
-
-    def unscaled(x, P):
-        U = cholesky(P)
-        return np.vstack([x + U, x - U]), np.full(2 * len(x), 0.5 / len(x))
-    with pytest.raises(checks.Feedback, match="scale P by n"):
-        checks.check_sigma_points(unscaled)
-
-
 def test_plain_ukf_gives_filterpys_estimates_without_the_unused_sigma_points(monkeypatch):
     """Lab 10's fair timing: the plain UKF pushes 2n points a step and factors P once; filterpy pushes 2n + 1 and
     factors twice (it recomputes sigma points after predict for an update the linear GPS update never uses)."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import gfimu as _gfimu
-from ._core import Feedback, _call, _call_tuple, forbids, _general_case, _ok, _where
+from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _general_case, _ok, _where
 
 __all__ = ["check_aiv_map", "check_quadratic_jacobian", "check_three_state_noise", "check_correlated_update"]
 
@@ -21,16 +21,19 @@ def check_aiv_map(fn):
     if np.allclose(L, ref):
         _ok("L reproduces α, the three cross terms and the three squares from noise-free lever-arm data.")
         return
-    if np.allclose(L, 2 * ref):
-        raise Feedback("each term is half a sum or difference of two lever-arm differences: divide by 2 (eq 3.8).")
-    if np.allclose(np.abs(L[:3]), np.abs(ref[:3])) and not np.allclose(L[:3], ref[:3]):
-        raise Feedback("the α rows have a sign slip: α×p for p = d·e_y has +α_x on z and for p = d·e_z -α_x on y, "
-                       "so α_x = (ΔC_z - ΔD_y)/2 (and cyclically).")
-    if np.allclose(L[:, 3:], ref[:, 3:]) and not np.allclose(L[:, :3], ref[:, :3]):
-        raise Feedback("the columns of the central triad A are wrong: every difference is a^T - a^A, so A's "
-                       "column is minus the sum of the others in each row.")
-    if np.allclose(L[6:], -ref[6:]):
-        raise Feedback("the squares have the wrong sign: a^B_x - a^A_x = -d(ω_y²+ω_z²), so S_B = -ΔB_x/d.")
+    msg = _first_match(L, [
+        (2 * ref, "each term is half a sum or difference of two lever-arm differences: divide by 2 (eq 3.8)."),
+        (lambda m: np.allclose(np.abs(m[:3]), np.abs(ref[:3])) and not np.allclose(m[:3], ref[:3]), "the α rows have "
+         "a sign slip: α×p for p = d·e_y has +α_x on z and for p = d·e_z -α_x on y, so α_x = (ΔC_z - ΔD_y)/2 (and "
+         "cyclically)."),
+        (lambda m: np.allclose(m[:, 3:], ref[:, 3:]) and not np.allclose(m[:, :3], ref[:, :3]), "the columns of the "
+         "central triad A are wrong: every difference is a^T - a^A, so A's column is minus the sum of the others in "
+         "each row."),
+        (lambda m: np.allclose(m[6:], -ref[6:]), "the squares have the wrong sign: a^B_x - a^A_x = -d(ω_y²+ω_z²), so "
+                                                 "S_B = -ΔB_x/d."),
+    ])
+    if msg:
+        raise Feedback(msg)
     rows = [_gfimu.AIV_NAMES[i] for i in range(9) if not np.allclose(L[i], ref[i])]
     raise Feedback(f"rows {', '.join(rows)} differ from eqs 3.8-3.10 (order [α_x, α_y, α_z, ω_xω_y, ω_xω_z, "
                    "ω_yω_z, ω_x², ω_y², ω_z²], readings [A_x, A_y, A_z, B_x, ..., D_z]).")
@@ -46,11 +49,12 @@ def check_quadratic_jacobian(fn):
             raise Feedback(f"H is ∂h/∂x: 6 measurements by 3 states; got {H.shape}")
         if np.allclose(H, ref):
             continue
-        if np.allclose(H[3:], ref[3:] / 2):
-            raise Feedback("∂(x₁²)/∂x₁ = 2x₁: the square rows need the factor 2.")
-        if np.allclose(H, ref[:, ::-1]) or np.allclose(H[:3], ref[:3][:, ::-1]):
-            raise Feedback("the columns are in the wrong order: column j is ∂h/∂x_j.")
-        raise Feedback(f"at x = {x} H is not eq 3.29: {_where(H, ref, 'H')}.")
+        msg = _first_match(H, [
+            (lambda h: np.allclose(h[3:], ref[3:] / 2), "∂(x₁²)/∂x₁ = 2x₁: the square rows need the factor 2."),
+            (lambda h: np.allclose(h, ref[:, ::-1]) or np.allclose(h[:3], ref[:3][:, ::-1]), "the columns are in the "
+             "wrong order: column j is ∂h/∂x_j."),
+        ])
+        raise Feedback(msg or f"at x = {x} H is not eq 3.29: {_where(H, ref, 'H')}.")
     _ok("H = ∂h/∂x of the six quadratic terms (eq 3.29).")
 
 
@@ -122,18 +126,15 @@ def check_correlated_update(fn):
             continue
         H = _gfimu.quadratic_jacobian(x)
         K0 = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
-        if np.allclose(xp, x + K0 @ (y - _gfimu.quadratic_terms(x)), atol=1e-12):
-            raise Feedback("you used the ordinary EKF update: with correlated noise the gain is (PHᵀ + M)(HPHᵀ + HM "
-                           "+ MᵀHᵀ + R)⁻¹ and P⁺ = P - K(HP + Mᵀ) (eqs 3.32-3.33).")
-        xm, _ = _reference_update(x, P, y, R, -M)
-        if np.allclose(xp, xm, atol=1e-12):
-            raise Feedback("the sign of M is flipped inside your update: use M exactly as given (eqs 3.32-3.33).")
-        S = H @ P @ H.T + H @ M + M.T @ H.T + R
-        K = (P @ H.T + M) @ np.linalg.inv(S)
-        if np.allclose(xp, x + K @ (y - H @ x), atol=1e-12):
-            raise Feedback("the residual is y - h(x), the six quadratic terms of the prior (eq 3.34), not y - Hx: "
-                           "the measurement is nonlinear (h(x) = ½Hx here).")
-        if np.allclose(xp, rx, atol=1e-12):
-            raise Feedback("x is right but P is not: P⁺ = P - K(HP + Mᵀ) (eq 3.33).")
-        raise Feedback(f"x is not eqs 3.32-3.34: {_where(xp, rx, 'x')} (rad).")
+        K = (P @ H.T + M) @ np.linalg.inv(H @ P @ H.T + H @ M + M.T @ H.T + R)
+        msg = _first_match(xp, [
+            (x + K0 @ (y - _gfimu.quadratic_terms(x)), "you used the ordinary EKF update: with correlated noise the "
+             "gain is (PHᵀ + M)(HPHᵀ + HM + MᵀHᵀ + R)⁻¹ and P⁺ = P - K(HP + Mᵀ) (eqs 3.32-3.33)."),
+            (_reference_update(x, P, y, R, -M)[0], "the sign of M is flipped inside your update: use M exactly as "
+                                                   "given (eqs 3.32-3.33)."),
+            (x + K @ (y - H @ x), "the residual is y - h(x), the six quadratic terms of the prior (eq 3.34), not "
+                                  "y - Hx: the measurement is nonlinear (h(x) = ½Hx here)."),
+            (rx, "x is right but P is not: P⁺ = P - K(HP + Mᵀ) (eq 3.33)."),
+        ], rtol=1e-5, atol=1e-12)
+        raise Feedback(msg or f"x is not eqs 3.32-3.34: {_where(xp, rx, 'x')} (rad).")
     _ok("your update matches filterpy's KalmanFilter.update_correlated (eqs 3.32-3.34).")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import gfimu as _gfimu
-from ._core import Feedback, _answer, _call, _call_tuple, forbids, _ok, _where
+from ._core import Feedback, _answer, _call, _call_tuple, _first_match, forbids, _ok, _where
 
 __all__ = ["check_dynamic_jacobian", "check_lie_derivative", "check_constraints"]
 
@@ -22,15 +22,16 @@ def check_dynamic_jacobian(fn):
             raise Feedback(f"H is 9 AIV measurements by 15 states; got {H.shape}")
         if np.allclose(H, ref):
             continue
-        if np.allclose(H[:, :6], ref[:, :6]) and not np.allclose(H[:, 6:], ref[:, 6:]):
-            raise Feedback("the bias columns: each of the 9 AIV terms carries its own additive bias, so "
-                           "∂h/∂b = I₉ (the α rows get b₁₋₃, the quadratic rows b₄₋₉).")
-        if np.allclose(H[:3, 3:6], 0):
-            raise Feedback("the first three measurements are α itself: ∂h/∂α = I₃ in rows 1-3.")
-        if np.allclose(H[3:, :3], ref[3:, :3] / 2):
-            raise Feedback("the square rows: ∂(ω_x²)/∂ω_x = 2ω_x.")
-        raise Feedback(f"H is not eq 5.19: {_where(H, ref, 'H', atol=1e-8)}. It is "
-                       "[[0, I₃, I₃, 0], [H_q(ω), 0, 0, I₆]].")
+        msg = _first_match(H, [
+            (lambda h: np.allclose(h[:, :6], ref[:, :6]) and not np.allclose(h[:, 6:], ref[:, 6:]), "the bias columns: "
+             "each of the 9 AIV terms carries its own additive bias, so ∂h/∂b = I₉ (the α rows get b₁₋₃, the "
+             "quadratic rows b₄₋₉)."),
+            (lambda h: np.allclose(h[:3, 3:6], 0), "the first three measurements are α itself: ∂h/∂α = I₃ in rows "
+                                                   "1-3."),
+            (lambda h: np.allclose(h[3:, :3], ref[3:, :3] / 2), "the square rows: ∂(ω_x²)/∂ω_x = 2ω_x."),
+        ])
+        raise Feedback(msg or f"H is not eq 5.19: {_where(H, ref, 'H', atol=1e-8)}. It is "
+                              "[[0, I₃, I₃, 0], [H_q(ω), 0, 0, I₆]].")
     _ok("H of the augmented model (eq 5.19) is right.")
 
 

@@ -52,12 +52,13 @@ def check_noise_printed(fn):
         ref = _nf.rate_noise_coefficient(*case)
         if np.isclose(got, ref, rtol=1e-9):
             continue
-        if np.isclose(got, ref / 2, rtol=1e-9):
-            raise Feedback("you left out the factor 2: each difference (a^r - a^A, ...) has variance 2R_a.")
-        if np.isclose(got, _nf.rate_noise_coefficient_exact(*case), rtol=1e-9):
-            raise Feedback("that is the exact propagation (the next exercise); here write eq 4.44 as printed.")
-        raise Feedback(f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}. Eq 4.44: "
-                       "2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
+        msg = _first_match(got, [
+            (ref / 2, "you left out the factor 2: each difference (a^r - a^A, ...) has variance 2R_a."),
+            (_nf.rate_noise_coefficient_exact(*case), "that is the exact propagation (the next exercise); here write "
+                                                      "eq 4.44 as printed."),
+        ], rtol=1e-9, atol=0)
+        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}. Eq 4.44: "
+                              "2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
     _ok(f"eq 4.44 as printed: {_nf.rate_noise_coefficient(*_noise_cases()[0]):.4f} for Table 4.1.")
 
 
@@ -71,16 +72,16 @@ def check_noise_exact(fn):
             continue
         rho, d, l, wr = case
         k2 = (2 * rho * wr) ** 2
-        if np.isclose(got, _nf.rate_noise_coefficient(*case), rtol=1e-9):
-            raise Feedback("that is the printed eq 4.44, which treats the three differences as independent; "
-                           "write ω_x as a weighted sum of the four accelerometers and add the squared weights.")
-        if np.isclose(got, (1 + (l / d) ** 2 + (rho / d) ** 2) / k2, rtol=1e-9):
-            raise Feedback("the central accelerometer a^A is missing: it appears in all three differences, with "
-                           "weight -1 + l/d + ρ/d in total.")
-        if np.isclose(got, (1 + (l / d) ** 2 + (rho / d) ** 2 + (1 + l / d + rho / d) ** 2) / k2, rtol=1e-9):
-            raise Feedback("the a^A weight has the wrong sign on the lever terms: -1 (from a^r - a^A) and then "
-                           "+l/d and +ρ/d (from subtracting -(a^C - a^A)l/d and -(a^B - a^A)ρ/d).")
-        raise Feedback(f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}.")
+        msg = _first_match(got, [
+            (_nf.rate_noise_coefficient(*case), "that is the printed eq 4.44, which treats the three differences as "
+             "independent; write ω_x as a weighted sum of the four accelerometers and add the squared weights."),
+            ((1 + (l / d) ** 2 + (rho / d) ** 2) / k2, "the central accelerometer a^A is missing: it appears in all "
+             "three differences, with weight -1 + l/d + ρ/d in total."),
+            ((1 + (l / d) ** 2 + (rho / d) ** 2 + (1 + l / d + rho / d) ** 2) / k2, "the a^A weight has the wrong sign "
+             "on the lever terms: -1 (from a^r - a^A) and then +l/d and +ρ/d (from subtracting -(a^C - a^A)l/d and "
+             "-(a^B - a^A)ρ/d)."),
+        ], rtol=1e-9, atol=0)
+        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}.")
     _ok(f"exact propagation: {_nf.rate_noise_coefficient_exact(*_noise_cases()[0]):.5f} for Table 4.1 "
         "(169/450), against 0.7311 printed.")
 
@@ -123,11 +124,9 @@ def check_demodulate(fn):
         if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
             continue
         where = f"heading {deg:.0f}°: you return {got:.6f} rad, expected {ref:.6f} rad: "
-        for cand, msg in _demod_variants(x, th):
-            if abs(got - cand) < 1e-9:
-                raise Feedback(where + msg)
-        raise Feedback(where + "Check eqs 4.28-4.32: c_i = Σ x·r_c, s_i = -Σ x·r_s with zero-mean sign references "
-                               "r_c = sgn(cos θ), r_s = sgn(sin θ), then ψ = atan2(s_i, c_i).")
+        msg = _first_match(got, _demod_variants(x, th), rtol=0, atol=1e-9)
+        raise Feedback(where + (msg or "Check eqs 4.28-4.32: c_i = Σ x·r_c, s_i = -Σ x·r_s with zero-mean sign "
+                                       "references r_c = sgn(cos θ), r_s = sgn(sin θ), then ψ = atan2(s_i, c_i)."))
     _ok("synchronous demodulation right in all four quadrants, with a 2 g constant and with a third harmonic.")
 
 
@@ -140,12 +139,14 @@ def check_sync_sampling(fn):
         if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
             continue
         where = f"heading {deg:.0f}°: you return {np.degrees(got):.3f}°, expected {np.degrees(ref):.3f}°. "
-        if abs(np.angle(np.exp(1j * (got + ref)))) < 1e-6:
-            raise Feedback(where + "The sign is flipped: a_90 = -A_c sin ψ, so ψ = atan2(-a_90, a_0) (eq 4.35).")
-        if abs(abs(np.angle(np.exp(1j * (got - ref)))) - np.pi) < 1e-6:
-            raise Feedback(where + "Off by 180°: use np.arctan2(-a_90, a_0).")
-        if abs(np.angle(np.exp(1j * (got - ref)))) < np.radians(0.5):
-            raise Feedback(where + "Close: take, for every whole turn k, the sample *nearest* θ = 2πk and the one "
-                                   "nearest 2πk + π/2 (turns with both inside the record), then average each set.")
-        raise Feedback(where + "Check eqs 4.33-4.35.")
+        def off(h):                                            # the student's heading minus h, in (-π, π]
+            return np.angle(np.exp(1j * (got - h)))
+        msg = _first_match(got, [
+            (lambda g: abs(np.angle(np.exp(1j * (g + ref)))) < 1e-6, "The sign is flipped: a_90 = -A_c sin ψ, so "
+                                                                     "ψ = atan2(-a_90, a_0) (eq 4.35)."),
+            (lambda g: abs(abs(off(ref)) - np.pi) < 1e-6, "Off by 180°: use np.arctan2(-a_90, a_0)."),
+            (lambda g: abs(off(ref)) < np.radians(0.5), "Close: take, for every whole turn k, the sample *nearest* "
+             "θ = 2πk and the one nearest 2πk + π/2 (turns with both inside the record), then average each set."),
+        ])
+        raise Feedback(where + (msg or "Check eqs 4.33-4.35."))
     _ok("synchronous sampling right (index-pulse and quarter-turn samples, averaged over the turns).")

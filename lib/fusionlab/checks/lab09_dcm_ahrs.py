@@ -22,16 +22,16 @@ def check_dcm_measurement_matrices(fn_a, fn_m):
                            f"{H.shape}")
         if _same(H, ref):
             continue
-        if _same(H, -ref):
-            raise Feedback("H_a has the sign of the specific force. The thesis writes the accelerometer as measured "
-                           "gravity, a_b = C_n^b [0, 0, g] = +g c3 (eq 6.15) -- the lab converts the real reading "
-                           "with dcm.accel_to_seed004 before the filter, so H_a is +g I3 on the c3 block.")
-        if _same(H[:, 0:3], g * np.eye(3)):
-            raise Feedback("gravity is along the third nav axis (down): the accelerometer sees row 3 of C_bn, the "
-                           "states 4-6 (c3), not c1.")
-        if _same(H[:, 3:6], np.eye(3)):
-            raise Feedback("scale the identity by g: a_b = g c3 is in m/s², the state c3 is a unit vector.")
-        raise Feedback(f"H_a is not [0₃, g I₃, 0₃]: {_where(H, ref, 'H_a')}.")
+        msg = _first_match(H, [
+            (-ref, "H_a has the sign of the specific force. The thesis writes the accelerometer as measured gravity, "
+                   "a_b = C_n^b [0, 0, g] = +g c3 (eq 6.15) -- the lab converts the real reading with "
+                   "dcm.accel_to_seed004 before the filter, so H_a is +g I3 on the c3 block."),
+            (lambda h: _same(h[:, 0:3], g * np.eye(3)), "gravity is along the third nav axis (down): the accelerometer "
+                                                        "sees row 3 of C_bn, the states 4-6 (c3), not c1."),
+            (lambda h: _same(h[:, 3:6], np.eye(3)), "scale the identity by g: a_b = g c3 is in m/s², the state c3 is "
+                                                    "a unit vector."),
+        ])
+        raise Feedback(msg or f"H_a is not [0₃, g I₃, 0₃]: {_where(H, ref, 'H_a')}.")
     for deg in (66.0, -30.0):
         d = np.radians(deg)
         H = _call(fn_m, d, what="your H_m")
@@ -41,15 +41,16 @@ def check_dcm_measurement_matrices(fn_a, fn_m):
         if _same(H, ref):
             continue
         hN, hD = np.cos(d), np.sin(d)
-        if _same(H[:, 0:3], hD * np.eye(3)) and _same(H[:, 3:6], hN * np.eye(3)):
-            raise Feedback("cos and sin are swapped: h_n = [cos δ, 0, sin δ] (δ the inclination, down positive), so "
-                           "the c1 block is cos δ I3 and the c3 block sin δ I3.")
-        if _same(H[:, 0:3], np.cos(deg) * np.eye(3)) or _same(H[:, 0:3], np.cos(np.radians(d)) * np.eye(3)):
-            raise Feedback("the inclination is passed in radians: use np.cos(inclination) directly.")
-        if np.any(np.abs(H[:, 6:9]) > 0):
-            raise Feedback("the magnetometer does not depend on the gyro bias: the last block is zero.")
-        raise Feedback(f"at δ = {deg:g}°, H_m is not [cos δ I₃, sin δ I₃, 0₃]: "
-                       f"{_where(H, ref, 'H_m')}.")
+        msg = _first_match(H, [
+            (lambda h: _same(h[:, 0:3], hD * np.eye(3)) and _same(h[:, 3:6], hN * np.eye(3)), "cos and sin are "
+             "swapped: h_n = [cos δ, 0, sin δ] (δ the inclination, down positive), so the c1 block is cos δ I3 and "
+             "the c3 block sin δ I3."),
+            (lambda h: _same(h[:, 0:3], np.cos(deg) * np.eye(3)) or _same(h[:, 0:3], np.cos(np.radians(d)) * np.eye(3)),
+             "the inclination is passed in radians: use np.cos(inclination) directly."),
+            (lambda h: np.any(np.abs(h[:, 6:9]) > 0), "the magnetometer does not depend on the gyro bias: the last "
+                                                      "block is zero."),
+        ])
+        raise Feedback(msg or f"at δ = {deg:g}°, H_m is not [cos δ I₃, sin δ I₃, 0₃]: {_where(H, ref, 'H_m')}.")
     _ok("H_a = [0, g I, 0] and H_m = [cos δ I, sin δ I, 0]: both measurements are linear in the DCM rows.")
 
 
@@ -79,7 +80,8 @@ def check_dcm_predict(fn):
         wrong_A = np.concatenate([A @ c1 - dt * np.cross(c1, b), A @ c3 - dt * np.cross(c3, b), b])
         wrong_sign = np.concatenate([c1 @ A + dt * np.cross(c1, b), c3 @ A + dt * np.cross(c3, b), b])
         no_bias = np.concatenate([c1 @ A, c3 @ A, b])
-        degs = np.concatenate([c1 @ _dcm.A_matrix(np.radians(gyr) * dt), c3 @ _dcm.A_matrix(np.radians(gyr) * dt), b])
+        Ad = _dcm.A_matrix(np.radians(gyr) * dt)                     # gyr taken for °/s
+        degs = np.concatenate([c1 @ Ad - dt * np.cross(c1, b), c3 @ Ad - dt * np.cross(c3, b), b])
         msg = _first_match(xp, [
             (wrong_A, "each row propagates with Ãᵀ: row i of C A is Aᵀ c_i (eq 6.11) -- you used Ã c_i."),
             (wrong_sign, "the bias term has the wrong sign: c_k = Ãᵀ c - Δt [c×] b_g (the true A is Ã - [b Δt×])."),

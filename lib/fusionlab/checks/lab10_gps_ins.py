@@ -7,7 +7,7 @@ import numpy as np
 from scipy.linalg import cholesky
 
 from .. import dcm as _dcm, rotations
-from ._core import Feedback, _call, _call_tuple, forbids, _general_case, _ok, _same, _where
+from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _general_case, _ok, _same, _where
 
 __all__ = ["check_ins_transition", "check_sigma_points"]
 
@@ -71,16 +71,17 @@ def check_sigma_points(fn):
                           "Use n = len(x), not 4.", rtol=0, atol=1e-10)
         _ok("2n sigma points x ± rows of chol(nP), weights 1/(2n): they reproduce x and P exactly (n = 4, 2, 15).")
         return
-    if not _same(w, wref) and _same(sig, ref, 1e-10):
-        raise Feedback("the points are right; every weight is 1/(2n) (eq 7.26).")
-    if _same(sig, np.vstack([x + cholesky(P), x - cholesky(P)]), 1e-10):
-        raise Feedback("scale P by n before the Cholesky factor: x ± (√(nP))_i (eq 7.24).")
     Lw = cholesky(4 * P, lower=True)
-    if _same(sig, np.vstack([x + Lw, x - Lw]), 1e-10):
-        raise Feedback("use the rows of the upper factor U (UᵀU = nP, Matlab chol / scipy.linalg.cholesky), or "
-                       "equivalently the columns of the lower one; you took rows of the lower factor.")
     d = sig - x
-    if sig.shape == (8, 4) and _same((w[:, None] * d).T @ d, P, 1e-8):
-        raise Feedback("your points reproduce P but are not ordered as asked: first x + row i for i = 1..n, "
-                       "then x - row i.")
-    raise Feedback("the points do not reproduce P: Σ w_i (χ_i - x)(χ_i - x)ᵀ must equal P with w_i = 1/(2n).")
+    msg = _first_match(sig, [
+        (lambda s: not _same(w, wref) and _same(s, ref, 1e-10), "the points are right; every weight is 1/(2n) "
+                                                                "(eq 7.26)."),
+        (np.vstack([x + cholesky(P), x - cholesky(P)]), "scale P by n before the Cholesky factor: x ± (√(nP))_i "
+                                                        "(eq 7.24)."),
+        (np.vstack([x + Lw, x - Lw]), "use the rows of the upper factor U (UᵀU = nP, Matlab chol / "
+                                      "scipy.linalg.cholesky), or equivalently the columns of the lower one; you took "
+                                      "rows of the lower factor."),
+        (lambda s: _same((w[:, None] * d).T @ d, P, 1e-8), "your points reproduce P but are not ordered as asked: "
+                                                           "first x + row i for i = 1..n, then x - row i."),
+    ], rtol=0, atol=1e-10)
+    raise Feedback(msg or "the points do not reproduce P: Σ w_i (χ_i - x)(χ_i - x)ᵀ must equal P with w_i = 1/(2n).")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import metrics, rotations
-from ._core import Feedback, _call, forbids, _ok
+from ._core import Feedback, _call, _first_match, forbids, _ok
 
 __all__ = ["check_broad_heading", "check_broad_inclination", "check_broad_rmse"]
 
@@ -26,7 +26,9 @@ def _broad_error_cases():
     return q, np.abs(delta), eps
 
 
-def _broad_angle_check(fn, what, ref_fn, truth):
+def _broad_angle_check(fn, what, ref_fn, formula, truth):
+    """``formula(w, z)`` is the BROAD angle written out, for the slips that read other components of q (which
+    ``ref_fn``, the library's, refuses: they are no unit quaternions)."""
     q, abs_delta, eps = _broad_error_cases()
     got = _call(fn, q, what=what).reshape(-1)
     ref = ref_fn(q)
@@ -34,24 +36,22 @@ def _broad_angle_check(fn, what, ref_fn, truth):
         raise Feedback(f"{what} must return one angle per error quaternion: shape {ref.shape}; got {got.shape}")
     if np.allclose(got, ref, atol=1e-9):
         return got, ref
-    if np.allclose(got, np.degrees(ref), atol=1e-6):
-        raise Feedback(f"{what} returns degrees: return radians (np.degrees only for display).")
-    if np.allclose(got, ref / 2, atol=1e-9):
-        raise Feedback(f"{what} is half the angle: a quaternion holds half angles, so the angle is 2·(...).")
     w, x, y, z = q.T
-    if np.allclose(np.abs(got), ref, atol=1e-9) or np.any(got < -1e-12):
-        raise Feedback(f"{what} has the wrong sign for some quaternions: q and -q are the same rotation, so use "
-                       "|w| and |z| (the angle is always between 0 and π).")
-    qx = np.stack([z, w, x, y], axis=-1)          # what q[..., 0] and q[..., 3] mean when read as [x, y, z, w]
-    if np.allclose(got, ref_fn(qx), atol=1e-9):
-        raise Feedback(f"{what} reads the quaternion as [x, y, z, w]: the suite's order is [w, x, y, z], so w = "
-                       "q[..., 0] and z = q[..., 3].")
-    for name, comp in (("x", 1), ("y", 2)):
-        qs = q.copy()
-        qs[:, 3] = q[:, comp]
-        if np.allclose(got, ref_fn(qs), atol=1e-9):
-            raise Feedback(f"{what} uses the {name} component: the heading axis is the vertical, the nav z axis, "
-                           "so use z = q[..., 3].")
+    msg = _first_match(got, [
+        (lambda g: np.allclose(g, np.degrees(ref), atol=1e-6), f"{what} returns degrees: return radians (np.degrees "
+                                                               "only for display)."),
+        (ref / 2, f"{what} is half the angle: a quaternion holds half angles, so the angle is 2·(...)."),
+        (lambda g: np.allclose(np.abs(g), ref, atol=1e-9) or np.any(g < -1e-12), f"{what} has the wrong sign for "
+         "some quaternions: q and -q are the same rotation, so use |w| and |z| (the angle is always between 0 and "
+         "π)."),
+        # read as [x, y, z, w], q[..., 3] (our z) is taken for w and q[..., 2] (our y) for z
+        (formula(z, y), f"{what} reads the quaternion as [x, y, z, w]: the suite's order is [w, x, y, z], so w = "
+                        "q[..., 0] and z = q[..., 3]."),
+        *((formula(w, c), f"{what} uses the {name} component: the heading axis is the vertical, the nav z axis, so "
+                          "use z = q[..., 3].") for name, c in (("x", x), ("y", y))),
+    ], rtol=0, atol=1e-9)
+    if msg:
+        raise Feedback(msg)
     if truth is not None and np.allclose(got, truth, atol=1e-9):
         return got, ref
     raise Feedback(f"{what} differs from the BROAD definition by up to {np.max(np.abs(got - ref)):.3g} rad; "
@@ -62,7 +62,8 @@ def _broad_angle_check(fn, what, ref_fn, truth):
 def check_broad_heading(fn):
     """Check a student's ``fn(q_err) -> (N,) rad``: heading error ``2·atan(|z/w|)`` (BROAD, Laidig et al. 2021)."""
     q, abs_delta, _ = _broad_error_cases()
-    _broad_angle_check(fn, "your heading error", metrics.heading_error, abs_delta)
+    _broad_angle_check(fn, "your heading error", metrics.heading_error,
+                       lambda w, z: 2 * np.arctan2(np.abs(z), np.abs(w)), abs_delta)
     _ok(f"heading error right on {len(q)} error quaternions (q and -q alike): it recovers |δ| of q_z(δ) ⊗ q_tilt.")
 
 
@@ -75,7 +76,8 @@ def check_broad_inclination(fn):
     if got.shape == eps.shape and np.allclose(got, 2 * np.arccos(np.clip(w * w + z * z, 0, 1)), atol=1e-9):
         raise Feedback("your inclination error takes acos(w² + z²): the square root is missing, "
                        "cos(ε/2) = √(w² + z²).")
-    _broad_angle_check(fn, "your inclination error", metrics.inclination_error, eps)
+    _broad_angle_check(fn, "your inclination error", metrics.inclination_error,
+                       lambda w, z: 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0, 1)), eps)
     _ok(f"inclination error right on {len(q)} error quaternions: it recovers the tilt ε and ignores the heading δ.")
 
 
@@ -91,14 +93,15 @@ def check_broad_rmse(fn):
     if np.isclose(got, ref, rtol=1e-9):
         _ok(f"RMSE over the movement mask, NaN samples skipped: {ref:.4f}° on the test data.")
         return
-    if np.isnan(got):
-        raise Feedback("your RMSE is NaN: skip the samples whose reference is lost (np.isnan), e.g. np.nanmean or "
-                       "a mask ok = movement & ~np.isnan(angle).")
-    if np.isclose(got, metrics.rms(x, m), rtol=1e-9):
-        raise Feedback("your RMSE is in radians: the BROAD tables are in degrees (np.degrees at the end).")
-    if np.isclose(got, np.degrees(metrics.rms(x)), rtol=1e-9):
-        raise Feedback("your RMSE uses every sample: keep only those where movement is True.")
-    if np.isclose(got, np.degrees(np.nanmean(np.abs(x[m]))), rtol=1e-9):
-        raise Feedback("that is the mean absolute error: the RMSE is the square root of the mean of the squares.")
+    msg = _first_match(got, [
+        (lambda g: np.isnan(g), "your RMSE is NaN: skip the samples whose reference is lost (np.isnan), e.g. "
+                                "np.nanmean or a mask ok = movement & ~np.isnan(angle)."),
+        (metrics.rms(x, m), "your RMSE is in radians: the BROAD tables are in degrees (np.degrees at the end)."),
+        (np.degrees(metrics.rms(x)), "your RMSE uses every sample: keep only those where movement is True."),
+        (np.degrees(np.nanmean(np.abs(x[m]))), "that is the mean absolute error: the RMSE is the square root of the "
+                                               "mean of the squares."),
+    ], rtol=1e-9, atol=0)
+    if msg:
+        raise Feedback(msg)
     raise Feedback(f"your RMSE is {got:.4f}°, expected {ref:.4f}°: sqrt(mean(angle²)) over movement & ~isnan, in "
                    "degrees.")
