@@ -25,18 +25,20 @@ from grading.classgrade import _env
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _gid(cell):
+def grade_id(cell):
+    """The nbgrader ``grade_id`` of a notebook cell (None for a cell nbgrader does not know)."""
     return cell.metadata.get("nbgrader", {}).get("grade_id")
 
 
-def _fill(release, solution, exercises):
+def fill_answers(release, solution, exercises):
+    """A copy of the ``release`` notebook with the code answers of ``exercises`` (numbers) taken from the
+    ``solution`` notebook, without its ``### BEGIN/END SOLUTION`` lines: a student who did those exercises."""
     nb = nbformat.from_dict(release)
-    answers = {_gid(c): c.source for c in solution.cells if _gid(c)}
+    answers = {grade_id(c): c.source for c in solution.cells if grade_id(c)}
     for cell in nb.cells:
-        gid = _gid(cell) or ""
-        m = re.fullmatch(r"ex(\d+)_solution", gid)
+        m = re.fullmatch(r"ex(\d+)_solution", grade_id(cell) or "")
         if m and int(m.group(1)) in exercises:
-            cell.source = "\n".join(line for line in answers[gid].splitlines() if "### " not in line)
+            cell.source = "\n".join(line for line in answers[m.group(0)].splitlines() if "### " not in line)
     return nb
 
 
@@ -49,7 +51,7 @@ def build(course: Path, lab: str, students: int):
                    cwd=course, env=_env(), check=True)
     release = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-    kinds = [_fill(release, solution, range(1, 100)), _fill(release, solution, {1, 4}), release]
+    kinds = [fill_answers(release, solution, range(1, 100)), fill_answers(release, solution, {1, 4}), release]
     for i in range(students):
         dest = course / "submitted" / f"s{i:03d}" / lab
         dest.mkdir(parents=True)

@@ -16,6 +16,7 @@ import pytest
 from nbgrader.api import Gradebook
 
 from conftest import ROOT, nbgrader
+from grading.bench_classgrade import grade_id
 
 LABS = ("01_euler_rotations", "02_kalman_falling_body")
 
@@ -27,10 +28,6 @@ def _off_by_one(v):
         return tuple(_off_by_one(x) for x in v)
     return np.asarray(v, dtype=float) + 1.0
 '''
-
-
-def _gid(cell):
-    return cell.metadata.get("nbgrader", {}).get("grade_id")
 
 
 def _wrong(solution):
@@ -123,7 +120,7 @@ def test_feedback_html_shows_no_line_of_any_hidden_test(failed_everything, lab):
 def test_failed_test_cells_keep_the_error_line_and_lose_the_quoted_code(failed_everything, lab):
     run = failed_everything[lab]
     hidden = _hidden_lines(run["solution"])
-    errors = [o for c in run["autograded"].cells if (_gid(c) or "").endswith("_tests")
+    errors = [o for c in run["autograded"].cells if (grade_id(c) or "").endswith("_tests")
               for o in c.outputs if o.output_type == "error"]
     assert len(errors) == len(run["tests"]), "each failed test cell carries its error"
     for out in errors:

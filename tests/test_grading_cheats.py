@@ -21,6 +21,7 @@ import pytest
 from nbgrader.api import Gradebook
 
 from conftest import ROOT, nbgrader
+from grading.bench_classgrade import grade_id
 
 # The reference call of each exercise: it replaces the model answer between BEGIN/END SOLUTION (indented as it was;
 # a tuple gives one line per solution region of the cell).
@@ -163,15 +164,11 @@ _c.guard.grade = _c.guard.assert_close = lambda *a, **k: None
 """
 
 
-def _gid(cell):
-    return cell.metadata.get("nbgrader", {}).get("grade_id")
-
-
 def _points(lab):
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     out = {}
     for cell in nb.cells:
-        m = re.fullmatch(r"ex(\d+)_tests", _gid(cell) or "")
+        m = re.fullmatch(r"ex(\d+)_tests", grade_id(cell) or "")
         if m:
             out[int(m.group(1))] = cell.metadata["nbgrader"]["points"]
     return out
@@ -196,12 +193,12 @@ def _region(source, code):
 def _answered(release, solution, replace):
     """The release with every exercise answered: the model answer, or ``replace[n]`` in its place for exercise n."""
     nb = nbformat.from_dict(release)
-    answers = {_gid(c): c.source for c in solution.cells if _gid(c)}
+    answers = {grade_id(c): c.source for c in solution.cells if grade_id(c)}
     for cell in nb.cells:
-        m = re.fullmatch(r"ex(\d+)_solution", _gid(cell) or "")
+        m = re.fullmatch(r"ex(\d+)_solution", grade_id(cell) or "")
         if m:
             n = int(m.group(1))
-            src = answers[_gid(cell)]
+            src = answers[grade_id(cell)]
             cell.source = (_region(src, replace[n]) if n in replace
                            else "\n".join(ln for ln in src.splitlines() if "### " not in ln))   # the model answer
     return nb
@@ -209,7 +206,7 @@ def _answered(release, solution, replace):
 
 def _prepend(nb, gid, code):
     nb = nbformat.from_dict(nb)
-    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
     cell.source = code.strip("\n") + "\n" + cell.source
     return nb
 
@@ -261,7 +258,7 @@ def graded(tmp_path_factory):
 
 def _errors(graded, lab, student, gid):
     nb = nbformat.read(graded["root"] / "autograded" / student / lab / f"{lab}.ipynb", as_version=4)
-    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
     return " ".join(f"{o.ename}: {o.evalue}" for o in cell.get("outputs", []) if o.output_type == "error")
 
 

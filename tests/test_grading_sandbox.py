@@ -25,6 +25,7 @@ import nbformat
 import pytest
 
 from conftest import ROOT, nbgrader
+from grading.bench_classgrade import fill_answers, grade_id
 
 pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
                                 reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
@@ -36,31 +37,16 @@ FULL = sum(POINTS.values())  # 9 autograded points; q1..q5 are graded by hand
 MARKER = "fusionlab-attack-marker"
 
 
-def _gid(cell):
-    return cell.metadata.get("nbgrader", {}).get("grade_id")
-
-
-def _fill(release, solution, exercises):
-    """The release with the code answers of ``exercises`` (numbers) taken from the solution notebook."""
-    nb = nbformat.from_dict(release)
-    answers = {_gid(c): c.source for c in solution.cells if _gid(c)}
-    for cell in nb.cells:
-        gid = _gid(cell)
-        if gid and re.fullmatch(r"ex\d+_solution", gid) and int(gid[2:gid.index("_")]) in exercises:
-            cell.source = "\n".join(line for line in answers[gid].splitlines() if "### " not in line)
-    return nb
-
-
 def _append(nb, gid, code):
     nb = nbformat.from_dict(nb)
-    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
     cell.source += "\n" + code
     return nb
 
 
 def _replace(nb, gid, code):
     nb = nbformat.from_dict(nb)
-    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
     cell.source = code
     return nb
 
@@ -213,7 +199,7 @@ def graded(tmp_path_factory):
     release = nbformat.read(root / "labs" / LAB / f"{LAB}.ipynb", as_version=4)
     solution = nbformat.read(root / "solutions" / LAB / f"{LAB}.ipynb", as_version=4)
     other = nbformat.read(root / "labs" / OTHER / f"{OTHER}.ipynb", as_version=4)
-    full = _fill(release, solution, range(1, 5))
+    full = fill_answers(release, solution, range(1, 5))
 
     listener = socket.socket()
     listener.bind(("127.0.0.1", 0))
@@ -221,14 +207,14 @@ def graded(tmp_path_factory):
     listener.setblocking(False)
     port = listener.getsockname()[1]
 
-    class_ = {"full": full, "partial": _fill(release, solution, {1, 4}), "stub": release}
+    class_ = {"full": full, "partial": fill_answers(release, solution, {1, 4}), "stub": release}
     for name, code in _attacks(root, port).items():
         class_[name] = _append(full, "ex1_solution", code)
     paths = [str(root / "solutions" / LAB / f"{LAB}.ipynb"), str(root / "submitted" / "full" / LAB / f"{LAB}.ipynb")]
     class_["read_others"] = _replace(release, "ex1_solution", READ_ATTACK.format(paths=paths))
     class_["stuck"] = _append(full, "ex2_solution", STUCK)
     pasted = nbformat.from_dict(full)
-    foreign = [c for c in other.cells if _gid(c) in ("ex6_solution", "ex6_tests", "ex1_tests")]
+    foreign = [c for c in other.cells if grade_id(c) in ("ex6_solution", "ex6_tests", "ex1_tests")]
     pasted.cells[5:5] = [nbformat.from_dict(c) for c in foreign]  # before this lab's own ex1_tests
     pasted.cells.append(nbformat.from_dict(foreign[0]))  # lab 01's ex1_tests again, at the end
     pasted.cells[-1].id = "pasted-again"
@@ -276,7 +262,7 @@ def graded(tmp_path_factory):
 
 def _out(graded, student, gid):
     nb = nbformat.read(graded["root"] / "autograded" / student / LAB / f"{LAB}.ipynb", as_version=4)
-    [cell] = [c for c in nb.cells if _gid(c) == gid]
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
     return "".join(o.get("text", "") + o.get("evalue", "") + "".join(o.get("traceback", [])) for o in cell.outputs)
 
 
