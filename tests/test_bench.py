@@ -220,6 +220,8 @@ def test_leave_one_out_refuses_a_grid_without_the_default_and_a_single_trial(sim
         bench.leave_one_out(sim_trials[:1], "complementary", {"tau": (1.0,)})
     with pytest.raises(ValueError, match="grid must name options of 'gyro'"):
         bench.leave_one_out(sim_trials, "gyro", {"tau": (1.0,)})
+    with pytest.raises(ValueError, match="estimator must be one of .*complementary.*; got 'nope'"):
+        bench.leave_one_out(sim_trials, "nope", {"tau": (1.0,)})
 
 
 def test_every_tuned_grid_holds_the_registered_defaults():

@@ -330,6 +330,15 @@ class TuningSweep:
         return self.values[int(np.nanargmin(self.rmse_deg[i]))]
 
 
+def _estimator(name):
+    """What :func:`fusionlab.estimators.available` says of the estimator ``name``; a ValueError naming the
+    choices if there is no such estimator (the one check of :func:`tuning_sweep` and :func:`leave_one_out`)."""
+    known = estimators.available()
+    if name not in known:
+        raise ValueError(f"estimator must be one of {', '.join(known)}; got {name!r}")
+    return known[name]
+
+
 def tuning_sweep(trials, estimator, option, values, progress=False):
     """Run one estimator over a set of values of one tuning option on each trial, and score every run.
 
@@ -353,8 +362,7 @@ def tuning_sweep(trials, estimator, option, values, progress=False):
     """
     from tqdm.auto import tqdm
 
-    if estimator not in estimators.available():
-        raise ValueError(f"estimator must be one of {', '.join(estimators.available())}; got {estimator!r}")
+    info = _estimator(estimator)
     takes = estimators.options(estimator)
     if option not in takes:
         raise ValueError(f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); "
@@ -365,7 +373,7 @@ def tuning_sweep(trials, estimator, option, values, progress=False):
     trials = list(trials)
     if not trials or not all(isinstance(t, datasets.BroadTrial) for t in trials):
         raise ValueError("trials must be a non-empty list of BroadTrial (fusionlab.datasets.load_trial)")
-    uses_mag = estimators.available()[estimator]["uses_mag"]
+    uses_mag = info["uses_mag"]
     metric = "total" if uses_mag else "inclination"
     error_fn = metrics.total_error if uses_mag else metrics.inclination_error
     rmse = np.full((len(trials), len(values)), np.nan)
@@ -464,8 +472,7 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
     """
     from tqdm.auto import tqdm
 
-    if estimator not in estimators.available():
-        raise ValueError(f"estimator must be one of {', '.join(estimators.available())}; got {estimator!r}")
+    info = _estimator(estimator)
     grid = TUNED.get(estimator) if grid is None else grid
     if not grid:
         raise ValueError(f"grid must name at least one option of {estimator!r}; got {grid!r}")
@@ -479,7 +486,7 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
     trials = list(trials)
     if len(trials) < 2 or not all(isinstance(t, datasets.BroadTrial) for t in trials):
         raise ValueError(f"trials must be a list of at least two BroadTrial; got {len(trials)}")
-    uses_mag = estimators.available()[estimator]["uses_mag"]
+    uses_mag = info["uses_mag"]
     metric = "total" if uses_mag else "inclination"
     names = tuple(grid)
     combos = tuple(itertools.product(*(tuple(grid[k]) for k in names)))
