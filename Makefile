@@ -1,11 +1,5 @@
 # Sensor-fusion teaching labs. `make help` lists the targets.
-SHELL   := /bin/bash
-PYTHON  ?= $(shell command -v python3.11 || command -v python3)
-VENV    := .venv
-BIN     := $(abspath $(VENV))/bin
-# nbgrader shells out to `alembic` by name: the environment's bin must be on PATH for every call.
-export PATH := $(BIN):$(PATH)
-export MPLBACKEND := Agg
+include grading/student/course.mk
 LABS    ?= $(sort $(notdir $(wildcard solutions/[0-9][0-9]_*)))
 NBVAL   := --nbval --nbval-current-env --nbval-sanitize-with tests/nbval_sanitize.cfg
 
@@ -18,28 +12,7 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: help lab formgrader test solutions labs env data bench release clean
-
-help:  ## list the targets
-	@grep -E '^[a-z]+:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | column -t -s $$'\t'
-
-$(VENV)/.installed: environment.txt pyproject.toml
-	@echo "==> setting up $(VENV) from environment.txt (first time: a few minutes)"
-	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	@$(BIN)/python -m pip install --quiet --upgrade pip
-	@$(BIN)/python -m pip install --quiet -r environment.txt
-	@touch $@
-
-env: $(VENV)/.installed  ## create .venv and install environment.txt
-
-# The student's view: jupyter/ (see jupyter/README.md) turns nbgrader's instructor tools and the news pop-up off.
-STUDENT_VIEW := JUPYTER_CONFIG_PATH=$(CURDIR)/jupyter$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))
-ALLOW_ROOT   := $(if $(filter 0,$(shell id -u)),--allow-root)
-
-lab: env  ## start JupyterLab on labs/ as a student sees it (prints the URL; no browser needed)
-	@echo "==> JupyterLab on labs/ -- open the URL printed below; Ctrl-C to stop"
-	@$(STUDENT_VIEW) $(BIN)/jupyter lab --no-browser --notebook-dir=labs \
-	  --LabApp.app_settings_dir=$(CURDIR)/jupyter/lab/settings $(ALLOW_ROOT)
+.PHONY: formgrader test solutions labs data bench release clean
 
 formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"

@@ -5,7 +5,8 @@
 
 It holds the release notebooks (labs/), the library (lib/fusionlab with its data files), data/, environment.txt,
 pyproject.toml, the derivations the labs link to (docs/derivations.md) and the student JupyterLab view (jupyter/),
-when the repository has them, and, from grading/student/, the student README, Makefile (env, lab, test) and tests.
+when the repository has them, and, from grading/student/, the student README, Makefile (test), course.mk (env and lab,
+which the course's own Makefile includes too) and tests.
 It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.py or a gradebook: the builder copies a fixed list and refuses a notebook that still carries a
 solution or hidden-test region. ``tests/test_release.py`` checks the result line by line against every solution.
 """
@@ -29,7 +30,8 @@ TOP = "fusionlab-course"
 SHIP = [("labs", "labs", True), ("lib/fusionlab", "lib/fusionlab", True), ("data", "data", True),
         ("environment.txt", "environment.txt", True), ("pyproject.toml", "pyproject.toml", True),
         ("docs/derivations.md", "docs/derivations.md", False), ("jupyter", "jupyter", False)]
-FROM_TEMPLATES = [("Makefile", "Makefile"), ("tests", "tests"), ("gitignore", ".gitignore")]
+FROM_TEMPLATES = [("Makefile", "Makefile"), ("course.mk", "course.mk"), ("tests", "tests"),
+                  ("gitignore", ".gitignore")]
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", ".ipynb_checkpoints", "*.egg-info", ".DS_Store")
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
 README_SECTIONS = ("Labs", "Conventions")  # taken from the repository README for the student one
