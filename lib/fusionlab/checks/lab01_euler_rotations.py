@@ -67,11 +67,13 @@ def check_renormalize(fn):
         err1 = np.max(np.abs(out.T @ out - np.eye(3)))
         _ok(f"renormalisation matches eqs 3.59-3.65; orthogonality error {err0:.1e} → {err1:.1e}.")
         return
-    if np.allclose(out, rotations.dcm_renormalize(R, axis="rows"), atol=1e-12):
-        raise Feedback("you renormalised the rows (as the thesis text does); the lab code -- and this exercise -- "
-                       "work on the columns R[:, 0], R[:, 1]. Both are valid, but here we want columns.")
-    raise Feedback("the result differs from eqs 3.59-3.65: error = c1·c2; c1' = c1 - error/2·c2; c2' = c2 - "
-                   "error/2·c1; c3' = c1' × c2'; then each column times (3 - c·c)/2.")
+    msg = _first_match(out, [
+        (rotations.dcm_renormalize(R, axis="rows"), "you renormalised the rows (as the thesis text does); the lab "
+         "code -- and this exercise -- work on the columns R[:, 0], R[:, 1]. Both are valid, but here we want "
+         "columns."),
+    ], rtol=1e-5, atol=1e-12)
+    raise Feedback(msg or "the result differs from eqs 3.59-3.65: error = c1·c2; c1' = c1 - error/2·c2; c2' = c2 - "
+                          "error/2·c1; c3' = c1' × c2'; then each column times (3 - c·c)/2.")
 
 
 @forbids("rotations.rodrigues_dcm", "rotations.rotvec_to_quat", "dcm.A_matrix", "scipy.linalg.expm")
@@ -85,14 +87,13 @@ def check_rodrigues(fn):
             continue
         s = np.linalg.norm(sigma)
         B = rotations.skew(sigma)
-        printed = np.eye(3) + np.sin(s) / s * B + (1 - np.cos(s)) / s * B @ B
-        if np.allclose(A, printed, atol=1e-9):
-            raise Feedback("you used the printed coefficient (1 - cos σ)/σ; the correct one is (1 - cos σ)/σ² "
-                           "(seed 000 eq 3.54 erratum).")
-        if not np.all(np.isfinite(A)):
-            raise Feedback(f"σ = {sigma}: the result is not finite -- guard the 0/0 at σ → 0 with the series "
-                           "sin σ/σ ≈ 1 - σ²/6, (1 - cos σ)/σ² ≈ 1/2 - σ²/24.")
-        raise Feedback(f"σ = {sigma}: A is not the matrix exponential: {_where(A, ref, 'A')}.")
+        msg = _first_match(A, [
+            (np.eye(3) + np.sin(s) / s * B + (1 - np.cos(s)) / s * B @ B, "you used the printed coefficient "
+             "(1 - cos σ)/σ; the correct one is (1 - cos σ)/σ² (seed 000 eq 3.54 erratum)."),
+            (lambda a: not np.all(np.isfinite(a)), f"σ = {sigma}: the result is not finite -- guard the 0/0 at σ → 0 "
+             "with the series sin σ/σ ≈ 1 - σ²/6, (1 - cos σ)/σ² ≈ 1/2 - σ²/24."),
+        ], rtol=1e-5, atol=1e-9)
+        raise Feedback(msg or f"σ = {sigma}: A is not the matrix exponential: {_where(A, ref, 'A')}.")
     _ok("the Rodrigues increment equals the matrix exponential, including σ → 0.")
 
 
@@ -123,12 +124,13 @@ def check_sequence_angles(angles_deg, seq, C_bn, tol=1e-3):
     if np.allclose(rotations.sequence_to_dcm(np.radians(a), seq), C_bn, atol=tol):
         _ok(f"{seq} {a.round(3)} deg gives the same orientation.")
         return
-    if np.allclose(rotations.sequence_to_dcm(a, seq), C_bn, atol=tol):
-        raise Feedback(f"your {seq} angles look like radians; this answer is asked in degrees.")
-    if np.allclose(rotations.sequence_to_dcm(np.radians(a[::-1]), seq), C_bn, atol=tol):
-        raise Feedback(f"your {seq} angles are in reverse order: list them in the order the rotations are applied "
-                       f"(first about {seq[0]}).")
-    raise Feedback(f"{seq} {a.round(3)} deg does not reproduce the orientation (max entry error "
+    msg = _first_match(np.asarray(C_bn, dtype=float), [      # the orientation each slip would have given
+        (rotations.sequence_to_dcm(a, seq), f"your {seq} angles look like radians; this answer is asked in degrees."),
+        (rotations.sequence_to_dcm(np.radians(a[::-1]), seq), f"your {seq} angles are in reverse order: list them in "
+                                                              f"the order the rotations are applied (first about "
+                                                              f"{seq[0]})."),
+    ], rtol=0, atol=tol)
+    raise Feedback(msg or f"{seq} {a.round(3)} deg does not reproduce the orientation (max entry error "
                    f"{np.max(np.abs(rotations.sequence_to_dcm(np.radians(a), seq) - C_bn)):.3g}).")
 
 
