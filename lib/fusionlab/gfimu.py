@@ -318,9 +318,9 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
     Q : ndarray, shape (3, 3)
         Process noise covariance, rad² (state Δθ in rad).
     R : ndarray, shape (6, 6)
-        Measurement noise covariance, rad⁴.
+        Measurement noise covariance of ``y = Δt² q̃``, on the same scale ``Δt² R_a/d²``.
     M : ndarray, shape (3, 6)
-        Cross-covariance, rad³.
+        Cross-covariance of input and measurement noise, on the same scale, with the sign ``m_sign``.
     """
     N = _nonneg(noise_density, "noise_density")
     dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
