@@ -65,7 +65,8 @@ IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input
                  "ast_transformers", "set_custom_exc", "custom_exceptions", "CustomTB", "register_magic_function",
                  "register_magics", "run_cell", "run_cell_magic", "run_line_magic", "showtraceback",
                  "_showtraceback", "showsyntaxerror", "InteractiveTB", "SyntaxTB", "user_ns", "user_global_ns",
-                 "set_hook", "prefilter_manager", "display_pub"}
+                 "set_hook", "prefilter_manager", "display_pub", "transform_cell", "run_cell_async", "do_execute",
+                 "dispatch_shell", "shell_handlers", "display_trap", "displayhook"}
 SYS_ATTRS = {"modules", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks", "path_importer_cache",
              "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
              "breakpointhook", "audit"}

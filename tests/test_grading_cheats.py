@@ -6,8 +6,11 @@ graded with two such students: one cheats on the odd exercises and answers the e
 other the reverse, so every exercise is seen both cheated (0 points) and honestly solved (full points). Labs 01 and 02
 also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.testing.assert_allclose``, and Lab 02
 the cheats that change how later cells run (an input transformer and an AST transformer that blank the test cells, a
-custom exception handler that swallows errors, a monkeypatched ``fusionlab.checks`` and grading guard). The untouched
-release scoring 0 on every lab is tested in ``test_pipeline.py``.
+custom exception handler that swallows errors, a monkeypatched ``fusionlab.checks`` and grading guard, and a
+replaced piece of the shell's or the kernel's execution machinery: ``transform_cell``, ``run_cell_async``,
+``do_execute`` or the kernel's ``execute_request`` handler that blank the test cells, ``run_cell_magic``, the shell's
+display hook, ``builtins.__import__``). The untouched release scoring 0 on every lab is tested in
+``test_pipeline.py``.
 
 One scratch nbgrader course per lab; one ``nbgrader autograde`` run grades all of that lab's students.
 """
@@ -154,6 +157,44 @@ get_ipython().ast_transformers.append(_Blank())
     "custom_exception": """
 get_ipython().set_custom_exc((Exception,), lambda shell, etype, value, tb, tb_offset=None: [])
 """,
+    # the shell's and the kernel's execution machinery, replaced so that the test cells never run
+    "transform_cell": """
+_ip = get_ipython()
+_ip.transform_cell = lambda raw, _t=_ip.transform_cell: "pass\\n" if "Autograder" in raw else _t(raw)
+""",
+    "run_cell_async": """
+def _run(self, raw, *a, _r=type(get_ipython()).run_cell_async, **k):
+    if "Autograder" in raw:
+        raw, k["transformed_cell"] = "pass", "pass\\n"
+    return _r(self, raw, *a, **k)
+type(get_ipython()).run_cell_async = _run
+""",
+    "do_execute": """
+_k = get_ipython().kernel
+_k.do_execute = lambda code, *a, _d=_k.do_execute, **kw: _d("pass" if "Autograder" in code else code, *a, **kw)
+""",
+    "shell_handlers": """
+def _execute_request(stream, ident, parent, _h=get_ipython().kernel.shell_handlers["execute_request"]):
+    if "Autograder" in parent["content"]["code"]:
+        parent["content"]["code"] = "pass"
+    return _h(stream, ident, parent)
+get_ipython().kernel.shell_handlers["execute_request"] = _execute_request
+""",
+    "run_cell_magic": """
+get_ipython().run_cell_magic = lambda *a, **k: None
+""",
+    "displayhook": """
+class _Quiet(type(get_ipython().displayhook)):
+    def __call__(self, result=None):
+        return None
+get_ipython().displayhook = _Quiet(shell=get_ipython())
+""",
+    "import": """
+import builtins
+def _import(name, *a, _real=builtins.__import__, **k):
+    return _real(name, *a, **k)
+builtins.__import__ = _import
+""",
 }
 # The library monkeypatched from an answer cell (with junk answers, so only the patch could earn points).
 PATCH_CHECKS = """
@@ -294,6 +335,13 @@ def test_junk_answers_behind_a_patched_allclose_score_zero(graded, lab):
     ("input_transformer", "IPython's input_transformers_cleanup was changed"),
     ("ast_transformer", "IPython's ast_transformers was changed"),
     ("custom_exception", "a custom exception handler was installed for Exception"),
+    ("transform_cell", "IPython's shell.transform_cell was changed"),
+    ("run_cell_async", "IPython's shell.run_cell_async was changed"),
+    ("do_execute", "IPython's kernel.do_execute was changed"),
+    ("shell_handlers", "IPython's kernel.shell_handlers was changed"),
+    ("run_cell_magic", "IPython's shell.run_cell_magic was changed"),
+    ("displayhook", "IPython's shell.displayhook was changed"),
+    ("import", "builtins.__import__ was replaced"),
     ("patched_checks", "fusionlab.guard.release was replaced"),
 ])
 def test_cheats_that_change_how_later_cells_run_score_zero(graded, hook, reason):

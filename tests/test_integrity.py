@@ -54,6 +54,8 @@ CONSTRUCTS = [
     ("import IPython\nIPython.get_ipython().run_cell('x = 1')", "ipython"),
     ("shell = get_ipython()\n", "ipython"),
     ("ip.events.register('pre_run_cell', print)", "ipython"),
+    ("shell.kernel.do_execute = print", "ipython"),
+    ("shell.transform_cell = str", "ipython"),
     ("src = open('../../solutions/02_kalman_falling_body/02_kalman_falling_body.ipynb').read()", "file"),
     ("import subprocess", "process"),
     ("import os\nos.system('ls')", "process"),

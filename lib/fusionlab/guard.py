@@ -17,7 +17,10 @@ locked setup cell (through ``fusionlab.checks``), before any student code runs, 
   and AST transformers, custom exception handlers, event callbacks, ``sys.excepthook``, trace and profile functions)
   changed since this module was imported. Before a grading cell (one that calls ``guard.intact()``) is even
   transformed, the hooks are put back as they were and what was changed is remembered, so a transformer cannot blank
-  the cell that would report it.
+  the cell that would report it. The execution machinery itself (the shell's ``transform_cell``, ``run_cell``,
+  ``run_cell_async``, ``run_cell_magic``, display hook and traceback display; the kernel's ``do_execute``,
+  ``dispatch_shell`` and message handlers; instance and class attributes alike) is compared by identity with the
+  objects seen at import, and put back before every message the kernel handles.
 
 Only numpy and the standard library are imported here (row 1 of the import plan). Nothing in a kernel is proof
 against a student who rewrites the kernel itself; the integrity report of the grading tools reads the submitted
@@ -65,6 +68,7 @@ _nd_copy = _ndarray.copy
 _complex, _bool = complex, bool
 _float, _int, _len, _tuple, _list, _dict, _str, _type, _id = float, int, len, tuple, list, dict, str, type, id
 _isinstance, _repr, _range, _zip, _enumerate, _getattr = isinstance, repr, range, zip, enumerate, getattr
+_hasattr, _setattr, _delattr = hasattr, setattr, delattr
 _divmod, _sorted, _set, _callable, _any, _vars = divmod, sorted, set, callable, any, vars
 _FunctionType, _MethodType, _ModuleType = types.FunctionType, types.MethodType, types.ModuleType
 _BuiltinTypes = (types.BuiltinFunctionType, types.BuiltinMethodType, np.ufunc)
@@ -512,7 +516,8 @@ _forbid_cls = forbid
 # ---------------------------------------------------------------------------------------------------------------
 # intact: nothing the grading relies on was changed by an answer cell
 # ---------------------------------------------------------------------------------------------------------------
-_state = {"excepthooks": [sys.__excepthook__], "exercise": None, "tampered": [], "user_ns": None, "custom": None}
+_state = {"excepthooks": [sys.__excepthook__], "displayhooks": [sys.__displayhook__], "exercise": None,
+          "tampered": [], "user_ns": None, "custom": None}
 _baseline_modules = {}     # module name -> {attribute: (object, code or None)}
 _module_objs = {}          # module name -> the module object
 _baseline_classes = {}     # class -> {attribute: (object, code or None)}
@@ -639,10 +644,15 @@ def _builtin_problems():
 
 
 # IPython ---------------------------------------------------------------------------------------------------------
+# The execution machinery: what the kernel calls to run a cell and show its result or its error. An answer cell that
+# replaces one of them (``get_ipython().transform_cell = ...``, ``get_ipython().kernel.do_execute = ...``) could
+# blank the grading cells before ``intact()`` runs in them, so they are put back before every message the kernel
+# handles (see ``_install``), and ``intact()`` reports the change.
 _SHELL_METHODS = ("run_cell", "run_cell_async", "_run_cell", "run_code", "run_ast_nodes", "transform_ast",
                   "should_run_async", "showtraceback", "_showtraceback", "showsyntaxerror", "get_exception_only",
-                  "set_custom_exc", "ex", "ev", "transform_cell")
-_KERNEL_METHODS = ("do_execute", "execute_request", "dispatch_shell")
+                  "set_custom_exc", "ex", "ev", "transform_cell", "run_cell_magic", "run_line_magic", "excepthook",
+                  "displayhook", "display_trap", "display_pub")
+_KERNEL_METHODS = ("do_execute", "execute_request", "dispatch_shell", "pre_handler_hook", "set_parent")
 
 
 def _shell():
@@ -680,6 +690,8 @@ def _hooks(ip):
         "prefilter_transformers": _tuple(ip.prefilter_manager.transformers),
         "events": ip.events,
         "sys.excepthook": sys.excepthook,
+        "sys.displayhook": sys.displayhook,
+        "shell.display_trap.hook": _getattr(_getattr(ip, "display_trap", None), "hook", None),
         "sys.settrace": sys.gettrace(),
         "sys.setprofile": sys.getprofile(),
         "InteractiveShell class": _type(ip),
@@ -704,6 +716,8 @@ def _capture_ip_baseline():
     if ip is None or _ip_base:
         return ip
     _ip_base["hooks"] = _hooks(ip)
+    handlers = _getattr(_getattr(ip, "kernel", None), "shell_handlers", None)
+    _ip_base["handlers"] = _dict(handlers) if _isinstance(handlers, _dict) else None
     _ip_base["callbacks"] = {k: _tuple(v) for k, v in ip.events.callbacks.items()}
     _state["custom"] = _custom_state(ip)
     return ip
@@ -726,6 +740,8 @@ def _ip_problems(ip):
         b = base.get(k, _MISSING)
         if k == "sys.excepthook" and (v == _getattr(ip, "excepthook", None) or v in _state["excepthooks"]):
             continue                      # IPython sets its own hook while a cell runs, the kernel's in between
+        if k == "sys.displayhook" and (v is base["shell.displayhook"][0] or v in _state["displayhooks"]):
+            continue                      # the same: the shell's display hook in a cell, the kernel's in between
         same = v is b or ((v == b) if _isinstance(v, (_tuple, _MethodType)) else False)  # bound methods: equal
         if not same:
             out.append(f"IPython's {k} was changed")
@@ -761,12 +777,47 @@ def _restore_ip(ip):
     sys.excepthook = base["sys.excepthook"]
     sys.settrace(base["sys.settrace"])
     sys.setprofile(base["sys.setprofile"])
-    for name in _SHELL_METHODS:
-        inst, _cls = base[f"shell.{name}"]
-        if inst is _MISSING:
-            _vars(ip).pop(name, None)
-        else:
-            _vars(ip)[name] = inst
+    _restore_machinery(ip)
+
+
+def _put_back(owner, prefix, names):
+    """Put back the instance and class attributes ``names`` of ``owner`` as in the baseline; what was changed."""
+    base, changed = _ip_base["hooks"], []
+    for name in names:
+        inst, cls = base[f"{prefix}.{name}"]
+        if _vars(owner).get(name, _MISSING) is not inst:
+            changed.append(f"IPython's {prefix}.{name} was changed")
+            if inst is _MISSING:
+                _vars(owner).pop(name, None)
+            else:
+                _vars(owner)[name] = inst
+        if _getattr(_type(owner), name, _MISSING) is not cls:
+            changed.append(f"IPython's {prefix}.{name} was changed")
+            if cls is _MISSING:
+                _delattr(_type(owner), name)
+            else:
+                _setattr(_type(owner), name, cls)
+    return changed
+
+
+def _restore_machinery(ip):
+    """Put back the shell's and the kernel's execution machinery (``_SHELL_METHODS``, ``_KERNEL_METHODS``, the
+    kernel's message handlers and the display trap's hook); return what was changed. Cheap: a few dozen lookups."""
+    changed = _put_back(ip, "shell", _SHELL_METHODS)
+    trap, hook = _getattr(ip, "display_trap", None), _ip_base["hooks"]["shell.display_trap.hook"]
+    if trap is not None and _getattr(trap, "hook", None) is not hook:
+        changed.append("IPython's shell.display_trap.hook was changed")
+        trap.hook = hook
+    kernel = _getattr(ip, "kernel", None)
+    if kernel is not None and "kernel.do_execute" in _ip_base["hooks"]:
+        changed += _put_back(kernel, "kernel", _KERNEL_METHODS)
+        handlers, saved = _getattr(kernel, "shell_handlers", None), _ip_base.get("handlers")
+        if _isinstance(handlers, _dict) and saved is not None and (
+                _len(handlers) != _len(saved) or _any(handlers.get(k, _MISSING) is not v for k, v in saved.items())):
+            changed.append("IPython's kernel.shell_handlers was changed")
+            handlers.clear()
+            handlers.update(saved)
+    return changed
 
 
 def _restore_modules():
@@ -835,6 +886,7 @@ def _protect_names(ip, restore):
     the originals even if an answer cell rebound one (``kf = my_fake_module``)."""
     if _state["user_ns"] is None:
         _state["excepthooks"].append(sys.excepthook)          # the kernel's own, between cells
+        _state["displayhooks"].append(sys.displayhook)
         keep = {}
         for k, v in ip.user_ns.items():
             if k.startswith("_") or k in ("In", "Out", "get_ipython", "exit", "quit"):
@@ -878,6 +930,24 @@ def _install():
     ip.transform_cell = transform_cell
     ip._fusionlab_guard = True
     _ip_base["hooks"]["shell.transform_cell"] = (transform_cell, _type(ip).transform_cell)
+    kernel = _getattr(ip, "kernel", None)
+    dispatch = _getattr(kernel, "dispatch_shell", None)
+    if dispatch is None:
+        return
+
+    async def dispatch_shell(*args, **kwargs):
+        """Before the kernel handles a message (a cell to run), put its execution machinery back: a replaced
+        ``transform_cell``, ``do_execute`` or message handler never sees the next cell, and intact() says so."""
+        try:
+            found = _restore_machinery(ip)
+            _state["tampered"].extend(p for p in found if p not in _state["tampered"])
+        except Exception as err:  # never break the kernel; the next intact() reports it
+            _state["tampered"].append(f"the grading guard could not check the kernel ({_type(err).__name__})")
+        result = dispatch(*args, **kwargs)
+        return (await result) if _hasattr(result, "__await__") else result
+
+    kernel.dispatch_shell = dispatch_shell
+    _ip_base["hooks"]["kernel.dispatch_shell"] = (dispatch_shell, _type(kernel).dispatch_shell)
 
 
 _snapshot_new_modules()
