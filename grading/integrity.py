@@ -12,6 +12,14 @@ instructor's version before grading, so they are not scanned. Each cell is parse
 taken out first and judged on their own); a cell that does not parse is flagged ``syntax`` and scanned token by
 token instead.
 
+A function in a scanned cell whose code has the shape of a library function (``lib/fusionlab``, public or private:
+the private helpers hold most formulas) is flagged ``copied``: both bodies are reduced to the sequence of their
+syntax-tree node types (identifiers, docstrings, comments and constant values dropped), compared as written and with
+their statements sorted (so reordering independent lines changes nothing), and the larger
+``difflib.SequenceMatcher`` ratio is reported. Only functions of at least ``COPY_MIN_NODES`` nodes are compared: a
+one-line formula written honestly is the library's formula (Lab 02's model ``my_joseph`` is ``kalman._joseph`` node
+for node), so a short copy cannot be told from an honest answer.
+
 A flag does not change a grade. It lists the submission for REVIEW: read the cell before trusting the score.
 """
 from __future__ import annotations
@@ -19,6 +27,8 @@ from __future__ import annotations
 import argparse
 import ast
 import csv
+import difflib
+import functools
 import io
 import re
 import sys
@@ -50,6 +60,7 @@ WHY = {
     "operator": "defines a class whose comparisons or conversions could fool an assert",
     "foreign-cell": "carries nbgrader metadata with a grade_id this lab does not have (pasted from another lab?)",
     "syntax": "does not parse as Python (scanned token by token instead)",
+    "copied": "a function whose code has the shape of one in the library, names and comments aside (copied?)",
     "unreadable": "the submission is not a readable notebook",
 }
 
@@ -98,6 +109,66 @@ INSTRUCTOR_PATHS = re.compile(r"\.\.|^/|solution|gradebook|autograded|submitted|
 SAFE_MAGICS = {"matplotlib", "timeit", "time", "precision", "pprint", "who", "whos", "pinfo", "pinfo2", "psearch"}
 SHELL_MAGICS = {"system", "sx", "bash", "sh", "script", "perl", "ruby", "python", "python3", "pypy", "sc", "run",
                 "load", "writefile", "env", "store", "cd", "pushd", "popd", "rm", "mkdir", "mv", "cp"}
+
+
+# Copied from the library: calibrated on the model answers of all labs, whose closest library functions are up to
+# 0.976 alike (Lab 06 my_aiv_map ~ gfimu.aiv_map, 182 nodes; Lab 10 my_ins_F ~ dcm._ins_F, 0.973), while a copy with
+# renamed variables, reordered independent lines and added comments is 1.0 alike.
+COPY_RATIO = 0.985
+COPY_MIN_NODES = 40
+LIBRARY = Path(__file__).resolve().parents[1] / "lib" / "fusionlab"
+
+
+def _shape(statements):
+    """(node types in order, the same with the statements sorted): what is left of code without its names."""
+    def types(node):
+        if isinstance(node, ast.expr_context):
+            return []
+        return [type(node).__name__] + [t for child in ast.iter_child_nodes(node) for t in types(child)]
+    if statements and isinstance(statements[0], ast.Expr) and isinstance(statements[0].value, ast.Constant) \
+            and isinstance(statements[0].value.value, str):
+        statements = statements[1:]                                           # the docstring
+    each = [types(s) for s in statements]
+    return [t for e in each for t in e], [t for e in sorted(each) for t in e]
+
+
+@functools.lru_cache(maxsize=4)
+def library_shapes(folder=LIBRARY):
+    """{"module.function": shape} for every function and method defined in the library's modules."""
+    out = {}
+
+    def collect(prefix, body):
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                out[f"{prefix}.{node.name}"] = _shape(node.body)
+                collect(f"{prefix}.{node.name}", node.body)
+            elif isinstance(node, ast.ClassDef):
+                collect(f"{prefix}.{node.name}", node.body)
+    for path in sorted(Path(folder).rglob("*.py")):                     # fusionlab.checks is a package
+        collect(".".join(path.relative_to(folder).with_suffix("").parts), ast.parse(path.read_text()).body)
+    return out
+
+
+def copied_from(function, library=None):
+    """(similarity, "module.function") of the library function closest to ``function`` (an ``ast.FunctionDef``), or
+    None below ``COPY_RATIO`` or for a function shorter than ``COPY_MIN_NODES``."""
+    mine = _shape(function.body)
+    n = len(mine[0])
+    if n < COPY_MIN_NODES:
+        return None
+    best = None
+    matcher = difflib.SequenceMatcher(None, autojunk=False)
+    for name, theirs in (library or library_shapes()).items():
+        m = len(theirs[0])
+        if 2 * min(n, m) / (n + m) < COPY_RATIO:                # the ratio cannot get there
+            continue
+        for a, b in zip(mine, theirs):
+            matcher.set_seqs(b, a)
+            if matcher.quick_ratio() >= COPY_RATIO:
+                ratio = matcher.ratio()
+                if ratio >= COPY_RATIO and (best is None or ratio > best[0]):
+                    best = (ratio, name)
+    return best
 
 
 def _nbg(cell):
@@ -476,6 +547,12 @@ def scan_source(source, src, exercise=None, added=False):
         return flags + [(err.lineno or 1, "syntax", None)] + _token_scan(code, forbidden)
     visitor = _Visitor(src, forbidden, exercise, added)
     visitor.visit(tree)
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            match = copied_from(node)
+            if match:
+                flags.append((node.lineno, "copied", f"`{node.name}` has the shape of `{match[1]}` in the library: "
+                                                     f"{match[0]:.1%} alike (flagged from {COPY_RATIO:.1%})"))
     return flags + visitor.flags
 
 

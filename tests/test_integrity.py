@@ -3,7 +3,9 @@ line; every model answer and every untouched release of every lab is clean; the 
 REVIEW."""
 from __future__ import annotations
 
+import ast
 import csv
+import inspect
 import textwrap
 
 import nbformat
@@ -235,3 +237,66 @@ def test_report_text_is_short_and_explains_each_kind():
                                   "network", "ctypes", "signal", "foreign-cell", "syntax"}
     assert all(len(why) < 120 for why in integrity.WHY.values())
     assert textwrap.dedent(integrity.__doc__).startswith("Integrity report")
+
+
+class _Rename(ast.NodeTransformer):
+    """Every parameter and variable renamed v0, v1, ... (what a student hides a pasted library body behind)."""
+
+    def __init__(self):
+        self.names = {}
+
+    def _new(self, name):
+        return self.names.setdefault(name, f"v{len(self.names)}")
+
+    def visit_arg(self, node):
+        node.arg = self._new(node.arg)
+        return node
+
+    def visit_Name(self, node):
+        node.id = self._new(node.id)
+        return node
+
+
+def _pasted(module, name, new_name):
+    """The body of a library function pasted into an answer: renamed, docstring gone, its first two statements
+    swapped, a comment on every line."""
+    tree = ast.parse(inspect.getsource(getattr(module, name)))
+    fn = tree.body[0]
+    body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
+    if len(body) >= 3:
+        body[0], body[1] = body[1], body[0]
+    fn.body, fn.name = body, new_name
+    _Rename().visit(fn)
+    return "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
+
+
+@pytest.mark.parametrize("gid, name, new_name", [("ex2_solution", "falling_body_state_space", "my_state_space"),
+                                                 ("ex3_solution", "predict", "my_predict"),
+                                                 ("ex4_solution", "_update", "my_update")])
+def test_a_library_body_pasted_with_new_names_is_flagged_copied_with_its_ratio(tmp_path, gid, name, new_name):
+    from fusionlab import kalman
+    code = "import numpy as np\n\n" + _pasted(kalman, name, new_name)
+    flags = integrity.scan_notebook(SOURCE, _submission(tmp_path, lambda nb: _answer(nb, gid, code)))
+    [flag] = flags                                   # nothing else in it: no reference call, no patch
+    assert (flag["cell"], flag["line"]) == (gid, 3) and flag["code"].startswith(f"def {new_name}(v0")
+    assert f"`{new_name}` has the shape of `kalman.{name}` in the library: 100.0% alike" in flag["why"], flag["why"]
+
+
+def test_the_copy_threshold_sits_between_the_model_answers_and_a_pasted_copy():
+    """Calibration, kept honest: the model answers closest to the library stay below COPY_RATIO; a formula short
+    enough to be written the library's way honestly (Lab 02's my_joseph is kalman._joseph node for node) is not
+    compared at all."""
+    nb = nbformat.read(ROOT / "solutions" / "06_gfimu_aiv" / "06_gfimu_aiv.ipynb", as_version=4)
+    [cell] = [c for c in nb.cells if _gid(c) == "ex1_solution"]
+    [fn] = [n for n in ast.parse(cell.source).body if isinstance(n, ast.FunctionDef) and n.name == "my_aiv_map"]
+    saved = integrity.COPY_RATIO
+    try:
+        integrity.COPY_RATIO = 0.9
+        ratio, name = integrity.copied_from(fn)
+    finally:
+        integrity.COPY_RATIO = saved
+    assert name == "gfimu.aiv_map" and 0.95 < ratio < integrity.COPY_RATIO
+    [cell] = [c for c in nbformat.read(SOURCE, as_version=4).cells if _gid(c) == "ex1_solution"]
+    [joseph] = [n for n in ast.parse(cell.source).body if isinstance(n, ast.FunctionDef)]
+    assert len(integrity._shape(joseph.body)[0]) < integrity.COPY_MIN_NODES
+    assert integrity.copied_from(joseph) is None
