@@ -77,7 +77,8 @@ CHEATS = {
         2: "return fz.process_noise(x_prev, dt, dataclasses.replace(fz.V500, Q_vY=Q_vY, Q_wb=Q_wb, Q_wdelta=Q_wdelta))",
         3: "return fz.measurement_noise(qvgqa, qvbqd, dt, dataclasses.replace(fz.V500, Q_vY=Q_vY, Q_wb=Q_wb), B=B)",
         4: "return fz.kalman_gain(Q_w, C, Q_v)",
-        5: "fz.Kalman9.step(kf, gyr_dps, G, B_c)",
+        5: "return fz.qrot(u, v)",
+        6: "fz.Kalman9.step(kf, gyr_dps, G, B_c)",
     },
     "06_gfimu_aiv": {
         1: "return gfimu.aiv_map()",

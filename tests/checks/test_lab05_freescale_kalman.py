@@ -103,3 +103,54 @@ def test_check_step_passes_kalman9_and_names_a_step_that_stores_nothing_or_drift
 def test_the_library_s_gain_is_refused():
     with pytest.raises(checks.Feedback, match="freescale.kalman_gain, the library's own solution"):
         checks.check_gain(fz.kalman_gain)
+
+
+# ---- Lab 05 exercise 5: the rotation between two vectors (seed 002 eqs 66-76) ----
+
+def qrot_note(u, v, tol=1e-12, flip_axis=False, equal_axis=(1.0, -1.0, 0.0), sign=-1, scalar_last=False,
+              normalise=True):
+    """Eqs 66-76 as a student writes them; the keywords make the slips the check names."""
+    u, v = np.asarray(u, float), np.asarray(v, float)
+    if normalise:
+        u, v = u / np.linalg.norm(u), v / np.linalg.norm(v)
+    w = 1 + u @ v
+    if w <= tol:                                          # 180°: q0 = 0, axis u × (1, 1, 1) (eqs 73-75)
+        ax = np.cross(np.ones(3), u) if flip_axis else np.cross(u, np.ones(3))
+        n = np.linalg.norm(ax)
+        ax = ax / n if n > 1e-12 else np.asarray(equal_axis) / np.linalg.norm(equal_axis)
+        q = np.r_[0.0, ax]
+    else:
+        q = np.r_[w, sign * np.cross(u, v)] / np.sqrt(2 * w)
+    return np.roll(q, -1) if scalar_last else q
+
+
+def half_angle(u, v):                                     # axis u × v / |u × v|: 0/0 for parallel vectors
+    u, v = np.asarray(u, float) / np.linalg.norm(u), np.asarray(v, float) / np.linalg.norm(v)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ax = -np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+    a = np.arccos(np.clip(u @ v, -1, 1))
+    return np.r_[np.cos(a / 2), np.sin(a / 2) * ax]
+
+
+@pytest.mark.parametrize("fn, match", [
+    (lambda u, v: qrot_note(u, v, sign=+1), r"60° apart .*turns v onto u: the vector part is -u × v"),
+    (lambda u, v: qrot_note(u, v, scalar_last=True), "scalar last"),
+    (lambda u, v: qrot_note(u, v, normalise=False), r"general pair .*right for unit vectors.*normalise u and v first"),
+    (half_angle, r"parallel vectors .*not finite. For parallel vectors u × v = 0"),
+    (lambda u, v: qrot_note(u, v, tol=-1.0), r"180°, general u .*not finite. At 180° 1 \+ u·v is 0"),
+    (lambda u, v: qrot_note(u, v, flip_axis=True), r"180°, general u .*u × \(1, 1, 1\), not \(1, 1, 1\) × u"),
+    (lambda u, v: qrot_note(u, v, equal_axis=(0.0, 1.0, -1.0)),
+     r"180° with u_x = u_y = u_z .*does turn u onto v.*eq 75 takes the axis \(1, -1, 0\)/√2"),
+    (lambda u, v: np.r_[1.0, 0, 0, 0], r"60° apart .*does not turn u onto v"),
+])
+def test_check_qrot_names_the_slip(fn, match):
+    with np.errstate(invalid="ignore"), pytest.raises(checks.Feedback, match=match):
+        checks.check_qrot(fn)
+
+
+def test_check_qrot_passes_eqs_66_76_and_refuses_the_library_s(capsys):
+    from fusionlab import freescale
+    checks.check_qrot(qrot_note)
+    assert capsys.readouterr().out.startswith("✓ q is right for 6 pairs")
+    with pytest.raises(checks.Feedback, match=r"called freescale\.qrot"):
+        checks.check_qrot(freescale.qrot)

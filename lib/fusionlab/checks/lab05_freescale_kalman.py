@@ -9,9 +9,10 @@ import dataclasses
 import numpy as np
 
 from .. import freescale as fz, rotations
-from ._core import Feedback, _answer, _call, _first_match, forbids, _general_case, _ok, _where
+from ._core import Feedback, _answer, _call, _first_match, forbids, _general_case, _ok, _same, _where
 
-__all__ = ["check_measurement_matrix", "check_process_noise", "check_measurement_noise", "check_gain", "check_step"]
+__all__ = ["check_measurement_matrix", "check_process_noise", "check_measurement_noise", "check_gain", "check_step",
+           "check_qrot"]
 
 
 @forbids("freescale.measurement_matrix")
@@ -143,3 +144,69 @@ def check_step(fn):
                        "before integrating; the eCompass built with δ6 instead of the previous δ̂; the correction "
                        "quaternion not conjugated ((√(1-|v|²), -v)); b̂ and δ̂ updated with + instead of -.")
     _ok(f"{n} steps agree with fusionlab.freescale.Kalman9 (quaternion, offset and inclination).")
+
+
+def _turned(q, u):
+    """q* ⊗ (0, u) ⊗ q: the note's frame rotation (seed 002 eq 66), for a check that q takes u onto v."""
+    qc = rotations.quat_conjugate(q)
+    return rotations.quat_multiply(rotations.quat_multiply(qc, np.r_[0.0, u]), q)[1:]
+
+
+@forbids("freescale.qrot", "freescale._qrot_vec", "freescale.gravity_tilt_error", "freescale.geomag_tilt_error")
+def check_qrot(fn):
+    """Lab 05 exercise 5: a student's ``fn(u, v) -> q``, the quaternion of the rotation between two vectors with
+    ``v = q* u q`` and q0 >= 0 (seed 002 §4.2-4.4, eqs 66-76), including both 180° rules (eqs 73-75). Vectors are
+    not unit, so a formula that forgets to normalise them shows up."""
+    s3 = np.sqrt(3.0)
+    cases = [("60° apart", [1.0, 0, 0], [0.5, s3 / 2, 0]),
+             ("a general pair (not unit vectors)", [2.0, -1, 0.5], [0.3, 4, -1]),
+             ("parallel vectors", [0.0, 0, 2], [0.0, 0, 5]),
+             ("180°, general u", [0.3, -0.5, 0.8], [-0.6, 1.0, -1.6]),
+             ("180° with u_x = u_y = u_z", [1.0, 1, 1], [-2.0, -2, -2]),
+             ("180° with u_x = u_y = u_z < 0", [-1.0, -1, -1], [3.0, 3, 3])]
+    for name, u, v in cases:
+        u, v = np.array(u), np.array(v)
+        got = _call(fn, u.copy(), v.copy(), what="your qrot")
+        ref = fz.qrot(u, v)
+        if got.shape != (4,):
+            raise Feedback(f"{name}: q is a quaternion [q0, q1, q2, q3]: shape (4,); got {got.shape}")
+        if _same(got, ref):
+            continue
+        where = f"{name} (u = {u.round(3)}, v = {v.round(3)}): "
+        half_turn = name.startswith("180")
+        if not np.all(np.isfinite(got)):
+            if half_turn:
+                raise Feedback(where + "your q is not finite. At 180° 1 + u·v is 0 -- or a few 1e-16 either side of "
+                               "it after rounding -- so eq 72 is 0/0: test it against a small tolerance (not == 0) "
+                               "and use q0 = 0 (eq 73) with the axis of eq 74 or 75.")
+            raise Feedback(where + "your q is not finite. For parallel vectors u × v = 0: eq 72 still works (q = (1, "
+                           "0, 0, 0)); an axis u × v / |u × v| does not.")
+        guesses = [
+            (-ref, ("the axis of eq 74 is u × (1, 1, 1), not (1, 1, 1) × u (both give a rotation of u onto v; the "
+                    "note's is the first)." if "u_x" not in name else "the axis of eq 75 is (1, -1, 0)/√2 whatever "
+                    "the sign of u.") if half_turn else "-q is the same rotation, but the note's q has q0 ≥ 0 "
+                                                        "(eq 76)."),
+            (rotations.quat_conjugate(ref), "your q turns v onto u: the vector part is -u × v in the note's frame "
+                                            "rotation v = q* u q (eq 72), not +u × v."),
+            (np.roll(ref, -1), "your q has the scalar last; the note's is [q0, q1, q2, q3], scalar first."),
+        ]
+        msg = _first_match(got, guesses)
+        if msg:
+            raise Feedback(where + msg)
+        unit = np.asarray(fn(u / np.linalg.norm(u), v / np.linalg.norm(v)), dtype=float)
+        if not np.allclose([np.linalg.norm(u), np.linalg.norm(v)], 1.0) and _same(unit, ref):
+            raise Feedback(where + "right for unit vectors, not for these: eq 72 is written for unit vectors, so "
+                           "normalise u and v first (only their directions matter).")
+        norm = float(np.linalg.norm(got))
+        if abs(norm - 1) > 1e-6:
+            raise Feedback(where + f"|q| = {norm:.4g}: q must be a unit quaternion. Eq 72 is written for unit "
+                           "vectors: normalise u and v first (only their directions matter), or use |u||v| + u·v "
+                           "and √(2|u||v|(|u||v| + u·v)).")
+        if np.allclose(_turned(got, u / np.linalg.norm(u)), v / np.linalg.norm(v), atol=1e-9):
+            rule = ("when u_x = u_y = u_z the cross product u × (1, 1, 1) is zero: eq 75 takes the axis "
+                    "(1, -1, 0)/√2" if "u_x" in name else "the note takes q0 = 0 and the axis u × (1, 1, 1) "
+                    "normalised (eqs 73-74)")
+            raise Feedback(where + f"your q does turn u onto v, but any axis perpendicular to u would; {rule}.")
+        raise Feedback(where + f"{_where(got, ref, 'q')}; your q does not turn u onto v (q* u q ≠ v). "
+                       "q = (1 + u·v, -u × v)/√(2(1 + u·v)) for unit u, v (eq 72).")
+    _ok(f"q is right for {len(cases)} pairs: 60°, not unit, parallel, and the three 180° cases of eqs 73-75.")
