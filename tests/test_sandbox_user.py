@@ -1,0 +1,87 @@
+"""The grading sandbox when the grader is not root (``grading/sandbox.py``).
+
+As root the kernel drops to user ``nobody`` (``tests/test_grading_sandbox.py`` grades a class that way). As an
+ordinary user bubblewrap makes a user namespace instead, and the kernel keeps the grader's own user id inside it:
+the command line must say so, and the box it describes must still hide the course and the network from a process
+that has no privilege at all. The second test runs that box as user ``nobody`` (it needs root to become nobody, and
+runs a shell instead of Python: the interpreter may sit where ``nobody`` cannot read it).
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+
+import pytest
+
+from grading import sandbox
+
+LAB = "02_kalman_falling_body"
+
+
+def _command(tmp_path, monkeypatch, euid):
+    course = tmp_path / "course"
+    (course / "lib").mkdir(parents=True)
+    (course / "labs" / LAB).mkdir(parents=True)
+    (course / "gradebook.db").write_text("the gradebook")
+    sockets = tmp_path / "sockets"
+    sockets.mkdir()
+    connection = tmp_path / "kernel.json"
+    connection.write_text(json.dumps({"transport": "ipc", "ip": str(sockets / "kernel")}))
+    start = tmp_path / "start"                   # the folder nbgrader starts the kernel in: copied into the box
+    start.mkdir()
+    (start / "notes.txt").write_text("copied")
+    monkeypatch.chdir(start)
+    for key, value in {"COURSE": course, "LAB": LAB, "SCRATCH": tmp_path}.items():
+        monkeypatch.setenv(f"FUSIONLAB_BOX_{key}", str(value))
+    monkeypatch.setattr(sandbox.os, "geteuid", lambda: euid)
+    return sandbox.bwrap_command(str(connection), ["--debug"]), course
+
+
+def test_an_ordinary_user_gets_a_user_namespace_and_keeps_its_own_id(tmp_path, monkeypatch):
+    args, course = _command(tmp_path, monkeypatch, euid=1000)
+    assert args[0] == "bwrap" and "--unshare-user" in args and "--disable-userns" in args
+    assert "--cap-drop" not in args, "an ordinary user has no capabilities to drop"
+    env = {args[i + 1]: args[i + 2] for i, a in enumerate(args) if a == "--setenv"}
+    assert "FUSIONLAB_BOX_UID" not in env, "no switch to nobody: setuid needs root"
+    assert json.loads(env["FUSIONLAB_BOX_LIMITS"])["nproc"] == 256     # passed on, applied only as root (INSIDE)
+    for flag in ("--unshare-pid", "--unshare-net", "--die-with-parent", "--clearenv"):
+        assert flag in args
+    binds = {args[i + 2]: args[i + 1] for i, a in enumerate(args) if a in ("--bind", "--ro-bind")}
+    assert binds[str(course / "labs" / LAB)].startswith(str(tmp_path / "box-")), "a private copy, writable"
+    assert str(course / "lib") in binds and str(course) not in binds
+    assert "--ro-bind" == args[args.index(str(course / "lib")) - 1], "the library stays read-only"
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("setpriv") or not shutil.which("bwrap"),
+                    reason="needs root (to become nobody), setpriv and bubblewrap")
+def test_the_box_of_an_ordinary_user_hides_the_machine_and_the_network(tmp_path, monkeypatch):
+    args, course = _command(tmp_path, monkeypatch, euid=65534)
+    outside = tempfile.mkdtemp(prefix="fusionlab-probe-", dir="/tmp")     # what nobody can read outside the box
+    os.chmod(outside, 0o755)
+    probe = os.path.join(outside, "gradebook.db")
+    with open(probe, "w") as f:
+        f.write("readable by all, outside the box")
+    os.chmod(probe, 0o644)
+    box = args[:args.index("--proc")] + ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
+    box += sandbox._system_binds() + ["--", "/bin/sh", "-c", f"""
+        echo uid=$(id -u)
+        test -r {probe} && echo gradebook=visible || echo gradebook=absent
+        touch /usr/pwned 2>/dev/null && echo usr=writable || echo usr=read-only
+        echo interfaces=$(tail -n +3 /proc/net/dev | cut -d: -f1 | tr -d ' ' | tr '\\n' ',')
+        echo pid=$$
+    """]
+    try:
+        run = subprocess.run(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *box],
+                             capture_output=True, text=True, timeout=60)
+    finally:
+        shutil.rmtree(outside)
+    if run.returncode != 0 and "namespace" in run.stderr.lower():
+        pytest.skip(f"unprivileged user namespaces are disabled here: {run.stderr.strip()}")
+    assert run.returncode == 0, run.stderr
+    out = dict(line.split("=", 1) for line in run.stdout.split())
+    assert out["uid"] == "65534" and out["gradebook"] == "absent" and out["usr"] == "read-only", run.stdout
+    assert out["interfaces"] == "lo,", run.stdout
+    assert int(out["pid"]) < 10, "a PID namespace of its own"
