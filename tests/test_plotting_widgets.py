@@ -193,3 +193,69 @@ def test_euler_viewer_yaw_slider_updates_readout():
     yaw.value = -30.0
     assert readout.value != before
     assert readout.value == widgets.viewer_state(10, -10, -30, False)["html"]
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 11: shade_movement and plot_trial
+# ----------------------------------------------------------------------------------------------------------------
+
+def _small_trial():
+    """A 2 s BroadTrial of constant rotation, movement from 0.5 s to 1.0 s and 1.5 s to the end, reference lost
+    on 10 samples."""
+    from fusionlab import datasets
+    fs, n = 100.0, 200
+    gyr = np.tile([0.0, 0.0, 0.5], (n, 1))
+    q = rotations.integrate_gyro_quat([1.0, 0, 0, 0], gyr, 1 / fs)[1:]
+    q[20:30] = np.nan
+    movement = np.zeros(n, bool)
+    movement[50:100] = movement[150:] = True
+    return datasets._make_trial("00_test", (), "", fs, gyr, np.tile([0.0, 0, 9.81], (n, 1)),
+                                np.tile([20.0, 0, -40.0], (n, 1)), q, movement)
+
+
+def test_shade_movement_shades_each_stretch_from_its_first_to_its_last_sample():
+    tr = _small_trial()
+    fig, ax = plt.subplots()
+    spans = plotting.shade_movement(ax, tr.t, tr.movement)
+    assert [s.get_gid() for s in spans] == ["movement", "movement"]
+    xs = [[round(s.get_x(), 6), round(s.get_x() + s.get_width(), 6)] for s in spans]
+    assert xs == [[0.5, 0.99], [1.5, 1.99]]
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("t, movement, match", [
+    (np.arange(5.0), np.ones(5), "movement must be a boolean array; got dtype float64"),
+    (np.arange(5.0), np.ones(4, bool), r"t and movement must both have shape \(N,\); got \(5,\) and \(4,\)"),
+    (np.array([0.0, np.nan]), np.ones(2, bool), "t must hold finite numbers"),
+])
+def test_shade_movement_rejects_bad_input(t, movement, match):
+    fig, ax = plt.subplots()
+    with pytest.raises(ValueError, match=match):
+        plotting.shade_movement(ax, t, movement)
+    plt.close(fig)
+
+
+def test_plot_trial_draws_four_shaded_panels_with_the_reference_as_euler_angles():
+    tr = _small_trial()
+    fig = plotting.plot_trial(tr, "the finding", step=1)
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["gyro (deg/s)", "acc (m/s²)", "mag (µT)", "reference (deg)"]
+    assert axes[0].get_title() == "the finding" and axes[-1].get_xlabel() == "time (s)"
+    assert all(sum(p.get_gid() == "movement" for p in ax.patches) == 2 for ax in axes)
+    gz = axes[0].get_lines()[2].get_ydata()
+    np.testing.assert_allclose(gz, np.degrees(0.5))                       # deg/s
+    yaw = axes[3].get_lines()[2].get_ydata()
+    assert np.isnan(yaw[20:30]).all()                                      # the lost reference is a gap
+    np.testing.assert_allclose(yaw[100], np.degrees(0.5 * 1.01), rtol=1e-9)   # yaw after 101 steps of 0.01 s
+    assert len(plotting.plot_trial(tr, "x").axes[0].get_lines()[0].get_xdata()) == 67   # every 3rd sample
+    plt.close("all")
+
+
+def test_plot_trial_rejects_what_is_not_a_trial():
+    with pytest.raises(ValueError, match="trial must be a datasets.BroadTrial"):
+        plotting.plot_trial({"t": np.arange(3)}, "title")
+    with pytest.raises(ValueError, match="title must be a string; got NoneType"):
+        plotting.plot_trial(_small_trial(), None)
+    with pytest.raises(ValueError, match="step must be an integer >= 1; got 0"):
+        plotting.plot_trial(_small_trial(), "title", step=0)
+

@@ -522,3 +522,84 @@ def plot_tuning_sweep(sweep, chosen=None, figsize=(11, 3.6)):
            title=f"{sweep.estimator}, {sweep.option} = {sweep.values[j]:g}")
     a2.legend(fontsize=8, loc="upper left")
     return fig
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 11: a first look at a real trial
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import datasets as _datasets  # noqa: E402  (a data loader; plotting sits above it)
+
+__all__ += ["shade_movement", "plot_trial"]
+
+
+def shade_movement(ax, t, movement, color="0.9"):
+    """Shade, behind the data, each stretch of samples that ``movement`` marks (the phase the metrics score).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axis to shade; its x axis is time.
+    t : array_like, shape (N,)
+        Time of each sample, s.
+    movement : array_like of bool, shape (N,)
+        True on the samples of the movement phase.
+    color : str, optional
+        Shade colour (default light grey).
+
+    Returns
+    -------
+    list of matplotlib.patches.Rectangle
+        One span per stretch, each with gid ``'movement'``, from the first to the last sample of the stretch.
+    """
+    t = validate.array(t, "t")
+    m = np.asarray(movement)
+    if m.dtype != bool:
+        raise ValueError(f"movement must be a boolean array; got dtype {m.dtype}")
+    if t.ndim != 1 or m.shape != t.shape:
+        raise ValueError(f"t and movement must both have shape (N,); got {t.shape} and {m.shape}")
+    edges = np.flatnonzero(np.diff(np.r_[0, m.astype(int), 0]))        # starts and (one past) ends of each stretch
+    return [ax.axvspan(t[a], t[b - 1], color=color, zorder=0, gid="movement")
+            for a, b in zip(edges[::2], edges[1::2])]
+
+
+def plot_trial(trial, title, step=3):
+    """The raw data of one BROAD trial in four stacked panels: gyro (deg/s), accelerometer (m/s²), magnetometer
+    (µT) and the optical reference as Euler angles (deg, ENU), the movement phase shaded in each.
+
+    Parameters
+    ----------
+    trial : datasets.BroadTrial
+        The trial (or a slice of it).
+    title : str
+        The figure's title: what the reader should see in it.
+    step : int, optional
+        Draw every ``step``-th sample (default 3: enough for the eye at BROAD's 286 Hz).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four axes sharing the time axis; the reference is NaN (a gap) where the markers were lost.
+    """
+    if not isinstance(trial, _datasets.BroadTrial):
+        raise ValueError(f"trial must be a datasets.BroadTrial (from datasets.load_trial); got {type(trial).__name__}")
+    if not isinstance(title, str):
+        raise ValueError(f"title must be a string; got {type(title).__name__}")
+    step = validate.count(step, "step", minimum=1)
+    ref_euler = np.full((len(trial), 3), np.nan)
+    ok = ~np.isnan(trial.quat_ref[:, 0])
+    ref_euler[ok] = rotations.quat_to_euler(trial.quat_ref[ok])
+    t = trial.t
+    fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True, constrained_layout=True)
+    for ax, y, label in zip(axes, (np.degrees(trial.gyr), trial.acc, trial.mag, np.degrees(ref_euler)),
+                            ("gyro (deg/s)", "acc (m/s²)", "mag (µT)", "reference (deg)")):
+        shade_movement(ax, t, trial.movement)
+        names = ("roll", "pitch", "yaw (ENU)") if label.startswith("ref") else ("x", "y", "z")
+        for k in range(3):
+            ax.plot(t[::step], y[::step, k], lw=0.7, label=names[k])
+        ax.set_ylabel(label)
+        ax.legend(loc="upper right", ncol=3, fontsize=8)
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("time (s)")
+    return fig
+
