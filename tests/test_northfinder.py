@@ -241,3 +241,68 @@ def test_tilted_heading_recovers_the_heading_and_the_level_formula_errs_by_tan_l
     assert np.degrees(np.max(np.abs(errs))) == pytest.approx(np.tan(lat), rel=2e-3)
     with pytest.raises(ValueError, match="lat"):
         nf.tilted_heading(0.1, 0.0, 0.0, np.pi / 2)
+
+
+# ---- period averaging (§4.5.5, Fig. 4.9) --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("psi_deg, theta0, duration", [(-42.0, 0.3, 7.3), (135.0, -2.0, 5.05), (10.0, 1.234, 9.9)])
+def test_period_average_of_a_clean_line_is_the_line_and_gives_its_heading(psi_deg, theta0, duration):
+    psi = np.radians(psi_deg)
+    r = nf.synthetic_record(psi, duration=duration, noise=0.0, harmonics={}, scale=1.3, bias=0.05, theta0=theta0)
+    out = nf.period_average(r["acc"], r["theta"], bins=64)
+    whole = int(np.floor(r["theta"][-1] / (2 * np.pi)) - np.ceil(r["theta"][0] / (2 * np.pi)))
+    assert out["turns"] == whole and out["phi"].shape == out["period"].shape == (64,)
+    line = 1.3 * (9.81 + r["A_c"] * np.cos(out["phi"] + psi)) + 0.05
+    assert np.max(np.abs(out["period"] - line)) < 2e-3 * r["A_c"]           # linear interpolation of 153.6 samples/turn
+    assert abs(_wrap_deg(out["heading"] - psi)) < 1e-3                     # g + b cancel: one whole period
+
+
+def test_period_average_uses_whole_turns_only_where_direct_demodulation_needs_them():
+    """A raw record (g included, no FIR) read over 20.5 turns: the half turn leaves g·Σ sgn in the integral; the
+    averaged period of the same samples holds only the 20 whole turns, and its references balance exactly."""
+    psi = np.radians(-42.0)
+    r = nf.synthetic_record(psi, duration=20.0, noise=0.0, harmonics={})
+    x, th = r["acc"], r["theta"]
+    k0 = np.ceil(th[0] / (2 * np.pi))
+    start, end = np.searchsorted(th, 2 * np.pi * k0) - 1, np.searchsorted(th, 2 * np.pi * (k0 + 20.5))   # pulse k0 in
+    xw, tw = x[start:end], th[start:end]
+    direct = np.arctan2(-xw @ np.sign(np.sin(tw)), xw @ np.sign(np.cos(tw)))
+    assert abs(_wrap_deg(direct - psi)) > 20.0
+    folded = nf.period_average(xw, tw)
+    assert folded["turns"] == 20 and abs(_wrap_deg(folded["heading"] - psi)) < 1e-3
+    trimmed = nf.period_average(xw[:np.searchsorted(tw, 2 * np.pi * (k0 + 20)) + 1], tw[:np.searchsorted(
+        tw, 2 * np.pi * (k0 + 20)) + 1])
+    assert np.allclose(trimmed["period"], folded["period"], atol=1e-12)     # the half turn is not used
+
+
+def test_period_average_lowers_white_noise_like_the_square_root_of_the_turns_but_keeps_a_rotor_locked_harmonic():
+    psi = np.radians(30.0)
+    r = nf.synthetic_record(psi, duration=40.0, g=0.0, harmonics={3: (0.5, 1.1)}, noise=1.0 * nf.UG, seed=4)
+    clean = nf.synthetic_record(psi, duration=40.0, g=0.0, harmonics={3: (0.5, 1.1)}, noise=0.0)
+    avg = nf.period_average(r["acc"], r["theta"])
+    one = nf.period_average(r["acc"], r["theta"], turns=1)
+    ref = nf.period_average(clean["acc"], clean["theta"])["period"]
+    ref1 = nf.period_average(clean["acc"], clean["theta"], turns=1)["period"]
+    gain = np.std(one["period"] - ref1) / np.std(avg["period"] - ref)
+    assert 0.75 * np.sqrt(avg["turns"]) < gain < 1.33 * np.sqrt(avg["turns"])
+    third = 2 / len(ref) * abs(np.sum(avg["period"] * np.exp(-3j * avg["phi"])))
+    assert third == pytest.approx(0.5 * r["A_c"], rel=0.1)                  # the same in every turn: it stays
+
+
+def test_period_average_rejects_bad_input_with_the_argument_named():
+    r = nf.synthetic_record(0.5, duration=2.0, noise=0.0)
+    x, th = r["acc"], r["theta"]
+    for bins in (6, 10, 12.5):
+        with pytest.raises(ValueError, match="bins must be an integer >= 8 and a multiple of 4"):
+            nf.period_average(x, th, bins=bins)
+    for turns in (0, 6, 1.5):
+        with pytest.raises(ValueError, match=r"turns must be an integer from 1 to 5 \(the whole turns in the record\)"):
+            nf.period_average(x, th, turns=turns)
+    with pytest.raises(ValueError, match="theta must increase"):
+        nf.period_average(x, th[::-1])
+    with pytest.raises(ValueError, match="at least one whole turn"):
+        nf.period_average(x[:100], th[:100])
+    with pytest.raises(ValueError, match="same length"):
+        nf.period_average(x, th[:-1])
+    doc = nf.period_average.__doc__
+    assert "004 §4.5.5" in doc and "Fig. 4.9" in doc and "eqs 4.28–4.32" in doc

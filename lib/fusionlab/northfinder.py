@@ -20,8 +20,9 @@ What is the seed's and what is ours
 * Ours: the synthetic 512 Hz record (harmonic amplitudes and phases, white-noise level, Siegen latitude, a 0.14 m
   radius for the thesis' "separation distance 28 cm"), the firls band edges, removing the record mean before the
   FIR (g is 3.6·10⁴ times the signal, more than any of these filters rejects), the zero-mean references and the
-  "exact" reference of :func:`demodulate` (the sign function integrated over each sample), and the nearest-sample
-  rule of :func:`synchronous_sampling`.
+  "exact" reference of :func:`demodulate` (the sign function integrated over each sample), the nearest-sample
+  rule of :func:`synchronous_sampling`, and the resampling of each turn at fixed rotor angles in
+  :func:`period_average` (the seed averages the periods into one, Fig. 4.9, without saying how).
 
 Conventions
 -----------
@@ -39,8 +40,8 @@ __all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS
            "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
            "rate_from_rotating", "rate_noise_coefficient", "rate_noise_coefficient_exact", "rate_noise_density",
            "rate_noise_monte_carlo", "coriolis_amplitude", "leveled_body_rate", "tilted_heading", "synthetic_record",
-           "bandpass_firls", "bandpass", "whole_turns", "demodulate", "synchronous_sampling", "north_finder",
-           "steps_experiment"]
+           "bandpass_firls", "bandpass", "whole_turns", "demodulate", "synchronous_sampling", "period_average",
+           "north_finder", "steps_experiment"]
 
 #: One micro-g in m/s².
 UG = 9.80665e-6
@@ -774,6 +775,67 @@ def synchronous_sampling(x, theta):
     a0 = x[nearest(2 * np.pi * k)].mean()                                            # (004 eq 4.33)
     a90 = x[nearest(2 * np.pi * k + np.pi / 2)].mean()                               # (004 eq 4.34)
     return float(np.arctan2(-a90, a0))                                               # (004 eq 4.35)
+
+
+def period_average(x, theta, bins=128, turns=None):
+    """Average the whole turns of a record into one period and read the heading from it (004 §4.5.5, Fig. 4.9).
+
+    The thesis averages the filtered signal's periods "to produce one sinusoidal period to improve the accuracy of
+    the computed heading angle" (Fig. 4.9) without saying how. Here (ours) each whole turn k -- from the index pulse
+    θ = 2πk to the next -- is resampled at the rotor angles ``2πk + φ_j``, ``φ_j = (j + ½)·2π/bins``, by linear
+    interpolation, and the turns are averaged angle by angle: the 512 Hz clock is not locked to the rotor (a turn is
+    153.6 samples), so the periods can only be cut at the index pulses, not every N samples. The heading is read from
+    the averaged period by synchronous demodulation (004 eqs 4.28–4.32) over exactly one period: on the half-bin grid
+    each sign reference sums to exactly zero, the thesis' condition that g + b be constant over an integer number of
+    periods (§4.4.2). Averaging removes what differs from turn to turn (noise); a harmonic locked to the rotor is the
+    same in every turn and stays.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The record, m/s², normally band-passed (:func:`bandpass`).
+    theta : array_like, shape (N,)
+        Rotor angle of each sample, rad, increasing, 2πk at the index pulses.
+    bins : int, optional
+        Points per period, at least 8 and a multiple of 4 (so that the sign references balance).
+    turns : int or None, optional
+        Average only the first ``turns`` whole turns; None averages all of them.
+
+    Returns
+    -------
+    dict
+        ``phi`` (bins,) rotor angles of the averaged period, rad; ``period`` (bins,) the averaged period, units of
+        ``x``; ``turns`` the number of whole turns averaged; ``heading`` ``atan2(s_i, c_i)`` of the averaged period,
+        rad.
+
+    Examples
+    --------
+    >>> rec = synthetic_record(np.radians(30.0), duration=3.0, noise=0.0, harmonics={})
+    >>> out = period_average(rec["acc"], rec["theta"], bins=64)
+    >>> out["turns"], round(float(np.degrees(out["heading"])), 3)
+    (9, 30.0)
+    """
+    x, theta = _signal_and_angle(x, theta)
+    if int(bins) != bins or bins < 8 or bins % 4:
+        raise ValueError(f"bins must be an integer >= 8 and a multiple of 4; got {bins}")
+    bins = int(bins)
+    if np.any(np.diff(theta) <= 0):
+        raise ValueError("theta must increase from sample to sample (the rotor turns one way)")
+    k0, k1 = np.ceil(theta[0] / (2 * np.pi)), np.floor(theta[-1] / (2 * np.pi))
+    available = int(k1 - k0)
+    if available < 1:
+        raise ValueError("theta must span at least one whole turn (two index pulses)")
+    if turns is None:
+        turns = available
+    elif int(turns) != turns or not 1 <= turns <= available:
+        raise ValueError(f"turns must be an integer from 1 to {available} (the whole turns in the record); got {turns}")
+    turns = int(turns)
+    phi = (np.arange(bins) + 0.5) * 2 * np.pi / bins
+    grid = 2 * np.pi * (k0 + np.arange(turns))[:, None] + phi                       # every turn, same angles
+    period = np.interp(grid, theta, x).mean(axis=0)                                 # (004 Fig. 4.9)
+    c_i = np.sum(period * np.sign(np.cos(phi)))                                     # (004 eq 4.28)
+    s_i = -np.sum(period * np.sign(np.sin(phi)))                                    # (004 eq 4.30)
+    return dict(phi=phi, period=period, turns=turns, heading=float(np.arctan2(s_i, c_i)))   # (004 eq 4.32)
 
 
 def north_finder(record, order, method="demodulation", reference="sampled", **band):
