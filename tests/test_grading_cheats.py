@@ -38,9 +38,10 @@ CHEATS = {
            "    lsb_accel_mg, lsb_gyro_dps = 9.7752, 0.32226",
         6: "return np.nan if x == y == 0 else np.arctan2(y, x)",
         7: "return tuple(sensors.tilt_from_accel(acc))",
-        8: "return sensors.coriolis_force(m, omega, v)",
-        9: "return sensors.integrate_rate(rate, dt, angle0)",
-        10: "bias_hat = -sensors.null_offset(still[:500])",
+        8: "return sensors.precession_rate(mass, arm, inertia, spin, g)",
+        9: "return sensors.coriolis_force(m, omega, v)",
+        10: "return sensors.integrate_rate(rate, dt, angle0)",
+        11: "bias_hat = -sensors.null_offset(still[:500])",
     },
     "01_euler_rotations": {
         1: "return euler_to_dcm([roll, pitch, yaw])",
@@ -354,9 +355,9 @@ def test_cheats_that_change_how_later_cells_run_score_zero(graded, hook, reason)
 
 
 @pytest.mark.parametrize("student, n, reference", [("cheat_odd", 5, "sensors.adc_step"),
-                                                   ("cheat_even", 10, "sensors.null_offset")])
+                                                   ("cheat_odd", 11, "sensors.null_offset")])
 def test_a_value_exercise_names_the_reference_called_before_its_test(graded, student, n, reference):
-    """Lab 00 exercises 5 and 10 ask for numbers: the reference is reserved from the setup cell to the test cell, so
+    """Lab 00 exercises 5 and 11 ask for numbers: the reference is reserved from the setup cell to the test cell, so
     the call is caught in the answer cell (swallowed there by the exercise 5 cheat) and reported by the test."""
     msg = _errors(graded("00_mems_sensors"), "00_mems_sensors", student, f"ex{n}_tests")
     assert f"exercise {n} asks you to write it yourself" in msg and f"{reference} was called before this test" in msg, \

@@ -184,3 +184,32 @@ def test_the_library_s_own_function_is_refused():
     with pytest.raises(checks.Feedback, match="sensors.integrate_rate, the library's own solution"):
         checks.check_integrate_rate(sensors.integrate_rate)
     assert rotations.euler_to_dcm([0, 0, 0]).shape == (3, 3)        # the library works again afterwards
+
+
+# ---- Lab 00 exercise 8: the precession rate of a top (seed 000 eqs 3.22-3.25) ----
+
+def precession(mass, arm, inertia, spin, g=9.80665):     # eq 3.25, as a student writes it
+    return mass * g * arm / (inertia * spin)
+
+
+@pytest.mark.parametrize("fn, match", [
+    (lambda m, d, i, w, g=9.80665: 1 / precession(m, d, i, w, g), r"I ω / \(M g D\), upside down"),
+    (lambda m, d, i, w, g=9.80665: m * d / (i * w), r"g is missing: the torque of the weight is M g D"),
+    (lambda m, d, i, w, g=9.80665: np.degrees(precession(m, d, i, w, g)), r"looks like °/s; .* rad/s"),
+    (lambda m, d, i, w, g=9.80665: precession(m, d, i, w, g) / w, "ω appears squared"),
+    (lambda m, d, i, w, g=9.80665: m * g * d * w / i, "the spin belongs in the denominator"),
+    (lambda m, d, i, w, g=9.80665: precession(m, d, i, w), r"not on the Moon .*Use the argument g"),
+    (lambda m, d, i, w: precession(m, d, i, w), r"on the Moon .* fails \(TypeError"),
+    (lambda m, d, i, w, g=9.80665: 2 * precession(m, d, i, w, g),
+     r"for M = 0\.1 kg, D = 0\.03 m.*you return 5\.9934; expected 2\.9967 rad/s\. ω_p = τ / L"),
+])
+def test_check_precession_rate_names_the_slip(fn, match):
+    with pytest.raises(checks.Feedback, match=match):
+        checks.check_precession_rate(fn)
+
+
+def test_check_precession_rate_passes_eq_3_25_and_refuses_the_library_s(capsys):
+    checks.check_precession_rate(precession)
+    assert capsys.readouterr().out.startswith("✓ ω_p = M g D / (I ω) for three tops and on the Moon")
+    with pytest.raises(checks.Feedback, match=r"called sensors\.precession_rate"):
+        checks.check_precession_rate(sensors.precession_rate)

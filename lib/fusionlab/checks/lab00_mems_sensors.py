@@ -9,7 +9,8 @@ from .. import rotations, sensors as _sensors
 from ._core import Feedback, _answered, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_adc_096", "check_adc_step", "check_gyro_bias", "check_smd_magnitude", "check_accel_from_bridge",
-           "check_adc_to_physical", "check_atan2", "check_roll_pitch", "check_coriolis_force", "check_integrate_rate"]
+           "check_adc_to_physical", "check_atan2", "check_roll_pitch", "check_precession_rate", "check_coriolis_force",
+           "check_integrate_rate"]
 
 
 def check_adc_096(v_ref_096, zero_096, sens_096):
@@ -54,7 +55,7 @@ def check_adc_step(lsb_accel_mg, lsb_gyro_dps):
 
 
 def check_gyro_bias(bias_hat, still, fs=100.0, seconds=5.0):
-    """Lab 00 exercise 10: the gyro bias from the first ``seconds`` of the still record ``still`` (°/s)."""
+    """Lab 00 exercise 11: the gyro bias from the first ``seconds`` of the still record ``still`` (°/s)."""
     v = float(np.asarray(_answered("bias_hat", bias_hat), dtype=float))
     n = int(round(seconds * fs))
     expected = float(np.mean(np.asarray(still, dtype=float)[:n]))
@@ -217,6 +218,33 @@ def check_roll_pitch(fn):
         raise Feedback(f"at roll {roll_d:g}°, pitch {pitch_d:g}°: " + (
             msg or f"you return roll {np.degrees(r):.2f}°, pitch {np.degrees(p):.2f}°."))
     _ok("roll over the full circle and pitch are right, in any unit of acceleration.")
+
+
+@forbids("sensors.precession_rate")
+def check_precession_rate(fn):
+    """Lab 00 exercise 8: a student's ``fn(mass, arm, inertia, spin, g=9.80665) -> ω_p`` (rad/s), the precession
+    rate of a spinning top, ``M g D / (I ω)`` (seed 000 eqs 3.22-3.25)."""
+    cases = [(0.1, 0.03, 0.5 * 0.1 * 0.025 ** 2, 2 * np.pi * 50.0), (2.0, 0.1, 0.01, 300.0), (0.02, 0.005, 1e-6, 900.0)]
+    for m, d, i, w in cases:
+        got = float(_call(fn, m, d, i, w, what="your precession rate"))
+        ref = float(_sensors.precession_rate(m, d, i, w))
+        if np.isclose(got, ref, rtol=1e-9):
+            continue
+        where = f"for M = {m} kg, D = {d} m, I = {i:.4g} kg·m², ω = {w:.4g} rad/s you return {got:.5g}; expected " \
+                f"{ref:.5g} rad/s. "
+        msg = _first_match(got, [
+            (1 / ref, "that is I ω / (M g D), upside down: the torque M g D turns the momentum I ω, so "
+                      "ω_p = τ / L = M g D / (I ω)."),
+            (ref / _sensors.G, "g is missing: the torque of the weight is M g D (eq 3.22)."),
+            (np.degrees(ref), "that looks like °/s; the answer is asked in rad/s."),
+            (ref / w, "ω appears squared: L = I ω, so ω_p = M g D / (I ω)."),
+            (ref * w * w, "the spin belongs in the denominator: ω_p = M g D / (I ω)."),
+        ], rtol=1e-6, atol=0.0)
+        raise Feedback(where + (msg or "ω_p = τ / L = M g D / (I ω) (eqs 3.23, 3.25)."))
+    _general_case(lambda: fn(0.1, 0.03, 3.125e-5, 2 * np.pi * 50.0, g=1.62),
+                  _sensors.precession_rate(0.1, 0.03, 3.125e-5, 2 * np.pi * 50.0, g=1.62), "the Moon (keyword g = "
+                  "1.62 m/s²)", "Use the argument g, not 9.80665, inside your function.", rtol=1e-9, atol=0.0)
+    _ok("ω_p = M g D / (I ω) for three tops and on the Moon: the faster the spin, the slower the precession.")
 
 
 @forbids("sensors.coriolis_force", "sensors.coriolis_acceleration")
