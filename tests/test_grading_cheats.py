@@ -105,6 +105,7 @@ CHEATS = {
         3: "return nf.rate_noise_coefficient_exact(rho, d, l, omega_r)",
         4: 'return nf.demodulate(x, theta, "sampled")',
         5: "return nf.synchronous_sampling(x, theta)",
+        6: "return nf.tilted_heading(zeta, roll, pitch, lat)",
     },
     "09_dcm_ahrs": {
         1: ("return dcm.accel_measurement_matrix(g)", "return dcm.mag_measurement_matrix(inclination)"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import checks, northfinder as nf
+from fusionlab import checks, northfinder as nf, rotations
 
 
 def omega_x(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, wr, k=2.0, lever=(1.0, 1.0), central=True, sign=-1.0):
@@ -92,3 +92,41 @@ def test_check_sync_sampling_names_the_slip(wrong, message, library_as_student):
     with pytest.raises(checks.Feedback, match=message):
         checks.check_sync_sampling(wrong)
     checks.check_sync_sampling(nf.synchronous_sampling)
+
+
+# ---- Lab 08 exercise 6: the heading of a tilted north finder (seed 004 eqs 4.36-4.43) ----
+
+def tilted(zeta, roll, pitch, lat, pick=min):
+    """Eqs 4.41-4.43 as a student writes them; ``pick=max`` keeps the other root."""
+    from fusionlab import earth
+    sf, cf, st, ct, tz = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch), np.tan(zeta)
+    W = earth.OMEGA_IE
+    I, J = W * np.cos(lat) * (st * sf * tz - ct), -W * np.cos(lat) * cf * tz
+    K = W * np.sin(lat) * (st + ct * sf * tz)
+    V, a = np.arctan2(I, J), np.arcsin(np.clip(K / np.hypot(I, J), -1, 1))
+
+    def phase(psi):
+        w = rotations.euler_to_dcm([roll, pitch, psi]).T @ earth.earth_rate_ned(lat)
+        return np.arctan2(w[0], w[1])
+    best = pick((a - V, np.pi - a - V), key=lambda psi: abs(np.angle(np.exp(1j * (phase(psi) - zeta)))))
+    return float(np.angle(np.exp(1j * best)))
+
+
+@pytest.mark.parametrize("fn, match", [
+    (lambda z, r, p, lat: tilted(z, r, p, lat, pick=max), r"-176\.490° off\). that is the other root of eq 4\.43"),
+    (lambda z, r, p, lat: tilted(z, 0.0, 0.0, lat), r"\+1\.738° off\). that is the heading read as if the table"),
+    (lambda z, r, p, lat: tilted(z, p, r, lat), "roll and pitch are swapped"),
+    (lambda z, r, p, lat: np.degrees(tilted(z, r, p, lat)), "return radians, not degrees"),
+    (lambda z, r, p, lat: tilted(z, r, p, lat) + 0.01, r"would not show the phase ζ: check I, J, K \(eq 4\.41\)"),
+])
+def test_check_tilted_heading_names_the_slip(fn, match):
+    with pytest.raises(checks.Feedback, match=match):
+        checks.check_tilted_heading(fn)
+
+
+def test_check_tilted_heading_passes_eqs_4_41_4_43_and_refuses_the_library_s(capsys):
+    from fusionlab import northfinder as nf
+    checks.check_tilted_heading(tilted)
+    assert capsys.readouterr().out.startswith("✓ the heading is right for 4 tilted tables")
+    with pytest.raises(checks.Feedback, match=r"called northfinder\.tilted_heading"):
+        checks.check_tilted_heading(nf.tilted_heading)

@@ -8,7 +8,8 @@ import numpy as np
 from .. import northfinder as _nf
 from ._core import Feedback, _call, _first_match, forbids, _ok
 
-__all__ = ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_demodulate", "check_sync_sampling"]
+__all__ = ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_demodulate", "check_sync_sampling",
+           "check_tilted_heading"]
 
 
 @forbids("northfinder.rate_from_rotating")
@@ -150,3 +151,50 @@ def check_sync_sampling(fn):
         ])
         raise Feedback(where + (msg or "Check eqs 4.33-4.35."))
     _ok("synchronous sampling right (index-pulse and quarter-turn samples, averaged over the turns).")
+
+
+def _tilted_phase(psi, roll, pitch, lat):
+    """The phase ζ = atan2(ω_x, ω_y) of the Earth-rate line a table at heading ``psi`` and tilts ``roll``, ``pitch``
+    shows (seed 004 eqs 4.36, 4.38-4.39)."""
+    from .. import earth, rotations
+    w = rotations.euler_to_dcm([roll, pitch, psi]).T @ earth.earth_rate_ned(lat)
+    return float(np.arctan2(w[0], w[1]))
+
+
+@forbids("northfinder.tilted_heading")
+def check_tilted_heading(fn):
+    """Lab 08 exercise 6: a student's ``fn(zeta, roll, pitch, lat) -> ψ`` (rad), the heading of a tilted north finder
+    from the phase of its line (seed 004 §4.4.3, eqs 4.36-4.43). The phases are made here from known headings."""
+    wrap = lambda a: float(np.angle(np.exp(1j * a)))
+    lat0 = _nf.SIEGEN_LAT
+    cases = [(np.radians(-42.0), np.radians(0.6), np.radians(1.5), lat0),
+             (np.radians(100.0), np.radians(-2.0), np.radians(0.8), lat0),
+             (np.radians(-150.0), np.radians(1.0), np.radians(-2.5), lat0),
+             (np.radians(20.0), np.radians(2.0), np.radians(-1.0), np.radians(-33.9))]     # southern hemisphere
+    for psi, roll, pitch, lat in cases:
+        zeta = _tilted_phase(psi, roll, pitch, lat)
+        got = float(_call(fn, zeta, roll, pitch, lat, what="your heading"))
+        err = np.degrees(wrap(got - psi))
+        if abs(err) < 1e-7:
+            continue
+        where = (f"at heading {np.degrees(psi):.0f}°, roll {np.degrees(roll):.1f}°, pitch {np.degrees(pitch):.1f}°, "
+                 f"latitude {np.degrees(lat):.1f}°: you return {np.degrees(got):.3f}° ({err:+.3f}° off). ")
+        guesses = [
+            (_nf.tilted_heading(zeta, 0.0, 0.0, lat), "that is the heading read as if the table were level: put "
+                                                      "roll and pitch into I, J, K (eq 4.41)."),
+            (_nf.tilted_heading(zeta, pitch, roll, lat), "roll and pitch are swapped: φ is roll (about x), θ pitch "
+                                                         "(about y) in I, J, K."),
+        ]
+        for cand, msg in guesses:
+            if abs(wrap(got - cand)) < 1e-7:
+                raise Feedback(where + msg)
+        if abs(wrap(np.radians(got) - psi)) < 1e-7 or abs(wrap(got - np.degrees(psi))) < 1e-5:
+            raise Feedback(where + "return radians, not degrees.")
+        if abs(wrap(_tilted_phase(got, roll, pitch, lat) - zeta)) > 1e-6:
+            other = abs(np.sin(_tilted_phase(got, roll, pitch, lat) - zeta)) < 1e-6
+            raise Feedback(where + ("that is the other root of eq 4.43: its line has the phase ζ + π. Keep the root "
+                                    "whose predicted phase atan2(ω_x, ω_y) is ζ." if other else
+                                    "a table at your heading would not show the phase ζ: check I, J, K (eq 4.41) "
+                                    "and V = atan2(I, J) (eq 4.42)."))
+        raise Feedback(where + "your heading gives the phase ζ but is not the table's: check the root of eq 4.43.")
+    _ok(f"the heading is right for {len(cases)} tilted tables (one in the southern hemisphere).")
