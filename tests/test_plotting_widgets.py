@@ -259,3 +259,36 @@ def test_plot_trial_rejects_what_is_not_a_trial():
     with pytest.raises(ValueError, match="step must be an integer >= 1; got 0"):
         plotting.plot_trial(_small_trial(), "title", step=0)
 
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 12: plot_error_signatures
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_plot_error_signatures_puts_each_cloud_in_a_panel_and_the_angles_last():
+    ideal = np.array([[1.0, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]])
+    clouds = {"bias": (ideal, ideal + [0.5, 0, 0]), "scale": (ideal, ideal * [1.2, 1, 1])}
+    t = np.arange(5.0)
+    fig = plotting.plot_error_signatures(clouds, t, {"ramp": 2 * t}, "the finding")
+    axes = fig.axes
+    assert fig._suptitle.get_text() == "the finding"
+    np.testing.assert_array_equal(axes[0].get_lines()[1].get_xdata(), [1.5, 0.5, -0.5, 0.5])
+    np.testing.assert_array_equal(axes[1].get_lines()[1].get_xdata(), [1.2, 0, -1.2, 0])
+    assert [ln.get_label() for ln in axes[1].get_lines()] == ["ideal", "scale"]
+    assert not axes[2].axison and not axes[4].axison                  # unused cloud panels are switched off
+    np.testing.assert_array_equal(axes[5].get_lines()[0].get_ydata(), 2 * t)
+    assert axes[5].get_ylabel() == "integrated angle (°)"
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("args, match", [
+    (({}, np.arange(3.0), {}, "x"), "clouds must be a dict of 1 to 5"),
+    (({"a": np.ones((3, 3))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] must be a pair \(ideal, measured\)"),
+    (({"a": (np.ones((3, 3)), np.ones((3, 2)))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] measured must have"),
+    (({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {"r": np.ones(4)}, "x"),
+     r"angles\['r'\] must have the shape of t \(3,\); got \(4,\)"),
+    (({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {}, 3), "title must be a string"),
+])
+def test_plot_error_signatures_rejects_bad_input(args, match):
+    with pytest.raises(ValueError, match=match):
+        plotting.plot_error_signatures(*args)
+    plt.close("all")

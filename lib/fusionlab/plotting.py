@@ -603,3 +603,68 @@ def plot_trial(trial, title, step=3):
     axes[-1].set_xlabel("time (s)")
     return fig
 
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 12: what each sensor error looks like
+# ----------------------------------------------------------------------------------------------------------------
+
+__all__ += ["plot_error_signatures"]
+
+
+def plot_error_signatures(clouds, t, angles, title):
+    """Sensor errors by their marks: one panel per point cloud (x-y projection of an ideal and a measured triad,
+    equal axes), and a last panel of integrated gyro angles against time.
+
+    Parameters
+    ----------
+    clouds : dict of str to (array_like, array_like)
+        Panel label -> (ideal, measured), each of shape (N, 3) (m/s² or µT); at most five panels, row by row.
+    t : array_like, shape (M,)
+        Time of the gyro angles, s.
+    angles : dict of str to array_like
+        Label -> integrated angle of shape (M,), degrees.
+    title : str
+        The figure's title: what the reader should see in it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A 2 x 3 grid: the clouds first, the angles in the last panel.
+    """
+    if not isinstance(clouds, dict) or not 1 <= len(clouds) <= 5:
+        raise ValueError(f"clouds must be a dict of 1 to 5 label -> (ideal, measured) pairs; got "
+                         f"{len(clouds) if isinstance(clouds, dict) else type(clouds).__name__}")
+    pairs = {}
+    for name, pair in clouds.items():
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise ValueError(f"clouds[{name!r}] must be a pair (ideal, measured); got {type(pair).__name__}")
+        pairs[name] = (validate.vectors(pair[0], f"clouds[{name!r}] ideal"),
+                       validate.vectors(pair[1], f"clouds[{name!r}] measured"))
+    t = validate.array(t, "t")
+    if t.ndim != 1:
+        raise ValueError(f"t must have shape (M,); got {t.shape}")
+    if not isinstance(angles, dict):
+        raise ValueError(f"angles must be a dict of label -> angle (deg); got {type(angles).__name__}")
+    angles = {k: validate.array(v, f"angles[{k!r}]") for k, v in angles.items()}
+    for k, v in angles.items():
+        if v.shape != t.shape:
+            raise ValueError(f"angles[{k!r}] must have the shape of t {t.shape}; got {v.shape}")
+    if not isinstance(title, str):
+        raise ValueError(f"title must be a string; got {type(title).__name__}")
+    fig, axes = plt.subplots(2, 3, figsize=(11, 7), constrained_layout=True)
+    for ax, (name, (ideal, data)) in zip(axes.flat, pairs.items()):
+        ax.plot(ideal[:, 0], ideal[:, 1], ".", ms=2, color="0.7", label="ideal")
+        ax.plot(data[:, 0], data[:, 1], ".", ms=2, label=name)
+        ax.set_aspect("equal")
+        ax.legend(fontsize=7, loc="upper right")
+        ax.set_xlabel("x (m/s² or µT)")
+        ax.set_ylabel("y")
+    for ax in axes.flat[len(pairs):5]:
+        ax.set_axis_off()
+    for label, angle in angles.items():
+        axes[1, 2].plot(t, angle, label=label)
+    axes[1, 2].set_xlabel("time (s)")
+    axes[1, 2].set_ylabel("integrated angle (°)")
+    axes[1, 2].legend(fontsize=7)
+    fig.suptitle(title)
+    return fig
