@@ -535,7 +535,7 @@ def test_integrate_gyro_quat_is_body_frame_right_multiplication():
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# sign conventions (seed 001 §1.5)
+# sign conventions (seed 001 Euler note §1-5: what its matrices imply, checked numerically)
 # ----------------------------------------------------------------------------------------------------------------
 
 

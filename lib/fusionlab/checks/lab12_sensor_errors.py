@@ -78,7 +78,8 @@ def check_arw_reading(fn):
 
 @forbids("sensors.remove_gravity")
 def check_remove_gravity(fn):
-    """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)`` (seed 001 §9.1)."""
+    """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)``
+    (seed 001 position note §2)."""
     rng = np.random.default_rng(1203)
     euler = np.stack([rng.uniform(-2, 2, 12), rng.uniform(-1.2, 1.2, 12), rng.uniform(-3, 3, 12)], 1)
     q = rotations.quat_nav_swap(rotations.euler_to_quat(euler))          # body→ENU
