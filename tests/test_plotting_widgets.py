@@ -261,6 +261,62 @@ def test_plot_trial_rejects_what_is_not_a_trial():
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# Lab 08: plot_earth_rate_line and plot_bandpass
+# ----------------------------------------------------------------------------------------------------------------
+
+def _nf_record():
+    from fusionlab import northfinder as nf
+    return nf.synthetic_record(np.radians(-42.0), duration=3.0, noise=0.0, harmonics={}, seed=1)   # 10 turns
+
+
+def test_plot_earth_rate_line_shows_the_line_at_its_amplitude_in_the_spectrum():
+    from fusionlab import northfinder as nf
+    rec = _nf_record()                                    # no harmonics, no noise: the record is the line
+    fig = plotting.plot_earth_rate_line(rec, np.radians(-42.0), "the finding")
+    left, right = fig.axes
+    assert fig._suptitle.get_text() == "the finding"
+    line = next(ln for ln in left.get_lines() if ln.get_gid() == "line")
+    np.testing.assert_allclose(line.get_ydata(), left.get_lines()[0].get_ydata(), atol=0.05 * rec["A_c"] / nf.UG)
+    spec = next(ln for ln in right.get_lines() if ln.get_gid() == "spectrum")
+    f, a = spec.get_xdata(), spec.get_ydata()
+    assert f[np.argmax(a)] == pytest.approx(rec["f_r"], abs=1e-9)                 # 3 s: f_r is bin 10
+    assert a.max() == pytest.approx(rec["A_c"] / nf.UG, rel=0.1)
+    assert f.max() < 90 and left.get_lines()[0].get_xdata().max() < 0.9
+    plt.close(fig)
+
+
+def test_plot_bandpass_draws_one_gain_per_order_and_the_chosen_order_on_the_record():
+    from fusionlab import northfinder as nf
+    rec = _nf_record()
+    taps = {m: nf.bandpass_firls(m, rec["fs"], rec["f_r"]) for m in (100, 400)}
+    fig = plotting.plot_bandpass(rec, taps, "the finding", t_max=2.5)
+    gains, out = fig.axes
+    assert [ln.get_gid() for ln in gains.get_lines() if ln.get_gid()] == ["order 100", "order 400"]
+    f = gains.get_lines()[1].get_xdata()
+    g400 = gains.get_lines()[1].get_ydata()
+    assert g400[np.argmin(np.abs(f - rec["f_r"]))] == pytest.approx(0.0, abs=1.0)      # passes the line
+    assert out.get_title() == "order 400, causal, raw record" and fig._suptitle.get_text() == "the finding"
+    assert out.get_lines()[0].get_xdata().max() < 2.5
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda rec: plotting.plot_earth_rate_line({"t": 1}, 0.1, "x"), "rec must be a record of northfinder"),
+    (lambda rec: plotting.plot_earth_rate_line(rec, 42.0, "x"), "heading must be in radians"),
+    (lambda rec: plotting.plot_earth_rate_line(rec, 0.1, None), "title must be a string"),
+    (lambda rec: plotting.plot_bandpass(rec, {}, "x"), "taps must be a non-empty dict"),
+    (lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", shown=20),
+     r"shown must be one of the orders in taps \(10\); got 20"),
+    (lambda rec: plotting.plot_bandpass(rec, {10: [np.nan] * 11}, "x"), r"taps\[10\] must hold finite numbers"),
+    (lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", f_max=0.0), "f_max must be a positive"),
+])
+def test_lab08_figures_reject_bad_input(call, match):
+    with pytest.raises(ValueError, match=match):
+        call(_nf_record())
+    plt.close("all")
+
+
+# ----------------------------------------------------------------------------------------------------------------
 # Lab 12: plot_error_signatures
 # ----------------------------------------------------------------------------------------------------------------
 

@@ -605,6 +605,147 @@ def plot_trial(trial, title, step=3):
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# Lab 08: the Earth-rate line of the rotating accelerometer and the FIR band-pass that finds it
+# ----------------------------------------------------------------------------------------------------------------
+
+from . import northfinder as _nf  # noqa: E402  (a seed-method module; plotting sits above it)
+
+__all__ += ["plot_earth_rate_line", "plot_bandpass"]
+
+_RECORD_KEYS = ("t", "acc", "theta", "A_c", "f_r", "fs")
+
+
+def _record(rec):
+    """A north-finder record (``northfinder.synthetic_record``) with the keys these figures read."""
+    if not isinstance(rec, dict) or any(k not in rec for k in _RECORD_KEYS):
+        have = sorted(rec) if isinstance(rec, dict) else type(rec).__name__
+        raise ValueError(f"rec must be a record of northfinder.synthetic_record, with keys {', '.join(_RECORD_KEYS)}; "
+                         f"got {have}")
+    return rec
+
+
+def plot_earth_rate_line(rec, heading, title, t_max=0.9, f_max=90.0):
+    """The rotating accelerometer's record against the Earth-rate line it hides (left, the first ``t_max`` s) and
+    the record's amplitude spectrum with the line marked (right).
+
+    Parameters
+    ----------
+    rec : dict
+        A record of :func:`fusionlab.northfinder.synthetic_record` (``t``, ``acc``, ``theta``, ``A_c``, ``f_r``,
+        ``fs``).
+    heading : float
+        The true heading, rad: the line drawn is ``A_c·cos(θ + heading)``.
+    title : str
+        The figure's title: what the reader should see in it.
+    t_max : float, optional
+        Seconds of record shown on the left (default 0.9, three turns at 200 rpm).
+    f_max : float, optional
+        Highest frequency shown on the right, Hz (default 90).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes, in µg; the spectrum is ``2|rfft(x)|/N`` of the record less its mean (a sinusoid of amplitude
+        A shows as A).
+    """
+    rec = _record(rec)
+    heading = validate.scalar(validate.angles_rad(heading, "heading"), "heading")
+    t_max, f_max = validate.positive(t_max, "t_max"), validate.positive(f_max, "f_max")
+    if not isinstance(title, str):
+        raise ValueError(f"title must be a string; got {type(title).__name__}")
+    t, A_c, f_r = rec["t"], rec["A_c"], rec["f_r"]
+    x = rec["acc"] - rec["acc"].mean()
+    spec = 2 * np.abs(np.fft.rfft(x)) / len(x)
+    freq = np.fft.rfftfreq(len(x), 1 / rec["fs"])
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.4))
+    sl = t < t_max
+    axs[0].plot(t[sl], x[sl] / _nf.UG, lw=0.8, label="record − mean")
+    axs[0].plot(t[sl], A_c * np.cos(rec["theta"][sl] + heading) / _nf.UG, "k", lw=1.5, label="Earth-rate line",
+                gid="line")
+    axs[0].set_xlabel("time (s)")
+    axs[0].set_ylabel("acceleration (µg)")
+    axs[0].legend(fontsize=8)
+    axs[0].grid(alpha=0.3)
+    band = freq < f_max
+    axs[1].semilogy(freq[band], spec[band] / _nf.UG, lw=0.7, gid="spectrum")
+    axs[1].plot(f_r, A_c / _nf.UG, "rv", label=f"Earth-rate line, {A_c / _nf.UG:.1f} µg")
+    axs[1].set_xlim(0, f_max)
+    axs[1].set_ylim(1e-3, 2e3)
+    axs[1].set_xlabel("frequency (Hz)")
+    axs[1].set_ylabel("amplitude (µg)")
+    axs[1].legend(fontsize=8)
+    axs[1].grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def plot_bandpass(rec, taps, title, shown=None, f_max=45.0, t_max=12.0):
+    """FIR band-pass filters around the spin rate: their gains with the drive harmonics dotted (left), and one of
+    them run causally on the raw record, filling up before the line appears (right).
+
+    Parameters
+    ----------
+    rec : dict
+        A record of :func:`fusionlab.northfinder.synthetic_record`.
+    taps : dict of int to array_like
+        Filter order -> its ``order + 1`` taps (:func:`fusionlab.northfinder.bandpass_firls`).
+    title : str
+        The figure's title: what the reader should see in it.
+    shown : int, optional
+        The order run on the record (default: the largest).
+    f_max : float, optional
+        Highest frequency of the gain plot, Hz (default 45).
+    t_max : float, optional
+        Seconds of filtered record shown (default 12).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes: gain (dB) against frequency, one line per order; the filtered record (µg), no mean removed.
+    """
+    from scipy.signal import freqz, lfilter
+
+    rec = _record(rec)
+    if not isinstance(taps, dict) or not taps:
+        raise ValueError(f"taps must be a non-empty dict of order -> taps; got {type(taps).__name__}")
+    taps = {m: validate.array(b, f"taps[{m}]") for m, b in taps.items()}
+    shown = max(taps) if shown is None else shown
+    if shown not in taps:
+        raise ValueError(f"shown must be one of the orders in taps ({', '.join(map(str, taps))}); got {shown!r}")
+    f_max, t_max = validate.positive(f_max, "f_max"), validate.positive(t_max, "t_max")
+    if not isinstance(title, str):
+        raise ValueError(f"title must be a string; got {type(title).__name__}")
+    fs, f_r = rec["fs"], rec["f_r"]
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.4))
+    fgrid = np.linspace(0, f_max, 1500)
+    for m, b in taps.items():
+        _, h = freqz(b, worN=fgrid, fs=fs)
+        axs[0].plot(fgrid, 20 * np.log10(np.abs(h) + 1e-12), lw=1, label=f"order {m}", gid=f"order {m}")
+    for k in (k for k in _nf.HARMONICS if k * f_r < f_max):
+        axs[0].axvline(k * f_r, color="0.7", lw=0.8, ls=":")
+    axs[0].set_xlim(0, f_max)
+    axs[0].set_ylim(-140, 10)
+    axs[0].set_xlabel("frequency (Hz)")
+    axs[0].set_ylabel("gain (dB)")
+    axs[0].legend(fontsize=8)
+    axs[0].grid(alpha=0.3)
+    axs[0].set_title("firls band-pass (dotted: harmonics)", fontsize=10)
+    first = rec["t"] < t_max
+    y_causal = lfilter(taps[shown], 1.0, rec["acc"][first])       # raw record, no mean removal: the start-up
+    axs[1].plot(rec["t"][first], y_causal / _nf.UG, lw=0.6, gid="filtered")
+    axs[1].set_ylim(-200, 200)
+    axs[1].set_xlim(0, t_max)
+    axs[1].set_xlabel("time (s)")
+    axs[1].set_ylabel("filtered (µg)")
+    axs[1].grid(alpha=0.3)
+    axs[1].set_title(f"order {shown}, causal, raw record", fontsize=10)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+# ----------------------------------------------------------------------------------------------------------------
 # Lab 12: what each sensor error looks like
 # ----------------------------------------------------------------------------------------------------------------
 
