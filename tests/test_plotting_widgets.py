@@ -348,3 +348,35 @@ def test_plot_error_signatures_rejects_bad_input(args, match):
     with pytest.raises(ValueError, match=match):
         plotting.plot_error_signatures(*args)
     plt.close("all")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 04: plot_disturbance_sweeps
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_plot_disturbance_sweeps_draws_both_errors_and_the_weight_per_disturbance():
+    g = np.linspace(0.0, 1.0, 5)
+    sweeps = {"acceleration (g)": (g, 1 - g / 2, 10 * g, 5 * g), "magnet (µT)": (100 * g, np.ones(5), 0 * g, 3 * g)}
+    fig = plotting.plot_disturbance_sweeps(sweeps, "the finding")
+    assert len(fig.axes) == 4 and tuple(fig.get_size_inches()) == (9.0, 3.3)
+    a0, a1, t0, t1 = fig.axes                              # twins are added after the panels
+    assert fig._suptitle.get_text() == "the finding" and a1.get_xlabel() == "magnet (µT)"
+    lines = {ln.get_gid(): ln for ln in a0.get_lines()}
+    np.testing.assert_array_equal(lines["weighted"].get_ydata(), 10 * g)
+    np.testing.assert_array_equal(lines["equal"].get_ydata(), 5 * g)
+    np.testing.assert_array_equal(t0.get_lines()[0].get_ydata(), 1 - g / 2)
+    assert t1.get_ylim() == (0.0, 1.05)
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("sweeps, title, match", [
+    ({}, "x", "sweeps must be a non-empty dict"),
+    ({"a": (np.ones(3),) * 3}, "x", r"sweeps\['a'\] must be \(grid, alpha_g, tilt_weighted, tilt_equal\)"),
+    ({"a": (np.ones(3), np.ones(3), np.ones(4), np.ones(3))}, "x", r"sweeps\['a'\] must hold four arrays of one"),
+    ({"a": (np.ones(3), np.ones(3), [np.nan] * 3, np.ones(3))}, "x", r"sweeps\['a'\]\[2\] must hold finite"),
+    ({"a": (np.ones(3),) * 4}, None, "title must be a string"),
+])
+def test_plot_disturbance_sweeps_rejects_bad_input(sweeps, title, match):
+    with pytest.raises(ValueError, match=match):
+        plotting.plot_disturbance_sweeps(sweeps, title)
+    plt.close("all")

@@ -809,3 +809,59 @@ def plot_error_signatures(clouds, t, angles, title):
     axes[1, 2].legend(fontsize=7)
     fig.suptitle(title)
     return fig
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Lab 04: the eCompass weights against a growing disturbance
+# ----------------------------------------------------------------------------------------------------------------
+
+__all__ += ["plot_disturbance_sweeps"]
+
+
+def plot_disturbance_sweeps(sweeps, title):
+    """Tilt error of a weighted and of an equal-weight estimate, and the weight ``α_g`` the weighted one gave the
+    accelerometer, as one disturbance grows: one panel per disturbance, ``α_g`` on a right-hand axis.
+
+    Parameters
+    ----------
+    sweeps : dict of str to tuple of four array_like
+        x-axis label (the disturbance and its unit) -> ``(grid, alpha_g, tilt_weighted, tilt_equal)``, each of
+        shape (K,): the disturbance sizes, the weight (0-1) and the two tilt errors (deg) at each size.
+    title : str
+        The figure's title: what the reader should see in it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axis per sweep and its twin (``α_g``, 0-1.05).
+    """
+    if not isinstance(sweeps, dict) or not sweeps:
+        raise ValueError(f"sweeps must be a non-empty dict of label -> (grid, alpha_g, tilt_weighted, tilt_equal); "
+                         f"got {type(sweeps).__name__}")
+    checked = {}
+    for label, sweep in sweeps.items():
+        if not isinstance(sweep, (tuple, list)) or len(sweep) != 4:
+            raise ValueError(f"sweeps[{label!r}] must be (grid, alpha_g, tilt_weighted, tilt_equal); got "
+                             f"{type(sweep).__name__}")
+        parts = [validate.array(a, f"sweeps[{label!r}][{k}]") for k, a in enumerate(sweep)]
+        if any(p.ndim != 1 or p.shape != parts[0].shape for p in parts):
+            raise ValueError(f"sweeps[{label!r}] must hold four arrays of one shape (K,); got "
+                             f"{[p.shape for p in parts]}")
+        checked[label] = parts
+    if not isinstance(title, str):
+        raise ValueError(f"title must be a string; got {type(title).__name__}")
+    fig, axs = plt.subplots(1, len(checked), figsize=(4.5 * len(checked), 3.3), squeeze=False)
+    for ax, (label, (grid, alpha_g, tilt_w, tilt_eq)) in zip(axs[0], checked.items()):
+        ax.plot(grid, tilt_w, label="tilt error, note's weights", gid="weighted")
+        ax.plot(grid, tilt_eq, color="0.6", label="tilt error, equal weights", gid="equal")
+        ax2 = ax.twinx()
+        ax2.plot(grid, alpha_g, "k:", label="α_g", gid="alpha_g")
+        ax2.set_ylabel("α_g")
+        ax2.set_ylim(0, 1.05)
+        ax.set_xlabel(label)
+        ax.set_ylabel("tilt error (deg)")
+        ax.grid(alpha=0.3)
+    axs[0, 0].legend(loc="upper left", fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
