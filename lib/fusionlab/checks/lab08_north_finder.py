@@ -179,22 +179,22 @@ def check_tilted_heading(fn):
             continue
         where = (f"at heading {np.degrees(psi):.0f}°, roll {np.degrees(roll):.1f}°, pitch {np.degrees(pitch):.1f}°, "
                  f"latitude {np.degrees(lat):.1f}°: you return {np.degrees(got):.3f}° ({err:+.3f}° off). ")
-        guesses = [
-            (_nf.tilted_heading(zeta, 0.0, 0.0, lat), "that is the heading read as if the table were level: put "
-                                                      "roll and pitch into I, J, K (eq 4.41)."),
-            (_nf.tilted_heading(zeta, pitch, roll, lat), "roll and pitch are swapped: φ is roll (about x), θ pitch "
-                                                         "(about y) in I, J, K."),
-        ]
-        for cand, msg in guesses:
-            if abs(wrap(got - cand)) < 1e-7:
-                raise Feedback(where + msg)
-        if abs(wrap(np.radians(got) - psi)) < 1e-7 or abs(wrap(got - np.degrees(psi))) < 1e-5:
-            raise Feedback(where + "return radians, not degrees.")
-        if abs(wrap(_tilted_phase(got, roll, pitch, lat) - zeta)) > 1e-6:
-            other = abs(np.sin(_tilted_phase(got, roll, pitch, lat) - zeta)) < 1e-6
-            raise Feedback(where + ("that is the other root of eq 4.43: its line has the phase ζ + π. Keep the root "
-                                    "whose predicted phase atan2(ω_x, ω_y) is ζ." if other else
-                                    "a table at your heading would not show the phase ζ: check I, J, K (eq 4.41) "
-                                    "and V = atan2(I, J) (eq 4.42)."))
-        raise Feedback(where + "your heading gives the phase ζ but is not the table's: check the root of eq 4.43.")
+        level = _nf.tilted_heading(zeta, 0.0, 0.0, lat)
+        swapped = _nf.tilted_heading(zeta, pitch, roll, lat)
+        phase_off = lambda v: wrap(_tilted_phase(v, roll, pitch, lat) - zeta)      # 0 for a heading that fits ζ
+        msg = _first_match(got, [
+            (lambda v: abs(wrap(v - level)) < 1e-7, "that is the heading read as if the table were level: put roll "
+                                                    "and pitch into I, J, K (eq 4.41)."),
+            (lambda v: abs(wrap(v - swapped)) < 1e-7, "roll and pitch are swapped: φ is roll (about x), θ pitch "
+                                                      "(about y) in I, J, K."),
+            (lambda v: abs(wrap(np.radians(v) - psi)) < 1e-7 or abs(wrap(v - np.degrees(psi))) < 1e-5,
+             "return radians, not degrees."),
+            (lambda v: abs(phase_off(v)) > 1e-6 and abs(np.sin(phase_off(v))) < 1e-6,
+             "that is the other root of eq 4.43: its line has the phase ζ + π. Keep the root whose predicted phase "
+             "atan2(ω_x, ω_y) is ζ."),
+            (lambda v: abs(phase_off(v)) > 1e-6, "a table at your heading would not show the phase ζ: check I, J, K "
+                                                 "(eq 4.41) and V = atan2(I, J) (eq 4.42)."),
+        ])
+        raise Feedback(where + (msg or "your heading gives the phase ζ but is not the table's: check the root of "
+                                       "eq 4.43."))
     _ok(f"the heading is right for {len(cases)} tilted tables (one in the southern hemisphere).")
