@@ -16,13 +16,16 @@ LIB = ROOT / "lib" / "fusionlab"
 # without a row is not (a new module must be placed).
 LAYERS = (
     ("validate", "guard"),                                                    # 1 numpy and the standard library only
-    ("rotations",),                                                           # 2 the one convention
-    ("sensors", "metrics", "earth", "calibration"),                           # 3 models, metrics, constants
-    ("simulate", "datasets"),                                                 # 4 where recordings come from
-    ("kalman", "correlation", "freescale", "gfimu", "northfinder", "dcm"),    # 5 one module per seed method
-    ("estimators",),                                                          # 6 the front door to the filters
-    ("bench", "plotting"),                                                    # 7 what runs and draws the filters
-    ("checks", "widgets"),                                                    # 8 what only notebooks import
+    ("rotations", "earth"),                                                   # 2 the one convention, Earth constants
+    ("conventions", "sensors", "accel_tilt", "inertial", "sensor_errors",     # 3 models on the convention, the seeds'
+     "signals", "metrics", "calibration", "kalman"),                          #   conventions at the edge, metrics
+    ("simulate", "datasets", "spreadsheet", "ecompass", "gfimu", "dcm"),      # 4 recordings; the equations of a method
+    ("falling_body", "correlation", "freescale", "gfimu_ekf",                 # 5 one module per seed method's filters
+     "gfimu_dynamics", "northfinder", "dcm_filter", "gpsins"),
+    ("freescale_fast",),                                                      # 6 fast paths of row 5's filters
+    ("estimators",),                                                          # 7 the front door to the filters
+    ("bench", "plotting"),                                                    # 8 what runs and draws the filters
+    ("checks", "widgets"),                                                    # 9 what only notebooks import
 )
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}
 
@@ -100,7 +103,7 @@ def test_the_checker_sees_every_form_of_import_and_a_module_without_a_row():
     sources = {
         "sensors": "from . import rotations\nfrom .validate import as_vector\n",     # both go down: fine
         "rotations": "def f():\n    from . import sensors\n",                        # inside a function
-        "earth": "from fusionlab import metrics\n",                                   # same row, absolute
+        "earth": "from fusionlab import metrics\n",                                   # upward, absolute
         "metrics": "import fusionlab.kalman as k\n",                                  # upward, dotted
         "kalman": "from fusionlab.widgets import slider\n",                           # upward, from a submodule
         "validate": "import numpy as np\nfrom . import guard\n",                      # same row
@@ -110,13 +113,13 @@ def test_the_checker_sees_every_form_of_import_and_a_module_without_a_row():
         "checks/__init__": "from .. import guard\n",                                  # not fusionlab/__init__.py
     }
     assert plan_violations(sources) == [
-        "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 8) imports widgets (row 8, the same "
+        "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 9) imports widgets (row 9, the same "
         "row); a module imports only from rows below its own",
-        "fusionlab/earth.py:1 `from fusionlab import metrics`: earth (row 3) imports metrics (row 3, the same row); "
+        "fusionlab/earth.py:1 `from fusionlab import metrics`: earth (row 2) imports metrics (row 3, a row above); "
         "a module imports only from rows below its own",
-        "fusionlab/kalman.py:1 `from fusionlab.widgets import slider`: kalman (row 5) imports widgets (row 8, a row "
+        "fusionlab/kalman.py:1 `from fusionlab.widgets import slider`: kalman (row 3) imports widgets (row 9, a row "
         "above); a module imports only from rows below its own",
-        "fusionlab/metrics.py:1 `import fusionlab.kalman as k`: metrics (row 3) imports kalman (row 5, a row above); "
+        "fusionlab/metrics.py:1 `import fusionlab.kalman as k`: metrics (row 3) imports kalman (row 3, the same row); "
         "a module imports only from rows below its own",
         "fusionlab.newcomer has no row in the import plan: place it in LAYERS (tests/test_architecture.py) and in "
         "README.md, Layout",
