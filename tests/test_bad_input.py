@@ -30,7 +30,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import calibration, estimators, kalman, metrics, rotations, sensors
-from fusionlab import rotations as ro
+from fusionlab import conventions, rotations as ro
 
 DEG = 180.0 / np.pi
 G = 9.80665
@@ -202,25 +202,25 @@ ROT = [
                                                              dt=S(0.01, positive=True))),
     Case("dcm_nav_swap", ro.dcm_nav_swap, dict(C_bn=mat(C5, rotation=True, nonzero=True))),
     Case("quat_nav_swap", ro.quat_nav_swap, dict(q=quat(Q5))),
-    Case("seed000_eq339", ro.seed000_eq339, dict(roll=arr(ANG5, unit="rad"), pitch=arr(ANG5 / 3, unit="rad"),
+    Case("seed000_eq339", conventions.seed000_eq339, dict(roll=arr(ANG5, unit="rad"), pitch=arr(ANG5 / 3, unit="rad"),
                                                  yaw=arr(-ANG5, unit="rad"))),
-    Case("seed000_labcode_dcm", ro.seed000_labcode_dcm, dict(yaw=arr(ANG5, unit="rad"),
+    Case("seed000_labcode_dcm", conventions.seed000_labcode_dcm, dict(yaw=arr(ANG5, unit="rad"),
                                                              pitch=arr(ANG5 / 3, unit="rad"),
                                                              roll=arr(-ANG5, unit="rad"))),
     # body rates (rad/s) of any size: a rate has no "full turn" to exceed, so no degrees test here
-    Case("seed000_labcode_omega", ro.seed000_labcode_omega, dict(wx=S(0.3), wy=S(-0.2), wz=S(0.5))),
-    Case("seed000_labcode_rates", ro.seed000_labcode_rates, dict(wx=arr(ANG5), wy=arr(-ANG5), wz=arr(ANG5 / 2))),
-    Case("seed000_labcode_angles", ro.seed000_labcode_angles, dict(R=mat(C5, rotation=True, nonzero=True))),
-    Case("seed000_eq379_381_printed", ro.seed000_eq379_381_printed,
+    Case("seed000_labcode_omega", conventions.seed000_labcode_omega, dict(wx=S(0.3), wy=S(-0.2), wz=S(0.5))),
+    Case("seed000_labcode_rates", conventions.seed000_labcode_rates, dict(wx=arr(ANG5), wy=arr(-ANG5), wz=arr(ANG5 / 2))),
+    Case("seed000_labcode_angles", conventions.seed000_labcode_angles, dict(R=mat(C5, rotation=True, nonzero=True))),
+    Case("seed000_eq379_381_printed", conventions.seed000_eq379_381_printed,
          dict(C_bn=mat(C5, rotation=True, nonzero=True), yaw=S(0.3, unit="rad"))),
-    Case("seed001_R_IB", ro.seed001_R_IB, dict(roll=arr(ANG5, unit="rad"), pitch=arr(ANG5 / 3, unit="rad"),
+    Case("seed001_R_IB", conventions.seed001_R_IB, dict(roll=arr(ANG5, unit="rad"), pitch=arr(ANG5 / 3, unit="rad"),
                                                yaw=arr(-ANG5, unit="rad"))),
-    Case("dcm_from_seed001", ro.dcm_from_seed001, dict(R_IB=mat(C5, rotation=True, nonzero=True))),
-    Case("dcm_to_seed001", ro.dcm_to_seed001, dict(C_bn=mat(C5, rotation=True, nonzero=True))),
-    Case("seed001_quat_to_euler", ro.seed001_quat_to_euler, dict(q=quat(Q5))),
-    Case("quat_from_seed002", ro.quat_from_seed002, dict(q=quat(Q5), frame=choice("Android"), nav=choice("NED"))),
-    Case("quat_to_seed002", ro.quat_to_seed002, dict(q=quat(Q5), frame=choice("Win8"), nav=choice("NED"))),
-    Case("dcm_from_seed004", ro.dcm_from_seed004, dict(C_bn=mat(C5, rotation=True, nonzero=True))),
+    Case("dcm_from_seed001", conventions.dcm_from_seed001, dict(R_IB=mat(C5, rotation=True, nonzero=True))),
+    Case("dcm_to_seed001", conventions.dcm_to_seed001, dict(C_bn=mat(C5, rotation=True, nonzero=True))),
+    Case("seed001_quat_to_euler", conventions.seed001_quat_to_euler, dict(q=quat(Q5))),
+    Case("quat_from_seed002", conventions.quat_from_seed002, dict(q=quat(Q5), frame=choice("Android"), nav=choice("NED"))),
+    Case("quat_to_seed002", conventions.quat_to_seed002, dict(q=quat(Q5), frame=choice("Win8"), nav=choice("NED"))),
+    Case("dcm_from_seed004", conventions.dcm_from_seed004, dict(C_bn=mat(C5, rotation=True, nonzero=True))),
 ]
 
 SEN = [

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import estimators, freescale as fz, rotations, sensors
+from fusionlab import conventions, estimators, freescale as fz, rotations, sensors
 
 RNG = np.random.default_rng(20020)
 
@@ -32,7 +32,7 @@ def test_rotation_matrix_eq34_maps_global_to_sensor_as_q_star_v_q():
 def test_seed002_quaternion_is_our_body_to_nav_quaternion_in_every_frame():
     q = _random_quats(1)[0]
     for frame, nav in (("NED", "NED"), ("Android", "ENU"), ("Win8", "ENU")):
-        assert np.allclose(rotations.quat_from_seed002(q, frame), q)
+        assert np.allclose(conventions.quat_from_seed002(q, frame), q)
         # a flat, north-facing sensor (v5.00's flat reading) is the identity in every frame
         G = fz.accel_model([1.0, 0, 0, 0], frame=frame)
         assert np.allclose(G, [0, 0, -1.0] if frame == "Win8" else [0, 0, 1.0])
@@ -433,4 +433,4 @@ def test_accel_hold_changes_nothing_at_one_g_and_reaches_the_estimators():
                        ("freescale9", lambda h: fz.run_fast9(Y, G, mag, 200.0, B=B, accel_hold=h)["q"])):
         for h in (0.0, 0.5):
             q = estimators.run(name, gyr, acc, 200.0, mag=mag, frame="NED", accel_hold=h)
-            assert np.allclose(q, rotations.quat_from_seed002(fast(h), "NED", nav="NED"), atol=1e-9)
+            assert np.allclose(q, conventions.quat_from_seed002(fast(h), "NED", nav="NED"), atol=1e-9)

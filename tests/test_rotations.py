@@ -12,7 +12,7 @@ import pytest
 from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
-from fusionlab import rotations as rot
+from fusionlab import conventions, rotations as rot
 
 deg = np.radians
 I3 = np.eye(3)
@@ -62,7 +62,7 @@ def seed002_eq34(q):
 
 def part_b_loop(renormalize=True, steps=20, dt=0.5):
     """Seed 000 lab 1 Part B as printed: R = R*(I + Omega*dt), column renormalisation, 20 steps."""
-    omega = rot.seed000_labcode_omega(0.07, 0.035, 0.0)
+    omega = conventions.seed000_labcode_omega(0.07, 0.035, 0.0)
     R = np.eye(3)
     for _ in range(steps):
         R = R @ (I3 + omega * dt)
@@ -220,7 +220,7 @@ def test_dcm_to_sequence_gives_seed000_part_a_equivalent_angles(seq):
 
 def test_seed000_labcode_dcm_is_zxy_sequence_of_negated_angles():
     yaw, pitch, roll = np.random.default_rng(42).uniform(-np.pi, np.pi, (3, 50))
-    np.testing.assert_allclose(rot.seed000_labcode_dcm(yaw, pitch, roll),
+    np.testing.assert_allclose(conventions.seed000_labcode_dcm(yaw, pitch, roll),
                                rot.sequence_to_dcm(np.stack([-yaw, -pitch, -roll], -1), "ZXY"), atol=1e-15)
 
 
@@ -262,7 +262,7 @@ def test_dcm_to_euler_batch_mixes_locked_and_regular_rows():
 @pytest.mark.parametrize("pitch, printed_roll", [(90, -170.0), (-90, -140.0)])
 def test_seed000_eq379_381_as_printed_gives_wrong_roll_at_lock(pitch, printed_roll):
     C = rot.euler_to_dcm(deg([25, pitch, 15]))
-    roll = rot.seed000_eq379_381_printed(C)
+    roll = conventions.seed000_eq379_381_printed(C)
     assert np.degrees(roll) == pytest.approx(printed_roll, abs=1e-9)
     rebuilt = rot.euler_to_dcm([roll, deg(pitch), 0.0])
     assert np.max(np.abs(rebuilt - C)) > 1.0              # a different orientation
@@ -600,58 +600,58 @@ def test_euler_to_dcm_matches_seed000_eq340_at_lab_angles():
 
 
 def test_seed000_eq339_as_printed_differs_from_eq340():
-    printed = rot.seed000_eq339(deg(10), deg(-10), deg(40))
+    printed = conventions.seed000_eq339(deg(10), deg(-10), deg(40))
     assert np.all(rot.is_rotation(printed))
     assert np.max(np.abs(printed - np.array(EQ340_CHECK))) > 0.2
 
 
 def test_seed000_eq339_as_printed_is_zyx_dcm_of_negated_angles():
     e = random_euler(np.random.default_rng(27), 100)
-    np.testing.assert_allclose(rot.seed000_eq339(e[:, 0], e[:, 1], e[:, 2]), rot.euler_to_dcm(-e), atol=1e-14)
+    np.testing.assert_allclose(conventions.seed000_eq339(e[:, 0], e[:, 1], e[:, 2]), rot.euler_to_dcm(-e), atol=1e-14)
 
 
 def test_seed000_labcode_dcm_matches_lab_part_a_key():
-    C = rot.seed000_labcode_dcm(deg(40), deg(-10), deg(10))
+    C = conventions.seed000_labcode_dcm(deg(40), deg(-10), deg(10))
     np.testing.assert_allclose(C, LAB_A_CHECK, atol=2e-4)
     assert np.linalg.det(C) == pytest.approx(1.0, abs=1e-12)
     assert np.max(np.abs(C - np.array(EQ340_CHECK))) > 0.5           # not the (3.40) orientation
 
 
 def test_seed000_labcode_omega_layout_and_equivalent_body_rates():
-    np.testing.assert_array_equal(rot.seed000_labcode_omega(1.0, 2.0, 3.0),
+    np.testing.assert_array_equal(conventions.seed000_labcode_omega(1.0, 2.0, 3.0),
                                   [[0, 3, -2], [-3, 0, -1], [2, 1, 0]])
     rng = np.random.default_rng(28)
     for wx, wy, wz in rng.normal(size=(20, 3)):
-        np.testing.assert_array_equal(rot.seed000_labcode_omega(wx, wy, wz),
-                                      rot.skew(rot.seed000_labcode_rates(wx, wy, wz)))
+        np.testing.assert_array_equal(conventions.seed000_labcode_omega(wx, wy, wz),
+                                      rot.skew(conventions.seed000_labcode_rates(wx, wy, wz)))
 
 
 def test_seed000_labcode_rates_flips_y_and_z_and_broadcasts():
-    np.testing.assert_array_equal(rot.seed000_labcode_rates(0.07, 0.035, 0.0), [0.07, -0.035, -0.0])
-    out = rot.seed000_labcode_rates(np.array([1.0, 2.0]), 3.0, np.array([4.0, 5.0]))
+    np.testing.assert_array_equal(conventions.seed000_labcode_rates(0.07, 0.035, 0.0), [0.07, -0.035, -0.0])
+    out = conventions.seed000_labcode_rates(np.array([1.0, 2.0]), 3.0, np.array([4.0, 5.0]))
     np.testing.assert_array_equal(out, [[1, -3, -4], [2, -3, -5]])
 
 
 def test_seed000_part_b_printed_loop_angles():
-    pitch, roll, yaw = np.degrees(rot.seed000_labcode_angles(part_b_loop()))
+    pitch, roll, yaw = np.degrees(conventions.seed000_labcode_angles(part_b_loop()))
     assert (pitch, roll, yaw) == pytest.approx((39.083, 23.960, -8.614), abs=1e-3)
 
 
 def test_seed000_part_b_exact_expm_angles():
-    R = expm(rot.seed000_labcode_omega(0.07, 0.035, 0.0) * 10.0)
-    assert tuple(np.degrees(rot.seed000_labcode_angles(R))) == pytest.approx((39.102, 23.977, -8.625), abs=1e-3)
+    R = expm(conventions.seed000_labcode_omega(0.07, 0.035, 0.0) * 10.0)
+    assert tuple(np.degrees(conventions.seed000_labcode_angles(R))) == pytest.approx((39.102, 23.977, -8.625), abs=1e-3)
 
 
 def test_seed000_part_b_without_renormalisation_drifts():
     R = part_b_loop(renormalize=False)
     assert np.linalg.det(R) == pytest.approx(1.031075, abs=1e-6)
-    assert tuple(np.degrees(rot.seed000_labcode_angles(R))) == pytest.approx((39.804, 23.960, -8.202), abs=1e-3)
+    assert tuple(np.degrees(conventions.seed000_labcode_angles(R))) == pytest.approx((39.804, 23.960, -8.202), abs=1e-3)
     R_renorm = part_b_loop()
     assert np.linalg.det(R_renorm) == pytest.approx(1.0, abs=1e-5)
 
 
 def test_integrate_gyro_dcm_reproduces_printed_part_b_loop():
-    rates = rot.seed000_labcode_rates(0.07, 0.035, 0.0)
+    rates = conventions.seed000_labcode_rates(0.07, 0.035, 0.0)
     out = rot.integrate_gyro_dcm(I3, np.tile(rates, (20, 1)), 0.5, order="first", renormalize="columns")
     np.testing.assert_allclose(out[-1], part_b_loop(), atol=1e-14, rtol=0)
 
@@ -667,7 +667,7 @@ def test_seed000_labcode_angles_reads_initial_pitch_with_wrong_sign():
     R = np.array([[Cr * Cy + Sr * Sp * Sy, Cp * Sy, -Sr * Cy + Cr * Sp * Sy],
                   [-Cr * Sy + Sr * Sp * Cy, Cp * Cy, Sr * Sy + Cr * Sp * Cy],
                   [Sr * Cp, -Sp, Cr * Cp]])
-    np.testing.assert_allclose(rot.seed000_labcode_angles(R), [-p, r, y], atol=1e-15)
+    np.testing.assert_allclose(conventions.seed000_labcode_angles(R), [-p, r, y], atol=1e-15)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -689,7 +689,7 @@ SEED001_FIXTURES = {
 
 @pytest.mark.parametrize("angles_deg", list(SEED001_FIXTURES), ids=str)
 def test_seed001_R_IB_matches_hand_worked_fixture_and_is_transpose_of_euler_to_dcm(angles_deg):
-    R = rot.seed001_R_IB(*deg(angles_deg))
+    R = conventions.seed001_R_IB(*deg(angles_deg))
     np.testing.assert_allclose(R, SEED001_FIXTURES[angles_deg], atol=1e-6)
     np.testing.assert_allclose(R.T, rot.euler_to_dcm(deg(angles_deg)), atol=1e-15)
 
@@ -698,7 +698,7 @@ def test_seed001_R_IB_entries_match_note_formulas():
     rng = np.random.default_rng(29)
     e = random_euler(rng, 100)
     phi, theta, psi = e.T
-    R = rot.seed001_R_IB(phi, theta, psi)
+    R = conventions.seed001_R_IB(phi, theta, psi)
     np.testing.assert_allclose(R[:, 0, 2], -np.sin(theta), atol=1e-15)
     np.testing.assert_allclose(R[:, 1, 2], np.cos(theta) * np.sin(phi), atol=1e-15)
     np.testing.assert_allclose(R[:, 2, 2], np.cos(phi) * np.cos(theta), atol=1e-15)
@@ -707,44 +707,44 @@ def test_seed001_R_IB_entries_match_note_formulas():
 
 
 def test_seed001_north_is_off_left_wing_when_nose_points_east():
-    np.testing.assert_allclose(rot.seed001_R_IB(0.0, 0.0, deg(90)) @ [1, 0, 0], [0, -1, 0], atol=1e-15)
+    np.testing.assert_allclose(conventions.seed001_R_IB(0.0, 0.0, deg(90)) @ [1, 0, 0], [0, -1, 0], atol=1e-15)
 
 
 def test_dcm_from_seed001_and_dcm_to_seed001_are_transposes_and_inverse():
     C = rot.euler_to_dcm(random_euler(np.random.default_rng(30), 50))
-    R_IB = rot.dcm_to_seed001(C)
+    R_IB = conventions.dcm_to_seed001(C)
     np.testing.assert_array_equal(R_IB, np.swapaxes(C, -1, -2))
-    np.testing.assert_array_equal(rot.dcm_from_seed001(R_IB), C)
+    np.testing.assert_array_equal(conventions.dcm_from_seed001(R_IB), C)
     e = deg([30, 20, 45])
-    np.testing.assert_allclose(rot.dcm_from_seed001(rot.seed001_R_IB(*e)), rot.euler_to_dcm(e), atol=1e-15)
+    np.testing.assert_allclose(conventions.dcm_from_seed001(conventions.seed001_R_IB(*e)), rot.euler_to_dcm(e), atol=1e-15)
 
 
 @pytest.mark.parametrize("a_deg, b_deg", [((0, 90, 90), (-90, 90, 0)), ((20, -90, 30), (50, -90, 0))],
                          ids=["plus90_yaw_equals_minus_roll", "minus90_yaw_equals_plus_roll"])
 def test_seed001_gimbal_lock_equivalent_orientations(a_deg, b_deg):
-    np.testing.assert_allclose(rot.seed001_R_IB(*deg(a_deg)), rot.seed001_R_IB(*deg(b_deg)), atol=1e-15)
+    np.testing.assert_allclose(conventions.seed001_R_IB(*deg(a_deg)), conventions.seed001_R_IB(*deg(b_deg)), atol=1e-15)
     np.testing.assert_allclose(rot.euler_to_dcm(deg(a_deg)), rot.euler_to_dcm(deg(b_deg)), atol=1e-15)
 
 
 def test_seed001_gimbal_lock_depends_only_on_roll_minus_or_plus_yaw():
     d = 0.37
-    np.testing.assert_allclose(rot.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d), rot.seed001_R_IB(0.5, np.pi / 2, 0.2),
+    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d), conventions.seed001_R_IB(0.5, np.pi / 2, 0.2),
                                atol=1e-15)
-    np.testing.assert_allclose(rot.seed001_R_IB(0.5 + d, -np.pi / 2, 0.2 - d),
-                               rot.seed001_R_IB(0.5, -np.pi / 2, 0.2), atol=1e-15)
-    assert np.max(np.abs(rot.seed001_R_IB(0.5 + d, 0.3, 0.2 + d) - rot.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
+    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, -np.pi / 2, 0.2 - d),
+                               conventions.seed001_R_IB(0.5, -np.pi / 2, 0.2), atol=1e-15)
+    assert np.max(np.abs(conventions.seed001_R_IB(0.5 + d, 0.3, 0.2 + d) - conventions.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
 
 
 def test_seed001_quat_to_euler_recovers_angles_from_our_quaternion():
     e = np.array([0.3, -0.4, 1.2])
-    np.testing.assert_allclose(rot.seed001_quat_to_euler(rot.euler_to_quat(e)), e, atol=1e-14)
+    np.testing.assert_allclose(conventions.seed001_quat_to_euler(rot.euler_to_quat(e)), e, atol=1e-14)
     many = random_euler(np.random.default_rng(31), 300)
-    np.testing.assert_allclose(rot.seed001_quat_to_euler(rot.euler_to_quat(many)), many, atol=1e-7)
+    np.testing.assert_allclose(conventions.seed001_quat_to_euler(rot.euler_to_quat(many)), many, atol=1e-7)
 
 
 def test_seed001_quat_to_euler_gives_nonsense_for_the_conjugate():
     q_conj = rot.quat_conjugate(rot.euler_to_quat([0.3, -0.4, 1.2]))
-    np.testing.assert_allclose(rot.seed001_quat_to_euler(q_conj), [-0.476, -0.141, -1.227], atol=5e-4)
+    np.testing.assert_allclose(conventions.seed001_quat_to_euler(q_conj), [-0.476, -0.141, -1.227], atol=5e-4)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -758,22 +758,22 @@ NOTE_GLOBAL = {"NED": "NED", "Android": "ENU", "Win8": "ENU"}
 @pytest.mark.parametrize("nav", [None, "NED", "ENU"])
 def test_quat_to_seed002_inverts_quat_from_seed002(frame, nav):
     q = random_quats(np.random.default_rng(32), 50)
-    same_quat_up_to_sign(rot.quat_from_seed002(rot.quat_to_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
-    same_quat_up_to_sign(rot.quat_to_seed002(rot.quat_from_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
+    same_quat_up_to_sign(conventions.quat_from_seed002(conventions.quat_to_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
+    same_quat_up_to_sign(conventions.quat_to_seed002(conventions.quat_from_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
 
 
 @pytest.mark.parametrize("frame, other_nav", [("Android", "NED"), ("Win8", "NED"), ("NED", "ENU")])
 def test_quat_from_seed002_nav_other_than_note_frame_is_nav_swap(frame, other_nav):
     q = random_quats(np.random.default_rng(33), 50)
-    own = rot.quat_from_seed002(q, frame)
-    np.testing.assert_allclose(rot.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own), atol=1e-15)
-    np.testing.assert_array_equal(rot.quat_from_seed002(q, frame, nav=NOTE_GLOBAL[frame]), own)
+    own = conventions.quat_from_seed002(q, frame)
+    np.testing.assert_allclose(conventions.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own), atol=1e-15)
+    np.testing.assert_array_equal(conventions.quat_from_seed002(q, frame, nav=NOTE_GLOBAL[frame]), own)
 
 
 def test_quat_from_seed002_android_and_win8_share_the_enu_global_frame():
     q = random_quats(np.random.default_rng(34), 20)
     for nav in (None, "NED", "ENU"):
-        np.testing.assert_array_equal(rot.quat_from_seed002(q, "Android", nav), rot.quat_from_seed002(q, "Win8", nav))
+        np.testing.assert_array_equal(conventions.quat_from_seed002(q, "Android", nav), conventions.quat_from_seed002(q, "Win8", nav))
 
 
 @pytest.mark.parametrize("frame, nav", [("NED", None), ("Android", None), ("Win8", None),
@@ -782,14 +782,14 @@ def test_quat_from_seed002_honours_note_sandwich_v_S_equals_q_conj_v_G_q(frame, 
     rng = np.random.default_rng(35)
     q_note, v_G = random_quats(rng, 1)[0], rng.normal(size=3)
     v_S = rot.quat_multiply(rot.quat_multiply(rot.quat_conjugate(q_note), np.r_[0.0, v_G]), q_note)[1:]  # (66)
-    C_bn = rot.quat_to_dcm(rot.quat_from_seed002(q_note, frame, nav))
+    C_bn = rot.quat_to_dcm(conventions.quat_from_seed002(q_note, frame, nav))
     v_nav = v_G if nav in (None, NOTE_GLOBAL[frame]) else rot.NED_ENU @ v_G
     np.testing.assert_allclose(C_bn.T @ v_nav, v_S, atol=1e-14)
 
 
 def test_quat_from_seed002_matches_note_eq34_global_to_sensor_matrix():
     q_note = random_quats(np.random.default_rng(36), 1)[0]
-    np.testing.assert_allclose(rot.quat_to_dcm(rot.quat_from_seed002(q_note)).T, seed002_eq34(q_note), atol=1e-14)
+    np.testing.assert_allclose(rot.quat_to_dcm(conventions.quat_from_seed002(q_note)).T, seed002_eq34(q_note), atol=1e-14)
 
 
 def test_seed002_eq34_is_transpose_of_our_quat_to_dcm():
@@ -808,7 +808,7 @@ def test_seed002_eq34_is_transpose_of_our_quat_to_dcm():
 
 def test_dcm_from_seed004_returns_rotation_unchanged():
     C = rot.euler_to_dcm(random_euler(np.random.default_rng(38), 20))
-    np.testing.assert_array_equal(rot.dcm_from_seed004(C), C)
+    np.testing.assert_array_equal(conventions.dcm_from_seed004(C), C)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -937,35 +937,35 @@ BAD_INPUTS = [
     ("quat_nav_swap_nonunit", lambda: rot.quat_nav_swap(Q_NONUNIT), "q"),
     ("quat_nav_swap_shape", lambda: rot.quat_nav_swap(I3), "q"),
     # seed converters
-    ("seed000_labcode_omega_wx_nan", lambda: rot.seed000_labcode_omega(np.nan, 0.0, 0.0), "wx"),
-    ("seed000_labcode_omega_wy_inf", lambda: rot.seed000_labcode_omega(0.0, np.inf, 0.0), "wy"),
-    ("seed000_labcode_omega_wz_nan", lambda: rot.seed000_labcode_omega(0.0, 0.0, np.nan), "wz"),
-    ("seed000_labcode_rates_wx_nan", lambda: rot.seed000_labcode_rates(np.nan, 0.0, 0.0), "wx"),
-    ("seed000_labcode_rates_wy_text", lambda: rot.seed000_labcode_rates(0.0, "x", 0.0), "wy"),
-    ("seed000_labcode_rates_wz_inf", lambda: rot.seed000_labcode_rates(0.0, 0.0, [np.inf]), "wz"),
-    ("seed000_labcode_angles_shape", lambda: rot.seed000_labcode_angles(np.eye(2)), "R"),
-    ("seed000_labcode_angles_nan", lambda: rot.seed000_labcode_angles(M_NAN), "R"),
-    ("seed000_eq379_381_printed_shape", lambda: rot.seed000_eq379_381_printed([0.0, 0.0, 1.0]), "C_bn"),
-    ("seed000_eq379_381_printed_nan", lambda: rot.seed000_eq379_381_printed(M_NAN), "C_bn"),
-    ("dcm_from_seed001_shape", lambda: rot.dcm_from_seed001(np.eye(4)), "R_IB"),
-    ("dcm_from_seed001_nan", lambda: rot.dcm_from_seed001(M_NAN), "R_IB"),
-    ("dcm_to_seed001_shape", lambda: rot.dcm_to_seed001(np.eye(2)), "C_bn"),
-    ("dcm_to_seed001_nan", lambda: rot.dcm_to_seed001(M_NAN), "C_bn"),
-    ("seed001_quat_to_euler_nonunit", lambda: rot.seed001_quat_to_euler(Q_NONUNIT), "q"),
-    ("seed001_quat_to_euler_shape", lambda: rot.seed001_quat_to_euler([1.0, 0.0]), "q"),
-    ("quat_from_seed002_frame", lambda: rot.quat_from_seed002(Q_ID, frame="ENU"), "frame"),
-    ("quat_from_seed002_frame_case", lambda: rot.quat_from_seed002(Q_ID, frame="android"), "frame"),
-    ("quat_from_seed002_nav", lambda: rot.quat_from_seed002(Q_ID, frame="NED", nav="enu"), "nav"),
-    ("quat_from_seed002_nonunit", lambda: rot.quat_from_seed002(Q_NONUNIT), "q"),
-    ("quat_from_seed002_shape", lambda: rot.quat_from_seed002([1.0, 0.0, 0.0]), "q"),
-    ("quat_to_seed002_frame", lambda: rot.quat_to_seed002(Q_ID, frame="Windows"), "frame"),
-    ("quat_to_seed002_nav", lambda: rot.quat_to_seed002(Q_ID, nav="NWU"), "nav"),
-    ("quat_to_seed002_nonunit", lambda: rot.quat_to_seed002(Q_NONUNIT), "q"),
-    ("quat_to_seed002_nan", lambda: rot.quat_to_seed002(Q_NAN), "q"),
-    ("dcm_from_seed004_reflection", lambda: rot.dcm_from_seed004(REFLECTION), "C_bn"),
-    ("dcm_from_seed004_transposed_scaled", lambda: rot.dcm_from_seed004(1.01 * I3), "C_bn"),
-    ("dcm_from_seed004_shape", lambda: rot.dcm_from_seed004(np.eye(4)), "C_bn"),
-    ("dcm_from_seed004_nan", lambda: rot.dcm_from_seed004(M_NAN), "C_bn"),
+    ("seed000_labcode_omega_wx_nan", lambda: conventions.seed000_labcode_omega(np.nan, 0.0, 0.0), "wx"),
+    ("seed000_labcode_omega_wy_inf", lambda: conventions.seed000_labcode_omega(0.0, np.inf, 0.0), "wy"),
+    ("seed000_labcode_omega_wz_nan", lambda: conventions.seed000_labcode_omega(0.0, 0.0, np.nan), "wz"),
+    ("seed000_labcode_rates_wx_nan", lambda: conventions.seed000_labcode_rates(np.nan, 0.0, 0.0), "wx"),
+    ("seed000_labcode_rates_wy_text", lambda: conventions.seed000_labcode_rates(0.0, "x", 0.0), "wy"),
+    ("seed000_labcode_rates_wz_inf", lambda: conventions.seed000_labcode_rates(0.0, 0.0, [np.inf]), "wz"),
+    ("seed000_labcode_angles_shape", lambda: conventions.seed000_labcode_angles(np.eye(2)), "R"),
+    ("seed000_labcode_angles_nan", lambda: conventions.seed000_labcode_angles(M_NAN), "R"),
+    ("seed000_eq379_381_printed_shape", lambda: conventions.seed000_eq379_381_printed([0.0, 0.0, 1.0]), "C_bn"),
+    ("seed000_eq379_381_printed_nan", lambda: conventions.seed000_eq379_381_printed(M_NAN), "C_bn"),
+    ("dcm_from_seed001_shape", lambda: conventions.dcm_from_seed001(np.eye(4)), "R_IB"),
+    ("dcm_from_seed001_nan", lambda: conventions.dcm_from_seed001(M_NAN), "R_IB"),
+    ("dcm_to_seed001_shape", lambda: conventions.dcm_to_seed001(np.eye(2)), "C_bn"),
+    ("dcm_to_seed001_nan", lambda: conventions.dcm_to_seed001(M_NAN), "C_bn"),
+    ("seed001_quat_to_euler_nonunit", lambda: conventions.seed001_quat_to_euler(Q_NONUNIT), "q"),
+    ("seed001_quat_to_euler_shape", lambda: conventions.seed001_quat_to_euler([1.0, 0.0]), "q"),
+    ("quat_from_seed002_frame", lambda: conventions.quat_from_seed002(Q_ID, frame="ENU"), "frame"),
+    ("quat_from_seed002_frame_case", lambda: conventions.quat_from_seed002(Q_ID, frame="android"), "frame"),
+    ("quat_from_seed002_nav", lambda: conventions.quat_from_seed002(Q_ID, frame="NED", nav="enu"), "nav"),
+    ("quat_from_seed002_nonunit", lambda: conventions.quat_from_seed002(Q_NONUNIT), "q"),
+    ("quat_from_seed002_shape", lambda: conventions.quat_from_seed002([1.0, 0.0, 0.0]), "q"),
+    ("quat_to_seed002_frame", lambda: conventions.quat_to_seed002(Q_ID, frame="Windows"), "frame"),
+    ("quat_to_seed002_nav", lambda: conventions.quat_to_seed002(Q_ID, nav="NWU"), "nav"),
+    ("quat_to_seed002_nonunit", lambda: conventions.quat_to_seed002(Q_NONUNIT), "q"),
+    ("quat_to_seed002_nan", lambda: conventions.quat_to_seed002(Q_NAN), "q"),
+    ("dcm_from_seed004_reflection", lambda: conventions.dcm_from_seed004(REFLECTION), "C_bn"),
+    ("dcm_from_seed004_transposed_scaled", lambda: conventions.dcm_from_seed004(1.01 * I3), "C_bn"),
+    ("dcm_from_seed004_shape", lambda: conventions.dcm_from_seed004(np.eye(4)), "C_bn"),
+    ("dcm_from_seed004_nan", lambda: conventions.dcm_from_seed004(M_NAN), "C_bn"),
 ]
 
 
@@ -993,10 +993,10 @@ def test_non_rotation_messages_say_what_was_wrong():
 # Validation gaps: these functions raise, but not a ValueError naming their own argument.
 
 SEED_ANGLE_NAME_CASES = [
-    ("seed000_eq339_roll", lambda: rot.seed000_eq339(np.nan, 0.0, 0.0), "roll"),
-    ("seed000_eq339_yaw", lambda: rot.seed000_eq339(0.0, 0.0, np.inf), "yaw"),
-    ("seed000_labcode_dcm_pitch", lambda: rot.seed000_labcode_dcm(0.0, np.nan, 0.0), "pitch"),
-    ("seed001_R_IB_pitch", lambda: rot.seed001_R_IB(0.0, np.nan, 0.0), "pitch"),
+    ("seed000_eq339_roll", lambda: conventions.seed000_eq339(np.nan, 0.0, 0.0), "roll"),
+    ("seed000_eq339_yaw", lambda: conventions.seed000_eq339(0.0, 0.0, np.inf), "yaw"),
+    ("seed000_labcode_dcm_pitch", lambda: conventions.seed000_labcode_dcm(0.0, np.nan, 0.0), "pitch"),
+    ("seed001_R_IB_pitch", lambda: conventions.seed001_R_IB(0.0, np.nan, 0.0), "pitch"),
 ]
 SEED_ANGLE_NAME_CASES_IDS = [i for i, _, _ in SEED_ANGLE_NAME_CASES]
 
@@ -1015,7 +1015,7 @@ def test_seed_angle_functions_name_the_bad_argument(call, name):
 
 def test_seed000_labcode_omega_rejects_non_scalar_rate_naming_it():
     with pytest.raises(ValueError, match=r"^wx must"):
-        rot.seed000_labcode_omega([0.07, 0.035], 0.0, 0.0)
+        conventions.seed000_labcode_omega([0.07, 0.035], 0.0, 0.0)
 
 
 def test_integrate_gyro_dcm_rejects_bad_renormalize_naming_it():

@@ -34,7 +34,7 @@ What is here
 Conventions at this module's edge
 ---------------------------------
 ``C_bn`` is the library's body→NED DCM (:mod:`fusionlab.rotations`; seed 004's ``C_b^n`` is the same matrix,
-:func:`fusionlab.rotations.dcm_from_seed004`). ``c1``, ``c3`` are its first and third **rows** as 3-vectors.
+:func:`fusionlab.conventions.dcm_from_seed004`). ``c1``, ``c3`` are its first and third **rows** as 3-vectors.
 
 **Accelerometer sign.** Seed 004 writes the accelerometer as "measured gravity", ``a_b = C_n^b [0, 0, g]ᵀ = g c3``
 (eqs 4.21, 6.15, 7.18): a level sensor with z down reads **+g on z**. A real accelerometer reads the specific force,

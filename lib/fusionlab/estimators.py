@@ -19,7 +19,7 @@ import inspect
 
 import numpy as np
 
-from . import rotations, sensors, validate
+from . import conventions, rotations, sensors, validate
 
 __all__ = ["register", "available", "options", "run"]
 
@@ -288,7 +288,7 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     Y, G = _freescale_units(gyr, acc)
     B, _ = sensors.field_reference(mag, fs)
     q = _freescale.run_fast9(Y, G, mag, fs, frame="NED", B=B, accel_hold=accel_hold)["q"]
-    return rotations.quat_from_seed002(q, "NED", nav="NED")
+    return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 
 @register("freescale6", uses_mag=False, seed="002 §8 (v5.00 fRun_6DOF_GY_KALMAN)",
@@ -301,7 +301,7 @@ def _freescale6(gyr, acc, mag, fs, accel_hold=0.5):
     takes the inclination RMSE from 87° to 12° (mean of the eight trials 16.3° → 3.2°)."""
     Y, G = _freescale_units(gyr, acc)
     q = _freescale.run_fast6(Y, G, fs, frame="NED", accel_hold=accel_hold)["q"]
-    return rotations.quat_from_seed002(q, "NED", nav="NED")
+    return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 
 @register("complementary", uses_mag=False, seed="000 eq 5.17 generalised to 3-D (not from the thesis)",

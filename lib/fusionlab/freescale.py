@@ -23,8 +23,8 @@ Conventions at the edge
 -----------------------
 * **Quaternions.** The note's orientation quaternion ``q`` rotates the coordinate frame global→sensor:
   ``v_S = q* v_G q = R(q) v_G`` with ``R(q)`` of eq 34 (= ``rotations.quat_to_dcm(q).T``). Those are the same four
-  numbers as the library's body→nav quaternion; :func:`fusionlab.rotations.quat_from_seed002` /
-  :func:`~fusionlab.rotations.quat_to_seed002` say which navigation frame they are written in (NED for ``'NED'``,
+  numbers as the library's body→nav quaternion; :func:`fusionlab.conventions.quat_from_seed002` /
+  :func:`~fusionlab.conventions.quat_to_seed002` say which navigation frame they are written in (NED for ``'NED'``,
   ENU for ``'Android'`` and ``'Win8'``). Nothing here conjugates.
 * **Frames.** ``frame`` is one of ``'NED'`` (aerospace; gravity-positive accelerometer, flat reading (0, 0, +1) g),
   ``'Android'`` (ENU, acceleration-positive, flat (0, 0, +1) g) or ``'Win8'`` (ENU, gravity-positive, flat
@@ -46,7 +46,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import rotations, sensors, validate
+from . import conventions, rotations, sensors, validate
 
 __all__ = [
     "FRAMES", "Tuning", "V500",
@@ -744,7 +744,7 @@ def heading(q, frame="NED"):
     """Compass heading of the sensor x axis (rad, clockwise from north seen from above) of the note's ``q``.
 
     For NED it is the yaw of ``q`` (our body→NED quaternion); for Android/Win8 ``q`` is first re-expressed in NED
-    with :func:`fusionlab.rotations.quat_from_seed002`.
+    with :func:`fusionlab.conventions.quat_from_seed002`.
 
     Parameters
     ----------
@@ -759,7 +759,7 @@ def heading(q, frame="NED"):
         Heading, rad.
     """
     q = validate.quaternions(q, "q")
-    q_ned = rotations.quat_from_seed002(q, _frame(frame), nav="NED")
+    q_ned = conventions.quat_from_seed002(q, _frame(frame), nav="NED")
     return rotations.quat_to_euler(q_ned)[..., 2]
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import checks, rotations
+from fusionlab import checks, conventions, rotations
 
 
 def good(r, p, y):                       # written as a student would: the library's euler_to_dcm is forbidden
@@ -27,7 +27,7 @@ def flip_sin(M):                         # one elementary matrix with the sin te
     (lambda r, p, y: good(r, p, y).T, "transpose of C_bn"),
     (lambda r, p, y: good(*np.radians([r, p, y])), "radians twice"),
     (lambda r, p, y: rotations.rot_x(r) @ rotations.rot_y(p) @ rotations.rot_z(y), "wrong order"),
-    (lambda r, p, y: rotations.seed000_eq339(r, p, y), "eq 3.39 as printed"),
+    (lambda r, p, y: conventions.seed000_eq339(r, p, y), "eq 3.39 as printed"),
     (lambda r, p, y: good(p, r, y), "roll and pitch are swapped"),
     (lambda r, p, y: flip_sin(good(r, p, y)), "det\\(C\\) = -1: a reflection"),
     (lambda r, p, y: 1.1 * good(r, p, y), "not orthonormal"),
@@ -121,7 +121,7 @@ def test_check_sequence_angles_spots_radians_and_reversed_order():
 
 def test_check_lock_roll_recognises_the_swapped_printed_rule():
     with pytest.raises(checks.Feedback, match="printed rule"):
-        checks.check_lock_roll(lambda C, yaw: float(rotations.seed000_eq379_381_printed(C, yaw)))
+        checks.check_lock_roll(lambda C, yaw: float(conventions.seed000_eq379_381_printed(C, yaw)))
     with pytest.raises(checks.Feedback, match="does not rebuild the matrix$"):
         checks.check_lock_roll(lambda C, yaw: 0.0)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import expm
 
-from .. import rotations
+from .. import conventions, rotations
 from ._core import Feedback, _answered, _call, _first_match, forbids, _ok, _same, _where
 
 __all__ = ["diagnose_dcm", "check_euler_to_dcm", "check_renormalize", "check_rodrigues", "check_body_gravity",
@@ -29,7 +29,7 @@ def diagnose_dcm(C, euler, tol=1e-6):
                                                     "twice -- the inputs are already in radians."),
         (rotations.rot_x(r) @ rotations.rot_y(p) @ rotations.rot_z(y),
          "the elementary rotations are multiplied in the wrong order: C_bn = Rz(yaw) @ Ry(pitch) @ Rx(roll)."),
-        (rotations.seed000_eq339(r, p, y), "this is seed 000 eq 3.39 as printed (passive matrices in Z-Y-X order) -- "
+        (conventions.seed000_eq339(r, p, y), "this is seed 000 eq 3.39 as printed (passive matrices in Z-Y-X order) -- "
                                            "it is not eq 3.40. Use the active matrices rot_z, rot_y, rot_x."),
         (rotations.euler_to_dcm([p, r, y]), "roll and pitch are swapped: roll is about x, pitch about y."),
     ]
@@ -144,7 +144,7 @@ def check_lock_roll(fn):
             rebuilt = rotations.euler_to_dcm([got, np.radians(pitch), np.radians(yaw_deg)])
             if np.allclose(rebuilt, C, atol=1e-9):
                 continue
-            printed = float(rotations.seed000_eq379_381_printed(C, np.radians(yaw_deg)))
+            printed = float(conventions.seed000_eq379_381_printed(C, np.radians(yaw_deg)))
             hint = (" -- that is the thesis' printed rule, which has the θ = +90° and θ = -90° cases swapped."
                     if np.isclose(got, printed) else "")
             raise Feedback(f"at pitch {pitch:+.0f}°, yaw {yaw_deg:.0f}°: your roll {np.degrees(got):.2f}° does not "
