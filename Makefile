@@ -37,7 +37,7 @@ labs: env  ## regenerate the student notebooks in labs/ from solutions/
 data: env  ## regenerate the datasets in data/ (byte-identical; checksums in data/README.md)
 	@echo "==> regenerating data/lab03 (terminal logs, true angles) and the Lab 03 spreadsheet"
 	@$(BIN)/python -m fusionlab.simulate --out data/
-	@$(BIN)/python -m fusionlab.correlation --log data/lab03/motion.log --xlsx data/lab03_fusion.xlsx
+	@$(BIN)/python -m fusionlab.spreadsheet --log data/lab03/motion.log --xlsx data/lab03_fusion.xlsx
 
 bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
 	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import correlation, sensors, simulate
+from fusionlab import sensors, simulate, spreadsheet
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "lab03"
 NAMES = ["stationary", "motion", "translation"]
@@ -43,7 +43,7 @@ def test_readme_lists_the_committed_checksums():
 
 def test_committed_logs_parse_back_to_the_simulated_counts(records):
     for name in NAMES:
-        counts = correlation.parse_terminal_log(DATA / f"{name}.log")
+        counts = spreadsheet.parse_terminal_log(DATA / f"{name}.log")
         np.testing.assert_array_equal(counts, records[name]["counts"])
 
 
