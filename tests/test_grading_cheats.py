@@ -93,10 +93,10 @@ CHEATS = {
            "return f.x, f.P",
     },
     "07_gfimu_constraints": {
-        1: "return gfimu.aiv_measurement_jacobian(x)[1]",
-        2: "lie = gfimu.observability_matrix(augmented=True, order=3)[2]\n"
+        1: "return gfimu_dynamics.aiv_measurement_jacobian(x)[1]",
+        2: "lie = gfimu_dynamics.observability_matrix(augmented=True, order=3)[2]\n"
            "return next(b for a, b in zip(lie, lie[1:]) if sp.expand(L - a) == sp.zeros(*a.shape))",
-        3: "return gfimu.constraints(x), gfimu.constraint_jacobian(x)",
+        3: "return gfimu_ekf.constraints(x), gfimu_ekf.constraint_jacobian(x)",
     },
     "08_north_finder": {
         1: "fixed = np.array([[0, 0, a_Az], [0, 0, a_Bz], [0, 0, a_Cz], [0, 0, 0.0]])\n"

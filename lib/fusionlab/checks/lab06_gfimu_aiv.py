@@ -112,7 +112,7 @@ def _reference_update(x, P, y, R, M):
     return kf.x, kf.P
 
 
-@forbids("filterpy.kalman.KalmanFilter.update_correlated", "gfimu.ThreeStateEKF.step")
+@forbids("filterpy.kalman.KalmanFilter.update_correlated", "gfimu_ekf.ThreeStateEKF.step")
 def check_correlated_update(fn):
     """Check a student's ``fn(x, P, y, R, M) -> (x_post, P_post)`` (seed 004 eqs 3.32–3.34 with h(x) of 3.28)."""
     for seed in (32, 33):

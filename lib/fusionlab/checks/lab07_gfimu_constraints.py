@@ -5,19 +5,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import gfimu as _gfimu
+from .. import gfimu_ekf as _gfimu_ekf, gfimu_dynamics as _gfimu_dynamics
 from ._core import Feedback, _answer, _call, _call_tuple, _first_match, forbids, _ok, _where
 
 __all__ = ["check_dynamic_jacobian", "check_lie_derivative", "check_constraints"]
 
 
-@forbids("gfimu.aiv_measurement_jacobian")
+@forbids("gfimu_dynamics.aiv_measurement_jacobian")
 def check_dynamic_jacobian(fn):
     """Check a student's ``fn(x) -> H`` (9×15; seed 004 eq 5.19) for x = [ω, α, b₁…b₉]."""
     rng = np.random.default_rng(519)
     for x in (np.concatenate([[0.4, 0.3, 0.0], [1.2, 1.2, 0.0], rng.normal(0, 0.05, 9)]), rng.normal(0, 1, 15)):
         H = _call(fn, x, what="your H")
-        ref = _gfimu.aiv_measurement_jacobian(x)[1]
+        ref = _gfimu_dynamics.aiv_measurement_jacobian(x)[1]
         if H.shape != (9, 15):
             raise Feedback(f"H is 9 AIV measurements by 15 states; got {H.shape}")
         if np.allclose(H, ref):
@@ -35,12 +35,12 @@ def check_dynamic_jacobian(fn):
     _ok("H of the augmented model (eq 5.19) is right.")
 
 
-@forbids("gfimu.observability_matrix")
+@forbids("gfimu_dynamics.observability_matrix")
 def check_lie_derivative(fn):
     """Check a student's sympy ``fn(L, f, x) -> ∂L/∂x · f`` (seed 004 eqs 5.26–5.27)."""
     import sympy as sp                     # here, not at the top: sympy takes a second to import
 
-    O, x, lie = _gfimu.observability_matrix(augmented=False, order=3)
+    O, x, lie = _gfimu_dynamics.observability_matrix(augmented=False, order=3)
     xs = sp.Matrix(x)
     f = sp.Matrix([*x[3:6], 0, 0, 0])
     got = sp.Matrix(_answer(fn, lie[0], f, xs, what="your Lie derivative"))
@@ -57,14 +57,14 @@ def check_lie_derivative(fn):
     _ok("L¹h and L²h of the reduced model are right (L²(ω_xω_y) = 2α_xα_y).")
 
 
-@forbids("gfimu.constraints", "gfimu.constraint_jacobian", "gfimu._e", "gfimu._E")
+@forbids("gfimu_ekf.constraints", "gfimu_ekf.constraint_jacobian", "gfimu_ekf._e", "gfimu_ekf._E")
 def check_constraints(fn):
     """Check a student's ``fn(x) -> (e, E)`` (seed 004 eq 5.40 and its Jacobian), x = [Δθ; Δω]."""
     rng = np.random.default_rng(540)
     for x in (rng.normal(0, 0.03, 6), np.array([0.03, 0.02, -0.01, 0.006, 0.004, -0.002])):
         out = _call_tuple(fn, (x,), 2, "your constraints")
         e, E = (np.asarray(o, dtype=float) for o in out)
-        re, rE = _gfimu.constraints(x), _gfimu.constraint_jacobian(x)
+        re, rE = _gfimu_ekf.constraints(x), _gfimu_ekf.constraint_jacobian(x)
         if e.shape != (2,) or E.shape != (2, 6):
             raise Feedback(f"return e (2,) and E (2, 6); got {e.shape} and {E.shape}")
         if np.allclose(e, -re, rtol=1e-9, atol=1e-15) and not np.allclose(re, 0, atol=1e-15):
