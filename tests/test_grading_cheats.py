@@ -69,9 +69,9 @@ CHEATS = {
         3: "return co.fuse(accel_deg, increment, weight, f0=f0)",
     },
     "04_ecompass": {
-        2: "return fz.kappa_general(s, r, alpha)",
-        4: "return fz.weights(fz.accel_noise(G), fz.mag_noise(B_c, B), B)",
-        5: "return fz.tilt_compensated_heading(G, B_c)",
+        2: "return ecompass.kappa_general(s, r, alpha)",
+        4: "return ecompass.weights(ecompass.accel_noise(G), ecompass.mag_noise(B_c, B), B)",
+        5: "return ecompass.tilt_compensated_heading(G, B_c)",
     },
     "05_freescale_kalman": {
         1: "return fz.measurement_matrix(dt, 9)",

@@ -263,7 +263,7 @@ def _triad(gyr, acc, mag, fs):
 # ---------------------------------------------------------------------------------------------------------------
 # Seed 002: the Freescale / NXP v5.00 indirect Kalman filters (Labs 04-05)
 # ---------------------------------------------------------------------------------------------------------------
-from . import freescale as _freescale  # noqa: E402  (a seed-method module; appended block)
+from . import freescale_fast as _freescale_fast  # noqa: E402  (a seed-method module; appended block)
 
 
 def _freescale_units(gyr, acc):
@@ -279,7 +279,7 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     calibration), never a statistic of the whole recording.
 
     ``accel_hold`` (s): 0 is v5.00; > 0 holds the largest accelerometer noise of that window (ours,
-    :func:`fusionlab.freescale.held_accel_noise`). Off by default here: on the eight BROAD trials 0.5 s cuts the
+    :func:`fusionlab.freescale_fast.held_accel_noise`). Off by default here: on the eight BROAD trials 0.5 s cuts the
     fast-translation error (87° → 18°) and the mean (20.8° → 14.4°), but the fast-rotation error doubles
     (15° → 31°, mostly heading). Our reading (not proven): the centripetal acceleration keeps the held noise high
     for most of that trial, the gravity correction is then nearly off, and a turn about the geomagnetic field
@@ -287,7 +287,7 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     therefore stays v5.00."""
     Y, G = _freescale_units(gyr, acc)
     B, _ = sensors.field_reference(mag, fs)
-    q = _freescale.run_fast9(Y, G, mag, fs, frame="NED", B=B, accel_hold=accel_hold)["q"]
+    q = _freescale_fast.run_fast9(Y, G, mag, fs, frame="NED", B=B, accel_hold=accel_hold)["q"]
     return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 
@@ -296,11 +296,11 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
                   "accelerometer noise held over accel_hold = 0.5 s (ours)")
 def _freescale6(gyr, acc, mag, fs, accel_hold=0.5):
     """``accel_hold`` (s): the accelerometer noise that sets the Kalman gain is the largest of the last 0.5 s
-    (ours, not v5.00's: :func:`fusionlab.freescale.held_accel_noise`; 0 gives v5.00's single-reading estimate).
+    (ours, not v5.00's: :func:`fusionlab.freescale_fast.held_accel_noise`; 0 gives v5.00's single-reading estimate).
     0.5 s is the duration of one hand movement, not fitted per trial; on the BROAD fast-translation trial it
     takes the inclination RMSE from 87° to 12° (mean of the eight trials 16.3° → 3.2°)."""
     Y, G = _freescale_units(gyr, acc)
-    q = _freescale.run_fast6(Y, G, fs, frame="NED", accel_hold=accel_hold)["q"]
+    q = _freescale_fast.run_fast6(Y, G, fs, frame="NED", accel_hold=accel_hold)["q"]
     return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 

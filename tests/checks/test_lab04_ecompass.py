@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import checks, freescale as fz
+from fusionlab import checks, ecompass
 
 
 def profile(s, r, alpha):
@@ -96,7 +96,7 @@ def heading(G, Bc, sign=1.0):
 
 
 def test_check_heading_passes_a_tilt_compensated_compass_and_names_the_slips():
-    try:                                   # the sign conventions of fz.accel_model decide which heading() is right
+    try:                         # the sign conventions of ecompass.accel_model decide which heading() is right
         checks.check_heading(heading)
         right = heading
     except checks.Feedback:
@@ -110,5 +110,5 @@ def test_check_heading_passes_a_tilt_compensated_compass_and_names_the_slips():
 
 
 def test_the_library_s_weights_are_refused():
-    with pytest.raises(checks.Feedback, match="freescale.accel_noise, the library's own solution"):
-        checks.check_weights(lambda G, Bc, B: fz.weights(fz.accel_noise(G), fz.mag_noise(Bc, B), B))
+    with pytest.raises(checks.Feedback, match="ecompass.accel_noise, the library's own solution"):
+        checks.check_weights(lambda G, Bc, B: ecompass.weights(ecompass.accel_noise(G), ecompass.mag_noise(Bc, B), B))

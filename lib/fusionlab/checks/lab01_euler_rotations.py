@@ -152,7 +152,7 @@ def check_lock_roll(fn):
     _ok("roll at gimbal lock is right for θ = +90° and θ = -90°.")
 
 
-@forbids("rotations.quat_multiply", "freescale._qmul")
+@forbids("rotations.quat_multiply", "freescale_fast._qmul")
 def check_quat_multiply(fn):
     """Lab 01 exercise 7: a student's Hamilton product ``fn(p, q) -> p ⊗ q`` of scalar-first quaternions (seed 001
     quaternion note §2). Cases are general (not unit) quaternions, so a normalised result shows up too."""
@@ -189,7 +189,7 @@ def check_quat_multiply(fn):
     _ok(f"p ⊗ q is right for {len(cases)} pairs (i ⊗ j = k, and quaternions that are not unit).")
 
 
-@forbids("rotations.quat_to_dcm", "rotations.quat_rotate", "freescale.rotation_matrix", "freescale._R")
+@forbids("rotations.quat_to_dcm", "rotations.quat_rotate", "ecompass.rotation_matrix", "freescale_fast._R")
 def check_quat_to_dcm(fn):
     """Lab 01 exercise 8: a student's ``fn(q) -> C_bn`` of a unit body→navigation quaternion ``[w, x, y, z]``:
     ``C(q) v = vector part of q ⊗ (0, v) ⊗ q*`` (seed 001 quaternion note §3). Diagnoses the transpose (the note's

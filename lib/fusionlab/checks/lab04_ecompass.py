@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import freescale as fz, rotations
+from .. import ecompass, rotations
 from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok, _where
 
 __all__ = ["check_profile_matrix", "check_kappa", "check_largest_eigenvector", "check_weights", "check_heading"]
@@ -38,7 +38,7 @@ def check_profile_matrix(fn):
     _ok("B = Σ α_k s_k r_kᵀ is right, for two and three vector pairs.")
 
 
-@forbids("freescale.kappa_general", "freescale.kappa_davenport", "freescale.kappa")
+@forbids("ecompass.kappa_general", "ecompass.kappa_davenport", "ecompass.kappa")
 def check_kappa(fn):
     """Check a student's ``fn(s, r, alpha) -> κ`` (seed 002 eq 41, corrected) on random vector pairs."""
     for seed in (42, 43):
@@ -47,15 +47,15 @@ def check_kappa(fn):
         K = _call(fn, s, r, alpha, what="your κ")
         if K.shape != (4, 4):
             raise Feedback(f"κ should be 4×4; got shape {K.shape}")
-        ref = fz.kappa_general(s, r, alpha)
+        ref = ecompass.kappa_general(s, r, alpha)
         if np.allclose(K, ref, atol=1e-12):
             continue
         z = np.sum(alpha[:, None] * np.cross(s, r), axis=0)
         msg = _first_match(K, [
-            (fz.kappa_general(r, s, alpha), "s and r are swapped: κ is built from B = Σ α s rᵀ with s measured "
+            (ecompass.kappa_general(r, s, alpha), "s and r are swapped: κ is built from B = Σ α s rᵀ with s measured "
                                             "(sensor frame) and r the reference (global frame); swapping them gives "
                                             "the inverse rotation."),
-            (fz.kappa_general(s, r, [1.0, 1.0]), "the weights α_k are missing."),
+            (ecompass.kappa_general(s, r, [1.0, 1.0]), "the weights α_k are missing."),
             # before symmetry: a first row of -z (the column right) is not symmetric either
             (lambda k: np.allclose(k[0, 1:], -z, atol=1e-12), "the first row has the wrong sign: z = Σ α (s × r), "
                                                               "not r × s."),
@@ -68,7 +68,7 @@ def check_kappa(fn):
                               "[[σ, zᵀ], [z, B + Bᵀ - σI]].")
     s3, r3 = _unit_pairs(45, 3)
     a3 = np.array([0.2, 0.5, 0.3])
-    _general_case(lambda: fn(s3, r3, a3), fz.kappa_general(s3, r3, a3), "three vector pairs",
+    _general_case(lambda: fn(s3, r3, a3), ecompass.kappa_general(s3, r3, a3), "three vector pairs",
                   "Sum over every pair k, not over the lab's two.")
     _ok("κ is right (symmetric, traceless, and equal to Davenport's form), for two and three vector pairs.")
 
@@ -79,8 +79,8 @@ def check_largest_eigenvector(fn):
     for _ in range(3):
         q_true = rng.standard_normal(4)
         q_true = q_true / np.linalg.norm(q_true) * np.sign(q_true[0])
-        G, B = fz.accel_model(q_true), fz.mag_model(q_true, 50.0, 1.0)
-        K = fz.kappa(fz.measured_gravity(G), B / np.linalg.norm(B), 1.0, 0.5, 0.5)
+        G, B = ecompass.accel_model(q_true), ecompass.mag_model(q_true, 50.0, 1.0)
+        K = ecompass.kappa(ecompass.measured_gravity(G), B / np.linalg.norm(B), 1.0, 0.5, 0.5)
         q = _call(fn, K, what="your function")
         if q.shape != (4,):
             raise Feedback(f"q should have shape (4,); got {q.shape}")
@@ -102,7 +102,7 @@ def check_largest_eigenvector(fn):
     _ok("q is the largest-eigenvalue eigenvector with q0 >= 0 (it recovers the true attitude).")
 
 
-@forbids("freescale.weights", "freescale.accel_noise", "freescale.mag_noise")
+@forbids("ecompass.weights", "ecompass.accel_noise", "ecompass.mag_noise")
 def check_weights(fn):
     """Check a student's ``fn(G, B_c, B) -> (alpha_g, alpha_m)`` (seed 002 eqs 9, 15, 64-65, with the 0/0 guard)."""
     cases = [([0.1, 0.2, 1.1], [30.0, 5.0, 44.0], 50.0), ([1.5, 0.0, 0.5], [20.0, 0.0, 45.0], 50.0),
@@ -111,7 +111,7 @@ def check_weights(fn):
         out = _call(fn, np.array(G), np.array(Bc), B, what="your weights")
         if out.shape != (2,):
             raise Feedback(f"return the pair (alpha_g, alpha_m); got shape {out.shape}")
-        ref = np.array(fz.weights(fz.accel_noise(G), fz.mag_noise(Bc, B), B), dtype=float)
+        ref = np.array(ecompass.weights(ecompass.accel_noise(G), ecompass.mag_noise(Bc, B), B), dtype=float)
         if np.allclose(out, ref, atol=1e-9):
             continue
         qa = abs(np.dot(G, G) - 1)
@@ -126,18 +126,19 @@ def check_weights(fn):
         ], rtol=0, atol=1e-9)
         raise Feedback(msg or f"G = {G}, B_c = {Bc}: expected (α_g, α_m) = {ref.round(6)}; got {out.round(6)}.")
     G4, B4 = np.array([0.2, -0.3, 0.9]), np.array([25.0, 10.0, -38.0])
-    _general_case(lambda: fn(G4, B4, 47.0), fz.weights(fz.accel_noise(G4), fz.mag_noise(B4, 47.0), 47.0),
+    _general_case(lambda: fn(G4, B4, 47.0),
+                  ecompass.weights(ecompass.accel_noise(G4), ecompass.mag_noise(B4, 47.0), 47.0),
                   "a field of B = 47 µT", "Use the argument B, not 50 µT, in the magnetometer noise (eq 64).",
                   atol=1e-9)
     _ok("the weights follow eqs 64-65, including the noise-free 0/0 case and another field strength.")
 
 
-@forbids("freescale.tilt_compensated_heading", "freescale.ecompass", "freescale.heading")
+@forbids("ecompass.tilt_compensated_heading", "ecompass.ecompass", "ecompass.heading")
 def check_heading(fn):
     """Check a student's ``fn(G, B_c) -> heading`` (rad; tilt-compensated compass, NED)."""
     for e in np.array([[0.0, 0.0, 0.5], [0.3, -0.2, 2.5], [-2.0, 0.4, -1.0]]):
         q = rotations.euler_to_quat(e)
-        G, Bc = fz.accel_model(q), fz.mag_model(q, 50.0, 1.1)
+        G, Bc = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, 1.1)
         h = float(_call(fn, G, Bc, what="your heading"))
         if np.isclose(np.cos(h - e[2]), 1.0, atol=1e-9):
             continue
