@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import dcm, estimators, metrics, rotations, sensors, simulate
+from fusionlab import dcm, dcm_filter, estimators, metrics, rotations, sensors, simulate
 
 BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 
@@ -72,8 +72,8 @@ def _inclination_deg(q, q_true):
 def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
     info = estimators.available()["dcm_ahrs6"]
     assert info["uses_mag"] is False and info["seed"].startswith("004")
-    assert estimators.options("dcm_ahrs") == {"acc_sigma_untrusted": dcm.HANDHELD.acc_sigma_untrusted,
-                                              "hold": dcm.HANDHELD.hold, "acc_lp_tau": dcm.HANDHELD.acc_lp_tau}
+    assert estimators.options("dcm_ahrs") == {"acc_sigma_untrusted": dcm_filter.HANDHELD.acc_sigma_untrusted,
+                                              "hold": dcm_filter.HANDHELD.hold, "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau}
     assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0}
 
 
@@ -96,8 +96,8 @@ def test_6d_learns_the_horizontal_gyro_bias_and_bounds_the_tilt_of_a_biased_gyro
     incl = _inclination_deg(q, rec["q"])
     gyro = _inclination_deg(estimators.run("gyro", rec["gyr"], rec["acc"], rec["fs"], frame="NED"), rec["q"])
     assert np.sqrt(np.mean(incl ** 2)) < 3.0 and incl.max() < 6.0 and gyro.max() > 90.0
-    out = dcm.run_ahrs(rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2,
-                       tuning=dcm.HANDHELD)
+    out = dcm_filter.run_ahrs(rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2,
+                       tuning=dcm_filter.HANDHELD)
     err_nav = out["C_bn"][-1] @ (out["bias"][-1] - rec["bias"])          # bias error in N, E, D at the end (still)
     assert np.all(np.abs(np.degrees(err_nav[:2])) < 0.1), np.degrees(err_nav)   # horizontal: learnt
     assert not out["mag_trusted"].any()
@@ -106,7 +106,7 @@ def test_6d_learns_the_horizontal_gyro_bias_and_bounds_the_tilt_of_a_biased_gyro
 def test_run_ahrs_without_magnetometer_still_checks_its_inputs():
     gyr, acc, _ = _still([0.1, 0.2, 0.3], n=20)
     with pytest.raises(ValueError, match="same length|same number|length"):
-        dcm.run_ahrs(gyr, dcm.accel_to_seed004(acc[:10]), None, 100.0)
+        dcm_filter.run_ahrs(gyr, dcm.accel_to_seed004(acc[:10]), None, 100.0)
     with pytest.raises(ValueError, match="acc_sigma_untrusted must be a positive"):
         estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, acc_sigma_untrusted=0.0)
 

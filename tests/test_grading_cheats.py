@@ -113,8 +113,8 @@ CHEATS = {
            "return F @ x, F @ P @ F.T + dcm.ahrs_process_noise(x[0:3], x[3:6], dt, gyro_noise, bias_walk)",
     },
     "10_gps_ins": {
-        1: "return dcm.ins_transition(x, acc, A_tilde, dt)",
-        2: "return dcm.sigma_points_2n(x, P)",
+        1: "return gpsins.ins_transition(x, acc, A_tilde, dt)",
+        2: "return gpsins.sigma_points_2n(x, P)",
     },
     "11_real_data": {
         1: "return metrics.heading_error(q_err)",

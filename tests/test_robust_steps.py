@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fusionlab import dcm, rotations, sensors
+from fusionlab import dcm, dcm_filter, rotations, sensors
 
 FS = 100.0
 C_TILT = rotations.euler_to_dcm(np.radians([15.0, -10.0, 40.0]))
@@ -28,7 +28,7 @@ def _static(seconds, bias_dps=(0.0, 0.0, 0.0), seed=0, C=C_TILT):
 
 def _ahrs(gyr, acc, mag, tuning, fs=FS):
     h = None if mag is None else mag / sensors.field_reference(mag, fs)[0][:, None]
-    return dcm.run_ahrs(gyr, dcm.accel_to_seed004(acc), h, fs, tuning=tuning, init_seconds=0.0)
+    return dcm_filter.run_ahrs(gyr, dcm.accel_to_seed004(acc), h, fs, tuning=tuning, init_seconds=0.0)
 
 
 # --- causal helpers ------------------------------------------------------------------------------------------------
@@ -67,8 +67,8 @@ def test_rest_is_found_after_min_time_of_quiet_and_never_during_motion():
 def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_accelerometer_cannot_see():
     bias = np.array([0.3, -0.2, 0.4])
     gyr, acc, _ = _static(60.0, bias)
-    with_rest = _ahrs(gyr, acc, None, dcm.HANDHELD)
-    without = _ahrs(gyr, acc, None, replace(dcm.HANDHELD, bias_sigma_rest=None))
+    with_rest = _ahrs(gyr, acc, None, dcm_filter.HANDHELD)
+    without = _ahrs(gyr, acc, None, replace(dcm_filter.HANDHELD, bias_sigma_rest=None))
     err = lambda out: C_TILT @ (np.degrees(out["bias"][-1]) - bias)               # bias error in N, E, D, °/s
     assert np.all(np.abs(err(with_rest)) < 0.01), err(with_rest)
     assert abs(err(without)[2]) > 0.2 and np.all(np.abs(err(without)[:2]) < 0.02), err(without)
@@ -101,7 +101,7 @@ def test_the_dip_test_ignores_a_field_that_turns_while_keeping_its_strength():
     window = slice(3000, 4500)                                                     # 30-45 s
     gyr, acc, mag = _turned_field(60.0, window, 25.0)
     err = {}
-    for label, tu in (("dip", dcm.HANDHELD), ("norm only", replace(dcm.HANDHELD, dip_tol=None))):
+    for label, tu in (("dip", dcm_filter.HANDHELD), ("norm only", replace(dcm_filter.HANDHELD, dip_tol=None))):
         out = _ahrs(gyr, acc, mag, tu)
         err[label] = np.degrees(rotations.quat_angle_between(out["q"], rotations.dcm_to_quat(C_TILT)))
         if label == "dip":
@@ -122,8 +122,8 @@ def test_the_accelerometer_low_passed_in_an_almost_inertial_frame_averages_a_tra
     acc = sensors.specific_force(C_TILT, a_nav) + 0.02 * rng.standard_normal((n, 3))
     gyr = np.radians(0.01) * rng.standard_normal((n, 3))
     tilt = {}
-    for label, tau in (("low-passed", dcm.HANDHELD.acc_lp_tau), ("raw", None)):
-        out = _ahrs(gyr, acc, None, replace(dcm.HANDHELD, acc_lp_tau=tau))
+    for label, tau in (("low-passed", dcm_filter.HANDHELD.acc_lp_tau), ("raw", None)):
+        out = _ahrs(gyr, acc, None, replace(dcm_filter.HANDHELD, acc_lp_tau=tau))
         c3 = out["C_bn"][:, 2]
         tilt[label] = np.degrees(np.arccos(np.clip(c3 @ C_TILT[2], -1, 1)))[2000:]   # angle of the estimated down
     rms = {k: np.sqrt(np.mean(v ** 2)) for k, v in tilt.items()}
@@ -139,11 +139,11 @@ def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag):
     gyr = gyr + np.radians(20.0) * np.sin(np.arange(len(gyr)) / 50.0)[:, None] * (np.arange(len(gyr)) > 800)[:, None]
     acc_b = dcm.accel_to_seed004(acc)
     h = mag / sensors.field_reference(mag, FS)[0][:, None] if with_mag else None
-    fast = dcm.run_ahrs(gyr, acc_b, h, FS, tuning=dcm.HANDHELD, init_seconds=0.0)
+    fast = dcm_filter.run_ahrs(gyr, acc_b, h, FS, tuning=dcm_filter.HANDHELD, init_seconds=0.0)
     C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[0], h[0] if with_mag else [1.0, 0.0, 0.0])
                                 * ([1.0, 1.0, 1.0] if with_mag else [1.0, 1.0, 0.0]))
     incl = float(dcm.inclination_from(acc_b[0], h[0])) if with_mag else 0.0
-    f = dcm.DcmAhrs(C0, incl, 1 / FS, tuning=dcm.HANDHELD, g=dcm.G)
+    f = dcm_filter.DcmAhrs(C0, incl, 1 / FS, tuning=dcm_filter.HANDHELD, g=dcm.G)
     xs = []
     for k in range(len(gyr)):
         f.step(gyr[k], acc_b[k], h[k] if with_mag else None)

@@ -322,7 +322,7 @@ def _correlation(gyr, acc, mag, fs, n_ma=12, accel_weight="ratio"):
 # ---------------------------------------------------------------------------------------------------------------
 # Seed 004 ch. 6: the 9-state DCM AHRS (Lab 09)
 # ---------------------------------------------------------------------------------------------------------------
-from . import dcm as _dcm  # noqa: E402  (a seed-method module; appended block)
+from . import dcm as _dcm, dcm_filter as _dcm_filter  # noqa: E402  (a seed-method module; appended block)
 
 #: Measurement-update rate of the registered DCM AHRS, Hz: every ``round(fs / 50)``-th sample (the prediction uses
 #: every gyro sample). The thesis updates at its 100 Hz sample rate; 50 Hz keeps real 286 Hz recordings fast.
@@ -332,9 +332,9 @@ DCM_AHRS_UPDATE_HZ = 50.0
 @register("dcm_ahrs", uses_mag=True, seed="004 §6.4 (9-state DCM AHRS: rows c1, c3 and gyro bias)",
           summary="DCM-row Kalman filter, linear acc/mag measurements, adaptive R, orthogonality pseudo-measurements; "
                   "ours after VQF: rest bias, magnetic dip test, accelerometer low-passed in an almost inertial "
-                  "frame (tuning dcm.HANDHELD)")
-def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm.HANDHELD.acc_sigma_untrusted, hold=_dcm.HANDHELD.hold,
-              acc_lp_tau=_dcm.HANDHELD.acc_lp_tau):
+                  "frame (tuning dcm_filter.HANDHELD)")
+def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm_filter.HANDHELD.acc_sigma_untrusted,
+              hold=_dcm_filter.HANDHELD.hold, acc_lp_tau=_dcm_filter.HANDHELD.acc_lp_tau):
     """Units and signs at the door, explicitly:
 
     * the thesis' accelerometer is "measured gravity", ``+g c3`` (+g on z when level, z down), the **negative** of
@@ -347,7 +347,7 @@ def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm.HANDHELD.acc_sigma_unt
       (x = magnetic north);
     * the thesis' constant g is the first sample's accelerometer magnitude (the sensor's own scale), unless that
       is more than 5 % from standard gravity (not at rest), then 9.80665 m/s²;
-    * the tuning is :data:`fusionlab.dcm.HANDHELD` (ours; it says which values were chosen on which data): an
+    * the tuning is :data:`fusionlab.dcm_filter.HANDHELD` (ours; it says which values were chosen on which data): an
       untrusted accelerometer still counts with σ = ``acc_sigma_untrusted`` m/s²; a sensor is trusted after
       ``hold`` s near its nominal magnitude (and, for the magnetometer, its dip); the accelerometer is low-passed
       with time constant ``acc_lp_tau`` s in an almost inertial frame. These three options were chosen on the
@@ -363,18 +363,18 @@ def _run_dcm_ahrs(gyr, acc, acc_b, h, fs, acc_sigma_untrusted, hold, acc_lp_tau)
     g = float(np.linalg.norm(acc[0]))
     g = g if abs(g / _dcm.G - 1) < 0.05 else _dcm.G
     every = max(1, int(round(fs / DCM_AHRS_UPDATE_HZ)))
-    tuning = replace(_dcm.HANDHELD, hold=validate.positive(hold, "hold"),
+    tuning = replace(_dcm_filter.HANDHELD, hold=validate.positive(hold, "hold"),
                      acc_sigma_untrusted=validate.positive(acc_sigma_untrusted, "acc_sigma_untrusted"),
                      acc_lp_tau=validate.positive(acc_lp_tau, "acc_lp_tau"))
-    return _dcm.run_ahrs(gyr, acc_b, h, fs, update_every=every, g=g, tuning=tuning, init_seconds=0.0)["q"]
+    return _dcm_filter.run_ahrs(gyr, acc_b, h, fs, update_every=every, g=g, tuning=tuning, init_seconds=0.0)["q"]
 
 
 @register("dcm_ahrs6", uses_mag=False, seed="004 §6.4 without the magnetometer (rows c3 and gyro bias; ours)",
           summary="the DCM AHRS without the magnetometer: accelerometer + orthogonality updates, gyro bias estimated")
-def _dcm_ahrs6(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm.HANDHELD.acc_sigma_untrusted, hold=_dcm.HANDHELD.hold,
-               acc_lp_tau=3.0):
-    """As ``dcm_ahrs`` with ``mag_b=None`` (:func:`fusionlab.dcm.run_ahrs`): the accelerometer observes ``c3`` and
-    the horizontal gyro bias; the heading starts at 0 and is the gyro's. Same tuning, ``g`` and update rate, except
-    ``acc_lp_tau = 3 s`` (VQF's value), which the eight BROAD trials prefer for the 6D filter (1 s for the 9D one);
-    any ``mag`` passed is ignored."""
+def _dcm_ahrs6(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm_filter.HANDHELD.acc_sigma_untrusted,
+               hold=_dcm_filter.HANDHELD.hold, acc_lp_tau=3.0):
+    """As ``dcm_ahrs`` with ``mag_b=None`` (:func:`fusionlab.dcm_filter.run_ahrs`): the accelerometer observes
+    ``c3`` and the horizontal gyro bias; the heading starts at 0 and is the gyro's. Same tuning, ``g`` and update
+    rate, except ``acc_lp_tau = 3 s`` (VQF's value), which the eight BROAD trials prefer for the 6D filter (1 s for
+    the 9D one); any ``mag`` passed is ignored."""
     return _run_dcm_ahrs(gyr, acc, _dcm.accel_to_seed004(acc), None, fs, acc_sigma_untrusted, hold, acc_lp_tau)

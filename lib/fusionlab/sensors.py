@@ -20,7 +20,7 @@ What is here, in the order of Lab 00:
 5. **The gyroscope**: the Coriolis force with its sign (eqs 3.32-3.34 corrected: :func:`coriolis_acceleration`,
    :func:`coriolis_force`, :func:`rotating_frame_acceleration`; printed form :func:`seed000_eq334_printed`), and the
    drift of an integrated gyro (:func:`gyro_measure`, :func:`integrate_rate`, :func:`integration_drift`).
-6. **Reading a real recording as it arrives** (not from a seed; the filters of :mod:`fusionlab.dcm` and
+6. **Reading a real recording as it arrives** (not from a seed; the filters of :mod:`fusionlab.dcm_filter` and
    :mod:`fusionlab.freescale` use them): the causal windows :func:`trailing_max` and :func:`lowpass`; rest
    detection (:func:`rest_detect`, :class:`RestDetector`) and a running reference of the geomagnetic field strength
    that ignores disturbances (:func:`field_reference`), after the ideas of VQF (D. Laidig, T. Seel, "VQF: Highly
@@ -2080,7 +2080,7 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
     have been disturbed, or the sensor moved to another place. This is the field-norm half of VQF's magnetic
     disturbance detection (Laidig & Seel 2023: norm and dip against a reference, a candidate accepted after
     a while; written here from the paper); the dip half needs the attitude, so the filter does it
-    (:func:`fusionlab.dcm.run_ahrs`). Defaults: VQF's published 10 %, 20 s and 20 s, not fitted here.
+    (:func:`fusionlab.dcm_filter.run_ahrs`). Defaults: VQF's published 10 %, 20 s and 20 s, not fitted here.
 
     Parameters
     ----------

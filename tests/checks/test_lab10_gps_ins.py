@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.linalg import cholesky
 
-from fusionlab import checks, dcm
+from fusionlab import checks, gpsins
 
 
 def with_block(F, rows, cols, value):
@@ -16,25 +16,25 @@ def with_block(F, rows, cols, value):
 
 
 @pytest.mark.parametrize("wrong, message", [
-    (lambda x, a, A, dt: dcm.ins_transition(x, a, A.T, dt), "you used Ã"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), slice(0, 9), slice(9, 12), 0.0),
+    (lambda x, a, A, dt: gpsins.ins_transition(x, a, A.T, dt), "you used Ã"),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(0, 9), slice(9, 12), 0.0),
      "DCM / gyro bias .* -Δt \\[ĉ_i×\\]"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), slice(12, 15), slice(15, 18), 0.0),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(12, 15), slice(15, 18), 0.0),
      "r ← r \\+ v Δt"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), slice(15, 18), slice(0, 9),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(15, 18), slice(0, 9),
                                     dt * np.kron(a, np.eye(3))), "you multiplied column-wise"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), slice(15, 18), slice(18, 21), 0.0),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(15, 18), slice(18, 21), 0.0),
      "the bias is removed before rotating"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), slice(9, 12), slice(9, 12), 0.0),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(9, 12), slice(9, 12), 0.0),
      "random walks and r, v keep identity blocks"),
-    (lambda x, a, A, dt: with_block(dcm.ins_transition(x, a, A, dt), 9, 20, 1.0), "F is not eqs 7.12-7.14"),
-    (lambda x, a, A, dt: dcm.ins_transition(x, a, A, 0.02), "Use the argument dt everywhere"),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), 9, 20, 1.0), "F is not eqs 7.12-7.14"),
+    (lambda x, a, A, dt: gpsins.ins_transition(x, a, A, 0.02), "Use the argument dt everywhere"),
     (lambda x, a, A, dt: np.eye(15), "F is 21×21"),
 ])
 def test_check_ins_transition_names_the_slip(wrong, message, library_as_student):
     with pytest.raises(checks.Feedback, match=message):
         checks.check_ins_transition(wrong)
-    checks.check_ins_transition(dcm.ins_transition)
+    checks.check_ins_transition(gpsins.ins_transition)
 
 
 def sigma(x, P, scale=True, lower=False, weight=None, order=None):

@@ -62,7 +62,7 @@ def _dcm_predict_ref(x, P, gyr, dt, gyro_noise, bias_walk):
 
 
 @forbids("dcm.ahrs_transition", "dcm._transition", "dcm.ahrs_process_noise", "dcm._process_noise",
-         "dcm.row_propagate", "dcm.DcmAhrs.step")
+         "dcm.row_propagate", "dcm_filter.DcmAhrs.step")
 def check_dcm_predict(fn):
     """Check a student's ``fn(x, P, gyr, dt, gyro_noise, bias_walk) -> (x_pred, P_pred)`` (seed 004 eqs 6.11-6.13)."""
     rng = np.random.default_rng(611)

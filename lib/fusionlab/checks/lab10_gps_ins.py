@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import cholesky
 
-from .. import dcm as _dcm, rotations
+from .. import dcm as _dcm, gpsins as _gpsins, rotations
 from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _general_case, _ok, _same, _where
 
 __all__ = ["check_ins_transition", "check_sigma_points"]
 
 
-@forbids("dcm.ins_transition", "dcm._ins_F")
+@forbids("gpsins.ins_transition", "gpsins._ins_F")
 def check_ins_transition(fn):
     """Check a student's ``fn(x, acc, A_tilde, dt) -> F`` (21×21; seed 004 eqs 7.12-7.14)."""
     rng = np.random.default_rng(713)
@@ -21,12 +21,12 @@ def check_ins_transition(fn):
                         rng.normal(0, 0.01, 3)])
     acc, A, dt = np.array([0.5, -1.2, -9.6]), _dcm.A_matrix([0.01, -0.02, 0.015]), 0.02
     F = _call(fn, x.copy(), acc.copy(), A.copy(), dt, what="your F")
-    ref = _dcm.ins_transition(x, acc, A, dt)
+    ref = _gpsins.ins_transition(x, acc, A, dt)
     if F.shape != (21, 21):
         raise Feedback(f"F is 21×21 (9 DCM elements, b_g, r, v, b_a); got {F.shape}")
     if _same(F, ref, 1e-12):
         A1 = _dcm.A_matrix([0.005, 0.01, -0.02])
-        _general_case(lambda: fn(x.copy(), acc.copy(), A1.copy(), 0.01), _dcm.ins_transition(x, acc, A1, 0.01),
+        _general_case(lambda: fn(x.copy(), acc.copy(), A1.copy(), 0.01), _gpsins.ins_transition(x, acc, A1, 0.01),
                       "Δt = 0.01 s", "Use the argument dt everywhere.", rtol=0, atol=1e-12)
         _ok("F matches eqs 7.12-7.14: F x̂ + g_c is exactly the direct propagation of eqs 7.7-7.11.")
         return
@@ -52,14 +52,14 @@ def check_ins_transition(fn):
     raise Feedback(f"F is not eqs 7.12-7.14: {_where(F, ref, 'F', atol=1e-12)}.")
 
 
-@forbids("dcm.sigma_points_2n", "filterpy.kalman.JulierSigmaPoints.sigma_points")
+@forbids("gpsins.sigma_points_2n", "filterpy.kalman.JulierSigmaPoints.sigma_points")
 def check_sigma_points(fn):
     """Check a student's ``fn(x, P) -> (sigmas (2n, n), weights (2n,))`` (seed 004 eqs 7.24-7.26)."""
     rng = np.random.default_rng(724)
     L = rng.normal(size=(4, 4))
     P, x = L @ L.T + 0.5 * np.eye(4), rng.normal(size=4)
     sig, w = _call_tuple(fn, (x.copy(), P.copy()), 2, "your sigma points")
-    ref, wref = _dcm.sigma_points_2n(x, P)
+    ref, wref = _gpsins.sigma_points_2n(x, P)
     if sig.shape != (8, 4) or w.shape != (8,):
         raise Feedback(f"2n = 8 points of dimension 4 and 8 weights; got {sig.shape} and {w.shape}")
     if _same(sig, ref, 1e-10) and _same(w, wref, 1e-14):
@@ -67,7 +67,7 @@ def check_sigma_points(fn):
             Ln = rng.normal(size=(n, n))
             Pn, xn = Ln @ Ln.T + 0.1 * np.eye(n), rng.normal(size=n)
             _general_case(lambda: np.concatenate([np.ravel(o) for o in fn(xn.copy(), Pn.copy())]),
-                          np.concatenate([np.ravel(o) for o in _dcm.sigma_points_2n(xn, Pn)]), f"n = {n} states",
+                          np.concatenate([np.ravel(o) for o in _gpsins.sigma_points_2n(xn, Pn)]), f"n = {n} states",
                           "Use n = len(x), not 4.", rtol=0, atol=1e-10)
         _ok("2n sigma points x ± rows of chol(nP), weights 1/(2n): they reproduce x and P exactly (n = 4, 2, 15).")
         return
