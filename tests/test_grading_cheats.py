@@ -56,7 +56,7 @@ CHEATS = {
     },
     "02_kalman_falling_body": {
         1: "return kf.joseph_covariance(P, K, H, R)",
-        2: "return kf.falling_body_state_space(k, m, g, dt)",
+        2: "return falling_body.falling_body_state_space(k, m, g, dt)",
         3: "return kf.predict(x, P, A, Q, B, u)",
         4: "f = KalmanFilter(dim_x=len(x), dim_z=len(z))\n"
            "f.x, f.P, f.H, f.R = x.copy(), P.copy(), H, R\n"

@@ -72,7 +72,7 @@ CONSTRUCTS = [
     ("import signal", "signal"),
     ("class Yes:\n    def __eq__(self, other):\n        return True", "operator"),
     ("kf = None", "rebind"),
-    ("def my_state_space(*a):\n    return kf.falling_body_state_space(*a)", "reference"),
+    ("def my_state_space(*a):\n    return falling_body.falling_body_state_space(*a)", "reference"),
 ]
 
 
@@ -270,16 +270,17 @@ def _pasted(module, name, new_name):
     return "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
 
 
-@pytest.mark.parametrize("gid, name, new_name", [("ex2_solution", "falling_body_state_space", "my_state_space"),
-                                                 ("ex3_solution", "predict", "my_predict"),
-                                                 ("ex4_solution", "_update", "my_update")])
-def test_a_library_body_pasted_with_new_names_is_flagged_copied_with_its_ratio(tmp_path, gid, name, new_name):
-    from fusionlab import kalman
-    code = "import numpy as np\n\n" + _pasted(kalman, name, new_name)
+@pytest.mark.parametrize("gid, module, name, new_name", [
+    ("ex2_solution", "falling_body", "falling_body_state_space", "my_state_space"),
+    ("ex3_solution", "kalman", "predict", "my_predict"),
+    ("ex4_solution", "kalman", "update_step", "my_update")])
+def test_a_library_body_pasted_with_new_names_is_flagged_copied_with_its_ratio(tmp_path, gid, module, name, new_name):
+    from fusionlab import falling_body, kalman
+    code = "import numpy as np\n\n" + _pasted({"falling_body": falling_body, "kalman": kalman}[module], name, new_name)
     flags = integrity.scan_notebook(SOURCE, _submission(tmp_path, lambda nb: _answer(nb, gid, code)))
     [flag] = flags                                   # nothing else in it: no reference call, no patch
     assert (flag["cell"], flag["line"]) == (gid, 3) and flag["code"].startswith(f"def {new_name}(v0")
-    assert f"`{new_name}` has the shape of `kalman.{name}` in the library: 100.0% alike" in flag["why"], flag["why"]
+    assert f"`{new_name}` has the shape of `{module}.{name}` in the library: 100.0% alike" in flag["why"], flag["why"]
 
 
 def test_the_copy_threshold_sits_between_the_model_answers_and_a_pasted_copy():

@@ -20,6 +20,16 @@ def test_validate_messages_name_argument_expected_and_got():
     with pytest.raises(ValueError, match="dt must be a positive"):
         validate.positive(float("inf"), "dt")
 
+
+def test_exact_shape_takes_no_batch_axis_and_names_the_argument():
+    np.testing.assert_array_equal(validate.exact_shape([[1, 2], [3, 4]], "H", (2, 2)), [[1.0, 2.0], [3.0, 4.0]])
+    assert validate.exact_shape(np.arange(3), "z", (3,)).dtype == float
+    with pytest.raises(ValueError, match=r"^z must have shape \(2,\); got \(1, 2\)$"):
+        validate.exact_shape([[1.0, 2.0]], "z", (2,))            # validate.array(shape=(2,)) would accept it
+    with pytest.raises(ValueError, match=r"^z must hold finite numbers; got 1 NaN or infinite value\(s\)$"):
+        validate.exact_shape([1.0, np.nan], "z", (2,))
+
+
 @pytest.mark.parametrize("euler_deg", [[30, 20, 0], [170, -60, 0], [-100, 10, 0], [0, 89, 0]])
 def test_tilt_from_accel_is_full_range(euler_deg):
     e = np.radians(euler_deg)

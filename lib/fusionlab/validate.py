@@ -9,8 +9,8 @@ Beyond shapes and finiteness: :func:`broadcast` names the arguments whose batch 
 refuses an unknown keyword, :func:`covariance` and :func:`rotation` check what a matrix must be, and the unit doors
 :func:`angles_rad`, :func:`euler_rad`, :func:`gyro_rad`, :func:`accel_ms2` and :func:`sample_rate` refuse values
 that fit degrees, °/s, g or a sample interval far better than the documented unit. ``tests/test_bad_input.py``
-checks every public function of rotations, sensors, kalman, calibration, metrics and ``estimators.run`` against
-them, one bad argument at a time.
+checks every public function of rotations, conventions, sensors, kalman, falling_body, calibration, metrics and
+``estimators.run`` against them, one bad argument at a time.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ import numpy as np
 
 __all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "UnknownOption"]
+           "quaternions_or_nan", "count", "exact_shape", "UnknownOption"]
 
 
 def _shape_text(shape, lead=""):
@@ -77,6 +77,47 @@ def array(x, name, shape=None, finite=True, dtype=float):
     if finite and not np.all(np.isfinite(a)):
         bad = int(np.size(a) - np.count_nonzero(np.isfinite(a)))
         raise ValueError(f"{name} must hold finite numbers; got {bad} NaN or infinite value(s)")
+    return a
+
+
+def exact_shape(x, name, shape):
+    """``x`` as a float array of exactly ``shape`` (no leading batch axes, unlike :func:`array`), finite.
+
+    For one vector or matrix of a filter's model, whose size the other matrices fix (a measurement ``z`` of
+    ``m`` values for an ``H`` of ``m`` rows).
+
+    Parameters
+    ----------
+    x : array_like
+        The argument to check.
+    name : str
+        The argument's name, used in the error message.
+    shape : tuple of int
+        The required shape, every axis given.
+
+    Returns
+    -------
+    ndarray
+        ``x`` as a float array of shape ``shape``.
+
+    Raises
+    ------
+    ValueError
+        If ``x`` cannot be read as numbers, holds non-finite values or has any other shape.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.exact_shape([1.0, 2.0], "z", (2,))
+    array([1., 2.])
+    >>> validate.exact_shape([[1.0, 2.0]], "z", (2,))
+    Traceback (most recent call last):
+        ...
+    ValueError: z must have shape (2,); got (1, 2)
+    """
+    a = array(x, name)
+    if a.shape != tuple(shape):
+        raise ValueError(f"{name} must have shape {tuple(shape)}; got {a.shape}")
     return a
 
 

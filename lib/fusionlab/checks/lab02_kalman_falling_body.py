@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import kalman as _kalman
+from .. import falling_body as _falling_body, kalman as _kalman
 from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _ok, _same, _where
 
 __all__ = ["check_joseph", "check_state_space", "check_predict", "check_update"]
@@ -85,12 +85,12 @@ def check_joseph(fn):
     _ok("Joseph form is right, for the optimal gain and for gains that are not optimal, with 1 to 4 states.")
 
 
-@forbids("kalman.falling_body_state_space")
+@forbids("falling_body.falling_body_state_space")
 def check_state_space(fn):
     """Check a student's ``fn(k, m, g, dt) -> (A, B, u)`` for the falling body (seed 000 §4.4.2)."""
     for k, m, g, dt in ((0.25, 10.0, 9.8, 0.01), (0.5, 2.0, 9.81, 0.1)):
         A, B, u = _call_tuple(fn, (k, m, g, dt), 3, "your function")
-        Ar, Br, ur = _kalman.falling_body_state_space(k, m, g, dt)
+        Ar, Br, ur = _falling_body.falling_body_state_space(k, m, g, dt)
         where = f"(k, m, g, dt) = ({k}, {m}, {g}, {dt})"
         if A.shape != (2, 2):
             raise Feedback(f"{where}: A must be 2×2; got shape {A.shape}.")
@@ -118,10 +118,10 @@ def check_state_space(fn):
     _ok("A and B @ u are right for the lab's parameters and another set" + note + ".")
 
 
-@forbids("kalman.predict", "kalman._predict", "filterpy.kalman.predict", "filterpy.kalman.KalmanFilter.predict")
+@forbids("kalman.predict", "kalman.predict_step", "filterpy.kalman.predict", "filterpy.kalman.KalmanFilter.predict")
 def check_predict(fn):
     """Check a student's projection ``fn(x, P, A, Q, B, u) -> (x', P')`` (seed 000 eqs 4.32 + G u, 4.36)."""
-    A, B, u = _kalman.falling_body_state_space(0.25, 10.0, 9.8, 0.1)
+    A, B, u = _falling_body.falling_body_state_space(0.25, 10.0, 9.8, 0.1)
     x = np.array([150.0, -12.0])
     P = np.array([[5.0, 0.7], [0.7, 4.8]])
     Q = np.diag([0.16, 0.25])
@@ -157,7 +157,7 @@ def check_predict(fn):
     _ok("predict: x' = A x + B u and P' = A P Aᵀ + Q, for the falling body and a general 3-state model.")
 
 
-@forbids("kalman.update", "kalman._update", "kalman.kalman_gain", "kalman._gain", "filterpy.kalman.update",
+@forbids("kalman.update", "kalman.update_step", "kalman.kalman_gain", "kalman._gain", "filterpy.kalman.update",
          "filterpy.kalman.KalmanFilter.update")
 def check_update(fn):
     """Check a student's update ``fn(x, P, z, H, R) -> (x_post, P_post, K)`` (seed 000 eqs 4.31, 4.8, 4.17)."""
