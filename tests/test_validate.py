@@ -41,3 +41,15 @@ def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
     assert np.allclose(np.degrees(sensors.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
     with pytest.raises(ValueError, match="free fall"):
         sensors.tilt_from_accel([0.0, 0.0, 0.0])
+
+def test_nonnegative_and_positive_array_keep_the_shape_and_name_the_smallest_value():
+    a = validate.nonnegative([[0.0, 2.0], [3.0, 4.0]], "t")
+    assert a.shape == (2, 2) and a.dtype == float and a[0, 0] == 0.0
+    with pytest.raises(ValueError, match=r"^t must be >= 0; got -2$"):
+        validate.nonnegative([1.0, -0.5, -2.0], "t")
+    assert validate.positive_array(0.3, "sensitivity") == 0.3
+    assert validate.positive_array([1e-12, 5.0], "gap").tolist() == [1e-12, 5.0]
+    with pytest.raises(ValueError, match=r"^gap must be > 0; got 0$"):
+        validate.positive_array([2e-6, 0.0], "gap")
+    with pytest.raises(ValueError, match="area must hold finite numbers"):
+        validate.positive_array([1.0, np.nan], "area")

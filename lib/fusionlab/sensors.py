@@ -76,20 +76,6 @@ EPS0 = 8.8541878128e-12
 FREE_FALL = 0.05 * G
 
 
-def _nonnegative(x, name):
-    a = validate.array(x, name)
-    if np.any(a < 0):
-        raise ValueError(f"{name} must be >= 0; got {float(np.min(a)):g}")
-    return a
-
-
-def _positive_array(x, name):
-    a = validate.array(x, name)
-    if np.any(a <= 0):
-        raise ValueError(f"{name} must be > 0; got {float(np.min(a)):g}")
-    return a
-
-
 # ----------------------------------------------------------------------------------------------------------------
 # 1. The accelerometer as a spring-mass-damper (seed 000 §3.1, eqs 3.1-3.7)
 # ----------------------------------------------------------------------------------------------------------------
@@ -128,10 +114,10 @@ def smd_transfer(omega, m, k, b):
     >>> np.round(np.abs(sensors.smd_transfer(np.array([0.0, 10.0]), m, k, 0.0)) / (m / k), 6)
     array([1.    , 1.0001])
     """
-    w = _nonnegative(omega, "omega")
+    w = validate.nonnegative(omega, "omega")
     m = validate.positive(m, "m")
     k = validate.positive(k, "k")
-    b = _nonnegative(b, "b")
+    b = validate.nonnegative(b, "b")
     validate.broadcast(omega=w, b=b)
     s = 1j * w
     return -1.0 / (s**2 + (b / m) * s + k / m)                                    # (000 eq 3.5)
@@ -174,7 +160,7 @@ def smd_damping_ratio(m, k, b):
     """
     m = validate.positive(m, "m")
     k = validate.positive(k, "k")
-    return _nonnegative(b, "b") / (2.0 * np.sqrt(k * m))
+    return validate.nonnegative(b, "b") / (2.0 * np.sqrt(k * m))
 
 
 def smd_dc_gain(m, k):
@@ -278,7 +264,7 @@ def parallel_plate_capacitance(eps, area, gap):
         Capacitance, F.
     """
     eps = validate.positive(eps, "eps")
-    area, gap = _positive_array(area, "area"), _positive_array(gap, "gap")
+    area, gap = validate.positive_array(area, "area"), validate.positive_array(gap, "gap")
     validate.broadcast(area=area, gap=gap)
     return eps * area / gap     # (000 eq 3.8)
 
@@ -338,8 +324,8 @@ def bridge_output(c1, c2, v_in):
     >>> round(float(sensors.bridge_output(c1, c2, 3.0)), 12), round(float(sensors.half_bridge_output(0.1, 3.0)), 12)
     (0.15, 0.15)
     """
-    c1 = _positive_array(c1, "c1")
-    c2 = _positive_array(c2, "c2")
+    c1 = validate.positive_array(c1, "c1")
+    c2 = validate.positive_array(c2, "c2")
     v_in = validate.array(v_in, "v_in")
     validate.broadcast(c1=c1, c2=c2, v_in=v_in)
     return v_in * c2 / (c1 + c2) - v_in / 2
@@ -422,7 +408,7 @@ def adxl335_bandwidth(c, r=32e3):
     >>> round(float(sensors.adxl335_bandwidth(0.1e-6)), 2)
     49.74
     """
-    return 1.0 / (2 * np.pi * validate.positive(r, "r") * _positive_array(c, "c"))
+    return 1.0 / (2 * np.pi * validate.positive(r, "r") * validate.positive_array(c, "c"))
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -595,7 +581,7 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
     """
     volts = adc_to_volts(counts, v_ref, bits)                                     # (000 eq 3.14)
     zero = validate.array(zero_level, "zero_level")
-    sens = _positive_array(sensitivity, "sensitivity")
+    sens = validate.positive_array(sensitivity, "sensitivity")
     off = validate.array(null_offset, "null_offset")
     return (volts - zero) / sens + off                                            # (000 eqs 3.15-3.16, 3.35, 5.1)
 
@@ -634,7 +620,7 @@ def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
     """
     x = validate.array(value, "value")
     zero = validate.array(zero_level, "zero_level")
-    sens = _positive_array(sensitivity, "sensitivity")
+    sens = validate.positive_array(sensitivity, "sensitivity")
     top = adc_full_scale(bits)
     volts = zero + sens * x
     return np.clip(np.rint(volts / validate.positive(v_ref, "v_ref") * top), 0, top).astype(np.int64)
@@ -659,7 +645,7 @@ def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
     float or ndarray
         One count, in the sensor's unit.
     """
-    return validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / _positive_array(sensitivity, "sensitivity")
+    return validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / validate.positive_array(sensitivity, "sensitivity")
 
 
 def null_offset(readings, expected=0.0):
@@ -1048,8 +1034,8 @@ def precession_rate(mass, arm, inertia, spin, g=G):
     float or ndarray
         Precession rate, rad/s.
     """
-    mass, arm = _positive_array(mass, "mass"), _positive_array(arm, "arm")
-    inertia, spin = _positive_array(inertia, "inertia"), _positive_array(spin, "spin")
+    mass, arm = validate.positive_array(mass, "mass"), validate.positive_array(arm, "arm")
+    inertia, spin = validate.positive_array(inertia, "inertia"), validate.positive_array(spin, "spin")
     g = validate.positive(g, "g")
     validate.broadcast(mass=mass, arm=arm, inertia=inertia, spin=spin)
     return mass * g * arm / (inertia * spin)                      # (000 eq 3.25)
@@ -1289,9 +1275,9 @@ def integration_drift(t, bias, noise_std, dt):
     >>> sensors.integration_drift(np.array([1.0, 100.0]), bias=0.01, noise_std=0.1, dt=0.01)
     (array([0.01, 1.  ]), array([0.01, 0.1 ]))
     """
-    t = _nonnegative(t, "t")
+    t = validate.nonnegative(t, "t")
     b = validate.array(bias, "bias")
-    sd = _nonnegative(noise_std, "noise_std")
+    sd = validate.nonnegative(noise_std, "noise_std")
     dt = validate.positive(dt, "dt")
     validate.broadcast(t=t, bias=b, noise_std=sd)
     return b * t, sd * np.sqrt(dt * t)
@@ -1654,7 +1640,7 @@ def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
     >>> sensors.allan_model([1.0], arw=0.01), sensors.allan_model([3.0], rrw=0.001)   # N at 1 s, K at 3 s
     (array([0.01]), array([0.001]))
     """
-    tau = _positive_array(tau, "tau")
+    tau = validate.positive_array(tau, "tau")
     arw, bias_instability, rrw = (validate.scalar(v, name, nonnegative=True) for v, name in
                                   ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
     return np.sqrt(arw ** 2 / tau + 2 * np.log(2) / np.pi * bias_instability ** 2 + rrw ** 2 * tau / 3)
@@ -1774,7 +1760,7 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     (0.171, 17.103, 8.552)
     """
     d = np.radians(validate.array(angle_deg, "angle_deg")).reshape(-1)
-    t = _nonnegative(t, "t").reshape(-1)
+    t = validate.nonnegative(t, "t").reshape(-1)
     a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
     vel = a[:, None] * t
     pos = a[:, None] * t ** 2 * (1.0 if printed else 0.5)               # printed a·t², kinematic ½·a·t²
@@ -1798,7 +1784,7 @@ def tilt_error_position(t, angle_err, g=G):
     ndarray, shape (...)
         Position error, m.
     """
-    t = _nonnegative(t, "t")
+    t = validate.nonnegative(t, "t")
     return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t ** 2
 
 
@@ -1820,7 +1806,7 @@ def gyro_bias_position(t, bias, g=G):
     ndarray, shape (...)
         Position error, m.
     """
-    t = _nonnegative(t, "t")
+    t = validate.nonnegative(t, "t")
     return validate.positive(g, "g") * validate.array(bias, "bias") * t ** 3 / 6
 
 

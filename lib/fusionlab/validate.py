@@ -18,7 +18,7 @@ import numpy as np
 
 __all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "exact_shape", "UnknownOption"]
+           "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption"]
 
 
 def _shape_text(shape, lead=""):
@@ -366,6 +366,50 @@ def count(x, name, minimum=0):
     if not np.isfinite(v) or v != int(v) or v < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}")
     return int(v)
+
+
+def nonnegative(x, name):
+    """A finite number or array with no element < 0 (frequencies, times, noise levels, damping).
+
+    Parameters
+    ----------
+    x : float or array_like
+        The value(s), any shape.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray
+        ``x`` as a float array (``array(x, name)``), unchanged.
+    """
+    a = array(x, name)
+    if np.any(a < 0):
+        raise ValueError(f"{name} must be >= 0; got {float(np.min(a)):g}")
+    return a
+
+
+def positive_array(x, name):
+    """A finite number or array whose every element is > 0 (areas, gaps, sensitivities, time constants).
+
+    Unlike :func:`positive`, which takes one scalar, it keeps the shape so that a batch of values broadcasts.
+
+    Parameters
+    ----------
+    x : float or array_like
+        The value(s), any shape.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray
+        ``x`` as a float array (``array(x, name)``), unchanged.
+    """
+    a = array(x, name)
+    if np.any(a <= 0):
+        raise ValueError(f"{name} must be > 0; got {float(np.min(a)):g}")
+    return a
 
 
 def same_length(**arrays):
