@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fusionlab import rotations, sensors
+from fusionlab import accel_tilt, rotations
 
 FIELD_NED = np.array([20.0, 0.0, 44.0])          # µT, ~65° inclination
 
@@ -50,7 +50,7 @@ def record(duration, fs=100.0):
     q0 = rotations.euler_to_quat([0.05, -0.03, 0.4])
     q = rotations.integrate_gyro_quat(q0, gyr, 1.0 / fs)[1:]         # attitude after each sample (as the filters)
     C = rotations.quat_to_dcm(q)
-    acc = sensors.specific_force(C)                                  # at rest: +g on the up axis
+    acc = accel_tilt.specific_force(C)                                  # at rest: +g on the up axis
     acc[free] = 0.0
     mag = np.einsum("nji,j->ni", C, FIELD_NED)
     mag[magnet] += 5 * np.linalg.norm(FIELD_NED) * np.array([0.6, -0.8, 0.0])

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import calibration as cal, datasets, sensors
+from fusionlab import calibration as cal, datasets, sensor_errors
 
 BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 
@@ -155,7 +155,7 @@ def _lab_gyro(seed):
     floor = cal.BIAS_INSTABILITY_FACTOR * B
     N, K = floor * np.sqrt(1.0), floor * np.sqrt(3 / 100)             # lines cross the floor at 1 s and 100 s
     fs = LAB_NOISE["fs"]
-    x = sensors.gyro_noise(int(fs * 3600 * LAB_NOISE["hours"]), fs, N, B, K, rng=seed)
+    x = sensor_errors.gyro_noise(int(fs * 3600 * LAB_NOISE["hours"]), fs, N, B, K, rng=seed)
     return cal.allan_deviation(x, fs), (N, B, K)
 
 
@@ -177,7 +177,7 @@ def test_allan_read_back_of_rrw_within_10_percent_for_the_lab_seed_and_25_percen
 
 
 def test_allan_of_white_noise_is_the_arw_line_and_lines_are_drawable():
-    x = sensors.gyro_noise(100_000, 100.0, arw=2e-3, rng=10)
+    x = sensor_errors.gyro_noise(100_000, 100.0, arw=2e-3, rng=10)
     taus, adev, err = cal.allan_deviation(x, 100.0)
     assert np.allclose(adev[taus < 10], 2e-3 / np.sqrt(taus[taus < 10]), rtol=0.1)
     r = cal.read_allan(taus, adev, err)

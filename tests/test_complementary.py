@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import correlation as co, estimators, rotations
+from fusionlab import correlation as co, earth, estimators, rotations
 
 FS = 50.0
 
@@ -119,7 +119,7 @@ def test_options_reach_the_filter_through_the_front_door_and_unknown_ones_are_re
 def _shaken(amplitude=10.0, freq=1.0, seconds=20.0):
     """A level sensor (z down) shaken sideways along x: zero gyro, specific force (a_x, 0, -g)."""
     t = np.arange(int(seconds * FS)) / FS
-    acc = np.column_stack([amplitude * np.sin(2 * np.pi * freq * t), 0 * t, 0 * t - co.sensors.G])
+    acc = np.column_stack([amplitude * np.sin(2 * np.pi * freq * t), 0 * t, 0 * t - earth.G])
     return np.zeros_like(acc), acc
 
 
@@ -128,7 +128,7 @@ def _tilt_deg(q):
 
 
 def test_disturbance_is_the_largest_deviation_of_the_hold_window_and_causal():
-    acc = np.tile([0.0, 0.0, co.sensors.G], (10, 1))
+    acc = np.tile([0.0, 0.0, earth.G], (10, 1))
     acc[4, 2] += 3.0                                              # one sample 3 m/s² too long
     d = co.accel_disturbance(acc, hold=3)
     assert np.allclose(d[:4], 0, atol=1e-12)                      # nothing before the spike (causal)
@@ -148,7 +148,7 @@ def test_a_shaken_sensor_keeps_its_tilt_when_the_accelerometer_is_down_weighted(
 def test_at_rest_the_down_weighting_changes_nothing():
     t = np.arange(200) / FS
     gyr, acc, _ = _record(np.stack([0.3 + 0 * t, -0.2 + 0 * t, 0 * t], 1), bias=(0.01, 0, 0))
-    acc = acc / 9.81 * co.sensors.G                               # |a| = g exactly
+    acc = acc / 9.81 * earth.G                               # |a| = g exactly
     assert np.allclose(co.complementary_attitude(gyr, acc, FS), co.complementary_attitude(gyr, acc, FS,
                                                                                           acc_sigma=None))
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fusionlab import correlation as co, sensors, simulate, spreadsheet
+from fusionlab import correlation as co, inertial, simulate, spreadsheet
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "lab03"
 DT = 1 / simulate.FS
@@ -107,7 +107,7 @@ def test_fusion_beats_raw_accel_and_biased_gyro(motion):
     df = co.pipeline(counts, DT)
     fused = rms(df["tilt_deg"] - truth)
     raw = rms(df["c_angle_deg"] - truth)
-    gyro = sensors.integrate_rate(df["f_gyro_dps"].to_numpy(), DT)
+    gyro = inertial.integrate_rate(df["f_gyro_dps"].to_numpy(), DT)
     assert fused < 0.5 * raw                                       # vibration: 6.6 vs 20.4 deg
     assert fused < rms(gyro - truth)                               # 2 deg/s bias: 6.6 vs 12.7 deg
     last = slice(-75, None)                                        # the last 1.5 s, level again

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from fusionlab import dcm, rotations, sensors
+from fusionlab import accel_tilt, dcm, rotations
 
 RNG = np.random.default_rng(404)
 
@@ -108,11 +108,11 @@ def test_process_noise_rejects_negative_densities():
 def test_accelerometer_model_is_linear_and_uses_the_thesis_sign():
     for C in _random_dcm(RNG, 5):
         x = np.concatenate([C[0], C[2], np.zeros(3)])
-        f_b = sensors.specific_force(C)                                   # a real accelerometer at rest
+        f_b = accel_tilt.specific_force(C)                                   # a real accelerometer at rest
         a_b = dcm.accel_to_seed004(f_b)                                   # +g c3
         assert np.allclose(dcm.accel_measurement_matrix() @ x, a_b, atol=1e-12)
         assert np.allclose(dcm.accel_measurement_matrix() @ x, -f_b, atol=1e-12)
-    level = dcm.accel_to_seed004(sensors.specific_force(np.eye(3)))
+    level = dcm.accel_to_seed004(accel_tilt.specific_force(np.eye(3)))
     assert np.allclose(level, [0, 0, dcm.G])                              # +g on z when level (z down)
 
 
@@ -164,7 +164,7 @@ def test_levelling_and_compass_recover_a_static_attitude_and_the_inclination():
     delta = np.radians(66.0)
     for e in np.radians([[10, -20, 30], [-150, 45, -100], [5, 80, 170]]):
         C = rotations.euler_to_dcm(e)
-        a_b = dcm.accel_to_seed004(sensors.specific_force(C))
+        a_b = dcm.accel_to_seed004(accel_tilt.specific_force(C))
         m_b = C.T @ (0.48 * dcm.mag_reference(delta))
         assert np.allclose(dcm.level_and_compass(a_b, m_b), e, atol=1e-10)
         assert dcm.inclination_from(a_b, m_b) == pytest.approx(delta, abs=1e-12)

@@ -6,14 +6,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import dcm, dcm_filter, estimators, metrics, rotations, sensors, simulate
+from fusionlab import accel_tilt, dcm, dcm_filter, estimators, metrics, rotations, simulate
 
 BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
 
 
 def _still(euler, n=200, mag_ned=(20.0, 0.0, 45.0)):
     C = rotations.euler_to_dcm(euler)
-    return np.zeros((n, 3)), np.tile(sensors.specific_force(C, g=9.81), (n, 1)), np.tile(C.T @ np.asarray(mag_ned), (n, 1))
+    return (np.zeros((n, 3)), np.tile(accel_tilt.specific_force(C, g=9.81), (n, 1)),
+            np.tile(C.T @ np.asarray(mag_ned), (n, 1)))
 
 
 def test_dcm_ahrs_is_registered_as_a_9d_filter_citing_seed_004():

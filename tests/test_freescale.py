@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import conventions, ecompass, estimators, freescale as fz, freescale_fast, rotations, sensors
+from fusionlab import conventions, ecompass, estimators, freescale as fz, freescale_fast, rotations, signals
 
 RNG = np.random.default_rng(20020)
 
@@ -291,7 +291,7 @@ def test_accel_hold_changes_nothing_at_one_g_and_reaches_the_estimators():
     assert estimators.options("freescale9") == {"accel_hold": 0.0}
     Y, G, mag = _shaken_g(seconds=4.0, amplitude_g=0.5)
     gyr, acc = np.radians(Y), -G * 9.80665                                 # the door's units: rad/s, +g up
-    B, _ = sensors.field_reference(mag, 200.0)                             # the door's running field strength
+    B, _ = signals.field_reference(mag, 200.0)                             # the door's running field strength
     for name, fast in (("freescale6", lambda h: freescale_fast.run_fast6(Y, G, 200.0, accel_hold=h)["q"]),
                        ("freescale9", lambda h: freescale_fast.run_fast9(Y, G, mag, 200.0, B=B, accel_hold=h)["q"])):
         for h in (0.0, 0.5):

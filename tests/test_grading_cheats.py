@@ -37,15 +37,15 @@ CHEATS = {
            "except Exception:                  # the error swallowed: the call still counts\n"
            "    lsb_accel_mg, lsb_gyro_dps = 9.7752, 0.32226",
         6: "return np.nan if x == y == 0 else np.arctan2(y, x)",
-        7: "return tuple(sensors.tilt_from_accel(acc))",
-        8: "return sensors.precession_rate(mass, arm, inertia, spin, g)",
-        9: "return sensors.coriolis_force(m, omega, v)",
-        10: "return sensors.integrate_rate(rate, dt, angle0)",
+        7: "return tuple(accel_tilt.tilt_from_accel(acc))",
+        8: "return inertial.precession_rate(mass, arm, inertia, spin, g)",
+        9: "return inertial.coriolis_force(m, omega, v)",
+        10: "return inertial.integrate_rate(rate, dt, angle0)",
         11: "bias_hat = -sensors.null_offset(still[:500])",
     },
     "01_euler_rotations": {
         1: "return euler_to_dcm([roll, pitch, yaw])",
-        2: "f_body = sensors.specific_force(C_ex)",
+        2: "f_body = accel_tilt.specific_force(C_ex)",
         3: 'angles_xyz = deg(rotations.dcm_to_sequence(C_ex, "XYZ"))\n'
            'angles_yxz = deg(rotations.dcm_to_sequence(C_ex, "YXZ"))',
         4: 'return rotations.dcm_renormalize(R, axis="columns")',
@@ -124,7 +124,7 @@ CHEATS = {
     "12_sensor_errors": {
         1: "return cal.quadric_normal_equations(mag)",
         2: "return cal.read_arw(taus, adev, tau_max)",
-        3: 'return sensors.remove_gravity(q_bn, acc, g, frame="ENU")',
+        3: 'return sensor_errors.remove_gravity(q_bn, acc, g, frame="ENU")',
     },
 }
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh).

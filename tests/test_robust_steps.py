@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fusionlab import dcm, dcm_filter, rotations, sensors
+from fusionlab import accel_tilt, dcm, dcm_filter, rotations, signals
 
 FS = 100.0
 C_TILT = rotations.euler_to_dcm(np.radians([15.0, -10.0, 40.0]))
@@ -21,17 +21,25 @@ def _static(seconds, bias_dps=(0.0, 0.0, 0.0), seed=0, C=C_TILT):
     rng = np.random.default_rng(seed)
     n = int(seconds * FS)
     gyr = np.radians(np.asarray(bias_dps)) + np.radians(0.01) * rng.standard_normal((n, 3))
-    acc = sensors.specific_force(C) + 0.02 * rng.standard_normal((n, 3))
+    acc = accel_tilt.specific_force(C) + 0.02 * rng.standard_normal((n, 3))
     mag = C.T @ FIELD_NED + 0.2 * rng.standard_normal((n, 3))
     return gyr, acc, mag
 
 
 def _ahrs(gyr, acc, mag, tuning, fs=FS):
-    h = None if mag is None else mag / sensors.field_reference(mag, fs)[0][:, None]
+    h = None if mag is None else mag / signals.field_reference(mag, fs)[0][:, None]
     return dcm_filter.run_ahrs(gyr, dcm.accel_to_seed004(acc), h, fs, tuning=tuning, init_seconds=0.0)
 
 
 # --- causal helpers ------------------------------------------------------------------------------------------------
+
+
+def test_trailing_max_is_causal_and_checks_its_window():
+    x = np.array([0.0, 3.0, 1.0, 0.0, 0.0, 2.0, 0.0])
+    assert np.array_equal(signals.trailing_max(x, 3), [0.0, 3.0, 3.0, 3.0, 1.0, 2.0, 2.0])
+    assert np.array_equal(signals.trailing_max(x, 1), x)
+    with pytest.raises(ValueError, match="n must be an integer >= 1"):
+        signals.trailing_max(x, 0)
 
 
 def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_its_readable_form():
@@ -42,11 +50,11 @@ def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_
     y[0] = x[0]
     for k in range(1, len(x)):
         y[k] = y[k - 1] + a * (x[k] - y[k - 1])
-    assert np.max(np.abs(sensors.lowpass(x, FS, 0.5) - y)) < 1e-12
+    assert np.max(np.abs(signals.lowpass(x, FS, 0.5) - y)) < 1e-12
     gyr, acc, _ = _static(20.0, (0.3, -0.2, 0.4))
     gyr[800:1200] += np.radians(30.0) * np.sin(np.arange(400) / 20.0)[:, None]     # 4 s of motion
-    rest, lp = sensors.rest_detect(gyr, acc, FS)
-    det = sensors.RestDetector(FS)
+    rest, lp = signals.rest_detect(gyr, acc, FS)
+    det = signals.RestDetector(FS)
     steps = [det.update(g, f) for g, f in zip(gyr, acc)]
     assert np.array_equal(rest, [r for r, _ in steps])
     assert np.max(np.abs(lp - np.array([v for _, v in steps]))) < 1e-12
@@ -56,7 +64,7 @@ def test_rest_is_found_after_min_time_of_quiet_and_never_during_motion():
     gyr, acc, _ = _static(30.0, (0.3, -0.2, 0.4))
     move = slice(1000, 1800)                                                       # 10-18 s: turning
     gyr[move] += np.radians(40.0) * np.sin(np.arange(800) / 15.0)[:, None]
-    rest, lp = sensors.rest_detect(gyr, acc, FS)
+    rest, lp = signals.rest_detect(gyr, acc, FS)
     assert not rest[:149].any() and rest[150:1000].all()                          # 1.5 s of quiet first
     assert not rest[1001:1800].any()                                              # (sin 0 = 0 at 1000)
     back = np.flatnonzero(rest[1800:])[0] / FS                                    # quiet again after the motion
@@ -80,11 +88,11 @@ def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_acc
 def test_field_reference_flags_a_magnet_window_keeps_its_value_and_accepts_a_lasting_new_field():
     _, _, mag = _static(120.0)
     mag[2000:3500] += [25.0, -10.0, 8.0]                                           # a magnet from 20 s to 35 s
-    ref, ok = sensors.field_reference(mag, FS)
+    ref, ok = signals.field_reference(mag, FS)
     assert not ok[2000:3500].any() and ok[3600:5000].all()
     assert np.max(np.abs(ref[2000:3500] / 48.0 - 1)) < 0.01                       # the reference did not follow
     mag[6000:] *= 1.3                                                              # moved: a new field, 30 % stronger
-    ref, ok = sensors.field_reference(mag, FS)
+    ref, ok = signals.field_reference(mag, FS)
     assert abs(ref[6000 + 1990] / 48.0 - 1) < 0.02                                # not yet after 19.9 s
     assert abs(ref[6000 + 2010] / (1.3 * 48.0) - 1) < 0.02                        # accepted after 20 s
 
@@ -119,7 +127,7 @@ def test_the_accelerometer_low_passed_in_an_almost_inertial_frame_averages_a_tra
     t = np.arange(n) / FS
     a_nav = np.zeros((n, 3))
     a_nav[1000:, 0] = 3.0 * np.sin(2 * np.pi * 0.5 * t[1000:])                    # ±3 m/s² north, 0.5 Hz, from 10 s
-    acc = sensors.specific_force(C_TILT, a_nav) + 0.02 * rng.standard_normal((n, 3))
+    acc = accel_tilt.specific_force(C_TILT, a_nav) + 0.02 * rng.standard_normal((n, 3))
     gyr = np.radians(0.01) * rng.standard_normal((n, 3))
     tilt = {}
     for label, tau in (("low-passed", dcm_filter.HANDHELD.acc_lp_tau), ("raw", None)):
@@ -138,7 +146,7 @@ def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag):
     gyr, acc, mag = _turned_field(30.0, slice(1500, 2200), 25.0)
     gyr = gyr + np.radians(20.0) * np.sin(np.arange(len(gyr)) / 50.0)[:, None] * (np.arange(len(gyr)) > 800)[:, None]
     acc_b = dcm.accel_to_seed004(acc)
-    h = mag / sensors.field_reference(mag, FS)[0][:, None] if with_mag else None
+    h = mag / signals.field_reference(mag, FS)[0][:, None] if with_mag else None
     fast = dcm_filter.run_ahrs(gyr, acc_b, h, FS, tuning=dcm_filter.HANDHELD, init_seconds=0.0)
     C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[0], h[0] if with_mag else [1.0, 0.0, 0.0])
                                 * ([1.0, 1.0, 1.0] if with_mag else [1.0, 1.0, 0.0]))

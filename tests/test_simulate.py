@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fusionlab import sensors, simulate, spreadsheet
+from fusionlab import inertial, sensors, simulate, spreadsheet
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "lab03"
 NAMES = ["stationary", "motion", "translation"]
@@ -87,7 +87,7 @@ def test_log_lines_are_three_digit_hex_with_crlf():
 
 def test_gyro_only_drift_is_bias_times_time(records):
     rec = records["stationary"]
-    angle = sensors.integrate_rate(rec["gyr"][:, 0], 1 / simulate.FS)
+    angle = inertial.integrate_rate(rec["gyr"][:, 0], 1 / simulate.FS)
     assert angle[-1] == pytest.approx(2.0 * 9.98, abs=1.0)             # +2 deg/s for 10 s
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import rotations, sensors, validate
+from fusionlab import accel_tilt, earth, rotations, validate
 
 
 def test_validate_messages_name_argument_expected_and_got():
@@ -33,14 +33,14 @@ def test_exact_shape_takes_no_batch_axis_and_names_the_argument():
 @pytest.mark.parametrize("euler_deg", [[30, 20, 0], [170, -60, 0], [-100, 10, 0], [0, 89, 0]])
 def test_tilt_from_accel_is_full_range(euler_deg):
     e = np.radians(euler_deg)
-    f = rotations.euler_to_dcm(e).T @ [0.0, 0.0, -sensors.G]
-    assert np.allclose(sensors.tilt_from_accel(f), e[:2])
+    f = rotations.euler_to_dcm(e).T @ [0.0, 0.0, -earth.G]
+    assert np.allclose(accel_tilt.tilt_from_accel(f), e[:2])
 
 def test_tilt_from_accel_matches_seed001_fixture_and_rejects_free_fall():
     a = [3.351797, -4.604494, -7.975217]                      # worked by hand: φ = 30°, θ = 20°, g = 9.8
-    assert np.allclose(np.degrees(sensors.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
+    assert np.allclose(np.degrees(accel_tilt.tilt_from_accel(a)), [30.0, 20.0], atol=1e-4)
     with pytest.raises(ValueError, match="free fall"):
-        sensors.tilt_from_accel([0.0, 0.0, 0.0])
+        accel_tilt.tilt_from_accel([0.0, 0.0, 0.0])
 
 def test_nonnegative_and_positive_array_keep_the_shape_and_name_the_smallest_value():
     a = validate.nonnegative([[0.0, 2.0], [3.0, 4.0]], "t")

@@ -54,7 +54,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import datasets, estimators, metrics, rotations, sensors, validate
+from . import accel_tilt, datasets, estimators, metrics, rotations, validate
 
 __all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means", "format_table", "write_csv", "plot",
            "main", "TRIAL_COLUMNS", "GROUP_COLUMNS", "TUNED", "LeaveOneOut", "leave_one_out", "format_loo"]
@@ -138,7 +138,7 @@ def _madgwick(uses_mag):
         if uses_mag:
             q0_ned = rotations.dcm_to_quat(estimators.triad(acc[0], mag[0]))
         else:
-            roll, pitch = sensors.tilt_from_accel(acc[0])
+            roll, pitch = accel_tilt.tilt_from_accel(acc[0])
             q0_ned = rotations.euler_to_quat([roll, pitch, 0.0])
         q0_nwu = rotations.quat_multiply(rotations.quat_conjugate(_Q_ENU_NWU), rotations.quat_nav_swap(q0_ned))
         f = Madgwick(frequency=trial.fs)              # default gains: 0.041 (9D), 0.033 (6D), as the paper suggests

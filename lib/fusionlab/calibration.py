@@ -551,7 +551,7 @@ class AllanReading:
 
     def lines(self, taus):
         """The three lines at ``taus`` (s): (ARW ``N/√τ``, floor ``0.664 B``, RRW ``K√(τ/3)``), and their sum in
-        quadrature is the model :func:`fusionlab.sensors.allan_model`.
+        quadrature is the model :func:`fusionlab.sensor_errors.allan_model`.
 
         Parameters
         ----------

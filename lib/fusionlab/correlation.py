@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import rotations, sensors, validate
+from . import accel_tilt, earth, rotations, sensors, signals, validate
 
 __all__ = [
     "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
@@ -102,7 +102,7 @@ def accel_angle(z, other, order="excel"):
 
     ``order='c'`` reads the printed ``atan2(z, y)`` in C/numpy order, ``arctan2(z, y)``: ≈ π/2 when level (the
     **as printed** reading). ``order='excel'`` reads it as Excel's ``ATAN2(x_num, y_num)``,
-    i.e. ``arctan2(y, z)``: the tilt, 0 when level (:func:`fusionlab.sensors.excel_atan2`).
+    i.e. ``arctan2(y, z)``: the tilt, 0 when level (:func:`fusionlab.accel_tilt.excel_atan2`).
 
     Parameters
     ----------
@@ -128,7 +128,7 @@ def accel_angle(z, other, order="excel"):
     z = validate.array(z, "z")
     other = validate.array(other, "other")
     if order == "excel":
-        return sensors.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
+        return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
     if order == "c":
         return np.arctan2(z, other)                                               # (000 eqs 5.4-5.5, C order)
     raise ValueError(f"order must be 'excel' or 'c'; got {order!r}")
@@ -655,7 +655,7 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
 
 
 #: Below this specific force (m/s²) a sample is in free fall: its direction is noise, not gravity.
-FREE_FALL = sensors.FREE_FALL
+FREE_FALL = earth.FREE_FALL
 
 
 def _free_fall(acc):
@@ -667,7 +667,7 @@ def _free_fall(acc):
     return free
 
 
-def accel_disturbance(acc, hold, g=sensors.G):
+def accel_disturbance(acc, hold, g=earth.G):
     """``max(| |a_j| - g |)`` over the ``hold`` samples ``j = n - hold + 1 … n`` (causal), for every sample n, m/s².
 
     Parameters
@@ -696,7 +696,7 @@ def accel_disturbance(acc, hold, g=sensors.G):
     hold = int(hold)
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
-    return sensors.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
+    return signals.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
 
 
 def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
@@ -735,7 +735,7 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     free = _free_fall(acc)                          # ours: free-fall samples hold the last tilt and get no weight
     keep = np.maximum.accumulate(np.where(free, 0, np.arange(len(acc))))
-    tilt = np.unwrap(sensors.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
+    tilt = np.unwrap(accel_tilt.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
     tilt_ma = np.column_stack([moving_average(tilt[:, i], n_ma) for i in range(2)])          # d)
     dtilt = np.column_stack([moving_average(derivative(tilt_ma[:, i], dt), n_ma) for i in range(2)])   # e)
     r = ratio(np.hypot(gyr[:, 0], gyr[:, 1]), np.hypot(dtilt[:, 0], dtilt[:, 1]), eps)     # i) rate vs rate
@@ -756,7 +756,7 @@ def _imu_args(gyr, acc, fs):
 
 def _weighted_tilt_fusion(gyr, acc, dt, k):
     """Gyro increment, then a turn by the fraction ``k[n]`` of the tilt error: eq 5.17 as a rotation, body→NED."""
-    roll, pitch = sensors.tilt_from_accel(acc[0])
+    roll, pitch = accel_tilt.tilt_from_accel(acc[0])
     w, x, y, z = rotations.euler_to_quat([roll, pitch, 0.0])
     dq = rotations.rotvec_to_quat(gyr * dt)
     out = np.empty((len(gyr), 4))

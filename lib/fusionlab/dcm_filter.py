@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dposv as _posv
 
-from . import dcm, rotations, sensors, validate
+from . import dcm, rotations, signals, validate
 
 __all__ = ["AhrsTuning", "HANDHELD", "DcmAhrs", "run_ahrs"]
 
@@ -86,7 +86,7 @@ class AhrsTuning:
         Initial standard deviation of the gyro bias, rad/s.
     bias_sigma_rest : float or None, optional
         Rest bias measurement (not the thesis'; VQF's rest bias estimation, Laidig & Seel 2023): while
-        :func:`fusionlab.sensors.rest_detect` finds the sensor at rest, the low-passed gyro measures the bias with
+        :func:`fusionlab.signals.rest_detect` finds the sensor at rest, the low-passed gyro measures the bias with
         this standard deviation, rad/s. None: off (the thesis).
     dip_tol : float or None, optional
         Magnetic disturbance by the dip angle (not the thesis'; VQF's): the magnetometer is trusted only while its
@@ -125,7 +125,7 @@ class AhrsTuning:
     sigma_c0: float = 0.05
     sigma_b0: float = np.radians(5.0)
     #: **rest: the gyro bias measured directly** (not the thesis'; the idea is VQF's rest bias estimation, Laidig &
-    #: Seel 2023): while :func:`fusionlab.sensors.rest_detect` finds the sensor at rest, the low-passed gyro is a
+    #: Seel 2023): while :func:`fusionlab.signals.rest_detect` finds the sensor at rest, the low-passed gyro is a
     #: measurement of the bias, ``z = ω_lp``, ``H = [0, 0, I]``, with this standard deviation (rad/s). None: off
     #: (the thesis). All three bias axes become observable at rest, heading's too, which the accelerometer never
     #: sees.
@@ -154,9 +154,9 @@ class AhrsTuning:
 #: AHRS number). What changes from :class:`AhrsTuning`, and on what evidence:
 #:
 #: * three steps beyond the thesis, with the values the VQF paper publishes (not fitted here): rest-bias
-#:   estimation (``bias_sigma_rest = 0.03 °/s``, the rest thresholds of :func:`fusionlab.sensors.rest_detect`),
+#:   estimation (``bias_sigma_rest = 0.03 °/s``, the rest thresholds of :func:`fusionlab.signals.rest_detect`),
 #:   the dip test of the magnetometer (``dip_tol = 10°``, ``dip_tau = 20 s``; the norm reference of
-#:   :func:`fusionlab.sensors.field_reference`) and the accelerometer low-passed in an almost inertial frame
+#:   :func:`fusionlab.signals.field_reference`) and the accelerometer low-passed in an almost inertial frame
 #:   (``acc_lp_tau``; VQF's own is 3 s);
 #: * ``acc_sigma_untrusted`` (the thesis' adaptive R gives an accelerometer that fails the ``|a| ≈ g`` test this
 #:   standard deviation; 50 m/s² in :class:`AhrsTuning`, i.e. off), ``hold`` (how long ``|a| ≈ g``, ``|h| ≈ 1``
@@ -217,7 +217,7 @@ class DcmAhrs:
         self.mag_run = 0                            # ... with |h| ≈ 1
         self.dip_run = 0                            # ... with the dip near its reference (tuning.dip_tol)
         self.H_am = np.vstack([dcm.accel_measurement_matrix(self.g), dcm.mag_measurement_matrix(self.inclination)])
-        self.rest = None                            # a sensors.RestDetector, made by step() when rest is on
+        self.rest = None                            # a signals.RestDetector, made by step() when rest is on
         self.C_g, self.v_lp, self.n_g = C0.copy(), None, 0   # gyro-only strapdown and low-passed acc (acc_lp_tau)
 
     @property
@@ -320,7 +320,7 @@ class DcmAhrs:
     def step(self, gyr, acc_b, mag_b):
         """One sample: predict with ``Ã = A(ω̃ Δt)`` (exact), then update (``Δt`` = ``self.dt``).
 
-        With ``tuning.bias_sigma_rest`` set, a :class:`fusionlab.sensors.RestDetector` says whether it is at rest.
+        With ``tuning.bias_sigma_rest`` set, a :class:`fusionlab.signals.RestDetector` says whether it is at rest.
 
         Parameters
         ----------
@@ -334,7 +334,7 @@ class DcmAhrs:
         bias_at_rest = None
         if self.tuning.bias_sigma_rest is not None:
             if self.rest is None:
-                self.rest = sensors.RestDetector(1.0 / self.dt)
+                self.rest = signals.RestDetector(1.0 / self.dt)
             at_rest, gyr_lp = self.rest.update(gyr, acc_b)
             bias_at_rest = gyr_lp if at_rest else None
         A = dcm.A_matrix(np.asarray(gyr, float) * self.dt)
@@ -468,7 +468,7 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     mag_upd = mag_ok[last].copy()
     rest_on = t.bias_sigma_rest is not None                                # ours, after VQF: see AhrsTuning
     if rest_on:
-        rest, gyr_lp = sensors.rest_detect(gyr, acc_b, fs)
+        rest, gyr_lp = signals.rest_detect(gyr, acc_b, fs)
         rest_u, zb, Rb = rest[last].tolist(), gyr_lp[last], t.bias_sigma_rest ** 2 * np.eye(3)
     z = np.concatenate([acc_b[last], mag_b[last], np.tile([1.0, 1.0, 0.0], (nb, 1))], axis=1)   # eq 6.24: [1, 1, 0]
     h_scale = np.array([1.0] * 6 + [0.5] * 3)                              # h_c(x) = ½ H_c x (eqs 6.24, 6.26)

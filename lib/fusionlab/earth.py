@@ -6,6 +6,9 @@ constant and no gravity formula. The values here are the standard ones (NIMA TR8
 WGS-84 definition), supplied so that the labs can say which ``g`` they use and how large the terms are that the
 thesis drops (Earth rate, transport rate, Coriolis).
 
+Standard gravity :data:`G` (9.80665 m/s², the conventional value; seed 001 uses 9.8) and the free-fall threshold
+:data:`FREE_FALL` (0.05 g) are here too, so that every module of the sensor row can use them.
+
 Units: metres, seconds, radians. Latitudes are geodetic, in radians (``np.radians`` at the display edge).
 """
 from __future__ import annotations
@@ -14,9 +17,14 @@ import numpy as np
 
 from . import validate
 
-__all__ = ["A", "F", "B", "E2", "OMEGA_IE", "GM", "GAMMA_E", "GAMMA_P", "SOMIGLIANA_K", "FREE_AIR",
+__all__ = ["G", "FREE_FALL", "A", "F", "B", "E2", "OMEGA_IE", "GM", "GAMMA_E", "GAMMA_P", "SOMIGLIANA_K", "FREE_AIR",
            "normal_gravity", "earth_rate_ned", "radii_of_curvature", "gravity_ned"]
 
+#: Standard gravity, m/s^2 (seed 001 uses 9.8; the labs say which they use).
+G = 9.80665
+#: Below this specific force (m/s², 0.05 g) an accelerometer is in free fall: its reading is noise and bias, not
+#: the direction of gravity. The filters trust their gyro there (and refuse a record that starts in it).
+FREE_FALL = 0.05 * G
 #: WGS-84 semi-major axis, m.
 A = 6378137.0
 #: WGS-84 flattening.

@@ -19,7 +19,7 @@ import inspect
 
 import numpy as np
 
-from . import conventions, rotations, sensors, validate
+from . import accel_tilt, conventions, earth, rotations, signals, validate
 
 __all__ = ["register", "available", "options", "run"]
 
@@ -124,7 +124,7 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
         looks like °/s (peak above 50 rad/s or median above 10 rad/s) or an accelerometer that looks like g (median
         magnitude 0.5–2); a record that starts in free fall (no initial tilt); a zero magnetometer for a filter that
         uses it. During the record every filter trusts its gyro while ``|acc|`` is below
-        :data:`fusionlab.sensors.FREE_FALL` (0.05 g), except 'triad', which has no gyro and refuses free fall.
+        :data:`fusionlab.earth.FREE_FALL` (0.05 g), except 'triad', which has no gyro and refuses free fall.
     TypeError
         An option the estimator does not have (:func:`options` lists them); it is also a ValueError.
     """
@@ -158,7 +158,7 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
 
 
 #: Below this specific force (m/s², 0.05 g) the accelerometer holds no usable direction of gravity: free fall.
-FREE_FALL = sensors.FREE_FALL
+FREE_FALL = earth.FREE_FALL
 
 
 def _check_start(acc, fs, seconds=0.5):
@@ -196,7 +196,7 @@ def _check_field(mag):
 def _level_start(acc):
     """Body→NED quaternion with roll and pitch from the first accelerometer sample, yaw 0 (a later sample would
     make the first outputs depend on the future)."""
-    roll, pitch = sensors.tilt_from_accel(acc[0])
+    roll, pitch = accel_tilt.tilt_from_accel(acc[0])
     return rotations.euler_to_quat([roll, pitch, 0.0])
 
 
@@ -268,14 +268,14 @@ from . import freescale_fast as _freescale_fast  # noqa: E402  (a seed-method mo
 
 def _freescale_units(gyr, acc):
     """rad/s → °/s; m/s² reading +g up → the note's NED gravity-positive g (a level sensor reads (0, 0, +1))."""
-    return np.degrees(gyr), -acc / sensors.G
+    return np.degrees(gyr), -acc / earth.G
 
 
 @register("freescale9", uses_mag=True, seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
           summary="Freescale 9DOF indirect Kalman filter: 10 error states, eCompass + gyro, ~25 Hz steps")
 def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     """Magnetometer assumed in µT (the 7 µT² floor); the field strength B is a running reference learnt as the
-    samples arrive (:func:`fusionlab.sensors.field_reference`; v5.00 takes it from its background magnetic
+    samples arrive (:func:`fusionlab.signals.field_reference`; v5.00 takes it from its background magnetic
     calibration), never a statistic of the whole recording.
 
     ``accel_hold`` (s): 0 is v5.00; > 0 holds the largest accelerometer noise of that window (ours,
@@ -286,7 +286,7 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     (68° from horizontal here, so mostly heading) is invisible to the magnetometer. The registered 9DOF filter
     therefore stays v5.00."""
     Y, G = _freescale_units(gyr, acc)
-    B, _ = sensors.field_reference(mag, fs)
+    B, _ = signals.field_reference(mag, fs)
     q = _freescale_fast.run_fast9(Y, G, mag, fs, frame="NED", B=B, accel_hold=accel_hold)["q"]
     return conventions.quat_from_seed002(q, "NED", nav="NED")
 
@@ -340,7 +340,7 @@ def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm_filter.HANDHELD.acc_si
     * the thesis' accelerometer is "measured gravity", ``+g c3`` (+g on z when level, z down), the **negative** of
       the specific force this door receives: ``acc_b = dcm.accel_to_seed004(acc) = -acc``;
     * the magnetometer is divided by a running reference of the field strength
-      (:func:`fusionlab.sensors.field_reference`: any unit in, ``|h| ≈ 1`` while undisturbed), learnt as the
+      (:func:`fusionlab.signals.field_reference`: any unit in, ``|h| ≈ 1`` while undisturbed), learnt as the
       samples arrive -- never a statistic of the whole recording, which no real-time filter has;
     * the initial attitude and the inclination come from the first sample alone (levelling + tilt-compensated
       compass), so that no output depends on a later sample; the gyro bias starts at 0. Heading is magnetic
@@ -354,7 +354,7 @@ def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=_dcm_filter.HANDHELD.acc_si
       eight BROAD trials the course ships; ``make bench`` reports them chosen on seven and scored on the eighth.
     """
     acc_b = _dcm.accel_to_seed004(acc)
-    ref, _ = sensors.field_reference(mag, fs)
+    ref, _ = signals.field_reference(mag, fs)
     return _run_dcm_ahrs(gyr, acc, acc_b, mag / ref[:, None], fs, acc_sigma_untrusted, hold, acc_lp_tau)
 
 

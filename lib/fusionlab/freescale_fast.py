@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import ecompass, freescale, sensors, validate
+from . import earth, ecompass, freescale, signals, validate
 
 __all__ = [
     "run_fast9", "run_fast6", "held_accel_noise", "FREE_FALL_G",
@@ -166,13 +166,13 @@ def held_accel_noise(qvgqa, dt, hold):
     dt = validate.positive(dt, "dt")
     if not np.isfinite(hold) or hold < 0:
         raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
-    return sensors.trailing_max(qa, int(round(hold / dt)) + 1)
+    return signals.trailing_max(qa, int(round(hold / dt)) + 1)
 
 
 #: Below this averaged accelerometer reading (g) a Kalman step is in free fall: the gravity direction is
 #: undefined, so the fast paths skip the measurement update and carry the gyro's attitude (ours, not v5.00's,
 #: which would level the sensor on noise and can return it upside down).
-FREE_FALL_G = sensors.FREE_FALL / sensors.G
+FREE_FALL_G = earth.FREE_FALL / earth.G
 
 
 def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=None, per_sample=True, accel_hold=0.0):

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import calibration, sensors, validate
+from . import calibration, inertial, validate
 
 __all__ = ["GRAVITY", "UG", "ARW_UNIT", "AIV_NAMES", "TABLE_3_1", "TABLE_4_4", "TABLE_5_1", "TABLE_5_2", "TABLE_5_3",
            "triad_positions", "lever_arm", "specific_forces", "aiv_map", "aiv", "aiv_true", "aiv_covariance",
@@ -110,7 +110,7 @@ def lever_arm(a_o, omega, alpha, p):
     """Specific force of a triad at lever arm ``p``: ``a_o + α×p + ω×(ω×p)`` (seed 004 eq 3.4).
 
     The gravity gradient over the lever arm is neglected (eq 3.3). One implementation serves this, the rotating
-    accelerometers of Lab 08 and seed 000's eq 3.32: :func:`fusionlab.sensors.point_acceleration`.
+    accelerometers of Lab 08 and seed 000's eq 3.32: :func:`fusionlab.inertial.point_acceleration`.
 
     Parameters
     ----------
@@ -128,7 +128,7 @@ def lever_arm(a_o, omega, alpha, p):
     ndarray, shape (..., 3)
         Specific force at ``p``, m/s².
     """
-    return sensors.point_acceleration(a_o, omega, alpha, p)                          # (004 eq 3.4)
+    return inertial.point_acceleration(a_o, omega, alpha, p)                          # (004 eq 3.4)
 
 
 def specific_forces(omega, alpha, d, a_o=None):

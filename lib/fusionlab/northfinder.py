@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import earth, rotations, sensors, validate
+from . import earth, inertial, rotations, validate
 
 __all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS",
            "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
@@ -90,7 +90,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
 
     ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3); with ``v_rel = a_rel = 0``
     it is the lever-arm equation of a fixed accelerometer. The one implementation:
-    :func:`fusionlab.sensors.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration).
+    :func:`fusionlab.inertial.point_acceleration` (seed 000 eq 3.32 with the origin's acceleration).
 
     Parameters
     ----------
@@ -112,7 +112,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     ndarray, shape (..., 3)
         Acceleration at the point, m/s².
     """
-    return sensors.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
+    return inertial.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
 
 
 def rotating_kinematics(t, rho, l, omega_r):

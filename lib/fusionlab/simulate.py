@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import sensors, validate
+from . import accel_tilt, inertial, sensors, validate
 
 __all__ = ["FS", "VIB_FREQ", "VIB_AMP", "ACC_NOISE", "GYRO_BIAS", "GYRO_NOISE", "SHAKE_RMS", "SHAKE_CUTOFF",
            "LAB03_SEED", "LOG_COLUMNS", "motion_profile", "imu_record", "adc_record", "lab03_records",
@@ -190,7 +190,7 @@ def imu_record(roll_deg, pitch_deg, fs=FS, rng=None, vib_amp=VIB_AMP, vib_freq=V
     acc = acc + vib_amp * np.sin(2 * np.pi * vib_freq * t[:, None] + phase)
     acc = acc + acc_noise * rng.standard_normal((n, 3))
     rate = np.stack([np.gradient(np.degrees(phi), 1 / fs), np.gradient(np.degrees(theta), 1 / fs)], axis=1)
-    gyr = sensors.gyro_measure(rate, bias=np.asarray(gyro_bias, float), noise_std=gyro_noise, rng=rng)
+    gyr = inertial.gyro_measure(rate, bias=np.asarray(gyro_bias, float), noise_std=gyro_noise, rng=rng)
     return acc, gyr
 
 
@@ -543,7 +543,7 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
                                        np.sin(2 * np.pi * 0.53 * u + 2)], -1)
     acc_n = np.gradient(np.gradient(pos, dt, axis=0), dt, axis=0)
     C = C_all[1:]
-    f_b = sensors.specific_force(C, acc_n[1:])
+    f_b = accel_tilt.specific_force(C, acc_n[1:])
     b_g = np.radians(np.asarray(bias_dps, float))
     b_a = rng.normal(0.0, XSENS_ACC_BIAS, 3) if acc_bias else np.zeros(3)
     delta = np.radians(inclination_deg)

@@ -9,8 +9,9 @@ Beyond shapes and finiteness: :func:`broadcast` names the arguments whose batch 
 refuses an unknown keyword, :func:`covariance` and :func:`rotation` check what a matrix must be, and the unit doors
 :func:`angles_rad`, :func:`euler_rad`, :func:`gyro_rad`, :func:`accel_ms2` and :func:`sample_rate` refuse values
 that fit degrees, °/s, g or a sample interval far better than the documented unit. ``tests/test_bad_input.py``
-checks every public function of rotations, conventions, sensors, kalman, falling_body, calibration, metrics and
-``estimators.run`` against them, one bad argument at a time.
+checks every public function of rotations, conventions, the sensor modules (sensors, accel_tilt, inertial,
+sensor_errors, signals), kalman, falling_body, calibration, metrics and ``estimators.run`` against them, one bad
+argument at a time.
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusionlab import checks, rotations, sensors
+from fusionlab import checks, inertial, rotations
 
 M, K = 1e-9, 1e-9 * (2 * np.pi * 5e3) ** 2           # the check's proof mass and spring
 
@@ -181,8 +181,8 @@ def test_value_checks_hold_the_expected_values(capsys):
 
 
 def test_the_library_s_own_function_is_refused():
-    with pytest.raises(checks.Feedback, match="sensors.integrate_rate, the library's own solution"):
-        checks.check_integrate_rate(sensors.integrate_rate)
+    with pytest.raises(checks.Feedback, match="inertial.integrate_rate, the library's own solution"):
+        checks.check_integrate_rate(inertial.integrate_rate)
     assert rotations.euler_to_dcm([0, 0, 0]).shape == (3, 3)        # the library works again afterwards
 
 
@@ -211,5 +211,5 @@ def test_check_precession_rate_names_the_slip(fn, match):
 def test_check_precession_rate_passes_eq_3_25_and_refuses_the_library_s(capsys):
     checks.check_precession_rate(precession)
     assert capsys.readouterr().out.startswith("✓ ω_p = M g D / (I ω) for three tops and on the Moon")
-    with pytest.raises(checks.Feedback, match=r"called sensors\.precession_rate"):
-        checks.check_precession_rate(sensors.precession_rate)
+    with pytest.raises(checks.Feedback, match=r"called inertial\.precession_rate"):
+        checks.check_precession_rate(inertial.precession_rate)

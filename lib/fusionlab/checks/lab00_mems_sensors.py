@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import rotations, sensors as _sensors
+from .. import accel_tilt as _accel_tilt, earth as _earth, inertial as _inertial, rotations, sensors as _sensors
 from ._core import Feedback, _answered, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_adc_096", "check_adc_step", "check_gyro_bias", "check_smd_magnitude", "check_accel_from_bridge",
@@ -156,8 +156,8 @@ def check_adc_to_physical(fn):
         f"{float(_sensors.adc_to_physical(508, 1.35, 0.3)):.4f} g at 3.0 V.")
 
 
-@forbids("numpy.arctan2", "numpy.angle", "math.atan2", "cmath.phase", "sensors.atan2_piecewise",
-         "sensors.excel_atan2")
+@forbids("numpy.arctan2", "numpy.angle", "math.atan2", "cmath.phase", "accel_tilt.atan2_piecewise",
+         "accel_tilt.excel_atan2")
 def check_atan2(fn):
     """Check a student's four-quadrant ``fn(y, x)`` (seed 000 eq 3.21, corrected), away from the origin."""
     pts = [(1.0, 2.0), (2.0, -1.0), (-1.0, -3.0), (-2.0, 0.5), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 2.0),
@@ -181,7 +181,7 @@ def check_atan2(fn):
     _ok("four quadrants and both axes are right.")
 
 
-@forbids("sensors.tilt_from_accel")
+@forbids("accel_tilt.tilt_from_accel")
 def check_roll_pitch(fn):
     """Check a student's ``fn(acc) -> (roll, pitch)`` for a forward-right-down sensor at rest (seed 001, full range)."""
     cases = [(10.0, 20.0, 1.0), (120.0, -45.0, 1.0), (-150.0, 60.0, 1.0), (179.0, 5.0, 1.0), (-60.0, 30.0, 0.1)]
@@ -191,7 +191,7 @@ def check_roll_pitch(fn):
 
     for roll_d, pitch_d, scale in cases:
         e = np.radians([roll_d, pitch_d, 0.0])
-        acc = scale * _sensors.specific_force(rotations.euler_to_dcm(e))
+        acc = scale * _accel_tilt.specific_force(rotations.euler_to_dcm(e))
         got = _call(fn, acc, what="your function")
         if got.shape != (2,):
             raise Feedback(f"return two numbers (roll, pitch); got shape {got.shape}")
@@ -220,14 +220,14 @@ def check_roll_pitch(fn):
     _ok("roll over the full circle and pitch are right, in any unit of acceleration.")
 
 
-@forbids("sensors.precession_rate")
+@forbids("inertial.precession_rate")
 def check_precession_rate(fn):
     """Lab 00 exercise 8: a student's ``fn(mass, arm, inertia, spin, g=9.80665) -> ω_p`` (rad/s), the precession
     rate of a spinning top, ``M g D / (I ω)`` (seed 000 eqs 3.22-3.25)."""
     cases = [(0.1, 0.03, 0.5 * 0.1 * 0.025 ** 2, 2 * np.pi * 50.0), (2.0, 0.1, 0.01, 300.0), (0.02, 0.005, 1e-6, 900.0)]
     for m, d, i, w in cases:
         got = float(_call(fn, m, d, i, w, what="your precession rate"))
-        ref = float(_sensors.precession_rate(m, d, i, w))
+        ref = float(_inertial.precession_rate(m, d, i, w))
         if np.isclose(got, ref, rtol=1e-9):
             continue
         where = f"for M = {m} kg, D = {d} m, I = {i:.4g} kg·m², ω = {w:.4g} rad/s you return {got:.5g}; expected " \
@@ -235,25 +235,25 @@ def check_precession_rate(fn):
         msg = _first_match(got, [
             (1 / ref, "that is I ω / (M g D), upside down: the torque M g D turns the momentum I ω, so "
                       "ω_p = τ / L = M g D / (I ω)."),
-            (ref / _sensors.G, "g is missing: the torque of the weight is M g D (eq 3.22)."),
+            (ref / _earth.G, "g is missing: the torque of the weight is M g D (eq 3.22)."),
             (np.degrees(ref), "that looks like °/s; the answer is asked in rad/s."),
             (ref / w, "ω appears squared: L = I ω, so ω_p = M g D / (I ω)."),
             (ref * w * w, "the spin belongs in the denominator: ω_p = M g D / (I ω)."),
         ], rtol=1e-6, atol=0.0)
         raise Feedback(where + (msg or "ω_p = τ / L = M g D / (I ω) (eqs 3.23, 3.25)."))
     _general_case(lambda: fn(0.1, 0.03, 3.125e-5, 2 * np.pi * 50.0, g=1.62),
-                  _sensors.precession_rate(0.1, 0.03, 3.125e-5, 2 * np.pi * 50.0, g=1.62), "the Moon (keyword g = "
+                  _inertial.precession_rate(0.1, 0.03, 3.125e-5, 2 * np.pi * 50.0, g=1.62), "the Moon (keyword g = "
                   "1.62 m/s²)", "Use the argument g, not 9.80665, inside your function.", rtol=1e-9, atol=0.0)
     _ok("ω_p = M g D / (I ω) for three tops and on the Moon: the faster the spin, the slower the precession.")
 
 
-@forbids("sensors.coriolis_force", "sensors.coriolis_acceleration")
+@forbids("inertial.coriolis_force", "inertial.coriolis_acceleration")
 def check_coriolis_force(fn):
     """Check a student's ``fn(m, omega, v) -> F`` (seed 000 eq 3.34, corrected: F = -2 m Ω × v)."""
     cases = [(2e-9, [0.0, 0.0, 1.7], [1.2, 0.0, 0.0]), (0.5, [0.3, -0.2, 0.9], [-1.0, 2.0, 0.5])]
     for m, w, v in cases:
         got = _call(fn, m, np.asarray(w), np.asarray(v), what="your function")
-        ref = _sensors.coriolis_force(m, w, v)
+        ref = _inertial.coriolis_force(m, w, v)
         if got.shape != (3,):
             raise Feedback(f"return a 3-vector; got shape {got.shape}")
         scale = np.max(np.abs(ref))
@@ -270,13 +270,13 @@ def check_coriolis_force(fn):
     _ok("F = -2 m Ω × v, with the sign the thesis' right-hand rule implies.")
 
 
-@forbids("sensors.integrate_rate")
+@forbids("inertial.integrate_rate")
 def check_integrate_rate(fn):
     """Check a student's forward-Euler ``fn(rate, dt, angle0) -> angle`` (seed 001 attitude note §3)."""
     rate = np.array([1.0, 2.0, 0.5, -1.0, 3.0])
     dt, a0 = 0.1, 5.0
     got = _call(fn, rate, dt, a0, what="your function")
-    ref = _sensors.integrate_rate(rate, dt, a0)
+    ref = _inertial.integrate_rate(rate, dt, a0)
     if got.shape == (len(rate) + 1,):
         raise Feedback("your result has one value more than the input: return one angle per sample, θ[0] = angle0 "
                        "at t = 0, and drop the angle after the last sample.")
@@ -284,7 +284,7 @@ def check_integrate_rate(fn):
         raise Feedback(f"return one angle per rate sample: expected shape {ref.shape}, got {got.shape}")
     if np.allclose(got, ref, atol=1e-12):
         r2 = np.random.default_rng(9).normal(size=(6, 4))
-        _general_case(lambda: fn(r2, 0.01), _sensors.integrate_rate(r2, 0.01),
+        _general_case(lambda: fn(r2, 0.01), _inertial.integrate_rate(r2, 0.01),
                       "a (6, 4) array (4 channels, time along axis 0) with the default angle0",
                       "Integrate along axis 0 (np.cumsum(..., axis=0)) and give angle0 a default of 0.")
         _ok("forward Euler: θ[0] = angle0, θ[n+1] = θ[n] + dt·ω[n], also for several channels at once.")

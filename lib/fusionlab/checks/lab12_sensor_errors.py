@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import calibration, rotations, sensors
+from .. import calibration, rotations, sensor_errors
 from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_quadric_fit", "check_arw_reading", "check_remove_gravity"]
@@ -76,7 +76,7 @@ def check_arw_reading(fn):
     raise Feedback(msg or f"expected N = {ref:.5g}, got {got:.5g}: N = exp(mean(log σ + ½ log τ)) over τ <= tau_max.")
 
 
-@forbids("sensors.remove_gravity")
+@forbids("sensor_errors.remove_gravity")
 def check_remove_gravity(fn):
     """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)``
     (seed 001 position note §2)."""
@@ -86,12 +86,12 @@ def check_remove_gravity(fn):
     a_true = rng.normal(0, 2, (12, 3))
     acc = rotations.quat_rotate(rotations.quat_conjugate(q), a_true + [0, 0, 9.8])   # +g up at rest
     got = _call(fn, q, acc, 9.8, what="your gravity removal")
-    ref = sensors.remove_gravity(q, acc, 9.8, frame="ENU")
+    ref = sensor_errors.remove_gravity(q, acc, 9.8, frame="ENU")
     if got.shape != ref.shape:
         raise Feedback(f"return one ENU acceleration per sample, shape {ref.shape}; got {got.shape}")
     if np.allclose(got, ref, atol=1e-9):
-        _general_case(lambda: fn(q, acc, 9.81), sensors.remove_gravity(q, acc, 9.81, frame="ENU"), "g = 9.81 m/s²",
-                      "Use the argument g, not 9.8.", rtol=0, atol=1e-9)
+        _general_case(lambda: fn(q, acc, 9.81), sensor_errors.remove_gravity(q, acc, 9.81, frame="ENU"),
+                      "g = 9.81 m/s²", "Use the argument g, not 9.8.", rtol=0, atol=1e-9)
         _ok("gravity removed: C_bn f − (0, 0, g) in ENU recovers the true acceleration (and 0 at rest).")
         return
     msg = _first_match(got, [
