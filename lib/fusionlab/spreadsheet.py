@@ -28,6 +28,7 @@ __all__ = [
 ]
 
 
+#: The column header line the MCU prints at the start of each data section.
 HEADER = ("AX", "AY", "AZ", "GX", "GY")
 
 
