@@ -12,6 +12,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the instructor tools in grading/ import as a package, however pytest is started
     sys.path.insert(0, str(ROOT))
+if str(ROOT / "tests") not in sys.path:  # the tests' shared helpers (numeric_helpers, longrun_record) import by name
+    sys.path.insert(0, str(ROOT / "tests"))
 LABS = sorted(p.name for p in (ROOT / "solutions").iterdir() if p.is_dir() and p.name[:2].isdigit())
 
 

@@ -6,13 +6,9 @@ import pytest
 from scipy.linalg import expm
 
 from fusionlab import accel_tilt, dcm, rotations
+from numeric_helpers import random_dcm
 
 RNG = np.random.default_rng(404)
-
-
-def _random_dcm(rng, n=None):
-    e = rng.uniform([-np.pi, -1.4, -np.pi], [np.pi, 1.4, np.pi], size=(3,) if n is None else (n, 3))
-    return rotations.euler_to_dcm(e)
 
 
 # ---------------------------------------------------------------- A(σ)
@@ -53,14 +49,14 @@ def test_gyro_error_increment_is_the_exact_biased_increment_to_first_order():
 # ---------------------------------------------------------------- process model
 
 def test_row_propagation_without_bias_is_exact():
-    C = _random_dcm(RNG)
+    C = random_dcm(RNG)
     A = dcm.A_matrix([0.02, -0.01, 0.03])
     for i in range(3):
         assert np.allclose(dcm.row_propagate(C[i], A, np.zeros(3), 0.01), (C @ A)[i], atol=1e-15)
 
 
 def test_row_propagation_removes_the_bias_to_second_order():
-    C = _random_dcm(RNG)
+    C = random_dcm(RNG)
     w, b = np.array([1.0, -2.0, 0.5]), np.radians([3.0, -4.0, 2.0])
     errs = []
     for dt in (0.01, 0.005):
@@ -76,7 +72,7 @@ def test_row_propagation_removes_the_bias_to_second_order():
 
 
 def test_transition_reproduces_the_row_propagation_and_a_random_walk_bias():
-    C = _random_dcm(RNG)
+    C = random_dcm(RNG)
     A, b, dt = dcm.A_matrix([0.1, 0.2, -0.1]), np.array([0.01, -0.02, 0.03]), 0.02
     F = dcm.ahrs_transition(C[0], C[2], A, dt)
     x = F @ np.concatenate([C[0], C[2], b])
@@ -86,7 +82,7 @@ def test_transition_reproduces_the_row_propagation_and_a_random_walk_bias():
 
 
 def test_process_noise_matches_a_monte_carlo_of_the_gyro_noise():
-    C = _random_dcm(RNG)
+    C = random_dcm(RNG)
     N, qb, dt = 0.01, 1e-4, 0.01
     Q = dcm.ahrs_process_noise(C[0], C[2], dt, N, qb)
     assert np.allclose(Q, Q.T) and np.min(np.linalg.eigvalsh(Q)) > -1e-18
@@ -106,7 +102,7 @@ def test_process_noise_rejects_negative_densities():
 # ---------------------------------------------------------------- measurements
 
 def test_accelerometer_model_is_linear_and_uses_the_thesis_sign():
-    for C in _random_dcm(RNG, 5):
+    for C in random_dcm(RNG, 5):
         x = np.concatenate([C[0], C[2], np.zeros(3)])
         f_b = accel_tilt.specific_force(C)                                   # a real accelerometer at rest
         a_b = dcm.accel_to_seed004(f_b)                                   # +g c3
@@ -120,13 +116,13 @@ def test_magnetometer_model_is_the_field_in_body_axes():
     delta = np.radians(66.0)
     h_n = dcm.mag_reference(delta)
     assert np.allclose(h_n, [np.cos(delta), 0.0, np.sin(delta)]) and h_n[1] == 0.0
-    for C in _random_dcm(RNG, 5):
+    for C in random_dcm(RNG, 5):
         x = np.concatenate([C[0], C[2], RNG.normal(size=3)])
         assert np.allclose(dcm.mag_measurement_matrix(delta) @ x, C.T @ h_n, atol=1e-12)
 
 
 def test_orthogonality_residual_is_zero_for_a_rotation_and_H_is_its_jacobian():
-    C = _random_dcm(RNG)
+    C = random_dcm(RNG)
     r, H = dcm.orthogonality_pseudo_measurement(C[0], C[2])
     assert np.max(np.abs(r)) < 1e-14
     c1, c3 = C[0] + 0.01 * RNG.normal(size=3), C[2] + 0.01 * RNG.normal(size=3)
@@ -151,7 +147,7 @@ def test_orthogonality_covariance_decays_with_rho_to_the_steady_value():
 # ---------------------------------------------------------------- read-out, initialisation, gates
 
 def test_rows_rebuild_the_dcm_and_orthonormalize_is_the_nearest_rotation():
-    C = _random_dcm(RNG, 20)
+    C = random_dcm(RNG, 20)
     assert np.allclose(dcm.rows_to_dcm(C[:, 0], C[:, 2]), C, atol=1e-14)
     noisy = C + 1e-3 * RNG.normal(size=C.shape)
     R = dcm.orthonormalize(noisy)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from fusionlab import calibration, gfimu as g
+from numeric_helpers import central_jacobian
 
 # ---------------------------------------------------------------------------------------------------------- AIV --
 
@@ -54,20 +55,10 @@ def test_three_state_noise_blocks_and_m_sign():
     assert np.all(g.three_state_noise(500 * g.UG, 0.01, 1.0, m_sign=0)[2] == 0)
 
 
-def _central_jacobian(f, x, h=1e-6):
-    """Central finite-difference Jacobian of ``f`` at ``x`` (one column per component of ``x``)."""
-    cols = []
-    for j in range(len(x)):
-        e = np.zeros(len(x))
-        e[j] = h
-        cols.append((np.asarray(f(x + e)) - np.asarray(f(x - e))) / (2 * h))
-    return np.stack(cols, axis=-1)
-
-
 def test_quadratic_jacobian_matches_finite_differences():
     rng = np.random.default_rng(4)
     x = rng.normal(size=3)
-    J = _central_jacobian(g.quadratic_terms, x)
+    J = central_jacobian(g.quadratic_terms, x)
     assert np.allclose(g.quadratic_jacobian(x), J, atol=1e-8)
     assert np.allclose(g.quadratic_jacobian(np.tile(x, (4, 1)))[2], J, atol=1e-8)
 

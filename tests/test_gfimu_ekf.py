@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from fusionlab import gfimu as g, gfimu_ekf as ge
+from numeric_helpers import central_jacobian
 
 
 # ------------------------------------------------------------------------------------------- three-state EKF --
@@ -94,23 +95,13 @@ def test_hybrid_readable_and_batched_agree():
 
 # ------------------------------------------------------------------------------------- the constrained filter --
 
-def _central_jacobian(f, x, h=1e-6):
-    """Central finite-difference Jacobian of ``f`` at ``x`` (one column per component of ``x``)."""
-    cols = []
-    for j in range(len(x)):
-        e = np.zeros(len(x))
-        e[j] = h
-        cols.append((np.asarray(f(x + e)) - np.asarray(f(x - e))) / (2 * h))
-    return np.stack(cols, axis=-1)
-
-
 def test_constraints_hold_for_fixed_axis_and_fail_for_tumbling():
     rng = np.random.default_rng(21)
     w = rng.normal(size=3)
     assert np.allclose(ge.constraints(np.concatenate([w, 0.3 * w])), 0, atol=1e-15)
     assert np.abs(ge.constraints([1.0, 1.0, 0.0, 0.0, 0.0, 1.0])).max() > 0.5
     x = rng.normal(size=6)
-    J = _central_jacobian(ge.constraints, x)
+    J = central_jacobian(ge.constraints, x)
     assert np.allclose(ge.constraint_jacobian(x), J, atol=1e-8)
 
 

@@ -5,14 +5,9 @@ import numpy as np
 import pytest
 
 from fusionlab import dcm, gpsins, rotations, simulate
+from numeric_helpers import random_dcm
 
 RNG = np.random.default_rng(404)
-
-
-def _random_dcm(rng, n=None):
-    e = rng.uniform([-np.pi, -1.4, -np.pi], [np.pi, 1.4, np.pi], size=(3,) if n is None else (n, 3))
-    return rotations.euler_to_dcm(e)
-
 
 
 def _ins_x(C, b_g, r, v, b_a):
@@ -34,7 +29,7 @@ def flight():
 def test_pseudo_linear_transition_equals_the_direct_propagation():
     rng = np.random.default_rng(712)
     for _ in range(5):
-        C = _random_dcm(rng) + 0.01 * rng.normal(size=(3, 3))            # raw, slightly non-orthonormal elements
+        C = random_dcm(rng) + 0.01 * rng.normal(size=(3, 3))            # raw, slightly non-orthonormal elements
         x = _ins_x(C, rng.normal(0, 0.01, 3), rng.normal(0, 100, 3), rng.normal(0, 50, 3), rng.normal(0, 0.01, 3))
         acc, A, dt = rng.normal(0, 5, 3), dcm.A_matrix(rng.normal(0, 0.05, 3)), 0.02
         g_c = np.zeros(21)
@@ -59,7 +54,7 @@ def test_gps_matrix_picks_position_and_velocity():
 
 
 def test_ins_process_noise_is_symmetric_psd_and_checks_its_input():
-    x = _ins_x(_random_dcm(RNG), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3))
+    x = _ins_x(random_dcm(RNG), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3))
     Q = gpsins.ins_process_noise(x, 0.02, 1e-3, 1e-3, 1e-6, 1e-5)
     assert np.allclose(Q, Q.T) and np.min(np.linalg.eigvalsh(Q)) > -1e-18
     assert np.allclose(Q[15:18, 15:18], 1e-6 * 0.02 * np.eye(3))

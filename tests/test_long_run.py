@@ -13,18 +13,14 @@ from __future__ import annotations
 
 import os
 import resource
-import sys
 import time
 import tracemalloc
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fusionlab import estimators, metrics
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from longrun_record import cycle_seconds, record  # noqa: E402
+from longrun_record import cycle_seconds, record
 
 LONG = os.environ.get("FUSIONLAB_LONG_RUN", "") not in ("", "0")
 DURATION = 3600.0 if LONG else 600.0

@@ -157,3 +157,13 @@ def test_data_after_the_stop_without_a_header_is_reported():
     last = len(MOTION.split("\r\n")) + 1
     with pytest.raises(spreadsheet.LogParseError, match=rf"line {last}: data line outside a recording"):
         spreadsheet.parse_terminal_log(text)
+
+
+def test_the_parser_reads_as_many_hex_digits_as_the_adc_has_bits_and_refuses_an_impossible_adc():
+    text = "AX AY AZ GX GY\n800 801 A6C 7FF 800\n"                       # a 12-bit ADC prints 3 hex digits
+    assert spreadsheet.parse_terminal_sessions(text, bits=12)[0].tolist() == [[2048, 2049, 2668, 2047, 2048]]
+    with pytest.raises(spreadsheet.LogParseError):
+        spreadsheet.parse_terminal_sessions(text, bits=10)                  # 10 bits: 3 digits, but 0xA6C > 1023
+    for bits in (0, 33, 10.5, "10", True):
+        with pytest.raises(ValueError, match=r"bits must be a whole number of ADC bits between 1 and 32"):
+            spreadsheet.parse_terminal_sessions(text, bits=bits)

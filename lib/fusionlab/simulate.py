@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import accel_tilt, inertial, sensors, validate
+from . import accel_tilt, earth, inertial, sensors, validate
 
 __all__ = ["FS", "VIB_FREQ", "VIB_AMP", "ACC_NOISE", "GYRO_BIAS", "GYRO_NOISE", "SHAKE_RMS", "SHAKE_CUTOFF",
            "LAB03_SEED", "LOG_COLUMNS", "motion_profile", "imu_record", "adc_record", "lab03_records",
@@ -724,7 +724,6 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
         raise ValueError(f"model must be 'thesis' (the simplified mechanization is exact) or 'full' (eq 7.1); "
                          f"got {model!r}")
     if model == "full":
-        from . import earth
         lat_deg = validate.array(lat_deg, "lat_deg")
         if lat_deg.ndim or abs(lat_deg) >= 90:
             raise ValueError(f"lat_deg must be one latitude in (-90, 90) degrees; got {lat_deg!r}")

@@ -100,8 +100,8 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
            [513, 512, 619, 512, 510]])]
     """
     text = _read_text(log)
-    bits = sensors._bits(bits)
-    top = 2 ** bits - 1
+    top = sensors.adc_full_scale(bits)            # checks bits (1-32) with the ADC functions' message
+    bits = top.bit_length()
     digits = -(-bits // 4)
     token = re.compile(rf"[0-9A-Fa-f]{{{digits}}}")
     lines = _LINE_END.split(text)
