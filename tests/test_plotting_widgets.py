@@ -9,7 +9,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from fusionlab import plotting, rotations, widgets  # noqa: E402
+from fusionlab import falling_body, plotting, rotations, widgets  # noqa: E402
 
 EULER = np.radians([10.0, -10.0, 40.0])
 
@@ -380,3 +380,30 @@ def test_plot_disturbance_sweeps_rejects_bad_input(sweeps, title, match):
     with pytest.raises(ValueError, match=match):
         plotting.plot_disturbance_sweeps(sweeps, title)
     plt.close("all")
+
+
+# ---------------------------------------------------------------- lab 02: the Gaussian product and the filter run
+def test_gaussian_product_explorer_builds_headless_and_updates():
+    box = widgets.gaussian_product_explorer(0.0, 4.0, 3.0, 1.0)
+    sliders = [c for c in box.children if isinstance(c, W.FloatSlider)]
+    readout = [c for c in box.children if isinstance(c, W.HTML)][0]
+    assert len(sliders) == 4 and not any(s.continuous_update for s in sliders)
+    assert readout.value == widgets.gaussian_product_state(0, 4, 3, 1)["html"]
+    assert "μ = 2.40, σ² = 0.80" in readout.value
+    sliders[3].value = 4.0                                                 # equal variances: halfway
+    assert "μ = 1.50, σ² = 2.00" in readout.value
+    st = widgets.gaussian_product_state(0, 4, 3, 4)
+    assert st["K"] == pytest.approx(0.5)
+
+
+def test_lab02_figures_draw_what_they_claim():
+    fig = plotting.plot_gaussian_product(0.0, 4.0, 3.0, 1.0)
+    prod = [ln for ln in fig.axes[0].get_lines() if ln.get_gid() == "product"][0]
+    xs, ys = prod.get_data()
+    assert xs[np.argmax(ys)] == pytest.approx(2.4, abs=0.03)
+    truth, z = falling_body.simulate_falling_body(1, seed=2)
+    run = falling_body.ThesisKF.falling_body().run(z[0])
+    fig = plotting.plot_kf_run(np.arange(1, 200) * 0.01, truth[0, 1:], z[0], run["x"], run["P"])
+    assert len(fig.axes) == 2 and fig.axes[1].get_xlabel() == "time (s)"
+    with pytest.raises(ValueError, match="P must have shape"):
+        plotting.plot_kf_run(np.arange(199) * 0.01, truth[0, 1:], z[0], run["x"], run["P"][:10])
