@@ -1,32 +1,21 @@
-"""The grading kernel's sandbox: a Jupyter kernel that runs a submission's code inside bubblewrap.
+"""The grading sandbox: the box a submission's code runs in (``bwrap``), and nothing else of grading.
 
-Only the *kernel* runs in the sandbox.  The nbgrader process that sends it the cells, records the outputs and writes
-the scores stays outside, so the code of a submission can neither write the executed notebook nor touch the
-gradebook: it reaches the trusted side only through the kernel's messages.
+:mod:`grading.judge` starts :mod:`grading.box` with :func:`bwrap_command`: a process that runs the student's cells
+and answers calls with plain data over a pipe.  The judge -- the tests, the expected values, the comparisons and the
+scores -- stays outside.  In the box
 
-This file is run by Jupyter as the kernel command (``kernel.json`` written by :func:`write_kernelspec`)::
-
-    python grading/sandbox.py -f {connection_file} [ipykernel options]
-
-It is trusted code and runs outside the sandbox.  It copies the folder the kernel is started in (the autograded
-submission, notebooks left out) into a fresh private folder, then replaces itself with ``bwrap``, which starts a
-tiny launcher and then ``ipykernel`` in a box where
-
-* the file system holds only the system (``/usr``, a few files of ``/etc``), the Python installation, the course's
-  ``lib/`` and ``data/`` (all read-only), the private folder, mounted where the student's lab folder sits in the
-  course (``<course>/labs/<LAB>``: relative paths behave as in the student's copy; writable), a private ``/tmp``,
-  the kernel's connection file (read-only) and the folder of its sockets (Unix sockets, because the box has no
-  network at all: ``c.KernelManager.transport = "ipc"`` with ``ip`` a path in a folder of its own);
-* solutions, submissions, autograded notebooks and the gradebook do not exist;
-* there is no network (own network namespace), the processes are in their own PID namespace (when the kernel goes,
-  every process it started goes with it) and the box dies with the grading process (``--die-with-parent``);
-* when the grader runs as root, the kernel runs as user ``nobody`` (65534) with no capabilities; otherwise as the
-  instructor's own user inside a user namespace;
+* the file system holds only the system (``/usr``, a few files of ``/etc``), the Python installation, the lab's copy
+  of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
+  course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path), a private
+  folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
+  the student's copy; writable) and a private ``/tmp``;
+* solutions, submissions, classmates, the gradebook, the real library and the grading code do not exist;
+* there is no network (own network namespace), the processes are in their own PID namespace (when the box goes,
+  every process it started goes with it) and the box dies with the judge (``--die-with-parent``);
+* when the grader runs as root, each box runs as a user id of its own (one per student graded at once) with no
+  capabilities, so that the process limit of one student is not a classmate's; otherwise as the instructor's own
+  user inside a user namespace;
 * CPU time, address space, file size and (as root) the number of processes are limited (``setrlimit``).
-
-Settings come from environment variables set by :mod:`grading.classgrade`: ``FUSIONLAB_BOX_COURSE`` (the course
-root), ``FUSIONLAB_BOX_LAB``, ``FUSIONLAB_BOX_SCRATCH`` (where private folders are made) and ``FUSIONLAB_BOX_LIMITS``
-(JSON, see :data:`DEFAULT_LIMITS`).
 """
 from __future__ import annotations
 
@@ -37,13 +26,14 @@ import sys
 import tempfile
 
 NOBODY = 65534
+FIRST_UID = 200_000   # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
 
 DEFAULT_LIMITS = {
     "cpu_s": 600,               # CPU seconds per process of the box (the per-cell wall-clock limit is nbgrader's)
     "memory_bytes": 4 << 30,    # address space per process
     "file_bytes": 256 << 20,    # largest file a process may write
     "tmp_bytes": 256 << 20,     # size of the private /tmp
-    "nproc": 256,               # processes and threads of user nobody (only when grading as root)
+    "nproc": 256,               # processes and threads of the box's own user (only when grading as root)
 }
 
 # Files of /etc a Python kernel needs (user names, the dynamic linker, time zone); the rest of /etc stays outside.
@@ -62,7 +52,7 @@ if uid:
     os.setgid(int(uid))
     os.setuid(int(uid))
     resource.setrlimit(resource.RLIMIT_NPROC, (lim["nproc"], lim["nproc"]))
-os.chdir(cwd)  # only now: the private folder belongs to the kernel's user
+os.chdir(cwd)  # only now: the private folder belongs to the box's user
 ctypes.CDLL(None, use_errno=True).prctl(38, 1, 0, 0, 0)  # PR_SET_NO_NEW_PRIVS
 resource.setrlimit(resource.RLIMIT_CPU, (lim["cpu_s"], lim["cpu_s"] + 5))
 resource.setrlimit(resource.RLIMIT_AS, (lim["memory_bytes"], lim["memory_bytes"]))
@@ -70,14 +60,8 @@ resource.setrlimit(resource.RLIMIT_FSIZE, (lim["file_bytes"], lim["file_bytes"])
 resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 if mpl and os.path.isdir(mpl):
     shutil.copytree(mpl, "/tmp/.cache/matplotlib", dirs_exist_ok=True)
-os.execv(sys.executable, [sys.executable, "-m", "ipykernel_launcher", *sys.argv[1:]])
+os.execv(sys.executable, [sys.executable, *sys.argv[1:]])
 """
-
-
-def _limits():
-    limits = dict(DEFAULT_LIMITS)
-    limits.update(json.loads(os.environ.get("FUSIONLAB_BOX_LIMITS") or "{}"))
-    return limits
 
 
 def _system_binds():
@@ -126,25 +110,24 @@ def _matplotlib_cache():
     return os.path.realpath(base) if os.path.isdir(base) else ""
 
 
-def _private_folder(scratch, as_root):
-    """A fresh writable folder holding what the kernel's start folder holds, notebooks left out."""
+def private_folder(source, scratch, uid=None):
+    """A fresh writable folder holding what ``source`` holds, notebooks and links left out, owned by ``uid``."""
     work = tempfile.mkdtemp(prefix="box-", dir=scratch)
-    for name in os.listdir("."):
-        if name.endswith(".ipynb") or name.startswith(".ipynb_checkpoints"):
-            continue
-        src = os.path.join(".", name)
-        if os.path.islink(src):
-            continue
-        if os.path.isdir(src):
-            shutil.copytree(src, os.path.join(work, name), symlinks=False,
-                            ignore=shutil.ignore_patterns("*.ipynb"))
-        else:
-            shutil.copy(src, os.path.join(work, name))
-    if as_root:
+    if source is not None and os.path.isdir(source):
+        for name in os.listdir(source):
+            src = os.path.join(source, name)
+            if name.endswith(".ipynb") or name.startswith(".ipynb_checkpoints") or os.path.islink(src):
+                continue
+            if os.path.isdir(src):
+                shutil.copytree(src, os.path.join(work, name), symlinks=False,
+                                ignore=shutil.ignore_patterns("*.ipynb"))
+            else:
+                shutil.copy(src, os.path.join(work, name))
+    if uid is not None:
         for top, dirs, files in os.walk(work):
-            os.chown(top, NOBODY, NOBODY)
+            os.chown(top, uid, uid)
             for f in files:
-                os.chown(os.path.join(top, f), NOBODY, NOBODY, follow_symlinks=False)
+                os.chown(os.path.join(top, f), uid, uid, follow_symlinks=False)
     os.chmod(work, 0o700)
     return work
 
@@ -176,98 +159,66 @@ def _with_parent_folders(args):
     return args[:at] + head + args[at:]
 
 
-def _connection(connection_file):
-    """The connection file and the folder of the kernel's Unix sockets (its ``ip``), both checked.
 
-    The kernel may write in the socket folder, which must therefore not hold the connection file: the trusted side
-    rewrites a missing connection file when it restarts the kernel and would follow a link the kernel left there.
-    Nothing here follows a link.
+
+def box_uid(slot):
+    """The user a box runs as when grading as root (one per slot), or None when not root."""
+    return FIRST_UID + slot if os.geteuid() == 0 else None
+
+
+def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None):
+    """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
+
+    ``lib`` is the library folder to mount where the course's ``lib/`` is; ``shadow`` a folder of packages put first
+    on the path; ``work`` the private folder (see :func:`private_folder`); ``uid`` the user to run as (root only).
+    ``command[0]`` may be ``"python"``: the sandbox's own interpreter.
     """
-    path = os.path.abspath(connection_file)
-    if not os.path.isfile(path) or os.path.islink(path):
-        sys.exit(f"the kernel's connection file {path} is not a regular file")
-    with open(path) as f:
-        info = json.load(f)
-    if info.get("transport") != "ipc":
-        sys.exit("the grading sandbox has no network: set c.KernelManager.transport = 'ipc'")
-    sockets = os.path.dirname(os.path.abspath(info["ip"]))
-    if os.path.islink(sockets) or not os.path.isdir(sockets) or sockets == os.path.dirname(path):
-        sys.exit(f"the kernel's sockets need a folder of their own, apart from its connection file: {sockets}")
-    return path, sockets
-
-
-def bwrap_command(connection_file, kernel_args):
-    """The ``bwrap`` command line that starts the kernel for ``connection_file`` in the box."""
-    course = os.path.realpath(os.environ["FUSIONLAB_BOX_COURSE"])
-    lab = os.environ["FUSIONLAB_BOX_LAB"]
-    scratch = os.environ["FUSIONLAB_BOX_SCRATCH"]
-    as_root = os.geteuid() == 0
-    limits = _limits()
-    connection_file, sockets = _connection(connection_file)
-    work = _private_folder(scratch, as_root)
-    if as_root:  # the kernel (nobody) reads its connection file and creates its sockets in their folder
-        os.chown(sockets, NOBODY, NOBODY, follow_symlinks=False)
-        os.chown(connection_file, NOBODY, NOBODY, follow_symlinks=False)
+    course = os.path.realpath(course)
+    limits = {**DEFAULT_LIMITS, **(limits or {})}
     python = os.path.join(os.path.realpath(sys.prefix), "bin", "python")
     cwd = os.path.join(course, "labs", lab)
     data_args, data_env = _data_binds()
     args = ["bwrap", "--die-with-parent", "--new-session",
             "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
             "--hostname", "grading"]
-    if as_root:
+    if uid is not None:
         args += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
     else:
         args += ["--unshare-user", "--disable-userns"]
     args += ["--proc", "/proc", "--dev", "/dev",
              "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", "/tmp"]
     args += _system_binds() + _python_binds() + data_args
-    args += ["--ro-bind", os.path.join(course, "lib"), os.path.join(course, "lib")]
+    args += ["--ro-bind", os.path.realpath(lib), os.path.join(course, "lib")]
     if os.path.isdir(os.path.join(course, "data")):
         args += ["--ro-bind", os.path.join(course, "data"), os.path.join(course, "data")]
+    path = [os.path.join(course, "lib")]
+    if shadow:
+        args += ["--ro-bind", os.path.realpath(shadow), "/opt/shadow"]
+        path.insert(0, "/opt/shadow")
     mpl = _matplotlib_cache()
     if mpl:
         args += ["--ro-bind", mpl, "/opt/mplcache"]
-    args += ["--bind", work, cwd, "--ro-bind", connection_file, connection_file, "--bind", sockets, sockets]
+    extra = []
+    for i, part in enumerate(command[1:]):  # files the command needs (the runner script), read-only at /opt/box
+        if os.path.isfile(part):
+            extra.append((os.path.realpath(part), f"/opt/box/{i}_{os.path.basename(part)}"))
+    for src, dest in extra:
+        args += ["--ro-bind", src, dest]
+    args += ["--bind", work, cwd]
     args = _with_parent_folders(args)
     env = {"PATH": f"{os.path.dirname(python)}:/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "USER": "student",
-           "LANG": "C.UTF-8", "PYTHONPATH": os.path.join(course, "lib"), "PYTHONDONTWRITEBYTECODE": "1",
+           "LANG": "C.UTF-8", "PYTHONPATH": ":".join(path), "PYTHONDONTWRITEBYTECODE": "1", "TMPDIR": "/tmp",
            "MPLBACKEND": "Agg", "MPLCONFIGDIR": "/tmp/.cache/matplotlib",
            "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "NBGRADER_EXECUTION": os.environ.get("NBGRADER_EXECUTION", "autograde"),
-           "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd}
+           "NBGRADER_EXECUTION": "autograde", "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd}
     if mpl:
         env["FUSIONLAB_BOX_MPLCACHE"] = "/opt/mplcache"
-    if as_root:
-        env["FUSIONLAB_BOX_UID"] = str(NOBODY)
+    if uid is not None:
+        env["FUSIONLAB_BOX_UID"] = str(uid)
     args += ["--clearenv"]
     for k, v in env.items():
         args += ["--setenv", k, v]
     args += data_env
-    args += ["--", python, "-c", INSIDE, "-f", connection_file, *kernel_args]
+    inner = [dict(extra).get(os.path.realpath(p), p) if os.path.isfile(p) else p for p in command[1:]]
+    args += ["--", python, "-c", INSIDE, *inner]
     return args
-
-
-def write_kernelspec(folder, name="fusionlab-sandbox"):
-    """Write ``<folder>/kernels/<name>/kernel.json`` (put ``folder`` on ``JUPYTER_PATH``); returns ``name``."""
-    spec_dir = os.path.join(folder, "kernels", name)
-    os.makedirs(spec_dir, exist_ok=True)
-    spec = {"argv": [sys.executable, os.path.abspath(__file__), "-f", "{connection_file}"],
-            "display_name": "Python 3 (grading sandbox)", "language": "python",
-            "interrupt_mode": "message",  # a signal to bwrap would not reach the kernel in its own session
-            "metadata": {"debugger": False}}
-    with open(os.path.join(spec_dir, "kernel.json"), "w") as f:
-        json.dump(spec, f, indent=1)
-    return name
-
-
-def main(argv):
-    if len(argv) < 2 or argv[0] != "-f":
-        sys.exit("usage: sandbox.py -f CONNECTION_FILE [kernel options]")
-    if shutil.which("bwrap") is None:
-        sys.exit("bwrap (bubblewrap) is not installed: the grading sandbox cannot start")
-    cmd = bwrap_command(argv[1], argv[2:])
-    os.execvp(cmd[0], cmd)
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])

@@ -1,0 +1,268 @@
+"""The student's side of grading: runs a submission's cells, then answers calls with plain data.
+
+This file is started by :mod:`grading.judge` inside the grading sandbox (:mod:`grading.sandbox`) as
+``python box.py``, with a pipe on its standard input and output.  Everything in this process belongs to the student:
+it holds the student's code, a copy of the library in which the reference answers of the lab are stubs, and no test,
+no expected value and no score.  It only
+
+1. reads the program (the cells to run, in order) as one JSON line and runs each cell, reporting ``start`` and
+   ``done`` (with the error's type and message) so that the judge can time each cell and stop a stuck one;
+2. answers requests, one JSON line each: ``describe`` (is a name a function, a value, or missing), ``call`` (call a
+   function of the notebook with arguments, return the result and the new state of library objects passed in),
+   ``get`` (a value).
+
+What goes over the pipe is data only -- numbers, strings, lists, dicts with string keys, numpy arrays of numbers,
+sympy expressions as ``srepr`` text and the attributes of the library's own objects -- encoded by :func:`encode` and
+read back by :func:`decode`, which refuses anything else.  The judge decodes replies with the same function and its
+own strict policy: no pickle, no code.
+
+Standard output and error of the student's code go to a capped file in the sandbox's private ``/tmp``: nothing a
+cell prints can reach the judge.
+"""
+from __future__ import annotations
+
+import base64
+import json
+import math
+import os
+import sys
+
+NUMERIC_KINDS = "biufc"        # bool, int, unsigned, float, complex: the only array dtypes that cross the pipe
+MAX_DEPTH = 12
+MAX_ITEMS = 1_000_000          # list items per message
+MAX_TEXT = 1_000_000           # characters of one string
+OUTPUT_BYTES = 1_000_000       # what the student's code may print (kept in the sandbox, never read by the judge)
+
+
+class WireError(ValueError):
+    """A message that is not plain data of the kinds this protocol allows."""
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The codec (shared by both sides: the judge imports these functions)
+# ---------------------------------------------------------------------------------------------------------------
+
+def _float(x):
+    if math.isfinite(x):
+        return x
+    return {"__float__": "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")}
+
+
+def encode(value, depth=0, objects=True):
+    """``value`` as JSON-ready plain data; raises :class:`WireError` for anything else.
+
+    Library objects (instances of classes of ``fusionlab``) travel as their class name and attributes when
+    ``objects`` is true; sympy expressions as their ``srepr`` text.
+    """
+    import numpy as np
+
+    if depth > MAX_DEPTH:
+        raise WireError("nested too deeply")
+    if value is None or isinstance(value, (bool, str)):
+        if isinstance(value, str) and len(value) > MAX_TEXT:
+            raise WireError("a string longer than 1,000,000 characters")
+        return value
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value if abs(value) < 2 ** 63 else _float(float(value))
+    if isinstance(value, float):
+        return _float(value)
+    if isinstance(value, complex):
+        return {"__complex__": [_float(value.real), _float(value.imag)]}
+    if isinstance(value, np.generic) and not isinstance(value, np.ndarray):
+        value = np.asarray(value)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in NUMERIC_KINDS:
+            raise WireError(f"an array of {value.dtype} (only arrays of numbers are accepted)")
+        arr = np.ascontiguousarray(value)
+        if arr.dtype.byteorder == ">":
+            arr = arr.astype(arr.dtype.newbyteorder("<"))
+        return {"__ndarray__": arr.dtype.str, "shape": list(arr.shape),
+                "data": base64.b64encode(arr.tobytes()).decode("ascii")}
+    if isinstance(value, (list, tuple)):
+        if len(value) > MAX_ITEMS:
+            raise WireError("a list of more than 1,000,000 items")
+        items = [encode(v, depth + 1, objects) for v in value]
+        return {"__tuple__": items} if isinstance(value, tuple) else items
+    if isinstance(value, dict):
+        if not all(isinstance(k, str) for k in value):
+            raise WireError("a dict whose keys are not all strings")
+        return {"__dict__": {k: encode(v, depth + 1, objects) for k, v in value.items()}}
+    module = type(value).__module__ or ""
+    if module.split(".")[0] == "sympy":
+        import sympy
+        if isinstance(value, (sympy.Basic, sympy.MatrixBase)):
+            return {"__sympy__": sympy.srepr(value)}
+    if objects and module.split(".")[0] == "fusionlab" and hasattr(value, "__dict__"):
+        return {"__object__": f"{module}:{type(value).__qualname__}",
+                "state": {k: encode(v, depth + 1, objects) for k, v in vars(value).items()}}
+    raise WireError(f"a {type(value).__name__} (only numbers, arrays of numbers, strings, lists, tuples and dicts "
+                    f"are accepted)")
+
+
+def decode(data, *, make_object=None, make_sympy=None, depth=0):
+    """The value that :func:`encode` encoded, checked strictly (dtype, shape, size); raises :class:`WireError`.
+
+    ``make_object(name, state)`` and ``make_sympy(text)`` build library objects and sympy expressions; without them
+    such values are refused.
+    """
+    import numpy as np
+
+    if depth > MAX_DEPTH:
+        raise WireError("nested too deeply")
+    if data is None or isinstance(data, (bool, int, str)):
+        return data
+    if isinstance(data, float):
+        return data
+    if isinstance(data, list):
+        return [decode(v, make_object=make_object, make_sympy=make_sympy, depth=depth + 1) for v in data]
+    if not isinstance(data, dict) or len(data) not in (1, 2, 3):
+        raise WireError("an unknown kind of value")
+    sub = dict(make_object=make_object, make_sympy=make_sympy, depth=depth + 1)
+    if set(data) == {"__float__"}:
+        text = data["__float__"]
+        if text not in ("nan", "inf", "-inf"):
+            raise WireError("a bad float")
+        return float(text)
+    if set(data) == {"__complex__"}:
+        re_, im = (decode(v, **sub) for v in data["__complex__"])
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (re_, im)):
+            raise WireError("a bad complex number")
+        return complex(re_, im)
+    if set(data) == {"__ndarray__", "shape", "data"}:
+        dtype = np.dtype(str(data["__ndarray__"]))
+        shape = data["shape"]
+        if dtype.kind not in NUMERIC_KINDS or dtype.hasobject or dtype.fields is not None:
+            raise WireError(f"an array of {dtype}")
+        if not isinstance(shape, list) or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
+                                                  for n in shape) or len(shape) > 32:
+            raise WireError("a bad array shape")
+        raw = base64.b64decode(data["data"], validate=True)
+        if len(raw) != math.prod(shape) * dtype.itemsize:
+            raise WireError(f"array data of {len(raw)} bytes for shape {tuple(shape)} of {dtype}")
+        return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
+    if set(data) == {"__tuple__"} and isinstance(data["__tuple__"], list):
+        return tuple(decode(v, **sub) for v in data["__tuple__"])
+    if set(data) == {"__dict__"} and isinstance(data["__dict__"], dict):
+        return {str(k): decode(v, **sub) for k, v in data["__dict__"].items()}
+    if set(data) == {"__sympy__"} and isinstance(data["__sympy__"], str):
+        if make_sympy is None:
+            raise WireError("a sympy expression where numbers were expected")
+        return make_sympy(data["__sympy__"])
+    if set(data) == {"__object__", "state"} and isinstance(data["state"], dict):
+        if make_object is None:
+            raise WireError("an object where numbers were expected")
+        state = {str(k): decode(v, **sub) for k, v in data["state"].items()}
+        return make_object(str(data["__object__"]), state)
+    raise WireError("an unknown kind of value")
+
+
+def library_object(name, state, *, into=None):
+    """Rebuild a ``fusionlab`` object from its class name and attributes, without running any of its code."""
+    import importlib
+
+    module, _, qualname = name.partition(":")
+    if module.split(".")[0] != "fusionlab":
+        raise WireError(f"an object of {module} (only the library's own objects are accepted)")
+    cls = importlib.import_module(module)
+    for part in qualname.split("."):
+        cls = getattr(cls, part)
+    if not isinstance(cls, type):
+        raise WireError(f"{name} is not a class")
+    obj = into if into is not None else object.__new__(cls)
+    obj.__dict__.update(state)
+    return obj
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The runner (student side)
+# ---------------------------------------------------------------------------------------------------------------
+
+def _short(exc):
+    text = f"{type(exc).__name__}: {exc}"
+    return text if len(text) < 600 else text[:600] + " ..."
+
+
+def _sympy_here(text):
+    import sympy
+    return eval(text, vars(sympy).copy())  # noqa: S307 -- in the student's own process, on the judge's own inputs
+
+
+def run(requests, replies):
+    """Run the program read from ``requests``, then answer requests until the pipe closes."""
+    def send(message):
+        replies.write((json.dumps(message, allow_nan=False) + "\n").encode())
+        replies.flush()
+
+    program = json.loads(requests.readline())
+    import matplotlib
+    matplotlib.use("Agg")
+    from IPython.core.interactiveshell import InteractiveShell
+    import matplotlib.pyplot as plt
+
+    shell = InteractiveShell.instance()
+    shell.display_pub.publish = lambda *a, **k: None  # rich outputs (figures, widgets) go nowhere
+    for i, source in enumerate(program["cells"]):
+        send({"cell": i, "state": "start"})
+        try:
+            result = shell.run_cell(source, store_history=False, silent=False)
+            error = result.error_before_exec or result.error_in_exec
+        except BaseException as exc:  # noqa: BLE001 -- a cell that escapes the shell is still only its own failure
+            error = exc
+        plt.close("all")
+        send({"cell": i, "state": "done", "error": _short(error) if error is not None else None})
+    send({"ready": True})
+    ns = shell.user_ns
+
+    for line in requests:
+        try:
+            req = json.loads(line)
+            op = req["op"]
+            if op == "describe":
+                out = {}
+                for name in req["names"]:
+                    if name not in ns:
+                        out[name] = {"kind": "missing"}
+                    elif callable(ns[name]) and not isinstance(ns[name], type):
+                        out[name] = {"kind": "function"}
+                    else:
+                        try:
+                            out[name] = {"kind": "value", "value": encode(ns[name])}
+                        except WireError as exc:
+                            out[name] = {"kind": "unreadable", "error": str(exc)}
+                send({"ok": True, "names": out})
+            elif op == "call":
+                args = decode(req["args"], make_object=library_object, make_sympy=_sympy_here)
+                kwargs = decode(req["kwargs"], make_object=library_object, make_sympy=_sympy_here)
+                try:
+                    value = ns[req["name"]](*args, **kwargs)
+                except BaseException as exc:  # noqa: BLE001 -- the student's error is the answer
+                    send({"ok": False, "error": _short(exc)})
+                    continue
+                try:
+                    send({"ok": True, "value": encode(value),
+                          "objects": {str(i): encode(a) for i, a in enumerate(args)
+                                      if type(a).__module__.split(".")[0] == "fusionlab"}})
+                except WireError as exc:
+                    send({"ok": False, "error": f"your function returned {exc}"})
+            else:
+                send({"ok": False, "error": f"unknown request {op!r}"})
+        except BaseException as exc:  # noqa: BLE001
+            send({"ok": False, "error": _short(exc)})
+
+
+def main():
+    requests = os.fdopen(os.dup(0), "rb")
+    replies = os.fdopen(os.dup(1), "wb")
+    null = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(null, 0)
+    out = os.open(os.path.join(os.environ.get("TMPDIR", "/tmp"), "box-output.txt"),
+                  os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(out, 1)
+    os.dup2(out, 2)
+    sys.stdout = open(1, "w", buffering=1, closefd=False)
+    sys.stderr = open(2, "w", buffering=1, closefd=False)
+    run(requests, replies)
+
+
+if __name__ == "__main__":
+    main()

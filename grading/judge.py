@@ -1,0 +1,799 @@
+"""The trusted judge: a lab's tests run here, the student's code runs in the box, and only data crosses.
+
+A lab's autograder tests are the code of its test cells (visible part and hidden part) as the gradebook holds them.
+The judge runs that code in *this* process, against the real library, with one change: every name the test takes
+from the student's notebook (``my_joseph``, ``f_body``) is a stand-in that asks the student's box
+(:mod:`grading.box`, in :mod:`grading.sandbox`) to call the student's function on the test's arguments, or to send
+the student's value, and gets back plain data, decoded strictly.  So
+
+* the expected values are computed, every comparison made and every score decided here; nothing the student's code
+  prints or returns is read as a score;
+* the hidden tests never enter the student's process: not as source, not as values (only the arguments of each
+  call do);
+* the reference answers of the lab are not in the student's process at all: the box holds a copy of the library in
+  which every function a test of the lab forbids (and every reference it compares with) is a stub, and packages
+  that answer the exercises (``ahrs``; filterpy's functions that a test forbids) are stubbed the same way.
+
+Values a test reads from a *provided* cell of the notebook (the lab's data, ``still``, ``q_demo``) are not taken
+from the student's box, where the student could have changed them: they come from a run of the model solution in
+the same kind of box, made once per lab (:meth:`Lab.reference_values`), which must itself score full marks.
+
+:func:`judge` grades one submission and returns a :class:`Verdict`: the score of each test cell, the judge's message
+for it, and what had to be done (cells stopped, the box restarted, cells missing or duplicated in the notebook).
+:func:`autograded_notebook` builds the notebook that nbgrader's Formgrader and feedback show: the release notebook,
+the student's answers in their cells, and the judge's verdict as the only output of each test cell.
+"""
+from __future__ import annotations
+
+import ast
+import builtins
+import contextlib
+import copy
+import importlib
+import inspect
+import json
+import os
+import re
+import selectors
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import types
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import nbformat
+
+from grading import box as wire
+from grading import sandbox
+from grading.preprocessors import _Budget
+
+BOX = Path(wire.__file__).resolve()
+CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
+STUDENT_SECONDS = 900      # wall time of the whole submission
+MAX_RESTARTS = 3
+MAX_REPLY_BYTES = 256 << 20
+STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
+                "lab is graded. Write it yourself.")
+HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quaternion products, DCMs): absent in the box
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Cells
+# ---------------------------------------------------------------------------------------------------------------
+
+def nbg(cell):
+    return cell.get("metadata", {}).get("nbgrader", {}) or {}
+
+
+def grade_id(cell):
+    return nbg(cell).get("grade_id")
+
+
+def is_test(cell):
+    m = nbg(cell)
+    return cell.get("cell_type") == "code" and bool(m.get("grade")) and not m.get("solution")
+
+
+def is_answer(cell):
+    return bool(nbg(cell).get("solution"))
+
+
+def is_check(cell):
+    return cell.get("cell_type") == "code" and (grade_id(cell) or "").endswith("_check") and not is_answer(cell)
+
+
+def python_of(source):
+    """The cell as Python: IPython magics and shell escapes dropped (the judge and the box run no magics)."""
+    return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines())
+
+
+def _bound_names(source):
+    """Names a cell binds at top level (defs, classes, imports, assignments)."""
+    try:
+        tree = ast.parse(python_of(source))
+    except SyntaxError:
+        return set()
+    out = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            out.update((a.asname or a.name).split(".")[0] for a in node.names)
+        else:
+            out.update(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store))
+    return out
+
+
+def free_names(source):
+    """Names a test cell reads without binding them anywhere in the cell."""
+    tree = ast.parse(python_of(source))
+    nodes = list(ast.walk(tree))
+    bound = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
+    bound |= {n.arg for n in nodes if isinstance(n, ast.arg)}
+    bound |= {n.name for n in nodes if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    bound |= {(a.asname or a.name).split(".")[0] for n in nodes if isinstance(n, (ast.Import, ast.ImportFrom))
+              for a in n.names}
+    return sorted({n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - bound)
+
+
+def _without_guard_calls(source):
+    """The setup cell as the judge runs it: the grading guard's and the checks' calls dropped (they act on a
+    student's kernel, and the judge has none)."""
+    tree = ast.parse(python_of(source))
+    keep = []
+    for node in tree.body:
+        call = node.value if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call) else None
+        owner = call.func.value if call is not None and isinstance(call.func, ast.Attribute) else None
+        if isinstance(owner, ast.Name) and owner.id in ("guard", "checks"):
+            continue
+        keep.append(node)
+    tree.body = keep
+    return ast.unparse(tree)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The guard as the judge runs it: the same comparisons, nothing to forbid (the box has no references to call)
+# ---------------------------------------------------------------------------------------------------------------
+
+def _judge_guard():
+    from fusionlab import guard
+
+    def grade(student_fn, reference_fn, cases, *, forbid=(), **kw):
+        return guard.grade(student_fn, reference_fn, cases, forbid=(), **kw)
+
+    def nothing(*args, **kwargs):
+        return None
+
+    return types.SimpleNamespace(assert_close=guard.assert_close, assert_equal=guard.assert_equal, grade=grade,
+                                 forbid=lambda *a, **k: contextlib.nullcontext(), reserve=nothing, release=nothing,
+                                 intact=nothing, allow_handler=nothing, ForbiddenCall=guard.ForbiddenCall)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# What a lab forbids, and the library copy without it
+# ---------------------------------------------------------------------------------------------------------------
+
+def _dotted(obj):
+    """``module:qualname`` of a function, method or class, or None for what cannot be named so."""
+    obj = getattr(obj, "__func__", obj)
+    module, qualname = getattr(obj, "__module__", None), getattr(obj, "__qualname__", None)
+    if not module or not qualname or "<" in qualname:
+        return None
+    return f"{module}:{qualname}"
+
+
+def forbidden_expressions(source):
+    """The expressions a test cell names as references or forbidden: ``guard.grade``'s second argument, every
+    ``forbid=...``, the arguments of ``guard.forbid(...)`` and ``guard.release(...)``; names bound in the cell to a
+    tuple stand for its items."""
+    tree = ast.parse(python_of(source))
+    bound = {n.targets[0].id: n.value for n in ast.walk(tree)
+             if isinstance(n, ast.Assign) and len(n.targets) == 1 and isinstance(n.targets[0], ast.Name)}
+
+    def items(node, depth=0):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            return [x for e in node.elts for x in items(e, depth)]
+        if isinstance(node, ast.Starred):
+            return items(node.value, depth)
+        if isinstance(node, ast.Name) and node.id in bound and depth < 5:
+            return items(bound[node.id], depth + 1)
+        return [node]
+
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call) or not isinstance(node.func, ast.Attribute):
+            continue
+        if node.func.attr in ("forbid", "release") and isinstance(node.func.value, ast.Name):
+            found += [x for a in node.args for x in items(a)]
+        if node.func.attr == "grade" and len(node.args) >= 2:
+            found += items(node.args[1])
+        for kw in node.keywords:
+            if kw.arg == "forbid":
+                found += items(kw.value)
+    return [n for n in found if isinstance(n, (ast.Attribute, ast.Name))]
+
+
+def _strip_module(path: Path, qualnames):
+    """Replace the bodies of ``qualnames`` (functions or methods) in the module file ``path`` by a stub."""
+    tree = ast.parse(path.read_text())
+    done = set()
+
+    def visit(body, prefix):
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                name = prefix + node.name
+                if name in qualnames:
+                    doc = ast.get_docstring(node)
+                    msg = STUB_MESSAGE.format(name=f"{path.stem}.{name}")
+                    node.body = ([ast.Expr(ast.Constant(doc))] if doc else []) + ast.parse(
+                        f"raise NotImplementedError({msg!r})").body
+                    node.decorator_list = [d for d in node.decorator_list
+                                           if isinstance(d, ast.Name) and d.id in ("staticmethod", "classmethod")]
+                    done.add(name)
+            elif isinstance(node, ast.ClassDef):
+                visit(node.body, prefix + node.name + ".")
+
+    visit(tree.body, "")
+    path.write_text(ast.unparse(ast.fix_missing_locations(tree)) + "\n")
+    return done
+
+
+def strip_packages(dest: Path, lib: Path, forbidden):
+    """Build the box's library (``dest/lib``) and shadow packages (``dest/shadow``) without ``forbidden``.
+
+    ``forbidden`` holds ``module:qualname`` names. Functions of ``fusionlab`` and of other pure-Python packages
+    become stubs in a copy; C functions cannot be removed and are returned (the integrity report flags their use by
+    name). Returns the names that could not be stubbed."""
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    shutil.copytree(lib, dest / "lib", ignore=ignore)
+    (dest / "shadow").mkdir()
+    for package in HIDDEN_PACKAGES:
+        (dest / "shadow" / package).mkdir()
+        (dest / "shadow" / package / "__init__.py").write_text(
+            f"raise ImportError('{package} is not available while the lab is graded: its functions answer "
+            f"exercises of the labs')\n")
+    by_file, left = {}, []
+    for name in sorted(forbidden):
+        module, qualname = name.split(":")
+        top = module.split(".")[0]
+        try:
+            mod = importlib.import_module(module)
+            file = Path(inspect.getsourcefile(mod) or "")
+        except (ImportError, TypeError):
+            file = Path()
+        if file.suffix != ".py" or top in ("numpy", "scipy", "math", "cmath", "builtins"):
+            left.append(name)  # a C function, or a package the box cannot run without: flagged by name instead
+            continue
+        if top == "fusionlab":
+            root = dest / "lib"
+            rel = file.relative_to(lib)
+        else:
+            pkg = Path(importlib.import_module(top).__file__).parent
+            if not (dest / "shadow" / top).exists():
+                shutil.copytree(pkg, dest / "shadow" / top, ignore=ignore)
+            root, rel = dest / "shadow", Path(top) / file.relative_to(pkg)
+        by_file.setdefault(root / rel, set()).add(qualname)
+    for path, names in by_file.items():
+        done = _strip_module(path, names)
+        left += [f"{path.stem}:{n}" for n in sorted(names - done)]
+    return left
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The box: a sandboxed process that runs the student's cells and answers calls
+# ---------------------------------------------------------------------------------------------------------------
+
+class BoxDied(RuntimeError):
+    pass
+
+
+class BoxTimeout(RuntimeError):
+    pass
+
+
+class Box:
+    """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output."""
+
+    def __init__(self, command, env=None):
+        self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=subprocess.DEVNULL, start_new_session=True, env=env)
+        self.buffer = b""
+        self.sel = selectors.DefaultSelector()
+        self.sel.register(self.proc.stdout, selectors.EVENT_READ)
+        os.set_blocking(self.proc.stdout.fileno(), False)
+
+    def send(self, message):
+        try:
+            self.proc.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
+            self.proc.stdin.flush()
+        except (BrokenPipeError, OSError) as exc:
+            raise BoxDied("the box closed its input") from exc
+
+    def receive(self, deadline):
+        """The next message, decoded as JSON (not yet as values); raises BoxTimeout or BoxDied."""
+        while b"\n" not in self.buffer:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise BoxTimeout()
+            if not self.sel.select(timeout=min(left, 1.0)):
+                if self.proc.poll() is not None:
+                    raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+                continue
+            chunk = self.proc.stdout.read(1 << 20)
+            if not chunk:
+                self.proc.wait()
+                raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+            self.buffer += chunk
+            if len(self.buffer) > MAX_REPLY_BYTES:
+                raise BoxDied("the box sent more than 256 MB at once")
+        line, _, self.buffer = self.buffer.partition(b"\n")
+        try:
+            return json.loads(line)
+        except ValueError as exc:
+            raise BoxDied("the box sent something that is not JSON") from exc
+
+    def kill(self):
+        if self.proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait()
+        self.sel.close()
+        for f in (self.proc.stdin, self.proc.stdout):
+            with contextlib.suppress(OSError):
+                f.close()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# A lab, as the judge sees it
+# ---------------------------------------------------------------------------------------------------------------
+
+@dataclass
+class TestResult:
+    grade_id: str
+    points: float
+    score: float = 0.0
+    message: str = ""
+
+
+@dataclass
+class Verdict:
+    tests: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    cell_errors: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+    @property
+    def score(self):
+        return sum(t.score for t in self.tests)
+
+    @property
+    def max_score(self):
+        return sum(t.points for t in self.tests)
+
+
+class Lab:
+    """Everything the judge needs of one lab, prepared once per class run.
+
+    ``release`` is the release notebook (no solutions, no hidden tests), ``tests`` maps each test cell's grade id to
+    its full source as the gradebook holds it, ``solution`` is the instructor's notebook (for the model run).
+    """
+
+    def __init__(self, course: Path, lab: str, release, tests: dict, solution, scratch: Path, limits=None,
+                 cell_seconds=CELL_SECONDS):
+        self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
+        self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
+        self.points = {grade_id(c): float(nbg(c).get("points", 0)) for c in release.cells if is_test(c)}
+        setup = [c for c in release.cells if grade_id(c) == "imports"] or \
+                [c for c in release.cells if c.cell_type == "code" and not is_answer(c)][:1]
+        self.setup_source = _without_guard_calls(setup[0].source) if setup else ""
+        self._base = None
+        self.answer_names = set().union(*[_bound_names(c.source) for c in solution.cells
+                                          if c.cell_type == "code" and is_answer(c)] or [set()])
+        self.provided_names = set().union(*[_bound_names(c.source) for c in release.cells
+                                            if c.cell_type == "code" and not is_answer(c) and not is_test(c)]
+                                          or [set()]) - self.answer_names
+        self.forbidden = {gid: self._forbidden(source) for gid, source in tests.items()}
+        self.unstubbed = {}
+        self._reference = {}
+
+    def box_root(self, gid):
+        """The box's library and shadow packages for the test ``gid``: its references and forbidden functions are
+        stubs (made once per lab and test)."""
+        root = self.scratch / f"box-{self.lab}-{gid}"
+        if not root.exists():
+            root.mkdir(parents=True)
+            self.unstubbed[gid] = strip_packages(root, self.course / "lib", self.forbidden[gid])
+            for top, dirs, files in os.walk(root):
+                os.chmod(top, 0o755)
+                for f in files:
+                    os.chmod(os.path.join(top, f), 0o644)
+        return root
+
+    # -- the trusted namespace -------------------------------------------------------------------------------
+    def base(self):
+        """The namespace of the lab's setup cell, run here (the judge's own imports), with the judge's guard."""
+        if self._base is None:
+            ns = {"__name__": "__judge__"}
+            exec(compile(self.setup_source, f"<{self.lab} setup>", "exec"), ns)  # noqa: S102 -- the course's cell
+            ns["guard"] = _judge_guard()
+            self._base = ns
+        return dict(self._base)
+
+    def _forbidden(self, source):
+        """``module:qualname`` of every reference and forbidden function a test cell names."""
+        scope = self.base()
+        out = set()
+        for node in forbidden_expressions(source):
+            try:
+                obj = eval(compile(ast.Expression(node), "<forbid>", "eval"), scope)  # noqa: S307
+            except Exception:  # noqa: BLE001 -- a name the cell makes itself: not a library function
+                continue
+            name = _dotted(obj)
+            if name:
+                out.add(name)
+        return out
+
+    # -- the student's program ----------------------------------------------------------------------------------
+    def layout(self, submitted):
+        """The submission's cells in its own order, read against the release: ``(kind, grade_id, cell)`` with kind
+        ``"known"`` (a cell of the lab, found by grade id: the first one when a grade id is duplicated, put back at
+        its place when deleted) or ``"added"`` (a cell the lab does not have), and notes on what was found."""
+        notes = []
+        known = {grade_id(c): c for c in self.release.cells if grade_id(c)}
+        order = [grade_id(c) for c in self.release.cells if grade_id(c)]
+        seq, seen = [], set()
+        for cell in submitted.cells if submitted is not None else []:
+            gid = grade_id(cell)
+            if gid in known:
+                if gid in seen:
+                    notes.append(f"cell {gid} appears more than once in the notebook: the first one was graded")
+                    continue
+                seen.add(gid)
+                seq.append(("known", gid, cell))
+            else:
+                seq.append(("added", None, cell))
+        if submitted is None:
+            seq = [("known", grade_id(c), c) if grade_id(c) else ("added", None, c) for c in self.release.cells]
+            seen = set(order)
+        for i, gid in enumerate(order):
+            if gid in seen:
+                continue
+            if is_answer(known[gid]):
+                notes.append(f"answer cell {gid} is missing from the notebook: graded as not attempted")
+            elif not is_test(known[gid]):
+                notes.append(f"cell {gid} was deleted from the notebook: put back from the lab")
+            earlier = [k for k, (_, g, _) in enumerate(seq) if g in order[:i]]
+            seq.insert(earlier[-1] + 1 if earlier else 0, ("known", gid, known[gid]))
+            seen.add(gid)
+        return seq, notes
+
+    def program(self, submitted, upto=None):
+        """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: every
+        code cell above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
+
+        Provided (locked) cells come from the release, whatever the submission holds; answer cells and the cells the
+        student added or may edit come from the submission. Test cells and visible checks are not run in the box:
+        the judge runs the tests."""
+        seq, notes = self.layout(submitted)
+        cells = []
+        for kind, gid, cell in seq:
+            if upto is not None and gid == upto:
+                break
+            if cell.get("cell_type") != "code":
+                continue
+            if kind == "added":
+                cells.append((None, python_of(cell.get("source", ""))))
+                continue
+            mine = self._release_cell(gid)
+            if is_test(mine) or is_check(mine):
+                continue
+            src = cell.get("source", "") if is_answer(mine) or not nbg(mine).get("locked") else mine.source
+            cells.append((gid, python_of(src)))
+        return cells, notes
+
+    def _release_cell(self, gid):
+        for c in self.release.cells:
+            if grade_id(c) == gid:
+                return c
+        raise KeyError(gid)
+
+    def box_command(self, gid, work, uid):
+        root = self.box_root(gid)
+        return sandbox.bwrap_command(["python", str(BOX)], course=self.course, lab=self.lab,
+                                     lib=root / "lib", shadow=root / "shadow", work=work,
+                                     limits=self.limits, uid=uid)
+
+    # -- values of the provided cells, from the model solution ------------------------------------------------------
+    def reference_values(self, gid, slot=0):
+        """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
+        as the student's (made once per lab and test)."""
+        if gid not in self._reference:
+            wanted = sorted(set(free_names(self.tests[gid])) & self.provided_names - set(self.base()))
+            values = {}
+            if wanted:
+                session = Session(self, self.solution, "model solution", slot, gid)
+                try:
+                    session.start()
+                    values = session.describe(wanted)
+                finally:
+                    session.close()
+                missing = [n for n, d in values.items() if d["kind"] != "value"]
+                if missing:
+                    raise RuntimeError(f"the model solution of {self.lab} does not make {missing} before {gid}: "
+                                       f"{session.cell_errors}")
+            self._reference[gid] = {n: d["value"] for n, d in values.items()}
+        return self._reference[gid]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# One submission
+# ---------------------------------------------------------------------------------------------------------------
+
+def _sympy_trusted(text):
+    """A sympy expression from its ``srepr`` text, built without eval: only sympy's classes and numbers."""
+    import sympy
+
+    allowed = {name: getattr(sympy, name) for name in dir(sympy) if isinstance(getattr(sympy, name), type)}
+    allowed.update({name: getattr(sympy, name) for name in ("Symbol", "Integer", "Rational", "Float", "Matrix",
+                                                           "ImmutableDenseMatrix", "MutableDenseMatrix")})
+
+    def build(node):
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float, str, bool)) or (
+                isinstance(node, ast.Constant) and node.value is None):
+            return node.value
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            return -build(node.operand)
+        if isinstance(node, (ast.List, ast.Tuple)):
+            return [build(e) for e in node.elts]
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in allowed:
+            return allowed[node.func.id](*[build(a) for a in node.args],
+                                         **{k.arg: build(k.value) for k in node.keywords if k.arg})
+        raise wire.WireError("a sympy expression with something other than sympy's own classes in it")
+
+    if len(text) > wire.MAX_TEXT:
+        raise wire.WireError("a sympy expression longer than 1,000,000 characters")
+    return build(ast.parse(text, mode="eval").body)
+
+
+def _trusted_object(name, state):
+    return wire.library_object(name, state)
+
+
+class StudentError(AssertionError):
+    """The student's code failed, or returned something that is not plain data."""
+
+
+class Session:
+    """The box of one submission: started, run through its program, then asked for calls and values."""
+
+    def __init__(self, lab: Lab, submitted, student, slot, gid):
+        self.lab, self.submitted, self.student, self.slot, self.gid = lab, submitted, student, slot, gid
+        self.cells, self.notes = lab.program(submitted, upto=gid)
+        self.skipped = set()
+        self.cell_errors = {}
+        self.box = None
+        self.work = None
+        self.restarts = 0
+        self.deadline = time.monotonic() + STUDENT_SECONDS
+
+    def _spawn(self):
+        uid = sandbox.box_uid(self.slot)
+        source = self.lab.course / "submitted" / self.student / self.lab.lab
+        self.work = sandbox.private_folder(source if source.is_dir() else None, self.lab.scratch, uid)
+        self.box = Box(self.lab.box_command(self.gid, self.work, uid))
+
+    def start(self):
+        """Start the box and run the program; a cell that runs over its time, or kills the box, is left out and the
+        program run again without it (said in the notes)."""
+        while True:
+            self._spawn()
+            cells = ["pass" if i in self.skipped else src for i, (_, src) in enumerate(self.cells)]
+            current = None
+            try:
+                self.box.send({"cells": cells})
+                while True:
+                    msg = self.box.receive(min(time.monotonic() + self.lab.cell_seconds + 30, self.deadline))
+                    if msg.get("ready"):
+                        return
+                    i = msg.get("cell")
+                    if not isinstance(i, int) or not 0 <= i < len(cells):
+                        raise BoxDied("the box sent a message that is not the judge's protocol")
+                    current = i
+                    if msg.get("state") == "done":
+                        if msg.get("error"):
+                            self.cell_errors[i] = str(msg["error"])[:600]
+                        current = None
+                    elif msg.get("state") == "start":
+                        msg = self.box.receive(min(time.monotonic() + self.lab.cell_seconds, self.deadline))
+                        if msg.get("cell") != i or msg.get("state") != "done":
+                            raise BoxDied("the box sent a message that is not the judge's protocol")
+                        if msg.get("error"):
+                            self.cell_errors[i] = str(msg["error"])[:600]
+                        current = None
+            except (BoxTimeout, BoxDied) as exc:
+                self.box.kill()
+                where = self._where(current)
+                if time.monotonic() >= self.deadline:
+                    self.notes.append(f"the notebook ran over {STUDENT_SECONDS} s in all and was stopped")
+                    raise BoxDied("time") from exc
+                if current is None or self.restarts >= MAX_RESTARTS:
+                    self.notes.append(f"the notebook could not be run ({exc or 'no reply'}); tests that need it "
+                                      f"score 0")
+                    raise BoxDied(str(exc)) from exc
+                why = (f"ran over {self.lab.cell_seconds} s" if isinstance(exc, BoxTimeout)
+                       else f"ended the process ({exc})")
+                self.notes.append(f"{where} {why}: it was stopped, and the notebook was run again from the start "
+                                  f"without it")
+                self.skipped.add(current)
+                self.restarts += 1
+
+    def _where(self, i):
+        if i is None:
+            return "the notebook"
+        gid = self.cells[i][0]
+        return f"cell {gid}" if gid else f"code cell {i + 1} of the program"
+
+    def request(self, message, seconds):
+        deadline = min(time.monotonic() + seconds, self.deadline)
+        self.box.send(message)
+        return self.box.receive(deadline)
+
+    def describe(self, names):
+        reply = self.request({"op": "describe", "names": list(names)}, self.lab.cell_seconds)
+        if not reply.get("ok") or not isinstance(reply.get("names"), dict):
+            raise BoxDied("the box did not describe its names")
+        out = {}
+        for name in names:
+            d = reply["names"].get(name) or {"kind": "missing"}
+            kind = d.get("kind")
+            if kind == "value":
+                try:
+                    out[name] = {"kind": "value", "value": wire.decode(d.get("value"), make_sympy=_sympy_trusted,
+                                                                       make_object=_trusted_object)}
+                except (wire.WireError, ValueError, TypeError) as exc:
+                    out[name] = {"kind": "unreadable", "error": str(exc)}
+            elif kind in ("function", "missing", "unreadable"):
+                out[name] = {"kind": kind, "error": str(d.get("error", ""))[:300]}
+            else:
+                out[name] = {"kind": "unreadable", "error": "not the judge's protocol"}
+        return out
+
+    def proxy(self, name, budget):
+        def call(*args, **kwargs):
+            objects = {i: a for i, a in enumerate(args) if type(a).__module__.split(".")[0] == "fusionlab"}
+            try:
+                message = {"op": "call", "name": name, "args": wire.encode(list(args)),
+                           "kwargs": wire.encode(dict(kwargs))}
+            except wire.WireError as exc:
+                raise RuntimeError(f"the test passes {exc} to {name}: the judge cannot send it") from exc
+            left = budget["deadline"] - time.monotonic()
+            if left <= 0:
+                raise BoxTimeout()
+            reply = self.request(message, left)
+            if not reply.get("ok"):
+                raise StudentError(f"your {name} raised {str(reply.get('error', 'an error'))[:500]}")
+            try:
+                value = wire.decode(reply.get("value"), make_sympy=_sympy_trusted, make_object=_trusted_object)
+                for key, state in (reply.get("objects") or {}).items():
+                    i = int(key)
+                    if i in objects:
+                        new = wire.decode(state, make_sympy=_sympy_trusted, make_object=_trusted_object)
+                        if type(new) is not type(objects[i]):
+                            raise wire.WireError("an object of another class in place of the one passed in")
+                        objects[i].__dict__.clear()
+                        objects[i].__dict__.update(new.__dict__)
+            except (wire.WireError, ValueError, TypeError, ImportError, AttributeError) as exc:
+                raise StudentError(f"your {name} returned {exc}") from None
+            return value
+        call.__name__ = name
+        return call
+
+    def close(self):
+        if self.box is not None:
+            self.box.kill()
+        if self.work:
+            shutil.rmtree(self.work, ignore_errors=True)
+
+
+def _first_line(exc):
+    text = str(exc).strip() or type(exc).__name__
+    if isinstance(exc, NameError):
+        return text
+    return text if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {text}"
+
+
+def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
+    """Grade one submission (``submitted``: the notebook, or None when it could not be read).
+
+    Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
+    that test) with that test's references stubbed, then answers the test's calls; one student's boxes run one after
+    the other under the same user id (``slot``)."""
+    t0 = time.monotonic()
+    verdict = Verdict()
+    base = lab.base()
+    for gid, source in lab.tests.items():
+        result = TestResult(gid, lab.points.get(gid, 0.0))
+        verdict.tests.append(result)
+        reference = lab.reference_values(gid, slot)
+        session = Session(lab, submitted, student, slot, gid)
+        try:
+            _run_test(lab, session, source, dict(base), reference, result)
+        finally:
+            verdict.notes += [n for n in session.notes if n not in verdict.notes]
+            for i, e in session.cell_errors.items():
+                verdict.cell_errors.setdefault(session._where(i), e)
+            session.close()
+    verdict.seconds = time.monotonic() - t0
+    return verdict
+
+
+def _run_test(lab, session, source, ns, reference, result):
+    gid = result.grade_id
+    try:
+        session.start()
+    except BoxDied:
+        result.message = "not run: the notebook above this test could not be run (see the notes)"
+        return
+    names = [n for n in free_names(source) if n not in ns and not hasattr(builtins, n)]
+    budget = {"deadline": time.monotonic() + lab.cell_seconds}
+    try:
+        own = [n for n in names if n not in reference]
+        described = session.describe(own) if own else {}
+        for n in names:
+            if n in reference:
+                ns[n] = copy.deepcopy(reference[n])
+                continue
+            d = described[n]
+            if d["kind"] == "function":
+                ns[n] = session.proxy(n, budget)
+            elif d["kind"] == "value":
+                ns[n] = d["value"]
+            elif d["kind"] == "unreadable":
+                raise StudentError(f"{n} is not plain numbers ({d['error']})")
+        exec(compile(python_of(source), f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+        result.score = result.points
+        result.message = "passed"
+    except (BoxTimeout, BoxDied) as exc:
+        result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
+                          else f"your code ended the process ({exc})")
+        session.notes.append(f"test {gid}: {result.message}")
+    except NameError as exc:
+        missing = re.search(r"name '(\w+)' is not defined", str(exc))
+        result.message = f"{missing.group(1)} is not defined by your notebook" if missing else _first_line(exc)
+        prefix = gid.split("_")[0] + "_"
+        errs = [e for i, e in session.cell_errors.items() if (session.cells[i][0] or "").startswith(prefix)]
+        if errs:
+            result.message += f" (your answer cell failed: {errs[0]})"
+    except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
+        result.message = _first_line(exc)[:1500]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The notebook the instructor and the student see
+# ---------------------------------------------------------------------------------------------------------------
+
+def autograded_notebook(lab: Lab, submitted, verdict: Verdict):
+    """The submission as the instructor and the student see it after grading: its cells in its order, each cell of
+    the lab with the release's source and metadata (the student's source in answer cells and in cells students may
+    edit), deleted cells put back, cells the lab does not have kept without nbgrader metadata, and the judge's verdict
+    as the only output of each test cell. Test cells show their visible part only: the hidden tests are never in
+    it."""
+    seq, _ = lab.layout(submitted)
+    results = {t.grade_id: t for t in verdict.tests}
+    budget = _Budget()
+    nb = nbformat.v4.new_notebook(metadata=copy.deepcopy(lab.release.metadata))
+
+    def outputs(cell):
+        return [o for o in (budget.admit(nbformat.from_dict(o)) for o in cell.get("outputs", []) or [])
+                if o is not None]
+
+    for kind, gid, cell in seq:
+        if kind == "added":
+            new = (nbformat.v4.new_code_cell(cell.get("source", "")) if cell.get("cell_type") == "code"
+                   else nbformat.v4.new_markdown_cell(cell.get("source", "")))
+            if new.cell_type == "code":
+                new.outputs = outputs(cell)
+            nb.cells.append(new)
+            continue
+        mine = copy.deepcopy(lab._release_cell(gid))
+        if is_test(mine):
+            t = results.get(gid)
+            mine.outputs = [_verdict_output(t)] if t else []
+        else:
+            if is_answer(mine) or not nbg(mine).get("locked"):
+                mine.source = cell.get("source", "")
+            if mine.cell_type == "code":
+                mine.outputs = outputs(cell) if cell is not lab._release_cell(gid) else []
+        nb.cells.append(mine)
+    return nb
+
+
+def _verdict_output(t: TestResult):
+    if t.score >= t.points:
+        return nbformat.v4.new_output("stream", name="stdout", text=f"✓ passed ({t.points:g} of {t.points:g} "
+                                                                     f"points)\n")
+    return nbformat.v4.new_output("error", ename="Failed", evalue=f"{t.message} (0 of {t.points:g} points)",
+                                  traceback=[f"Failed: {t.message} (0 of {t.points:g} points)"])
