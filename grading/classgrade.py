@@ -1,37 +1,34 @@
-"""Autograde a whole class in the grading sandbox: ``python -m grading.classgrade LAB [--workers N]``.
+"""Autograde a whole class with the trusted judge: ``python -m grading.classgrade LAB [--workers N]``.
 
-``make grade LAB=02_kalman_falling_body WORKERS=2`` runs this from the course root.  For each student folder
-``submitted/<student>/<LAB>/``:
+``make grade LAB=02_kalman_falling_body WORKERS=2`` runs this from the course root.
 
-1. a private scratch course is made (outside the course): a copy of the gradebook as it was when the run started,
-   the submission, the lab's non-notebook source files, and a ``nbgrader_config.py`` that loads the course's own
-   and then switches on the sandbox (see :mod:`grading.sandbox`) and the preprocessors of
-   :mod:`grading.preprocessors`;
-2. ``nbgrader autograde LAB --student <student>`` runs there; only its kernel, which executes the student's code, is
-   inside the sandbox: it sees neither this scratch course nor the real one;
-3. afterwards, this (trusted) process copies that student's autograded scores and comments into the course's
-   ``gradebook.db`` and the autograded notebook into ``autograded/<student>/<LAB>/``.  Manual scores and extra
-   credit already in the gradebook are kept; nothing else in the gradebook is written.
+1. The lab is (re)recorded in ``gradebook.db`` from ``solutions/`` (``nbgrader generate_assignment --force``,
+   released into a temporary folder so ``labs/`` is not touched; ``--no-generate`` skips that). The test cells are
+   read back from the gradebook: what the gradebook holds is what is graded, whatever a submission did to its cells.
+2. The model solution is graded first, by the same judge and boxes as the students; unless it scores full marks
+   the run stops (the lab's tests would be wrong, not the students).
+3. Each submission ``submitted/<student>/<LAB>/<LAB>.ipynb`` is graded by :func:`grading.judge.judge`: the tests
+   run in this process, the student's code in sandboxed boxes that only return data (see :mod:`grading.judge`).
+   Several students are graded at once (``--workers``), each under a user id of its own.
+4. This process writes each student's scores into ``gradebook.db`` (manual scores and extra credit already there
+   are kept), and the notebook that Formgrader and the feedback show into ``autograded/<student>/<LAB>/``: the
+   student's answers, and the judge's verdict as the only output of each test cell (no hidden test in it).
 
-Several students are graded at once (``--workers``), each in its own sandbox.  Before grading, the lab is (re)recorded
-in ``gradebook.db`` from ``solutions/`` (``nbgrader generate_assignment --force``, released into a temporary folder
-so ``labs/`` is not touched); ``--no-generate`` skips that.  At the end ``grades.csv`` is exported (``nbgrader
-export``), the integrity report ``integrity_<LAB>.md/.csv`` is written when ``grading/integrity.py`` is present, and
-a summary is printed: each student's autograded score and what the grader had to do (outputs truncated, a stuck
-cell's kernel restarted, pasted cells ignored, integrity flags).  The exit status is 1 if a submission could not be
-graded (its student is named), 0 otherwise.
+At the end ``grades.csv`` is written (``nbgrader export``, plus a ``status`` column: every student of
+``submitted/`` is listed, a submission that could not be graded with the reason), the integrity report
+``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run) and a summary: each student's
+score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).  The exit status is 1 if
+a submission could not be graded (its student is named), 0 otherwise.
 """
 from __future__ import annotations
 
 import argparse
-import ctypes
-import inspect
+import csv
 import json
 import os
+import queue
 import re
 import shutil
-import signal
-import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -41,11 +38,11 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from grading import sandbox
-from grading.preprocessors import TAG
+import nbformat
+
+from grading import judge, sandbox
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
-KERNEL = "fusionlab-sandbox"
 
 
 @dataclass
@@ -58,6 +55,7 @@ class Result:
     notes: list = field(default_factory=list)
     error: str = ""
     flags: list = field(default_factory=list)
+    verdict: judge.Verdict | None = None
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -72,11 +70,6 @@ def _env(extra=None):
     return env
 
 
-def _die_with_parent():
-    """In the child before exec: killed when this process dies (a grading worker never outlives the run)."""
-    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
-
-
 def _copy_files(src: Path, dest: Path, notebooks=True):
     """Copy a folder without following or keeping symbolic links (a submitted link could point anywhere)."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -89,165 +82,123 @@ def _copy_files(src: Path, dest: Path, notebooks=True):
             shutil.copyfile(p, dest / p.name)
 
 
-def generate(course: Path, lab: str):
-    """Record ``lab`` (its cells, points, tests) in the course's gradebook; the release goes to a temporary folder."""
-    with tempfile.TemporaryDirectory(prefix="release-") as release:
-        res = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", lab, "--force",
-                              f"--CourseDirectory.release_directory={release}", "--log-level=ERROR"],
-                             cwd=course, env=_env(), capture_output=True, text=True)
+def generate(course: Path, lab: str, release: Path):
+    """Record ``lab`` (its cells, points, tests) in the course's gradebook; its release notebook goes to
+    ``release``."""
+    res = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", lab, "--force",
+                          f"--CourseDirectory.release_directory={release}", "--log-level=ERROR"],
+                         cwd=course, env=_env(), capture_output=True, text=True)
     if res.returncode != 0:
         raise SystemExit(f"could not record {lab} in gradebook.db:\n{res.stdout}{res.stderr}")
 
 
-def snapshot(db: Path, dest: Path):
-    """A consistent copy of an SQLite gradebook (the sqlite backup API)."""
-    with sqlite3.connect(db) as src, sqlite3.connect(dest) as out:
-        src.backup(out)
+def _gradebook(course: Path):
+    from nbgrader.api import Gradebook
+    return Gradebook(f"sqlite:///{course / 'gradebook.db'}")
 
 
-SCRATCH_CONFIG = '''\
-"""Scratch course of one submission (written by grading.classgrade): the course's config, then the sandbox."""
-import sys
-sys.path.insert(0, {course!r})
-load_subconfig({config!r})  # noqa: F821
-from nbgrader.converters import Autograde
-from nbgrader.preprocessors import (CheckCellMetadata, ClearOutput, DeduplicateIds, Execute, OverwriteCells,
-                                    OverwriteKernelspec)
-from grading.preprocessors import IgnoreForeignCells, LimitOutputBytes, SandboxExecute
-
-c = get_config()  # noqa: F821
-c.CourseDirectory.root = {root!r}
-c.CourseDirectory.db_url = {db_url!r}
-c.KernelManager.transport = "ipc"  # the sandbox has no network: the kernel's sockets are files in its runtime folder
-c.KernelManager.ip = {ip!r}
-c.KernelManager.connection_file = {connection!r}
-sanitize = list(c.Autograde.sanitize_preprocessors) if "sanitize_preprocessors" in c.Autograde else [
-    ClearOutput, DeduplicateIds, OverwriteKernelspec, OverwriteCells, CheckCellMetadata]
-c.Autograde.sanitize_preprocessors = [IgnoreForeignCells] + [p for p in sanitize if p is not IgnoreForeignCells]
-autograde = list(c.Autograde.autograde_preprocessors) if "autograde_preprocessors" in c.Autograde else \
-    Autograde.class_traits()["autograde_preprocessors"].default()
-assert Execute in autograde, "the course's autograde pipeline has no Execute step to sandbox"
-autograde[autograde.index(Execute)] = SandboxExecute  # the course's other steps stay as they are
-autograde.insert(autograde.index(SandboxExecute) + 1, LimitOutputBytes)
-c.Autograde.autograde_preprocessors = autograde
-c.SandboxExecute.kernel_name = {kernel!r}
-'''
+def recorded_tests(course: Path, lab: str):
+    """The test cells of ``lab`` as the gradebook holds them (hidden tests included): {grade_id: source}."""
+    with warnings.catch_warnings(), _gradebook(course) as gb:
+        warnings.simplefilter("ignore")
+        nb = gb.find_notebook(lab, lab)
+        solutions = {c.name for c in nb.solution_cells}
+        sources = {c.name: c.source for c in nb.source_cells}
+        return {c.name: sources[c.name] for c in nb.grade_cells
+                if c.cell_type == "code" and c.name not in solutions}
 
 
-def _prepare(course: Path, lab: str, student: str, work: Path, base_db: Path, timeout: int | None):
-    (work / "rt" / "conn").mkdir(parents=True)  # the connection file (read-only in the sandbox)
-    (work / "rt" / "sock").mkdir()  # the kernel's Unix sockets (it creates them)
-    (work / "box").mkdir()
-    shutil.copyfile(base_db, work / "gradebook.db")
-    _copy_files(course / "submitted" / student / lab, work / "submitted" / student / lab)
-    src = course / "solutions" / lab
-    _copy_files(src, work / "solutions" / lab, notebooks=False) if src.is_dir() else (work / "solutions" / lab).mkdir(
-        parents=True)
-    config = SCRATCH_CONFIG.format(course=str(course), config=str(course / "nbgrader_config.py"), root=str(work),
-                                   db_url=f"sqlite:///{work / 'gradebook.db'}", ip=str(work / "rt" / "sock" / "k"),
-                                   connection=str(work / "rt" / "conn" / "kernel.json"), kernel=KERNEL)
-    if timeout:
-        config += f"c.Execute.timeout = {int(timeout)}\n"
-    (work / "nbgrader_config.py").write_text(config)
-
-
-def _notes(log: str):
-    """The grader's decisions (``classgrade:`` warnings) and nbgrader's errors, from a worker's log."""
-    notes = []
-    for line in log.splitlines():
-        if TAG in line:
-            text = line.split(TAG, 1)[1].strip()
-            if text not in notes:
-                notes.append(text)
-    return notes
-
-
-def _error(log: str):
-    lines = [ln for ln in log.splitlines() if ln.strip()]
-    errors = [ln.strip() for ln in lines if re.search(r"Error|error processing", ln)]
-    return (errors[-2:] if errors else lines[-2:]) or ["nbgrader failed without a message"]
-
-
-def grade_one(course: Path, lab: str, student: str, work: Path, kernels: Path, base_db: Path, args) -> tuple:
-    """Autograde one submission in its scratch course (runs in a worker thread); returns (result, log)."""
-    t0 = time.monotonic()
-    _prepare(course, lab, student, work, base_db, args.timeout)
-    limits = dict(sandbox.DEFAULT_LIMITS)
+def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> judge.Lab:
+    release = nbformat.read(release_dir / lab / f"{lab}.ipynb", as_version=4)
+    solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    tests = recorded_tests(course, lab)
+    order = [judge.grade_id(c) for c in release.cells]
+    tests = dict(sorted(tests.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
+    limits = {}
     if args.memory_mb:
         limits["memory_bytes"] = args.memory_mb << 20
     if args.cpu_seconds:
         limits["cpu_s"] = args.cpu_seconds
-    env = _env({"JUPYTER_PATH": str(kernels), "JUPYTER_RUNTIME_DIR": str(work / "rt"),
-                "FUSIONLAB_BOX_COURSE": str(course), "FUSIONLAB_BOX_LAB": lab,
-                "FUSIONLAB_BOX_SCRATCH": str(work / "box"), "FUSIONLAB_BOX_LIMITS": json.dumps(limits)})
-    cmd = [sys.executable, "-m", "nbgrader", "autograde", lab, "--student", student, "--force"]
-    with open(work / "autograde.log", "w") as log:
-        proc = subprocess.Popen(cmd, cwd=work, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True, preexec_fn=_die_with_parent)
-        try:
-            proc.wait(timeout=args.student_timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-            with open(work / "autograde.log", "a") as f:
-                f.write(f"\nError: grading {student} took more than {args.student_timeout} s and was stopped\n")
-    text = (work / "autograde.log").read_text(errors="replace")
-    result = Result(student, seconds=time.monotonic() - t0, notes=_notes(text))
-    notebook = work / "autograded" / student / lab
-    if proc.returncode == 0 and notebook.is_dir():
-        result.ok = True
-    else:
-        result.error = " | ".join(_error(text))
-    return result, text
+    return judge.Lab(course, lab, release, tests, solution, scratch, limits=limits,
+                     cell_seconds=args.timeout or judge.CELL_SECONDS)
 
 
-def merge(course: Path, lab: str, student: str, work: Path, result: Result):
-    """Copy one student's autograded results from its scratch course into the course (trusted process only)."""
-    from nbgrader.api import Gradebook
+def read_submission(course: Path, lab: str, student: str):
+    """The submitted notebook, or raise ValueError saying why it cannot be read."""
+    path = course / "submitted" / student / lab / f"{lab}.ipynb"
+    if not path.is_file() or path.is_symlink():
+        raise ValueError(f"no file {lab}.ipynb in submitted/{student}/{lab}/")
+    if path.stat().st_size > 100 << 20:
+        raise ValueError("the notebook is larger than 100 MB")
+    try:
+        nb = nbformat.read(path, as_version=4)
+    except Exception as e:  # noqa: BLE001 -- whatever nbformat says, the file is not a notebook
+        raise ValueError(f"the notebook cannot be read ({type(e).__name__}: {str(e)[:200]})") from None
+    if not isinstance(nb.get("cells"), list):
+        raise ValueError("the notebook has no list of cells")
+    return nb
+
+
+def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) -> Result:
+    """Grade one submission (runs in a worker thread, under a user id no other running student has)."""
+    t0 = time.monotonic()
+    result = Result(student)
+    try:
+        nb = read_submission(course, lab.lab, student)
+    except ValueError as e:
+        result.error = str(e)
+        return result
+    slot = slots.get()
+    try:
+        result.verdict = judge.judge(lab, nb, student, slot)
+    finally:
+        slots.put(slot)
+    result.ok = True
+    result.score, result.max_score = result.verdict.score, result.verdict.max_score
+    result.notes = list(result.verdict.notes)
+    result.seconds = time.monotonic() - t0
+    return result
+
+
+def _timestamp(course: Path, lab: str, student: str):
+    path = course / "submitted" / student / lab / "timestamp.txt"
+    return path.read_text().strip()[:100] if path.is_file() else None
+
+
+def record(course: Path, lab: judge.Lab, student: str, result: Result):
+    """Write one student's autograded scores into the gradebook and the autograded notebook into the course."""
     from sqlalchemy.exc import SAWarning
 
-    with warnings.catch_warnings(), Gradebook(f"sqlite:///{work / 'gradebook.db'}") as src, \
-            Gradebook(f"sqlite:///{course / 'gradebook.db'}") as dst:
-        warnings.simplefilter("ignore", SAWarning)  # nbgrader 0.9.6's own session warnings, harmless
-        sub = src.find_submission(lab, student)
-        dst.update_or_create_student(student)
-        dst.update_or_create_submission(lab, student, timestamp=sub.timestamp)
-        score = max_score = 0.0
-        for nb in sub.notebooks:
-            auto = {c.name for c in dst.find_notebook(nb.name, lab).grade_cells} - \
-                   {c.name for c in dst.find_notebook(nb.name, lab).solution_cells}
-            out = dst.find_submission_notebook(nb.name, lab, student)
-            out.late_submission_penalty = nb.late_submission_penalty
-            for g in nb.grades:
-                d = dst.find_grade(g.name, nb.name, lab, student)
-                d.auto_score = g.auto_score
-                d.needs_manual_grade = g.needs_manual_grade
-                if g.name in auto:
-                    score += g.auto_score or 0.0
-                    max_score += g.max_score
-            for cm in nb.comments:
-                dst.find_comment(cm.name, nb.name, lab, student).auto_comment = cm.auto_comment
-        dst.db.commit()
-    result.score, result.max_score = score, max_score
-    dest = course / "autograded" / student / lab
+    scores = {t.grade_id: t.score for t in result.verdict.tests}
+    with warnings.catch_warnings(), _gradebook(course) as gb:
+        warnings.simplefilter("ignore", SAWarning)
+        gb.update_or_create_student(student)
+        ts = _timestamp(course, lab.lab, student)
+        gb.update_or_create_submission(lab.lab, student, **({"timestamp": ts} if ts else {}))
+        sub = gb.find_submission_notebook(lab.lab, lab.lab, student)
+        for g in sub.grades:
+            if g.name in scores:
+                g.auto_score, g.needs_manual_grade = scores[g.name], False
+            else:
+                g.auto_score = None
+                g.needs_manual_grade = g.manual_score is None
+        gb.db.commit()
+    dest = course / "autograded" / student / lab.lab
     if dest.exists():
         shutil.rmtree(dest)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    _copy_files(work / "autograded" / student / lab, dest)
+    src = course / "submitted" / student / lab.lab
+    _copy_files(src, dest, notebooks=False)
+    nb = judge.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
+    nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 
 
 def integrity(course: Path, lab: str, results: list[Result]):
-    """Write ``integrity_<LAB>.md/.csv`` with grading.integrity when it is there; returns the report's path or None.
+    """Write ``integrity_<LAB>.md/.csv``: this run's students scanned, earlier rows of the others kept."""
+    from grading import integrity as scanner
 
-    Hook: ``grading.integrity.scan_notebook(source, submitted)`` returns a list of flags per notebook and
-    ``write_report(rows, md, csv)`` writes the report; rows are ``(student, lab, flags)``.
-    """
-    try:
-        from grading import integrity as scanner
-    except ImportError:
-        return None
     source = course / "solutions" / lab / f"{lab}.ipynb"
-    rows = []
+    md, csv_path = course / f"integrity_{lab}.md", course / f"integrity_{lab}.csv"
+    rows, done = [], {r.student for r in results}
     for r in results:
         submitted = course / "submitted" / r.student / lab / f"{lab}.ipynb"
         try:
@@ -255,18 +206,48 @@ def integrity(course: Path, lab: str, results: list[Result]):
         except Exception as e:  # noqa: BLE001 -- a notebook the scanner cannot read is itself worth a look
             r.flags = [{"cell": "-", "kind": "unreadable", "line": 0, "code": "", "why": f"{type(e).__name__}: {e}"}]
         rows.append((r.student, lab, r.flags))
-    md, csv = course / f"integrity_{lab}.md", course / f"integrity_{lab}.csv"
-    extra = {}
-    if "scores" in inspect.signature(scanner.write_report).parameters:  # the report can show each score
-        extra["scores"] = {r.student: f"{r.score:g} / {r.max_score:g}" for r in results if r.ok}
-    scanner.write_report(rows, md, csv, **extra)
+    if csv_path.is_file():  # a run on some students: keep the others' rows
+        earlier = {}
+        with open(csv_path, newline="") as fh:
+            for row in csv.DictReader(fh):
+                if row["student"] in done or row["lab"] != lab:
+                    continue
+                flags = earlier.setdefault(row["student"], [])
+                if row["status"] == "REVIEW":
+                    flags.append({k: row[k] for k in ("cell", "line", "kind", "code", "why")})
+        rows += [(s, lab, f) for s, f in earlier.items()]
+    scanner.write_report(rows, md, csv_path)
     return md
 
 
-def export(course: Path):
+def export(course: Path, lab: str, results: list[Result]):
+    """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``."""
     res = subprocess.run([sys.executable, "-m", "nbgrader", "export", "--log-level=ERROR"], cwd=course, env=_env(),
                          capture_output=True, text=True)
-    return res.returncode == 0
+    path = course / "grades.csv"
+    if res.returncode != 0 or not path.is_file():
+        return False
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+        fields = list(rows[0].keys()) if rows else ["assignment", "student_id", "score", "max_score"]
+    fields = [f for f in fields if f != "status"] + ["status"]
+    failed = {r.student: r.error for r in results if not r.ok}
+    for row in rows:
+        if row.get("assignment") == lab:
+            row["status"] = f"NOT GRADED: {failed[row['student_id']]}" if row["student_id"] in failed else (
+                "graded" if row.get("status") in (None, "", "graded") else row["status"])
+        else:
+            row.setdefault("status", "")
+    listed = {row["student_id"] for row in rows if row.get("assignment") == lab}
+    for student, why in failed.items():
+        if student not in listed:
+            rows.append({**{f: "" for f in fields}, "assignment": lab, "student_id": student,
+                         "status": f"NOT GRADED: {why}"})
+    with open(path, "w", newline="") as fh:
+        out = csv.DictWriter(fh, fieldnames=fields)
+        out.writeheader()
+        out.writerows(rows)
+    return True
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -298,8 +279,6 @@ def summary(lab: str, results: list[Result], seconds: float, workers: int, repor
         if not r.ok:
             notes.insert(0, r.error)
         lines.append(f"{r.student:<{width}}  {score:>12}  {'; '.join(notes)}")
-    if report is None:
-        lines.append("\n(integrity report skipped: grading/integrity.py is not in this course)")
     return "\n".join(lines)
 
 
@@ -309,12 +288,11 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2, help="submissions graded at once (default 2)")
     ap.add_argument("--student", action="append", help="grade only this student (repeatable)")
     ap.add_argument("--course", default=".", help="the course root (default: the current folder)")
-    ap.add_argument("--timeout", type=int, help="seconds per cell (default: c.Execute.timeout of the course)")
+    ap.add_argument("--timeout", type=int, help=f"seconds per cell and per test (default {judge.CELL_SECONDS})")
     ap.add_argument("--memory-mb", type=int, help="address space per sandboxed process (default 4096)")
     ap.add_argument("--cpu-seconds", type=int, help="CPU seconds per sandboxed process (default 600)")
-    ap.add_argument("--student-timeout", type=int, default=1800, help="wall seconds per submission (default 1800)")
     ap.add_argument("--no-generate", action="store_true", help="do not re-record the lab in gradebook.db first")
-    ap.add_argument("--keep-scratch", action="store_true", help="keep the scratch courses (prints where)")
+    ap.add_argument("--keep-scratch", action="store_true", help="keep the scratch folder (prints where)")
     args = ap.parse_args(argv)
 
     course = Path(args.course).resolve()
@@ -332,50 +310,56 @@ def main(argv=None):
         raise SystemExit(f"student folder names must be letters, digits, '_', '.', '-': {bad}")
     if not students:
         raise SystemExit(f"no submissions: put them in submitted/<student>/{lab}/{lab}.ipynb")
-    if not args.no_generate:
-        print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
-        generate(course, lab)
-    elif not (course / "gradebook.db").is_file():
-        raise SystemExit("gradebook.db does not exist: run without --no-generate (or `make gradebook`)")
-
-    # the sandbox mounts lib/ read-only: compile it once here, or every kernel compiles it again
-    subprocess.run([sys.executable, "-m", "compileall", "-q", str(course / "lib")], capture_output=True)
-    t0 = time.monotonic()
-    scratch = Path(tempfile.mkdtemp(prefix="cg-"))  # short: the kernel's socket paths must fit in 107 bytes
+    scratch = Path(tempfile.mkdtemp(prefix="cg-"))
+    os.chmod(scratch, 0o755)
     results = []
     try:
-        os.chmod(scratch, 0o755)
-        base_db = scratch / "base.db"
-        snapshot(course / "gradebook.db", base_db)
-        os.chmod(base_db, 0o600)
-        kernels = scratch / "jp"
-        sandbox.write_kernelspec(kernels, KERNEL)
-        print(f"grading {len(students)} submission(s) of {lab}, {args.workers} at a time, each in the sandbox",
-              flush=True)
+        if not args.no_generate:
+            print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
+            generate(course, lab, scratch / "release")
+            release_dir = scratch / "release"
+        elif not (course / "gradebook.db").is_file():
+            raise SystemExit("gradebook.db does not exist: run without --no-generate (or `make gradebook`)")
+        else:
+            release_dir = course / "labs"
+        t0 = time.monotonic()
+        the_lab = load_lab(course, lab, release_dir, scratch, args)
+        model = judge.judge(the_lab, the_lab.solution, "model solution", slot=0)
+        if model.score < model.max_score:
+            wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)
+            raise SystemExit(f"the model solution of {lab} scores {model.score:g} / {model.max_score:g} under the "
+                             f"judge, so its tests are wrong, not the students: {wrong}")
+        print(f"model solution: {model.score:g} / {model.max_score:g} ({model.seconds:.0f} s); grading "
+              f"{len(students)} submission(s), {args.workers} at a time, each in the sandbox", flush=True)
+        slots = queue.Queue()
+        for i in range(max(1, args.workers)):
+            slots.put(i)
         with ThreadPoolExecutor(max_workers=max(1, args.workers)) as pool:
-            futures = {pool.submit(grade_one, course, lab, s, scratch / f"s{i:04d}", kernels, base_db, args): (i, s)
-                       for i, s in enumerate(students)}
+            futures = {pool.submit(grade_one, the_lab, course, s, slots): s for s in students}
             for fut in as_completed(futures):
-                i, student = futures[fut]
-                result, _ = fut.result()
+                student = futures[fut]
+                try:
+                    result = fut.result()
+                except Exception as e:  # noqa: BLE001 -- a failure of the judge on one student: name it, go on
+                    result = Result(student, error=f"the judge failed: {type(e).__name__}: {e}")
                 if result.ok:
                     try:
-                        merge(course, lab, student, scratch / f"s{i:04d}", result)
+                        record(course, the_lab, student, result)
                     except Exception as e:  # noqa: BLE001 -- report it with the student's name, grade the others
                         result.ok, result.error = False, f"could not record the scores: {type(e).__name__}: {e}"
                 results.append(result)
                 state = f"{result.score:g}/{result.max_score:g}" if result.ok else "NOT GRADED"
                 print(f"  {student}: {state} ({result.seconds:.0f} s)", flush=True)
         seconds = time.monotonic() - t0
-        exported = export(course)
+        exported = export(course, lab, results)
         report = integrity(course, lab, results)
         print()
         print(summary(lab, results, seconds, args.workers, report))
-        print(f"\ngrades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}"
-              + (f"; integrity report: {report.name} and {report.with_suffix('.csv').name}" if report else ""))
+        print(f"\ngrades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
+              f"{report.name} and {report.with_suffix('.csv').name}")
     finally:
         if args.keep_scratch:
-            print(f"scratch courses kept in {scratch}")
+            print(f"scratch folder kept in {scratch}")
         else:
             shutil.rmtree(scratch, ignore_errors=True)
     failed = [r.student for r in results if not r.ok]

@@ -385,7 +385,9 @@ class Lab:
         root = self.scratch / f"box-{self.lab}-{gid}"
         if not root.exists():
             root.mkdir(parents=True)
-            self.unstubbed[gid] = strip_packages(root, self.course / "lib", self.forbidden[gid])
+            import fusionlab  # the library the judge computes with is the one the box gets (references stubbed)
+            self.unstubbed[gid] = strip_packages(root, Path(fusionlab.__file__).resolve().parents[1],
+                                                 self.forbidden[gid])
             for top, dirs, files in os.walk(root):
                 os.chmod(top, 0o755)
                 for f in files:
