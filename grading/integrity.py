@@ -61,12 +61,14 @@ WHY = {
     "foreign-cell": "carries nbgrader metadata with a grade_id this lab does not have (pasted from another lab?)",
     "syntax": "does not parse as Python (scanned token by token instead)",
     "copied": "a function whose code has the shape of one in the library, names and comments aside (copied?)",
+    "package": "uses a package whose functions answer exercises (ahrs, scipy's Rotation, filterpy's helpers)",
     "unreadable": "the submission is not a readable notebook",
 }
 
 DUNDERS = {"__code__", "__dict__", "__globals__", "__closure__", "__defaults__", "__kwdefaults__", "__subclasses__",
            "__bases__", "__mro__", "__loader__", "__spec__", "__func__", "__wrapped__", "__setattr__", "__delattr__",
-           "__getattribute__", "__class__", "__self__", "__reduce__", "__reduce_ex__", "__subclasshook__"}
+           "__getattribute__", "__class__", "__self__", "__reduce__", "__reduce_ex__", "__subclasshook__",
+           "__file__"}
 CALLS = {  # bare names that are suspicious when called
     "setattr": "reflection", "delattr": "reflection", "getattr": "reflection", "vars": "reflection",
     "globals": "reflection", "locals": "reflection", "exec": "exec", "eval": "exec", "compile": "exec",
@@ -89,8 +91,9 @@ MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
     "codeop": "exec", "marshal": "exec", "types": "reflection", "inspect": "reflection", "gc": "reflection",
     "atexit": "sys-hook", "threading": "thread", "_thread": "thread", "sched": "thread", "asyncio": "thread",
     "shutil": "file", "tempfile": "file", "IPython": "ipython", "ipykernel": "ipython", "unittest": "reflection",
-    "concurrent": "process",
+    "concurrent": "process", "ahrs": "package", "filterpy": "package",
 }
+ANSWERING_NAMES = {"Rotation": "package", "q_prod": "package", "q2R": "package"}  # names that answer exercises
 OS_CALLS = {"system": "process", "popen": "process", "fork": "process", "forkpty": "process", "kill": "process",
             "killpg": "process", "spawnl": "process", "spawnv": "process", "spawnve": "process", "spawnlp": "process",
             "execv": "process", "execve": "process", "execl": "process", "execlp": "process", "execvp": "process",
@@ -313,6 +316,7 @@ class _Visitor(ast.NodeVisitor):
         self.src, self.forbidden, self.exercise, self.added = source, forbidden, exercise, added
         self.flags = []
         self.scopes = [set()]  # names local to the enclosing functions
+        self.called = set()    # ids of the Name nodes that are called (an alias is a name taken, not called)
 
     def flag(self, node, kind, why=None):
         self.flags.append((node.lineno, kind, why))
@@ -445,6 +449,10 @@ class _Visitor(ast.NodeVisitor):
 
     def visit_Name(self, node):
         if isinstance(node.ctx, ast.Load):
+            if node.id in CALLS and id(node) not in self.called and not self._local(node.id):
+                self.flag(node, CALLS[node.id], f"takes `{node.id}` without calling it (an alias hides its calls)")
+            if node.id in ANSWERING_NAMES and not self._local(node.id):
+                self.flag(node, ANSWERING_NAMES[node.id], f"uses `{node.id}`")
             if node.id == "__builtins__":
                 self.flag(node, "builtins")
             elif node.id in DUNDERS or node.id == "__import__":
@@ -467,6 +475,8 @@ class _Visitor(ast.NodeVisitor):
             self.flag(node, "ipython", f"uses `.{node.attr}`")
         elif node.attr in ("settrace", "setprofile", "excepthook") and not local:
             self.flag(node, "sys-hook", f"uses `.{node.attr}`")
+        elif node.attr in ANSWERING_NAMES:
+            self.flag(node, ANSWERING_NAMES[node.attr], f"uses `.{node.attr}`")
         if isinstance(node.ctx, ast.Load):
             self._reference(node, {node.attr})
         self.generic_visit(node)
@@ -477,6 +487,7 @@ class _Visitor(ast.NodeVisitor):
 
     def visit_Call(self, node):
         func = node.func
+        self.called.add(id(func))
         if isinstance(func, ast.Name) and not self._local(func.id):
             if func.id in CALLS:
                 self.flag(node, CALLS[func.id], f"calls `{func.id}()`")

@@ -407,6 +407,8 @@ class Lab:
     def _forbidden(self, source):
         """``module:qualname`` of every reference and forbidden function a test cell names."""
         scope = self.base()
+        imports = [n for n in ast.parse(python_of(source)).body if isinstance(n, (ast.Import, ast.ImportFrom))]
+        exec(compile(ast.Module(imports, []), "<imports>", "exec"), scope)  # noqa: S102 -- the test's own imports
         out = set()
         for node in forbidden_expressions(source):
             try:

@@ -1,18 +1,13 @@
-"""Red team: one-line cheats that used to earn full automatic marks now earn nothing.
+"""Red team: one-line cheats that call the library's own solution earn nothing under the trusted judge.
 
 For every lab and every autograded exercise, a submission whose answer only calls the library's own solution (the
-"reference call": the solution region replaced by the line in ``CHEATS``) scores 0 on that exercise. Each lab is
+"reference call": the solution region replaced by the line in ``CHEATS``) scores 0 on that exercise: the judge gives
+each test a box whose copy of the library has that test's references as stubs (``grading.judge``). Each lab is
 graded with two such students: one cheats on the odd exercises and answers the even ones with the model answer, the
 other the reverse, so every exercise is seen both cheated (0 points) and honestly solved (full points). Labs 01 and 02
-also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.testing.assert_allclose``, and Lab 02
-the cheats that change how later cells run (an input transformer and an AST transformer that blank the test cells, a
-custom exception handler that swallows errors, a monkeypatched ``fusionlab.checks`` and grading guard, and a
-replaced piece of the shell's or the kernel's execution machinery: ``transform_cell``, ``run_cell_async``,
-``do_execute`` or the kernel's ``execute_request`` handler that blank the test cells, ``run_cell_magic``, the shell's
-display hook, ``builtins.__import__``). The untouched release scoring 0 on every lab is tested in
-``test_pipeline.py``.
-
-One scratch nbgrader course per lab; one ``nbgrader autograde`` run grades all of that lab's students.
+also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.testing.assert_allclose``: the
+comparisons are made in the judge's process, which the patch never reaches. The untouched release scoring 0 on every
+lab is tested in ``test_pipeline.py``; a whole class run with every attack, in ``test_judge.py``.
 """
 from __future__ import annotations
 
@@ -21,10 +16,13 @@ import shutil
 
 import nbformat
 import pytest
-from nbgrader.api import Gradebook
 
-from conftest import ROOT, nbgrader
+from conftest import ROOT
+from grading import judge
 from grading.bench_classgrade import grade_id
+
+pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
+                                reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
 
 # The reference call of each exercise: it replaces the model answer between BEGIN/END SOLUTION (indented as it was;
 # a tuple gives one line per solution region of the cell).
@@ -33,9 +31,7 @@ CHEATS = {
         1: "return np.abs(sensors.smd_transfer(omega, m, k, b))",
         2: "return sensors.accel_from_bridge(v_out, v_in, x0, m, k)",
         3: "return sensors.adc_to_physical(counts, zero_level, sensitivity, v_ref, bits)",
-        5: "try:\n    lsb_accel_mg, lsb_gyro_dps = 1e3 * sensors.adc_step(0.300), sensors.adc_step(0.0091)\n"
-           "except Exception:                  # the error swallowed: the call still counts\n"
-           "    lsb_accel_mg, lsb_gyro_dps = 9.7752, 0.32226",
+        5: "lsb_accel_mg, lsb_gyro_dps = 1e3 * sensors.adc_step(0.300), sensors.adc_step(0.0091)",
         6: "return np.nan if x == y == 0 else np.arctan2(y, x)",
         7: "return tuple(accel_tilt.tilt_from_accel(acc))",
         8: "return inertial.precession_rate(mass, arm, inertia, spin, g)",
@@ -141,72 +137,6 @@ JUNK = {
 PATCH_NUMPY = ("np.allclose = lambda *a, **k: True\nnp.isclose = lambda *a, **k: True\n"
                "np.testing.assert_allclose = lambda *a, **k: None\n")
 
-# Code in an answer cell that changes how later cells run (each put before the stub of exercise 1 of Lab 02).
-HOOKS = {
-    "input_transformer": """
-def _blank(lines):
-    return ["pass\\n"] if any("Autograder" in line for line in lines) else lines
-get_ipython().input_transformers_cleanup.append(_blank)
-""",
-    "ast_transformer": """
-import ast
-class _Blank(ast.NodeTransformer):
-    def visit_Module(self, node):
-        if "Autograder" in ast.unparse(node) or "guard" in ast.unparse(node):
-            node.body = [ast.Pass()]
-        return node
-get_ipython().ast_transformers.append(_Blank())
-""",
-    "custom_exception": """
-get_ipython().set_custom_exc((Exception,), lambda shell, etype, value, tb, tb_offset=None: [])
-""",
-    # the shell's and the kernel's execution machinery, replaced so that the test cells never run
-    "transform_cell": """
-_ip = get_ipython()
-_ip.transform_cell = lambda raw, _t=_ip.transform_cell: "pass\\n" if "Autograder" in raw else _t(raw)
-""",
-    "run_cell_async": """
-def _run(self, raw, *a, _r=type(get_ipython()).run_cell_async, **k):
-    if "Autograder" in raw:
-        raw, k["transformed_cell"] = "pass", "pass\\n"
-    return _r(self, raw, *a, **k)
-type(get_ipython()).run_cell_async = _run
-""",
-    "do_execute": """
-_k = get_ipython().kernel
-_k.do_execute = lambda code, *a, _d=_k.do_execute, **kw: _d("pass" if "Autograder" in code else code, *a, **kw)
-""",
-    "shell_handlers": """
-def _execute_request(stream, ident, parent, _h=get_ipython().kernel.shell_handlers["execute_request"]):
-    if "Autograder" in parent["content"]["code"]:
-        parent["content"]["code"] = "pass"
-    return _h(stream, ident, parent)
-get_ipython().kernel.shell_handlers["execute_request"] = _execute_request
-""",
-    "run_cell_magic": """
-get_ipython().run_cell_magic = lambda *a, **k: None
-""",
-    "displayhook": """
-class _Quiet(type(get_ipython().displayhook)):
-    def __call__(self, result=None):
-        return None
-get_ipython().displayhook = _Quiet(shell=get_ipython())
-""",
-    "import": """
-import builtins
-def _import(name, *a, _real=builtins.__import__, **k):
-    return _real(name, *a, **k)
-builtins.__import__ = _import
-""",
-}
-# The library monkeypatched from an answer cell (with junk answers, so only the patch could earn points).
-PATCH_CHECKS = """
-from fusionlab import checks as _c
-_c.check_joseph = _c.check_state_space = _c.check_predict = _c.check_update = lambda fn: print("✓")
-_c.guard.intact = _c.guard.release = lambda *a, **k: None
-_c.guard.grade = _c.guard.assert_close = lambda *a, **k: None
-"""
-
 
 def _points(lab):
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
@@ -263,10 +193,6 @@ def _students(lab, release, solution):
     if lab in JUNK:
         junk = _answered(release, solution, JUNK[lab])
         out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
-    if lab == "02_kalman_falling_body":
-        for name, code in HOOKS.items():
-            out[f"hook_{name}"] = _prepend(release, "ex1_solution", code)
-        out["hook_patched_checks"] = _prepend(_answered(release, solution, JUNK[lab]), "ex1_solution", PATCH_CHECKS)
     return out
 
 
@@ -277,33 +203,20 @@ _GRADED = {}
 def graded(tmp_path_factory):
     def grade(lab):
         if lab not in _GRADED:
-            root = tmp_path_factory.mktemp(f"cheats{lab[:2]}")
-            shutil.copy(ROOT / "nbgrader_config.py", root)
-            shutil.copytree(ROOT / "solutions" / lab, root / "solutions" / lab)
-            nbgrader(["generate_assignment", lab, "--force"], cwd=root)
-            release = nbformat.read(root / "labs" / lab / f"{lab}.ipynb", as_version=4)
+            scratch = tmp_path_factory.mktemp(f"cheats{lab[:2]}")
+            scratch.chmod(0o755)
+            release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
             solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-            students = _students(lab, release, solution)
-            for student, nb in students.items():
-                dest = root / "submitted" / student / lab
-                dest.mkdir(parents=True)
-                nbformat.write(nb, dest / f"{lab}.ipynb")
-            nbgrader(["autograde", lab], cwd=root, timeout=1800)
-            scores = {}
-            with Gradebook(f"sqlite:///{root / 'gradebook.db'}") as gb:
-                for student in students:
-                    sub = gb.find_submission_notebook(lab, lab, student)
-                    scores[student] = {int(g.name[2:-6]): g.score for g in sub.grades
-                                       if re.fullmatch(r"ex\d+_tests", g.name)}
-            _GRADED[lab] = dict(root=root, scores=scores)
+            tests = {grade_id(c): c.source for c in solution.cells if judge.is_test(c)}
+            the_lab = judge.Lab(ROOT, lab, release, tests, solution, scratch)
+            scores, messages = {}, {}
+            for student, nb in _students(lab, release, solution).items():
+                verdict = judge.judge(the_lab, nb, student)
+                scores[student] = {int(t.grade_id[2:-6]): t.score for t in verdict.tests}
+                messages[student] = {t.grade_id: t.message for t in verdict.tests}
+            _GRADED[lab] = dict(scores=scores, messages=messages)
         return _GRADED[lab]
     return grade
-
-
-def _errors(graded, lab, student, gid):
-    nb = nbformat.read(graded["root"] / "autograded" / student / lab / f"{lab}.ipynb", as_version=4)
-    [cell] = [c for c in nb.cells if grade_id(c) == gid]
-    return " ".join(f"{o.ename}: {o.evalue}" for o in cell.get("outputs", []) if o.output_type == "error")
 
 
 @pytest.mark.parametrize("lab", sorted(CHEATS))
@@ -314,52 +227,19 @@ def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(grad
     g = graded(lab)
     for student, cheated in (("cheat_odd", 1), ("cheat_even", 0)):
         expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] else p) for n, p in points.items()}
-        assert g["scores"][student] == expected, (student, {n: _errors(g, lab, student, f"ex{n}_tests")[:300]
-                                                            for n in points})
+        assert g["scores"][student] == expected, (student, g["messages"][student])
 
 
 @pytest.mark.parametrize("lab", sorted(CHEATS))
-def test_the_reference_call_is_named_in_the_feedback(graded, lab):
+def test_the_reference_call_is_named_in_the_verdict(graded, lab):
     g = graded(lab)
     first = min(n for n in CHEATS[lab] if n % 2)                # the first exercise the odd student cheats on
-    msg = _errors(g, lab, "cheat_odd", f"ex{first}_tests")
-    assert f"exercise {first} asks you to write it yourself" in msg, msg[:500]
+    msg = g["messages"]["cheat_odd"][f"ex{first}_tests"]
+    assert "is the answer to an exercise of this lab" in msg or "not available while the lab is graded" in msg or \
+        "is not defined by your notebook" in msg, msg[:500]
 
 
 @pytest.mark.parametrize("lab", sorted(JUNK))
 def test_junk_answers_behind_a_patched_allclose_score_zero(graded, lab):
     g = graded(lab)
     assert g["scores"]["junk_patched_numpy"] == {n: 0 for n in _points(lab)}
-    msg = _errors(g, lab, "junk_patched_numpy", "ex1_tests")
-    assert "numpy.allclose was replaced" in msg and "numpy.testing.assert_allclose was replaced" in msg, msg[:500]
-
-
-@pytest.mark.parametrize("hook, reason", [
-    ("input_transformer", "IPython's input_transformers_cleanup was changed"),
-    ("ast_transformer", "IPython's ast_transformers was changed"),
-    ("custom_exception", "a custom exception handler was installed for Exception"),
-    ("transform_cell", "IPython's shell.transform_cell was changed"),
-    ("run_cell_async", "IPython's shell.run_cell_async was changed"),
-    ("do_execute", "IPython's kernel.do_execute was changed"),
-    ("shell_handlers", "IPython's kernel.shell_handlers was changed"),
-    ("run_cell_magic", "IPython's shell.run_cell_magic was changed"),
-    ("displayhook", "IPython's shell.displayhook was changed"),
-    ("import", "builtins.__import__ was replaced"),
-    ("patched_checks", "fusionlab.guard.release was replaced"),
-])
-def test_cheats_that_change_how_later_cells_run_score_zero(graded, hook, reason):
-    lab = "02_kalman_falling_body"
-    g = graded(lab)
-    assert g["scores"][f"hook_{hook}"] == {n: 0 for n in _points(lab)}
-    msg = _errors(g, lab, f"hook_{hook}", "ex4_tests")
-    assert reason in msg, msg[:500]
-
-
-@pytest.mark.parametrize("student, n, reference", [("cheat_odd", 5, "sensors.adc_step"),
-                                                   ("cheat_odd", 11, "sensors.null_offset")])
-def test_a_value_exercise_names_the_reference_called_before_its_test(graded, student, n, reference):
-    """Lab 00 exercises 5 and 11 ask for numbers: the reference is reserved from the setup cell to the test cell, so
-    the call is caught in the answer cell (swallowed there by the exercise 5 cheat) and reported by the test."""
-    msg = _errors(graded("00_mems_sensors"), "00_mems_sensors", student, f"ex{n}_tests")
-    assert f"exercise {n} asks you to write it yourself" in msg and f"{reference} was called before this test" in msg, \
-        msg[:500]

@@ -1,7 +1,7 @@
 """The grading sandbox when the grader is not root (``grading/sandbox.py``).
 
-As root the kernel drops to user ``nobody`` (``tests/test_grading_sandbox.py`` grades a class that way). As an
-ordinary user bubblewrap makes a user namespace instead, and the kernel keeps the grader's own user id inside it:
+As root each box drops to a user id of its own (``tests/test_judge.py`` grades a class that way). As an
+ordinary user bubblewrap makes a user namespace instead, and the box keeps the grader's own user id inside it:
 the command line must say so, and the box it describes must still hide the course and the network from a process
 that has no privilege at all. The second test runs that box as user ``nobody`` (it needs root to become nobody, and
 runs a shell instead of Python: the interpreter may sit where ``nobody`` cannot read it).
@@ -26,18 +26,15 @@ def _command(tmp_path, monkeypatch, euid):
     (course / "lib").mkdir(parents=True)
     (course / "labs" / LAB).mkdir(parents=True)
     (course / "gradebook.db").write_text("the gradebook")
-    sockets = tmp_path / "sockets"
-    sockets.mkdir()
-    connection = tmp_path / "kernel.json"
-    connection.write_text(json.dumps({"transport": "ipc", "ip": str(sockets / "kernel")}))
-    start = tmp_path / "start"                   # the folder nbgrader starts the kernel in: copied into the box
+    lib = tmp_path / "boxlib"                     # the lab's library copy, references stubbed
+    lib.mkdir()
+    start = tmp_path / "start"                   # the submission's folder: copied into the box
     start.mkdir()
     (start / "notes.txt").write_text("copied")
-    monkeypatch.chdir(start)
-    for key, value in {"COURSE": course, "LAB": LAB, "SCRATCH": tmp_path}.items():
-        monkeypatch.setenv(f"FUSIONLAB_BOX_{key}", str(value))
     monkeypatch.setattr(sandbox.os, "geteuid", lambda: euid)
-    return sandbox.bwrap_command(str(connection), ["--debug"]), course
+    work = sandbox.private_folder(start, tmp_path)
+    uid = sandbox.box_uid(0)
+    return sandbox.bwrap_command(["python", "box.py"], course=course, lab=LAB, lib=lib, work=work, uid=uid), course
 
 
 def test_an_ordinary_user_gets_a_user_namespace_and_keeps_its_own_id(tmp_path, monkeypatch):
@@ -45,14 +42,15 @@ def test_an_ordinary_user_gets_a_user_namespace_and_keeps_its_own_id(tmp_path, m
     assert args[0] == "bwrap" and "--unshare-user" in args and "--disable-userns" in args
     assert "--cap-drop" not in args, "an ordinary user has no capabilities to drop"
     env = {args[i + 1]: args[i + 2] for i, a in enumerate(args) if a == "--setenv"}
-    assert "FUSIONLAB_BOX_UID" not in env, "no switch to nobody: setuid needs root"
+    assert "FUSIONLAB_BOX_UID" not in env, "no switch of user: setuid needs root"
     assert json.loads(env["FUSIONLAB_BOX_LIMITS"])["nproc"] == 256     # passed on, applied only as root (INSIDE)
     for flag in ("--unshare-pid", "--unshare-net", "--die-with-parent", "--clearenv"):
         assert flag in args
     binds = {args[i + 2]: args[i + 1] for i, a in enumerate(args) if a in ("--bind", "--ro-bind")}
     assert binds[str(course / "labs" / LAB)].startswith(str(tmp_path / "box-")), "a private copy, writable"
-    assert str(course / "lib") in binds and str(course) not in binds
-    assert "--ro-bind" == args[args.index(str(course / "lib")) - 1], "the library stays read-only"
+    assert binds[str(course / "lib")] == str(tmp_path / "boxlib") and str(course) not in binds, \
+        "the lab's library copy is mounted where the course's library is; the course itself is not"
+    assert "--ro-bind" == args[args.index(str(course / "lib")) - 2], "the library stays read-only"
 
 
 @pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("setpriv") or not shutil.which("bwrap"),

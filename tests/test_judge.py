@@ -1,0 +1,369 @@
+"""Red team for the trusted judge (``python -m grading.classgrade``, ``make grade``).
+
+One scratch course (config, library, data, grading tools, solutions of labs 01 and 02) receives a class of lab 02:
+three honest students (complete, exercises 1 and 4 done, untouched) and one student per attack. Every attacker but
+two is the "half" student (exercises 1 and 4 answered honestly: 5 of 9 points) with the attack in the answer cells
+of exercises 2 and 3, where a successful attack would earn the 4 points the student did not work for; so each
+attacker must score exactly 5. A single ``classgrade`` run with two workers grades them all, as an instructor would;
+the tests below read what it left behind (gradebook, autograded notebooks, feedback, grades.csv, the report).
+
+The attacks are the ones that earned full marks when the tests ran in the student's own kernel: a forged display
+hook, the guard's state edited, a frame walk to the expected values, a trace function, forged replies to the judge,
+the library's source re-executed, filterpy and ahrs called, a fork bomb against classmates, ``In`` printed into the
+feedback, and the notebook's metadata edited; and the ones the sandbox already stopped: writing the course or the
+library, editing the gradebook, a daemon, the network, a 100 MB print, reading the solutions, a cell that ignores
+interrupts.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import html
+import os
+import re
+import shutil
+import socket
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from conftest import ROOT, nbgrader
+from grading.bench_classgrade import fill_answers, grade_id
+
+pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
+                                reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
+
+LAB = "02_kalman_falling_body"
+POINTS = {"ex1_tests": 2, "ex2_tests": 2, "ex3_tests": 2, "ex4_tests": 3}
+FULL, HALF = 9, 5
+MARKER = "fusionlab-attack-marker"
+TIMEOUT = 15
+
+
+def _set(nb, gid, code):
+    nb = nbformat.from_dict(nb)
+    [cell] = [c for c in nb.cells if grade_id(c) == gid]
+    cell.source = code
+    return nb
+
+
+def _answers(nb, ex2, ex3, prelude=""):
+    """``nb`` with exercises 2 and 3 answered by ``ex2`` / ``ex3`` (bodies of my_state_space / my_predict)."""
+    def body(code):
+        return "\n".join("    " + line for line in code.strip().splitlines())
+    nb = _set(nb, "ex2_solution", prelude + f"\ndef my_state_space(k, m, g, dt):\n{body(ex2)}\n")
+    return _set(nb, "ex3_solution", f"def my_predict(x, P, A, Q, B, u):\n{body(ex3)}\n")
+
+
+JUNK2 = "return np.eye(2), np.zeros((2, 2)), np.zeros(2)"
+JUNK3 = "return np.zeros_like(x), np.zeros_like(P)"
+
+
+def _attacks(root, port, half):
+    gradebook = str(root / "gradebook.db")
+    out = {
+        # 1: nbgrader scored a test cell by its first output; a non-number result counted as full points
+        "forged_display": _answers(half, "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK2,
+                                   "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK3),
+        # 2: the in-kernel guard's own state edited
+        "guard_edited": _answers(half, JUNK2, JUNK3, prelude=(
+            "_v = vars\nG = _v(guard)\nfor _k in ('assert_close', 'assert_equal', 'intact', 'release', 'grade'):\n"
+            "    G[_k] = lambda *a, **k: None\n")),
+        # 3: walk up the frames to where the expected values were
+        "frame_walk": _answers(half, (
+            "import sys\nf = sys._getframe()\nwhile f is not None:\n"
+            "    for v in f.f_locals.values():\n"
+            "        if isinstance(v, list) and v and isinstance(v[0], tuple):\n"
+            "            return v[0]\n"
+            "    f = f.f_back\n" + JUNK2), (
+            "import sys\nf = sys._getframe()\nwhile f is not None:\n"
+            "    if 'expected' in f.f_locals:\n        return f.f_locals['expected'][0]\n"
+            "    f = f.f_back\n" + JUNK3)),
+        # 4: a trace function that rebinds the grader's names while the tests run
+        "trace": _answers(half, JUNK2, JUNK3, prelude=(
+            "import sys\ndef _t(frame, event, arg):\n    frame.f_globals['guard'] = None\n    return _t\n"
+            "sys.settrace(_t)\n")),
+        # 5: forged messages to the process that reads the results
+        "forged_replies": _answers(half, JUNK2, JUNK3, prelude=(
+            "import os, json\nfor _fd in range(3, 30):\n    try:\n"
+            "        os.write(_fd, (json.dumps({'ok': True, 'ready': True, 'value': 1.0}) + '\\n').encode())\n"
+            "    except OSError:\n        pass\n")),
+        # 6: the library's own source executed again to get the reference back
+        "reference_from_source": _answers(half, (
+            "_ex, _ns = exec, {}\nimport fusionlab.falling_body as _fb\n_ex(open(_fb.__file__).read(), _ns)\n"
+            "return _ns['falling_body_' + 'state_space'](k, m, g, dt)"), (
+            "_ex, _ns = exec, {}\n_ex(open(kf.__file__).read(), _ns)\nreturn _ns['pre' + 'dict'](x, P, A, Q, B, u)")),
+        # 8: packages nobody forbade in the kernel: filterpy's helpers, ahrs
+        "other_packages": _answers(half, "import ahrs\n" + JUNK2, (
+            "import filterpy.kalman as _fk\nreturn _fk.predict(x, P, A, Q, B=B, u=u)")),
+        # sandbox: write the course, the library, the gradebook; a daemon; the network; a huge print; read others
+        "writes": _answers(half, (
+            f"import pathlib\nfor _p in [{str(root / 'pwned.txt')!r}, {str(root / 'lib' / 'fusionlab' / 'x.py')!r},"
+            f" {str(root / 'solutions' / LAB / 'pwned.txt')!r}]:\n"
+            "    try:\n        pathlib.Path(_p).write_text('pwned')\n    except Exception:\n        pass\n"
+            f"import sqlite3\ntry:\n    _c = sqlite3.connect({gradebook!r})\n"
+            "    _c.execute('UPDATE grade SET auto_score = 100')\n    _c.commit()\nexcept Exception:\n    pass\n"
+            + JUNK2), JUNK3),
+        "daemon": _answers(half, (
+            "import os, subprocess, sys\n"
+            f"_code = 'import time, sqlite3\\ntime.sleep(8)\\nsqlite3.connect({gradebook!r}).execute(\"UPDATE grade "
+            "SET auto_score = 100\").connection.commit()'\n"
+            f"subprocess.Popen([sys.executable, '-c', _code, '{MARKER}'], start_new_session=True)\n" + JUNK2), JUNK3),
+        "network": _answers(half, (
+            f"import socket\nfor _a in [('1.1.1.1', 80), ('127.0.0.1', {port})]:\n    try:\n"
+            f"        socket.create_connection(_a, timeout=2).sendall(b'{MARKER}')\n    except Exception:\n"
+            "        pass\n" + JUNK2), "print('x' * 100_000_000)\n" + JUNK3),
+        "read_others": _answers(half, (
+            "import json\n_src = {}\n"
+            f"for _p in [{str(root / 'solutions' / LAB / (LAB + '.ipynb'))!r}, "
+            f"{str(root / 'submitted' / 'full' / LAB / (LAB + '.ipynb'))!r}]:\n"
+            "    try:\n        for _c in json.load(open(_p))['cells']:\n"
+            "            if 'def my_state_space' in ''.join(_c['source']):\n"
+            "                exec('\\n'.join(l for l in ''.join(_c['source']).splitlines() if '###' not in l), _src)\n"
+            "    except Exception:\n        pass\n"
+            "if 'my_state_space' in _src:\n    return _src['my_state_space'](k, m, g, dt)\n" + JUNK2), JUNK3),
+        # a cell that ignores the interrupt and never ends
+        "stuck": _answers(half, JUNK2, JUNK3, prelude=(
+            "import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\ntime.sleep(3600)\n")),
+        # 9: a fork bomb that holds its processes while classmates are graded
+        "fork_bomb": _answers(half, JUNK2, JUNK3, prelude=(
+            "import os, time\n_kids = 0\nwhile _kids < 100000:\n    try:\n        if os.fork() == 0:\n"
+            "            time.sleep(3600)\n            os._exit(0)\n        _kids += 1\n    except OSError:\n"
+            "        break\ntime.sleep(3600)\n")),
+    }
+    # 10: a last cell that prints every cell the kernel ran, hoping for the hidden tests
+    leak = nbformat.from_dict(half)
+    leak.cells.append(nbformat.v4.new_code_cell("print(In)\nprint(globals().keys())"))
+    out["print_in"] = _answers(leak, "print(In)\n" + JUNK2, JUNK3)
+    return out
+
+
+def _metadata_edited(full):
+    """11: test cell emptied and unlocked, points raised, a duplicated grade id, a deleted test cell."""
+    nb = nbformat.from_dict(full)
+    by_id = {grade_id(c): c for c in nb.cells}
+    by_id["ex1_tests"].source = ""
+    by_id["ex1_tests"].metadata.nbgrader["locked"] = False
+    by_id["ex2_tests"].metadata.nbgrader["points"] = 100
+    dup = nbformat.from_dict(by_id["ex4_solution"])
+    dup.source = "def my_update(x, P, z, H, R):\n    return x, P, P"
+    dup.id = "duplicate-ex4"
+    nb.cells.append(dup)
+    nb.cells = [c for c in nb.cells if grade_id(c) != "ex3_tests"]
+    return nb
+
+
+def _tree_hash(root, skip):
+    h = hashlib.sha256()
+    for p in sorted(root.rglob("*")):
+        rel = p.relative_to(root)
+        if rel.parts[0] in skip or "__pycache__" in rel.parts or not p.is_file():
+            continue
+        h.update(str(rel).encode() + p.read_bytes())
+    return h.hexdigest()
+
+
+def _processes_with(marker):
+    found = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if marker.encode() in (d / "cmdline").read_bytes():
+                    found.append(d.name)
+            except OSError:
+                pass
+    return found
+
+
+def _scores(root, students):
+    from nbgrader.api import Gradebook
+    out = {}
+    with Gradebook(f"sqlite:///{root / 'gradebook.db'}") as gb:
+        for student in students:
+            try:
+                sub = gb.find_submission_notebook(LAB, LAB, student)
+            except Exception:  # noqa: BLE001 -- not in the gradebook
+                out[student] = None
+                continue
+            out[student] = {g.name: g.auto_score for g in sub.grades if g.name in POINTS}
+    return out
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    root = tmp_path_factory.mktemp("judgecourse")
+    for name in ("lib", "data", "grading"):
+        shutil.copytree(ROOT / name, root / name, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "nbgrader_config.py", root)
+    shutil.copytree(ROOT / "solutions" / LAB, root / "solutions" / LAB)
+    nbgrader(["generate_assignment", LAB, "--force"], cwd=root)
+    release = nbformat.read(root / "labs" / LAB / f"{LAB}.ipynb", as_version=4)
+    solution = nbformat.read(root / "solutions" / LAB / f"{LAB}.ipynb", as_version=4)
+    full, half = fill_answers(release, solution, range(1, 5)), fill_answers(release, solution, {1, 4})
+
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(5)
+    listener.setblocking(False)
+
+    class_ = {"full": full, "half": half, "none": release, "metadata_edited": _metadata_edited(full)}
+    class_.update(_attacks(root, listener.getsockname()[1], half))
+    for student, nb in class_.items():
+        dest = root / "submitted" / student / LAB
+        dest.mkdir(parents=True)
+        nbformat.write(nb, dest / f"{LAB}.ipynb")
+    (root / "submitted" / "not_json" / LAB).mkdir(parents=True)
+    (root / "submitted" / "not_json" / LAB / f"{LAB}.ipynb").write_text("{ this is not a notebook")
+
+    keep = ("gradebook.db", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md", f"integrity_{LAB}.csv")
+    before = _tree_hash(root, keep)
+    with sqlite3.connect(root / "gradebook.db") as con:
+        sources = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
+    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""),
+               MPLBACKEND="Agg")
+    t0 = time.monotonic()
+    run = subprocess.run([sys.executable, "-m", "grading.classgrade", LAB, "--workers", "2", "--timeout",
+                          str(TIMEOUT), "--no-generate"], cwd=root, env=env, capture_output=True, text=True,
+                         timeout=1500)
+    seconds = time.monotonic() - t0
+    time.sleep(9)  # the daemon's delay: had it survived, it would have written by now
+    left = _processes_with(MARKER)
+    try:
+        conn, _ = listener.accept()
+        connected = True
+        conn.close()
+    except BlockingIOError:
+        connected = False
+    listener.close()
+    nbgrader(["generate_feedback", LAB, "--force"], cwd=root)
+    with sqlite3.connect(root / "gradebook.db") as con:
+        sources_after = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
+    return dict(root=root, run=run, seconds=seconds, scores=_scores(root, class_), before=before, keep=keep,
+                left=left, connected=connected, students=list(class_), sources=(sources, sources_after),
+                solution=solution)
+
+
+def _autograded(graded, student, gid):
+    nb = nbformat.read(graded["root"] / "autograded" / student / LAB / f"{LAB}.ipynb", as_version=4)
+    cells = [c for c in nb.cells if grade_id(c) == gid]
+    return cells, "".join(o.get("text", "") + o.get("evalue", "") for c in cells for o in c.get("outputs", []))
+
+
+def _total(graded, student):
+    return sum(graded["scores"][student].values())
+
+
+def test_the_class_run_names_every_student_and_refuses_only_the_unreadable_one(graded):
+    run = graded["run"]
+    assert run.returncode == 1, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "not graded: not_json" in run.stderr
+    assert "model solution: 9 / 9" in run.stdout
+    for student in graded["students"] + ["not_json"]:
+        assert re.search(rf"^{re.escape(student)}\s", run.stdout, re.M), student
+    with open(graded["root"] / "grades.csv", newline="") as fh:
+        rows = {r["student_id"]: r for r in csv.DictReader(fh) if r["assignment"] == LAB}
+    assert set(rows) == set(graded["students"]) | {"not_json"}
+    assert rows["not_json"]["status"].startswith("NOT GRADED: the notebook cannot be read")
+    assert rows["full"]["status"] == "graded" and float(rows["full"]["raw_score"]) == FULL
+
+
+def test_honest_students_score_what_they_did(graded):
+    assert _total(graded, "full") == FULL
+    assert _total(graded, "half") == HALF
+    assert _total(graded, "none") == 0
+
+
+@pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
+                                     "reference_from_source", "other_packages", "writes", "daemon", "network",
+                                     "read_others", "stuck", "fork_bomb", "print_in"])
+def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
+    assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
+        graded["run"].stdout[-4000:]
+
+
+def test_the_reference_called_from_a_stubbed_library_is_named(graded):
+    _, text = _autograded(graded, "reference_from_source", "ex3_tests")
+    assert "kalman.predict is the answer to an exercise of this lab" in text
+    _, text = _autograded(graded, "other_packages", "ex3_tests")
+    assert "not available while the lab is graded" in text
+    _, text = _autograded(graded, "other_packages", "ex2_tests")
+    assert "my_state_space is not defined" in text and "ahrs is not available" in text
+
+
+def test_edited_metadata_is_graded_against_the_gradebook_and_said(graded):
+    assert graded["scores"]["metadata_edited"] == {"ex1_tests": 2, "ex2_tests": 2, "ex3_tests": 2, "ex4_tests": 3}
+    line = re.search(r"^metadata_edited\s.*$", graded["run"].stdout, re.M).group(0)
+    assert "9 / 9" in line and "ex4_solution appears more than once" in line
+    cells, text = _autograded(graded, "metadata_edited", "ex1_tests")
+    assert len(cells) == 1 and cells[0].source.strip() and "passed" in text
+    cells, _ = _autograded(graded, "metadata_edited", "ex3_tests")
+    assert len(cells) == 1, "the deleted test cell is back in the autograded notebook"
+
+
+def test_a_stuck_cell_is_stopped_and_the_restart_is_said(graded):
+    line = re.search(r"^stuck\s.*$", graded["run"].stdout, re.M).group(0)
+    assert f"cell ex2_solution ran over {TIMEOUT} s" in line and "run again from the start without it" in line
+
+
+def test_classmates_graded_beside_a_fork_bomb_are_unharmed(graded):
+    honest = [s for s in ("full", "half", "metadata_edited") if graded["scores"][s] is not None]
+    assert [_total(graded, s) for s in honest] == [FULL, HALF, FULL]
+    assert "NOT GRADED" not in re.search(r"^fork_bomb\s.*$", graded["run"].stdout, re.M).group(0)
+
+
+def test_the_course_the_gradebook_tests_and_the_network_are_untouched(graded):
+    root = graded["root"]
+    assert _tree_hash(root, graded["keep"]) == graded["before"]
+    assert not (root / "pwned.txt").exists() and not (root / "lib" / "fusionlab" / "x.py").exists()
+    assert graded["sources"][0] == graded["sources"][1]
+    assert graded["scores"]["daemon"]["ex2_tests"] == 0 and graded["scores"]["writes"]["ex2_tests"] == 0
+    assert graded["left"] == [], "no process of a submission outlives the run"
+    assert not graded["connected"], "nothing reached the network"
+
+
+def _hidden_lines(solution):
+    out = []
+    for cell in solution.cells:
+        if "### BEGIN HIDDEN TESTS" in cell.source:
+            region = cell.source.split("### BEGIN HIDDEN TESTS")[1].split("### END HIDDEN TESTS")[0]
+            out += [line.strip() for line in region.splitlines() if len(line.strip()) >= 20]
+    return out
+
+
+def test_no_hidden_test_reaches_the_feedback_whatever_the_notebook_prints(graded):
+    page = (graded["root"] / "feedback" / "print_in" / LAB / f"{LAB}.html").read_text()
+    text = html.unescape(re.sub(r"<[^>]+>", "", page))
+    hidden = _hidden_lines(graded["solution"])
+    assert len(hidden) > 10
+    assert [line for line in hidden if line in text] == []
+    nb = nbformat.read(graded["root"] / "autograded" / "print_in" / LAB / f"{LAB}.ipynb", as_version=4)
+    assert "BEGIN HIDDEN TESTS" not in nbformat.writes(nb)
+
+
+def test_feedback_shows_the_judges_verdict_for_each_test(graded):
+    _, text = _autograded(graded, "half", "ex1_tests")
+    assert "passed (2 of 2 points)" in text
+    _, text = _autograded(graded, "half", "ex2_tests")
+    assert "exercise 2 not attempted yet" in text and "(0 of 2 points)" in text
+    page = (graded["root"] / "feedback" / "half" / LAB / f"{LAB}.html").read_text()
+    assert "exercise 2 not attempted yet" in html.unescape(page)
+
+
+def test_the_report_is_whole_and_a_run_on_one_student_merges_into_it(graded):
+    root = graded["root"]
+    report = (root / f"integrity_{LAB}.md").read_text()
+    assert re.search(r"\| full \| " + LAB + r" \| clean \| 9 / 9 \|", report), report[:2000]
+    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""))
+    run = subprocess.run([sys.executable, "-m", "grading.classgrade", LAB, "--student", "half", "--no-generate"],
+                         cwd=root, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    with open(root / f"integrity_{LAB}.csv", newline="") as fh:
+        students = {r["student"] for r in csv.DictReader(fh)}
+    assert students == set(graded["students"]) | {"not_json"}
+    flagged = {r for r in students if f"| {r} | {LAB} | REVIEW" in (root / f"integrity_{LAB}.md").read_text()}
+    assert {"reference_from_source", "writes", "network"} <= flagged
