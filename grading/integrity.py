@@ -652,7 +652,7 @@ def write_report(rows, path_md, path_csv, scores=None):
 
 
 def _scores(course, lab):
-    """Autograded totals from the course's gradebook, if there is one."""
+    """Autograded totals (the code cells: the tests) from the course's gradebook, if there is one."""
     db = course / "gradebook.db"
     if not db.exists():
         return {}
@@ -664,7 +664,7 @@ def _scores(course, lab):
                 sub = gb.find_submission(lab, student.id)
             except MissingEntry:
                 continue
-            out[student.id] = f"{sub.score:g} / {sub.max_score:g}"
+            out[student.id] = f"{sub.code_score:g} / {sub.max_code_score:g}"
     return out
 
 

@@ -125,6 +125,9 @@ CHEATS = {
 }
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh).
 NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3)}
+# Exercises whose reference is a C function (numpy.arctan2): the box cannot be without it, so the cheat scores and the
+# integrity report flags it by name (the limit docs/instructors.md states).
+UNSTUBBABLE = {("00_mems_sensors", 6)}
 
 # Junk that has the right shapes (so the visible shape checks pass), for the patched-numpy students.
 JUNK = {
@@ -226,7 +229,8 @@ def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(grad
         f"{lab}: a cheat for every autograded exercise {sorted(points)} that a library function answers"
     g = graded(lab)
     for student, cheated in (("cheat_odd", 1), ("cheat_even", 0)):
-        expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] else p) for n, p in points.items()}
+        expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] and (lab, n) not in UNSTUBBABLE else p)
+                    for n, p in points.items()}
         assert g["scores"][student] == expected, (student, g["messages"][student])
 
 
@@ -243,3 +247,14 @@ def test_the_reference_call_is_named_in_the_verdict(graded, lab):
 def test_junk_answers_behind_a_patched_allclose_score_zero(graded, lab):
     g = graded(lab)
     assert g["scores"]["junk_patched_numpy"] == {n: 0 for n in _points(lab)}
+
+
+@pytest.mark.parametrize("lab, n", sorted(UNSTUBBABLE))
+def test_a_reference_the_box_must_keep_is_flagged_by_name(tmp_path, lab, n):
+    from grading import integrity
+    release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    path = tmp_path / f"{lab}.ipynb"
+    nbformat.write(_answered(release, solution, {n: CHEATS[lab][n]}), path)
+    flags = integrity.scan_notebook(ROOT / "solutions" / lab / f"{lab}.ipynb", path)
+    assert any(f["cell"] == f"ex{n}_solution" and f["kind"] == "reference" for f in flags), flags

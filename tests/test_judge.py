@@ -95,9 +95,11 @@ def _attacks(root, port, half):
             "    except OSError:\n        pass\n")),
         # 6: the library's own source executed again to get the reference back
         "reference_from_source": _answers(half, (
-            "_ex, _ns = exec, {}\nimport fusionlab.falling_body as _fb\n_ex(open(_fb.__file__).read(), _ns)\n"
+            "_ex, _ns = exec, {'__name__': 'fusionlab.falling_body', '__package__': 'fusionlab'}\n"
+            "import fusionlab.falling_body as _fb\n_ex(open(_fb.__file__).read(), _ns)\n"
             "return _ns['falling_body_' + 'state_space'](k, m, g, dt)"), (
-            "_ex, _ns = exec, {}\n_ex(open(kf.__file__).read(), _ns)\nreturn _ns['pre' + 'dict'](x, P, A, Q, B, u)")),
+            "_ex, _ns = exec, {'__name__': 'fusionlab.kalman', '__package__': 'fusionlab'}\n"
+            "_ex(open(kf.__file__).read(), _ns)\nreturn _ns['pre' + 'dict'](x, P, A, Q, B, u)")),
         # 8: packages nobody forbade in the kernel: filterpy's helpers, ahrs
         "other_packages": _answers(half, "import ahrs\n" + JUNK2, (
             "import filterpy.kalman as _fk\nreturn _fk.predict(x, P, A, Q, B=B, u=u)")),
@@ -327,12 +329,15 @@ def test_the_course_the_gradebook_tests_and_the_network_are_untouched(graded):
 
 
 def _hidden_lines(solution):
-    out = []
+    """Every line of the hidden-test regions that says anything and is not also in a visible part of a test."""
+    hidden, visible = [], set()
     for cell in solution.cells:
         if "### BEGIN HIDDEN TESTS" in cell.source:
-            region = cell.source.split("### BEGIN HIDDEN TESTS")[1].split("### END HIDDEN TESTS")[0]
-            out += [line.strip() for line in region.splitlines() if len(line.strip()) >= 20]
-    return out
+            before, _, rest = cell.source.partition("### BEGIN HIDDEN TESTS")
+            region, _, after = rest.partition("### END HIDDEN TESTS")
+            visible |= {line.strip() for line in (before + after).splitlines()}
+            hidden += [line.strip() for line in region.splitlines() if len(line.strip()) >= 20]
+    return [line for line in hidden if not any(line in seen for seen in visible)]
 
 
 def test_no_hidden_test_reaches_the_feedback_whatever_the_notebook_prints(graded):

@@ -38,6 +38,7 @@ Units and frames at this module's edge: SI (m/s², rad/s, rad/s², rad), body fr
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -194,7 +195,19 @@ def aiv_map():
     ])
 
 
-_L = aiv_map()
+@functools.cache
+def aiv_map_cached():
+    """:func:`aiv_map`, made on first use and kept (the filters apply it to every sample).
+
+    Made on first use rather than at import, so that the module imports even where :func:`aiv_map` itself is not
+    available (the grading sandbox of the exercise that asks for it).
+
+    Returns
+    -------
+    numpy.ndarray
+        The 9×12 AIV map; do not modify it.
+    """
+    return aiv_map()
 
 
 def aiv(acc, d):
@@ -222,7 +235,7 @@ def aiv(acc, d):
     """
     acc = validate.array(acc, "acc", shape=(12,))
     d = validate.positive(d, "d")
-    return acc @ _L.T / d
+    return acc @ aiv_map_cached().T / d
 
 
 def aiv_true(omega, alpha):
@@ -264,7 +277,8 @@ def aiv_covariance():
            [-0.25,  1.  , -0.25],
            [-0.25, -0.25,  1.  ]])
     """
-    return _L @ _L.T
+    L = aiv_map_cached()
+    return L @ L.T
 
 
 def three_state_noise(noise_density, dt, d, m_sign=-1):

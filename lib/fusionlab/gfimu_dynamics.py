@@ -29,7 +29,6 @@ from . import gfimu, validate
 __all__ = ["caa_model", "singer_model", "aiv_measurement_jacobian", "DynamicEKF", "observability_matrix",
            "observability_rank"]
 
-_L = gfimu.aiv_map()                 # the 9×12 AIV map, once: the filter applies it to every sample
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -224,7 +223,7 @@ class DynamicEKF:
             The posterior state.
         """
         self.ekf.predict()
-        y = acc @ _L.T / self.d
+        y = acc @ gfimu.aiv_map_cached().T / self.d
         self.ekf.update(y, HJacobian=lambda x: _dyn_h(x)[1], Hx=lambda x: _dyn_h(x)[0])
         return self.ekf.x.copy()
 

@@ -35,7 +35,6 @@ from . import gfimu, validate
 __all__ = ["ThreeStateEKF", "HybridEKF", "three_state_batch", "hybrid_batch", "nees", "constraints",
            "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo"]
 
-_L = gfimu.aiv_map()                 # the 9×12 AIV map, once: the filters apply it to every sample
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -45,7 +44,7 @@ _L = gfimu.aiv_map()                 # the 9×12 AIV map, once: the filters appl
 
 def _inputs(acc, dt, d):
     """Δt²·AIV: the input u = Δt² α̃ (3.19-3.21) and the measurement y = Δt² q̃ (3.28) of each sample."""
-    v = acc @ _L.T * (dt ** 2 / d)                               # (004 eqs 3.8-3.10, times Δt²)
+    v = acc @ gfimu.aiv_map_cached().T * (dt ** 2 / d)                               # (004 eqs 3.8-3.10, times Δt²)
     return v[..., :3], v[..., 3:]
 
 
@@ -612,7 +611,7 @@ class ConstrainedEKF:
         if self.k:
             self.x = self.F @ self.x                             # (004 eq 5.45)
             self.P = self.F @ self.P @ self.F.T + self.Q
-        v = acc @ _L.T / self.d
+        v = acc @ gfimu.aiv_map_cached().T / self.d
         y = np.concatenate([v[:3] * self.dt, v[3:] * self.dt ** 2])              # (004 eq 5.46)
         h = np.concatenate([self.x[3:], gfimu.quadratic_terms(self.x[:3], check=False)])
         H = np.zeros((9, 6))
@@ -715,7 +714,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
         raise ValueError(f"q_dw must be >= 0 (rad/s per step); got {np.min(q_dw)!r}")
     F, Q = _wiener6(dt, q_dw)
     R = np.asarray(N, dtype=float) ** 2 * _constrained_noise(1.0, dt, d)
-    v = acc @ _L.T / d
+    v = acc @ gfimu.aiv_map_cached().T / d
     y = np.concatenate([v[..., :3] * dt, v[..., 3:] * dt ** 2], -1)             # (004 eq 5.46)
     x0 = validate.array(x0, "x0", shape=(6,))
     x = np.array(np.broadcast_to(x0, (runs, 6)), dtype=float)

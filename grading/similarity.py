@@ -1,0 +1,196 @@
+"""Copies between classmates and from the library: ``python -m grading.similarity LAB``.
+
+``make grade`` writes ``similarity_<LAB>.md/.csv`` after grading. Each answer (the code a student wrote in the
+answer cell of an exercise, the release's stub and ``def`` line left out as boilerplate) is compared
+
+* with the same exercise of every classmate, and
+* with every function of the course's library (the library holds several model answers almost verbatim),
+
+by ``copydetect``, a maintained implementation of winnowing (the fingerprinting of MOSS, Schleimer, Wilkerson &
+Aiken, SIGMOD 2003): the code is tokenised, names and literals normalised, k-grams hashed and a window's minimum
+kept. So renamed variables, changed comments, reordered and added statements still leave most fingerprints shared.
+
+Two classmates are listed when the matched code is at least :data:`MIN_TOKENS` normalised characters long and
+covers at least :data:`MIN_SHARE` of an answer. The library holds several model answers almost verbatim (Lab 10's
+``my_ins_F`` is ``gpsins._ins_F`` to 95 %), so an answer is listed against a library function only when it matches
+that function :data:`LIB_BEYOND` times more code than the model answer itself does (a paste brings the function's
+checks and details along) and covers :data:`LIB_SHARE` of the answer: writing the model answer is never a copy of
+the library. The report gives the score (the share of the answer covered), the exercise and the matching lines of
+both sides. Short answers (two lines of ``(I - KH) P (I - KH)ᵀ + K R Kᵀ``) are alike in every class and are not
+listed: a listed pair is worth a look, an unlisted one proves nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import csv
+import functools
+import io
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import nbformat
+
+K, WINDOW = 20, 6          # k-gram length and winnowing window (copydetect's scale: normalised characters)
+MIN_TOKENS = 80            # matched normalised characters for a pair of classmates to be listed
+MIN_SHARE = 0.80           # share of the answer that the match covers, for a pair of classmates
+LIB_SHARE = 0.60           # the same for an answer and a library function ...
+LIB_BEYOND = 1.3           # ... whose match must also be this much longer than the model answer's with it
+LIB_MIN_TOKENS = 60
+LIBRARY = Path(__file__).resolve().parents[1] / "lib" / "fusionlab"
+
+
+@dataclass
+class Pair:
+    exercise: str
+    a: str
+    b: str
+    score: float
+    tokens: int
+    lines_a: str
+    lines_b: str
+
+
+@functools.lru_cache(maxsize=4096)
+def _fingerprint(code, boilerplate=()):
+    from copydetect import CodeFingerprint
+    from copydetect.utils import filter_code, get_document_fingerprints
+
+    hashes = []
+    for text in boilerplate:
+        filtered, _ = filter_code(text, "b.py", "python")
+        hashes += list(get_document_fingerprints(filtered, K, WINDOW, [])[0])
+    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=hashes, fp=io.StringIO(code), language="python")
+
+
+def _lines(code, slices):
+    """The lines of ``code`` that the copied character ranges ``slices`` touch, as text."""
+    if len(slices) == 0 or len(slices[0]) == 0:
+        return ""
+    starts = [code.count("\n", 0, int(s)) for s in slices[0]]
+    ends = [code.count("\n", 0, int(e)) for e in slices[1]]
+    lines = code.splitlines()
+    keep = sorted({i for s, e in zip(starts, ends) for i in range(s, e + 1) if i < len(lines)})
+    return "\n".join(lines[i] for i in keep)
+
+
+def compare(a_code, b_code, boilerplate=(), b_boilerplate=None):
+    """(share of ``a_code`` covered, matched tokens, lines of a, lines of b) for two pieces of code; ``boilerplate``
+    (code whose fingerprints do not count) applies to both unless ``b_boilerplate`` is given for b."""
+    from copydetect import compare_files
+
+    fa = _fingerprint(a_code, tuple(boilerplate))
+    fb = _fingerprint(b_code, tuple(boilerplate if b_boilerplate is None else b_boilerplate))
+    tokens, (share_a, _), (slices_a, slices_b) = compare_files(fa, fb)
+    return float(share_a), int(tokens), _lines(fa.raw_code, slices_a), _lines(fb.raw_code, slices_b)
+
+
+def library_functions(folder=LIBRARY):
+    """{"module.function": source} of every function and method of the library."""
+    out = {}
+    for path in sorted(folder.rglob("*.py")):
+        text = path.read_text()
+        try:
+            tree = ast.parse(text)
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                seg = ast.get_source_segment(text, node)
+                if seg and seg.count("\n") >= 2:
+                    out[f"{path.relative_to(folder).with_suffix('').as_posix().replace('/', '.')}.{node.name}"] = seg
+    return out
+
+
+def answers(nb):
+    """{exercise grade id: code} of a notebook's code answer cells (``exN_solution``)."""
+    out = {}
+    for cell in nb.cells:
+        gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
+        if cell.get("cell_type") == "code" and re.fullmatch(r"ex\d+[a-z]?_solution", gid or "") and gid not in out:
+            out[gid] = "\n".join(line for line in cell.get("source", "").splitlines() if "### " not in line)
+    return out
+
+
+def find_pairs(submissions: dict, release, model, library=None):
+    """Pairs worth a look among ``submissions`` ({student: notebook}) and between them and the library; ``model``
+    is the instructor's notebook (its answers set how alike with the library an answer may honestly be)."""
+    library = library_functions() if library is None else library
+    stubs, models = answers(release), answers(model)
+    by_student = {s: answers(nb) for s, nb in submissions.items()}
+    found = []
+    for gid in sorted({g for a in by_student.values() for g in a}):
+        boiler = [stubs.get(gid, "")]
+        codes = {s: a[gid] for s, a in by_student.items() if gid in a and a[gid].strip() != stubs.get(gid, "").strip()}
+        students = sorted(codes)
+        for i, s in enumerate(students):
+            for t in students[i + 1:]:
+                share, tokens, la, lb = compare(codes[s], codes[t], boiler)
+                share = max(share, compare(codes[t], codes[s], boiler)[0])
+                if tokens >= MIN_TOKENS and share >= MIN_SHARE:
+                    found.append(Pair(gid, s, t, share, tokens, la, lb))
+        baseline = {}
+        for s in students:
+            best = None
+            for name, src in library.items():
+                share, tokens, la, lb = compare(codes[s], src, boiler, ())
+                if tokens < LIB_MIN_TOKENS or share < LIB_SHARE:
+                    continue
+                if name not in baseline:
+                    baseline[name] = compare(models.get(gid, ""), src, boiler, ())[1] if models.get(gid) else 0
+                if tokens >= LIB_BEYOND * baseline[name] and (best is None or share > best.score):
+                    best = Pair(gid, s, f"library {name}", share, tokens, la, lb)
+            if best:
+                found.append(best)
+    return found
+
+
+def write_report(lab, pairs, path_md, path_csv):
+    md = [f"# Similarity report: {lab}", "",
+          f"{len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look (winnowing fingerprints, copydetect). Two "
+          f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
+          f"{MIN_SHARE:.0%} of an answer; an answer and a library function when the match covers {LIB_SHARE:.0%} "
+          f"of the answer and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
+          "literals and comments do not count; an unlisted pair proves nothing.", "", "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
+    md += [f"| {p.exercise} | {p.a} | {p.b} | {p.score:.2f} | {p.tokens} |" for p in pairs]
+    for p in pairs:
+        md += ["", f"## {p.a} ~ {p.b} ({p.exercise}, {p.score:.2f})", "", "```python", p.lines_a, "```", "",
+               "```python", p.lines_b, "```"]
+    Path(path_md).write_text("\n".join(md) + "\n")
+    with open(path_csv, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["exercise", "student", "alike_with", "score", "matched_tokens"])
+        for p in pairs:
+            out.writerow([p.exercise, p.a, p.b, f"{p.score:.3f}", p.tokens])
+
+
+def report(course: Path, lab: str, release, model):
+    subs = {}
+    for path in sorted((course / "submitted").glob(f"*/{lab}/{lab}.ipynb")):
+        try:
+            subs[path.parts[-3]] = nbformat.read(path, as_version=4)
+        except Exception:  # noqa: BLE001 -- an unreadable notebook is named by the grading summary already
+            continue
+    pairs = find_pairs(subs, release, model)
+    md, csv_path = course / f"similarity_{lab}.md", course / f"similarity_{lab}.csv"
+    write_report(lab, pairs, md, csv_path)
+    return md, pairs
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m grading.similarity", description=__doc__.split("\n\n")[0])
+    ap.add_argument("lab")
+    ap.add_argument("--course", default=".")
+    args = ap.parse_args(argv)
+    course = Path(args.course).resolve()
+    release = nbformat.read(course / "labs" / args.lab / f"{args.lab}.ipynb", as_version=4)
+    model = nbformat.read(course / "solutions" / args.lab / f"{args.lab}.ipynb", as_version=4)
+    md, pairs = report(course, args.lab, release, model)
+    print(f"{len(pairs)} pair(s) worth a look: {md}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
