@@ -16,8 +16,9 @@
 
 At the end ``grades.csv`` is written (``nbgrader export``, plus a ``status`` column: every student of
 ``submitted/`` is listed, a submission that could not be graded with the reason), the integrity report
-``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run) and a summary: each student's
-score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).  The exit status is 1 if
+``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run), the similarity report
+``similarity_<LAB>.md/.csv`` (answers alike between classmates, or with the library: :mod:`grading.similarity`) and a
+summary: each student's score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).  The exit status is 1 if
 a submission could not be graded (its student is named), 0 otherwise.
 """
 from __future__ import annotations
@@ -40,7 +41,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import judge, sandbox
+from grading import judge, similarity
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -353,10 +354,12 @@ def main(argv=None):
         seconds = time.monotonic() - t0
         exported = export(course, lab, results)
         report = integrity(course, lab, results)
+        alike, pairs = similarity.report(course, lab, the_lab.release, the_lab.solution)
         print()
         print(summary(lab, results, seconds, args.workers, report))
         print(f"\ngrades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
-              f"{report.name} and {report.with_suffix('.csv').name}")
+              f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
+              f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")
     finally:
         if args.keep_scratch:
             print(f"scratch folder kept in {scratch}")

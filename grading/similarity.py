@@ -14,8 +14,8 @@ Two classmates are listed when the matched code is at least :data:`MIN_TOKENS` n
 covers at least :data:`MIN_SHARE` of an answer. The library holds several model answers almost verbatim (Lab 10's
 ``my_ins_F`` is ``gpsins._ins_F`` to 95 %), so an answer is listed against a library function only when it matches
 that function :data:`LIB_BEYOND` times more code than the model answer itself does (a paste brings the function's
-checks and details along) and covers :data:`LIB_SHARE` of the answer: writing the model answer is never a copy of
-the library. The report gives the score (the share of the answer covered), the exercise and the matching lines of
+checks and details along) and covers :data:`LIB_SHARE` of the answer or of the function: writing the model answer is
+never a copy of the library. The report gives the score (the share of the answer covered), the exercise and the matching lines of
 both sides. Short answers (two lines of ``(I - KH) P (I - KH)ᵀ + K R Kᵀ``) are alike in every class and are not
 listed: a listed pair is worth a look, an unlisted one proves nothing.
 """
@@ -77,14 +77,16 @@ def _lines(code, slices):
 
 
 def compare(a_code, b_code, boilerplate=(), b_boilerplate=None):
-    """(share of ``a_code`` covered, matched tokens, lines of a, lines of b) for two pieces of code; ``boilerplate``
+    """(share of ``a_code`` covered, matched tokens, lines of a, lines of b, share of ``b_code`` covered) for two
+    pieces of code; ``boilerplate``
     (code whose fingerprints do not count) applies to both unless ``b_boilerplate`` is given for b."""
     from copydetect import compare_files
 
     fa = _fingerprint(a_code, tuple(boilerplate))
     fb = _fingerprint(b_code, tuple(boilerplate if b_boilerplate is None else b_boilerplate))
-    tokens, (share_a, _), (slices_a, slices_b) = compare_files(fa, fb)
-    return float(share_a), int(tokens), _lines(fa.raw_code, slices_a), _lines(fb.raw_code, slices_b)
+    tokens, (share_a, share_b), (slices_a, slices_b) = compare_files(fa, fb)
+    return (float(share_a), int(tokens), _lines(fa.raw_code, slices_a), _lines(fb.raw_code, slices_b),
+            float(share_b))
 
 
 def library_functions(folder=LIBRARY):
@@ -127,15 +129,16 @@ def find_pairs(submissions: dict, release, model, library=None):
         students = sorted(codes)
         for i, s in enumerate(students):
             for t in students[i + 1:]:
-                share, tokens, la, lb = compare(codes[s], codes[t], boiler)
-                share = max(share, compare(codes[t], codes[s], boiler)[0])
+                share, tokens, la, lb, share_b = compare(codes[s], codes[t], boiler)
+                share = max(share, share_b)
                 if tokens >= MIN_TOKENS and share >= MIN_SHARE:
                     found.append(Pair(gid, s, t, share, tokens, la, lb))
         baseline = {}
         for s in students:
             best = None
             for name, src in library.items():
-                share, tokens, la, lb = compare(codes[s], src, boiler, ())
+                share, tokens, la, lb, share_lib = compare(codes[s], src, boiler, ())
+                share = max(share, share_lib)
                 if tokens < LIB_MIN_TOKENS or share < LIB_SHARE:
                     continue
                 if name not in baseline:
@@ -152,7 +155,7 @@ def write_report(lab, pairs, path_md, path_csv):
           f"{len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look (winnowing fingerprints, copydetect). Two "
           f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
           f"{MIN_SHARE:.0%} of an answer; an answer and a library function when the match covers {LIB_SHARE:.0%} "
-          f"of the answer and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
+          f"of either and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
           "literals and comments do not count; an unlisted pair proves nothing.", "", "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
     md += [f"| {p.exercise} | {p.a} | {p.b} | {p.score:.2f} | {p.tokens} |" for p in pairs]
     for p in pairs:

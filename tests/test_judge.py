@@ -145,6 +145,35 @@ def _attacks(root, port, half):
     return out
 
 
+def _pasted_update():
+    """kalman.update_step and its two helpers pasted as my_update: locals renamed, two statements swapped, one
+    statement added, a comment on every line."""
+    import ast
+    import inspect
+
+    from fusionlab import kalman
+    out = []
+    for fn_obj, new in ((kalman._gain, "gain_"), (kalman._joseph, "joseph_"), (kalman.update_step, "my_update")):
+        fn = ast.parse(inspect.getsource(fn_obj)).body[0]
+        body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
+        if fn_obj is kalman.update_step:
+            body[0], body[1] = body[1], body[0]                 # x's update before K's: K is not known yet
+            body[0], body[1] = body[1], body[0]                 # ... so swapped back, and a line added
+            body.insert(1, ast.parse("n_state = len(x)").body[0])
+            fn.args.defaults = [ast.Constant("joseph")]
+        fn.body, fn.name = body, new
+        names = {"x": "xx", "P": "PP", "K": "KK", "I_KH": "M", "form": "form"}
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Name) and node.id in names:
+                node.id = names[node.id]
+            elif isinstance(node, ast.arg) and node.arg in names:
+                node.arg = names[node.arg]
+            elif isinstance(node, ast.Name) and node.id in ("_gain", "_joseph"):
+                node.id = node.id[1:] + "_"
+        out.append("\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines()))
+    return "\n\n".join(out)
+
+
 def _metadata_edited(full):
     """11: test cell emptied and unlocked, points raised, a duplicated grade id, a deleted test cell."""
     nb = nbformat.from_dict(full)
@@ -213,7 +242,8 @@ def graded(tmp_path_factory):
     listener.listen(5)
     listener.setblocking(False)
 
-    class_ = {"full": full, "half": half, "none": release, "metadata_edited": _metadata_edited(full)}
+    class_ = {"full": full, "half": half, "none": release, "metadata_edited": _metadata_edited(full),
+              "pasted_library": _set(release, "ex4_solution", _pasted_update())}
     class_.update(_attacks(root, listener.getsockname()[1], half))
     for student, nb in class_.items():
         dest = root / "submitted" / student / LAB
@@ -372,3 +402,19 @@ def test_the_report_is_whole_and_a_run_on_one_student_merges_into_it(graded):
     assert students == set(graded["students"]) | {"not_json"}
     flagged = {r for r in students if f"| {r} | {LAB} | REVIEW" in (root / f"integrity_{LAB}.md").read_text()}
     assert {"reference_from_source", "writes", "network"} <= flagged
+
+
+def test_the_similarity_report_finds_a_pasted_library_function_and_twins_but_no_model_answer(graded):
+    with open(graded["root"] / f"similarity_{LAB}.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert {"pasted_library"} == {r["student"] for r in rows if r["alike_with"] == "library kalman.update_step"}, rows
+    library = {r["student"] for r in rows if r["alike_with"].startswith("library")}
+    assert not library & {"full", "half", "metadata_edited"}, "the model answers are not copies of the library"
+    twins = {(r["student"], r["alike_with"]) for r in rows if float(r["score"]) >= 0.99}
+    assert ("full", "metadata_edited") in twins, rows
+    text = (graded["root"] / f"similarity_{LAB}.md").read_text()
+    assert "## pasted_library ~ library kalman.update_step" in text and "my own working" in text
+
+
+def test_a_pasted_library_function_earns_its_points_and_is_listed_not_hidden(graded):
+    assert graded["scores"]["pasted_library"] == {"ex1_tests": 0, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}
