@@ -149,7 +149,7 @@ def _judge_guard():
 
     return types.SimpleNamespace(assert_close=guard.assert_close, assert_equal=guard.assert_equal, grade=grade,
                                  forbid=lambda *a, **k: contextlib.nullcontext(), reserve=nothing, release=nothing,
-                                 intact=nothing, allow_handler=nothing, ForbiddenCall=guard.ForbiddenCall)
+                                 intact=nothing, ForbiddenCall=guard.ForbiddenCall)
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-"""The grading guard: forbidden functions stay forbidden however they are reached, comparisons survive a patched
-numpy, and ``intact()`` notices every hook an answer cell can use to change how later cells run."""
+"""The visible checks' guard: forbidden functions stay forbidden however they are reached, comparisons survive a
+patched numpy, and ``intact()`` notices a replaced function of numpy, the library or the builtins."""
 from __future__ import annotations
 
 import json
@@ -190,29 +190,10 @@ def test_grade_computes_the_reference_first_on_its_own_copy_and_forbids_while_th
 
 _SCENARIOS = {
     "clean": "",
-    "input_transformer_blanks_tests": """
-        ip = get_ipython()
-        ip.input_transformers_cleanup.append(lambda lines: [] if any('Autograder' in l for l in lines) else lines)
-    """,
-    "post_transformer": "get_ipython().input_transformers_post.append(lambda lines: lines)",
-    "ast_transformer_blanks_tests": """
-        import ast
-        class Blank(ast.NodeTransformer):
-            def visit_Module(self, node):
-                node.body = []
-                return node
-        get_ipython().ast_transformers.append(Blank())
-    """,
-    "custom_exception_swallows_asserts": """
-        get_ipython().set_custom_exc((AssertionError,), lambda *a, **k: [])
-    """,
-    "event_callback": "get_ipython().events.register('post_run_cell', lambda result: None)",
-    "settrace": "import sys\nsys.settrace(lambda *a: None)",
     "numpy_patched": "np.allclose = lambda *a, **k: True",
     "code_swapped": "from fusionlab import kalman\nkalman.joseph_covariance.__code__ = (lambda P, K, H, R: P).__code__",
     "checks_patched": "checks.check_joseph = lambda fn: print('✓')",
     "builtin_patched": "import builtins\nbuiltins.abs = lambda x: 0",
-    "module_rebound": "import types\nkf = types.SimpleNamespace(joseph_covariance=lambda P, K, H, R: 0)",
 }
 
 _DRIVER = r'''
@@ -238,9 +219,7 @@ for name, cheat in json.loads(sys.argv[1]).items():
         res = {"cheat": run(textwrap.dedent(cheat)) if cheat else None,
                "test": run("# Autograder: exercise 1 (2 points)\nguard.intact()\n"
                            "assert kf.joseph_covariance.__module__ == 'fusionlab.kalman'\n"
-                           "assert 1 == 2, 'the real test ran'"),
-               "sys_excepthook": run("import sys\ndef hook():\n    sys.excepthook = lambda *a: None\n"
-                                     "    guard.intact()\nhook()")}
+                           "assert 1 == 2, 'the real test ran'")}
         os.write(w, json.dumps(res).encode())
         os._exit(0)
     os.close(w)
@@ -268,28 +247,13 @@ def test_an_untouched_notebook_is_intact_and_its_real_test_runs(hooks):
 
 
 @pytest.mark.parametrize("name, reason", [
-    ("input_transformer_blanks_tests", "IPython's input_transformers_cleanup was changed"),
-    ("post_transformer", "IPython's input_transformers_post was changed"),
-    ("ast_transformer_blanks_tests", "IPython's ast_transformers was changed"),
-    ("custom_exception_swallows_asserts", "a custom exception handler was installed for AssertionError"),
-    ("event_callback", "a callback was added to IPython's 'post_run_cell' event"),
-    ("settrace", "IPython's sys.settrace was changed"),
     ("numpy_patched", "numpy.allclose was replaced"),
     ("code_swapped", "the code of fusionlab.kalman.joseph_covariance was replaced"),
     ("checks_patched", "fusionlab.checks.check_joseph was replaced"),
     ("builtin_patched", "builtins.abs was replaced"),
 ])
-def test_intact_names_each_hook_and_the_grading_cell_still_fails(hooks, name, reason):
+def test_intact_names_each_patch_so_the_visible_test_shows_no_pass(hooks, name, reason):
     assert hooks[name]["cheat"] is None, hooks[name]
     test = hooks[name]["test"]
-    assert test.startswith("AssertionError: an earlier cell changed how this notebook runs"), test
+    assert test.startswith("AssertionError: an earlier cell changed how this notebook compares results"), test
     assert reason in test, test
-
-
-def test_intact_sees_sys_excepthook_changed_in_the_same_cell(hooks):
-    assert "IPython's sys.excepthook was changed" in hooks["clean"]["sys_excepthook"]
-
-
-def test_a_rebound_module_name_is_put_back_before_a_grading_cell(hooks):
-    # `kf = <fake>` in an answer cell: the test cell sees the real fusionlab.kalman, and intact() has nothing to say
-    assert hooks["module_rebound"]["test"] == "AssertionError: the real test ran"

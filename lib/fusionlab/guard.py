@@ -1,10 +1,9 @@
-"""The grading guard: hidden tests that an answer cell cannot talk its way past.
+"""The visible checks' guard: a student's own kernel cannot be fooled into showing a pass.
 
-A lab's hidden tests compare the student's function with the library's. Three one-line cheats used to pass them:
-calling the library function that the test compares against, replacing ``np.allclose`` in an answer cell, and
-changing how later cells run (an IPython input or AST transformer that blanks the test cells, a custom exception
-handler that swallows ``AssertionError``, a patched ``fusionlab.checks``). This module is imported by every lab's
-locked setup cell (through ``fusionlab.checks``), before any student code runs, and closes those doors:
+Grades do not come from here. The trusted judge of the grading tools runs each lab's tests in a process of its own,
+against a copy of the student's code that runs in a sandbox without the lab's reference answers, and compares the
+results there. This module serves the student while working: the visible checks and the visible part of each test
+cell (what **Validate** runs) should not print a pass that the judge will refuse. So, in the student's kernel:
 
 * :func:`forbid` -- while active, the listed library functions (and methods, e.g. filterpy's
   ``KalmanFilter.update``) raise "exercise N asks you to write this yourself". It swaps each function's
@@ -12,19 +11,13 @@ locked setup cell (through ``fusionlab.checks``), before any student code runs, 
   it internally are caught too; on exit the block fails if any of them was called, even if the error was caught.
   :func:`reserve` / :func:`release` do the same across cells, for exercises whose answer is a value.
 * :func:`assert_close`, :func:`assert_equal`, :func:`grade` -- comparisons made only with functions captured when
-  this module was imported (C functions and ufuncs, which an answer cell cannot patch in place).
-* :func:`intact` -- fails if numpy, the builtins, scipy, filterpy or fusionlab functions, or IPython's hooks (input
-  and AST transformers, custom exception handlers, event callbacks, ``sys.excepthook``, trace and profile functions)
-  changed since this module was imported. Before a grading cell (one that calls ``guard.intact()``) is even
-  transformed, the hooks are put back as they were and what was changed is remembered, so a transformer cannot blank
-  the cell that would report it. The execution machinery itself (the shell's ``transform_cell``, ``run_cell``,
-  ``run_cell_async``, ``run_cell_magic``, display hook and traceback display; the kernel's ``do_execute``,
-  ``dispatch_shell`` and message handlers; instance and class attributes alike) is compared by identity with the
-  objects seen at import, and put back before every message the kernel handles.
+  this module was imported (C functions and ufuncs, which an answer cell cannot patch in place); the judge uses the
+  same ones in its own process.
+* :func:`intact` -- fails if a function of numpy, scipy, filterpy, the library or the builtins was replaced since
+  this module was imported (a patched ``np.allclose``), so such a kernel shows no pass.
 
 Only numpy and the standard library are imported here (row 1 of the import plan). Nothing in a kernel is proof
-against a student who rewrites the kernel itself; the integrity report of the grading tools reads the submitted
-source for that.
+against a student who rewrites the kernel itself, and nothing here needs to be: it is a learning aid.
 """
 from __future__ import annotations
 
@@ -37,8 +30,7 @@ import numpy as np
 import numpy.linalg    # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
 import numpy.testing   # noqa: F401
 
-__all__ = ["ForbiddenCall", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact",
-           "allow_handler"]
+__all__ = ["ForbiddenCall", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact"]
 
 # ---------------------------------------------------------------------------------------------------------------
 # Functions captured now, before any student code runs. C functions, ufuncs and ndarray methods: an answer cell can
@@ -489,7 +481,6 @@ def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol
     ForbiddenCall
         If the student's function called a forbidden one.
     """
-    _intact()
     cases = [c if _isinstance(c, (_tuple, _dict)) else (c,) for c in cases]
     expected = [reference_fn(**_copy(c)) if _isinstance(c, _dict) else reference_fn(*_copy(c)) for c in cases]
     actual = []
@@ -516,30 +507,10 @@ _forbid_cls = forbid
 # ---------------------------------------------------------------------------------------------------------------
 # intact: nothing the grading relies on was changed by an answer cell
 # ---------------------------------------------------------------------------------------------------------------
-_state = {"excepthooks": [sys.__excepthook__], "displayhooks": [sys.__displayhook__], "exercise": None,
-          "tampered": [], "user_ns": None, "custom": None}
+_state = {"exercise": None}  # the exercise named in a forbidden call's message, when the caller gives none
 _baseline_modules = {}     # module name -> {attribute: (object, code or None)}
 _module_objs = {}          # module name -> the module object
 _baseline_classes = {}     # class -> {attribute: (object, code or None)}
-_allowed_handlers = []     # custom exception handlers the library itself installs (checks.friendly_errors)
-_allowed_callbacks = {     # event callbacks that the plotting back ends and IPython extensions register on demand
-    ("matplotlib_inline.backend_inline", "flush_figures"), ("matplotlib_inline.backend_inline", "configure_once"),
-    ("matplotlib.pyplot", "_draw_all_if_interactive"), ("matplotlib.pyplot", "post_execute"),
-    ("ipympl.backend_nbagg", "flush_figures"), ("IPython.extensions.autoreload", "pre_run_cell"),
-    ("IPython.extensions.autoreload", "post_execute_hook"), ("IPython.extensions.autoreload", "post_execute"),
-}
-
-
-def allow_handler(handler):
-    """Accept ``handler`` as a legitimate custom exception handler (the library's NameError hint).
-
-    Parameters
-    ----------
-    handler : callable
-        The handler, as passed to IPython's ``set_custom_exc``.
-    """
-    if handler not in _allowed_handlers:
-        _allowed_handlers.append(handler)
 
 
 def _entry(obj):
@@ -643,18 +614,6 @@ def _builtin_problems():
     return out
 
 
-# IPython ---------------------------------------------------------------------------------------------------------
-# The execution machinery: what the kernel calls to run a cell and show its result or its error. An answer cell that
-# replaces one of them (``get_ipython().transform_cell = ...``, ``get_ipython().kernel.do_execute = ...``) could
-# blank the grading cells before ``intact()`` runs in them, so they are put back before every message the kernel
-# handles (see ``_install``), and ``intact()`` reports the change.
-_SHELL_METHODS = ("run_cell", "run_cell_async", "_run_cell", "run_code", "run_ast_nodes", "transform_ast",
-                  "should_run_async", "showtraceback", "_showtraceback", "showsyntaxerror", "get_exception_only",
-                  "set_custom_exc", "ex", "ev", "transform_cell", "run_cell_magic", "run_line_magic", "excepthook",
-                  "displayhook", "display_trap", "display_pub")
-_KERNEL_METHODS = ("do_execute", "execute_request", "dispatch_shell", "pre_handler_hook", "set_parent")
-
-
 def _shell():
     try:
         from IPython import get_ipython
@@ -663,196 +622,9 @@ def _shell():
     return get_ipython()
 
 
-def _custom_state(ip):
-    handler = None
-    tb = _getattr(ip, "CustomTB", None)
-    f = _getattr(tb, "__func__", None)
-    if f is not None and f.__closure__ and "handler" in f.__code__.co_freevars:
-        handler = f.__closure__[f.__code__.co_freevars.index("handler")].cell_contents
-    return _tuple(ip.custom_exceptions), handler
-
-
-def _callback_key(cb):
-    f = _getattr(cb, "__func__", cb)
-    return (_getattr(f, "__module__", None), _getattr(f, "__name__", None))
-
-
-def _hooks(ip):
-    """Everything in the shell that decides what a cell runs and how its errors are shown."""
-    itm = ip.input_transformer_manager
-    hooks = {
-        "input_transformer_manager": ip.input_transformer_manager,
-        "input_transformers_cleanup": _tuple(itm.cleanup_transforms),
-        "input_transformers_line": _tuple(itm.line_transforms),
-        "input_transformers_token": _tuple(itm.token_transformers),
-        "input_transformers_post": _tuple(ip.input_transformers_post),
-        "ast_transformers": _tuple(ip.ast_transformers),
-        "prefilter_transformers": _tuple(ip.prefilter_manager.transformers),
-        "events": ip.events,
-        "sys.excepthook": sys.excepthook,
-        "sys.displayhook": sys.displayhook,
-        "shell.display_trap.hook": _getattr(_getattr(ip, "display_trap", None), "hook", None),
-        "sys.settrace": sys.gettrace(),
-        "sys.setprofile": sys.getprofile(),
-        "InteractiveShell class": _type(ip),
-    }
-    for name in _SHELL_METHODS:
-        hooks[f"shell.{name}"] = (_vars(ip).get(name, _MISSING), _getattr(_type(ip), name, _MISSING))
-    kernel = _getattr(ip, "kernel", None)
-    if kernel is not None:
-        for name in _KERNEL_METHODS:
-            hooks[f"kernel.{name}"] = (_vars(kernel).get(name, _MISSING), _getattr(_type(kernel), name, _MISSING))
-        handlers = _getattr(kernel, "shell_handlers", None)
-        if _isinstance(handlers, _dict):
-            hooks["kernel.shell_handlers"] = _tuple(_sorted((k, _id(v)) for k, v in handlers.items()))
-    return hooks
-
-
-_ip_base = {}
-
-
-def _capture_ip_baseline():
-    ip = _shell()
-    if ip is None or _ip_base:
-        return ip
-    _ip_base["hooks"] = _hooks(ip)
-    handlers = _getattr(_getattr(ip, "kernel", None), "shell_handlers", None)
-    _ip_base["handlers"] = _dict(handlers) if _isinstance(handlers, _dict) else None
-    _ip_base["callbacks"] = {k: _tuple(v) for k, v in ip.events.callbacks.items()}
-    _state["custom"] = _custom_state(ip)
-    return ip
-
-
-def _custom_ok(ip):
-    exc, handler = _custom_state(ip)
-    if (exc, handler) == _state["custom"]:
-        return True
-    if handler in _allowed_handlers:                   # the library's own hint (it shows the error), installed again
-        _state["custom"] = (exc, handler)
-        return True
-    return False
-
-
-def _ip_problems(ip):
-    out = []
-    base = _ip_base["hooks"]
-    for k, v in _hooks(ip).items():
-        b = base.get(k, _MISSING)
-        if k == "sys.excepthook" and (v == _getattr(ip, "excepthook", None) or v in _state["excepthooks"]):
-            continue                      # IPython sets its own hook while a cell runs, the kernel's in between
-        if k == "sys.displayhook" and (v is base["shell.displayhook"][0] or v in _state["displayhooks"]):
-            continue                      # the same: the shell's display hook in a cell, the kernel's in between
-        same = v is b or ((v == b) if _isinstance(v, (_tuple, _MethodType)) else False)  # bound methods: equal
-        if not same:
-            out.append(f"IPython's {k} was changed")
-    for event, cbs in ip.events.callbacks.items():
-        old = _ip_base["callbacks"].get(event, ())
-        for cb in cbs:
-            if not _any(cb is o or cb == o for o in old) and _callback_key(cb) not in _allowed_callbacks:
-                out.append(f"a callback was added to IPython's {event!r} event ({_named(cb)})")
-    if not _custom_ok(ip):
-        names = ", ".join(_getattr(e, "__name__", "?") for e in ip.custom_exceptions)
-        out.append(f"a custom exception handler was installed for {names}")
-    return out
-
-
-def _restore_ip(ip):
-    """Put the shell's hooks back as they were when this module was imported."""
-    base = _ip_base["hooks"]
-    itm = base["input_transformer_manager"]
-    ip.input_transformer_manager = itm
-    itm.cleanup_transforms[:] = base["input_transformers_cleanup"]
-    itm.line_transforms[:] = base["input_transformers_line"]
-    itm.token_transformers[:] = base["input_transformers_token"]
-    ip.input_transformers_post[:] = base["input_transformers_post"]
-    ip.ast_transformers[:] = base["ast_transformers"]
-    ip.prefilter_manager.transformers[:] = base["prefilter_transformers"]
-    ip.events = base["events"]
-    for event, cbs in ip.events.callbacks.items():
-        old = _ip_base["callbacks"].get(event, ())
-        cbs[:] = [cb for cb in cbs if _any(cb is o or cb == o for o in old) or _callback_key(cb) in _allowed_callbacks]
-    if not _custom_ok(ip):
-        exc, handler = _state["custom"]
-        ip.set_custom_exc(exc, handler)
-    sys.excepthook = base["sys.excepthook"]
-    sys.settrace(base["sys.settrace"])
-    sys.setprofile(base["sys.setprofile"])
-    _restore_machinery(ip)
-
-
-def _put_back(owner, prefix, names):
-    """Put back the instance and class attributes ``names`` of ``owner`` as in the baseline; what was changed."""
-    base, changed = _ip_base["hooks"], []
-    for name in names:
-        inst, cls = base[f"{prefix}.{name}"]
-        if _vars(owner).get(name, _MISSING) is not inst:
-            changed.append(f"IPython's {prefix}.{name} was changed")
-            if inst is _MISSING:
-                _vars(owner).pop(name, None)
-            else:
-                _vars(owner)[name] = inst
-        if _getattr(_type(owner), name, _MISSING) is not cls:
-            changed.append(f"IPython's {prefix}.{name} was changed")
-            if cls is _MISSING:
-                _delattr(_type(owner), name)
-            else:
-                _setattr(_type(owner), name, cls)
-    return changed
-
-
-def _restore_machinery(ip):
-    """Put back the shell's and the kernel's execution machinery (``_SHELL_METHODS``, ``_KERNEL_METHODS``, the
-    kernel's message handlers and the display trap's hook); return what was changed. Cheap: a few dozen lookups."""
-    changed = _put_back(ip, "shell", _SHELL_METHODS)
-    trap, hook = _getattr(ip, "display_trap", None), _ip_base["hooks"]["shell.display_trap.hook"]
-    if trap is not None and _getattr(trap, "hook", None) is not hook:
-        changed.append("IPython's shell.display_trap.hook was changed")
-        trap.hook = hook
-    kernel = _getattr(ip, "kernel", None)
-    if kernel is not None and "kernel.do_execute" in _ip_base["hooks"]:
-        changed += _put_back(kernel, "kernel", _KERNEL_METHODS)
-        handlers, saved = _getattr(kernel, "shell_handlers", None), _ip_base.get("handlers")
-        if _isinstance(handlers, _dict) and saved is not None and (
-                _len(handlers) != _len(saved) or _any(handlers.get(k, _MISSING) is not v for k, v in saved.items())):
-            changed.append("IPython's kernel.shell_handlers was changed")
-            handlers.clear()
-            handlers.update(saved)
-    return changed
-
-
-def _restore_modules():
-    """Put back every library and builtin function an answer cell replaced (its code object too)."""
-    for name, attrs in _list(_baseline_modules.items()):
-        current = _vars(_module_objs[name])
-        for k, (obj, code) in attrs.items():
-            if current.get(k, _MISSING) is not obj and _callable(obj):
-                current[k] = obj
-            if code is not None and obj not in _active and obj.__code__ is not code:
-                obj.__code__ = code
-        for k, now in _list(current.items()):
-            if k not in attrs and _from_a_cell(now):
-                del current[k]
-        if sys.modules.get(name, _module_objs[name]) is not _module_objs[name]:
-            sys.modules[name] = _module_objs[name]
-    for cls, attrs in _list(_baseline_classes.items()):
-        for k, (obj, code) in attrs.items():
-            if _vars(cls).get(k, _MISSING) is not obj:
-                setattr(cls, k, obj)
-            if obj not in _active and obj.__code__ is not code:
-                obj.__code__ = code
-    now = _vars(builtins)
-    for k, obj in _builtins_base.items():
-        if k not in _IGNORED_BUILTINS and _callable(obj) and now.get(k, _MISSING) is not obj and not (
-                _isinstance(obj, _MethodType) and now.get(k) == obj):
-            now[k] = obj
-
-
 def _problems():
     _snapshot_new_modules()
-    out = _list(_state["tampered"]) + _module_problems() + _builtin_problems()
-    ip = _shell()
-    if ip is not None and _ip_base:
-        out += _ip_problems(ip)
+    out = _module_problems() + _builtin_problems()
     seen, unique = _set(), []
     for p in out:
         if p not in seen:
@@ -862,93 +634,18 @@ def _problems():
 
 
 def intact():
-    """Fail if an earlier cell changed what the grading relies on (see the module docstring for the list)."""
+    """Fail if an earlier cell replaced a function of numpy, scipy, filterpy, the library or the builtins.
+
+    The visible tests call it so that a patched ``np.allclose`` cannot show a pass while a student works; grades do
+    not rely on it (the judge runs the tests outside the student's kernel).
+    """
     problems = _problems()
     if problems:
         more = f" (and {_len(problems) - 5} more)" if _len(problems) > 5 else ""
-        raise AssertionError("an earlier cell changed how this notebook runs or compares results, so it cannot be "
-                             "graded: " + "; ".join(problems[:5]) + more + ". Remove that code and run the notebook "
+        raise AssertionError("an earlier cell changed how this notebook compares results, so this check cannot be "
+                             "trusted: " + "; ".join(problems[:5]) + more + ". Remove that code and run the notebook "
                              "again from the top.")
 
 
-_intact = intact
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# The kernel side: before a grading cell is transformed, put the hooks back and remember what was changed.
-# ---------------------------------------------------------------------------------------------------------------
-_MARK = "guard.intact()"
-_EXERCISE = re.compile(r"#\s*Autograder:\s*exercise\s+(\w+)")
-
-
-def _protect_names(ip, restore):
-    """Names the setup cell bound to modules and library functions (np, kf, euler_to_dcm...): a grading cell uses
-    the originals even if an answer cell rebound one (``kf = my_fake_module``)."""
-    if _state["user_ns"] is None:
-        _state["excepthooks"].append(sys.excepthook)          # the kernel's own, between cells
-        _state["displayhooks"].append(sys.displayhook)
-        keep = {}
-        for k, v in ip.user_ns.items():
-            if k.startswith("_") or k in ("In", "Out", "get_ipython", "exit", "quit"):
-                continue
-            mod = _getattr(v, "__module__", None) if not _isinstance(v, _ModuleType) else v.__name__
-            if _isinstance(v, _ModuleType) or (_callable(v) and _isinstance(mod, _str) and
-                                               (_watched(mod) or mod.startswith("matplotlib"))):
-                keep[k] = v
-        _state["user_ns"] = keep
-        return
-    if not restore:
-        return
-    for k, v in _state["user_ns"].items():
-        if ip.user_ns.get(k, _MISSING) is not v:
-            ip.user_ns[k] = v
-
-
-def _install():
-    ip = _capture_ip_baseline()
-    if ip is None or _getattr(ip, "_fusionlab_guard", False):
-        return
-    original = ip.transform_cell
-
-    def transform_cell(raw_cell):
-        try:
-            _snapshot_new_modules()
-            grading = _MARK in raw_cell
-            m = _EXERCISE.search(raw_cell) if grading else None
-            _state["exercise"] = m.group(1) if m else None
-            if grading:
-                found = _ip_problems(ip) + _module_problems() + _builtin_problems()
-                if found:                   # put it all back, so this cell's own intact() runs and reports it
-                    _state["tampered"].extend(p for p in found if p not in _state["tampered"])
-                    _restore_ip(ip)
-                    _restore_modules()
-            _protect_names(ip, grading)
-        except Exception as err:  # never break the kernel; the cell's intact() reports what is wrong
-            _state["tampered"].append(f"the grading guard could not check this cell ({_type(err).__name__})")
-        return original(raw_cell)
-
-    ip.transform_cell = transform_cell
-    ip._fusionlab_guard = True
-    _ip_base["hooks"]["shell.transform_cell"] = (transform_cell, _type(ip).transform_cell)
-    kernel = _getattr(ip, "kernel", None)
-    dispatch = _getattr(kernel, "dispatch_shell", None)
-    if dispatch is None:
-        return
-
-    async def dispatch_shell(*args, **kwargs):
-        """Before the kernel handles a message (a cell to run), put its execution machinery back: a replaced
-        ``transform_cell``, ``do_execute`` or message handler never sees the next cell, and intact() says so."""
-        try:
-            found = _restore_machinery(ip)
-            _state["tampered"].extend(p for p in found if p not in _state["tampered"])
-        except Exception as err:  # never break the kernel; the next intact() reports it
-            _state["tampered"].append(f"the grading guard could not check the kernel ({_type(err).__name__})")
-        result = dispatch(*args, **kwargs)
-        return (await result) if _hasattr(result, "__await__") else result
-
-    kernel.dispatch_shell = dispatch_shell
-    _ip_base["hooks"]["kernel.dispatch_shell"] = (dispatch_shell, _type(kernel).dispatch_shell)
-
 
 _snapshot_new_modules()
-_install()

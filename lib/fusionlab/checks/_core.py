@@ -57,7 +57,7 @@ def _ipython():
 
 
 def _ok(msg):
-    problems = guard._problems()          # a patched np.allclose (or a notebook hook) must not earn a ✓
+    problems = guard._problems()          # a patched np.allclose must not earn a ✓
     if problems:
         raise Feedback("this check cannot be trusted: " + "; ".join(problems[:3]) + ". Remove the code that does "
                        "this and run the notebook again from the top.")
@@ -242,7 +242,6 @@ def friendly_errors():
     ip._fusionlab_custom_tb = ip.CustomTB
 
 
-guard.allow_handler(_show_unfinished)   # the grading guard accepts this one custom exception handler
 friendly_errors()                        # every lab imports checks: its NameErrors then say what to do
 
 
