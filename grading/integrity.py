@@ -184,48 +184,6 @@ def _exercise(grade_id):
     return int(m.group(1)) if m else None
 
 
-def _last_name(node):
-    if isinstance(node, ast.Attribute):
-        return node.attr
-    if isinstance(node, ast.Name):
-        return node.id
-    if isinstance(node, ast.Constant) and isinstance(node.value, str):
-        return node.value.rsplit(".", 1)[-1]
-    return None
-
-
-def _forbidden_in(source):
-    """Last names of the arguments of ``guard.forbid(...)``, ``guard.release(...)`` and of every ``forbid=...`` in a
-    test cell; a name bound in the cell to a tuple (``_forbid = (kf.update, ...)``, then ``forbid=_forbid`` or
-    ``guard.forbid(*_forbid)``) stands for its items."""
-    try:
-        tree = ast.parse(_strip_magics(source)[0])
-    except SyntaxError:
-        return set()
-    bound = {node.targets[0].id: node.value for node in ast.walk(tree)
-             if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)}
-
-    def names(node, depth=0):
-        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
-            return set().union(*(names(e, depth) for e in node.elts)) if node.elts else set()
-        if isinstance(node, ast.Starred):
-            return names(node.value, depth)
-        if isinstance(node, ast.Name) and node.id in bound and depth < 5:
-            return names(bound[node.id], depth + 1)
-        return {_last_name(node)}
-
-    found = set()
-    for node in ast.walk(tree):
-        if not isinstance(node, ast.Call):
-            continue
-        if _last_name(node.func) in ("forbid", "release"):   # release(...) ends a value exercise's reserve(...)
-            found |= set().union(*(names(a) for a in node.args)) if node.args else set()
-        for kw in node.keywords:
-            if kw.arg == "forbid":
-                found |= names(kw.value)
-    return found - {None}
-
-
 class Source:
     """What the scanner needs from the instructor's notebook of a lab."""
 
@@ -241,10 +199,10 @@ class Source:
         for c in nb.cells:
             if c.cell_type == "code" and not _nbg(c).get("solution") and not _nbg(c).get("grade"):
                 self.provided_names |= set(re.findall(r"\w+", c.source))
-        self.forbid = {}  # exercise -> names of its reference functions
-        for gid, cell in self.cells.items():
-            if _nbg(cell).get("grade") and not _nbg(cell).get("solution") and _exercise(gid):
-                self.forbid.setdefault(_exercise(gid), set()).update(_forbidden_in(cell.source))
+        self.forbid = {}  # exercise -> last names of what it forbids, from the table of exercises
+        from fusionlab.checks import exercises
+        for e in exercises.of_lab(lab):
+            self.forbid[e.number] = {name.rsplit(".", 1)[-1] for name in e.forbid}
         # names the locked cells bind at top level (imports, definitions, constants) and the tests read
         bound, read = set(MODULE_NAMES), set()
         self.imported = set(MODULE_NAMES)

@@ -38,7 +38,6 @@ import selectors
 import shutil
 import signal
 import subprocess
-import sys
 import time
 import types
 from dataclasses import dataclass, field
@@ -48,7 +47,7 @@ import nbformat
 
 from grading import box as wire
 from grading import sandbox
-from grading.preprocessors import _Budget
+from grading.outputs import Budget
 
 BOX = Path(wire.__file__).resolve()
 CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
@@ -375,7 +374,7 @@ class Lab:
         self.provided_names = set().union(*[_bound_names(c.source) for c in release.cells
                                             if c.cell_type == "code" and not is_answer(c) and not is_test(c)]
                                           or [set()]) - self.answer_names
-        self.forbidden = {gid: self._forbidden(source) for gid, source in tests.items()}
+        self.forbidden = {gid: self._forbidden(gid) for gid in tests}
         self.unstubbed = {}
         self._reference = {}
 
@@ -404,18 +403,16 @@ class Lab:
             self._base = ns
         return dict(self._base)
 
-    def _forbidden(self, source):
-        """``module:qualname`` of every reference and forbidden function a test cell names."""
-        scope = self.base()
-        imports = [n for n in ast.parse(python_of(source)).body if isinstance(n, (ast.Import, ast.ImportFrom))]
-        exec(compile(ast.Module(imports, []), "<imports>", "exec"), scope)  # noqa: S102 -- the test's own imports
+    def _forbidden(self, gid):
+        """``module:qualname`` of what the exercise of the test ``gid`` forbids, from the table of exercises."""
+        from fusionlab.checks import _core, exercises
+
+        entry = {e.grade_id: e for e in exercises.of_lab(self.lab)}.get(gid)
+        if entry is None:
+            raise LookupError(f"{self.lab}: test cell {gid} has no exercise in fusionlab.checks.exercises")
         out = set()
-        for node in forbidden_expressions(source):
-            try:
-                obj = eval(compile(ast.Expression(node), "<forbid>", "eval"), scope)  # noqa: S307
-            except Exception:  # noqa: BLE001 -- a name the cell makes itself: not a library function
-                continue
-            name = _dotted(obj)
+        for dotted in entry.forbid:
+            name = _dotted(_core._resolve(dotted))
             if name:
                 out.add(name)
         return out
@@ -767,7 +764,7 @@ def autograded_notebook(lab: Lab, submitted, verdict: Verdict):
     it."""
     seq, _ = lab.layout(submitted)
     results = {t.grade_id: t for t in verdict.tests}
-    budget = _Budget()
+    budget = Budget()
     nb = nbformat.v4.new_notebook(metadata=copy.deepcopy(lab.release.metadata))
 
     def outputs(cell):

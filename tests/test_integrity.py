@@ -161,26 +161,16 @@ def test_an_honestly_edited_provided_cell_is_judged_by_the_new_lines_only(tmp_pa
     assert flag["kind"] == "patch" and flag["line"] == len(cell.source.splitlines()) + 1
 
 
-def test_reference_names_come_from_guard_forbid_and_forbid_keywords(tmp_path):
-    nb = nbformat.read(SOURCE, as_version=4)
-    [t1] = [c for c in nb.cells if _gid(c) == "ex1_tests"]
-    t1.source = "with guard.forbid(kf.joseph_covariance, np.linalg.multi_dot, exercise='1'):\n    my_joseph(1, 2, 3, 4)"
-    [t3] = [c for c in nb.cells if _gid(c) == "ex3_tests"]
-    t3.source = "guard.grade(my_predict, kf.predict, [()], forbid=(kf.predict, KalmanFilter.predict), what='x')"
-    [t4] = [c for c in nb.cells if _gid(c) == "ex4_tests"]
-    t4.source = ("_forbid = (kf.update, filterpy.kalman.KalmanFilter.update)\n_more = [kf.kalman_gain, *_forbid]\n"
-                 "guard.grade(my_update, kf.update, [()], forbid=_forbid)\nwith guard.forbid(*_more, kf._gain):\n"
-                 "    pass")
-    [t2] = [c for c in nb.cells if _gid(c) == "ex2_tests"]
-    t2.source = "guard.release(kf.state_space_elsewhere, exercise=2)   # a value exercise: reserve(...) ... release(...)"
-    src = integrity.Source(nb, LAB)
-    assert src.forbid[1] == {"joseph_covariance", "multi_dot"}
-    assert src.forbid[3] == {"predict"}
-    assert src.forbid[4] == {"update", "kalman_gain", "_gain"}
-    assert src.forbid[2] == {"state_space_elsewhere"}, "release(...) names it"
-    # the extracted names are what the answer of that exercise is checked against
-    assert [k for _, k, _ in integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=1)] == ["reference"]
-    assert integrity.scan_source("y = np.linalg.multi_dot([P, P])", src, exercise=3) == []
+def test_reference_names_come_from_the_table_of_exercises():
+    from fusionlab.checks import exercises
+    src = integrity.Source(nbformat.read(SOURCE, as_version=4), LAB)
+    for e in exercises.of_lab(LAB):
+        assert src.forbid[e.number] == {name.rsplit(".", 1)[-1] for name in e.forbid}
+    assert "joseph_covariance" in src.forbid[1] and "predict" in src.forbid[3]
+    # the names are what the answer of that exercise is checked against
+    assert [k for _, k, _ in integrity.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=1)] == \
+        ["reference"]
+    assert integrity.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=3) == []
 
 
 # Autograded exercises whose answer no library function computes (a derived constant, a matrix built by hand).
@@ -189,8 +179,8 @@ NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3)}
 
 @pytest.mark.parametrize("lab", LABS)
 def test_every_exercise_names_its_reference_functions_in_its_own_tests(lab):
-    """The scanner reads the reference functions from the test cells only (no table to keep in step), so every
-    exercise a library function answers must name it there: guard.forbid/grade(forbid=...) or guard.release."""
+    """The scanner reads the reference functions from the table of exercises, so every exercise a library function
+    answers must name it there."""
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     graded = {integrity._exercise(_gid(c)) for c in nb.cells if (_gid(c) or "").endswith("_tests")}
     src = integrity.Source(nb, lab)

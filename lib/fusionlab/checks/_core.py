@@ -14,6 +14,7 @@ import traceback
 import numpy as np
 
 from .. import datasets, guard
+from .exercises import EXERCISES
 
 __all__ = ["Feedback", "friendly_errors", "describe_difference", "check_close"]
 
@@ -334,10 +335,10 @@ def check_close(name, value, expected, tol, hint=""):
 
 # ---------------------------------------------------------------------------------------------------------------
 # Every check runs the student's function with the library's own answer out of reach: while it runs, the functions
-# a check names in @forbids(...) raise "exercise N asks you to write this yourself" (fusionlab.guard.forbid), so a
-# check cannot print ✓ for an answer that only calls them.
+# its exercise forbids in the table (fusionlab.checks.exercises) raise "exercise N asks you to write this yourself"
+# (fusionlab.guard.forbid), so a check cannot print ✓ for an answer that only calls them.
 # ---------------------------------------------------------------------------------------------------------------
-_REFERENCES = {}                         # check name -> the dotted names it forbids (filled by @forbids)
+_REFERENCES = {e.check: e.forbid for e in EXERCISES}   # check name -> the dotted names it forbids (the table)
 
 
 def _resolve(dotted):
@@ -355,31 +356,31 @@ def _resolve(dotted):
     raise ImportError(dotted)
 
 
-def forbids(*references):
-    """Decorate a check so that every function it is given runs with ``references`` forbidden.
+def forbids(check):
+    """Decorate a check so that every function it is given runs with its exercise's ``forbid`` out of reach.
 
-    ``references`` are dotted names: ``"kalman.update"`` is fusionlab's, ``"numpy.arctan2"`` a package's. They are
-    looked up when the check runs (the table is :data:`_REFERENCES`, which a test may empty to hand the library's
-    own functions to a check)."""
-    def decorate(check):
-        _REFERENCES[check.__name__] = references
+    The names come from the table of exercises (:mod:`fusionlab.checks.exercises`), by the check's name: dotted
+    names, ``"kalman.update"`` for fusionlab's, ``"numpy.arctan2"`` for a package's. They are looked up when the
+    check runs (the table is :data:`_REFERENCES`, which a test may empty to hand the library's own functions to a
+    check)."""
+    if check.__name__ not in _REFERENCES:
+        raise LookupError(f"{check.__name__} has no exercise in fusionlab.checks.exercises")
 
-        def guarded(fn):
-            if not callable(fn):
-                return fn
+    def guarded(fn):
+        if not callable(fn):
+            return fn
 
-            @functools.wraps(fn)
-            def call(*args, **kwargs):
-                try:
-                    names = _REFERENCES.get(check.__name__, ())
-                    with guard.forbid(*(_resolve(n) for n in names), exercise=None):
-                        return fn(*args, **kwargs)
-                except guard.ForbiddenCall as err:
-                    raise Feedback(str(err)) from None
-            return call
+        @functools.wraps(fn)
+        def call(*args, **kwargs):
+            try:
+                names = _REFERENCES.get(check.__name__, ())
+                with guard.forbid(*(_resolve(n) for n in names), exercise=None):
+                    return fn(*args, **kwargs)
+            except guard.ForbiddenCall as err:
+                raise Feedback(str(err)) from None
+        return call
 
-        @functools.wraps(check)
-        def run(*args, **kwargs):
-            return check(*(guarded(a) for a in args), **kwargs)
-        return run
-    return decorate
+    @functools.wraps(check)
+    def run(*args, **kwargs):
+        return check(*(guarded(a) for a in args), **kwargs)
+    return run

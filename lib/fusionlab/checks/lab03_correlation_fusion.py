@@ -11,7 +11,7 @@ from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
 __all__ = ["check_moving_average", "check_ratio", "check_fuse"]
 
 
-@forbids("correlation.moving_average")
+@forbids
 def check_moving_average(fn):
     """Check a student's causal ``fn(x, n)`` against seed 000 eq 5.7 with an expanding start."""
     x = np.array([4.0, 8.0, 0.0, 2.0, 6.0, 10.0, 1.0, 3.0])
@@ -38,7 +38,7 @@ def check_moving_average(fn):
     raise Feedback(msg or f"expected {np.round(ref, 3)}, got {np.round(got, 3)}.")
 
 
-@forbids("correlation.ratio")
+@forbids
 def check_ratio(fn):
     """Check a student's ``fn(gyro_rate, accel_term) -> ratio`` (seed 000 eqs 5.15-5.16 with ε for 0/0)."""
     g = np.array([10.0, -10.0, 5.0, 0.0, 3.0, 0.0])
@@ -62,7 +62,7 @@ def check_ratio(fn):
     raise Feedback(msg or f"expected {np.round(ref, 4)}, got {np.round(got, 4)}.")
 
 
-@forbids("correlation.fuse")
+@forbids
 def check_fuse(fn):
     """Check a student's ``fn(accel_deg, increment, weight, f0) -> fused`` (seed 000 eq 5.17)."""
     a = np.array([10.0, 12.0, 8.0, 11.0, 9.0])

@@ -12,7 +12,7 @@ __all__ = ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_d
            "check_tilted_heading"]
 
 
-@forbids("northfinder.rate_from_rotating")
+@forbids
 def check_omega_x(fn):
     """Check a student's ``fn(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, omega_r) -> ω_x`` (seed 004 eq 4.15)."""
     rng = np.random.default_rng(801)
@@ -45,7 +45,7 @@ def _noise_cases():
     return [(0.02, 0.15, 0.1, 50.0), (0.05, 0.2, 0.3, 20.0), (0.03, 0.1, 0.05, 500.0)]
 
 
-@forbids("northfinder.rate_noise_coefficient", "northfinder.rate_noise_density")
+@forbids
 def check_noise_printed(fn):
     """Check a student's ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` as printed (seed 004 eq 4.44)."""
     for case in _noise_cases():
@@ -63,7 +63,7 @@ def check_noise_printed(fn):
     _ok(f"eq 4.44 as printed: {_nf.rate_noise_coefficient(*_noise_cases()[0]):.4f} for Table 4.1.")
 
 
-@forbids("northfinder.rate_noise_coefficient_exact", "northfinder.rate_noise_density")
+@forbids
 def check_noise_exact(fn):
     """Check a student's exact ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` (correction of seed 004 eq 4.44)."""
     for case in _noise_cases():
@@ -116,7 +116,7 @@ def _demod_variants(x, th):
             (np.degrees(np.arctan2(s, c)), "return radians (np.degrees only for display).")]
 
 
-@forbids("northfinder.demodulate")
+@forbids
 def check_demodulate(fn):
     """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.28-4.32 (sampled references)."""
     for deg, x, th in _demod_cases():
@@ -131,7 +131,7 @@ def check_demodulate(fn):
     _ok("synchronous demodulation right in all four quadrants, with a 2 g constant and with a third harmonic.")
 
 
-@forbids("northfinder.synchronous_sampling")
+@forbids
 def check_sync_sampling(fn):
     """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.33-4.35 (nearest samples)."""
     for deg, x, th in _demod_cases()[:2] + [_demod_cases()[3]]:
@@ -161,7 +161,7 @@ def _tilted_phase(psi, roll, pitch, lat):
     return float(np.arctan2(w[0], w[1]))
 
 
-@forbids("northfinder.tilted_heading")
+@forbids
 def check_tilted_heading(fn):
     """Lab 08 exercise 6: a student's ``fn(zeta, roll, pitch, lat) -> ψ`` (rad), the heading of a tilted north finder
     from the phase of its line (seed 004 §4.4.3, eqs 4.36-4.43). The phases are made here from known headings."""

@@ -58,7 +58,7 @@ def _broad_angle_check(fn, what, ref_fn, formula, truth):
                    "check the formula against the markdown above.")
 
 
-@forbids("metrics.heading_error")
+@forbids
 def check_broad_heading(fn):
     """Check a student's ``fn(q_err) -> (N,) rad``: heading error ``2·atan(|z/w|)`` (BROAD, Laidig et al. 2021)."""
     q, abs_delta, _ = _broad_error_cases()
@@ -67,7 +67,7 @@ def check_broad_heading(fn):
     _ok(f"heading error right on {len(q)} error quaternions (q and -q alike): it recovers |δ| of q_z(δ) ⊗ q_tilt.")
 
 
-@forbids("metrics.inclination_error")
+@forbids
 def check_broad_inclination(fn):
     """Check a student's ``fn(q_err) -> (N,) rad``: inclination error ``2·acos(√(w² + z²))`` (BROAD)."""
     q, _, eps = _broad_error_cases()
@@ -81,7 +81,7 @@ def check_broad_inclination(fn):
     _ok(f"inclination error right on {len(q)} error quaternions: it recovers the tilt ε and ignores the heading δ.")
 
 
-@forbids("metrics.rms")
+@forbids
 def check_broad_rmse(fn):
     """Check a student's ``fn(angle_rad, movement) -> float`` degrees: RMS over the mask, NaN samples ignored."""
     rng = np.random.default_rng(1112)

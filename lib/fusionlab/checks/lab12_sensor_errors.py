@@ -19,7 +19,7 @@ def _lab12_ellipsoid(seed, noise=0.0):
     return b @ D.T + np.array([12.0, -7.0, 20.0]) + noise * rng.normal(size=(200, 3))
 
 
-@forbids("calibration.quadric_normal_equations")
+@forbids
 def check_quadric_fit(fn):
     """Check a student's ``fn(mag) -> (9,)``: the normal equations ``(DᵀD) v = Dᵀ1`` of the quadric fit."""
     mag = _lab12_ellipsoid(1201, noise=0.3)
@@ -45,7 +45,7 @@ def check_quadric_fit(fn):
                    "markdown and solve np.linalg.solve(D.T @ D, D.T @ np.ones(N)).")
 
 
-@forbids("calibration.read_arw", "calibration.read_allan")
+@forbids
 def check_arw_reading(fn):
     """Check a student's ``fn(taus, adev, tau_max) -> N``: slope −½ line through τ <= tau_max, read at τ = 1 s."""
     rng = np.random.default_rng(1202)
@@ -76,7 +76,7 @@ def check_arw_reading(fn):
     raise Feedback(msg or f"expected N = {ref:.5g}, got {got:.5g}: N = exp(mean(log σ + ½ log τ)) over τ <= tau_max.")
 
 
-@forbids("sensor_errors.remove_gravity")
+@forbids
 def check_remove_gravity(fn):
     """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)``
     (seed 001 position note §2)."""

@@ -1,0 +1,98 @@
+"""Byte caps on the outputs a submission brings into the autograded notebook and the feedback built from it.
+
+A student's saved outputs are kept in the notebook the instructor and the student see after grading (the judge's
+verdict replaces the outputs of the test cells). An output can be anything a notebook file holds, so each is capped
+in bytes, with a visible note where it was cut: :class:`Budget` admits outputs one by one.
+"""
+from __future__ import annotations
+
+import json
+
+from nbformat.notebooknode import NotebookNode
+
+TEXT_BYTES = 100_000          # a stream, a traceback or a text result
+RICH_BYTES = 1_000_000        # an output holding an image or HTML (the largest figure of the labs is 0.45 MB)
+NOTEBOOK_BYTES = 8_000_000    # all outputs of a notebook (the largest lab holds 1.3 MB)
+
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Output sizes
+# ----------------------------------------------------------------------------------------------------------------
+
+def _text(value):
+    return "".join(value) if isinstance(value, list) else value if isinstance(value, str) else json.dumps(value)
+
+
+def output_bytes(out):
+    """Bytes an output takes in the notebook (text and every representation of a rich output)."""
+    kind = out.get("output_type")
+    if kind == "stream":
+        return len(_text(out.get("text", "")).encode("utf-8", "replace"))
+    if kind == "error":
+        return len(_text(out.get("evalue", "")).encode("utf-8", "replace")) + sum(
+            len(line.encode("utf-8", "replace")) for line in out.get("traceback", []))
+    return sum(len(_text(v).encode("utf-8", "replace")) for v in out.get("data", {}).values())
+
+
+def _is_rich(out):
+    return any(k != "text/plain" for k in out.get("data", {}))
+
+
+def _note(size, limit):
+    return (f"\n[... output truncated by the grader: {size:,} bytes, the limit is {limit:,} bytes per output and "
+            f"{NOTEBOOK_BYTES:,} bytes per notebook ...]\n")
+
+
+def truncate_output(out, limit):
+    """``out`` cut down to about ``limit`` bytes, with a visible note saying so (a new output)."""
+    size = output_bytes(out)
+    keep = max(limit - 300, 0)
+    kind = out.get("output_type")
+    new = NotebookNode(dict(out))
+    if kind == "stream":
+        new["text"] = _text(out.get("text", ""))[:keep] + _note(size, limit)
+    elif kind == "error":
+        tb = out.get("traceback", [])
+        lines, used = [], 0
+        for line in tb[:3] + tb[-3:] if len(tb) > 6 else tb:
+            lines.append(line[:max(keep // 6, 200)])
+            used += len(lines[-1])
+        new["evalue"] = _text(out.get("evalue", ""))[:max(keep - used, 200)]
+        new["traceback"] = lines + [_note(size, limit).strip()]
+    else:
+        text = _text(out.get("data", {}).get("text/plain", ""))
+        new["data"] = {"text/plain": text[:keep] + _note(size, limit)}
+        new["metadata"] = {}
+    return new
+
+
+def _dropped_note():
+    return NotebookNode(output_type="stream", name="stderr",
+                        text=f"[... further output dropped by the grader: the notebook's outputs reached "
+                             f"{NOTEBOOK_BYTES:,} bytes ...]\n")
+
+
+class Budget:
+    """Per-output and per-notebook byte caps applied to outputs as they come."""
+
+    def __init__(self):
+        self.used = 0
+        self.truncated = 0
+        self.dropped = 0
+
+    def limit_for(self, out):
+        return RICH_BYTES if _is_rich(out) else TEXT_BYTES
+
+    def admit(self, out):
+        """The output to keep in place of ``out`` (possibly truncated), or None to drop it."""
+        if self.used >= NOTEBOOK_BYTES:
+            self.dropped += 1
+            return None
+        limit = min(self.limit_for(out), NOTEBOOK_BYTES - self.used)
+        size = output_bytes(out)
+        if size > limit:
+            out = truncate_output(out, max(limit, 1000))
+            self.truncated += 1
+        self.used += output_bytes(out)
+        return out

@@ -1,0 +1,216 @@
+"""The one table of the labs' autograded exercises: what each asks for, how it is checked, what answers it for free.
+
+Each :class:`Exercise` states once what every part of the course needs to know about an exercise:
+
+* the visible check (:mod:`fusionlab.checks`) runs the student's function with ``forbid`` out of reach;
+* the grading tools' judge takes ``forbid`` out of the student's process while the exercise's hidden test runs
+  (each is a stub in the library copy the student's code gets), and scores the test with ``points``;
+* the integrity report flags an answer that names one of ``forbid``;
+* the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing.
+
+The hidden test itself (its inputs and comparisons) is the exercise's test cell in the instructor's notebook,
+``exN_tests``, as nbgrader keeps it; a test of the suite checks that each test cell names exactly these references and
+points, so that adding an exercise means one entry here and its cells.
+
+``forbid`` holds dotted names: ``"kalman.update"`` is ``fusionlab.kalman.update``, other packages by their full name
+(``"numpy.arctan2"``, ``"filterpy.kalman.predict"``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check"]
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """One autograded exercise: its lab, number, points, the names the answer defines, its check, what it forbids."""
+
+    lab: str
+    number: int
+    points: float
+    answer: tuple
+    check: str
+    forbid: tuple
+
+    @property
+    def grade_id(self):
+        """The grade id of the exercise's test cell (``ex4_tests``)."""
+        return f"ex{self.number}_tests"
+
+
+EXERCISES = (
+    # 00_mems_sensors
+    Exercise('00_mems_sensors', 1, 2, ('my_smd_magnitude',), 'check_smd_magnitude',
+             ('sensors.smd_transfer',)),
+    Exercise('00_mems_sensors', 2, 2, ('my_accel_from_bridge',), 'check_accel_from_bridge',
+             ('sensors.accel_from_bridge',)),
+    Exercise('00_mems_sensors', 3, 2, ('my_adc_to_physical',), 'check_adc_to_physical',
+             ('sensors.adc_to_physical',)),
+    Exercise('00_mems_sensors', 4, 1, ('sens_096', 'v_ref_096', 'zero_096',), 'check_adc_096',
+             ()),
+    Exercise('00_mems_sensors', 5, 1, ('lsb_accel_mg', 'lsb_gyro_dps',), 'check_adc_step',
+             ('sensors.adc_step',)),
+    Exercise('00_mems_sensors', 6, 2, ('my_atan2',), 'check_atan2',
+             ('accel_tilt.atan2_piecewise', 'accel_tilt.excel_atan2', 'cmath.phase', 'math.atan2', 'numpy.angle',
+              'numpy.arctan2')),
+    Exercise('00_mems_sensors', 7, 2, ('my_roll_pitch',), 'check_roll_pitch',
+             ('accel_tilt.tilt_from_accel',)),
+    Exercise('00_mems_sensors', 8, 1, ('my_precession_rate',), 'check_precession_rate',
+             ('inertial.precession_rate',)),
+    Exercise('00_mems_sensors', 9, 2, ('my_coriolis_force',), 'check_coriolis_force',
+             ('inertial.coriolis_acceleration', 'inertial.coriolis_force')),
+    Exercise('00_mems_sensors', 10, 2, ('my_integrate_rate',), 'check_integrate_rate',
+             ('inertial.integrate_rate',)),
+    Exercise('00_mems_sensors', 11, 1, ('bias_hat',), 'check_gyro_bias',
+             ('sensors.null_offset',)),
+    # 01_euler_rotations
+    Exercise('01_euler_rotations', 1, 2, ('my_euler_to_dcm',), 'check_euler_to_dcm',
+             ('rotations.euler_to_dcm', 'rotations.euler_to_quat', 'rotations.sequence_to_dcm')),
+    Exercise('01_euler_rotations', 2, 1, ('f_body',), 'check_body_gravity',
+             ('accel_tilt.specific_force',)),
+    Exercise('01_euler_rotations', 3, 2, ('angles_xyz', 'angles_yxz',), 'check_sequence_angles',
+             ('rotations.dcm_to_sequence',)),
+    Exercise('01_euler_rotations', 4, 3, ('my_renormalize',), 'check_renormalize',
+             ('rotations.dcm_renormalize',)),
+    Exercise('01_euler_rotations', 5, 2, ('my_rodrigues',), 'check_rodrigues',
+             ('dcm.A_matrix', 'rotations.rodrigues_dcm', 'rotations.rotvec_to_quat', 'scipy.linalg.expm')),
+    Exercise('01_euler_rotations', 6, 2, ('my_lock_roll',), 'check_lock_roll',
+             ('rotations.dcm_to_euler', 'rotations.quat_to_euler')),
+    Exercise('01_euler_rotations', 7, 2, ('my_quat_multiply',), 'check_quat_multiply',
+             ('freescale_fast._qmul', 'rotations.quat_multiply')),
+    Exercise('01_euler_rotations', 8, 2, ('my_quat_to_dcm',), 'check_quat_to_dcm',
+             ('ecompass.rotation_matrix', 'freescale_fast._R', 'rotations.quat_rotate', 'rotations.quat_to_dcm')),
+    # 02_kalman_falling_body
+    Exercise('02_kalman_falling_body', 1, 2, ('my_joseph',), 'check_joseph',
+             ('kalman._joseph', 'kalman.expanded_covariance', 'kalman.joseph_covariance')),
+    Exercise('02_kalman_falling_body', 2, 2, ('my_state_space',), 'check_state_space',
+             ('falling_body.falling_body_state_space',)),
+    Exercise('02_kalman_falling_body', 3, 2, ('my_predict',), 'check_predict',
+             ('filterpy.kalman.KalmanFilter.predict', 'filterpy.kalman.predict', 'kalman.predict',
+              'kalman.predict_step')),
+    Exercise('02_kalman_falling_body', 4, 3, ('my_update',), 'check_update',
+             ('filterpy.kalman.KalmanFilter.update', 'filterpy.kalman.update', 'kalman._gain', 'kalman.kalman_gain',
+              'kalman.update', 'kalman.update_step')),
+    # 03_correlation_fusion
+    Exercise('03_correlation_fusion', 1, 2, ('my_moving_average',), 'check_moving_average',
+             ('correlation.moving_average',)),
+    Exercise('03_correlation_fusion', 2, 2, ('my_ratio',), 'check_ratio',
+             ('correlation.ratio',)),
+    Exercise('03_correlation_fusion', 3, 3, ('my_fuse',), 'check_fuse',
+             ('correlation.fuse',)),
+    # 04_ecompass
+    Exercise('04_ecompass', 1, 1, ('my_profile_matrix',), 'check_profile_matrix',
+             ()),
+    Exercise('04_ecompass', 2, 3, ('my_kappa',), 'check_kappa',
+             ('ecompass.kappa', 'ecompass.kappa_davenport', 'ecompass.kappa_general')),
+    Exercise('04_ecompass', 3, 2, ('my_largest_eigenvector',), 'check_largest_eigenvector',
+             ()),
+    Exercise('04_ecompass', 4, 2, ('my_weights',), 'check_weights',
+             ('ecompass.accel_noise', 'ecompass.mag_noise', 'ecompass.weights')),
+    Exercise('04_ecompass', 5, 2, ('my_heading',), 'check_heading',
+             ('ecompass.ecompass', 'ecompass.heading', 'ecompass.tilt_compensated_heading')),
+    # 05_freescale_kalman
+    Exercise('05_freescale_kalman', 1, 2, ('my_C',), 'check_measurement_matrix',
+             ('freescale.measurement_matrix',)),
+    Exercise('05_freescale_kalman', 2, 2, ('my_Qw',), 'check_process_noise',
+             ('freescale.process_noise',)),
+    Exercise('05_freescale_kalman', 3, 2, ('my_Qv',), 'check_measurement_noise',
+             ('freescale.measurement_noise',)),
+    Exercise('05_freescale_kalman', 4, 1, ('my_gain',), 'check_gain',
+             ('freescale.kalman_gain',)),
+    Exercise('05_freescale_kalman', 5, 2, ('my_qrot',), 'check_qrot',
+             ('freescale.geomag_tilt_error', 'freescale.gravity_tilt_error', 'freescale.qrot',
+              'freescale_fast._qrot_vec')),
+    Exercise('05_freescale_kalman', 6, 3, ('my_step',), 'check_step',
+             ('freescale.Kalman9.step', 'freescale_fast.run_fast9')),
+    # 06_gfimu_aiv
+    Exercise('06_gfimu_aiv', 1, 2, ('my_aiv_map',), 'check_aiv_map',
+             ('gfimu.aiv_map',)),
+    Exercise('06_gfimu_aiv', 2, 1, ('my_Hq',), 'check_quadratic_jacobian',
+             ('gfimu._qj', 'gfimu.quadratic_jacobian')),
+    Exercise('06_gfimu_aiv', 3, 2, ('my_noise',), 'check_three_state_noise',
+             ('gfimu.three_state_noise',)),
+    Exercise('06_gfimu_aiv', 4, 3, ('my_update',), 'check_correlated_update',
+             ('filterpy.kalman.KalmanFilter.update_correlated', 'gfimu_ekf.ThreeStateEKF.step')),
+    # 07_gfimu_constraints
+    Exercise('07_gfimu_constraints', 1, 2, ('my_H15',), 'check_dynamic_jacobian',
+             ('gfimu_dynamics.aiv_measurement_jacobian',)),
+    Exercise('07_gfimu_constraints', 2, 2, ('my_lie',), 'check_lie_derivative',
+             ('gfimu_dynamics.observability_matrix',)),
+    Exercise('07_gfimu_constraints', 3, 2, ('my_constraints',), 'check_constraints',
+             ('gfimu_ekf._E', 'gfimu_ekf._e', 'gfimu_ekf.constraint_jacobian', 'gfimu_ekf.constraints')),
+    # 08_north_finder
+    Exercise('08_north_finder', 1, 2, ('my_omega_x',), 'check_omega_x',
+             ('northfinder.rate_from_rotating',)),
+    Exercise('08_north_finder', 2, 1, ('my_noise_printed',), 'check_noise_printed',
+             ('northfinder.rate_noise_coefficient', 'northfinder.rate_noise_density')),
+    Exercise('08_north_finder', 3, 2, ('my_noise_exact',), 'check_noise_exact',
+             ('northfinder.rate_noise_coefficient_exact', 'northfinder.rate_noise_density')),
+    Exercise('08_north_finder', 4, 3, ('my_demodulate',), 'check_demodulate',
+             ('northfinder.demodulate',)),
+    Exercise('08_north_finder', 5, 2, ('my_sync_sampling',), 'check_sync_sampling',
+             ('northfinder.synchronous_sampling',)),
+    Exercise('08_north_finder', 6, 2, ('my_tilted_heading',), 'check_tilted_heading',
+             ('northfinder.tilted_heading',)),
+    # 09_dcm_ahrs
+    Exercise('09_dcm_ahrs', 1, 2, ('my_H_a', 'my_H_m',), 'check_dcm_measurement_matrices',
+             ('dcm.accel_measurement_matrix', 'dcm.mag_measurement_matrix')),
+    Exercise('09_dcm_ahrs', 2, 3, ('my_predict',), 'check_dcm_predict',
+             ('dcm._process_noise', 'dcm._transition', 'dcm.ahrs_process_noise', 'dcm.ahrs_transition',
+              'dcm.row_propagate', 'dcm_filter.DcmAhrs.step')),
+    # 10_gps_ins
+    Exercise('10_gps_ins', 1, 3, ('my_ins_F',), 'check_ins_transition',
+             ('gpsins._ins_F', 'gpsins.ins_transition')),
+    Exercise('10_gps_ins', 2, 2, ('my_sigma_points',), 'check_sigma_points',
+             ('filterpy.kalman.JulierSigmaPoints.sigma_points', 'gpsins.sigma_points_2n')),
+    # 11_real_data
+    Exercise('11_real_data', 1, 2, ('my_heading_error',), 'check_broad_heading',
+             ('metrics.heading_error',)),
+    Exercise('11_real_data', 2, 2, ('my_inclination_error',), 'check_broad_inclination',
+             ('metrics.inclination_error',)),
+    Exercise('11_real_data', 3, 1, ('my_rmse_deg',), 'check_broad_rmse',
+             ('metrics.rms',)),
+    # 12_sensor_errors
+    Exercise('12_sensor_errors', 1, 2, ('my_quadric_fit',), 'check_quadric_fit',
+             ('calibration.quadric_normal_equations',)),
+    Exercise('12_sensor_errors', 2, 2, ('my_read_arw',), 'check_arw_reading',
+             ('calibration.read_allan', 'calibration.read_arw')),
+    Exercise('12_sensor_errors', 3, 2, ('my_remove_gravity',), 'check_remove_gravity',
+             ('sensor_errors.remove_gravity',)),
+)
+
+
+def of_lab(lab):
+    """The exercises of ``lab`` (its folder name), in order.
+
+    Parameters
+    ----------
+    lab : str
+        The lab's folder name, e.g. ``"02_kalman_falling_body"``.
+
+    Returns
+    -------
+    tuple of Exercise
+        Its exercises, by number (empty for a lab without autograded exercises).
+    """
+    return tuple(e for e in EXERCISES if e.lab == lab)
+
+
+def by_check(check):
+    """The exercise whose visible check is the function named ``check``.
+
+    Parameters
+    ----------
+    check : str
+        The name of a check function, e.g. ``"check_joseph"``.
+
+    Returns
+    -------
+    Exercise or None
+        Its exercise, or None when no exercise names that check.
+    """
+    for e in EXERCISES:
+        if e.check == check:
+            return e
+    return None

@@ -1,0 +1,82 @@
+"""The table of exercises (``fusionlab.checks.exercises``) is the single source of what each exercise forbids.
+
+The visible checks, the judge's stubs and the integrity report read the table; the test cells of the instructor's
+notebooks state the same references again for a student's own kernel (``guard.grade(..., forbid=...)``). These tests
+fail when the two disagree, when a test cell has no entry or an entry no test cell, or when a check or a red-team
+cheat is missing: adding an exercise means one entry and its cells.
+"""
+from __future__ import annotations
+
+import ast
+import re
+
+import nbformat
+import pytest
+
+from conftest import LABS, ROOT
+from fusionlab.checks import _core, exercises
+from grading import judge
+from grading.bench_classgrade import grade_id
+from test_grading_cheats import CHEATS, NO_REFERENCE
+
+
+def _solution(lab):
+    return nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+
+
+def _canonical(obj):
+    return judge._dotted(obj)
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_every_test_cell_has_one_entry_with_its_points_and_answer(lab):
+    nb = _solution(lab)
+    cells = {grade_id(c): c for c in nb.cells if grade_id(c)}
+    tests = {g: c for g, c in cells.items() if judge.is_test(c)}
+    entries = {e.grade_id: e for e in exercises.of_lab(lab)}
+    assert set(tests) == set(entries)
+    for gid, e in entries.items():
+        assert float(tests[gid].metadata.nbgrader.points) == e.points, gid
+        bound = judge._bound_names(cells[f"ex{e.number}_solution"].source)
+        assert set(e.answer) <= bound, (gid, e.answer, bound)
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_each_test_cell_names_exactly_the_references_of_its_entry(lab):
+    nb = _solution(lab)
+    setup = next(c for c in nb.cells if grade_id(c) == "imports")
+    base = {"__name__": "__check__"}
+    exec(compile(judge._without_guard_calls(setup.source), "<setup>", "exec"), base)  # noqa: S102
+    reserved = {}
+    for node in ast.walk(ast.parse(judge.python_of(setup.source))):
+        if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "reserve":
+            n = next(int(k.value.value) for k in node.keywords if k.arg == "exercise")
+            reserved[n] = {_canonical(eval(compile(ast.Expression(a), "<a>", "eval"), base)) for a in node.args}
+    for e in exercises.of_lab(lab):
+        source = next(c.source for c in nb.cells if grade_id(c) == e.grade_id)
+        scope = dict(base)
+        imports = [n for n in ast.parse(judge.python_of(source)).body if isinstance(n, (ast.Import, ast.ImportFrom))]
+        exec(compile(ast.Module(imports, []), "<imports>", "exec"), scope)  # noqa: S102
+        named = set()
+        for node in judge.forbidden_expressions(source):
+            try:
+                named.add(_canonical(eval(compile(ast.Expression(node), "<f>", "eval"), scope)))  # noqa: S307
+            except NameError:
+                continue   # a name the cell makes itself (a lambda's wrapper): not a library function
+        table = {_canonical(_core._resolve(d)) for d in e.forbid}
+        assert named - {None} == table | reserved.get(e.number, set()), (e.grade_id, named, table)
+
+
+def test_every_check_reads_its_forbids_from_the_table():
+    assert set(_core._REFERENCES) == {e.check for e in exercises.EXERCISES}
+    for lab in LABS:
+        cells = {grade_id(c): c.source for c in _solution(lab).cells if grade_id(c)}
+        for e in exercises.of_lab(lab):
+            assert re.search(rf"checks\.{e.check}\(", cells[f"ex{e.number}_check"]), (lab, e.number, e.check)
+
+
+def test_the_red_team_has_a_cheat_for_every_exercise_the_library_answers():
+    with_reference = {(e.lab, e.number) for e in exercises.EXERCISES if e.forbid}
+    cheats = {(lab, n) for lab, table in CHEATS.items() for n in table}
+    assert cheats == with_reference - NO_REFERENCE
+    assert {(e.lab, e.number) for e in exercises.EXERCISES if not e.forbid} == NO_REFERENCE
