@@ -10,9 +10,11 @@ the student's value, and gets back plain data, decoded strictly.  So
   prints or returns is read as a score;
 * the hidden tests never enter the student's process: not as source, not as values (only the arguments of each
   call do);
-* the reference answers of the lab are not in the student's process at all: the box holds a copy of the library in
-  which every function a test of the lab forbids (and every reference it compares with) is a stub, and packages
-  that answer the exercises (``ahrs``; filterpy's functions that a test forbids) are stubbed the same way.
+* the reference answer of the exercise under test is not in the student's process at all: each test gets a box of
+  its own, holding a copy of the library in which every function the exercise forbids in the table of exercises
+  (:mod:`fusionlab.checks.exercises`: the reference first) is a stub, source included; filterpy's functions are
+  stubbed the same way in a copy that shadows the installed package, and ``ahrs`` is absent. C functions
+  (``numpy.arctan2``) cannot be taken out; the integrity report flags their use by name.
 
 Values a test reads from a *provided* cell of the notebook (the lab's data, ``still``, ``q_demo``) are not taken
 from the student's box, where the student could have changed them: they come from a run of the model solution in
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import compileall
 import contextlib
 import copy
 import importlib
@@ -325,6 +328,62 @@ class Box:
                 f.close()
 
 
+def _global_reads(node):
+    """Names ``node`` loads from the enclosing module: inside a function or lambda, its parameters and the names it
+    assigns are its own (a cell that rebinds at top level a name it reads still reads it)."""
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+        args = node.args
+        local = {a.arg for a in [*args.posonlyargs, *args.args, *args.kwonlyargs, args.vararg, args.kwarg] if a}
+        body = node.body if isinstance(node.body, list) else [node.body]
+        inner = [n for b in body for n in ast.walk(b)]
+        local |= {n.id for n in inner if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+        local -= {name for n in inner if isinstance(n, ast.Global) for name in n.names}
+        reads = set().union(*[_global_reads(b) for b in body]) - local
+        defaults = [*args.defaults, *[d for d in args.kw_defaults if d is not None]]
+        decorators = getattr(node, "decorator_list", [])
+        return reads.union(*[_global_reads(d) for d in [*defaults, *decorators]])
+    if isinstance(node, ast.Name):
+        return {node.id} if isinstance(node.ctx, ast.Load) else set()
+    return set().union(*[_global_reads(child) for child in ast.iter_child_nodes(node)])
+
+
+def _reads_and_writes(source):
+    """(names a cell reads from the notebook, names it binds, names whose objects it changes in place), or None if it
+    does not parse."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return None
+    changed = set()
+    for n in ast.walk(tree):
+        if isinstance(n, (ast.Attribute, ast.Subscript)) and isinstance(n.ctx, (ast.Store, ast.Del)):
+            root = n
+            while isinstance(root, (ast.Attribute, ast.Subscript)):
+                root = root.value
+            if isinstance(root, ast.Name):
+                changed.add(root.id)
+    return _global_reads(tree), _bound_names(source), changed
+
+
+def prune(cells, need=()):
+    """The cells of ``cells`` = [(grade_id, source, must_run)] that must run, in order: every ``must_run`` cell, and
+    every other cell that binds or changes a name read by a kept cell (or named in ``need``), to a fixed point. If a
+    kept cell does not parse, nothing is left out."""
+    info = [_reads_and_writes(src) for _, src, _ in cells]
+    keep = [must for _, _, must in cells]
+    if any(i is None for i, k in zip(info, keep) if k):
+        return cells
+    needed = set(need).union(*[info[i][0] for i, k in enumerate(keep) if k])
+    grew = True
+    while grew:
+        grew = False
+        for i, (k, nfo) in enumerate(zip(keep, info)):
+            if not k and (nfo is None or (nfo[1] | nfo[2]) & needed):
+                keep[i], grew = True, True
+                needed |= nfo[0] if nfo is not None else set()
+    return [c for c, k in zip(cells, keep) if k]
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # A lab, as the judge sees it
 # ---------------------------------------------------------------------------------------------------------------
@@ -387,6 +446,7 @@ class Lab:
             import fusionlab  # the library the judge computes with is the one the box gets (references stubbed)
             self.unstubbed[gid] = strip_packages(root, Path(fusionlab.__file__).resolve().parents[1],
                                                  self.forbidden[gid])
+            compileall.compile_dir(root, quiet=1)  # the box mounts it read-only: compiled once here, not per box
             for top, dirs, files in os.walk(root):
                 os.chmod(top, 0o755)
                 for f in files:
@@ -451,29 +511,33 @@ class Lab:
             seen.add(gid)
         return seq, notes
 
-    def program(self, submitted, upto=None):
-        """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: every
-        code cell above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
+    def program(self, submitted, upto=None, need=()):
+        """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: the code
+        cells above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
 
         Provided (locked) cells come from the release, whatever the submission holds; answer cells and the cells the
         student added or may edit come from the submission. Test cells and visible checks are not run in the box:
-        the judge runs the tests."""
+        the judge runs the tests. Of the provided cells (locked, or unmarked and as the release has them) only those
+        that make or change a name the other cells, or the names ``need``, read are run: the setup cell, every answer
+        and every cell the student added or edited always are (:func:`prune`)."""
         seq, notes = self.layout(submitted)
+        released = {c.source.strip() for c in self.release.cells if c.cell_type == "code" and not grade_id(c)}
         cells = []
         for kind, gid, cell in seq:
             if upto is not None and gid == upto:
                 break
             if cell.get("cell_type") != "code":
                 continue
+            source = cell.get("source", "")
             if kind == "added":
-                cells.append((None, python_of(cell.get("source", ""))))
+                cells.append((None, python_of(source), source.strip() not in released))
                 continue
             mine = self._release_cell(gid)
             if is_test(mine) or is_check(mine):
                 continue
-            src = cell.get("source", "") if is_answer(mine) or not nbg(mine).get("locked") else mine.source
-            cells.append((gid, python_of(src)))
-        return cells, notes
+            answer = is_answer(mine) or not nbg(mine).get("locked")
+            cells.append((gid, python_of(source if answer else mine.source), answer or gid == "imports"))
+        return [(gid, src) for gid, src, _ in prune(cells, need)], notes
 
     def _release_cell(self, gid):
         for c in self.release.cells:
@@ -495,7 +559,7 @@ class Lab:
             wanted = sorted(set(free_names(self.tests[gid])) & self.provided_names - set(self.base()))
             values = {}
             if wanted:
-                session = Session(self, self.solution, "model solution", slot, gid)
+                session = Session(self, self.solution, "model solution", slot, gid, need=wanted)
                 try:
                     session.start()
                     values = session.describe(wanted)
@@ -550,9 +614,9 @@ class StudentError(AssertionError):
 class Session:
     """The box of one submission: started, run through its program, then asked for calls and values."""
 
-    def __init__(self, lab: Lab, submitted, student, slot, gid):
+    def __init__(self, lab: Lab, submitted, student, slot, gid, need=()):
         self.lab, self.submitted, self.student, self.slot, self.gid = lab, submitted, student, slot, gid
-        self.cells, self.notes = lab.program(submitted, upto=gid)
+        self.cells, self.notes = lab.program(submitted, upto=gid, need=need)
         self.skipped = set()
         self.cell_errors = {}
         self.box = None
@@ -699,7 +763,7 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
         result = TestResult(gid, lab.points.get(gid, 0.0))
         verdict.tests.append(result)
         reference = lab.reference_values(gid, slot)
-        session = Session(lab, submitted, student, slot, gid)
+        session = Session(lab, submitted, student, slot, gid, need=free_names(source))
         try:
             _run_test(lab, session, source, dict(base), reference, result)
         finally:
