@@ -3,7 +3,7 @@
 Each check that names the library function computing its answer (``@forbids``) is handed that function with its result
 nudged just outside the check's tolerance (relative 1e-7, 1e-5, 1e-3): the answer is then wrong, so wherever the
 message compares "yours" with "expected", the two printed numbers must differ. The slips the per-lab tests feed are
-read the same way (tests/checks/conftest.py).
+read the same way (tests/conftest.py).
 """
 from __future__ import annotations
 
