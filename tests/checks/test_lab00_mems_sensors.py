@@ -142,7 +142,7 @@ def euler(rate, dt, angle0=0.0):
     (lambda r, dt, a0: a0 + np.cumsum(r) * dt, "off by one sample"),
     (lambda r, dt, a0: euler(r, dt), "angle0 is ignored"),
     (lambda r, dt, a0: np.r_[a0, a0 + np.cumsum((r[1:] + r[:-1]) / 2) * dt], "the trapezoidal rule"),
-    (lambda r, dt, a0: euler(r, 2 * dt, a0), "you return \\[5.  5.2 5.6"),
+    (lambda r, dt, a0: euler(r, 2 * dt, a0), "you return \\[5, 5.2, 5.6"),
     # right for one channel with angle0 given, wrong for several channels with the default angle0
     (lambda r, dt, a0=0.0: a0 + np.r_[0, np.cumsum(np.ravel(r))[:-1]] * dt, "axis 0"),
 ])

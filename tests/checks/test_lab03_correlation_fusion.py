@@ -18,7 +18,7 @@ def moving_average(x, n):                    # causal, expanding start (eq 5.7)
     (lambda x, n: np.convolve(x, np.ones(n) / n, mode="same"), "your average is centred"),
     (lambda x, n: np.r_[x[:n - 1], np.convolve(x, np.ones(n) / n, mode="valid")], "right from m = N-1 on"),
     (lambda x, n: n * moving_average(x, n), "do not divide by N"),
-    (lambda x, n: moving_average(x, n) + 1, "expected \\[4.  "),
+    (lambda x, n: moving_average(x, n) + 1, "expected \\[4, "),
     (lambda x, n: np.array([np.mean(x[max(0, i - 2):i + 1]) for i in range(len(x))]), "Use N, not 3"),
 ])
 def test_check_moving_average_names_the_slip(wrong, message):

@@ -73,8 +73,24 @@ def _answered(name, value):
     return value
 
 
-def _num(x):
-    return f"{float(x):.4g}" if np.isfinite(x) else str(float(x))
+def _num(x, digits=4):
+    return f"{float(x):.{digits}g}" if np.isfinite(x) else str(float(x))
+
+
+def _pair(got, expected, digits=4, fmt=None):
+    """``got`` and ``expected`` printed with ``digits`` significant digits, or with as many more as it takes to tell
+    them apart: a message never shows "0.7318 (expected 0.7318)" for two different values. Arrays are printed as
+    ``[a, b, c]``, all with one number of digits. ``fmt`` (a function of the digits) prints each number otherwise."""
+    fmt = fmt or (lambda x, d: _num(x, d))
+
+    def show(v, d):
+        v = np.asarray(v, dtype=float)
+        return fmt(v, d) if v.ndim == 0 else "[" + ", ".join(fmt(x, d) for x in v.ravel()) + "]"
+    for d in range(digits, 18):
+        a, b = show(got, d), show(expected, d)
+        if a != b:
+            break
+    return a, b
 
 
 def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e-9):
@@ -91,30 +107,28 @@ def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e
     if not bad.any():
         return None
     if got.ndim == 0:
-        return f"{name} is {_num(got)} (expected {_num(exp)})"
+        return "{} is {} (expected {})".format(name, *_pair(got, exp))
     if got.ndim == 2 and got.shape[0] == got.shape[1] and got.shape[0] > 1 and np.allclose(got, exp.T, atol=atol,
                                                                                             rtol=rtol):
         return f"{name} is the transpose of the expected matrix"
     flipped = bool(np.allclose(got[bad], -exp[bad], atol=atol, rtol=rtol))
     sign = " has the wrong sign" if flipped else " is wrong"
 
-    def vec(v):
-        return "[" + ", ".join(_num(x) for x in v) + "]"
-
     if got.ndim == 2 and got.shape[1] > 1:
         rows, cols = np.flatnonzero(bad.any(axis=1)), np.flatnonzero(bad.any(axis=0))
         if len(rows) == 1 and len(cols) > 1:
             r = rows[0]
-            return f"row [{r}, :] of {name}{sign}: {vec(got[r])} (expected {vec(exp[r])}); the other rows are right"
+            return "row [{}, :] of {}{}: {} (expected {}); the other rows are right".format(r, name, sign,
+                                                                                           *_pair(got[r], exp[r]))
         if len(cols) == 1 and len(rows) > 1:
             c = cols[0]
-            return (f"column [:, {c}] of {name}{sign}: {vec(got[:, c])} (expected {vec(exp[:, c])}); the other "
-                    f"columns are right")
+            return ("column [:, {}] of {}{}: {} (expected {}); the other columns are right"
+                    .format(c, name, sign, *_pair(got[:, c], exp[:, c])))
     idx = list(zip(*np.nonzero(bad)))
     where = [f"[{', '.join(str(int(i)) for i in ix)}]" for ix in idx]
     if len(idx) == 1:
-        return f"entry {where[0]} of {name}{sign}: {_num(got[idx[0]])} (expected {_num(exp[idx[0]])})"
-    shown = "; ".join(f"{w} is {_num(got[ix])} (expected {_num(exp[ix])})" for w, ix in zip(where[:3], idx[:3]))
+        return "entry {} of {}{}: {} (expected {})".format(where[0], name, sign, *_pair(got[idx[0]], exp[idx[0]]))
+    shown = "; ".join("{} is {} (expected {})".format(w, *_pair(got[ix], exp[ix])) for w, ix in zip(where[:3], idx[:3]))
     return (f"{len(idx)} of the {got.size} entries of {name} {'have the wrong sign' if flipped else 'differ'}: "
             f"{shown}{'; ...' if len(idx) > 3 else ''}")
 

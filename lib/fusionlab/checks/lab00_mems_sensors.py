@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import accel_tilt as _accel_tilt, earth as _earth, inertial as _inertial, rotations, sensors as _sensors
-from ._core import Feedback, _answered, _call, _first_match, forbids, _general_case, _ok
+from ._core import Feedback, _pair, _answered, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_adc_096", "check_adc_step", "check_gyro_bias", "check_smd_magnitude", "check_accel_from_bridge",
            "check_adc_to_physical", "check_atan2", "check_roll_pitch", "check_precession_rate", "check_coriolis_force",
@@ -150,8 +150,8 @@ def check_adc_to_physical(fn):
             ((counts * v_ref / 1023 - zero) / sens if bits != 10 else None,
              "1023 is hard-coded; use 2**bits - 1 so other ADCs work too."),
         ], rtol=1e-9, atol=0)
-        raise Feedback(f"{where}: " + (msg or f"you return {got:.6g}, expected {ref:.6g}. Formula: "
-                                              "(counts·Vref/(2**bits - 1) - zero) / sensitivity."))
+        raise Feedback(f"{where}: " + (msg or "you return {}, expected {}. ".format(*_pair(got, ref, 6))
+                                       + "Formula: (counts·Vref/(2**bits - 1) - zero) / sensitivity."))
     _ok("the ADC conversion is right (including a 12-bit ADC); the thesis' example gives "
         f"{float(_sensors.adc_to_physical(508, 1.35, 0.3)):.4f} g at 3.0 V.")
 
@@ -296,5 +296,5 @@ def check_integrate_rate(fn):
         (lambda g: np.allclose(g[1:], trapezoid[1:], atol=1e-12), "that is the trapezoidal rule -- more accurate, "
          "but this exercise asks for seed 001's forward Euler, θ[n+1] = θ[n] + dt·ω[n]."),
     ], rtol=0, atol=1e-12)
-    raise Feedback(msg or f"for rate {rate}, dt = {dt}, angle0 = {a0} you return {np.round(got, 4)}; "
-                          f"expected {np.round(ref, 4)}.")
+    raise Feedback(msg or f"for rate {rate}, dt = {dt}, angle0 = {a0} " + "you return {}; expected {}.".format(
+        *_pair(got, ref)))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import correlation as _correlation
-from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
+from ._core import Feedback, _pair, _call, _first_match, forbids, _general_case, _ok
 
 __all__ = ["check_moving_average", "check_ratio", "check_fuse"]
 
@@ -32,10 +32,10 @@ def check_moving_average(fn):
         (lambda g: np.allclose(g[1:-1], centred[1:-1]), "your average is centred (it uses the next sample): eq 5.7 "
          "averages A[m], A[m-1], ... A[m-N+1] only -- a causal filter, as a live MCU would need."),
         (lambda g: np.allclose(g[2:], ref[2:]), "right from m = N-1 on; the first N-1 samples should be the mean of "
-         f"the samples so far (expected {np.round(ref[:2], 3)}, got {np.round(got[:2], 3)})."),
+         "the samples so far (expected {1}, got {0}).".format(*_pair(got[:2], ref[:2], 3))),
         (lambda g: np.allclose(g[2:], 3 * ref[2:]), "you sum the window but do not divide by N (eq 5.7 has 1/N)."),
     ])
-    raise Feedback(msg or f"expected {np.round(ref, 3)}, got {np.round(got, 3)}.")
+    raise Feedback(msg or "expected {1}, got {0}.".format(*_pair(got, ref, 3)))
 
 
 @forbids
@@ -59,7 +59,7 @@ def check_ratio(fn):
         (lambda v: np.allclose(v[:5], 1 - ref[:5], atol=1e-6), "you return 1 - ratio: the gyro magnitude goes in the "
          "numerator (eq 5.15)."),
     ])
-    raise Feedback(msg or f"expected {np.round(ref, 4)}, got {np.round(got, 4)}.")
+    raise Feedback(msg or "expected {1}, got {0}.".format(*_pair(got, ref)))
 
 
 @forbids
@@ -78,4 +78,4 @@ def check_fuse(fn):
                                                    "accelerometer angle A[n]."),
         (w * a + (1 - w) * inc, "the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n]."),
     ], rtol=1e-5, atol=1e-8)
-    raise Feedback(msg or f"expected {np.round(ref, 4)}, got {np.round(got, 4)} (F[-1] = f0 = 5).")
+    raise Feedback(msg or "expected {1}, got {0} (F[-1] = f0 = 5).".format(*_pair(got, ref)))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import northfinder as _nf
-from ._core import Feedback, _call, _first_match, forbids, _ok
+from ._core import Feedback, _pair, _call, _first_match, forbids, _ok
 
 __all__ = ["check_omega_x", "check_noise_printed", "check_noise_exact", "check_demodulate", "check_sync_sampling",
            "check_tilted_heading"]
@@ -37,8 +37,8 @@ def check_omega_x(fn):
                ((base - dC * l - dB * rho) / k, "the fixed-triad differences are d·(...): divide them by d."),
                ((base + dC * l / d + dB * rho / d) / k, "the two fixed-triad terms are subtracted, not added.")]
     msg = _first_match(got, guesses)
-    raise Feedback(msg or f"your ω_x is {got:.6f} rad/s; the true rate is {w[0]:.6f}. Eq 4.15: ω_x = [a^{{rC}}_z - "
-                          "a^A_z - (α_x + ω_yω_z) l - (ω_xω_z - α_y) ρ] / (2ρω_r).")
+    raise Feedback(msg or "your ω_x is {} rad/s; the true rate is {}. ".format(*_pair(got, w[0], 6))
+                   + "Eq 4.15: ω_x = [a^{rC}_z - a^A_z - (α_x + ω_yω_z) l - (ω_xω_z - α_y) ρ] / (2ρω_r).")
 
 
 def _noise_cases():
@@ -58,7 +58,7 @@ def check_noise_printed(fn):
             (_nf.rate_noise_coefficient_exact(*case), "that is the exact propagation (the next exercise); here write "
                                                       "eq 4.44 as printed."),
         ], rtol=1e-9, atol=0)
-        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}. Eq 4.44: "
+        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: " + "expected {1}, got {0}. ".format(*_pair(got, ref, 6)) + "Eq 4.44: "
                               "2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
     _ok(f"eq 4.44 as printed: {_nf.rate_noise_coefficient(*_noise_cases()[0]):.4f} for Table 4.1.")
 
@@ -82,7 +82,7 @@ def check_noise_exact(fn):
              "on the lever terms: -1 (from a^r - a^A) and then +l/d and +ρ/d (from subtracting -(a^C - a^A)l/d and "
              "-(a^B - a^A)ρ/d)."),
         ], rtol=1e-9, atol=0)
-        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: expected {ref:.6g}, got {got:.6g}.")
+        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: " + "expected {1}, got {0}.".format(*_pair(got, ref, 6)))
     _ok(f"exact propagation: {_nf.rate_noise_coefficient_exact(*_noise_cases()[0]):.5f} for Table 4.1 "
         "(169/450), against 0.7311 printed.")
 
@@ -124,7 +124,7 @@ def check_demodulate(fn):
         ref = _nf.demodulate(x, th, "sampled")
         if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
             continue
-        where = f"heading {deg:.0f}°: you return {got:.6f} rad, expected {ref:.6f} rad: "
+        where = f"heading {deg:.0f}°: " + "you return {} rad, expected {} rad: ".format(*_pair(got, ref, 6))
         msg = _first_match(got, _demod_variants(x, th), rtol=0, atol=1e-9)
         raise Feedback(where + (msg or "Check eqs 4.28-4.32: c_i = Σ x·r_c, s_i = -Σ x·r_s with zero-mean sign "
                                        "references r_c = sgn(cos θ), r_s = sgn(sin θ), then ψ = atan2(s_i, c_i)."))
@@ -139,7 +139,7 @@ def check_sync_sampling(fn):
         ref = _nf.synchronous_sampling(x, th)
         if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
             continue
-        where = f"heading {deg:.0f}°: you return {np.degrees(got):.3f}°, expected {np.degrees(ref):.3f}°. "
+        where = f"heading {deg:.0f}°: " + "you return {}°, expected {}°. ".format(*_pair(np.degrees(got), np.degrees(ref), 5))
         def off(h):                                            # the student's heading minus h, in (-π, π]
             return np.angle(np.exp(1j * (got - h)))
         msg = _first_match(got, [

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import metrics, rotations
-from ._core import Feedback, _call, _first_match, forbids, _ok
+from ._core import Feedback, _pair, _call, _first_match, forbids, _ok
 
 __all__ = ["check_broad_heading", "check_broad_inclination", "check_broad_rmse"]
 
@@ -103,5 +103,5 @@ def check_broad_rmse(fn):
     ], rtol=1e-9, atol=0)
     if msg:
         raise Feedback(msg)
-    raise Feedback(f"your RMSE is {got:.4f}°, expected {ref:.4f}°: sqrt(mean(angle²)) over movement & ~isnan, in "
-                   "degrees.")
+    raise Feedback("your RMSE is {}°, expected {}°: ".format(*_pair(got, ref, 5))
+                   + "sqrt(mean(angle²)) over movement & ~isnan, in degrees.")
