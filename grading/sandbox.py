@@ -8,7 +8,8 @@ scores -- stays outside.  In the box
   of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
   course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path), a private
   folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
-  the student's copy; writable) and a private ``/tmp``;
+  the student's copy; writable, in memory, size-limited, seeded with the submission's files) and a private ``/tmp``
+  (the same): nothing a box writes reaches the grader's disk;
 * solutions, submissions, classmates, the gradebook, the real library and the grading code do not exist;
 * there is no network (own network namespace), the processes are in their own PID namespace (when the box goes,
   every process it started goes with it) and the box dies with the judge (``--die-with-parent``);
@@ -51,7 +52,14 @@ if uid:
     os.setgid(int(uid))
     os.setuid(int(uid))
     resource.setrlimit(resource.RLIMIT_NPROC, (lim["nproc"], lim["nproc"]))
-os.chdir(cwd)  # only now: the private folder belongs to the box's user
+if os.path.isdir("/opt/seed"):  # the submission's files, into the box's own size-limited folder, as its user
+    for name in os.listdir("/opt/seed"):
+        src, dst = os.path.join("/opt/seed", name), os.path.join(cwd, name)
+        if os.path.isdir(src) and not os.path.islink(src):
+            shutil.copytree(src, dst, symlinks=False, copy_function=shutil.copyfile)
+        elif os.path.isfile(src) and not os.path.islink(src):
+            shutil.copyfile(src, dst)
+os.chdir(cwd)
 ctypes.CDLL(None, use_errno=True).prctl(38, 1, 0, 0, 0)  # PR_SET_NO_NEW_PRIVS
 resource.setrlimit(resource.RLIMIT_CPU, (lim["cpu_s"], lim["cpu_s"] + 5))
 resource.setrlimit(resource.RLIMIT_AS, (lim["memory_bytes"], lim["memory_bytes"]))
@@ -138,6 +146,9 @@ def _with_parent_folders(args):
         if args[i] in ("--ro-bind", "--bind", "--ro-bind-try"):
             dests.append(args[i + 2])
             i += 3
+        elif args[i] == "--tmpfs" and args[i + 1] != "/tmp":
+            dests.append(args[i + 1])
+            i += 2
         else:
             i += 1
 
@@ -156,8 +167,6 @@ def _with_parent_folders(args):
             head += ["--perms", "0755", "--dir", p]
     at = args.index("--tmpfs") + 2  # after the private /tmp: a scratch folder under the host's /tmp gets them too
     return args[:at] + head + args[at:]
-
-
 
 
 def box_uid(slot):
@@ -203,7 +212,7 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
             extra.append((os.path.realpath(part), f"/opt/box/{i}_{os.path.basename(part)}"))
     for src, dest in extra:
         args += ["--ro-bind", src, dest]
-    args += ["--bind", work, cwd]
+    args += ["--ro-bind", work, "/opt/seed", "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", cwd]
     args = _with_parent_folders(args)
     env = {"PATH": f"{os.path.dirname(python)}:/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "USER": "student",
            "LANG": "C.UTF-8", "PYTHONPATH": ":".join(path), "PYTHONDONTWRITEBYTECODE": "1", "TMPDIR": "/tmp",

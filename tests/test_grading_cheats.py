@@ -192,7 +192,8 @@ def _students(lab, release, solution):
     cheats = CHEATS[lab]
     odd = {n: c for n, c in cheats.items() if n % 2}
     even = {n: c for n, c in cheats.items() if not n % 2}
-    out = {"cheat_odd": _answered(release, solution, odd), "cheat_even": _answered(release, solution, even)}
+    out = {"cheat_odd": _answered(release, solution, odd), "cheat_even": _answered(release, solution, even),
+           "untouched": release}
     if lab in JUNK:
         junk = _answered(release, solution, JUNK[lab])
         out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
@@ -232,6 +233,14 @@ def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(grad
         expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] and (lab, n) not in UNSTUBBABLE else p)
                     for n, p in points.items()}
         assert g["scores"][student] == expected, (student, g["messages"][student])
+
+
+@pytest.mark.parametrize("lab", sorted(CHEATS))
+def test_the_untouched_release_scores_zero_and_says_which_exercise_to_finish(graded, lab):
+    g = graded(lab)
+    assert set(g["scores"]["untouched"].values()) == {0}
+    for gid, msg in g["messages"]["untouched"].items():
+        assert "not attempted yet" in msg or "is not defined by your notebook" in msg, (gid, msg)
 
 
 @pytest.mark.parametrize("lab", sorted(CHEATS))

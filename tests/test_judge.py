@@ -132,6 +132,11 @@ def _attacks(root, port, half):
         # a cell that ignores the interrupt and never ends
         "stuck": _answers(half, JUNK2, JUNK3, prelude=(
             "import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\ntime.sleep(3600)\n")),
+        # the disk filled from the box's folder and /tmp (each is in memory, 256 MB)
+        "disk_fill": _answers(half, JUNK2, JUNK3, prelude=(
+            "import os\nfor _d in ('.', '/tmp'):\n    for _i in range(40):\n        try:\n"
+            "            with open(os.path.join(_d, f'fill{_i}.bin'), 'wb') as _f:\n"
+            "                _f.write(b'x' * (10 << 20))\n        except OSError:\n            break\n")),
         # 9: a fork bomb that holds its processes while classmates are graded
         "fork_bomb": _answers(half, JUNK2, JUNK3, prelude=(
             "import os, time\n_kids = 0\nwhile _kids < 100000:\n    try:\n        if os.fork() == 0:\n"
@@ -312,7 +317,7 @@ def test_honest_students_score_what_they_did(graded):
 
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
                                      "reference_from_source", "other_packages", "writes", "daemon", "network",
-                                     "read_others", "stuck", "fork_bomb", "print_in"])
+                                     "read_others", "stuck", "fork_bomb", "print_in", "disk_fill"])
 def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
     assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
         graded["run"].stdout[-4000:]

@@ -47,7 +47,10 @@ def test_an_ordinary_user_gets_a_user_namespace_and_keeps_its_own_id(tmp_path, m
     for flag in ("--unshare-pid", "--unshare-net", "--die-with-parent", "--clearenv"):
         assert flag in args
     binds = {args[i + 2]: args[i + 1] for i, a in enumerate(args) if a in ("--bind", "--ro-bind")}
-    assert binds[str(course / "labs" / LAB)].startswith(str(tmp_path / "box-")), "a private copy, writable"
+    assert binds["/opt/seed"].startswith(str(tmp_path / "box-")), "the submission's files, read-only, to seed the box"
+    cwd = str(course / "labs" / LAB)
+    assert args[args.index(cwd) - 1] == "--tmpfs" and args[args.index(cwd) - 3] == "--size", \
+        "the box's own folder is in memory and size-limited: nothing it writes reaches the grader's disk"
     assert binds[str(course / "lib")] == str(tmp_path / "boxlib") and str(course) not in binds, \
         "the lab's library copy is mounted where the course's library is; the course itself is not"
     assert "--ro-bind" == args[args.index(str(course / "lib")) - 2], "the library stays read-only"
