@@ -257,7 +257,8 @@ def graded(tmp_path_factory):
     (root / "submitted" / "not_json" / LAB).mkdir(parents=True)
     (root / "submitted" / "not_json" / LAB / f"{LAB}.ipynb").write_text("{ this is not a notebook")
 
-    keep = ("gradebook.db", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md", f"integrity_{LAB}.csv")
+    keep = ("gradebook.db", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md", f"integrity_{LAB}.csv",
+            f"similarity_{LAB}.md", f"similarity_{LAB}.csv")
     before = _tree_hash(root, keep)
     with sqlite3.connect(root / "gradebook.db") as con:
         sources = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
