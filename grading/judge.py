@@ -123,13 +123,15 @@ def free_names(source):
 
 def _without_guard_calls(source):
     """The setup cell as the judge runs it: the grading guard's and the checks' calls dropped (they act on a
-    student's kernel, and the judge has none)."""
+    student's kernel, and the judge has none), and numpy's print options left alone (they are the process's)."""
     tree = ast.parse(python_of(source))
     keep = []
     for node in tree.body:
         call = node.value if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call) else None
         owner = call.func.value if call is not None and isinstance(call.func, ast.Attribute) else None
         if isinstance(owner, ast.Name) and owner.id in ("guard", "checks"):
+            continue
+        if call is not None and isinstance(call.func, ast.Attribute) and call.func.attr == "set_printoptions":
             continue
         keep.append(node)
     tree.body = keep
