@@ -37,7 +37,8 @@ from . import conventions, rotations, validate
 __all__ = [
     "FRAMES", "accel_model", "mag_model", "accel_noise", "mag_noise", "weights", "reference_vectors",
     "measured_gravity", "rotation_matrix", "kappa_general", "kappa_davenport", "kappa", "kappa_eq41_printed",
-    "kappa_frame_printed", "EcompassResult", "ecompass", "inclination", "wahba_error", "tilt_compensated_heading",
+    "kappa_frame_printed", "EcompassResult", "ECOMPASS_FIELD_UT", "ecompass", "inclination", "wahba_error",
+    "tilt_compensated_heading",
     "heading", "tilt_error", "synthetic_recording", "ENU", "check_frame", "nonzero_norm",
 ]
 
@@ -629,6 +630,11 @@ def inclination(G, B_c, frame="NED"):
     return -d if frame == "Android" else d                                 # (002 eqs 111-112)
 
 
+#: The median field strengths (µT) :func:`ecompass` accepts: wide, since a magnet next to the sensor (Lab 04's
+#: disturbance sweep) adds hundreds of µT; gauss (0.25-0.65) and nT (25,000-65,000) fall outside.
+ECOMPASS_FIELD_UT = (2.0, 5000.0)
+
+
 def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     """Least-squares accelerometer/magnetometer orientation (002 §3; v5.00 ``fLeastSquareseCompass*``).
 
@@ -639,9 +645,11 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g (non-zero).
+        Accelerometer reading, g (non-zero; a median magnitude of 5-20, m/s², or of 200 and more, milli-g, is
+        refused: the noise estimate of eq 9 assumes 1 g at rest).
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT (non-zero).
+        Calibrated magnetometer reading, µT (non-zero; a median field strength outside
+        :data:`ECOMPASS_FIELD_UT`, gauss or nT, is refused: eq 15 compares it with ``B`` in µT).
     delta : float or array_like, shape (...)
         Inclination of the reference field direction, rad.
     frame : {'NED', 'Android', 'Win8'}, optional
@@ -657,11 +665,12 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
         ``q`` (the note's orientation quaternion = our body→nav quaternion in the frame's global frame), the
         measured inclination, the noise estimates, the weights and the spectrum of κ.
     """
-    G = validate.vectors(G, "G")
-    B_c = validate.vectors(B_c, "B_c")
     check_frame(frame)
+    G = validate.accel_g(G, "G")
+    B_c = validate.vectors(B_c, "B_c")
     B = validate.positive(B, "B")
     s_g = measured_gravity(G, frame)
+    validate.field_uT(B_c, "B_c", low=ECOMPASS_FIELD_UT[0], high=ECOMPASS_FIELD_UT[1], per_sample=False)
     s_m = B_c / nonzero_norm(B_c, "B_c")[..., None]
     qa, qd = accel_noise(G), mag_noise(B_c, B)
     if alpha is None:
