@@ -35,7 +35,7 @@ from . import accel_tilt, earth, rotations, sensors, signals, validate
 __all__ = [
     "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
     "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "ComplementaryFilter", "TiltKalman2",
-    "complementary_attitude", "accel_disturbance", "correlation_attitude",
+    "complementary_attitude", "accel_disturbance", "correlation_attitude", "COUNTS_MEDIAN_MIN",
 ]
 
 
@@ -362,6 +362,11 @@ def printed_to_tilt(angle_deg, axis="x"):
     raise ValueError(f"axis must be 'x' or 'y'; got {axis!r}")
 
 
+#: The smallest median count :func:`pipeline` accepts: the thesis' 10-bit ADC reads about 460-620 on every
+#: channel at rest (mid-scale 512), while the same record in volts stays below 3 and in g or °/s mostly below 10.
+COUNTS_MEDIAN_MIN = 50.0
+
+
 def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0,
              eps=1e-9):
     """The spreadsheet of Lab 3 (000 §5.4.3): one column per step a)-l), as a pandas DataFrame.
@@ -369,9 +374,11 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     Parameters
     ----------
     counts : array_like of int, shape (N, 5)
-        AX AY AZ GX GY counts (from :func:`fusionlab.spreadsheet.parse_terminal_log`).
+        AX AY AZ GX GY counts (from :func:`fusionlab.spreadsheet.parse_terminal_log`); a median below
+        :data:`COUNTS_MEDIAN_MIN` is refused as volts or g.
     dt : float
-        Sample interval, s (the thesis gives none; the synthetic logs use 1/50 s).
+        Sample interval, s (the thesis gives none; the synthetic logs use 1/50 s); 10 µs – 1 s, so that the sample
+        rate passed in its place (50) is refused.
     axis : {'x', 'y'}, optional
         ``'x'``: the Y-Z angle with the X gyro, as the lab's steps a)-k); ``'y'``: the X-Z angle with the Y gyro
         (question 2).
@@ -398,7 +405,12 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     import pandas as pd
 
     c = validate.samples(counts, "counts", 5)
-    dt = validate.positive(dt, "dt")
+    if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
+        raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
+                         f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
+                         "counts the terminal log prints (spreadsheet.parse_terminal_log)")
+    dt = validate.time_step(dt, "dt")
+    n_ma = validate.count(n_ma, "n_ma", 1)
     if variant not in ("meant", "printed"):
         raise ValueError(f"variant must be 'meant' or 'printed'; got {variant!r}")
     if accel_weight not in ("ratio", "one_minus_ratio"):
@@ -647,7 +659,8 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
     k = np.full(len(gyr), dt / (validate.positive(tau, "tau") + dt))
     if acc_sigma is not None:
         acc_sigma = validate.positive(acc_sigma, "acc_sigma")
-        if not np.isfinite(acc_hold) or acc_hold < 0:
+        acc_hold = validate.scalar(acc_hold, "acc_hold")
+        if acc_hold < 0:
             raise ValueError(f"acc_hold must be a finite number of seconds >= 0; got {acc_hold!r}")
         k = k / (1.0 + (accel_disturbance(acc, round(acc_hold / dt) + 1) / acc_sigma) ** 2)
     k[_free_fall(acc)] = 0.0                             # no gravity direction: trust the gyro
@@ -733,6 +746,7 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     gyr, acc, dt = _imu_args(gyr, acc, fs)
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
+    n_ma = validate.count(n_ma, "n_ma", 1)
     free = _free_fall(acc)                          # ours: free-fall samples hold the last tilt and get no weight
     keep = np.maximum.accumulate(np.where(free, 0, np.arange(len(acc))))
     tilt = np.unwrap(accel_tilt.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
@@ -749,9 +763,11 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
 def _imu_args(gyr, acc, fs):
     """Checked (N, 3) gyro and accelerometer arrays of one length, and the sample interval 1/fs."""
     gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
+    acc = validate.accel_ms2(acc, "acc")
     validate.same_length(gyr=gyr, acc=acc)
-    return gyr, acc, 1.0 / validate.sample_rate(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
+    validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs)
+    return gyr, acc, 1.0 / fs
 
 
 def _weighted_tilt_fusion(gyr, acc, dt, k):

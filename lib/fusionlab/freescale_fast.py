@@ -235,7 +235,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
     qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)               # (002 eq 15)
     ag_all, am_all = ecompass.weights(qa_all, qd_all / B2_all, 1.0)       # (002 eqs 64-65): only QvBQd/B² enters
-    if accel_hold:                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
+    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
     free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
     if free[0]:
@@ -361,7 +361,7 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     if free[0]:
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
     qa_all = np.abs(g2 - 1.0)                                              # (002 eq 9)
-    if accel_hold:
+    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):
         qa_all = held_accel_noise(qa_all, dt, accel_hold)                  # ours
     sgn = -1.0 if frame == "Android" else 1.0
     sg_all = np.where(g2[:, None] == 0, [0.0, 0.0, 1.0], sgn * Gm / np.sqrt(np.where(g2 == 0, 1.0, g2))[:, None])

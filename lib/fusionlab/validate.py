@@ -20,7 +20,7 @@ import numpy as np
 __all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "gyro_tilt_ratio", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
 
 
 def _shape_text(shape, lead=""):
@@ -615,6 +615,58 @@ def covariance(P, name, n=None, tol=1e-9, definite=False):
     if low < -tol * scale or (definite and low <= 0):
         raise ValueError(f"{name} must be a positive {'definite' if definite else 'semi-definite'} covariance "
                          f"matrix (variances cannot be negative); got smallest eigenvalue {low:.3g}")
+    return P
+
+
+def covariances(P, name, n, tol=1e-9, definite=True):
+    """A batch of covariance matrices ``(..., n, n)``: each symmetric and positive (semi-)definite within ``tol``.
+
+    The batched twin of :func:`covariance` (same tolerances, relative to each matrix's largest entry), for a
+    function that inverts one covariance per sample or per run.
+
+    Parameters
+    ----------
+    P : array_like, shape (..., n, n)
+        The covariance matrices.
+    name : str
+        The argument's name, used in the error message.
+    n : int
+        The size of one matrix.
+    tol : float, default 1e-9
+        Allowed asymmetry and negative eigenvalue, relative to each matrix's largest entry.
+    definite : bool, default True
+        Require positive definite (smallest eigenvalue > 0): the matrix is inverted.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        ``P`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.covariances([[[1.0, 0.0], [0.0, -4.0]]], "P", 2)
+    Traceback (most recent call last):
+        ...
+    ValueError: P must be positive definite covariance matrices (variances cannot be negative, and P is inverted); got smallest eigenvalue -4 (matrix 0)
+    """
+    P = array(P, name, shape=(n, n))
+    if P.size == 0:
+        return P
+    flat = P.reshape(-1, n, n)
+    scale = np.maximum(np.max(np.abs(flat), axis=(1, 2)), 1e-300)
+    asym = np.max(np.abs(flat - np.swapaxes(flat, 1, 2)), axis=(1, 2))
+    if np.any(asym > tol * scale):
+        i = int(np.argmax(asym / scale))
+        raise ValueError(f"{name} must be symmetric covariance matrices; got max|{name} - {name}ᵀ| = {asym[i]:.3g} "
+                         f"(matrix {i})")
+    low = np.min(np.linalg.eigvalsh(0.5 * (flat + np.swapaxes(flat, 1, 2))), axis=1)
+    bad = (low < -tol * scale) | ((low <= 0) if definite else False)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise ValueError(f"{name} must be positive {'definite' if definite else 'semi-definite'} covariance "
+                         f"matrices (variances cannot be negative{', and ' + name + ' is inverted' if definite else ''}"
+                         f"); got smallest eigenvalue {low[i]:.3g} (matrix {i})")
     return P
 
 
