@@ -792,7 +792,7 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
     >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)
     Traceback (most recent call last):
         ...
-    ValueError: gyr must be in rad/s; it says the body tilted 57.3 times as far as the direction of gravity in acc turned (median of 31 windows of 0.1 s in which the gyro tilts it by more than 0.05 rad), which looks like deg/s (57.3 times) -- use np.radians(...)
+    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)
     """
     g = samples(gyr, name)
     if len(g):
@@ -806,10 +806,10 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
     if acc is not None and fs is not None and len(g):
         ratio, n = gyro_tilt_ratio(g, acc, fs)
         if n >= TILT_WINDOWS_MIN and ratio < TILT_RATIO_MIN:
-            raise ValueError(f"{name} must be in rad/s; it says the body tilted {1 / ratio:.3g} times as far as the "
-                             f"direction of gravity in {acc_name} turned (median of {n} windows of "
-                             f"{TILT_WINDOW:g} s in which the gyro tilts it by more than {TILT_MIN:g} rad), which "
-                             f"looks like deg/s ({np.degrees(1.0):.3g} times) -- use np.radians(...)")
+            raise ValueError(f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
+                             f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
+                             f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
+                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)")
     return g
 
 
