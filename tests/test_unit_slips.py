@@ -245,6 +245,20 @@ def test_dead_reckon_of_no_sample_is_empty():
 
 
 # ----------------------------------------------------------------------------------------------------------------
+# 7. Degrees where radians are documented, where a magnitude tells
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("fn", [rotations.rotvec_to_quat, rotations.rodrigues_dcm])
+def test_a_rotation_vector_over_one_turn_is_refused_as_degrees(fn):
+    with pytest.raises(ValueError, match=r"^sigma must be rotation vectors in radians .* got an angle of 90, which "
+                                         r"looks like degrees"):
+        fn([0.0, 0.0, 90.0])
+    q = rotations.rotvec_to_quat([0.0, 0.0, 1.5 * np.pi])          # the long way round is still a rotation
+    assert np.degrees(rotations.quat_to_euler(q)[2]) == pytest.approx(-90.0)
+    fn([[0.0, 0.0, 2 * np.pi]])
+
+
+# ----------------------------------------------------------------------------------------------------------------
 # 8. The obscure errors: a ValueError naming the argument
 # ----------------------------------------------------------------------------------------------------------------
 

@@ -585,7 +585,7 @@ def rotvec_to_quat(sigma, order="exact"):
     Parameters
     ----------
     sigma : array_like, shape (..., 3)
-        Rotation vectors (unit axis × angle), rad.
+        Rotation vectors (unit axis × angle), rad; an angle over one turn (2π) is refused as degrees.
     order : {'exact', 'first'}, default 'exact'
         The exact quaternion or its small-angle form.
 
@@ -604,7 +604,7 @@ def rotvec_to_quat(sigma, order="exact"):
     >>> round(float(np.linalg.norm(q)) - 1, 6)                 # norm error ≈ s²/8 = 0.00125
     0.001249
     """
-    sigma = validate.vectors(sigma, "sigma")
+    sigma = validate.rotation_vectors(sigma, "sigma")
     if order == "first":
         return np.concatenate([np.ones(sigma.shape[:-1] + (1,)), sigma / 2], -1)
     if order != "exact":
@@ -649,7 +649,8 @@ def rodrigues_dcm(sigma, order="exact"):
     Parameters
     ----------
     sigma : array_like, shape (..., 3)
-        Body rotation vector over the step (body rate × dt), rad.
+        Body rotation vector over the step (body rate × dt), rad; an angle over one turn (2π) is refused as
+        degrees.
     order : {'exact', 'second', 'first'}, default 'exact'
         Rodrigues' formula, or its expansion to second or first order in ``B``.
 
@@ -668,7 +669,7 @@ def rodrigues_dcm(sigma, order="exact"):
            [ 0.1,  1. ,  0. ],
            [ 0. ,  0. ,  1. ]])
     """
-    sigma = validate.vectors(sigma, "sigma")
+    sigma = validate.rotation_vectors(sigma, "sigma")
     B = skew(sigma)                                                       # (000 eq 3.53)
     eye = np.broadcast_to(np.eye(3), B.shape)
     if order == "first":

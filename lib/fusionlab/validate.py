@@ -20,7 +20,7 @@ import numpy as np
 __all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
 
 
 def _shape_text(shape, lead=""):
@@ -473,6 +473,43 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
         raise ValueError(f"{name} must be in radians (|angle| <= {limit:.4g}); got a value of "
                          f"{float(np.max(np.abs(a))):.4g}, which looks like degrees -- use np.radians(...)")
     return a
+
+
+def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
+    """Rotation vectors ``(..., 3)`` (unit axis × angle) in radians: an angle beyond one full turn means degrees.
+
+    Every rotation has a rotation vector of angle at most π; up to 2π (the same rotation the long way round) is
+    accepted, beyond it the vector fits degrees far better than radians.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The rotation vectors, rad.
+    name : str, default "sigma"
+        The argument's name, used in the error message.
+    limit : float, default 2π + 1e-9
+        The largest angle ``|x|`` accepted, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``x`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.rotation_vectors([0.0, 0.0, 90.0], "sigma")
+    Traceback (most recent call last):
+        ...
+    ValueError: sigma must be rotation vectors in radians (angle |sigma| <= 6.283, one turn); got an angle of 90, which looks like degrees -- use np.radians(...)
+    """
+    v = vectors(x, name)
+    if v.size:
+        top = float(np.max(np.linalg.norm(v, axis=-1)))
+        if top > limit:
+            raise ValueError(f"{name} must be rotation vectors in radians (angle |{name}| <= {limit:.4g}, one turn); "
+                             f"got an angle of {top:.4g}, which looks like degrees -- use np.radians(...)")
+    return v
 
 
 def euler_rad(x, name="euler"):
