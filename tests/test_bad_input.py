@@ -30,7 +30,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fusionlab import accel_tilt, calibration, estimators, falling_body, inertial, kalman, metrics, rotations
+from fusionlab import accel_tilt, calibration, correlation, estimators, falling_body, inertial, kalman, metrics, rotations
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -457,6 +457,56 @@ MET = [
 ]
 
 
+_rng3 = np.random.default_rng(7)
+COUNTS30 = np.column_stack([512 + _rng3.integers(-20, 21, 30), 512 + _rng3.integers(-20, 21, 30),
+                            614 + _rng3.integers(-5, 6, 30), 461 + _rng3.integers(-30, 31, 30),
+                            461 + _rng3.integers(-30, 31, 30)]).astype(float)
+DEG8 = np.array([10.0, 12.0, 15.0, 14.0, 11.0, 9.0, 10.5, 12.5])             # a tilt, deg (Lab 03's unit)
+RATE8 = np.array([5.0, 20.0, 30.0, -10.0, -25.0, -5.0, 12.0, 3.0])          # a gyro rate, °/s
+W8 = np.array([0.1, 0.3, 0.5, 0.7, 0.9, 0.2, 0.4, 0.6])                     # accelerometer weights in [0, 1]
+COR = [
+    Case("adc_to_g", correlation.adc_to_g, dict(counts=arr(COUNTS30[:, :3]), null_offset=S(0.01, broadcasts=True),
+                                                sensor=A(sensors.ADXL335, opaque=True),
+                                                v_ref=S(3.0, positive=True))),
+    Case("adc_to_dps", correlation.adc_to_dps, dict(counts=arr(COUNTS30[:, 3:]), null_offset=S(0.5, broadcasts=True),
+                                                    sensor=A(sensors.IDG500, opaque=True),
+                                                    v_ref=S(3.0, positive=True))),
+    Case("accel_angle", correlation.accel_angle, dict(z=arr(np.cos(np.radians(DEG8))),
+                                                      other=arr(np.sin(np.radians(DEG8))),
+                                                      order=choice("excel", "c"))),
+    Case("moving_average", correlation.moving_average, dict(x=arr(DEG8), n=S(3, integer=True, positive=True))),
+    Case("derivative", correlation.derivative, dict(a=arr(DEG8), dt=S(0.02, positive=True))),
+    Case("gyro_increment", correlation.gyro_increment, dict(rate=arr(RATE8), dt=S(0.02, positive=True),
+                                                            rule=choice("trapezoid", "printed"))),
+    Case("cumulative_integral", correlation.cumulative_integral, dict(increment=arr(RATE8 * 0.02), angle0=S(1.0))),
+    Case("ratio", correlation.ratio, dict(gyro_rate=arr(RATE8), accel_term=arr(DEG8), eps=S(1e-9, positive=True))),
+    Case("fuse", correlation.fuse, dict(accel_deg=arr(DEG8), increment=arr(RATE8 * 0.02), weight=arr(W8),
+                                        f0=S(10.0))),
+    Case("printed_to_tilt", correlation.printed_to_tilt, dict(angle_deg=arr(90.0 - DEG8), axis=choice("y"))),
+    Case("pipeline", correlation.pipeline, dict(counts=samples(COUNTS30), dt=S(0.02, positive=True),
+                                                axis=choice("y"), variant=choice("printed"),
+                                                n_ma=S(3, integer=True, positive=True),
+                                                accel_weight=choice("one_minus_ratio"),
+                                                acc_null=S(0.01, broadcasts=True), gyro_null=S(0.5, broadcasts=True),
+                                                eps=S(1e-9, positive=True))),
+    Case("ComplementaryFilter", correlation.ComplementaryFilter, dict(alpha=S(0.98),
+                                                                      dt=S(0.02, positive=True), angle0=S(1.0))),
+    Case("TiltKalman2", correlation.TiltKalman2, dict(dt=S(0.02, positive=True), q_angle=S(1e-3, positive=True),
+                                                      q_bias=S(1e-5, positive=True), r_angle=S(100.0, positive=True),
+                                                      angle0=S(1.0), bias0=S(0.1), p0=S(100.0, positive=True))),
+    Case("complementary_attitude", correlation.complementary_attitude,
+         dict(gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True), fs=S(100.0, positive=True),
+              tau=S(1.0, positive=True), acc_sigma=S(2.0, positive=True), acc_hold=S(0.5, nonneg=True))),
+    Case("accel_disturbance", correlation.accel_disturbance, dict(acc=samples(ACC, unit="ms2"),
+                                                                  hold=S(5, integer=True, positive=True),
+                                                                  g=S(G, positive=True))),
+    Case("correlation_attitude", correlation.correlation_attitude,
+         dict(gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True), fs=S(100.0, positive=True),
+              n_ma=S(12, integer=True, positive=True), accel_weight=choice("one_minus_ratio"),
+              eps=S(1e-9, positive=True))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -470,7 +520,7 @@ RUN = [_run_case(name) for name in estimators.available()]
 SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
-           "kalman": KAL, "calibration": CAL, "metrics": MET, "estimators.run": RUN}
+           "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
 
@@ -668,7 +718,7 @@ UNCHECKED = {kalman.update_step, kalman.predict_step}
 def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
-    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics):
+    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):

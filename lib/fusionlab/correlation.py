@@ -127,6 +127,7 @@ def accel_angle(z, other, order="excel"):
     """
     z = validate.array(z, "z")
     other = validate.array(other, "other")
+    validate.broadcast(z=z, other=other)
     if order == "excel":
         return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
     if order == "c":
@@ -163,9 +164,7 @@ def moving_average(x, n):
     x = validate.array(x, "x")
     if x.ndim != 1:
         raise ValueError(f"x must have shape (N,); got {x.shape}")
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be a whole number >= 1; got {n!r}")
-    n = int(n)
+    n = validate.count(n, "n", 1)
     c = np.concatenate([[0.0], np.cumsum(x)])
     m = np.arange(1, len(x) + 1)
     lo = np.maximum(m - n, 0)
@@ -257,7 +256,7 @@ def cumulative_integral(increment, angle0=0.0):
     ndarray, shape (N,)
         Accumulated angle, deg.
     """
-    return validate.array(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
+    return validate.scalar(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
 
 
 def ratio(gyro_rate, accel_term, eps=1e-9):
@@ -328,7 +327,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     validate.same_length(accel_deg=a, increment=inc, weight=w)
     if np.any((w < 0) | (w > 1)):
         raise ValueError("weight must lie in [0, 1]")
-    prev = float(a[0]) if f0 is None else float(f0)
+    prev = float(a[0]) if f0 is None else validate.scalar(f0, "f0")
     out = np.empty_like(a)
     for n in range(len(a)):
         prev = w[n] * a[n] + (1 - w[n]) * (prev + inc[n])                         # (000 eq 5.17)
@@ -405,6 +404,10 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     import pandas as pd
 
     c = validate.samples(counts, "counts", 5)
+    if len(c) == 0:
+        raise ValueError("counts must hold at least one sample (row); got 0")
+    acc_null = validate.array(acc_null, "acc_null")
+    gyro_null = validate.array(gyro_null, "gyro_null")
     if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
         raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
                          f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
@@ -481,11 +484,12 @@ class ComplementaryFilter:
     """
 
     def __init__(self, alpha=0.98, dt=0.02, angle0=0.0):
-        if not 0.0 <= float(alpha) <= 1.0:
+        alpha = validate.scalar(alpha, "alpha")
+        if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1]; got {alpha!r}")
-        self.alpha = float(alpha)
+        self.alpha = alpha
         self.dt = validate.positive(dt, "dt")
-        self.angle = float(angle0)
+        self.angle = validate.scalar(angle0, "angle0")
 
     def step(self, rate, accel_angle):
         """One sample.
@@ -565,7 +569,7 @@ class TiltKalman2:
         kf.H = np.array([[1.0, 0.0]])
         kf.Q = np.diag([validate.positive(q_angle, "q_angle"), validate.positive(q_bias, "q_bias")])
         kf.R = np.array([[validate.positive(r_angle, "r_angle")]])
-        kf.x = np.array([[float(angle0)], [float(bias0)]])
+        kf.x = np.array([[validate.scalar(angle0, "angle0")], [validate.scalar(bias0, "bias0")]])
         kf.P = np.eye(2) * validate.positive(p0, "p0")
         self.kf = kf
 
@@ -705,8 +709,9 @@ def accel_disturbance(acc, hold, g=earth.G):
     >>> np.round(accel_disturbance(acc, 2, g=9.80665), 6)
     array([0., 1., 1.])
     """
-    acc = validate.samples(acc, "acc")
-    hold = int(hold)
+    g = validate.positive(g, "g")
+    acc = validate.accel_ms2(acc, "acc", g=g)
+    hold = validate.count(hold, "hold")
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
     return signals.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
