@@ -30,7 +30,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fusionlab import accel_tilt, calibration, correlation, estimators, falling_body, inertial, kalman, metrics, rotations
+from fusionlab import (accel_tilt, calibration, correlation, ecompass, estimators, falling_body, inertial, kalman,
+                       metrics, rotations)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -507,6 +508,62 @@ COR = [
 ]
 
 
+DELTA = np.radians(60.0)                                                        # Lab 04's inclination
+G5 = ecompass.accel_model(Q5)                                                   # g, NED gravity-positive
+B5 = ecompass.mag_model(Q5, 50.0, DELTA)                                        # µT
+SG5 = ecompass.measured_gravity(G5)
+SM5 = B5 / np.linalg.norm(B5, axis=1, keepdims=True)
+R_G, R_M = ecompass.reference_vectors(DELTA)
+S2 = np.stack([SG5[0], SM5[0]])                                                 # (K, 3) pairs for one sample
+R2V = np.stack([R_G, R_M])
+ECO = [
+    Case("check_frame", ecompass.check_frame, dict(frame=choice("Android", "Win8")), kwargs_unknown=False),
+    Case("nonzero_norm", ecompass.nonzero_norm, dict(v=vec(V5, nonzero=True), name="v"), kwargs_unknown=False),
+    Case("rotation_matrix", ecompass.rotation_matrix, dict(q=quat(Q5))),
+    Case("reference_vectors", ecompass.reference_vectors, dict(delta=arr(DELTA, unit="rad"),
+                                                              frame=choice("Android", "Win8"))),
+    Case("accel_model", ecompass.accel_model, dict(q=quat(Q5), a_S=vec(0.01 * V5), frame=choice("Win8"),
+                                                   noise=vec(0.001 * W5))),
+    Case("mag_model", ecompass.mag_model, dict(q=quat(Q5), B=S(50.0, positive=True), delta=S(DELTA, unit="rad"),
+                                               frame=choice("Android"), d_S=vec(V5), noise=vec(0.1 * W5))),
+    Case("accel_noise", ecompass.accel_noise, dict(G=vec(G5 * 1.01))),
+    Case("mag_noise", ecompass.mag_noise, dict(B_c=vec(B5 * 1.01), B=S(50.0, positive=True))),
+    Case("weights", ecompass.weights, dict(qvgqa=arr([0.01, 0.02, 0.0], nonneg=True),
+                                           qvbqd=arr([75.0, 10.0, 0.0], nonneg=True), B=S(50.0, positive=True),
+                                           tol=S(1e-12, positive=True))),
+    Case("measured_gravity", ecompass.measured_gravity, dict(G=vec(G5, nonzero=True), frame=choice("NED"))),
+    Case("kappa_general", ecompass.kappa_general, dict(s=vec(S2), r=vec(R2V), alpha=arr([0.4, 0.6], group="K"))),
+    Case("kappa_davenport", ecompass.kappa_davenport, dict(s=vec(S2), r=vec(R2V),
+                                                         alpha=arr([0.4, 0.6], group="K"))),
+    Case("kappa", ecompass.kappa, dict(s_g=vec(SG5, nonzero=True), s_m=vec(SM5, nonzero=True),
+                                       delta=S(DELTA, unit="rad", broadcasts=True),
+                                       alpha_g=S(0.5, broadcasts=True), alpha_m=S(0.5, broadcasts=True),
+                                       frame=choice("NED"))),
+    Case("kappa_eq41_printed", ecompass.kappa_eq41_printed, dict(s=vec(SG5[0], nonzero=True),
+                                                                 r=vec(R_G, nonzero=True))),
+    Case("kappa_frame_printed", ecompass.kappa_frame_printed, dict(eq=choice(53, 58, 63), s_g=vec(SG5[0]),
+                                                                   s_m=vec(SM5[0]), delta=S(DELTA, unit="rad"),
+                                                                   alpha_g=S(0.5), alpha_m=S(0.5))),
+    Case("wahba_error", ecompass.wahba_error, dict(q=quat(Q5[0]), s=vec(S2), r=vec(R2V), alpha=arr([0.4, 0.6]))),
+    Case("inclination", ecompass.inclination, dict(G=vec(G5, nonzero=True), B_c=vec(B5, nonzero=True),
+                                                   frame=choice("NED"))),
+    Case("ecompass", ecompass.ecompass, dict(G=vec(G5 * 1.01, nonzero=True), B_c=vec(B5 * 0.98, nonzero=True),
+                                             delta=S(DELTA, unit="rad", broadcasts=True), frame=choice("NED"),
+                                             B=S(50.0, positive=True), alpha=A((0.3, 0.7), opaque=True))),
+    Case("tilt_compensated_heading", ecompass.tilt_compensated_heading, dict(G=vec(G5, nonzero=True),
+                                                                             B_c=vec(B5, nonzero=True))),
+    Case("heading", ecompass.heading, dict(q=quat(Q5), frame=choice("Android"))),
+    Case("tilt_error", ecompass.tilt_error, dict(q_est=quat(Q5), q_true=quat(Q5[::-1].copy()),
+                                                 frame=choice("Win8"))),
+    Case("synthetic_recording", ecompass.synthetic_recording,
+         dict(omega_dps=samples(np.degrees(W5)), q0=quat(Q5[0]), frame=choice("Android"),
+              fs=S(200.0, positive=True), bias_dps=vec([0.1, -0.2, 0.3]), sigma_gyr=S(0.1, nonneg=True),
+              sigma_acc=S(0.01, nonneg=True), sigma_mag=S(0.5, nonneg=True), B=S(50.0, positive=True),
+              delta=S(DELTA, unit="rad"), a_S=samples(0.01 * V5), d_S=samples(V5),
+              seed=S(3, integer=True, nonneg=True))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -520,7 +577,8 @@ RUN = [_run_case(name) for name in estimators.available()]
 SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
-           "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "estimators.run": RUN}
+           "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO,
+           "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
 
@@ -718,13 +776,13 @@ UNCHECKED = {kalman.update_step, kalman.predict_step}
 def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
-    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation):
+    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):
                 continue
             if callable(obj) and getattr(obj, "__module__", None) == mod.__name__ and not (
-                    isinstance(obj, type) and (dataclasses.is_dataclass(obj))):
+                    isinstance(obj, type) and (dataclasses.is_dataclass(obj) or issubclass(obj, tuple))):  # results
                 assert obj in covered, f"{mod.__name__}.{name} has no valid call in tests/test_bad_input.py"
     assert {c.args["name"].value for c in RUN} == set(estimators.available())
 
