@@ -192,7 +192,7 @@ def derivative(a, dt):
     array([0., 2., 4.])
     """
     a = validate.array(a, "a")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
 
 
@@ -229,7 +229,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     (array([1., 2., 3.]), array([0., 1., 1.]))
     """
     r = validate.array(rate, "rate")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     if rule == "printed":
         return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)
     if rule == "rectangular":
@@ -488,7 +488,7 @@ class ComplementaryFilter:
         if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1]; got {alpha!r}")
         self.alpha = alpha
-        self.dt = validate.positive(dt, "dt")
+        self.dt = validate.time_step(dt, "dt")
         self.angle = validate.scalar(angle0, "angle0")
 
     def step(self, rate, accel_angle):
@@ -562,7 +562,7 @@ class TiltKalman2:
     def __init__(self, dt=0.02, q_angle=1e-3, q_bias=1e-5, r_angle=100.0, angle0=0.0, bias0=0.0, p0=100.0):
         from filterpy.kalman import KalmanFilter
 
-        dt = validate.positive(dt, "dt")
+        dt = validate.time_step(dt, "dt")
         kf = KalmanFilter(dim_x=2, dim_z=1, dim_u=1)
         kf.F = np.array([[1.0, -dt], [0.0, 1.0]])
         kf.B = np.array([[dt], [0.0]])

@@ -116,7 +116,7 @@ def A_with_gyro_error(A, bias, dt, noise=None):
     """
     A = validate.array(A, "A", shape=(3, 3))
     b = validate.vectors(bias, "bias")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt      # (004 eq 6.9)
     return A + rotations.skew(e)                                                     # (004 eq 6.10)
 
@@ -147,7 +147,7 @@ def row_propagate(c, A_tilde, bias, dt):
     c = validate.vectors(c, "c")
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3))
     b = validate.vectors(bias, "bias")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return c @ A_tilde - dt * np.cross(c, b)                                          # (004 eq 6.11)
 
 
@@ -176,7 +176,7 @@ def ahrs_transition(c1, c3, A_tilde, dt):
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _transition(c1, c3, A_tilde, dt)
 
 
@@ -217,7 +217,7 @@ def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     gyro_noise = validate.array(gyro_noise, "gyro_noise")
     bias_walk = validate.array(bias_walk, "bias_walk")
     if gyro_noise < 0 or bias_walk < 0:

@@ -205,7 +205,7 @@ class DcmAhrs:
 
     def __init__(self, C0, inclination, dt, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(), g=dcm.G):
         C0 = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
-        self.dt = validate.positive(dt, "dt")
+        self.dt = validate.time_step(dt, "dt")
         self.hold = max(1, int(round(tuning.hold / self.dt)))
         self.x = np.concatenate([C0[0], C0[2], validate.vectors(bias0, "bias0").reshape(3)])
         self.tuning = tuning
@@ -421,7 +421,7 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     use_mag = mag_b is not None
     mag_b = validate.samples(mag_b, "mag_b") if use_mag else np.zeros_like(acc_b)
     n = validate.same_length(gyr=gyr, acc_b=acc_b, mag_b=mag_b)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     g = validate.positive(g, "g")
     M = int(update_every)
     if M != update_every or M < 1:

@@ -844,7 +844,7 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     w = validate.array(omega_dps, "omega_dps", shape=(None, 3))
     if w.ndim != 2:
         raise ValueError(f"omega_dps must have shape (N, 3); got {w.shape}")
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     q0 = validate.exact_shape(validate.quaternions(q0, "q0"), "q0", (4,))
     bias = validate.exact_shape(bias_dps, "bias_dps", (3,))
     sigma_gyr, sigma_acc, sigma_mag = (validate.scalar(v, n, nonnegative=True) for v, n in

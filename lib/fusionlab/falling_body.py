@@ -151,7 +151,7 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
     (200, 181.006, -19.027)
     """
     k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g", True)
-    dt, x0, v0 = validate.scalar(dt, "dt", True), validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
+    dt, x0, v0 = validate.time_step(dt, "dt"), validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
     TMAX = validate.count(TMAX, "TMAX", 1)
     X = np.zeros(TMAX)
     V = np.zeros(TMAX)
@@ -192,7 +192,7 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
     x : ndarray, shape (N + 1, 2)
         ``[position (m), velocity (m/s)]`` at each ``t``.
     """
-    duration, dt = validate.scalar(duration, "duration", True), validate.scalar(dt, "dt", True)
+    duration, dt = validate.scalar(duration, "duration", True), validate.time_step(dt, "dt")
     k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g", True)
     n = int(round(duration / dt))
     if abs(n * dt - duration) > 1e-9 * max(1.0, duration):
@@ -363,7 +363,7 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     array([ 0.   , -0.098])
     """
     k, m = validate.scalar(k, "k", True), validate.scalar(m, "m", True)
-    g, dt = validate.scalar(g, "g", True), validate.scalar(dt, "dt", True)
+    g, dt = validate.scalar(g, "g", True), validate.time_step(dt, "dt")
     A = np.array([[1.0, dt], [0.0, 1.0 - (k / m) * dt]])            # (000 §4.4.2)
     B = np.array([[1.0, 0.0], [0.0, -g * dt]])                       # (000 §4.4.2)
     u = np.array([0.0, 1.0])                                         # (000 §4.4.2)

@@ -220,7 +220,7 @@ def delta_quat(omega_dps, dt):
         Unit quaternions.
     """
     w = validate.vectors(omega_dps, "omega_dps")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return rotations.rotvec_to_quat(w * (D2R * dt))                       # (002 eq 120)
 
 
@@ -242,7 +242,7 @@ def alpha(dt):
     float
         ``α``, rad per °/s.
     """
-    return math.pi * validate.positive(dt, "dt") / 180.0                   # (002 eq 140)
+    return math.pi * validate.time_step(dt, "dt") / 180.0                   # (002 eq 140)
 
 
 def measurement_matrix(dt, dof=9):
@@ -474,7 +474,7 @@ def block_size(fs, kalman_hz=25.0):
     >>> block_size(200.0), block_size(50.0), block_size(10.0)
     (8, 2, 1)
     """
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     return max(1, int(round(fs / kalman_hz)))
 
 

@@ -163,7 +163,7 @@ def held_accel_noise(qvgqa, dt, hold):
     qa = validate.array(qvgqa, "qvgqa")
     if qa.ndim != 1 or np.any(qa < 0):
         raise ValueError(f"qvgqa must be a (M,) array of values >= 0; got shape {qa.shape}")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     if not np.isfinite(hold) or hold < 0:
         raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
     return signals.trailing_max(qa, int(round(hold / dt)) + 1)
@@ -216,7 +216,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``delta_deg`` (M,), ``t`` (M,) s.
     """
     gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     enu = ecompass.ENU[frame]
     N = len(gyr)
@@ -351,7 +351,7 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``t`` (M,) s.
     """
     gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     N = len(gyr)
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)

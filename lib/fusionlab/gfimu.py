@@ -302,7 +302,7 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
         Cross-covariance of input and measurement noise, on the same scale, with the sign ``m_sign``.
     """
     N = validate.scalar(noise_density, "noise_density", nonnegative=True)
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     if m_sign not in (-1, 0, 1):
         raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (the sign inferred from Table 5.3); got {m_sign!r}")
     Ra = N ** 2 * dt                                             # (004 eq 3.24)
@@ -462,7 +462,7 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
     """
     omega, alpha = validate.samples(omega, "omega"), validate.samples(alpha, "alpha")
     validate.same_length(omega=omega, alpha=alpha)
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     N, sb, sw = (validate.scalar(noise_density, "noise_density", nonnegative=True),
                  validate.scalar(bias_std, "bias_std", nonnegative=True),
                  validate.scalar(bias_walk, "bias_walk", nonnegative=True))
@@ -538,7 +538,7 @@ def apply_calibration(fits, acc):
 
 
 def _time(T, dt):
-    T, dt = validate.positive(T, "T"), validate.positive(dt, "dt")
+    T, dt = validate.positive(T, "T"), validate.time_step(dt, "dt")
     return np.arange(int(round(T / dt))) * dt
 
 

@@ -63,7 +63,7 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
     Q : ndarray, shape (6 + n_bias, 6 + n_bias)
         Process noise covariance.
     """
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     qa = validate.scalar(q_alpha, "q_alpha", nonnegative=True)
     qb = validate.scalar(q_bias, "q_bias", nonnegative=True)
     if n_bias not in (0, 9):
@@ -111,7 +111,7 @@ def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
     Q : ndarray, shape (6 + n_bias, 6 + n_bias)
         Process noise covariance.
     """
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     beta = validate.scalar(beta, "beta", nonnegative=True)
     sigma = validate.scalar(sigma, "sigma", nonnegative=True)
     if first_order:
@@ -199,7 +199,7 @@ class DynamicEKF:
         if x0.shape not in ((6,), (15,)):
             raise ValueError(f"x0 must be [ω, α] (6,) or [ω, α, b] (15,); got {x0.shape}")
         n = len(x0)
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         sa2 = validate.scalar(noise_density, "noise_density", nonnegative=True) ** 2 / self.dt
         self.ekf = ExtendedKalmanFilter(dim_x=n, dim_z=9)
         if process is None:

@@ -82,7 +82,7 @@ class ThreeStateEKF:
     def __init__(self, dt, d, noise_density, x0, P0, m_sign=-1):
         from filterpy.kalman import KalmanFilter
 
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         Q, R, M = gfimu.three_state_noise(noise_density, dt, d, m_sign)
         self.kf = KalmanFilter(dim_x=3, dim_z=self._dim_z)
         self.kf.F = np.eye(3)                                    # (004 eq 3.20)
@@ -191,7 +191,7 @@ class HybridEKF(ThreeStateEKF):
     _dim_z = 9
 
     def __init__(self, dt, d, noise_density, arw, x0, P0, m_sign=-1):
-        self.Rg = validate.scalar(arw, "arw", nonnegative=True) ** 2 / validate.positive(dt, "dt")
+        self.Rg = validate.scalar(arw, "arw", nonnegative=True) ** 2 / validate.time_step(dt, "dt")
         super().__init__(dt, d, noise_density, x0, P0, m_sign)
 
     def _R(self, R):
@@ -372,7 +372,7 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     if acc.ndim != 3 or gyro.shape[:2] != acc.shape[:2]:
         raise ValueError(f"acc (R, N, 12) and gyro (R, N, 3) must share runs and samples; got {acc.shape}, "
                          f"{gyro.shape}")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
     u, y = _inputs(acc, dt, d)
     Rg = dt ** 2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
@@ -587,7 +587,7 @@ class ConstrainedEKF:
     """
 
     def __init__(self, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0):
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         self.N = validate.scalar(noise_density, "noise_density", nonnegative=True)
         self.F, self.Q = _wiener6(self.dt, validate.scalar(q_dw, "q_dw", nonnegative=True))
         self.R = _constrained_noise(self.N, self.dt, self.d)
@@ -703,7 +703,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     acc = validate.array(acc, "acc", shape=(None, 12))
     if acc.ndim != 3:
         raise ValueError(f"acc must have shape (R, N, 12), runs first; got {acc.shape}")
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     runs, n = acc.shape[:2]
     N = _per_run(noise_density, "noise_density", runs)
     t_on = np.asarray(np.inf if t_on is None else t_on, dtype=float)

@@ -81,7 +81,7 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
 
 
@@ -111,7 +111,7 @@ def ins_transition(x, acc, A_tilde, dt):
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _ins_F(x, acc, A_tilde, dt)
 
 
@@ -157,7 +157,7 @@ def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_wal
         ``Q``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     vals = dict(gyro_noise=gyro_noise, acc_noise=acc_noise, gyro_bias_walk=gyro_bias_walk,
                 acc_bias_walk=acc_bias_walk, pos_noise=pos_noise)
     for k, v in vals.items():
@@ -285,7 +285,7 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     acc = validate.samples(acc, "acc")
     n = validate.same_length(gyr=gyr, acc=acc)
     fix = _gps_rows(gps, n)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     x = validate.array(x0, "x0", shape=(21,)).reshape(21).copy()
     P = validate.array(P0, "P0")
     P = np.diag(P) if P.shape == (21,) else P.copy()
@@ -483,7 +483,7 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
     acc = validate.samples(acc, "acc")
     n = validate.same_length(gyr=gyr, acc=acc)
     fix = _gps_rows(gps, n)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     x0 = validate.array(x0, "x0", shape=(15,)).reshape(15)
     P0 = validate.array(P0, "P0")
     P0 = np.diag(P0) if P0.shape == (15,) else P0

@@ -290,7 +290,7 @@ def integrate_rate(rate, dt, angle0=0.0):
     w = validate.array(rate, "rate")
     if w.ndim == 0 or len(w) == 0:
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     a0 = validate.array(angle0, "angle0")
     validate.broadcast(rate=w[0], angle0=a0)                  # one start angle per axis of a sample
     steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
@@ -335,6 +335,6 @@ def integration_drift(t, bias, noise_std, dt):
     t = validate.nonnegative(t, "t")
     b = validate.array(bias, "bias")
     sd = validate.nonnegative(noise_std, "noise_std")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     validate.broadcast(t=t, bias=b, noise_std=sd)
     return b * t, sd * np.sqrt(dt * t)

@@ -556,7 +556,7 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
         m/s², ``heading`` rad.
     """
     heading = float(validate.angles_rad(heading, "heading"))
-    duration, fs, rpm = validate.positive(duration, "duration"), validate.positive(fs, "fs"), validate.positive(
+    duration, fs, rpm = validate.positive(duration, "duration"), validate.sample_rate(fs, "fs"), validate.positive(
         rpm, "rpm")
     scale, bias, g = _scalar(scale, "scale"), _scalar(bias, "bias"), _scalar(g, "g")
     if scale == 0:
@@ -613,7 +613,7 @@ def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
     order = int(order)
     if order < 2 or order % 2:
         raise ValueError(f"order must be an even integer >= 2 (odd tap count, integer group delay); got {order}")
-    fs, f_r = validate.positive(fs, "fs"), validate.positive(f_r, "f_r")
+    fs, f_r = validate.sample_rate(fs, "fs"), validate.positive(f_r, "f_r")
     p, s = validate.positive(pass_half_width, "pass_half_width"), validate.positive(stop_half_width,
                                                                                       "stop_half_width")
     if not (p < s < f_r and f_r + s < fs / 2):

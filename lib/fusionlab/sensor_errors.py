@@ -453,7 +453,7 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     (array([0., 1., 2., 3.]), array([0., 0., 1., 3.]))
     """
     a = validate.samples(acc_nav, "acc_nav")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     v0 = np.zeros(3) if v0 is None else validate.array(v0, "v0", shape=(3,))
     p0 = np.zeros(3) if p0 is None else validate.array(p0, "p0", shape=(3,))
     if len(a) == 0:                                  # no sample, no state: not the initial one alone

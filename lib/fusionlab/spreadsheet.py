@@ -272,7 +272,7 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
     from openpyxl import Workbook
 
     c = validate.samples(counts, "counts", 5).astype(np.int64)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     wb = Workbook()
