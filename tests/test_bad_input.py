@@ -1,6 +1,6 @@
 """Nothing silently wrong: every public function of rotations, conventions, the sensor modules (sensors, accel_tilt,
-inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics and ``estimators.run`` (every
-registered filter), fed one bad argument at a time.
+inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, correlation (Lab 03), ecompass (Lab 04)
+and ``estimators.run`` (every registered filter), fed one bad argument at a time.
 
 Each case starts from a valid call and mutates ONE argument: NaN, inf, the wrong shape, transposed, empty, a zero
 vector, a length that no longer matches its partner, degrees where radians are documented, g where m/s² is, a

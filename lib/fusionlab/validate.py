@@ -6,12 +6,16 @@ gets a ``ValueError`` that names the argument, what was expected and what came, 
 three calls deeper.
 
 Beyond shapes and finiteness: :func:`broadcast` names the arguments whose batch sizes do not fit, :func:`options`
-refuses an unknown keyword, :func:`covariance` and :func:`rotation` check what a matrix must be, and the unit doors
-:func:`angles_rad`, :func:`euler_rad`, :func:`gyro_rad`, :func:`accel_ms2` and :func:`sample_rate` refuse values
-that fit degrees, °/s, g or a sample interval far better than the documented unit. ``tests/test_bad_input.py``
-checks every public function of rotations, conventions, the sensor modules (sensors, accel_tilt, inertial,
-sensor_errors, signals), kalman, falling_body, calibration, metrics and ``estimators.run`` against them, one bad
-argument at a time.
+refuses an unknown keyword, :func:`covariance`, :func:`covariances` and :func:`rotation` check what a matrix must
+be, and the unit doors -- one per kind of quantity -- refuse values that fit another unit far better than the
+documented one: :func:`angles_rad`, :func:`euler_rad` and :func:`rotation_vectors` (degrees), :func:`gyro_rad`
+(°/s, also against the accelerometer: :func:`gyro_tilt_ratio`), :func:`accel_ms2` (g, milli-g), :func:`accel_g`
+(m/s², milli-g where g is documented), :func:`field_uT` (gauss, milligauss, nT), :func:`sample_rate` and
+:func:`time_step` (a sample interval for a rate and the reverse), :func:`turn_per_step` (a turn no sampled record
+resolves). ``tests/test_bad_input.py`` checks every public function of rotations, conventions, the sensor modules
+(sensors, accel_tilt, inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, correlation,
+ecompass and ``estimators.run`` against them, one bad argument at a time; ``tests/test_unit_slips.py`` makes the
+same slips on real BROAD recordings.
 """
 from __future__ import annotations
 
