@@ -30,8 +30,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fusionlab import (accel_tilt, calibration, correlation, ecompass, estimators, falling_body, inertial, kalman,
-                       metrics, rotations)
+from fusionlab import (accel_tilt, calibration, correlation, ecompass, estimators, falling_body, freescale,
+                       freescale_fast, inertial, kalman, metrics, rotations)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -564,6 +564,57 @@ ECO = [
 ]
 
 
+X10 = np.array([0.01, -0.02, 0.005, 0.3, -0.2, 0.1, 1.0, -0.01, 0.02, 0.01])     # a 9DOF error state
+C10 = freescale.measurement_matrix(0.04)
+QW10 = freescale.process_noise(X10, 0.04)
+QV7 = freescale.measurement_noise(0.01, 10.0, 0.04)
+Y_DPS, G_G = np.degrees(GYR), -ACC / G                                          # the note's units and signs (NED)
+FRE = [
+    Case("qrot", freescale.qrot, dict(u=vec(V5, nonzero=True), v=vec(W5, nonzero=True))),
+    Case("gravity_tilt_error", freescale.gravity_tilt_error, dict(R6=mat(C5, rotation=True),
+                                                                  R_prior=mat(C5[::-1].copy(), rotation=True))),
+    Case("geomag_tilt_error", freescale.geomag_tilt_error, dict(R6=mat(C5, rotation=True),
+                                                                R_prior=mat(C5[::-1].copy(), rotation=True),
+                                                                delta=S(DELTA, unit="rad"),
+                                                                frame=choice("Android"))),
+    Case("delta_quat", freescale.delta_quat, dict(omega_dps=vec(np.degrees(W5)), dt=S(0.04, positive=True))),
+    Case("alpha", freescale.alpha, dict(dt=S(0.04, positive=True))),
+    Case("measurement_matrix", freescale.measurement_matrix, dict(dt=S(0.04, positive=True), dof=choice(6))),
+    Case("process_noise", freescale.process_noise, dict(x_prev=vec(X10), dt=S(0.04, positive=True),
+                                                        tuning=A(freescale.V500, opaque=True), dof=choice(9))),
+    Case("measurement_noise", freescale.measurement_noise, dict(qvgqa=S(0.01, nonneg=True),
+                                                                qvbqd=S(10.0, nonneg=True),
+                                                                dt=S(0.04, positive=True),
+                                                                tuning=A(freescale.V500, opaque=True),
+                                                                dof=choice(9), B=S(48.0, positive=True))),
+    Case("kalman_gain", freescale.kalman_gain, dict(Q_w=cov(QW10), C=mat(C10), Q_v=cov(QV7))),
+    Case("nominal_gain", freescale.nominal_gain, dict(dof=choice(9), tuning=A(freescale.V500, opaque=True),
+                                                      qvgqa=S(0.01, nonneg=True), qvbqd=S(10.0, nonneg=True),
+                                                      B=S(48.0, positive=True))),
+    Case("Kalman9", freescale.Kalman9, dict(frame=choice("Android"), tuning=A(freescale.V500, opaque=True),
+                                            B=S(48.0, positive=True))),
+    Case("Kalman6", freescale.Kalman6, dict(frame=choice("Win8"), tuning=A(freescale.V500, opaque=True))),
+    Case("block_size", freescale.block_size, dict(fs=S(200.0, positive=True), kalman_hz=S(25.0, positive=True))),
+    # a zero recording is a valid recording here: the filters name free fall and a dead magnetometer
+    Case("check_recording", freescale.check_recording, dict(gyr=samples(Y_DPS), acc=samples(G_G), mag=samples(MAG),
+                                                            need_mag=True)),
+    Case("check_units", freescale.check_units, dict(acc_g=samples(G_G), mag_uT=samples(MAG))),
+    Case("run_fast9", freescale_fast.run_fast9, dict(gyr_dps=samples(Y_DPS), acc_g=samples(G_G, nonzero=True),
+                                                     mag_uT=samples(MAG, nonzero=True), fs=S(100.0, positive=True),
+                                                     frame=choice("NED"), tuning=A(freescale.V500, opaque=True),
+                                                     B=S(48.0, positive=True), per_sample=True,
+                                                     accel_hold=S(0.5, nonneg=True))),
+    Case("run_fast6", freescale_fast.run_fast6, dict(gyr_dps=samples(Y_DPS), acc_g=samples(G_G, nonzero=True),
+                                                     fs=S(100.0, positive=True), frame=choice("NED"),
+                                                     tuning=A(freescale.V500, opaque=True), per_sample=True,
+                                                     accel_hold=S(0.5, nonneg=True))),
+    Case("held_accel_noise", freescale_fast.held_accel_noise, dict(qvgqa=arr([0.01, 0.2, 0.0, 0.05, 0.01],
+                                                                             nonneg=True),
+                                                                   dt=S(0.04, positive=True),
+                                                                   hold=S(0.1, nonneg=True))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -577,7 +628,7 @@ RUN = [_run_case(name) for name in estimators.available()]
 SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
-           "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO,
+           "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -776,7 +827,8 @@ UNCHECKED = {kalman.update_step, kalman.predict_step}
 def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
-    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass):
+    for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
+                freescale_fast):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):

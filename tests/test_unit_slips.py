@@ -333,3 +333,18 @@ def test_a_wrong_sized_P_is_named_beside_H():
 def test_tuning_errors_name_the_option_as_the_caller_spelt_it(call, name):
     with pytest.raises(ValueError, match=rf"^{name} must be"):
         call()
+
+
+def test_freescale_doors_name_the_callers_arguments_and_units(trial27):
+    from fusionlab import freescale, freescale_fast
+    gyr, acc, mag, fs = trial27
+    Y, Gg = np.degrees(gyr[:2000]), -acc[:2000] / G                    # the note's units (NED, gravity-positive)
+    with pytest.raises(ValueError, match=r"^acc_g must be in g \(1 at rest\); .* looks like m/s²"):
+        freescale_fast.run_fast9(Y, -acc[:2000], mag[:2000], fs)
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* looks like gauss"):
+        freescale_fast.run_fast9(Y, Gg, mag[:2000] / 100, fs)
+    with pytest.raises(ValueError, match=r"^gyr_dps, acc_g must have the same number of samples"):
+        freescale_fast.run_fast6(Y[:-1], Gg, fs)
+    with pytest.raises(ValueError, match=r"^acc_g must have shape \(\.\.\., N, 3\); got \(2000, 2\)"):
+        freescale.Kalman6().run(Y, Gg[:, :2])
+    assert freescale_fast.run_fast9(Y, Gg, mag[:2000], fs)["q"].shape[1] == 4

@@ -164,7 +164,8 @@ def held_accel_noise(qvgqa, dt, hold):
     if qa.ndim != 1 or np.any(qa < 0):
         raise ValueError(f"qvgqa must be a (M,) array of values >= 0; got shape {qa.shape}")
     dt = validate.time_step(dt, "dt")
-    if not np.isfinite(hold) or hold < 0:
+    hold = validate.scalar(hold, "hold")
+    if hold < 0:
         raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
     return signals.trailing_max(qa, int(round(hold / dt)) + 1)
 
@@ -215,7 +216,9 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``delta_deg`` (M,), ``t`` (M,) s.
     """
-    gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True)
+    gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True,
+                                              names=("gyr_dps", "acc_g", "mag_uT"))
+    freescale.check_units(acc, mag)
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     enu = ecompass.ENU[frame]
@@ -242,7 +245,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
     Gm = np.where(free[:, None], [0.0, 0.0, 1.0], Gm)                  # placeholder, never used for an update
     sg_all = ecompass.measured_gravity(Gm, frame)
-    sm_all = Bm / ecompass.nonzero_norm(Bm, "mag")[:, None]
+    sm_all = Bm / ecompass.nonzero_norm(Bm, "mag_uT")[:, None]
     d6_all = np.degrees(ecompass.inclination(Gm, Bm, frame))
     # κ is linear in (cos δ, sin δ): α_g K_g + α_m (cos δ K_m(δ=0) + sin δ K_m(δ=90°)); build the parts for all
     # steps at once, combine them with the running inclination inside the loop.
@@ -350,7 +353,9 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``t`` (M,) s.
     """
-    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False)
+    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False,
+                                            names=("gyr_dps", "acc_g", "mag_uT"))
+    freescale.check_units(acc, None)
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     N = len(gyr)
