@@ -30,8 +30,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fusionlab import (accel_tilt, calibration, correlation, ecompass, estimators, falling_body, freescale,
-                       freescale_fast, inertial, kalman, metrics, rotations)
+from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
+                       freescale, freescale_fast, inertial, kalman, metrics, rotations)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -68,6 +68,7 @@ class A:
     nan_ok: bool | str = False    # True: NaN in, NaN out (documented); 'ignored': NaN samples are left out
     opaque: bool = False          # an object (a fit result, a generator): not mutated
     broadcasts: bool = False      # a scalar that may also be an array (the function broadcasts it)
+    none_ok: bool = False         # None is a documented choice (dcm_filter.run_ahrs: no magnetometer)
 
 
 def S(v, **kw):
@@ -615,6 +616,54 @@ FRE = [
 ]
 
 
+C1_, C3_ = C5[0][0], C5[0][2]                                                    # two rows of a DCM (seed 004)
+A3 = dcm.A_matrix([0.01, -0.02, 0.005])
+ACC_B = dcm.accel_to_seed004(ACC)                                               # "measured gravity", +g c3
+MAG_B = MAG / 48.4                                                              # the field, |h| near 1
+DCMS = [
+    # a rotation over one step, small: degrees cannot be told here (rotations.rodrigues_dcm refuses over a turn)
+    Case("A_matrix", dcm.A_matrix, dict(sigma=vec(0.01 * V5), order=choice("second"))),
+    Case("A_with_gyro_error", dcm.A_with_gyro_error, dict(A=mat(A3), bias=vec([0.01, -0.02, 0.0]),
+                                                          dt=S(0.01, positive=True), noise=vec([0.001, 0.0, -0.002]))),
+    Case("row_propagate", dcm.row_propagate, dict(c=vec(C5[:, 2]), A_tilde=mat(A3), bias=vec([0.01, -0.02, 0.0]),
+                                                  dt=S(0.01, positive=True))),
+    Case("ahrs_transition", dcm.ahrs_transition, dict(c1=vec(C1_), c3=vec(C3_), A_tilde=mat(A3),
+                                                      dt=S(0.01, positive=True))),
+    Case("ahrs_process_noise", dcm.ahrs_process_noise, dict(c1=vec(C1_), c3=vec(C3_), dt=S(0.01, positive=True),
+                                                            gyro_noise=S(0.002, nonneg=True),
+                                                            bias_walk=S(0.0002, nonneg=True))),
+    Case("accel_to_seed004", dcm.accel_to_seed004, dict(acc=vec(ACC))),           # a sign flip in any unit
+    Case("accel_measurement_matrix", dcm.accel_measurement_matrix, dict(g=S(G, positive=True))),
+    Case("mag_reference", dcm.mag_reference, dict(inclination=S(1.1, unit="rad", broadcasts=True))),
+    Case("mag_measurement_matrix", dcm.mag_measurement_matrix, dict(inclination=S(1.1, unit="rad"))),
+    Case("orthogonality_pseudo_measurement", dcm.orthogonality_pseudo_measurement, dict(c1=vec(C1_), c3=vec(C3_))),
+    Case("orthogonality_covariance", dcm.orthogonality_covariance, dict(k=S(3, integer=True, nonneg=True,
+                                                                              broadcasts=True),
+                                                                        R_i=S(1.0, nonneg=True),
+                                                                        R_ss=S(1e-4, nonneg=True),
+                                                                        rho=S(0.92, positive=True))),
+    Case("rows_to_dcm", dcm.rows_to_dcm, dict(c1=vec(C5[:, 0], nonzero=True), c3=vec(C5[:, 2], nonzero=True))),
+    Case("orthonormalize", dcm.orthonormalize, dict(C=mat(C5 + 0.01, nonzero=True))),
+    Case("level_and_compass", dcm.level_and_compass, dict(acc_b=vec(ACC_B, nonzero=True),
+                                                          mag_b=vec(MAG_B, nonzero=True))),
+    Case("inclination_from", dcm.inclination_from, dict(acc_b=vec(ACC_B, nonzero=True),
+                                                        mag_b=vec(MAG_B, nonzero=True))),
+    Case("trusted_mask", dcm.trusted_mask, dict(deviation=arr([0.1, -0.5, 0.05, 0.02, 0.3]),   # |d| counts
+                                                tol=S(0.2, positive=True), hold=S(2, integer=True, positive=True))),
+    Case("DcmAhrs", dcm_filter.DcmAhrs, dict(C0=mat(C5[0], rotation=True), inclination=S(1.1, unit="rad"),
+                                             dt=S(0.01, positive=True), bias0=vec([0.01, 0.0, -0.01]),
+                                             tuning=A(dcm_filter.HANDHELD, opaque=True), g=S(G, positive=True))),
+    Case("run_ahrs", dcm_filter.run_ahrs, dict(gyr=samples(GYR, unit="rad"), acc_b=samples(ACC_B, nonzero=True),
+                                               mag_b=samples(MAG_B, nonzero=True, none_ok=True),
+                                               fs=S(100.0, positive=True),
+                                               inclination=S(1.1, unit="rad"), C0=mat(C5[0], rotation=True),
+                                               bias0=vec([0.01, 0.0, -0.01]),
+                                               tuning=A(dcm_filter.HANDHELD, opaque=True),
+                                               update_every=S(2, integer=True, positive=True),
+                                               init_seconds=S(0.5, nonneg=True), g=S(G, positive=True))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -629,6 +678,7 @@ SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
+           "dcm": DCMS,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -695,7 +745,7 @@ def mutations(case):
         out.append((name, "list", v.tolist(), "same"))
         out.append((name, "string", "abc", "error"))
         if default is not None:
-            out.append((name, "None", None, "error"))
+            out.append((name, "None", None, "any" if a.none_ok else "error"))
         if a.core >= 1:
             out.append((name, "wrong item length", np.concatenate([v, v[..., :1]], -1), "error"))
         if a.core == 1 and v.ndim == 2 and v.shape[0] != v.shape[1]:
@@ -828,7 +878,7 @@ def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast):
+                freescale_fast, dcm, dcm_filter):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):
