@@ -31,7 +31,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
-                       freescale, freescale_fast, inertial, kalman, metrics, rotations)
+                       freescale, freescale_fast, gpsins, inertial, kalman, metrics, rotations, simulate)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -664,6 +664,45 @@ DCMS = [
 ]
 
 
+FLIGHT = simulate.air_vehicle_record(duration=3.0)
+N_FL = len(FLIGHT["gyr"])
+X21 = np.concatenate([np.ravel(FLIGHT["C0"]), FLIGHT["b_g"], FLIGHT["r0"], FLIGHT["v0"], FLIGHT["b_a"]])
+P21 = np.r_[[1e-6] * 9, [np.radians(100 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(0.2e-3 * 9.8) ** 2] * 3]
+X15 = np.concatenate([FLIGHT["r0"], FLIGHT["v0"], FLIGHT["euler"][0], FLIGHT["b_a"], FLIGHT["b_g"]])
+P15 = np.r_[[9.0] * 3, [0.25] * 3, [1e-4] * 3, [(0.2e-3 * 9.8) ** 2] * 3, [np.radians(100 / 3600) ** 2] * 3]
+A_FL = dcm.A_matrix(FLIGHT["gyr"][0] / FLIGHT["fs"])
+GPSINS = [
+    # one sample of acc: g cannot be told from a low-g manoeuvre (run_gps_ins checks the record at its door)
+    Case("ins_transition", gpsins.ins_transition, dict(x=vec(X21), acc=vec(FLIGHT["acc"][0]),
+                                                      A_tilde=mat(A_FL), dt=S(0.02, positive=True))),
+    Case("ins_propagate", gpsins.ins_propagate, dict(x=vec(X21), acc=vec(FLIGHT["acc"][0]),
+                                                    A_tilde=mat(A_FL), dt=S(0.02, positive=True),
+                                                    g=S(G, positive=True))),
+    Case("ins_process_noise", gpsins.ins_process_noise, dict(x=vec(X21), dt=S(0.02, positive=True),
+                                                            gyro_noise=S(1e-3, nonneg=True),
+                                                            acc_noise=S(1e-3, nonneg=True),
+                                                            gyro_bias_walk=S(1e-6, nonneg=True),
+                                                            acc_bias_walk=S(1e-5, nonneg=True),
+                                                            pos_noise=S(0.05, nonneg=True))),
+    Case("gps_measurement_matrix", gpsins.gps_measurement_matrix, {}),
+    Case("run_gps_ins", gpsins.run_gps_ins, dict(gyr=samples(FLIGHT["gyr"], unit="rad"),
+                                                 acc=samples(FLIGHT["acc"], unit="ms2"),
+                                                 gps=samples(FLIGHT["gps"], nan_ok="ignored"),
+                                                 fs=S(50.0, positive=True), x0=vec(X21), P0=vec(P21),
+                                                 tuning=A(gpsins.InsTuning(), opaque=True), g=S(G, positive=True),
+                                                 static=A(np.zeros(N_FL, bool), batch=True),
+                                                 acc_sigma=S(0.02, positive=True),
+                                                 still_speed=S(1.0, positive=True))),
+    Case("sigma_points_2n", gpsins.sigma_points_2n, dict(x=vec(X15[:4]), P=cov(np.diag(P15[:4])))),
+    Case("run_euler_ukf", gpsins.run_euler_ukf, dict(gyr=samples(FLIGHT["gyr"], unit="rad"),
+                                                     acc=samples(FLIGHT["acc"], unit="ms2"),
+                                                     gps=samples(FLIGHT["gps"], nan_ok="ignored"),
+                                                     fs=S(50.0, positive=True), x0=vec(X15), P0=vec(P15),
+                                                     tuning=A(gpsins.InsTuning(), opaque=True),
+                                                     g=S(G, positive=True), engine=choice("plain"))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -678,7 +717,7 @@ SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
-           "dcm": DCMS,
+           "dcm": DCMS, "gpsins": GPSINS,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -871,14 +910,15 @@ def test_every_bad_argument_is_named_or_harmless(module):
 # The inner steps of a filter's loop, public so that a filter built on kalman can run them: they check nothing by
 # design (the filter checked its matrices once, with kalman.check_model); their checked doors, kalman.update and
 # kalman.predict, are covered above, and tests/test_kalman.py asserts the two give the same numbers.
-UNCHECKED = {kalman.update_step, kalman.predict_step}
+UNCHECKED = {kalman.update_step, kalman.predict_step,
+             gpsins.euler_ins_fx}      # the UKF's fx, run 2n times a sample: run_euler_ukf checks at its door
 
 
 def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast, dcm, dcm_filter):
+                freescale_fast, dcm, dcm_filter, gpsins):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):

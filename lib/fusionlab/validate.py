@@ -869,7 +869,10 @@ def gyro_tilt_ratio(gyr, acc, fs):
     ``u`` of gravity in the body, whatever its unit and sign), and between two windows the gyro predicts the change
     ``u × ω Δt`` (a rotation about gravity changes nothing and is not counted). Over the windows where that
     prediction exceeds :data:`TILT_MIN` rad, the median of observed / predicted is near 1 for a gyro in rad/s
-    (above 1 while the body also accelerates) and near 1/57 for one in °/s.
+    (above 1 while the body also accelerates) and near 1/57 for one in °/s. It assumes the specific force mostly
+    follows gravity while the body tilts fast (a hand, a robot, a walker); an aircraft in a coordinated turn keeps
+    it along its own z, but turns far slower than the 0.5 rad/s across gravity a window needs to count (the
+    simulated flight of Lab 10: no window counts in rad/s, 620 in °/s).
 
     Parameters
     ----------
