@@ -31,7 +31,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
-                       freescale, freescale_fast, gpsins, inertial, kalman, metrics, rotations, simulate)
+                       freescale, freescale_fast, gpsins, inertial, kalman, metrics, northfinder, rotations,
+                       simulate)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -703,6 +704,73 @@ GPSINS = [
 ]
 
 
+T41 = northfinder.TABLE_4_1
+GEO = dict(rho=S(T41["rho"], positive=True), d=S(T41["d"], positive=True), l=S(T41["l"]),   # l: a signed offset
+           omega_r=S(T41["omega_r"], positive=True))
+GEO_SWEEP = {k: dataclasses.replace(a, broadcasts=True) for k, a in GEO.items()}    # the noise formulas broadcast
+T5 = np.linspace(0.0, 0.2, 5)
+NF_REC = northfinder.synthetic_record(0.5, duration=2.0, fs=256.0, harmonics={}, noise=0.0)
+NF_TAPS = northfinder.bandpass_firls(64, 256.0, NF_REC["f_r"])
+NF_FIXED = northfinder.fixed_triad_outputs(V5, W5, V5 / 3, T41["d"])
+NF_ROT = northfinder.rotating_outputs(V5, W5, V5 / 3, T5, T41["rho"], T41["l"], T41["omega_r"])
+NORTH = [
+    Case("point_specific_force", northfinder.point_specific_force,
+         dict(a_o=vec(V5), omega=vec(W5), alpha=vec(V5 / 3), r=vec(V5 * 2), v_rel=vec(W5 * 3), a_rel=vec(V5 / 4))),
+    Case("rotating_kinematics", northfinder.rotating_kinematics, dict(t=arr(T5), rho=GEO["rho"],
+                                                                      l=GEO["l"], omega_r=GEO["omega_r"])),
+    Case("rotating_outputs", northfinder.rotating_outputs, dict(a_A=vec(V5), omega=vec(W5), alpha=vec(V5 / 3),
+                                                                t=arr(T5), rho=GEO["rho"], l=GEO["l"],
+                                                                omega_r=GEO["omega_r"])),
+    Case("fixed_triad_outputs", northfinder.fixed_triad_outputs, dict(a_A=vec(V5), omega=vec(W5), alpha=vec(V5 / 3),
+                                                                      d=GEO["d"])),
+    Case("rate_from_rotating", northfinder.rate_from_rotating, dict(a_rot=vec(NF_ROT), fixed=A(NF_FIXED, core=2,
+                                                                                            batch=True), **GEO)),
+    Case("rate_noise_coefficient", northfinder.rate_noise_coefficient, dict(**GEO_SWEEP)),
+    Case("rate_noise_coefficient_exact", northfinder.rate_noise_coefficient_exact, dict(**GEO_SWEEP)),
+    Case("rate_noise_density", northfinder.rate_noise_density, dict(w_acc=S(T41["w_acc"], positive=True),
+                                                                    exact=choice(True), **GEO_SWEEP)),
+    Case("rate_noise_monte_carlo", northfinder.rate_noise_monte_carlo, dict(n=S(200, integer=True, positive=True),
+                                                                            seed=S(3, integer=True, nonneg=True),
+                                                                            **GEO)),
+    Case("coriolis_amplitude", northfinder.coriolis_amplitude, dict(rho=GEO["rho"], omega_r=GEO["omega_r"],
+                                                                    lat=S(0.9, unit="rad", broadcasts=True))),
+    Case("leveled_body_rate", northfinder.leveled_body_rate, dict(heading=arr(ANG5, unit="rad"),
+                                                                  lat=S(0.9, unit="rad"))),
+    # a small tilt in degrees (3°) is a plausible tilt in radians: no degrees test on roll and pitch
+    Case("tilted_heading", northfinder.tilted_heading, dict(zeta=S(0.4, unit="rad"), roll=S(0.05),
+                                                            pitch=S(-0.03), lat=S(0.9, unit="rad"))),
+    Case("synthetic_record", northfinder.synthetic_record,
+         dict(heading=S(0.5, unit="rad"), duration=S(2.0, positive=True), fs=S(256.0, positive=True),
+              rpm=S(200.0, positive=True), rho=S(0.14, positive=True), lat=S(0.9, unit="rad"),
+              g=S(9.81, nonneg=True), scale=S(1.0), bias=S(0.01),                 # g = 0: no leakage noise=S(1e-6, nonneg=True),
+              harmonics=A({2: (1.5, 0.4)}, opaque=True), theta0=S(0.3),           # any start angle of the rotor
+              seed=S(2, integer=True, nonneg=True))),
+    Case("bandpass_firls", northfinder.bandpass_firls, dict(order=S(64, integer=True, positive=True),
+                                                            fs=S(256.0, positive=True), f_r=S(NF_REC["f_r"],
+                                                                                              positive=True),
+                                                            pass_half_width=S(0.2, positive=True),
+                                                            stop_half_width=S(1.5, positive=True))),
+    Case("bandpass", northfinder.bandpass, dict(x=arr(NF_REC["acc"]), theta=arr(NF_REC["theta"]),
+                                                taps=arr(NF_TAPS, group="taps"), remove_mean=choice(False))),
+    Case("whole_turns", northfinder.whole_turns, dict(theta=arr(NF_REC["theta"]))),
+    Case("demodulate", northfinder.demodulate, dict(x=arr(NF_REC["acc"]), theta=arr(NF_REC["theta"]),
+                                                    reference=choice("exact"))),
+    Case("synchronous_sampling", northfinder.synchronous_sampling, dict(x=arr(NF_REC["acc"]),
+                                                                        theta=arr(NF_REC["theta"]))),
+    Case("period_average", northfinder.period_average, dict(x=arr(NF_REC["acc"]), theta=arr(NF_REC["theta"]),
+                                                            bins=S(32, integer=True, positive=True),
+                                                            turns=S(4, integer=True, positive=True))),
+    Case("north_finder", northfinder.north_finder, dict(record=A(NF_REC, opaque=True),
+                                                        order=S(64, integer=True, positive=True),
+                                                        method=choice("sampling"), reference=choice("exact"))),
+    Case("steps_experiment", northfinder.steps_experiment, dict(headings=arr([0.0, 0.2], unit="rad", group="S"),
+                                                                orders=A((64,), opaque=True),
+                                                                seed=S(1, integer=True, nonneg=True),
+                                                                duration=S(2.0, positive=True),
+                                                                fs=S(256.0, positive=True))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -717,7 +785,7 @@ SEN_MODULES = (sensors, accel_tilt, inertial, sensor_errors, signals)
 MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
-           "dcm": DCMS, "gpsins": GPSINS,
+           "dcm": DCMS, "gpsins": GPSINS, "northfinder": NORTH,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -918,7 +986,7 @@ def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast, dcm, dcm_filter, gpsins):
+                freescale_fast, dcm, dcm_filter, gpsins, northfinder):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):
