@@ -31,8 +31,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
-                       freescale, freescale_fast, gpsins, inertial, kalman, metrics, northfinder, rotations,
-                       simulate)
+                       freescale, freescale_fast, gfimu, gpsins, inertial, kalman, metrics, northfinder,
+                       rotations, simulate)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
 
@@ -771,6 +771,49 @@ NORTH = [
 ]
 
 
+_t_gf, OM_GF, AL_GF = gfimu.trajectory_ch3(T=0.5)
+ACC12 = gfimu.specific_forces(OM_GF, AL_GF, 0.1).reshape(len(OM_GF), 12)
+SIX_G = calibration.six_positions() * G
+SIX12 = np.tile(SIX_G, 4) * 1.01 + 0.02                                      # four triads, scale and offset
+GF_FITS = gfimu.calibrate_triads(SIX_G, SIX12)
+GFI = [
+    Case("triad_positions", gfimu.triad_positions, dict(d=S(0.1, positive=True))),
+    Case("lever_arm", gfimu.lever_arm, dict(a_o=vec(V5), omega=vec(W5), alpha=vec(V5 / 3), p=vec(V5 * 2))),
+    Case("specific_forces", gfimu.specific_forces, dict(omega=vec(W5), alpha=vec(V5 / 3), d=S(0.1, positive=True),
+                                                        a_o=vec(V5))),
+    Case("aiv_map", gfimu.aiv_map, {}),
+    Case("aiv", gfimu.aiv, dict(acc=A(ACC12, core=1, batch=True), d=S(0.1, positive=True))),
+    Case("aiv_true", gfimu.aiv_true, dict(omega=vec(W5), alpha=vec(V5 / 3))),
+    Case("aiv_covariance", gfimu.aiv_covariance, {}),
+    Case("three_state_noise", gfimu.three_state_noise, dict(noise_density=S(1e-4, nonneg=True),
+                                                            dt=S(0.01, positive=True), d=S(0.1, positive=True),
+                                                            m_sign=choice(1, 0))),
+    Case("quadratic_terms", gfimu.quadratic_terms, dict(x=vec(W5))),
+    Case("quadratic_jacobian", gfimu.quadratic_jacobian, dict(x=vec(W5))),
+    Case("simulate_gfimu", gfimu.simulate_gfimu,
+         dict(omega=samples(OM_GF), alpha=samples(AL_GF), dt=S(0.01, positive=True), d=S(0.1, positive=True),
+              noise_density=S(1e-4, nonneg=True), bias_std=S(1e-3, nonneg=True),
+              bias_model=choice("random_walk"), bias_walk=S(1e-5, nonneg=True),
+              M=A(np.tile(np.eye(3), (4, 1, 1)), core=2), a_o=samples(0.1 * OM_GF),
+              runs=S(2, integer=True, positive=True), seed=S(4, integer=True, nonneg=True))),
+    Case("calibrate_triads", gfimu.calibrate_triads, dict(reference=A(SIX_G, core=1, batch=True, group="P"),
+                                                          readings=A(SIX12, core=1, batch=True, group="P"))),
+    Case("apply_calibration", gfimu.apply_calibration, dict(fits=A(GF_FITS, opaque=True),
+                                                            acc=A(ACC12, core=1, batch=True))),
+    Case("trajectory_ch3", gfimu.trajectory_ch3, dict(T=S(0.5, positive=True), dt=S(0.01, positive=True),
+                                                      omega_x=S(3.29), omega_z=S(0.658), f=S(0.1, nonneg=True),
+                                                      integrate=choice("exact"))),
+    Case("trajectory_ch5", gfimu.trajectory_ch5, dict(T=S(0.5, positive=True), dt=S(0.01, positive=True),
+                                                      omega_m=S(0.4112), f=S(0.5, nonneg=True),
+                                                      integrate=choice("exact"))),
+    Case("trajectory_constant", gfimu.trajectory_constant, dict(T=S(0.5, positive=True), dt=S(0.01, positive=True),
+                                                                omega=vec([3.29, 3.29, 3.29]))),
+    Case("trajectory_tumbling", gfimu.trajectory_tumbling, dict(T=S(0.5, positive=True), dt=S(0.01, positive=True),
+                                                                omega_xy=S(3.29), alpha_z=S(0.5), omega_z0=S(-5.0),
+                                                                integrate=choice("exact"))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -786,6 +829,7 @@ MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
            "dcm": DCMS, "gpsins": GPSINS, "northfinder": NORTH,
+           "gfimu": GFI,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -986,7 +1030,7 @@ def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast, dcm, dcm_filter, gpsins, northfinder):
+                freescale_fast, dcm, dcm_filter, gpsins, northfinder, gfimu):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):
