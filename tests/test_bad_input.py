@@ -31,7 +31,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
-                       freescale, freescale_fast, gfimu, gpsins, inertial, kalman, metrics, northfinder,
+                       freescale, freescale_fast, gfimu, gfimu_dynamics, gpsins, inertial, kalman, metrics, northfinder,
                        rotations, simulate)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
@@ -814,6 +814,27 @@ GFI = [
 ]
 
 
+X6 = np.array([0.1, -0.2, 0.3, 0.5, 0.4, -0.6])                                 # [alpha, omega] (seed 004 ch. 5)
+GFD = [
+    Case("caa_model", gfimu_dynamics.caa_model, dict(dt=S(0.01, positive=True), q_alpha=S(0.05, nonneg=True),
+                                                     n_bias=choice(0), q_bias=S(1e-6, nonneg=True))),
+    Case("singer_model", gfimu_dynamics.singer_model, dict(dt=S(0.01, positive=True), beta=S(0.5, nonneg=True),
+                                                           sigma=S(0.2, nonneg=True), n_bias=choice(0),
+                                                           q_bias=S(1e-6, nonneg=True), first_order=choice(True))),
+    Case("aiv_measurement_jacobian", gfimu_dynamics.aiv_measurement_jacobian, dict(x=A(X6, core=1))),
+    Case("DynamicEKF", gfimu_dynamics.DynamicEKF, dict(dt=S(0.01, positive=True), d=S(0.1, positive=True),
+                                                       noise_density=S(1e-4, nonneg=True),
+                                                       q_alpha=S(0.05, nonneg=True), x0=A(X6, core=1),
+                                                       P0=cov(np.diag([0.05 ** 2] * 3 + [0.1 ** 2] * 3)),
+                                                       q_bias=S(1e-6, nonneg=True), process=A(None, opaque=True))),
+    Case("observability_matrix", gfimu_dynamics.observability_matrix, dict(augmented=choice(False),
+                                                                           order=S(2, integer=True, nonneg=True))),
+    Case("observability_rank", gfimu_dynamics.observability_rank, dict(omega=vec([0.3, -0.2, 0.5]),
+                                                                       alpha=vec([0.1, 0.0, -0.1]),
+                                                                       augmented=choice(False), exact=choice(False))),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -829,7 +850,7 @@ MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
            "dcm": DCMS, "gpsins": GPSINS, "northfinder": NORTH,
-           "gfimu": GFI,
+           "gfimu": GFI, "gfimu_dynamics": GFD,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -1030,7 +1051,7 @@ def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast, dcm, dcm_filter, gpsins, northfinder, gfimu):
+                freescale_fast, dcm, dcm_filter, gpsins, northfinder, gfimu, gfimu_dynamics):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):

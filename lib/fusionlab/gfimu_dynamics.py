@@ -208,7 +208,8 @@ class DynamicEKF:
             self.ekf.F, self.ekf.Q = (validate.matrices(m, name, n).copy() for m, name in zip(process, ("F", "Q")))
         self.ekf.R = sa2 / self.d ** 2 * gfimu.aiv_covariance()       # (004 eq 5.20) [R]
         self.ekf.x = x0.copy()
-        self.ekf.P = np.eye(n) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0", n).copy()
+        self.ekf.P = (np.eye(n) * validate.positive(P0, "P0") if np.ndim(P0) == 0 and not isinstance(P0, str)
+                      else validate.covariance(P0, "P0", n).copy())
 
     def step(self, acc):
         """One sample of the twelve accelerometers.
@@ -277,6 +278,8 @@ def observability_matrix(augmented=True, order=None):
     """
     import sympy as sp
 
+    if augmented not in (True, False):
+        raise ValueError(f"augmented must be True or False; got {augmented!r}")
     n = 15 if augmented else 6
     order = n if order is None else validate.count(order, "order", minimum=1)
     w = sp.symbols("omega_x omega_y omega_z", real=True)
@@ -316,6 +319,8 @@ def observability_rank(omega, alpha, augmented=True, exact=True):
     import sympy as sp
 
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
+    if augmented not in (True, False):
+        raise ValueError(f"augmented must be True or False; got {augmented!r}")
     O, x, _ = _observability_cached(bool(augmented))
     vals = [*omega, *alpha]
     if exact:
