@@ -31,7 +31,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fusionlab import (accel_tilt, calibration, correlation, dcm, dcm_filter, ecompass, estimators, falling_body,
-                       freescale, freescale_fast, gfimu, gfimu_dynamics, gpsins, inertial, kalman, metrics, northfinder,
+                       freescale, freescale_fast, gfimu, gfimu_dynamics, gfimu_ekf, gpsins, inertial, kalman, metrics, northfinder,
                        rotations, simulate)
 from fusionlab import conventions, rotations as ro
 from fusionlab import sensor_errors, sensors, signals
@@ -70,6 +70,7 @@ class A:
     opaque: bool = False          # an object (a fit result, a generator): not mutated
     broadcasts: bool = False      # a scalar that may also be an array (the function broadcasts it)
     none_ok: bool = False         # None is a documented choice (dcm_filter.run_ahrs: no magnetometer)
+    inf_ok: bool = False          # inf is a documented choice (gfimu_ekf.constrained_batch: t_on = never)
 
 
 def S(v, **kw):
@@ -835,6 +836,54 @@ GFD = [
 ]
 
 
+_t_c, _om_c, _al_c = gfimu.trajectory_constant(T=0.3)
+GF_REC = gfimu.simulate_gfimu(_om_c, _al_c, 0.01, 1.0, 500 * 9.80665e-6, runs=2, seed=23)
+DTH3 = GF_REC.dtheta[0]                                                          # the AIV state at the start
+P3 = np.diag([1e-8] * 3)
+X6C = np.concatenate([DTH3, np.zeros(3)])
+P6C = np.diag([1e-8] * 3 + [1e-6] * 3)
+GYRO_REC = np.tile(_om_c, (2, 1, 1))
+GFE = [
+    Case("ThreeStateEKF", gfimu_ekf.ThreeStateEKF, dict(dt=S(0.01, positive=True), d=S(1.0, positive=True),
+                                                        noise_density=S(5e-3, positive=True), x0=vec(DTH3),
+                                                        P0=cov(P3), m_sign=choice(1, 0))),
+    Case("HybridEKF", gfimu_ekf.HybridEKF, dict(dt=S(0.01, positive=True), d=S(1.0, positive=True),
+                                                noise_density=S(5e-3, positive=True), arw=S(1e-3, nonneg=True),
+                                                x0=vec(DTH3), P0=cov(P3), m_sign=choice(1))),
+    Case("three_state_batch", gfimu_ekf.three_state_batch, dict(acc=A(GF_REC.acc, core=1), dt=S(0.01, positive=True),
+                                                                d=S(1.0, positive=True),
+                                                                noise_density=S(5e-3, positive=True),
+                                                                x0=vec(DTH3), P0=cov(P3), m_sign=choice(1))),
+    Case("hybrid_batch", gfimu_ekf.hybrid_batch, dict(acc=A(GF_REC.acc, core=1), gyro=A(GYRO_REC, core=1),
+                                                      dt=S(0.01, positive=True), d=S(1.0, positive=True),
+                                                      noise_density=S(5e-3, positive=True),
+                                                      arw=S(1e-3, nonneg=True), x0=vec(DTH3), P0=cov(P3),
+                                                      m_sign=choice(1))),
+    Case("nees", gfimu_ekf.nees, dict(err=vec([[1e-4, -2e-4, 5e-5]]), P=cov(P3))),
+    Case("constraints", gfimu_ekf.constraints, dict(x=A(np.stack([X6C, X6C + 0.01]), core=1, batch=True))),
+    Case("constraint_jacobian", gfimu_ekf.constraint_jacobian, dict(x=A(X6C, core=1))),
+    Case("sckf_project", gfimu_ekf.sckf_project, dict(x=A(X6C + 1e-3, core=1), P=cov(P6C),
+                                                      alpha_f=S(0.1, positive=True), s_th=S(100.0, positive=True),
+                                                      max_iter=S(30, integer=True, positive=True))),
+    Case("ConstrainedEKF", gfimu_ekf.ConstrainedEKF, dict(dt=S(0.01, positive=True), d=S(1.0, positive=True),
+                                                          noise_density=S(5e-3, positive=True),
+                                                          q_dw=S(1e-5, nonneg=True), x0=A(X6C, core=1), P0=cov(P6C),
+                                                          alpha_f=S(0.1, positive=True), s_th=S(100.0, positive=True),
+                                                          max_iter=S(30, integer=True, positive=True),
+                                                          t_on=S(0.1, nonneg=True, none_ok=True))),
+    Case("constrained_batch", gfimu_ekf.constrained_batch, dict(acc=A(GF_REC.acc, core=1),
+                                                                dt=S(0.01, positive=True), d=S(1.0, positive=True),
+                                                                noise_density=S(5e-3, positive=True),
+                                                                q_dw=S(1e-5, nonneg=True), x0=A(X6C, core=1),
+                                                                P0=cov(P6C), alpha_f=S(0.1, positive=True),
+                                                                s_th=S(100.0, positive=True),
+                                                                max_iter=S(30, integer=True, positive=True),
+                                                                t_on=S(0.1, nonneg=True, none_ok=True, broadcasts=True,
+                                                                       inf_ok=True),
+                                                                progress=False)),
+]
+
+
 def _run_case(name):
     args = dict(name=choice(name), gyr=samples(GYR, unit="rad"), acc=samples(ACC, unit="ms2", nonzero=True),
                 fs=S(100.0, positive=True), frame=choice("NED"))
@@ -850,7 +899,7 @@ MODULES = {"rotations": ROT,
            **{m.__name__.split(".")[-1]: [c for c in SEN if c.fn.__module__ == m.__name__] for m in SEN_MODULES},
            "kalman": KAL, "calibration": CAL, "metrics": MET, "correlation": COR, "ecompass": ECO, "freescale": FRE,
            "dcm": DCMS, "gpsins": GPSINS, "northfinder": NORTH,
-           "gfimu": GFI, "gfimu_dynamics": GFD,
+           "gfimu": GFI, "gfimu_dynamics": GFD, "gfimu_ekf": GFE,
            "estimators.run": RUN}
 assert sum(len(MODULES[m.__name__.split(".")[-1]]) for m in SEN_MODULES) == len(SEN), "a SEN case of another module"
 
@@ -888,11 +937,11 @@ def mutations(case):
         if a.scalar:
             out += [(name, "NaN", float("nan"), "error"), (name, "string", "abc", "error")]
             if not (isinstance(default, float) and math.isinf(default)):
-                out.append((name, "inf", float("inf"), "error"))
+                out.append((name, "inf", float("inf"), "any" if a.inf_ok else "error"))
             if not a.broadcasts:
                 out.append((name, "two values", [v, v], "error"))
             if default is not None:
-                out.append((name, "None", None, "error"))
+                out.append((name, "None", None, "any" if a.none_ok else "error"))
             if a.positive:
                 out += [(name, "zero", 0 * v, "error"), (name, "negative", -abs(v) - 1, "error")]
             elif a.nonneg:
@@ -1044,14 +1093,15 @@ def test_every_bad_argument_is_named_or_harmless(module):
 # design (the filter checked its matrices once, with kalman.check_model); their checked doors, kalman.update and
 # kalman.predict, are covered above, and tests/test_kalman.py asserts the two give the same numbers.
 UNCHECKED = {kalman.update_step, kalman.predict_step,
-             gpsins.euler_ins_fx}      # the UKF's fx, run 2n times a sample: run_euler_ukf checks at its door
+             gpsins.euler_ins_fx,      # the UKF's fx, run 2n times a sample: run_euler_ukf checks at its door
+             gfimu_ekf.table53_monte_carlo}   # a whole experiment (minutes a call): its filters are covered above
 
 
 def test_every_public_function_is_covered():
     """A new public function must get a valid call above, or this suite silently stops covering it."""
     covered = {c.fn for cases in MODULES.values() for c in cases}
     for mod in (rotations, conventions, *SEN_MODULES, kalman, falling_body, calibration, metrics, correlation, ecompass, freescale,
-                freescale_fast, dcm, dcm_filter, gpsins, northfinder, gfimu, gfimu_dynamics):
+                freescale_fast, dcm, dcm_filter, gpsins, northfinder, gfimu, gfimu_dynamics, gfimu_ekf):
         for name in mod.__all__:
             obj = getattr(mod, name)
             if any(obj is f for f in UNCHECKED):
