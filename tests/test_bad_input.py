@@ -1,5 +1,6 @@
 """Nothing silently wrong: every public function of rotations, conventions, the sensor modules (sensors, accel_tilt,
-inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, correlation (Lab 03), ecompass (Lab 04)
+inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, the seed methods (correlation,
+ecompass, freescale and freescale_fast, gfimu, gfimu_ekf, gfimu_dynamics, northfinder, dcm and dcm_filter, gpsins)
 and ``estimators.run`` (every registered filter), fed one bad argument at a time.
 
 Each case starts from a valid call and mutates ONE argument: NaN, inf, the wrong shape, transposed, empty, a zero

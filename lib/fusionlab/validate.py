@@ -13,8 +13,8 @@ documented one: :func:`angles_rad`, :func:`euler_rad` and :func:`rotation_vector
 (m/s², milli-g where g is documented), :func:`field_uT` (gauss, milligauss, nT), :func:`sample_rate` and
 :func:`time_step` (a sample interval for a rate and the reverse), :func:`turn_per_step` (a turn no sampled record
 resolves). ``tests/test_bad_input.py`` checks every public function of rotations, conventions, the sensor modules
-(sensors, accel_tilt, inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, correlation,
-ecompass and ``estimators.run`` against them, one bad argument at a time; ``tests/test_unit_slips.py`` makes the
+(sensors, accel_tilt, inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, the seed
+methods' modules and ``estimators.run`` against them, one bad argument at a time; ``tests/test_unit_slips.py`` makes the
 same slips on real BROAD recordings.
 """
 from __future__ import annotations
