@@ -53,3 +53,50 @@ def test_nonnegative_and_positive_array_keep_the_shape_and_name_the_smallest_val
         validate.positive_array([2e-6, 0.0], "gap")
     with pytest.raises(ValueError, match="area must hold finite numbers"):
         validate.positive_array([1.0, np.nan], "area")
+
+
+@pytest.mark.parametrize("median, unit, factor", [(0.45, "gauss", "100"), (450.0, "milligauss", "0.1"),
+                                                  (45000.0, "nT", "0.001"), (4.5e-5, "T", "1e\\+06")])
+def test_field_uT_names_the_unit_that_brings_the_field_to_the_earths(median, unit, factor):
+    mag = np.tile([0.0, 0.6 * median, 0.8 * median], (4, 1))
+    with pytest.raises(ValueError, match=rf"^mag must be in µT .* which looks like {unit} -- multiply by {factor}$"):
+        validate.field_uT(mag, "mag")
+    validate.field_uT(mag * 45.0 / median, "mag")                     # the same field in µT passes
+
+
+def test_time_step_and_sample_rate_accept_their_bounds_and_name_the_swap():
+    assert validate.time_step(1.0) == 1.0 and validate.time_step(1e-5) == 1e-5
+    assert validate.sample_rate(1.0) == 1.0 and validate.sample_rate(1e5) == 1e5
+    with pytest.raises(ValueError, match=r"^dt must be a time step .* got 200 -- a sample rate fs in Hz\? the step "
+                                         r"is 1/fs = 0.005 s$"):
+        validate.time_step(200.0)
+    with pytest.raises(ValueError, match=r"^fs must be a sample rate .* got 0.005 -- a sample interval dt in s\?"):
+        validate.sample_rate(0.005)
+
+
+def test_accel_g_refuses_m_s2_and_milli_g_and_keeps_g():
+    validate.accel_g([[0.0, 0.0, 1.0], [0.1, 0.0, 1.2]])
+    validate.accel_g([0.0, 0.0, 0.0])                                 # free fall is the filters' business
+    for scale, what in ((earth.G, "m/s²"), (1000.0, "milli-g")):
+        with pytest.raises(ValueError, match=rf"^G must be in g \(1 at rest\); .* looks like {what}"):
+            validate.accel_g(np.array([0.0, 0.0, 1.0]) * scale)
+
+
+def test_covariances_checks_every_matrix_of_a_batch():
+    P = np.stack([np.eye(2), [[1.0, 0.5], [0.0, 1.0]]])
+    with pytest.raises(ValueError, match=r"^P must be symmetric covariance matrices; .* \(matrix 1\)$"):
+        validate.covariances(P, "P", 2)
+    np.testing.assert_array_equal(validate.covariances(np.stack([np.eye(2)] * 3), "P", 2), np.stack([np.eye(2)] * 3))
+    with pytest.raises(ValueError, match=r"positive definite .* smallest eigenvalue 0 \(matrix 0\)"):
+        validate.covariances(np.zeros((1, 2, 2)), "P", 2)
+    validate.covariances(np.zeros((1, 2, 2)), "P", 2, definite=False)
+
+
+def test_gyro_tilt_ratio_is_one_for_a_consistent_tilt_and_not_judged_at_rest():
+    t = np.arange(600) / 100.0
+    roll = 1.2 * np.sin(1.0 * t)
+    acc = 9.81 * np.stack([0 * t, np.sin(roll), np.cos(roll)], axis=1)
+    gyr = np.stack([-np.gradient(roll, t), 0 * t, 0 * t], axis=1)     # the body rate that tilts gravity so
+    ratio, n = validate.gyro_tilt_ratio(gyr, acc, 100.0)
+    assert n > 0 and ratio == pytest.approx(1.0, abs=0.05)
+    assert validate.gyro_tilt_ratio(np.zeros((600, 3)), acc, 100.0) == (pytest.approx(np.nan, nan_ok=True), 0)

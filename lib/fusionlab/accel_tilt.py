@@ -40,7 +40,7 @@ def tilt_2d(a_x, a_y):
     Parameters
     ----------
     a_x : array_like, shape (...)
-        X reading, any unit (g).
+        X reading, any unit (g); not 0 together with ``a_y`` (no angle).
     a_y : array_like, shape (...)
         Y reading, same unit.
 
@@ -61,6 +61,9 @@ def tilt_2d(a_x, a_y):
     ax = validate.array(a_x, "a_x")
     ay = validate.array(a_y, "a_y")
     validate.broadcast(a_x=ax, a_y=ay)
+    if np.any((ax == 0) & (ay == 0)):
+        raise ValueError("a_x, a_y must not both be 0 in one reading: a zero in-plane reading has no angle (the "
+                         "gravity axis is out of the plane, or the sensor is unpowered)")
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.arctan(ay / ax)                                                 # (000 eq 3.17)
 

@@ -158,6 +158,12 @@ def fit_triad(reference, measured):
                     residual_rms=float(np.sqrt(np.mean(resid ** 2))), rank=rank)
 
 
+def _fit_of(fit, cls, maker):
+    """Refuse anything but a ``cls`` (a dict of its fields, None, the fit of the other model) as ``fit``."""
+    if not isinstance(fit, cls):
+        raise ValueError(f"fit must be the {cls.__name__} that {maker}(...) returns; got {type(fit).__name__}")
+
+
 def apply_triad(fit, measured):
     """Invert the triad model: the corrected input ``a = M⁻¹ (z − b)`` for each reading ``z``.
 
@@ -173,6 +179,7 @@ def apply_triad(fit, measured):
     ndarray, shape (N, 3)
         Corrected inputs ``a``, same unit.
     """
+    _fit_of(fit, TriadFit, "fit_triad")
     z = validate.samples(measured, "measured")
     return np.linalg.solve(fit.M, (z - fit.b).T).T
 
@@ -427,6 +434,7 @@ def apply_ellipsoid(fit, mag):
     ndarray, shape (N, 3)
         Corrected readings, same unit.
     """
+    _fit_of(fit, EllipsoidFit, "fit_ellipsoid")
     m = validate.samples(mag, "mag")
     return (m - fit.centre) @ fit.W.T
 
@@ -588,7 +596,8 @@ def read_allan(taus, adev, adev_err=None):
     adev : array_like, shape (M,)
         Allan deviation σ(τ), rate unit.
     adev_err : array_like, shape (M,), optional
-        1-σ error of each σ, rate unit (0 where unknown); weights the fit when given.
+        1-σ error of each σ, rate unit (0 where unknown, but not all 0: that is None); weights the fit when
+        given.
 
     Returns
     -------
@@ -606,6 +615,9 @@ def read_allan(taus, adev, adev_err=None):
         validate.same_length(taus=t, adev_err=e)
         if np.any(e < 0):
             raise ValueError(f"adev_err must be >= 0 (1-σ errors; 0 where unknown); got min {float(np.min(e)):.3g}")
+        if len(e) and not np.any(e > 0):
+            raise ValueError("adev_err must hold at least one known (> 0) error; got all 0 -- pass adev_err=None "
+                             "when no error is known")
         w = a / np.where(e > 0, e, a)
     A = np.stack([1 / t, np.full_like(t, BIAS_INSTABILITY_FACTOR ** 2), t / 3], axis=1) / a[:, None] ** 2
     coef, _ = nnls(A * w[:, None], w)

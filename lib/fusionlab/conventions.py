@@ -123,11 +123,11 @@ def seed000_labcode_omega(wx, wy, wz):
     Parameters
     ----------
     wx : float
-        The code's ``Wx``, rad/s.
+        The code's ``Wx``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
     wy : float
-        The code's ``Wy``, rad/s.
+        The code's ``Wy``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
     wz : float
-        The code's ``Wz``, rad/s.
+        The code's ``Wz``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
 
     Returns
     -------
@@ -145,11 +145,11 @@ def seed000_labcode_rates(wx, wy, wz):
     Parameters
     ----------
     wx : float or array_like, shape (...)
-        The code's ``Wx``, rad/s.
+        The code's ``Wx``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
     wy : float or array_like, shape (...)
-        The code's ``Wy``, rad/s.
+        The code's ``Wy``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
     wz : float or array_like, shape (...)
-        The code's ``Wz``, rad/s.
+        The code's ``Wz``, rad/s (any size: °/s cannot be told from a fast turn, so convert with np.radians).
 
     Returns
     -------

@@ -35,7 +35,7 @@ from . import accel_tilt, earth, rotations, sensors, signals, validate
 __all__ = [
     "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
     "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "ComplementaryFilter", "TiltKalman2",
-    "complementary_attitude", "accel_disturbance", "correlation_attitude",
+    "complementary_attitude", "accel_disturbance", "correlation_attitude", "COUNTS_MEDIAN_MIN",
 ]
 
 
@@ -127,6 +127,7 @@ def accel_angle(z, other, order="excel"):
     """
     z = validate.array(z, "z")
     other = validate.array(other, "other")
+    validate.broadcast(z=z, other=other)
     if order == "excel":
         return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
     if order == "c":
@@ -163,9 +164,7 @@ def moving_average(x, n):
     x = validate.array(x, "x")
     if x.ndim != 1:
         raise ValueError(f"x must have shape (N,); got {x.shape}")
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be a whole number >= 1; got {n!r}")
-    n = int(n)
+    n = validate.count(n, "n", 1)
     c = np.concatenate([[0.0], np.cumsum(x)])
     m = np.arange(1, len(x) + 1)
     lo = np.maximum(m - n, 0)
@@ -193,7 +192,7 @@ def derivative(a, dt):
     array([0., 2., 4.])
     """
     a = validate.array(a, "a")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
 
 
@@ -230,7 +229,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     (array([1., 2., 3.]), array([0., 1., 1.]))
     """
     r = validate.array(rate, "rate")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     if rule == "printed":
         return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)
     if rule == "rectangular":
@@ -257,7 +256,7 @@ def cumulative_integral(increment, angle0=0.0):
     ndarray, shape (N,)
         Accumulated angle, deg.
     """
-    return validate.array(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
+    return validate.scalar(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
 
 
 def ratio(gyro_rate, accel_term, eps=1e-9):
@@ -328,7 +327,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     validate.same_length(accel_deg=a, increment=inc, weight=w)
     if np.any((w < 0) | (w > 1)):
         raise ValueError("weight must lie in [0, 1]")
-    prev = float(a[0]) if f0 is None else float(f0)
+    prev = float(a[0]) if f0 is None else validate.scalar(f0, "f0")
     out = np.empty_like(a)
     for n in range(len(a)):
         prev = w[n] * a[n] + (1 - w[n]) * (prev + inc[n])                         # (000 eq 5.17)
@@ -362,6 +361,11 @@ def printed_to_tilt(angle_deg, axis="x"):
     raise ValueError(f"axis must be 'x' or 'y'; got {axis!r}")
 
 
+#: The smallest median count :func:`pipeline` accepts: the thesis' 10-bit ADC reads about 460-620 on every
+#: channel at rest (mid-scale 512), while the same record in volts stays below 3 and in g or °/s mostly below 10.
+COUNTS_MEDIAN_MIN = 50.0
+
+
 def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0,
              eps=1e-9):
     """The spreadsheet of Lab 3 (000 §5.4.3): one column per step a)-l), as a pandas DataFrame.
@@ -369,9 +373,11 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     Parameters
     ----------
     counts : array_like of int, shape (N, 5)
-        AX AY AZ GX GY counts (from :func:`fusionlab.spreadsheet.parse_terminal_log`).
+        AX AY AZ GX GY counts (from :func:`fusionlab.spreadsheet.parse_terminal_log`); a median below
+        :data:`COUNTS_MEDIAN_MIN` is refused as volts or g.
     dt : float
-        Sample interval, s (the thesis gives none; the synthetic logs use 1/50 s).
+        Sample interval, s (the thesis gives none; the synthetic logs use 1/50 s); 10 µs – 1 s, so that the sample
+        rate passed in its place (50) is refused.
     axis : {'x', 'y'}, optional
         ``'x'``: the Y-Z angle with the X gyro, as the lab's steps a)-k); ``'y'``: the X-Z angle with the Y gyro
         (question 2).
@@ -398,7 +404,16 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     import pandas as pd
 
     c = validate.samples(counts, "counts", 5)
-    dt = validate.positive(dt, "dt")
+    if len(c) == 0:
+        raise ValueError("counts must hold at least one sample (row); got 0")
+    acc_null = validate.array(acc_null, "acc_null")
+    gyro_null = validate.array(gyro_null, "gyro_null")
+    if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
+        raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
+                         f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
+                         "counts the terminal log prints (spreadsheet.parse_terminal_log)")
+    dt = validate.time_step(dt, "dt")
+    n_ma = validate.count(n_ma, "n_ma", 1)
     if variant not in ("meant", "printed"):
         raise ValueError(f"variant must be 'meant' or 'printed'; got {variant!r}")
     if accel_weight not in ("ratio", "one_minus_ratio"):
@@ -469,11 +484,12 @@ class ComplementaryFilter:
     """
 
     def __init__(self, alpha=0.98, dt=0.02, angle0=0.0):
-        if not 0.0 <= float(alpha) <= 1.0:
+        alpha = validate.scalar(alpha, "alpha")
+        if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1]; got {alpha!r}")
-        self.alpha = float(alpha)
-        self.dt = validate.positive(dt, "dt")
-        self.angle = float(angle0)
+        self.alpha = alpha
+        self.dt = validate.time_step(dt, "dt")
+        self.angle = validate.scalar(angle0, "angle0")
 
     def step(self, rate, accel_angle):
         """One sample.
@@ -546,14 +562,14 @@ class TiltKalman2:
     def __init__(self, dt=0.02, q_angle=1e-3, q_bias=1e-5, r_angle=100.0, angle0=0.0, bias0=0.0, p0=100.0):
         from filterpy.kalman import KalmanFilter
 
-        dt = validate.positive(dt, "dt")
+        dt = validate.time_step(dt, "dt")
         kf = KalmanFilter(dim_x=2, dim_z=1, dim_u=1)
         kf.F = np.array([[1.0, -dt], [0.0, 1.0]])
         kf.B = np.array([[dt], [0.0]])
         kf.H = np.array([[1.0, 0.0]])
         kf.Q = np.diag([validate.positive(q_angle, "q_angle"), validate.positive(q_bias, "q_bias")])
         kf.R = np.array([[validate.positive(r_angle, "r_angle")]])
-        kf.x = np.array([[float(angle0)], [float(bias0)]])
+        kf.x = np.array([[validate.scalar(angle0, "angle0")], [validate.scalar(bias0, "bias0")]])
         kf.P = np.eye(2) * validate.positive(p0, "p0")
         self.kf = kf
 
@@ -647,7 +663,8 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
     k = np.full(len(gyr), dt / (validate.positive(tau, "tau") + dt))
     if acc_sigma is not None:
         acc_sigma = validate.positive(acc_sigma, "acc_sigma")
-        if not np.isfinite(acc_hold) or acc_hold < 0:
+        acc_hold = validate.scalar(acc_hold, "acc_hold")
+        if acc_hold < 0:
             raise ValueError(f"acc_hold must be a finite number of seconds >= 0; got {acc_hold!r}")
         k = k / (1.0 + (accel_disturbance(acc, round(acc_hold / dt) + 1) / acc_sigma) ** 2)
     k[_free_fall(acc)] = 0.0                             # no gravity direction: trust the gyro
@@ -692,8 +709,9 @@ def accel_disturbance(acc, hold, g=earth.G):
     >>> np.round(accel_disturbance(acc, 2, g=9.80665), 6)
     array([0., 1., 1.])
     """
-    acc = validate.samples(acc, "acc")
-    hold = int(hold)
+    g = validate.positive(g, "g")
+    acc = validate.accel_ms2(acc, "acc", g=g)
+    hold = validate.count(hold, "hold")
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
     return signals.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
@@ -733,6 +751,7 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     gyr, acc, dt = _imu_args(gyr, acc, fs)
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
+    n_ma = validate.count(n_ma, "n_ma", 1)
     free = _free_fall(acc)                          # ours: free-fall samples hold the last tilt and get no weight
     keep = np.maximum.accumulate(np.where(free, 0, np.arange(len(acc))))
     tilt = np.unwrap(accel_tilt.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
@@ -749,9 +768,11 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
 def _imu_args(gyr, acc, fs):
     """Checked (N, 3) gyro and accelerometer arrays of one length, and the sample interval 1/fs."""
     gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
+    acc = validate.accel_ms2(acc, "acc")
     validate.same_length(gyr=gyr, acc=acc)
-    return gyr, acc, 1.0 / validate.sample_rate(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
+    validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs)
+    return gyr, acc, 1.0 / fs
 
 
 def _weighted_tilt_fusion(gyr, acc, dt, k):

@@ -116,7 +116,7 @@ def A_with_gyro_error(A, bias, dt, noise=None):
     """
     A = validate.array(A, "A", shape=(3, 3))
     b = validate.vectors(bias, "bias")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt      # (004 eq 6.9)
     return A + rotations.skew(e)                                                     # (004 eq 6.10)
 
@@ -147,7 +147,7 @@ def row_propagate(c, A_tilde, bias, dt):
     c = validate.vectors(c, "c")
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3))
     b = validate.vectors(bias, "bias")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return c @ A_tilde - dt * np.cross(c, b)                                          # (004 eq 6.11)
 
 
@@ -176,7 +176,7 @@ def ahrs_transition(c1, c3, A_tilde, dt):
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _transition(c1, c3, A_tilde, dt)
 
 
@@ -217,12 +217,12 @@ def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
-    dt = validate.positive(dt, "dt")
-    gyro_noise = validate.array(gyro_noise, "gyro_noise")
-    bias_walk = validate.array(bias_walk, "bias_walk")
+    dt = validate.time_step(dt, "dt")
+    gyro_noise = validate.scalar(gyro_noise, "gyro_noise")
+    bias_walk = validate.scalar(bias_walk, "bias_walk")
     if gyro_noise < 0 or bias_walk < 0:
-        raise ValueError(f"gyro_noise and bias_walk must be >= 0; got {float(gyro_noise)}, {float(bias_walk)}")
-    return _process_noise(c1, c3, dt, float(gyro_noise) ** 2, float(bias_walk) ** 2)
+        raise ValueError(f"gyro_noise and bias_walk must be >= 0; got {gyro_noise}, {bias_walk}")
+    return _process_noise(c1, c3, dt, gyro_noise ** 2, bias_walk ** 2)
 
 
 def _process_noise(c1, c3, dt, qg, qb):
@@ -314,7 +314,7 @@ def mag_measurement_matrix(inclination):
     ndarray, shape (3, 9)
         ``H_m``.
     """
-    hN, _, hD = mag_reference(float(validate.array(inclination, "inclination")))
+    hN, _, hD = mag_reference(validate.scalar(inclination, "inclination"))
     H = np.zeros((3, 9))
     H[:, 0:3] = hN * np.eye(3)
     H[:, 3:6] = hD * np.eye(3)                                                       # (004 eq 6.19)
@@ -386,10 +386,13 @@ def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
     k = validate.array(k, "k")
     if np.any(k < 0):
         raise ValueError(f"k must be >= 0; got {float(np.min(k))}")
+    if np.any(k != np.round(k)):
+        raise ValueError(f"k must be whole update counts; got {k.ravel()[:3]}")
+    rho = validate.scalar(rho, "rho")
     if not 0 < rho < 1:
         raise ValueError(f"rho must be in (0, 1); got {rho!r}")
-    if R_i < 0 or R_ss < 0:
-        raise ValueError(f"R_i and R_ss must be >= 0; got {R_i!r}, {R_ss!r}")
+    R_i = validate.scalar(R_i, "R_i", nonnegative=True)
+    R_ss = validate.scalar(R_ss, "R_ss", nonnegative=True)
     return rho ** k * R_i + R_ss                                                     # (004 eq 6.27)
 
 
@@ -415,6 +418,10 @@ def rows_to_dcm(c1, c3):
     """
     c1 = validate.vectors(c1, "c1")
     c3 = validate.vectors(c3, "c3")
+    validate.broadcast({"c1": 1, "c3": 1}, c1=c1, c3=c3)
+    for name, c in (("c1", c1), ("c3", c3)):
+        if np.any(np.linalg.norm(c, axis=-1) < 1e-12):
+            raise ValueError(f"{name} must be a row of a DCM (norm near 1); got a zero vector")
     return np.stack(np.broadcast_arrays(c1, np.cross(c3, c1), c3), -2)
 
 
@@ -432,6 +439,9 @@ def orthonormalize(C):
         The nearest rotation matrix.
     """
     C = validate.matrices(C, "C")
+    if np.any(np.linalg.matrix_rank(C) < 2):
+        raise ValueError("C must be nearly a rotation (rank 3; rank 2 is completed); got a matrix of rank < 2, "
+                         "which has no nearest rotation")
     U, _, Vt = np.linalg.svd(C)
     R = U @ Vt
     neg = np.linalg.det(R) < 0
@@ -463,9 +473,12 @@ def level_and_compass(acc_b, mag_b):
     """
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
+    validate.broadcast({"acc_b": 1, "mag_b": 1}, acc_b=a, mag_b=m)
     n = np.linalg.norm(a, axis=-1)
     if np.any(n == 0):
         raise ValueError("acc_b must not be zero-length")
+    if np.any(np.linalg.norm(m, axis=-1) == 0):
+        raise ValueError("mag_b must not be zero-length: a zero field has no heading")
     pitch = np.arcsin(np.clip(-a[..., 0] / n, -1, 1))                                # (004 eq 4.22)
     roll = np.arctan2(a[..., 1], a[..., 2])                                          # (004 eq 4.23)
     sr, cr, sp, cp = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
@@ -494,6 +507,10 @@ def inclination_from(acc_b, mag_b):
     """
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
+    validate.broadcast({"acc_b": 1, "mag_b": 1}, acc_b=a, mag_b=m)
+    for name, v in (("acc_b", a), ("mag_b", m)):
+        if np.any(np.linalg.norm(v, axis=-1) == 0):
+            raise ValueError(f"{name} must not be zero-length: the angle between the vectors is undefined")
     s = np.sum(a * m, -1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(m, axis=-1))
     return np.arcsin(np.clip(s, -1, 1))
 
@@ -527,7 +544,7 @@ def trusted_mask(deviation, tol, hold):
     if d.ndim != 1:
         raise ValueError(f"deviation must have shape (N,); got {d.shape}")
     tol = validate.positive(tol, "tol")
-    hold = int(hold)
+    hold = validate.count(hold, "hold")
     if hold < 1:
         raise ValueError(f"hold must be >= 1 sample; got {hold}")
     ok = np.abs(d) < tol

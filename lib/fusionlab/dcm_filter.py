@@ -204,13 +204,13 @@ class DcmAhrs:
     """
 
     def __init__(self, C0, inclination, dt, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(), g=dcm.G):
-        C0 = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
-        self.dt = validate.positive(dt, "dt")
+        C0 = validate.rotation(validate.exact_shape(C0, "C0", (3, 3)), "C0", tol=1e-3)
+        self.dt = validate.time_step(dt, "dt")
         self.hold = max(1, int(round(tuning.hold / self.dt)))
         self.x = np.concatenate([C0[0], C0[2], validate.vectors(bias0, "bias0").reshape(3)])
         self.tuning = tuning
         self.g = validate.positive(g, "g")
-        self.inclination = float(validate.angles_rad(inclination, "inclination"))
+        self.inclination = float(validate.angles_rad(validate.scalar(inclination, "inclination"), "inclination"))
         self.P = np.diag([tuning.sigma_c0 ** 2] * 6 + [tuning.sigma_b0 ** 2] * 3)
         self.k = 0                                  # update count, for the decaying R_c (eq 6.27)
         self.acc_run = 0                            # consecutive samples with |a| ≈ g
@@ -421,13 +421,18 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     use_mag = mag_b is not None
     mag_b = validate.samples(mag_b, "mag_b") if use_mag else np.zeros_like(acc_b)
     n = validate.same_length(gyr=gyr, acc_b=acc_b, mag_b=mag_b)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     g = validate.positive(g, "g")
-    M = int(update_every)
-    if M != update_every or M < 1:
+    M = validate.scalar(update_every, "update_every")
+    if M != int(M) or M < 1:
         raise ValueError(f"update_every must be a positive integer; got {update_every!r}")
+    M = int(M)
+    init_seconds = validate.scalar(init_seconds, "init_seconds", nonnegative=True)
     if n == 0:
         raise ValueError("gyr, acc_b, mag_b must hold at least one sample; got 0")
+    for name, v, used in (("acc_b", acc_b, True), ("mag_b", mag_b, use_mag)):
+        if used and not np.any(v):
+            raise ValueError(f"{name} must measure something; got 0 at every sample (a disconnected sensor?)")
     dt = 1.0 / fs
     n0 = max(1, min(n, int(round(init_seconds * fs))))
     a0, m0 = acc_b[:n0].mean(0), mag_b[:n0].mean(0)
@@ -439,7 +444,9 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         inclination = float(dcm.inclination_from(a0, m0))
     if C0 is None:
         C0 = rotations.euler_to_dcm(dcm.level_and_compass(a0, m0))
-    C0 = validate.array(C0, "C0", shape=(3, 3)).reshape(3, 3)
+    C0 = validate.rotation(validate.exact_shape(C0, "C0", (3, 3)), "C0", tol=1e-3)
+    if inclination is not None:
+        inclination = validate.scalar(inclination, "inclination")
     t = tuning
 
     nb = n // M                                        # full blocks: one update each

@@ -37,7 +37,8 @@ from . import conventions, rotations, validate
 __all__ = [
     "FRAMES", "accel_model", "mag_model", "accel_noise", "mag_noise", "weights", "reference_vectors",
     "measured_gravity", "rotation_matrix", "kappa_general", "kappa_davenport", "kappa", "kappa_eq41_printed",
-    "kappa_frame_printed", "EcompassResult", "ecompass", "inclination", "wahba_error", "tilt_compensated_heading",
+    "kappa_frame_printed", "EcompassResult", "ECOMPASS_FIELD_UT", "ecompass", "inclination", "wahba_error",
+    "tilt_compensated_heading",
     "heading", "tilt_error", "synthetic_recording", "ENU", "check_frame", "nonzero_norm",
 ]
 
@@ -91,6 +92,7 @@ def nonzero_norm(v, name):
     >>> float(nonzero_norm(np.array([3.0, 4.0, 0.0]), "B_c"))
     5.0
     """
+    v = validate.vectors(v, name)
     n = np.linalg.norm(v, axis=-1)
     if np.any(n == 0):
         raise ValueError(f"{name} must not be a zero vector: its direction is undefined")
@@ -180,6 +182,8 @@ def accel_model(q, a_S=None, frame="NED", noise=None):
     g_S = rotation_matrix(q) @ r_g
     a = 0.0 if a_S is None else validate.vectors(a_S, "a_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
+    validate.broadcast({"q": 1, "a_S": 1, "noise": 1}, q=q, a_S=a_S if a_S is None else a,
+                       noise=noise if noise is None else v)
     if frame == "Android":
         return a - g_S + v                                                 # (002 eq 2)
     return -a + g_S - v                                                    # (002 eq 1)
@@ -211,9 +215,11 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
     q = validate.quaternions(q, "q")
     B = validate.positive(B, "B")
     _, r_m = reference_vectors(delta, frame)
-    m = B * (rotation_matrix(q) @ r_m[..., None])[..., 0]
     d = 0.0 if d_S is None else validate.vectors(d_S, "d_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
+    validate.broadcast({"q": 1, "d_S": 1, "noise": 1}, q=q, delta=np.asarray(delta, float),
+                       d_S=d_S if d_S is None else d, noise=noise if noise is None else v)
+    m = B * (rotation_matrix(q) @ r_m[..., None])[..., 0]
     return m + d + v                                                       # (002 eq 10)
 
 
@@ -289,7 +295,9 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
     """
     a = validate.array(qvgqa, "qvgqa")
     m = validate.array(qvbqd, "qvbqd")
+    validate.broadcast(qvgqa=a, qvbqd=m)
     B = validate.positive(B, "B")
+    tol = validate.positive(tol, "tol")
     if np.any(a < 0) or np.any(m < 0):
         raise ValueError("qvgqa and qvbqd must be >= 0 (they are magnitudes | |G|^2 - 1 | and | |B_c|^2 - B^2 |)")
     a = np.where(a < tol, 0.0, a)
@@ -364,9 +372,11 @@ def _vector_pairs(s, r, alpha):
         raise ValueError(f"s and r must have the same shape; got {s.shape} and {r.shape}")
     if s.ndim == 1:
         s, r = s[None], r[None]
-    w = (np.full(s.shape[:-1], 1.0 / s.shape[-2]) if alpha is None
-         else validate.array(alpha, "alpha") * np.ones(s.shape[:-1]))
-    return s, r, w
+    if alpha is None:
+        return s, r, np.full(s.shape[:-1], 1.0 / s.shape[-2])
+    a = validate.array(alpha, "alpha")
+    validate.broadcast({"s": 1}, s=s, alpha=a)
+    return s, r, a * np.ones(s.shape[:-1])
 
 
 def kappa_davenport(s, r, alpha=None):
@@ -401,6 +411,16 @@ def kappa_davenport(s, r, alpha=None):
     return out
 
 
+def _unit(v, name, tol=1e-6):
+    """``v`` as unit 3-vectors (a direction): a zero or unnormalised vector is named."""
+    v = validate.vectors(v, name)
+    n = nonzero_norm(v, name)
+    if n.size and float(np.max(np.abs(n - 1.0))) > tol:
+        raise ValueError(f"{name} must be unit vectors (a direction); got a norm of "
+                         f"{float(n.flat[np.argmax(np.abs(n - 1.0))]):.6g} -- divide by its norm")
+    return v
+
+
 def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     """κ for gravity + geomagnetic field in one coordinate system (002 eqs 53, 58, 63, **corrected**).
 
@@ -427,11 +447,13 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     ndarray, shape (..., 4, 4)
         κ.
     """
-    s_g = validate.vectors(s_g, "s_g")
-    s_m = validate.vectors(s_m, "s_m")
+    s_g = _unit(s_g, "s_g")
+    s_m = _unit(s_m, "s_m")
     d = validate.angles_rad(delta, "delta")
-    ag = validate.array(alpha_g, "alpha_g")[..., None, None]
-    am = validate.array(alpha_m, "alpha_m")[..., None, None]
+    ag = validate.array(alpha_g, "alpha_g")
+    am = validate.array(alpha_m, "alpha_m")
+    validate.broadcast({"s_g": 1, "s_m": 1}, s_g=s_g, s_m=s_m, delta=d, alpha_g=ag, alpha_m=am)
+    ag, am = ag[..., None, None], am[..., None, None]
     check_frame(frame)
     c, s = np.cos(d), np.sin(d)
     gx, gy, gz = s_g[..., 0], s_g[..., 1], s_g[..., 2]
@@ -474,8 +496,9 @@ def kappa_eq41_printed(s, r):
     ndarray, shape (4, 4)
         The printed matrix, NaN where an entry is missing.
     """
-    sx, sy, sz = validate.vectors(s, "s").reshape(3)
-    rx, ry, rz = validate.vectors(r, "r").reshape(3)
+    sx, sy, sz = validate.exact_shape(s, "s", (3,))
+    rx, ry, rz = validate.exact_shape(r, "r", (3,))
+    nonzero_norm(np.array([sx, sy, sz]), "s"), nonzero_norm(np.array([rx, ry, rz]), "r")
     nan = np.nan
     return np.array([
         [sx * rx + sy * ry + sz * rz, sy * rz - sz * ry, sx * rx - sx * rz, sx * ry - sy * rx],
@@ -518,8 +541,8 @@ def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
         raise ValueError(f"eq must be 53, 58 or 63; got {eq!r}")
     gx, gy, gz = validate.vectors(s_g, "s_g").reshape(3)
     mx, my, mz = validate.vectors(s_m, "s_m").reshape(3)
-    d = float(validate.angles_rad(delta, "delta"))
-    ag, am = float(alpha_g), float(alpha_m)
+    d = float(validate.angles_rad(validate.scalar(delta, "delta"), "delta"))
+    ag, am = validate.scalar(alpha_g, "alpha_g"), validate.scalar(alpha_m, "alpha_m")
     c, s, nan = math.cos(d), math.sin(d), np.nan
     if eq == 53:
         Kg = [[gz, gy, -gz, 0], [gy, -gz, 0, gx], [-gx, 0, -gz, gy], [0, gx, gy, gz]]
@@ -568,7 +591,11 @@ def wahba_error(q, s, r, alpha=None):
     R = rotation_matrix(q).reshape(3, 3)
     s = validate.array(s, "s", shape=(None, 3)).reshape(-1, 3)
     r = validate.array(r, "r", shape=(None, 3)).reshape(-1, 3)
+    validate.same_length(s=s, r=r)
+    if len(s) == 0:
+        raise ValueError("s, r must hold at least one vector pair; got 0")
     w = np.full(len(s), 1.0 / len(s)) if alpha is None else validate.array(alpha, "alpha").reshape(-1)
+    validate.same_length(s=s, alpha=w)
     res = s - r @ R.T
     return 0.5 * float(np.sum(w * np.sum(res * res, axis=-1)))            # (002 eq 22)
 
@@ -623,10 +650,16 @@ def inclination(G, B_c, frame="NED"):
     """
     G = validate.vectors(G, "G")
     B_c = validate.vectors(B_c, "B_c")
+    validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     check_frame(frame)
     cosang = np.sum(G * B_c, axis=-1) / (nonzero_norm(G, "G") * nonzero_norm(B_c, "B_c"))
     d = np.arcsin(np.clip(cosang, -1.0, 1.0))                              # (002 eqs 109-110)
     return -d if frame == "Android" else d                                 # (002 eqs 111-112)
+
+
+#: The median field strengths (µT) :func:`ecompass` accepts: wide, since a magnet next to the sensor (Lab 04's
+#: disturbance sweep) adds hundreds of µT; gauss (0.25-0.65) and nT (25,000-65,000) fall outside.
+ECOMPASS_FIELD_UT = (2.0, 5000.0)
 
 
 def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
@@ -639,9 +672,11 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g (non-zero).
+        Accelerometer reading, g (non-zero; a median magnitude of 5-20, m/s², or of 200 and more, milli-g, is
+        refused: the noise estimate of eq 9 assumes 1 g at rest).
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT (non-zero).
+        Calibrated magnetometer reading, µT (non-zero; a median field strength outside
+        :data:`ECOMPASS_FIELD_UT`, gauss or nT, is refused: eq 15 compares it with ``B`` in µT).
     delta : float or array_like, shape (...)
         Inclination of the reference field direction, rad.
     frame : {'NED', 'Android', 'Win8'}, optional
@@ -657,11 +692,13 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
         ``q`` (the note's orientation quaternion = our body→nav quaternion in the frame's global frame), the
         measured inclination, the noise estimates, the weights and the spectrum of κ.
     """
-    G = validate.vectors(G, "G")
-    B_c = validate.vectors(B_c, "B_c")
     check_frame(frame)
+    G = validate.accel_g(G, "G")
+    B_c = validate.vectors(B_c, "B_c")
+    validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c, delta=validate.angles_rad(delta, "delta"))
     B = validate.positive(B, "B")
     s_g = measured_gravity(G, frame)
+    validate.field_uT(B_c, "B_c", low=ECOMPASS_FIELD_UT[0], high=ECOMPASS_FIELD_UT[1], per_sample=False)
     s_m = B_c / nonzero_norm(B_c, "B_c")[..., None]
     qa, qd = accel_noise(G), mag_noise(B_c, B)
     if alpha is None:
@@ -697,6 +734,7 @@ def tilt_compensated_heading(G, B_c):
     """
     G = validate.vectors(G, "G")
     B_c = validate.vectors(B_c, "B_c")
+    validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     nonzero_norm(G, "G")
     nonzero_norm(B_c, "B_c")
     phi = np.arctan2(G[..., 1], G[..., 2])
@@ -753,6 +791,9 @@ def tilt_error(q_est, q_true, frame="NED"):
     ndarray, shape (...)
         Tilt error, rad.
     """
+    q_est = validate.quaternions(q_est, "q_est")
+    q_true = validate.quaternions(q_true, "q_true")
+    validate.broadcast({"q_est": 1, "q_true": 1}, q_est=q_est, q_true=q_true)
     r_g, _ = reference_vectors(0.0, frame)
     a = rotation_matrix(q_est) @ r_g
     b = rotation_matrix(q_true) @ r_g
@@ -803,13 +844,20 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     w = validate.array(omega_dps, "omega_dps", shape=(None, 3))
     if w.ndim != 2:
         raise ValueError(f"omega_dps must have shape (N, 3); got {w.shape}")
-    fs = validate.positive(fs, "fs")
-    q0 = validate.quaternions(q0, "q0").reshape(4)
-    rng = np.random.default_rng(seed)
+    fs = validate.sample_rate(fs, "fs")
+    q0 = validate.exact_shape(validate.quaternions(q0, "q0"), "q0", (4,))
+    bias = validate.exact_shape(bias_dps, "bias_dps", (3,))
+    sigma_gyr, sigma_acc, sigma_mag = (validate.scalar(v, n, nonnegative=True) for v, n in
+                                       ((sigma_gyr, "sigma_gyr"), (sigma_acc, "sigma_acc"), (sigma_mag, "sigma_mag")))
+    validate.scalar(delta, "delta")
+    a_S = None if a_S is None else validate.samples(a_S, "a_S")
+    d_S = None if d_S is None else validate.samples(d_S, "d_S")
+    validate.same_length(omega_dps=w, a_S=a_S, d_S=d_S)
+    rng = np.random.default_rng(validate.count(seed, "seed"))
     q_true = rotations.integrate_gyro_quat(q0, np.radians(w), 1.0 / fs)[1:]
     N = len(w)
     noise = lambda s: s * rng.standard_normal((N, 3))                      # noqa: E731
-    gyr = w + np.asarray(bias_dps, dtype=float) + noise(sigma_gyr)         # (002 eq 89)
+    gyr = w + bias + noise(sigma_gyr)                                       # (002 eq 89)
     acc = accel_model(q_true, a_S, frame, noise=noise(sigma_acc))          # (002 eqs 1-2): same physical noise
     mag = mag_model(q_true, B, delta, frame, d_S) + noise(sigma_mag)       # (002 eq 10)
     return {"q_true": q_true, "gyr": gyr, "acc": acc, "mag": mag, "fs": fs}

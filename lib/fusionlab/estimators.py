@@ -28,7 +28,7 @@ _REGISTRY = {}
 FRAMES = ("NED", "ENU")
 
 
-def register(name, uses_mag, summary, seed):
+def register(name, uses_mag, summary, seed, mag_uT=False):
     """Decorator: register ``fn(gyr, acc, mag, fs, **options) -> (N, 4) body→NED quaternions`` under ``name``.
 
     Keyword parameters after ``fs`` (with their defaults) are the estimator's tuning options (:func:`options`).
@@ -43,6 +43,9 @@ def register(name, uses_mag, summary, seed):
         One line saying what it is.
     seed : str
         The source it follows (document and section).
+    mag_uT : bool, default False
+        The filter needs the magnetometer in µT (a noise floor in µT², say): :func:`run` then checks the field
+        strength against the Earth's (:func:`fusionlab.validate.field_uT`). Scale-free filters leave it False.
 
     Returns
     -------
@@ -54,6 +57,7 @@ def register(name, uses_mag, summary, seed):
             raise ValueError(f"estimator {name!r} is already registered")
         params = list(inspect.signature(fn).parameters.values())[4:]     # after (gyr, acc, mag, fs)
         _REGISTRY[name] = {"fn": fn, "uses_mag": bool(uses_mag), "summary": summary, "seed": seed,
+                           "mag_uT": bool(mag_uT),
                            "options": {p.name: p.default for p in params}}
         return fn
     return deco
@@ -107,7 +111,9 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     fs : float
         Sample rate, Hz.
     mag : array_like, shape (N, 3), optional
-        Magnetometer, any unit; required by estimators with ``uses_mag``.
+        Magnetometer; required by estimators with ``uses_mag``. Any consistent unit for the scale-free filters
+        ('triad', 'dcm_ahrs'); µT for 'freescale9', whose noise floor is in µT² (the median field strength must
+        be 10-200 µT, so gauss, milligauss and nT are refused).
     frame : {'ENU', 'NED'}, optional
         Navigation frame of the result.
     **options
@@ -122,9 +128,11 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     ------
     ValueError
         Naming the argument: a bad shape or a NaN; lengths that differ; ``fs`` outside 1 Hz – 100 kHz; a gyro that
-        looks like °/s (peak above 50 rad/s or median above 10 rad/s) or an accelerometer that looks like g (median
-        magnitude 0.5–2); a record that starts in free fall (no initial tilt); a zero magnetometer for a filter that
-        uses it. During the record every filter trusts its gyro while ``|acc|`` is below
+        looks like °/s (peak above 50 rad/s, median above 10 rad/s, or tilting the body about 57 times as far as
+        the accelerometer's gravity direction turns: :func:`fusionlab.validate.gyro_tilt_ratio`) or an
+        accelerometer that looks like g or milli-g (median magnitude 0.5–2, or 100 and more); a record that starts
+        in free fall (no initial tilt); a zero magnetometer for a filter that uses it, or one not in µT for
+        'freescale9'. During the record every filter trusts its gyro while ``|acc|`` is below
         :data:`fusionlab.earth.FREE_FALL` (0.05 g), except 'triad', which has no gyro and refuses free fall.
     TypeError
         An option the estimator does not have (:func:`options` lists them); it is also a ValueError.
@@ -149,11 +157,13 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
     validate.same_length(gyr=gyr, acc=acc, mag=mag)
     if len(gyr) == 0:
         raise ValueError("gyr, acc must hold at least one sample; got 0")
-    validate.gyro_rad(gyr, "gyr")
     validate.accel_ms2(acc, "acc")
+    validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs)
     _check_start(acc, fs)
     if mag is not None and entry["uses_mag"]:
         _check_field(mag)
+        if entry["mag_uT"]:
+            validate.field_uT(mag, "mag")
     q_ned = entry["fn"](gyr, acc, mag, fs, **options)
     return q_ned if frame == "NED" else rotations.quat_nav_swap(q_ned)
 
@@ -271,7 +281,7 @@ def _freescale_units(gyr, acc):
     return np.degrees(gyr), -acc / earth.G
 
 
-@register("freescale9", uses_mag=True, seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
+@register("freescale9", uses_mag=True, mag_uT=True, seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
           summary="Freescale 9DOF indirect Kalman filter: 10 error states, eCompass + gyro, ~25 Hz steps")
 def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     """Magnetometer assumed in µT (the 7 µT² floor); the field strength B is a running reference learnt as the

@@ -64,7 +64,7 @@ def terminal_velocity(k, m, g=9.8):
     m : float
         Mass, kg (> 0).
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
 
     Returns
     -------
@@ -76,7 +76,7 @@ def terminal_velocity(k, m, g=9.8):
     >>> terminal_velocity(0.25, 10.0)
     -392.0
     """
-    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g")
+    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g", True)
     return -m * g / k
 
 
@@ -127,7 +127,7 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     dt : float, optional
         Time step, s.
     TMAX : int, optional
@@ -150,8 +150,8 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
     >>> len(X), round(float(X[-1]), 3), round(float(V[-1]), 3)
     (200, 181.006, -19.027)
     """
-    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g")
-    dt, x0, v0 = validate.scalar(dt, "dt", True), validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
+    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g", True)
+    dt, x0, v0 = validate.time_step(dt, "dt"), validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
     TMAX = validate.count(TMAX, "TMAX", 1)
     X = np.zeros(TMAX)
     V = np.zeros(TMAX)
@@ -177,7 +177,7 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     dt : float, optional
         Time step, s.
     x0 : float, optional
@@ -192,8 +192,8 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
     x : ndarray, shape (N + 1, 2)
         ``[position (m), velocity (m/s)]`` at each ``t``.
     """
-    duration, dt = validate.scalar(duration, "duration", True), validate.scalar(dt, "dt", True)
-    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g")
+    duration, dt = validate.scalar(duration, "duration", True), validate.time_step(dt, "dt")
+    k, m, g = validate.scalar(k, "k", True), validate.scalar(m, "m", True), validate.scalar(g, "g", True)
     n = int(round(duration / dt))
     if abs(n * dt - duration) > 1e-9 * max(1.0, duration):
         raise ValueError(f"duration must be a whole number of steps dt = {dt:g} s; got {duration:g} s")
@@ -221,7 +221,7 @@ def falling_body_exact(t, k=0.25, m=10.0, g=9.8, x0=200.0, v0=0.0):
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     x0 : float, optional
         Start position, m (up).
     v0 : float, optional
@@ -252,7 +252,7 @@ def quadratic_terminal_velocity(m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD, a
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     rho : float, optional
         Air density, kg/m³.
     C_D : float, optional
@@ -290,7 +290,7 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     rho : float, optional
         Air density, kg/m³.
     C_D : float, optional
@@ -309,7 +309,7 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
         time when ``stop_at_ground``.
     """
     duration = validate.scalar(duration, "duration", True)
-    m, g = validate.scalar(m, "m", True), validate.scalar(g, "g")
+    m, g = validate.scalar(m, "m", True), validate.scalar(g, "g", True)
     c = (0.5 * validate.scalar(rho, "rho", True) * validate.scalar(C_D, "C_D", True)
          * validate.scalar(area, "area", True) / m)
 
@@ -343,7 +343,7 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     dt : float, optional
         Time step, s.
 
@@ -363,7 +363,7 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     array([ 0.   , -0.098])
     """
     k, m = validate.scalar(k, "k", True), validate.scalar(m, "m", True)
-    g, dt = validate.scalar(g, "g"), validate.scalar(dt, "dt", True)
+    g, dt = validate.scalar(g, "g", True), validate.time_step(dt, "dt")
     A = np.array([[1.0, dt], [0.0, 1.0 - (k / m) * dt]])            # (000 §4.4.2)
     B = np.array([[1.0, 0.0], [0.0, -g * dt]])                       # (000 §4.4.2)
     u = np.array([0.0, 1.0])                                         # (000 §4.4.2)
@@ -545,7 +545,7 @@ class ThesisKF:
         m : float, optional
             Mass, kg.
         g : float, optional
-            Gravity, m/s².
+            Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
         dt : float, optional
             Time step, s.
         **options
@@ -638,7 +638,7 @@ def simulate_falling_body(n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0
     m : float, optional
         Mass, kg.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², > 0 (the body falls down: a negative g would make it fall upward).
     dt : float, optional
         Time step, s.
     pn_std : float, optional

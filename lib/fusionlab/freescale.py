@@ -39,7 +39,7 @@ from . import ecompass, rotations, validate
 __all__ = [
     "Tuning", "V500", "qrot", "gravity_tilt_error", "geomag_tilt_error", "delta_quat", "alpha",
     "measurement_matrix", "process_noise", "measurement_noise", "kalman_gain", "nominal_gain", "Kalman9", "Kalman6",
-    "block_size", "D2R", "R2D", "check_recording",
+    "block_size", "D2R", "R2D", "check_recording", "check_units",
 ]
 
 
@@ -137,6 +137,7 @@ def qrot(u, v):
     """
     u = validate.vectors(u, "u")
     v = validate.vectors(v, "v")
+    validate.broadcast({"u": 1, "v": 1}, u=u, v=v)
     nu, nv = ecompass.nonzero_norm(u, "u"), ecompass.nonzero_norm(v, "v")
     u, v = np.broadcast_arrays(u / nu[..., None], v / nv[..., None])
     w = 1.0 + np.sum(u * v, axis=-1)                                       # 1 + u·v (unit vectors)
@@ -150,6 +151,14 @@ def qrot(u, v):
                       ax / np.where(equal[..., None], 1.0, n))
         q = np.where(flip[..., None], np.concatenate([np.zeros_like(w)[..., None], ax], -1), q)   # (002 eq 73)
     return q / np.linalg.norm(q, axis=-1, keepdims=True)                   # (002 eq 76)
+
+
+def _rotation_pair(R6, R_prior, **other):
+    """``R6`` and ``R_prior`` as rotation matrices whose batches (and ``other``'s) fit together."""
+    R6 = validate.rotation(R6, "R6", tol=1e-4)
+    Rp = validate.rotation(R_prior, "R_prior", tol=1e-4)
+    validate.broadcast({"R6": 2, "R_prior": 2}, R6=R6, R_prior=Rp, **other)
+    return R6, Rp
 
 
 def gravity_tilt_error(R6, R_prior):
@@ -170,8 +179,7 @@ def gravity_tilt_error(R6, R_prior):
     ndarray, shape (..., 4)
         Quaternion; its vector part is the measurement ``z[0:3]``.
     """
-    R6 = validate.matrices(R6, "R6")
-    Rp = validate.matrices(R_prior, "R_prior")
+    R6, Rp = _rotation_pair(R6, R_prior)
     return qrot(R6[..., :, 2], Rp[..., :, 2])                              # (002 eq 82)
 
 
@@ -198,8 +206,7 @@ def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
     ndarray, shape (..., 4)
         Quaternion; its vector part is ``z[3:6]``.
     """
-    R6 = validate.matrices(R6, "R6")
-    Rp = validate.matrices(R_prior, "R_prior")
+    R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(delta, "delta"))
     _, r_m = ecompass.reference_vectors(delta, frame)
     return qrot(R6 @ r_m, Rp @ r_m)                                        # (002 eqs 84-88)
 
@@ -220,7 +227,7 @@ def delta_quat(omega_dps, dt):
         Unit quaternions.
     """
     w = validate.vectors(omega_dps, "omega_dps")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return rotations.rotvec_to_quat(w * (D2R * dt))                       # (002 eq 120)
 
 
@@ -242,7 +249,7 @@ def alpha(dt):
     float
         ``α``, rad per °/s.
     """
-    return math.pi * validate.positive(dt, "dt") / 180.0                   # (002 eq 140)
+    return math.pi * validate.time_step(dt, "dt") / 180.0                   # (002 eq 140)
 
 
 def measurement_matrix(dt, dof=9):
@@ -352,7 +359,7 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
     ndarray, shape (7, 7) or (3, 3)
         Diagonal ``Q_v``.
     """
-    qa = float(validate.array(qvgqa, "qvgqa"))
+    qa = validate.scalar(qvgqa, "qvgqa", nonnegative=True)
     a2 = alpha(dt) / 2
     gyro = a2 * a2 * (tuning.Q_vY + tuning.Q_wb)
     vg = 0.25 * qa + gyro                                                  # (002 eqs 162, 188)
@@ -361,7 +368,7 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
     if dof != 9:
         raise ValueError(f"dof must be 6 or 9; got {dof!r}")
     B = tuning.B if B is None else validate.positive(B, "B")
-    qd = max(float(validate.array(qvbqd, "qvbqd")), tuning.qvbqd_min)     # (002 §2.3) floor
+    qd = max(validate.scalar(qvbqd, "qvbqd", nonnegative=True), tuning.qvbqd_min)   # (002 §2.3) floor
     vm = 0.25 * qd / (B * B) + gyro                                        # (002 eq 163)
     vd = R2D * R2D * (qa + qd / (B * B))                                 # (002 eq 164)
     return np.diag([vg] * 3 + [vm] * 3 + [vd])                             # (002 eq 165)
@@ -386,9 +393,14 @@ def kalman_gain(Q_w, C, Q_v):
     ndarray, shape (n, m)
         The gain.
     """
-    Q_w = validate.array(Q_w, "Q_w", shape=(None, None))
-    C = validate.array(C, "C", shape=(None, None))
-    Q_v = validate.array(Q_v, "Q_v", shape=(None, None))
+    Q_w = validate.covariance(Q_w, "Q_w")
+    C = validate.array(C, "C")
+    if C.ndim != 2 or C.shape[1] != Q_w.shape[0]:
+        raise ValueError(f"C must have shape (m, {Q_w.shape[0]}) to match Q_w ({Q_w.shape[0]} states); got {C.shape}")
+    Q_v = validate.covariance(Q_v, "Q_v")
+    if Q_v.shape != (C.shape[0], C.shape[0]):
+        raise ValueError(f"Q_v must have shape ({C.shape[0]}, {C.shape[0]}) to match C ({C.shape[0]} measurements); "
+                         f"got {Q_v.shape}")
     P = Q_w                                                                # (002 eq 167) P⁻ = Q_w
     S = C @ P @ C.T + Q_v
     try:
@@ -474,8 +486,8 @@ def block_size(fs, kalman_hz=25.0):
     >>> block_size(200.0), block_size(50.0), block_size(10.0)
     (8, 2, 1)
     """
-    fs = validate.positive(fs, "fs")
-    return max(1, int(round(fs / kalman_hz)))
+    fs = validate.sample_rate(fs, "fs")
+    return max(1, int(round(fs / validate.positive(kalman_hz, "kalman_hz"))))
 
 
 class Kalman9:
@@ -618,7 +630,8 @@ class Kalman9:
             One row per Kalman step: ``q`` (M, 4), ``b_dps`` (M, 3), ``delta_deg`` (M,), ``q6`` (M, 4) the eCompass
             orientation, ``t`` (M,) s, time at the end of each step.
         """
-        gyr, acc, mag = check_recording(gyr_dps, acc_g, mag_uT, need_mag=True)
+        gyr, acc, mag = check_recording(gyr_dps, acc_g, mag_uT, need_mag=True, names=("gyr_dps", "acc_g", "mag_uT"))
+        check_units(acc, mag)
         n = self.tuning.oversample
         M = len(gyr) // n
         out = {k: [] for k in ("q", "b_dps", "delta_deg", "q6")}
@@ -754,7 +767,8 @@ class Kalman6:
         dict of ndarray
             ``q`` (M, 4), ``b_dps`` (M, 3), ``t`` (M,) s.
         """
-        gyr, acc, _ = check_recording(gyr_dps, acc_g, None, need_mag=False)
+        gyr, acc, _ = check_recording(gyr_dps, acc_g, None, need_mag=False, names=("gyr_dps", "acc_g", "mag_uT"))
+        check_units(acc, None)
         n = self.tuning.oversample
         M = len(gyr) // n
         qs, bs = [], []
@@ -766,8 +780,9 @@ class Kalman6:
                 "t": (np.arange(M) + 1) * n / self.tuning.sensor_fs}
 
 
-def check_recording(gyr, acc, mag, need_mag):
-    """The arrays of a recording in the note's units, checked: (N, 3) each, the same N.
+def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag")):
+    """The arrays of a recording in the note's units, checked: (N, 3) each, the same N (the units:
+    :func:`check_units`).
 
     Parameters
     ----------
@@ -779,6 +794,8 @@ def check_recording(gyr, acc, mag, need_mag):
         Magnetometer, µT (None when not needed).
     need_mag : bool
         Whether ``mag`` must be given.
+    names : tuple of str, default ("gyr", "acc", "mag")
+        The caller's names of the three arguments, for the messages (``run_fast9`` passes ``gyr_dps``, ...).
 
     Returns
     -------
@@ -791,16 +808,41 @@ def check_recording(gyr, acc, mag, need_mag):
     >>> g.shape, m
     ((8, 3), None)
     """
-    gyr = validate.array(gyr, "gyr", shape=(None, 3))
-    acc = validate.array(acc, "acc", shape=(None, 3))
-    for name, a in (("gyr", gyr), ("acc", acc)):
+    n_gyr, n_acc, n_mag = names
+    gyr = validate.array(gyr, n_gyr, shape=(None, 3))
+    acc = validate.array(acc, n_acc, shape=(None, 3))
+    for name, a in ((n_gyr, gyr), (n_acc, acc)):
         if a.ndim != 2:
             raise ValueError(f"{name} must have shape (N, 3); got {a.shape}")
     if need_mag:
         if mag is None:
-            raise ValueError("mag must be given: an (N, 3) array in µT")
-        mag = validate.array(mag, "mag", shape=(None, 3))
+            raise ValueError(f"{n_mag} must be given: an (N, 3) array in µT")
+        mag = validate.array(mag, n_mag, shape=(None, 3))
         if mag.ndim != 2:
-            raise ValueError(f"mag must have shape (N, 3); got {mag.shape}")
-    validate.same_length(gyr=gyr, acc=acc, mag=mag)
+            raise ValueError(f"{n_mag} must have shape (N, 3); got {mag.shape}")
+    validate.same_length(**{n_gyr: gyr, n_acc: acc, n_mag: mag})
     return gyr, acc, mag
+
+
+def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT")):
+    """The note's units at a filter's door: the accelerometer in g (m/s² and milli-g refused,
+    :func:`fusionlab.validate.accel_g`), the magnetometer in µT (gauss and nT refused, :func:`fusionlab.validate.field_uT`
+    over :data:`fusionlab.ecompass.ECOMPASS_FIELD_UT`): eq 9 compares ``|G|²`` with 1, eq 15 ``|B_c|²`` with ``B²``
+    and the 7 µT² floor is in µT.
+
+    Parameters
+    ----------
+    acc_g : array_like, shape (N, 3)
+        Accelerometer, g.
+    mag_uT : array_like, shape (N, 3), or None
+        Magnetometer, µT.
+    names : tuple of str, default ("acc_g", "mag_uT")
+        The caller's names of the two arguments.
+
+    Returns
+    -------
+    None
+    """
+    validate.accel_g(acc_g, names[0], per_sample=True)
+    if mag_uT is not None:
+        validate.field_uT(mag_uT, names[1], *ecompass.ECOMPASS_FIELD_UT)

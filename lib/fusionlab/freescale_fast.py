@@ -163,8 +163,9 @@ def held_accel_noise(qvgqa, dt, hold):
     qa = validate.array(qvgqa, "qvgqa")
     if qa.ndim != 1 or np.any(qa < 0):
         raise ValueError(f"qvgqa must be a (M,) array of values >= 0; got shape {qa.shape}")
-    dt = validate.positive(dt, "dt")
-    if not np.isfinite(hold) or hold < 0:
+    dt = validate.time_step(dt, "dt")
+    hold = validate.scalar(hold, "hold")
+    if hold < 0:
         raise ValueError(f"hold must be a finite number of seconds >= 0; got {hold!r}")
     return signals.trailing_max(qa, int(round(hold / dt)) + 1)
 
@@ -215,8 +216,10 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``delta_deg`` (M,), ``t`` (M,) s.
     """
-    gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True)
-    fs = validate.positive(fs, "fs")
+    gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True,
+                                              names=("gyr_dps", "acc_g", "mag_uT"))
+    freescale.check_units(acc, mag)
+    fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     enu = ecompass.ENU[frame]
     N = len(gyr)
@@ -235,14 +238,14 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
     qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)               # (002 eq 15)
     ag_all, am_all = ecompass.weights(qa_all, qd_all / B2_all, 1.0)       # (002 eqs 64-65): only QvBQd/B² enters
-    if accel_hold:                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
+    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
     free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
     if free[0]:
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
     Gm = np.where(free[:, None], [0.0, 0.0, 1.0], Gm)                  # placeholder, never used for an update
     sg_all = ecompass.measured_gravity(Gm, frame)
-    sm_all = Bm / ecompass.nonzero_norm(Bm, "mag")[:, None]
+    sm_all = Bm / ecompass.nonzero_norm(Bm, "mag_uT")[:, None]
     d6_all = np.degrees(ecompass.inclination(Gm, Bm, frame))
     # κ is linear in (cos δ, sin δ): α_g K_g + α_m (cos δ K_m(δ=0) + sin δ K_m(δ=90°)); build the parts for all
     # steps at once, combine them with the running inclination inside the loop.
@@ -350,8 +353,10 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``t`` (M,) s.
     """
-    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False)
-    fs = validate.positive(fs, "fs")
+    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False,
+                                            names=("gyr_dps", "acc_g", "mag_uT"))
+    freescale.check_units(acc, None)
+    fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     N = len(gyr)
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
@@ -361,7 +366,7 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     if free[0]:
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
     qa_all = np.abs(g2 - 1.0)                                              # (002 eq 9)
-    if accel_hold:
+    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):
         qa_all = held_accel_noise(qa_all, dt, accel_hold)                  # ours
     sgn = -1.0 if frame == "Android" else 1.0
     sg_all = np.where(g2[:, None] == 0, [0.0, 0.0, 1.0], sgn * Gm / np.sqrt(np.where(g2 == 0, 1.0, g2))[:, None])

@@ -129,7 +129,9 @@ def lever_arm(a_o, omega, alpha, p):
     ndarray, shape (..., 3)
         Specific force at ``p``, m/s².
     """
-    return inertial.point_acceleration(a_o, omega, alpha, p)                          # (004 eq 3.4)
+    vs = {k: validate.vectors(v, k) for k, v in (("a_o", a_o), ("omega", omega), ("alpha", alpha), ("p", p))}
+    validate.broadcast({k: 1 for k in vs}, **vs)
+    return inertial.point_acceleration(vs["a_o"], vs["omega"], vs["alpha"], vs["p"])  # (004 eq 3.4)
 
 
 def specific_forces(omega, alpha, d, a_o=None):
@@ -153,6 +155,7 @@ def specific_forces(omega, alpha, d, a_o=None):
     """
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     a_o = np.zeros(3) if a_o is None else validate.vectors(a_o, "a_o")
+    validate.broadcast({"omega": 1, "alpha": 1, "a_o": 1}, omega=omega, alpha=alpha, a_o=a_o)
     pos = triad_positions(d)
     out = [lever_arm(a_o, omega, alpha, np.broadcast_to(p, np.broadcast_shapes(omega.shape, alpha.shape)))
            for p in pos]
@@ -254,6 +257,7 @@ def aiv_true(omega, alpha):
         The AIV, rad/s² and rad²/s².
     """
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
+    validate.broadcast({"omega": 1, "alpha": 1}, omega=omega, alpha=alpha)
     omega, alpha = np.broadcast_arrays(omega, alpha)
     return np.concatenate([alpha, quadratic_terms(omega)], axis=-1)
 
@@ -316,7 +320,7 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
         Cross-covariance of input and measurement noise, on the same scale, with the sign ``m_sign``.
     """
     N = validate.scalar(noise_density, "noise_density", nonnegative=True)
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     if m_sign not in (-1, 0, 1):
         raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (the sign inferred from Table 5.3); got {m_sign!r}")
     Ra = N ** 2 * dt                                             # (004 eq 3.24)
@@ -476,14 +480,14 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
     """
     omega, alpha = validate.samples(omega, "omega"), validate.samples(alpha, "alpha")
     validate.same_length(omega=omega, alpha=alpha)
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     N, sb, sw = (validate.scalar(noise_density, "noise_density", nonnegative=True),
                  validate.scalar(bias_std, "bias_std", nonnegative=True),
                  validate.scalar(bias_walk, "bias_walk", nonnegative=True))
     if bias_model not in ("constant", "random_walk"):
         raise ValueError(f"bias_model must be 'constant' or 'random_walk'; got {bias_model!r}")
     lead = () if runs is None else (validate.count(runs, "runs", minimum=1),)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(validate.count(seed, "seed"))
     n = len(omega)
     true = specific_forces(omega, alpha, d, a_o)
     if M is not None:
@@ -552,7 +556,7 @@ def apply_calibration(fits, acc):
 
 
 def _time(T, dt):
-    T, dt = validate.positive(T, "T"), validate.positive(dt, "dt")
+    T, dt = validate.positive(T, "T"), validate.time_step(dt, "dt")
     return np.arange(int(round(T / dt))) * dt
 
 
@@ -602,6 +606,7 @@ def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrat
     w = 2 * np.pi * validate.scalar(f, "f", nonnegative=True)
     om = np.zeros((len(t), 3))
     al = np.zeros((len(t), 3))
+    omega_x, omega_z = validate.scalar(omega_x, "omega_x"), validate.scalar(omega_z, "omega_z")
     om[:, 0] = omega_x
     om[:, 2] = omega_z * np.sin(w * t)                           # (004 eq 3.35)
     al[:, 2] = omega_z * w * np.cos(w * t)
@@ -638,6 +643,7 @@ def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
     t = _time(T, dt)
     w = 2 * np.pi * validate.scalar(f, "f", nonnegative=True)
     axis = np.array([1.0, 1.0, 0.0])
+    omega_m = validate.scalar(omega_m, "omega_m")
     om = omega_m * np.sin(w * t)[:, None] * axis                 # (004 eq 5.31)
     al = omega_m * w * np.cos(w * t)[:, None] * axis             # (004 eq 5.32)
     return _integrate(t, om, al, integrate)
@@ -703,7 +709,8 @@ def trajectory_tumbling(T=20.0, dt=0.01, omega_xy=3.29, alpha_z=0.5, omega_z0=-5
         Angular acceleration, rad/s².
     """
     t = _time(T, dt)
-    a = float(alpha_z)
+    a = validate.scalar(alpha_z, "alpha_z")
+    omega_xy, omega_z0 = validate.scalar(omega_xy, "omega_xy"), validate.scalar(omega_z0, "omega_z0")
     om = np.stack([np.full_like(t, omega_xy), np.full_like(t, omega_xy), omega_z0 + a * t], -1)
     al = np.tile([0.0, 0.0, a], (len(t), 1))
     return _integrate(t, om, al, integrate)

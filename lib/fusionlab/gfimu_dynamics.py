@@ -62,7 +62,7 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
     Q : ndarray, shape (6 + n_bias, 6 + n_bias)
         Process noise covariance.
     """
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     qa = validate.scalar(q_alpha, "q_alpha", nonnegative=True)
     qb = validate.scalar(q_bias, "q_bias", nonnegative=True)
     if n_bias not in (0, 9):
@@ -110,7 +110,7 @@ def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
     Q : ndarray, shape (6 + n_bias, 6 + n_bias)
         Process noise covariance.
     """
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     beta = validate.scalar(beta, "beta", nonnegative=True)
     sigma = validate.scalar(sigma, "sigma", nonnegative=True)
     if first_order:
@@ -198,7 +198,7 @@ class DynamicEKF:
         if x0.shape not in ((6,), (15,)):
             raise ValueError(f"x0 must be [ω, α] (6,) or [ω, α, b] (15,); got {x0.shape}")
         n = len(x0)
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         sa2 = validate.scalar(noise_density, "noise_density", nonnegative=True) ** 2 / self.dt
         self.ekf = ExtendedKalmanFilter(dim_x=n, dim_z=9)
         if process is None:
@@ -207,7 +207,8 @@ class DynamicEKF:
             self.ekf.F, self.ekf.Q = (validate.matrices(m, name, n).copy() for m, name in zip(process, ("F", "Q")))
         self.ekf.R = sa2 / self.d ** 2 * gfimu.aiv_covariance()       # (004 eq 5.20) [R]
         self.ekf.x = x0.copy()
-        self.ekf.P = np.eye(n) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0", n).copy()
+        self.ekf.P = (np.eye(n) * validate.positive(P0, "P0") if np.ndim(P0) == 0 and not isinstance(P0, str)
+                      else validate.covariance(P0, "P0", n).copy())
 
     def step(self, acc):
         """One sample of the twelve accelerometers.
@@ -276,6 +277,8 @@ def observability_matrix(augmented=True, order=None):
     """
     import sympy as sp
 
+    if augmented not in (True, False):
+        raise ValueError(f"augmented must be True or False; got {augmented!r}")
     n = 15 if augmented else 6
     order = n if order is None else validate.count(order, "order", minimum=1)
     w = sp.symbols("omega_x omega_y omega_z", real=True)
@@ -315,6 +318,8 @@ def observability_rank(omega, alpha, augmented=True, exact=True):
     import sympy as sp
 
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
+    if augmented not in (True, False):
+        raise ValueError(f"augmented must be True or False; got {augmented!r}")
     O, x, _ = _observability_cached(bool(augmented))
     vals = [*omega, *alpha]
     if exact:

@@ -81,14 +81,14 @@ class ThreeStateEKF:
     def __init__(self, dt, d, noise_density, x0, P0, m_sign=-1):
         from filterpy.kalman import KalmanFilter
 
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
-        Q, R, M = gfimu.three_state_noise(noise_density, dt, d, m_sign)
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
+        Q, R, M = gfimu.three_state_noise(validate.positive(noise_density, "noise_density"), dt, d, m_sign)
         self.kf = KalmanFilter(dim_x=3, dim_z=self._dim_z)
         self.kf.F = np.eye(3)                                    # (004 eq 3.20)
         self.kf.B = np.eye(3)                                    # G = I (3.21)
         self.kf.Q, self.kf.R, self.kf.M = Q, self._R(R), self._M(M)
         self.kf.x = validate.vectors(x0, "x0").reshape(3).copy()
-        self.kf.P = np.eye(3) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0").copy()
+        self.kf.P = _initial_covariance(P0, 3)
         self.first = True
 
     _dim_z = 6
@@ -190,7 +190,7 @@ class HybridEKF(ThreeStateEKF):
     _dim_z = 9
 
     def __init__(self, dt, d, noise_density, arw, x0, P0, m_sign=-1):
-        self.Rg = validate.scalar(arw, "arw", nonnegative=True) ** 2 / validate.positive(dt, "dt")
+        self.Rg = validate.scalar(arw, "arw", nonnegative=True) ** 2 / validate.time_step(dt, "dt")
         super().__init__(dt, d, noise_density, x0, P0, m_sign)
 
     def _R(self, R):
@@ -276,11 +276,18 @@ def _batch_x0(x0, runs):
     raise ValueError(f"x0 must have shape (3,) or ({runs}, 3); got {x0.shape}")
 
 
-def _per_run(value, name, runs):
+def _initial_covariance(P0, n):
+    """``P0`` as an (n, n) covariance: a positive number is ``P0 I``, a matrix is checked as a covariance."""
+    if np.ndim(P0) == 0 and not isinstance(P0, (str, bytes)) and P0 is not None:
+        return np.eye(n) * validate.positive(P0, "P0")
+    return validate.covariance(P0, "P0", n).copy()
+
+
+def _per_run(value, name, runs, positive=False):
     """A scalar, or one value per run as an (R, 1, 1) array that broadcasts over a batch of matrices."""
-    if np.ndim(value) == 0:
-        return value
-    v = validate.array(value, name)
+    if np.ndim(value) == 0 or value is None or isinstance(value, str):
+        return validate.positive(value, name) if positive else validate.scalar(value, name)
+    v = validate.positive_array(value, name) if positive else validate.array(value, name)
     if v.shape != (runs,):
         raise ValueError(f"{name} must be a number or one value per run, shape ({runs},); got {v.shape}")
     return v[:, None, None]
@@ -288,9 +295,7 @@ def _per_run(value, name, runs):
 
 def _batch_noise(noise_density, dt, d, m_sign, runs):
     """Q, R, M for a batch; ``noise_density`` and ``m_sign`` may hold one value per run (then (R, ·, ·) arrays)."""
-    N = _per_run(noise_density, "noise_density", runs)
-    if np.any(np.asarray(N) < 0):
-        raise ValueError("noise_density must be >= 0")
+    N = _per_run(noise_density, "noise_density", runs, positive=True)        # R is inverted: > 0
     signs = _per_run(m_sign, "m_sign", runs)
     if not np.all(np.isin(signs, (-1, 0, 1))):
         raise ValueError(f"m_sign must be -1, 0, +1, or one of them per run; got {m_sign!r}")
@@ -331,7 +336,7 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
         raise ValueError(f"acc must have shape (R, N, 12), runs first; got {acc.shape}")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
     u, y = _inputs(acc, dt, d)
-    P0 = np.eye(3) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0")
+    P0 = _initial_covariance(P0, 3)
     return _batch_core(u, y, Q, R, M, _batch_x0(x0, len(acc)), P0)
 
 
@@ -371,11 +376,11 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     if acc.ndim != 3 or gyro.shape[:2] != acc.shape[:2]:
         raise ValueError(f"acc (R, N, 12) and gyro (R, N, 3) must share runs and samples; got {acc.shape}, "
                          f"{gyro.shape}")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
     u, y = _inputs(acc, dt, d)
     Rg = dt ** 2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
-    P0 = np.eye(3) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0")
+    P0 = _initial_covariance(P0, 3)
     return _batch_core(u, y, Q, R, M, _batch_x0(x0, len(acc)), P0, gyro_dtheta=dt * gyro, Rg=Rg)
 
 
@@ -399,6 +404,7 @@ def nees(err, P):
     err, P = validate.array(err, "err"), validate.array(P, "P")
     if P.shape[-2:] != (err.shape[-1], err.shape[-1]):
         raise ValueError(f"P must have shape (..., {err.shape[-1]}, {err.shape[-1]}) to match err; got {P.shape}")
+    validate.covariances(P, "P", err.shape[-1])
     return np.einsum("...i,...i->...", err, np.linalg.solve(P, err[..., None])[..., 0])
 
 
@@ -494,7 +500,7 @@ def sckf_project(x, P, alpha_f=0.1, s_th=100.0, max_iter=30):
         How many pseudo-measurements each constraint took (per run).
     """
     x = validate.array(x, "x", shape=(6,))
-    P = validate.array(P, "P", shape=(6, 6))
+    P = validate.covariances(P, "P", 6, definite=False)
     alpha_f, s_th = validate.positive(alpha_f, "alpha_f"), validate.positive(s_th, "s_th")
     single = x.ndim == 1
     xb, Pb = np.atleast_2d(x).copy(), P.reshape((-1, 6, 6)).copy()
@@ -586,14 +592,15 @@ class ConstrainedEKF:
     """
 
     def __init__(self, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0):
-        self.dt, self.d = validate.positive(dt, "dt"), validate.positive(d, "d")
-        self.N = validate.scalar(noise_density, "noise_density", nonnegative=True)
+        self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
+        self.N = validate.positive(noise_density, "noise_density")               # R is inverted: > 0
         self.F, self.Q = _wiener6(self.dt, validate.scalar(q_dw, "q_dw", nonnegative=True))
         self.R = _constrained_noise(self.N, self.dt, self.d)
         self.x = validate.array(x0, "x0", shape=(6,)).reshape(6).copy()
-        self.P = np.eye(6) * P0 if np.ndim(P0) == 0 else validate.matrices(P0, "P0", 6).copy()
-        self.sckf = dict(alpha_f=alpha_f, s_th=s_th, max_iter=max_iter)
-        self.t_on, self.k = t_on, 0
+        self.P = _initial_covariance(P0, 6)
+        self.sckf = dict(alpha_f=validate.positive(alpha_f, "alpha_f"), s_th=validate.positive(s_th, "s_th"),
+                         max_iter=validate.count(max_iter, "max_iter", minimum=1))
+        self.t_on, self.k = (None if t_on is None else validate.scalar(t_on, "t_on", nonnegative=True)), 0
 
     def step(self, acc):
         """One sample: predict, update, and (from ``t_on`` on) constrain.
@@ -702,11 +709,15 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     acc = validate.array(acc, "acc", shape=(None, 12))
     if acc.ndim != 3:
         raise ValueError(f"acc must have shape (R, N, 12), runs first; got {acc.shape}")
-    dt, d = validate.positive(dt, "dt"), validate.positive(d, "d")
+    dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
     runs, n = acc.shape[:2]
-    N = _per_run(noise_density, "noise_density", runs)
-    t_on = np.asarray(np.inf if t_on is None else t_on, dtype=float)
-    if t_on.shape not in ((), (runs,)) or np.any(np.isnan(t_on)):
+    N = _per_run(noise_density, "noise_density", runs, positive=True)
+    alpha_f, s_th = validate.positive(alpha_f, "alpha_f"), validate.positive(s_th, "s_th")
+    max_iter = validate.count(max_iter, "max_iter", minimum=1)
+    t_on = np.asarray(np.inf if t_on is None else validate.array(t_on, "t_on", finite=False), dtype=float)
+    if np.any(np.isnan(t_on)) or np.any(t_on < 0):                     # inf: never (as None), per run
+        raise ValueError(f"t_on must be times in s >= 0 (inf or None: never); got {t_on.ravel()[:3]}")
+    if t_on.shape not in ((), (runs,)):
         raise ValueError(f"t_on must be a time in s, None, or one per run ({runs},); got shape {t_on.shape}")
     t_on = np.broadcast_to(t_on, (runs,))
     q_dw = _per_run(q_dw, "q_dw", runs)
@@ -718,7 +729,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     y = np.concatenate([v[..., :3] * dt, v[..., 3:] * dt ** 2], -1)             # (004 eq 5.46)
     x0 = validate.array(x0, "x0", shape=(6,))
     x = np.array(np.broadcast_to(x0, (runs, 6)), dtype=float)
-    P = np.array(np.broadcast_to(np.eye(6) * P0 if np.ndim(P0) == 0 else P0, (runs, 6, 6)), dtype=float)
+    P = np.array(np.broadcast_to(_initial_covariance(P0, 6), (runs, 6, 6)), dtype=float)
     xs, ps, its = np.empty((runs, n, 6)), np.empty((runs, n, 6)), np.zeros((runs, n, 2), dtype=int)
     H = np.zeros((runs, 9, 6))
     H[:, :3, 3:] = np.eye(3)

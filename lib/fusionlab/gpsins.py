@@ -81,7 +81,7 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
 
 
@@ -111,7 +111,7 @@ def ins_transition(x, acc, A_tilde, dt):
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
     A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     return _ins_F(x, acc, A_tilde, dt)
 
 
@@ -157,13 +157,14 @@ def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_wal
         ``Q``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     vals = dict(gyro_noise=gyro_noise, acc_noise=acc_noise, gyro_bias_walk=gyro_bias_walk,
                 acc_bias_walk=acc_bias_walk, pos_noise=pos_noise)
     for k, v in vals.items():
-        if not np.isfinite(v) or v < 0:
+        vals[k] = validate.scalar(v, k)
+        if vals[k] < 0:
             raise ValueError(f"{k} must be a finite number >= 0; got {v!r}")
-    return _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise)
+    return _ins_Q(x, dt, **vals)
 
 
 def _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise):
@@ -236,6 +237,16 @@ def _gps_rows(gps, n):
     return np.all(np.isfinite(gps), axis=1)
 
 
+def _imu_door(gyr, acc, fs, g):
+    """The IMU record at a filter's door: (N, 3) each, the same N, rad/s and m/s² (°/s and g refused, the gyro
+    also against the accelerometer), a sample rate in Hz and a positive g."""
+    gyr = validate.samples(gyr, "gyr")
+    acc = validate.accel_ms2(acc, "acc")
+    validate.same_length(gyr=gyr, acc=acc)
+    fs = validate.sample_rate(fs, "fs")
+    return validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs), acc, fs, validate.positive(g, "g")
+
+
 def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=None, acc_sigma=0.02, still_speed=1.0):
     """The 21-state loosely coupled DCM GPS/INS Kalman filter (004 §7.2) over a recording.
 
@@ -281,11 +292,9 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
         ``x`` (N, 21) after each sample, ``sd`` (N, 21) standard deviations, ``C_bn`` (N, 3, 3) orthonormal,
         ``euler`` (N, 3) rad, ``r``, ``v``, ``b_g``, ``b_a`` (N, 3).
     """
-    gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
-    n = validate.same_length(gyr=gyr, acc=acc)
+    gyr, acc, fs, g = _imu_door(gyr, acc, fs, g)
+    n = len(gyr)
     fix = _gps_rows(gps, n)
-    fs = validate.positive(fs, "fs")
     x = validate.array(x0, "x0", shape=(21,)).reshape(21).copy()
     P = validate.array(P0, "P0")
     P = np.diag(P) if P.shape == (21,) else P.copy()
@@ -368,7 +377,8 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
 
     Derived in docs/derivations.md §5:
     ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
-    State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step.
+    State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step,
+    so it checks nothing (as :func:`fusionlab.kalman.update_step`); :func:`run_euler_ukf` checks its inputs once.
 
     Parameters
     ----------
@@ -429,7 +439,12 @@ def sigma_points_2n(x, P):
     if x.ndim != 1:
         raise ValueError(f"x must have shape (n,); got {x.shape}")
     n = len(x)
-    P = validate.array(P, "P", shape=(n, n))
+    P = validate.array(P, "P")
+    if P.shape != (n, n):
+        raise ValueError(f"P must have shape ({n}, {n}) to match x ({n} states); got {P.shape}")
+    asym = float(np.max(np.abs(P - P.T))) if P.size else 0.0
+    if asym > 1e-9 * max(float(np.max(np.abs(P))), 1e-300):
+        raise ValueError(f"P must be symmetric positive definite (a covariance); got max|P - Pᵀ| = {asym:.3g}")
     try:
         U = cholesky(n * P)                                                          # upper: UᵀU = nP
     except np.linalg.LinAlgError:
@@ -479,11 +494,9 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
         As :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
     """
     from filterpy.kalman import JulierSigmaPoints, UnscentedKalmanFilter, update
-    gyr = validate.samples(gyr, "gyr")
-    acc = validate.samples(acc, "acc")
-    n = validate.same_length(gyr=gyr, acc=acc)
+    gyr, acc, fs, g = _imu_door(gyr, acc, fs, g)
+    n = len(gyr)
     fix = _gps_rows(gps, n)
-    fs = validate.positive(fs, "fs")
     x0 = validate.array(x0, "x0", shape=(15,)).reshape(15)
     P0 = validate.array(P0, "P0")
     P0 = np.diag(P0) if P0.shape == (15,) else P0

@@ -35,7 +35,8 @@ def coriolis_acceleration(omega, v):
     Parameters
     ----------
     omega : array_like, shape (..., 3)
-        Rotation rate of the frame, rad/s.
+        Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
+        turntable, so convert with np.radians).
     v : array_like, shape (..., 3)
         Velocity relative to the rotating frame, m/s.
 
@@ -106,7 +107,8 @@ def coriolis_force(mass, omega, v):
     mass : float
         Mass, kg, > 0.
     omega : array_like, shape (..., 3)
-        Rotation rate of the frame, rad/s.
+        Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
+        turntable, so convert with np.radians).
     v : array_like, shape (..., 3)
         Velocity relative to the rotating frame, m/s.
 
@@ -127,7 +129,8 @@ def seed000_eq334_printed(mass, omega, v):
     mass : float
         Mass M, kg, > 0.
     omega : array_like, shape (..., 3)
-        Rotation rate of the frame, rad/s.
+        Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
+        turntable, so convert with np.radians).
     v : array_like, shape (..., 3)
         Velocity relative to the rotating frame, m/s.
 
@@ -153,7 +156,8 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     a_inertial : array_like, shape (..., 3)
         Acceleration in the inertial frame, expressed in rotating-frame axes, m/s².
     omega : array_like, shape (..., 3)
-        Rotation rate of the frame, rad/s.
+        Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
+        turntable, so convert with np.radians).
     r : array_like, shape (..., 3)
         Position in the rotating frame, m.
     v : array_like, shape (..., 3)
@@ -190,7 +194,8 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     a_o : array_like, shape (..., 3)
         Acceleration (or specific force) at the body origin, m/s².
     omega : array_like, shape (..., 3)
-        Body rate, rad/s.
+        Body rate, rad/s (any size is accepted: a rate in °/s cannot be told from a fast turn, so convert
+        with np.radians).
     alpha : array_like, shape (..., 3)
         Angular acceleration, rad/s².
     r : array_like, shape (..., 3)
@@ -285,7 +290,7 @@ def integrate_rate(rate, dt, angle0=0.0):
     w = validate.array(rate, "rate")
     if w.ndim == 0 or len(w) == 0:
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     a0 = validate.array(angle0, "angle0")
     validate.broadcast(rate=w[0], angle0=a0)                  # one start angle per axis of a sample
     steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
@@ -330,6 +335,6 @@ def integration_drift(t, bias, noise_std, dt):
     t = validate.nonnegative(t, "t")
     b = validate.array(bias, "bias")
     sd = validate.nonnegative(noise_std, "noise_std")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     validate.broadcast(t=t, bias=b, noise_std=sd)
     return b * t, sd * np.sqrt(dt * t)

@@ -104,24 +104,26 @@ def check_model(names=None, optional=(), **given):
             raise ValueError(f"{nm[key]} is required (an array); got None")
     P, H, R, A, Q, B, u, x, z, K = (given.get(k) for k in _KEYS)
     n = m = None
+    by = ""                                          # " to match P (n states)": which argument fixed n
     if P is not None:
         P = validate.covariance(P, nm["P"])
-        n = P.shape[0]
+        n, by = P.shape[0], f" to match {nm['P']} ({P.shape[0]} states)"
     if A is not None:
         A = _square(A, nm["A"])
         if n is not None and A.shape != (n, n):
             raise ValueError(f"{nm['A']} must have shape ({n}, {n}) to match {nm['P']}; got {A.shape}")
-        n = A.shape[0]
+        if n is None:
+            n, by = A.shape[0], f" to match {nm['A']} ({A.shape[0]} states)"
     if x is not None:
         x = validate.array(x, nm["x"])
-        if n is None:
-            n = x.shape[0] if x.ndim == 1 else None
+        if n is None and x.ndim == 1:
+            n, by = x.shape[0], f" to match {nm['x']} ({x.shape[0]} states)"
         if x.shape != (n,):
-            raise ValueError(f"{nm['x']} must have shape ({n},); got {x.shape}")
+            raise ValueError(f"{nm['x']} must have shape ({n},){by}; got {x.shape}")
     if H is not None:
         H = validate.array(H, nm["H"])
         if H.ndim != 2 or (n is not None and H.shape[1] != n):
-            raise ValueError(f"{nm['H']} must have shape (m, {n}); got {H.shape}")
+            raise ValueError(f"{nm['H']} must have shape (m, {n}){by}; got {H.shape}")
         m = H.shape[0]
     if R is not None:
         R = validate.covariance(R, nm["R"])
@@ -129,7 +131,9 @@ def check_model(names=None, optional=(), **given):
             raise ValueError(f"{nm['R']} must have shape ({m}, {m}) to match {nm['H']}; got {R.shape}")
         m = R.shape[0]
     if Q is not None:
-        Q = validate.covariance(Q, nm["Q"], n=n)
+        Q = validate.covariance(Q, nm["Q"])
+        if n is not None and Q.shape != (n, n):
+            raise ValueError(f"{nm['Q']} must have shape ({n}, {n}){by}; got {Q.shape}")
     if z is not None:
         z = validate.exact_shape(z, nm["z"], (m,))
     if K is not None:
@@ -142,7 +146,7 @@ def check_model(names=None, optional=(), **given):
             raise ValueError(f"{nm['B']} and {nm['u']} must be given together (the control term is B @ u)")
         B = validate.array(B, nm["B"])
         if B.ndim != 2 or B.shape[0] != n:
-            raise ValueError(f"{nm['B']} must have shape ({n}, p); got {B.shape}")
+            raise ValueError(f"{nm['B']} must have shape ({n}, p){by}; got {B.shape}")
         u = validate.array(u, nm["u"])
         if u.shape != (B.shape[1],):
             raise ValueError(f"{nm['u']} must have shape ({B.shape[1]},) to match {nm['B']} {B.shape}; "
@@ -253,8 +257,30 @@ def rls_scalar(y, R, x0=0.0, P0=np.inf):
     return x_hat, Ps, Ks
 
 
+def _inv(M, message):
+    """``M⁻¹``, or a ValueError with ``message`` (which names the arguments) where numpy would raise LinAlgError."""
+    try:
+        return np.linalg.inv(M)
+    except np.linalg.LinAlgError:
+        raise ValueError(message) from None
+
+
+_SINGULAR_S = ("P, H, R give a singular innovation covariance H P Hᵀ + R, which the gain inverts: R must be "
+               "positive definite, or P and H must give every measurement some variance (R = 0 with P = 0, or a "
+               "row of H that observes no state?)")
+
+
 def _gain(P, H, R):
-    return P @ H.T @ np.linalg.inv(H @ P @ H.T + R)                  # (000 eq 4.31)
+    return P @ H.T @ _inv(H @ P @ H.T + R, _SINGULAR_S)              # (000 eq 4.31)
+
+
+def _information(P, H, R):
+    """``(P⁻¹ + Hᵀ R⁻¹ H)⁻¹`` with the singular cases named."""
+    Pi = _inv(P, "P must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a "
+                 "singular P")
+    Ri = _inv(R, "R must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a "
+                 "singular R")
+    return _inv(Pi + H.T @ Ri @ H, "P, H, R give a singular information matrix P⁻¹ + Hᵀ R⁻¹ H")
 
 
 def _joseph(P, K, H, R):
@@ -357,7 +383,7 @@ def information_covariance(P, H, R):
     """
     d = check_model(P=P, H=H, R=R)
     P, H, R = d["P"], d["H"], d["R"]
-    return np.linalg.inv(np.linalg.inv(P) + H.T @ np.linalg.inv(R) @ H)   # (000 §4.3.1, alternate form)
+    return _information(P, H, R)                                     # (000 §4.3.1, alternate form)
 
 
 def gain_from_posterior(P_post, H, R):
@@ -378,7 +404,8 @@ def gain_from_posterior(P_post, H, R):
         The gain.
     """
     d = check_model(P=P_post, H=H, R=R, names={"P": "P_post"})
-    return d["P"] @ d["H"].T @ np.linalg.inv(d["R"])                 # (000 §4.3.1, alternate form)
+    R_inv = _inv(d["R"], "R must be positive definite (invertible) for the gain P_post Hᵀ R⁻¹; got a singular R")
+    return d["P"] @ d["H"].T @ R_inv                                 # (000 §4.3.1, alternate form)
 
 
 def expanded_covariance(P, K, H, R):
@@ -539,7 +566,7 @@ def update_step(x, P, z, H, R, form):
     elif form == "short":
         P = (np.eye(P.shape[0]) - K @ H) @ P                         # (000 §4.3.1 alternate form)
     else:
-        P = np.linalg.inv(np.linalg.inv(P) + H.T @ np.linalg.inv(R) @ H)   # (000 §4.3.1 alternate form)
+        P = _information(P, H, R)                                    # (000 §4.3.1 alternate form)
     return x, P, K
 
 
@@ -736,7 +763,7 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
         elif form == "short":
             P = (np.eye(n) - K @ H) @ P                              # (000 §4.3.1 alternate form)
         else:
-            P = np.linalg.inv(np.linalg.inv(P) + H.T @ np.linalg.inv(Rm) @ H)   # (000 §4.3.1 alternate form)
+            P = _information(P, H, Rm)                               # (000 §4.3.1 alternate form)
         out["x"][:, i], out["P"][i], out["K"][i] = x, P, K
         if project_state:
             x = x @ A.T + Bu                                         # (000 eq 4.32 + G u)
@@ -754,7 +781,7 @@ def nees(err, P):
     err : array_like, shape (..., n)
         Estimate minus truth.
     P : array_like, shape (..., n, n)
-        The filter's covariance for that estimate (broadcasts against ``err``).
+        The filter's covariance for that estimate (broadcasts against ``err``): symmetric, positive definite.
 
     Returns
     -------
@@ -772,6 +799,7 @@ def nees(err, P):
         raise ValueError(f"P must have shape (..., {err.shape[-1] if err.ndim else 'n'}, "
                          f"{err.shape[-1] if err.ndim else 'n'}) to match err {err.shape}; got {P.shape}")
     validate.broadcast({"err": 1, "P": 2}, err=err, P=P)
+    validate.covariances(P, "P", err.shape[-1])
     sol = np.linalg.solve(P, err[..., None])[..., 0]
     return np.einsum("...i,...i->...", err, sol)
 
@@ -833,6 +861,10 @@ def steady_state(A, H, Q, R):
     """
     d = check_model(A=A, H=H, Q=Q, R=R)
     A, H, Q, R = d["A"], d["H"], d["Q"], d["R"]
-    P = solve_discrete_are(A.T, H.T, Q, R)
+    try:
+        P = solve_discrete_are(A.T, H.T, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"A, H, Q, R have no steady state: (A, H) must be detectable (H must observe every state "
+                         f"A does not damp) and R positive definite; the Riccati solver says: {exc}") from None
     K = _gain(P, H, R)                                               # (000 eq 4.31)
     return P, K, _joseph(P, K, H, R)                                 # (000 eq 4.17)

@@ -266,6 +266,9 @@ def rms(x, mask=None, *, axis=None):
     array([1., 2.])
     """
     x = validate.array(x, "x", finite=False)
+    if np.any(np.isinf(x)):
+        raise ValueError(f"x must hold finite numbers or NaN (undefined samples, left out); got "
+                         f"{int(np.count_nonzero(np.isinf(x)))} infinite value(s)")
     if axis is None and x.ndim != 1:
         raise ValueError(f"x must have shape (N,), or give axis= to average over several axes; got {x.shape}")
     if x.ndim == 0:

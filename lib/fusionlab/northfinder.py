@@ -185,6 +185,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     """
     a_A, w, al = validate.vectors(a_A, "a_A"), validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     t = validate.array(t, "t")
+    validate.broadcast({"a_A": 1, "omega": 1, "alpha": 1}, a_A=a_A, omega=w, alpha=al, t=t)
     rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
     c, s = np.cos(omega_r * t), np.sin(omega_r * t)
     wx, wy, wz = w[..., 0], w[..., 1], w[..., 2]
@@ -216,10 +217,10 @@ def fixed_triad_outputs(a_A, omega, alpha, d):
         Specific forces, m/s², rows A, B, C, D.
     """
     d = validate.positive(d, "d")
-    a_A = validate.vectors(a_A, "a_A")
+    a_A, w, al = validate.vectors(a_A, "a_A"), validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
+    validate.broadcast({"a_A": 1, "omega": 1, "alpha": 1}, a_A=a_A, omega=w, alpha=al)
     pos = np.array([[0.0, 0, 0], [d, 0, 0], [0, d, 0], [0, 0, d]])
-    return point_specific_force(a_A[..., None, :], np.asarray(omega, float)[..., None, :],
-                                np.asarray(alpha, float)[..., None, :], pos)
+    return point_specific_force(a_A[..., None, :], w[..., None, :], al[..., None, :], pos)
 
 
 def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
@@ -250,6 +251,7 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
         ``[ω_x, ω_y, ω_z]``, rad/s.
     """
     a_rot, fixed = validate.vectors(a_rot, "a_rot"), validate.array(fixed, "fixed", shape=(4, 3))
+    validate.broadcast({"a_rot": 1, "fixed": 2}, a_rot=a_rot, fixed=fixed)
     d, rho = validate.positive(d, "d"), validate.positive(rho, "rho")
     l, omega_r = _scalar(l, "l"), validate.positive(omega_r, "omega_r")
     A, B, C, D = (fixed[..., i, :] for i in range(4))
@@ -400,10 +402,10 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
     ndarray, shape (3,)
         The sample variance of ω_x, ω_y, ω_z (s²/m² when R_a = 1 (m/s²)²).
     """
-    n = int(n)
+    n = validate.count(n, "n")
     if n < 2:
         raise ValueError(f"n must be an integer >= 2; got {n}")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(validate.count(seed, "seed"))
     w = rate_from_rotating(rng.standard_normal((n, 3)), rng.standard_normal((n, 4, 3)), d, rho, l, omega_r)
     return w.var(axis=0, ddof=1)
 
@@ -460,7 +462,7 @@ def leveled_body_rate(heading, lat):
     """
     heading = validate.angles_rad(heading, "heading")
     C_bn = rotations.euler_to_dcm(np.stack([np.zeros_like(heading), np.zeros_like(heading), heading], -1))
-    w_n = earth.earth_rate_ned(lat)
+    w_n = earth.earth_rate_ned(validate.scalar(lat, "lat"))
     return np.einsum("...ji,...j->...i", C_bn, w_n)
 
 
@@ -493,8 +495,9 @@ def tilted_heading(zeta, roll, pitch, lat):
     float
         Heading ψ, rad, in (−π, π].
     """
-    zeta, roll, pitch = (validate.angles_rad(a, n) for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch")))
-    lat = validate.angles_rad(lat, "lat", limit=np.pi / 2 - 1e-9)
+    zeta, roll, pitch = (float(validate.angles_rad(validate.scalar(a, n), n))
+                         for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch")))
+    lat = float(validate.angles_rad(validate.scalar(lat, "lat"), "lat", limit=np.pi / 2 - 1e-9))
     sf, cf, st, ct = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
     tz = np.tan(zeta)
     W = earth.OMEGA_IE
@@ -535,7 +538,7 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
     lat : float, optional
         Latitude, rad.
     g : float, optional
-        Gravity, m/s².
+        Gravity, m/s², >= 0 (0 leaves the gravity leakage out).
     scale : float, optional
         Scale factor s_a (dimensionless).
     bias : float, optional
@@ -555,10 +558,12 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
         ``t`` (N,) s, ``theta`` (N,) rad, ``acc`` (N,) m/s², ``fs`` Hz, ``f_r`` Hz, ``omega_r`` rad/s, ``A_c``
         m/s², ``heading`` rad.
     """
-    heading = float(validate.angles_rad(heading, "heading"))
-    duration, fs, rpm = validate.positive(duration, "duration"), validate.positive(fs, "fs"), validate.positive(
+    heading = float(validate.angles_rad(validate.scalar(heading, "heading"), "heading"))
+    lat = validate.scalar(lat, "lat")
+    seed = validate.count(seed, "seed")
+    duration, fs, rpm = validate.positive(duration, "duration"), validate.sample_rate(fs, "fs"), validate.positive(
         rpm, "rpm")
-    scale, bias, g = _scalar(scale, "scale"), _scalar(bias, "bias"), _scalar(g, "g")
+    scale, bias, g = _scalar(scale, "scale"), _scalar(bias, "bias"), validate.scalar(g, "g", nonnegative=True)
     if scale == 0:
         raise ValueError("scale must be non-zero; got 0")
     noise = _scalar(noise, "noise")
@@ -610,10 +615,10 @@ def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
     """
     from scipy.signal import firls
 
-    order = int(order)
+    order = validate.count(order, "order")
     if order < 2 or order % 2:
         raise ValueError(f"order must be an even integer >= 2 (odd tap count, integer group delay); got {order}")
-    fs, f_r = validate.positive(fs, "fs"), validate.positive(f_r, "f_r")
+    fs, f_r = validate.sample_rate(fs, "fs"), validate.positive(f_r, "f_r")
     p, s = validate.positive(pass_half_width, "pass_half_width"), validate.positive(stop_half_width,
                                                                                       "stop_half_width")
     if not (p < s < f_r and f_r + s < fs / 2):
@@ -662,6 +667,8 @@ def bandpass(x, theta, taps, remove_mean=True):
     m = len(taps) - 1
     if len(x) <= m:
         raise ValueError(f"x must be longer than the filter order {m}; got {len(x)} samples")
+    if remove_mean not in (True, False):
+        raise ValueError(f"remove_mean must be True or False; got {remove_mean!r}")
     if remove_mean:
         x = x - x.mean()
     y = oaconvolve(x, taps, mode="valid")                                            # (004 eq 4.47)
@@ -687,6 +694,8 @@ def whole_turns(theta):
     slice(28, 94, None)
     """
     theta = validate.array(theta, "theta")
+    if theta.ndim != 1 or len(theta) < 2:
+        raise ValueError(f"theta must be a (N,) rotor angle of at least 2 samples; got shape {theta.shape}")
     k0, k1 = np.ceil(theta[0] / (2 * np.pi)), np.floor(theta[-1] / (2 * np.pi))
     if k1 - k0 < 1:
         raise ValueError("theta must span at least one whole turn (two index pulses)")
@@ -816,7 +825,8 @@ def period_average(x, theta, bins=128, turns=None):
     (9, 30.0)
     """
     x, theta = _signal_and_angle(x, theta)
-    if int(bins) != bins or bins < 8 or bins % 4:
+    bins = validate.scalar(bins, "bins")
+    if bins != int(bins) or bins < 8 or bins % 4:
         raise ValueError(f"bins must be an integer >= 8 and a multiple of 4; got {bins}")
     bins = int(bins)
     if np.any(np.diff(theta) <= 0):
@@ -827,7 +837,7 @@ def period_average(x, theta, bins=128, turns=None):
         raise ValueError("theta must span at least one whole turn (two index pulses)")
     if turns is None:
         turns = available
-    elif int(turns) != turns or not 1 <= turns <= available:
+    elif validate.scalar(turns, "turns") != int(turns) or not 1 <= turns <= available:
         raise ValueError(f"turns must be an integer from 1 to {available} (the whole turns in the record); got {turns}")
     turns = int(turns)
     phi = (np.arange(bins) + 0.5) * 2 * np.pi / bins
@@ -859,6 +869,7 @@ def north_finder(record, order, method="demodulation", reference="sampled", **ba
     float
         Heading, rad.
     """
+    order = validate.count(order, "order")
     taps = bandpass_firls(order, record["fs"], record["f_r"], **band)
     y, th = bandpass(record["acc"], record["theta"], taps)
     if method == "demodulation":
@@ -888,6 +899,7 @@ def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
         Headings, rad: [demodulation sampled, demodulation exact, synchronous sampling].
     """
     headings = validate.angles_rad(np.atleast_1d(headings), "headings")
+    seed = validate.count(seed, "seed")
     out = np.empty((len(headings), len(orders), 3))
     for s, psi in enumerate(headings):
         rec = synthetic_record(psi, seed=seed + s, **record)

@@ -585,7 +585,7 @@ def rotvec_to_quat(sigma, order="exact"):
     Parameters
     ----------
     sigma : array_like, shape (..., 3)
-        Rotation vectors (unit axis × angle), rad.
+        Rotation vectors (unit axis × angle), rad; an angle over one turn (2π) is refused as degrees.
     order : {'exact', 'first'}, default 'exact'
         The exact quaternion or its small-angle form.
 
@@ -604,7 +604,7 @@ def rotvec_to_quat(sigma, order="exact"):
     >>> round(float(np.linalg.norm(q)) - 1, 6)                 # norm error ≈ s²/8 = 0.00125
     0.001249
     """
-    sigma = validate.vectors(sigma, "sigma")
+    sigma = validate.rotation_vectors(sigma, "sigma")
     if order == "first":
         return np.concatenate([np.ones(sigma.shape[:-1] + (1,)), sigma / 2], -1)
     if order != "exact":
@@ -649,7 +649,8 @@ def rodrigues_dcm(sigma, order="exact"):
     Parameters
     ----------
     sigma : array_like, shape (..., 3)
-        Body rotation vector over the step (body rate × dt), rad.
+        Body rotation vector over the step (body rate × dt), rad; an angle over one turn (2π) is refused as
+        degrees.
     order : {'exact', 'second', 'first'}, default 'exact'
         Rodrigues' formula, or its expansion to second or first order in ``B``.
 
@@ -668,7 +669,7 @@ def rodrigues_dcm(sigma, order="exact"):
            [ 0.1,  1. ,  0. ],
            [ 0. ,  0. ,  1. ]])
     """
-    sigma = validate.vectors(sigma, "sigma")
+    sigma = validate.rotation_vectors(sigma, "sigma")
     B = skew(sigma)                                                       # (000 eq 3.53)
     eye = np.broadcast_to(np.eye(3), B.shape)
     if order == "first":
@@ -810,7 +811,7 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     gyr : array_like, shape (N, 3)
         Body rates, one row per step, rad/s.
     dt : float
-        Time step, s.
+        Time step, s, 10 µs – 1 s (a larger value is refused as a sample rate in Hz).
     order : {'first', 'second', 'exact'}, default 'first'
         ``'first'`` (I + B, the thesis lab), ``'second'`` or ``'exact'`` (Rodrigues), see :func:`rodrigues_dcm`.
     renormalize : {'columns', 'rows', None}, default 'columns'
@@ -837,9 +838,10 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     first columns det 1.0000 yaw 89.9926
     exact None    det 1.0000 yaw 90.0000
     """
-    C = validate.rotation(validate.array(C0, "C0", shape=(3, 3)), "C0", tol=1e-3).reshape(3, 3)
+    C = validate.rotation(validate.exact_shape(C0, "C0", (3, 3)), "C0", tol=1e-3)
     gyr = validate.gyro_rad(gyr, "gyr")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
+    validate.turn_per_step(gyr, dt, "gyr")
     if renormalize not in (None, "columns", "rows"):
         raise ValueError(f"renormalize must be 'columns', 'rows' or None; got {renormalize!r}")
     A = rodrigues_dcm(gyr * dt, order=order)
@@ -861,9 +863,11 @@ def integrate_gyro_quat(q0, gyr, dt):
     q0 : array_like, shape (4,)
         Initial unit quaternion ``[w, x, y, z]``, body→navigation.
     gyr : array_like, shape (N, 3)
-        Body rates, one row per step, rad/s.
+        Body rates, one row per step, rad/s. Refused as °/s when they peak above 50 or have a median above 10, or
+        turn more than π in one step; a record in °/s that is mostly at rest passes these (only the accelerometer
+        could tell: :func:`fusionlab.validate.gyro_rad` with ``acc``, as ``estimators.run`` does).
     dt : float
-        Time step, s.
+        Time step, s, 10 µs – 1 s (a larger value is refused as a sample rate in Hz).
 
     Returns
     -------
@@ -883,7 +887,8 @@ def integrate_gyro_quat(q0, gyr, dt):
     if q.shape != (4,):
         raise ValueError(f"q0 must be one quaternion, shape (4,); got {q.shape}")
     gyr = validate.gyro_rad(gyr, "gyr")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
+    validate.turn_per_step(gyr, dt, "gyr")
     dq = rotvec_to_quat(gyr * dt)
     out = np.empty((len(gyr) + 1, 4))
     out[0] = q

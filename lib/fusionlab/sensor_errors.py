@@ -453,9 +453,11 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     (array([0., 1., 2., 3.]), array([0., 0., 1., 3.]))
     """
     a = validate.samples(acc_nav, "acc_nav")
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     v0 = np.zeros(3) if v0 is None else validate.array(v0, "v0", shape=(3,))
     p0 = np.zeros(3) if p0 is None else validate.array(p0, "p0", shape=(3,))
+    if len(a) == 0:                                  # no sample, no state: not the initial one alone
+        return np.zeros((0, 3)), np.zeros((0, 3))
     v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])     # (001 position §3, v update)
     p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])     # (001 position §3, r update)
     return v, p

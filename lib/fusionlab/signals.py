@@ -166,6 +166,7 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
     if len(gyr) == 0:
         raise ValueError("gyr, acc must hold at least one sample; got 0")
     fs = validate.sample_rate(fs)
+    validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs)
     gyr_lp, acc_lp = lowpass(gyr, fs, tau), lowpass(acc, fs, tau)
     quiet = ((np.linalg.norm(gyr - gyr_lp, axis=1) < validate.positive(gyr_tol, "gyr_tol"))
              & (np.linalg.norm(acc - acc_lp, axis=1) < validate.positive(acc_tol, "acc_tol"))

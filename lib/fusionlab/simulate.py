@@ -107,7 +107,7 @@ def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 
     >>> len(t), angle[[0, 150, 300]], round(float(rate.max()), 3)      # 11 s at 50 Hz; level, +60°, -40°...
     (550, array([ 0., 60., 10.]), 47.124)
     """
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     wp = validate.array(waypoints, "waypoints", shape=(2,))
     if wp.ndim != 2 or len(wp) < 2 or np.any(np.diff(wp[:, 0]) <= 0):
         raise ValueError(f"waypoints must be (t, angle) pairs with increasing t; got shape {wp.shape}")
@@ -179,7 +179,7 @@ def imu_record(roll_deg, pitch_deg, fs=FS, rng=None, vib_amp=VIB_AMP, vib_freq=V
     phi = np.radians(validate.array(roll_deg, "roll_deg"))
     theta = np.radians(validate.array(pitch_deg, "pitch_deg"))
     validate.same_length(roll_deg=phi, pitch_deg=theta)
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     n = len(phi)
     t = np.arange(n) / fs
@@ -263,7 +263,7 @@ def lab03_records(seed=LAB03_SEED, fs=FS):
         Per record name: ``t`` (N,) s, ``roll_deg``, ``pitch_deg`` (N,) true angles in degrees, ``acc`` (N, 3) g,
         ``gyr`` (N, 2) °/s, ``counts`` (N, 5) int.
     """
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3)]
     out = {}
     n10 = int(round(10 * fs))
@@ -520,7 +520,7 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
         (N, 3); ``bias`` (3,) rad/s; ``acc_bias`` (3,) m/s²; ``inclination`` rad; ``field`` gauss; ``fs`` Hz.
     """
     from . import rotations
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     duration = validate.positive(duration, "duration")
     rng = np.random.default_rng(seed)
     n = int(round(duration * fs))
@@ -611,7 +611,7 @@ def car_record(seed=11, fs=1 / T71_DT, duration=120.0, stops=((0.0, 10.0), (55.0
         As :func:`air_vehicle_record`, plus ``static`` (N,) bool: the car stands still after sample k.
     """
     from . import rotations
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     rng = np.random.default_rng(seed)
     dt = 1.0 / fs
     n = int(round(duration * fs))
@@ -699,7 +699,7 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
         ``b_a`` (3,) m/s²; ``gyr_true``, ``f_true`` (N, 3); ``fs`` Hz, ``g`` m/s².
     """
     from . import rotations
-    fs = validate.positive(fs, "fs")
+    fs = validate.sample_rate(fs, "fs")
     rng = np.random.default_rng(seed)
     dt = 1.0 / fs
     n = int(round(duration * fs))

@@ -42,9 +42,13 @@ class LogParseError(ValueError):
 
 
 def _read_text(log):
+    if isinstance(log, str) and log.strip() and "\n" not in log.strip() and Path(log.strip()).exists():
+        log = Path(log.strip())                        # a path copied with its line end ("motion.log\n")
     if isinstance(log, (bytes, bytearray)):
         raw = bytes(log)
     elif isinstance(log, Path) or (isinstance(log, str) and "\n" not in log and Path(log).is_file()):
+        if Path(log).is_dir():
+            raise ValueError(f"log must be a terminal log file; got the directory {str(log)!r} (name a file in it)")
         raw = Path(log).read_bytes()
     elif isinstance(log, str):
         if "\n" not in log and tuple(log.split()) != HEADER:
@@ -52,6 +56,12 @@ def _read_text(log):
         return log.removeprefix("\ufeff")
     else:
         raise ValueError(f"log must be a path, str or bytes; got {type(log).__name__}")
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return raw.decode("utf-16").removeprefix("\ufeff")  # a log saved as UTF-16 by an editor
+    if raw[:200].count(b"\x00") > len(raw[:200]) // 4:
+        raise ValueError("log must be text in one byte per character (ASCII, Latin-1 or UTF-8); got bytes with "
+                         "NUL characters between the letters, as UTF-16 without a byte-order mark -- save it as "
+                         "UTF-8")
     return raw.removeprefix(b"\xef\xbb\xbf").decode("latin-1")         # a UTF-8 byte-order mark is not text
 
 
@@ -262,7 +272,7 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
     from openpyxl import Workbook
 
     c = validate.samples(counts, "counts", 5).astype(np.int64)
-    dt = validate.positive(dt, "dt")
+    dt = validate.time_step(dt, "dt")
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     wb = Workbook()

@@ -6,12 +6,16 @@ gets a ``ValueError`` that names the argument, what was expected and what came, 
 three calls deeper.
 
 Beyond shapes and finiteness: :func:`broadcast` names the arguments whose batch sizes do not fit, :func:`options`
-refuses an unknown keyword, :func:`covariance` and :func:`rotation` check what a matrix must be, and the unit doors
-:func:`angles_rad`, :func:`euler_rad`, :func:`gyro_rad`, :func:`accel_ms2` and :func:`sample_rate` refuse values
-that fit degrees, °/s, g or a sample interval far better than the documented unit. ``tests/test_bad_input.py``
-checks every public function of rotations, conventions, the sensor modules (sensors, accel_tilt, inertial,
-sensor_errors, signals), kalman, falling_body, calibration, metrics and ``estimators.run`` against them, one bad
-argument at a time.
+refuses an unknown keyword, :func:`covariance`, :func:`covariances` and :func:`rotation` check what a matrix must
+be, and the unit doors -- one per kind of quantity -- refuse values that fit another unit far better than the
+documented one: :func:`angles_rad`, :func:`euler_rad` and :func:`rotation_vectors` (degrees), :func:`gyro_rad`
+(°/s, also against the accelerometer: :func:`gyro_tilt_ratio`), :func:`accel_ms2` (g, milli-g), :func:`accel_g`
+(m/s², milli-g where g is documented), :func:`field_uT` (gauss, milligauss, nT), :func:`sample_rate` and
+:func:`time_step` (a sample interval for a rate and the reverse), :func:`turn_per_step` (a turn no sampled record
+resolves). ``tests/test_bad_input.py`` checks every public function of rotations, conventions, the sensor modules
+(sensors, accel_tilt, inertial, sensor_errors, signals), kalman, falling_body, calibration, metrics, the seed
+methods' modules and ``estimators.run`` against them, one bad argument at a time; ``tests/test_unit_slips.py`` makes the
+same slips on real BROAD recordings.
 """
 from __future__ import annotations
 
@@ -19,7 +23,8 @@ import numpy as np
 
 __all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption"]
+           "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
 
 
 def _shape_text(shape, lead=""):
@@ -474,6 +479,43 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
     return a
 
 
+def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
+    """Rotation vectors ``(..., 3)`` (unit axis × angle) in radians: an angle beyond one full turn means degrees.
+
+    Every rotation has a rotation vector of angle at most π; up to 2π (the same rotation the long way round) is
+    accepted, beyond it the vector fits degrees far better than radians.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The rotation vectors, rad.
+    name : str, default "sigma"
+        The argument's name, used in the error message.
+    limit : float, default 2π + 1e-9
+        The largest angle ``|x|`` accepted, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``x`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.rotation_vectors([0.0, 0.0, 90.0], "sigma")
+    Traceback (most recent call last):
+        ...
+    ValueError: sigma must be rotation vectors in radians (angle |sigma| <= 6.283, one turn); got an angle of 90, which looks like degrees -- use np.radians(...)
+    """
+    v = vectors(x, name)
+    if v.size:
+        top = float(np.max(np.linalg.norm(v, axis=-1)))
+        if top > limit:
+            raise ValueError(f"{name} must be rotation vectors in radians (angle |{name}| <= {limit:.4g}, one turn); "
+                             f"got an angle of {top:.4g}, which looks like degrees -- use np.radians(...)")
+    return v
+
+
 def euler_rad(x, name="euler"):
     """Euler angles ``(..., 3)`` = ``[roll, pitch, yaw]`` in radians: roll and yaw within ±2π, pitch within ±π.
 
@@ -617,6 +659,58 @@ def covariance(P, name, n=None, tol=1e-9, definite=False):
     return P
 
 
+def covariances(P, name, n, tol=1e-9, definite=True):
+    """A batch of covariance matrices ``(..., n, n)``: each symmetric and positive (semi-)definite within ``tol``.
+
+    The batched twin of :func:`covariance` (same tolerances, relative to each matrix's largest entry), for a
+    function that inverts one covariance per sample or per run.
+
+    Parameters
+    ----------
+    P : array_like, shape (..., n, n)
+        The covariance matrices.
+    name : str
+        The argument's name, used in the error message.
+    n : int
+        The size of one matrix.
+    tol : float, default 1e-9
+        Allowed asymmetry and negative eigenvalue, relative to each matrix's largest entry.
+    definite : bool, default True
+        Require positive definite (smallest eigenvalue > 0): the matrix is inverted.
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        ``P`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.covariances([[[1.0, 0.0], [0.0, -4.0]]], "P", 2)
+    Traceback (most recent call last):
+        ...
+    ValueError: P must be positive definite covariance matrices (variances cannot be negative, and P is inverted); got smallest eigenvalue -4 (matrix 0)
+    """
+    P = array(P, name, shape=(n, n))
+    if P.size == 0:
+        return P
+    flat = P.reshape(-1, n, n)
+    scale = np.maximum(np.max(np.abs(flat), axis=(1, 2)), 1e-300)
+    asym = np.max(np.abs(flat - np.swapaxes(flat, 1, 2)), axis=(1, 2))
+    if np.any(asym > tol * scale):
+        i = int(np.argmax(asym / scale))
+        raise ValueError(f"{name} must be symmetric covariance matrices; got max|{name} - {name}ᵀ| = {asym[i]:.3g} "
+                         f"(matrix {i})")
+    low = np.min(np.linalg.eigvalsh(0.5 * (flat + np.swapaxes(flat, 1, 2))), axis=1)
+    bad = (low < -tol * scale) | ((low <= 0) if definite else False)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise ValueError(f"{name} must be positive {'definite' if definite else 'semi-definite'} covariance "
+                         f"matrices (variances cannot be negative{', and ' + name + ' is inverted' if definite else ''}"
+                         f"); got smallest eigenvalue {low[i]:.3g} (matrix {i})")
+    return P
+
+
 def rotation(C, name, tol=1e-6):
     """``C`` as rotation matrices ``(..., 3, 3)``: orthonormal with det +1 within ``tol``.
 
@@ -690,12 +784,16 @@ def sample_rate(fs, name="fs", low=1.0, high=1e5):
     return v
 
 
-def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0):
+def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_name="acc"):
     """Gyro rates ``(N, 3)`` in rad/s, refusing records that look like °/s.
 
-    Two tests, both far outside a body's motion in rad/s and squarely inside it in °/s: a peak rate above ``peak``
-    (50 rad/s = 2900 °/s, beyond the range of the MEMS gyros of the course), or a *median* rate above ``typical``
-    (10 rad/s = 570 °/s sustained over half the record: a hand or a vehicle turning in °/s gives 10-100).
+    Two tests on the gyro alone, both far outside a body's motion in rad/s and squarely inside it in °/s: a peak
+    rate above ``peak`` (50 rad/s = 2900 °/s, beyond the range of the MEMS gyros of the course), or a *median* rate
+    above ``typical`` (10 rad/s = 570 °/s sustained over half the record: a hand or a vehicle turning in °/s gives
+    10-100). A record that is mostly at rest passes both in °/s; given the accelerometer ``acc`` and the sample rate
+    ``fs``, the gyro is also checked against it (:func:`gyro_tilt_ratio`): where the gyro says the body tilted, the
+    direction of gravity must have turned about as far. Read in rad/s, a gyro in °/s tilts the body 57 times
+    further than the accelerometer sees.
 
     Parameters
     ----------
@@ -707,11 +805,35 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0):
         The largest rate magnitude accepted, rad/s.
     typical : float, default 10.0
         The largest median rate magnitude accepted, rad/s.
+    acc : ndarray, shape (N, 3), optional
+        The accelerometer of the same record (any unit, already checked), for the cross-check.
+    fs : float, optional
+        The sample rate, Hz (already checked), for the cross-check.
+    acc_name : str, default "acc"
+        The accelerometer's argument name, for the message.
 
     Returns
     -------
     ndarray, shape (N, 3)
         ``gyr`` as a float array, rad/s.
+
+    Examples
+    --------
+    Mostly at rest, with one tilt of 0.6 rad about x in 3 s that the accelerometer follows; then the same gyro
+    in °/s, which passes the tests on the gyro alone (median rate 0):
+
+    >>> import numpy as np
+    >>> from fusionlab import validate
+    >>> rate = np.where((np.arange(800) >= 200) & (np.arange(800) < 500), -0.2, 0.0)       # rad/s, 100 Hz
+    >>> roll = -np.cumsum(rate) / 100.0
+    >>> acc = 9.81 * np.stack([0 * roll, np.sin(roll), np.cos(roll)], axis=1)
+    >>> gyr = np.stack([rate, 0 * rate, 0 * rate], axis=1)
+    >>> validate.gyro_rad(gyr, acc=acc, fs=100.0).shape
+    (800, 3)
+    >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)
     """
     g = samples(gyr, name)
     if len(g):
@@ -722,7 +844,69 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0):
             raise ValueError(f"{name} must be in rad/s; got {what}, which looks like deg/s "
                              f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
                              f"turning body) -- use np.radians(...)")
+    if acc is not None and fs is not None and len(g):
+        ratio, n = gyro_tilt_ratio(g, acc, fs)
+        if n >= TILT_WINDOWS_MIN and ratio < TILT_RATIO_MIN:
+            raise ValueError(f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
+                             f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
+                             f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
+                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)")
     return g
+
+
+#: The cross-check of :func:`gyro_tilt_ratio`: windows of 0.1 s; only windows in which the gyro tilts the body by
+#: more than 0.05 rad count (0.5 rad/s across gravity: gyro noise and bias at rest never reach it); at least 20 such
+#: windows (2 s: a short gyro glitch the accelerometer never saw is a filter's business, not a unit slip), and the
+#: accelerometer must follow at least a quarter of the tilt (real records: median 0.8-3.3 on the
+#: eight BROAD trials, °/s read as rad/s: 0.015-0.06).
+TILT_WINDOW, TILT_MIN, TILT_WINDOWS_MIN, TILT_RATIO_MIN = 0.1, 0.05, 20, 0.25
+
+
+def gyro_tilt_ratio(gyr, acc, fs):
+    """How far the direction of gravity turns, as a fraction of the tilt the gyro integrates (median over windows).
+
+    The record is cut into windows of :data:`TILT_WINDOW` s; in each the accelerometer is averaged (the direction
+    ``u`` of gravity in the body, whatever its unit and sign), and between two windows the gyro predicts the change
+    ``u × ω Δt`` (a rotation about gravity changes nothing and is not counted). Over the windows where that
+    prediction exceeds :data:`TILT_MIN` rad, the median of observed / predicted is near 1 for a gyro in rad/s
+    (above 1 while the body also accelerates) and near 1/57 for one in °/s. It assumes the specific force mostly
+    follows gravity while the body tilts fast (a hand, a robot, a walker); an aircraft in a coordinated turn keeps
+    it along its own z, but turns far slower than the 0.5 rad/s across gravity a window needs to count (the
+    simulated flight of Lab 10: no window counts in rad/s, 620 in °/s).
+
+    Parameters
+    ----------
+    gyr : ndarray, shape (N, 3)
+        Angular rates, supposedly rad/s.
+    acc : ndarray, shape (N, 3)
+        Accelerometer of the same samples, any unit.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    ratio : float
+        The median ratio (NaN when no window counts).
+    n : int
+        The number of windows that count.
+    """
+    gyr, acc = np.asarray(gyr, float), np.asarray(acc, float)
+    m = max(1, int(round(TILT_WINDOW * fs)))
+    nb = min(len(gyr), len(acc)) // m
+    if nb < 2:
+        return float("nan"), 0
+    a = acc[:nb * m].reshape(nb, m, 3).mean(axis=1)
+    size = np.linalg.norm(a, axis=1)
+    u = a / np.maximum(size, 1e-300)[:, None]
+    turn = gyr[:nb * m].reshape(nb, m, 3).sum(axis=1) / fs                # rotation vector over each window, rad
+    between = 0.5 * (turn[:-1] + turn[1:])                                 # from one window's middle to the next
+    predicted = np.linalg.norm(np.cross(u[:-1], between), axis=1)
+    observed = np.linalg.norm(u[1:] - u[:-1], axis=1)
+    usable = (size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size))   # not in free fall
+    count = usable & (predicted > TILT_MIN)
+    if not np.any(count):
+        return float("nan"), 0
+    return float(np.median(observed[count] / predicted[count])), int(count.sum())
 
 
 def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
@@ -730,7 +914,8 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
     that look like g.
 
     The median magnitude of any record with a rest or slow phase is near 9.81 m/s²; a median between 0.5 and 2
-    means the readings are in g (multiply by 9.80665). A record in free fall throughout (median near 0) passes
+    means the readings are in g (multiply by 9.80665), one of :data:`MILLI_G_FROM` (100) or more means milli-g
+    (1000 at rest) or raw counts. A record in free fall throughout (median near 0) passes
     here; the filters say what they do with it.
 
     Parameters
@@ -763,4 +948,171 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
         if 0.5 <= med <= 2.0:
             raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.3g}, which looks like g "
                              f"(at rest it should be {g:.4g}) -- multiply by {g}")
+        if med >= MILLI_G_FROM:
+            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
+                             f"half the record), which looks like milli-g (1000 at rest) or raw counts -- "
+                             f"multiply milli-g by {g / 1000:g}")
     return a
+
+
+#: A median specific force from this value up (m/s², about 10 g over half the record: no vehicle or hand
+#: sustains it) is refused by :func:`accel_ms2` as milli-g or counts.
+MILLI_G_FROM = 100.0
+
+
+#: The Earth's field strength at its surface, µT (about 25 at the magnetic equator to 65 near the poles).
+EARTH_FIELD_UT = (25.0, 65.0)
+
+_FIELD_UNITS = (("gauss", 100.0), ("milligauss", 0.1), ("nT", 1e-3), ("T", 1e6), ("mT", 1e3))
+
+
+def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
+    """A magnetometer record in µT: its median field strength must lie between ``low`` and ``high``.
+
+    The Earth's field is 25-65 µT (:data:`EARTH_FIELD_UT`); indoors and near iron the median of a record stays
+    within 10-200 µT. A median outside fits another unit far better: gauss (0.25-0.65), milligauss (250-650), nT
+    (25,000-65,000) or tesla; the message names the one that brings it to the Earth's field and its factor.
+
+    Parameters
+    ----------
+    mag : array_like, shape (N, 3) (``(..., 3)`` with ``per_sample=False``)
+        Magnetic field, µT.
+    name : str, default "mag"
+        The argument's name, used in the error message.
+    low, high : float, default 10.0, 200.0
+        The accepted range of the median field strength, µT.
+    per_sample : bool, default True
+        Require a recording ``(N, 3)``; otherwise any ``(..., 3)``.
+
+    Returns
+    -------
+    ndarray
+        ``mag`` as a float array, µT.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.field_uT([[0.2, 0.0, 0.44]], "mag")
+    Traceback (most recent call last):
+        ...
+    ValueError: mag must be in µT (the Earth's field is 25-65 µT); got a median field strength of 0.4833, which looks like gauss -- multiply by 100
+    """
+    m = samples(mag, name) if per_sample else vectors(mag, name)
+    if m.size:
+        med = float(np.median(np.linalg.norm(m, axis=-1)))
+        if med > 0 and not low <= med <= high:
+            lo, hi = EARTH_FIELD_UT
+            fits = [(u, f) for u, f in _FIELD_UNITS if 0.5 * lo <= med * f <= 2 * hi]
+            hint = (", which looks like a unit vector (a direction, not a field) -- pass the field in µT"
+                    if abs(med - 1.0) < 1e-3 else
+                    f", which looks like {fits[0][0]} -- multiply by {fits[0][1]:g}" if fits else
+                    " -- convert it to µT")
+            raise ValueError(f"{name} must be in µT (the Earth's field is {lo:g}-{hi:g} µT); got a median field "
+                             f"strength of {med:.4g}{hint}")
+    return m
+
+
+def accel_g(G, name="G", per_sample=False):
+    """An accelerometer reading in units of g (the Freescale note's unit): refuse m/s² and milli-g.
+
+    At rest ``|G|`` is 1; a median magnitude between 5 and 20 is m/s² (9.81 at rest), one of 200 or more is
+    milli-g (1000 at rest).
+
+    Parameters
+    ----------
+    G : array_like, shape (..., 3) (``(N, 3)`` with ``per_sample``)
+        Accelerometer readings, g.
+    name : str, default "G"
+        The argument's name, used in the error message.
+    per_sample : bool, default False
+        Require a recording ``(N, 3)``.
+
+    Returns
+    -------
+    ndarray
+        ``G`` as a float array, g.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.accel_g([0.0, 0.0, 9.81], "G")
+    Traceback (most recent call last):
+        ...
+    ValueError: G must be in g (1 at rest); got a median magnitude of 9.81, which looks like m/s² -- divide by 9.80665
+    """
+    a = samples(G, name) if per_sample else vectors(G, name)
+    if a.size:
+        med = float(np.median(np.linalg.norm(a, axis=-1)))
+        what = ("m/s² -- divide by 9.80665" if 5.0 <= med <= 20.0 else
+                "milli-g -- divide by 1000" if med >= 200.0 else None)
+        if what:
+            raise ValueError(f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks "
+                             f"like {what}")
+    return a
+
+
+def time_step(dt, name="dt", low=1e-5, high=1.0):
+    """A sample interval in s between ``low`` and ``high`` (10 µs – 1 s: the rates of :func:`sample_rate`).
+
+    A value above is almost always the sample *rate* in Hz passed as the interval (100 for 0.01 s), or a time in
+    ms; one below, a rate in kHz inverted twice.
+
+    Parameters
+    ----------
+    dt : float
+        The time step, s.
+    name : str, default "dt"
+        The argument's name, used in the error message.
+    low : float, default 1e-5
+        The shortest step accepted, s.
+    high : float, default 1.0
+        The longest step accepted, s.
+
+    Returns
+    -------
+    float
+        ``dt`` as a Python float, s.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.time_step(100.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: dt must be a time step in s between 1e-05 and 1; got 100 -- a sample rate fs in Hz? the step is 1/fs = 0.01 s
+    """
+    v = positive(dt, name)
+    if not low <= v <= high:
+        hint = (f" -- a sample rate fs in Hz? the step is 1/fs = {1 / v:g} s" if v > high else
+                " -- a time in another unit?")
+        raise ValueError(f"{name} must be a time step in s between {low:g} and {high:g}; got {v:g}{hint}")
+    return v
+
+
+def turn_per_step(gyr, dt, name="gyr"):
+    """Refuse rates whose turn over one step, ``|ω| dt``, exceeds π: no sampled record can resolve it.
+
+    Half a turn or more between two samples aliases (a turn of 1.5π reads as −0.5π); from a real sensor it means
+    degrees passed as radians, or a step that is the sample rate.
+
+    Parameters
+    ----------
+    gyr : ndarray, shape (N, 3)
+        Rates, rad/s.
+    dt : float
+        Time step, s.
+    name : str, default "gyr"
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        ``gyr``, unchanged.
+    """
+    if np.size(gyr):
+        top = float(np.max(np.linalg.norm(gyr, axis=-1))) * dt
+        if top > np.pi:
+            raise ValueError(f"{name} must turn less than π rad per step; got |{name}| dt = {top:.4g} rad in one "
+                             f"step of {dt:g} s, which no sampled record resolves -- degrees for radians, or the "
+                             "sample rate passed as dt?")
+    return gyr

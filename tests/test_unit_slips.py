@@ -1,0 +1,350 @@
+"""Unit slips on real recordings, and the holes an outside probe found in the bad-input checks: each one either
+gives a ValueError that names the argument and the likely slip, or the correct number.
+
+The real-data cases run on the BROAD trials the course ships (``data/broad/``): a gyro in °/s on a record that is
+mostly at rest passes every test on the gyro alone, so it is checked against the accelerometer
+(:func:`fusionlab.validate.gyro_tilt_ratio`); milli-g, gauss and nT are checked against the magnitudes a real
+record has; the smaller functions get the exact reproducer of the report.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fusionlab import (accel_tilt, calibration, correlation, datasets, ecompass, estimators, falling_body, kalman,
+                       metrics, rotations, sensor_errors, spreadsheet, validate)
+
+G = 9.80665
+N_REST = 15_000                                   # trial 27's first 15,000 samples: mostly at rest (the report's case)
+
+
+@pytest.fixture(scope="module")
+def trial27():
+    tr = datasets.load_trial(27)
+    return tr.gyr[:N_REST], tr.acc[:N_REST], tr.mag[:N_REST], tr.fs
+
+
+@pytest.fixture(scope="module")
+def trials():
+    return {t: datasets.load_trial(t) for t in datasets.available_trials()}
+
+
+def _mag(name, mag):
+    return mag if estimators.available()[name]["uses_mag"] else None
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 1. The gyro in °/s, cross-checked against the accelerometer
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_trial27_start_is_the_case_the_gyro_alone_cannot_tell(trial27):
+    """The premise: in °/s the first 15,000 samples pass the peak and median tests (median below 10)."""
+    gyr, acc, _, fs = trial27
+    rate = np.linalg.norm(np.degrees(gyr), axis=1)
+    assert np.max(rate) < 50.0 and np.median(rate) < 10.0
+    validate.gyro_rad(np.degrees(gyr), "gyr")                         # the tests on the gyro alone pass
+
+
+@pytest.mark.parametrize("name", sorted(estimators.available()))
+def test_gyro_in_deg_per_s_on_a_mostly_rest_record_is_refused_by_every_filter(trial27, name):
+    gyr, acc, mag, fs = trial27
+    with pytest.raises(ValueError, match=r"^gyr must be in rad/s; the direction of gravity in acc turned only "
+                                         r"0\.0\d+ times as far as gyr says the body tilted .* deg/s"):
+        estimators.run(name, np.degrees(gyr), acc, fs, mag=_mag(name, mag))
+
+
+def test_gyro_tilt_ratio_separates_rad_from_deg_on_every_shipped_trial(trials):
+    """The cross-check's margin, on whole trials and on their first 15,000 samples: rad/s never below 0.5, °/s
+    never above 0.1 (the threshold is 0.25); a window count below the minimum is not judged."""
+    for name, tr in trials.items():
+        for sl in (slice(None), slice(0, N_REST)):
+            ratio, n = validate.gyro_tilt_ratio(tr.gyr[sl], tr.acc[sl], tr.fs)
+            assert n < validate.TILT_WINDOWS_MIN or ratio > 0.5, (name, sl, ratio, n)
+            ratio, n = validate.gyro_tilt_ratio(np.degrees(tr.gyr[sl]), tr.acc[sl], tr.fs)
+            assert n >= validate.TILT_WINDOWS_MIN and ratio < 0.1, (name, sl, ratio, n)
+        validate.gyro_rad(tr.gyr, "gyr", acc=tr.acc, fs=tr.fs)         # the honest record passes
+
+
+def test_gyro_check_ignores_turns_about_gravity_and_short_glitches():
+    """A turn about the vertical leaves gravity where it is (nothing to compare), and a 0.5 s gyro glitch the
+    accelerometer never saw is a filter's business, not a unit slip."""
+    fs, n = 100.0, 2000
+    acc = np.tile([0.0, 0.0, G], (n, 1))
+    yaw = np.tile([0.0, 0.0, 3.0], (n, 1))                             # 3 rad/s about z, gravity still
+    validate.gyro_rad(yaw, "gyr", acc=acc, fs=fs)
+    glitch = np.zeros((n, 3))
+    glitch[300:350, 0] = 4.0
+    validate.gyro_rad(glitch, "gyr", acc=acc, fs=fs)
+    glitch[300:600, 0] = 4.0                                           # 3 s of it: no longer a glitch
+    with pytest.raises(ValueError, match="gyr must be in rad/s"):
+        validate.gyro_rad(glitch, "gyr", acc=acc, fs=fs)
+
+
+def test_rest_detect_cross_checks_the_gyro_too(trial27):
+    from fusionlab import signals
+    gyr, acc, _, fs = trial27
+    with pytest.raises(ValueError, match="gyr must be in rad/s.*deg/s"):
+        signals.rest_detect(np.degrees(gyr), acc, fs)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 2-3. Accelerometer in milli-g, magnetometer in gauss or nT
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", sorted(estimators.available()))
+def test_acc_in_milli_g_is_refused_by_every_filter(trial27, name):
+    gyr, acc, mag, fs = trial27
+    with pytest.raises(ValueError, match=r"^acc must be in m/s²; got a median magnitude of 10\d\d .* milli-g"):
+        estimators.run(name, gyr, acc / G * 1000.0, fs, mag=_mag(name, mag))
+
+
+@pytest.mark.parametrize("factor, unit", [(0.01, "gauss"), (1000.0, "nT"), (10.0, "milligauss")])
+def test_freescale9_refuses_a_field_that_is_not_in_micro_tesla(trial27, factor, unit):
+    gyr, acc, mag, fs = trial27
+    with pytest.raises(ValueError, match=rf"^mag must be in µT .* which looks like {unit}"):
+        estimators.run("freescale9", gyr, acc, fs, mag=mag * factor)
+
+
+@pytest.mark.parametrize("name", ["dcm_ahrs", "triad"])
+def test_scale_free_filters_give_the_same_attitude_in_any_field_unit(trial27, name):
+    """What run()'s docstring promises for them: gauss or nT give the µT answer (within rounding)."""
+    gyr, acc, mag, fs = gyr_acc_mag_fs = trial27
+    ref = estimators.run(name, gyr[:3000], acc[:3000], fs, mag=mag[:3000])
+    for factor in (0.01, 1000.0):
+        q = estimators.run(name, gyr[:3000], acc[:3000], fs, mag=factor * mag[:3000])
+        assert np.degrees(np.max(metrics.total_error(metrics.error_quaternion(q, ref)))) < 1e-6
+
+
+def test_ecompass_refuses_m_s2_milli_g_gauss_and_nT_and_keeps_honest_snapshots():
+    q = rotations.euler_to_quat([0.2, -0.1, 0.7])
+    G1 = ecompass.accel_model(q)                                       # g
+    B1 = ecompass.mag_model(q, 50.0, np.radians(60.0))                 # µT
+    ref = ecompass.ecompass(G1, B1, np.radians(60.0)).q
+    assert np.degrees(metrics.total_error(metrics.error_quaternion(ref[None], q[None]))[0]) < 1e-6
+    with pytest.raises(ValueError, match=r"^G must be in g .* looks like m/s² -- divide by 9.80665"):
+        ecompass.ecompass(G1 * G, B1, np.radians(60.0))
+    with pytest.raises(ValueError, match=r"^G must be in g .* looks like milli-g"):
+        ecompass.ecompass(G1 * 1000, B1, np.radians(60.0))
+    with pytest.raises(ValueError, match=r"^B_c must be in µT .* looks like gauss -- multiply by 100"):
+        ecompass.ecompass(G1, B1 / 100, np.radians(60.0))
+    with pytest.raises(ValueError, match=r"^B_c must be in µT .* looks like nT -- multiply by 0.001"):
+        ecompass.ecompass(G1, B1 * 1000, np.radians(60.0))
+    # a magnet beside the sensor (Lab 04's sweep adds up to 200 µT) is a disturbance, not a unit
+    ecompass.ecompass(G1, B1 + [200.0, -100.0, 80.0], np.radians(60.0))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 4. Lab 03's pipeline
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def counts():
+    return spreadsheet.parse_terminal_log("data/lab03/motion.log")
+
+
+def test_pipeline_refuses_volts_for_counts_and_the_rate_for_dt(counts):
+    volts = counts * 3.0 / 1024
+    with pytest.raises(ValueError, match=r"^counts must be raw ADC counts .* looks like volts"):
+        correlation.pipeline(volts, 0.02)
+    with pytest.raises(ValueError, match=r"^dt must be a time step in s .* got 50 -- a sample rate fs in Hz\? the "
+                                         r"step is 1/fs = 0.02 s"):
+        correlation.pipeline(counts, 50)
+    with pytest.raises(ValueError, match=r"^n_ma must be an integer >= 1; got nan"):
+        correlation.pipeline(counts, 0.02, n_ma=float("nan"))
+    assert len(correlation.pipeline(counts, 0.02)) == len(counts)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 5. The sample rate for dt in the integrators, and a turn over π per step
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_integrators_refuse_the_sample_rate_as_dt_and_give_the_right_yaw_with_dt():
+    gyr = np.tile(np.radians([0.0, 0.0, 10.0]), (100, 1))
+    for call in (lambda dt: rotations.integrate_gyro_quat([1.0, 0, 0, 0], gyr, dt)[-1],
+                 lambda dt: rotations.integrate_gyro_dcm(np.eye(3), gyr, dt, order="exact")[-1]):
+        with pytest.raises(ValueError, match=r"^dt must be a time step in s .* got 100 -- a sample rate fs in Hz"):
+            call(100.0)
+        final = call(0.01)
+        yaw = rotations.quat_to_euler(final)[2] if final.shape == (4,) else rotations.dcm_to_euler(final)[2]
+        assert np.degrees(yaw) == pytest.approx(10.0, abs=1e-9)
+
+
+def test_integrators_refuse_a_turn_over_half_a_revolution_per_step():
+    gyr = np.tile([0.0, 0.0, 8.0], (10, 1))                        # 8 rad/s (peak and median pass) at 0.5 s
+    for fn, x0 in ((rotations.integrate_gyro_quat, [1.0, 0, 0, 0]),
+                   (lambda C0, w, dt: rotations.integrate_gyro_dcm(C0, w, dt, order="exact"), np.eye(3))):
+        with pytest.raises(ValueError, match=r"^gyr must turn less than π rad per step; got \|gyr\| dt = 4 rad"):
+            fn(x0, gyr, 0.5)
+        fn(x0, gyr, 0.1)                                           # 0.8 rad per step: resolved
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 6. The small holes
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_nees_refuses_a_covariance_that_is_not_positive_definite():
+    with pytest.raises(ValueError, match=r"^P must be positive definite covariance matrices .* -1 \(matrix 0\)"):
+        kalman.nees([1.0, 1.0], [[1.0, 2.0], [2.0, 1.0]])              # the report's 0.25
+    P = np.stack([np.eye(2), np.diag([1.0, 0.0])])
+    with pytest.raises(ValueError, match=r"\(matrix 1\)"):
+        kalman.nees(np.ones((2, 2)), P)
+    assert kalman.nees([1.0, 2.0], np.diag([1.0, 4.0])) == pytest.approx(2.0)
+
+
+def test_rms_refuses_inf_and_still_leaves_nan_out():
+    with pytest.raises(ValueError, match=r"^x must hold finite numbers or NaN .* 1 infinite value"):
+        metrics.rms([0.1, np.inf, 0.2])
+    assert metrics.rms([3.0, np.nan, -3.0]) == 3.0
+
+
+def test_tilt_2d_refuses_a_zero_reading_and_keeps_the_axis_case():
+    with pytest.raises(ValueError, match=r"^a_x, a_y must not both be 0"):
+        accel_tilt.tilt_2d(0.0, 0.0)
+    assert accel_tilt.tilt_2d(0.0, 1.0) == pytest.approx(np.pi / 2)
+
+
+G_CALLS = [
+    lambda g: falling_body.terminal_velocity(0.25, 10.0, g=g),
+    lambda g: falling_body.seed000_labcode_falling_body(g=g, TMAX=1),
+    lambda g: falling_body.falling_body_euler(1.0, g=g),
+    lambda g: falling_body.falling_body_exact([0.0, 1.0], g=g),
+    lambda g: falling_body.quadratic_terminal_velocity(g=g),
+    lambda g: falling_body.falling_body_quadratic(1.0, g=g),
+    lambda g: falling_body.falling_body_state_space(g=g),
+    lambda g: falling_body.simulate_falling_body(1, 0, n_steps=5, g=g),
+]
+
+
+@pytest.mark.parametrize("call", G_CALLS)
+@pytest.mark.parametrize("g", [0.0, -9.8])
+def test_falling_body_refuses_gravity_that_is_not_positive(call, g):
+    with pytest.raises(ValueError, match=rf"^g must be > 0; got {g!r}"):
+        call(g)
+
+
+def test_falling_body_keeps_positive_gravity():
+    for call in G_CALLS:
+        call(9.8)
+    assert falling_body.terminal_velocity(0.25, 10.0, g=9.8) == pytest.approx(-392.0)
+
+
+def test_read_allan_refuses_all_zero_errors_and_keeps_partly_unknown_ones():
+    taus = np.array([0.01, 0.02, 0.05, 0.1, 0.2, 0.5])
+    adev = 0.01 / np.sqrt(taus) + 0.001 * np.sqrt(taus)
+    with pytest.raises(ValueError, match=r"^adev_err must hold at least one known \(> 0\) error"):
+        calibration.read_allan(taus, adev, adev_err=np.zeros(6))
+    err = np.r_[np.zeros(3), adev[3:] / 10]
+    assert calibration.read_allan(taus, adev, adev_err=err).arw == pytest.approx(0.01, rel=0.05)
+
+
+def test_dead_reckon_of_no_sample_is_empty():
+    v, p = sensor_errors.dead_reckon(np.zeros((0, 3)), 0.01, v0=[1.0, 0, 0])
+    assert v.shape == (0, 3) and p.shape == (0, 3)
+    v, p = sensor_errors.dead_reckon(np.zeros((2, 3)), 0.5, v0=[1.0, 0, 0])
+    np.testing.assert_allclose(p[:, 0], [0.0, 0.5])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 7. Degrees where radians are documented, where a magnitude tells
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("fn", [rotations.rotvec_to_quat, rotations.rodrigues_dcm])
+def test_a_rotation_vector_over_one_turn_is_refused_as_degrees(fn):
+    with pytest.raises(ValueError, match=r"^sigma must be rotation vectors in radians .* got an angle of 90, which "
+                                         r"looks like degrees"):
+        fn([0.0, 0.0, 90.0])
+    q = rotations.rotvec_to_quat([0.0, 0.0, 1.5 * np.pi])          # the long way round is still a rotation
+    assert np.degrees(rotations.quat_to_euler(q)[2]) == pytest.approx(-90.0)
+    fn([[0.0, 0.0, 2 * np.pi]])
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 8. The obscure errors: a ValueError naming the argument
+# ----------------------------------------------------------------------------------------------------------------
+
+Z2 = np.zeros((2, 2))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: kalman.kalman_gain(Z2, np.eye(2), Z2), r"^P, H, R give a singular innovation covariance"),
+    (lambda: kalman.update([0, 0], Z2, [1, 1], np.eye(2), Z2), r"^P, H, R give a singular innovation covariance"),
+    (lambda: kalman.information_covariance(Z2, np.eye(2), np.eye(2)), r"^P must be positive definite"),
+    (lambda: kalman.update([0, 0], Z2, [1, 1], np.eye(2), np.eye(2), covariance="information"),
+     r"^P must be positive definite"),
+    (lambda: kalman.gain_from_posterior(np.eye(2), np.eye(2), Z2), r"^R must be positive definite"),
+    (lambda: kalman.steady_state(1.01 * np.eye(2), np.zeros((1, 2)), 0.1 * np.eye(2), np.eye(1)),
+     r"^A, H, Q, R have no steady state: \(A, H\) must be detectable"),
+])
+def test_singular_kalman_matrices_are_named_not_a_linalg_error(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+@pytest.mark.parametrize("fn, good", [(calibration.apply_triad, "TriadFit"),
+                                      (calibration.apply_ellipsoid, "EllipsoidFit")])
+@pytest.mark.parametrize("fit", [None, {"M": np.eye(3), "b": np.zeros(3)}])
+def test_apply_a_calibration_refuses_what_is_not_its_fit(fn, good, fit):
+    with pytest.raises(ValueError, match=rf"^fit must be the {good} that .* returns; got {type(fit).__name__}"):
+        fn(fit, np.zeros((2, 3)))
+
+
+def test_integrate_gyro_dcm_names_an_empty_or_batched_C0():
+    for C0, shape in (([], r"\(0,\)"), (np.stack([np.eye(3)] * 2), r"\(2, 3, 3\)")):
+        with pytest.raises(ValueError, match=rf"^C0 must have shape \(3, 3\); got {shape}"):
+            rotations.integrate_gyro_dcm(C0, np.zeros((3, 3)), 0.01)
+
+
+def test_log_parser_reads_utf16_and_a_path_with_its_line_end_and_names_a_directory(tmp_path, counts):
+    text = open("data/lab03/motion.log", encoding="latin-1").read()
+    (tmp_path / "bom.log").write_bytes(text.encode("utf-16"))
+    np.testing.assert_array_equal(spreadsheet.parse_terminal_log(tmp_path / "bom.log"), counts)
+    np.testing.assert_array_equal(spreadsheet.parse_terminal_log("data/lab03/motion.log\n"), counts)
+    (tmp_path / "nobom.log").write_bytes(text.encode("utf-16-le"))
+    with pytest.raises(ValueError, match=r"^log must be text in one byte per character .* UTF-16"):
+        spreadsheet.parse_terminal_log(tmp_path / "nobom.log")
+    with pytest.raises(ValueError, match=r"^log must be a terminal log file; got the directory"):
+        spreadsheet.parse_terminal_log(str(tmp_path))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# 9. The message names the argument the caller passed
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_a_wrong_sized_P_is_named_beside_H():
+    with pytest.raises(ValueError, match=r"^H must have shape \(m, 3\) to match P \(3 states\); got \(2, 2\)$"):
+        kalman.kalman_gain(np.eye(3), np.eye(2), np.eye(2))
+    with pytest.raises(ValueError, match=r"^P0 must be"):
+        kalman.kf_batch(np.zeros((1, 3, 2)), np.eye(2), np.zeros((2, 1)), [0.0], np.eye(2), np.eye(2),
+                        np.eye(2), [0.0, 0.0], -np.eye(2))
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: correlation.correlation_attitude(np.zeros((50, 3)), np.tile([0, 0, G], (50, 1)), 100.0,
+                                              n_ma=float("nan")), "n_ma"),
+    (lambda: correlation.correlation_attitude(np.zeros((50, 3)), np.tile([0, 0, G], (50, 1)), 100.0,
+                                              n_ma=0), "n_ma"),
+    (lambda: estimators.run("freescale6", np.zeros((50, 3)), np.tile([0, 0, G], (50, 1)), 100.0,
+                            accel_hold=-1.0), "accel_hold"),
+    (lambda: estimators.run("freescale9", np.zeros((50, 3)), np.tile([0, 0, G], (50, 1)), 100.0,
+                            mag=np.tile([20.0, 0, 44.0], (50, 1)), accel_hold="abc"), "accel_hold"),
+    (lambda: correlation.complementary_attitude(np.zeros((50, 3)), np.tile([0, 0, G], (50, 1)), 100.0,
+                                                acc_hold="abc"), "acc_hold"),
+])
+def test_tuning_errors_name_the_option_as_the_caller_spelt_it(call, name):
+    with pytest.raises(ValueError, match=rf"^{name} must be"):
+        call()
+
+
+def test_freescale_doors_name_the_callers_arguments_and_units(trial27):
+    from fusionlab import freescale, freescale_fast
+    gyr, acc, mag, fs = trial27
+    Y, Gg = np.degrees(gyr[:2000]), -acc[:2000] / G                    # the note's units (NED, gravity-positive)
+    with pytest.raises(ValueError, match=r"^acc_g must be in g \(1 at rest\); .* looks like m/s²"):
+        freescale_fast.run_fast9(Y, -acc[:2000], mag[:2000], fs)
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* looks like gauss"):
+        freescale_fast.run_fast9(Y, Gg, mag[:2000] / 100, fs)
+    with pytest.raises(ValueError, match=r"^gyr_dps, acc_g must have the same number of samples"):
+        freescale_fast.run_fast6(Y[:-1], Gg, fs)
+    with pytest.raises(ValueError, match=r"^acc_g must have shape \(\.\.\., N, 3\); got \(2000, 2\)"):
+        freescale.Kalman6().run(Y, Gg[:, :2])
+    assert freescale_fast.run_fast9(Y, Gg, mag[:2000], fs)["q"].shape[1] == 4
