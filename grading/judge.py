@@ -579,30 +579,53 @@ class Lab:
 # One submission
 # ---------------------------------------------------------------------------------------------------------------
 
+SYMPY_CLASSES = ("Symbol", "Dummy", "Integer", "Rational", "Float", "Add", "Mul", "Pow", "Matrix",
+                 "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "sin", "cos", "tan", "exp", "log", "Abs")
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,60}")
+_DECIMAL = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d{1,4})?")
+
+
 def _sympy_trusted(text):
-    """A sympy expression from its ``srepr`` text, built without eval: only sympy's classes and numbers."""
+    """A sympy expression from its ``srepr`` text, built without eval or sympify: only the classes of
+    :data:`SYMPY_CLASSES`, numbers, and strings only where ``srepr`` puts them (a symbol's name, a float's digits),
+    so no text the student sent is ever parsed as an expression here."""
     import sympy
 
-    allowed = {name: getattr(sympy, name) for name in dir(sympy) if isinstance(getattr(sympy, name), type)}
-    allowed.update({name: getattr(sympy, name) for name in ("Symbol", "Integer", "Rational", "Float", "Matrix",
-                                                           "ImmutableDenseMatrix", "MutableDenseMatrix")})
-
-    def build(node):
-        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float, str, bool)) or (
-                isinstance(node, ast.Constant) and node.value is None):
+    def build(node, owner=None, first=False):
+        if isinstance(node, ast.Constant) and isinstance(node.value, bool):
+            return node.value
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
+            return node.value
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            ok = first and ((owner in ("Symbol", "Dummy") and _IDENTIFIER.fullmatch(node.value)) or
+                            (owner == "Float" and _DECIMAL.fullmatch(node.value)))
+            if not ok:
+                raise wire.WireError("a sympy expression with text where a number or a symbol belongs")
             return node.value
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
             return -build(node.operand)
         if isinstance(node, (ast.List, ast.Tuple)):
             return [build(e) for e in node.elts]
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in allowed:
-            return allowed[node.func.id](*[build(a) for a in node.args],
-                                         **{k.arg: build(k.value) for k in node.keywords if k.arg})
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in SYMPY_CLASSES:
+            name = node.func.id
+            args = [build(a, name, i == 0) for i, a in enumerate(node.args)]
+            kwargs = {}
+            for k in node.keywords:
+                value = build(k.value, name)
+                if k.arg is None or not isinstance(value, (bool, int)):
+                    raise wire.WireError("a sympy expression with an unexpected keyword")
+                kwargs[k.arg] = value
+            return getattr(sympy, name)(*args, **kwargs)
         raise wire.WireError("a sympy expression with something other than sympy's own classes in it")
 
     if len(text) > wire.MAX_TEXT:
         raise wire.WireError("a sympy expression longer than 1,000,000 characters")
-    return build(ast.parse(text, mode="eval").body)
+    try:
+        return build(ast.parse(text, mode="eval").body)
+    except wire.WireError:
+        raise
+    except (SyntaxError, ValueError, TypeError, RecursionError) as exc:
+        raise wire.WireError(f"a sympy expression that cannot be read ({type(exc).__name__})") from None
 
 
 def _trusted_object(name, state):
