@@ -34,6 +34,7 @@ import pytest
 
 from conftest import ROOT, nbgrader
 from grading.bench_classgrade import fill_answers, grade_id
+from test_feedback import _hidden_lines
 
 pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
                                 reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
@@ -357,18 +358,6 @@ def test_the_course_the_gradebook_tests_and_the_network_are_untouched(graded):
     assert graded["scores"]["daemon"]["ex2_tests"] == 0 and graded["scores"]["writes"]["ex2_tests"] == 0
     assert graded["left"] == [], "no process of a submission outlives the run"
     assert not graded["connected"], "nothing reached the network"
-
-
-def _hidden_lines(solution):
-    """Every line of the hidden-test regions that says anything and is not also in a visible part of a test."""
-    hidden, visible = [], set()
-    for cell in solution.cells:
-        if "### BEGIN HIDDEN TESTS" in cell.source:
-            before, _, rest = cell.source.partition("### BEGIN HIDDEN TESTS")
-            region, _, after = rest.partition("### END HIDDEN TESTS")
-            visible |= {line.strip() for line in (before + after).splitlines()}
-            hidden += [line.strip() for line in region.splitlines() if len(line.strip()) >= 20]
-    return [line for line in hidden if not any(line in seen for seen in visible)]
 
 
 def test_no_hidden_test_reaches_the_feedback_whatever_the_notebook_prints(graded):
