@@ -12,17 +12,28 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: formgrader test solutions labs data bench release clean
+.PHONY: formgrader test test-all test-budget solutions labs data bench release clean
 
 formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
 	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
 
-test: env  ## the whole test suite: unit tests, the library's doctests, strict nbval on every solution, autograde
-	@echo "==> unit and pipeline tests, and the examples in the library's docstrings"
-	@$(BIN)/python -m pytest tests lib/fusionlab --doctest-modules -q
-	@echo "==> strict nbval on every solution notebook"
-	@$(BIN)/python -m pytest -q $(NBVAL) solutions
+# One pytest run holds the unit tests, the library's doctests and strict nbval on every solution, on both cores
+# (-n 2; each test file stays in one process, so a module's fixture -- a class graded once -- serves all its tests;
+# the files of the longest fixtures start first: tests/conftest.py).
+PYTEST  := $(BIN)/python -m pytest tests lib/fusionlab solutions --doctest-modules $(NBVAL) -q --durations=10 \
+           -n 2 --dist loadfile --no-loadscope-reorder
+
+test: env  ## the fast tests (a few minutes): every module, every solution under strict nbval, one graded class
+	@echo "==> unit tests, doctests, strict nbval on every solution, one class graded by the judge (slow tier: make test-all)"
+	@$(PYTEST) -m "not slow"
+
+test-all: env  ## every test (CI): the fast tests, plus every lab graded in the sandbox, the browser, long records
+	@echo "==> the whole suite: make test's tests and the slow tier (pytest -m slow)"
+	@$(PYTEST)
+
+test-budget: env  ## time make test's tests (median of 3) and each lab's Run All against their budgets
+	@$(BIN)/python tests/budget.py both --repeat 3
 
 solutions: env  ## re-execute every solution notebook in place (authors; one lab: make solutions LABS=01_euler_rotations)
 	@for lab in $(LABS); do echo "==> executing solutions/$$lab/$$lab.ipynb"; \

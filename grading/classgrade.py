@@ -24,6 +24,7 @@ a submission could not be graded (its student is named), 0 otherwise.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import os
 import queue
@@ -40,7 +41,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import judge, similarity
+from grading import judge, sandbox, similarity
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -313,6 +314,7 @@ def main(argv=None):
     scratch = Path(tempfile.mkdtemp(prefix="cg-"))
     os.chmod(scratch, 0o755)
     results = []
+    stack = contextlib.ExitStack()
     try:
         if not args.no_generate:
             print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
@@ -324,7 +326,8 @@ def main(argv=None):
             release_dir = course / "labs"
         t0 = time.monotonic()
         the_lab = load_lab(course, lab, release_dir, scratch, args)
-        model = judge.judge(the_lab, the_lab.solution, "model solution", slot=0)
+        mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
+        model = judge.judge(the_lab, the_lab.solution, "model solution", slot=mine[0])
         if model.score < model.max_score:
             wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)
             raise SystemExit(f"the model solution of {lab} scores {model.score:g} / {model.max_score:g} under the "
@@ -332,8 +335,8 @@ def main(argv=None):
         print(f"model solution: {model.score:g} / {model.max_score:g} ({model.seconds:.0f} s); grading "
               f"{len(students)} submission(s), {args.workers} at a time, each in the sandbox", flush=True)
         slots = queue.Queue()
-        for i in range(max(1, args.workers)):
-            slots.put(i)
+        for slot in mine:
+            slots.put(slot)
         with ThreadPoolExecutor(max_workers=max(1, args.workers)) as pool:
             futures = {pool.submit(grade_one, the_lab, course, s, slots): s for s in students}
             for fut in as_completed(futures):
@@ -360,6 +363,7 @@ def main(argv=None):
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
               f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")
     finally:
+        stack.close()
         if args.keep_scratch:
             print(f"scratch folder kept in {scratch}")
         else:

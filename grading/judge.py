@@ -639,10 +639,13 @@ class StudentError(AssertionError):
 class Session:
     """The box of one submission: started, run through its program, then asked for calls and values."""
 
-    def __init__(self, lab: Lab, submitted, student, slot, gid, need=()):
+    def __init__(self, lab: Lab, submitted, student, slot, gid, need=(), stopped=None):
         self.lab, self.submitted, self.student, self.slot, self.gid = lab, submitted, student, slot, gid
         self.cells, self.notes = lab.program(submitted, upto=gid, need=need)
-        self.skipped = set()
+        # cells stopped in an earlier box of this student (over time, or ended the process) are left out from the
+        # start: a stuck cell costs its time once per student, not once per test
+        self.stopped = set() if stopped is None else stopped
+        self.skipped = {i for i, cell in enumerate(self.cells) if tuple(cell) in self.stopped}
         self.cell_errors = {}
         self.box = None
         self.work = None
@@ -698,6 +701,7 @@ class Session:
                 self.notes.append(f"{where} {why}: it was stopped, and the notebook was run again from the start "
                                   f"without it")
                 self.skipped.add(current)
+                self.stopped.add(tuple(self.cells[current]))
                 self.restarts += 1
 
     def _where(self, i):
@@ -784,11 +788,12 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
     t0 = time.monotonic()
     verdict = Verdict()
     base = lab.base()
+    stopped = set()
     for gid, source in lab.tests.items():
         result = TestResult(gid, lab.points.get(gid, 0.0))
         verdict.tests.append(result)
         reference = lab.reference_values(gid, slot)
-        session = Session(lab, submitted, student, slot, gid, need=free_names(source))
+        session = Session(lab, submitted, student, slot, gid, need=free_names(source), stopped=stopped)
         try:
             _run_test(lab, session, source, dict(base), reference, result)
         finally:

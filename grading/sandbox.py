@@ -20,6 +20,8 @@ scores -- stays outside.  In the box
 """
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import os
 import shutil
@@ -27,6 +29,7 @@ import sys
 import tempfile
 
 FIRST_UID = 200_000   # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
+                      # (slots are claimed machine-wide: claimed_slots)
 
 DEFAULT_LIMITS = {
     "cpu_s": 600,               # CPU seconds per process of the box (the per-cell wall-clock limit is nbgrader's)
@@ -172,6 +175,42 @@ def _with_parent_folders(args):
 def box_uid(slot):
     """The user a box runs as when grading as root (one per slot), or None when not root."""
     return FIRST_UID + slot if os.geteuid() == 0 else None
+
+
+MAX_SLOTS = 1000
+
+
+@contextlib.contextmanager
+def claimed_slots(n):
+    """``n`` slot numbers no other grading run on this machine holds, held until the ``with`` ends.
+
+    Each slot is a user id as root (:func:`box_uid`), and a user's process limit counts every process of that user:
+    two grading runs at once (two labs, two instructors) must not share one, or one class's fork bomb would stop the
+    other class's boxes. A slot is held by an exclusive lock on its file in a folder of the machine's own; a run that
+    ends, however it ends, lets its locks go."""
+    if n < 1:
+        raise ValueError(f"n must be 1 or more slots, got {n!r}")
+    folder = os.path.join("/run/lock" if os.access("/run/lock", os.W_OK) else tempfile.gettempdir(),
+                          f"fusionlab-grading-slots-{os.geteuid()}")
+    os.makedirs(folder, mode=0o700, exist_ok=True)
+    held = []
+    try:
+        for slot in range(MAX_SLOTS):
+            if len(held) == n:
+                break
+            fd = os.open(os.path.join(folder, f"{slot}.lock"), os.O_RDWR | os.O_CREAT, 0o600)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(fd)
+                continue
+            held.append((slot, fd))
+        if len(held) < n:
+            raise RuntimeError(f"only {len(held)} of {n} grading slots are free on this machine ({MAX_SLOTS} in all)")
+        yield [slot for slot, _ in held]
+    finally:
+        for _, fd in held:
+            os.close(fd)
 
 
 def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None):

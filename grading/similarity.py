@@ -90,20 +90,35 @@ def compare(a_code, b_code, boilerplate=(), b_boilerplate=None):
 
 
 def library_functions(folder=LIBRARY):
-    """{"module.function": source} of every function and method of the library."""
-    out = {}
+    """{"module.function": source} of every function and method of the library (read once per folder and
+    process: a class run asks for it once per exercise)."""
+    return dict(_library_functions(Path(folder).resolve()))
+
+
+@functools.lru_cache(maxsize=8)
+def _library_functions(folder):
+    out = []
     for path in sorted(folder.rglob("*.py")):
         text = path.read_text()
         try:
             tree = ast.parse(text)
         except SyntaxError:
             continue
+        lines = text.splitlines(keepends=True)
+        module = path.relative_to(folder).with_suffix("").as_posix().replace("/", ".")
         for node in ast.walk(tree):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                seg = ast.get_source_segment(text, node)
-                if seg and seg.count("\n") >= 2:
-                    out[f"{path.relative_to(folder).with_suffix('').as_posix().replace('/', '.')}.{node.name}"] = seg
-    return out
+                # the lines of the def (as ast.get_source_segment, without splitting the file again per function)
+                # (offsets count UTF-8 bytes)
+                first, last = node.lineno - 1, node.end_lineno - 1
+                head = lines[first].encode()[node.col_offset:].decode()
+                if first == last:
+                    seg = lines[first].encode()[node.col_offset:node.end_col_offset].decode()
+                else:
+                    seg = head + "".join(lines[first + 1:last]) + lines[last].encode()[:node.end_col_offset].decode()
+                if seg.count("\n") >= 2:
+                    out.append((f"{module}.{node.name}", seg))
+    return tuple(out)
 
 
 def answers(nb):

@@ -24,8 +24,9 @@ import pytest
 from conftest import LABS, ROOT
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine: the browser test needs "
-                                                         "Debian's chromium (apt-get install chromium)")
+pytestmark = [pytest.mark.slow,  # a JupyterLab server and Chromium: minutes (make test-all)
+              pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine: the browser test needs "
+                                                         "Debian's chromium (apt-get install chromium)")]
 WIDGET_LAB = "01_euler_rotations"
 SHOTS = ROOT / "tests" / "_screenshots"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",

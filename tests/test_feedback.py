@@ -22,6 +22,8 @@ from nbgrader.api import Gradebook
 from conftest import ROOT, nbgrader
 from grading.bench_classgrade import grade_id
 
+pytestmark = pytest.mark.slow  # two classes graded in the sandbox (make test-all); test_judge.py checks one in make test
+
 LABS = ("01_euler_rotations", "02_kalman_falling_body")
 
 # Appended to every answer cell after the model answer: every function the cell defines and every name it assigns

@@ -21,6 +21,8 @@ from nbgrader.api import Gradebook
 from conftest import ROOT, nbgrader
 from grading.bench_classgrade import fill_answers, grade_id
 
+pytestmark = pytest.mark.slow  # nbgrader's own autograde of a whole class (make test-all)
+
 LAB = "01_euler_rotations"
 POINTS = {"ex1_tests": 2, "ex2_tests": 1, "ex3_tests": 2, "ex4_tests": 3, "ex5_tests": 2, "ex6_tests": 2,
           "ex7_tests": 2, "ex8_tests": 2}

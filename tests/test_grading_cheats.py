@@ -18,11 +18,12 @@ import nbformat
 import pytest
 
 from conftest import ROOT
-from grading import judge
+from grading import judge, sandbox
 from grading.bench_classgrade import grade_id
 
-pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
-                                reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
+pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class: test_judge.py
+              pytest.mark.skipif(shutil.which("bwrap") is None,
+                                 reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")]
 
 # The reference call of each exercise: it replaces the model answer between BEGIN/END SOLUTION (indented as it was;
 # a tuple gives one line per solution region of the cell).
@@ -214,8 +215,10 @@ def graded(tmp_path_factory):
             tests = {grade_id(c): c.source for c in solution.cells if judge.is_test(c)}
             the_lab = judge.Lab(ROOT, lab, release, tests, solution, scratch)
             scores, messages = {}, {}
-            for student, nb in _students(lab, release, solution).items():
-                verdict = judge.judge(the_lab, nb, student)
+            with sandbox.claimed_slots(1) as [slot]:    # a user id no other grading run holds now
+                verdicts = {student: judge.judge(the_lab, nb, student, slot)
+                            for student, nb in _students(lab, release, solution).items()}
+            for student, verdict in verdicts.items():
                 scores[student] = {int(t.grade_id[2:-6]): t.score for t in verdict.tests}
                 messages[student] = {t.grade_id: t.message for t in verdict.tests}
             _GRADED[lab] = dict(scores=scores, messages=messages)

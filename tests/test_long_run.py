@@ -5,8 +5,8 @@ Asserted for every filter: |q| = 1 within 1e-9 at every sample, no flipped attit
 stays small, also right after each free fall), and memory that grows with the record only linearly (a few hundred
 bytes per sample). The TRIAD snapshot has no gyro: it must refuse free fall with a clear message instead.
 
-`make test` runs a 10-minute record (24 cycles of every hard case): about 40 s of CPU for all filters, the memory
-check included. The full hour is six times that (6 min 52 s of wall time for the seven gyro filters measured on a
+`make test-all` runs a 10-minute record (24 cycles of every hard case): about 40 s of CPU for all filters, the
+memory check included (`make test` leaves it out: the slow tier). The full hour is six times that (6 min 52 s of wall time for the seven gyro filters measured on a
 shared 2-core machine), too slow for every run: it runs with ``FUSIONLAB_LONG_RUN=1``.
 """
 from __future__ import annotations
@@ -21,6 +21,8 @@ import pytest
 
 from fusionlab import estimators, metrics
 from longrun_record import cycle_seconds, record
+
+pytestmark = pytest.mark.slow  # long recordings through every filter (make test-all)
 
 LONG = os.environ.get("FUSIONLAB_LONG_RUN", "") not in ("", "0")
 DURATION = 3600.0 if LONG else 600.0

@@ -33,6 +33,7 @@ def test_release_hides_solutions_and_hidden_tests(course, lab):
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), "release must have no outputs"
 
 
+@pytest.mark.slow  # 13 notebook runs (make test-all)
 @pytest.mark.parametrize("lab", LABS)
 def test_the_untouched_release_runs_all_cells_stopping_only_at_unfinished_exercises(tmp_path, lab):
     """What a student sees on Run All of the release: every cell runs, and the only errors are the unfinished

@@ -18,7 +18,7 @@ ARGS    ?=
 .PHONY: help env lab
 
 help:  ## list the targets
-	@grep -hE '^[a-z]+:.*## ' $(filter %.mk,$(MAKEFILE_LIST)) $(filter-out %.mk,$(MAKEFILE_LIST)) | sed 's/:.*## /\t/' | column -t -s $$'\t'
+	@grep -hE '^[a-z-]+:.*## ' $(filter %.mk,$(MAKEFILE_LIST)) $(filter-out %.mk,$(MAKEFILE_LIST)) | sed 's/:.*## /\t/' | column -t -s $$'\t'
 
 $(VENV)/.installed: environment.txt pyproject.toml
 	@echo "==> setting up $(VENV) from environment.txt (first time: a few minutes)"
