@@ -3,9 +3,9 @@
 Times on a shared machine vary, so no test asserts them; this script measures and reports instead, so that a slow
 new test or a slow new cell is seen at once:
 
-* ``suite``: the fast tier exactly as ``make test`` runs it (its pytest command, read from ``make -n test``), ``--repeat`` times; prints
-  each run's wall time, their median, the load average before and after, and the median against ``--budget``
-  (default 8 minutes; venv creation is not included: it is timed once by a fresh clone, see the README);
+* ``suite``: the fast tier exactly as ``make test`` runs it (its pytest command, read from ``make -n test``),
+  ``--repeat`` times; prints each run's wall time, their median, the load average before and after, and the median
+  against ``--budget`` (default 8 minutes; venv creation is not included: a fresh clone times it, see the README);
 * ``labs``: every solution notebook run top to bottom in a fresh kernel (kernel start included, as a student's
   Restart & Run All), ``--repeat`` times each; prints each lab's median against ``--lab-budget`` (default 12 s).
 
@@ -65,8 +65,9 @@ def run_lab(lab):
     from nbclient import NotebookClient
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     start = time.perf_counter()
-    NotebookClient(nb, timeout=120, kernel_name="python3",
-                   resources={"metadata": {"path": str(ROOT / "solutions" / lab)}}).execute(stderr=subprocess.DEVNULL)
+    client = NotebookClient(nb, timeout=120, kernel_name="python3",
+                            resources={"metadata": {"path": str(ROOT / "solutions" / lab)}})
+    client.execute(stderr=subprocess.DEVNULL)                         # the kernel's own warnings are not news here
     return time.perf_counter() - start
 
 

@@ -22,7 +22,7 @@ from nbgrader.api import Gradebook
 from conftest import ROOT, nbgrader
 from grading.bench_classgrade import grade_id
 
-pytestmark = pytest.mark.slow  # two classes graded in the sandbox (make test-all); test_judge.py checks one in make test
+pytestmark = pytest.mark.slow  # two classes graded in the sandbox (make test-all); make test has test_judge.py's
 
 LABS = ("01_euler_rotations", "02_kalman_falling_body")
 

@@ -21,7 +21,7 @@ from conftest import ROOT
 from grading import judge, sandbox
 from grading.bench_classgrade import grade_id
 
-pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class: test_judge.py
+pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class (test_judge)
               pytest.mark.skipif(shutil.which("bwrap") is None,
                                  reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")]
 

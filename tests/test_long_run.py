@@ -6,8 +6,9 @@ stays small, also right after each free fall), and memory that grows with the re
 bytes per sample). The TRIAD snapshot has no gyro: it must refuse free fall with a clear message instead.
 
 `make test-all` runs a 10-minute record (24 cycles of every hard case): about 40 s of CPU for all filters, the
-memory check included (`make test` leaves it out: the slow tier). The full hour is six times that (6 min 52 s of wall time for the seven gyro filters measured on a
-shared 2-core machine), too slow for every run: it runs with ``FUSIONLAB_LONG_RUN=1``.
+memory check included (`make test` leaves it out: the slow tier). The full hour is six times that (6 min 52 s of
+wall time for the seven gyro filters measured on a shared 2-core machine), too slow for every run: it runs with
+``FUSIONLAB_LONG_RUN=1``.
 """
 from __future__ import annotations
 

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.linalg import solve_discrete_are
-from scipy.stats import chi2
 
 from . import validate
 
@@ -827,6 +826,7 @@ def nees_bounds(n_runs, dim=2, prob=0.95):
     prob = validate.scalar(prob, "prob", True)
     if prob >= 1:
         raise ValueError(f"prob must be in (0, 1); got {prob!r}")
+    from scipy.stats import chi2  # here, not at import: scipy.stats takes ~1 s to import, and few labs need it
     lo, hi = chi2.ppf([(1 - prob) / 2, (1 + prob) / 2], n_runs * dim)
     return lo / n_runs, hi / n_runs
 
