@@ -114,6 +114,9 @@ def prepare(args, instructor, students):
     exchange = folder / "exchange"
     exchange.mkdir(exist_ok=True)
     os.chmod(exchange, 0o777)
+    if unreachable(exchange):
+        raise SystemExit(f"other users cannot reach {folder} ({', '.join(map(str, unreachable(exchange)))} not open "
+                         f"to them), so nbgrader's exchange in it would not work: choose a --dir they can enter")
     settings = folder / "hub.json"
     old = json.loads(settings.read_text()) if settings.is_file() else {}
     home = Path(pwd.getpwnam(instructor).pw_dir)
