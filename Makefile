@@ -67,6 +67,31 @@ grade: env  ## sandboxed autograde of a class: make grade LAB=02_kalman_falling_
 	@test -n "$(LAB)" || { echo "usage: make grade LAB=NN_name [WORKERS=2] [STUDENT=id]"; exit 2; }
 	@$(BIN)/python -m grading.classgrade $(LAB) --workers $(WORKERS) $(if $(STUDENT),--student $(STUDENT))
 
+# The course on a JupyterHub on this machine (hub/, docs/hub.md): as root, Ctrl-C stops it all.
+HUB_STUDENTS ?= 3
+HUB_PORT     ?= 8000
+HUB_DIR      ?= /srv/fusionlab-hub
+.PHONY: hub hub-env hub-remove
+
+$(VENV)/.hub-installed: $(VENV)/.installed hub/requirements.txt
+	@echo "==> installing JupyterHub and the idle culler into $(VENV) (hub/requirements.txt)"
+	@$(BIN)/python -m pip install --quiet -r hub/requirements.txt
+	@touch $@
+
+hub/node_modules/.package-lock.json: hub/package.json hub/package-lock.json
+	@echo "==> installing the proxy (configurable-http-proxy, pinned in hub/package-lock.json) into hub/node_modules"
+	@command -v npm >/dev/null || { echo "make hub needs Node.js and npm (Debian: apt-get install nodejs npm)"; exit 2; }
+	@cd hub && npm ci --no-audit --no-fund --loglevel=error
+	@touch $@
+
+hub-env: $(VENV)/.hub-installed hub/node_modules/.package-lock.json  ## install what make hub needs (JupyterHub, the proxy)
+
+hub: hub-env  ## as root: JupyterHub on 127.0.0.1:8000, an instructor and HUB_STUDENTS=3 student accounts; Ctrl-C stops it
+	@$(BIN)/python -m hub.run --students $(HUB_STUDENTS) --port $(HUB_PORT) --dir $(HUB_DIR) $(ARGS)
+
+hub-remove:  ## remove the hub's accounts and its folder (HUB_DIR)
+	@$(BIN)/python -m hub.run --remove --dir $(HUB_DIR)
+
 release: env  ## the student course: release/course/ and release/fusionlab-course.tar.gz (no solutions, no grading)
 	@$(BIN)/python -m grading.release --out release
 

@@ -5,6 +5,8 @@
 1. The lab is (re)recorded in ``gradebook.db`` from ``solutions/`` (``nbgrader generate_assignment --force``,
    released into a temporary folder so ``labs/`` is not touched; ``--no-generate`` skips that). The test cells are
    read back from the gradebook: what the gradebook holds is what is graded, whatever a submission did to its cells.
+   Before that, one box is started with nothing in it (:func:`grading.sandbox.box_problem`): where the sandbox
+   cannot start, the run stops at once, saying what is missing and what to do.
 2. The model solution is graded first, by the same judge and boxes as the students; unless it scores full marks
    the run stops (the lab's tests would be wrong, not the students).
 3. Each submission ``submitted/<student>/<LAB>/<LAB>.ipynb`` is graded by :func:`grading.judge.judge`: the tests
@@ -302,9 +304,6 @@ def main(argv=None):
         raise SystemExit(f"{course} is not the course root (no nbgrader_config.py)")
     if not (course / "solutions" / lab).is_dir():
         raise SystemExit(f"unknown lab {lab!r}: solutions/{lab} does not exist")
-    if shutil.which("bwrap") is None:
-        raise SystemExit("bubblewrap is not installed (apt-get install bubblewrap): refusing to run student code "
-                         "without the sandbox")
     students = students_of(course, lab, args.student)
     bad = [s for s in students if not STUDENT_ID.match(s)]
     if bad:
@@ -316,6 +315,11 @@ def main(argv=None):
     results = []
     stack = contextlib.ExitStack()
     try:
+        mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
+        problem = sandbox.box_problem(str(course), lab, scratch, mine)
+        if problem:
+            raise SystemExit(f"cannot grade {lab}: the sandbox does not start on this machine, so no student is "
+                             f"graded.\n{problem}")
         if not args.no_generate:
             print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
             generate(course, lab, scratch / "release")
@@ -326,7 +330,6 @@ def main(argv=None):
             release_dir = course / "labs"
         t0 = time.monotonic()
         the_lab = load_lab(course, lab, release_dir, scratch, args)
-        mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
         model = judge.judge(the_lab, the_lab.solution, "model solution", slot=mine[0])
         if model.score < model.max_score:
             wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)

@@ -25,6 +25,7 @@ import fcntl
 import json
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 
@@ -269,3 +270,57 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
     inner = [dict(extra).get(os.path.realpath(p), p) if os.path.isfile(p) else p for p in command[1:]]
     args += ["--", python, "-c", INSIDE, *inner]
     return args
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Can a box start here? Asked once, before anyone is graded
+# ---------------------------------------------------------------------------------------------------------------
+
+WHERE_TO_GRADE = ("or grade on a machine or VM where it can (docs/instructors.md, section 7, 'Where to grade': copy "
+                  "submitted/ and gradebook.db there, run make grade, copy gradebook.db and autograded/ back)")
+
+
+def _mapped_uids(path="/proc/self/uid_map"):
+    """The user ids of the machine's own namespace that this process can use: [(first, count), ...]."""
+    try:
+        with open(path) as fh:
+            return [(int(inside), int(count)) for inside, _, count in (line.split() for line in fh if line.strip())]
+    except (OSError, ValueError):
+        return [(0, 1 << 32)]
+
+
+def box_problem(course, lab, scratch, slots):
+    """Why a box cannot start on this machine, as a message saying what is missing and what to do; None if it can.
+
+    Starts one box exactly as grading does (same mounts, limits and, as root, the user id of each slot), running
+    ``print`` only: no student code. Called once by :mod:`grading.classgrade` before the model solution."""
+    if shutil.which("bwrap") is None:
+        return ("bubblewrap is not installed: install it (Debian/Ubuntu: apt-get install bubblewrap) and run again. "
+                "Student code is never run without the sandbox.")
+    uids = [box_uid(slot) for slot in slots]
+    if uids[0] is not None:
+        ranges = _mapped_uids()
+        unmapped = [u for u in uids if not any(first <= u < first + count for first, count in ranges)]
+        if unmapped:
+            return (f"the grader runs as root, but in a user namespace that has no user id {unmapped[0]} (its map: "
+                    f"{', '.join(f'{n} id(s) from {first}' for first, n in ranges)}), so a box cannot run as a user "
+                    f"of its own (one per student graded at once, from {FIRST_UID}). This is root inside "
+                    f"`unshare --user --map-root-user` or a rootless container. Run make grade as the real root, or "
+                    f"as an ordinary user (bubblewrap then makes the user namespace itself), {WHERE_TO_GRADE}.")
+    try:
+        work = private_folder(None, scratch, uids[0])
+        command = bwrap_command(["python", "-c", "print('box ok')"], course=course, lab=lab,
+                                lib=os.path.join(course, "lib"), work=work, uid=uids[0])
+        run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"a test box could not be started ({type(exc).__name__}: {exc}); {WHERE_TO_GRADE}."
+    if run.returncode == 0 and run.stdout.strip() == "box ok":
+        return None
+    said = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}, nothing on stderr"])[-1][:400]
+    if run.stderr.startswith("bwrap:") and ("namespace" in run.stderr or "uid map" in run.stderr):
+        return (f"bubblewrap cannot create the namespaces a box needs ({said}). Allow them: Debian, `sysctl "
+                f"kernel.unprivileged_userns_clone=1`; Ubuntu 24.04, `sysctl "
+                f"kernel.apparmor_restrict_unprivileged_userns=0` (or an AppArmor profile for bwrap); any system, "
+                f"`sysctl user.max_user_namespaces` above 0; in a container, a runtime that allows them (Docker: "
+                f"--security-opt seccomp=unconfined --security-opt apparmor=unconfined), {WHERE_TO_GRADE}.")
+    return f"a test box did not start ({said}); {WHERE_TO_GRADE}."
