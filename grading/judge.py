@@ -41,6 +41,7 @@ import selectors
 import shutil
 import signal
 import subprocess
+import threading
 import time
 import types
 from dataclasses import dataclass, field
@@ -65,6 +66,18 @@ HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quater
 # ---------------------------------------------------------------------------------------------------------------
 # Cells
 # ---------------------------------------------------------------------------------------------------------------
+
+_AST_LOCK = threading.Lock()
+
+
+def _parse(source, mode="exec"):
+    """``ast.parse``, one thread at a time. A class is graded by threads, and CPython 3.11 keeps the depth counter of
+    its converter between C and Python syntax trees in state the threads share: two threads parsing at once can fail
+    with "SystemError: AST constructor recursion depth mismatch" (seen grading a class), which would leave a student
+    ungraded. Parsing is a small part of a test's time, so the lock costs nothing visible."""
+    with _AST_LOCK:
+        return ast.parse(source, mode=mode)
+
 
 def nbg(cell):
     return cell.get("metadata", {}).get("nbgrader", {}) or {}
@@ -95,7 +108,7 @@ def python_of(source):
 def _bound_names(source):
     """Names a cell binds at top level (defs, classes, imports, assignments)."""
     try:
-        tree = ast.parse(python_of(source))
+        tree = _parse(python_of(source))
     except SyntaxError:
         return set()
     out = set()
@@ -111,7 +124,7 @@ def _bound_names(source):
 
 def free_names(source):
     """Names a test cell reads without binding them anywhere in the cell."""
-    tree = ast.parse(python_of(source))
+    tree = _parse(python_of(source))
     nodes = list(ast.walk(tree))
     bound = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
     bound |= {n.arg for n in nodes if isinstance(n, ast.arg)}
@@ -124,7 +137,7 @@ def free_names(source):
 def _without_guard_calls(source):
     """The setup cell as the judge runs it: the grading guard's and the checks' calls dropped (they act on a
     student's kernel, and the judge has none), and numpy's print options left alone (they are the process's)."""
-    tree = ast.parse(python_of(source))
+    tree = _parse(python_of(source))
     keep = []
     for node in tree.body:
         call = node.value if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call) else None
@@ -173,7 +186,7 @@ def forbidden_expressions(source):
     """The expressions a test cell names as references or forbidden: ``guard.grade``'s second argument, every
     ``forbid=...``, the arguments of ``guard.forbid(...)`` and ``guard.release(...)``; names bound in the cell to a
     tuple stand for its items."""
-    tree = ast.parse(python_of(source))
+    tree = _parse(python_of(source))
     bound = {n.targets[0].id: n.value for n in ast.walk(tree)
              if isinstance(n, ast.Assign) and len(n.targets) == 1 and isinstance(n.targets[0], ast.Name)}
 
@@ -202,7 +215,7 @@ def forbidden_expressions(source):
 
 def _strip_module(path: Path, qualnames):
     """Replace the bodies of ``qualnames`` (functions or methods) in the module file ``path`` by a stub."""
-    tree = ast.parse(path.read_text())
+    tree = _parse(path.read_text())
     done = set()
 
     def visit(body, prefix):
@@ -212,7 +225,7 @@ def _strip_module(path: Path, qualnames):
                 if name in qualnames:
                     doc = ast.get_docstring(node)
                     msg = STUB_MESSAGE.format(name=f"{path.stem}.{name}")
-                    node.body = ([ast.Expr(ast.Constant(doc))] if doc else []) + ast.parse(
+                    node.body = ([ast.Expr(ast.Constant(doc))] if doc else []) + _parse(
                         f"raise NotImplementedError({msg!r})").body
                     node.decorator_list = [d for d in node.decorator_list
                                            if isinstance(d, ast.Name) and d.id in ("staticmethod", "classmethod")]
@@ -353,7 +366,7 @@ def _reads_and_writes(source):
     """(names a cell reads from the notebook, names it binds, names whose objects it changes in place), or None if it
     does not parse."""
     try:
-        tree = ast.parse(source)
+        tree = _parse(source)
     except SyntaxError:
         return None
     changed = set()
@@ -621,7 +634,7 @@ def _sympy_trusted(text):
     if len(text) > wire.MAX_TEXT:
         raise wire.WireError("a sympy expression longer than 1,000,000 characters")
     try:
-        return build(ast.parse(text, mode="eval").body)
+        return build(_parse(text, mode="eval").body)
     except wire.WireError:
         raise
     except (SyntaxError, ValueError, TypeError, RecursionError) as exc:
