@@ -149,6 +149,18 @@ class AhrsTuning:
     #: low-pass would lag behind it, so the raw reading is used and the strapdown restarts from the estimate
     acc_lp_bias_gate: float = np.radians(0.2)
 
+    def __post_init__(self):
+        for f in ("gyro_noise", "acc_sigma", "acc_sigma_untrusted", "acc_tol", "mag_sigma", "mag_sigma_untrusted",
+                  "mag_tol", "hold", "R_i", "sigma_c0", "sigma_b0", "dip_tau", "acc_lp_bias_gate"):
+            validate.positive(getattr(self, f), f)
+        for f in ("bias_walk", "R_ss"):
+            validate.scalar(getattr(self, f), f, nonnegative=True)
+        for f in ("bias_sigma_rest", "dip_tol", "acc_lp_tau"):              # None: off
+            if getattr(self, f) is not None:
+                validate.positive(getattr(self, f), f)
+        if not 0 < validate.scalar(self.rho, "rho") <= 1:
+            raise ValueError(f"rho must be in (0, 1] (the decay of R_c per step, 004 eq 6.27); got {self.rho!r}")
+
 
 #: The tuning of the registered ``dcm_ahrs`` / ``dcm_ahrs6`` estimators for a hand-held MEMS IMU (ours, like every
 #: AHRS number). What changes from :class:`AhrsTuning`, and on what evidence:

@@ -213,7 +213,7 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
         The reading, µT.
     """
     q = validate.quaternions(q, "q")
-    B = validate.positive(B, "B")
+    B = validate.field_uT(B, "B", per_sample=False)
     _, r_m = reference_vectors(delta, frame)
     d = 0.0 if d_S is None else validate.vectors(d_S, "d_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
@@ -256,7 +256,7 @@ def mag_noise(B_c, B=50.0):
         The noise estimate, µT².
     """
     B_c = validate.vectors(B_c, "B_c")
-    B = validate.positive(B, "B")
+    B = validate.field_uT(B, "B", per_sample=False)
     return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)                     # (002 eq 15)
 
 
@@ -696,7 +696,7 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     G = validate.accel_g(G, "G")
     B_c = validate.vectors(B_c, "B_c")
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c, delta=validate.angles_rad(delta, "delta"))
-    B = validate.positive(B, "B")
+    B = validate.field_uT(B, "B", per_sample=False)
     s_g = measured_gravity(G, frame)
     validate.field_uT(B_c, "B_c", low=ECOMPASS_FIELD_UT[0], high=ECOMPASS_FIELD_UT[1], per_sample=False)
     s_m = B_c / nonzero_norm(B_c, "B_c")[..., None]

@@ -91,6 +91,13 @@ class Tuning:
     oversample: int = 8
     B: float = 50.0
 
+    def __post_init__(self):
+        for f in ("Q_vY", "Q_wb", "Q_wdelta", "qvbqd_min", "gyro_offset_max", "delta_max"):
+            validate.positive(getattr(self, f), f)
+        validate.sample_rate(self.sensor_fs, "sensor_fs")
+        validate.count(self.oversample, "oversample", 1)
+        validate.field_uT(self.B, "B", per_sample=False)
+
     @property
     def dt(self):
         """Kalman interval δt = OVERSAMPLE_RATIO / SENSORFS, s (0.04 s: 25 Hz)."""
@@ -367,7 +374,7 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
         return vg * np.eye(3)
     if dof != 9:
         raise ValueError(f"dof must be 6 or 9; got {dof!r}")
-    B = tuning.B if B is None else validate.positive(B, "B")
+    B = tuning.B if B is None else validate.field_uT(B, "B", per_sample=False)
     qd = max(validate.scalar(qvbqd, "qvbqd", nonnegative=True), tuning.qvbqd_min)   # (002 §2.3) floor
     vm = 0.25 * qd / (B * B) + gyro                                        # (002 eq 163)
     vd = R2D * R2D * (qa + qd / (B * B))                                 # (002 eq 164)
@@ -530,7 +537,7 @@ class Kalman9:
         if not isinstance(tuning, Tuning):
             raise ValueError(f"tuning must be a fusionlab.freescale.Tuning; got {type(tuning).__name__}")
         self.tuning = tuning
-        self.B = tuning.B if B is None else validate.positive(B, "B")
+        self.B = tuning.B if B is None else validate.field_uT(B, "B", per_sample=False)
         self.dt = tuning.dt
         self.dt_gyro = 1.0 / tuning.sensor_fs
         self.C = measurement_matrix(self.dt, 9)
