@@ -348,3 +348,79 @@ def test_freescale_doors_name_the_callers_arguments_and_units(trial27):
     with pytest.raises(ValueError, match=r"^acc_g must have shape \(\.\.\., N, 3\); got \(2000, 2\)"):
         freescale.Kalman6().run(Y, Gg[:, :2])
     assert freescale_fast.run_fast9(Y, Gg, mag[:2000], fs)["q"].shape[1] == 4
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Second round of the outside probe: swapped sensors, flags for numbers, tuning records, field strengths
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def trial07_moving():
+    tr = datasets.load_trial(7)
+    part = slice(int(15 * tr.fs), int(40 * tr.fs))                    # rest, then fast rotation
+    return tr.gyr[part], tr.acc[part], tr.mag[part], tr.fs
+
+
+@pytest.mark.parametrize("name", ["dcm_ahrs", "triad"])
+def test_run_refuses_the_magnetometer_passed_as_the_accelerometer(trial07_moving, name):
+    gyr, acc, mag, fs = trial07_moving
+    estimators.run(name, gyr, acc, fs, mag=mag)                       # the right order runs
+    with pytest.raises(ValueError, match=r"acc must be in m/s².*no hand or vehicle sustains.*magnetometer"):
+        estimators.run(name, gyr, mag, fs, mag=acc)
+
+
+def test_freescale_refuses_the_gyro_passed_as_the_accelerometer_in_g():
+    from fusionlab import freescale
+    rec = ecompass.synthetic_recording(np.tile([20.0, -10.0, 40.0], (400, 1)), frame="NED", seed=1)
+    freescale.Kalman6("NED").run(rec["gyr"], rec["acc"])
+    with pytest.raises(ValueError, match=r"acc_g must be in g.*another sensor's reading"):
+        freescale.Kalman6("NED").run(rec["acc"], rec["gyr"])
+
+
+def test_run_ahrs_checks_units_and_a_magnetometer_that_is_not_normalised(trial07_moving):
+    from fusionlab import dcm, dcm_filter
+    gyr, acc, mag, fs = trial07_moving
+    acc_b = dcm.accel_to_seed004(acc)
+    mag_b = mag / np.median(np.linalg.norm(mag, axis=1))
+    dcm_filter.run_ahrs(gyr, acc_b, mag_b, fs)
+    with pytest.raises(ValueError, match=r"gyr must be in rad/s"):
+        dcm_filter.run_ahrs(np.degrees(gyr), acc_b, mag_b, fs)
+    with pytest.raises(ValueError, match=r"acc_b must be in m/s².*looks like g"):
+        dcm_filter.run_ahrs(gyr, acc_b / G, mag_b, fs)
+    with pytest.raises(ValueError, match=r"mag_b must be normalised"):
+        dcm_filter.run_ahrs(gyr, acc_b, mag, fs)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: rotations.rot_x(True),
+    lambda: rotations.euler_to_dcm([True, False, True]),
+    lambda: kalman.gaussian_product(True, 4.0, 12.0, 1.0),
+])
+def test_a_flag_where_a_number_belongs_is_refused(call):
+    with pytest.raises(ValueError, match=r"must be numbers, not True/False"):
+        call()
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(acc_tol=0.0), "acc_tol"),
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(rho=1.5), "rho"),
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(hold=float("nan")), "hold"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(sensor_fs=0.005), "sensor_fs"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(oversample=2.5), "oversample"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(B=0.5), "B"),
+    (lambda: __import__("fusionlab.gpsins").gpsins.InsTuning(sigma_pos=-3.0), "sigma_pos"),
+    (lambda: __import__("fusionlab.sensors").sensors.AnalogSensor("X", 0.3, 1.5, 3.0, "g", None), "full_scale"),
+    (lambda: __import__("fusionlab.sensors").sensors.AnalogSensor("X", 0.3, 460.0, 3.0, "g", 3.0), "zero_level"),
+])
+def test_tuning_records_name_a_bad_field(make, field):
+    with pytest.raises(ValueError, match=rf"^{field} must"):
+        make()
+
+
+def test_a_field_strength_in_gauss_or_nT_is_refused():
+    from fusionlab import freescale
+    assert validate.field_uT(50.0, "B", per_sample=False) == 50.0
+    with pytest.raises(ValueError, match=r"B must be in µT.*field strength of 0.5, which looks like gauss"):
+        ecompass.mag_model([1.0, 0.0, 0.0, 0.0], B=0.5)
+    with pytest.raises(ValueError, match=r"B must be in µT.*looks like nT"):
+        freescale.Kalman9("NED", B=50_000.0)

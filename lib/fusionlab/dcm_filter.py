@@ -429,11 +429,17 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         ``t_update`` (nb,) s; ``inclination`` rad; ``acc_trusted``, ``mag_trusted`` (N,) bool.
     """
     gyr = validate.samples(gyr, "gyr")
-    acc_b = validate.samples(acc_b, "acc_b")
+    acc_b = validate.accel_ms2(acc_b, "acc_b")
     use_mag = mag_b is not None
     mag_b = validate.samples(mag_b, "mag_b") if use_mag else np.zeros_like(acc_b)
     n = validate.same_length(gyr=gyr, acc_b=acc_b, mag_b=mag_b)
     fs = validate.sample_rate(fs, "fs")
+    validate.gyro_rad(gyr, "gyr", acc=acc_b, fs=fs, acc_name="acc_b")
+    if use_mag and n:
+        med = float(np.median(np.linalg.norm(mag_b, axis=1)))
+        if not 0.5 <= med <= 2.0:
+            raise ValueError(f"mag_b must be normalised to the local field strength (|h| about 1); got a median "
+                             f"|mag_b| of {med:.4g} -- divide by it (np.median(np.linalg.norm(mag, axis=1)))")
     g = validate.positive(g, "g")
     M = validate.scalar(update_every, "update_every")
     if M != int(M) or M < 1:
