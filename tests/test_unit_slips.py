@@ -424,3 +424,15 @@ def test_a_field_strength_in_gauss_or_nT_is_refused():
         ecompass.mag_model([1.0, 0.0, 0.0, 0.0], B=0.5)
     with pytest.raises(ValueError, match=r"B must be in µT.*looks like nT"):
         freescale.Kalman9("NED", B=50_000.0)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: falling_body.ThesisKF(*falling_body.falling_body_state_space(), 0.01 * np.eye(2), [[144.0]], [[1.0, 0.0]],
+                                   [200.0, 0.0], np.eye(2), project_state=None), "project_state"),
+    (lambda: kalman.kf_batch(np.zeros((1, 5, 1)), np.eye(2), np.zeros((2, 1)), [0.0], np.eye(2), [[1.0]],
+                             [[1.0, 0.0]], [0.0, 0.0], np.eye(2), control="no"), "control"),
+    (lambda: falling_body.falling_body_quadratic(3.0, stop_at_ground=None), "stop_at_ground"),
+])
+def test_a_yes_no_option_must_be_a_bool(call, name):
+    with pytest.raises(ValueError, match=rf"{name} must be True or False"):
+        call()

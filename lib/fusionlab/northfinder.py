@@ -667,8 +667,7 @@ def bandpass(x, theta, taps, remove_mean=True):
     m = len(taps) - 1
     if len(x) <= m:
         raise ValueError(f"x must be longer than the filter order {m}; got {len(x)} samples")
-    if remove_mean not in (True, False):
-        raise ValueError(f"remove_mean must be True or False; got {remove_mean!r}")
+    remove_mean = validate.flag(remove_mean, "remove_mean")
     if remove_mean:
         x = x - x.mean()
     y = oaconvolve(x, taps, mode="valid")                                            # (004 eq 4.47)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
+__all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
            "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
@@ -326,6 +326,26 @@ def scalar(x, name, positive=False, nonnegative=False):
     if nonnegative and v < 0:
         raise ValueError(f"{name} must be >= 0; got {x!r}")
     return v
+
+
+def flag(x, name):
+    """A yes/no option: ``True`` or ``False`` (numpy's too); None, 0/1, strings and arrays name ``name``.
+
+    Parameters
+    ----------
+    x : bool
+        The option.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    bool
+        ``x`` as a Python bool.
+    """
+    if not isinstance(x, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False; got {_show(x)}")
+    return bool(x)
 
 
 def positive(x, name):
