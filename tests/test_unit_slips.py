@@ -436,3 +436,45 @@ def test_a_field_strength_in_gauss_or_nT_is_refused():
 def test_a_yes_no_option_must_be_a_bool(call, name):
     with pytest.raises(ValueError, match=rf"{name} must be True or False"):
         call()
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Third round: a recording's field in milligauss, the 2 g rule on single readings
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_freescale_refuses_a_recording_in_milligauss_unless_the_range_is_widened(trial27):
+    from fusionlab import freescale, freescale_fast
+    gyr, acc, mag, fs = trial27
+    Y, Gg, mG = np.degrees(gyr[:2000]), -acc[:2000] / G, 10.0 * mag[:2000]   # the Earth's field read in milligauss
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* median field strength of \d{3}\.?\d*, which looks like milligauss"):
+        freescale.Kalman9("NED").run(Y[:400], Gg[:400], mG[:400])
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* milligauss -- multiply by 0.1"):
+        freescale_fast.run_fast9(Y, Gg, mG, fs)
+    with pytest.raises(ValueError, match=r"^mag must be in µT .* milligauss"):
+        freescale.check_recording(Y, Gg, mG, need_mag=True)
+    freescale.check_recording(Y, Gg, mag[:2000], need_mag=True)                    # µT passes
+    freescale.check_recording(Y, Gg, mG, need_mag=True, field_range=(10.0, 1000.0))  # the caller says so
+
+
+@pytest.mark.parametrize("call", [lambda G1, B1: ecompass.accel_noise(B1),
+                                  lambda G1, B1: ecompass.tilt_compensated_heading(B1, G1)],
+                         ids=["accel_noise", "tilt_compensated_heading"])
+def test_a_single_field_reading_passed_as_the_accelerometer_is_refused(call):
+    q = rotations.euler_to_quat([0.2, -0.1, 0.7])
+    G1, B1 = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, np.radians(60.0))
+    with pytest.raises(ValueError, match=r"^G must be in g .* median magnitude of 50, which looks like another sensor's reading"):
+        call(G1, B1)
+
+
+def test_ecompass_noise_and_heading_refuse_m_s2_and_a_field_in_gauss_or_nT():
+    q = rotations.euler_to_quat([0.2, -0.1, 0.7])
+    G1, B1 = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, np.radians(60.0))
+    assert float(ecompass.accel_noise(G1)) < 1e-12
+    assert abs(float(ecompass.tilt_compensated_heading(G1, B1)) - 0.7) < 1e-9
+    with pytest.raises(ValueError, match=r"^G must be in g .* looks like m/s²"):
+        ecompass.accel_noise(G1 * G)
+    for factor, unit in ((0.01, "gauss"), (1000.0, "nT")):
+        with pytest.raises(ValueError, match=rf"^B_c must be in µT .* looks like {unit}"):
+            ecompass.mag_noise(B1 * factor)
+        with pytest.raises(ValueError, match=rf"^B_c must be in µT .* looks like {unit}"):
+            ecompass.tilt_compensated_heading(G1, B1 * factor)

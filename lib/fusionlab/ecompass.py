@@ -229,14 +229,15 @@ def accel_noise(G):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g.
+        Accelerometer reading, g (a median magnitude of 2 or more -- m/s², milli-g, another sensor -- is refused:
+        :func:`fusionlab.validate.accel_g`).
 
     Returns
     -------
     ndarray, shape (...)
         The noise estimate, g²: zero on the 1 g sphere, whatever the direction.
     """
-    G = validate.vectors(G, "G")
+    G = validate.accel_g(G, "G")
     return np.abs(np.sum(G * G, axis=-1) - 1.0)                           # (002 eq 9)
 
 
@@ -246,7 +247,8 @@ def mag_noise(B_c, B=50.0):
     Parameters
     ----------
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT.
+        Calibrated magnetometer reading, µT (a median field strength outside :data:`ECOMPASS_FIELD_UT`, gauss or
+        nT, is refused).
     B : float, optional
         Geomagnetic field strength, µT.
 
@@ -255,7 +257,7 @@ def mag_noise(B_c, B=50.0):
     ndarray, shape (...)
         The noise estimate, µT².
     """
-    B_c = validate.vectors(B_c, "B_c")
+    B_c = validate.field_uT(B_c, "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     B = validate.field_uT(B, "B", per_sample=False)
     return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)                     # (002 eq 15)
 
@@ -723,17 +725,18 @@ def tilt_compensated_heading(G, B_c):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g (NED convention, flat reading (0, 0, +1)).
+        Accelerometer reading, g (NED convention, flat reading (0, 0, +1)); a median magnitude of 2 or more is
+        refused (m/s², milli-g, or the magnetometer passed here: :func:`fusionlab.validate.accel_g`).
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT.
+        Calibrated magnetometer reading, µT (a median field strength outside :data:`ECOMPASS_FIELD_UT` is refused).
 
     Returns
     -------
     ndarray, shape (...)
         Heading, rad: the yaw of the sensor (``quat_to_euler(q)[..., 2]`` of the true attitude when noise-free).
     """
-    G = validate.vectors(G, "G")
-    B_c = validate.vectors(B_c, "B_c")
+    G = validate.accel_g(G, "G")
+    B_c = validate.field_uT(B_c, "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     nonzero_norm(G, "G")
     nonzero_norm(B_c, "B_c")

@@ -1061,8 +1061,9 @@ def accel_g(G, name="G", per_sample=False):
     """An accelerometer reading in units of g (the Freescale note's unit): refuse m/s² and milli-g.
 
     At rest ``|G|`` is 1; a median magnitude between 5 and 20 is m/s² (9.81 at rest), one of 200 or more is
-    milli-g (1000 at rest); a recording (``per_sample``) with a median of :data:`SUSTAINED_G_MAX` or more is
-    another sensor's reading.
+    milli-g (1000 at rest); any other median of :data:`SUSTAINED_G_MAX` or more -- of a recording, or of one
+    reading or a few: the note's eCompass and filters take an accelerometer near 1 g -- is another sensor's reading
+    (the gyro in °/s, the magnetometer in µT).
 
     Parameters
     ----------
@@ -1092,7 +1093,9 @@ def accel_g(G, name="G", per_sample=False):
         what = ("m/s² -- divide by 9.80665" if 5.0 <= med <= 20.0 else
                 "milli-g -- divide by 1000" if med >= 200.0 else
                 f"another sensor's reading (°/s, µT; over half a recording no hand or vehicle sustains "
-                f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?" if per_sample and med >= SUSTAINED_G_MAX else None)
+                f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?" if per_sample and med >= SUSTAINED_G_MAX else
+                f"another sensor's reading (°/s, µT; the accelerometer of the note's eCompass and filters reads "
+                f"about 1 g, not {SUSTAINED_G_MAX:g} or more) -- arguments swapped?" if med >= SUSTAINED_G_MAX else None)
         if what:
             raise ValueError(f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks "
                              f"like {what}")
