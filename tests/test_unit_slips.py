@@ -478,3 +478,33 @@ def test_ecompass_noise_and_heading_refuse_m_s2_and_a_field_in_gauss_or_nT():
             ecompass.mag_noise(B1 * factor)
         with pytest.raises(ValueError, match=rf"^B_c must be in µT .* looks like {unit}"):
             ecompass.tilt_compensated_heading(G1, B1 * factor)
+
+
+def test_ellipsoid_fit_refuses_gauss_and_nT_and_a_radius_in_another_unit():
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((200, 3)); u /= np.linalg.norm(u, axis=1, keepdims=True)
+    mag = 44.3 * u * [1.1, 0.9, 1.0] + [10.0, -5.0, 3.0]               # µT, soft and hard iron
+    fit = calibration.fit_ellipsoid(mag, field_strength=44.3)
+    assert np.allclose(np.linalg.norm(calibration.apply_ellipsoid(fit, mag), axis=1), 44.3, rtol=1e-6)
+    for factor, unit in ((0.01, "gauss"), (1000.0, "nT")):
+        with pytest.raises(ValueError, match=rf"^mag must be in µT .* looks like {unit}"):
+            calibration.fit_ellipsoid(mag * factor)
+        with pytest.raises(ValueError, match=rf"^mag must be in µT .* looks like {unit}"):
+            calibration.apply_ellipsoid(fit, mag * factor)
+        with pytest.raises(ValueError, match=rf"^field_strength must be in µT .* looks like {unit}"):
+            calibration.fit_ellipsoid(mag, field_strength=44.3 * factor)
+
+
+def test_steps_experiment_and_bandpass_name_their_own_arguments():
+    from fusionlab import northfinder
+    with pytest.raises(ValueError, match=r"^headings must be one heading or a 1-D array"):
+        northfinder.steps_experiment(np.radians([[0.0, 10.0]]), orders=(200,))
+    with pytest.raises(ValueError, match=r"^orders must be an integer >= 1; got np.float64\(nan\)"):
+        northfinder.steps_experiment(np.radians([0.0]), orders=(np.nan,))
+    with pytest.raises(ValueError, match=r"^orders must be a sequence of FIR orders"):
+        northfinder.steps_experiment(np.radians([0.0]), orders="200")
+    rec = northfinder.synthetic_record(0.3, seed=0)
+    taps = northfinder.bandpass_firls(200, rec["fs"], rec["f_r"])
+    assert northfinder.bandpass(rec["acc"], rec["theta"], taps)[0].shape == (len(rec["acc"]) - 200,)
+    with pytest.raises(ValueError, match=r"^taps must have shape \(order \+ 1,\); got \(1, 201\)"):
+        northfinder.bandpass(rec["acc"], rec["theta"], taps[None])

@@ -662,6 +662,8 @@ def bandpass(x, theta, taps, remove_mean=True):
 
     x, theta = validate.array(x, "x"), validate.array(theta, "theta")
     taps = validate.array(taps, "taps")
+    if taps.ndim != 1:
+        raise ValueError(f"taps must have shape (order + 1,); got {taps.shape}")
     if x.ndim != 1 or theta.shape != x.shape:
         raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
     m = len(taps) - 1
@@ -898,6 +900,11 @@ def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
         Headings, rad: [demodulation sampled, demodulation exact, synchronous sampling].
     """
     headings = validate.angles_rad(np.atleast_1d(headings), "headings")
+    if headings.ndim != 1:
+        raise ValueError(f"headings must be one heading or a 1-D array of them, shape (S,); got {headings.shape}")
+    if isinstance(orders, (str, bytes)) or np.ndim(orders) > 1:
+        raise ValueError(f"orders must be a sequence of FIR orders (int); got {validate._show(orders)}")
+    orders = [validate.count(o, "orders", minimum=1) for o in np.atleast_1d(orders)]
     seed = validate.count(seed, "seed")
     out = np.empty((len(headings), len(orders), 3))
     for s, psi in enumerate(headings):
