@@ -508,3 +508,10 @@ def test_steps_experiment_and_bandpass_name_their_own_arguments():
     assert northfinder.bandpass(rec["acc"], rec["theta"], taps)[0].shape == (len(rec["acc"]) - 200,)
     with pytest.raises(ValueError, match=r"^taps must have shape \(order \+ 1,\); got \(1, 201\)"):
         northfinder.bandpass(rec["acc"], rec["theta"], taps[None])
+
+
+def test_a_single_number_is_not_a_field_reading():
+    with pytest.raises(ValueError, match=r"^B_c must have shape \(\.\.\., 3\); got \(\)"):
+        ecompass.mag_noise(50.0)
+    with pytest.raises(ValueError, match=r"^B_c must have shape \(\.\.\., 3\); got \(\)"):
+        ecompass.tilt_compensated_heading([0.0, 0.0, 1.0], 50.0)

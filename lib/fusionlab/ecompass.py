@@ -257,7 +257,7 @@ def mag_noise(B_c, B=50.0):
     ndarray, shape (...)
         The noise estimate, µT².
     """
-    B_c = validate.field_uT(B_c, "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
+    B_c = validate.field_uT(validate.vectors(B_c, "B_c"), "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     B = validate.field_uT(B, "B", per_sample=False)
     return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)                     # (002 eq 15)
 
@@ -736,7 +736,7 @@ def tilt_compensated_heading(G, B_c):
         Heading, rad: the yaw of the sensor (``quat_to_euler(q)[..., 2]`` of the true attitude when noise-free).
     """
     G = validate.accel_g(G, "G")
-    B_c = validate.field_uT(B_c, "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
+    B_c = validate.field_uT(validate.vectors(B_c, "B_c"), "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     nonzero_norm(G, "G")
     nonzero_norm(B_c, "B_c")
