@@ -515,3 +515,12 @@ def test_a_single_number_is_not_a_field_reading():
         ecompass.mag_noise(50.0)
     with pytest.raises(ValueError, match=r"^B_c must have shape \(\.\.\., 3\); got \(\)"):
         ecompass.tilt_compensated_heading([0.0, 0.0, 1.0], 50.0)
+
+
+def test_a_single_reading_in_a_shake_passes_and_one_beyond_any_accelerometer_range_does_not():
+    G1 = np.array([1.5, 0.0, 2.0])                                       # 2.5 g: Lab 04's shaken snapshot
+    B1 = np.array([20.0, -5.0, 40.0])
+    assert np.isfinite(ecompass.tilt_compensated_heading(G1, B1))
+    assert abs(float(ecompass.accel_noise(G1)) - 5.25) < 1e-12
+    with pytest.raises(ValueError, match=r"^G must be in g .* no accelerometer of the course reads 16 g"):
+        ecompass.accel_noise(G1 * 8.0)

@@ -24,7 +24,7 @@ import numpy as np
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
 
 
 def _shape_text(shape, lead=""):
@@ -999,6 +999,11 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
 #: is refused by :func:`accel_ms2`: over half a record no hand or vehicle of the course sustains 2 g.
 SUSTAINED_G_MAX = 2.0
 
+#: Single accelerometer readings in g (not a recording) whose median magnitude is this or more are refused by
+#: :func:`accel_g`: beyond the ±16 g range of any accelerometer of the course (the Freescale note's FXOS8700 reads
+#: ±2/4/8 g), so the magnetometer in µT (25-65) or the gyro in °/s was passed in its place.
+READING_G_MAX = 16.0
+
 #: A median specific force from this value up (m/s², about 10 g over half the record: no vehicle or hand
 #: sustains it) is refused by :func:`accel_ms2` as milli-g or counts.
 MILLI_G_FROM = 100.0
@@ -1061,9 +1066,9 @@ def accel_g(G, name="G", per_sample=False):
     """An accelerometer reading in units of g (the Freescale note's unit): refuse m/s² and milli-g.
 
     At rest ``|G|`` is 1; a median magnitude between 5 and 20 is m/s² (9.81 at rest), one of 200 or more is
-    milli-g (1000 at rest); any other median of :data:`SUSTAINED_G_MAX` or more -- of a recording, or of one
-    reading or a few: the note's eCompass and filters take an accelerometer near 1 g -- is another sensor's reading
-    (the gyro in °/s, the magnetometer in µT).
+    milli-g (1000 at rest); any other median of a recording (``per_sample``) of :data:`SUSTAINED_G_MAX` or more,
+    or of single readings of :data:`READING_G_MAX` or more (a reading in a shake may pass 2 g, as in Lab 04, not the
+    sensor's range), is another sensor's reading (the gyro in °/s, the magnetometer in µT).
 
     Parameters
     ----------
@@ -1094,8 +1099,8 @@ def accel_g(G, name="G", per_sample=False):
                 "milli-g -- divide by 1000" if med >= 200.0 else
                 f"another sensor's reading (°/s, µT; over half a recording no hand or vehicle sustains "
                 f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?" if per_sample and med >= SUSTAINED_G_MAX else
-                f"another sensor's reading (°/s, µT; the accelerometer of the note's eCompass and filters reads "
-                f"about 1 g, not {SUSTAINED_G_MAX:g} or more) -- arguments swapped?" if med >= SUSTAINED_G_MAX else None)
+                f"another sensor's reading (°/s, µT; no accelerometer of the course reads {READING_G_MAX:g} g or "
+                f"more) -- arguments swapped?" if med >= READING_G_MAX else None)
         if what:
             raise ValueError(f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks "
                              f"like {what}")
