@@ -300,7 +300,7 @@ def test_accel_hold_changes_nothing_at_one_g_and_reaches_the_estimators():
 
 
 def test_check_recording_returns_float_arrays_and_names_the_bad_one():
-    gyr, acc, mag = fz.check_recording([[1, 2, 3]] * 4, np.zeros((4, 3)), np.ones((4, 3)), need_mag=True)
+    gyr, acc, mag = fz.check_recording([[1, 2, 3]] * 4, np.zeros((4, 3)), np.full((4, 3), 30.0), need_mag=True)
     assert gyr.dtype == float and gyr.shape == acc.shape == mag.shape == (4, 3)
     assert fz.check_recording(gyr, acc, None, need_mag=False)[2] is None
     with pytest.raises(ValueError, match=r"^mag must be given: an \(N, 3\) array in µT$"):

@@ -348,3 +348,179 @@ def test_freescale_doors_name_the_callers_arguments_and_units(trial27):
     with pytest.raises(ValueError, match=r"^acc_g must have shape \(\.\.\., N, 3\); got \(2000, 2\)"):
         freescale.Kalman6().run(Y, Gg[:, :2])
     assert freescale_fast.run_fast9(Y, Gg, mag[:2000], fs)["q"].shape[1] == 4
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Second round of the outside probe: swapped sensors, flags for numbers, tuning records, field strengths
+# ----------------------------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def trial07_moving():
+    tr = datasets.load_trial(7)
+    part = slice(int(15 * tr.fs), int(40 * tr.fs))                    # rest, then fast rotation
+    return tr.gyr[part], tr.acc[part], tr.mag[part], tr.fs
+
+
+@pytest.mark.parametrize("name", ["dcm_ahrs", "triad"])
+def test_run_refuses_the_magnetometer_passed_as_the_accelerometer(trial07_moving, name):
+    gyr, acc, mag, fs = trial07_moving
+    estimators.run(name, gyr, acc, fs, mag=mag)                       # the right order runs
+    with pytest.raises(ValueError, match=r"acc must be in m/s².*no hand or vehicle sustains.*magnetometer"):
+        estimators.run(name, gyr, mag, fs, mag=acc)
+
+
+def test_freescale_refuses_the_gyro_passed_as_the_accelerometer_in_g():
+    from fusionlab import freescale
+    rec = ecompass.synthetic_recording(np.tile([20.0, -10.0, 40.0], (400, 1)), frame="NED", seed=1)
+    freescale.Kalman6("NED").run(rec["gyr"], rec["acc"])
+    with pytest.raises(ValueError, match=r"acc_g must be in g.*another sensor's reading"):
+        freescale.Kalman6("NED").run(rec["acc"], rec["gyr"])
+
+
+def test_run_ahrs_checks_units_and_a_magnetometer_that_is_not_normalised(trial07_moving):
+    from fusionlab import dcm, dcm_filter
+    gyr, acc, mag, fs = trial07_moving
+    acc_b = dcm.accel_to_seed004(acc)
+    mag_b = mag / np.median(np.linalg.norm(mag, axis=1))
+    dcm_filter.run_ahrs(gyr, acc_b, mag_b, fs)
+    with pytest.raises(ValueError, match=r"gyr must be in rad/s"):
+        dcm_filter.run_ahrs(np.degrees(gyr), acc_b, mag_b, fs)
+    with pytest.raises(ValueError, match=r"acc_b must be in m/s².*looks like g"):
+        dcm_filter.run_ahrs(gyr, acc_b / G, mag_b, fs)
+    with pytest.raises(ValueError, match=r"mag_b must be normalised"):
+        dcm_filter.run_ahrs(gyr, acc_b, mag, fs)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: rotations.rot_x(True),
+    lambda: rotations.euler_to_dcm([True, False, True]),
+    lambda: kalman.gaussian_product(True, 4.0, 12.0, 1.0),
+])
+def test_a_flag_where_a_number_belongs_is_refused(call):
+    with pytest.raises(ValueError, match=r"must be numbers, not True/False"):
+        call()
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(acc_tol=0.0), "acc_tol"),
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(rho=1.5), "rho"),
+    (lambda: __import__("fusionlab.dcm_filter").dcm_filter.AhrsTuning(hold=float("nan")), "hold"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(sensor_fs=0.005), "sensor_fs"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(oversample=2.5), "oversample"),
+    (lambda: __import__("fusionlab.freescale").freescale.Tuning(B=0.5), "B"),
+    (lambda: __import__("fusionlab.gpsins").gpsins.InsTuning(sigma_pos=-3.0), "sigma_pos"),
+    (lambda: __import__("fusionlab.sensors").sensors.AnalogSensor("X", 0.3, 1.5, 3.0, "g", None), "full_scale"),
+    (lambda: __import__("fusionlab.sensors").sensors.AnalogSensor("X", 0.3, 460.0, 3.0, "g", 3.0), "zero_level"),
+])
+def test_tuning_records_name_a_bad_field(make, field):
+    with pytest.raises(ValueError, match=rf"^{field} must"):
+        make()
+
+
+def test_a_field_strength_in_gauss_or_nT_is_refused():
+    from fusionlab import freescale
+    assert validate.field_uT(50.0, "B", per_sample=False) == 50.0
+    with pytest.raises(ValueError, match=r"B must be in µT.*field strength of 0.5, which looks like gauss"):
+        ecompass.mag_model([1.0, 0.0, 0.0, 0.0], B=0.5)
+    with pytest.raises(ValueError, match=r"B must be in µT.*looks like nT"):
+        freescale.Kalman9("NED", B=50_000.0)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: falling_body.ThesisKF(*falling_body.falling_body_state_space(), 0.01 * np.eye(2), [[144.0]], [[1.0, 0.0]],
+                                   [200.0, 0.0], np.eye(2), project_state=None), "project_state"),
+    (lambda: kalman.kf_batch(np.zeros((1, 5, 1)), np.eye(2), np.zeros((2, 1)), [0.0], np.eye(2), [[1.0]],
+                             [[1.0, 0.0]], [0.0, 0.0], np.eye(2), control="no"), "control"),
+    (lambda: falling_body.falling_body_quadratic(3.0, stop_at_ground=None), "stop_at_ground"),
+])
+def test_a_yes_no_option_must_be_a_bool(call, name):
+    with pytest.raises(ValueError, match=rf"{name} must be True or False"):
+        call()
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Third round: a recording's field in milligauss, the 2 g rule on single readings
+# ----------------------------------------------------------------------------------------------------------------
+
+def test_freescale_refuses_a_recording_in_milligauss_unless_the_range_is_widened(trial27):
+    from fusionlab import freescale, freescale_fast
+    gyr, acc, mag, fs = trial27
+    Y, Gg, mG = np.degrees(gyr[:2000]), -acc[:2000] / G, 10.0 * mag[:2000]   # the Earth's field read in milligauss
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* median field strength of \d{3}\.?\d*, which looks like milligauss"):
+        freescale.Kalman9("NED").run(Y[:400], Gg[:400], mG[:400])
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* milligauss -- multiply by 0.1"):
+        freescale_fast.run_fast9(Y, Gg, mG, fs)
+    with pytest.raises(ValueError, match=r"^mag must be in µT .* milligauss"):
+        freescale.check_recording(Y, Gg, mG, need_mag=True)
+    freescale.check_recording(Y, Gg, mag[:2000], need_mag=True)                    # µT passes
+    freescale.check_recording(Y, Gg, mG, need_mag=True, field_range=(10.0, 1000.0))  # the caller says so
+
+
+@pytest.mark.parametrize("call", [lambda G1, B1: ecompass.accel_noise(B1),
+                                  lambda G1, B1: ecompass.tilt_compensated_heading(B1, G1)],
+                         ids=["accel_noise", "tilt_compensated_heading"])
+def test_a_single_field_reading_passed_as_the_accelerometer_is_refused(call):
+    q = rotations.euler_to_quat([0.2, -0.1, 0.7])
+    G1, B1 = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, np.radians(60.0))
+    with pytest.raises(ValueError, match=r"^G must be in g .* median magnitude of 50, which looks like another sensor's reading"):
+        call(G1, B1)
+
+
+def test_ecompass_noise_and_heading_refuse_m_s2_and_a_field_in_gauss_or_nT():
+    q = rotations.euler_to_quat([0.2, -0.1, 0.7])
+    G1, B1 = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, np.radians(60.0))
+    assert float(ecompass.accel_noise(G1)) < 1e-12
+    assert abs(float(ecompass.tilt_compensated_heading(G1, B1)) - 0.7) < 1e-9
+    with pytest.raises(ValueError, match=r"^G must be in g .* looks like m/s²"):
+        ecompass.accel_noise(G1 * G)
+    for factor, unit in ((0.01, "gauss"), (1000.0, "nT")):
+        with pytest.raises(ValueError, match=rf"^B_c must be in µT .* looks like {unit}"):
+            ecompass.mag_noise(B1 * factor)
+        with pytest.raises(ValueError, match=rf"^B_c must be in µT .* looks like {unit}"):
+            ecompass.tilt_compensated_heading(G1, B1 * factor)
+
+
+def test_ellipsoid_fit_refuses_gauss_and_nT_and_a_radius_in_another_unit():
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((200, 3)); u /= np.linalg.norm(u, axis=1, keepdims=True)
+    mag = 44.3 * u * [1.1, 0.9, 1.0] + [10.0, -5.0, 3.0]               # µT, soft and hard iron
+    fit = calibration.fit_ellipsoid(mag, field_strength=44.3)
+    assert np.allclose(np.linalg.norm(calibration.apply_ellipsoid(fit, mag), axis=1), 44.3, rtol=1e-6)
+    for factor, unit in ((0.01, "gauss"), (1000.0, "nT")):
+        with pytest.raises(ValueError, match=rf"^mag must be in µT .* looks like {unit}"):
+            calibration.fit_ellipsoid(mag * factor)
+        with pytest.raises(ValueError, match=rf"^mag must be in µT .* looks like {unit}"):
+            calibration.apply_ellipsoid(fit, mag * factor)
+        with pytest.raises(ValueError, match=rf"^field_strength must be in µT .* looks like {unit}"):
+            calibration.fit_ellipsoid(mag, field_strength=44.3 * factor)
+
+
+def test_steps_experiment_and_bandpass_name_their_own_arguments():
+    from fusionlab import northfinder
+    with pytest.raises(ValueError, match=r"^headings must be one heading or a 1-D array"):
+        northfinder.steps_experiment(np.radians([[0.0, 10.0]]), orders=(200,))
+    with pytest.raises(ValueError, match=r"^orders must be an integer >= 1; got np.float64\(nan\)"):
+        northfinder.steps_experiment(np.radians([0.0]), orders=(np.nan,))
+    with pytest.raises(ValueError, match=r"^orders must be a sequence of FIR orders"):
+        northfinder.steps_experiment(np.radians([0.0]), orders="200")
+    rec = northfinder.synthetic_record(0.3, seed=0)
+    taps = northfinder.bandpass_firls(200, rec["fs"], rec["f_r"])
+    assert northfinder.bandpass(rec["acc"], rec["theta"], taps)[0].shape == (len(rec["acc"]) - 200,)
+    with pytest.raises(ValueError, match=r"^taps must have shape \(order \+ 1,\); got \(1, 201\)"):
+        northfinder.bandpass(rec["acc"], rec["theta"], taps[None])
+
+
+def test_a_single_number_is_not_a_field_reading():
+    with pytest.raises(ValueError, match=r"^B_c must have shape \(\.\.\., 3\); got \(\)"):
+        ecompass.mag_noise(50.0)
+    with pytest.raises(ValueError, match=r"^B_c must have shape \(\.\.\., 3\); got \(\)"):
+        ecompass.tilt_compensated_heading([0.0, 0.0, 1.0], 50.0)
+
+
+def test_a_single_reading_in_a_shake_passes_and_one_beyond_any_accelerometer_range_does_not():
+    G1 = np.array([1.5, 0.0, 2.0])                                       # 2.5 g: Lab 04's shaken snapshot
+    B1 = np.array([20.0, -5.0, 40.0])
+    assert np.isfinite(ecompass.tilt_compensated_heading(G1, B1))
+    assert abs(float(ecompass.accel_noise(G1)) - 5.25) < 1e-12
+    with pytest.raises(ValueError, match=r"^G must be in g .* no accelerometer of the course reads 16 g"):
+        ecompass.accel_noise(G1 * 10.0)                                   # 25: nor m/s² (5-20), nor milli-g

@@ -31,7 +31,7 @@ from . import validate
 __all__ = ["TriadFit", "fit_triad", "apply_triad", "observation_matrix",
            "six_positions", "gyro_bias_from_rest", "quadric_normal_equations", "ellipsoid_design_matrix",
            "EllipsoidFit", "fit_ellipsoid", "apply_ellipsoid", "allan_deviation", "AllanReading", "read_arw",
-           "read_allan", "BIAS_INSTABILITY_FACTOR"]
+           "read_allan", "BIAS_INSTABILITY_FACTOR", "RAW_FIELD_UT"]
 
 
 @dataclass(frozen=True)
@@ -348,13 +348,19 @@ def _li_griffiths(D, k=4.0):
     return np.concatenate([v1, -S22_inv_S21 @ v1])
 
 
+#: The median field strength (µT) of *raw* magnetometer readings that :func:`fit_ellipsoid` and
+#: :func:`apply_ellipsoid` accept: wide, since hard iron can shift a phone's readings by hundreds of µT; gauss
+#: (0.25-0.65) and nT (25,000-65,000) fall outside, milligauss (250-650) cannot be told from hard iron.
+RAW_FIELD_UT = (2.0, 5000.0)
+
+
 def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     """Hard- and soft-iron calibration from readings taken while the sensor turns in a constant field.
 
     Parameters
     ----------
     mag : array_like, shape (N, 3)
-        Raw magnetometer readings, µT; N >= 10, covering the sphere in more than one plane.
+        Raw magnetometer readings, µT (a median outside :data:`RAW_FIELD_UT`, gauss or nT, is refused); N >= 10, covering the sphere in more than one plane.
     field_strength : float, optional
         The radius of the corrected sphere, µT (e.g. the local field, 44.3 µT for BROAD); by default the one that
         keeps the volume (det W = 1).
@@ -386,7 +392,7 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     >>> np.round(np.linalg.norm(calibration.apply_ellipsoid(fit, mag), axis=1)[:3], 6)
     array([44.3, 44.3, 44.3])
     """
-    m = validate.samples(mag, "mag")
+    m = validate.field_uT(mag, "mag", *RAW_FIELD_UT)
     _check_spread(m, 10)
     mu = m.mean(axis=0)
     s = float(np.sqrt(np.mean(np.sum((m - mu) ** 2, axis=1))))
@@ -411,7 +417,7 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     if field_strength is None:
         radius = float(np.linalg.det(W_unit) ** (-1 / 3))
     else:
-        radius = validate.positive(field_strength, "field_strength")
+        radius = validate.field_uT(field_strength, "field_strength", per_sample=False)
     W = radius * W_unit
     resid = np.linalg.norm((m - centre) @ W.T, axis=1) - radius
     coeffs = v / np.linalg.norm(v)
@@ -427,7 +433,7 @@ def apply_ellipsoid(fit, mag):
     fit : EllipsoidFit
         The calibration (:func:`fit_ellipsoid`).
     mag : array_like, shape (N, 3)
-        Raw magnetometer readings, unit of the fit (µT).
+        Raw magnetometer readings, unit of the fit (µT; a median outside :data:`RAW_FIELD_UT`, gauss or nT, is refused).
 
     Returns
     -------
@@ -435,7 +441,7 @@ def apply_ellipsoid(fit, mag):
         Corrected readings, same unit.
     """
     _fit_of(fit, EllipsoidFit, "fit_ellipsoid")
-    m = validate.samples(mag, "mag")
+    m = validate.field_uT(mag, "mag", *RAW_FIELD_UT)
     return (m - fit.centre) @ fit.W.T
 
 

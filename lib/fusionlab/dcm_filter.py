@@ -149,6 +149,18 @@ class AhrsTuning:
     #: low-pass would lag behind it, so the raw reading is used and the strapdown restarts from the estimate
     acc_lp_bias_gate: float = np.radians(0.2)
 
+    def __post_init__(self):
+        for f in ("gyro_noise", "acc_sigma", "acc_sigma_untrusted", "acc_tol", "mag_sigma", "mag_sigma_untrusted",
+                  "mag_tol", "hold", "R_i", "sigma_c0", "sigma_b0", "dip_tau", "acc_lp_bias_gate"):
+            validate.positive(getattr(self, f), f)
+        for f in ("bias_walk", "R_ss"):
+            validate.scalar(getattr(self, f), f, nonnegative=True)
+        for f in ("bias_sigma_rest", "dip_tol", "acc_lp_tau"):              # None: off
+            if getattr(self, f) is not None:
+                validate.positive(getattr(self, f), f)
+        if not 0 < validate.scalar(self.rho, "rho") <= 1:
+            raise ValueError(f"rho must be in (0, 1] (the decay of R_c per step, 004 eq 6.27); got {self.rho!r}")
+
 
 #: The tuning of the registered ``dcm_ahrs`` / ``dcm_ahrs6`` estimators for a hand-held MEMS IMU (ours, like every
 #: AHRS number). What changes from :class:`AhrsTuning`, and on what evidence:
@@ -417,11 +429,17 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         ``t_update`` (nb,) s; ``inclination`` rad; ``acc_trusted``, ``mag_trusted`` (N,) bool.
     """
     gyr = validate.samples(gyr, "gyr")
-    acc_b = validate.samples(acc_b, "acc_b")
+    acc_b = validate.accel_ms2(acc_b, "acc_b")
     use_mag = mag_b is not None
     mag_b = validate.samples(mag_b, "mag_b") if use_mag else np.zeros_like(acc_b)
     n = validate.same_length(gyr=gyr, acc_b=acc_b, mag_b=mag_b)
     fs = validate.sample_rate(fs, "fs")
+    validate.gyro_rad(gyr, "gyr", acc=acc_b, fs=fs, acc_name="acc_b")
+    if use_mag and n:
+        med = float(np.median(np.linalg.norm(mag_b, axis=1)))
+        if not 0.5 <= med <= 2.0:
+            raise ValueError(f"mag_b must be normalised to the local field strength (|h| about 1); got a median "
+                             f"|mag_b| of {med:.4g} -- divide by it (np.median(np.linalg.norm(mag, axis=1)))")
     g = validate.positive(g, "g")
     M = validate.scalar(update_every, "update_every")
     if M != int(M) or M < 1:

@@ -213,7 +213,7 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
         The reading, µT.
     """
     q = validate.quaternions(q, "q")
-    B = validate.positive(B, "B")
+    B = validate.field_uT(B, "B", per_sample=False)
     _, r_m = reference_vectors(delta, frame)
     d = 0.0 if d_S is None else validate.vectors(d_S, "d_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
@@ -229,14 +229,15 @@ def accel_noise(G):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g.
+        Accelerometer reading, g (a median magnitude of 2 or more -- m/s², milli-g, another sensor -- is refused:
+        :func:`fusionlab.validate.accel_g`).
 
     Returns
     -------
     ndarray, shape (...)
         The noise estimate, g²: zero on the 1 g sphere, whatever the direction.
     """
-    G = validate.vectors(G, "G")
+    G = validate.accel_g(G, "G")
     return np.abs(np.sum(G * G, axis=-1) - 1.0)                           # (002 eq 9)
 
 
@@ -246,7 +247,8 @@ def mag_noise(B_c, B=50.0):
     Parameters
     ----------
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT.
+        Calibrated magnetometer reading, µT (a median field strength outside :data:`ECOMPASS_FIELD_UT`, gauss or
+        nT, is refused).
     B : float, optional
         Geomagnetic field strength, µT.
 
@@ -255,8 +257,8 @@ def mag_noise(B_c, B=50.0):
     ndarray, shape (...)
         The noise estimate, µT².
     """
-    B_c = validate.vectors(B_c, "B_c")
-    B = validate.positive(B, "B")
+    B_c = validate.field_uT(validate.vectors(B_c, "B_c"), "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
+    B = validate.field_uT(B, "B", per_sample=False)
     return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)                     # (002 eq 15)
 
 
@@ -696,7 +698,7 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     G = validate.accel_g(G, "G")
     B_c = validate.vectors(B_c, "B_c")
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c, delta=validate.angles_rad(delta, "delta"))
-    B = validate.positive(B, "B")
+    B = validate.field_uT(B, "B", per_sample=False)
     s_g = measured_gravity(G, frame)
     validate.field_uT(B_c, "B_c", low=ECOMPASS_FIELD_UT[0], high=ECOMPASS_FIELD_UT[1], per_sample=False)
     s_m = B_c / nonzero_norm(B_c, "B_c")[..., None]
@@ -723,17 +725,18 @@ def tilt_compensated_heading(G, B_c):
     Parameters
     ----------
     G : array_like, shape (..., 3)
-        Accelerometer reading, g (NED convention, flat reading (0, 0, +1)).
+        Accelerometer reading, g (NED convention, flat reading (0, 0, +1)); a median magnitude of 2 or more is
+        refused (m/s², milli-g, or the magnetometer passed here: :func:`fusionlab.validate.accel_g`).
     B_c : array_like, shape (..., 3)
-        Calibrated magnetometer reading, µT.
+        Calibrated magnetometer reading, µT (a median field strength outside :data:`ECOMPASS_FIELD_UT` is refused).
 
     Returns
     -------
     ndarray, shape (...)
         Heading, rad: the yaw of the sensor (``quat_to_euler(q)[..., 2]`` of the true attitude when noise-free).
     """
-    G = validate.vectors(G, "G")
-    B_c = validate.vectors(B_c, "B_c")
+    G = validate.accel_g(G, "G")
+    B_c = validate.field_uT(validate.vectors(B_c, "B_c"), "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     nonzero_norm(G, "G")
     nonzero_norm(B_c, "B_c")

@@ -323,7 +323,7 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
         t_eval = validate.array(t_eval, "t_eval")
         t_eval = t_eval[t_eval <= duration]
     return solve_ivp(rhs, (0.0, duration), [validate.scalar(x0, "x0"), validate.scalar(v0, "v0")], method="RK45",
-                     rtol=1e-10, atol=1e-10, t_eval=t_eval, events=ground if stop_at_ground else None)
+                     rtol=1e-10, atol=1e-10, t_eval=t_eval, events=ground if validate.flag(stop_at_ground, "stop_at_ground") else None)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -522,7 +522,8 @@ class ThesisKF:
         self.A, self.B, self.u, self.Q, self.R, self.H = (d[k] for k in ("A", "B", "u", "Q", "R", "H"))
         self.x, self.P = d["x"].copy(), d["P"].copy()
         self.covariance = kalman.check_covariance_form(covariance)
-        self.project_state, self.control = bool(project_state), bool(control)
+        self.project_state = validate.flag(project_state, "project_state")
+        self.control = validate.flag(control, "control")
         self.x_post = self.P_post = self.K = None
 
     @classmethod

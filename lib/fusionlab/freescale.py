@@ -39,7 +39,7 @@ from . import ecompass, rotations, validate
 __all__ = [
     "Tuning", "V500", "qrot", "gravity_tilt_error", "geomag_tilt_error", "delta_quat", "alpha",
     "measurement_matrix", "process_noise", "measurement_noise", "kalman_gain", "nominal_gain", "Kalman9", "Kalman6",
-    "block_size", "D2R", "R2D", "check_recording", "check_units",
+    "block_size", "D2R", "R2D", "check_recording", "check_units", "RECORD_FIELD_UT",
 ]
 
 
@@ -90,6 +90,13 @@ class Tuning:
     sensor_fs: float = 200.0
     oversample: int = 8
     B: float = 50.0
+
+    def __post_init__(self):
+        for f in ("Q_vY", "Q_wb", "Q_wdelta", "qvbqd_min", "gyro_offset_max", "delta_max"):
+            validate.positive(getattr(self, f), f)
+        validate.sample_rate(self.sensor_fs, "sensor_fs")
+        validate.count(self.oversample, "oversample", 1)
+        validate.field_uT(self.B, "B", per_sample=False)
 
     @property
     def dt(self):
@@ -367,7 +374,7 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
         return vg * np.eye(3)
     if dof != 9:
         raise ValueError(f"dof must be 6 or 9; got {dof!r}")
-    B = tuning.B if B is None else validate.positive(B, "B")
+    B = tuning.B if B is None else validate.field_uT(B, "B", per_sample=False)
     qd = max(validate.scalar(qvbqd, "qvbqd", nonnegative=True), tuning.qvbqd_min)   # (002 §2.3) floor
     vm = 0.25 * qd / (B * B) + gyro                                        # (002 eq 163)
     vd = R2D * R2D * (qa + qd / (B * B))                                 # (002 eq 164)
@@ -530,7 +537,7 @@ class Kalman9:
         if not isinstance(tuning, Tuning):
             raise ValueError(f"tuning must be a fusionlab.freescale.Tuning; got {type(tuning).__name__}")
         self.tuning = tuning
-        self.B = tuning.B if B is None else validate.positive(B, "B")
+        self.B = tuning.B if B is None else validate.field_uT(B, "B", per_sample=False)
         self.dt = tuning.dt
         self.dt_gyro = 1.0 / tuning.sensor_fs
         self.C = measurement_matrix(self.dt, 9)
@@ -631,7 +638,6 @@ class Kalman9:
             orientation, ``t`` (M,) s, time at the end of each step.
         """
         gyr, acc, mag = check_recording(gyr_dps, acc_g, mag_uT, need_mag=True, names=("gyr_dps", "acc_g", "mag_uT"))
-        check_units(acc, mag)
         n = self.tuning.oversample
         M = len(gyr) // n
         out = {k: [] for k in ("q", "b_dps", "delta_deg", "q6")}
@@ -768,7 +774,6 @@ class Kalman6:
             ``q`` (M, 4), ``b_dps`` (M, 3), ``t`` (M,) s.
         """
         gyr, acc, _ = check_recording(gyr_dps, acc_g, None, need_mag=False, names=("gyr_dps", "acc_g", "mag_uT"))
-        check_units(acc, None)
         n = self.tuning.oversample
         M = len(gyr) // n
         qs, bs = [], []
@@ -780,9 +785,16 @@ class Kalman6:
                 "t": (np.arange(M) + 1) * n / self.tuning.sensor_fs}
 
 
-def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag")):
-    """The arrays of a recording in the note's units, checked: (N, 3) each, the same N (the units:
-    :func:`check_units`).
+#: The median field strength (µT) of a whole recording the filters accept: the Earth's 25-65 µT, with room for
+#: indoor iron (as :func:`fusionlab.validate.field_uT`). A magnet may disturb part of a record (Lab 05), not half
+#: of it; milligauss (250-650), gauss and nT fall outside. A caller whose field really is elsewhere passes
+#: ``field_range``.
+RECORD_FIELD_UT = (10.0, 200.0)
+
+
+def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_range=RECORD_FIELD_UT):
+    """The arrays of a recording in the note's units, checked: (N, 3) each, the same N, and the units of
+    :func:`check_units` (the gyro's °/s cannot be told from rad/s on a slow record, and is not checked).
 
     Parameters
     ----------
@@ -796,6 +808,8 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag")):
         Whether ``mag`` must be given.
     names : tuple of str, default ("gyr", "acc", "mag")
         The caller's names of the three arguments, for the messages (``run_fast9`` passes ``gyr_dps``, ...).
+    field_range : tuple of float, default :data:`RECORD_FIELD_UT`
+        The accepted median field strength of ``mag``, µT (:func:`check_units`).
 
     Returns
     -------
@@ -804,7 +818,7 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag")):
 
     Examples
     --------
-    >>> g, a, m = check_recording(np.zeros((8, 3)), np.zeros((8, 3)), None, need_mag=False)
+    >>> g, a, m = check_recording(np.zeros((8, 3)), np.tile([0.0, 0.0, 1.0], (8, 1)), None, need_mag=False)
     >>> g.shape, m
     ((8, 3), None)
     """
@@ -821,14 +835,15 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag")):
         if mag.ndim != 2:
             raise ValueError(f"{n_mag} must have shape (N, 3); got {mag.shape}")
     validate.same_length(**{n_gyr: gyr, n_acc: acc, n_mag: mag})
+    check_units(acc, mag, (n_acc, n_mag), field_range)
     return gyr, acc, mag
 
 
-def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT")):
+def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT"), field_range=RECORD_FIELD_UT):
     """The note's units at a filter's door: the accelerometer in g (m/s² and milli-g refused,
-    :func:`fusionlab.validate.accel_g`), the magnetometer in µT (gauss and nT refused, :func:`fusionlab.validate.field_uT`
-    over :data:`fusionlab.ecompass.ECOMPASS_FIELD_UT`): eq 9 compares ``|G|²`` with 1, eq 15 ``|B_c|²`` with ``B²``
-    and the 7 µT² floor is in µT.
+    :func:`fusionlab.validate.accel_g`), the magnetometer in µT (milligauss, gauss and nT refused,
+    :func:`fusionlab.validate.field_uT` over ``field_range``): eq 9 compares ``|G|²`` with 1, eq 15 ``|B_c|²``
+    with ``B²`` and the 7 µT² floor is in µT.
 
     Parameters
     ----------
@@ -838,6 +853,9 @@ def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT")):
         Magnetometer, µT.
     names : tuple of str, default ("acc_g", "mag_uT")
         The caller's names of the two arguments.
+    field_range : tuple of float, default :data:`RECORD_FIELD_UT`
+        The accepted median field strength of ``mag_uT``, µT: (10, 200) refuses milligauss (an Earth field of
+        250-650); pass a wider range for a field that really is stronger or weaker.
 
     Returns
     -------
@@ -845,4 +863,5 @@ def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT")):
     """
     validate.accel_g(acc_g, names[0], per_sample=True)
     if mag_uT is not None:
-        validate.field_uT(mag_uT, names[1], *ecompass.ECOMPASS_FIELD_UT)
+        low, high = (validate.positive(v, "field_range") for v in field_range)
+        validate.field_uT(mag_uT, names[1], low, high)

@@ -218,7 +218,6 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     """
     gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True,
                                               names=("gyr_dps", "acc_g", "mag_uT"))
-    freescale.check_units(acc, mag)
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     enu = ecompass.ENU[frame]
@@ -355,7 +354,6 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     """
     gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False,
                                             names=("gyr_dps", "acc_g", "mag_uT"))
-    freescale.check_units(acc, None)
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     N = len(gyr)

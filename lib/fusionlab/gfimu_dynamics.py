@@ -277,8 +277,7 @@ def observability_matrix(augmented=True, order=None):
     """
     import sympy as sp
 
-    if augmented not in (True, False):
-        raise ValueError(f"augmented must be True or False; got {augmented!r}")
+    augmented = validate.flag(augmented, "augmented")
     n = 15 if augmented else 6
     order = n if order is None else validate.count(order, "order", minimum=1)
     w = sp.symbols("omega_x omega_y omega_z", real=True)
@@ -318,8 +317,7 @@ def observability_rank(omega, alpha, augmented=True, exact=True):
     import sympy as sp
 
     omega, alpha = validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
-    if augmented not in (True, False):
-        raise ValueError(f"augmented must be True or False; got {augmented!r}")
+    augmented = validate.flag(augmented, "augmented")
     O, x, _ = _observability_cached(bool(augmented))
     vals = [*omega, *alpha]
     if exact:

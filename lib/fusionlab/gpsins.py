@@ -229,6 +229,12 @@ class InsTuning:
     sigma_pos: float = 3.0
     sigma_vel: float = 0.5
 
+    def __post_init__(self):
+        for f in ("gyro_noise", "acc_noise", "sigma_pos", "sigma_vel"):
+            validate.positive(getattr(self, f), f)
+        for f in ("gyro_bias_walk", "acc_bias_walk", "pos_noise"):
+            validate.scalar(getattr(self, f), f, nonnegative=True)
+
 
 def _gps_rows(gps, n):
     gps = validate.array(gps, "gps", shape=(6,), finite=False)

@@ -750,7 +750,8 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
         raise ValueError(f"x0 must have shape ({n},) or ({runs}, {n}); got {x.shape}")
     x = np.broadcast_to(x, (runs, n)).copy()
     form = check_covariance_form(covariance)
-    Bu = d["B"] @ d["u"] if control else np.zeros(n)
+    project_state = validate.flag(project_state, "project_state")
+    Bu = d["B"] @ d["u"] if validate.flag(control, "control") else np.zeros(n)
     out = {"x": np.empty((runs, N, n)), "x_prior": np.empty((runs, N, n)), "P": np.empty((N, n, n)),
            "P_prior": np.empty((N, n, n)), "K": np.empty((N, n, m))}
     for i in range(N):

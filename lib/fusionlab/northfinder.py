@@ -662,13 +662,14 @@ def bandpass(x, theta, taps, remove_mean=True):
 
     x, theta = validate.array(x, "x"), validate.array(theta, "theta")
     taps = validate.array(taps, "taps")
+    if taps.ndim != 1:
+        raise ValueError(f"taps must have shape (order + 1,); got {taps.shape}")
     if x.ndim != 1 or theta.shape != x.shape:
         raise ValueError(f"x and theta must be 1-D of the same length; got {x.shape} and {theta.shape}")
     m = len(taps) - 1
     if len(x) <= m:
         raise ValueError(f"x must be longer than the filter order {m}; got {len(x)} samples")
-    if remove_mean not in (True, False):
-        raise ValueError(f"remove_mean must be True or False; got {remove_mean!r}")
+    remove_mean = validate.flag(remove_mean, "remove_mean")
     if remove_mean:
         x = x - x.mean()
     y = oaconvolve(x, taps, mode="valid")                                            # (004 eq 4.47)
@@ -899,6 +900,11 @@ def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
         Headings, rad: [demodulation sampled, demodulation exact, synchronous sampling].
     """
     headings = validate.angles_rad(np.atleast_1d(headings), "headings")
+    if headings.ndim != 1:
+        raise ValueError(f"headings must be one heading or a 1-D array of them, shape (S,); got {headings.shape}")
+    if isinstance(orders, (str, bytes)) or np.ndim(orders) > 1:
+        raise ValueError(f"orders must be a sequence of FIR orders (int); got {validate._show(orders)}")
+    orders = [validate.count(o, "orders", minimum=1) for o in np.atleast_1d(orders)]
     seed = validate.count(seed, "seed")
     out = np.empty((len(headings), len(orders), 3))
     for s, psi in enumerate(headings):

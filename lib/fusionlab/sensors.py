@@ -419,6 +419,16 @@ class AnalogSensor:
     unit: str
     full_scale: float
 
+    def __post_init__(self):
+        for f in ("name", "unit"):
+            if not isinstance(getattr(self, f), str):
+                raise ValueError(f"{f} must be a str; got {getattr(self, f)!r}")
+        for f in ("sensitivity", "supply", "full_scale"):
+            validate.positive(getattr(self, f), f)
+        if not 0 <= validate.scalar(self.zero_level, "zero_level") <= self.supply:
+            raise ValueError(f"zero_level must be a voltage between 0 and the supply ({self.supply:g} V); got "
+                             f"{self.zero_level!r}")
+
 
 def adxl335(vs=3.0):
     """ADXL335 accelerometer numbers at supply ``vs`` (V): ratiometric, so zero-g level ``Vs/2`` and ≈ ``0.1·Vs`` V/g.

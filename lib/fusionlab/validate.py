@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
+__all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "EARTH_FIELD_UT", "MILLI_G_FROM", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
 
 
 def _shape_text(shape, lead=""):
@@ -70,6 +70,9 @@ def array(x, name, shape=None, finite=True, dtype=float):
         ...
     ValueError: acc must have shape (..., 3); got (2,)
     """
+    if dtype is not bool and _is_bool(x):
+        raise ValueError(f"{name} must be numbers, not True/False; got {_show(x)} -- a flag passed in the place "
+                         "of a number?")
     try:
         a = np.asarray(x, dtype=dtype)
     except (TypeError, ValueError) as exc:
@@ -84,6 +87,18 @@ def array(x, name, shape=None, finite=True, dtype=float):
         bad = int(np.size(a) - np.count_nonzero(np.isfinite(a)))
         raise ValueError(f"{name} must hold finite numbers; got {bad} NaN or infinite value(s)")
     return a
+
+
+def _is_bool(x):
+    """True for True/False or an array (or list) of them: a flag where a number belongs."""
+    if isinstance(x, (bool, np.bool_)) or getattr(x, "dtype", None) == np.bool_:
+        return True
+    if isinstance(x, (list, tuple)) and len(x):
+        try:
+            return np.asarray(x).dtype == np.bool_
+        except (TypeError, ValueError):
+            return False
+    return False
 
 
 def exact_shape(x, name, shape):
@@ -298,7 +313,7 @@ def scalar(x, name, positive=False, nonnegative=False):
     float
         ``x`` as a Python float.
     """
-    if isinstance(x, (str, bytes, bool)) or x is None or np.ndim(x) != 0:
+    if isinstance(x, (str, bytes, bool, np.bool_)) or x is None or np.ndim(x) != 0:
         raise ValueError(f"{name} must be a single number; got {_show(x)}")
     try:
         v = float(x)
@@ -311,6 +326,26 @@ def scalar(x, name, positive=False, nonnegative=False):
     if nonnegative and v < 0:
         raise ValueError(f"{name} must be >= 0; got {x!r}")
     return v
+
+
+def flag(x, name):
+    """A yes/no option: ``True`` or ``False`` (numpy's too); None, 0/1, strings and arrays name ``name``.
+
+    Parameters
+    ----------
+    x : bool
+        The option.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    bool
+        ``x`` as a Python bool.
+    """
+    if not isinstance(x, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False; got {_show(x)}")
+    return bool(x)
 
 
 def positive(x, name):
@@ -328,7 +363,7 @@ def positive(x, name):
     float
         ``x`` as a Python float.
     """
-    if isinstance(x, (str, bytes, bool)) or np.ndim(x) != 0:
+    if isinstance(x, (str, bytes, bool, np.bool_)) or np.ndim(x) != 0:
         raise ValueError(f"{name} must be a positive number; got {_show(x)}")
     try:
         v = float(x)
@@ -363,7 +398,7 @@ def count(x, name, minimum=0):
     int
         ``x`` as a Python int.
     """
-    if isinstance(x, (bool, str, bytes)) or np.ndim(x) != 0:
+    if isinstance(x, (bool, np.bool_, str, bytes)) or np.ndim(x) != 0:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {_show(x)}")
     try:
         v = float(x)
@@ -915,7 +950,8 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
 
     The median magnitude of any record with a rest or slow phase is near 9.81 m/s²; a median between 0.5 and 2
     means the readings are in g (multiply by 9.80665), one of :data:`MILLI_G_FROM` (100) or more means milli-g
-    (1000 at rest) or raw counts. A record in free fall throughout (median near 0) passes
+    (1000 at rest) or raw counts, and for a recording one of :data:`SUSTAINED_G_MAX` g (20 m/s²) or more, a
+    magnetometer in µT passed in its place. A record in free fall throughout (median near 0) passes
     here; the filters say what they do with it.
 
     Parameters
@@ -952,8 +988,21 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
             raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
                              f"half the record), which looks like milli-g (1000 at rest) or raw counts -- "
                              f"multiply milli-g by {g / 1000:g}")
+        if per_sample and med >= SUSTAINED_G_MAX * g:
+            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
+                             f"half the record, which no hand or vehicle sustains; at rest it is {g:.4g}) -- the "
+                             "magnetometer (µT) passed as the accelerometer, or another unit?")
     return a
 
+
+#: A recording whose median specific force is this many g or more (20 m/s²; the Earth's field in µT is 25-65)
+#: is refused by :func:`accel_ms2`: over half a record no hand or vehicle of the course sustains 2 g.
+SUSTAINED_G_MAX = 2.0
+
+#: Single accelerometer readings in g (not a recording) whose median magnitude is this or more are refused by
+#: :func:`accel_g`: beyond the ±16 g range of any accelerometer of the course (the Freescale note's FXOS8700 reads
+#: ±2/4/8 g), so the magnetometer in µT (25-65) or the gyro in °/s was passed in its place.
+READING_G_MAX = 16.0
 
 #: A median specific force from this value up (m/s², about 10 g over half the record: no vehicle or hand
 #: sustains it) is refused by :func:`accel_ms2` as milli-g or counts.
@@ -975,8 +1024,8 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
 
     Parameters
     ----------
-    mag : array_like, shape (N, 3) (``(..., 3)`` with ``per_sample=False``)
-        Magnetic field, µT.
+    mag : array_like, shape (N, 3) (``(..., 3)`` with ``per_sample=False``), or float
+        Magnetic field, µT; with ``per_sample=False`` a single number is a field strength (> 0), checked alike.
     name : str, default "mag"
         The argument's name, used in the error message.
     low, high : float, default 10.0, 200.0
@@ -986,8 +1035,8 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
 
     Returns
     -------
-    ndarray
-        ``mag`` as a float array, µT.
+    ndarray or float
+        ``mag`` as a float array (a float for a field strength), µT.
 
     Examples
     --------
@@ -997,9 +1046,10 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
         ...
     ValueError: mag must be in µT (the Earth's field is 25-65 µT); got a median field strength of 0.4833, which looks like gauss -- multiply by 100
     """
-    m = samples(mag, name) if per_sample else vectors(mag, name)
+    strength = np.ndim(mag) == 0 and not per_sample
+    m = np.array([positive(mag, name)]) if strength else samples(mag, name) if per_sample else vectors(mag, name)
     if m.size:
-        med = float(np.median(np.linalg.norm(m, axis=-1)))
+        med = float(m[0]) if strength else float(np.median(np.linalg.norm(m, axis=-1)))
         if med > 0 and not low <= med <= high:
             lo, hi = EARTH_FIELD_UT
             fits = [(u, f) for u, f in _FIELD_UNITS if 0.5 * lo <= med * f <= 2 * hi]
@@ -1007,16 +1057,18 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
                     if abs(med - 1.0) < 1e-3 else
                     f", which looks like {fits[0][0]} -- multiply by {fits[0][1]:g}" if fits else
                     " -- convert it to µT")
-            raise ValueError(f"{name} must be in µT (the Earth's field is {lo:g}-{hi:g} µT); got a median field "
-                             f"strength of {med:.4g}{hint}")
-    return m
+            raise ValueError(f"{name} must be in µT (the Earth's field is {lo:g}-{hi:g} µT); got a "
+                             f"{'' if strength else 'median '}field strength of {med:.4g}{hint}")
+    return float(m[0]) if strength else m
 
 
 def accel_g(G, name="G", per_sample=False):
     """An accelerometer reading in units of g (the Freescale note's unit): refuse m/s² and milli-g.
 
     At rest ``|G|`` is 1; a median magnitude between 5 and 20 is m/s² (9.81 at rest), one of 200 or more is
-    milli-g (1000 at rest).
+    milli-g (1000 at rest); any other median of a recording (``per_sample``) of :data:`SUSTAINED_G_MAX` or more,
+    or of single readings of :data:`READING_G_MAX` or more (a reading in a shake may pass 2 g, as in Lab 04, not the
+    sensor's range), is another sensor's reading (the gyro in °/s, the magnetometer in µT).
 
     Parameters
     ----------
@@ -1044,7 +1096,11 @@ def accel_g(G, name="G", per_sample=False):
     if a.size:
         med = float(np.median(np.linalg.norm(a, axis=-1)))
         what = ("m/s² -- divide by 9.80665" if 5.0 <= med <= 20.0 else
-                "milli-g -- divide by 1000" if med >= 200.0 else None)
+                "milli-g -- divide by 1000" if med >= 200.0 else
+                f"another sensor's reading (°/s, µT; over half a recording no hand or vehicle sustains "
+                f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?" if per_sample and med >= SUSTAINED_G_MAX else
+                f"another sensor's reading (°/s, µT; no accelerometer of the course reads {READING_G_MAX:g} g or "
+                f"more) -- arguments swapped?" if med >= READING_G_MAX else None)
         if what:
             raise ValueError(f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks "
                              f"like {what}")
