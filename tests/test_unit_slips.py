@@ -524,3 +524,127 @@ def test_a_single_reading_in_a_shake_passes_and_one_beyond_any_accelerometer_ran
     assert abs(float(ecompass.accel_noise(G1)) - 5.25) < 1e-12
     with pytest.raises(ValueError, match=r"^G must be in g .* no accelerometer of the course reads 16 g"):
         ecompass.accel_noise(G1 * 10.0)                                   # 25: nor m/s² (5-20), nor milli-g
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Third round: the probe's remaining silent faults
+# ----------------------------------------------------------------------------------------------------------------
+
+_M_TRUE = np.array([[1.02, 0.01, 0.0], [0.0, 0.98, 0.02], [0.0, 0.0, 1.01]])
+
+
+@pytest.mark.parametrize("which, factor, overall", [("measured", 1 / G, "0.102"), ("measured", 1000 / G, "102"),
+                                                    ("reference", 1 / G, "9.8")])
+def test_fit_triad_refuses_a_reference_and_readings_in_different_units(which, factor, overall):
+    ref = calibration.six_positions()
+    meas = ref @ _M_TRUE.T + [0.1, -0.2, 0.05]
+    fit = calibration.fit_triad(ref, meas)
+    assert np.allclose(fit.M, _M_TRUE)
+    args = {"reference": ref, "measured": meas}
+    args[which] = args[which] * factor
+    with pytest.raises(ValueError, match=rf"^measured must be in the unit of reference; .* overall {overall}"):
+        calibration.fit_triad(**args)
+    # the same readings in g against a reference in g are a valid fit in g, with the same M
+    assert np.allclose(calibration.fit_triad(ref / G, meas / G).M, _M_TRUE)
+
+
+def test_a_single_specific_force_in_milli_g_or_g_is_refused_where_gravity_is_in_it():
+    f = np.array([0.3, -0.2, 9.7])
+    M, S, beta = np.eye(3), np.ones(3), np.zeros(3)
+    for call, name in ((lambda v: sensor_errors.accel_measure(v, M, S, beta), "f"),
+                       (lambda v: sensor_errors.accel_correct(v, M, S, beta), "a_m"),
+                       (lambda v: sensor_errors.gyro_measure_full(np.zeros(3), M, S, beta, np.eye(3) * 1e-3, v),
+                        "a_c")):
+        assert np.all(np.isfinite(call(f)))
+        with pytest.raises(ValueError, match=rf"^{name} must be in m/s²; .* looks like milli-g"):
+            call(f * 1000 / G)
+        with pytest.raises(ValueError, match=rf"^{name} must be in m/s²; .* looks like g"):
+            call(f / G)
+
+
+def test_the_ins_steps_refuse_acc_in_g_and_a_zero_increment():
+    from fusionlab import gpsins
+    x = np.zeros(21)
+    x[gpsins.INS_SLICES["c"]] = np.eye(3).ravel()                 # the identity attitude, nothing else
+    acc, A = np.array([0.1, 0.0, -9.8]), np.eye(3)
+    assert np.all(np.isfinite(gpsins.ins_transition(x, acc, A, 0.02)))
+    with pytest.raises(ValueError, match=r"^acc must be in m/s²; .* looks like g"):
+        gpsins.ins_transition(x, acc / G, A, 0.02)
+    with pytest.raises(ValueError, match=r"^acc must be in m/s²; .* milli-g"):
+        gpsins.ins_propagate(x, acc * 1000 / G, A, 0.02)
+    with pytest.raises(ValueError, match=r"^A_tilde must be a rotation matrix .* zero matrix"):
+        gpsins.ins_propagate(x, acc, np.zeros((3, 3)), 0.02)
+
+
+def test_dcm_steps_refuse_a_zero_increment_and_a_row_that_is_not_a_unit_vector():
+    from fusionlab import dcm
+    A = dcm.A_matrix(np.radians([1.0, 2.0, 3.0]), order="second")          # a second-order increment passes
+    c = np.array([1.0, 0.0, 0.0])
+    assert np.allclose(dcm.row_propagate(c, A, np.zeros(3), 0.01), c @ A)
+    for call in (lambda: dcm.row_propagate(c, np.zeros((3, 3)), np.zeros(3), 0.01),
+                 lambda: dcm.ahrs_transition(c, c, np.zeros((3, 3)), 0.01),
+                 lambda: dcm.A_with_gyro_error(np.zeros((3, 3)), np.zeros(3), 0.01)):
+        with pytest.raises(ValueError, match=r"^A(_tilde)? must be a rotation matrix"):
+            call()
+    with pytest.raises(ValueError, match=r"^c must be unit vectors .* got a length of 0"):
+        dcm.row_propagate(np.zeros(3), A, np.zeros(3), 0.01)
+
+
+@pytest.mark.parametrize("call", [
+    lambda s: __import__("fusionlab.inertial").inertial.gyro_measure(np.zeros(3), np.zeros(3), 0.01, rng=s),
+    lambda s: sensor_errors.gyro_noise(100, 100.0, 1e-3, 1e-4, 1e-5, rng=s),
+])
+def test_a_list_or_a_flag_is_not_a_seed(call):
+    assert call(3).shape and np.allclose(call(3), call(np.random.default_rng(3)))
+    for bad in ([3, 3], True):
+        with pytest.raises(ValueError, match=r"^rng must be a numpy Generator, None or an integer seed"):
+            call(bad)
+
+
+def test_table53_refuses_a_seed_list_a_flag_sign_and_a_switch_on_never_reached():
+    from fusionlab import gfimu_ekf
+    for kw, match in (({"seed": [53, 54]}, r"^seed must be an integer"), ({"m_sign": True}, r"^m_sign must be one of"),
+                      ({"q_dw": True}, r"^q_dw must be a single number"), ({"t_on": np.inf}, r"^t_on .* finite"),
+                      ({"window": (15.0, np.nan)}, r"^window .* finite"),
+                      ({"window": (20.0, 15.0)}, r"^window must be \(start, end\)"),
+                      ({"q_sweep": [[1e-5]]}, r"^q_sweep must be a sequence")):
+        with pytest.raises(ValueError, match=match):
+            gfimu_ekf.table53_monte_carlo(n_runs=1, grades=("tactical",), progress=False, **kw)
+
+
+def test_three_state_noise_refuses_a_flag_for_the_sign():
+    from fusionlab import gfimu
+    with pytest.raises(ValueError, match=r"^m_sign .* must be one of -1, 0, 1; got True"):
+        gfimu.three_state_noise(50 * gfimu.UG, 0.01, 0.1, True)
+
+
+@pytest.mark.parametrize("fn, args", [
+    ("rotating_kinematics", dict(t=0.0, rho=0.14, omega_r=20.9)),
+    ("rate_noise_coefficient", dict(rho=0.14, d=0.1, omega_r=20.9)),
+    ("rate_noise_coefficient_exact", dict(rho=0.14, d=0.1, omega_r=20.9)),
+])
+def test_north_finder_rotor_distance_must_be_positive(fn, args):
+    from fusionlab import northfinder
+    f = getattr(northfinder, fn)
+    assert np.all(np.isfinite(np.asarray(f(l=0.2, **args), dtype=float)))
+    for bad in (0.0, -0.2, True):
+        with pytest.raises(ValueError, match=r"^l must be"):
+            f(l=bad, **args)
+
+
+def test_north_finder_record_refuses_flags_and_a_negative_scale():
+    from fusionlab import northfinder
+    for kw, match in (({"bias": True}, r"^bias must be a single number"),
+                      ({"theta0": True}, r"^theta0 must be a single number"),
+                      ({"scale": -1.0}, r"^scale must be > 0")):
+        with pytest.raises(ValueError, match=match):
+            northfinder.synthetic_record(0.3, **kw)
+
+
+def test_gyro_and_accelerometer_swapped_are_named(trial27):
+    gyr, acc, mag, fs = trial27
+    from fusionlab import dcm_filter
+    with pytest.raises(ValueError, match=r"^gyr and acc look swapped"):
+        estimators.run("dcm_ahrs", acc, gyr, fs, mag=mag)
+    with pytest.raises(ValueError, match=r"^gyr and acc_b look swapped"):
+        dcm_filter.run_ahrs(acc, gyr, mag / np.linalg.norm(mag, axis=1, keepdims=True), fs)

@@ -321,8 +321,8 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
     """
     N = validate.scalar(noise_density, "noise_density", nonnegative=True)
     dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
-    if m_sign not in (-1, 0, 1):
-        raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (the sign inferred from Table 5.3); got {m_sign!r}")
+    m_sign = validate.choice(m_sign, "m_sign (-1 corrected, 0 no correlation, +1 the sign inferred from Table 5.3)",
+                             (-1, 0, 1))
     Ra = N ** 2 * dt                                             # (004 eq 3.24)
     C = aiv_covariance()
     s = dt ** 2 * Ra / d ** 2

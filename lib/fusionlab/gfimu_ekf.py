@@ -801,10 +801,25 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
         q_sweep}, plus 'n_runs', 'seed', 't'.
     """
     n_runs = validate.count(n_runs, "n_runs", minimum=1)
+    seed = validate.count(seed, "seed")
+    if isinstance(grades, str) or not len(grades):
+        raise ValueError(f"grades must be a non-empty sequence of grade names among {tuple(gfimu.TABLE_5_2)}; "
+                         f"got {grades!r}")
     for gr in grades:
         if gr not in gfimu.TABLE_5_2:
             raise ValueError(f"grades must be among {tuple(gfimu.TABLE_5_2)}; got {gr!r}")
+    q_dw = validate.scalar(q_dw, "q_dw", nonnegative=True)
+    m_sign = validate.choice(m_sign, "m_sign", (1, -1, 0))
+    q_sweep = validate.nonnegative(q_sweep, "q_sweep")
+    if q_sweep.ndim != 1:
+        raise ValueError(f"q_sweep must be a sequence of q_dw values, shape (K,); got {q_sweep.shape}")
     t, om, al = gfimu.trajectory_constant()
+    if t_on is not None:
+        t_on = validate.scalar(t_on, "t_on (s; None for never)", nonnegative=True)
+    window = validate.exact_shape(window, "window (start, end) in s", (2,))
+    if not (t[0] <= window[0] < window[1] and window[0] <= t[-1]):
+        raise ValueError(f"window must be (start, end) in s with {t[0]:g} <= start < end and start within the "
+                         f"record (up to {t[-1]:g} s); got {tuple(float(w) for w in window)}")
     dt, d = 0.01, 1.0
     dens = np.repeat([gfimu.TABLE_5_2[gr] * gfimu.UG for gr in grades], n_runs)
     white = np.random.default_rng(seed).standard_normal((len(dens), len(t), 12))
@@ -815,7 +830,7 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     signs = np.concatenate([np.full(R, m_sign), np.full(R, other), np.full(R, 0)])
     x3, _ = three_state_batch(np.concatenate([acc] * 3), dt, d, np.tile(dens, 3), truth[0], 1e-8, m_sign=signs)
     P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
-    qs = [float(q_dw)] + [float(q) for q in q_sweep]
+    qs = [q_dw] + [float(q) for q in q_sweep]
     x6, _, _ = constrained_batch(np.concatenate([acc] * len(qs)), dt, d, np.tile(dens, len(qs)),
                                  np.repeat(qs, R), np.concatenate([truth[0], np.zeros(3)]), P0,
                                  alpha_f=alpha_f, s_th=s_th, t_on=t_on, progress=progress)

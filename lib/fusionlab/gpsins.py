@@ -79,8 +79,8 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
         The predicted state.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    acc = validate.accel_ms2(validate.exact_shape(acc, "acc", (3,)), "acc", per_sample=False)
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=dcm.INCREMENT_TOL).reshape(3, 3)
     dt = validate.time_step(dt, "dt")
     return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
 
@@ -109,8 +109,8 @@ def ins_transition(x, acc, A_tilde, dt):
         ``F(x̂)``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    acc = validate.accel_ms2(validate.exact_shape(acc, "acc", (3,)), "acc", per_sample=False)
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=dcm.INCREMENT_TOL).reshape(3, 3)
     dt = validate.time_step(dt, "dt")
     return _ins_F(x, acc, A_tilde, dt)
 

@@ -254,7 +254,7 @@ def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     b = validate.array(bias, "bias")
     validate.broadcast(rate_true=w, bias=b)
     sd = validate.scalar(noise_std, "noise_std", nonnegative=True)
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = validate.generator(rng, "rng")
     return w + b + sd * rng.standard_normal(w.shape)
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import earth, validate
+from . import calibration, earth, validate
 
 __all__ = [
     "accel_measure", "accel_correct", "gyro_measure_full", "gyro_correct", "mag_measure", "mag_correct",
@@ -93,7 +93,7 @@ def accel_measure(f, M, S, beta):
     >>> np.round(sensor_errors.accel_correct(a_m, M, S, beta), 12) + 0.0
     array([ 0.     ,  0.     , -9.80665])
     """
-    f = validate.vectors(f, "f")
+    f = validate.accel_ms2(f, "f", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
     return (f @ S.T - beta) @ M.T                                        # (001 sensors §2, model)
 
@@ -119,7 +119,7 @@ def accel_correct(a_m, M, S, beta):
     ndarray, shape (..., 3)
         Corrected specific force, m/s².
     """
-    a_m = validate.vectors(a_m, "a_m")
+    a_m = validate.accel_ms2(a_m, "a_m", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
     return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 sensors §2, correction)
 
@@ -186,14 +186,14 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
 def _g_sensitivity(C_ga, a_c, **rates):
     if C_ga is None:
         if a_c is not None:
-            validate.vectors(a_c, "a_c")
+            validate.accel_ms2(a_c, "a_c", per_sample=False)
         return 0.0
     C = validate.matrices(C_ga, "C_ga")
     if C.shape != (3, 3):
         raise ValueError(f"C_ga must be one 3×3 matrix; got shape {C.shape}")
     if a_c is None:
         raise ValueError("a_c (the corrected specific force) is needed when C_ga is given")
-    a_c = validate.vectors(a_c, "a_c")
+    a_c = validate.accel_ms2(a_c, "a_c", per_sample=False)
     validate.broadcast({"a_c": 1, **{k: 1 for k in rates}}, a_c=a_c, **rates)
     return a_c @ C.T
 
@@ -226,7 +226,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         The raw reading ``b_m``, µT.
     """
-    b = validate.vectors(b, "b")
+    b = validate.field_uT(b, "b", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
     return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 sensors §4, solved for b_m)
@@ -239,7 +239,8 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     Parameters
     ----------
     b_m : array_like, shape (..., 3)
-        Raw readings, µT.
+        Raw readings, µT (a median strength outside 2-5000 µT, ``calibration.RAW_FIELD_UT``, is refused: gauss or
+        nT; milligauss cannot be told from a strong hard iron).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -256,7 +257,7 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         Corrected field ``b_c``, µT.
     """
-    b_m = validate.vectors(b_m, "b_m")
+    b_m = validate.field_uT(b_m, "b_m", *calibration.RAW_FIELD_UT, per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
     b = np.linalg.solve(S, (np.linalg.solve(M, b_m.T).T + beta).T).T     # S_b⁻¹(M_b⁻¹ b_m + β_b)
@@ -337,7 +338,7 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     fs = validate.sample_rate(fs, "fs")
     N, B, K = (validate.scalar(v, name, nonnegative=True) for v, name in
                ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = validate.generator(rng, "rng")
     out = N * np.sqrt(fs) * rng.standard_normal(n)                      # white rate: ARW
     if B > 0:
         spec = np.fft.rfft(rng.standard_normal(n))

@@ -23,8 +23,9 @@ import numpy as np
 
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
+           "SWAP_ACC_MAX"]
 
 
 def _shape_text(shape, lead=""):
@@ -409,6 +410,66 @@ def count(x, name, minimum=0):
     return int(v)
 
 
+def generator(rng, name="rng"):
+    """A random generator: a ``numpy.random.Generator`` (used as is), None (fresh entropy) or a whole-number seed.
+
+    A list or array of seeds is refused: numpy would mix it into one seed without complaint, so ``rng=[1, 2]``
+    meant as two runs' seeds silently gives one stream. True/False is refused as a seed (a flag in its place).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, int or None
+        The generator or its seed.
+    name : str, default "rng"
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    numpy.random.Generator
+        ``rng`` itself, or a new generator seeded with it.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.generator([1, 2], "seed")
+    Traceback (most recent call last):
+        ...
+    ValueError: seed must be a numpy Generator, None or an integer seed >= 0; got list of shape (2,)
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None:
+        return np.random.default_rng()
+    if isinstance(rng, (bool, np.bool_, str, bytes)) or np.ndim(rng) != 0:
+        raise ValueError(f"{name} must be a numpy Generator, None or an integer seed >= 0; got {_show(rng)}")
+    return np.random.default_rng(count(rng, name))
+
+
+def choice(x, name, allowed):
+    """One of the values ``allowed`` (numbers compared by value); True/False is refused where a number is meant.
+
+    Parameters
+    ----------
+    x : object
+        The option.
+    name : str
+        The argument's name, used in the error message.
+    allowed : tuple
+        The values accepted.
+
+    Returns
+    -------
+    object
+        ``x``, unchanged.
+    """
+    numeric = all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in allowed)
+    if numeric and (isinstance(x, (bool, np.bool_)) or np.ndim(x) != 0 or isinstance(x, (str, bytes)) or x is None):
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {_show(x)}")
+    if x not in allowed:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {x!r}")
+    return x
+
+
 def nonnegative(x, name):
     """A finite number or array with no element < 0 (frequencies, times, noise levels, damping).
 
@@ -781,6 +842,36 @@ def rotation(C, name, tol=1e-6):
     return C
 
 
+def unit_vectors(x, name, tol=0.5):
+    """``x`` as 3-vectors ``(..., 3)`` of length 1 within ``tol`` (DCM rows, directions an estimator carries).
+
+    A filter's rows drift a little from unit length between renormalisations, so the tolerance is wide; what it
+    refuses is a zero vector, a vector in a physical unit (gravity in m/s², a field in µT) or a typo.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The vectors, finite.
+    name : str
+        The argument's name, used in the error message.
+    tol : float, default 0.5
+        The largest accepted ``| |x| - 1 |``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``x`` as a float array.
+    """
+    a = vectors(x, name)
+    if a.size:
+        n = np.linalg.norm(a, axis=-1)
+        if np.any(np.abs(n - 1) > tol):
+            bad = float(n.ravel()[np.argmax(np.abs(n - 1).ravel())])
+            raise ValueError(f"{name} must be unit vectors (length 1 within {tol:g}: a DCM row or a direction); "
+                             f"got a length of {bad:.4g}")
+    return a
+
+
 def sample_rate(fs, name="fs", low=1.0, high=1e5):
     """A sample rate in Hz between ``low`` and ``high`` (1 Hz – 100 kHz: every IMU of the course is in it).
 
@@ -879,6 +970,14 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
             raise ValueError(f"{name} must be in rad/s; got {what}, which looks like deg/s "
                              f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
                              f"turning body) -- use np.radians(...)")
+    if acc is not None and len(g) and len(acc):
+        med_g = float(np.median(np.linalg.norm(g, axis=1)))
+        med_a = float(np.median(np.linalg.norm(np.asarray(acc, float), axis=-1)))
+        if med_a < SWAP_ACC_MAX and med_g >= SWAP_GYR_MIN:
+            raise ValueError(f"{name} and {acc_name} look swapped: {name} has a median magnitude of {med_g:.4g} "
+                             f"(gravity's size in m/s²) while {acc_name} reads {med_a:.3g} over half the record (a "
+                             f"gyro at rest, or a free fall no record of the course holds for half its length) -- "
+                             f"pass ({name}=..., {acc_name}=...) in the documented order")
     if acc is not None and fs is not None and len(g):
         ratio, n = gyro_tilt_ratio(g, acc, fs)
         if n >= TILT_WINDOWS_MIN and ratio < TILT_RATIO_MIN:
@@ -895,6 +994,11 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
 #: accelerometer must follow at least a quarter of the tilt (real records: median 0.8-3.3 on the
 #: eight BROAD trials, °/s read as rad/s: 0.015-0.06).
 TILT_WINDOW, TILT_MIN, TILT_WINDOWS_MIN, TILT_RATIO_MIN = 0.1, 0.05, 20, 0.25
+
+#: :func:`gyro_rad` given the accelerometer: a gyro whose median rate is ``SWAP_GYR_MIN`` rad/s or more (230 °/s
+#: sustained over half the record) beside an accelerometer whose median is under ``SWAP_ACC_MAX`` (free fall over
+#: half the record) is the two arguments swapped: the gyro reads gravity, the accelerometer a body's rates.
+SWAP_GYR_MIN, SWAP_ACC_MAX = 4.0, 0.5
 
 
 def gyro_tilt_ratio(gyr, acc, fs):
