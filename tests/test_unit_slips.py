@@ -648,3 +648,84 @@ def test_gyro_and_accelerometer_swapped_are_named(trial27):
         estimators.run("dcm_ahrs", acc, gyr, fs, mag=mag)
     with pytest.raises(ValueError, match=r"^gyr and acc_b look swapped"):
         dcm_filter.run_ahrs(acc, gyr, mag / np.linalg.norm(mag, axis=1, keepdims=True), fs)
+
+
+def test_calibrate_triads_names_its_own_readings():
+    from fusionlab import gfimu
+    ref = calibration.six_positions()
+    readings = np.concatenate([ref @ _M_TRUE.T] * 4, axis=1)
+    assert len(gfimu.calibrate_triads(ref, readings)) == 4
+    with pytest.raises(ValueError, match=r"^readings must be in the unit of reference"):
+        gfimu.calibrate_triads(ref, readings / G)
+
+
+@pytest.mark.parametrize("slip, match", [("gyro_deg", r"^gyro must be in rad/s and acc in m/s².* 3.28e\+03 times"),
+                                         ("acc_g", r"^gyro must be in rad/s and acc in m/s².* 9.8\d* times"),
+                                         ("acc_mg", r"^acc must be in m/s² and gyro in rad/s.* 102 times")])
+def test_hybrid_filter_checks_the_gyro_against_the_accelerometers(slip, match):
+    from fusionlab import gfimu, gfimu_ekf
+    t, om, al = gfimu.trajectory_ch3(T=2.0)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 0.2, 50 * gfimu.UG, runs=2, seed=5)
+    acc, gyro = rec.acc, np.broadcast_to(om, rec.acc.shape[:2] + (3,))
+    args = dict(dt=0.01, d=0.2, noise_density=50 * gfimu.UG, arw=1e-3, x0=0.01 * om[0], P0=1e-6)
+    x, _ = gfimu_ekf.hybrid_batch(acc, gyro, **args)
+    assert np.all(np.isfinite(x))
+    bad = {"gyro_deg": (acc, np.degrees(gyro)), "acc_g": (acc / G, gyro), "acc_mg": (acc * 1000 / G, gyro)}[slip]
+    with pytest.raises(ValueError, match=match):
+        gfimu_ekf.hybrid_batch(*bad, **args)
+    ekf = gfimu_ekf.HybridEKF(0.01, 0.2, 50 * gfimu.UG, 1e-3, 0.01 * om[0], 1e-6)
+    with pytest.raises(ValueError, match=match):
+        ekf.run(bad[0][0], bad[1][0])
+
+
+def test_ins_filters_refuse_a_negative_initial_covariance():
+    from fusionlab import gpsins
+    rng = np.random.default_rng(0)
+    n, fs = 200, 50.0
+    gyr, acc = rng.normal(0, 1e-3, (n, 3)), np.tile([0.0, 0.0, -G], (n, 1)) + rng.normal(0, 1e-2, (n, 3))
+    gps = np.full((n, 6), np.nan)
+    with pytest.raises(ValueError, match=r"^P0 must be a positive semi-definite covariance"):
+        gpsins.run_gps_ins(gyr, acc, gps, fs, np.r_[np.eye(3).ravel(), np.zeros(12)], -np.ones(21))
+    with pytest.raises(ValueError, match=r"^P0 must be a positive definite covariance"):
+        gpsins.run_euler_ukf(gyr, acc, gps, fs, np.zeros(15), np.zeros(15))
+
+
+@pytest.mark.parametrize("name", ["COMPLEMENTARY", None, 1, ""])
+def test_an_unknown_estimator_name_is_named(name):
+    with pytest.raises(ValueError, match=r"^name must name an estimator: unknown estimator"):
+        estimators.options(name)
+
+
+def test_kalman6_lock_checks_its_reading():
+    from fusionlab import freescale
+    k = freescale.Kalman6()
+    k.lock([0.0, 0.0, 1.0])
+    for bad, match in ((None, r"^G must (be an array of|hold finite) numbers"), (1.0, r"^G must have shape \(3,\)"),
+                       ([0.0, 0.0, 9.81], r"^G must be in g")):
+        with pytest.raises(ValueError, match=match):
+            k.lock(bad)
+
+
+def test_sensor_error_models_take_records_of_records():
+    rng = np.random.default_rng(2)
+    M, S, beta = np.eye(3) + 0.01 * rng.normal(size=(3, 3)), np.array([1.01, 0.99, 1.02]), np.array([0.1, 0, -0.1])
+    f = np.tile([0.0, 0.0, 9.8], (2, 5, 1)) + rng.normal(0, 0.1, (2, 5, 3))
+    a_m = sensor_errors.accel_measure(f, M, S, beta)
+    assert np.allclose(sensor_errors.accel_correct(a_m, M, S, beta), f)
+    assert np.allclose(sensor_errors.accel_correct(a_m[0], M, S, beta), f[0])
+    b = np.tile([20.0, 0.0, 40.0], (2, 5, 1))
+    assert np.allclose(sensor_errors.mag_correct(sensor_errors.mag_measure(b, M, S, beta), M, S, beta), b)
+
+
+def test_adc_converters_refuse_volts_for_counts_and_name_what_does_not_broadcast():
+    from fusionlab import sensors
+    assert np.allclose(sensors.adc_to_volts([0, 1023]), [0.0, 3.0])
+    assert np.isfinite(sensors.adc_to_physical(508.25, 1.35, 0.3))           # averaged counts are fractional too
+    for call in (lambda c: sensors.adc_to_volts(c), lambda c: sensors.adc_to_physical(c, 1.35, 0.3),
+                 lambda c: correlation.adc_to_g(c)):
+        with pytest.raises(ValueError, match=r"^counts must be ADC counts .* look like volts"):
+            call(np.array([512, 614, 409]) * 3.0 / 1023)
+    with pytest.raises(ValueError, match=r"^counts, zero_level, sensitivity, null_offset must have matching"):
+        sensors.adc_to_physical([500, 510, 520], [1.35, 1.35], 0.3)
+    with pytest.raises(ValueError, match=r"^value, zero_level, sensitivity must have matching"):
+        sensors.physical_to_adc([0.0, 1.0, 2.0], [1.5, 1.5], 0.3)

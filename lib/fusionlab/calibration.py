@@ -102,7 +102,7 @@ def _span_message(a):
             "scale, misalignment and bias need positions that span all three (e.g. ±g on each axis)")
 
 
-def fit_triad(reference, measured):
+def fit_triad(reference, measured, *, names=("reference", "measured")):
     """Least-squares calibration of one triad, seed 004 eqs (3.11)–(3.15).
 
     Parameters
@@ -113,6 +113,9 @@ def fit_triad(reference, measured):
         The triad's (averaged) reading in each position, same unit: fitted scale factors (singular values of
         ``M``) outside :data:`TRIAD_SCALE` (0.5-2; a triad's are within a few % of 1) are refused as a unit
         mismatch (readings in g against a reference in m/s² give 0.10, in milli-g 102).
+    names : tuple of str, default ("reference", "measured")
+        The two arguments' names in the messages, for a caller that passes them on under its own names
+        (:func:`fusionlab.gfimu.calibrate_triads`: ``reference``, ``readings``).
 
     Returns
     -------
@@ -140,15 +143,16 @@ def fit_triad(reference, measured):
            [0.  , 0.98, 0.02],
            [0.  , 0.  , 1.01]]), array([ 0.1 , -0.2 ,  0.05]), 12)
     """
-    a = validate.samples(reference, "reference")
-    z = validate.samples(measured, "measured")
-    validate.same_length(reference=a, measured=z)
+    rn, mn = names
+    a = validate.samples(reference, rn)
+    z = validate.samples(measured, mn)
+    validate.same_length(**{rn: a, mn: z})
     if len(a) < 4:
-        raise ValueError(f"reference, measured: need at least 4 positions for the 12 parameters; got {len(a)}")
+        raise ValueError(f"{rn}, {mn}: need at least 4 positions for the 12 parameters; got {len(a)}")
     O = observation_matrix(a)
     rank = int(np.linalg.matrix_rank(O))
     if rank < 12:
-        raise ValueError(f"reference: the positions leave the calibration rank-deficient (rank {rank} of 12): "
+        raise ValueError(f"{rn}: the positions leave the calibration rank-deficient (rank {rank} of 12): "
                          + _span_message(a))
     y = z.reshape(-1)
     theta, *_ = np.linalg.lstsq(O, y, rcond=None)
@@ -160,9 +164,9 @@ def fit_triad(reference, measured):
     sv = np.linalg.svd(M, compute_uv=False)
     if sv.min() < TRIAD_SCALE[0] or sv.max() > TRIAD_SCALE[1]:
         k = float(np.exp(np.mean(np.log(np.maximum(sv, 1e-300)))))
-        raise ValueError(f"measured must be in the unit of reference; the fitted scale factors are {sv.min():.3g} to "
-                         f"{sv.max():.3g} (a triad's are within a few % of 1; overall {k:.3g}: 0.102 is measured in g "
-                         f"against a reference in m/s², 9.81 the reverse, 102 measured in milli-g) -- convert one "
+        raise ValueError(f"{mn} must be in the unit of {rn}; the fitted scale factors are {sv.min():.3g} to "
+                         f"{sv.max():.3g} (a triad's are within a few % of 1; overall {k:.3g}: 0.102 is {mn} in g "
+                         f"against {rn} in m/s², 9.81 the reverse, 102 {mn} in milli-g) -- convert one "
                          f"of them")
     return TriadFit(M=M, b=theta[9:].copy(), theta=theta, cov=cov,
                     residual_rms=float(np.sqrt(np.mean(resid ** 2))), rank=rank)
@@ -368,9 +372,8 @@ def _li_griffiths(D, k=4.0):
 
 
 #: The median field strength (µT) of *raw* magnetometer readings that :func:`fit_ellipsoid` and
-#: :func:`apply_ellipsoid` accept: wide, since hard iron can shift a phone's readings by hundreds of µT; gauss
-#: (0.25-0.65) and nT (25,000-65,000) fall outside, milligauss (250-650) cannot be told from hard iron.
-RAW_FIELD_UT = (2.0, 5000.0)
+#: :func:`apply_ellipsoid` accept (:data:`fusionlab.validate.RAW_FIELD_UT`).
+RAW_FIELD_UT = validate.RAW_FIELD_UT
 
 
 def fit_ellipsoid(mag, field_strength=None, method="constrained"):

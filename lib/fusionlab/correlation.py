@@ -408,6 +408,9 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
         raise ValueError("counts must hold at least one sample (row); got 0")
     acc_null = validate.array(acc_null, "acc_null")
     gyro_null = validate.array(gyro_null, "gyro_null")
+    for null, name, n in ((acc_null, "acc_null", 3), (gyro_null, "gyro_null", 2)):
+        if null.shape not in ((), (n,)):
+            raise ValueError(f"{name} must be one number or one per axis, shape ({n},); got {null.shape}")
     if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
         raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
                          f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "

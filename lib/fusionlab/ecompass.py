@@ -413,16 +413,6 @@ def kappa_davenport(s, r, alpha=None):
     return out
 
 
-def _unit(v, name, tol=1e-6):
-    """``v`` as unit 3-vectors (a direction): a zero or unnormalised vector is named."""
-    v = validate.vectors(v, name)
-    n = nonzero_norm(v, name)
-    if n.size and float(np.max(np.abs(n - 1.0))) > tol:
-        raise ValueError(f"{name} must be unit vectors (a direction); got a norm of "
-                         f"{float(n.flat[np.argmax(np.abs(n - 1.0))]):.6g} -- divide by its norm")
-    return v
-
-
 def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     """κ for gravity + geomagnetic field in one coordinate system (002 eqs 53, 58, 63, **corrected**).
 
@@ -449,8 +439,8 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     ndarray, shape (..., 4, 4)
         κ.
     """
-    s_g = _unit(s_g, "s_g")
-    s_m = _unit(s_m, "s_m")
+    s_g = validate.unit_vectors(s_g, "s_g", tol=1e-6)
+    s_m = validate.unit_vectors(s_m, "s_m", tol=1e-6)
     d = validate.angles_rad(delta, "delta")
     ag = validate.array(alpha_g, "alpha_g")
     am = validate.array(alpha_m, "alpha_m")

@@ -715,6 +715,7 @@ class Kalman6:
         G : array_like, shape (3,)
             Accelerometer reading, g.
         """
+        G = validate.accel_g(validate.exact_shape(G, "G", (3,)), "G")
         self.q = qrot(self.r_g, self._s_g(G))
         self.b_dps = np.zeros(3)
         self.x_err = np.zeros(6)

@@ -526,7 +526,7 @@ def calibrate_triads(reference, readings):
     ref = validate.samples(reference, "reference")
     z = validate.samples(readings, "readings", n=12)
     validate.same_length(reference=ref, readings=z)
-    return [calibration.fit_triad(ref, z[:, 3 * t:3 * t + 3]) for t in range(4)]
+    return [calibration.fit_triad(ref, z[:, 3 * t:3 * t + 3], names=("reference", "readings")) for t in range(4)]
 
 
 def apply_calibration(fits, acc):

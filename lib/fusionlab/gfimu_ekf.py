@@ -48,6 +48,30 @@ def _inputs(acc, dt, d):
     return v[..., :3], v[..., 3:]
 
 
+#: :func:`hybrid_batch` and :meth:`HybridEKF.run` compare the gyro with the accelerometers: the median of ``|ω|²``
+#: from the gyro over that of ``ω_x² + ω_y² + ω_z²`` from the AIV (eqs 3.8-3.10) is near 1 when both are in their
+#: units, 3283 for a gyro in °/s, 9.8 for readings in g, 0.01 for milli-g. A ratio outside this range is refused
+#: once either median reaches ``GYRO_AIV_MIN`` (rad/s)² (at rest both are noise).
+GYRO_AIV_RATIO, GYRO_AIV_MIN = (0.25, 4.0), 1.0
+
+
+def _gyro_against_aiv(acc, gyro, d):
+    """Refuse a gyro (rad/s) and twelve accelerometers (m/s²) whose rates disagree by a unit's factor."""
+    w2_acc = float(np.median(np.sum((acc @ gfimu.aiv_map_cached().T / d)[..., 6:9], axis=-1)))
+    w2_gyro = float(np.median(np.sum(gyro ** 2, axis=-1)))
+    if max(w2_acc, w2_gyro) < GYRO_AIV_MIN:
+        return
+    ratio = w2_gyro / max(w2_acc, 1e-300)
+    if ratio > GYRO_AIV_RATIO[1]:
+        raise ValueError(f"gyro must be in rad/s and acc in m/s²: |ω|² from gyro is {ratio:.3g} times ω² from the "
+                         f"accelerometers (median {w2_gyro:.3g} against {w2_acc:.3g} rad²/s²) -- 3283 is gyro in "
+                         "°/s (use np.radians), 9.8 is acc in g (multiply by 9.80665)")
+    if ratio < GYRO_AIV_RATIO[0]:
+        raise ValueError(f"acc must be in m/s² and gyro in rad/s: ω² from the accelerometers is {1 / ratio:.3g} "
+                         f"times |ω|² from gyro (median {w2_acc:.3g} against {w2_gyro:.3g} rad²/s²) -- 102 is acc "
+                         "in milli-g (multiply by 0.00980665)")
+
+
 class ThreeStateEKF:
     """The direct angular-motion EKF of seed 004 §3.5 (eqs 3.16–3.34), built on ``filterpy``'s ``KalmanFilter``.
 
@@ -230,6 +254,7 @@ class HybridEKF(ThreeStateEKF):
         """
         gyro = validate.samples(gyro, "gyro")
         validate.same_length(acc=acc, gyro=gyro)
+        _gyro_against_aiv(validate.samples(acc, "acc", 12), gyro, self.d)
         return super().run(acc, gyro)
 
 
@@ -378,6 +403,7 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
                          f"{gyro.shape}")
     dt = validate.time_step(dt, "dt")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
+    _gyro_against_aiv(acc, gyro, validate.positive(d, "d"))
     u, y = _inputs(acc, dt, d)
     Rg = dt ** 2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
     P0 = _initial_covariance(P0, 3)

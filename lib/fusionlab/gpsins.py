@@ -306,6 +306,7 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     P = np.diag(P) if P.shape == (21,) else P.copy()
     if P.shape != (21, 21):
         raise ValueError(f"P0 must have shape (21, 21) or (21,); got {P.shape}")
+    P = validate.covariance(P, "P0", 21)
     still = np.zeros(n, bool) if static is None else validate.array(static, "static", dtype=bool).reshape(-1)
     if still.shape != (n,):
         raise ValueError(f"static must be one flag per sample, shape ({n},); got {still.shape}")
@@ -508,6 +509,7 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
     P0 = np.diag(P0) if P0.shape == (15,) else P0
     if P0.shape != (15, 15):
         raise ValueError(f"P0 must have shape (15, 15) or (15,); got {P0.shape}")
+    P0 = validate.covariance(P0, "P0", 15, definite=True)              # its square root spreads the sigma points
     if engine not in ("filterpy", "plain"):
         raise ValueError(f"engine must be 'filterpy' or 'plain'; got {engine!r}")
     dt = 1.0 / fs

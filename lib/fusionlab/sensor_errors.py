@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import calibration, earth, validate
+from . import earth, validate
 
 __all__ = [
     "accel_measure", "accel_correct", "gyro_measure_full", "gyro_correct", "mag_measure", "mag_correct",
@@ -38,6 +38,12 @@ __all__ = [
 # Lab 12: sensor error models (seed 001 sensors note §2-4), gyro noise, gravity removal and dead reckoning
 # (seed 001 position note §2-4), the fixed-gain observer with a biased gyro (seed 001 attitude note §4)
 # ================================================================================================================
+
+
+def _solve(A, v):
+    """``A⁻¹ v`` for every 3-vector of ``v`` (any leading axes: a batch of records is one call)."""
+    v = np.asarray(v, dtype=float)
+    return np.linalg.solve(A, v.reshape(-1, 3).T).T.reshape(v.shape)
 
 
 def _triad_params(M, S, beta, who, names=("M", "S", "beta")):
@@ -121,7 +127,7 @@ def accel_correct(a_m, M, S, beta):
     """
     a_m = validate.accel_ms2(a_m, "a_m", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 sensors §2, correction)
+    return _solve(S, _solve(M, a_m) + beta)                                 # (001 sensors §2, correction)
 
 
 def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
@@ -180,7 +186,7 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
-    return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 sensors §3, correction)
+    return _solve(S, _solve(M, p_m) + beta - g_term)                       # (001 sensors §3, correction)
 
 
 def _g_sensitivity(C_ga, a_c, **rates):
@@ -229,7 +235,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     b = validate.field_uT(b, "b", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 sensors §4, solved for b_m)
+    return (_solve(D, b + h) @ S.T - beta) @ M.T                       # (001 sensors §4, solved for b_m)
 
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
@@ -239,7 +245,7 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     Parameters
     ----------
     b_m : array_like, shape (..., 3)
-        Raw readings, µT (a median strength outside 2-5000 µT, ``calibration.RAW_FIELD_UT``, is refused: gauss or
+        Raw readings, µT (a median strength outside 2-5000 µT, ``validate.RAW_FIELD_UT``, is refused: gauss or
         nT; milligauss cannot be told from a strong hard iron).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
@@ -257,10 +263,10 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         Corrected field ``b_c``, µT.
     """
-    b_m = validate.field_uT(b_m, "b_m", *calibration.RAW_FIELD_UT, per_sample=False)
+    b_m = validate.field_uT(b_m, "b_m", *validate.RAW_FIELD_UT, per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    b = np.linalg.solve(S, (np.linalg.solve(M, b_m.T).T + beta).T).T     # S_b⁻¹(M_b⁻¹ b_m + β_b)
+    b = _solve(S, _solve(M, b_m) + beta)                                  # S_b⁻¹(M_b⁻¹ b_m + β_b)
     return b @ D.T - h                                                   # (001 sensors §4: b_c = D_s b − β_h)
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from . import validate
 
 __all__ = [
-    "EPS0",
+    "EPS0", "VOLTS_MAX",
     # 1. spring-mass-damper
     "smd_transfer", "smd_natural_frequency", "smd_damping_ratio", "smd_dc_gain",
     "accel_from_displacement", "seed000_eq37_printed",
@@ -496,7 +496,16 @@ def _counts(counts, bits):
     if np.any(c < 0) or np.any(c > top):
         raise ValueError(f"counts must lie in 0..{top} for a {bits}-bit ADC; got {float(np.min(c)):g}.."
                          f"{float(np.max(c)):g} (a hex log? convert with int(text, 16) first)")
+    if c.size and float(np.max(c)) <= VOLTS_MAX and np.any(c != np.round(c)):
+        raise ValueError(f"counts must be ADC counts (whole numbers 0..{top}); got fractions no larger than "
+                         f"{float(np.max(c)):.3g}, which look like volts -- pass the counts the board prints, not "
+                         "adc_to_volts(...) of them")
     return c
+
+
+#: Fractional ``counts`` that never exceed this are refused as volts (an ADC reference of the course is 3-5 V;
+#: averaged counts are fractional too, but at rest read hundreds).
+VOLTS_MAX = 5.5
 
 
 def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
@@ -565,6 +574,7 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
     zero = validate.array(zero_level, "zero_level")
     sens = validate.positive_array(sensitivity, "sensitivity")
     off = validate.array(null_offset, "null_offset")
+    validate.broadcast(counts=volts, zero_level=zero, sensitivity=sens, null_offset=off)
     return (volts - zero) / sens + off                                            # (000 eqs 3.15-3.16, 3.35, 5.1)
 
 
@@ -603,6 +613,7 @@ def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
     x = validate.array(value, "value")
     zero = validate.array(zero_level, "zero_level")
     sens = validate.positive_array(sensitivity, "sensitivity")
+    validate.broadcast(value=x, zero_level=zero, sensitivity=sens)
     top = adc_full_scale(bits)
     volts = zero + sens * x
     return np.clip(np.rint(volts / validate.positive(v_ref, "v_ref") * top), 0, top).astype(np.int64)

@@ -24,7 +24,7 @@ import numpy as np
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
            "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
            "SWAP_ACC_MAX"]
 
 
@@ -867,8 +867,9 @@ def unit_vectors(x, name, tol=0.5):
         n = np.linalg.norm(a, axis=-1)
         if np.any(np.abs(n - 1) > tol):
             bad = float(n.ravel()[np.argmax(np.abs(n - 1).ravel())])
-            raise ValueError(f"{name} must be unit vectors (length 1 within {tol:g}: a DCM row or a direction); "
-                             f"got a length of {bad:.4g}")
+            raise ValueError(f"{name} must be unit vectors (length 1 within {tol:g}: a direction or a DCM row); "
+                             f"got a length of {bad:.6g} -- "
+                             + ("a zero vector has no direction" if bad == 0 else "divide by its norm"))
     return a
 
 
@@ -1115,6 +1116,11 @@ MILLI_G_FROM = 100.0
 
 #: The Earth's field strength at its surface, µT (about 25 at the magnetic equator to 65 near the poles).
 EARTH_FIELD_UT = (25.0, 65.0)
+
+#: The median field strength (µT) accepted from *raw* magnetometer readings (before a hard- and soft-iron
+#: calibration): wide, since hard iron can shift a phone's readings by hundreds of µT; gauss (0.25-0.65) and nT
+#: (25,000-65,000) fall outside, milligauss (250-650) cannot be told from hard iron.
+RAW_FIELD_UT = (2.0, 5000.0)
 
 _FIELD_UNITS = (("gauss", 100.0), ("milligauss", 0.1), ("nT", 1e-3), ("T", 1e6), ("mT", 1e3))
 
