@@ -729,3 +729,20 @@ def test_adc_converters_refuse_volts_for_counts_and_name_what_does_not_broadcast
         sensors.adc_to_physical([500, 510, 520], [1.35, 1.35], 0.3)
     with pytest.raises(ValueError, match=r"^value, zero_level, sensitivity must have matching"):
         sensors.physical_to_adc([0.0, 1.0, 2.0], [1.5, 1.5], 0.3)
+
+
+def test_a_noise_free_constrained_filter_runs_on_its_own_covariance():
+    from fusionlab import gfimu, gfimu_ekf
+    t, om, al = gfimu.trajectory_constant(T=2.0)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 1.0, 500 * gfimu.UG, runs=2, seed=23)
+    x0 = np.concatenate([om[0] * 0.01, np.zeros(3)])
+    P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
+    ekf = gfimu_ekf.ConstrainedEKF(0.01, 1.0, 500 * gfimu.UG, 0.0, x0, P0, t_on=1.0)   # q_dw = 0 is documented
+    assert np.all(np.isfinite(ekf.run(rec.acc[1, :150])[0]))
+
+
+def test_pipeline_names_null_offsets_of_the_wrong_size(counts):
+    for kw, match in (({"acc_null": [0.0, 0.0]}, r"^acc_null must be one number or one per axis, shape \(3,\)"),
+                      ({"gyro_null": []}, r"^gyro_null must be one number or one per axis, shape \(2,\)")):
+        with pytest.raises(ValueError, match=match):
+            correlation.pipeline(counts, 0.02, **kw)

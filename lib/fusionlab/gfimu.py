@@ -116,7 +116,8 @@ def lever_arm(a_o, omega, alpha, p):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Specific force at the body origin (gravity and linear acceleration), m/s².
+        Specific force at the body origin (gravity and linear acceleration), m/s²; any value (a gravity-free
+        simulation has none), so a vector in g cannot be told from another motion.
     omega : array_like, shape (..., 3)
         Angular rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -219,7 +220,8 @@ def aiv(acc, d):
     Parameters
     ----------
     acc : array_like, shape (..., 12)
-        Specific forces, m/s² (or velocity increments, m/s, giving the AIV times Δt).
+        Specific forces, m/s² (or velocity increments, m/s, giving the AIV times Δt): any scale, so a unit
+        slip (g, milli-g) cannot be told from another motion and is not checked.
     d : float
         Separation distance, m.
 
@@ -537,7 +539,7 @@ def apply_calibration(fits, acc):
     fits : sequence of fusionlab.calibration.TriadFit
         Four fits, for triads A, B, C, D (:func:`calibrate_triads`).
     acc : array_like, shape (N, 12)
-        Raw readings, m/s².
+        Raw readings, m/s², in the unit of the fits (not checked: a triad is applied to any motion).
 
     Returns
     -------

@@ -33,7 +33,8 @@ import numpy as np
 from . import gfimu, validate
 
 __all__ = ["ThreeStateEKF", "HybridEKF", "three_state_batch", "hybrid_batch", "nees", "constraints",
-           "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo"]
+           "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo",
+           "GYRO_AIV_RATIO", "GYRO_AIV_MIN"]
 
 
 
@@ -159,7 +160,9 @@ class ThreeStateEKF:
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). The unit is
+            not checked: the course's records are simulated without gravity, so readings in g or milli-g cannot be
+            told from a slower or faster motion (the hybrid filter checks them against its gyro).
         gyro : array_like, shape (N, 3), optional
             Gyro rates, rad/s (used by :class:`HybridEKF` only).
 
@@ -241,7 +244,9 @@ class HybridEKF(ThreeStateEKF):
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). Checked against
+            ``gyro``: the rates the accelerometers give (eqs 3.8-3.10) must match the gyro's within a factor 4
+            (:data:`GYRO_AIV_RATIO`), which readings in g or milli-g, or a gyro in °/s, do not.
         gyro : array_like, shape (N, 3)
             Gyro rates, rad/s.
 
@@ -335,7 +340,8 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². The unit is not checked: the course's records are simulated without gravity, so readings in g
+        or milli-g cannot be told from a slower or faster motion (the hybrid filter checks them against its gyro).
     dt : float
         Sample interval, s.
     d : float
@@ -371,7 +377,8 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². Checked against ``gyro`` as in
+        :meth:`HybridEKF.run` (:data:`GYRO_AIV_RATIO`).
     gyro : array_like, shape (R, N, 3)
         Gyro rates, rad/s.
     dt : float
@@ -656,7 +663,8 @@ class ConstrainedEKF:
         self.P = self.P - K @ H @ self.P
         self.P = 0.5 * (self.P + self.P.T)
         if self.t_on is not None and self.k * self.dt >= self.t_on - 1e-9:
-            self.x, self.P, _ = sckf_project(self.x, self.P, **self.sckf)
+            xb, Pb, _ = _sckf(self.x[None].copy(), self.P[None].copy(), **self.sckf)   # its own P: checked at the door
+            self.x, self.P = xb[0], Pb[0]
         self.k += 1
         return self.x.copy()
 
@@ -666,7 +674,9 @@ class ConstrainedEKF:
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). The unit is
+            not checked: the course's records are simulated without gravity, so readings in g or milli-g cannot be
+            told from a slower or faster motion (the hybrid filter checks them against its gyro).
 
         Returns
         -------
@@ -697,7 +707,8 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². The unit is not checked: the course's records are simulated without gravity, so readings in g
+        or milli-g cannot be told from a slower or faster motion (the hybrid filter checks them against its gyro).
     dt : float
         Sample interval, s.
     d : float

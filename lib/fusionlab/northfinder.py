@@ -85,7 +85,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Specific force at the body origin, m/s².
+        Specific force at the body origin, m/s² (any value: a vector in g cannot be told from another motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -154,7 +154,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     Parameters
     ----------
     a_A : array_like, shape (..., 3)
-        Specific force at the central triad A, m/s².
+        Specific force at the central triad A, m/s² (any value, as ``a_A`` of :func:`fixed_triad_outputs`).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -193,7 +193,8 @@ def fixed_triad_outputs(a_A, omega, alpha, d):
     Parameters
     ----------
     a_A : array_like, shape (..., 3)
-        Specific force at the origin, m/s².
+        Specific force at the origin, m/s² (not checked against g: the kinematics hold for any value, so a
+        vector in g or milli-g cannot be told from another motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
