@@ -746,3 +746,17 @@ def test_pipeline_names_null_offsets_of_the_wrong_size(counts):
                       ({"gyro_null": []}, r"^gyro_null must be one number or one per axis, shape \(2,\)")):
         with pytest.raises(ValueError, match=match):
             correlation.pipeline(counts, 0.02, **kw)
+
+
+def test_flags_and_an_excitation_that_is_not_positive_are_refused():
+    from fusionlab import northfinder, sensors
+    assert sensors.half_bridge_output(0.1, 3.0) == pytest.approx(0.15)
+    for call in (lambda v: sensors.bridge_output(1.1e-12, 0.9e-12, v), lambda v: sensors.half_bridge_output(0.1, v),
+                 lambda v: sensors.accel_from_bridge(0.1, v, 1e-6, 1e-9, 1.0)):
+        for bad in (0.0, -3.0):
+            with pytest.raises(ValueError, match=r"^v_in must be > 0"):
+                call(bad)
+    with pytest.raises(ValueError, match=r"^exact must be True or False; got None"):
+        northfinder.rate_noise_density(1e-4, 0.14, 0.1, 0.2, 20.9, exact=None)
+    with pytest.raises(ValueError, match=r"^printed must be True or False; got 'yes'"):
+        sensor_errors.seed001_table1(np.array([1.0]), np.array([10.0]), printed="yes")

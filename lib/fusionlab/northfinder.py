@@ -361,7 +361,7 @@ def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
         σ_g, rad/s/√Hz.
     """
     w_acc = validate.positive(w_acc, "w_acc")
-    coef = rate_noise_coefficient_exact if exact else rate_noise_coefficient
+    coef = rate_noise_coefficient_exact if validate.flag(exact, "exact") else rate_noise_coefficient
     return w_acc * np.sqrt(coef(rho, d, l, omega_r))
 
 

@@ -510,7 +510,7 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     t = validate.nonnegative(t, "t").reshape(-1)
     a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
     vel = a[:, None] * t
-    pos = a[:, None] * t ** 2 * (1.0 if printed else 0.5)               # printed a·t², kinematic ½·a·t²
+    pos = a[:, None] * t ** 2 * (1.0 if validate.flag(printed, "printed") else 0.5)               # printed a·t², kinematic ½·a·t²
     return a, vel, pos
 
 

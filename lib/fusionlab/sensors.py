@@ -280,7 +280,7 @@ def bridge_output(c1, c2, v_in):
     c2 : float or array_like, shape (...)
         Capacitance of the second leg, F, > 0.
     v_in : float or array_like
-        Amplitude of the excitation, V.
+        Amplitude of the excitation, V, > 0.
 
     Returns
     -------
@@ -298,7 +298,7 @@ def bridge_output(c1, c2, v_in):
     """
     c1 = validate.positive_array(c1, "c1")
     c2 = validate.positive_array(c2, "c2")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(c1=c1, c2=c2, v_in=v_in)
     return v_in * c2 / (c1 + c2) - v_in / 2
 
@@ -313,7 +313,7 @@ def half_bridge_output(delta, v_in):
     delta : array_like, shape (...)
         Relative displacement ``x/x0``, dimensionless.
     v_in : float or array_like
-        Amplitude of the excitation, V.
+        Amplitude of the excitation, V, > 0.
 
     Returns
     -------
@@ -321,7 +321,7 @@ def half_bridge_output(delta, v_in):
         Bridge output, V.
     """
     d = validate.array(delta, "delta")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(delta=d, v_in=v_in)
     return 0.5 * d * v_in                                 # (000 eq 3.11)
 
@@ -336,7 +336,7 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
     v_out : array_like, shape (...)
         Bridge output, V.
     v_in : float or array_like
-        Amplitude of the excitation, V, not 0.
+        Amplitude of the excitation, V, > 0.
     x0 : float
         Rest gap, m, > 0.
     m : float
@@ -350,10 +350,8 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
         Case acceleration, m/s².
     """
     v_out = validate.array(v_out, "v_out")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(v_out=v_out, v_in=v_in)
-    if np.any(v_in == 0):
-        raise ValueError("v_in must not be 0: the bridge output is read as a fraction of the excitation")
     x0 = validate.positive(x0, "x0")
     delta = 2.0 * v_out / v_in                                                    # (000 eq 3.11 inverted)
     return accel_from_displacement(x0 * delta, m, k)                              # (000 eqs 3.12-3.13, corrected)
