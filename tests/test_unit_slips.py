@@ -760,3 +760,34 @@ def test_flags_and_an_excitation_that_is_not_positive_are_refused():
         northfinder.rate_noise_density(1e-4, 0.14, 0.1, 0.2, 20.9, exact=None)
     with pytest.raises(ValueError, match=r"^printed must be True or False; got 'yes'"):
         sensor_errors.seed001_table1(np.array([1.0]), np.array([10.0]), printed="yes")
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: kalman.update_step(np.zeros(3), np.eye(2), np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"),
+     r"^x must have shape \(2,\)"),
+    (lambda: kalman.update_step(np.zeros(2), np.eye(2), np.ones(1), [[1.0, 0.0]], "abc", "joseph"), r"^R must "),
+    (lambda: kalman.update_step(np.zeros(2), None, np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"), r"^P is required"),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), [[1.0, 0.0]], np.eye(2), None), r"^A must "),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), None, None), r"^Q is required"),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), np.eye(2), np.ones(3)), r"^Bu must have shape"),
+])
+def test_the_unchecked_inner_steps_name_the_argument_when_they_fail(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_the_ahrs_step_and_the_rest_detector_name_what_they_cannot_read():
+    from fusionlab import dcm_filter, signals
+    ahrs = dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01)
+    ahrs.step(np.zeros(3), np.array([0.0, 0.0, -G]), np.array([0.5, 0.0, 0.86]))
+    for args, match in (((np.zeros(2), [0.0, 0.0, -G], None), r"^gyr must have shape \(3,\)"),
+                        ((np.zeros(3), [[0.0, 0.0, -G]] * 2, None), r"^acc_b must have shape \(3,\)"),
+                        ((None, [0.0, 0.0, -G], None), r"^gyr must")):
+        with pytest.raises(ValueError, match=match):
+            dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01).step(*args)
+    det = signals.RestDetector(100.0)
+    det.update(np.zeros(3), np.array([0.0, 0.0, G]))
+    with pytest.raises(ValueError, match=r"^gyr must have shape \(3,\); got \(2,\)"):
+        det.update(np.zeros(2), np.array([0.0, 0.0, G]))
+    with pytest.raises(ValueError, match=r"^acc must have shape \(3,\); got \(2,\)"):
+        det.update(np.zeros(3), np.array([0.0, G]))

@@ -343,6 +343,15 @@ class DcmAhrs:
         mag_b : array_like, shape (3,), or None
             Normalised magnetometer, or None for none.
         """
+        try:
+            self._step(gyr, acc_b, mag_b)
+        except validate.INNER_ERRORS:
+            for v, name in ((gyr, "gyr"), (acc_b, "acc_b"), (mag_b, "mag_b")):   # name the argument that does not fit
+                if v is not None or name != "mag_b":
+                    validate.exact_shape(v, name, (3,))
+            raise
+
+    def _step(self, gyr, acc_b, mag_b):
         bias_at_rest = None
         if self.tuning.bias_sigma_rest is not None:
             if self.rest is None:

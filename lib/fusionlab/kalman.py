@@ -558,14 +558,18 @@ def update_step(x, P, z, H, R, form):
     >>> np.round(x, 3), np.round(P, 3)
     (array([0.8]), array([[0.8]]))
     """
-    K = _gain(P, H, R)                                               # (000 eq 4.31)
-    x = x + K @ (z - H @ x)                                          # (000 eq 4.8)
-    if form == "joseph":
-        P = _joseph(P, K, H, R)                                      # (000 eq 4.17)
-    elif form == "short":
-        P = (np.eye(P.shape[0]) - K @ H) @ P                         # (000 §4.3.1 alternate form)
-    else:
-        P = _information(P, H, R)                                    # (000 §4.3.1 alternate form)
+    try:
+        K = _gain(P, H, R)                                           # (000 eq 4.31)
+        x = x + K @ (z - H @ x)                                      # (000 eq 4.8)
+        if form == "joseph":
+            P = _joseph(P, K, H, R)                                  # (000 eq 4.17)
+        elif form == "short":
+            P = (np.eye(P.shape[0]) - K @ H) @ P                     # (000 §4.3.1 alternate form)
+        else:
+            P = _information(P, H, R)                                # (000 §4.3.1 alternate form)
+    except validate.INNER_ERRORS:
+        check_model(x=x, P=P, z=z, H=H, R=R)                         # name the argument that does not fit
+        raise
     return x, P, K
 
 
@@ -644,8 +648,14 @@ def predict_step(x, P, A, Q, Bu):
     >>> np.round(x, 3), np.round(P, 3)
     (array([0.8]), array([[1.3]]))
     """
-    x = A @ x if Bu is None else A @ x + Bu                          # (000 eq 4.32, with G u restored; eq 4.1)
-    P = A @ P @ A.T + Q                                              # (000 eq 4.36)
+    try:
+        x = A @ x if Bu is None else A @ x + Bu                      # (000 eq 4.32, with G u restored; eq 4.1)
+        P = A @ P @ A.T + Q                                          # (000 eq 4.36)
+    except validate.INNER_ERRORS:
+        d = check_model(x=x, P=P, A=A, Q=Q)                          # name the argument that does not fit
+        if Bu is not None:
+            validate.exact_shape(Bu, "Bu", d["x"].shape)
+        raise
     return x, P
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
+           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "INNER_ERRORS", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
            "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
            "SWAP_ACC_MAX"]
 
@@ -408,6 +408,13 @@ def count(x, name, minimum=0):
     if not np.isfinite(v) or v != int(v) or v < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}")
     return int(v)
+
+
+#: What a per-sample inner step (``kalman.update_step``, ``DcmAhrs.step``, ...) raises when an argument is not
+#: what it expects. Those steps check nothing on the way in (they run once per sample); when one fails with one of
+#: these, it runs its public door's checks on the same arguments, so that the error names the argument, and
+#: re-raises the original only if they pass.
+INNER_ERRORS = (ValueError, TypeError, IndexError, AttributeError, np.linalg.LinAlgError)
 
 
 def generator(rng, name="rng"):
