@@ -791,3 +791,14 @@ def test_the_ahrs_step_and_the_rest_detector_name_what_they_cannot_read():
         det.update(np.zeros(2), np.array([0.0, 0.0, G]))
     with pytest.raises(ValueError, match=r"^acc must have shape \(3,\); got \(2,\)"):
         det.update(np.zeros(3), np.array([0.0, G]))
+
+
+@pytest.mark.parametrize("kw, match", [({"x": None}, r"^x must"), ({"x": np.zeros(14)}, r"^x must have shape \(15,\)"),
+                                       ({"gyr": 0.1}, r"^gyr must have shape \(3,\)"), ({"dt": "0.02"}, r"^dt must"),
+                                       ({"acc": "abc"}, r"^acc must"), ({"g": None}, r"^g must")])
+def test_the_ukf_process_model_names_what_it_cannot_read(kw, match):
+    from fusionlab import gpsins
+    args = dict(x=np.zeros(15), dt=0.02, gyr=np.zeros(3), acc=np.array([0.0, 0.0, -G]), g=G)
+    assert np.allclose(gpsins.euler_ins_fx(**args)[3:6], 0.0)
+    with pytest.raises(ValueError, match=match):
+        gpsins.euler_ins_fx(**{**args, **kw})

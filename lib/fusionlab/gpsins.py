@@ -385,7 +385,8 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
     Derived in docs/derivations.md §5:
     ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
     State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step,
-    so it checks nothing (as :func:`fusionlab.kalman.update_step`); :func:`run_euler_ukf` checks its inputs once.
+    so it checks nothing on the way in (as :func:`fusionlab.kalman.update_step`; a NaN or a unit slip goes through);
+    :func:`run_euler_ukf` checks its inputs once. When it fails, it checks its arguments to name the one at fault.
 
     Parameters
     ----------
@@ -405,6 +406,18 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
     ndarray, shape (15,)
         The predicted state.
     """
+    try:
+        return _euler_ins_fx(x, dt, gyr, acc, g)
+    except validate.INNER_ERRORS:
+        validate.exact_shape(x, "x", (15,))                      # name the argument that does not fit
+        validate.time_step(dt, "dt")
+        validate.exact_shape(gyr, "gyr", (3,))
+        validate.exact_shape(acc, "acc", (3,))
+        validate.positive(g, "g")
+        raise
+
+
+def _euler_ins_fx(x, dt, gyr, acc, g):
     r1, r2, r3, v1, v2, v3, phi, th, psi, ba1, ba2, ba3, bg1, bg2, bg3 = x.tolist()
     sf, cf, st, ct, sp, cp = _m.sin(phi), _m.cos(phi), _m.sin(th), _m.cos(th), _m.sin(psi), _m.cos(psi)
     ax, ay, az = acc[0] - ba1, acc[1] - ba2, acc[2] - ba3
