@@ -802,3 +802,27 @@ def test_the_ukf_process_model_names_what_it_cannot_read(kw, match):
     assert np.allclose(gpsins.euler_ins_fx(**args)[3:6], 0.0)
     with pytest.raises(ValueError, match=match):
         gpsins.euler_ins_fx(**{**args, **kw})
+
+
+def test_one_series_check_and_single_numbers_where_one_is_meant():
+    from fusionlab import freescale
+    for call, name in ((lambda a: correlation.derivative(a, 0.02), "a"),
+                       (lambda a: correlation.gyro_increment(a, 0.02), "rate"),
+                       (lambda a: kalman.rls_scalar(a, R=1.0), "y")):
+        assert call(np.array([1.0, 2.0, 4.0])).__len__() == 3
+        with pytest.raises(ValueError, match=rf"^{name} must have shape \(N,\), one value per sample; got \(1, 3\)"):
+            call(np.array([[1.0, 2.0, 4.0]]))
+    with pytest.raises(ValueError, match=r"^P0 must be a positive number or inf, not True/False"):
+        kalman.rls_scalar([1.0, 2.0], R=1.0, P0=True)
+    with pytest.raises(ValueError, match=r"^delta must be a single number"):
+        freescale.geomag_tilt_error(np.eye(3), np.eye(3), [1.0, 1.0])
+    M, S, beta = np.eye(3), np.ones(3), np.zeros(3)
+    for call in (lambda b: sensor_errors.mag_measure(b, M, S, beta), lambda b: sensor_errors.mag_correct(b, M, S, beta)):
+        with pytest.raises(ValueError, match=r"^b(_m)? must have shape \(\.\.\., 3\); got \(\)"):
+            call(45.0)
+
+
+def test_the_tilt_cross_check_points_at_fs_too(trial27):
+    gyr, acc, mag, fs = trial27
+    with pytest.raises(ValueError, match=rf"^gyr must be in rad/s; .* or is fs = {fs:g} Hz not the record's sample"):
+        estimators.run("dcm_ahrs", np.degrees(gyr), acc, fs, mag=mag)

@@ -161,9 +161,7 @@ def moving_average(x, n):
     >>> moving_average([1.0, 2.0, 3.0, 4.0, 5.0], 2)
     array([1. , 1.5, 2.5, 3.5, 4.5])
     """
-    x = validate.array(x, "x")
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    x = validate.series(x, "x")
     n = validate.count(n, "n", 1)
     c = np.concatenate([[0.0], np.cumsum(x)])
     m = np.arange(1, len(x) + 1)
@@ -191,7 +189,7 @@ def derivative(a, dt):
     >>> derivative([0.0, 1.0, 3.0], 0.5)
     array([0., 2., 4.])
     """
-    a = validate.array(a, "a")
+    a = validate.series(a, "a")
     dt = validate.time_step(dt, "dt")
     return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
 
@@ -228,7 +226,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     >>> gyro_increment(rate, 0.1), gyro_increment(rate, 0.1, rule="printed")
     (array([1., 2., 3.]), array([0., 1., 1.]))
     """
-    r = validate.array(rate, "rate")
+    r = validate.series(rate, "rate")
     dt = validate.time_step(dt, "dt")
     if rule == "printed":
         return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)

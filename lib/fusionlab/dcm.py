@@ -545,9 +545,7 @@ def trusted_mask(deviation, tol, hold):
     >>> trusted_mask(np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]), tol=0.5, hold=2)
     array([False,  True, False, False,  True,  True])
     """
-    d = validate.array(deviation, "deviation")
-    if d.ndim != 1:
-        raise ValueError(f"deviation must have shape (N,); got {d.shape}")
+    d = validate.series(deviation, "deviation")
     tol = validate.positive(tol, "tol")
     hold = validate.count(hold, "hold")
     if hold < 1:

@@ -276,7 +276,8 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
     qvbqd : float or array_like, shape (...)
         Magnetometer noise, µT² (:func:`mag_noise`).
     B : float, optional
-        Geomagnetic field strength, µT.
+        Geomagnetic field strength, in the unit ``qvbqd`` is the square of (µT; 1 for normalised readings): not
+        checked against the Earth's field, since only ``qvbqd / B²`` counts.
     tol : float, optional
         ``QvGQa`` and ``QvBQd/B²`` below this are treated as exactly 0.
 

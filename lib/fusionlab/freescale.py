@@ -213,7 +213,7 @@ def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
     ndarray, shape (..., 4)
         Quaternion; its vector part is ``z[3:6]``.
     """
-    R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(delta, "delta"))
+    R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(validate.scalar(delta, "delta"), "delta"))
     _, r_m = ecompass.reference_vectors(delta, frame)
     return qrot(R6 @ r_m, Rp @ r_m)                                        # (002 eqs 84-88)
 

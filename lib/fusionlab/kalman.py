@@ -236,11 +236,11 @@ def rls_scalar(y, R, x0=0.0, P0=np.inf):
     >>> x_hat, np.round(P, 3)
     (array([1., 2., 2.]), array([1.   , 0.5  , 0.333]))
     """
-    y = validate.array(y, "y")
-    if y.ndim != 1:
-        raise ValueError(f"y must have shape (N,); got {y.shape}")
+    y = validate.series(y, "y")
     R = validate.scalar(R, "R", True)
     x = validate.scalar(x0, "x0")
+    if isinstance(P0, (bool, np.bool_)):
+        raise ValueError(f"P0 must be a positive number or inf, not True/False; got {P0!r}")
     try:
         P = float(P0)
     except (TypeError, ValueError):

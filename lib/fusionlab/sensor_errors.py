@@ -232,7 +232,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         The raw reading ``b_m``, µT.
     """
-    b = validate.field_uT(b, "b", per_sample=False)
+    b = validate.field_uT(validate.vectors(b, "b"), "b", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
     return (_solve(D, b + h) @ S.T - beta) @ M.T                       # (001 sensors §4, solved for b_m)
@@ -263,7 +263,7 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         Corrected field ``b_c``, µT.
     """
-    b_m = validate.field_uT(b_m, "b_m", *validate.RAW_FIELD_UT, per_sample=False)
+    b_m = validate.field_uT(validate.vectors(b_m, "b_m"), "b_m", *validate.RAW_FIELD_UT, per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
     b = _solve(S, _solve(M, b_m) + beta)                                  # S_b⁻¹(M_b⁻¹ b_m + β_b)

@@ -51,9 +51,7 @@ def trailing_max(x, n):
     """
     from scipy.ndimage import maximum_filter1d
 
-    x = validate.array(x, "x")
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    x = validate.series(x, "x")
     n = validate.count(n, "n", 1)
     return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
 

@@ -23,7 +23,7 @@ import numpy as np
 
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "INNER_ERRORS", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
+           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "series", "INNER_ERRORS", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
            "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
            "SWAP_ACC_MAX"]
 
@@ -179,6 +179,35 @@ def samples(x, name, n=3):
     if a.ndim != 2 or a.shape[1] != n:
         raise ValueError(f"{name} must have shape (N, {n}), one row per sample; got {a.shape}")
     return array(a, name)
+
+
+def series(x, name):
+    """``x`` as one time series: exactly one axis, shape ``(N,)``, finite.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The samples.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        ``x`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.series([[1.0, 2.0]], "x")
+    Traceback (most recent call last):
+        ...
+    ValueError: x must have shape (N,), one value per sample; got (1, 2)
+    """
+    a = array(x, name)
+    if a.ndim != 1:
+        raise ValueError(f"{name} must have shape (N,), one value per sample; got {a.shape}")
+    return a
 
 
 def vectors(x, name, n=3):
@@ -967,7 +996,7 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
     >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)
     Traceback (most recent call last):
         ...
-    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)
+    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = 100 Hz not the record's sample rate? the tilt is integrated with it
     """
     g = samples(gyr, name)
     if len(g):
@@ -992,7 +1021,8 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
             raise ValueError(f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
                              f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
                              f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
-                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)")
+                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = {fs:g} Hz not the "
+                             "record's sample rate? the tilt is integrated with it")
     return g
 
 
