@@ -826,3 +826,4 @@ def test_the_tilt_cross_check_points_at_fs_too(trial27):
     gyr, acc, mag, fs = trial27
     with pytest.raises(ValueError, match=rf"^gyr must be in rad/s; .* or is fs = {fs:g} Hz not the record's sample"):
         estimators.run("dcm_ahrs", np.degrees(gyr), acc, fs, mag=mag)
+

@@ -207,7 +207,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     Parameters
     ----------
     rate : array_like, shape (N,)
-        Gyro rate, °/s.
+        Gyro rate, °/s (rad/s cannot be told from °/s by the values of a rate).
     dt : float
         Sample interval, s.
     rule : {'rectangular', 'printed', 'trapezoid'}, optional
@@ -245,7 +245,7 @@ def cumulative_integral(increment, angle0=0.0):
     Parameters
     ----------
     increment : array_like, shape (N,)
-        Per-sample angle increments, deg.
+        Per-sample angle increments, deg (radians cannot be told from degrees by the values).
     angle0 : float, optional
         Angle before the first sample, deg.
 
@@ -267,7 +267,7 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
     Parameters
     ----------
     gyro_rate : array_like, shape (N,)
-        Gyro rate, °/s.
+        Gyro rate, °/s (rad/s cannot be told from °/s by the values of a rate).
     accel_term : array_like, shape (N,)
         The accelerometer term: its angle (deg, as printed) or that angle's rate (°/s, as meant).
     eps : float, optional
@@ -301,7 +301,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     accel_deg : array_like, shape (N,)
         Accelerometer angle, deg.
     increment : array_like, shape (N,)
-        Gyro angle increment per sample, deg.
+        Gyro angle increment per sample, deg (radians cannot be told from degrees by the values).
     weight : array_like, shape (N,)
         Accelerometer weight ``w``, in [0, 1].
     f0 : float, optional
@@ -516,9 +516,10 @@ class ComplementaryFilter:
         Parameters
         ----------
         rate : array_like, shape (N,)
-            Gyro rates, angle unit / s.
+            Gyro rates, angle unit / s (the unit of ``accel_angle`` per second).
         accel_angle : array_like, shape (N,)
-            Accelerometer angles, angle unit.
+            Accelerometer angles, angle unit (any, the same as ``rate``'s: the filter cannot tell which one is in
+            another).
 
         Returns
         -------
@@ -601,9 +602,10 @@ class TiltKalman2:
         Parameters
         ----------
         rate : array_like, shape (N,)
-            Gyro rates, angle unit / s.
+            Gyro rates, angle unit / s (the unit of ``accel_angle`` per second).
         accel_angle : array_like, shape (N,)
-            Accelerometer angles, angle unit.
+            Accelerometer angles, angle unit (any, the same as ``rate``'s: the filter cannot tell which one is in
+            another).
 
         Returns
         -------

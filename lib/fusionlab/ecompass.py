@@ -802,7 +802,8 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     Parameters
     ----------
     omega_dps : array_like, shape (N, 3)
-        True sensor-frame angular rate of each sample, °/s.
+        True sensor-frame angular rate of each sample, °/s (a true rate has no natural scale: rad/s cannot be
+        told from °/s here).
     q0 : array_like, shape (4,), optional
         Initial orientation (note's convention).
     frame : {'NED', 'Android', 'Win8'}, optional

@@ -154,7 +154,8 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     Parameters
     ----------
     a_inertial : array_like, shape (..., 3)
-        Acceleration in the inertial frame, expressed in rotating-frame axes, m/s².
+        Acceleration in the inertial frame, expressed in rotating-frame axes, m/s² (any value: g cannot be told
+        from another motion).
     omega : array_like, shape (..., 3)
         Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
         turntable, so convert with np.radians).
@@ -192,7 +193,8 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Acceleration (or specific force) at the body origin, m/s².
+        Acceleration (or specific force) at the body origin, m/s² (any value: g cannot be told from another
+        motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s (any size is accepted: a rate in °/s cannot be told from a fast turn, so convert
         with np.radians).

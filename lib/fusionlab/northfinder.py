@@ -224,9 +224,10 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
     Parameters
     ----------
     a_rot : array_like, shape (..., 3)
-        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]`` at the index pulse (cos ω_r t = 1), m/s².
+        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]`` at the index pulse (cos ω_r t = 1), m/s² (any value: the kinematics
+        hold for any motion, so g or milli-g cannot be told apart).
     fixed : array_like, shape (..., 4, 3)
-        Triads A, B, C, D, m/s².
+        Triads A, B, C, D, m/s² (any value, as ``a_rot``).
     rho : float
         Radius of the rotating accelerometers, m.
     d : float
@@ -633,9 +634,11 @@ def bandpass(x, theta, taps, remove_mean=True):
     Parameters
     ----------
     x : array_like, shape (N,)
-        The record, m/s².
+        The record, m/s² (any scale passes: the filter is linear, so a record in g or milli-g gives the same wave
+        in that unit).
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
     taps : array_like, shape (order + 1,)
         FIR taps (:func:`bandpass_firls`).
     remove_mean : bool, optional
@@ -715,7 +718,8 @@ def demodulate(x, theta, reference="sampled"):
     x : array_like, shape (N,)
         The (band-passed) record, m/s².
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
     reference : {'sampled', 'exact'}, optional
         ``"sampled"``: sgn evaluated at each sample (the rectangular rule, eq 4.28 discretised); ``"exact"``: the
         sign function averaged over each sample interval, ``[F(θ + h/2) − F(θ − h/2)]/h`` with ``F = asin(sin θ)``
@@ -756,7 +760,8 @@ def synchronous_sampling(x, theta):
     x : array_like, shape (N,)
         The band-passed record, m/s².
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
 
     Returns
     -------
@@ -795,7 +800,8 @@ def period_average(x, theta, bins=128, turns=None):
     x : array_like, shape (N,)
         The record, m/s², normally band-passed (:func:`bandpass`).
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad, increasing, 2πk at the index pulses.
+        Rotor angle of each sample, rad, increasing, 2πk at the index pulses (degrees cannot be told from radians
+        by the values).
     bins : int, optional
         Points per period, at least 8 and a multiple of 4 (so that the sign references balance).
     turns : int or None, optional

@@ -137,7 +137,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     Parameters
     ----------
     rate : array_like, shape (..., 3)
-        True body rates p, rad/s.
+        True body rates p, rad/s (a rate has no natural scale: °/s cannot be told from rad/s here).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -166,7 +166,7 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     Parameters
     ----------
     p_m : array_like, shape (..., 3)
-        Raw readings, rad/s.
+        Raw readings, rad/s (°/s cannot be told from rad/s here: a rate has no natural scale).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -434,7 +434,8 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     Parameters
     ----------
     acc_nav : array_like, shape (N, 3)
-        Navigation-frame acceleration (gravity removed), m/s².
+        Navigation-frame acceleration (gravity removed), m/s² (no natural scale without gravity: g or milli-g
+        cannot be told from another motion).
     dt : float
         Sample interval, s.
     v0 : array_like, shape (3,), optional
