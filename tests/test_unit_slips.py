@@ -827,3 +827,20 @@ def test_the_tilt_cross_check_points_at_fs_too(trial27):
     with pytest.raises(ValueError, match=rf"^gyr must be in rad/s; .* or is fs = {fs:g} Hz not the record's sample"):
         estimators.run("dcm_ahrs", np.degrees(gyr), acc, fs, mag=mag)
 
+
+
+def test_accel_angle_refuses_one_reading_in_m_s2_or_milli_g(counts):
+    acc = correlation.adc_to_g(counts[:, :3])
+    z, other = acc[:, 2], acc[:, 1]
+    assert np.all(np.isfinite(correlation.accel_angle(z, other)))
+    for zz, oo in ((z * G, other), (z, other * 1000.0), (z * 1000.0, other)):
+        with pytest.raises(ValueError, match=r"^z and other must be in g"):
+            correlation.accel_angle(zz, oo)
+
+
+def test_kappa_weights_must_match_the_vector_pairs():
+    s = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    assert np.isfinite(ecompass.kappa_general(s, s, [0.5, 0.5])).all()
+    for alpha in ([0.5], 0.5):
+        with pytest.raises(ValueError, match=r"^alpha must hold one weight per vector pair, shape \(\.\.\., 2\)"):
+            ecompass.kappa_general(s, s, alpha)

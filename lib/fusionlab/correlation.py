@@ -107,7 +107,7 @@ def accel_angle(z, other, order="excel"):
     Parameters
     ----------
     z : array_like, shape (N,)
-        Z reading, g.
+        Z reading, g (with ``other``: a median magnitude that looks like m/s² or milli-g is refused).
     other : array_like, shape (N,)
         The Y (or X) reading, g.
     order : {'excel', 'c'}, optional
@@ -128,6 +128,8 @@ def accel_angle(z, other, order="excel"):
     z = validate.array(z, "z")
     other = validate.array(other, "other")
     validate.broadcast(z=z, other=other)
+    pair = np.stack(np.broadcast_arrays(other, z), axis=-1).reshape(-1, 2)
+    validate.accel_g(np.concatenate([pair, np.zeros((len(pair), 1))], axis=1), "z and other", per_sample=len(pair) > 1)
     if order == "excel":
         return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
     if order == "c":

@@ -378,6 +378,9 @@ def _vector_pairs(s, r, alpha):
     if alpha is None:
         return s, r, np.full(s.shape[:-1], 1.0 / s.shape[-2])
     a = validate.array(alpha, "alpha")
+    K = s.shape[-2]
+    if a.ndim == 0 or a.shape[-1] != K:
+        raise ValueError(f"alpha must hold one weight per vector pair, shape (..., {K}); got {a.shape}")
     validate.broadcast({"s": 1}, s=s, alpha=a)
     return s, r, a * np.ones(s.shape[:-1])
 
