@@ -844,3 +844,33 @@ def test_kappa_weights_must_match_the_vector_pairs():
     for alpha in ([0.5], 0.5):
         with pytest.raises(ValueError, match=r"^alpha must hold one weight per vector pair, shape \(\.\.\., 2\)"):
             ecompass.kappa_general(s, s, alpha)
+
+
+def test_inner_steps_take_lists_and_name_a_state_spoilt_by_an_earlier_nan():
+    from fusionlab import dcm_filter, gpsins
+    x, P = kalman.update_step(np.zeros(1), [[4.0]], [1.0], [[1.0]], [[1.0]], "joseph")[:2]
+    assert np.allclose(x, [0.8]) and np.allclose(P, [[0.8]])
+    x, P = kalman.predict_step([0.8], [[0.8]], [[1.0]], [[0.5]], None)
+    assert np.allclose(P, [[1.3]])
+    assert np.allclose(gpsins.euler_ins_fx([0.0] * 15, 0.02, np.zeros(3), np.array([0.0, 0.0, -G]), G)[3:6], 0.0)
+    f = dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01)
+    mag = np.array([0.5, 0.0, 0.86])
+    f.step(np.zeros(3), np.array([0.0, np.nan, -G]), mag)
+    with pytest.raises(ValueError, match=r"^gyr, acc_b and mag_b of an earlier step held NaN or inf"):
+        for _ in range(5):
+            f.step(np.zeros(3), np.array([0.0, 0.0, -G]), mag)
+
+
+def test_kalman9_and_check_recording_refuse_an_all_zero_magnetometer_sample(trial27):
+    from fusionlab import freescale
+    gyr, acc, mag, fs = trial27
+    g, a, m = np.degrees(gyr[:400]), acc[:400] / G, mag[:400].copy()
+    m[10] = 0.0
+    with pytest.raises(ValueError, match=r"^mag_uT must not hold all-zero readings .* the first at sample 10"):
+        freescale.Kalman9().run(g, a, m)
+
+
+def test_pipeline_refuses_a_null_offset_in_milli_g(counts):
+    assert np.isfinite(correlation.pipeline(counts, 0.02, acc_null=[0.01, -0.02, 0.0])["k_fused_deg"]).all()
+    with pytest.raises(ValueError, match=r"^acc_null must be an offset in g"):
+        correlation.pipeline(counts, 0.02, acc_null=[10.0, -20.0, 0.0])

@@ -388,7 +388,7 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     accel_weight : {'ratio', 'one_minus_ratio'}, optional
         ``'ratio'`` (eq 5.17) or ``'one_minus_ratio'`` (lab step j)).
     acc_null : float or array_like, shape (3,), optional
-        Accelerometer NullOffset of eqs 5.1-5.3, g.
+        Accelerometer NullOffset of eqs 5.1-5.3, g (under 1 in size: milli-g or m/s² are refused).
     gyro_null : float or array_like, shape (2,), optional
         Gyro NullOffset of eqs 5.11-5.12, °/s.
     eps : float, optional
@@ -411,6 +411,9 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     for null, name, n in ((acc_null, "acc_null", 3), (gyro_null, "gyro_null", 2)):
         if null.shape not in ((), (n,)):
             raise ValueError(f"{name} must be one number or one per axis, shape ({n},); got {null.shape}")
+    if np.any(np.abs(acc_null) >= 1.0):
+        raise ValueError(f"acc_null must be an offset in g, under 1 in size (a null offset is a fraction of g); got "
+                         f"{float(np.max(np.abs(acc_null))):.4g} -- milli-g or m/s²?")
     if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
         raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
                          f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "

@@ -835,6 +835,10 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_
         mag = validate.array(mag, n_mag, shape=(None, 3))
         if mag.ndim != 2:
             raise ValueError(f"{n_mag} must have shape (N, 3); got {mag.shape}")
+        zero = np.flatnonzero(~np.any(mag, axis=1))
+        if zero.size:
+            raise ValueError(f"{n_mag} must not hold all-zero readings (no field has no direction); got {zero.size}, "
+                             f"the first at sample {zero[0]} -- a magnetometer not yet ready, or not connected?")
     validate.same_length(**{n_gyr: gyr, n_acc: acc, n_mag: mag})
     check_units(acc, mag, (n_acc, n_mag), field_range)
     return gyr, acc, mag

@@ -414,7 +414,9 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
         validate.exact_shape(gyr, "gyr", (3,))
         validate.exact_shape(acc, "acc", (3,))
         validate.positive(g, "g")
-        raise
+        if isinstance(x, np.ndarray):
+            raise
+        return _euler_ins_fx(np.asarray(x, float), dt, gyr, acc, g)      # a list for x
 
 
 def _euler_ins_fx(x, dt, gyr, acc, g):

@@ -568,8 +568,10 @@ def update_step(x, P, z, H, R, form):
         else:
             P = _information(P, H, R)                                # (000 §4.3.1 alternate form)
     except validate.INNER_ERRORS:
-        check_model(x=x, P=P, z=z, H=H, R=R)                         # name the argument that does not fit
-        raise
+        d = check_model(x=x, P=P, z=z, H=H, R=R)                     # name the argument that does not fit,
+        if all(isinstance(v, np.ndarray) for v in (x, P, z, H, R)):
+            raise
+        return update_step(d["x"], d["P"], d["z"], d["H"], d["R"], form)   # or take lists as arrays
     return x, P, K
 
 
@@ -652,10 +654,11 @@ def predict_step(x, P, A, Q, Bu):
         x = A @ x if Bu is None else A @ x + Bu                      # (000 eq 4.32, with G u restored; eq 4.1)
         P = A @ P @ A.T + Q                                          # (000 eq 4.36)
     except validate.INNER_ERRORS:
-        d = check_model(x=x, P=P, A=A, Q=Q)                          # name the argument that does not fit
-        if Bu is not None:
-            validate.exact_shape(Bu, "Bu", d["x"].shape)
-        raise
+        d = check_model(x=x, P=P, A=A, Q=Q)                          # name the argument that does not fit,
+        Bu = None if Bu is None else validate.exact_shape(Bu, "Bu", d["x"].shape)
+        if all(isinstance(v, np.ndarray) for v in (x, P, A, Q)):
+            raise
+        return predict_step(d["x"], d["P"], d["A"], d["Q"], Bu)    # or take lists as arrays
     return x, P
 
 
