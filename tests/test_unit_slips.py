@@ -874,3 +874,20 @@ def test_pipeline_refuses_a_null_offset_in_milli_g(counts):
     assert np.isfinite(correlation.pipeline(counts, 0.02, acc_null=[0.01, -0.02, 0.0])["k_fused_deg"]).all()
     with pytest.raises(ValueError, match=r"^acc_null must be an offset in g"):
         correlation.pipeline(counts, 0.02, acc_null=[10.0, -20.0, 0.0])
+
+
+def test_batch_shapes_are_named_or_broadcast():
+    from fusionlab import dcm, gfimu_ekf, inertial
+    with pytest.raises(ValueError, match=r"^err must have shape \(\.\.\., N\); got \(\)"):
+        gfimu_ekf.nees(0.1, np.eye(3))
+    with pytest.raises(ValueError, match=r"^rate, angle0 must have matching"):
+        inertial.integrate_rate(np.zeros(12), 0.01, angle0=np.zeros(3))
+    acc = np.tile([0.0, 0.0, 9.8], (4, 1))
+    mag = np.tile([20.0, 0.0, 40.0], (4, 1))
+    assert dcm.level_and_compass(acc, mag[None]).shape == (1, 4, 3)
+    from fusionlab import gfimu
+    t, om, al = gfimu.trajectory_ch3(T=0.5)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 0.2, 50 * gfimu.UG, runs=2, seed=5)
+    gyro = np.broadcast_to(om, rec.acc.shape[:2] + (3,))
+    with pytest.raises(ValueError, match=r"^x0 must have shape \(3,\) or \(2, 3\); got \(1, 2, 3\)"):
+        gfimu_ekf.hybrid_batch(rec.acc, gyro, 0.01, 0.2, 50 * gfimu.UG, 1e-3, np.zeros((1, 2, 3)), 1e-6)

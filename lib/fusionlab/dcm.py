@@ -479,6 +479,7 @@ def level_and_compass(acc_b, mag_b):
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
     validate.broadcast({"acc_b": 1, "mag_b": 1}, acc_b=a, mag_b=m)
+    a, m = np.broadcast_arrays(a, m)
     n = np.linalg.norm(a, axis=-1)
     if np.any(n == 0):
         raise ValueError("acc_b must not be zero-length")

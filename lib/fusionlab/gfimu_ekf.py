@@ -301,7 +301,7 @@ def _batch_core(u, y, Q, R, M, x0, P0, gyro_dtheta=None, Rg=None):
 
 def _batch_x0(x0, runs):
     x0 = validate.array(x0, "x0", shape=(3,))
-    if x0.ndim == 1 or x0.shape[0] in (1, runs):
+    if x0.ndim == 1 or x0.ndim == 2 and x0.shape[0] in (1, runs):
         return x0
     raise ValueError(f"x0 must have shape (3,) or ({runs}, 3); got {x0.shape}")
 
@@ -434,7 +434,7 @@ def nees(err, P):
     ndarray, shape (...)
         The NEES (dimensionless).
     """
-    err, P = validate.array(err, "err"), validate.array(P, "P")
+    err, P = validate.array(err, "err", shape=(None,)), validate.array(P, "P")
     if P.shape[-2:] != (err.shape[-1], err.shape[-1]):
         raise ValueError(f"P must have shape (..., {err.shape[-1]}, {err.shape[-1]}) to match err; got {P.shape}")
     validate.covariances(P, "P", err.shape[-1])

@@ -294,7 +294,7 @@ def integrate_rate(rate, dt, angle0=0.0):
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
     dt = validate.time_step(dt, "dt")
     a0 = validate.array(angle0, "angle0")
-    validate.broadcast(rate=w[0], angle0=a0)                  # one start angle per axis of a sample
+    validate.broadcast(rate=w, angle0=a0)                     # one start angle per axis of a sample
     steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
     return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
 

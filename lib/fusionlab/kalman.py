@@ -191,11 +191,8 @@ def gaussian_product(mu1, var1, mu2, var2):
     (11.6, 0.8)
     """
     mu1, mu2 = validate.array(mu1, "mu1"), validate.array(mu2, "mu2")
-    var1, var2 = validate.array(var1, "var1"), validate.array(var2, "var2")
+    var1, var2 = validate.positive_array(var1, "var1"), validate.positive_array(var2, "var2")
     validate.broadcast(mu1=mu1, var1=var1, mu2=mu2, var2=var2)
-    for v, name in ((var1, "var1"), (var2, "var2")):
-        if np.any(v <= 0):
-            raise ValueError(f"{name} must be > 0 (a variance); got min {float(np.min(v))!r}")
     mu = (var2 * mu1 + var1 * mu2) / (var1 + var2)                   # (000 §4.2, fig 25)
     var = var1 * var2 / (var1 + var2)
     return (float(mu), float(var)) if np.ndim(mu) == 0 else (mu, var)
