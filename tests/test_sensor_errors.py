@@ -70,9 +70,9 @@ def test_printed_mag_formula_uses_the_accelerometer_parameters_and_is_wrong():
 
 def test_error_models_reject_singular_and_nan_parameters():
     with pytest.raises(ValueError, match="M must be invertible"):
-        sensor_errors.accel_correct(np.ones(3), np.zeros((3, 3)), np.ones(3), np.zeros(3))
+        sensor_errors.accel_correct([0.0, 0.0, 9.81], np.zeros((3, 3)), np.ones(3), np.zeros(3))
     with pytest.raises(ValueError, match="beta must hold finite"):
-        sensor_errors.accel_measure(np.ones(3), np.eye(3), np.ones(3), [0, np.nan, 0])
+        sensor_errors.accel_measure([0.0, 0.0, 9.81], np.eye(3), np.ones(3), [0, np.nan, 0])
     with pytest.raises(ValueError, match="a_c"):
         sensor_errors.gyro_correct(np.ones(3), np.eye(3), np.ones(3), np.zeros(3), C_ga=np.eye(3))
 

@@ -524,3 +524,370 @@ def test_a_single_reading_in_a_shake_passes_and_one_beyond_any_accelerometer_ran
     assert abs(float(ecompass.accel_noise(G1)) - 5.25) < 1e-12
     with pytest.raises(ValueError, match=r"^G must be in g .* no accelerometer of the course reads 16 g"):
         ecompass.accel_noise(G1 * 10.0)                                   # 25: nor m/s² (5-20), nor milli-g
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Third round: the probe's remaining silent faults
+# ----------------------------------------------------------------------------------------------------------------
+
+_M_TRUE = np.array([[1.02, 0.01, 0.0], [0.0, 0.98, 0.02], [0.0, 0.0, 1.01]])
+
+
+@pytest.mark.parametrize("which, factor, overall", [("measured", 1 / G, "0.102"), ("measured", 1000 / G, "102"),
+                                                    ("reference", 1 / G, "9.8")])
+def test_fit_triad_refuses_a_reference_and_readings_in_different_units(which, factor, overall):
+    ref = calibration.six_positions()
+    meas = ref @ _M_TRUE.T + [0.1, -0.2, 0.05]
+    fit = calibration.fit_triad(ref, meas)
+    assert np.allclose(fit.M, _M_TRUE)
+    args = {"reference": ref, "measured": meas}
+    args[which] = args[which] * factor
+    with pytest.raises(ValueError, match=rf"^measured must be in the unit of reference; .* overall {overall}"):
+        calibration.fit_triad(**args)
+    # the same readings in g against a reference in g are a valid fit in g, with the same M
+    assert np.allclose(calibration.fit_triad(ref / G, meas / G).M, _M_TRUE)
+
+
+def test_a_single_specific_force_in_milli_g_or_g_is_refused_where_gravity_is_in_it():
+    f = np.array([0.3, -0.2, 9.7])
+    M, S, beta = np.eye(3), np.ones(3), np.zeros(3)
+    for call, name in ((lambda v: sensor_errors.accel_measure(v, M, S, beta), "f"),
+                       (lambda v: sensor_errors.accel_correct(v, M, S, beta), "a_m"),
+                       (lambda v: sensor_errors.gyro_measure_full(np.zeros(3), M, S, beta, np.eye(3) * 1e-3, v),
+                        "a_c")):
+        assert np.all(np.isfinite(call(f)))
+        with pytest.raises(ValueError, match=rf"^{name} must be in m/s²; .* looks like milli-g"):
+            call(f * 1000 / G)
+        with pytest.raises(ValueError, match=rf"^{name} must be in m/s²; .* looks like g"):
+            call(f / G)
+
+
+def test_the_ins_steps_refuse_acc_in_g_and_a_zero_increment():
+    from fusionlab import gpsins
+    x = np.zeros(21)
+    x[gpsins.INS_SLICES["c"]] = np.eye(3).ravel()                 # the identity attitude, nothing else
+    acc, A = np.array([0.1, 0.0, -9.8]), np.eye(3)
+    assert np.all(np.isfinite(gpsins.ins_transition(x, acc, A, 0.02)))
+    with pytest.raises(ValueError, match=r"^acc must be in m/s²; .* looks like g"):
+        gpsins.ins_transition(x, acc / G, A, 0.02)
+    with pytest.raises(ValueError, match=r"^acc must be in m/s²; .* milli-g"):
+        gpsins.ins_propagate(x, acc * 1000 / G, A, 0.02)
+    with pytest.raises(ValueError, match=r"^A_tilde must be a rotation matrix .* zero matrix"):
+        gpsins.ins_propagate(x, acc, np.zeros((3, 3)), 0.02)
+
+
+def test_dcm_steps_refuse_a_zero_increment_and_a_row_that_is_not_a_unit_vector():
+    from fusionlab import dcm
+    A = dcm.A_matrix(np.radians([1.0, 2.0, 3.0]), order="second")          # a second-order increment passes
+    c = np.array([1.0, 0.0, 0.0])
+    assert np.allclose(dcm.row_propagate(c, A, np.zeros(3), 0.01), c @ A)
+    for call in (lambda: dcm.row_propagate(c, np.zeros((3, 3)), np.zeros(3), 0.01),
+                 lambda: dcm.ahrs_transition(c, c, np.zeros((3, 3)), 0.01),
+                 lambda: dcm.A_with_gyro_error(np.zeros((3, 3)), np.zeros(3), 0.01)):
+        with pytest.raises(ValueError, match=r"^A(_tilde)? must be a rotation matrix"):
+            call()
+    with pytest.raises(ValueError, match=r"^c must be unit vectors .* got a length of 0"):
+        dcm.row_propagate(np.zeros(3), A, np.zeros(3), 0.01)
+
+
+@pytest.mark.parametrize("call", [
+    lambda s: __import__("fusionlab.inertial").inertial.gyro_measure(np.zeros(3), np.zeros(3), 0.01, rng=s),
+    lambda s: sensor_errors.gyro_noise(100, 100.0, 1e-3, 1e-4, 1e-5, rng=s),
+])
+def test_a_list_or_a_flag_is_not_a_seed(call):
+    assert call(3).shape and np.allclose(call(3), call(np.random.default_rng(3)))
+    for bad in ([3, 3], True):
+        with pytest.raises(ValueError, match=r"^rng must be a numpy Generator, None or an integer seed"):
+            call(bad)
+
+
+def test_table53_refuses_a_seed_list_a_flag_sign_and_a_switch_on_never_reached():
+    from fusionlab import gfimu_ekf
+    for kw, match in (({"seed": [53, 54]}, r"^seed must be an integer"), ({"m_sign": True}, r"^m_sign must be one of"),
+                      ({"q_dw": True}, r"^q_dw must be a single number"), ({"t_on": np.inf}, r"^t_on .* finite"),
+                      ({"window": (15.0, np.nan)}, r"^window .* finite"),
+                      ({"window": (20.0, 15.0)}, r"^window must be \(start, end\)"),
+                      ({"q_sweep": [[1e-5]]}, r"^q_sweep must be a sequence")):
+        with pytest.raises(ValueError, match=match):
+            gfimu_ekf.table53_monte_carlo(n_runs=1, grades=("tactical",), progress=False, **kw)
+
+
+def test_three_state_noise_refuses_a_flag_for_the_sign():
+    from fusionlab import gfimu
+    with pytest.raises(ValueError, match=r"^m_sign .* must be one of -1, 0, 1; got True"):
+        gfimu.three_state_noise(50 * gfimu.UG, 0.01, 0.1, True)
+
+
+@pytest.mark.parametrize("fn, args", [
+    ("rotating_kinematics", dict(t=0.0, rho=0.14, omega_r=20.9)),
+    ("rate_noise_coefficient", dict(rho=0.14, d=0.1, omega_r=20.9)),
+    ("rate_noise_coefficient_exact", dict(rho=0.14, d=0.1, omega_r=20.9)),
+])
+def test_north_finder_rotor_distance_must_be_positive(fn, args):
+    from fusionlab import northfinder
+    f = getattr(northfinder, fn)
+    assert np.all(np.isfinite(np.asarray(f(l=0.2, **args), dtype=float)))
+    for bad in (0.0, -0.2, True):
+        with pytest.raises(ValueError, match=r"^l must be"):
+            f(l=bad, **args)
+
+
+def test_north_finder_record_refuses_flags_and_a_negative_scale():
+    from fusionlab import northfinder
+    for kw, match in (({"bias": True}, r"^bias must be a single number"),
+                      ({"theta0": True}, r"^theta0 must be a single number"),
+                      ({"scale": -1.0}, r"^scale must be > 0")):
+        with pytest.raises(ValueError, match=match):
+            northfinder.synthetic_record(0.3, **kw)
+
+
+def test_gyro_and_accelerometer_swapped_are_named(trial27):
+    gyr, acc, mag, fs = trial27
+    from fusionlab import dcm_filter
+    with pytest.raises(ValueError, match=r"^gyr and acc look swapped"):
+        estimators.run("dcm_ahrs", acc, gyr, fs, mag=mag)
+    with pytest.raises(ValueError, match=r"^gyr and acc_b look swapped"):
+        dcm_filter.run_ahrs(acc, gyr, mag / np.linalg.norm(mag, axis=1, keepdims=True), fs)
+
+
+def test_calibrate_triads_names_its_own_readings():
+    from fusionlab import gfimu
+    ref = calibration.six_positions()
+    readings = np.concatenate([ref @ _M_TRUE.T] * 4, axis=1)
+    assert len(gfimu.calibrate_triads(ref, readings)) == 4
+    with pytest.raises(ValueError, match=r"^readings must be in the unit of reference"):
+        gfimu.calibrate_triads(ref, readings / G)
+
+
+@pytest.mark.parametrize("slip, match", [("gyro_deg", r"^gyro must be in rad/s and acc in m/s².* 3.28e\+03 times"),
+                                         ("acc_g", r"^gyro must be in rad/s and acc in m/s².* 9.8\d* times"),
+                                         ("acc_mg", r"^acc must be in m/s² and gyro in rad/s.* 102 times")])
+def test_hybrid_filter_checks_the_gyro_against_the_accelerometers(slip, match):
+    from fusionlab import gfimu, gfimu_ekf
+    t, om, al = gfimu.trajectory_ch3(T=2.0)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 0.2, 50 * gfimu.UG, runs=2, seed=5)
+    acc, gyro = rec.acc, np.broadcast_to(om, rec.acc.shape[:2] + (3,))
+    args = dict(dt=0.01, d=0.2, noise_density=50 * gfimu.UG, arw=1e-3, x0=0.01 * om[0], P0=1e-6)
+    x, _ = gfimu_ekf.hybrid_batch(acc, gyro, **args)
+    assert np.all(np.isfinite(x))
+    bad = {"gyro_deg": (acc, np.degrees(gyro)), "acc_g": (acc / G, gyro), "acc_mg": (acc * 1000 / G, gyro)}[slip]
+    with pytest.raises(ValueError, match=match):
+        gfimu_ekf.hybrid_batch(*bad, **args)
+    ekf = gfimu_ekf.HybridEKF(0.01, 0.2, 50 * gfimu.UG, 1e-3, 0.01 * om[0], 1e-6)
+    with pytest.raises(ValueError, match=match):
+        ekf.run(bad[0][0], bad[1][0])
+
+
+def test_ins_filters_refuse_a_negative_initial_covariance():
+    from fusionlab import gpsins
+    rng = np.random.default_rng(0)
+    n, fs = 200, 50.0
+    gyr, acc = rng.normal(0, 1e-3, (n, 3)), np.tile([0.0, 0.0, -G], (n, 1)) + rng.normal(0, 1e-2, (n, 3))
+    gps = np.full((n, 6), np.nan)
+    with pytest.raises(ValueError, match=r"^P0 must be a positive semi-definite covariance"):
+        gpsins.run_gps_ins(gyr, acc, gps, fs, np.r_[np.eye(3).ravel(), np.zeros(12)], -np.ones(21))
+    with pytest.raises(ValueError, match=r"^P0 must be a positive definite covariance"):
+        gpsins.run_euler_ukf(gyr, acc, gps, fs, np.zeros(15), np.zeros(15))
+
+
+@pytest.mark.parametrize("name", ["COMPLEMENTARY", None, 1, ""])
+def test_an_unknown_estimator_name_is_named(name):
+    with pytest.raises(ValueError, match=r"^name must name an estimator: unknown estimator"):
+        estimators.options(name)
+
+
+def test_kalman6_lock_checks_its_reading():
+    from fusionlab import freescale
+    k = freescale.Kalman6()
+    k.lock([0.0, 0.0, 1.0])
+    for bad, match in ((None, r"^G must (be an array of|hold finite) numbers"), (1.0, r"^G must have shape \(3,\)"),
+                       ([0.0, 0.0, 9.81], r"^G must be in g")):
+        with pytest.raises(ValueError, match=match):
+            k.lock(bad)
+
+
+def test_sensor_error_models_take_records_of_records():
+    rng = np.random.default_rng(2)
+    M, S, beta = np.eye(3) + 0.01 * rng.normal(size=(3, 3)), np.array([1.01, 0.99, 1.02]), np.array([0.1, 0, -0.1])
+    f = np.tile([0.0, 0.0, 9.8], (2, 5, 1)) + rng.normal(0, 0.1, (2, 5, 3))
+    a_m = sensor_errors.accel_measure(f, M, S, beta)
+    assert np.allclose(sensor_errors.accel_correct(a_m, M, S, beta), f)
+    assert np.allclose(sensor_errors.accel_correct(a_m[0], M, S, beta), f[0])
+    b = np.tile([20.0, 0.0, 40.0], (2, 5, 1))
+    assert np.allclose(sensor_errors.mag_correct(sensor_errors.mag_measure(b, M, S, beta), M, S, beta), b)
+
+
+def test_adc_converters_refuse_volts_for_counts_and_name_what_does_not_broadcast():
+    from fusionlab import sensors
+    assert np.allclose(sensors.adc_to_volts([0, 1023]), [0.0, 3.0])
+    assert np.isfinite(sensors.adc_to_physical(508.25, 1.35, 0.3))           # averaged counts are fractional too
+    for call in (lambda c: sensors.adc_to_volts(c), lambda c: sensors.adc_to_physical(c, 1.35, 0.3),
+                 lambda c: correlation.adc_to_g(c)):
+        with pytest.raises(ValueError, match=r"^counts must be ADC counts .* look like volts"):
+            call(np.array([512, 614, 409]) * 3.0 / 1023)
+    with pytest.raises(ValueError, match=r"^counts, zero_level, sensitivity, null_offset must have matching"):
+        sensors.adc_to_physical([500, 510, 520], [1.35, 1.35], 0.3)
+    with pytest.raises(ValueError, match=r"^value, zero_level, sensitivity must have matching"):
+        sensors.physical_to_adc([0.0, 1.0, 2.0], [1.5, 1.5], 0.3)
+
+
+def test_a_noise_free_constrained_filter_runs_on_its_own_covariance():
+    from fusionlab import gfimu, gfimu_ekf
+    t, om, al = gfimu.trajectory_constant(T=2.0)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 1.0, 500 * gfimu.UG, runs=2, seed=23)
+    x0 = np.concatenate([om[0] * 0.01, np.zeros(3)])
+    P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
+    ekf = gfimu_ekf.ConstrainedEKF(0.01, 1.0, 500 * gfimu.UG, 0.0, x0, P0, t_on=1.0)   # q_dw = 0 is documented
+    assert np.all(np.isfinite(ekf.run(rec.acc[1, :150])[0]))
+
+
+def test_pipeline_names_null_offsets_of_the_wrong_size(counts):
+    for kw, match in (({"acc_null": [0.0, 0.0]}, r"^acc_null must be one number or one per axis, shape \(3,\)"),
+                      ({"gyro_null": []}, r"^gyro_null must be one number or one per axis, shape \(2,\)")):
+        with pytest.raises(ValueError, match=match):
+            correlation.pipeline(counts, 0.02, **kw)
+
+
+def test_flags_and_an_excitation_that_is_not_positive_are_refused():
+    from fusionlab import northfinder, sensors
+    assert sensors.half_bridge_output(0.1, 3.0) == pytest.approx(0.15)
+    for call in (lambda v: sensors.bridge_output(1.1e-12, 0.9e-12, v), lambda v: sensors.half_bridge_output(0.1, v),
+                 lambda v: sensors.accel_from_bridge(0.1, v, 1e-6, 1e-9, 1.0)):
+        for bad in (0.0, -3.0):
+            with pytest.raises(ValueError, match=r"^v_in must be > 0"):
+                call(bad)
+    with pytest.raises(ValueError, match=r"^exact must be True or False; got None"):
+        northfinder.rate_noise_density(1e-4, 0.14, 0.1, 0.2, 20.9, exact=None)
+    with pytest.raises(ValueError, match=r"^printed must be True or False; got 'yes'"):
+        sensor_errors.seed001_table1(np.array([1.0]), np.array([10.0]), printed="yes")
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: kalman.update_step(np.zeros(3), np.eye(2), np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"),
+     r"^x must have shape \(2,\)"),
+    (lambda: kalman.update_step(np.zeros(2), np.eye(2), np.ones(1), [[1.0, 0.0]], "abc", "joseph"), r"^R must "),
+    (lambda: kalman.update_step(np.zeros(2), None, np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"), r"^P is required"),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), [[1.0, 0.0]], np.eye(2), None), r"^A must "),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), None, None), r"^Q is required"),
+    (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), np.eye(2), np.ones(3)), r"^Bu must have shape"),
+])
+def test_the_unchecked_inner_steps_name_the_argument_when_they_fail(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_the_ahrs_step_and_the_rest_detector_name_what_they_cannot_read():
+    from fusionlab import dcm_filter, signals
+    ahrs = dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01)
+    ahrs.step(np.zeros(3), np.array([0.0, 0.0, -G]), np.array([0.5, 0.0, 0.86]))
+    for args, match in (((np.zeros(2), [0.0, 0.0, -G], None), r"^gyr must have shape \(3,\)"),
+                        ((np.zeros(3), [[0.0, 0.0, -G]] * 2, None), r"^acc_b must have shape \(3,\)"),
+                        ((None, [0.0, 0.0, -G], None), r"^gyr must")):
+        with pytest.raises(ValueError, match=match):
+            dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01).step(*args)
+    det = signals.RestDetector(100.0)
+    det.update(np.zeros(3), np.array([0.0, 0.0, G]))
+    with pytest.raises(ValueError, match=r"^gyr must have shape \(3,\); got \(2,\)"):
+        det.update(np.zeros(2), np.array([0.0, 0.0, G]))
+    with pytest.raises(ValueError, match=r"^acc must have shape \(3,\); got \(2,\)"):
+        det.update(np.zeros(3), np.array([0.0, G]))
+
+
+@pytest.mark.parametrize("kw, match", [({"x": None}, r"^x must"), ({"x": np.zeros(14)}, r"^x must have shape \(15,\)"),
+                                       ({"gyr": 0.1}, r"^gyr must have shape \(3,\)"), ({"dt": "0.02"}, r"^dt must"),
+                                       ({"acc": "abc"}, r"^acc must"), ({"g": None}, r"^g must")])
+def test_the_ukf_process_model_names_what_it_cannot_read(kw, match):
+    from fusionlab import gpsins
+    args = dict(x=np.zeros(15), dt=0.02, gyr=np.zeros(3), acc=np.array([0.0, 0.0, -G]), g=G)
+    assert np.allclose(gpsins.euler_ins_fx(**args)[3:6], 0.0)
+    with pytest.raises(ValueError, match=match):
+        gpsins.euler_ins_fx(**{**args, **kw})
+
+
+def test_one_series_check_and_single_numbers_where_one_is_meant():
+    from fusionlab import freescale
+    for call, name in ((lambda a: correlation.derivative(a, 0.02), "a"),
+                       (lambda a: correlation.gyro_increment(a, 0.02), "rate"),
+                       (lambda a: kalman.rls_scalar(a, R=1.0), "y")):
+        assert call(np.array([1.0, 2.0, 4.0])).__len__() == 3
+        with pytest.raises(ValueError, match=rf"^{name} must have shape \(N,\), one value per sample; got \(1, 3\)"):
+            call(np.array([[1.0, 2.0, 4.0]]))
+    with pytest.raises(ValueError, match=r"^P0 must be a positive number or inf, not True/False"):
+        kalman.rls_scalar([1.0, 2.0], R=1.0, P0=True)
+    with pytest.raises(ValueError, match=r"^delta must be a single number"):
+        freescale.geomag_tilt_error(np.eye(3), np.eye(3), [1.0, 1.0])
+    M, S, beta = np.eye(3), np.ones(3), np.zeros(3)
+    for call in (lambda b: sensor_errors.mag_measure(b, M, S, beta), lambda b: sensor_errors.mag_correct(b, M, S, beta)):
+        with pytest.raises(ValueError, match=r"^b(_m)? must have shape \(\.\.\., 3\); got \(\)"):
+            call(45.0)
+
+
+def test_the_tilt_cross_check_points_at_fs_too(trial27):
+    gyr, acc, mag, fs = trial27
+    with pytest.raises(ValueError, match=rf"^gyr must be in rad/s; .* or is fs = {fs:g} Hz not the record's sample"):
+        estimators.run("dcm_ahrs", np.degrees(gyr), acc, fs, mag=mag)
+
+
+
+def test_accel_angle_refuses_one_reading_in_m_s2_or_milli_g(counts):
+    acc = correlation.adc_to_g(counts[:, :3])
+    z, other = acc[:, 2], acc[:, 1]
+    assert np.all(np.isfinite(correlation.accel_angle(z, other)))
+    for zz, oo in ((z * G, other), (z, other * 1000.0), (z * 1000.0, other)):
+        with pytest.raises(ValueError, match=r"^z and other must be in g"):
+            correlation.accel_angle(zz, oo)
+
+
+def test_kappa_weights_must_match_the_vector_pairs():
+    s = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    assert np.isfinite(ecompass.kappa_general(s, s, [0.5, 0.5])).all()
+    for alpha in ([0.5], 0.5):
+        with pytest.raises(ValueError, match=r"^alpha must hold one weight per vector pair, shape \(\.\.\., 2\)"):
+            ecompass.kappa_general(s, s, alpha)
+
+
+def test_inner_steps_take_lists_and_name_a_state_spoilt_by_an_earlier_nan():
+    from fusionlab import dcm_filter, gpsins
+    x, P = kalman.update_step(np.zeros(1), [[4.0]], [1.0], [[1.0]], [[1.0]], "joseph")[:2]
+    assert np.allclose(x, [0.8]) and np.allclose(P, [[0.8]])
+    x, P = kalman.predict_step([0.8], [[0.8]], [[1.0]], [[0.5]], None)
+    assert np.allclose(P, [[1.3]])
+    assert np.allclose(gpsins.euler_ins_fx([0.0] * 15, 0.02, np.zeros(3), np.array([0.0, 0.0, -G]), G)[3:6], 0.0)
+    f = dcm_filter.DcmAhrs(np.eye(3), 1.0, 0.01)
+    mag = np.array([0.5, 0.0, 0.86])
+    f.step(np.zeros(3), np.array([0.0, np.nan, -G]), mag)
+    with pytest.raises(ValueError, match=r"^gyr, acc_b and mag_b of an earlier step held NaN or inf"):
+        for _ in range(5):
+            f.step(np.zeros(3), np.array([0.0, 0.0, -G]), mag)
+
+
+def test_kalman9_and_check_recording_refuse_an_all_zero_magnetometer_sample(trial27):
+    from fusionlab import freescale
+    gyr, acc, mag, fs = trial27
+    g, a, m = np.degrees(gyr[:400]), acc[:400] / G, mag[:400].copy()
+    m[10] = 0.0
+    with pytest.raises(ValueError, match=r"^mag_uT must not hold all-zero readings .* the first at sample 10"):
+        freescale.Kalman9().run(g, a, m)
+
+
+def test_pipeline_refuses_a_null_offset_in_milli_g(counts):
+    assert np.isfinite(correlation.pipeline(counts, 0.02, acc_null=[0.01, -0.02, 0.0])["k_fused_deg"]).all()
+    with pytest.raises(ValueError, match=r"^acc_null must be an offset in g"):
+        correlation.pipeline(counts, 0.02, acc_null=[10.0, -20.0, 0.0])
+
+
+def test_batch_shapes_are_named_or_broadcast():
+    from fusionlab import dcm, gfimu_ekf, inertial
+    with pytest.raises(ValueError, match=r"^err must have shape \(\.\.\., N\); got \(\)"):
+        gfimu_ekf.nees(0.1, np.eye(3))
+    with pytest.raises(ValueError, match=r"^rate, angle0 must have matching"):
+        inertial.integrate_rate(np.zeros(12), 0.01, angle0=np.zeros(3))
+    acc = np.tile([0.0, 0.0, 9.8], (4, 1))
+    mag = np.tile([20.0, 0.0, 40.0], (4, 1))
+    assert dcm.level_and_compass(acc, mag[None]).shape == (1, 4, 3)
+    from fusionlab import gfimu
+    t, om, al = gfimu.trajectory_ch3(T=0.5)
+    rec = gfimu.simulate_gfimu(om, al, 0.01, 0.2, 50 * gfimu.UG, runs=2, seed=5)
+    gyro = np.broadcast_to(om, rec.acc.shape[:2] + (3,))
+    with pytest.raises(ValueError, match=r"^x0 must have shape \(3,\) or \(2, 3\); got \(1, 2, 3\)"):
+        gfimu_ekf.hybrid_batch(rec.acc, gyro, 0.01, 0.2, 50 * gfimu.UG, 1e-3, np.zeros((1, 2, 3)), 1e-6)

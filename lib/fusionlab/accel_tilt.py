@@ -293,7 +293,8 @@ def specific_force(C_bn, acc_nav=None, g=earth.G):
     C_bn : array_like, shape (..., 3, 3)
         Attitude, body→NED (:mod:`fusionlab.rotations`).
     acc_nav : array_like, shape (..., 3), optional
-        Acceleration of the sensor in NED, m/s² (default 0: at rest).
+        Acceleration of the sensor in NED, m/s² (default 0: at rest; any value, so g cannot be told from another
+        motion).
     g : float, default earth.G
         Gravity, m/s².
 

@@ -31,7 +31,7 @@ from . import validate
 __all__ = ["TriadFit", "fit_triad", "apply_triad", "observation_matrix",
            "six_positions", "gyro_bias_from_rest", "quadric_normal_equations", "ellipsoid_design_matrix",
            "EllipsoidFit", "fit_ellipsoid", "apply_ellipsoid", "allan_deviation", "AllanReading", "read_arw",
-           "read_allan", "BIAS_INSTABILITY_FACTOR", "RAW_FIELD_UT"]
+           "read_allan", "BIAS_INSTABILITY_FACTOR", "RAW_FIELD_UT", "TRIAD_SCALE"]
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ def _span_message(a):
             "scale, misalignment and bias need positions that span all three (e.g. ±g on each axis)")
 
 
-def fit_triad(reference, measured):
+def fit_triad(reference, measured, *, names=("reference", "measured")):
     """Least-squares calibration of one triad, seed 004 eqs (3.11)–(3.15).
 
     Parameters
@@ -110,7 +110,12 @@ def fit_triad(reference, measured):
     reference : array_like, shape (N, 3)
         The known input of each position (e.g. gravity's specific force in the body frame, m/s²).
     measured : array_like, shape (N, 3)
-        The triad's (averaged) reading in each position, same unit.
+        The triad's (averaged) reading in each position, same unit: fitted scale factors (singular values of
+        ``M``) outside :data:`TRIAD_SCALE` (0.5-2; a triad's are within a few % of 1) are refused as a unit
+        mismatch (readings in g against a reference in m/s² give 0.10, in milli-g 102).
+    names : tuple of str, default ("reference", "measured")
+        The two arguments' names in the messages, for a caller that passes them on under its own names
+        (:func:`fusionlab.gfimu.calibrate_triads`: ``reference``, ``readings``).
 
     Returns
     -------
@@ -138,15 +143,16 @@ def fit_triad(reference, measured):
            [0.  , 0.98, 0.02],
            [0.  , 0.  , 1.01]]), array([ 0.1 , -0.2 ,  0.05]), 12)
     """
-    a = validate.samples(reference, "reference")
-    z = validate.samples(measured, "measured")
-    validate.same_length(reference=a, measured=z)
+    rn, mn = names
+    a = validate.samples(reference, rn)
+    z = validate.samples(measured, mn)
+    validate.same_length(**{rn: a, mn: z})
     if len(a) < 4:
-        raise ValueError(f"reference, measured: need at least 4 positions for the 12 parameters; got {len(a)}")
+        raise ValueError(f"{rn}, {mn}: need at least 4 positions for the 12 parameters; got {len(a)}")
     O = observation_matrix(a)
     rank = int(np.linalg.matrix_rank(O))
     if rank < 12:
-        raise ValueError(f"reference: the positions leave the calibration rank-deficient (rank {rank} of 12): "
+        raise ValueError(f"{rn}: the positions leave the calibration rank-deficient (rank {rank} of 12): "
                          + _span_message(a))
     y = z.reshape(-1)
     theta, *_ = np.linalg.lstsq(O, y, rcond=None)
@@ -154,8 +160,21 @@ def fit_triad(reference, measured):
     dof = len(y) - 12
     sigma2 = float(resid @ resid) / dof if dof > 0 else np.nan
     cov = sigma2 * np.linalg.inv(O.T @ O)
-    return TriadFit(M=theta[:9].reshape(3, 3), b=theta[9:].copy(), theta=theta, cov=cov,
+    M = theta[:9].reshape(3, 3)
+    sv = np.linalg.svd(M, compute_uv=False)
+    if sv.min() < TRIAD_SCALE[0] or sv.max() > TRIAD_SCALE[1]:
+        k = float(np.exp(np.mean(np.log(np.maximum(sv, 1e-300)))))
+        raise ValueError(f"{mn} must be in the unit of {rn}; the fitted scale factors are {sv.min():.3g} to "
+                         f"{sv.max():.3g} (a triad's are within a few % of 1; overall {k:.3g}: 0.102 is {mn} in g "
+                         f"against {rn} in m/s², 9.81 the reverse, 102 {mn} in milli-g) -- convert one "
+                         f"of them")
+    return TriadFit(M=M, b=theta[9:].copy(), theta=theta, cov=cov,
                     residual_rms=float(np.sqrt(np.mean(resid ** 2))), rank=rank)
+
+
+#: The singular values of a fitted triad's ``M`` must lie in this range (:func:`fit_triad`): real scale factors
+#: and misalignments stay within a few % of the identity; a reference and readings in different units do not.
+TRIAD_SCALE = (0.5, 2.0)
 
 
 def _fit_of(fit, cls, maker):
@@ -172,7 +191,9 @@ def apply_triad(fit, measured):
     fit : TriadFit
         The calibration (:func:`fit_triad`).
     measured : array_like, shape (N, 3)
-        Raw readings ``z``, unit of the fit.
+        Raw readings ``z``, unit of the fit. Not checked against it: a triad is applied to any motion (a
+        gravity-free record reads a tenth of the positions' g, a tumbling one several g), so readings in another
+        unit cannot be told from another motion -- convert them to the fit's unit first.
 
     Returns
     -------
@@ -228,14 +249,16 @@ def gyro_bias_from_rest(gyr):
     Parameters
     ----------
     gyr : array_like, shape (N, 3)
-        Readings while the sensor does not rotate (N >= 2), rad/s.
+        Readings while the sensor does not rotate (N >= 2), rad/s in the course; the mean and its error are
+        taken in whatever unit ``gyr`` is in (°/s at rest cannot be told from rad/s: both are small numbers), so
+        they come out in that unit.
 
     Returns
     -------
     bias : ndarray, shape (3,)
-        Mean reading, rad/s.
+        Mean reading, unit of ``gyr`` (rad/s).
     stderr : ndarray, shape (3,)
-        Its standard error ``std/√N``, rad/s.
+        Its standard error ``std/√N``, unit of ``gyr``.
     """
     w = validate.samples(gyr, "gyr")
     if len(w) < 2:
@@ -349,9 +372,8 @@ def _li_griffiths(D, k=4.0):
 
 
 #: The median field strength (µT) of *raw* magnetometer readings that :func:`fit_ellipsoid` and
-#: :func:`apply_ellipsoid` accept: wide, since hard iron can shift a phone's readings by hundreds of µT; gauss
-#: (0.25-0.65) and nT (25,000-65,000) fall outside, milligauss (250-650) cannot be told from hard iron.
-RAW_FIELD_UT = (2.0, 5000.0)
+#: :func:`apply_ellipsoid` accept (:data:`fusionlab.validate.RAW_FIELD_UT`).
+RAW_FIELD_UT = validate.RAW_FIELD_UT
 
 
 def fit_ellipsoid(mag, field_strength=None, method="constrained"):
@@ -455,7 +477,8 @@ def allan_deviation(rate, fs, taus=None):
     Parameters
     ----------
     rate : array_like, shape (N,)
-        Rate samples (e.g. a gyro axis at rest, rad/s), N >= 3.
+        Rate samples (e.g. a gyro axis at rest, rad/s), N >= 3; any unit (an accelerometer axis in m/s² too):
+        σ comes out in the unit of ``rate``, so a gyro in °/s gives σ in °/s -- nothing to refuse.
     fs : float
         Sample rate, Hz.
     taus : array_like, shape (M,), optional

@@ -107,7 +107,7 @@ def accel_angle(z, other, order="excel"):
     Parameters
     ----------
     z : array_like, shape (N,)
-        Z reading, g.
+        Z reading, g (with ``other``: a median magnitude that looks like m/s² or milli-g is refused).
     other : array_like, shape (N,)
         The Y (or X) reading, g.
     order : {'excel', 'c'}, optional
@@ -128,6 +128,8 @@ def accel_angle(z, other, order="excel"):
     z = validate.array(z, "z")
     other = validate.array(other, "other")
     validate.broadcast(z=z, other=other)
+    pair = np.stack(np.broadcast_arrays(other, z), axis=-1).reshape(-1, 2)
+    validate.accel_g(np.concatenate([pair, np.zeros((len(pair), 1))], axis=1), "z and other", per_sample=len(pair) > 1)
     if order == "excel":
         return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
     if order == "c":
@@ -161,9 +163,7 @@ def moving_average(x, n):
     >>> moving_average([1.0, 2.0, 3.0, 4.0, 5.0], 2)
     array([1. , 1.5, 2.5, 3.5, 4.5])
     """
-    x = validate.array(x, "x")
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    x = validate.series(x, "x")
     n = validate.count(n, "n", 1)
     c = np.concatenate([[0.0], np.cumsum(x)])
     m = np.arange(1, len(x) + 1)
@@ -191,7 +191,7 @@ def derivative(a, dt):
     >>> derivative([0.0, 1.0, 3.0], 0.5)
     array([0., 2., 4.])
     """
-    a = validate.array(a, "a")
+    a = validate.series(a, "a")
     dt = validate.time_step(dt, "dt")
     return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
 
@@ -209,7 +209,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     Parameters
     ----------
     rate : array_like, shape (N,)
-        Gyro rate, °/s.
+        Gyro rate, °/s (rad/s cannot be told from °/s by the values of a rate).
     dt : float
         Sample interval, s.
     rule : {'rectangular', 'printed', 'trapezoid'}, optional
@@ -228,7 +228,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     >>> gyro_increment(rate, 0.1), gyro_increment(rate, 0.1, rule="printed")
     (array([1., 2., 3.]), array([0., 1., 1.]))
     """
-    r = validate.array(rate, "rate")
+    r = validate.series(rate, "rate")
     dt = validate.time_step(dt, "dt")
     if rule == "printed":
         return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)
@@ -247,7 +247,7 @@ def cumulative_integral(increment, angle0=0.0):
     Parameters
     ----------
     increment : array_like, shape (N,)
-        Per-sample angle increments, deg.
+        Per-sample angle increments, deg (radians cannot be told from degrees by the values).
     angle0 : float, optional
         Angle before the first sample, deg.
 
@@ -269,7 +269,7 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
     Parameters
     ----------
     gyro_rate : array_like, shape (N,)
-        Gyro rate, °/s.
+        Gyro rate, °/s (rad/s cannot be told from °/s by the values of a rate).
     accel_term : array_like, shape (N,)
         The accelerometer term: its angle (deg, as printed) or that angle's rate (°/s, as meant).
     eps : float, optional
@@ -303,7 +303,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     accel_deg : array_like, shape (N,)
         Accelerometer angle, deg.
     increment : array_like, shape (N,)
-        Gyro angle increment per sample, deg.
+        Gyro angle increment per sample, deg (radians cannot be told from degrees by the values).
     weight : array_like, shape (N,)
         Accelerometer weight ``w``, in [0, 1].
     f0 : float, optional
@@ -388,7 +388,7 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
     accel_weight : {'ratio', 'one_minus_ratio'}, optional
         ``'ratio'`` (eq 5.17) or ``'one_minus_ratio'`` (lab step j)).
     acc_null : float or array_like, shape (3,), optional
-        Accelerometer NullOffset of eqs 5.1-5.3, g.
+        Accelerometer NullOffset of eqs 5.1-5.3, g (under 1 in size: milli-g or m/s² are refused).
     gyro_null : float or array_like, shape (2,), optional
         Gyro NullOffset of eqs 5.11-5.12, °/s.
     eps : float, optional
@@ -408,6 +408,12 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
         raise ValueError("counts must hold at least one sample (row); got 0")
     acc_null = validate.array(acc_null, "acc_null")
     gyro_null = validate.array(gyro_null, "gyro_null")
+    for null, name, n in ((acc_null, "acc_null", 3), (gyro_null, "gyro_null", 2)):
+        if null.shape not in ((), (n,)):
+            raise ValueError(f"{name} must be one number or one per axis, shape ({n},); got {null.shape}")
+    if np.any(np.abs(acc_null) >= 1.0):
+        raise ValueError(f"acc_null must be an offset in g, under 1 in size (a null offset is a fraction of g); got "
+                         f"{float(np.max(np.abs(acc_null))):.4g} -- milli-g or m/s²?")
     if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
         raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
                          f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
@@ -515,9 +521,10 @@ class ComplementaryFilter:
         Parameters
         ----------
         rate : array_like, shape (N,)
-            Gyro rates, angle unit / s.
+            Gyro rates, angle unit / s (the unit of ``accel_angle`` per second).
         accel_angle : array_like, shape (N,)
-            Accelerometer angles, angle unit.
+            Accelerometer angles, angle unit (any, the same as ``rate``'s: the filter cannot tell which one is in
+            another).
 
         Returns
         -------
@@ -600,9 +607,10 @@ class TiltKalman2:
         Parameters
         ----------
         rate : array_like, shape (N,)
-            Gyro rates, angle unit / s.
+            Gyro rates, angle unit / s (the unit of ``accel_angle`` per second).
         accel_angle : array_like, shape (N,)
-            Accelerometer angles, angle unit.
+            Accelerometer angles, angle unit (any, the same as ``rate``'s: the filter cannot tell which one is in
+            another).
 
         Returns
         -------

@@ -47,13 +47,18 @@ import numpy as np
 
 from . import rotations, validate
 
-__all__ = ["G", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition", "ahrs_process_noise",
+__all__ = ["G", "INCREMENT_TOL", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition", "ahrs_process_noise",
            "accel_to_seed004", "accel_measurement_matrix", "mag_reference", "mag_measurement_matrix",
            "orthogonality_pseudo_measurement", "orthogonality_covariance", "rows_to_dcm", "orthonormalize",
            "level_and_compass", "inclination_from", "trusted_mask"]
 
 #: The constant gravity of the thesis' AHRS and GPS/INS models, m/s² (standard gravity; the thesis gives no value).
 G = 9.80665
+
+#: How far a gyro increment ``A``/``Ã`` may be from a rotation (max|AAᵀ - I| and |det A - 1|): the second-order
+#: expansion and the bias term of eq 6.10 leave it a few 1e-4 off at the course's steps; a zero matrix, a
+#: transposed product or a typo is far beyond.
+INCREMENT_TOL = 0.05
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -114,7 +119,7 @@ def A_with_gyro_error(A, bias, dt, noise=None):
     ndarray, shape (3, 3)
         ``Ã``.
     """
-    A = validate.array(A, "A", shape=(3, 3))
+    A = validate.rotation(A, "A", tol=INCREMENT_TOL)
     b = validate.vectors(bias, "bias")
     dt = validate.time_step(dt, "dt")
     e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt      # (004 eq 6.9)
@@ -144,8 +149,8 @@ def row_propagate(c, A_tilde, bias, dt):
     ndarray, shape (..., 3)
         The propagated row(s).
     """
-    c = validate.vectors(c, "c")
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3))
+    c = validate.unit_vectors(c, "c")
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=INCREMENT_TOL)
     b = validate.vectors(bias, "bias")
     dt = validate.time_step(dt, "dt")
     return c @ A_tilde - dt * np.cross(c, b)                                          # (004 eq 6.11)
@@ -175,7 +180,7 @@ def ahrs_transition(c1, c3, A_tilde, dt):
     """
     c1 = validate.array(c1, "c1", shape=(3,)).reshape(3)
     c3 = validate.array(c3, "c3", shape=(3,)).reshape(3)
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=INCREMENT_TOL).reshape(3, 3)
     dt = validate.time_step(dt, "dt")
     return _transition(c1, c3, A_tilde, dt)
 
@@ -474,6 +479,7 @@ def level_and_compass(acc_b, mag_b):
     a = validate.vectors(acc_b, "acc_b")
     m = validate.vectors(mag_b, "mag_b")
     validate.broadcast({"acc_b": 1, "mag_b": 1}, acc_b=a, mag_b=m)
+    a, m = np.broadcast_arrays(a, m)
     n = np.linalg.norm(a, axis=-1)
     if np.any(n == 0):
         raise ValueError("acc_b must not be zero-length")
@@ -540,9 +546,7 @@ def trusted_mask(deviation, tol, hold):
     >>> trusted_mask(np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]), tol=0.5, hold=2)
     array([False,  True, False, False,  True,  True])
     """
-    d = validate.array(deviation, "deviation")
-    if d.ndim != 1:
-        raise ValueError(f"deviation must have shape (N,); got {d.shape}")
+    d = validate.series(deviation, "deviation")
     tol = validate.positive(tol, "tol")
     hold = validate.count(hold, "hold")
     if hold < 1:

@@ -343,6 +343,18 @@ class DcmAhrs:
         mag_b : array_like, shape (3,), or None
             Normalised magnetometer, or None for none.
         """
+        try:
+            self._step(gyr, acc_b, mag_b)
+        except validate.INNER_ERRORS:
+            for v, name in ((gyr, "gyr"), (acc_b, "acc_b"), (mag_b, "mag_b")):   # name the argument that does not fit
+                if v is not None or name != "mag_b":
+                    validate.exact_shape(v, name, (3,))
+            if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
+                raise ValueError("gyr, acc_b and mag_b of an earlier step held NaN or inf: the filter's state is no "
+                                 "longer finite (step checks nothing on the way in; run_ahrs checks a recording)")
+            raise
+
+    def _step(self, gyr, acc_b, mag_b):
         bias_at_rest = None
         if self.tuning.bias_sigma_rest is not None:
             if self.rest is None:

@@ -276,7 +276,8 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
     qvbqd : float or array_like, shape (...)
         Magnetometer noise, µT² (:func:`mag_noise`).
     B : float, optional
-        Geomagnetic field strength, µT.
+        Geomagnetic field strength, in the unit ``qvbqd`` is the square of (µT; 1 for normalised readings): not
+        checked against the Earth's field, since only ``qvbqd / B²`` counts.
     tol : float, optional
         ``QvGQa`` and ``QvBQd/B²`` below this are treated as exactly 0.
 
@@ -377,6 +378,9 @@ def _vector_pairs(s, r, alpha):
     if alpha is None:
         return s, r, np.full(s.shape[:-1], 1.0 / s.shape[-2])
     a = validate.array(alpha, "alpha")
+    K = s.shape[-2]
+    if a.ndim == 0 or a.shape[-1] != K:
+        raise ValueError(f"alpha must hold one weight per vector pair, shape (..., {K}); got {a.shape}")
     validate.broadcast({"s": 1}, s=s, alpha=a)
     return s, r, a * np.ones(s.shape[:-1])
 
@@ -413,16 +417,6 @@ def kappa_davenport(s, r, alpha=None):
     return out
 
 
-def _unit(v, name, tol=1e-6):
-    """``v`` as unit 3-vectors (a direction): a zero or unnormalised vector is named."""
-    v = validate.vectors(v, name)
-    n = nonzero_norm(v, name)
-    if n.size and float(np.max(np.abs(n - 1.0))) > tol:
-        raise ValueError(f"{name} must be unit vectors (a direction); got a norm of "
-                         f"{float(n.flat[np.argmax(np.abs(n - 1.0))]):.6g} -- divide by its norm")
-    return v
-
-
 def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     """κ for gravity + geomagnetic field in one coordinate system (002 eqs 53, 58, 63, **corrected**).
 
@@ -449,8 +443,8 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     ndarray, shape (..., 4, 4)
         κ.
     """
-    s_g = _unit(s_g, "s_g")
-    s_m = _unit(s_m, "s_m")
+    s_g = validate.unit_vectors(s_g, "s_g", tol=1e-6)
+    s_m = validate.unit_vectors(s_m, "s_m", tol=1e-6)
     d = validate.angles_rad(delta, "delta")
     ag = validate.array(alpha_g, "alpha_g")
     am = validate.array(alpha_m, "alpha_m")
@@ -811,7 +805,8 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     Parameters
     ----------
     omega_dps : array_like, shape (N, 3)
-        True sensor-frame angular rate of each sample, °/s.
+        True sensor-frame angular rate of each sample, °/s (a true rate has no natural scale: rad/s cannot be
+        told from °/s here).
     q0 : array_like, shape (4,), optional
         Initial orientation (note's convention).
     frame : {'NED', 'Android', 'Win8'}, optional

@@ -92,8 +92,9 @@ def options(name):
     >>> options("complementary")
     {'tau': 1.0, 'acc_sigma': 2.0, 'acc_hold': 0.5}
     """
-    if name not in _REGISTRY:
-        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}")
+    if not isinstance(name, str) or name not in _REGISTRY:
+        raise ValueError(f"name must name an estimator: unknown estimator {name!r}; available: "
+                         f"{', '.join(sorted(_REGISTRY))}")
     return dict(_REGISTRY[name]["options"])
 
 
@@ -138,8 +139,8 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
         An option the estimator does not have (:func:`options` lists them); it is also a ValueError.
     """
     if not isinstance(name, str) or name not in _REGISTRY:
-        raise ValueError(f"unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))} (the name "
-                         "argument picks one)")
+        raise ValueError(f"name must name an estimator: unknown estimator {name!r}; available: "
+                         f"{', '.join(sorted(_REGISTRY))}")
     if frame not in FRAMES:
         raise ValueError(f"frame must be 'ENU' or 'NED'; got {frame!r}")
     entry = _REGISTRY[name]

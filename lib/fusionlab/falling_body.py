@@ -388,7 +388,7 @@ def mass_spring_damper_ss(m, b, k, input="force"):
     m : float
         Mass, kg.
     b : float
-        Damping, N s/m.
+        Damping, N s/m, >= 0 (0: undamped).
     k : float
         Spring stiffness, N/m.
     input : {'force', 'base_accel'}, optional

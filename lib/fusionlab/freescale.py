@@ -213,7 +213,7 @@ def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
     ndarray, shape (..., 4)
         Quaternion; its vector part is ``z[3:6]``.
     """
-    R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(delta, "delta"))
+    R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(validate.scalar(delta, "delta"), "delta"))
     _, r_m = ecompass.reference_vectors(delta, frame)
     return qrot(R6 @ r_m, Rp @ r_m)                                        # (002 eqs 84-88)
 
@@ -715,6 +715,7 @@ class Kalman6:
         G : array_like, shape (3,)
             Accelerometer reading, g.
         """
+        G = validate.accel_g(validate.exact_shape(G, "G", (3,)), "G")
         self.q = qrot(self.r_g, self._s_g(G))
         self.b_dps = np.zeros(3)
         self.x_err = np.zeros(6)
@@ -834,6 +835,10 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_
         mag = validate.array(mag, n_mag, shape=(None, 3))
         if mag.ndim != 2:
             raise ValueError(f"{n_mag} must have shape (N, 3); got {mag.shape}")
+        zero = np.flatnonzero(~np.any(mag, axis=1))
+        if zero.size:
+            raise ValueError(f"{n_mag} must not hold all-zero readings (no field has no direction); got {zero.size}, "
+                             f"the first at sample {zero[0]} -- a magnetometer not yet ready, or not connected?")
     validate.same_length(**{n_gyr: gyr, n_acc: acc, n_mag: mag})
     check_units(acc, mag, (n_acc, n_mag), field_range)
     return gyr, acc, mag

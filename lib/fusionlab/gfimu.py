@@ -116,7 +116,8 @@ def lever_arm(a_o, omega, alpha, p):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Specific force at the body origin (gravity and linear acceleration), m/s².
+        Specific force at the body origin (gravity and linear acceleration), m/s²; any value (a gravity-free
+        simulation has none), so a vector in g cannot be told from another motion.
     omega : array_like, shape (..., 3)
         Angular rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -219,7 +220,8 @@ def aiv(acc, d):
     Parameters
     ----------
     acc : array_like, shape (..., 12)
-        Specific forces, m/s² (or velocity increments, m/s, giving the AIV times Δt).
+        Specific forces, m/s² (or velocity increments, m/s, giving the AIV times Δt): any scale, so a unit
+        slip (g, milli-g) cannot be told from another motion and is not checked.
     d : float
         Separation distance, m.
 
@@ -321,8 +323,8 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
     """
     N = validate.scalar(noise_density, "noise_density", nonnegative=True)
     dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
-    if m_sign not in (-1, 0, 1):
-        raise ValueError(f"m_sign must be -1 (corrected), 0 (no correlation) or +1 (the sign inferred from Table 5.3); got {m_sign!r}")
+    m_sign = validate.choice(m_sign, "m_sign (-1 corrected, 0 no correlation, +1 the sign inferred from Table 5.3)",
+                             (-1, 0, 1))
     Ra = N ** 2 * dt                                             # (004 eq 3.24)
     C = aiv_covariance()
     s = dt ** 2 * Ra / d ** 2
@@ -526,7 +528,7 @@ def calibrate_triads(reference, readings):
     ref = validate.samples(reference, "reference")
     z = validate.samples(readings, "readings", n=12)
     validate.same_length(reference=ref, readings=z)
-    return [calibration.fit_triad(ref, z[:, 3 * t:3 * t + 3]) for t in range(4)]
+    return [calibration.fit_triad(ref, z[:, 3 * t:3 * t + 3], names=("reference", "readings")) for t in range(4)]
 
 
 def apply_calibration(fits, acc):
@@ -537,7 +539,7 @@ def apply_calibration(fits, acc):
     fits : sequence of fusionlab.calibration.TriadFit
         Four fits, for triads A, B, C, D (:func:`calibrate_triads`).
     acc : array_like, shape (N, 12)
-        Raw readings, m/s².
+        Raw readings, m/s², in the unit of the fits (not checked: a triad is applied to any motion).
 
     Returns
     -------

@@ -33,7 +33,8 @@ import numpy as np
 from . import gfimu, validate
 
 __all__ = ["ThreeStateEKF", "HybridEKF", "three_state_batch", "hybrid_batch", "nees", "constraints",
-           "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo"]
+           "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo",
+           "GYRO_AIV_RATIO", "GYRO_AIV_MIN"]
 
 
 
@@ -46,6 +47,30 @@ def _inputs(acc, dt, d):
     """Δt²·AIV: the input u = Δt² α̃ (3.19-3.21) and the measurement y = Δt² q̃ (3.28) of each sample."""
     v = acc @ gfimu.aiv_map_cached().T * (dt ** 2 / d)                               # (004 eqs 3.8-3.10, times Δt²)
     return v[..., :3], v[..., 3:]
+
+
+#: :func:`hybrid_batch` and :meth:`HybridEKF.run` compare the gyro with the accelerometers: the median of ``|ω|²``
+#: from the gyro over that of ``ω_x² + ω_y² + ω_z²`` from the AIV (eqs 3.8-3.10) is near 1 when both are in their
+#: units, 3283 for a gyro in °/s, 9.8 for readings in g, 0.01 for milli-g. A ratio outside this range is refused
+#: once either median reaches ``GYRO_AIV_MIN`` (rad/s)² (at rest both are noise).
+GYRO_AIV_RATIO, GYRO_AIV_MIN = (0.25, 4.0), 1.0
+
+
+def _gyro_against_aiv(acc, gyro, d):
+    """Refuse a gyro (rad/s) and twelve accelerometers (m/s²) whose rates disagree by a unit's factor."""
+    w2_acc = float(np.median(np.sum((acc @ gfimu.aiv_map_cached().T / d)[..., 6:9], axis=-1)))
+    w2_gyro = float(np.median(np.sum(gyro ** 2, axis=-1)))
+    if max(w2_acc, w2_gyro) < GYRO_AIV_MIN:
+        return
+    ratio = w2_gyro / max(w2_acc, 1e-300)
+    if ratio > GYRO_AIV_RATIO[1]:
+        raise ValueError(f"gyro must be in rad/s and acc in m/s²: |ω|² from gyro is {ratio:.3g} times ω² from the "
+                         f"accelerometers (median {w2_gyro:.3g} against {w2_acc:.3g} rad²/s²) -- 3283 is gyro in "
+                         "°/s (use np.radians), 9.8 is acc in g (multiply by 9.80665)")
+    if ratio < GYRO_AIV_RATIO[0]:
+        raise ValueError(f"acc must be in m/s² and gyro in rad/s: ω² from the accelerometers is {1 / ratio:.3g} "
+                         f"times |ω|² from gyro (median {w2_acc:.3g} against {w2_gyro:.3g} rad²/s²) -- 102 is acc "
+                         "in milli-g (multiply by 0.00980665)")
 
 
 class ThreeStateEKF:
@@ -135,7 +160,9 @@ class ThreeStateEKF:
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). The unit is
+            not checked: the course's records are simulated without gravity, so readings in g or milli-g cannot be
+            told from a slower or faster motion (the hybrid filter checks them against its gyro).
         gyro : array_like, shape (N, 3), optional
             Gyro rates, rad/s (used by :class:`HybridEKF` only).
 
@@ -217,7 +244,9 @@ class HybridEKF(ThreeStateEKF):
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). Checked against
+            ``gyro``: the rates the accelerometers give (eqs 3.8-3.10) must match the gyro's within a factor 4
+            (:data:`GYRO_AIV_RATIO`), which readings in g or milli-g, or a gyro in °/s, do not.
         gyro : array_like, shape (N, 3)
             Gyro rates, rad/s.
 
@@ -230,6 +259,7 @@ class HybridEKF(ThreeStateEKF):
         """
         gyro = validate.samples(gyro, "gyro")
         validate.same_length(acc=acc, gyro=gyro)
+        _gyro_against_aiv(validate.samples(acc, "acc", 12), gyro, self.d)
         return super().run(acc, gyro)
 
 
@@ -271,7 +301,7 @@ def _batch_core(u, y, Q, R, M, x0, P0, gyro_dtheta=None, Rg=None):
 
 def _batch_x0(x0, runs):
     x0 = validate.array(x0, "x0", shape=(3,))
-    if x0.ndim == 1 or x0.shape[0] in (1, runs):
+    if x0.ndim == 1 or x0.ndim == 2 and x0.shape[0] in (1, runs):
         return x0
     raise ValueError(f"x0 must have shape (3,) or ({runs}, 3); got {x0.shape}")
 
@@ -310,7 +340,8 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². The unit is not checked: the course's records are simulated without gravity, so readings in g
+        or milli-g cannot be told from a slower or faster motion (the hybrid filter checks them against its gyro).
     dt : float
         Sample interval, s.
     d : float
@@ -346,7 +377,8 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². Checked against ``gyro`` as in
+        :meth:`HybridEKF.run` (:data:`GYRO_AIV_RATIO`).
     gyro : array_like, shape (R, N, 3)
         Gyro rates, rad/s.
     dt : float
@@ -378,6 +410,7 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
                          f"{gyro.shape}")
     dt = validate.time_step(dt, "dt")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
+    _gyro_against_aiv(acc, gyro, validate.positive(d, "d"))
     u, y = _inputs(acc, dt, d)
     Rg = dt ** 2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
     P0 = _initial_covariance(P0, 3)
@@ -401,7 +434,7 @@ def nees(err, P):
     ndarray, shape (...)
         The NEES (dimensionless).
     """
-    err, P = validate.array(err, "err"), validate.array(P, "P")
+    err, P = validate.array(err, "err", shape=(None,)), validate.array(P, "P")
     if P.shape[-2:] != (err.shape[-1], err.shape[-1]):
         raise ValueError(f"P must have shape (..., {err.shape[-1]}, {err.shape[-1]}) to match err; got {P.shape}")
     validate.covariances(P, "P", err.shape[-1])
@@ -630,7 +663,8 @@ class ConstrainedEKF:
         self.P = self.P - K @ H @ self.P
         self.P = 0.5 * (self.P + self.P.T)
         if self.t_on is not None and self.k * self.dt >= self.t_on - 1e-9:
-            self.x, self.P, _ = sckf_project(self.x, self.P, **self.sckf)
+            xb, Pb, _ = _sckf(self.x[None].copy(), self.P[None].copy(), **self.sckf)   # its own P: checked at the door
+            self.x, self.P = xb[0], Pb[0]
         self.k += 1
         return self.x.copy()
 
@@ -640,7 +674,9 @@ class ConstrainedEKF:
         Parameters
         ----------
         acc : array_like, shape (N, 12)
-            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``).
+            The twelve accelerometer readings of each sample, m/s² (``[A_x, A_y, A_z, B_x, …, D_z]``). The unit is
+            not checked: the course's records are simulated without gravity, so readings in g or milli-g cannot be
+            told from a slower or faster motion (the hybrid filter checks them against its gyro).
 
         Returns
         -------
@@ -671,7 +707,8 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     Parameters
     ----------
     acc : array_like, shape (R, N, 12)
-        Readings, m/s².
+        Readings, m/s². The unit is not checked: the course's records are simulated without gravity, so readings in g
+        or milli-g cannot be told from a slower or faster motion (the hybrid filter checks them against its gyro).
     dt : float
         Sample interval, s.
     d : float
@@ -801,10 +838,25 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
         q_sweep}, plus 'n_runs', 'seed', 't'.
     """
     n_runs = validate.count(n_runs, "n_runs", minimum=1)
+    seed = validate.count(seed, "seed")
+    if isinstance(grades, str) or not len(grades):
+        raise ValueError(f"grades must be a non-empty sequence of grade names among {tuple(gfimu.TABLE_5_2)}; "
+                         f"got {grades!r}")
     for gr in grades:
         if gr not in gfimu.TABLE_5_2:
             raise ValueError(f"grades must be among {tuple(gfimu.TABLE_5_2)}; got {gr!r}")
+    q_dw = validate.scalar(q_dw, "q_dw", nonnegative=True)
+    m_sign = validate.choice(m_sign, "m_sign", (1, -1, 0))
+    q_sweep = validate.nonnegative(q_sweep, "q_sweep")
+    if q_sweep.ndim != 1:
+        raise ValueError(f"q_sweep must be a sequence of q_dw values, shape (K,); got {q_sweep.shape}")
     t, om, al = gfimu.trajectory_constant()
+    if t_on is not None:
+        t_on = validate.scalar(t_on, "t_on (s; None for never)", nonnegative=True)
+    window = validate.exact_shape(window, "window (start, end) in s", (2,))
+    if not (t[0] <= window[0] < window[1] and window[0] <= t[-1]):
+        raise ValueError(f"window must be (start, end) in s with {t[0]:g} <= start < end and start within the "
+                         f"record (up to {t[-1]:g} s); got {tuple(float(w) for w in window)}")
     dt, d = 0.01, 1.0
     dens = np.repeat([gfimu.TABLE_5_2[gr] * gfimu.UG for gr in grades], n_runs)
     white = np.random.default_rng(seed).standard_normal((len(dens), len(t), 12))
@@ -815,7 +867,7 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     signs = np.concatenate([np.full(R, m_sign), np.full(R, other), np.full(R, 0)])
     x3, _ = three_state_batch(np.concatenate([acc] * 3), dt, d, np.tile(dens, 3), truth[0], 1e-8, m_sign=signs)
     P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
-    qs = [float(q_dw)] + [float(q) for q in q_sweep]
+    qs = [q_dw] + [float(q) for q in q_sweep]
     x6, _, _ = constrained_batch(np.concatenate([acc] * len(qs)), dt, d, np.tile(dens, len(qs)),
                                  np.repeat(qs, R), np.concatenate([truth[0], np.zeros(3)]), P0,
                                  alpha_f=alpha_f, s_th=s_th, t_on=t_on, progress=progress)

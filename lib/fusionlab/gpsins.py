@@ -79,8 +79,8 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
         The predicted state.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    acc = validate.accel_ms2(validate.exact_shape(acc, "acc", (3,)), "acc", per_sample=False)
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=dcm.INCREMENT_TOL).reshape(3, 3)
     dt = validate.time_step(dt, "dt")
     return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
 
@@ -109,8 +109,8 @@ def ins_transition(x, acc, A_tilde, dt):
         ``F(x̂)``.
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
-    acc = validate.array(acc, "acc", shape=(3,)).reshape(3)
-    A_tilde = validate.array(A_tilde, "A_tilde", shape=(3, 3)).reshape(3, 3)
+    acc = validate.accel_ms2(validate.exact_shape(acc, "acc", (3,)), "acc", per_sample=False)
+    A_tilde = validate.rotation(A_tilde, "A_tilde", tol=dcm.INCREMENT_TOL).reshape(3, 3)
     dt = validate.time_step(dt, "dt")
     return _ins_F(x, acc, A_tilde, dt)
 
@@ -306,6 +306,7 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     P = np.diag(P) if P.shape == (21,) else P.copy()
     if P.shape != (21, 21):
         raise ValueError(f"P0 must have shape (21, 21) or (21,); got {P.shape}")
+    P = validate.covariance(P, "P0", 21)
     still = np.zeros(n, bool) if static is None else validate.array(static, "static", dtype=bool).reshape(-1)
     if still.shape != (n,):
         raise ValueError(f"static must be one flag per sample, shape ({n},); got {still.shape}")
@@ -384,7 +385,8 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
     Derived in docs/derivations.md §5:
     ``r ← r + v Δt``, ``v ← v + C(Ψ)(ã - b_a)Δt + g_n Δt``, ``Ψ ← Ψ + E(Ψ)(ω̃ - b_g)Δt`` (eq 6.1), biases constant.
     State ``[r, v, Ψ = (φ, θ, ψ), b_a, b_g]`` (eq 7.22). Written with scalars: the UKF calls it 2n + 1 times a step,
-    so it checks nothing (as :func:`fusionlab.kalman.update_step`); :func:`run_euler_ukf` checks its inputs once.
+    so it checks nothing on the way in (as :func:`fusionlab.kalman.update_step`; a NaN or a unit slip goes through);
+    :func:`run_euler_ukf` checks its inputs once. When it fails, it checks its arguments to name the one at fault.
 
     Parameters
     ----------
@@ -404,6 +406,20 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
     ndarray, shape (15,)
         The predicted state.
     """
+    try:
+        return _euler_ins_fx(x, dt, gyr, acc, g)
+    except validate.INNER_ERRORS:
+        validate.exact_shape(x, "x", (15,))                      # name the argument that does not fit
+        validate.time_step(dt, "dt")
+        validate.exact_shape(gyr, "gyr", (3,))
+        validate.exact_shape(acc, "acc", (3,))
+        validate.positive(g, "g")
+        if isinstance(x, np.ndarray):
+            raise
+        return _euler_ins_fx(np.asarray(x, float), dt, gyr, acc, g)      # a list for x
+
+
+def _euler_ins_fx(x, dt, gyr, acc, g):
     r1, r2, r3, v1, v2, v3, phi, th, psi, ba1, ba2, ba3, bg1, bg2, bg3 = x.tolist()
     sf, cf, st, ct, sp, cp = _m.sin(phi), _m.cos(phi), _m.sin(th), _m.cos(th), _m.sin(psi), _m.cos(psi)
     ax, ay, az = acc[0] - ba1, acc[1] - ba2, acc[2] - ba3
@@ -508,6 +524,7 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
     P0 = np.diag(P0) if P0.shape == (15,) else P0
     if P0.shape != (15, 15):
         raise ValueError(f"P0 must have shape (15, 15) or (15,); got {P0.shape}")
+    P0 = validate.covariance(P0, "P0", 15, definite=True)              # its square root spreads the sigma points
     if engine not in ("filterpy", "plain"):
         raise ValueError(f"engine must be 'filterpy' or 'plain'; got {engine!r}")
     dt = 1.0 / fs

@@ -154,7 +154,8 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     Parameters
     ----------
     a_inertial : array_like, shape (..., 3)
-        Acceleration in the inertial frame, expressed in rotating-frame axes, m/s².
+        Acceleration in the inertial frame, expressed in rotating-frame axes, m/s² (any value: g cannot be told
+        from another motion).
     omega : array_like, shape (..., 3)
         Rotation rate of the frame, rad/s (any size is accepted: a rate in °/s cannot be told from a fast
         turntable, so convert with np.radians).
@@ -192,7 +193,8 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Acceleration (or specific force) at the body origin, m/s².
+        Acceleration (or specific force) at the body origin, m/s² (any value: g cannot be told from another
+        motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s (any size is accepted: a rate in °/s cannot be told from a fast turn, so convert
         with np.radians).
@@ -254,7 +256,7 @@ def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     b = validate.array(bias, "bias")
     validate.broadcast(rate_true=w, bias=b)
     sd = validate.scalar(noise_std, "noise_std", nonnegative=True)
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = validate.generator(rng, "rng")
     return w + b + sd * rng.standard_normal(w.shape)
 
 
@@ -292,7 +294,7 @@ def integrate_rate(rate, dt, angle0=0.0):
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
     dt = validate.time_step(dt, "dt")
     a0 = validate.array(angle0, "angle0")
-    validate.broadcast(rate=w[0], angle0=a0)                  # one start angle per axis of a sample
+    validate.broadcast(rate=w, angle0=a0)                     # one start angle per axis of a sample
     steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
     return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
 

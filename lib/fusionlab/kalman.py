@@ -191,11 +191,8 @@ def gaussian_product(mu1, var1, mu2, var2):
     (11.6, 0.8)
     """
     mu1, mu2 = validate.array(mu1, "mu1"), validate.array(mu2, "mu2")
-    var1, var2 = validate.array(var1, "var1"), validate.array(var2, "var2")
+    var1, var2 = validate.positive_array(var1, "var1"), validate.positive_array(var2, "var2")
     validate.broadcast(mu1=mu1, var1=var1, mu2=mu2, var2=var2)
-    for v, name in ((var1, "var1"), (var2, "var2")):
-        if np.any(v <= 0):
-            raise ValueError(f"{name} must be > 0 (a variance); got min {float(np.min(v))!r}")
     mu = (var2 * mu1 + var1 * mu2) / (var1 + var2)                   # (000 §4.2, fig 25)
     var = var1 * var2 / (var1 + var2)
     return (float(mu), float(var)) if np.ndim(mu) == 0 else (mu, var)
@@ -236,11 +233,11 @@ def rls_scalar(y, R, x0=0.0, P0=np.inf):
     >>> x_hat, np.round(P, 3)
     (array([1., 2., 2.]), array([1.   , 0.5  , 0.333]))
     """
-    y = validate.array(y, "y")
-    if y.ndim != 1:
-        raise ValueError(f"y must have shape (N,); got {y.shape}")
+    y = validate.series(y, "y")
     R = validate.scalar(R, "R", True)
     x = validate.scalar(x0, "x0")
+    if isinstance(P0, (bool, np.bool_)):
+        raise ValueError(f"P0 must be a positive number or inf, not True/False; got {P0!r}")
     try:
         P = float(P0)
     except (TypeError, ValueError):
@@ -558,14 +555,20 @@ def update_step(x, P, z, H, R, form):
     >>> np.round(x, 3), np.round(P, 3)
     (array([0.8]), array([[0.8]]))
     """
-    K = _gain(P, H, R)                                               # (000 eq 4.31)
-    x = x + K @ (z - H @ x)                                          # (000 eq 4.8)
-    if form == "joseph":
-        P = _joseph(P, K, H, R)                                      # (000 eq 4.17)
-    elif form == "short":
-        P = (np.eye(P.shape[0]) - K @ H) @ P                         # (000 §4.3.1 alternate form)
-    else:
-        P = _information(P, H, R)                                    # (000 §4.3.1 alternate form)
+    try:
+        K = _gain(P, H, R)                                           # (000 eq 4.31)
+        x = x + K @ (z - H @ x)                                      # (000 eq 4.8)
+        if form == "joseph":
+            P = _joseph(P, K, H, R)                                  # (000 eq 4.17)
+        elif form == "short":
+            P = (np.eye(P.shape[0]) - K @ H) @ P                     # (000 §4.3.1 alternate form)
+        else:
+            P = _information(P, H, R)                                # (000 §4.3.1 alternate form)
+    except validate.INNER_ERRORS:
+        d = check_model(x=x, P=P, z=z, H=H, R=R)                     # name the argument that does not fit,
+        if all(isinstance(v, np.ndarray) for v in (x, P, z, H, R)):
+            raise
+        return update_step(d["x"], d["P"], d["z"], d["H"], d["R"], form)   # or take lists as arrays
     return x, P, K
 
 
@@ -644,8 +647,15 @@ def predict_step(x, P, A, Q, Bu):
     >>> np.round(x, 3), np.round(P, 3)
     (array([0.8]), array([[1.3]]))
     """
-    x = A @ x if Bu is None else A @ x + Bu                          # (000 eq 4.32, with G u restored; eq 4.1)
-    P = A @ P @ A.T + Q                                              # (000 eq 4.36)
+    try:
+        x = A @ x if Bu is None else A @ x + Bu                      # (000 eq 4.32, with G u restored; eq 4.1)
+        P = A @ P @ A.T + Q                                          # (000 eq 4.36)
+    except validate.INNER_ERRORS:
+        d = check_model(x=x, P=P, A=A, Q=Q)                          # name the argument that does not fit,
+        Bu = None if Bu is None else validate.exact_shape(Bu, "Bu", d["x"].shape)
+        if all(isinstance(v, np.ndarray) for v in (x, P, A, Q)):
+            raise
+        return predict_step(d["x"], d["P"], d["A"], d["Q"], Bu)    # or take lists as arrays
     return x, P
 
 

@@ -71,16 +71,6 @@ HARMONICS = {2: (1.5, 0.4), 3: (0.5, 1.1), 4: (4.0, 2.0), 5: (0.3, 0.3), 6: (6.0
              24: (15.0, 0.1)}
 
 
-def _scalar(x, name):
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number; got {x!r}") from None
-    if not np.isfinite(v):
-        raise ValueError(f"{name} must be finite; got {x!r}")
-    return v
-
-
 # --------------------------------------------------------------------------------------------------------------
 # Fixed + rotating configuration (§4.3)
 # --------------------------------------------------------------------------------------------------------------
@@ -95,7 +85,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     Parameters
     ----------
     a_o : array_like, shape (..., 3)
-        Specific force at the body origin, m/s².
+        Specific force at the body origin, m/s² (any value: a vector in g cannot be told from another motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -128,7 +118,7 @@ def rotating_kinematics(t, rho, l, omega_r):
     rho : float
         Radius, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
 
@@ -142,7 +132,7 @@ def rotating_kinematics(t, rho, l, omega_r):
         Accelerations relative to the body, m/s².
     """
     t = validate.array(t, "t")
-    rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    rho, l, omega_r = validate.positive(rho, "rho"), validate.positive(l, "l"), validate.positive(omega_r, "omega_r")
     c, s, z = np.cos(omega_r * t), np.sin(omega_r * t), np.zeros_like(t)
     p = np.stack([np.stack([z, rho * c, rho * s + l], -1),                           # r_D (004 eq 4.4)
                   np.stack([rho * s + l, z, rho * c], -1),                           # r_B (004 eq 4.7)
@@ -164,7 +154,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     Parameters
     ----------
     a_A : array_like, shape (..., 3)
-        Specific force at the central triad A, m/s².
+        Specific force at the central triad A, m/s² (any value, as ``a_A`` of :func:`fixed_triad_outputs`).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -174,7 +164,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     rho : float
         Radius, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
 
@@ -186,7 +176,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     a_A, w, al = validate.vectors(a_A, "a_A"), validate.vectors(omega, "omega"), validate.vectors(alpha, "alpha")
     t = validate.array(t, "t")
     validate.broadcast({"a_A": 1, "omega": 1, "alpha": 1}, a_A=a_A, omega=w, alpha=al, t=t)
-    rho, l, omega_r = validate.positive(rho, "rho"), _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    rho, l, omega_r = validate.positive(rho, "rho"), validate.positive(l, "l"), validate.positive(omega_r, "omega_r")
     c, s = np.cos(omega_r * t), np.sin(omega_r * t)
     wx, wy, wz = w[..., 0], w[..., 1], w[..., 2]
     ax, ay, az = al[..., 0], al[..., 1], al[..., 2]
@@ -203,7 +193,8 @@ def fixed_triad_outputs(a_A, omega, alpha, d):
     Parameters
     ----------
     a_A : array_like, shape (..., 3)
-        Specific force at the origin, m/s².
+        Specific force at the origin, m/s² (not checked against g: the kinematics hold for any value, so a
+        vector in g or milli-g cannot be told from another motion).
     omega : array_like, shape (..., 3)
         Body rate, rad/s.
     alpha : array_like, shape (..., 3)
@@ -233,15 +224,16 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
     Parameters
     ----------
     a_rot : array_like, shape (..., 3)
-        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]`` at the index pulse (cos ω_r t = 1), m/s².
+        ``[a^{rD}_x, a^{rB}_y, a^{rC}_z]`` at the index pulse (cos ω_r t = 1), m/s² (any value: the kinematics
+        hold for any motion, so g or milli-g cannot be told apart).
     fixed : array_like, shape (..., 4, 3)
-        Triads A, B, C, D, m/s².
+        Triads A, B, C, D, m/s² (any value, as ``a_rot``).
     rho : float
         Radius of the rotating accelerometers, m.
     d : float
         Distance of the fixed triads from the origin, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
 
@@ -253,7 +245,7 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
     a_rot, fixed = validate.vectors(a_rot, "a_rot"), validate.array(fixed, "fixed", shape=(4, 3))
     validate.broadcast({"a_rot": 1, "fixed": 2}, a_rot=a_rot, fixed=fixed)
     d, rho = validate.positive(d, "d"), validate.positive(rho, "rho")
-    l, omega_r = _scalar(l, "l"), validate.positive(omega_r, "omega_r")
+    l, omega_r = validate.positive(l, "l"), validate.positive(omega_r, "omega_r")
     A, B, C, D = (fixed[..., i, :] for i in range(4))
     k = 2 * rho * omega_r
     w_y = (a_rot[..., 0] - A[..., 0] - (D[..., 0] - A[..., 0]) * l / d - (C[..., 0] - A[..., 0]) * rho / d) / k
@@ -267,15 +259,13 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
 # --------------------------------------------------------------------------------------------------------------
 
 def _positive_values(x, name):
-    a = validate.array(x, name)
-    if np.any(a <= 0):
-        raise ValueError(f"{name} must be positive; got {x!r}")
+    a = validate.positive_array(x, name)
     return a if a.ndim else float(a)
 
 
 def _geometry(rho, d, l, omega_r):
     """Geometry of eq 4.15 (scalars or broadcastable arrays, so a design can be swept)."""
-    return (_positive_values(rho, "rho"), _positive_values(d, "d"), validate.array(l, "l"),
+    return (_positive_values(rho, "rho"), _positive_values(d, "d"), _positive_values(l, "l"),
             _positive_values(omega_r, "omega_r"))
 
 
@@ -292,7 +282,7 @@ def rate_noise_coefficient(rho, d, l, omega_r):
     d : float
         Distance of the fixed triads from the origin, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
 
@@ -331,7 +321,7 @@ def rate_noise_coefficient_exact(rho, d, l, omega_r):
     d : float
         Distance of the fixed triads from the origin, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
 
@@ -360,7 +350,7 @@ def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
     d : float
         Distance of the fixed triads from the origin, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
     exact : bool, optional
@@ -372,7 +362,7 @@ def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
         σ_g, rad/s/√Hz.
     """
     w_acc = validate.positive(w_acc, "w_acc")
-    coef = rate_noise_coefficient_exact if exact else rate_noise_coefficient
+    coef = rate_noise_coefficient_exact if validate.flag(exact, "exact") else rate_noise_coefficient
     return w_acc * np.sqrt(coef(rho, d, l, omega_r))
 
 
@@ -391,7 +381,7 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
     d : float
         Distance of the fixed triads from the origin, m.
     l : float
-        Distance of each rotor centre from the body origin, m.
+        Distance of each rotor centre from the body origin, m, > 0 (three rotors cannot share the origin).
     omega_r : float
         Spin rate, rad/s.
     seed : int, optional
@@ -563,23 +553,24 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
     seed = validate.count(seed, "seed")
     duration, fs, rpm = validate.positive(duration, "duration"), validate.sample_rate(fs, "fs"), validate.positive(
         rpm, "rpm")
-    scale, bias, g = _scalar(scale, "scale"), _scalar(bias, "bias"), validate.scalar(g, "g", nonnegative=True)
-    if scale == 0:
-        raise ValueError("scale must be non-zero; got 0")
-    noise = _scalar(noise, "noise")
+    scale, bias, g = validate.scalar(scale, "scale"), validate.scalar(bias, "bias"), validate.scalar(g, "g", nonnegative=True)
+    if scale <= 0:
+        raise ValueError(f"scale must be > 0 (a scale factor near 1; a negative one turns the Coriolis wave and the "
+                         f"heading by 180°); got {scale}")
+    noise = validate.scalar(noise, "noise")
     if noise < 0:
         raise ValueError(f"noise must be >= 0 (a density in m/s²/√Hz); got {noise}")
     harmonics = HARMONICS if harmonics is None else dict(harmonics)
     omega_r = rpm * 2 * np.pi / 60
     n = int(round(duration * fs))
     t = np.arange(n) / fs
-    theta = omega_r * t + _scalar(theta0, "theta0")
+    theta = omega_r * t + validate.scalar(theta0, "theta0")
     w_b = leveled_body_rate(heading, lat)
     A_c = coriolis_amplitude(rho, omega_r, lat)
     a = g + 2 * rho * omega_r * (w_b[1] * np.sin(theta) + w_b[0] * np.cos(theta))   # (004 eq 4.16)
     for k, (amp, phase) in harmonics.items():
         a = a + amp * A_c * np.cos(k * theta + phase)
-    rng = np.random.default_rng(seed)
+    rng = validate.generator(seed, "seed")
     a = scale * a + bias + noise * np.sqrt(fs) * rng.standard_normal(n)              # (004 eq 4.27)
     return dict(t=t, theta=theta, acc=a, fs=fs, f_r=omega_r / (2 * np.pi), omega_r=omega_r, A_c=A_c,
                 heading=heading)
@@ -643,9 +634,11 @@ def bandpass(x, theta, taps, remove_mean=True):
     Parameters
     ----------
     x : array_like, shape (N,)
-        The record, m/s².
+        The record, m/s² (any scale passes: the filter is linear, so a record in g or milli-g gives the same wave
+        in that unit).
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
     taps : array_like, shape (order + 1,)
         FIR taps (:func:`bandpass_firls`).
     remove_mean : bool, optional
@@ -725,7 +718,8 @@ def demodulate(x, theta, reference="sampled"):
     x : array_like, shape (N,)
         The (band-passed) record, m/s².
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
     reference : {'sampled', 'exact'}, optional
         ``"sampled"``: sgn evaluated at each sample (the rectangular rule, eq 4.28 discretised); ``"exact"``: the
         sign function averaged over each sample interval, ``[F(θ + h/2) − F(θ − h/2)]/h`` with ``F = asin(sin θ)``
@@ -766,7 +760,8 @@ def synchronous_sampling(x, theta):
     x : array_like, shape (N,)
         The band-passed record, m/s².
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad.
+        Rotor angle of each sample, rad (not checked: an angle record in degrees cannot be told from one in
+        radians by its values).
 
     Returns
     -------
@@ -805,7 +800,8 @@ def period_average(x, theta, bins=128, turns=None):
     x : array_like, shape (N,)
         The record, m/s², normally band-passed (:func:`bandpass`).
     theta : array_like, shape (N,)
-        Rotor angle of each sample, rad, increasing, 2πk at the index pulses.
+        Rotor angle of each sample, rad, increasing, 2πk at the index pulses (degrees cannot be told from radians
+        by the values).
     bins : int, optional
         Points per period, at least 8 and a multiple of 4 (so that the sign references balance).
     turns : int or None, optional

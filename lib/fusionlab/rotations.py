@@ -322,7 +322,7 @@ def dcm_to_sequence(C, seq):
     """
     from scipy.spatial.transform import Rotation
     C = validate.matrices(C, "C")
-    _require_rotation(C, "C")
+    validate.rotation(C, "C")
     _check_seq(seq)
     return Rotation.from_matrix(C).as_euler(seq)
 
@@ -373,7 +373,7 @@ def dcm_to_quat(C_bn):
         Unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
     """
     C = validate.matrices(C_bn, "C_bn")
-    _require_rotation(C, "C_bn")
+    validate.rotation(C, "C_bn")
     tr = np.trace(C, axis1=-2, axis2=-1)
     d = np.stack([tr, C[..., 0, 0], C[..., 1, 1], C[..., 2, 2]], -1)
     k = np.argmax(d, axis=-1)
@@ -737,10 +737,6 @@ def is_rotation(C, tol=1e-6):
     tol = validate.scalar(tol, "tol", positive=True)
     ortho = np.max(np.abs(C @ np.swapaxes(C, -1, -2) - np.eye(3)), axis=(-2, -1))
     return (ortho < tol) & (np.abs(np.linalg.det(C) - 1) < tol)
-
-
-def _require_rotation(C, name, tol=1e-6):
-    validate.rotation(C, name, tol)
 
 
 def _roll_pitch(roll, pitch):

@@ -40,6 +40,12 @@ __all__ = [
 # ================================================================================================================
 
 
+def _solve(A, v):
+    """``A⁻¹ v`` for every 3-vector of ``v`` (any leading axes: a batch of records is one call)."""
+    v = np.asarray(v, dtype=float)
+    return np.linalg.solve(A, v.reshape(-1, 3).T).T.reshape(v.shape)
+
+
 def _triad_params(M, S, beta, who, names=("M", "S", "beta")):
     nM, nS, nb = (f"{who} {n}" for n in names)
     M = validate.matrices(M, nM)
@@ -93,7 +99,7 @@ def accel_measure(f, M, S, beta):
     >>> np.round(sensor_errors.accel_correct(a_m, M, S, beta), 12) + 0.0
     array([ 0.     ,  0.     , -9.80665])
     """
-    f = validate.vectors(f, "f")
+    f = validate.accel_ms2(f, "f", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
     return (f @ S.T - beta) @ M.T                                        # (001 sensors §2, model)
 
@@ -119,9 +125,9 @@ def accel_correct(a_m, M, S, beta):
     ndarray, shape (..., 3)
         Corrected specific force, m/s².
     """
-    a_m = validate.vectors(a_m, "a_m")
+    a_m = validate.accel_ms2(a_m, "a_m", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return np.linalg.solve(S, (np.linalg.solve(M, a_m.T).T + beta).T).T  # (001 sensors §2, correction)
+    return _solve(S, _solve(M, a_m) + beta)                                 # (001 sensors §2, correction)
 
 
 def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
@@ -131,7 +137,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     Parameters
     ----------
     rate : array_like, shape (..., 3)
-        True body rates p, rad/s.
+        True body rates p, rad/s (a rate has no natural scale: °/s cannot be told from rad/s here).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -160,7 +166,7 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     Parameters
     ----------
     p_m : array_like, shape (..., 3)
-        Raw readings, rad/s.
+        Raw readings, rad/s (°/s cannot be told from rad/s here: a rate has no natural scale).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -180,20 +186,20 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
-    return np.linalg.solve(S, (np.linalg.solve(M, p_m.T).T + beta - g_term).T).T   # (001 sensors §3, correction)
+    return _solve(S, _solve(M, p_m) + beta - g_term)                       # (001 sensors §3, correction)
 
 
 def _g_sensitivity(C_ga, a_c, **rates):
     if C_ga is None:
         if a_c is not None:
-            validate.vectors(a_c, "a_c")
+            validate.accel_ms2(a_c, "a_c", per_sample=False)
         return 0.0
     C = validate.matrices(C_ga, "C_ga")
     if C.shape != (3, 3):
         raise ValueError(f"C_ga must be one 3×3 matrix; got shape {C.shape}")
     if a_c is None:
         raise ValueError("a_c (the corrected specific force) is needed when C_ga is given")
-    a_c = validate.vectors(a_c, "a_c")
+    a_c = validate.accel_ms2(a_c, "a_c", per_sample=False)
     validate.broadcast({"a_c": 1, **{k: 1 for k in rates}}, a_c=a_c, **rates)
     return a_c @ C.T
 
@@ -226,10 +232,10 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         The raw reading ``b_m``, µT.
     """
-    b = validate.vectors(b, "b")
+    b = validate.field_uT(validate.vectors(b, "b"), "b", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    return (np.linalg.solve(D, (b + h).T).T @ S.T - beta) @ M.T         # (001 sensors §4, solved for b_m)
+    return (_solve(D, b + h) @ S.T - beta) @ M.T                       # (001 sensors §4, solved for b_m)
 
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
@@ -239,7 +245,8 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     Parameters
     ----------
     b_m : array_like, shape (..., 3)
-        Raw readings, µT.
+        Raw readings, µT (a median strength outside 2-5000 µT, ``validate.RAW_FIELD_UT``, is refused: gauss or
+        nT; milligauss cannot be told from a strong hard iron).
     M : array_like, shape (3, 3)
         Misalignment (dimensionless, invertible).
     S : array_like, shape (3,) or (3, 3)
@@ -256,10 +263,10 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     ndarray, shape (..., 3)
         Corrected field ``b_c``, µT.
     """
-    b_m = validate.vectors(b_m, "b_m")
+    b_m = validate.field_uT(validate.vectors(b_m, "b_m"), "b_m", *validate.RAW_FIELD_UT, per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    b = np.linalg.solve(S, (np.linalg.solve(M, b_m.T).T + beta).T).T     # S_b⁻¹(M_b⁻¹ b_m + β_b)
+    b = _solve(S, _solve(M, b_m) + beta)                                  # S_b⁻¹(M_b⁻¹ b_m + β_b)
     return b @ D.T - h                                                   # (001 sensors §4: b_c = D_s b − β_h)
 
 
@@ -337,7 +344,7 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     fs = validate.sample_rate(fs, "fs")
     N, B, K = (validate.scalar(v, name, nonnegative=True) for v, name in
                ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = validate.generator(rng, "rng")
     out = N * np.sqrt(fs) * rng.standard_normal(n)                      # white rate: ARW
     if B > 0:
         spec = np.fft.rfft(rng.standard_normal(n))
@@ -427,7 +434,8 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     Parameters
     ----------
     acc_nav : array_like, shape (N, 3)
-        Navigation-frame acceleration (gravity removed), m/s².
+        Navigation-frame acceleration (gravity removed), m/s² (no natural scale without gravity: g or milli-g
+        cannot be told from another motion).
     dt : float
         Sample interval, s.
     v0 : array_like, shape (3,), optional
@@ -503,7 +511,7 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     t = validate.nonnegative(t, "t").reshape(-1)
     a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
     vel = a[:, None] * t
-    pos = a[:, None] * t ** 2 * (1.0 if printed else 0.5)               # printed a·t², kinematic ½·a·t²
+    pos = a[:, None] * t ** 2 * (1.0 if validate.flag(printed, "printed") else 0.5)               # printed a·t², kinematic ½·a·t²
     return a, vel, pos
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from . import validate
 
 __all__ = [
-    "EPS0",
+    "EPS0", "VOLTS_MAX",
     # 1. spring-mass-damper
     "smd_transfer", "smd_natural_frequency", "smd_damping_ratio", "smd_dc_gain",
     "accel_from_displacement", "seed000_eq37_printed",
@@ -280,7 +280,7 @@ def bridge_output(c1, c2, v_in):
     c2 : float or array_like, shape (...)
         Capacitance of the second leg, F, > 0.
     v_in : float or array_like
-        Amplitude of the excitation, V.
+        Amplitude of the excitation, V, > 0.
 
     Returns
     -------
@@ -298,7 +298,7 @@ def bridge_output(c1, c2, v_in):
     """
     c1 = validate.positive_array(c1, "c1")
     c2 = validate.positive_array(c2, "c2")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(c1=c1, c2=c2, v_in=v_in)
     return v_in * c2 / (c1 + c2) - v_in / 2
 
@@ -313,7 +313,7 @@ def half_bridge_output(delta, v_in):
     delta : array_like, shape (...)
         Relative displacement ``x/x0``, dimensionless.
     v_in : float or array_like
-        Amplitude of the excitation, V.
+        Amplitude of the excitation, V, > 0.
 
     Returns
     -------
@@ -321,7 +321,7 @@ def half_bridge_output(delta, v_in):
         Bridge output, V.
     """
     d = validate.array(delta, "delta")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(delta=d, v_in=v_in)
     return 0.5 * d * v_in                                 # (000 eq 3.11)
 
@@ -336,7 +336,7 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
     v_out : array_like, shape (...)
         Bridge output, V.
     v_in : float or array_like
-        Amplitude of the excitation, V, not 0.
+        Amplitude of the excitation, V, > 0.
     x0 : float
         Rest gap, m, > 0.
     m : float
@@ -350,10 +350,8 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
         Case acceleration, m/s².
     """
     v_out = validate.array(v_out, "v_out")
-    v_in = validate.array(v_in, "v_in")
+    v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(v_out=v_out, v_in=v_in)
-    if np.any(v_in == 0):
-        raise ValueError("v_in must not be 0: the bridge output is read as a fraction of the excitation")
     x0 = validate.positive(x0, "x0")
     delta = 2.0 * v_out / v_in                                                    # (000 eq 3.11 inverted)
     return accel_from_displacement(x0 * delta, m, k)                              # (000 eqs 3.12-3.13, corrected)
@@ -496,7 +494,16 @@ def _counts(counts, bits):
     if np.any(c < 0) or np.any(c > top):
         raise ValueError(f"counts must lie in 0..{top} for a {bits}-bit ADC; got {float(np.min(c)):g}.."
                          f"{float(np.max(c)):g} (a hex log? convert with int(text, 16) first)")
+    if c.size and float(np.max(c)) <= VOLTS_MAX and np.any(c != np.round(c)):
+        raise ValueError(f"counts must be ADC counts (whole numbers 0..{top}); got fractions no larger than "
+                         f"{float(np.max(c)):.3g}, which look like volts -- pass the counts the board prints, not "
+                         "adc_to_volts(...) of them")
     return c
+
+
+#: Fractional ``counts`` that never exceed this are refused as volts (an ADC reference of the course is 3-5 V;
+#: averaged counts are fractional too, but at rest read hundreds).
+VOLTS_MAX = 5.5
 
 
 def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
@@ -565,6 +572,7 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
     zero = validate.array(zero_level, "zero_level")
     sens = validate.positive_array(sensitivity, "sensitivity")
     off = validate.array(null_offset, "null_offset")
+    validate.broadcast(counts=volts, zero_level=zero, sensitivity=sens, null_offset=off)
     return (volts - zero) / sens + off                                            # (000 eqs 3.15-3.16, 3.35, 5.1)
 
 
@@ -603,6 +611,7 @@ def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
     x = validate.array(value, "value")
     zero = validate.array(zero_level, "zero_level")
     sens = validate.positive_array(sensitivity, "sensitivity")
+    validate.broadcast(value=x, zero_level=zero, sensitivity=sens)
     top = adc_full_scale(bits)
     volts = zero + sens * x
     return np.clip(np.rint(volts / validate.positive(v_ref, "v_ref") * top), 0, top).astype(np.int64)

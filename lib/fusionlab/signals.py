@@ -51,9 +51,7 @@ def trailing_max(x, n):
     """
     from scipy.ndimage import maximum_filter1d
 
-    x = validate.array(x, "x")
-    if x.ndim != 1:
-        raise ValueError(f"x must have shape (N,); got {x.shape}")
+    x = validate.series(x, "x")
     n = validate.count(n, "n", 1)
     return maximum_filter1d(x, n, origin=(n - 1) // 2, mode="nearest")
 
@@ -221,7 +219,14 @@ class RestDetector:
         gyr_lp : ndarray, shape (3,)
             The low-passed gyro, rad/s (the bias estimate at rest).
         """
-        gyr, acc = np.asarray(gyr, float), np.asarray(acc, float)
+        try:
+            return self._update(np.asarray(gyr, float), np.asarray(acc, float))
+        except validate.INNER_ERRORS:
+            validate.exact_shape(gyr, "gyr", (3,))                       # name the argument that does not fit
+            validate.exact_shape(acc, "acc", (3,))
+            raise
+
+    def _update(self, gyr, acc):
         if self.gyr_lp is None:                              # the low-passes start at the first sample
             self.gyr_lp, self.acc_lp = gyr.copy(), acc.copy()
         else:

@@ -23,8 +23,9 @@ import numpy as np
 
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
            "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN"]
+           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "series", "INNER_ERRORS", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
+           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
+           "SWAP_ACC_MAX"]
 
 
 def _shape_text(shape, lead=""):
@@ -178,6 +179,35 @@ def samples(x, name, n=3):
     if a.ndim != 2 or a.shape[1] != n:
         raise ValueError(f"{name} must have shape (N, {n}), one row per sample; got {a.shape}")
     return array(a, name)
+
+
+def series(x, name):
+    """``x`` as one time series: exactly one axis, shape ``(N,)``, finite.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The samples.
+    name : str
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        ``x`` as a float array.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.series([[1.0, 2.0]], "x")
+    Traceback (most recent call last):
+        ...
+    ValueError: x must have shape (N,), one value per sample; got (1, 2)
+    """
+    a = array(x, name)
+    if a.ndim != 1:
+        raise ValueError(f"{name} must have shape (N,), one value per sample; got {a.shape}")
+    return a
 
 
 def vectors(x, name, n=3):
@@ -407,6 +437,73 @@ def count(x, name, minimum=0):
     if not np.isfinite(v) or v != int(v) or v < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}; got {x!r}")
     return int(v)
+
+
+#: What a per-sample inner step (``kalman.update_step``, ``DcmAhrs.step``, ...) raises when an argument is not
+#: what it expects. Those steps check nothing on the way in (they run once per sample); when one fails with one of
+#: these, it runs its public door's checks on the same arguments, so that the error names the argument, and
+#: re-raises the original only if they pass.
+INNER_ERRORS = (ValueError, TypeError, IndexError, AttributeError, np.linalg.LinAlgError)
+
+
+def generator(rng, name="rng"):
+    """A random generator: a ``numpy.random.Generator`` (used as is), None (fresh entropy) or a whole-number seed.
+
+    A list or array of seeds is refused: numpy would mix it into one seed without complaint, so ``rng=[1, 2]``
+    meant as two runs' seeds silently gives one stream. True/False is refused as a seed (a flag in its place).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, int or None
+        The generator or its seed.
+    name : str, default "rng"
+        The argument's name, used in the error message.
+
+    Returns
+    -------
+    numpy.random.Generator
+        ``rng`` itself, or a new generator seeded with it.
+
+    Examples
+    --------
+    >>> from fusionlab import validate
+    >>> validate.generator([1, 2], "seed")
+    Traceback (most recent call last):
+        ...
+    ValueError: seed must be a numpy Generator, None or an integer seed >= 0; got list of shape (2,)
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None:
+        return np.random.default_rng()
+    if isinstance(rng, (bool, np.bool_, str, bytes)) or np.ndim(rng) != 0:
+        raise ValueError(f"{name} must be a numpy Generator, None or an integer seed >= 0; got {_show(rng)}")
+    return np.random.default_rng(count(rng, name))
+
+
+def choice(x, name, allowed):
+    """One of the values ``allowed`` (numbers compared by value); True/False is refused where a number is meant.
+
+    Parameters
+    ----------
+    x : object
+        The option.
+    name : str
+        The argument's name, used in the error message.
+    allowed : tuple
+        The values accepted.
+
+    Returns
+    -------
+    object
+        ``x``, unchanged.
+    """
+    numeric = all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in allowed)
+    if numeric and (isinstance(x, (bool, np.bool_)) or np.ndim(x) != 0 or isinstance(x, (str, bytes)) or x is None):
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {_show(x)}")
+    if x not in allowed:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {x!r}")
+    return x
 
 
 def nonnegative(x, name):
@@ -781,6 +878,37 @@ def rotation(C, name, tol=1e-6):
     return C
 
 
+def unit_vectors(x, name, tol=0.5):
+    """``x`` as 3-vectors ``(..., 3)`` of length 1 within ``tol`` (DCM rows, directions an estimator carries).
+
+    A filter's rows drift a little from unit length between renormalisations, so the tolerance is wide; what it
+    refuses is a zero vector, a vector in a physical unit (gravity in m/s², a field in µT) or a typo.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3)
+        The vectors, finite.
+    name : str
+        The argument's name, used in the error message.
+    tol : float, default 0.5
+        The largest accepted ``| |x| - 1 |``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``x`` as a float array.
+    """
+    a = vectors(x, name)
+    if a.size:
+        n = np.linalg.norm(a, axis=-1)
+        if np.any(np.abs(n - 1) > tol):
+            bad = float(n.ravel()[np.argmax(np.abs(n - 1).ravel())])
+            raise ValueError(f"{name} must be unit vectors (length 1 within {tol:g}: a direction or a DCM row); "
+                             f"got a length of {bad:.6g} -- "
+                             + ("a zero vector has no direction" if bad == 0 else "divide by its norm"))
+    return a
+
+
 def sample_rate(fs, name="fs", low=1.0, high=1e5):
     """A sample rate in Hz between ``low`` and ``high`` (1 Hz – 100 kHz: every IMU of the course is in it).
 
@@ -868,7 +996,7 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
     >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)
     Traceback (most recent call last):
         ...
-    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)
+    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = 100 Hz not the record's sample rate? the tilt is integrated with it
     """
     g = samples(gyr, name)
     if len(g):
@@ -879,13 +1007,22 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
             raise ValueError(f"{name} must be in rad/s; got {what}, which looks like deg/s "
                              f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
                              f"turning body) -- use np.radians(...)")
+    if acc is not None and len(g) and len(acc):
+        med_g = float(np.median(np.linalg.norm(g, axis=1)))
+        med_a = float(np.median(np.linalg.norm(np.asarray(acc, float), axis=-1)))
+        if med_a < SWAP_ACC_MAX and med_g >= SWAP_GYR_MIN:
+            raise ValueError(f"{name} and {acc_name} look swapped: {name} has a median magnitude of {med_g:.4g} "
+                             f"(gravity's size in m/s²) while {acc_name} reads {med_a:.3g} over half the record (a "
+                             f"gyro at rest, or a free fall no record of the course holds for half its length) -- "
+                             f"pass ({name}=..., {acc_name}=...) in the documented order")
     if acc is not None and fs is not None and len(g):
         ratio, n = gyro_tilt_ratio(g, acc, fs)
         if n >= TILT_WINDOWS_MIN and ratio < TILT_RATIO_MIN:
             raise ValueError(f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
                              f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
                              f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
-                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...)")
+                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = {fs:g} Hz not the "
+                             "record's sample rate? the tilt is integrated with it")
     return g
 
 
@@ -895,6 +1032,11 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
 #: accelerometer must follow at least a quarter of the tilt (real records: median 0.8-3.3 on the
 #: eight BROAD trials, °/s read as rad/s: 0.015-0.06).
 TILT_WINDOW, TILT_MIN, TILT_WINDOWS_MIN, TILT_RATIO_MIN = 0.1, 0.05, 20, 0.25
+
+#: :func:`gyro_rad` given the accelerometer: a gyro whose median rate is ``SWAP_GYR_MIN`` rad/s or more (230 °/s
+#: sustained over half the record) beside an accelerometer whose median is under ``SWAP_ACC_MAX`` (free fall over
+#: half the record) is the two arguments swapped: the gyro reads gravity, the accelerometer a body's rates.
+SWAP_GYR_MIN, SWAP_ACC_MAX = 4.0, 0.5
 
 
 def gyro_tilt_ratio(gyr, acc, fs):
@@ -1011,6 +1153,11 @@ MILLI_G_FROM = 100.0
 
 #: The Earth's field strength at its surface, µT (about 25 at the magnetic equator to 65 near the poles).
 EARTH_FIELD_UT = (25.0, 65.0)
+
+#: The median field strength (µT) accepted from *raw* magnetometer readings (before a hard- and soft-iron
+#: calibration): wide, since hard iron can shift a phone's readings by hundreds of µT; gauss (0.25-0.65) and nT
+#: (25,000-65,000) fall outside, milligauss (250-650) cannot be told from hard iron.
+RAW_FIELD_UT = (2.0, 5000.0)
 
 _FIELD_UNITS = (("gauss", 100.0), ("milligauss", 0.1), ("nT", 1e-3), ("T", 1e6), ("mT", 1e3))
 

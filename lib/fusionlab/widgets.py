@@ -23,13 +23,6 @@ __all__ = ["viewer_state", "euler_viewer"]
 LOCK_PITCH_DEG = 90.0
 
 
-def _scalar(x, name):
-    a = validate.array(x, name)
-    if a.shape != ():
-        raise ValueError(f"{name} must be a single number (degrees); got shape {a.shape}")
-    return float(a)
-
-
 def _fmt(x, digits=3):
     return f"{round(float(x), digits) + 0.0:.{digits}f}"          # + 0.0 turns -0.000 into 0.000
 
@@ -64,7 +57,7 @@ def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
     >>> state["euler_deg"], np.round(state["euler_readback_deg"], 6) + 0.0
     (array([30., 90., 10.]), array([20., 90.,  0.]))
     """
-    roll, pitch, yaw = (_scalar(v, n) for v, n in ((roll_deg, "roll_deg"), (pitch_deg, "pitch_deg"),
+    roll, pitch, yaw = (validate.scalar(v, n) for v, n in ((roll_deg, "roll_deg"), (pitch_deg, "pitch_deg"),
                                                    (yaw_deg, "yaw_deg")))
     if lock:
         pitch = LOCK_PITCH_DEG
@@ -136,7 +129,7 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
         Children, in order: three ``HBox`` rows (yaw, pitch, roll), each a ``FloatSlider`` and the
         ``BoundedFloatText`` linked to it; the lock ``ToggleButton``; the readout ``HTML``; the figure ``Output``.
     """
-    roll, pitch, yaw = (_scalar(v, n) for v, n in ((roll, "roll"), (pitch, "pitch"), (yaw, "yaw")))
+    roll, pitch, yaw = (validate.scalar(v, n) for v, n in ((roll, "roll"), (pitch, "pitch"), (yaw, "yaw")))
     opts = dict(step=1, continuous_update=True, readout=False, style={"description_width": "7em"},
                 layout=W.Layout(width="36em"))
     s_yaw = W.FloatSlider(value=yaw, min=-180, max=180, description="ψ yaw (°)", **opts)
@@ -221,7 +214,7 @@ def gaussian_product_state(mu1, var1, mu2, var2):
     >>> round(state["K"], 3), round(state["mu"], 3)          # mu = mu1 + K (mu2 - mu1)
     (0.8, 2.4)
     """
-    mu1, var1, mu2, var2 = (_scalar(v, n) for v, n in ((mu1, "mu1"), (var1, "var1"), (mu2, "mu2"),
+    mu1, var1, mu2, var2 = (validate.scalar(v, n) for v, n in ((mu1, "mu1"), (var1, "var1"), (mu2, "mu2"),
                                                          (var2, "var2")))
     mu, var = _kalman.gaussian_product(mu1, var1, mu2, var2)
     K = var1 / (var1 + var2)
