@@ -337,3 +337,38 @@ def test_the_leaderboard_renders_in_chromium(graded):
             page.screenshot(path=str(SHOTS / "capstone_feedback_good.png"), full_page=True)
         finally:
             browser.close()
+
+
+@needs_box
+def test_the_box_sees_no_data_and_no_reference_filter(scored, tmp_path):
+    """What a student's estimate can reach in the box, asked from inside: no BROAD file anywhere (the course's
+    data/, the cache, a mirror), no vqf, the library's filters stubs; only the call's sensor data."""
+    probe = f'''
+import os, numpy as np
+
+def estimate(gyr, acc, mag, fs):
+    seen = [p for p in ({str(ROOT / "data")!r}, {str(datasets.cache_dir())!r}, os.environ.get("FUSIONLAB_BROAD_DIR") or "")
+            if p and os.path.exists(p)]
+    try:
+        import vqf
+        seen.append("vqf")
+    except ImportError:
+        pass
+    from fusionlab import estimators
+    try:
+        estimators.run("triad", gyr, acc, fs, mag=mag)
+        seen.append("estimators.run")
+    except NotImplementedError:
+        pass
+    q = np.zeros((len(gyr), 4))
+    q[:, 0] = 1.0 if not seen else 0.0
+    q[:, 1] = 0.0 if not seen else 1.0
+    return q
+'''
+    runner = capstone.Runner([probe], ROOT, tmp_path)
+    try:
+        q, status, why, _ = runner.call(scored[0], 60)
+    finally:
+        runner.close()
+    assert status == "ok", why
+    assert q[0].tolist() == [1.0, 0.0, 0.0, 0.0], "the box can see data or a reference filter"
