@@ -372,3 +372,14 @@ def estimate(gyr, acc, mag, fs):
         runner.close()
     assert status == "ok", why
     assert q[0].tolist() == [1.0, 0.0, 0.0, 0.0], "the box can see data or a reference filter"
+
+
+@pytest.mark.slow
+def test_a_library_filter_that_refuses_a_trial_is_left_out_of_the_references():
+    import dataclasses
+    t = capstone.disguise(capstone.stand_in([7], 10000), SEED)[0]
+    acc = np.array(t.acc)
+    acc[9000:9010] = 0.0                                           # 35 ms of free fall: TRIAD has no gyro for it
+    refs = capstone.references([dataclasses.replace(t, acc=acc)])
+    assert "triad" not in refs["_all"] and {"vqf9", "madgwick9", "dcm_ahrs"} <= set(refs["_all"])
+    assert any(name.startswith("library best") for name in refs)
