@@ -169,6 +169,8 @@ def test_a_crash_on_trial_3_costs_that_trial_only(graded, scored):
     for mine, theirs in zip(res.trials[:2], good.trials[:2]):     # the same filter on the trials that ran
         assert mine.total_deg == pytest.approx(theirs.total_deg, abs=1e-9)
     assert res.points["runs"] == 0 and res.points == _expected_points(res, refs)
+    # the secret causality trial is the one that crashed: the check ran on another trial instead
+    assert capstone.causality_trial(SEED, len(STAND_IN)) == 2 and res.causal is True
 
 
 @pytest.mark.slow
@@ -215,6 +217,7 @@ def test_the_disguise_leaves_the_authors_metrics_of_a_filter_unchanged(scored):
     plain = capstone.stand_in(STAND_IN[:1], MAX_SAMPLES)[0]
     s = scored[0]
     assert s.turn_deg > 5 and len(s) < len(plain)                  # turned and cut
+    assert s.movement.sum() == plain.movement.sum()                 # ... never inside the movement phase
     a = metrics.broad_rmse(vqf.run(plain), plain.quat_ref, plain.movement).total_deg
     b = metrics.broad_rmse(vqf.run(s), s.quat_ref, s.movement).total_deg
     assert b == pytest.approx(a, rel=0.05)
@@ -347,8 +350,8 @@ def test_the_box_sees_no_data_and_no_reference_filter(scored, tmp_path):
 import os, numpy as np
 
 def estimate(gyr, acc, mag, fs):
-    seen = [p for p in ({str(ROOT / "data")!r}, {str(datasets.cache_dir())!r}, os.environ.get("FUSIONLAB_BROAD_DIR") or "")
-            if p and os.path.exists(p)]
+    places = ({str(ROOT / "data")!r}, {str(datasets.cache_dir())!r}, os.environ.get("FUSIONLAB_BROAD_DIR") or "")
+    seen = [p for p in places if p and os.path.exists(p)]
     try:
         import vqf
         seen.append("vqf")
@@ -383,3 +386,12 @@ def test_a_library_filter_that_refuses_a_trial_is_left_out_of_the_references():
     refs = capstone.references([dataclasses.replace(t, acc=acc)])
     assert "triad" not in refs["_all"] and {"vqf9", "madgwick9", "dcm_ahrs"} <= set(refs["_all"])
     assert any(name.startswith("library best") for name in refs)
+
+
+def test_the_disguise_cuts_both_ends_by_secret_amounts_but_never_the_movement():
+    whole = capstone.stand_in([2])[0]
+    cut = [capstone.disguise([whole], seed)[0] for seed in range(4)]
+    assert all(c.movement.sum() == whole.movement.sum() for c in cut)
+    lost = [len(whole) - len(c) for c in cut]
+    assert len(set(lost)) == 4 and max(lost) > capstone.MAX_CROP_SECONDS * whole.fs      # the end loses some too
+    assert max(lost) < (capstone.MAX_CROP_SECONDS + capstone.MAX_END_CROP_SECONDS) * whole.fs
