@@ -83,11 +83,12 @@ MAX_RESTARTS = 5                # boxes started again after a call ran over its 
 CAUSAL_K = (lambda n: 3, lambda n: 200, lambda n: n // 2 + 1)
 CAUSAL_NOISE = (0.5, 3.0, 20.0)  # rad/s, m/s^2, uT added to gyro, accelerometer, magnetometer after k
 CAUSAL_TOL = 1e-10
-MAX_CROP_SECONDS = 0.5         # secret cut at the start (inside the rest before the movement) ...
-MAX_END_CROP_SECONDS = 3.0     # ... and at the end (never into the movement): a trial's length does not name it
+MAX_CROP_SECONDS = 0.5          # secret cut at the start (inside the rest before the movement) ...
+MAX_END_CROP_SECONDS = 3.0      # ... and at the end (never into the movement): a trial's length does not name it
 MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
 MATCH_STRIDE = 5                # ... compared at every 5th sample
-FOLLOW_RATIO = 0.25             # ... and this much closer to the published reference than to the disguised one
+FOLLOW_RATIO = 0.25             # an output this much closer to the published reference than to the disguised one
+                                # follows the published reference: the trial was recognised
 
 
 @dataclass(frozen=True)
