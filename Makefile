@@ -67,6 +67,16 @@ grade: env  ## sandboxed autograde of a class: make grade LAB=02_kalman_falling_
 	@test -n "$(LAB)" || { echo "usage: make grade LAB=NN_name [WORKERS=2] [STUDENT=id]"; exit 2; }
 	@$(BIN)/python -m grading.classgrade $(LAB) --workers $(WORKERS) $(if $(STUDENT),--student $(STUDENT))
 
+# The capstone (Lab 13): scored on the BROAD trials the course does not ship, in the sandbox (grading/capstone.py).
+CLASS ?= class
+.PHONY: capstone-data capstone
+
+capstone-data: env  ## instructors: fetch the capstone's 31 hidden BROAD trials once (checked download into the cache)
+	@$(BIN)/python -m grading.capstone fetch
+
+capstone: env  ## the capstone's leaderboard: make capstone CLASS=name (needs make capstone-data first)
+	@$(BIN)/python -m grading.capstone grade --class $(CLASS) --workers $(WORKERS)
+
 # The course on a JupyterHub on this machine (hub/, docs/hub.md): as root, Ctrl-C stops it all.
 HUB_STUDENTS ?= 3
 HUB_PORT     ?= 8000

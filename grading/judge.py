@@ -213,7 +213,7 @@ def forbidden_expressions(source):
     return [n for n in found if isinstance(n, (ast.Attribute, ast.Name))]
 
 
-def _strip_module(path: Path, qualnames):
+def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
     """Replace the bodies of ``qualnames`` (functions or methods) in the module file ``path`` by a stub."""
     tree = _parse(path.read_text())
     done = set()
@@ -224,7 +224,7 @@ def _strip_module(path: Path, qualnames):
                 name = prefix + node.name
                 if name in qualnames:
                     doc = ast.get_docstring(node)
-                    msg = STUB_MESSAGE.format(name=f"{path.stem}.{name}")
+                    msg = message.format(name=f"{path.stem}.{name}")
                     node.body = ([ast.Expr(ast.Constant(doc))] if doc else []) + _parse(
                         f"raise NotImplementedError({msg!r})").body
                     node.decorator_list = [d for d in node.decorator_list
@@ -238,20 +238,21 @@ def _strip_module(path: Path, qualnames):
     return done
 
 
-def strip_packages(dest: Path, lib: Path, forbidden):
+def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES,
+                   why="its functions answer exercises of the labs", message=STUB_MESSAGE):
     """Build the box's library (``dest/lib``) and shadow packages (``dest/shadow``) without ``forbidden``.
 
-    ``forbidden`` holds ``module:qualname`` names. Functions of ``fusionlab`` and of other pure-Python packages
-    become stubs in a copy; C functions cannot be removed and are returned (the integrity report flags their use by
-    name). Returns the names that could not be stubbed."""
+    ``forbidden`` holds ``module:qualname`` names; the packages ``hidden`` are absent (importing one raises
+    ImportError saying ``why``); ``message`` is the stubs' text (``{name}`` is the function's). Functions of
+    ``fusionlab`` and of other pure-Python packages become stubs in a copy; C functions cannot be removed and are
+    returned (the integrity report flags their use by name). Returns the names that could not be stubbed."""
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
     shutil.copytree(lib, dest / "lib", ignore=ignore)
     (dest / "shadow").mkdir()
-    for package in HIDDEN_PACKAGES:
+    for package in hidden:
         (dest / "shadow" / package).mkdir()
         (dest / "shadow" / package / "__init__.py").write_text(
-            f"raise ImportError('{package} is not available while the lab is graded: its functions answer "
-            f"exercises of the labs')\n")
+            f"raise ImportError({f'{package} is not available while the lab is graded: {why}'!r})\n")
     by_file, left = {}, []
     for name in sorted(forbidden):
         module, qualname = name.split(":")
@@ -274,7 +275,7 @@ def strip_packages(dest: Path, lib: Path, forbidden):
             root, rel = dest / "shadow", Path(top) / file.relative_to(pkg)
         by_file.setdefault(root / rel, set()).add(qualname)
     for path, names in by_file.items():
-        done = _strip_module(path, names)
+        done = _strip_module(path, names, message)
         left += [f"{path.stem}:{n}" for n in sorted(names - done)]
     return left
 

@@ -214,18 +214,20 @@ def claimed_slots(n):
             os.close(fd)
 
 
-def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None):
+def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True):
     """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
 
     ``lib`` is the library folder to mount where the course's ``lib/`` is; ``shadow`` a folder of packages put first
     on the path; ``work`` the private folder (see :func:`private_folder`); ``uid`` the user to run as (root only).
-    ``command[0]`` may be ``"python"``: the sandbox's own interpreter.
+    ``command[0]`` may be ``"python"``: the sandbox's own interpreter. With ``data=False`` the box gets no data at
+    all: neither the course's ``data/`` nor a BROAD mirror or cache (the capstone's boxes, which see only the sensor
+    data the judge sends).
     """
     course = os.path.realpath(course)
     limits = {**DEFAULT_LIMITS, **(limits or {})}
     python = os.path.join(os.path.realpath(sys.prefix), "bin", "python")
     cwd = os.path.join(course, "labs", lab)
-    data_args, data_env = _data_binds()
+    data_args, data_env = _data_binds() if data else ([], [])
     args = ["bwrap", "--die-with-parent", "--new-session",
             "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
             "--hostname", "grading"]
@@ -237,7 +239,7 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
              "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", "/tmp"]
     args += _system_binds() + _python_binds() + data_args
     args += ["--ro-bind", os.path.realpath(lib), os.path.join(course, "lib")]
-    if os.path.isdir(os.path.join(course, "data")):
+    if data and os.path.isdir(os.path.join(course, "data")):
         args += ["--ro-bind", os.path.join(course, "data"), os.path.join(course, "data")]
     path = [os.path.join(course, "lib")]
     if shadow:

@@ -1,0 +1,1041 @@
+"""Lab 13, the capstone: each student's attitude filter scored on BROAD trials they never saw (the trusted side).
+
+    python -m grading.capstone fetch                       # make capstone-data: the hidden trials, once
+    python -m grading.capstone grade [--class NAME]        # every submitted/<student>/13_capstone/13_capstone.ipynb
+
+The student hands in a notebook whose answer cells define ``estimate(gyr, acc, mag, fs) -> (N, 4)``: unit quaternions
+``[w, x, y, z]``, body->ENU, the course's convention (:mod:`fusionlab.rotations`), from gyro (rad/s), accelerometer
+(m/s^2) and magnetometer (uT) readings in the sensor frame at ``fs`` Hz. Grading happens here, not in the student's
+process:
+
+* **Hidden trials.** The instructor scores on the BROAD trials that the course does not ship (:data:`HIDDEN`, 31 of
+  39; ``data/broad/`` and the student release hold the other 8). ``make capstone-data`` gets them once through
+  :func:`fusionlab.datasets.fetch_trial` (each file downloaded to a temporary file, checked and only then renamed
+  into the cache); grading refuses to start without all of them and says how to get them (:func:`hidden_trials`).
+* **What the student's code sees.** Its notebook's answer cells (and the cells they need) run in a box of the
+  grading sandbox (:mod:`grading.sandbox`, :mod:`grading.box`) with no data at all: no ``data/``, no BROAD cache, no
+  submission folder. The judge sends each trial's sensor data (nothing else) as a call of ``estimate`` and gets the
+  quaternions back as plain numbers. Ground truth, metrics and scores exist only in this process.
+* **Each trial is disguised.** Before a class is graded every trial is turned by a secret random rotation of the
+  sensor frame (gyro, accelerometer and magnetometer alike, the reference to match) and loses a secret number of
+  samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase): its length does not
+  name it either. A causal filter does not care (the authors' error quaternion q_est * conj(q_ref)
+  is unchanged by a turn of the body frame); a submission that recognises a published trial and returns its
+  published reference is far off, and is named (:data:`CHEATS`, ``detects the trial``).
+* **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
+  RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
+  the run time of each call, against a time budget per trial (:func:`budget_seconds`). A trial without a valid
+  estimate (an error, over its budget, not N unit quaternions) counts with the error of an estimate that never
+  moves (the identity quaternion).
+* **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret among those that
+  ran, every sample after k is replaced by noisy samples and ``estimate`` is called again; its output up to k must
+  not change (1e-10), for k in :data:`CAUSAL_K`.
+* **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
+  budget, then the mean total RMSE against Madgwick's filter and VQF, computed here on the same disguised trials.
+  A non-causal submission, or one named in :data:`CHEATS`, gets no points for the filter.
+* **Reference rows** (:func:`references`): VQF 9D (default parameters), Madgwick 9D (``ahrs``, its default gain) and
+  the library's best 9D filter on the same trials; they are scored like a student and listed on the leaderboard.
+
+Outputs (``--out``, default ``capstone_<class>/`` in the course): ``leaderboard.html`` and ``leaderboard.csv`` (one
+row per student and per reference: mean total / heading / inclination RMSE, rank, ratio to VQF, run time, budget and
+causality held, points, cheats), ``trials.csv`` (every student and reference on every trial), and per student
+``feedback/<student>/capstone.html`` with a per-trial figure (``trials.png``).
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import csv
+import dataclasses
+import html
+import json
+import os
+import queue
+import secrets
+import shutil
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from grading import box as wire
+from grading import judge, sandbox
+
+LAB = "13_capstone"
+FUNCTION = "estimate"
+
+#: The eight trials that ship in ``data/broad/`` (the students tune on them); the capstone scores on the others.
+SHIPPED = (2, 7, 11, 16, 25, 27, 29, 33)
+
+#: Seconds per sample a call may take, and the least a trial gets (:func:`budget_seconds`): 0.5 ms per sample is
+#: 7 times real time at BROAD's 286 Hz; the course's starter filter needs about 0.2 ms per sample in plain numpy.
+SECONDS_PER_SAMPLE = 5e-4
+MIN_SECONDS = 10.0
+SETUP_SECONDS = 60.0            # the notebook's cells, run once per box
+MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box
+
+#: Causality: samples after k are replaced by noisy ones for these k (``n`` is the trial's length), as
+#: ``tests/test_causality.py`` does for the library's filters; outputs up to k must agree to CAUSAL_TOL.
+CAUSAL_K = (lambda n: 3, lambda n: 200, lambda n: n // 2 + 1)
+CAUSAL_NOISE = (0.5, 3.0, 20.0)  # rad/s, m/s^2, uT added to gyro, accelerometer, magnetometer after k
+CAUSAL_TOL = 1e-10
+MAX_CROP_SECONDS = 0.5          # secret cut at the start (inside the rest before the movement) ...
+MAX_END_CROP_SECONDS = 3.0      # ... and at the end (never into the movement): a trial's length does not name it
+MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
+MATCH_STRIDE = 5                # ... compared at every 5th sample
+FOLLOW_RATIO = 0.25             # an output this much closer to the published reference than to the disguised one
+                                # follows the published reference: the trial was recognised
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """One row of the rubric: its key, points, and what earns them."""
+    key: str
+    points: float
+    rule: str
+
+
+NEAR_VQF = 1.2
+RUBRIC = (
+    Criterion("runs", 2, "a valid estimate (N unit quaternions) on every hidden trial, each within its time budget"),
+    Criterion("beats_madgwick", 3, "mean total RMSE below Madgwick's filter (ahrs, 9D, its default gain)"),
+    Criterion("near_vqf", 3, f"mean total RMSE at most {NEAR_VQF:g} x VQF's (9D, default parameters)"),
+    Criterion("beats_vqf", 2, "mean total RMSE below VQF's"),
+)
+MAX_POINTS = sum(c.points for c in RUBRIC)
+GATES = ("causal: the estimate up to sample k does not change when later samples do (else no points for the filter)",
+         "no cheat of the list below (else no points for the filter, and the submission is named)")
+
+#: What is looked for, and how it is found (each is named on the leaderboard when found).
+CHEATS = {
+    "calls a reference filter": "imports or calls VQF, ahrs, imufusion, filterpy or the library's filters (they are "
+                                "absent or stubs in the box; found in the code, in its errors, or as output equal to "
+                                f"a reference filter's to {MATCH_RAD:g} rad everywhere)",
+    "reads files": "opens, loads or lists files (the box has none; found in the code)",
+    "detects the trial": "its output follows a trial's published reference instead of the data it was given "
+                         f"(closer to the undisguised reference than {FOLLOW_RATIO:g} x its error)",
+}
+
+# The library's filters: every public function and method of these modules is a stub in the box (the estimators'
+# registry functions too), with the packages that hold other published filters absent.
+FILTER_MODULES = ("estimators", "bench", "freescale", "freescale_fast", "dcm_filter", "correlation", "gfimu_ekf",
+                  "gpsins")
+FILE_MODULES = ("datasets", "spreadsheet")
+HIDDEN_PACKAGES = ("ahrs", "vqf", "imufusion", "filterpy")
+KEEP = {"estimators": {"register", "available", "options"}}      # called when the library is imported
+STUB_MESSAGE = ("{name} is one of the library's filters or data loaders: it is not available in the capstone, "
+                "whose filter is yours.")
+WHY_HIDDEN = "the capstone's filter is yours, not a published one"
+# Calls that read files: by any name (``open``, ``x.read_text()``), or as functions of the modules that read them
+# (``np.load``, ``os.listdir``; a method of the student's own called ``load`` is not one).
+FILE_CALLS = {"open", "read_text", "read_bytes", "iterdir", "rglob", "loadmat", "load_trial", "fetch_trial",
+              "load_reference_position", "read_csv", "read_excel", "genfromtxt", "loadtxt", "fromfile", "memmap"}
+FILE_MODULE_CALLS = {"load", "listdir", "scandir", "walk", "glob"}
+FILE_OWNERS = {"np", "numpy", "os", "io", "pathlib", "Path", "json", "pickle", "glob", "scipy", "sio", "pd",
+               "pandas", "datasets", "shutil"}
+EMBED_CHARS = 200_000           # code the box runs beyond this size is listed for review (data pasted into it?)
+
+COLUMNS = ("rank", "name", "kind", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
+           "ratio_to_vqf", "seconds", "trials_ok", "trials", "budget_held", "causal", "cheats", "notes")
+TRIAL_COLUMNS = ("name", "kind", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
+                 "budget_s", "message")
+
+
+class CapstoneDataMissing(FileNotFoundError):
+    """The hidden trials are not on this computer: the message says which and how to get them."""
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The hidden trials
+# ----------------------------------------------------------------------------------------------------------------
+
+def hidden_names():
+    """The full names of the hidden trials: every BROAD trial that the course does not ship (:data:`SHIPPED`)."""
+    from fusionlab import datasets
+    return [t.name for t in datasets.list_trials() if t.number not in SHIPPED]
+
+
+def hidden_trials(folder=None, names=None):
+    """Load the hidden trials (without a download), or raise :class:`CapstoneDataMissing` saying how to get them.
+
+    Parameters
+    ----------
+    folder : str or Path, optional
+        A folder holding the ``.mat`` files (default: where :func:`fusionlab.datasets.load_trial` looks).
+    names : list of str, optional
+        Only these hidden trials (default: all of :func:`hidden_names`).
+
+    Returns
+    -------
+    list of fusionlab.datasets.BroadTrial
+    """
+    from fusionlab import datasets
+    names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
+    missing = []
+    for name in names:
+        try:
+            datasets.fetch_trial(name, folder=folder, download=False, progress=False)
+        except FileNotFoundError:            # DataMissing, or not in the folder given
+            missing.append(name)
+    if missing:
+        shown = ", ".join(missing[:4]) + (f" and {len(missing) - 4} more" if len(missing) > 4 else "")
+        raise CapstoneDataMissing(
+            f"the capstone is graded on {len(names)} hidden BROAD trials and {len(missing)} of them are not on this "
+            f"computer ({shown}). Get them once with `make capstone-data` (needs the internet; the files go to "
+            f"{datasets.cache_dir()}), or point {datasets.ENV_DIR} at a folder that holds them. Nothing was graded.")
+    return [datasets.load_trial(n, folder=folder, download=False, progress=False) for n in names]
+
+
+def stand_in(numbers, max_samples=None):
+    """Shipped trials held back as a STAND-IN for the hidden set (tests, a dry run): not the capstone's scores.
+
+    Parameters
+    ----------
+    numbers : list of int
+        Trials of :data:`SHIPPED`.
+    max_samples : int, optional
+        Keep only the first samples of each (quick runs).
+    """
+    from fusionlab import datasets
+    bad = [n for n in numbers if n not in SHIPPED]
+    if bad or not numbers:
+        raise ValueError(f"numbers must be shipped trials ({', '.join(map(str, SHIPPED))}); got {list(numbers)}")
+    out = []
+    for n in numbers:
+        whole = datasets.load_trial(n, download=False, progress=False)
+        t = whole.slice(0, max_samples) if max_samples else whole
+        if not (t.movement & ~np.isnan(t.quat_ref).any(axis=-1)).any():
+            raise ValueError(f"max_samples must keep part of each trial's movement phase; {t.name} cut to "
+                             f"{len(t)} samples has none (it starts at sample {np.flatnonzero(whole.movement)[0]})")
+        out.append(t)
+    return out
+
+
+def fetch(names=None, progress=True, out=None):
+    """``make capstone-data``: every hidden trial through the library's checked download; returns the exit status.
+
+    Each file is written to a temporary file, checked (length, and SHA-256 where the library knows the sum) and only
+    then renamed into the cache, so an interrupted run leaves whole files or none. Without a network it stops at the
+    first trial it cannot get, says how many it has and what to do, and returns 2.
+    """
+    import warnings
+
+    from fusionlab import datasets
+    out = sys.stdout if out is None else out
+    names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
+    print(f"==> the capstone's {len(names)} hidden BROAD trials, into {datasets.cache_dir()} (checked download)",
+          file=out, flush=True)
+    have, unverified = 0, []
+    for name in names:
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                path = datasets.fetch_trial(name, download=True, progress=progress)
+        except datasets.DataMissing as exc:
+            print(f"\nstopped: {name} could not be downloaded -- {exc}\n{have} of {len(names)} hidden trials are "
+                  f"here, each complete and checked (nothing partial is kept). Connect to the internet and run "
+                  f"`make capstone-data` again: it fetches only what is missing. The capstone cannot be graded "
+                  f"until all {len(names)} are here.", file=out, flush=True)
+            return 2
+        have += 1
+        if datasets.known_sha256(name) is None:
+            unverified.append((name, path))
+        for w in caught:
+            if "no checksum known" not in str(w.message):
+                print(f"warning: {w.message}", file=out)
+    print(f"all {len(names)} hidden trials are here.", file=out)
+    if unverified:
+        print(f"{len(unverified)} of them have no SHA-256 in lib/fusionlab/data/broad_sha256.txt, so they were "
+              "checked for length only; their sums (add them there once, from a copy you trust):", file=out)
+        for name, path in unverified:
+            print(f"{datasets._sha256(path)}  {name}.mat", file=out)
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Disguise: a secret turn of the sensor frame and a secret start
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Scored:
+    """A trial as the capstone scores it: disguised sensor data, the disguised reference, the published one."""
+    name: str
+    fs: float
+    gyr: np.ndarray
+    acc: np.ndarray
+    mag: np.ndarray
+    quat_ref: np.ndarray
+    movement: np.ndarray
+    published: np.ndarray      # the trial's own reference over the same samples, not disguised
+    turn_deg: float
+
+    def __len__(self):
+        return len(self.gyr)
+
+
+def disguise(trials, seed):
+    """Each trial turned by a random rotation of the sensor frame and cut at both ends by random amounts.
+
+    The start loses under 0.5 s, the end under 3 s but never a sample of the movement phase.
+
+    New sensor axes ``v' = A v`` (``A = quat_to_dcm(q_T)``, uniform over rotations); the body->ENU reference becomes
+    ``q_ref ⊗ conj(q_T)``, so the error quaternion of any estimate of the new body is that of the old one.
+    """
+    from fusionlab import rotations
+    rng = np.random.default_rng(seed)
+    out = []
+    for t in trials:
+        q_t = rng.standard_normal(4)
+        q_t = q_t / np.linalg.norm(q_t) * (1 if q_t[0] >= 0 else -1)
+        A = rotations.quat_to_dcm(q_t)
+        start = int(rng.integers(0, int(MAX_CROP_SECONDS * t.fs)))
+        last_moving = int(np.flatnonzero(t.movement)[-1]) if t.movement.any() else len(t) - 1
+        stop = max(last_moving + 1, len(t) - int(rng.integers(0, int(MAX_END_CROP_SECONDS * t.fs))))
+        s = slice(start, stop)
+        ref = np.array(t.quat_ref[s])
+        lost = np.isnan(ref).any(axis=-1)
+        turned = rotations.quat_multiply(np.where(lost[:, None], [1.0, 0, 0, 0], ref), rotations.quat_conjugate(q_t))
+        turned[lost] = np.nan
+        out.append(Scored(t.name, t.fs, np.array(t.gyr[s]) @ A.T, np.array(t.acc[s]) @ A.T,
+                          np.array(t.mag[s]) @ A.T, turned, np.array(t.movement[s]), ref,
+                          float(np.degrees(2 * np.arccos(min(1.0, abs(q_t[0])))))))
+    return out
+
+
+def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
+    """The time a call of ``estimate`` may take on a trial of ``n`` samples, s."""
+    return max(float(min_seconds), n * float(seconds_per_sample))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Scoring (trusted side only)
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass
+class TrialResult:
+    trial: str
+    status: str = "ok"        # ok, error, timeout, died, invalid, not run
+    message: str = ""
+    seconds: float = float("nan")
+    budget_s: float = float("nan")
+    total_deg: float = float("nan")
+    heading_deg: float = float("nan")
+    inclination_deg: float = float("nan")
+    counted_deg: float = float("nan")   # total RMSE as the mean counts it (a failed trial: the identity's error)
+    q: np.ndarray | None = None
+
+
+def _as_quaternions(value, n):
+    """The reply as (n, 4) unit quaternions, or a ValueError saying what it is instead."""
+    try:
+        q = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"estimate returned something that is not an array of numbers") from None
+    if q.shape != (n, 4):
+        raise ValueError(f"estimate must return shape ({n}, 4); got {q.shape}")
+    if not np.isfinite(q).all():
+        raise ValueError("estimate returned NaN or infinite values")
+    norm = np.linalg.norm(q, axis=-1)
+    if np.any(np.abs(norm - 1) > 1e-3):
+        raise ValueError(f"estimate must return unit quaternions; norms range {norm.min():.3g}..{norm.max():.3g}")
+    return q / norm[:, None]
+
+
+def score_trial(result, q, trial):
+    """Fill ``result`` with the authors' metrics of ``q`` on ``trial`` (as :func:`fusionlab.bench.score` does)."""
+    from fusionlab import metrics
+    r = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
+    result.total_deg, result.heading_deg, result.inclination_deg = r.total_deg, r.heading_deg, r.inclination_deg
+    result.counted_deg = r.total_deg
+    return result
+
+
+def never_moves(trial):
+    """Total RMSE of the identity quaternion on ``trial``: what a trial without a valid estimate counts."""
+    from fusionlab import metrics
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (len(trial), 1))
+    return metrics.broad_rmse(q, trial.quat_ref, trial.movement).total_deg
+
+
+@dataclass
+class Reference:
+    """A reference filter's row: its per-trial results (with a thinned copy of its output for the match check)."""
+    name: str
+    summary: str
+    trials: list
+
+
+def references(scored, progress=False):
+    """VQF 9D, Madgwick 9D and every 9D filter of the library on the disguised trials; the library's best is kept.
+
+    A library filter that refuses a trial (TRIAD, which has no gyro, refuses free fall) is left out of the choice.
+
+    Returns
+    -------
+    dict
+        ``{'vqf9': Reference, 'madgwick9': Reference, 'library best (<name>)': Reference}``
+    """
+    from fusionlab import bench
+    found = {c.name: c for c in bench.contenders()}
+    missing = [n for n in ("vqf9", "madgwick9") if n not in found]
+    if missing:
+        raise RuntimeError(f"the capstone's reference rows need {' and '.join(missing)} (the packages vqf and ahrs "
+                           "of environment.txt)")
+    library = [c for c in found.values() if c.source == "fusionlab" and c.uses_mag]
+    rows = {}
+    for c in [found["vqf9"], found["madgwick9"], *library]:
+        trials = []
+        for t in scored:
+            r = TrialResult(t.name)
+            t0 = time.perf_counter()
+            try:
+                q = np.asarray(c.run(t), dtype=float)
+            except ValueError as exc:                 # a library filter that refuses a trial (TRIAD in free fall)
+                if c.source != "fusionlab":
+                    raise
+                if progress:
+                    print(f"  reference {c.name} left out: it refuses {t.name} ({exc})", flush=True)
+                break
+            r.seconds = time.perf_counter() - t0
+            q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+            score_trial(r, q, t)
+            r.q = q[::MATCH_STRIDE]                 # enough to recognise this output again, a fifth of the memory
+            trials.append(r)
+            if progress:
+                print(f"  reference {c.name} on {t.name}: {r.total_deg:.2f} deg", flush=True)
+        else:
+            rows[c.name] = Reference(c.name, c.summary, trials)
+    library = [c for c in library if c.name in rows]
+    best = min((rows[c.name] for c in library), key=lambda ref: np.mean([r.total_deg for r in ref.trials]))
+    out = {"vqf9": rows["vqf9"], "madgwick9": rows["madgwick9"]}
+    out[f"library best ({best.name})"] = best
+    out["_all"] = rows                     # every reference's output, for the match check
+    return out
+
+
+def mean_total(trials):
+    """Mean over the trials of the total RMSE as counted (a failed trial with the identity's error), deg."""
+    return float(np.mean([r.counted_deg for r in trials])) if trials else float("nan")
+
+
+def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg):
+    """Points of each rubric criterion (:data:`RUBRIC`) for a mean total RMSE; none when ``gated_out``."""
+    if gated_out:
+        return {c.key: 0.0 for c in RUBRIC}
+    earned = {"runs": all_ran, "beats_madgwick": mean_deg < madgwick_deg,
+              "near_vqf": mean_deg <= NEAR_VQF * vqf_deg, "beats_vqf": mean_deg < vqf_deg}
+    return {c.key: float(c.points) if earned[c.key] else 0.0 for c in RUBRIC}
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The student's program and what it may not do
+# ----------------------------------------------------------------------------------------------------------------
+
+def program_of(nb):
+    """The cells the box runs, as source: the setup cell (grade id ``imports``), every answer cell, and the other
+    cells those need (:func:`grading.judge.prune`). Tuning and plotting cells that define nothing the answers use
+    are left out (they read the shipped trials, which the box does not have)."""
+    cells = []
+    for cell in nb.cells:
+        if cell.get("cell_type") != "code":
+            continue
+        meta = judge.nbg(cell)
+        if meta.get("grade") and not meta.get("solution"):
+            continue                                   # a test cell: the judge's, not the student's
+        must = bool(meta.get("solution")) or meta.get("grade_id") == "imports"
+        cells.append((meta.get("grade_id"), judge.python_of(cell.get("source", "")), must))
+    return [(gid, src) for gid, src, _ in judge.prune(cells, need=(FUNCTION,))]
+
+
+def scan(cells):
+    """Cheats seen in the code the box runs (``[(grade_id, source)]``): ``[(kind, why)]`` (kinds of :data:`CHEATS`).
+
+    The setup cell (``imports``) may import the library's modules, as the lab's own cell does for tuning on the
+    shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found."""
+    found = []
+    lib_filters = set(FILTER_MODULES)
+    for i, (gid, source) in enumerate(cells, 1):
+        setup = gid == "imports"
+        try:
+            tree = judge._parse(source)
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [f"{node.module or ''}.{a.name}" for a in node.names]
+            for name in names:
+                parts = name.split(".")
+                if parts[0] in HIDDEN_PACKAGES:
+                    found.append(("calls a reference filter", f"cell {i}: imports {name}"))
+                elif setup:
+                    continue
+                elif parts[0] == "fusionlab" and lib_filters & set(parts[1:]):
+                    found.append(("calls a reference filter", f"cell {i}: imports {name}"))
+                elif parts[0] == "fusionlab" and set(FILE_MODULES) & set(parts[1:]):
+                    found.append(("reads files", f"cell {i}: imports {name}"))
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
+                    node.value.id in lib_filters:
+                found.append(("calls a reference filter", f"cell {i}: uses {node.value.id}.{node.attr}"))
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else None
+                owner = f.value.id if isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name) else None
+                if name in FILE_CALLS or (name in FILE_MODULE_CALLS and owner in FILE_OWNERS) or \
+                        (isinstance(f, ast.Name) and name == "glob"):
+                    found.append(("reads files", f"cell {i}, line {node.lineno}: calls {name}"))
+    return list(dict.fromkeys(found))
+
+
+def forbidden_names():
+    """``module:qualname`` of every function the box's library has as a stub (:data:`FILTER_MODULES`,
+    :data:`FILE_MODULES`, the estimators' registered functions)."""
+    import importlib
+    import inspect
+    out = set()
+    for short in FILTER_MODULES + FILE_MODULES:
+        mod = importlib.import_module(f"fusionlab.{short}")
+        keep = KEEP.get(short, set())
+        for name, obj in vars(mod).items():
+            if name.startswith("_") or name in keep or getattr(obj, "__module__", None) != mod.__name__:
+                continue
+            if inspect.isfunction(obj):
+                out.add(f"{mod.__name__}:{name}")
+            elif inspect.isclass(obj):
+                for attr, member in vars(obj).items():
+                    if inspect.isfunction(member) and not attr.startswith("__"):
+                        out.add(f"{mod.__name__}:{name}.{attr}")
+    from fusionlab import estimators
+    for entry in estimators._REGISTRY.values():
+        out.add(judge._dotted(entry["fn"]))
+    return sorted(n for n in out if n)
+
+
+def box_library(scratch):
+    """The library copy and shadow packages every capstone box gets (made once per run); returns its folder."""
+    import compileall
+
+    import fusionlab
+    root = Path(scratch) / "capstone-box"
+    if not root.exists():
+        root.mkdir(parents=True)
+        left = judge.strip_packages(root, Path(fusionlab.__file__).resolve().parents[1], forbidden_names(),
+                                    hidden=HIDDEN_PACKAGES, why=WHY_HIDDEN, message=STUB_MESSAGE)
+        if left:
+            raise RuntimeError(f"these filters could not be taken out of the box: {left}")
+        compileall.compile_dir(root, quiet=1)
+        for top, dirs, files in os.walk(root):
+            os.chmod(top, 0o755)
+            for f in files:
+                os.chmod(os.path.join(top, f), 0o644)
+    return root
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The box: the student's cells, then calls of estimate with sensor data only
+# ----------------------------------------------------------------------------------------------------------------
+
+class Runner:
+    """One student's box, started again (from the notebook's cells) after a call that ran over or ended it."""
+
+    def __init__(self, cells, course, scratch, slot=0, limits=None):
+        self.cells, self.course, self.scratch, self.slot = cells, Path(course), Path(scratch), slot
+        self.limits = limits or {}
+        self.root = box_library(scratch)
+        self.box = self.work = None
+        self.cell_errors = {}
+        self.starts = 0
+        self.setup_error = ""          # set when the notebook's cells could not be run: no call is tried again
+
+    def start(self):
+        self.close()
+        self.starts += 1
+        uid = sandbox.box_uid(self.slot)
+        self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
+        command = sandbox.bwrap_command(["python", str(judge.BOX)], course=self.course, lab=LAB,
+                                        lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
+                                        limits=self.limits, uid=uid, data=False)
+        self.box = judge.Box(command)
+        deadline = time.monotonic() + SETUP_SECONDS
+        try:
+            self.box.send({"cells": self.cells})
+            while True:
+                msg = self.box.receive(deadline)
+                if msg.get("ready"):
+                    return True
+                if msg.get("state") == "done" and msg.get("error"):
+                    self.cell_errors.setdefault(int(msg.get("cell", -1)), str(msg["error"])[:300])
+        except judge.BoxTimeout:
+            self.setup_error = f"the notebook's cells ran over {SETUP_SECONDS:g} s"
+        except judge.BoxDied as exc:
+            self.setup_error = f"the notebook's cells ended the process ({exc})"
+        self.close()
+        return False
+
+    def call(self, trial, seconds, gyr=None, acc=None, mag=None):
+        """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data."""
+        if self.box is None and (self.setup_error or self.starts > MAX_RESTARTS or not self.start()):
+            return None, "not run", self.setup_error or f"the box was started {self.starts} times", float("nan")
+        args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
+                trial.mag if mag is None else mag, float(trial.fs)]
+        message = {"op": "call", "name": FUNCTION, "args": wire.encode(args), "kwargs": wire.encode({})}
+        t0 = time.monotonic()
+        try:
+            self.box.send(message)
+            reply = self.box.receive(t0 + seconds)
+        except judge.BoxTimeout:
+            self.close()
+            return None, "timeout", f"ran over its budget of {seconds:.1f} s (stopped)", time.monotonic() - t0
+        except judge.BoxDied as exc:
+            self.close()
+            return None, "died", f"ended the process ({exc})", time.monotonic() - t0
+        elapsed = time.monotonic() - t0
+        if not reply.get("ok"):
+            return None, "error", str(reply.get("error", "an error"))[:500], elapsed
+        try:
+            q = _as_quaternions(wire.decode(reply.get("value")), len(args[0]))
+        except (wire.WireError, ValueError) as exc:
+            return None, "invalid", str(exc)[:300], elapsed
+        return q, "ok", "", elapsed
+
+    def close(self):
+        if self.box is not None:
+            self.box.kill()
+            self.box = None
+        if self.work:
+            shutil.rmtree(self.work, ignore_errors=True)
+            self.work = None
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# One submission
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass
+class StudentResult:
+    name: str
+    trials: list = field(default_factory=list)
+    causal: bool | None = None
+    causal_message: str = ""
+    cheats: list = field(default_factory=list)      # (kind, why)
+    notes: list = field(default_factory=list)
+    points: dict = field(default_factory=dict)
+    error: str = ""
+
+    @property
+    def total_points(self):
+        return float(sum(self.points.values()))
+
+    @property
+    def all_ran(self):
+        return bool(self.trials) and all(r.status == "ok" for r in self.trials)
+
+
+def check_causality(runner, trial, q, seconds, rng):
+    """(True/False, message): is ``estimate``'s output up to k unchanged when every sample after k changes?"""
+    n = len(trial)
+    for k_of in CAUSAL_K:
+        k = min(k_of(n), n - 2)
+        noisy = []
+        for x, scale in zip((trial.gyr, trial.acc, trial.mag), CAUSAL_NOISE):
+            y = np.array(x)
+            y[k + 1:] += scale * rng.standard_normal(y[k + 1:].shape)
+            noisy.append(y)
+        q2, status, why, _ = runner.call(trial, seconds, *noisy)
+        if q2 is None:
+            return None, f"not checked: with later samples changed, estimate {why} ({status})"
+        change = float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
+        if change > CAUSAL_TOL:
+            return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
+                           f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
+                           "seed)")
+    return True, f"causal (checked on one trial at k = {', '.join(str(min(f(n), n - 2)) for f in CAUSAL_K)})"
+
+
+def causality_trial(seed, n, rng=None):
+    """Index of the secret trial (of ``n``) on which the causality check runs, for the disguise's ``seed``."""
+    rng = np.random.default_rng([seed, 7]) if rng is None else rng
+    return int(rng.integers(n))
+
+
+def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0, seconds_per_sample=SECONDS_PER_SAMPLE,
+                     min_seconds=MIN_SECONDS, limits=None):
+    """Grade one notebook on the disguised trials ``scored``; every number is computed here."""
+    res = StudentResult(name)
+    cells = program_of(nb)
+    res.cheats += scan(cells)
+    size = sum(len(src) for _, src in cells)
+    if size > EMBED_CHARS:
+        res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
+                         "published reference, say)?")
+    runner = Runner([src for _, src in cells], course, scratch, slot, limits)
+    rng = np.random.default_rng([seed, 7])
+    chosen = causality_trial(seed, len(scored), rng)
+    try:
+        for i, t in enumerate(scored):
+            r = TrialResult(t.name, budget_s=budget_seconds(len(t), seconds_per_sample, min_seconds))
+            q, r.status, r.message, r.seconds = runner.call(t, r.budget_s)
+            if q is not None and r.seconds > r.budget_s:
+                r.status, q = "timeout", None
+                r.message = f"took {r.seconds:.1f} s, over its budget of {r.budget_s:.1f} s"
+            if q is not None:
+                score_trial(r, q, t)
+                r.q = q
+                _look_for_cheats(res, r, t, refs)
+                if i != chosen:
+                    r.q = None                                  # a class of a few hundred would not fit otherwise
+            else:
+                r.counted_deg = never_moves(t)
+                if any(text in r.message for text in ("not available in the capstone",
+                                                      "not available while the lab is graded")):
+                    res.cheats.append(("calls a reference filter", f"{t.name}: {r.message}"))
+            res.trials.append(r)
+        ran = [(t, r) for t, r in zip(scored, res.trials) if r.status == "ok"]
+        if res.trials[chosen].status != "ok" and ran:           # it failed there: the first trial that ran, again
+            t, r = ran[0]
+            q, status, why, _ = runner.call(t, r.budget_s)
+            ran = [(t, dataclasses.replace(r, q=q))] if q is not None else []
+        else:
+            ran = [(scored[chosen], res.trials[chosen])] if ran else []
+        if ran:
+            t, r = ran[0]
+            res.causal, res.causal_message = check_causality(runner, t, r.q, r.budget_s, rng)
+            r.q = None
+        else:
+            res.causal_message = "not checked: estimate ran on no trial"
+        if runner.cell_errors:
+            res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
+        if runner.starts > 1:
+            res.notes.append(f"the box was started {runner.starts} times (after calls that ran over or ended it)")
+    finally:
+        runner.close()
+    res.cheats = list(dict.fromkeys(res.cheats))
+    vqf, madgwick = mean_total(refs["vqf9"].trials), mean_total(refs["madgwick9"].trials)
+    gated = bool(res.cheats) or res.causal is False
+    res.points = rubric_points(mean_total(res.trials), res.all_ran, gated, madgwick, vqf)
+    return res
+
+
+def _look_for_cheats(res, r, t, refs):
+    from fusionlab import metrics, rotations
+    for ref in refs["_all"].values():
+        q_ref = next(x.q for x in ref.trials if x.trial == t.name)
+        if np.max(rotations.quat_angle_between(r.q[::MATCH_STRIDE], q_ref)) < MATCH_RAD:
+            res.cheats.append(("calls a reference filter", f"{t.name}: its output is {ref.name}'s to "
+                                                           f"{MATCH_RAD:g} rad at every sample"))
+    published = metrics.broad_rmse(r.q, t.published, t.movement).total_deg
+    if published < FOLLOW_RATIO * r.total_deg:
+        res.cheats.append(("detects the trial", f"{t.name}: {published:.2f} deg from the published reference, "
+                                                f"{r.total_deg:.2f} deg from the data it was given"))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The class: leaderboard (HTML, CSV) and per-student feedback
+# ----------------------------------------------------------------------------------------------------------------
+
+def _row(name, kind, trials, vqf_deg, points=None, causal="", cheats="", notes=""):
+    ok = [r for r in trials if r.status == "ok"]
+    secs = [r.seconds for r in trials if np.isfinite(r.seconds)]
+    m = mean_total(trials)
+    return dict(rank="", name=name, kind=kind, points="" if points is None else f"{points:g}",
+                max_points="" if points is None else f"{MAX_POINTS:g}", total_deg=m,
+                heading_deg=float(np.mean([r.heading_deg for r in ok])) if ok else float("nan"),
+                inclination_deg=float(np.mean([r.inclination_deg for r in ok])) if ok else float("nan"),
+                ratio_to_vqf=m / vqf_deg, seconds=float(sum(secs)), trials_ok=len(ok), trials=len(trials),
+                budget_held="" if kind == "reference" or not trials else
+                ("yes" if all(r.status != "timeout" for r in trials) else "no"),
+                causal=causal, cheats=cheats, notes=notes)
+
+
+def _cheat_text(cheats):
+    """Each kind of cheat once, with its first evidence and how many more there are (the feedback lists all)."""
+    kinds = list(dict.fromkeys(k for k, _ in cheats))
+    parts = []
+    for kind in kinds:
+        whys = [w for k, w in cheats if k == kind]
+        parts.append(f"{kind}: {whys[0]}" + (f" (and {len(whys) - 1} more)" if len(whys) > 1 else ""))
+    return "; ".join(parts)
+
+
+def leaderboard_rows(results, refs):
+    """Rows of :data:`COLUMNS`: students ranked by points, then mean total RMSE; reference rows among them."""
+    vqf = mean_total(refs["vqf9"].trials)
+    rows = []
+    for res in results:
+        causal = {True: "yes", False: "NO", None: "not checked"}[res.causal]
+        rows.append(_row(res.name, "student", res.trials, vqf, res.total_points, causal, _cheat_text(res.cheats),
+                         "; ".join(res.notes + [res.error]).strip("; ")))
+    students = sorted(rows, key=lambda r: (-float(r["points"]), r["total_deg"] if np.isfinite(r["total_deg"])
+                                           else np.inf))
+    for i, r in enumerate(students, 1):
+        r["rank"] = i
+    refs_rows = sorted((_row(name, "reference", ref.trials, vqf, notes=ref.summary) for name, ref in refs.items()
+                        if not name.startswith("_")), key=lambda r: r["total_deg"])
+    merged = []
+    for r in students:                          # each reference sits above the first student it beats on total
+        while refs_rows and refs_rows[0]["total_deg"] <= r["total_deg"]:
+            merged.append(refs_rows.pop(0))
+        merged.append(r)
+    return merged + refs_rows
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return "" if not np.isfinite(v) else f"{v:.2f}"
+    return str(v)
+
+
+def write_csv(rows, path, columns):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([_fmt(r[c]) for c in columns])
+    return path
+
+
+def trial_rows(results, refs):
+    rows = []
+    for kind, items in (("student", [(r.name, r.trials) for r in results]),
+                        ("reference", [(n, ref.trials) for n, ref in refs.items() if not n.startswith("_")])):
+        for name, trials in items:
+            for t in trials:
+                rows.append(dict(name=name, kind=kind, trial=t.trial, status=t.status, total_deg=t.total_deg,
+                                 heading_deg=t.heading_deg, inclination_deg=t.inclination_deg, seconds=t.seconds,
+                                 budget_s=t.budget_s, message=t.message))
+    return rows
+
+
+STYLE = ("body{font-family:sans-serif;margin:2em;max-width:80em} table{border-collapse:collapse;margin:1em 0} "
+         "td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right} td.l,th.l{text-align:left} "
+         "tr.reference{background:#eef3fb;font-style:italic} tr.gated{background:#fbeeee} "
+         ".standin{background:#fff3c4;border:2px solid #d9a400;padding:.6em;font-weight:bold}")
+
+
+def _table(rows, columns, cls=None):
+    head = "".join(f"<th class='l'>{html.escape(c)}</th>" if c in ("name", "cheats", "notes", "rule", "trial",
+                                                                   "message") else f"<th>{html.escape(c)}</th>"
+                   for c in columns)
+    body = []
+    for r in rows:
+        klass = cls(r) if cls else ""
+        cells = "".join(f"<td class='l'>{html.escape(_fmt(r[c]))}</td>" if c in ("name", "cheats", "notes", "rule",
+                                                                                 "trial", "message")
+                        else f"<td>{html.escape(_fmt(r[c]))}</td>" for c in columns)
+        body.append(f"<tr class='{klass}'>{cells}</tr>")
+    return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+
+
+def _page(title, parts, label):
+    banner = f"<p class='standin'>{html.escape(label)}</p>" if label else ""
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{banner}{''.join(parts)}</body></html>")
+
+
+def _rubric_html():
+    rows = [dict(points=f"{c.points:g}", rule=c.rule) for c in RUBRIC]
+    gates = "".join(f"<li>{html.escape(g)}</li>" for g in GATES)
+    cheats = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in CHEATS.items())
+    return (f"<h2>Rubric (points for the filter, out of {MAX_POINTS:g})</h2>{_table(rows, ('points', 'rule'))}"
+            f"<p>Gates:</p><ul>{gates}</ul><p>Cheats looked for:</p><ul>{cheats}</ul>"
+            "<p>A trial without a valid estimate (error, over its budget, not unit quaternions) counts in the mean "
+            "with the error of an estimate that never moves (the identity quaternion).</p>")
+
+
+def write_leaderboard(results, refs, scored, out, class_name, label=""):
+    """``leaderboard.html``, ``leaderboard.csv``, ``trials.csv`` and each student's feedback page and figure."""
+    import matplotlib
+    matplotlib.use("Agg")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = leaderboard_rows(results, refs)
+    write_csv(rows, out / "leaderboard.csv", COLUMNS)
+    write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
+    what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each disguised by a secret turn of the "
+            "sensor frame and a secret start; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
+            "the trials; seconds: run time of estimate on all trials")
+    gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["cheats"] or r["causal"] == "NO"
+                                                                      else "")
+    page = _page(f"Capstone leaderboard: {class_name}",
+                 [f"<p>{html.escape(what)}</p>", _table(rows, COLUMNS, gated), _rubric_html()], label)
+    (out / "leaderboard.html").write_text(page, encoding="utf-8")
+    for res in results:
+        feedback(res, refs, out / "feedback" / res.name, label)
+    return out / "leaderboard.html"
+
+
+def feedback(res, refs, folder, label=""):
+    """One student's page: their row, each trial against the references, the figure (``trials.png``)."""
+    import matplotlib.pyplot as plt
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = [r.trial for r in refs["vqf9"].trials]
+    mine = {r.trial: r for r in res.trials}
+    shown = {"you": [mine[n].total_deg if n in mine else float("nan") for n in names]}
+    for n, ref in refs.items():
+        if not n.startswith("_"):
+            shown[n] = [r.total_deg for r in ref.trials]
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(names) + 2), 4.2), constrained_layout=True)
+    x = np.arange(len(names))
+    width = 0.8 / len(shown)
+    for i, (n, vals) in enumerate(shown.items()):
+        ax.bar(x + (i - (len(shown) - 1) / 2) * width, np.nan_to_num(vals, nan=0.0), width, label=n)
+    for i, n in enumerate(names):
+        status = mine[n].status if n in mine else "not run"
+        if status != "ok":
+            ax.text(x[i], 0.1, status, ha="center", va="bottom", rotation=90, color="crimson",
+                    transform=ax.get_xaxis_transform())
+    ax.set_xticks(x, [n[:2] for n in names])
+    ax.set_xlabel("hidden trial (number)")
+    ax.set_ylabel("total RMSE (deg)")
+    ax.set_yscale("log")
+    ax.legend(fontsize=8)
+    ax.set_title(f"{res.name}: {res.total_points:g} of {MAX_POINTS:g} points, mean total RMSE "
+                 f"{mean_total(res.trials):.2f} deg (VQF {mean_total(refs['vqf9'].trials):.2f})")
+    fig.savefig(folder / "trials.png", dpi=90)
+    plt.close(fig)
+    rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
+                 inclination_deg=r.inclination_deg, seconds=r.seconds, budget_s=r.budget_s, message=r.message)
+            for r in res.trials]
+    pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
+    flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
+    parts = [f"<p>Causality: {html.escape(res.causal_message)}</p>",
+             f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
+             f"<ul>{flags}</ul>" if flags else "", "<img src='trials.png' alt='total RMSE per trial'>",
+             _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds", "budget_s",
+                           "message"))]
+    (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The command
+# ----------------------------------------------------------------------------------------------------------------
+
+def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed=0, label="", progress=True,
+                seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
+    """Grade ``submissions`` (``{student: notebook}``) on ``scored``; writes the leaderboard; returns the results."""
+    scratch = Path(tempfile.mkdtemp(prefix="capstone-"))
+    os.chmod(scratch, 0o755)
+    try:
+        with sandbox.claimed_slots(max(1, workers)) as slots:
+            problem = sandbox.box_problem(str(course), LAB, scratch, slots)
+            if problem:
+                raise SystemExit(f"cannot grade the capstone: the sandbox does not start here.\n{problem}")
+            if progress:
+                print(f"==> reference filters on {len(scored)} trials", flush=True)
+            refs = references(scored, progress=progress)
+            box_library(scratch)
+            free = queue.Queue()
+            for s in slots:
+                free.put(s)
+
+            def one(student):
+                slot = free.get()
+                try:
+                    nb = submissions[student]
+                    if isinstance(nb, str):                 # a notebook that could not be read: why
+                        return StudentResult(student, error=nb, points=rubric_points(0, False, True, 0, 0))
+                    return grade_submission(student, nb, scored, refs, course, scratch, slot=slot, seed=seed,
+                                            seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
+                                            limits=limits)
+                finally:
+                    free.put(slot)
+
+            with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+                results = list(pool.map(one, sorted(submissions)))
+            for res in results:
+                if progress:
+                    print(f"  {res.name}: {res.total_points:g} / {MAX_POINTS:g}, mean total "
+                          f"{mean_total(res.trials) if res.trials else float('nan'):.2f} deg"
+                          + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
+                          + ("" if res.causal is not False else ", NOT causal"), flush=True)
+            write_leaderboard(results, refs, scored, out, class_name, label)
+            return results, refs
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def read_submissions(submitted, only=None):
+    """``{student: notebook, or the reason it cannot be read}`` from ``<submitted>/<student>/13_capstone/``."""
+    import nbformat
+
+    from grading import classgrade
+    submitted = Path(submitted)
+    found = sorted(p.parent.name for p in submitted.glob(f"*/{LAB}") if p.is_dir())
+    if only:
+        missing = sorted(set(only) - set(found))
+        if missing:
+            raise SystemExit(f"no submission of {LAB} for: {', '.join(missing)}")
+        found = [s for s in found if s in only]
+    out = {}
+    for student in found:
+        path = submitted / student / LAB / f"{LAB}.ipynb"
+        if not classgrade.STUDENT_ID.match(student):
+            out[student] = "the folder name is not a student id (letters, digits, '_', '.', '-')"
+        elif not path.is_file() or path.is_symlink() or path.stat().st_size > 100 << 20:
+            out[student] = f"no readable {LAB}.ipynb (a file of at most 100 MB) in its folder"
+        else:
+            try:
+                out[student] = nbformat.read(path, as_version=4)
+            except Exception as exc:  # noqa: BLE001 -- whatever nbformat says, the file is not a notebook
+                out[student] = f"the notebook cannot be read ({type(exc).__name__}: {str(exc)[:200]})"
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m grading.capstone", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    f = sub.add_parser("fetch", help="download the hidden trials once (make capstone-data)")
+    f.add_argument("--no-progress", action="store_true")
+    g = sub.add_parser("grade", help="grade every submitted/<student>/13_capstone/13_capstone.ipynb")
+    g.add_argument("--course", default=".", help="the course root (default: the current folder)")
+    g.add_argument("--class", dest="class_name", default="class", help="the class's name (titles, output folder)")
+    g.add_argument("--out", help="output folder (default capstone_<class>/ in the course)")
+    g.add_argument("--submitted", help="the folder of submissions (default: submitted/ in the course)")
+    g.add_argument("--student", action="append", help="grade only this student (repeatable)")
+    g.add_argument("--workers", type=int, default=1)
+    g.add_argument("--seed", type=int, help="the secret of the disguise (default: a new random one, saved in "
+                                            "<out>/run.json)")
+    g.add_argument("--stand-in", type=int, nargs="+", metavar="N",
+                   help="grade on these SHIPPED trials instead (a dry run; labelled a stand-in everywhere)")
+    g.add_argument("--max-samples", type=int, help="with --stand-in: only the first N samples of each trial")
+    a = ap.parse_args(argv)
+    if a.command == "fetch":
+        return fetch(progress=not a.no_progress)
+    course = Path(a.course).resolve()
+    out = Path(a.out) if a.out else course / f"capstone_{a.class_name}"
+    if a.stand_in:
+        trials = stand_in(a.stand_in, a.max_samples)
+        label = (f"STAND-IN: scored on shipped trials {', '.join(map(str, a.stand_in))} held back, not on the hidden "
+                 "set -- these are not capstone grades")
+    else:
+        try:
+            trials = hidden_trials()
+        except CapstoneDataMissing as exc:
+            print(f"cannot grade the capstone: {exc}", file=sys.stderr)
+            return 2
+        label = ""
+    seed = a.seed if a.seed is not None else secrets.randbits(62)
+    submissions = read_submissions(Path(a.submitted) if a.submitted else course / "submitted", a.student)
+    if not submissions:
+        print(f"no submissions: put them in submitted/<student>/{LAB}/{LAB}.ipynb", file=sys.stderr)
+        return 2
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "run.json").write_text(json.dumps({"seed": seed, "trials": [t.name for t in trials],
+                                              "stand_in": bool(a.stand_in)}, indent=1))
+    scored = disguise(trials, seed)
+    grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label)
+    print(f"leaderboard: {out / 'leaderboard.html'} (and .csv); feedback: {out / 'feedback'}/<student>/")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
