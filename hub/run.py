@@ -10,7 +10,9 @@ What it does, in order (``docs/hub.md`` has the whole story):
    password: they log in to the hub only.
 2. The hub's folder (``--dir``): the hub's database and secrets, ``hub.json`` (what ``hub/jupyterhub_config.py``
    reads; root only), nbgrader's exchange (``exchange/``, writable by all as nbgrader wants; the course id is
-   ``fusionlab``) and the two ``nbgrader_config.py`` files that point the instructor and the students at it.
+   ``fusionlab``), the two ``nbgrader_config.py`` files that point the instructor and the students at it, and the
+   students' JupyterLab settings: the student view's, plus a menu *Nbgrader* with one entry, *Assignment List*
+   (the student view hides nbgrader's own menu, which also holds Formgrader and Course List).
 3. The instructor's copy of the course: a clone of this repository in the instructor's home (``~/course``), the
    course root of Formgrader and of ``make grade``; kept between runs.
 4. Every server runs this repository's ``.venv`` and library, so the repository stays readable, but its parts that
@@ -107,6 +109,27 @@ def nbgrader_config(path, lines):
     os.chmod(path / "nbgrader_config.py", 0o644)
 
 
+# The student view hides nbgrader's menu (it holds Formgrader and Course List), which leaves no way to open the
+# Assignments panel; on the hub, where the panel is how labs come and go, a menu of its own opens it.
+ASSIGNMENTS_MENU = {"id": "jp-mainmenu-nbgrader", "label": "Nbgrader", "rank": 900,
+                    "items": [{"command": "nbgrader:open-assignment-list", "rank": 0}]}
+
+
+def student_settings(folder):
+    """The students' JupyterLab settings on the hub: the student view's (jupyter/lab/settings/overrides.json) and
+    the menu that opens the Assignments panel. Returns the folder."""
+    settings = folder / "config" / "student-settings"
+    settings.mkdir(parents=True, exist_ok=True)
+    overrides = json.loads((ROOT / "jupyter" / "lab" / "settings" / "overrides.json").read_text())
+    menus = overrides.setdefault("@jupyterlab/mainmenu-extension:plugin", {}).setdefault("menus", [])
+    menus.append(ASSIGNMENTS_MENU)
+    (settings / "overrides.json").write_text(json.dumps(overrides, indent=1))
+    for path in (folder / "config", settings):
+        os.chmod(path, 0o755)
+    os.chmod(settings / "overrides.json", 0o644)
+    return settings
+
+
 def prepare(args, instructor, students):
     folder = Path(args.dir).resolve()
     folder.mkdir(parents=True, exist_ok=True)
@@ -130,7 +153,7 @@ def prepare(args, instructor, students):
     nbgrader_config(folder / "config" / "instructor", common + [f"c.CourseDirectory.root = {str(course)!r}"])
     s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
          "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
-         "student_view": str(ROOT / "jupyter"), "exchange": str(exchange), "course_id": COURSE_ID,
+         "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)), "exchange": str(exchange), "course_id": COURSE_ID,
          "memory_mb": args.memory_mb, "cpus": args.cpus, "idle_seconds": args.idle_seconds,
          "student_password": old.get("student_password") or secrets.token_urlsafe(9),
          "instructor_password": old.get("instructor_password") or secrets.token_urlsafe(32),

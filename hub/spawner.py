@@ -123,7 +123,8 @@ class CourseSpawner(LocalProcessSpawner):
         config=True)
     student_view = Unicode(help="the student view's configuration folder (the repository's jupyter/)").tag(
         config=True)
-    student_settings = Unicode(help="the student view's JupyterLab settings (jupyter/lab/settings)").tag(config=True)
+    student_settings = Unicode(help="the students' JupyterLab settings: the student view's (jupyter/lab/settings) "
+                                    "and a menu that opens the Assignments panel").tag(config=True)
 
     def get_env(self):
         env = super().get_env()

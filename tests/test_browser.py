@@ -21,16 +21,12 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from chromium import chromium, needs_chromium, screenshot
 from conftest import LABS, ROOT
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = [pytest.mark.slow,  # a JupyterLab server and Chromium: minutes (make test-all)
-              pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine: the browser test needs "
-                                                         "Debian's chromium (apt-get install chromium)")]
+              needs_chromium]
 WIDGET_LAB = "01_euler_rotations"
-SHOTS = ROOT / "tests" / "_screenshots"
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
 RUN_ALL_TIMEOUT = 300                      # seconds for one lab's Run All (Lab 11 reads real data)
 
 
@@ -101,13 +97,8 @@ def server(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def browser():
-    from playwright.sync_api import sync_playwright
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    with chromium() as b:
+        yield b
 
 
 def _open(browser, server, path):
@@ -190,8 +181,7 @@ def test_run_all_goes_through_the_untouched_lab(browser, server, lab):
     """Run All in the untouched release runs every code cell; unfinished exercises show short feedback; every
     widget of the lab renders; the student view has no instructor tools and keeps nbgrader's Validate button."""
     page = _open(browser, server, f"labs/{lab}/{lab}.ipynb")
-    SHOTS.mkdir(exist_ok=True)
-    page.screenshot(path=str(SHOTS / f"{lab}_first_screen.png"))
+    screenshot(page, f"{lab}_first_screen")
     progress = _run_all(page)
     cells = page.evaluate(_OUTPUTS)
     not_run = [c["index"] for c in cells if c["count"] is None]
@@ -236,8 +226,8 @@ def test_run_all_goes_through_the_untouched_lab(browser, server, lab):
 
     if lab == WIDGET_LAB:
         page.evaluate(_SHOW, first_cell["index"])
-        page.locator(".jp-Notebook .jp-CodeCell.jp-mod-active .jp-OutputArea-output").last.screenshot(
-            path=str(SHOTS / f"{lab}_feedback_box.png"))
+        screenshot(page.locator(".jp-Notebook .jp-CodeCell.jp-mod-active .jp-OutputArea-output").last,
+                   f"{lab}_feedback_box")
     page.close()
 
 
@@ -260,7 +250,6 @@ def test_solution_runs_in_jupyterlab_without_errors_and_the_widget_responds(brow
         page.keyboard.press("ArrowRight")
     page.wait_for_function("(b) => { const i = document.querySelector('.widget-output img');"
                            "         return i && i.getAttribute('src') !== b; }", arg=before, timeout=30_000)
-    SHOTS.mkdir(exist_ok=True)
     page.locator(".widget-output img").first.scroll_into_view_if_needed()
-    page.screenshot(path=str(SHOTS / f"{WIDGET_LAB}_solution_widget.png"))
+    screenshot(page, f"{WIDGET_LAB}_solution_widget")
     page.close()
