@@ -15,8 +15,10 @@ from __future__ import annotations
 import argparse
 import gzip
 import io
+import os
 import re
 import shutil
+import subprocess
 import sys
 import tarfile
 from pathlib import Path
@@ -71,21 +73,41 @@ def _check_notebooks(course):
                 raise SystemExit(f"{nb.relative_to(course)} still holds '{marker}': regenerate it with `make labs`")
 
 
-def _archive(course, path):
-    """A reproducible .tar.gz of ``course`` under the top folder ``TOP`` (sorted, no owners, no times)."""
+def source_date(root=ROOT, environ=None):
+    """The date every file of the archive carries, in seconds since 1970: ``SOURCE_DATE_EPOCH`` when it is set (the
+    reproducible-builds convention), else the commit date of the repository's HEAD. The same sources give the same
+    archive, and a student's file browser shows when the course was last changed rather than 1970."""
+    environ = os.environ if environ is None else environ
+    value = environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if value:
+        if not value.isdigit():
+            raise SystemExit(f"SOURCE_DATE_EPOCH must be a whole number of seconds since 1970; got {value!r}")
+        return int(value)
+    try:
+        out = subprocess.run(["git", "-C", str(root), "log", "-1", "--format=%ct"], capture_output=True, text=True,
+                             check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise SystemExit(f"cannot date the release: {root} is not a git checkout with a commit ({exc}); set "
+                         "SOURCE_DATE_EPOCH to the date to stamp (seconds since 1970)") from None
+    return int(out)
+
+
+def _archive(course, path, mtime):
+    """A reproducible .tar.gz of ``course`` under the top folder ``TOP``: sorted, no owners, every entry dated
+    ``mtime`` (seconds since 1970; :func:`source_date`)."""
     buf = io.BytesIO()
     with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as tar:
         for item in [course, *sorted(course.rglob("*"))]:
             info = tar.gettarinfo(item, arcname=str(Path(TOP) / item.relative_to(course)))
             info.uid = info.gid = 0
             info.uname = info.gname = ""
-            info.mtime = 0
+            info.mtime = mtime
             if item.is_file():
                 with open(item, "rb") as fh:
                     tar.addfile(info, fh)
             else:
                 tar.addfile(info)
-    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0, filename="") as gz:
+    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=mtime, filename="") as gz:
         gz.write(buf.getvalue())
 
 
@@ -115,7 +137,7 @@ def build(out=None, root=ROOT):
     (course / "README.md").write_text(student_readme(root))
     _check_notebooks(course)
     archive = out / ARCHIVE
-    _archive(course, archive)
+    _archive(course, archive, source_date(root))
     return course, archive
 
 

@@ -75,6 +75,35 @@ def test_archive_is_the_folder_and_is_reproducible(built, tmp_path):
     assert hashlib.sha256(again.read_bytes()).digest() == hashlib.sha256(archive.read_bytes()).digest()
 
 
+def _head_date():
+    return int(subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%ct"], capture_output=True, text=True,
+                              check=True).stdout)
+
+
+def test_archive_files_carry_the_date_of_the_last_commit_not_1970(built):
+    _, archive = built
+    with tarfile.open(archive) as tar:
+        dates = {m.mtime for m in tar.getmembers()}
+    with open(archive, "rb") as fh:
+        gzip_date = int.from_bytes(fh.read(8)[4:8], "little")          # the gzip header's MTIME field
+    assert dates == {_head_date()} and gzip_date == _head_date(), (sorted(dates)[:3], gzip_date, _head_date())
+    assert _head_date() > 1_600_000_000                                # a real date (after September 2020)
+
+
+def test_source_date_epoch_sets_the_date_and_the_archive_stays_reproducible(tmp_path, monkeypatch):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")             # 2026-01-01 00:00 UTC
+    _, first = release.build(tmp_path / "a")
+    _, second = release.build(tmp_path / "b")
+    assert first.read_bytes() == second.read_bytes()
+    with tarfile.open(first) as tar:
+        assert {m.mtime for m in tar.getmembers()} == {1767225600}
+    assert release.source_date(environ={}) == _head_date()
+    with pytest.raises(SystemExit, match="SOURCE_DATE_EPOCH must be a whole number"):
+        release.source_date(environ={"SOURCE_DATE_EPOCH": "yesterday"})
+    with pytest.raises(SystemExit, match="set SOURCE_DATE_EPOCH"):
+        release.source_date(root=tmp_path, environ={})
+
+
 def _regions(cell):
     """(hidden-test lines, model-answer lines, text left visible in the release) of one solution cell."""
     src = cell.source
