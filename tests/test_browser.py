@@ -166,7 +166,9 @@ _SHOW = """async (i) => {
     await new Promise(r => setTimeout(r, 500));
     return {widget: !!cell.node.querySelector('.jp-OutputArea-output .jupyter-widgets .widget-container, '
                                                + '.jp-OutputArea-output .jupyter-widgets.widget-container'),
-            shown: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output')).map(n => n.innerText)};
+            shown: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output')).map(n => n.innerText),
+            cut: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output .widget-label'))   // "measurement varianc…"
+                .filter(l => l.offsetWidth > 0 && l.scrollWidth > l.clientWidth + 1).map(l => l.innerText)};
 }"""
 
 
@@ -223,8 +225,11 @@ def test_run_all_goes_through_the_untouched_lab(browser, server, lab):
     widgets = [c["index"] for c in cells if any(o["widget"] for o in c["outputs"])]
     assert set(expected) <= set(widgets), f"{lab}: widget outputs in code cells {widgets}; the lab builds fusionlab " \
                                           f"widgets in {expected}"
-    blank = [i for i in widgets if not page.evaluate(_SHOW, i)["widget"]]
+    shown = {i: page.evaluate(_SHOW, i) for i in widgets}
+    blank = [i for i in widgets if not shown[i]["widget"]]
     assert not blank, f"{lab}: widgets that did not render (text only) in code cells {blank}"
+    cut = [(i, label) for i in widgets for label in shown[i]["cut"]]
+    assert not cut, f"{lab}: widget labels cut short (code cell, label): {cut}"
 
     view = _student_view(page)
     assert view["plugins"] == {"create-assignment": False, "formgrader": False, "course-list": False, "menu": False,
