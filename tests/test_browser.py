@@ -269,3 +269,15 @@ def test_solution_runs_in_jupyterlab_without_errors_and_the_widget_responds(brow
     page.locator(".widget-output img").first.scroll_into_view_if_needed()
     page.screenshot(path=str(SHOTS / f"{WIDGET_LAB}_solution_widget.png"))
     page.close()
+
+
+def test_a_labs_link_to_a_course_document_opens_it_in_jupyterlab(browser, server):
+    """The header's link to the References (labs/docs/, tests/test_release.py) opens in JupyterLab, not a 404."""
+    page = _open(browser, server, f"labs/{WIDGET_LAB}/{WIDGET_LAB}.ipynb")
+    page.locator(".jp-Notebook .jp-MarkdownCell").first.get_by_role("link", name="References").first.click()
+    page.wait_for_function("() => { const w = window.jupyterapp.shell.currentWidget;"
+                           "        return w && w.context && w.context.path === 'labs/docs/references.md'; }",
+                           timeout=30_000)
+    page.wait_for_function("() => window.jupyterapp.shell.currentWidget.node.innerText.includes('seed 004')",
+                           timeout=30_000)
+    page.close()

@@ -11,9 +11,16 @@ from conftest import LABS, ROOT
 
 
 def test_every_lab_has_a_solution_and_a_release():
-    released = sorted(p.name for p in (ROOT / "labs").iterdir() if p.is_dir())
+    released = sorted(p.name for p in (ROOT / "labs").iterdir() if p.is_dir() and p.name != "docs")
     assert LABS, "no solutions/NN_name folders found"
     assert released == LABS, f"labs/ {released} does not match solutions/ {LABS}: run `make labs`"
+
+
+def test_labs_docs_is_what_the_readme_and_docs_make():
+    """labs/docs holds copies of the documents the labs link to (`make labs`): equal to their sources."""
+    from grading import release
+    release._check_docs(ROOT, ROOT)
+    assert sorted(p.name for p in (ROOT / "labs").iterdir() if not p.name.startswith(".")) == sorted([*LABS, "docs"])
 
 
 @pytest.mark.parametrize("lab", LABS)

@@ -52,7 +52,8 @@ def test_release_holds_the_course_and_nothing_of_the_instructor(built):
     if student_config in files:
         text = (course / student_config).read_text()
         assert not re.search(r"CourseDirectory|Exchange|ClearSolutions|Autograde|db_url", text), student_config
-    assert [f for f in files if f.startswith("labs/")] == sorted(f"labs/{lab}/{lab}.ipynb" for lab in LABS)
+    assert [f for f in files if f.startswith("labs/")] == sorted(
+        [f"labs/{lab}/{lab}.ipynb" for lab in LABS] + [f"{release.LABS_DOCS}/{d}" for d, _ in release.STUDENT_DOCS])
     lib = [f for f in _files(ROOT / "lib" / "fusionlab") if "__pycache__" not in f and not f.endswith(".pyc")]
     assert [f for f in files if f.startswith("lib/")] == [f"lib/fusionlab/{f}" for f in lib]
     assert "lib/fusionlab/data/broad_trials.json" in files
@@ -77,6 +78,37 @@ def test_archive_is_the_folder_and_is_reproducible(built, tmp_path):
     assert readme == (course / "README.md").read_bytes()
     _, again = release.build(tmp_path)
     assert hashlib.sha256(again.read_bytes()).digest() == hashlib.sha256(archive.read_bytes()).digest()
+
+
+MD_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+CITED = ("README *References*", "docs/derivations.md", "data/README.md", "data/broad/README.md")
+
+
+def _relative_links(text):
+    return [t.split("#")[0] for t in MD_LINK.findall(text) if not re.match(r"[a-z][a-z0-9+.-]*:|#", t)]
+
+
+def test_every_link_in_the_labs_opens_a_file_that_make_lab_serves(built):
+    """`make lab` serves labs/ only: a notebook's relative link (and a link in the documents it opens) must reach a
+    file inside labs/ of the release -- the course checkout has the same labs/ (tests/test_pipeline.py)."""
+    course, _ = built
+    labs = (course / "labs").resolve()
+    pages = [(p, "\n".join(c.source for c in nbformat.read(p, as_version=4).cells if c.cell_type == "markdown"))
+             for p in sorted(labs.glob("*/*.ipynb"))]
+    pages += [(p, p.read_text()) for p in sorted((labs / "docs").rglob("*.md"))]
+    broken, links = [], 0
+    for path, text in pages:
+        for target in _relative_links(text):
+            links += 1
+            found = (path.parent / target).resolve()
+            if not (found.is_file() and found.is_relative_to(labs)):
+                broken.append(f"{path.relative_to(course)}: {target}")
+    assert not broken, "links that JupyterLab cannot open:\n" + "\n".join(broken)
+    assert links >= len(LABS), f"only {links} relative links in the labs"
+    for path, text in pages:                            # what the labs cite is a link, not plain text
+        if path.suffix == ".ipynb":
+            plain = MD_LINK.sub("", text)
+            assert not [c for c in CITED if c in plain], (path.name, [c for c in CITED if c in plain])
 
 
 def _head_date():
@@ -234,7 +266,8 @@ def test_make_lab_serves_the_labs(built):
             except OSError:
                 time.sleep(1)
         assert listing is not None, f"JupyterLab did not answer on port {port} (exit {proc.poll()})"
-        assert sorted(item["name"] for item in listing["content"]) == LABS, "the server's root is not labs/"
+        assert sorted(item["name"] for item in listing["content"]) == sorted([*LABS, "docs"]), \
+            "the server's root is not labs/ (the labs and labs/docs)"
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/lab?token={token}", timeout=10) as r:
             page = r.read().decode()
             assert r.status == 200 and "JupyterLab" in page
