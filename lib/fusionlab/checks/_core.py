@@ -300,6 +300,8 @@ def friendly_errors():
     """In a notebook, explain unfinished exercises: a stub's NotImplementedError becomes one line saying which
     exercise to finish, and a ``NameError`` says which earlier cell (and exercise) should have made the name --
     unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
+    Where the exercise (or the missing data) is known, the NameError is one short box like a check's; so is a
+    provided test cell's failed ``assert``, with the exercise its names wait for.
 
     A cell that raises :class:`fusionlab.datasets.DataMissing` has the names it would have made remembered; a
     ``NameError`` on one of them says that data is missing and how to get it (and passes the remembering on to the
