@@ -41,9 +41,11 @@ solutions: env  ## re-execute every solution notebook in place (authors; one lab
 	    solutions/$$lab/$$lab.ipynb 2>&1 | grep -v "without encryption" ; test $${PIPESTATUS[0]} = 0 || exit 1; \
 	  $(BIN)/python -c "$$STRIP_WIDGET_STATE" solutions/$$lab/$$lab.ipynb || exit 1; done
 
-labs: env  ## regenerate the student notebooks in labs/ from solutions/
+labs: env  ## regenerate the student notebooks in labs/ from solutions/, and labs/docs (what the labs link to)
 	@db=$$(mktemp -d)/gradebook.db; for lab in $(LABS); do echo "==> generating labs/$$lab"; \
 	  $(BIN)/nbgrader generate_assignment $$lab --force --log-level=ERROR --db=sqlite:///$$db || exit 1; done
+	@echo "==> copying the documents the labs link to into labs/docs"
+	@$(BIN)/python -m grading.release --labs-docs >/dev/null
 
 data: env  ## regenerate the datasets in data/ (byte-identical; checksums in data/README.md)
 	@echo "==> regenerating data/lab03 (terminal logs, true angles) and the Lab 03 spreadsheet"

@@ -161,3 +161,7 @@ c.RestoreDeletedCells.add_missing_cells = True
 c.Autograde.autograde_preprocessors = [*Autograde.class_traits()["autograde_preprocessors"].default(),
                                        HideTestSource]
 c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, HideTestSource, CSSHTMLHeaderPreprocessor]
+
+# Validate's report as the student gets it ("6 of 9 tests pass"): the student view's settings, loaded here too so
+# that `nbgrader validate` in this folder reports the same.
+load_subconfig("jupyter/nbgrader_config.py")  # noqa: F821 (given to configuration files by traitlets)

@@ -3,7 +3,8 @@
     release/course/                 the course folder (git-ignored), ready to publish as its own repository
     release/fusionlab-course.tar.gz the same folder as one archive (top folder ``fusionlab-course/``)
 
-It holds the release notebooks (labs/), the library (lib/fusionlab with its data files), data/, environment.txt,
+It holds the release notebooks (labs/, with labs/docs/: the documents the labs link to, which `make labs` copies
+there because `make lab` serves labs/ only), the library (lib/fusionlab with its data files), data/, environment.txt,
 pyproject.toml, the derivations the labs link to (docs/derivations.md) and the student JupyterLab view (jupyter/),
 when the repository has them, and, from grading/student/, the student README, Makefile (test), course.mk (env and lab,
 which the course's own Makefile includes too) and tests.
@@ -15,8 +16,10 @@ from __future__ import annotations
 import argparse
 import gzip
 import io
+import os
 import re
 import shutil
+import subprocess
 import sys
 import tarfile
 from pathlib import Path
@@ -63,6 +66,57 @@ def student_readme(root=ROOT):
     return text
 
 
+# The documents the labs cite, copied into labs/docs/ (`make labs`): `make lab` serves only labs/, so a notebook's
+# link must stay inside it. (path in labs/docs, the repository file, or None for the README's References section)
+LABS_DOCS = "labs/docs"
+STUDENT_DOCS = [("references.md", None), ("derivations.md", "docs/derivations.md"),
+                ("data/README.md", "data/README.md"), ("data/broad/README.md", "data/broad/README.md")]
+_LINK = re.compile(r"(\]\()([^)\s#]+)(#[^)\s]*)?(\))")
+
+
+def student_docs(root=ROOT):
+    """{path under labs/docs: text} of the documents the labs cite. Each relative link that points at another of
+    them is made to point at its copy; the others stay as they are (tests/test_release.py checks that every link
+    resolves)."""
+    readme = (root / "README.md").read_text()
+    refs = _section(readme, "References")
+    if refs is None:
+        raise SystemExit("README.md has no '## References' section for labs/docs/references.md")
+    texts = {"references.md": ("README.md", "# References\n\n" + refs + "\n")}
+    for dest, src in STUDENT_DOCS:
+        if src is not None:
+            texts[dest] = (src, (root / src).read_text())
+    copy_of = {src: dest for dest, src in STUDENT_DOCS if src is not None}
+
+    def relink(dest, src, text):
+        def one(m):
+            target = Path(src).parent / m.group(2)
+            if re.match(r"[a-z]+:", m.group(2)) or str(Path(os.path.normpath(target))) not in copy_of:
+                return m.group(0)
+            new = os.path.relpath(copy_of[str(Path(os.path.normpath(target)))], Path(dest).parent)
+            return m.group(1) + new + (m.group(3) or "") + m.group(4)
+        return _LINK.sub(one, text)
+    return {dest: relink(dest, src, text) for dest, (src, text) in texts.items()}
+
+
+def write_student_docs(root=ROOT):
+    """Write :func:`student_docs` into ``root``/labs/docs (what `make labs` runs), replacing what was there."""
+    folder = root / LABS_DOCS
+    if folder.exists():
+        shutil.rmtree(folder)
+    for dest, text in student_docs(root).items():
+        (folder / dest).parent.mkdir(parents=True, exist_ok=True)
+        (folder / dest).write_text(text)
+    return folder
+
+
+def _check_docs(course, root):
+    shipped = {str(p.relative_to(course / LABS_DOCS)): p.read_text() for p in (course / LABS_DOCS).rglob("*")
+               if p.is_file()} if (course / LABS_DOCS).is_dir() else {}
+    if shipped != student_docs(root):
+        raise SystemExit(f"{LABS_DOCS} is not what the README and docs/ make: regenerate it with `make labs`")
+
+
 def _check_notebooks(course):
     for nb in sorted((course / "labs").rglob("*.ipynb")):
         text = nb.read_text()
@@ -71,21 +125,41 @@ def _check_notebooks(course):
                 raise SystemExit(f"{nb.relative_to(course)} still holds '{marker}': regenerate it with `make labs`")
 
 
-def _archive(course, path):
-    """A reproducible .tar.gz of ``course`` under the top folder ``TOP`` (sorted, no owners, no times)."""
+def source_date(root=ROOT, environ=None):
+    """The date every file of the archive carries, in seconds since 1970: ``SOURCE_DATE_EPOCH`` when it is set (the
+    reproducible-builds convention), else the commit date of the repository's HEAD. The same sources give the same
+    archive, and a student's file browser shows when the course was last changed rather than 1970."""
+    environ = os.environ if environ is None else environ
+    value = environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if value:
+        if not value.isdigit():
+            raise SystemExit(f"SOURCE_DATE_EPOCH must be a whole number of seconds since 1970; got {value!r}")
+        return int(value)
+    try:
+        out = subprocess.run(["git", "-C", str(root), "log", "-1", "--format=%ct"], capture_output=True, text=True,
+                             check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise SystemExit(f"cannot date the release: {root} is not a git checkout with a commit ({exc}); set "
+                         "SOURCE_DATE_EPOCH to the date to stamp (seconds since 1970)") from None
+    return int(out)
+
+
+def _archive(course, path, mtime):
+    """A reproducible .tar.gz of ``course`` under the top folder ``TOP``: sorted, no owners, every entry dated
+    ``mtime`` (seconds since 1970; :func:`source_date`)."""
     buf = io.BytesIO()
     with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as tar:
         for item in [course, *sorted(course.rglob("*"))]:
             info = tar.gettarinfo(item, arcname=str(Path(TOP) / item.relative_to(course)))
             info.uid = info.gid = 0
             info.uname = info.gname = ""
-            info.mtime = 0
+            info.mtime = mtime
             if item.is_file():
                 with open(item, "rb") as fh:
                     tar.addfile(info, fh)
             else:
                 tar.addfile(info)
-    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0, filename="") as gz:
+    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=mtime, filename="") as gz:
         gz.write(buf.getvalue())
 
 
@@ -114,15 +188,21 @@ def build(out=None, root=ROOT):
             shutil.copy2(STUDENT / src, course / dest)
     (course / "README.md").write_text(student_readme(root))
     _check_notebooks(course)
+    _check_docs(course, root)
     archive = out / ARCHIVE
-    _archive(course, archive)
+    _archive(course, archive, source_date(root))
     return course, archive
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=str(ROOT / "release"), help="output folder (default: release/)")
+    parser.add_argument("--labs-docs", action="store_true", help=f"only write {LABS_DOCS} (what `make labs` runs)")
     args = parser.parse_args(argv)
+    if args.labs_docs:
+        folder = write_student_docs()
+        print(f"{folder.relative_to(ROOT)}: {', '.join(dest for dest, _ in STUDENT_DOCS)}")
+        return 0
     course, archive = build(args.out)
     files = sum(1 for p in course.rglob("*") if p.is_file())
     print(f"student course: {course} ({files} files)\narchive:        {archive} "

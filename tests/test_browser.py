@@ -157,7 +157,9 @@ _SHOW = """async (i) => {
     await new Promise(r => setTimeout(r, 500));
     return {widget: !!cell.node.querySelector('.jp-OutputArea-output .jupyter-widgets .widget-container, '
                                                + '.jp-OutputArea-output .jupyter-widgets.widget-container'),
-            shown: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output')).map(n => n.innerText)};
+            shown: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output')).map(n => n.innerText),
+            cut: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output .widget-label'))   // "measurement varianc…"
+                .filter(l => l.offsetWidth > 0 && l.scrollWidth > l.clientWidth + 1).map(l => l.innerText)};
 }"""
 
 
@@ -213,8 +215,11 @@ def test_run_all_goes_through_the_untouched_lab(browser, server, lab):
     widgets = [c["index"] for c in cells if any(o["widget"] for o in c["outputs"])]
     assert set(expected) <= set(widgets), f"{lab}: widget outputs in code cells {widgets}; the lab builds fusionlab " \
                                           f"widgets in {expected}"
-    blank = [i for i in widgets if not page.evaluate(_SHOW, i)["widget"]]
+    shown = {i: page.evaluate(_SHOW, i) for i in widgets}
+    blank = [i for i in widgets if not shown[i]["widget"]]
     assert not blank, f"{lab}: widgets that did not render (text only) in code cells {blank}"
+    cut = [(i, label) for i in widgets for label in shown[i]["cut"]]
+    assert not cut, f"{lab}: widget labels cut short (code cell, label): {cut}"
 
     view = _student_view(page)
     assert view["plugins"] == {"create-assignment": False, "formgrader": False, "course-list": False, "menu": False,
@@ -252,4 +257,16 @@ def test_solution_runs_in_jupyterlab_without_errors_and_the_widget_responds(brow
                            "         return i && i.getAttribute('src') !== b; }", arg=before, timeout=30_000)
     page.locator(".widget-output img").first.scroll_into_view_if_needed()
     screenshot(page, f"{WIDGET_LAB}_solution_widget")
+    page.close()
+
+
+def test_a_labs_link_to_a_course_document_opens_it_in_jupyterlab(browser, server):
+    """The header's link to the References (labs/docs/, tests/test_release.py) opens in JupyterLab, not a 404."""
+    page = _open(browser, server, f"labs/{WIDGET_LAB}/{WIDGET_LAB}.ipynb")
+    page.locator(".jp-Notebook .jp-MarkdownCell").first.get_by_role("link", name="References").first.click()
+    page.wait_for_function("() => { const w = window.jupyterapp.shell.currentWidget;"
+                           "        return w && w.context && w.context.path === 'labs/docs/references.md'; }",
+                           timeout=30_000)
+    page.wait_for_function("() => window.jupyterapp.shell.currentWidget.node.innerText.includes('seed 004')",
+                           timeout=30_000)
     page.close()

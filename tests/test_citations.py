@@ -24,6 +24,7 @@ _NUM = r"\d+(?:\.\d+)*"
 _LIST = rf"{_NUM}(?:\s*[–-]\s*{_NUM})?(?:\s*(?:,|and)\s*{_NUM}(?:\s*[–-]\s*{_NUM})?)*"
 CITATION = re.compile(rf"(?P<kind>§|\b[Ee]qs?\.?|\bTables?)\s*(?P<nums>{_LIST})")
 SEED = re.compile(r"\bseed (00\d)\b|\((00\d)[ ,]|\b(00\d)(?:'s)? (?:eq|§|Table)")
+MD_LINK = re.compile(r"\[([^\]]*)\]\([^)\s]*\)")
 COURSE_OWN = re.compile(r"(derivations(?:\.md)?|README|Lab \d\d|docs/\S+)\s*\*?[^.;|]{0,12}$")
 
 
@@ -44,7 +45,7 @@ def citations(nb):
     fallback = default_seed(nb)
     found = []
     for i, cell in enumerate(nb["cells"]):
-        text = source(cell)
+        text = MD_LINK.sub(r"\1", source(cell))            # a link reads as its text: [References](../docs/...)
         if cell["cell_type"] == "code":            # comments only: code may index arrays with § never, but eq...
             text = "\n".join(line.split("#", 1)[1] for line in text.splitlines() if "#" in line)
         for m in CITATION.finditer(text):

@@ -32,6 +32,14 @@ CELLS = {
     "student_type_error": "def mine2(r, p, y):\n    return len(r)\nchecks.check_euler_to_dcm(mine2)",
     "own_not_implemented": "raise NotImplementedError('my own abstract method')",
     "again": "checks.friendly_errors()\nprint(get_ipython().CustomTB is get_ipython()._fusionlab_custom_tb)",
+    # a release stub whose answer (a value) was cleared: no cell assigns v_ref, the stub's comment names it
+    "stub_value": "# define v_ref (V)\nraise NotImplementedError('exercise 3 not attempted yet')\nprint(v_ref)",
+    "check_value": "checks.check_close('v_ref', v_ref, 3.3, 0.01)",
+    "test_value": "# Autograder: exercise 3\nassert 3.0 < v_ref < 3.6",
+    "stub_none": "f_vec = None   # replace None\nraise NotImplementedError('exercise 4 not attempted yet')",
+    "test_none": "assert np.shape(f_vec) == (3,), 'f_vec must be three numbers'",
+    "bare_assert": "x = 2\nassert x + 1 == 4",
+    "assert_in_function": "def mine3():\n    assert False, 'my own invariant'\nmine3()",
 }
 
 
@@ -83,6 +91,46 @@ def test_a_name_missing_because_of_an_unfinished_exercise_names_it_through_a_cha
         assert err.ename == "NameError"
         assert "This name is made by an earlier cell" in err.evalue
         assert "it stopped because exercise 2 is not finished yet" in err.evalue, err.evalue
+
+
+def _is_box(shown, lines=3):
+    return ("Traceback" not in shown and "Cell In[" not in shown and "File " not in shown
+            and len(shown.splitlines()) <= lines and shown.startswith("✗ "))
+
+
+def test_a_name_an_unfinished_exercise_makes_is_one_short_box(run):
+    for name in ("uses_after", "uses_twice"):
+        assert _is_box(run[name]["shown"]), run[name]["shown"]
+        assert "%tb in a new cell" in run[name]["shown"]
+    err = run["check_value"]["error"]                      # no cell assigns v_ref: the stub that names it is found
+    assert err.ename == "NameError" and _is_box(run["check_value"]["shown"]), run["check_value"]["shown"]
+    assert "it stopped because exercise 3 is not finished yet" in err.evalue, err.evalue
+
+
+def test_a_provided_tests_assert_is_one_short_box_naming_the_exercise(run):
+    shown = run["test_none"]["shown"]
+    assert run["test_none"]["error"].ename == "AssertionError" and _is_box(shown), shown
+    assert shown.splitlines()[0] == "✗ f_vec must be three numbers", shown
+    assert "uses your answer to exercise 4, which is not finished yet" in shown, shown
+    shown = run["test_value"]["shown"]                     # the NameError comes first here
+    assert run["test_value"]["error"].ename == "NameError" and _is_box(shown), shown
+    shown = run["bare_assert"]["shown"]                    # no message: the line that failed, and nothing to finish
+    assert _is_box(shown, 2) and shown.splitlines()[0] == "✗ this test failed: assert x + 1 == 4", shown
+    shown = run["assert_in_function"]["shown"]             # the student's own assert keeps its traceback
+    assert "Traceback" in shown and "assert False, 'my own invariant'" in shown and "✗" not in shown, shown
+
+
+def test_validate_and_autograde_reports_have_no_percent_tb_hint(monkeypatch):
+    """nbgrader sets NBGRADER_EXECUTION while it runs a notebook (Validate, autograding): its report has no cell."""
+    monkeypatch.setenv("NBGRADER_EXECUTION", "validate")
+    names = ("setup", "stub_fn", "check_stub", "stub_cell", "uses_after", "stub_none", "test_none")
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(CELLS[n]) for n in names])
+    nbclient.NotebookClient(nb, allow_errors=True, kernel_name="python3", timeout=120).execute()
+    shown = {n: ANSI.sub("", "\n".join(o.traceback)) for n, c in zip(names, nb.cells) for o in c.outputs
+             if o.output_type == "error"}
+    assert set(shown) == {"check_stub", "stub_cell", "uses_after", "stub_none", "test_none"}, shown
+    for name, text in shown.items():
+        assert text.startswith("✗ ") and "%tb" not in text and "Traceback" not in text, (name, text)
 
 
 def test_a_students_own_errors_keep_their_traceback(run):

@@ -11,9 +11,16 @@ from conftest import LABS, ROOT
 
 
 def test_every_lab_has_a_solution_and_a_release():
-    released = sorted(p.name for p in (ROOT / "labs").iterdir() if p.is_dir())
+    released = sorted(p.name for p in (ROOT / "labs").iterdir() if p.is_dir() and p.name != "docs")
     assert LABS, "no solutions/NN_name folders found"
     assert released == LABS, f"labs/ {released} does not match solutions/ {LABS}: run `make labs`"
+
+
+def test_labs_docs_is_what_the_readme_and_docs_make():
+    """labs/docs holds copies of the documents the labs link to (`make labs`): equal to their sources."""
+    from grading import release
+    release._check_docs(ROOT, ROOT)
+    assert sorted(p.name for p in (ROOT / "labs").iterdir() if not p.name.startswith(".")) == sorted([*LABS, "docs"])
 
 
 @pytest.mark.parametrize("lab", LABS)
@@ -48,18 +55,26 @@ def test_the_untouched_release_runs_all_cells_stopping_only_at_unfinished_exerci
 
 
 EXPECTED_ERRORS = {"NotImplementedError", "Feedback", "AssertionError"}
+ANSI = re.compile(r"\x1b\[[0-9;]*m")
+FRAME = re.compile(r"Traceback|Cell In\[|File \"|---->|^-{20,}", flags=re.M)
 
 
 def _assert_only_unfinished_exercise_errors(path):
-    """An untouched lab fails only where an exercise is unfinished; a NameError always says which cell to finish."""
+    """An untouched lab fails only where an exercise is unfinished; a NameError always says which cell to finish;
+    every error is one short box (a ✗ message and its hint), never a traceback."""
     nb = nbformat.read(path, as_version=4)
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []) if o.output_type == "error"]
+    errors = [(i, o) for i, c in enumerate(nb.cells) if c.cell_type == "code" for o in c.get("outputs", [])
+              if o.output_type == "error"]
     assert errors, "the untouched lab ran without a single unfinished-exercise error"
-    for e in errors:
+    for i, e in errors:
         if e.ename == "NameError":
             assert "made by an earlier cell" in e.evalue, f"NameError without the hint: {e.evalue}"
         else:
             assert e.ename in EXPECTED_ERRORS, f"unexpected {e.ename} in the untouched lab: {e.evalue[:300]}"
+    long = [(i, e.ename, shown) for i, e in errors for shown in [ANSI.sub("", "\n".join(e.traceback))]
+            if FRAME.search(shown) or not shown.startswith("✗ ") or len(shown.splitlines()) > 6]
+    assert not long, "errors shown as a traceback, not a short box:\n" + "\n\n".join(
+        f"cell {i} ({ename}):\n{shown[:600]}" for i, ename, shown in long[:5])
 
 
 @pytest.mark.parametrize("lab", LABS)

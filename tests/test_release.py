@@ -47,8 +47,13 @@ def test_release_holds_the_course_and_nothing_of_the_instructor(built):
     assert {p.name for p in course.iterdir()} == TOP | optional
     files = _files(course)
     assert [f for f in files if f.startswith("docs/")] == (["docs/derivations.md"] if "docs" in optional else [])
-    assert not [f for f in files if set(Path(f).parts) & NEVER or f.startswith("integrity_")]
-    assert [f for f in files if f.startswith("labs/")] == sorted(f"labs/{lab}/{lab}.ipynb" for lab in LABS)
+    student_config = "jupyter/nbgrader_config.py"           # the student's Validate report, not the instructor's
+    assert not [f for f in files if (set(Path(f).parts) & NEVER and f != student_config) or f.startswith("integrity_")]
+    if student_config in files:
+        text = (course / student_config).read_text()
+        assert not re.search(r"CourseDirectory|Exchange|ClearSolutions|Autograde|db_url", text), student_config
+    assert [f for f in files if f.startswith("labs/")] == sorted(
+        [f"labs/{lab}/{lab}.ipynb" for lab in LABS] + [f"{release.LABS_DOCS}/{d}" for d, _ in release.STUDENT_DOCS])
     lib = [f for f in _files(ROOT / "lib" / "fusionlab") if "__pycache__" not in f and not f.endswith(".pyc")]
     assert [f for f in files if f.startswith("lib/")] == [f"lib/fusionlab/{f}" for f in lib]
     assert "lib/fusionlab/data/broad_trials.json" in files
@@ -73,6 +78,66 @@ def test_archive_is_the_folder_and_is_reproducible(built, tmp_path):
     assert readme == (course / "README.md").read_bytes()
     _, again = release.build(tmp_path)
     assert hashlib.sha256(again.read_bytes()).digest() == hashlib.sha256(archive.read_bytes()).digest()
+
+
+MD_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+CITED = ("README *References*", "docs/derivations.md", "data/README.md", "data/broad/README.md")
+
+
+def _relative_links(text):
+    return [t.split("#")[0] for t in MD_LINK.findall(text) if not re.match(r"[a-z][a-z0-9+.-]*:|#", t)]
+
+
+def test_every_link_in_the_labs_opens_a_file_that_make_lab_serves(built):
+    """`make lab` serves labs/ only: a notebook's relative link (and a link in the documents it opens) must reach a
+    file inside labs/ of the release -- the course checkout has the same labs/ (tests/test_pipeline.py)."""
+    course, _ = built
+    labs = (course / "labs").resolve()
+    pages = [(p, "\n".join(c.source for c in nbformat.read(p, as_version=4).cells if c.cell_type == "markdown"))
+             for p in sorted(labs.glob("*/*.ipynb"))]
+    pages += [(p, p.read_text()) for p in sorted((labs / "docs").rglob("*.md"))]
+    broken, links = [], 0
+    for path, text in pages:
+        for target in _relative_links(text):
+            links += 1
+            found = (path.parent / target).resolve()
+            if not (found.is_file() and found.is_relative_to(labs)):
+                broken.append(f"{path.relative_to(course)}: {target}")
+    assert not broken, "links that JupyterLab cannot open:\n" + "\n".join(broken)
+    assert links >= len(LABS), f"only {links} relative links in the labs"
+    for path, text in pages:                            # what the labs cite is a link, not plain text
+        if path.suffix == ".ipynb":
+            plain = MD_LINK.sub("", text)
+            assert not [c for c in CITED if c in plain], (path.name, [c for c in CITED if c in plain])
+
+
+def _head_date():
+    return int(subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%ct"], capture_output=True, text=True,
+                              check=True).stdout)
+
+
+def test_archive_files_carry_the_date_of_the_last_commit_not_1970(built):
+    _, archive = built
+    with tarfile.open(archive) as tar:
+        dates = {m.mtime for m in tar.getmembers()}
+    with open(archive, "rb") as fh:
+        gzip_date = int.from_bytes(fh.read(8)[4:8], "little")          # the gzip header's MTIME field
+    assert dates == {_head_date()} and gzip_date == _head_date(), (sorted(dates)[:3], gzip_date, _head_date())
+    assert _head_date() > 1_600_000_000                                # a real date (after September 2020)
+
+
+def test_source_date_epoch_sets_the_date_and_the_archive_stays_reproducible(tmp_path, monkeypatch):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")             # 2026-01-01 00:00 UTC
+    _, first = release.build(tmp_path / "a")
+    _, second = release.build(tmp_path / "b")
+    assert first.read_bytes() == second.read_bytes()
+    with tarfile.open(first) as tar:
+        assert {m.mtime for m in tar.getmembers()} == {1767225600}
+    assert release.source_date(environ={}) == _head_date()
+    with pytest.raises(SystemExit, match="SOURCE_DATE_EPOCH must be a whole number"):
+        release.source_date(environ={"SOURCE_DATE_EPOCH": "yesterday"})
+    with pytest.raises(SystemExit, match="set SOURCE_DATE_EPOCH"):
+        release.source_date(root=tmp_path, environ={})
 
 
 def _regions(cell):
@@ -201,7 +266,8 @@ def test_make_lab_serves_the_labs(built):
             except OSError:
                 time.sleep(1)
         assert listing is not None, f"JupyterLab did not answer on port {port} (exit {proc.poll()})"
-        assert sorted(item["name"] for item in listing["content"]) == LABS, "the server's root is not labs/"
+        assert sorted(item["name"] for item in listing["content"]) == sorted([*LABS, "docs"]), \
+            "the server's root is not labs/ (the labs and labs/docs)"
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/lab?token={token}", timeout=10) as r:
             page = r.read().decode()
             assert r.status == 200 and "JupyterLab" in page

@@ -1,6 +1,7 @@
 """The course stands on its own: every file git tracks (outside data/, whose READMEs cite the datasets' origins)
 names no folder outside the repository, no build machine's path and no private working notes, and `make bench`
-needs nothing beside the clone. The sources a lab follows are the published documents in README "References".
+needs nothing beside the clone. The sources a lab follows are the published documents in README "References" (each
+header links to their copy, labs/docs/references.md).
 """
 from __future__ import annotations
 
@@ -127,7 +128,7 @@ def test_every_seed_id_a_lab_uses_is_defined_in_its_header(path):
     text = "\n".join("".join(c["source"]) for c in cells)
     used = sorted(set(re.findall(r"\bseed (00\d)\b", text, re.IGNORECASE)))
     for seed in used:
-        assert re.search(rf"seed {seed} \([^()]*README \*References\*\)", header), \
+        assert re.search(rf"seed {seed} \([^()]*\[\*References\*\]\(\.\./docs/references\.md\)\)", header), \
             f"{path.stem}: seed {seed} is cited but the header does not say what it is"
     follows = next(line for line in header.splitlines() if line.startswith("| **Follows**"))
     read_first = next(line for line in header.splitlines() if line.startswith("| **Read first**"))

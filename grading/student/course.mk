@@ -15,7 +15,7 @@ SETTINGS     := $(if $(wildcard jupyter/lab/settings),--LabApp.app_settings_dir=
 ALLOW_ROOT   := $(if $(filter 0,$(shell id -u)),--allow-root)
 ARGS    ?=
 
-.PHONY: help env lab
+.PHONY: help env lab validate
 
 help:  ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(filter %.mk,$(MAKEFILE_LIST)) $(filter-out %.mk,$(MAKEFILE_LIST)) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -32,3 +32,7 @@ env: $(VENV)/.installed  ## create .venv and install environment.txt
 lab: env  ## start JupyterLab on labs/ as a student sees it (prints the URL to open; Ctrl-C stops it)
 	@echo "==> JupyterLab on labs/ -- open the URL printed below; Ctrl-C to stop"
 	@$(STUDENT_VIEW) $(BIN)/jupyter lab --no-browser --notebook-dir=labs $(SETTINGS) $(ALLOW_ROOT) $(ARGS)
+
+validate: env  ## what the Validate button reports, in the terminal: make validate LAB=01_euler_rotations
+	@test -n "$(LAB)" || { echo "usage: make validate LAB=NN_name"; exit 2; }
+	@$(STUDENT_VIEW) $(BIN)/nbgrader validate labs/$(LAB)/$(LAB).ipynb

@@ -21,6 +21,8 @@ from . import plotting, rotations, validate
 __all__ = ["viewer_state", "euler_viewer"]
 
 LOCK_PITCH_DEG = 90.0
+# Every slider's label at its own width: a fixed width cut "measurement variance σ₂² (m²)" to "measurement varianc…".
+LABEL = {"description_width": "initial"}
 
 
 def _fmt(x, digits=3):
@@ -130,8 +132,7 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
         ``BoundedFloatText`` linked to it; the lock ``ToggleButton``; the readout ``HTML``; the figure ``Output``.
     """
     roll, pitch, yaw = (validate.scalar(v, n) for v, n in ((roll, "roll"), (pitch, "pitch"), (yaw, "yaw")))
-    opts = dict(step=1, continuous_update=True, readout=False, style={"description_width": "7em"},
-                layout=W.Layout(width="36em"))
+    opts = dict(step=1, continuous_update=True, readout=False, style=LABEL, layout=W.Layout(width="36em"))
     s_yaw = W.FloatSlider(value=yaw, min=-180, max=180, description="ψ yaw (°)", **opts)
     s_pitch = W.FloatSlider(value=pitch, min=-90, max=90, description="θ pitch (°)", **opts)
     s_roll = W.FloatSlider(value=roll, min=-180, max=180, description="φ roll (°)", **opts)
@@ -246,8 +247,7 @@ def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
         Children: four ``FloatSlider`` (μ₁, σ₁², μ₂, σ₂²), the readout ``HTML``, the figure ``Output``.
     """
     st = gaussian_product_state(mu1, var1, mu2, var2)             # validates the start values
-    opts = dict(step=0.1, continuous_update=False, readout_format=".1f", style={"description_width": "12em"},
-                layout=W.Layout(width="30em"))
+    opts = dict(step=0.1, continuous_update=False, readout_format=".1f", style=LABEL, layout=W.Layout(width="36em"))
     s_mu1 = W.FloatSlider(value=mu1, min=-10, max=10, description="prediction mean μ₁ (m)", **opts)
     s_var1 = W.FloatSlider(value=var1, min=0.1, max=25, description="prediction variance σ₁² (m²)", **opts)
     s_mu2 = W.FloatSlider(value=mu2, min=-10, max=10, description="measurement mean μ₂ (m)", **opts)
@@ -302,7 +302,7 @@ def tuning_explorer(sweep, start=None):
     start = values[0] if start is None else values[int(np.argmin(np.abs(np.asarray(values) - float(start))))]
     slider = W.SelectionSlider(options=[(f"{v:g}", v) for v in values], value=start, continuous_update=False,
                                description=f"{sweep.estimator} {sweep.option}",
-                               style={"description_width": "12em"}, layout=W.Layout(width="40em"))
+                               style=LABEL, layout=W.Layout(width="40em"))
     readout = W.HTML()
     out = W.Output()
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 import ast
 import functools
 import importlib
+import linecache
+import os
 import re
 import traceback
 
@@ -23,7 +25,8 @@ class Feedback(AssertionError):
 
     IPython shows it as one short box -- the message and its numbers, no traceback through this library -- by
     calling ``_render_traceback_``. The full traceback stays one step away: ``%tb`` in the next cell shows it (every
-    rendering after the first one is the full traceback).
+    rendering after the first one is the full traceback). The box says so in a notebook only: nbgrader's Validate
+    and autograding run the notebook for a report, where there is no next cell (:func:`_box`).
     """
 
     def _render_traceback_(self):
@@ -37,8 +40,14 @@ _RED, _DIM, _END = "\x1b[1;31m", "\x1b[2m", "\x1b[0m"
 
 
 def _box(message, footnote=None):
-    """The lines IPython shows for a student-facing error: the message in bold red, an optional dim footnote."""
+    """The lines IPython shows for a student-facing error: the message in bold red, an optional dim footnote.
+
+    The footnote (how to see the full traceback with ``%tb``) is left out while nbgrader runs the notebook -- its
+    Validate button, ``nbgrader validate`` or autograding, which set ``NBGRADER_EXECUTION`` --: their report quotes
+    the box in a dialog or a file, where no new cell can be run."""
     lines = [_RED + line + _END for line in str(message).splitlines() or [""]]
+    if os.environ.get("NBGRADER_EXECUTION"):
+        footnote = None
     return lines + ([_DIM + footnote + _END] if footnote else [])
 
 
@@ -145,8 +154,11 @@ def _where(got, expected, name, **tol):
 # ---------------------------------------------------------------------------------------------------------------
 # The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (nbgrader_config.py names the
 # exercise). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
-# NameError looks up the last cell that assigns the missing name, and if that cell stopped at an exercise, says
-# which one. Run All (whose cells are tagged raises-exception in the release) then reads as a to-do list.
+# NameError looks up the last cell that assigns the missing name (or, if none does, the last stopped cell that names
+# it), and if that cell stopped at an exercise, says which one; so does a provided test's bare ``assert`` about such a
+# name. Each is one short box, like a check's Feedback; a NameError of unknown origin (a slip in the student's own
+# code, most likely) keeps its traceback, whose line says where. Run All (whose cells are tagged raises-exception in
+# the release) then reads as a to-do list.
 
 _HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
          "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
@@ -184,16 +196,53 @@ def _data_hint(missing):
 
 
 def _waits_for(shell, name, count):
-    """The exercises the last cell before ``count`` that assigns ``name`` stopped at (empty if none is known)."""
+    """The exercises the last cell before ``count`` that assigns ``name`` stopped at; if no cell assigns it, those of
+    the last cell that stopped at an exercise and names it (a release stub whose answer was cleared still says
+    ``# define v_ref_096 ...``); empty if none is known."""
     history = shell.user_ns.get("In", [])
+    named = re.compile(rf"(?<![\w.]){re.escape(name)}\b")
+    mentioned = []
     for k in range(min(count, len(history)) - 1, 0, -1):
         if name in _assigned_names(shell.transform_cell(history[k]) if "%" in history[k] else history[k]):
             return _stopped.get(k, [])
-    return []
+        if not mentioned and k in _stopped and named.search(history[k]):
+            mentioned = _stopped[k]
+    return mentioned
+
+
+def _show_box(shell, etype, evalue, tb, message):
+    """Show ``message`` as the error's short box (see :func:`_box`); ``%tb`` in the next cell shows the traceback."""
+    shell._get_exc_info((etype, evalue, tb))                  # so that %tb shows the whole traceback
+    shell._showtraceback(etype, evalue, _box(message, "(%tb in a new cell shows the full traceback)"))
+
+
+def _failed_assert(shell, etype, evalue, tb, count):
+    """A bare ``assert`` of a cell (a provided test) as a box: its message, or the line when it has none, and the
+    unfinished exercise its names wait for. None for an assert inside a function (the student's own code, whose
+    traceback says where)."""
+    last = tb
+    while last.tb_next is not None:
+        last = last.tb_next
+    if etype is not AssertionError or last.tb_frame.f_code.co_name != "<module>":
+        return None
+    line = linecache.getline(last.tb_frame.f_code.co_filename, last.tb_lineno).strip()
+    message = str(evalue) or f"this test failed: {line}"
+    try:
+        names = [n.id for n in ast.walk(ast.parse(line)) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)]
+    except SyntaxError:                                       # an assert over several lines: its first line only
+        names = []
+    waits = list(dict.fromkeys(w for n in dict.fromkeys(names) for w in _waits_for(shell, n, count)))
+    if waits:
+        _stopped[count] = waits
+        todo = " and ".join(waits)
+        message += (f"\n→ This test uses your answer to {todo}, which is not finished yet. Finish {todo} (its answer "
+                    f"cell above), run it, then run this cell again.")
+    return "✗ " + message
 
 
 def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
-    """IPython handler for NameError, NotImplementedError and DataMissing (see the section comment)."""
+    """IPython handler for NameError, AssertionError, NotImplementedError and DataMissing (see the section
+    comment)."""
     count = shell.execution_count - 1                         # IPython counts the running cell before it runs
     hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
     if issubclass(etype, datasets.DataMissing):               # its own short message (_render_traceback_)
@@ -207,7 +256,7 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
             _DATA_NAMES.update(_assigned_names(hist[-1]))
             if "data is missing" not in str(evalue):
                 evalue = etype(f"{evalue}{_data_hint(missing)}")
-            shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+            _show_box(shell, etype, evalue, tb, f"✗ {evalue}")
             return None
         waits = _waits_for(shell, name, count) if name else []
         if waits:
@@ -218,7 +267,17 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
                     _HINT.split("—")[0] + f"— it stopped because {todo} is not finished yet. Finish {todo} (its "
                     f"answer cell above), run it, then run this cell again.")
             evalue = etype(f"{evalue}{hint}")
-        shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        if waits:                                             # an unfinished exercise's knock-on: one short box
+            _show_box(shell, etype, evalue, tb, f"✗ {evalue}")
+        else:                                                 # maybe a slip in the student's own code: its line
+            shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        return None
+    if issubclass(etype, AssertionError):
+        message = _failed_assert(shell, etype, evalue, tb, count)
+        if message is None:                                   # a check's Feedback box, or an assert in a function
+            shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
+        else:
+            _show_box(shell, etype, evalue, tb, message)
         return None
     what = _unfinished(evalue)
     if what is None:                                          # a NotImplementedError of the student's own
@@ -233,8 +292,7 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
            f"with your answer, then run the cell again." if here else
            f"✗ This cell uses your answer to {what}, which is not written yet: finish {what} (above), run it, "
            f"then run this cell again.")
-    shell._get_exc_info((etype, evalue, tb))                  # so that %tb shows the whole traceback
-    shell._showtraceback(etype, evalue, _box(msg, "(%tb in a new cell shows the full traceback)"))
+    _show_box(shell, etype, evalue, tb, msg)
     return None
 
 
@@ -242,6 +300,8 @@ def friendly_errors():
     """In a notebook, explain unfinished exercises: a stub's NotImplementedError becomes one line saying which
     exercise to finish, and a ``NameError`` says which earlier cell (and exercise) should have made the name --
     unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
+    Where the exercise (or the missing data) is known, the NameError is one short box like a check's; so is a
+    provided test cell's failed ``assert``, with the exercise its names wait for.
 
     A cell that raises :class:`fusionlab.datasets.DataMissing` has the names it would have made remembered; a
     ``NameError`` on one of them says that data is missing and how to get it (and passes the remembering on to the
@@ -253,7 +313,7 @@ def friendly_errors():
     ip = _ipython()
     if ip is None or getattr(ip, "_fusionlab_custom_tb", None) is ip.CustomTB:
         return
-    ip.set_custom_exc((NameError, NotImplementedError, datasets.DataMissing), _show_unfinished)
+    ip.set_custom_exc((NameError, AssertionError, NotImplementedError, datasets.DataMissing), _show_unfinished)
     ip._fusionlab_custom_tb = ip.CustomTB
 
 
