@@ -62,12 +62,11 @@ def time_suite(repeat, budget):
 def run_lab(lab):
     """Wall time of one Run All of ``lab``'s solution in a fresh kernel, kernel start included."""
     import nbformat
-    from nbclient import NotebookClient
+    from fusionlab.execute import run_notebook
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     start = time.perf_counter()
-    client = NotebookClient(nb, timeout=120, kernel_name="python3",
-                            resources={"metadata": {"path": str(ROOT / "solutions" / lab)}})
-    client.execute(stderr=subprocess.DEVNULL)                         # the kernel's own warnings are not news here
+    run_notebook(nb, cwd=ROOT / "solutions" / lab, timeout=120, allow_errors=False,
+                 stderr=subprocess.DEVNULL)                           # the kernel's own warnings are not news here
     return time.perf_counter() - start
 
 

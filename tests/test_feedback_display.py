@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import re
 
-import nbclient
 import nbformat
 import numpy as np
 import pytest
 
 from fusionlab import checks
+from fusionlab.execute import run_notebook
 
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -46,7 +46,7 @@ CELLS = {
 @pytest.fixture(scope="module")
 def run():
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(src) for src in CELLS.values()])
-    nbclient.NotebookClient(nb, allow_errors=True, kernel_name="python3", timeout=120).execute()
+    run_notebook(nb, timeout=120)
     out = {}
     for name, cell in zip(CELLS, nb.cells):
         [error] = [o for o in cell.outputs if o.output_type == "error"] or [None]
@@ -125,7 +125,7 @@ def test_validate_and_autograde_reports_have_no_percent_tb_hint(monkeypatch):
     monkeypatch.setenv("NBGRADER_EXECUTION", "validate")
     names = ("setup", "stub_fn", "check_stub", "stub_cell", "uses_after", "stub_none", "test_none")
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(CELLS[n]) for n in names])
-    nbclient.NotebookClient(nb, allow_errors=True, kernel_name="python3", timeout=120).execute()
+    run_notebook(nb, timeout=120)
     shown = {n: ANSI.sub("", "\n".join(o.traceback)) for n, c in zip(names, nb.cells) for o in c.outputs
              if o.output_type == "error"}
     assert set(shown) == {"check_stub", "stub_cell", "uses_after", "stub_none", "test_none"}, shown

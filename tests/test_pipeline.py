@@ -45,10 +45,8 @@ def test_release_hides_solutions_and_hidden_tests(course, lab):
 def test_the_untouched_release_runs_all_cells_stopping_only_at_unfinished_exercises(tmp_path, lab):
     """What a student sees on Run All of the release: every cell runs, and the only errors are the unfinished
     exercises' (grades are the judge's: tests/test_grading_cheats.py and tests/test_judge.py)."""
-    from nbclient import NotebookClient
-    nb = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
-    NotebookClient(nb, timeout=120, kernel_name="python3", allow_errors=True,
-                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    from fusionlab.execute import run_notebook
+    nb = run_notebook(ROOT / "labs" / lab / f"{lab}.ipynb", cwd=tmp_path, timeout=120)
     path = tmp_path / f"{lab}.ipynb"
     nbformat.write(nb, path)
     _assert_only_unfinished_exercise_errors(path)
