@@ -397,13 +397,16 @@ def test_the_report_is_whole_and_a_run_on_one_student_merges_into_it(graded):
 def test_the_similarity_report_finds_a_pasted_library_function_and_twins_but_no_model_answer(graded):
     with open(graded["root"] / f"similarity_{LAB}.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert {"pasted_library"} == {r["student"] for r in rows if r["alike_with"] == "library kalman.update_step"}, rows
+    # the pasted body is update_step's; update holds the same equations after its checks, so either may match best
+    pasted = {r["alike_with"] for r in rows if r["student"] == "pasted_library"}
+    assert pasted & {"library kalman.update_step", "library kalman.update"}, rows
+    assert {"pasted_library"} == {r["student"] for r in rows if r["alike_with"].startswith("library kalman.update")}
     library = {r["student"] for r in rows if r["alike_with"].startswith("library")}
     assert not library & {"full", "half", "metadata_edited"}, "the model answers are not copies of the library"
     twins = {(r["student"], r["alike_with"]) for r in rows if float(r["score"]) >= 0.99}
     assert ("full", "metadata_edited") in twins, rows
     text = (graded["root"] / f"similarity_{LAB}.md").read_text()
-    assert "## pasted_library ~ library kalman.update_step" in text and "my own working" in text
+    assert re.search(r"## pasted_library ~ library kalman\.update(_step)?\b", text) and "my own working" in text
 
 
 def test_a_pasted_library_function_earns_its_points_and_is_listed_not_hidden(graded):
