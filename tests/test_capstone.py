@@ -319,27 +319,22 @@ def test_make_capstone_data_runs_the_fetch(tmp_path):
 @pytest.mark.slow
 @needs_box
 def test_the_leaderboard_renders_in_chromium(graded):
-    from test_browser import CHROMIUM, CHROMIUM_ARGS, SHOTS
+    from chromium import CHROMIUM, SHOTS, chromium
     if CHROMIUM is None:
         pytest.skip("no chromium on this machine (apt-get install chromium)")
-    from playwright.sync_api import sync_playwright
     out = graded[2]
     SHOTS.mkdir(exist_ok=True)
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto((out / "leaderboard.html").as_uri())
-            rows = page.locator("table").first.locator("tr")
-            assert rows.count() == 1 + len(CLASS) + 1 + 3                 # header, students, references
-            assert page.locator("tr.gated").count() == 2                   # the non-causal one and the VQF caller
-            assert page.locator(".standin").inner_text().startswith("STAND-IN")
-            page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
-            page.goto((out / "feedback" / "good" / "capstone.html").as_uri())
-            assert page.locator("img").evaluate("img => img.naturalWidth") > 300   # the per-trial figure loaded
-            page.screenshot(path=str(SHOTS / "capstone_feedback_good.png"), full_page=True)
-        finally:
-            browser.close()
+    with chromium() as browser:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto((out / "leaderboard.html").as_uri())
+        rows = page.locator("table").first.locator("tr")
+        assert rows.count() == 1 + len(CLASS) + 1 + 3                     # header, students, references
+        assert page.locator("tr.gated").count() == 2                       # the non-causal one and the VQF caller
+        assert page.locator(".standin").inner_text().startswith("STAND-IN")
+        page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
+        page.goto((out / "feedback" / "good" / "capstone.html").as_uri())
+        assert page.locator("img").evaluate("img => img.naturalWidth") > 300       # the per-trial figure loaded
+        page.screenshot(path=str(SHOTS / "capstone_feedback_good.png"), full_page=True)
 
 
 @needs_box
