@@ -84,6 +84,22 @@ def make_accounts(names):
         os.chmod(home, 0o700)
 
 
+def link_docs(students):
+    """``~/docs`` in each student's home: the course documents the labs link to (``../docs/...`` from the folder
+    a fetched lab lands in, ``~/<lab>/``), as ``labs/docs`` beside the labs in ``make lab`` and the release."""
+    docs = ROOT / "labs" / "docs"
+    if not docs.is_dir():
+        return
+    for name in students:
+        user = pwd.getpwnam(name)
+        link = Path(user.pw_dir) / "docs"
+        if link.is_symlink() or not link.exists():
+            if link.is_symlink():
+                link.unlink()
+            link.symlink_to(docs, target_is_directory=True)
+            os.lchown(link, user.pw_uid, user.pw_gid)
+
+
 def remove(prefix, folder):
     """Remove every account of the hub's group whose name starts with ``prefix``, and the hub's folder."""
     try:
@@ -287,6 +303,7 @@ def main(argv=None):
     instructor, students = accounts(args.prefix, args.students)
     say(f"accounts: {instructor} and {len(students)} student(s), group {GROUP}")
     make_accounts([instructor, *students])
+    link_docs(students)
     folder, s = prepare(args, instructor, students)
     uids = [pwd.getpwnam(n).pw_uid for n in (instructor, *students)]
     env = dict(os.environ, FUSIONLAB_HUB_DIR=str(folder),

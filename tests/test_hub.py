@@ -451,6 +451,15 @@ def test_a_term_on_the_hub(hub):
         assert hub.as_user(ada, "cat", str(ROOT / "solutions" / LAB / f"{LAB}.ipynb"), check=False).returncode != 0
         assert hub.as_user(ada, "ls", str(hub.course), check=False).returncode != 0
 
+        # what a student may see: every relative link of the fetched lab opens (../docs is ~/docs on the hub)
+        fetched = Path(pwd.getpwnam(ada).pw_dir) / LAB
+        text = "\n".join(c.source for c in release.cells if c.cell_type == "markdown")
+        targets = sorted({t.split("#")[0] for t in re.findall(r"\[[^\]]*\]\(([^)\s]+)\)", text)
+                          if not re.match(r"[a-z][a-z0-9+.-]*:|#", t)})
+        assert targets, "Lab 01 links no document"
+        unread = [t for t in targets if hub.as_user(ada, "test", "-r", str(fetched / t), check=False).returncode]
+        assert not unread, f"links a student on the hub cannot open: {unread}"
+
         # the instructor collects and grades with the sandboxed grader
         hub.as_user(instructor, "nbgrader", "collect", LAB, cwd=hub.course)
         graded = hub.as_user(instructor, "python", "-m", "grading.classgrade", LAB, "--workers", "2", cwd=hub.course)
