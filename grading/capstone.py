@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import argparse
 import ast
-import csv
 import dataclasses
 import html
 import json
@@ -792,14 +791,9 @@ def _fmt(v):
 
 
 def write_csv(rows, path, columns):
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(columns)
-        for r in rows:
-            w.writerow([_fmt(r[c]) for c in columns])
-    return path
+    """The leaderboard's CSV: :func:`fusionlab.bench.write_csv` with two decimals and empty cells for NaN."""
+    from fusionlab import bench
+    return bench.write_csv(rows, path, columns, fmt=_fmt)
 
 
 def trial_rows(results, refs):

@@ -628,8 +628,12 @@ def format_table(rows):
     return "\n".join(lines)
 
 
-def write_csv(rows, path, columns=TRIAL_COLUMNS):
-    """Write result rows to ``path`` (CSV with a header; floats with 6 significant digits).
+def _six_digits(v):
+    return f"{v:.6g}" if isinstance(v, float) else v
+
+
+def write_csv(rows, path, columns=TRIAL_COLUMNS, fmt=None):
+    """Write result rows to ``path`` (CSV with a header; by default floats with 6 significant digits).
 
     Parameters
     ----------
@@ -639,19 +643,23 @@ def write_csv(rows, path, columns=TRIAL_COLUMNS):
         The file to write.
     columns : sequence of str, optional
         The columns, in order.
+    fmt : callable, optional
+        ``fmt(value) -> str`` for every cell; default: floats with 6 significant digits, the rest as they are.
 
     Returns
     -------
     pathlib.Path
         The file written.
     """
+    if fmt is None:
+        fmt = _six_digits
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(columns)
         for r in rows:
-            w.writerow([f"{r[c]:.6g}" if isinstance(r[c], float) else r[c] for c in columns])
+            w.writerow([fmt(r[c]) for c in columns])
     return path
 
 
