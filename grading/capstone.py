@@ -24,12 +24,12 @@ process:
   published reference is far off, and is named (:data:`CHEATS`, ``detects the trial``).
 * **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
   RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
-  the run time of each call, against a time budget per trial (:func:`budget_seconds`). A trial without a valid
-  estimate (an error, over its budget, not N unit quaternions) counts with the error of an estimate that never
-  moves (the identity quaternion).
+  the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A trial
+  without a valid estimate (an error, over its budget, not N unit quaternions) counts with the error of an estimate
+  that never moves (the identity quaternion).
 * **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret among those that
   ran, every sample after k is replaced by noisy samples and ``estimate`` is called again; its output up to k must
-  not change (1e-10), for k in :data:`CAUSAL_K`.
+  not change (1e-10), for k in :func:`fusionlab.capstone.causal_ks`.
 * **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
   budget, then the mean total RMSE against Madgwick's filter and VQF, computed here on the same disguised trials.
   A non-causal submission, or one named in :data:`CHEATS`, gets no points for the filter.
@@ -61,53 +61,23 @@ from pathlib import Path
 
 import numpy as np
 
+from fusionlab.capstone import (CAUSAL_NOISE, CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR_VQF, RUBRIC,
+                                SECONDS_PER_SAMPLE, SHIPPED, Criterion, as_quaternions, budget_seconds, causal_ks,
+                                perturb_future)   # the rules, as the lab states them to the students
 from grading import box as wire
 from grading import judge, sandbox
 
 LAB = "13_capstone"
 FUNCTION = "estimate"
 
-#: The eight trials that ship in ``data/broad/`` (the students tune on them); the capstone scores on the others.
-SHIPPED = (2, 7, 11, 16, 25, 27, 29, 33)
-
-#: Seconds per sample a call may take, and the least a trial gets (:func:`budget_seconds`): 0.5 ms per sample is
-#: 7 times real time at BROAD's 286 Hz; the course's starter filter needs about 0.2 ms per sample in plain numpy.
-SECONDS_PER_SAMPLE = 5e-4
-MIN_SECONDS = 10.0
 SETUP_SECONDS = 60.0            # the notebook's cells, run once per box
 MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box
-
-#: Causality: samples after k are replaced by noisy ones for these k (``n`` is the trial's length), as
-#: ``tests/test_causality.py`` does for the library's filters; outputs up to k must agree to CAUSAL_TOL.
-CAUSAL_K = (lambda n: 3, lambda n: 200, lambda n: n // 2 + 1)
-CAUSAL_NOISE = (0.5, 3.0, 20.0)  # rad/s, m/s^2, uT added to gyro, accelerometer, magnetometer after k
-CAUSAL_TOL = 1e-10
 MAX_CROP_SECONDS = 0.5          # secret cut at the start (inside the rest before the movement) ...
 MAX_END_CROP_SECONDS = 3.0      # ... and at the end (never into the movement): a trial's length does not name it
 MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
 MATCH_STRIDE = 5                # ... compared at every 5th sample
 FOLLOW_RATIO = 0.25             # an output this much closer to the published reference than to the disguised one
                                 # follows the published reference: the trial was recognised
-
-
-@dataclass(frozen=True)
-class Criterion:
-    """One row of the rubric: its key, points, and what earns them."""
-    key: str
-    points: float
-    rule: str
-
-
-NEAR_VQF = 1.2
-RUBRIC = (
-    Criterion("runs", 2, "a valid estimate (N unit quaternions) on every hidden trial, each within its time budget"),
-    Criterion("beats_madgwick", 3, "mean total RMSE below Madgwick's filter (ahrs, 9D, its default gain)"),
-    Criterion("near_vqf", 3, f"mean total RMSE at most {NEAR_VQF:g} x VQF's (9D, default parameters)"),
-    Criterion("beats_vqf", 2, "mean total RMSE below VQF's"),
-)
-MAX_POINTS = sum(c.points for c in RUBRIC)
-GATES = ("causal: the estimate up to sample k does not change when later samples do (else no points for the filter)",
-         "no cheat of the list below (else no points for the filter, and the submission is named)")
 
 #: What is looked for, and how it is found (each is named on the leaderboard when found).
 CHEATS = {
@@ -305,11 +275,6 @@ def disguise(trials, seed):
     return out
 
 
-def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
-    """The time a call of ``estimate`` may take on a trial of ``n`` samples, s."""
-    return max(float(min_seconds), n * float(seconds_per_sample))
-
-
 # ----------------------------------------------------------------------------------------------------------------
 # Scoring (trusted side only)
 # ----------------------------------------------------------------------------------------------------------------
@@ -326,22 +291,6 @@ class TrialResult:
     inclination_deg: float = float("nan")
     counted_deg: float = float("nan")   # total RMSE as the mean counts it (a failed trial: the identity's error)
     q: np.ndarray | None = None
-
-
-def _as_quaternions(value, n):
-    """The reply as (n, 4) unit quaternions, or a ValueError saying what it is instead."""
-    try:
-        q = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"estimate returned something that is not an array of numbers") from None
-    if q.shape != (n, 4):
-        raise ValueError(f"estimate must return shape ({n}, 4); got {q.shape}")
-    if not np.isfinite(q).all():
-        raise ValueError("estimate returned NaN or infinite values")
-    norm = np.linalg.norm(q, axis=-1)
-    if np.any(np.abs(norm - 1) > 1e-3):
-        raise ValueError(f"estimate must return unit quaternions; norms range {norm.min():.3g}..{norm.max():.3g}")
-    return q / norm[:, None]
 
 
 def score_trial(result, q, trial):
@@ -598,7 +547,7 @@ class Runner:
         if not reply.get("ok"):
             return None, "error", str(reply.get("error", "an error"))[:500], elapsed
         try:
-            q = _as_quaternions(wire.decode(reply.get("value")), len(args[0]))
+            q = as_quaternions(wire.decode(reply.get("value")), len(args[0]))
         except (wire.WireError, ValueError) as exc:
             return None, "invalid", str(exc)[:300], elapsed
         return q, "ok", "", elapsed
@@ -639,13 +588,8 @@ class StudentResult:
 def check_causality(runner, trial, q, seconds, rng):
     """(True/False, message): is ``estimate``'s output up to k unchanged when every sample after k changes?"""
     n = len(trial)
-    for k_of in CAUSAL_K:
-        k = min(k_of(n), n - 2)
-        noisy = []
-        for x, scale in zip((trial.gyr, trial.acc, trial.mag), CAUSAL_NOISE):
-            y = np.array(x)
-            y[k + 1:] += scale * rng.standard_normal(y[k + 1:].shape)
-            noisy.append(y)
+    for k in causal_ks(n):
+        noisy = [perturb_future(x, k, scale, rng) for x, scale in zip((trial.gyr, trial.acc, trial.mag), CAUSAL_NOISE)]
         q2, status, why, _ = runner.call(trial, seconds, *noisy)
         if q2 is None:
             return None, f"not checked: with later samples changed, estimate {why} ({status})"
@@ -654,7 +598,7 @@ def check_causality(runner, trial, q, seconds, rng):
             return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
                            f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
                            "seed)")
-    return True, f"causal (checked on one trial at k = {', '.join(str(min(f(n), n - 2)) for f in CAUSAL_K)})"
+    return True, f"causal (checked on one trial at k = {', '.join(map(str, causal_ks(n)))})"
 
 
 def causality_trial(seed, n, rng=None):

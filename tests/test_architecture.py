@@ -25,7 +25,7 @@ LAYERS = (
     ("freescale_fast",),                                                      # 6 fast paths of row 5's filters
     ("estimators",),                                                          # 7 the front door to the filters
     ("bench", "plotting"),                                                    # 8 what runs and draws the filters
-    ("checks", "widgets"),                                                    # 9 what only notebooks import
+    ("checks", "widgets", "capstone"),                                        # 9 what only notebooks import
     ("execute",),                                                             # 10 running the notebooks (tests)
 )
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from fusionlab import estimators, simulate
+from fusionlab.capstone import CAUSAL_NOISE, perturb_future
 
 FS = 286.0                                     # BROAD's rate: 6 samples per DCM update, 11 per Freescale step
 
@@ -22,12 +23,6 @@ def record():
     return rec["gyr"], rec["acc"], rec["mag"] * 100.0                   # gauss → µT, as a real magnetometer
 
 
-def _perturbed(x, k, rng, scale):
-    y = x.copy()
-    y[k + 1:] += scale * rng.standard_normal(y[k + 1:].shape)
-    return y
-
-
 @pytest.mark.parametrize("name", sorted(estimators.available()))
 def test_the_output_up_to_k_does_not_change_when_later_samples_change(name, record):
     gyr, acc, mag = record
@@ -36,7 +31,7 @@ def test_the_output_up_to_k_does_not_change_when_later_samples_change(name, reco
     rng = np.random.default_rng(21)
     n = len(gyr)
     for k in (3, 8, 200, n // 2 + 1):
-        g2, a2, m2 = (_perturbed(gyr, k, rng, 0.5), _perturbed(acc, k, rng, 3.0), _perturbed(mag, k, rng, 20.0))
+        g2, a2, m2 = (perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE))
         q2 = run(g2, a2, m2)
         assert np.max(np.abs(q2[:k + 1] - q[:k + 1])) <= 1e-12, f"{name}: sample <= {k} changed"
         assert np.max(np.abs(q2[k + 1:] - q[k + 1:])) > 1e-6, f"{name}: the perturbation changed nothing"

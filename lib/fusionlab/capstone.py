@@ -1,0 +1,459 @@
+"""Lab 13, the capstone: its rules stated once, and the checks a student runs on their own filter before handing in.
+
+A capstone filter is one function, ``estimate(gyr, acc, mag, fs) -> (N, 4)``: unit quaternions ``[w, x, y, z]``,
+body -> ENU in the course's convention (:mod:`fusionlab.rotations`), from gyro (rad/s), accelerometer (m/s^2) and
+magnetometer (uT) readings in the sensor frame, ``(N, 3)`` each, at ``fs`` Hz. The instructor scores it on BROAD
+trials the course does not ship, with the dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`):
+
+* **Causal**: the estimate at sample k uses no sample after k. Checked as :func:`causality_change` does it: every
+  sample after k is replaced by noise (:data:`CAUSAL_NOISE`), the filter runs again, and its output up to k must not
+  change by more than :data:`CAUSAL_TOL`, for each k of :func:`causal_ks`.
+* **On time**: a call on a trial of N samples may take :func:`budget_seconds` ``(N)``.
+* **Its own**: numpy, scipy and the course's rotation and metric helpers, but no published filter (the library's
+  estimators, VQF, ``ahrs``...) and no file: the grader runs the filter where neither exists.
+* **Points** from :data:`RUBRIC`, not from rank.
+
+:func:`self_check` runs these checks (all but the last) on the shipped trials; the grader (the course's grading
+tools) runs the same functions of this module on the hidden ones. :func:`bar` reads the scores of the published
+filters and the library's on the shipped trials (:data:`BAR_FILE`, made by ``python -m fusionlab.capstone``).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import metrics, validate
+
+__all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
+           "Criterion", "NEAR_VQF", "SENSORS", "RUBRIC", "MAX_POINTS", "GATES", "budget_seconds", "causal_ks",
+           "perturb_future", "as_quaternions", "causality_change", "window", "self_check", "SelfCheck", "bar",
+           "BAR_FILE", "make_bar"]
+
+#: The eight BROAD trials that ship with the course (``data/broad/``); the capstone is scored on the other 31.
+SHIPPED = (2, 7, 11, 16, 25, 27, 29, 33)
+#: Lab 13's split of the shipped trials: tune on these ...
+TUNE = (2, 11, 16, 25, 27)
+#: ... and check on these, which the tuning never saw (the grading tests hold the same three back).
+HOLD_OUT = (7, 29, 33)
+
+#: Seconds per sample a call may take, and the least a trial gets (:func:`budget_seconds`): 0.5 ms per sample is
+#: 7 times real time at BROAD's 286 Hz; a plain-Python loop over floats takes about 0.01 ms per sample.
+SECONDS_PER_SAMPLE = 5e-4
+MIN_SECONDS = 10.0
+
+#: Noise added after k to the gyro (rad/s), accelerometer (m/s^2) and magnetometer (uT) by the causality check.
+CAUSAL_NOISE = (0.5, 3.0, 20.0)
+#: The largest change of the output up to k that the check accepts (any quaternion component).
+CAUSAL_TOL = 1e-10
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """One row of the rubric.
+
+    Parameters
+    ----------
+    key : str
+        Its name in the grader's reports.
+    points : float
+        What it is worth.
+    rule : str
+        What earns them.
+    """
+    key: str
+    points: float
+    rule: str
+
+
+#: A filter within this factor of VQF's mean RMSE earns ``near_vqf``.
+NEAR_VQF = 1.2
+#: What a filter declares with ``SENSORS = "9D"`` (the default) or ``"6D"`` in its cell, and the RMSE it is scored
+#: on: a 9D filter gets the magnetometer and is scored on total error; a 6D filter gets ``mag=None`` and is scored
+#: on inclination (no 6D filter can know heading), against the 6D versions of the reference filters.
+SENSORS = {"9D": "total_deg", "6D": "inclination_deg"}
+#: The capstone's points (10): each row is earned or not, whatever the class's ranks.
+RUBRIC = (
+    Criterion("runs", 2, "a valid estimate (N unit quaternions) on every hidden trial, each within its time budget"),
+    Criterion("beats_madgwick", 3, "mean RMSE (9D: total, 6D: inclination) below Madgwick's filter's (ahrs, the "
+                                   "same sensors, its default gain)"),
+    Criterion("near_vqf", 3, f"mean RMSE at most {NEAR_VQF:g} x VQF's (the same sensors, default parameters)"),
+    Criterion("beats_vqf", 2, "mean RMSE below VQF's"),
+)
+MAX_POINTS = sum(c.points for c in RUBRIC)
+#: Conditions without which the filter earns none of the rubric's points.
+GATES = ("causal: the estimate up to sample k does not change when later samples do",
+         "its own: it calls no published filter (the library's, VQF, ahrs...), reads no file and does not recognise "
+         "which trial it is given")
+
+
+def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
+    """The time one call of ``estimate`` may take on a trial of ``n`` samples, in seconds.
+
+    Parameters
+    ----------
+    n : int
+        Samples in the trial.
+    seconds_per_sample : float, optional
+        Seconds per sample (:data:`SECONDS_PER_SAMPLE`).
+    min_seconds : float, optional
+        The least any trial gets (:data:`MIN_SECONDS`).
+
+    Returns
+    -------
+    float
+        The budget, s.
+
+    >>> budget_seconds(53240)                      # a BROAD trial of 186 s
+    26.62
+    >>> budget_seconds(100)
+    10.0
+    """
+    n = validate.count(n, "n", minimum=1)
+    seconds_per_sample = validate.scalar(seconds_per_sample, "seconds_per_sample", positive=True)
+    min_seconds = validate.scalar(min_seconds, "min_seconds", nonnegative=True)
+    return max(min_seconds, n * seconds_per_sample)
+
+
+def causal_ks(n):
+    """The samples k after which the causality check changes the data, for a trial of ``n`` samples: one inside
+    the first steps, one after the first 0.7 s (a filter's start-up statistics), one in the middle.
+
+    Parameters
+    ----------
+    n : int
+        Samples in the trial (at least 5).
+
+    Returns
+    -------
+    list of int
+        The three k, each leaving at least one sample after it.
+
+    >>> causal_ks(1000)
+    [3, 200, 501]
+    """
+    n = validate.count(n, "n", minimum=5)
+    return [min(k, n - 2) for k in (3, 200, n // 2 + 1)]
+
+
+def perturb_future(x, k, scale, rng):
+    """A copy of ``x`` with Gaussian noise of standard deviation ``scale`` added to every sample after k.
+
+    Parameters
+    ----------
+    x : array_like, shape (N, ...)
+        Samples along the first axis.
+    k : int
+        The last sample left as it is.
+    scale : float
+        Standard deviation of the noise, in the unit of ``x``.
+    rng : numpy.random.Generator
+        Draws the noise.
+
+    Returns
+    -------
+    numpy.ndarray
+        The changed copy.
+
+    >>> perturb_future(np.zeros((4, 1)), 1, 1.0, np.random.default_rng(0))[:2, 0]
+    array([0., 0.])
+    """
+    y = validate.array(x, "x", dtype=float).copy()
+    if y.ndim < 1 or len(y) < 2:
+        raise ValueError(f"x must hold at least two samples along its first axis; got shape {y.shape}")
+    k = validate.count(k, "k")
+    if k >= len(y) - 1:
+        raise ValueError(f"k must leave at least one sample after it (k < {len(y) - 1}); got {k}")
+    scale = validate.scalar(scale, "scale", nonnegative=True)
+    rng = validate.generator(rng)
+    y[k + 1:] += scale * rng.standard_normal(y[k + 1:].shape)
+    return y
+
+
+def as_quaternions(value, n):
+    """``value`` as ``(n, 4)`` unit quaternions, or a ValueError that says what a filter returned instead.
+
+    Norms within 1e-3 of 1 are accepted and made exactly 1.
+
+    Parameters
+    ----------
+    value : object
+        What a filter returned.
+    n : int
+        The number of samples it was given.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 4)
+        Unit quaternions.
+    """
+    try:
+        q = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("estimate returned something that is not an array of numbers") from None
+    if q.shape != (n, 4):
+        raise ValueError(f"estimate must return shape ({n}, 4); got {q.shape}")
+    if not np.isfinite(q).all():
+        raise ValueError("estimate returned NaN or infinite values")
+    norm = np.linalg.norm(q, axis=-1)
+    if np.any(np.abs(norm - 1) > 1e-3):
+        raise ValueError(f"estimate must return unit quaternions; norms range {norm.min():.3g}..{norm.max():.3g}")
+    return q / norm[:, None]
+
+
+def causality_change(run, gyr, acc, mag, q, k, rng):
+    """How much ``run``'s output up to sample k changes when every sample after k is replaced by noisy ones.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(gyr, acc, mag) -> (N, 4)``: the filter, called once more on the changed data.
+    gyr, acc, mag : array_like, shape (N, 3)
+        The data ``q`` was estimated from.
+    q : array_like, shape (N, 4)
+        The filter's output on them.
+    k : int
+        The last sample kept.
+    rng : numpy.random.Generator
+        Draws the noise (:data:`CAUSAL_NOISE`).
+
+    Returns
+    -------
+    float
+        The largest change of any quaternion component up to k; a causal filter gives 0 (at most :data:`CAUSAL_TOL`).
+    """
+    if not callable(run):
+        raise ValueError(f"run must be a function run(gyr, acc, mag) -> (N, 4); got {type(run).__name__}")
+    q = validate.array(q, "q")
+    noisy = [perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
+    q2 = as_quaternions(run(*noisy), len(q))
+    return float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
+
+
+def window(trial, rest=5.0, movement=40.0):
+    """A piece of a BROAD trial for quick tuning: ``rest`` seconds before its movement phase starts, then the first
+    ``movement`` seconds of motion (the lab's windows; the hidden trials are scored whole).
+
+    Parameters
+    ----------
+    trial : fusionlab.datasets.BroadTrial
+        A trial with a movement phase.
+    rest : float, optional
+        Seconds kept before the movement starts.
+    movement : float, optional
+        Seconds of movement kept.
+
+    Returns
+    -------
+    fusionlab.datasets.BroadTrial
+        The window, with its reference and movement mask.
+    """
+    rest = validate.scalar(rest, "rest", nonnegative=True)
+    movement = validate.scalar(movement, "movement", positive=True)
+    moving = np.flatnonzero(trial.movement)
+    if not len(moving):
+        raise ValueError(f"trial must have a movement phase; {trial.name} has none")
+    start = max(0, int(moving[0]) - int(round(rest * trial.fs)))
+    return trial.slice(start, int(moving[0]) + int(round(movement * trial.fs)))
+
+
+@dataclass
+class SelfCheck:
+    """What :func:`self_check` found.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One per trial: its name, status (ok, error, timeout), message, RMSEs (deg), seconds and budget.
+    sensors : str
+        ``'9D'`` or ``'6D'``, as the filter was run.
+    causal : bool or None
+        The causality check's verdict (None: not checked).
+    causal_message : str
+        What the check found.
+    """
+    rows: list = field(default_factory=list)
+    sensors: str = "9D"
+    causal: bool | None = None
+    causal_message: str = ""
+
+    @property
+    def ok(self):
+        """True when every trial gave a valid estimate within its budget and the filter is causal."""
+        return bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True
+
+    def mean(self, key=None):
+        """The mean of one metric over the trials that ran (NaN when none did).
+
+        Parameters
+        ----------
+        key : str, optional
+            ``'total_deg'``, ``'heading_deg'`` or ``'inclination_deg'``; by default the one the filter is scored on
+            (:data:`SENSORS`).
+
+        Returns
+        -------
+        float
+            Degrees.
+        """
+        key = SENSORS[self.sensors] if key is None else key
+        vals = [r[key] for r in self.rows if r["status"] == "ok"]
+        return float(np.mean(vals)) if vals else float("nan")
+
+    def __str__(self):
+        lines = [f"{'trial':<36}{'status':<9}{'total':>8}{'heading':>9}{'inclin.':>9}   (RMSE, deg)"]
+        for r in self.rows:
+            lines.append(f"{r['trial']:<36}{r['status']:<9}{r['total_deg']:8.2f}{r['heading_deg']:9.2f}"
+                         f"{r['inclination_deg']:9.2f}" + (f"   {r['message']}" if r["message"] else ""))
+        lines.append(f"{'mean':<45}{self.mean('total_deg'):8.2f}{self.mean('heading_deg'):9.2f}"
+                     f"{self.mean('inclination_deg'):9.2f}")
+        lines.append(f"a {self.sensors} filter is scored on its mean {SENSORS[self.sensors][:-4]} RMSE: "
+                     f"{self.mean():.2f} deg")
+        lines.append(f"time budget held on every trial: {'yes' if all(r['status'] != 'timeout' for r in self.rows) else 'NO'}")
+        lines.append(self.causal_message)
+        return "\n".join(lines)
+
+
+def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
+    """Run ``estimate`` on ``trials`` as the grader does: valid output, the time budget, the metrics, causality.
+
+    Parameters
+    ----------
+    estimate : callable
+        ``estimate(gyr, acc, mag, fs) -> (N, 4)``.
+    trials : list of fusionlab.datasets.BroadTrial
+        Trials (or windows of them, :func:`window`) with their reference.
+    sensors : {'9D', '6D'}, optional
+        As the filter declares (:data:`SENSORS`): a 6D filter is given ``mag=None`` and scored on inclination.
+    seed : int, optional
+        Seeds the causality check's noise.
+    causality : bool, optional
+        Run the causality check (on the first trial that ran).
+
+    Returns
+    -------
+    SelfCheck
+        Printing it gives a table; ``.ok`` says whether the grader's gates would hold.
+    """
+    if not callable(estimate):
+        raise ValueError(f"estimate must be your filter, a function; got {type(estimate).__name__}")
+    trials = list(trials)
+    if not trials:
+        raise ValueError("trials must hold at least one trial")
+    sensors = validate.choice(sensors, "sensors", tuple(SENSORS))
+    seed = validate.count(seed, "seed")
+    out = SelfCheck(sensors=sensors)
+    first = None
+    for tr in trials:
+        row = dict(trial=tr.name, status="ok", message="", total_deg=np.nan, heading_deg=np.nan,
+                   inclination_deg=np.nan, seconds=np.nan, budget_s=budget_seconds(len(tr)))
+        t0 = time.perf_counter()
+        try:
+            q = as_quaternions(estimate(tr.gyr, tr.acc, tr.mag if sensors == "9D" else None, tr.fs), len(tr))
+        except Exception as exc:                  # the student's filter: any error is reported, not raised
+            row.update(status="error", message=f"{type(exc).__name__}: {str(exc)[:200]}")
+            out.rows.append(row)
+            continue
+        row["seconds"] = time.perf_counter() - t0
+        if row["seconds"] > row["budget_s"]:
+            row.update(status="timeout", message=f"over its budget of {row['budget_s']:.1f} s")
+        r = metrics.broad_rmse(q, tr.quat_ref, tr.movement)
+        row.update(total_deg=r.total_deg, heading_deg=r.heading_deg, inclination_deg=r.inclination_deg)
+        out.rows.append(row)
+        if first is None:
+            first = (tr, q)
+    if not causality:
+        out.causal_message = "causality: not checked"
+    elif first is None:
+        out.causal_message = "causality: not checked (estimate ran on no trial)"
+    else:
+        tr, q = first
+        rng = np.random.default_rng(seed)
+        run = lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, tr.fs)    # noqa: E731
+        for k in causal_ks(len(tr)):
+            change = causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
+            if change > CAUSAL_TOL:
+                out.causal, out.causal_message = False, (
+                    f"causality: NOT causal -- changing the samples after k = {k} of {tr.name} changed the "
+                    f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)")
+                break
+        else:
+            out.causal, out.causal_message = True, (
+                f"causality: causal (the output up to k is unchanged when the samples after k change; "
+                f"k = {', '.join(map(str, causal_ks(len(tr))))} of {tr.name})")
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The bar to beat: the published filters and the library's, on the shipped trials
+# ----------------------------------------------------------------------------------------------------------------
+
+#: The bar's table (:func:`make_bar` writes it, :func:`bar` reads it).
+BAR_FILE = Path(__file__).parent / "data" / "capstone_bar.csv"
+BAR_COLUMNS = ("estimator", "source", "sensors", "trial", "span", "n_samples", "total_rmse_deg",
+               "heading_rmse_deg", "inclination_rmse_deg")
+
+
+def make_bar(path=BAR_FILE, progress=True):
+    """Score every filter of :func:`fusionlab.bench.contenders` on every shipped trial, whole and as the lab's
+    :func:`window`, and write :data:`BAR_FILE` (about two minutes: Madgwick's filter is plain Python).
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        Where to write the table.
+    progress : bool, optional
+        Print a line per filter and trial.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    from . import bench, datasets
+    rows = []
+    for n in SHIPPED:
+        whole = datasets.load_trial(n, download=False, progress=False)
+        for span, tr in (("whole", whole), ("window", window(whole))):
+            for c in bench.contenders():
+                row = bench.score(c, tr)
+                if row["error"]:
+                    continue                        # TRIAD refuses free fall; the bar lists the filters that ran
+                rows.append({**row, "span": span})
+                if progress:
+                    print(f"{c.name:<14}{tr.name:<36}{span:<7}{row['total_rmse_deg']:7.2f} deg", flush=True)
+    bench.write_csv(rows, path, columns=BAR_COLUMNS)
+    return Path(path)
+
+
+def bar(span="whole", path=BAR_FILE):
+    """The bar's rows for one span (``'whole'`` trials or the lab's ``'window'``): a list of dicts with the numbers
+    as floats, in the order :func:`make_bar` wrote them.
+
+    Parameters
+    ----------
+    span : {'whole', 'window'}, optional
+        Whole trials, or the lab's windows (:func:`window`).
+    path : str or Path, optional
+        The table (:data:`BAR_FILE`).
+
+    Returns
+    -------
+    list of dict
+        Columns :data:`BAR_COLUMNS`.
+    """
+    import csv
+    span = validate.choice(span, "span", ("whole", "window"))
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["span"] == span]
+    for r in rows:
+        for key in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg"):
+            r[key] = float(r[key])
+        r["n_samples"] = int(r["n_samples"])
+    return rows
+
+
+if __name__ == "__main__":
+    print(f"wrote {make_bar()}")
