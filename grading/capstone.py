@@ -8,6 +8,12 @@ The student hands in a notebook whose answer cells define ``estimate(gyr, acc, m
 (m/s^2) and magnetometer (uT) readings in the sensor frame at ``fs`` Hz. Grading happens here, not in the student's
 process:
 
+* **Sensor set.** A filter is 9D (gyro, accelerometer, magnetometer) unless its answer cells declare
+  ``SENSORS = "6D"`` (:data:`fusionlab.capstone.SENSORS`). The declaration is read here, from the code
+  (:func:`declared_sensors`: a top-level assignment of the literal ``"6D"`` or ``"9D"`` in a cell the box runs), never
+  from the student's process; anything else that sets ``SENSORS`` makes the filter 9D, with a note that says why. A 6D
+  filter is called with ``mag=None`` in every call, the causality check's too, and is scored on inclination.
+
 * **Hidden trials.** The instructor scores on the BROAD trials that the course does not ship (:data:`HIDDEN`, 31 of
   39; ``data/broad/`` and the student release hold the other 8). ``make capstone-data`` gets them once through
   :func:`fusionlab.datasets.fetch_trial` (each file downloaded to a temporary file, checked and only then renamed
@@ -24,22 +30,34 @@ process:
   published reference is far off, and is named (:data:`CHEATS`, ``detects the trial``).
 * **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
   RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
-  the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A trial
-  without a valid estimate (an error, over its budget, not N unit quaternions) counts with the error of an estimate
-  that never moves (the identity quaternion).
+  the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A filter
+  is scored on one of them, its sensor set's: total RMSE (9D) or inclination RMSE (6D, which cannot know heading).
+  A trial without a valid estimate (an error, over its budget, not N unit quaternions) counts with that RMSE of an
+  estimate that never moves (the identity quaternion).
 * **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret among those that
   ran, every sample after k is replaced by noisy samples and ``estimate`` is called again; its output up to k must
   not change (1e-10), for k in :func:`fusionlab.capstone.causal_ks`.
 * **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
-  budget, then the mean total RMSE against Madgwick's filter and VQF, computed here on the same disguised trials.
-  A non-causal submission, or one named in :data:`CHEATS`, gets no points for the filter.
-* **Reference rows** (:func:`references`): VQF 9D (default parameters), Madgwick 9D (``ahrs``, its default gain) and
-  the library's best 9D filter on the same trials; they are scored like a student and listed on the leaderboard.
+  budget, then the mean RMSE the filter is scored on against Madgwick's filter's and VQF's with the same sensors
+  (9D: total RMSE of the 9D versions; 6D: inclination RMSE of the 6D versions), computed here on the same disguised
+  trials. A non-causal submission, or one named in :data:`CHEATS`, gets no points for the filter.
+* **Reference rows** (:func:`references`), for each sensor set on the same trials: VQF (default parameters), Madgwick
+  (``ahrs``, its default gain) and the library's best filter of that set (by the RMSE the set is scored on). They are
+  scored like a student of their set and listed on the leaderboard; the output of every reference filter that ran,
+  either set, is what the match check compares a student's with. They are computed once per disguise and kept in
+  ``<out>/references.npz`` (:func:`cached_references`), keyed by the seed, the trials (names, lengths, a digest of
+  their disguised data) and a digest of the code (the library's source files, this module, the versions of vqf and
+  ahrs): re-grading one student with the class's seed reuses them (Madgwick's filter alone takes seconds per
+  trial); any difference computes them again.
+* **Seed.** ``--seed`` sets the disguise's secret; without it the seed that ``<out>/run.json`` saved for the same
+  trials is used again (one disguise per class), else a new random one (``--new-seed`` forces a new one).
 
 Outputs (``--out``, default ``capstone_<class>/`` in the course): ``leaderboard.html`` and ``leaderboard.csv`` (one
-row per student and per reference: mean total / heading / inclination RMSE, rank, ratio to VQF, run time, budget and
-causality held, points, cheats), ``trials.csv`` (every student and reference on every trial), and per student
-``feedback/<student>/capstone.html`` with a per-trial figure (``trials.png``).
+row per student and per reference: sensor set, mean total / heading / inclination RMSE, rank, ratio to VQF with the
+same sensors, run time, budget and causality held, points, cheats; 9D and 6D filters are ranked separately, each rank
+within its set, a table per set on the page), ``trials.csv`` (every student and reference on every trial), per
+student ``feedback/<student>/capstone.html`` with a per-trial figure (``trials.png``) of the RMSE they are scored on,
+``run.json`` (the seed and the trials) and ``references.npz``.
 """
 from __future__ import annotations
 
@@ -62,8 +80,8 @@ from pathlib import Path
 import numpy as np
 
 from fusionlab.capstone import (CAUSAL_NOISE, CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR_VQF, RUBRIC,
-                                SECONDS_PER_SAMPLE, SHIPPED, Criterion, as_quaternions, budget_seconds, causal_ks,
-                                perturb_future)   # the rules, as the lab states them to the students
+                                SECONDS_PER_SAMPLE, SENSORS, SHIPPED, Criterion, as_quaternions, budget_seconds,
+                                causal_ks, perturb_future)   # the rules, as the lab states them to the students
 from grading import box as wire
 from grading import judge, sandbox
 
@@ -108,11 +126,16 @@ FILE_OWNERS = {"np", "numpy", "os", "io", "pathlib", "Path", "json", "pickle", "
                "pandas", "datasets", "shutil"}
 EMBED_CHARS = 200_000           # code the box runs beyond this size is listed for review (data pasted into it?)
 
-COLUMNS = ("rank", "name", "kind", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
+COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
            "ratio_to_vqf", "seconds", "trials_ok", "trials", "budget_held", "causal", "cheats", "notes")
-TRIAL_COLUMNS = ("name", "kind", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
+TRIAL_COLUMNS = ("name", "kind", "sensors", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
                  "budget_s", "message")
 
+
+#: How each sensor set is named on the leaderboard and the feedback pages.
+SETS = {"9D": "9D filters (gyroscope, accelerometer, magnetometer): scored on mean total RMSE",
+        "6D": "6D filters (gyroscope and accelerometer; called with mag=None): scored on mean inclination RMSE, "
+              "which is all a filter without a magnetometer can know"}
 
 class CapstoneDataMissing(FileNotFoundError):
     """The hidden trials are not on this computer: the message says which and how to get them."""
@@ -289,24 +312,26 @@ class TrialResult:
     total_deg: float = float("nan")
     heading_deg: float = float("nan")
     inclination_deg: float = float("nan")
-    counted_deg: float = float("nan")   # total RMSE as the mean counts it (a failed trial: the identity's error)
+    counted_deg: float = float("nan")   # the scored RMSE as the mean counts it (a failed trial: the identity's error)
+    metric: str = "total_deg"           # which RMSE that is: SENSORS[the filter's sensor set]
     q: np.ndarray | None = None
 
 
-def score_trial(result, q, trial):
-    """Fill ``result`` with the authors' metrics of ``q`` on ``trial`` (as :func:`fusionlab.bench.score` does)."""
+def score_trial(result, q, trial, metric="total_deg"):
+    """Fill ``result`` with the authors' metrics of ``q`` on ``trial`` (as :func:`fusionlab.bench.score` does);
+    ``metric`` (``'total_deg'`` for a 9D filter, ``'inclination_deg'`` for a 6D one) is the one counted."""
     from fusionlab import metrics
     r = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
     result.total_deg, result.heading_deg, result.inclination_deg = r.total_deg, r.heading_deg, r.inclination_deg
-    result.counted_deg = r.total_deg
+    result.counted_deg, result.metric = getattr(result, metric), metric
     return result
 
 
-def never_moves(trial):
-    """Total RMSE of the identity quaternion on ``trial``: what a trial without a valid estimate counts."""
+def never_moves(trial, metric="total_deg"):
+    """RMSE (``metric``) of the identity quaternion on ``trial``: what a trial without a valid estimate counts."""
     from fusionlab import metrics
     q = np.tile([1.0, 0.0, 0.0, 0.0], (len(trial), 1))
-    return metrics.broad_rmse(q, trial.quat_ref, trial.movement).total_deg
+    return getattr(metrics.broad_rmse(q, trial.quat_ref, trial.movement), metric)
 
 
 @dataclass
@@ -315,63 +340,193 @@ class Reference:
     name: str
     summary: str
     trials: list
+    sensors: str = "9D"
+
+
+#: The published reference filters of each sensor set: (VQF, Madgwick), as :func:`fusionlab.bench.contenders`
+#: names them.
+PUBLISHED = {"9D": ("vqf9", "madgwick9"), "6D": ("vqf6", "madgwick6")}
 
 
 def references(scored, progress=False):
-    """VQF 9D, Madgwick 9D and every 9D filter of the library on the disguised trials; the library's best is kept.
+    """The reference rows of both sensor sets on the disguised trials: VQF and Madgwick 9D with every 9D filter of
+    the library, scored on total RMSE, and VQF and Madgwick 6D with every 6D filter of the library, scored on
+    inclination RMSE; the library's best of each set (by that RMSE) is kept.
 
     A library filter that refuses a trial (TRIAD, which has no gyro, refuses free fall) is left out of the choice.
 
     Returns
     -------
     dict
-        ``{'vqf9': Reference, 'madgwick9': Reference, 'library best (<name>)': Reference}``
+        ``{'vqf9', 'madgwick9', 'library best 9D (<name>)', 'vqf6', 'madgwick6', 'library best 6D (<name>)'}``,
+        each a :class:`Reference`, and ``'_all'``: every filter that ran, for the match check.
     """
     from fusionlab import bench
     found = {c.name: c for c in bench.contenders()}
-    missing = [n for n in ("vqf9", "madgwick9") if n not in found]
+    missing = [n for names in PUBLISHED.values() for n in names if n not in found]
     if missing:
         raise RuntimeError(f"the capstone's reference rows need {' and '.join(missing)} (the packages vqf and ahrs "
                            "of environment.txt)")
-    library = [c for c in found.values() if c.source == "fusionlab" and c.uses_mag]
-    rows = {}
-    for c in [found["vqf9"], found["madgwick9"], *library]:
-        trials = []
-        for t in scored:
-            r = TrialResult(t.name)
-            t0 = time.perf_counter()
-            try:
-                q = np.asarray(c.run(t), dtype=float)
-            except ValueError as exc:                 # a library filter that refuses a trial (TRIAD in free fall)
-                if c.source != "fusionlab":
-                    raise
+    rows, out = {}, {}
+    for sensors, published in PUBLISHED.items():
+        metric = SENSORS[sensors]
+        library = [c for c in found.values() if c.source == "fusionlab" and c.uses_mag == (sensors == "9D")]
+        for c in [*(found[n] for n in published), *library]:
+            trials = []
+            for t in scored:
+                r = TrialResult(t.name)
+                t0 = time.perf_counter()
+                try:
+                    q = np.asarray(c.run(t), dtype=float)
+                except ValueError as exc:                 # a library filter that refuses a trial (TRIAD in free fall)
+                    if c.source != "fusionlab":
+                        raise
+                    if progress:
+                        print(f"  reference {c.name} left out: it refuses {t.name} ({exc})", flush=True)
+                    break
+                r.seconds = time.perf_counter() - t0
+                q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+                score_trial(r, q, t, metric)
+                r.q = q[::MATCH_STRIDE]                 # enough to recognise this output again, a fifth of the memory
+                trials.append(r)
                 if progress:
-                    print(f"  reference {c.name} left out: it refuses {t.name} ({exc})", flush=True)
-                break
-            r.seconds = time.perf_counter() - t0
-            q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-            score_trial(r, q, t)
-            r.q = q[::MATCH_STRIDE]                 # enough to recognise this output again, a fifth of the memory
-            trials.append(r)
-            if progress:
-                print(f"  reference {c.name} on {t.name}: {r.total_deg:.2f} deg", flush=True)
-        else:
-            rows[c.name] = Reference(c.name, c.summary, trials)
-    library = [c for c in library if c.name in rows]
-    best = min((rows[c.name] for c in library), key=lambda ref: np.mean([r.total_deg for r in ref.trials]))
-    out = {"vqf9": rows["vqf9"], "madgwick9": rows["madgwick9"]}
-    out[f"library best ({best.name})"] = best
+                    print(f"  reference {c.name} on {t.name}: {r.counted_deg:.2f} deg ({metric[:-4]})", flush=True)
+            else:
+                rows[c.name] = Reference(c.name, c.summary, trials, sensors)
+        ran = [rows[c.name] for c in library if c.name in rows]
+        best = min(ran, key=lambda ref: mean_scored(ref.trials))
+        out.update({n: rows[n] for n in published})
+        out[f"library best {sensors} ({best.name})"] = best
     out["_all"] = rows                     # every reference's output, for the match check
     return out
 
 
-def mean_total(trials):
-    """Mean over the trials of the total RMSE as counted (a failed trial with the identity's error), deg."""
+def references_of(refs, sensors):
+    """The reference rows of one sensor set: ``{name: Reference}`` (VQF, Madgwick, the library's best)."""
+    return {n: ref for n, ref in refs.items() if not n.startswith("_") and ref.sensors == sensors}
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The reference rows, kept in the output folder
+# ----------------------------------------------------------------------------------------------------------------
+
+REFERENCE_CACHE = "references.npz"
+CACHE_FORMAT = 1
+_TRIAL_FIELDS = [f.name for f in dataclasses.fields(TrialResult) if f.name != "q"]
+
+
+def references_key(scored, seed):
+    """What the reference rows depend on, as a dict that :func:`cached_references` compares: the disguise's seed,
+    the trials' names and lengths, a digest of their disguised data, and a digest of the code that computes the
+    rows (the library's source files and this module) with the versions of the packages of VQF and Madgwick."""
+    import hashlib
+    from importlib import metadata
+
+    import fusionlab
+    code = hashlib.sha256()
+    lib = Path(fusionlab.__file__).resolve().parent
+    for path in sorted(lib.rglob("*.py")) + [Path(__file__).resolve()]:
+        code.update((str(path.relative_to(lib)) if path.is_relative_to(lib) else f"grading/{path.name}").encode())
+        code.update(path.read_bytes())
+    packages = {}
+    for name in ("vqf", "ahrs", "numpy", "scipy"):
+        try:
+            packages[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            packages[name] = None
+    data = hashlib.sha256()
+    for t in scored:
+        for a in (t.gyr, t.acc, t.mag, t.quat_ref, t.movement):
+            data.update(np.ascontiguousarray(a).tobytes())
+        data.update(repr(float(t.fs)).encode())
+    return {"format": CACHE_FORMAT, "seed": int(seed), "trials": [[t.name, len(t)] for t in scored],
+            "data": data.hexdigest(), "code": code.hexdigest(), "packages": packages}
+
+
+def save_references(refs, path, key):
+    """Write ``refs`` (:func:`references`) and ``key`` to ``path`` (an ``.npz`` of numbers and JSON text, no pickle),
+    whole or not at all."""
+    path = Path(path)
+    names = list(refs["_all"])
+    rows = {"all": [dict(name=ref.name, summary=ref.summary, sensors=ref.sensors,
+                         trials=[{k: getattr(r, k) for k in _TRIAL_FIELDS} for r in ref.trials])
+                    for ref in refs["_all"].values()],
+            "chosen": {label: ref.name for label, ref in refs.items() if not label.startswith("_")}}
+    arrays = {"key": np.array(json.dumps(key)), "rows": np.array(json.dumps(rows))}
+    for j, name in enumerate(names):
+        for i, r in enumerate(refs["_all"][name].trials):
+            arrays[f"q_{j}_{i}"] = np.asarray(r.q, dtype=float)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    with open(tmp, "wb") as f:
+        np.savez(f, **arrays)
+    os.replace(tmp, path)
+    return path
+
+
+def load_references(path, key):
+    """The reference rows saved in ``path`` if they were saved with ``key``; None otherwise (no file, another key,
+    a file that cannot be read)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if json.loads(str(z["key"])) != json.loads(json.dumps(key)):
+                return None
+            rows = json.loads(str(z["rows"]))
+            every = {}
+            for j, row in enumerate(rows["all"]):
+                trials = []
+                for i, fields in enumerate(row["trials"]):
+                    r = TrialResult(**{k: fields[k] for k in _TRIAL_FIELDS})
+                    r.q = np.array(z[f"q_{j}_{i}"])
+                    trials.append(r)
+                every[row["name"]] = Reference(row["name"], row["summary"], trials, row["sensors"])
+            out = {label: every[name] for label, name in rows["chosen"].items()}
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    out["_all"] = every
+    return out
+
+
+def cached_references(scored, folder, seed, progress=False):
+    """:func:`references` of ``scored``, kept in ``<folder>/references.npz`` (:data:`REFERENCE_CACHE`): computed
+    once per disguise and reused while :func:`references_key` is the same (re-grading a late student with the
+    class's seed); recomputed and saved again when it differs."""
+    path = Path(folder) / REFERENCE_CACHE
+    key = references_key(scored, seed)
+    refs = load_references(path, key) if path.exists() else None
+    if refs is not None:
+        if progress:
+            print(f"  reference rows reused from {path} (same seed, trials and library)", flush=True)
+        return refs
+    if progress and path.exists():
+        print(f"  {path} was made for other trials, another seed or another library: computed again", flush=True)
+    refs = references(scored, progress=progress)
+    save_references(refs, path, key)
+    return refs
+
+
+def mean_scored(trials):
+    """Mean over the trials of the RMSE they are scored on, as counted (a failed trial with the identity's error),
+    deg: total RMSE for a 9D filter, inclination RMSE for a 6D one."""
     return float(np.mean([r.counted_deg for r in trials])) if trials else float("nan")
 
 
+def mean_total(trials):
+    """Mean total RMSE as counted, deg, of trials scored on total RMSE (a 9D filter's)."""
+    if any(r.metric != "total_deg" for r in trials):
+        raise ValueError("trials must be scored on total RMSE (a 9D filter's); use mean_scored")
+    return mean_scored(trials)
+
+
+def _published_means(refs, sensors):
+    """(Madgwick's, VQF's) mean scored RMSE of one sensor set: what :func:`rubric_points` compares with."""
+    vqf, madgwick = PUBLISHED[sensors]
+    return mean_scored(refs[madgwick].trials), mean_scored(refs[vqf].trials)
+
+
 def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg):
-    """Points of each rubric criterion (:data:`RUBRIC`) for a mean total RMSE; none when ``gated_out``."""
+    """Points of each rubric criterion (:data:`RUBRIC`) for a mean RMSE (total for a 9D filter, inclination for a
+    6D one), against Madgwick's and VQF's of the same sensor set; none when ``gated_out``."""
     if gated_out:
         return {c.key: 0.0 for c in RUBRIC}
     earned = {"runs": all_ran, "beats_madgwick": mean_deg < madgwick_deg,
@@ -397,6 +552,74 @@ def program_of(nb):
         must = bool(meta.get("solution")) or meta.get("grade_id") == "imports"
         cells.append((meta.get("grade_id"), judge.python_of(cell.get("source", "")), must))
     return [(gid, src) for gid, src, _ in judge.prune(cells, need=(FUNCTION,))]
+
+
+DECLARATION = "SENSORS"       # the name a submission declares its sensor set with (fusionlab.capstone.SENSORS)
+
+
+def _module_scope(tree):
+    """The nodes of a cell's own (module) scope: not the bodies of functions, lambdas and classes, nor the loop
+    variables of comprehensions, which bind names of their own scopes."""
+    stack = list(tree.body)
+    while stack:
+        node = stack.pop()
+        yield node
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            stack += [*node.decorator_list, *node.args.defaults, *(d for d in node.args.kw_defaults if d)]
+        elif isinstance(node, ast.ClassDef):
+            stack += [*node.decorator_list, *node.bases, *node.keywords]
+        elif isinstance(node, ast.Lambda):
+            stack += [*node.args.defaults, *(d for d in node.args.kw_defaults if d)]
+        elif isinstance(node, ast.comprehension):
+            stack += [node.iter, *node.ifs]
+        else:
+            stack += list(ast.iter_child_nodes(node))
+
+
+def declared_sensors(cells):
+    """The sensor set a submission declares, read from its code (never from its process): ``(sensors, note)``.
+
+    A declaration is a top-level assignment of a literal, ``SENSORS = "6D"`` or ``SENSORS = "9D"``, in one of the
+    cells the box runs (``[(grade_id, source)]``, :func:`program_of`); without one the filter is 9D. Anything else
+    that sets ``SENSORS`` -- another value, an expression, an assignment inside a block or through ``global``, two
+    different declarations -- makes it 9D too, and ``note`` says why (it is empty otherwise).
+    """
+    literal, other = [], []
+    for i, (_, source) in enumerate(cells, 1):
+        try:
+            tree = judge._parse(source)
+        except SyntaxError:
+            continue
+        plain = set()
+        for node in tree.body:
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target] \
+                if isinstance(node, ast.AnnAssign) and node.value is not None else []
+            if len(targets) == 1 and isinstance(targets[0], ast.Name) and targets[0].id == DECLARATION:
+                v = node.value
+                if isinstance(v, ast.Constant) and isinstance(v.value, str) and v.value in SENSORS:
+                    literal.append(v.value)
+                    plain.add(targets[0])
+                else:
+                    other.append(f"cell {i}, line {node.lineno}: {DECLARATION} = {ast.unparse(v)[:60]}")
+                    plain.add(targets[0])
+        for node in _module_scope(tree):
+            binds = (isinstance(node, ast.Name) and node.id == DECLARATION and not isinstance(node.ctx, ast.Load)
+                     and node not in plain) or \
+                    (isinstance(node, ast.alias) and (node.asname or node.name) == DECLARATION) or \
+                    (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+                     and node.name == DECLARATION)
+            if binds:
+                other.append(f"cell {i}, line {getattr(node, 'lineno', '?')}: {DECLARATION} is set there other than "
+                             "by a literal assignment at the top level of the cell")
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Global, ast.Nonlocal)) and DECLARATION in node.names:
+                other.append(f"cell {i}, line {node.lineno}: a function sets the global {DECLARATION}")
+    how = f'declare a 6D filter with the line {DECLARATION} = "6D" at the top level of an answer cell'
+    if other:
+        return "9D", f"graded as 9D: {'; '.join(other)} ({how}; nothing else is read)"
+    if len(set(literal)) > 1:
+        return "9D", f"graded as 9D: {DECLARATION} is declared both {' and '.join(map(repr, sorted(set(literal))))}"
+    return (literal[0] if literal else "9D"), ""
 
 
 def scan(cells):
@@ -490,10 +713,15 @@ def box_library(scratch):
 # ----------------------------------------------------------------------------------------------------------------
 
 class Runner:
-    """One student's box, started again (from the notebook's cells) after a call that ran over or ended it."""
+    """One student's box, started again (from the notebook's cells) after a call that ran over or ended it.
 
-    def __init__(self, cells, course, scratch, slot=0, limits=None):
+    A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box."""
+
+    def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D"):
+        if sensors not in SENSORS:
+            raise ValueError(f"sensors must be one of {', '.join(SENSORS)}; got {sensors!r}")
         self.cells, self.course, self.scratch, self.slot = cells, Path(course), Path(scratch), slot
+        self.sensors = sensors
         self.limits = limits or {}
         self.root = box_library(scratch)
         self.box = self.work = None
@@ -527,11 +755,12 @@ class Runner:
         return False
 
     def call(self, trial, seconds, gyr=None, acc=None, mag=None):
-        """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data."""
+        """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data
+        (``gyr``, ``acc``, ``mag`` instead of the trial's when given; no magnetometer at all for a 6D runner)."""
         if self.box is None and (self.setup_error or self.starts > MAX_RESTARTS or not self.start()):
             return None, "not run", self.setup_error or f"the box was started {self.starts} times", float("nan")
         args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
-                trial.mag if mag is None else mag, float(trial.fs)]
+                None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
         message = {"op": "call", "name": FUNCTION, "args": wire.encode(args), "kwargs": wire.encode({})}
         t0 = time.monotonic()
         try:
@@ -575,6 +804,7 @@ class StudentResult:
     notes: list = field(default_factory=list)
     points: dict = field(default_factory=dict)
     error: str = ""
+    sensors: str = "9D"                             # as its code declares it (declared_sensors)
 
     @property
     def total_points(self):
@@ -586,10 +816,12 @@ class StudentResult:
 
 
 def check_causality(runner, trial, q, seconds, rng):
-    """(True/False, message): is ``estimate``'s output up to k unchanged when every sample after k changes?"""
+    """(True/False, message): is ``estimate``'s output up to k unchanged when every sample after k changes?
+    (For a 6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
     n = len(trial)
+    sensors = (trial.gyr, trial.acc) if runner.sensors == "6D" else (trial.gyr, trial.acc, trial.mag)
     for k in causal_ks(n):
-        noisy = [perturb_future(x, k, scale, rng) for x, scale in zip((trial.gyr, trial.acc, trial.mag), CAUSAL_NOISE)]
+        noisy = [perturb_future(x, k, scale, rng) for x, scale in zip(sensors, CAUSAL_NOISE)]
         q2, status, why, _ = runner.call(trial, seconds, *noisy)
         if q2 is None:
             return None, f"not checked: with later samples changed, estimate {why} ({status})"
@@ -613,11 +845,18 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
     res = StudentResult(name)
     cells = program_of(nb)
     res.cheats += scan(cells)
+    res.sensors, why = declared_sensors(cells)
+    metric = SENSORS[res.sensors]
+    if why:
+        res.notes.append(f"{DECLARATION}: {why}")
+    if _declared_outside(nb, cells):
+        res.notes.append(f"{DECLARATION} is set in a cell the grader does not run (only the answer cells and the "
+                         f"cells they need run): graded as {res.sensors}")
     size = sum(len(src) for _, src in cells)
     if size > EMBED_CHARS:
         res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
                          "published reference, say)?")
-    runner = Runner([src for _, src in cells], course, scratch, slot, limits)
+    runner = Runner([src for _, src in cells], course, scratch, slot, limits, sensors=res.sensors)
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
     try:
@@ -628,13 +867,13 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
                 r.status, q = "timeout", None
                 r.message = f"took {r.seconds:.1f} s, over its budget of {r.budget_s:.1f} s"
             if q is not None:
-                score_trial(r, q, t)
+                score_trial(r, q, t, metric)
                 r.q = q
                 _look_for_cheats(res, r, t, refs)
                 if i != chosen:
                     r.q = None                                  # a class of a few hundred would not fit otherwise
             else:
-                r.counted_deg = never_moves(t)
+                r.counted_deg, r.metric = never_moves(t, metric), metric
                 if any(text in r.message for text in ("not available in the capstone",
                                                       "not available while the lab is graded")):
                     res.cheats.append(("calls a reference filter", f"{t.name}: {r.message}"))
@@ -659,10 +898,21 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
     finally:
         runner.close()
     res.cheats = list(dict.fromkeys(res.cheats))
-    vqf, madgwick = mean_total(refs["vqf9"].trials), mean_total(refs["madgwick9"].trials)
+    madgwick, vqf = _published_means(refs, res.sensors)
     gated = bool(res.cheats) or res.causal is False
-    res.points = rubric_points(mean_total(res.trials), res.all_ran, gated, madgwick, vqf)
+    res.points = rubric_points(mean_scored(res.trials), res.all_ran, gated, madgwick, vqf)
     return res
+
+
+def _declared_outside(nb, cells):
+    """Does a code cell that the box does not run set ``SENSORS`` (a declaration the grader would not see)?"""
+    ran = {src for _, src in cells}
+    for cell in nb.cells:
+        if cell.get("cell_type") == "code":
+            src = judge.python_of(cell.get("source", ""))
+            if src not in ran and DECLARATION in judge._bound_names(src):
+                return True
+    return False
 
 
 def _look_for_cheats(res, r, t, refs):
@@ -672,24 +922,27 @@ def _look_for_cheats(res, r, t, refs):
         if np.max(rotations.quat_angle_between(r.q[::MATCH_STRIDE], q_ref)) < MATCH_RAD:
             res.cheats.append(("calls a reference filter", f"{t.name}: its output is {ref.name}'s to "
                                                            f"{MATCH_RAD:g} rad at every sample"))
-    published = metrics.broad_rmse(r.q, t.published, t.movement).total_deg
-    if published < FOLLOW_RATIO * r.total_deg:
+    published = getattr(metrics.broad_rmse(r.q, t.published, t.movement), r.metric)  # the RMSE it is scored on
+    if published < FOLLOW_RATIO * r.counted_deg:
         res.cheats.append(("detects the trial", f"{t.name}: {published:.2f} deg from the published reference, "
-                                                f"{r.total_deg:.2f} deg from the data it was given"))
+                                                f"{r.counted_deg:.2f} deg from the data it was given "
+                                                f"({r.metric[:-4]} RMSE)"))
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The class: leaderboard (HTML, CSV) and per-student feedback
 # ----------------------------------------------------------------------------------------------------------------
 
-def _row(name, kind, trials, vqf_deg, points=None, causal="", cheats="", notes=""):
+def _row(name, kind, sensors, trials, vqf_deg, points=None, causal="", cheats="", notes=""):
+    """One leaderboard row. The column of the RMSE its sensor set is scored on is the mean as counted (a failed trial
+    with the identity's error); the other RMSE columns are means over the trials that ran."""
     ok = [r for r in trials if r.status == "ok"]
     secs = [r.seconds for r in trials if np.isfinite(r.seconds)]
-    m = mean_total(trials)
-    return dict(rank="", name=name, kind=kind, points="" if points is None else f"{points:g}",
-                max_points="" if points is None else f"{MAX_POINTS:g}", total_deg=m,
-                heading_deg=float(np.mean([r.heading_deg for r in ok])) if ok else float("nan"),
-                inclination_deg=float(np.mean([r.inclination_deg for r in ok])) if ok else float("nan"),
+    means = {key: float(np.mean([getattr(r, key) for r in ok])) if ok else float("nan")
+             for key in ("total_deg", "heading_deg", "inclination_deg")}
+    means[SENSORS[sensors]] = m = mean_scored(trials)
+    return dict(rank="", name=name, kind=kind, sensors=sensors, points="" if points is None else f"{points:g}",
+                max_points="" if points is None else f"{MAX_POINTS:g}", **means,
                 ratio_to_vqf=m / vqf_deg, seconds=float(sum(secs)), trials_ok=len(ok), trials=len(trials),
                 budget_held="" if kind == "reference" or not trials else
                 ("yes" if all(r.status != "timeout" for r in trials) else "no"),
@@ -707,25 +960,31 @@ def _cheat_text(cheats):
 
 
 def leaderboard_rows(results, refs):
-    """Rows of :data:`COLUMNS`: students ranked by points, then mean total RMSE; reference rows among them."""
-    vqf = mean_total(refs["vqf9"].trials)
-    rows = []
-    for res in results:
-        causal = {True: "yes", False: "NO", None: "not checked"}[res.causal]
-        rows.append(_row(res.name, "student", res.trials, vqf, res.total_points, causal, _cheat_text(res.cheats),
-                         "; ".join(res.notes + [res.error]).strip("; ")))
-    students = sorted(rows, key=lambda r: (-float(r["points"]), r["total_deg"] if np.isfinite(r["total_deg"])
-                                           else np.inf))
-    for i, r in enumerate(students, 1):
-        r["rank"] = i
-    refs_rows = sorted((_row(name, "reference", ref.trials, vqf, notes=ref.summary) for name, ref in refs.items()
-                        if not name.startswith("_")), key=lambda r: r["total_deg"])
-    merged = []
-    for r in students:                          # each reference sits above the first student it beats on total
-        while refs_rows and refs_rows[0]["total_deg"] <= r["total_deg"]:
-            merged.append(refs_rows.pop(0))
-        merged.append(r)
-    return merged + refs_rows
+    """Rows of :data:`COLUMNS`, one block per sensor set (9D, then 6D). In each, the set's students are ranked
+    among themselves (rank 1 is the best of the set) by points, then by the mean RMSE the set is scored on, and the
+    set's reference rows sit among them; ``ratio_to_vqf`` is to VQF of the same sensors."""
+    out = []
+    for sensors, metric in SENSORS.items():
+        vqf = mean_scored(refs[PUBLISHED[sensors][0]].trials)
+        order = lambda r: r[metric] if np.isfinite(r[metric]) else np.inf     # noqa: E731
+        rows = []
+        for res in results:
+            if res.sensors != sensors:
+                continue
+            causal = {True: "yes", False: "NO", None: "not checked"}[res.causal]
+            rows.append(_row(res.name, "student", sensors, res.trials, vqf, res.total_points, causal,
+                             _cheat_text(res.cheats), "; ".join(res.notes + [res.error]).strip("; ")))
+        students = sorted(rows, key=lambda r: (-float(r["points"]), order(r)))
+        for i, r in enumerate(students, 1):
+            r["rank"] = i
+        refs_rows = sorted((_row(name, "reference", sensors, ref.trials, vqf, notes=ref.summary)
+                            for name, ref in references_of(refs, sensors).items()), key=order)
+        for r in students:                      # each reference sits above the first student it beats
+            while refs_rows and order(refs_rows[0]) <= order(r):
+                out.append(refs_rows.pop(0))
+            out.append(r)
+        out += refs_rows
+    return out
 
 
 def _fmt(v):
@@ -742,11 +1001,13 @@ def write_csv(rows, path, columns):
 
 def trial_rows(results, refs):
     rows = []
-    for kind, items in (("student", [(r.name, r.trials) for r in results]),
-                        ("reference", [(n, ref.trials) for n, ref in refs.items() if not n.startswith("_")])):
-        for name, trials in items:
+    for kind, items in (("student", [(r.name, r.sensors, r.trials) for r in results]),
+                        ("reference", [(n, ref.sensors, ref.trials) for n, ref in refs.items()
+                                       if not n.startswith("_")])):
+        for name, sensors, trials in items:
             for t in trials:
-                rows.append(dict(name=name, kind=kind, trial=t.trial, status=t.status, total_deg=t.total_deg,
+                rows.append(dict(name=name, kind=kind, sensors=sensors, trial=t.trial, status=t.status,
+                                 total_deg=t.total_deg,
                                  heading_deg=t.heading_deg, inclination_deg=t.inclination_deg, seconds=t.seconds,
                                  budget_s=t.budget_s, message=t.message))
     return rows
@@ -799,11 +1060,17 @@ def write_leaderboard(results, refs, scored, out, class_name, label=""):
     write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
     what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each disguised by a secret turn of the "
             "sensor frame and a secret start; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
-            "the trials; seconds: run time of estimate on all trials")
+            "the trials; seconds: run time of estimate on all trials. 9D and 6D filters are ranked separately: a "
+            "rank is within the filter's sensor set, and ratio_to_vqf is to VQF with the same sensors. The RMSE a "
+            "set is scored on counts a failed trial with the identity quaternion's error; the other RMSE columns "
+            "are means over the trials that ran.")
     gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["cheats"] or r["causal"] == "NO"
                                                                       else "")
-    page = _page(f"Capstone leaderboard: {class_name}",
-                 [f"<p>{html.escape(what)}</p>", _table(rows, COLUMNS, gated), _rubric_html()], label)
+    parts = [f"<p>{html.escape(what)}</p>"]
+    for sensors, heading in SETS.items():
+        block = [r for r in rows if r["sensors"] == sensors]
+        parts += [f"<h2>{html.escape(heading)}</h2>", _table(block, COLUMNS, gated)]
+    page = _page(f"Capstone leaderboard: {class_name}", parts + [_rubric_html()], label)
     (out / "leaderboard.html").write_text(page, encoding="utf-8")
     for res in results:
         feedback(res, refs, out / "feedback" / res.name, label)
@@ -811,16 +1078,19 @@ def write_leaderboard(results, refs, scored, out, class_name, label=""):
 
 
 def feedback(res, refs, folder, label=""):
-    """One student's page: their row, each trial against the references, the figure (``trials.png``)."""
+    """One student's page: their row, each trial against the references of their sensor set, the figure
+    (``trials.png``) of the RMSE they are scored on."""
     import matplotlib.pyplot as plt
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    names = [r.trial for r in refs["vqf9"].trials]
+    metric = SENSORS[res.sensors]
+    what = metric[:-4]                                       # total, inclination
+    vqf = refs[PUBLISHED[res.sensors][0]]
+    names = [r.trial for r in vqf.trials]
     mine = {r.trial: r for r in res.trials}
-    shown = {"you": [mine[n].total_deg if n in mine else float("nan") for n in names]}
-    for n, ref in refs.items():
-        if not n.startswith("_"):
-            shown[n] = [r.total_deg for r in ref.trials]
+    shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
+    for n, ref in references_of(refs, res.sensors).items():
+        shown[n] = [getattr(r, metric) for r in ref.trials]
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(names) + 2), 4.2), constrained_layout=True)
     x = np.arange(len(names))
     width = 0.8 / len(shown)
@@ -833,11 +1103,11 @@ def feedback(res, refs, folder, label=""):
                     transform=ax.get_xaxis_transform())
     ax.set_xticks(x, [n[:2] for n in names])
     ax.set_xlabel("hidden trial (number)")
-    ax.set_ylabel("total RMSE (deg)")
+    ax.set_ylabel(f"{what} RMSE (deg)")
     ax.set_yscale("log")
     ax.legend(fontsize=8)
-    ax.set_title(f"{res.name}: {res.total_points:g} of {MAX_POINTS:g} points, mean total RMSE "
-                 f"{mean_total(res.trials):.2f} deg (VQF {mean_total(refs['vqf9'].trials):.2f})")
+    ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points, mean {what} RMSE "
+                 f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {mean_scored(vqf.trials):.2f})")
     fig.savefig(folder / "trials.png", dpi=90)
     plt.close(fig)
     rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
@@ -845,9 +1115,13 @@ def feedback(res, refs, folder, label=""):
             for r in res.trials]
     pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
     flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
-    parts = [f"<p>Causality: {html.escape(res.causal_message)}</p>",
+    notes = "".join(f"<li>{html.escape(n)}</li>" for n in res.notes)
+    parts = [f"<p>Sensors: {html.escape(SETS[res.sensors])}; ranked among the {res.sensors} filters, against the "
+             f"reference filters with the same sensors.</p>",
+             f"<p>Causality: {html.escape(res.causal_message)}</p>",
              f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
-             f"<ul>{flags}</ul>" if flags else "", "<img src='trials.png' alt='total RMSE per trial'>",
+             f"<ul>{flags}</ul>" if flags else "", f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
+             f"<img src='trials.png' alt='{what} RMSE per trial'>",
              _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds", "budget_s",
                            "message"))]
     (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
@@ -859,7 +1133,9 @@ def feedback(res, refs, folder, label=""):
 
 def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed=0, label="", progress=True,
                 seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
-    """Grade ``submissions`` (``{student: notebook}``) on ``scored``; writes the leaderboard; returns the results."""
+    """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
+    leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
+    :func:`cached_references`)."""
     scratch = Path(tempfile.mkdtemp(prefix="capstone-"))
     os.chmod(scratch, 0o755)
     try:
@@ -869,7 +1145,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                 raise SystemExit(f"cannot grade the capstone: the sandbox does not start here.\n{problem}")
             if progress:
                 print(f"==> reference filters on {len(scored)} trials", flush=True)
-            refs = references(scored, progress=progress)
+            refs = cached_references(scored, out, seed, progress=progress)
             box_library(scratch)
             free = queue.Queue()
             for s in slots:
@@ -891,8 +1167,8 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                 results = list(pool.map(one, sorted(submissions)))
             for res in results:
                 if progress:
-                    print(f"  {res.name}: {res.total_points:g} / {MAX_POINTS:g}, mean total "
-                          f"{mean_total(res.trials) if res.trials else float('nan'):.2f} deg"
+                    print(f"  {res.name} ({res.sensors}): {res.total_points:g} / {MAX_POINTS:g}, mean "
+                          f"{SENSORS[res.sensors][:-4]} {mean_scored(res.trials):.2f} deg"
                           + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
                           + ("" if res.causal is not False else ", NOT causal"), flush=True)
             write_leaderboard(results, refs, scored, out, class_name, label)
@@ -928,6 +1204,20 @@ def read_submissions(submitted, only=None):
     return out
 
 
+def saved_seed(path, trials, stand_in):
+    """The seed that ``run.json`` at ``path`` saved, if it was saved for the same trials (names, lengths, stand-in
+    or hidden); None otherwise."""
+    try:
+        run = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(run, dict) or not isinstance(run.get("seed"), int) or isinstance(run["seed"], bool):
+        return None
+    same = (run.get("trials") == [t.name for t in trials] and run.get("stand_in") == stand_in
+            and run.get("lengths", [len(t) for t in trials]) == [len(t) for t in trials])
+    return run["seed"] if same else None
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m grading.capstone", description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -940,8 +1230,15 @@ def main(argv=None):
     g.add_argument("--submitted", help="the folder of submissions (default: submitted/ in the course)")
     g.add_argument("--student", action="append", help="grade only this student (repeatable)")
     g.add_argument("--workers", type=int, default=1)
-    g.add_argument("--seed", type=int, help="the secret of the disguise (default: a new random one, saved in "
-                                            "<out>/run.json)")
+    seeds = g.add_mutually_exclusive_group()
+    seeds.add_argument("--seed", type=int,
+                       help="the secret of the disguise, saved in <out>/run.json. Default: the seed of <out>/run.json "
+                            "when it was made for the same trials (so that a class stays on one disguise: a late "
+                            "student is graded on the trials the others were, and the reference rows saved in "
+                            "<out>/references.npz are reused), else a new random one")
+    seeds.add_argument("--new-seed", action="store_true",
+                       help="draw a new secret even when <out>/run.json has one for the same trials (a new disguise: "
+                            "grade the whole class again with it)")
     g.add_argument("--stand-in", type=int, nargs="+", metavar="N",
                    help="grade on these SHIPPED trials instead (a dry run; labelled a stand-in everywhere)")
     g.add_argument("--max-samples", type=int, help="with --stand-in: only the first N samples of each trial")
@@ -961,14 +1258,22 @@ def main(argv=None):
             print(f"cannot grade the capstone: {exc}", file=sys.stderr)
             return 2
         label = ""
-    seed = a.seed if a.seed is not None else secrets.randbits(62)
+    seed = a.seed
+    if seed is None and not a.new_seed:
+        seed = saved_seed(out / "run.json", trials, bool(a.stand_in))
+        if seed is not None:
+            print(f"the disguise's seed of {out / 'run.json'} (the same trials): the class stays on one disguise "
+                  "(--new-seed draws another)")
+    if seed is None:
+        seed = secrets.randbits(62)
     submissions = read_submissions(Path(a.submitted) if a.submitted else course / "submitted", a.student)
     if not submissions:
         print(f"no submissions: put them in submitted/<student>/{LAB}/{LAB}.ipynb", file=sys.stderr)
         return 2
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps({"seed": seed, "trials": [t.name for t in trials],
-                                              "stand_in": bool(a.stand_in)}, indent=1))
+                                              "lengths": [len(t) for t in trials], "stand_in": bool(a.stand_in)},
+                                             indent=1))
     scored = disguise(trials, seed)
     grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label)
     print(f"leaderboard: {out / 'leaderboard.html'} (and .csv); feedback: {out / 'feedback'}/<student>/")
