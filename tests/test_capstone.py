@@ -7,6 +7,8 @@ it movement): the real hidden trials are not on this machine, and the tests must
 from __future__ import annotations
 
 import csv
+import dataclasses
+import json
 import shutil
 import subprocess
 import sys
@@ -79,8 +81,34 @@ def estimate(gyr, acc, mag, fs):
         raise RuntimeError("index 3 is out of bounds")
     return _good(gyr, acc, mag, fs)
 '''
+SIX_D = _filter("good") + '''
+
+SENSORS = "6D"
+_good = estimate
+
+
+def estimate(gyr, acc, mag, fs):
+    if mag is not None:
+        raise ValueError(f"a 6D filter was given a magnetometer ({type(mag).__name__})")
+    acc = np.asarray(acc, dtype=float)
+    # no magnetometer: a field fixed in the sensor frame only picks the start heading, and k_mag=0 never corrects it
+    field = np.tile(np.eye(3)[int(np.argmin(np.abs(acc[0])))], (len(acc), 1))
+    return _good(gyr, acc, field, fs, k_mag=0.0)
+'''
+DECLARES_BADLY = _filter("good") + '''
+
+SENSORS = "6d"                      # not one of the two literals: graded as 9D, with a note
+_good = estimate
+
+
+def estimate(gyr, acc, mag, fs):
+    if mag is None:
+        raise ValueError("a 9D filter was given no magnetometer")
+    return _good(gyr, acc, mag, fs)
+'''
 CLASS = {"starter": _filter("starter"), "good": _filter("good"), "noncausal": NONCAUSAL, "calls_vqf": CALLS_VQF,
-         "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3}
+         "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3, "six_d": SIX_D, "declares_badly": DECLARES_BADLY}
+NINE_D = [name for name in CLASS if name != "six_d"] + ["unreadable"]     # the 9D students of the graded class
 
 
 @pytest.fixture(scope="module")
@@ -104,9 +132,16 @@ def graded(scored, tmp_path_factory):
 # ----------------------------------------------------------------------------------------------------------------
 
 def _expected_points(res, refs):
-    vqf, mad = capstone.mean_total(refs["vqf9"].trials), capstone.mean_total(refs["madgwick9"].trials)
-    return capstone.rubric_points(capstone.mean_total(res.trials), res.all_ran, bool(res.cheats) or
+    vqf, mad = (capstone.mean_scored(refs[n].trials) for n in capstone.PUBLISHED[res.sensors])
+    return capstone.rubric_points(capstone.mean_scored(res.trials), res.all_ran, bool(res.cheats) or
                                   res.causal is False, mad, vqf)
+
+
+def _points_by_hand(mean_deg, all_ran, madgwick_deg, vqf_deg):
+    """The rubric's rows read literally, for a submission that passes the gates."""
+    return {"runs": 2.0 if all_ran else 0.0, "beats_madgwick": 3.0 if mean_deg < madgwick_deg else 0.0,
+            "near_vqf": 3.0 if mean_deg <= capstone.NEAR_VQF * vqf_deg else 0.0,
+            "beats_vqf": 2.0 if mean_deg < vqf_deg else 0.0}
 
 
 @pytest.mark.slow
@@ -123,8 +158,9 @@ def test_the_starter_and_the_good_filter_are_causal_clean_and_score_as_the_rubri
     assert capstone.mean_total(good.trials) < mad                 # the good filter beats Madgwick on the stand-in
     assert good.points["beats_madgwick"] == 3
     assert capstone.mean_total(good.trials) < capstone.mean_total(results["starter"].trials)
-    print("stand-in mean total RMSE, deg:", {n: round(capstone.mean_total(r.trials), 2) for n, r in results.items()},
-          {n: round(capstone.mean_total(r.trials), 2) for n, r in refs.items() if not n.startswith("_")})
+    print("stand-in mean scored RMSE (9D total, 6D inclination), deg:",
+          {n: round(capstone.mean_scored(r.trials), 2) for n, r in results.items()},
+          {n: round(capstone.mean_scored(r.trials), 2) for n, r in refs.items() if not n.startswith("_")})
 
 
 @pytest.mark.slow
@@ -181,21 +217,146 @@ def test_the_leaderboard_lists_every_student_and_the_references(graded):
     names = [r["name"] for r in rows]
     assert set(CLASS) | {"unreadable"} <= set(names)
     broken = next(r for r in rows if r["name"] == "unreadable")
-    assert broken["points"] == "0" and "cannot be read" in broken["notes"] and broken["rank"] == str(len(CLASS) + 1)
-    assert {"vqf9", "madgwick9"} <= set(names) and any(n.startswith("library best") for n in names)
-    students = [r for r in rows if r["kind"] == "student"]
-    assert [int(r["rank"]) for r in students] == list(range(1, len(CLASS) + 2))
-    points = [float(r["points"]) for r in students]
-    assert points == sorted(points, reverse=True)
-    vqf = next(r for r in rows if r["name"] == "vqf9")
-    assert float(vqf["ratio_to_vqf"]) == pytest.approx(1.0, abs=0.01)
+    assert broken["points"] == "0" and "cannot be read" in broken["notes"] and broken["rank"] == str(len(NINE_D))
+    refs9 = {"vqf9", "madgwick9"} | {n for n in names if n.startswith("library best 9D")}
+    refs6 = {"vqf6", "madgwick6"} | {n for n in names if n.startswith("library best 6D")}
+    assert len(refs9) == len(refs6) == 3
+    for sensors, students, references in (("9D", NINE_D, refs9), ("6D", ["six_d"], refs6)):   # ranked apart
+        block = [r for r in rows if r["sensors"] == sensors]
+        assert {r["name"] for r in block} == set(students) | references
+        mine = [r for r in block if r["kind"] == "student"]
+        assert [int(r["rank"]) for r in mine] == list(range(1, len(students) + 1))
+        points = [float(r["points"]) for r in mine]
+        assert points == sorted(points, reverse=True)
+        vqf = next(r for r in block if r["name"] == ("vqf9" if sensors == "9D" else "vqf6"))
+        assert float(vqf["ratio_to_vqf"]) == pytest.approx(1.0, abs=0.01)
+    assert [r["sensors"] for r in rows] == sorted((r["sensors"] for r in rows), reverse=True)   # 9D block first
     page = (out / "leaderboard.html").read_text()
-    assert "STAND-IN" in page and all(name in page for name in CLASS)
+    assert "STAND-IN" in page and all(name in page for name in CLASS) and "ranked separately" in page
     for name in CLASS:
         assert (out / "feedback" / name / "trials.png").stat().st_size > 5000
         assert "Causality" in (out / "feedback" / name / "capstone.html").read_text()
     trial_rows = list(csv.DictReader(open(out / "trials.csv")))
-    assert len(trial_rows) == (len(CLASS) + 3) * len(STAND_IN)
+    assert len(trial_rows) == (len(CLASS) + 6) * len(STAND_IN)
+    assert {r["sensors"] for r in trial_rows if r["name"] in ("six_d", "vqf6", "madgwick6")} == {"6D"}
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_6d_filter_is_scored_on_inclination_against_the_6d_references(graded):
+    results, refs, out = graded
+    res = results["six_d"]
+    # it raises when given a magnetometer: every call, the causality check's too, had mag=None
+    assert res.sensors == "6D" and res.notes == [] and res.all_ran and res.causal is True and res.cheats == []
+    assert all(r.metric == "inclination_deg" and r.counted_deg == r.inclination_deg for r in res.trials)
+    for name in ("vqf6", "madgwick6"):
+        assert refs[name].sensors == "6D"
+        assert all(r.metric == "inclination_deg" and r.counted_deg == r.inclination_deg for r in refs[name].trials)
+    best6 = next(ref for n, ref in refs.items() if n.startswith("library best 6D"))
+    library6 = [ref for ref in refs["_all"].values() if ref.sensors == "6D" and ref.name not in ("vqf6", "madgwick6")]
+    assert best6.name in {"complementary", "correlation", "dcm_ahrs6", "freescale6", "gyro"}
+    assert capstone.mean_scored(best6.trials) == min(capstone.mean_scored(ref.trials) for ref in library6)
+    mean = float(np.mean([r.inclination_deg for r in res.trials]))
+    mad6 = float(np.mean([r.inclination_deg for r in refs["madgwick6"].trials]))
+    vqf6 = float(np.mean([r.inclination_deg for r in refs["vqf6"].trials]))
+    assert res.points == _points_by_hand(mean, True, mad6, vqf6)
+    # the 9D references' total RMSE is another scale: it is not what the 6D filter was compared with
+    mad9 = capstone.mean_total(refs["madgwick9"].trials)
+    assert abs(mad9 - mad6) > 1.0
+    rows = {r["name"]: r for r in csv.DictReader(open(out / "leaderboard.csv"))}
+    mine = rows["six_d"]
+    assert mine["sensors"] == "6D" and float(mine["inclination_deg"]) == pytest.approx(mean, abs=0.006)
+    assert float(mine["ratio_to_vqf"]) == pytest.approx(mean / vqf6, abs=0.006)
+    assert float(mine["points"]) == sum(res.points.values())
+    page = (out / "feedback" / "six_d" / "capstone.html").read_text()
+    assert "scored on mean inclination RMSE" in page and "ranked among the 6D filters" in page
+    print(f"stand-in 6D mean inclination RMSE, deg: six_d {mean:.2f}, madgwick6 {mad6:.2f}, vqf6 {vqf6:.2f}, "
+          f"{best6.name} {capstone.mean_scored(best6.trials):.2f}; points {res.points}")
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_bad_declaration_is_graded_as_9d_with_a_note(graded):
+    results, refs, out = graded
+    res = results["declares_badly"]
+    assert res.sensors == "9D" and len(res.notes) == 1 and "graded as 9D" in res.notes[0] and "'6d'" in res.notes[0]
+    # it raises without a magnetometer: it was given one, and it is the good filter, scored as the good filter
+    assert res.all_ran and res.causal is True and res.cheats == []
+    for mine, good in zip(res.trials, results["good"].trials):
+        assert mine.metric == "total_deg" and mine.total_deg == pytest.approx(good.total_deg, abs=1e-9)
+    assert res.points == _expected_points(res, refs) == results["good"].points
+    row = next(r for r in csv.DictReader(open(out / "leaderboard.csv")) if r["name"] == "declares_badly")
+    assert row["sensors"] == "9D" and "graded as 9D" in row["notes"]
+    assert "graded as 9D" in (out / "feedback" / "declares_badly" / "capstone.html").read_text()
+
+
+PROBE_6D = '''
+import numpy as np
+
+SENSORS = "6D"
+_calls = []
+
+
+def estimate(gyr, acc, mag, fs):
+    if mag is not None:
+        raise ValueError(f"mag is a {type(mag).__name__}, not None")
+    _calls.append(len(gyr))
+    if len(_calls) == 2:
+        raise RuntimeError("fails on its second call")
+    return np.tile([1.0, 0.0, 0.0, 0.0], (len(gyr), 1))
+'''
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_6d_submission_receives_mag_none_and_a_failed_trial_counts_the_identitys_inclination(graded, scored,
+                                                                                               tmp_path):
+    refs = graded[1]
+    res = capstone.grade_submission("probe", notebook(PROBE_6D), scored, refs, ROOT, tmp_path, seed=SEED,
+                                    min_seconds=5.0)
+    assert res.sensors == "6D"
+    assert [r.status for r in res.trials] == ["ok", "error", "ok"], [r.message for r in res.trials]
+    assert "fails on its second call" in res.trials[1].message           # not "mag is ...": every call had None
+    assert res.causal is True                                             # ... the causality check's calls too
+    for r, t in zip(res.trials, scored):
+        identity = capstone.never_moves(t, "inclination_deg")
+        assert r.metric == "inclination_deg" and r.counted_deg == pytest.approx(identity, abs=1e-9)
+    assert res.trials[1].counted_deg != pytest.approx(capstone.never_moves(scored[1]), abs=1e-3)   # not the total
+    mad6, vqf6 = (capstone.mean_scored(refs[n].trials) for n in ("madgwick6", "vqf6"))
+    assert res.points == _points_by_hand(capstone.mean_scored(res.trials), False, mad6, vqf6)
+
+
+@pytest.mark.slow
+@needs_box
+def test_regrading_a_late_student_with_the_saved_seed_reuses_the_reference_rows(graded, tmp_path, monkeypatch):
+    """`grade --student X --seed S` in a folder whose references.npz was made with S on the same trials computes no
+    reference filter; without --seed, the seed of run.json (same trials) is used again."""
+    results, refs, out = graded
+    late = tmp_path / "out"
+    late.mkdir()
+    shutil.copy(out / capstone.REFERENCE_CACHE, late / capstone.REFERENCE_CACHE)
+    folder = tmp_path / "submitted" / "late" / capstone.LAB
+    folder.mkdir(parents=True)
+    nbformat.write(notebook(SIX_D), folder / f"{capstone.LAB}.ipynb")
+    computed = []
+    monkeypatch.setattr(capstone, "references", lambda *a, **k: computed.append(1) or pytest.fail("recomputed"))
+    argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(late),
+            "--class", "late", "--stand-in", *map(str, STAND_IN), "--max-samples", str(MAX_SAMPLES),
+            "--student", "late"]
+    assert capstone.main(argv + ["--seed", str(SEED)]) == 0
+    first = list(csv.DictReader(open(late / "leaderboard.csv")))
+    assert capstone.main(argv) == 0                                       # no --seed: run.json's
+    assert computed == [] and json.loads((late / "run.json").read_text())["seed"] == SEED
+    class_rows = {r["name"]: r for r in csv.DictReader(open(out / "leaderboard.csv")) if r["kind"] == "reference"}
+    for rows in (first, list(csv.DictReader(open(late / "leaderboard.csv")))):
+        mine = {r["name"]: r for r in rows if r["kind"] == "reference"}
+        assert mine.keys() == class_rows.keys()
+        for name, row in mine.items():
+            assert {k: row[k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")} == \
+                   {k: class_rows[name][k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")}
+        student = next(r for r in rows if r["name"] == "late")
+        assert student["inclination_deg"] == next(r for r in csv.DictReader(open(out / "leaderboard.csv"))
+                                                  if r["name"] == "six_d")["inclination_deg"]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -209,6 +370,116 @@ def test_the_rubric_gives_its_stated_points():
     assert pts(2.5, True, False, 5.0, 2.0) == {"runs": 2, "beats_madgwick": 3, "near_vqf": 0, "beats_vqf": 0}
     assert pts(6.0, False, False, 5.0, 2.0) == {"runs": 0, "beats_madgwick": 0, "near_vqf": 0, "beats_vqf": 0}
     assert sum(pts(1.0, True, True, 5.0, 2.0).values()) == 0                     # a cheat or not causal
+
+
+def test_the_declaration_is_read_from_the_code_and_anything_but_the_two_literals_is_9d_with_a_note():
+    def read(*cells):
+        return capstone.declared_sensors([("filter", c) for c in cells])
+    assert read('SENSORS = "6D"') == ("6D", "")
+    assert read('SENSORS = "9D"') == read("def estimate(gyr, acc, mag, fs):\n    pass") == ("9D", "")
+    assert read('SENSORS: str = "6D"', 'SENSORS = "6D"') == ("6D", "")                 # the same twice
+    # a local of the filter, or a comprehension's variable, is not the declaration
+    assert read('SENSORS = "6D"\ndef estimate(g, a, m, fs):\n    SENSORS = 1\n    return [SENSORS for SENSORS in g]'
+                ) == ("6D", "")
+    for cells, why in ((['SENSORS = "6d"'], "SENSORS = '6d'"), (['SENSORS = "6D" if True else "9D"'], "if True"),
+                       (['S = "6D"\nSENSORS = S'], "SENSORS = S"), (['SENSORS = "6D"', 'SENSORS = "9D"'], "both"),
+                       (['SENSORS = "6D"\nif True:\n    SENSORS = "6D"'], "other than by a literal"),
+                       (['SENSORS = "6D"\ndef f():\n    global SENSORS'], "a function sets the global"),
+                       (['SENSORS = "6D"\nSENSORS += ""'], "other than by a literal"),
+                       (['from os import sep as SENSORS'], "other than by a literal")):
+        sensors, note = read(*cells)
+        assert sensors == "9D" and "graded as 9D" in note and why in note, (cells, note)
+
+
+def test_a_declaration_in_a_cell_the_box_does_not_run_is_noted():
+    extra = nbformat.v4.new_code_cell('SENSORS = "6D"')
+    nb = notebook("def estimate(gyr, acc, mag, fs):\n    return None", extra=[extra])
+    cells = capstone.program_of(nb)
+    assert capstone.declared_sensors(cells) == ("9D", "") and capstone._declared_outside(nb, cells)
+    assert not capstone._declared_outside(notebook('SENSORS = "6D"'), capstone.program_of(notebook('SENSORS = "6D"')))
+
+
+def test_none_crosses_the_wire_as_the_6d_magnetometer():
+    from grading import box
+    args = [np.zeros((3, 3)), np.ones((3, 3)), None, 286.0]
+    back = box.decode(json.loads(json.dumps(box.encode(args))))
+    assert back[2] is None and np.array_equal(back[1], args[1]) and back[3] == 286.0
+
+
+def _fake_references(calls):
+    """references() as the cache sees it, cheap: identity quaternions scored as VQF and Madgwick of each set."""
+    def compute(scored, progress=False):
+        calls.append([t.name for t in scored])
+        rows = {}
+        for sensors, names in capstone.PUBLISHED.items():
+            for name in (*names, f"lib{sensors}"):
+                trials = []
+                for t in scored:
+                    q = np.tile([1.0, 0, 0, 0], (len(t), 1))
+                    r = capstone.score_trial(capstone.TrialResult(t.name), q, t, capstone.SENSORS[sensors])
+                    r.q = q[::capstone.MATCH_STRIDE]
+                    trials.append(r)
+                rows[name] = capstone.Reference(name, f"{name} summary", trials, sensors)
+        return {**{n: rows[n] for names in capstone.PUBLISHED.values() for n in names},
+                "library best 9D (lib9D)": rows["lib9D"], "library best 6D (lib6D)": rows["lib6D"], "_all": rows}
+    return compute
+
+
+def test_the_reference_rows_are_cached_per_seed_trials_and_library(scored, tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(capstone, "references", _fake_references(calls))
+    first = capstone.cached_references(scored, tmp_path, SEED)
+    again = capstone.cached_references(scored, tmp_path, SEED)
+    assert len(calls) == 1 and (tmp_path / capstone.REFERENCE_CACHE).is_file()             # reused
+    assert again.keys() == first.keys() and again["_all"].keys() == first["_all"].keys()
+    for name, ref in first["_all"].items():
+        back = again["_all"][name]
+        assert (back.summary, back.sensors) == (ref.summary, ref.sensors)
+        for a, b in zip(ref.trials, back.trials):
+            assert np.array_equal(a.q, b.q) and (a.trial, a.counted_deg, a.metric) == (b.trial, b.counted_deg, b.metric)
+    assert again["vqf6"] is again["_all"]["vqf6"]
+    capstone.cached_references(scored[:2], tmp_path, SEED)                     # other trials
+    assert len(calls) == 2 and calls[-1] == [t.name for t in scored[:2]]
+    capstone.cached_references(scored[:2], tmp_path, SEED + 1)                 # another seed
+    assert len(calls) == 3
+    cut = [dataclasses.replace(t, gyr=t.gyr + 1e-9) for t in scored[:2]]      # same names and lengths, other data
+    capstone.cached_references(cut, tmp_path, SEED + 1)
+    assert len(calls) == 4
+    capstone.cached_references(cut, tmp_path, SEED + 1)
+    assert len(calls) == 4
+    monkeypatch.setattr(capstone, "references_key", lambda s, seed: {"code": "another library", "seed": seed})
+    capstone.cached_references(cut, tmp_path, SEED + 1)                       # the library changed
+    assert len(calls) == 5
+    (tmp_path / capstone.REFERENCE_CACHE).write_bytes(b"not a zip file")
+    capstone.cached_references(cut, tmp_path, SEED + 1)                       # unreadable: computed again
+    assert len(calls) == 6
+
+
+def test_the_library_digest_changes_with_a_source_file(scored, tmp_path, monkeypatch):
+    import fusionlab
+    key = capstone.references_key(scored, SEED)
+    assert key["seed"] == SEED and key["trials"] == [[t.name, len(t)] for t in scored]
+    lib = tmp_path / "fusionlab"
+    shutil.copytree(Path(fusionlab.__file__).parent, lib, ignore=shutil.ignore_patterns("__pycache__", "data"))
+    monkeypatch.setattr(fusionlab, "__file__", str(lib / "__init__.py"))
+    assert capstone.references_key(scored, SEED)["code"] == key["code"]          # the same sources, elsewhere
+    with open(lib / "estimators.py", "a") as f:
+        f.write("\n# changed\n")
+    assert capstone.references_key(scored, SEED)["code"] != key["code"]
+
+
+def test_the_saved_seed_is_reused_only_for_the_same_trials(tmp_path):
+    trials = capstone.stand_in([7], MAX_SAMPLES)
+    run = tmp_path / "run.json"
+    assert capstone.saved_seed(run, trials, True) is None                      # no run.json
+    run.write_text(json.dumps({"seed": 99, "trials": [t.name for t in trials], "lengths": [len(trials[0])],
+                               "stand_in": True}))
+    assert capstone.saved_seed(run, trials, True) == 99
+    assert capstone.saved_seed(run, trials, False) is None                     # hidden trials, not a stand-in
+    assert capstone.saved_seed(run, capstone.stand_in([7], MAX_SAMPLES - 1), True) is None     # another length
+    assert capstone.saved_seed(run, capstone.stand_in([29], MAX_SAMPLES), True) is None        # another trial
+    run.write_text("{not json")
+    assert capstone.saved_seed(run, trials, True) is None
 
 
 def test_the_disguise_leaves_the_authors_metrics_of_a_filter_unchanged(scored):
@@ -328,7 +599,7 @@ def test_the_leaderboard_renders_in_chromium(graded):
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.goto((out / "leaderboard.html").as_uri())
         rows = page.locator("table").first.locator("tr")
-        assert rows.count() == 1 + len(CLASS) + 1 + 3                     # header, students, references
+        assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
         assert page.locator("tr.gated").count() == 2                       # the non-causal one and the VQF caller
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
