@@ -45,8 +45,8 @@ process:
   (``ahrs``, its default gain) and the library's best filter of that set (by the RMSE the set is scored on). They are
   scored like a student of their set and listed on the leaderboard; the output of every reference filter that ran,
   either set, is what the match check compares a student's with. They are computed once per disguise and kept in
-  ``<out>/references.npz`` (:func:`cached_references`), keyed by the seed, the trials (names, lengths, a digest of
-  their disguised data) and a digest of the code (the library's source files, this module, the versions of vqf and
+  ``<out>/references.npz`` (:func:`cached_references`), keyed by the seed, the trials (names, lengths, a hash of
+  their disguised data) and a hash of the code (the library's source files, this module, the versions of vqf and
   ahrs): re-grading one student with the class's seed reuses them (Madgwick's filter alone takes seconds per
   trial); any difference computes them again.
 * **Seed.** ``--seed`` sets the disguise's secret; without it the seed that ``<out>/run.json`` saved for the same
@@ -417,7 +417,7 @@ _TRIAL_FIELDS = [f.name for f in dataclasses.fields(TrialResult) if f.name != "q
 
 def references_key(scored, seed):
     """What the reference rows depend on, as a dict that :func:`cached_references` compares: the disguise's seed,
-    the trials' names and lengths, a digest of their disguised data, and a digest of the code that computes the
+    the trials' names and lengths, a hash of their disguised data, and a hash of the code that computes the
     rows (the library's source files and this module) with the versions of the packages of VQF and Madgwick."""
     import hashlib
     from importlib import metadata

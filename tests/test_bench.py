@@ -228,3 +228,47 @@ def test_every_tuned_grid_holds_the_registered_defaults():
     for name, grid in bench.TUNED.items():
         defaults = estimators.options(name)
         assert all(defaults[k] in v for k, v in grid.items()), name
+
+
+def test_tuning_sweep_takes_your_own_filter_and_its_keyword(sweep):
+    """Lab 13 sweeps a student's function: the same numbers as the registered filter it wraps, and the sensor set the
+    student states (a 6D filter gets no magnetometer)."""
+    tr, sw = sweep
+    seen = []
+
+    def mine(gyr, acc, mag, fs, tau):
+        seen.append(mag)
+        return estimators.run("complementary", gyr=gyr, acc=acc, fs=fs, tau=tau)
+
+    own = bench.tuning_sweep([tr], mine, "tau", [0.05, 1.0, 30.0], uses_mag=False)
+    assert own.estimator == "mine" and own.metric == "inclination" and all(m is None for m in seen)
+    np.testing.assert_allclose(own.rmse_deg, sw.rmse_deg, rtol=1e-12)
+    nine = bench.tuning_sweep([tr], mine, "tau", [1.0])
+    assert nine.metric == "total" and seen[-1] is not None
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(option="not a name"), "option must be the name of a keyword argument of mine"),
+    (dict(uses_mag="yes"), "uses_mag"),
+    (dict(values=[1.0]), "estimator must return \\(\\d+, 4\\) finite quaternions"),
+])
+def test_tuning_sweep_of_your_own_filter_names_what_is_wrong(sweep, kw, match):
+    tr, _ = sweep
+
+    def mine(gyr, acc, mag, fs, tau):
+        return np.zeros((len(gyr), 3))
+
+    args = dict(trials=[tr], estimator=mine, option="tau", values=[1.0]) | kw
+    with pytest.raises(ValueError, match=match):
+        bench.tuning_sweep(**args)
+
+
+def test_tuning_sweep_says_when_the_knob_is_not_a_keyword_of_your_filter(sweep):
+    tr, _ = sweep
+
+    def mine(gyr, acc, mag, fs, k_acc=1.0):
+        return estimators.run("complementary", gyr=gyr, acc=acc, fs=fs)
+
+    with pytest.raises(ValueError, match=r"option must be a keyword argument of mine \(gyr, acc, mag, fs, k_acc\); "
+                                         r"got 'tau'"):
+        bench.tuning_sweep([tr], mine, "tau", [1.0])

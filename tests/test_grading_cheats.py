@@ -123,6 +123,9 @@ CHEATS = {
         2: "return cal.read_arw(taus, adev, tau_max)",
         3: 'return sensor_errors.remove_gravity(q_bn, acc, g, frame="ENU")',
     },
+    "13_capstone": {
+        1: "return rotations.integrate_gyro_quat(q0, gyr, 1.0 / fs)[1:]",
+    },
 }
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh).
 NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3)}

@@ -45,6 +45,7 @@ from __future__ import annotations
 import argparse
 import csv
 import importlib.util
+import inspect
 import itertools
 import sys
 import time
@@ -285,7 +286,7 @@ class TuningSweep:
     Parameters
     ----------
     estimator : str
-        The registered estimator.
+        The registered estimator, or the name of your own filter.
     option : str
         The tuning option swept.
     values : tuple
@@ -339,21 +340,25 @@ def _estimator(name):
     return known[name]
 
 
-def tuning_sweep(trials, estimator, option, values, progress=False):
+def tuning_sweep(trials, estimator, option, values, progress=False, uses_mag=True):
     """Run one estimator over a set of values of one tuning option on each trial, and score every run.
 
     Parameters
     ----------
     trials : list of fusionlab.datasets.BroadTrial
         The trials (slices are fine), see :func:`fusionlab.datasets.load_trial`.
-    estimator : str
-        A registered estimator with the option (see :func:`fusionlab.estimators.options`).
+    estimator : str or callable
+        A registered estimator with the option (see :func:`fusionlab.estimators.options`), or your own filter
+        ``estimator(gyr, acc, mag, fs, **{option: value}) -> (N, 4)`` body->ENU quaternions (Lab 13).
     option : str
         E.g. ``'tau'`` for ``'complementary'``.
     values : sequence of float
         At least one value.
     progress : bool, optional
         A tqdm bar over the runs.
+    uses_mag : bool, optional
+        For your own filter only: True (9D, scored on total error) or False (6D: given ``mag=None``, scored on
+        inclination). A registered estimator says it itself.
 
     Returns
     -------
@@ -362,31 +367,49 @@ def tuning_sweep(trials, estimator, option, values, progress=False):
     """
     from tqdm.auto import tqdm
 
-    info = _estimator(estimator)
-    takes = estimators.options(estimator)
-    if option not in takes:
-        raise ValueError(f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); "
-                         f"got {option!r}")
+    if callable(estimator):
+        run, name = estimator, getattr(estimator, "__name__", "your filter")
+        if not isinstance(option, str) or not option.isidentifier():
+            raise ValueError(f"option must be the name of a keyword argument of {name}; got {option!r}")
+        try:
+            params = inspect.signature(estimator).parameters
+        except (TypeError, ValueError):       # a builtin or a C function: let the call say it
+            params = {}
+        if params and option not in params and not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            raise ValueError(f"option must be a keyword argument of {name} ({', '.join(params)}); got {option!r}: "
+                             f"give {name} a keyword argument {option}=<default>")
+        uses_mag = validate.flag(uses_mag, "uses_mag")
+    else:
+        info = _estimator(estimator)
+        takes = estimators.options(estimator)
+        if option not in takes:
+            raise ValueError(f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); "
+                             f"got {option!r}")
+        uses_mag, name = info["uses_mag"], estimator
+
+        def run(gyr, acc, mag, fs, **opt):
+            return estimators.run(estimator, gyr=gyr, acc=acc, fs=fs, mag=mag, frame="ENU", **opt)
     values = tuple(float(v) for v in validate.array(values, "values").reshape(-1))
     if not values:
         raise ValueError("values must hold at least one value; got none")
     trials = list(trials)
     if not trials or not all(isinstance(t, datasets.BroadTrial) for t in trials):
         raise ValueError("trials must be a non-empty list of BroadTrial (fusionlab.datasets.load_trial)")
-    uses_mag = info["uses_mag"]
     metric = "total" if uses_mag else "inclination"
     error_fn = metrics.total_error if uses_mag else metrics.inclination_error
     rmse = np.full((len(trials), len(values)), np.nan)
     errors = [[None] * len(values) for _ in trials]
-    with tqdm(total=rmse.size, desc=f"{estimator} {option}", unit="run", disable=not progress) as bar:
+    with tqdm(total=rmse.size, desc=f"{name} {option}", unit="run", disable=not progress) as bar:
         for i, tr in enumerate(trials):
             for j, v in enumerate(values):
-                q = estimators.run(estimator, gyr=tr.gyr, acc=tr.acc, fs=tr.fs, mag=tr.mag if uses_mag else None,
-                                   frame="ENU", **{option: v})
+                q = np.asarray(run(tr.gyr, tr.acc, tr.mag if uses_mag else None, tr.fs, **{option: v}), dtype=float)
+                if q.shape != (len(tr), 4) or not np.isfinite(q).all():
+                    raise ValueError(f"estimator must return ({len(tr)}, 4) finite quaternions on {tr.name} with "
+                                     f"{option}={v:g}; got shape {q.shape}")
                 rmse[i, j] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
                 errors[i][j] = np.degrees(error_fn(metrics.error_quaternion(q, tr.quat_ref)))
                 bar.update()
-    return TuningSweep(estimator, option, values, metric, tuple(t.name for t in trials), rmse, errors,
+    return TuningSweep(name, option, values, metric, tuple(t.name for t in trials), rmse, errors,
                        [t.t for t in trials], [t.movement for t in trials])
 
 

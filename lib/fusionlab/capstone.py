@@ -29,7 +29,7 @@ from . import metrics, validate
 
 __all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
            "Criterion", "NEAR_VQF", "SENSORS", "RUBRIC", "MAX_POINTS", "GATES", "budget_seconds", "causal_ks",
-           "perturb_future", "as_quaternions", "causality_change", "window", "self_check", "SelfCheck", "bar",
+           "perturb_future", "as_quaternions", "causality_change", "self_check", "SelfCheck", "bar",
            "BAR_FILE", "make_bar"]
 
 #: The eight BROAD trials that ship with the course (``data/broad/``); the capstone is scored on the other 31.
@@ -232,33 +232,6 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     return float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
 
 
-def window(trial, rest=5.0, movement=40.0):
-    """A piece of a BROAD trial for quick tuning: ``rest`` seconds before its movement phase starts, then the first
-    ``movement`` seconds of motion (the lab's windows; the hidden trials are scored whole).
-
-    Parameters
-    ----------
-    trial : fusionlab.datasets.BroadTrial
-        A trial with a movement phase.
-    rest : float, optional
-        Seconds kept before the movement starts.
-    movement : float, optional
-        Seconds of movement kept.
-
-    Returns
-    -------
-    fusionlab.datasets.BroadTrial
-        The window, with its reference and movement mask.
-    """
-    rest = validate.scalar(rest, "rest", nonnegative=True)
-    movement = validate.scalar(movement, "movement", positive=True)
-    moving = np.flatnonzero(trial.movement)
-    if not len(moving):
-        raise ValueError(f"trial must have a movement phase; {trial.name} has none")
-    start = max(0, int(moving[0]) - int(round(rest * trial.fs)))
-    return trial.slice(start, int(moving[0]) + int(round(movement * trial.fs)))
-
-
 @dataclass
 class SelfCheck:
     """What :func:`self_check` found.
@@ -324,7 +297,7 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
     estimate : callable
         ``estimate(gyr, acc, mag, fs) -> (N, 4)``.
     trials : list of fusionlab.datasets.BroadTrial
-        Trials (or windows of them, :func:`window`) with their reference.
+        Trials (or windows of them, :meth:`fusionlab.datasets.BroadTrial.window`) with their reference.
     sensors : {'9D', '6D'}, optional
         As the filter declares (:data:`SENSORS`): a 6D filter is given ``mag=None`` and scored on inclination.
     seed : int, optional
@@ -398,7 +371,8 @@ BAR_COLUMNS = ("estimator", "source", "sensors", "trial", "span", "n_samples", "
 
 def make_bar(path=BAR_FILE, progress=True):
     """Score every filter of :func:`fusionlab.bench.contenders` on every shipped trial, whole and as the lab's
-    :func:`window`, and write :data:`BAR_FILE` (about two minutes: Madgwick's filter is plain Python).
+    window (:meth:`fusionlab.datasets.BroadTrial.window`, its defaults), and write :data:`BAR_FILE` (about two
+    minutes: Madgwick's filter is plain Python).
 
     Parameters
     ----------
@@ -416,7 +390,7 @@ def make_bar(path=BAR_FILE, progress=True):
     rows = []
     for n in SHIPPED:
         whole = datasets.load_trial(n, download=False, progress=False)
-        for span, tr in (("whole", whole), ("window", window(whole))):
+        for span, tr in (("whole", whole), ("window", whole.window())):
             for c in bench.contenders():
                 row = bench.score(c, tr)
                 if row["error"]:
@@ -435,7 +409,7 @@ def bar(span="whole", path=BAR_FILE):
     Parameters
     ----------
     span : {'whole', 'window'}, optional
-        Whole trials, or the lab's windows (:func:`window`).
+        Whole trials, or the lab's windows (:meth:`fusionlab.datasets.BroadTrial.window`).
     path : str or Path, optional
         The table (:data:`BAR_FILE`).
 

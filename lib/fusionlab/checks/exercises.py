@@ -178,6 +178,9 @@ EXERCISES = (
              ('calibration.read_allan', 'calibration.read_arw')),
     Exercise('12_sensor_errors', 3, 2, ('my_remove_gravity',), 'check_remove_gravity',
              ('sensor_errors.remove_gravity',)),
+    # 13_capstone (its filter, exercise 2, is scored on hidden trials by the capstone's grader, not here)
+    Exercise('13_capstone', 1, 2, ('my_integrate_gyro',), 'check_integrate_gyro',
+             ('rotations.integrate_gyro_quat', 'rotations.integrate_gyro_dcm')),
 )
 
 

@@ -1,0 +1,168 @@
+"""The capstone's rules and the student's self-check (fusionlab.capstone): what the lab states and the grader uses.
+
+The self-check must find what the grader finds: a filter that looks ahead, one that returns the wrong shape, one
+that raises; a 6D filter gets no magnetometer. The bar the lab reads is what `python -m fusionlab.capstone` makes.
+"""
+from __future__ import annotations
+
+import csv
+import time
+
+import numpy as np
+import pytest
+
+from fusionlab import bench, capstone, datasets, metrics, rotations
+
+
+@pytest.fixture(scope="module")
+def short():
+    """Two short windows of shipped trials: 2 s of rest, 6 s of motion."""
+    return [datasets.load_trial(n, download=False, progress=False).window(rest=2.0, length=8.0) for n in (2, 27)]
+
+
+def gyro_only(gyr, acc, mag, fs):
+    """Gyro integration from the identity: causal."""
+    return rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], gyr, 1.0 / fs)[1:]
+
+
+def looks_ahead(gyr, acc, mag, fs):
+    """Gyro integration from the identity, turned by the mean accelerometer of the whole record: not causal."""
+    q = gyro_only(gyr, acc, mag, fs)
+    a = np.mean(acc, axis=0)
+    return rotations.quat_multiply(q, rotations.rotvec_to_quat(1e-3 * a / np.linalg.norm(a)))
+
+
+def test_the_rules_add_up():
+    assert capstone.MAX_POINTS == 10 == sum(c.points for c in capstone.RUBRIC)
+    assert set(capstone.TUNE) | set(capstone.HOLD_OUT) == set(capstone.SHIPPED)
+    assert not set(capstone.TUNE) & set(capstone.HOLD_OUT)
+    assert capstone.budget_seconds(53240) == pytest.approx(26.62)
+    assert capstone.budget_seconds(10) == capstone.MIN_SECONDS
+    assert capstone.causal_ks(1000) == [3, 200, 501] and capstone.causal_ks(6) == [3, 4, 4]
+
+
+def test_perturb_future_keeps_the_past_and_changes_the_rest():
+    x = np.zeros((50, 3))
+    y = capstone.perturb_future(x, 9, 2.0, np.random.default_rng(0))
+    assert np.all(y[:10] == 0) and np.all(y[10:] != 0) and np.all(x == 0)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: capstone.perturb_future(np.zeros((5, 3)), 4, 1.0, np.random.default_rng(0)), "k must leave"),
+    (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, -1.0, np.random.default_rng(0)), "scale"),
+    (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, 1.0, [1, 2]), "rng"),
+    (lambda: capstone.budget_seconds(0), "n"),
+    (lambda: capstone.causal_ks(3), "n"),
+    (lambda: capstone.bar("all"), "span"),
+    (lambda: capstone.self_check("estimate", []), "estimate must be your filter"),
+    (lambda: capstone.self_check(gyro_only, []), "trials must hold"),
+    (lambda: capstone.self_check(gyro_only, [None], sensors="3D"), "sensors"),
+])
+def test_bad_arguments_are_named(call, words):
+    with pytest.raises(ValueError, match=words):
+        call()
+
+
+@pytest.mark.parametrize("value, words", [
+    (np.ones((4, 3)), r"shape \(4, 4\)"), ("q", "not an array of numbers"), (np.full((4, 4), np.nan), "NaN"),
+    (np.ones((4, 4)), "unit quaternions"),
+])
+def test_as_quaternions_says_what_a_filter_returned_instead(value, words):
+    with pytest.raises(ValueError, match=words):
+        capstone.as_quaternions(value, 4)
+
+
+def test_the_window_is_the_rest_before_the_movement_then_the_movement():
+    whole = datasets.load_trial(2, download=False, progress=False)
+    w = whole.window()
+    rest = int(5.0 * whole.fs)
+    start = int(np.flatnonzero(whole.movement)[0]) - rest
+    assert len(w) == int(35.0 * whole.fs)
+    assert not w.movement[:rest].any() and w.movement[rest]
+    np.testing.assert_array_equal(w.gyr, whole.gyr[start:start + len(w)])
+    with pytest.raises(ValueError, match="length"):
+        whole.window(length=0.0)
+    with pytest.raises(ValueError, match="movement phase"):
+        whole.slice(0, 100).window()
+
+
+def test_self_check_scores_like_the_metrics_and_passes_a_causal_filter(short):
+    report = capstone.self_check(gyro_only, short)
+    assert report.causal is True and report.ok
+    for tr, row in zip(short, report.rows):
+        expected = metrics.broad_rmse(gyro_only(tr.gyr, tr.acc, tr.mag, tr.fs), tr.quat_ref, tr.movement)
+        assert row["total_deg"] == pytest.approx(expected.total_deg)
+        assert row["inclination_deg"] == pytest.approx(expected.inclination_deg)
+    assert report.mean() == pytest.approx(np.mean([r["total_deg"] for r in report.rows]))
+    assert "causal (the output up to k is unchanged" in str(report)
+
+
+def test_self_check_finds_a_filter_that_looks_ahead(short):
+    report = capstone.self_check(looks_ahead, short)
+    assert report.causal is False and not report.ok
+    assert "NOT causal" in str(report)
+
+
+def test_self_check_reports_errors_and_bad_outputs_without_raising(short):
+    def crashes(gyr, acc, mag, fs):
+        raise IndexError("index 3 is out of bounds")
+
+    report = capstone.self_check(crashes, short)
+    assert [r["status"] for r in report.rows] == ["error", "error"] and "IndexError" in report.rows[0]["message"]
+    assert "estimate ran on no trial" in report.causal_message and not report.ok
+    report = capstone.self_check(lambda g, a, m, fs: np.ones((len(g), 3)), short, causality=False)
+    assert "must return shape" in report.rows[0]["message"]
+
+
+def test_a_6d_filter_gets_no_magnetometer_and_is_scored_on_inclination(short):
+    seen = []
+
+    def six(gyr, acc, mag, fs):
+        seen.append(mag)
+        return gyro_only(gyr, acc, mag, fs)
+
+    report = capstone.self_check(six, short, sensors="6D")
+    assert seen and all(m is None for m in seen)
+    assert report.mean() == pytest.approx(np.mean([r["inclination_deg"] for r in report.rows]))
+    assert "scored on its mean inclination RMSE" in str(report)
+
+
+def test_self_check_marks_a_call_over_its_budget(short, monkeypatch):
+    monkeypatch.setattr(capstone, "budget_seconds", lambda n: 0.05)
+
+    def slow(gyr, acc, mag, fs):
+        time.sleep(0.1)
+        return gyro_only(gyr, acc, mag, fs)
+
+    report = capstone.self_check(slow, short[:1], causality=False)
+    assert report.rows[0]["status"] == "timeout" and "time budget held on every trial: NO" in str(report)
+
+
+def test_the_bar_has_every_filter_on_every_shipped_trial_in_both_spans():
+    for span in ("whole", "window"):
+        rows = capstone.bar(span)
+        names = {r["estimator"] for r in rows}
+        assert {"vqf9", "vqf6", "madgwick9", "madgwick6", "dcm_ahrs", "dcm_ahrs6"} <= names
+        for name in names - {"triad"}:                  # TRIAD refuses trial 33's free fall
+            assert sorted(int(r["trial"][:2]) for r in rows if r["estimator"] == name) == sorted(capstone.SHIPPED)
+
+
+def test_the_bar_row_of_a_filter_is_what_bench_scores_now():
+    """One row of the committed table, recomputed (the whole table: the slow test below)."""
+    tr = datasets.load_trial(2, download=False, progress=False).window()
+    row = next(r for r in capstone.bar("window") if r["estimator"] == "vqf9" and r["trial"].startswith("02"))
+    now = bench.score(bench.contenders(["vqf9"])[0], tr)
+    assert row["n_samples"] == len(tr)
+    assert row["total_rmse_deg"] == pytest.approx(now["total_rmse_deg"], rel=1e-5)
+
+
+@pytest.mark.slow
+def test_make_bar_writes_the_committed_table(tmp_path):
+    """`python -m fusionlab.capstone` (about two minutes) reproduces the table the lab reads, to its six digits."""
+    path = capstone.make_bar(tmp_path / "bar.csv", progress=False)
+    with open(path, newline="") as f, open(capstone.BAR_FILE, newline="") as g:
+        new, old = list(csv.DictReader(f)), list(csv.DictReader(g))
+    assert [(r["estimator"], r["trial"], r["span"]) for r in new] == [(r["estimator"], r["trial"], r["span"]) for r in old]
+    for a, b in zip(new, old):
+        for key in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg"):
+            assert float(a[key]) == pytest.approx(float(b[key]), rel=1e-4, abs=1e-6), (a["estimator"], a["trial"], key)
