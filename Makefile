@@ -71,13 +71,16 @@ grade: env  ## sandboxed autograde of a class: make grade LAB=02_kalman_falling_
 
 # The capstone (Lab 13): scored on the BROAD trials the course does not ship, in the sandbox (grading/capstone.py).
 CLASS ?= class
-.PHONY: capstone-data capstone
+.PHONY: capstone-data capstone capstone-bar
 
 capstone-data: env  ## instructors: fetch the capstone's 31 hidden BROAD trials once (checked download into the cache)
 	@$(BIN)/python -m grading.capstone fetch
 
 capstone: env  ## the capstone's leaderboard: make capstone CLASS=name (needs make capstone-data first)
 	@$(BIN)/python -m grading.capstone grade --class $(CLASS) --workers $(WORKERS)
+
+capstone-bar: env  ## authors: re-make the bar Lab 13 reads (every filter on the shipped trials; about 2 minutes)
+	@$(BIN)/python -m fusionlab.capstone
 
 # The course on a JupyterHub on this machine (hub/, docs/hub.md): as root, Ctrl-C stops it all.
 HUB_STUDENTS ?= 3
