@@ -25,8 +25,9 @@ LAYERS = (
     ("freescale_fast",),                                                      # 6 fast paths of row 5's filters
     ("estimators",),                                                          # 7 the front door to the filters
     ("bench", "plotting"),                                                    # 8 what runs and draws the filters
-    ("checks", "widgets", "capstone"),                                        # 9 what only notebooks import
-    ("execute",),                                                             # 10 running the notebooks (tests)
+    ("capstone",),                                                            # 9 the capstone's rules and self-check
+    ("checks", "widgets"),                                                    # 10 what only notebooks import
+    ("execute",),                                                             # 11 running the notebooks (tests)
 )
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}
 
@@ -114,11 +115,11 @@ def test_the_checker_sees_every_form_of_import_and_a_module_without_a_row():
         "checks/__init__": "from .. import guard\n",                                  # not fusionlab/__init__.py
     }
     assert plan_violations(sources) == [
-        "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 9) imports widgets (row 9, the same "
+        "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 10) imports widgets (row 10, the same "
         "row); a module imports only from rows below its own",
         "fusionlab/earth.py:1 `from fusionlab import metrics`: earth (row 2) imports metrics (row 3, a row above); "
         "a module imports only from rows below its own",
-        "fusionlab/kalman.py:1 `from fusionlab.widgets import slider`: kalman (row 3) imports widgets (row 9, a row "
+        "fusionlab/kalman.py:1 `from fusionlab.widgets import slider`: kalman (row 3) imports widgets (row 10, a row "
         "above); a module imports only from rows below its own",
         "fusionlab/metrics.py:1 `import fusionlab.kalman as k`: metrics (row 3) imports kalman (row 3, the same row); "
         "a module imports only from rows below its own",

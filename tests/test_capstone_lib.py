@@ -110,6 +110,7 @@ def test_self_check_reports_errors_and_bad_outputs_without_raising(short):
     report = capstone.self_check(crashes, short)
     assert [r["status"] for r in report.rows] == ["error", "error"] and "IndexError" in report.rows[0]["message"]
     assert "estimate ran on no trial" in report.causal_message and not report.ok
+    assert "time budget held on every trial: not known (no trial ran)" in str(report)
     report = capstone.self_check(lambda g, a, m, fs: np.ones((len(g), 3)), short, causality=False)
     assert "must return shape" in report.rows[0]["message"]
 
@@ -166,3 +167,48 @@ def test_make_bar_writes_the_committed_table(tmp_path):
     for a, b in zip(new, old):
         for key in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg"):
             assert float(a[key]) == pytest.approx(float(b[key]), rel=1e-4, abs=1e-6), (a["estimator"], a["trial"], key)
+
+
+# --- Lab 13's own filter: its defaults were chosen on the tuning windows only ------------------------------------
+
+GRID = {"k_acc": (0.2, 0.5, 1.0), "k_mag": (0.1, 0.3, 0.5, 1.0), "k_bias": (0.0, 0.01, 0.02, 0.05),
+        "tau_acc": (0.0, 3.0, 10.0)}
+
+
+def _solution_estimate():
+    """The solution's `estimate` (exercise 2) with the provided cell it uses, from the instructor's notebook."""
+    import inspect
+    import math
+
+    import nbformat
+
+    from conftest import ROOT
+    nb = nbformat.read(ROOT / "solutions" / "13_capstone" / "13_capstone.ipynb", as_version=4)
+    scope = {"np": np, "math": math, "rotations": rotations, "inspect": inspect}
+    for cell in nb.cells:
+        gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+        if cell.cell_type == "code" and ("def starter_estimate(" in cell.source or gid == "ex2_solution"):
+            exec(cell.source, scope)                                         # noqa: S102 -- the course's own cell
+    return scope["estimate"]
+
+
+@pytest.mark.slow
+def test_the_solutions_defaults_are_the_best_of_their_grid_on_the_tuning_windows():
+    """The model answer says the defaults are the best of a grid on the five tuning windows (the held-out trials
+    played no part): then each default is also the best of its own line of the grid, the others held. About 10 s."""
+    import inspect
+
+    estimate = _solution_estimate()
+    defaults = {k: p.default for k, p in inspect.signature(estimate).parameters.items() if k in GRID}
+    tune = [datasets.load_trial(n, download=False, progress=False).window() for n in capstone.TUNE]
+
+    def mean(**kw):
+        return np.mean([metrics.broad_rmse(estimate(t.gyr, t.acc, t.mag, t.fs, **kw), t.quat_ref,
+                                           t.movement).total_deg for t in tune])
+
+    at_default = mean()
+    for knob, values in GRID.items():
+        assert defaults[knob] in values, knob
+        for v in values:
+            if v != defaults[knob]:
+                assert mean(**{knob: v}) > at_default, (knob, v)

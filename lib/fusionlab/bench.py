@@ -142,7 +142,9 @@ def _madgwick(uses_mag):
             roll, pitch = accel_tilt.tilt_from_accel(acc[0])
             q0_ned = rotations.euler_to_quat([roll, pitch, 0.0])
         q0_nwu = rotations.quat_multiply(rotations.quat_conjugate(_Q_ENU_NWU), rotations.quat_nav_swap(q0_ned))
-        f = Madgwick(frequency=trial.fs)              # default gains: 0.041 (9D), 0.033 (6D), as the paper suggests
+        # The paper's gains, 0.041 (9D) and 0.033 (6D), given explicitly: built without data, ahrs would take its IMU
+        # gain for updateMARG too.
+        f = Madgwick(frequency=trial.fs, gain=0.041 if uses_mag else 0.033)
         Q = np.empty((len(gyr), 4))
         Q[0] = q0_nwu
         step = f.updateMARG if uses_mag else f.updateIMU

@@ -284,7 +284,10 @@ class SelfCheck:
                      f"{self.mean('inclination_deg'):9.2f}")
         lines.append(f"a {self.sensors} filter is scored on its mean {SENSORS[self.sensors][:-4]} RMSE: "
                      f"{self.mean():.2f} deg")
-        lines.append(f"time budget held on every trial: {'yes' if all(r['status'] != 'timeout' for r in self.rows) else 'NO'}")
+        timed = [r for r in self.rows if r["status"] in ("ok", "timeout")]
+        held = "not known (no trial ran)" if not timed else \
+            "yes" if all(r["status"] == "ok" for r in timed) else "NO"
+        lines.append(f"time budget held on every trial: {held}")
         lines.append(self.causal_message)
         return "\n".join(lines)
 

@@ -180,7 +180,10 @@ EXERCISES = (
              ('sensor_errors.remove_gravity',)),
     # 13_capstone (its filter, exercise 2, is scored on hidden trials by the capstone's grader, not here)
     Exercise('13_capstone', 1, 2, ('my_integrate_gyro',), 'check_integrate_gyro',
-             ('rotations.integrate_gyro_quat', 'rotations.integrate_gyro_dcm')),
+             ('rotations.integrate_gyro_quat', 'rotations.integrate_gyro_dcm',
+              'correlation._weighted_tilt_fusion')),       # the complementary filters' loop, with no correction
+    Exercise('13_capstone', 2, 1, ('estimate',), 'check_capstone_filter',   # valid and causal; 10 more on the
+             ()),                                                            # leaderboard (grading/capstone.py)
 )
 
 

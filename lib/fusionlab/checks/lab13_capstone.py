@@ -8,7 +8,7 @@ import numpy as np
 from .. import rotations
 from ._core import Feedback, _call, _first_match, _general_case, _ok, _where, forbids
 
-__all__ = ["check_integrate_gyro"]
+__all__ = ["check_integrate_gyro", "check_capstone_filter"]
 
 
 def _case():
@@ -26,6 +26,9 @@ def check_integrate_gyro(fn):
     q0, gyr, fs = _case()
     ref = rotations.integrate_gyro_quat(q0, gyr, 1.0 / fs)
     got = _call(fn, q0, gyr, fs, what="your integration")
+    if got.shape == ref[:-1].shape and np.allclose(np.abs(np.sum(got * ref[:-1], axis=-1)), 1.0, atol=1e-9):
+        raise Feedback("row k of yours is the attitude before sample k (row 0 is q0): return the attitude after "
+                       "each sample, so that row k is the estimate at k, and leave q0 out.")
     if got.shape == ref.shape:
         raise Feedback(f"your integration returns {ref.shape[0]} quaternions for {len(gyr)} gyro samples: leave q0 "
                        "out, so that row k is the attitude after sample k (the filter's estimate at k).")
@@ -63,3 +66,39 @@ def check_integrate_gyro(fn):
          "your quaternions are not of unit length: normalise each step."),
     ], rtol=1e-6, atol=1e-9)
     raise Feedback(msg or f"your attitudes differ from q_k = q_(k-1) ⊗ q(ω_k / fs): {_where(fixed, ref[1:], 'q')}.")
+
+
+@forbids
+def check_capstone_filter(estimate, sensors="9D"):
+    """Check a student's capstone filter ``estimate(gyr, acc, mag, fs) -> (N, 4)`` on a short synthetic hand-motion
+    record (no data needed): N unit quaternions, within the time budget, causal (as :func:`fusionlab.capstone.
+    self_check` checks it). Its accuracy is the leaderboard's business, not this check's."""
+    import time
+
+    from .. import capstone, simulate
+    if sensors not in capstone.SENSORS:
+        raise Feedback(f'SENSORS must be "9D" or "6D" (in the cell of exercise 2); got {sensors!r}')
+    rec = simulate.hand_motion_record(seed=1302, fs=286.0, duration=8.0, still=2.0)
+    gyr, acc = rec["gyr"], rec["acc"]
+    mag = rec["mag"] * 100.0 if sensors == "9D" else None            # gauss -> µT; a 6D filter gets none
+    n = len(gyr)
+    t0 = time.perf_counter()
+    q = _call(estimate, gyr, acc, mag, 286.0, what="your estimate")
+    seconds = time.perf_counter() - t0
+    try:
+        q = capstone.as_quaternions(q, n)
+    except ValueError as exc:
+        raise Feedback(f"{exc} (for {n} samples{', mag=None: a 6D filter' if mag is None else ''}).") from None
+    if seconds > capstone.budget_seconds(n):
+        raise Feedback(f"your estimate took {seconds:.1f} s for {n} samples, over the budget of "
+                       f"{capstone.budget_seconds(n):.1f} s.")
+    rng = np.random.default_rng(1303)
+    for k in capstone.causal_ks(n):
+        change = capstone.causality_change(lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, 286.0),
+                                           gyr, acc, rec["mag"] * 100.0, q, k, rng)
+        if change > capstone.CAUSAL_TOL:
+            raise Feedback(f"your estimate is not causal: changing the samples after k = {k} changed its output up "
+                           f"to k by {change:.2g}. Use no later sample, no statistic of the whole record, and seed "
+                           "any random numbers.")
+    _ok(f"your estimate returns {n} unit quaternions for {n} samples ({sensors}), within its time budget, and is "
+        "causal, on a synthetic hand-motion record. Its score is the leaderboard's.")
