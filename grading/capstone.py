@@ -222,16 +222,25 @@ def fetch(names=None, progress=True, out=None):
     print(f"==> the capstone's {len(names)} hidden BROAD trials, into {datasets.cache_dir()} (checked download)",
           file=out, flush=True)
     have, unverified = 0, []
+    cache = Path(datasets.cache_dir())
+    had_cache = cache.exists()
     for name in names:
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 path = datasets.fetch_trial(name, download=True, progress=progress)
         except datasets.DataMissing as exc:
-            print(f"\nstopped: {name} could not be downloaded -- {exc}\n{have} of {len(names)} hidden trials are "
-                  f"here, each complete and checked (nothing partial is kept). Connect to the internet and run "
-                  f"`make capstone-data` again: it fetches only what is missing. The capstone cannot be graded "
-                  f"until all {len(names)} are here.", file=out, flush=True)
+            text = str(exc)
+            reason = text.split(" failed (", 1)[1].rsplit("). To get it", 1)[0] if " failed (" in text else text
+            url = (os.environ.get(datasets.ENV_URL) or datasets.BROAD_URL).rstrip("/") + f"/{name}.mat"
+            if not had_cache and cache.is_dir() and not any(cache.iterdir()):
+                cache.rmdir()                                  # made for this run and still empty: leave no trace
+            print(f"\nstopped: {name} could not be downloaded from {url} ({reason}).\n{have} of {len(names)} "
+                  f"hidden trials are here, each complete and checked (nothing partial is kept). Connect to the "
+                  f"internet and run `make capstone-data` again: it fetches only what is missing. Or put the "
+                  f"published .mat files in a folder of yours and point {datasets.ENV_DIR} at it (not in data/broad/, "
+                  f"which ships to the students). The capstone cannot be graded until all {len(names)} are here.",
+                  file=out, flush=True)
             return 2
         have += 1
         if datasets.known_sha256(name) is None:
