@@ -742,6 +742,16 @@ def _filter_functions():
     return {name: src for name, src in similarity.library_functions().items() if name.split(".")[0] in FILTER_MODULES}
 
 
+def _allowed_code():
+    """The source of every other module of the library (rotations, metrics, dcm, signals, ...): what a filter may
+    use, and copy. Its fingerprints do not count as a copy (a filter function built like a rotation helper is not
+    copied when the helper is)."""
+    import fusionlab
+    folder = Path(fusionlab.__file__).resolve().parent
+    skip = set(FILTER_MODULES) | set(FILE_MODULES) | {"capstone"}
+    return tuple(p.read_text() for p in sorted(folder.glob("*.py")) if p.stem not in skip)
+
+
 _BASELINES = {}
 
 
@@ -762,19 +772,21 @@ def library_copies(cells, model=""):
     the match covers :data:`grading.similarity.LIB_SHARE` of the library function, is at least
     :data:`COPY_MIN_CHARS` normalised characters long, and :data:`grading.similarity.LIB_BEYOND` times what the
     lab's own notebook (``model``, :func:`model_program`) matches of that function. The rotation and metric helpers
-    (other modules) are never looked for."""
+    (the other modules, :func:`_allowed_code`) are never looked for, and code they share with a filter does not
+    count."""
     from grading import similarity
     functions = _filter_functions()
+    allowed = _allowed_code()
     found = []
     for i, (_, source) in enumerate(cells, 1):
         best = None
         for name, src in functions.items():
-            share_a, chars, lines, _, share = similarity.compare(source, src, (), (), numbers=True)
+            share_a, chars, lines, _, share = similarity.compare(source, src, allowed, numbers=True)
             if share < similarity.LIB_SHARE or chars < max(COPY_MIN_CHARS, similarity.LIB_MIN_TOKENS):
                 continue
             key = (model, name)
             if key not in _BASELINES:
-                _BASELINES[key] = similarity.compare(model, src, (), ())[1] if model else 0
+                _BASELINES[key] = similarity.compare(model, src, allowed)[1] if model else 0
             if chars >= similarity.LIB_BEYOND * _BASELINES[key] and (best is None or chars > best[1]):
                 best = (name, chars, share, lines)
         if best:
@@ -1082,7 +1094,8 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
         if cleared:
             res.notes.append(f"cleared by the instructor, who read the code: {close}")
         else:
-            res.cheats.append(("detects the trial", close))
+            res.cheats.append(("detects the trial", f"{close} -- review the code: the instructor may clear this "
+                                                     "after reading it"))
     res.cheats = list(dict.fromkeys(res.cheats))
     madgwick, vqf = _published_means(refs, res.sensors)
     gated = bool(res.cheats) or res.causal is False
@@ -1110,7 +1123,7 @@ def implausibly_close(res, refs):
     theirs = float(np.mean([best[r.trial] for r in close]))
     return (f"{IMPLAUSIBLY_CLOSE}: its {what} RMSE is below {IMPLAUSIBLE:g} x the best reference filter's on "
             f"{len(close)} of the {len(ran)} trials it ran (there {mine:.2f} deg against {theirs:.2f} deg on "
-            "average) -- review the code: the instructor may clear this after reading it")
+            "average)")
 
 
 def _declared_outside(nb, cells):
@@ -1486,15 +1499,15 @@ def main(argv=None):
     if not submissions:
         print(f"no submissions: put them in submitted/<student>/{LAB}/{LAB}.ipynb", file=sys.stderr)
         return 2
+    unknown = sorted(set(a.cleared) - set(submissions))
+    if unknown:
+        print(f"--cleared names no submission graded here: {', '.join(unknown)}", file=sys.stderr)
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps({"seed": seed, "trials": [t.name for t in trials],
                                               "lengths": [len(t) for t in trials], "stand_in": bool(a.stand_in)},
                                              indent=1))
     scored = disguise(trials, seed)
-    unknown = sorted(set(a.cleared) - set(submissions))
-    if unknown:
-        print(f"--cleared names no submission graded here: {', '.join(unknown)}", file=sys.stderr)
-        return 2
     grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label,
                 cleared=a.cleared)
     print(f"leaderboard: {out / 'leaderboard.html'} (and .csv); feedback: {out / 'feedback'}/<student>/")

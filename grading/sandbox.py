@@ -6,8 +6,9 @@ scores -- stays outside.  In the box
 
 * the file system holds only the system (``/usr``, a few files of ``/etc``), the Python installation, the lab's copy
   of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
-  course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path), a private
-  folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
+  course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path; the installed
+  copies they replace covered by empty folders, :func:`package_paths`, so that no change of ``sys.path`` reaches
+  them), a private folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
   the student's copy; writable, in memory, size-limited, seeded with the submission's files) and a private ``/tmp``
   (the same): nothing a box writes reaches the grader's disk;
 * solutions, submissions, classmates, the gradebook, the real library and the grading code do not exist;

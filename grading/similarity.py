@@ -53,16 +53,25 @@ class Pair:
     lines_b: str
 
 
-@functools.lru_cache(maxsize=4096)
-def _fingerprint(code, boilerplate=()):
-    from copydetect import CodeFingerprint
+@functools.lru_cache(maxsize=64)
+def _boilerplate(boilerplate):
+    """The fingerprints of the code ``boilerplate`` (a tuple of texts), made once per process; each once (copydetect
+    takes them as unique)."""
     from copydetect.utils import filter_code, get_document_fingerprints
 
     hashes = []
     for text in boilerplate:
         filtered, _ = filter_code(text, "b.py", "python")
         hashes += list(get_document_fingerprints(filtered, K, WINDOW, [])[0])
-    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=hashes, fp=io.StringIO(code), language="python")
+    return tuple(sorted(set(hashes)))
+
+
+@functools.lru_cache(maxsize=4096)
+def _fingerprint(code, boilerplate=()):
+    from copydetect import CodeFingerprint
+
+    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=list(_boilerplate(boilerplate)), fp=io.StringIO(code),
+                           language="python")
 
 
 def _line_numbers(code, slices):

@@ -529,6 +529,15 @@ def test_the_library_hash_changes_with_a_source_file(scored, tmp_path, monkeypat
     assert capstone.references_key(scored, SEED)["code"] != key["code"]
 
 
+def test_clearing_a_student_who_is_not_graded_is_refused_before_anything_is_written(tmp_path):
+    folder = tmp_path / "submitted" / "ann" / capstone.LAB
+    folder.mkdir(parents=True)
+    nbformat.write(notebook(CLASS["good"]), folder / f"{capstone.LAB}.ipynb")
+    argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(tmp_path / "out"),
+            "--stand-in", "7", "--max-samples", str(MAX_SAMPLES), "--cleared", "bob"]
+    assert capstone.main(argv) == 2 and not (tmp_path / "out").exists()
+
+
 def test_the_saved_seed_is_reused_only_for_the_same_trials(tmp_path):
     trials = capstone.stand_in([7], MAX_SAMPLES)
     run = tmp_path / "run.json"
