@@ -20,14 +20,25 @@ process:
   into the cache); grading refuses to start without all of them and says how to get them (:func:`hidden_trials`).
 * **What the student's code sees.** Its notebook's answer cells (and the cells they need) run in a box of the
   grading sandbox (:mod:`grading.sandbox`, :mod:`grading.box`) with no data at all: no ``data/``, no BROAD cache, no
-  submission folder. The judge sends each trial's sensor data (nothing else) as a call of ``estimate`` and gets the
-  quaternions back as plain numbers. Ground truth, metrics and scores exist only in this process.
+  submission folder. In the box's library the filters and data loaders are stubs; ``vqf``, ``ahrs``,
+  ``imufusion`` and ``filterpy`` are shadowed by packages that refuse to load, and their installed copies are
+  hidden (an empty folder mounted over each, :func:`grading.sandbox.package_paths`), so that taking the shadow off
+  ``sys.path`` reaches nothing. The box's CPU-time limit is made from the trials' budgets (:func:`box_limits`).
+  The judge sends each trial's sensor data (nothing else) as a call of ``estimate`` and gets the quaternions back
+  as plain numbers. Ground truth, metrics and scores exist only in this process.
 * **Each trial is disguised.** Before a class is graded every trial is turned by a secret random rotation of the
-  sensor frame (gyro, accelerometer and magnetometer alike, the reference to match) and loses a secret number of
-  samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase): its length does not
-  name it either. A causal filter does not care (the authors' error quaternion q_est * conj(q_ref)
-  is unchanged by a turn of the body frame); a submission that recognises a published trial and returns its
-  published reference is far off, and is named (:data:`CHEATS`, ``detects the trial``).
+  sensor frame (gyro, accelerometer and magnetometer alike, the reference to match), loses a secret number of
+  samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase), so that its length
+  does not name it either, and gets fresh white noise of about the sensors' own (:data:`DISGUISE_NOISE`), so that
+  no raw sample of the published trial (their norms survive a turn) is found again. A causal filter does not care
+  (the authors' error quaternion q_est * conj(q_ref) is unchanged by a turn of the body frame); a submission that
+  returns a published reference unturned is far off and is named (:data:`CHEATS`, ``detects the trial``).
+* **Plausibility.** A submission could still recognise a trial (from its movement, say), estimate the secret
+  turn from the rest before it and return the published reference turned into the disguised frame: an error far
+  below any filter's. A scored RMSE below :data:`IMPLAUSIBLE` x the best reference filter's on at least half of
+  the trials that ran is named (``detects the trial``: "implausibly close to the optical reference ... review the
+  code") and gets no points for the filter; the instructor who has read the code and trusts it grades again with
+  ``--cleared <student>`` (:func:`implausibly_close`).
 * **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
   RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
   the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A filter
@@ -36,7 +47,16 @@ process:
   estimate that never moves (the identity quaternion).
 * **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret among those that
   ran, every sample after k is replaced by noisy samples and ``estimate`` is called again; its output up to k must
-  not change (1e-10), for k in :func:`fusionlab.capstone.causal_ks`.
+  not change (1e-10), for three k drawn in secret (:func:`fusionlab.capstone.causal_ks` with the grader's
+  generator: in the first hundredth, the first tenth and the second half of the trial). Then ``estimate`` is
+  called on the samples up to another secret k alone: its output must be the first k+1 rows of its output on the
+  whole trial (a causal filter's output on a prefix is the prefix of its output). Each of these calls runs in a box
+  started for it alone (:meth:`Runner.call_fresh`): nothing of an earlier call survives to be replayed.
+* **The code** the box runs is read first (:func:`scan`, :func:`library_copies`): imports or uses of a reference
+  filter, files read, the import system reached around (:func:`grading.integrity.tampering`), and a library filter
+  pasted in (:mod:`grading.similarity`'s fingerprints against the library's filter modules; the rotation and
+  metric helpers that the rules allow are not looked for). Names written in the code only: what is built at run
+  time is not seen, which is why the box holds nothing those names would reach.
 * **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
   budget, then the mean RMSE the filter is scored on against Madgwick's filter's and VQF's with the same sensors
   (9D: total RMSE of the 9D versions; 6D: inclination RMSE of the 6D versions), computed here on the same disguised
@@ -89,23 +109,56 @@ LAB = "13_capstone"
 FUNCTION = "estimate"
 
 SETUP_SECONDS = 60.0            # the notebook's cells, run once per box
-MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box
+MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box (the fresh
+                                # boxes of the causality checks are not counted)
+CPU_PER_BUDGET = 2.0            # the box's CPU-time limit: this many CPU seconds per second of the trials' budgets
+CPU_SLACK_S = 60                # ... plus the notebook's cells (SETUP_SECONDS) and this; never below the sandbox's
+                                # default (box_limits): an honest filter within its budgets is never stopped by it
 MAX_CROP_SECONDS = 0.5          # secret cut at the start (inside the rest before the movement) ...
 MAX_END_CROP_SECONDS = 3.0      # ... and at the end (never into the movement): a trial's length does not name it
+# Fresh white noise the disguise adds to the sensor data (standard deviations: gyro rad/s, accelerometer m/s^2,
+# magnetometer uT), at or below the BROAD sensors' own noise at rest (about 0.002 rad/s, 0.04-0.07 m/s^2, 0.7 uT):
+# it changes no filter's accuracy that matters, but no raw sample of a published trial is found again in the data
+# the box is sent (its norms, which a turn of the frame keeps, named the trial to the sample).
+DISGUISE_NOISE = (0.002, 0.03, 0.3)
 MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
 MATCH_STRIDE = 5                # ... compared at every 5th sample
 FOLLOW_RATIO = 0.25             # an output this much closer to the published reference than to the disguised one
                                 # follows the published reference: the trial was recognised
+IMPLAUSIBLE = 0.5               # a scored RMSE below this fraction of the best reference filter's on that trial (any
+                                # filter of its sensor set, VQF's, Madgwick's and every library filter's), on at least
+                                # half of the trials that ran: no honest filter is that far ahead of all of them, a
+                                # filter that recognises the trial and returns its reference is (the instructor reads
+                                # the code and may clear it: --cleared)
+COPY_MIN_CHARS = 250            # a pasted library filter: at least this many normalised characters matched (a
+                                # filter's worth, not a quaternion product), with grading.similarity's shares
 
-#: What is looked for, and how it is found (each is named on the leaderboard when found).
+#: What is looked for, and how it is found (each is named on the leaderboard when found). The code is read for
+#: names only (what it calls, imports and reaches, written out): a name built at run time is not seen there, which
+#: is why the box has none of what those names would reach.
 CHEATS = {
     "calls a reference filter": "imports or calls VQF, ahrs, imufusion, filterpy or the library's filters (they are "
-                                "absent or stubs in the box; found in the code, in its errors, or as output equal to "
-                                f"a reference filter's to {MATCH_RAD:g} rad everywhere)",
-    "reads files": "opens, loads or lists files (the box has none; found in the code)",
+                                "absent or stubs in the box, the installed packages hidden; found in the code, in its "
+                                "errors, or as output equal to a reference filter's to "
+                                f"{MATCH_RAD:g} rad everywhere)",
+    "copies the library's filter": "code of one of the library's filters pasted into the notebook, names and "
+                                   f"comments aside (grading.similarity's fingerprints: at least {COPY_MIN_CHARS} "
+                                   "characters and most of the library function; the rotation and metric helpers "
+                                   "may be used, and are not looked for)",
+    "tampers with imports": "reaches around Python's import system or builtins: importlib, __import__, sys.path, "
+                            "sys.modules, import hooks, the builtins module, exec/eval/compile of text (found in the "
+                            "code by grading.integrity's scanner)",
+    "reads files": "opens, loads or lists files (found in the code by the names it calls: open, io.FileIO, os.open, "
+                   "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
+                   "a string is not seen -- the box holds no data file to find anyway)",
     "detects the trial": "its output follows a trial's published reference instead of the data it was given "
-                         f"(closer to the undisguised reference than {FOLLOW_RATIO:g} x its error)",
+                         f"(closer to the undisguised reference than {FOLLOW_RATIO:g} x its error), or is implausibly "
+                         f"close to the optical reference: a scored RMSE below {IMPLAUSIBLE:g} x the best reference "
+                         "filter's on at least half of the trials it ran. The instructor reads the code of such a "
+                         "filter and may clear this flag (grade again with --cleared <student>)",
 }
+#: The kind of cheat the instructor may clear after reading the code, and the evidence's first words.
+IMPLAUSIBLY_CLOSE = "implausibly close to the optical reference"
 
 # The library's filters: every public function and method of these modules is a stub in the box (the estimators'
 # registry functions too), with the packages that hold other published filters absent.
@@ -120,10 +173,13 @@ WHY_HIDDEN = "the capstone's filter is yours, not a published one"
 # Calls that read files: by any name (``open``, ``x.read_text()``), or as functions of the modules that read them
 # (``np.load``, ``os.listdir``; a method of the student's own called ``load`` is not one).
 FILE_CALLS = {"open", "read_text", "read_bytes", "iterdir", "rglob", "loadmat", "load_trial", "fetch_trial",
-              "load_reference_position", "read_csv", "read_excel", "genfromtxt", "loadtxt", "fromfile", "memmap"}
-FILE_MODULE_CALLS = {"load", "listdir", "scandir", "walk", "glob"}
+              "load_reference_position", "read_csv", "read_excel", "genfromtxt", "loadtxt", "fromfile", "memmap",
+              "FileIO", "fdopen", "open_code"}
+FILE_MODULE_CALLS = {"load", "listdir", "scandir", "walk", "glob", "read"}
 FILE_OWNERS = {"np", "numpy", "os", "io", "pathlib", "Path", "json", "pickle", "glob", "scipy", "sio", "pd",
                "pandas", "datasets", "shutil"}
+FILE_IMPORT_OWNERS = {"numpy", "os", "io", "pathlib", "json", "pickle", "glob", "scipy", "pandas", "shutil",
+                      "builtins", "_io", "posix"}      # importing a file-reading name from these is found too
 EMBED_CHARS = 200_000           # code the box runs beyond this size is listed for review (data pasted into it?)
 
 COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
@@ -279,9 +335,12 @@ class Scored:
 
 
 def disguise(trials, seed):
-    """Each trial turned by a random rotation of the sensor frame and cut at both ends by random amounts.
+    """Each trial turned by a random rotation of the sensor frame, cut at both ends by random amounts and given a
+    little fresh sensor noise.
 
-    The start loses under 0.5 s, the end under 3 s but never a sample of the movement phase.
+    The start loses under 0.5 s, the end under 3 s but never a sample of the movement phase. The noise is white,
+    of the standard deviations :data:`DISGUISE_NOISE` (at or below the sensors' own): a turn keeps the norm of every
+    sample, so without it the norms of a few samples would find a published trial and its start again.
 
     New sensor axes ``v' = A v`` (``A = quat_to_dcm(q_T)``, uniform over rotations); the body->ENU reference becomes
     ``q_ref ⊗ conj(q_T)``, so the error quaternion of any estimate of the new body is that of the old one.
@@ -301,8 +360,9 @@ def disguise(trials, seed):
         lost = np.isnan(ref).any(axis=-1)
         turned = rotations.quat_multiply(np.where(lost[:, None], [1.0, 0, 0, 0], ref), rotations.quat_conjugate(q_t))
         turned[lost] = np.nan
-        out.append(Scored(t.name, t.fs, np.array(t.gyr[s]) @ A.T, np.array(t.acc[s]) @ A.T,
-                          np.array(t.mag[s]) @ A.T, turned, np.array(t.movement[s]), ref,
+        gyr, acc, mag = (np.array(x[s]) @ A.T + sigma * rng.standard_normal((stop - start, 3))
+                         for x, sigma in zip((t.gyr, t.acc, t.mag), DISGUISE_NOISE))
+        out.append(Scored(t.name, t.fs, gyr, acc, mag, turned, np.array(t.movement[s]), ref,
                           float(np.degrees(2 * np.arccos(min(1.0, abs(q_t[0])))))))
     return out
 
@@ -635,11 +695,17 @@ def scan(cells):
     """Cheats seen in the code the box runs (``[(grade_id, source)]``): ``[(kind, why)]`` (kinds of :data:`CHEATS`).
 
     The setup cell (``imports``) may import the library's modules, as the lab's own cell does for tuning on the
-    shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found."""
+    shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found. Code that reaches
+    around the import system is found by :func:`grading.integrity.tampering`. Names only: what the code builds at
+    run time (``getattr(os, "op" + "en")``) is not seen here."""
+    from grading import integrity
     found = []
     lib_filters = set(FILTER_MODULES)
+    file_names = FILE_CALLS | FILE_MODULE_CALLS
     for i, (gid, source) in enumerate(cells, 1):
         setup = gid == "imports"
+        found += [("tampers with imports", f"cell {i}, line {line}: {why}")
+                  for line, _, why in integrity.tampering(source)]
         try:
             tree = judge._parse(source)
         except SyntaxError:
@@ -660,6 +726,11 @@ def scan(cells):
                     found.append(("calls a reference filter", f"cell {i}: imports {name}"))
                 elif parts[0] == "fusionlab" and set(FILE_MODULES) & set(parts[1:]):
                     found.append(("reads files", f"cell {i}: imports {name}"))
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in FILE_IMPORT_OWNERS:
+                for a in node.names:                    # from io import FileIO as F: F(...) is not seen by name
+                    if a.name in file_names:
+                        found.append(("reads files", f"cell {i}, line {node.lineno}: imports {a.name} from "
+                                                     f"{node.module}"))
             if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
                     node.value.id in lib_filters:
                 found.append(("calls a reference filter", f"cell {i}: uses {node.value.id}.{node.attr}"))
@@ -671,6 +742,67 @@ def scan(cells):
                         (isinstance(f, ast.Name) and name == "glob"):
                     found.append(("reads files", f"cell {i}, line {node.lineno}: calls {name}"))
     return list(dict.fromkeys(found))
+
+
+def _filter_functions():
+    """``{"module.function": source}`` of the library's filter modules (:data:`FILTER_MODULES`), as
+    :func:`grading.similarity.library_functions` indexes the library: the code a pasted filter would match."""
+    from grading import similarity
+    return {name: src for name, src in similarity.library_functions().items() if name.split(".")[0] in FILTER_MODULES}
+
+
+def _allowed_code():
+    """The source of every other module of the library (rotations, metrics, dcm, signals, ...): what a filter may
+    use, and copy. Its fingerprints do not count as a copy (a filter function built like a rotation helper is not
+    copied when the helper is)."""
+    import fusionlab
+    folder = Path(fusionlab.__file__).resolve().parent
+    skip = set(FILTER_MODULES) | set(FILE_MODULES) | {"capstone"}
+    return tuple(p.read_text() for p in sorted(folder.glob("*.py")) if p.stem not in skip)
+
+
+_BASELINES = {}
+
+
+def model_program(course):
+    """The code the box would run of the lab's own notebook (the solution's, else the release's; "" without
+    either): what an honest answer may have in common with the library (the starter, the solution's filter)."""
+    for folder in ("solutions", "labs"):
+        path = Path(course) / folder / LAB / f"{LAB}.ipynb"
+        if path.is_file():
+            import nbformat
+            return "\n\n".join(src for _, src in program_of(nbformat.read(path, as_version=4)))
+    return ""
+
+
+def library_copies(cells, model=""):
+    """Cheats ``[("copies the library's filter", why)]``: cells the box runs that hold code of one of the library's
+    filter functions (:func:`_filter_functions`), found as :mod:`grading.similarity` finds a pasted library function:
+    the match covers :data:`grading.similarity.LIB_SHARE` of the library function, is at least
+    :data:`COPY_MIN_CHARS` normalised characters long, and :data:`grading.similarity.LIB_BEYOND` times what the
+    lab's own notebook (``model``, :func:`model_program`) matches of that function. The rotation and metric helpers
+    (the other modules, :func:`_allowed_code`) are never looked for, and code they share with a filter does not
+    count."""
+    from grading import similarity
+    functions = _filter_functions()
+    allowed = _allowed_code()
+    found = []
+    for i, (_, source) in enumerate(cells, 1):
+        best = None
+        for name, src in functions.items():
+            share_a, chars, lines, _, share = similarity.compare(source, src, allowed, numbers=True)
+            if share < similarity.LIB_SHARE or chars < max(COPY_MIN_CHARS, similarity.LIB_MIN_TOKENS):
+                continue
+            key = (model, name)
+            if key not in _BASELINES:
+                _BASELINES[key] = similarity.compare(model, src, allowed)[1] if model else 0
+            if chars >= similarity.LIB_BEYOND * _BASELINES[key] and (best is None or chars > best[1]):
+                best = (name, chars, share, lines)
+        if best:
+            name, chars, share, lines = best
+            found.append(("copies the library's filter", f"{name}: lines {lines[0]}-{lines[-1]} of cell {i} "
+                                                         f"({share:.0%} of it, {chars} characters alike)"))
+    return found
 
 
 def forbidden_names():
@@ -721,10 +853,23 @@ def box_library(scratch):
 # The box: the student's cells, then calls of estimate with sensor data only
 # ----------------------------------------------------------------------------------------------------------------
 
+def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
+    """The sandbox limits of a capstone box (:data:`grading.sandbox.DEFAULT_LIMITS`, then ``limits``), its CPU time
+    made from the budgets: one box may run the notebook's cells and every trial, each within its budget, so its
+    limit is :data:`CPU_PER_BUDGET` CPU seconds per second of the trials' budgets, plus :data:`SETUP_SECONDS` and
+    :data:`CPU_SLACK_S` (never below the sandbox's default; a ``cpu_s`` in ``limits`` is kept as given)."""
+    import math
+    budgets = sum(budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored)
+    cpu = max(sandbox.DEFAULT_LIMITS["cpu_s"], math.ceil(CPU_PER_BUDGET * budgets + SETUP_SECONDS + CPU_SLACK_S))
+    return {**sandbox.DEFAULT_LIMITS, "cpu_s": cpu, **(limits or {})}
+
+
 class Runner:
     """One student's box, started again (from the notebook's cells) after a call that ran over or ended it.
 
-    A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box."""
+    A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box.
+    The installed packages that the box's shadow replaces (vqf, ahrs, ...) are hidden in the box
+    (:func:`grading.judge.shadowed`): taking the shadow off ``sys.path`` finds nothing."""
 
     def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D"):
         if sensors not in SENSORS:
@@ -733,10 +878,17 @@ class Runner:
         self.sensors = sensors
         self.limits = limits or {}
         self.root = box_library(scratch)
+        self.hide = judge.shadowed(self.root / "shadow")
         self.box = self.work = None
         self.cell_errors = {}
         self.starts = 0
+        self.fresh = 0                 # boxes started for one call (call_fresh): not restarts after a failure
         self.setup_error = ""          # set when the notebook's cells could not be run: no call is tried again
+
+    @property
+    def restarts(self):
+        """Boxes started after a call that ran over its budget or ended its box."""
+        return max(0, self.starts - self.fresh - 1)
 
     def start(self):
         self.close()
@@ -745,7 +897,7 @@ class Runner:
         self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
         command = sandbox.bwrap_command(["python", str(judge.BOX)], course=self.course, lab=LAB,
                                         lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
-                                        limits=self.limits, uid=uid, data=False)
+                                        limits=self.limits, uid=uid, data=False, hide=self.hide)
         self.box = judge.Box(command)
         deadline = time.monotonic() + SETUP_SECONDS
         try:
@@ -766,8 +918,9 @@ class Runner:
     def call(self, trial, seconds, gyr=None, acc=None, mag=None):
         """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data
         (``gyr``, ``acc``, ``mag`` instead of the trial's when given; no magnetometer at all for a 6D runner)."""
-        if self.box is None and (self.setup_error or self.starts > MAX_RESTARTS or not self.start()):
-            return None, "not run", self.setup_error or f"the box was started {self.starts} times", float("nan")
+        if self.box is None and (self.setup_error or self.restarts >= MAX_RESTARTS or not self.start()):
+            return None, "not run", self.setup_error or f"the box was started again {self.restarts} times", \
+                float("nan")
         args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
                 None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
         message = {"op": "call", "name": FUNCTION, "args": wire.encode(args), "kwargs": wire.encode({})}
@@ -789,6 +942,20 @@ class Runner:
         except (wire.WireError, ValueError) as exc:
             return None, "invalid", str(exc)[:300], elapsed
         return q, "ok", "", elapsed
+
+    def call_fresh(self, trial, seconds, gyr=None, acc=None, mag=None):
+        """:meth:`call` in a box started for this call alone (the notebook's cells run again) and closed after it:
+        nothing of an earlier call -- its data, its output -- is left for this one to see."""
+        self.close()
+        if self.setup_error:
+            return None, "not run", self.setup_error, float("nan")
+        self.fresh += 1
+        if not self.start():
+            return None, "not run", self.setup_error, float("nan")
+        try:
+            return self.call(trial, seconds, gyr, acc, mag)
+        finally:
+            self.close()
 
     def close(self):
         if self.box is not None:
@@ -825,13 +992,16 @@ class StudentResult:
 
 
 def check_causality(runner, trial, q, seconds, rng):
-    """(True/False, message): is ``estimate``'s output up to k unchanged when every sample after k changes?
-    (For a 6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
+    """(True/False/None, message): is ``estimate``'s output up to k unchanged when every sample after k changes, for
+    three secret k (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``), and is its output on the samples up to
+    another secret k alone the first k+1 rows of ``q``, its output on the whole trial? Each of these calls runs in
+    a box of its own (:meth:`Runner.call_fresh`), so that no call can replay what an earlier one returned. (For a
+    6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
     n = len(trial)
     sensors = (trial.gyr, trial.acc) if runner.sensors == "6D" else (trial.gyr, trial.acc, trial.mag)
-    for k in causal_ks(n):
+    for k in causal_ks(n, rng):
         noisy = [perturb_future(x, k, scale, rng) for x, scale in zip(sensors, CAUSAL_NOISE)]
-        q2, status, why, _ = runner.call(trial, seconds, *noisy)
+        q2, status, why, _ = runner.call_fresh(trial, seconds, *noisy)
         if q2 is None:
             return None, f"not checked: with later samples changed, estimate {why} ({status})"
         change = float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
@@ -839,7 +1009,22 @@ def check_causality(runner, trial, q, seconds, rng):
             return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
                            f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
                            "seed)")
-    return True, f"causal (checked on one trial at k = {', '.join(map(str, causal_ks(n)))})"
+    k = prefix_k(n, rng)
+    q2, status, why, _ = runner.call_fresh(trial, seconds, *(x[:k + 1] for x in sensors))
+    if q2 is None:
+        return None, f"not checked: given the samples up to a k alone, estimate {why} ({status})"
+    change = float(np.max(np.abs(q2 - q[:k + 1])))
+    if change > CAUSAL_TOL:
+        return False, (f"NOT causal: given only the samples up to k = {k} of {trial.name}, its estimate up to k "
+                       f"differs by {change:.2g} from its estimate on the whole trial (a filter may use no later "
+                       "sample, nor the length of the data)")
+    return True, ("causal (checked on one trial: the estimate up to k unchanged when the samples after k change, at "
+                  "three secret k, and when they are left out, at another; each call in a fresh box)")
+
+
+def prefix_k(n, rng):
+    """The secret k of the prefix check for a trial of ``n`` samples: anywhere after its first tenth."""
+    return int(rng.integers(max(1, n // 10), n - 1))
 
 
 def causality_trial(seed, n, rng=None):
@@ -849,11 +1034,16 @@ def causality_trial(seed, n, rng=None):
 
 
 def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0, seconds_per_sample=SECONDS_PER_SAMPLE,
-                     min_seconds=MIN_SECONDS, limits=None):
-    """Grade one notebook on the disguised trials ``scored``; every number is computed here."""
+                     min_seconds=MIN_SECONDS, limits=None, cleared=False, model=None):
+    """Grade one notebook on the disguised trials ``scored``; every number is computed here.
+
+    ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
+    reference (it is then a note, not a cheat). ``model``: the lab's own program (:func:`model_program` of
+    ``course`` by default), what an honest answer may share with the library."""
     res = StudentResult(name)
     cells = program_of(nb)
     res.cheats += scan(cells)
+    res.cheats += library_copies(cells, model_program(course) if model is None else model)
     res.sensors, why = declared_sensors(cells)
     metric = SENSORS[res.sensors]
     if why:
@@ -865,7 +1055,8 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
     if size > EMBED_CHARS:
         res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
                          "published reference, say)?")
-    runner = Runner([src for _, src in cells], course, scratch, slot, limits, sensors=res.sensors)
+    runner = Runner([src for _, src in cells], course, scratch, slot,
+                    box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors)
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
     try:
@@ -902,15 +1093,46 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
             res.causal_message = "not checked: estimate ran on no trial"
         if runner.cell_errors:
             res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
-        if runner.starts > 1:
-            res.notes.append(f"the box was started {runner.starts} times (after calls that ran over or ended it)")
+        if runner.restarts:
+            res.notes.append(f"the box was started again {runner.restarts} times (after calls that ran over or "
+                             "ended it)")
     finally:
         runner.close()
+    close = implausibly_close(res, refs)
+    if close:
+        if cleared:
+            res.notes.append(f"cleared by the instructor, who read the code: {close}")
+        else:
+            res.cheats.append(("detects the trial", f"{close} -- review the code: the instructor may clear this "
+                                                     "after reading it"))
     res.cheats = list(dict.fromkeys(res.cheats))
     madgwick, vqf = _published_means(refs, res.sensors)
     gated = bool(res.cheats) or res.causal is False
     res.points = rubric_points(mean_scored(res.trials), res.all_ran, gated, madgwick, vqf)
     return res
+
+
+def implausibly_close(res, refs):
+    """The evidence (text) when ``res``'s scored RMSE is below :data:`IMPLAUSIBLE` x the best reference filter's
+    on at least half of the trials it ran; "" otherwise. The best on a trial is the lowest scored RMSE there of every
+    reference filter of the student's sensor set (VQF, Madgwick and each library filter that ran: ``refs['_all']``).
+    No honest filter is that far ahead of all of them on most trials; one that recognises each trial and returns
+    its published reference, turned into the disguised frame, is."""
+    best = {}
+    for ref in refs["_all"].values():
+        if ref.sensors == res.sensors:
+            for r in ref.trials:
+                best[r.trial] = min(best.get(r.trial, np.inf), r.counted_deg)
+    ran = [r for r in res.trials if r.status == "ok" and r.trial in best]
+    close = [r for r in ran if r.counted_deg < IMPLAUSIBLE * best[r.trial]]
+    if not ran or 2 * len(close) < len(ran):
+        return ""
+    what = SENSORS[res.sensors][:-4]
+    mine = float(np.mean([r.counted_deg for r in close]))
+    theirs = float(np.mean([best[r.trial] for r in close]))
+    return (f"{IMPLAUSIBLY_CLOSE}: its {what} RMSE is below {IMPLAUSIBLE:g} x the best reference filter's on "
+            f"{len(close)} of the {len(ran)} trials it ran (there {mine:.2f} deg against {theirs:.2f} deg on "
+            "average)")
 
 
 def _declared_outside(nb, cells):
@@ -1142,10 +1364,13 @@ def feedback(res, refs, folder, label=""):
 # ----------------------------------------------------------------------------------------------------------------
 
 def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed=0, label="", progress=True,
-                seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
+                seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None, cleared=()):
     """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
     leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
-    :func:`cached_references`)."""
+    :func:`cached_references`). ``cleared``: students whose estimate :data:`IMPLAUSIBLY_CLOSE` to the reference
+    the instructor has cleared after reading their code."""
+    cleared = set(cleared)
+    model = model_program(course)
     scratch = Path(tempfile.mkdtemp(prefix="capstone-"))
     os.chmod(scratch, 0o755)
     try:
@@ -1169,7 +1394,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                         return StudentResult(student, error=nb, points=rubric_points(0, False, True, 0, 0))
                     return grade_submission(student, nb, scored, refs, course, scratch, slot=slot, seed=seed,
                                             seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
-                                            limits=limits)
+                                            limits=limits, cleared=student in cleared, model=model)
                 finally:
                     free.put(slot)
 
@@ -1252,6 +1477,9 @@ def main(argv=None):
     g.add_argument("--stand-in", type=int, nargs="+", metavar="N",
                    help="grade on these SHIPPED trials instead (a dry run; labelled a stand-in everywhere)")
     g.add_argument("--max-samples", type=int, help="with --stand-in: only the first N samples of each trial")
+    g.add_argument("--cleared", action="append", default=[], metavar="STUDENT",
+                   help=f"a student whose estimate was named '{IMPLAUSIBLY_CLOSE}' and whose code you have read and "
+                        "trust: graded without that flag (a note says it was cleared); repeatable")
     a = ap.parse_args(argv)
     if a.command == "fetch":
         return fetch(progress=not a.no_progress)
@@ -1280,12 +1508,17 @@ def main(argv=None):
     if not submissions:
         print(f"no submissions: put them in submitted/<student>/{LAB}/{LAB}.ipynb", file=sys.stderr)
         return 2
+    unknown = sorted(set(a.cleared) - set(submissions))
+    if unknown:
+        print(f"--cleared names no submission graded here: {', '.join(unknown)}", file=sys.stderr)
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps({"seed": seed, "trials": [t.name for t in trials],
                                               "lengths": [len(t) for t in trials], "stand_in": bool(a.stand_in)},
                                              indent=1))
     scored = disguise(trials, seed)
-    grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label)
+    grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label,
+                cleared=a.cleared)
     print(f"leaderboard: {out / 'leaderboard.html'} (and .csv); feedback: {out / 'feedback'}/<student>/")
     return 0
 

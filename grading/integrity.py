@@ -80,8 +80,8 @@ IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input
                  "_showtraceback", "showsyntaxerror", "InteractiveTB", "SyntaxTB", "user_ns", "user_global_ns",
                  "set_hook", "prefilter_manager", "display_pub", "transform_cell", "run_cell_async", "do_execute",
                  "dispatch_shell", "shell_handlers", "display_trap", "displayhook"}
-SYS_ATTRS = {"modules", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks", "path_importer_cache",
-             "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
+SYS_ATTRS = {"modules", "path", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks",
+             "path_importer_cache", "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
              "breakpointhook", "audit"}
 MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
     "builtins": "builtins", "ctypes": "ctypes", "cffi": "ctypes", "signal": "signal", "subprocess": "process",
@@ -233,6 +233,16 @@ class Source:
                 elif isinstance(node, ast.Assign):
                     bound |= {n.id for t in node.targets for n in ast.walk(t) if isinstance(n, ast.Name)}
         self.protected = self.imported | (bound & read)
+
+    @classmethod
+    def plain(cls, lab=""):
+        """The Source of code scanned on its own, without a lab's notebook: no locked cell, no test, no exercise."""
+        self = cls.__new__(cls)
+        self.lab, self.cells, self.forbid = lab, {}, {}
+        self.provided, self.provided_lines, self.provided_names, self.protected = set(), set(), set(), set()
+        self.imported = set(MODULE_NAMES)
+        self.import_of = {"np": "numpy", "plt": "matplotlib.pyplot", "sp": "sympy"}
+        return self
 
     @property
     def all_forbidden(self):
@@ -497,6 +507,40 @@ def _token_scan(source, forbidden):
         elif word in forbidden:
             flags.append((line, "reference", f"`{word}`, a reference function, in a cell that does not parse"))
     return flags
+
+
+# The part of the interpreter that decides what ``import`` finds: code that reaches it can undo a box's hiding of a
+# package (grading/capstone.py names it a cheat there, where nothing honest needs it).
+IMPORT_SYSTEM = {"modules", "path", "meta_path", "path_hooks", "path_importer_cache"}
+TAMPER_KINDS = ("exec", "builtins")
+
+
+class _Tampering(_Visitor):
+    """The scanner, keeping only what reaches around imports: :data:`TAMPER_KINDS`, and ``sys-hook`` on
+    :data:`IMPORT_SYSTEM` (``sys.path``, ``from sys import modules``)."""
+
+    def flag(self, node, kind, why=None):
+        names = {node.attr} if isinstance(node, ast.Attribute) else \
+            {a.name for a in node.names} if isinstance(node, ast.ImportFrom) else set()
+        if kind in TAMPER_KINDS or (kind == "sys-hook" and names & IMPORT_SYSTEM):
+            super().flag(node, kind, why or WHY[kind])
+
+
+def tampering(source):
+    """Flags ``(line, kind, why)`` of code that reaches around Python's import system or builtins: importlib,
+    ``__import__``, ``exec``/``eval``/``compile``, ``runpy``/``marshal``, the ``builtins`` module or
+    ``__builtins__``, ``sys.path``, ``sys.modules`` and the import hooks -- the same detection as the report's
+    (names written in the code: a name built at run time is not seen). A cell that does not parse is scanned word by
+    word for the same names."""
+    code, _ = _strip_magics(source)
+    try:
+        tree = ast.parse(code)
+    except SyntaxError:
+        words = _token_scan(code, set())
+        return [(line, kind, why) for line, kind, why in words if kind in TAMPER_KINDS]
+    visitor = _Tampering(Source.plain(), set(), None, False)
+    visitor.visit(tree)
+    return sorted(set(visitor.flags))
 
 
 def scan_source(source, src, exercise=None, added=False):

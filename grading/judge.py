@@ -13,7 +13,8 @@ the student's value, and gets back plain data, decoded strictly.  So
 * the reference answer of the exercise under test is not in the student's process at all: each test gets a box of
   its own, holding a copy of the library in which every function the exercise forbids in the table of exercises
   (:mod:`fusionlab.checks.exercises`: the reference first) is a stub, source included; filterpy's functions are
-  stubbed the same way in a copy that shadows the installed package, and ``ahrs`` is absent. C functions
+  stubbed the same way in a copy that shadows the installed package, and ``ahrs`` is absent (the installed copies
+  of both are hidden in the box, so that taking the shadow off ``sys.path`` finds nothing). C functions
   (``numpy.arctan2``) cannot be taken out; the integrity report flags their use by name.
 
 Values a test reads from a *provided* cell of the notebook (the lab's data, ``still``, ``q_demo``) are not taken
@@ -283,6 +284,12 @@ def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES,
 # ---------------------------------------------------------------------------------------------------------------
 # The box: a sandboxed process that runs the student's cells and answers calls
 # ---------------------------------------------------------------------------------------------------------------
+
+def shadowed(shadow: Path):
+    """The installed copies of the packages that the folder ``shadow`` replaces (:func:`strip_packages`): the box
+    hides them (:func:`grading.sandbox.package_paths`), so that taking the shadow off ``sys.path`` reaches nothing."""
+    return sandbox.package_paths(sorted(p.name for p in Path(shadow).iterdir() if p.is_dir()))
+
 
 class BoxDied(RuntimeError):
     pass
@@ -565,7 +572,7 @@ class Lab:
         root = self.box_root(gid)
         return sandbox.bwrap_command(["python", str(BOX)], course=self.course, lab=self.lab,
                                      lib=root / "lib", shadow=root / "shadow", work=work,
-                                     limits=self.limits, uid=uid)
+                                     limits=self.limits, uid=uid, hide=shadowed(root / "shadow"))
 
     # -- values of the provided cells, from the model solution ------------------------------------------------------
     def reference_values(self, gid, slot=0):

@@ -6,8 +6,9 @@ scores -- stays outside.  In the box
 
 * the file system holds only the system (``/usr``, a few files of ``/etc``), the Python installation, the lab's copy
   of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
-  course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path), a private
-  folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
+  course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path; the installed
+  copies they replace covered by empty folders, :func:`package_paths`, so that no change of ``sys.path`` reaches
+  them), a private folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
   the student's copy; writable, in memory, size-limited, seeded with the submission's files) and a private ``/tmp``
   (the same): nothing a box writes reaches the grader's disk;
 * solutions, submissions, classmates, the gradebook, the real library and the grading code do not exist;
@@ -214,14 +215,33 @@ def claimed_slots(n):
             os.close(fd)
 
 
-def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True):
+def package_paths(names):
+    """Every copy of the packages ``names`` on the grader's ``sys.path``: each package's folder, or the file of a
+    single-file module (``name.py``, an extension module); none is imported. Names not found are left out."""
+    from importlib.machinery import all_suffixes
+    out = set()
+    for entry in sys.path:
+        entry = os.path.realpath(entry or ".")
+        if not os.path.isdir(entry):
+            continue
+        for name in names:
+            if os.path.isdir(os.path.join(entry, name)):
+                out.add(os.path.join(entry, name))
+            out.update(os.path.join(entry, f"{name}{suffix}") for suffix in all_suffixes()
+                       if os.path.isfile(os.path.join(entry, f"{name}{suffix}")))
+    return sorted(out)
+
+
+def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True, hide=()):
     """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
 
     ``lib`` is the library folder to mount where the course's ``lib/`` is; ``shadow`` a folder of packages put first
     on the path; ``work`` the private folder (see :func:`private_folder`); ``uid`` the user to run as (root only).
     ``command[0]`` may be ``"python"``: the sandbox's own interpreter. With ``data=False`` the box gets no data at
     all: neither the course's ``data/`` nor a BROAD mirror or cache (the capstone's boxes, which see only the sensor
-    data the judge sends).
+    data the judge sends). ``hide`` lists folders and files of the mounted Python installation that the box must
+    not reach (:func:`package_paths`: the real packages that ``shadow`` replaces): each folder is covered by an
+    empty read-only one and each file by an empty file, so that taking the shadow off ``sys.path`` finds nothing.
     """
     course = os.path.realpath(course)
     limits = {**DEFAULT_LIMITS, **(limits or {})}
@@ -238,6 +258,12 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
     args += ["--proc", "/proc", "--dev", "/dev",
              "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", "/tmp"]
     args += _system_binds() + _python_binds() + data_args
+    for path in hide:               # after the installation's mounts, which they cover
+        path = os.path.realpath(path)
+        if os.path.isdir(path):
+            args += ["--perms", "0555", "--tmpfs", path, "--remount-ro", path]
+        elif os.path.exists(path):
+            args += ["--ro-bind", "/dev/null", path]
     args += ["--ro-bind", os.path.realpath(lib), os.path.join(course, "lib")]
     if data and os.path.isdir(os.path.join(course, "data")):
         args += ["--ro-bind", os.path.join(course, "data"), os.path.join(course, "data")]

@@ -53,40 +53,58 @@ class Pair:
     lines_b: str
 
 
-@functools.lru_cache(maxsize=4096)
-def _fingerprint(code, boilerplate=()):
-    from copydetect import CodeFingerprint
+@functools.lru_cache(maxsize=64)
+def _boilerplate(boilerplate):
+    """The fingerprints of the code ``boilerplate`` (a tuple of texts), made once per process; each once (copydetect
+    takes them as unique)."""
     from copydetect.utils import filter_code, get_document_fingerprints
 
     hashes = []
     for text in boilerplate:
         filtered, _ = filter_code(text, "b.py", "python")
         hashes += list(get_document_fingerprints(filtered, K, WINDOW, [])[0])
-    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=hashes, fp=io.StringIO(code), language="python")
+    return tuple(sorted(set(hashes)))
+
+
+@functools.lru_cache(maxsize=4096)
+def _fingerprint(code, boilerplate=()):
+    from copydetect import CodeFingerprint
+
+    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=list(_boilerplate(boilerplate)), fp=io.StringIO(code),
+                           language="python")
+
+
+def _line_numbers(code, slices):
+    """The lines (0-based) of ``code`` that the copied character ranges ``slices`` touch."""
+    if len(slices) == 0 or len(slices[0]) == 0:
+        return []
+    starts = [code.count("\n", 0, int(s)) for s in slices[0]]
+    ends = [code.count("\n", 0, int(e)) for e in slices[1]]
+    n = code.count("\n") + 1
+    return sorted({i for s, e in zip(starts, ends) for i in range(s, e + 1) if i < n})
 
 
 def _lines(code, slices):
     """The lines of ``code`` that the copied character ranges ``slices`` touch, as text."""
-    if len(slices) == 0 or len(slices[0]) == 0:
-        return ""
-    starts = [code.count("\n", 0, int(s)) for s in slices[0]]
-    ends = [code.count("\n", 0, int(e)) for e in slices[1]]
     lines = code.splitlines()
-    keep = sorted({i for s, e in zip(starts, ends) for i in range(s, e + 1) if i < len(lines)})
-    return "\n".join(lines[i] for i in keep)
+    return "\n".join(lines[i] for i in _line_numbers(code, slices) if i < len(lines))
 
 
-def compare(a_code, b_code, boilerplate=(), b_boilerplate=None):
+def compare(a_code, b_code, boilerplate=(), b_boilerplate=None, numbers=False):
     """(share of ``a_code`` covered, matched tokens, lines of a, lines of b, share of ``b_code`` covered) for two
     pieces of code; ``boilerplate``
-    (code whose fingerprints do not count) applies to both unless ``b_boilerplate`` is given for b."""
+    (code whose fingerprints do not count) applies to both unless ``b_boilerplate`` is given for b. With
+    ``numbers`` the lines are given as lists of their numbers (1-based) instead of their text."""
     from copydetect import compare_files
 
     fa = _fingerprint(a_code, tuple(boilerplate))
     fb = _fingerprint(b_code, tuple(boilerplate if b_boilerplate is None else b_boilerplate))
     tokens, (share_a, share_b), (slices_a, slices_b) = compare_files(fa, fb)
-    return (float(share_a), int(tokens), _lines(fa.raw_code, slices_a), _lines(fb.raw_code, slices_b),
-            float(share_b))
+    if numbers:
+        la, lb = ([i + 1 for i in _line_numbers(f.raw_code, sl)] for f, sl in ((fa, slices_a), (fb, slices_b)))
+    else:
+        la, lb = _lines(fa.raw_code, slices_a), _lines(fb.raw_code, slices_b)
+    return float(share_a), int(tokens), la, lb, float(share_b)
 
 
 def library_functions(folder=LIBRARY):

@@ -18,7 +18,7 @@ import nbformat
 import numpy as np
 import pytest
 
-from grading import capstone
+from grading import capstone, sandbox
 from fusionlab import datasets
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -121,8 +121,29 @@ def estimate(gyr, acc, mag, fs):
         raise ValueError("a 9D filter was given no magnetometer")
     return _good(gyr, acc, mag, fs)
 '''
+CACHES = NONCAUSAL + '''
+
+_noncausal = estimate
+_seen = []
+
+
+def estimate(gyr, acc, mag, fs):
+    # the non-causal filter, with the output of an earlier call replayed wherever a later call's data agree with it:
+    # the causality check's calls would see the unchanged past only if they ran in the same process
+    x = np.hstack([np.asarray(gyr, float), np.asarray(acc, float)] + ([] if mag is None else [np.asarray(mag, float)]))
+    q = np.array(_noncausal(gyr, acc, mag, fs))
+    for x0, q0 in _seen:
+        if x0.shape == x.shape and (x0[0] == x[0]).all():
+            d = np.flatnonzero((x0 != x).any(axis=1))
+            d = int(d[0]) if len(d) else len(x)
+            q[:d] = q0[:d]
+            return q
+    _seen.append((x, q))
+    return q
+'''
 CLASS = {"starter": _filter("starter"), "good": _filter("good"), "noncausal": NONCAUSAL, "calls_vqf": CALLS_VQF,
-         "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3, "six_d": SIX_D, "declares_badly": DECLARES_BADLY}
+         "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3, "six_d": SIX_D, "declares_badly": DECLARES_BADLY,
+         "caches": CACHES}
 NINE_D = [name for name in CLASS if name != "six_d"] + ["unreadable"]     # the 9D students of the graded class
 
 
@@ -189,6 +210,31 @@ def test_a_filter_that_reads_later_samples_is_caught_and_scores_nothing(graded):
     would = capstone.rubric_points(capstone.mean_total(res.trials), res.all_ran, False,
                                    capstone.mean_total(refs["madgwick9"].trials), capstone.mean_total(refs["vqf9"].trials))
     assert sum(would.values()) >= 2
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_replays_an_earlier_call_is_caught_in_a_fresh_box(graded):
+    """The causality check's calls run each in a box of its own: the unperturbed call is not there to replay."""
+    res = graded[0]["caches"]
+    assert res.all_ran and res.causal is False and "NOT causal" in res.causal_message, res.causal_message
+    assert res.total_points == 0 and res.cheats == []
+
+
+@pytest.mark.slow
+@needs_box
+def test_honest_filters_are_not_implausibly_close_to_the_reference(graded):
+    """The plausibility gate against the stand-in's numbers: the solution's filter (the good one) and the starter
+    are nowhere near half the best reference filter's RMSE on most trials (the library's dcm_ahrs, about 1.9 deg)."""
+    results, refs, _ = graded
+    for name in ("good", "starter", "six_d"):
+        res = results[name]
+        assert capstone.implausibly_close(res, refs) == "", name
+        best = [min(r.counted_deg for ref in refs["_all"].values() if ref.sensors == res.sensors
+                    for r in ref.trials if r.trial == mine.trial) for mine in res.trials]
+        ratios = [mine.counted_deg / b for mine, b in zip(res.trials, best)]
+        assert sum(x < capstone.IMPLAUSIBLE for x in ratios) < len(ratios) / 2, (name, ratios)
+        print(f"{name}: scored RMSE / best reference's, per trial: {[round(x, 2) for x in ratios]}")
 
 
 @pytest.mark.slow
@@ -486,6 +532,15 @@ def test_the_library_hash_changes_with_a_source_file(scored, tmp_path, monkeypat
     assert capstone.references_key(scored, SEED)["code"] != key["code"]
 
 
+def test_clearing_a_student_who_is_not_graded_is_refused_before_anything_is_written(tmp_path):
+    folder = tmp_path / "submitted" / "ann" / capstone.LAB
+    folder.mkdir(parents=True)
+    nbformat.write(notebook(CLASS["good"]), folder / f"{capstone.LAB}.ipynb")
+    argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(tmp_path / "out"),
+            "--stand-in", "7", "--max-samples", str(MAX_SAMPLES), "--cleared", "bob"]
+    assert capstone.main(argv) == 2 and not (tmp_path / "out").exists()
+
+
 def test_the_saved_seed_is_reused_only_for_the_same_trials(tmp_path):
     trials = capstone.stand_in([7], MAX_SAMPLES)
     run = tmp_path / "run.json"
@@ -531,6 +586,185 @@ def test_the_code_scan_names_imports_of_filters_and_file_reads():
     # the setup cell imports the library's modules for tuning; using them is still found
     assert capstone.scan([("imports", "from fusionlab import bench, datasets")]) == []
     assert [k for k, _ in capstone.scan([("imports", "import ahrs")])] == ["calls a reference filter"]
+
+
+@pytest.mark.parametrize("code", ["import io\nx = io.FileIO('/etc/hostname').read()",
+                                  "import os\nfd = os.open('/etc/hostname', os.O_RDONLY)",
+                                  "import os\nx = os.read(3, 100)", "import os\nf = os.fdopen(3)",
+                                  "from io import FileIO as F", "from os import read as r"])
+def test_the_code_scan_names_the_lower_level_file_reads(code):
+    assert [k for k, _ in capstone.scan([("filter", code)])] == ["reads files"], code
+
+
+@pytest.mark.parametrize("code, why", [
+    ("import sys\nsys.path[:] = [p for p in sys.path if 'shadow' not in p]", "sys.path"),
+    ("import sys\ndel sys.modules['vqf']", "sys.modules"),
+    ("import importlib\nV = importlib.import_module('v' + 'qf')", "importlib"),
+    ("V = __import__('v' + 'qf')", "__import__"),
+    ("import builtins\nf = getattr(builtins, 'op' + 'en')", "builtins"),
+    ("exec('import v' + 'qf')", "exec"),
+    ("x = eval('1 + 1')", "eval"),
+])
+def test_the_code_scan_names_code_that_reaches_around_the_imports(code, why):
+    found = capstone.scan([("filter", f"def estimate(gyr, acc, mag, fs):\n    pass\n{code}")])
+    assert found and {k for k, _ in found} == {"tampers with imports"} and why in found[0][1], found
+
+
+def test_honest_code_does_not_tamper_with_imports():
+    nb = nbformat.read(LAB_NOTEBOOK, as_version=4)       # the lab's setup cell (a magic, inspect, checks) and answer
+    cells = capstone.program_of(nb) + [("filter", c) for c in CLASS.values()]
+    cells.append(("filter", "import sys\nprint('x', file=sys.stderr)\nimport re\nre.compile('a')"))
+    assert [k for k, _ in capstone.scan(cells) if k == "tampers with imports"] == []
+
+
+def test_a_pasted_library_filter_is_named_with_its_lines_and_honest_code_is_not(scored, monkeypatch):
+    import fusionlab
+    src = (Path(fusionlab.__file__).parent / "dcm_filter.py").read_text()
+    src = src.replace("from . import", "from fusionlab import").replace("acc_sigma", "acc_sd")   # pasted, one change
+    pasted = src + "\n\ndef estimate(gyr, acc, mag, fs):\n    return run_ahrs(gyr, acc, mag, fs)['q']\n"
+    model = capstone.model_program(ROOT)
+    assert "def starter_estimate" in model
+    [(kind, why)] = capstone.library_copies(capstone.program_of(notebook(pasted)), model)
+    assert kind == "copies the library's filter" and why.startswith("dcm_filter.run_ahrs: lines ") and "cell 2" in why
+    first, last = (int(x) for x in why.split("lines ")[1].split(" ")[0].split("-"))
+    assert pasted.splitlines()[first - 1:last] and "def run_ahrs" in "\n".join(pasted.splitlines()[first - 1:last])
+    for name, code in CLASS.items():                  # the starter, the solution's filter and the rest: their own
+        assert capstone.library_copies(capstone.program_of(notebook(code)), model) == [], name
+    assert capstone.library_copies(capstone.program_of(nbformat.read(LAB_NOTEBOOK, as_version=4)), model) == []
+    # the rotation helpers the rules allow are never looked for, however much of them is pasted
+    rot = (Path(fusionlab.__file__).parent / "rotations.py").read_text()
+    assert capstone.library_copies([("filter", rot)], model) == []
+    res = _grade_in_process(monkeypatch, scored[:1], lambda: lambda gyr, acc, mag, fs: _tilt(acc), code=pasted)
+    assert [k for k, _ in res.cheats] == ["copies the library's filter"] and res.total_points == 0
+
+
+def test_the_boxs_cpu_limit_is_made_from_the_budgets():
+    """31 trials of 186 s have budgets of 26.6 s each, 825 s in all: more than the sandbox's default 600 CPU s."""
+    trials = [np.zeros(53240)] * 31
+    budgets = sum(capstone.budget_seconds(len(t)) for t in trials)
+    limits = capstone.box_limits(trials)
+    assert budgets > sandbox.DEFAULT_LIMITS["cpu_s"]
+    assert limits["cpu_s"] >= budgets + capstone.SETUP_SECONDS
+    assert limits["memory_bytes"] == sandbox.DEFAULT_LIMITS["memory_bytes"]
+    assert capstone.box_limits(trials[:1])["cpu_s"] == sandbox.DEFAULT_LIMITS["cpu_s"]     # never below the default
+    assert capstone.box_limits(trials, limits={"cpu_s": 5})["cpu_s"] == 5                  # as the caller says
+
+
+class _InProcess:
+    """capstone.Runner without a box, for the trusted side's logic: ``make()`` gives the student's ``estimate``,
+    made again for every fresh box (nothing survives); the limits the grader asked for are kept in ``made``."""
+    made = []
+
+    def __init__(self, make, cells, course, scratch, slot=0, limits=None, sensors="9D"):
+        self.make, self.sensors, self.limits = make, sensors, limits
+        self.estimate, self.cell_errors, self.restarts, self.fresh = make(), {}, 0, 0
+        _InProcess.made.append(self)
+
+    def call(self, trial, seconds, gyr=None, acc=None, mag=None):
+        args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
+                None if self.sensors == "6D" else trial.mag if mag is None else mag]
+        q = capstone.as_quaternions(self.estimate(*args, trial.fs), len(args[0]))
+        return q, "ok", "", 0.01
+
+    def call_fresh(self, *args):
+        self.fresh += 1
+        self.estimate = self.make()
+        return self.call(*args)
+
+    def close(self):
+        pass
+
+
+def _grade_in_process(monkeypatch, scored, make, code="def estimate(gyr, acc, mag, fs):\n    pass\n", **kw):
+    refs = _fake_references([])(scored)                # every reference an estimate that never moves: tens of deg
+    monkeypatch.setattr(capstone, "Runner", lambda *a, **k: _InProcess(make, *a, **k))
+    return capstone.grade_submission("x", notebook(code), scored, refs, ROOT, None, seed=SEED, model="", **kw)
+
+
+def _tilt(acc):
+    """Per sample, the shortest turn taking the measured "up" onto the ENU up: causal (it has no memory)."""
+    a = np.asarray(acc, dtype=float) / np.linalg.norm(acc, axis=1, keepdims=True)
+    q = np.column_stack([1 + a[:, 2], a[:, 1], -a[:, 0], np.zeros(len(a))])     # [1 + a.z, a x z]
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def test_an_estimate_implausibly_close_to_the_reference_is_named_and_may_be_cleared(scored, monkeypatch):
+    """A replay: the trial recognised, its published reference returned turned into the disguised frame (here the
+    disguised reference itself, as the best replay would give it)."""
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            t = next(t for t in scored if np.array_equal(t.gyr[0], gyr[0]))
+            return np.where(np.isnan(t.quat_ref), [1.0, 0, 0, 0], t.quat_ref)[:len(gyr)]
+        return estimate
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert res.causal is True and res.all_ran
+    [(kind, why)] = res.cheats
+    assert kind == "detects the trial" and why.startswith(capstone.IMPLAUSIBLY_CLOSE)
+    assert "on 3 of the 3 trials" in why and "review the code" in why and res.total_points == 0
+    cleared = _grade_in_process(monkeypatch, scored, make, cleared=True)
+    assert cleared.cheats == [] and cleared.total_points == capstone.MAX_POINTS
+    assert any(n.startswith("cleared by the instructor") for n in cleared.notes)
+    # the same estimate a little off on all but one trial: not implausible there, not named
+    fine = capstone.StudentResult("y", trials=[dataclasses.replace(r, counted_deg=r.counted_deg + (
+        0 if i == 0 else 100)) for i, r in enumerate(res.trials)])
+    assert capstone.implausibly_close(fine, _fake_references([])(scored)) == ""
+    assert "--cleared" in capstone.CHEATS["detects the trial"]
+
+
+def test_a_filter_that_reads_the_length_of_its_data_fails_the_prefix_check(scored, monkeypatch):
+    """Causal sample by sample when later samples change (the length stays), but not when they are left out."""
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            q = _tilt(acc)
+            a = 1e-4 * len(gyr)                         # a turn about up that depends on how long the data are
+            return rotations.quat_multiply([np.cos(a), 0, 0, np.sin(a)], q)
+        return estimate
+    from fusionlab import rotations
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert res.causal is False and "given only the samples up to k" in res.causal_message, res.causal_message
+    assert res.total_points == 0
+
+
+def test_look_ahead_between_the_public_ks_is_caught_by_the_secret_ones(scored, monkeypatch):
+    """The accelerometer smoothed by a centred window inside each segment between the fixed ks (causal_ks(n)):
+    what the check at those ks cannot see; the grader's ks are drawn in secret."""
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            from scipy.ndimage import uniform_filter1d
+
+            from fusionlab import capstone as rules
+            acc = np.asarray(acc, dtype=float).copy()
+            edges = [0] + [k + 1 for k in rules.causal_ks(len(acc))] + [len(acc)]
+            for a, b in zip(edges[:-1], edges[1:]):
+                acc[a:b] = uniform_filter1d(acc[a:b], 51, axis=0, mode="nearest")
+            return _tilt(acc)
+        return estimate
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert res.causal is False and "changing the samples after k" in res.causal_message, res.causal_message
+
+
+def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(scored, monkeypatch):
+    _InProcess.made.clear()
+    res = _grade_in_process(monkeypatch, scored, lambda: lambda gyr, acc, mag, fs: _tilt(acc), min_seconds=5.0)
+    assert res.causal is True and "each call in a fresh box" in res.causal_message
+    [runner] = _InProcess.made
+    assert runner.fresh == 4                                 # three changed futures and one prefix, each fresh
+    assert runner.limits == capstone.box_limits(scored, capstone.SECONDS_PER_SAMPLE, 5.0)
+
+
+def test_the_disguise_adds_fresh_noise_so_no_raw_sample_names_the_trial(scored):
+    """The norms of the samples survive a turn: without the noise, those of the first samples were found again in
+    the published trial, to the last digit, at its secret start."""
+    for s, n in zip(scored, STAND_IN):
+        plain = capstone.stand_in([n], MAX_SAMPLES)[0]
+        head = int(capstone.MAX_CROP_SECONDS * plain.fs) + 64
+        for x, y, sigma in ((s.acc, plain.acc, capstone.DISGUISE_NOISE[1]), (s.mag, plain.mag,
+                                                                            capstone.DISGUISE_NOISE[2])):
+            mine, theirs = np.linalg.norm(x[:32], axis=1), np.linalg.norm(y[:head], axis=1)
+            gaps = [np.abs(theirs[k:k + 32] - mine) for k in range(head - 32)]
+            best = min(range(len(gaps)), key=lambda k: np.mean(gaps[k] ** 2))
+            assert np.max(gaps[best]) > 1e-3, "a raw sample names the trial"
+            assert np.std(theirs[best:best + 32] - mine) == pytest.approx(sigma, rel=0.4)     # the stated noise
 
 
 def test_the_program_is_the_setup_and_answer_cells_without_the_tuning_cell():
@@ -618,7 +852,7 @@ def test_the_leaderboard_renders_in_chromium(graded):
         page.goto((out / "leaderboard.html").as_uri())
         rows = page.locator("table").first.locator("tr")
         assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
-        assert page.locator("tr.gated").count() == 2                       # the non-causal one and the VQF caller
+        assert page.locator("tr.gated").count() == 3       # the non-causal one, the one that caches, the VQF caller
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
         page.goto((out / "feedback" / "good" / "capstone.html").as_uri())
@@ -629,7 +863,8 @@ def test_the_leaderboard_renders_in_chromium(graded):
 @needs_box
 def test_the_box_sees_no_data_and_no_reference_filter(scored, tmp_path):
     """What a student's estimate can reach in the box, asked from inside: no BROAD file anywhere (the course's
-    data/, the cache, a mirror), no vqf, the library's filters stubs; only the call's sensor data."""
+    data/, the cache, a mirror), no vqf (not even with the shadow taken off sys.path: the installed packages are
+    hidden), the library's filters stubs; only the call's sensor data."""
     probe = f'''
 import os, numpy as np
 
@@ -647,6 +882,19 @@ def estimate(gyr, acc, mag, fs):
         seen.append("estimators.run")
     except NotImplementedError:
         pass
+    import importlib, sys
+    shadowed = list(sys.path)
+    sys.path[:] = [p for p in sys.path if "shadow" not in p]      # the shadow off the path: the installed packages?
+    for name in ("vqf", "ahrs", "filterpy"):
+        for m in [m for m in sys.modules if m.split(".")[0] == name]:
+            del sys.modules[m]
+        try:
+            module = importlib.import_module(name)
+            if getattr(module, "__file__", None) or [p for p in module.__path__ if os.listdir(p)]:
+                seen.append(f"{{name}} at {{module.__path__}}")
+        except ImportError:
+            pass
+    sys.path[:] = shadowed
     q = np.zeros((len(gyr), 4))
     q[:, 0] = 1.0 if not seen else 0.0
     q[:, 1] = 0.0 if not seen else 1.0
@@ -659,6 +907,8 @@ def estimate(gyr, acc, mag, fs):
         runner.close()
     assert status == "ok", why
     assert q[0].tolist() == [1.0, 0.0, 0.0, 0.0], "the box can see data or a reference filter"
+    assert capstone.Runner([probe], ROOT, tmp_path).hide and all(
+        "/vqf" in p or "/ahrs" in p or "/filterpy" in p or "imufusion" in p for p in runner.hide)
 
 
 @pytest.mark.slow

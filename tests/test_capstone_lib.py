@@ -41,6 +41,69 @@ def test_the_rules_add_up():
     assert capstone.causal_ks(1000) == [3, 200, 501] and capstone.causal_ks(6) == [3, 4, 4]
 
 
+def test_the_drawn_ks_fall_in_their_spans_and_change_with_the_generator():
+    n = 16000
+    draws = [capstone.causal_ks(n, np.random.default_rng(seed)) for seed in range(20)]
+    for ks in draws:
+        assert ks == sorted(ks) and 1 <= ks[0] <= n // 100 < ks[1] <= n // 10 and n // 2 <= ks[2] <= n - 2
+    assert len({tuple(ks) for ks in draws}) == 20 and capstone.causal_ks(n) not in draws
+    assert capstone.causal_ks(n, 5) == capstone.causal_ks(n, np.random.default_rng(5))     # a seed will do
+    assert all(k <= 4 for k in capstone.causal_ks(6, np.random.default_rng(0)))           # short data: inside
+    with pytest.raises(ValueError, match="rng"):
+        capstone.causal_ks(n, [1, 2])
+
+
+def segments(gyr, acc, mag, fs):
+    """Looks ahead only inside the segments between the fixed ks: the accelerometer smoothed by a centred window
+    in each, then a memoryless tilt."""
+    from scipy.ndimage import uniform_filter1d
+    acc = np.array(acc, dtype=float)
+    edges = [0] + [k + 1 for k in capstone.causal_ks(len(acc))] + [len(acc)]
+    for a, b in zip(edges[:-1], edges[1:]):
+        acc[a:b] = uniform_filter1d(acc[a:b], 51, axis=0, mode="nearest")
+    up = acc / np.linalg.norm(acc, axis=1, keepdims=True)
+    q = np.column_stack([1 + up[:, 2], up[:, 1], -up[:, 0], np.zeros(len(up))])
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def test_look_ahead_between_the_fixed_ks_passes_them_and_fails_the_drawn_ones(short):
+    tr = short[0]
+    q = segments(tr.gyr, tr.acc, tr.mag, tr.fs)
+    run = lambda g, a, m: segments(g, a, m, tr.fs)        # noqa: E731
+    rng = np.random.default_rng(0)
+    fixed = [capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng) for k in capstone.causal_ks(len(tr))]
+    assert max(fixed) <= capstone.CAUSAL_TOL                    # what a public, fixed check cannot see
+    drawn = [capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
+             for k in capstone.causal_ks(len(tr), np.random.default_rng(1))]
+    assert max(drawn) > capstone.CAUSAL_TOL
+    assert capstone.self_check(segments, short[:1], random_ks=True).causal is False
+    # the fixed ks with the prefix check catch it too: given the samples up to k alone, its segments move
+    report = capstone.self_check(segments, short[:1])
+    assert report.causal is False and "given only the samples up to k" in str(report)
+
+
+def test_the_prefix_check_finds_a_filter_that_reads_the_length_of_its_data(short):
+    tr = short[0]
+
+    def by_length(gyr, acc, mag, fs):
+        a = 1e-4 * len(gyr)
+        return rotations.quat_multiply([np.cos(a), 0, 0, np.sin(a)], gyro_only(gyr, acc, mag, fs))
+
+    run = lambda g, a, m: by_length(g, a, m, tr.fs)       # noqa: E731
+    q = by_length(tr.gyr, tr.acc, tr.mag, tr.fs)
+    k = len(tr) // 2
+    assert capstone.prefix_change(run, tr.gyr, tr.acc, tr.mag, q, k) > 1e-3
+    same_length = capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, np.random.default_rng(0))
+    assert same_length <= capstone.CAUSAL_TOL
+    causal = gyro_only(tr.gyr, tr.acc, tr.mag, tr.fs)
+    assert capstone.prefix_change(lambda g, a, m: gyro_only(g, a, m, tr.fs), tr.gyr, tr.acc, None, causal, k) \
+        <= capstone.CAUSAL_TOL
+    report = capstone.self_check(by_length, short[:1])
+    assert report.causal is False and "given only the samples up to k" in report.causal_message
+    with pytest.raises(ValueError, match="k must be a sample of q"):
+        capstone.prefix_change(run, tr.gyr, tr.acc, tr.mag, q, len(q))
+
+
 def test_perturb_future_keeps_the_past_and_changes_the_rest():
     x = np.zeros((50, 3))
     y = capstone.perturb_future(x, 9, 2.0, np.random.default_rng(0))
@@ -94,7 +157,11 @@ def test_self_check_scores_like_the_metrics_and_passes_a_causal_filter(short):
         assert row["total_deg"] == pytest.approx(expected.total_deg)
         assert row["inclination_deg"] == pytest.approx(expected.inclination_deg)
     assert report.mean() == pytest.approx(np.mean([r["total_deg"] for r in report.rows]))
-    assert "causal (the output up to k is unchanged" in str(report)
+    assert "causal (the output up to k is unchanged when the samples after k change, and when they are left out" \
+        in str(report)
+    drawn = capstone.self_check(gyro_only, short, seed=3, random_ks=True)
+    assert drawn.causal is True and str(capstone.causal_ks(len(short[0]), np.random.default_rng(3))[0]) in \
+        drawn.causal_message
 
 
 def test_self_check_finds_a_filter_that_looks_ahead(short):

@@ -12,6 +12,7 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 
 import pytest
@@ -86,3 +87,31 @@ def test_the_box_of_an_ordinary_user_hides_the_machine_and_the_network(tmp_path,
     assert out["uid"] == "65534" and out["gradebook"] == "absent" and out["usr"] == "read-only", run.stdout
     assert out["interfaces"] == "lo,", run.stdout
     assert int(out["pid"]) < 10, "a PID namespace of its own"
+
+
+def test_hidden_packages_are_covered_after_the_installation_is_mounted(tmp_path, monkeypatch):
+    """``hide``: each installed copy of a package the shadow replaces is covered in the box (an empty read-only
+    folder, /dev/null for a single-file module), so that taking the shadow off sys.path reaches nothing."""
+    from grading import judge
+    site = tmp_path / "site"
+    (site / "vqf").mkdir(parents=True)
+    (site / "vqf" / "__init__.py").write_text("")
+    (site / "imufusion.cpython-311-x86_64-linux-gnu.so").write_bytes(b"")
+    (site / "ahrs.py").write_text("")
+    monkeypatch.syspath_prepend(str(site))
+    found = sandbox.package_paths(["vqf", "imufusion", "ahrs", "not_installed"])
+    assert {os.path.basename(p) for p in found} >= {"vqf", "imufusion.cpython-311-x86_64-linux-gnu.so", "ahrs.py"}
+    shadow = tmp_path / "shadow"
+    (shadow / "vqf").mkdir(parents=True)
+    assert str(site / "vqf") in judge.shadowed(shadow) and str(site / "ahrs.py") not in judge.shadowed(shadow)
+    args, _ = _command(tmp_path, monkeypatch, euid=1000)
+    assert "--remount-ro" not in args                                     # nothing hidden unless asked
+    work = sandbox.private_folder(None, tmp_path)
+    args = sandbox.bwrap_command(["python", "box.py"], course=tmp_path / "course", lab=LAB, lib=tmp_path / "boxlib",
+                                 work=work, hide=found)
+    folder, single = str(site / "vqf"), str(site / "ahrs.py")
+    i = args.index(folder)
+    assert args[i - 1] == "--tmpfs" and args[i + 1:i + 3] == ["--remount-ro", folder]
+    assert args[args.index(single) - 2:args.index(single)] == ["--ro-bind", "/dev/null"]
+    last_python = max(j for j, a in enumerate(args) if a == "--ro-bind" and args[j + 1] == os.path.realpath(sys.prefix))
+    assert i > last_python, "the cover comes after the installation's mount"

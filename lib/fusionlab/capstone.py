@@ -7,10 +7,16 @@ trials the course does not ship, with the dataset authors' metrics (:func:`fusio
 
 * **Causal**: the estimate at sample k uses no sample after k. Checked as :func:`causality_change` does it: every
   sample after k is replaced by noise (:data:`CAUSAL_NOISE`), the filter runs again, and its output up to k must not
-  change by more than :data:`CAUSAL_TOL`, for each k of :func:`causal_ks`.
+  change by more than :data:`CAUSAL_TOL`, for each k of :func:`causal_ks` (drawn at random by the grader, with a
+  secret); and as :func:`prefix_change` does it: given only the samples up to a k, its output must be the first
+  k+1 rows of its output on the whole trial. The grader makes each of these calls in a fresh process, so no call
+  can see what an earlier one was given.
 * **On time**: a call on a trial of N samples may take :func:`budget_seconds` ``(N)``.
 * **Its own**: numpy, scipy and the course's rotation and metric helpers, but no published filter (the library's
-  estimators, VQF, ``ahrs``...) and no file: the grader runs the filter where neither exists.
+  estimators, VQF, ``ahrs``..., nor their code pasted in) and no file: the grader runs the filter where neither
+  exists. The grader's data are each trial turned by a secret rotation, cut at secret places and given a little
+  fresh sensor noise, so that no trial can be recognised from its samples; an estimate far closer to the
+  reference than any published filter's on most trials is held until the instructor has read its code.
 * **Points** from :data:`RUBRIC`, not from rank.
 
 :func:`self_check` runs these checks (all but the last) on the shipped trials; the grader (the course's grading
@@ -29,7 +35,7 @@ from . import metrics, validate
 
 __all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
            "Criterion", "NEAR_VQF", "SENSORS", "RUBRIC", "MAX_POINTS", "GATES", "budget_seconds", "causal_ks",
-           "perturb_future", "as_quaternions", "causality_change", "self_check", "SelfCheck", "bar",
+           "perturb_future", "as_quaternions", "causality_change", "prefix_change", "self_check", "SelfCheck", "bar",
            "BAR_FILE", "make_bar"]
 
 #: The eight BROAD trials that ship with the course (``data/broad/``); the capstone is scored on the other 31.
@@ -84,9 +90,10 @@ RUBRIC = (
 )
 MAX_POINTS = sum(c.points for c in RUBRIC)
 #: Conditions without which the filter earns none of the rubric's points.
-GATES = ("causal: the estimate up to sample k does not change when later samples do",
-         "its own: it calls no published filter (the library's, VQF, ahrs...), reads no file and does not recognise "
-         "which trial it is given")
+GATES = ("causal: the estimate up to sample k does not change when later samples change or are left out",
+         "its own: it calls no published filter (the library's, VQF, ahrs...) and copies none into its code, reads no "
+         "file, does not reach around Python's imports, and does not recognise which trial it is given (an estimate "
+         "far closer to the reference than every published filter's is held until the instructor has read the code)")
 
 
 def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
@@ -117,25 +124,39 @@ def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SEC
     return max(min_seconds, n * seconds_per_sample)
 
 
-def causal_ks(n):
-    """The samples k after which the causality check changes the data, for a trial of ``n`` samples: one inside
-    the first steps, one after the first 0.7 s (a filter's start-up statistics), one in the middle.
+def causal_ks(n, rng=None):
+    """The samples k after which the causality check changes the data, for a trial of ``n`` samples.
+
+    Without ``rng`` they are fixed: one inside the first steps, one after the first 0.7 s (a filter's start-up
+    statistics), one in the middle -- what :func:`self_check` uses by default, so that a student's run can be
+    repeated. With ``rng`` they are drawn at random, as the grader draws them with its secret: one in the first
+    hundredth of the trial, one in its first tenth, one in its second half. A causal filter passes either way; a
+    filter that reads later samples only between fixed ks does not pass the drawn ones.
 
     Parameters
     ----------
     n : int
         Samples in the trial (at least 5).
+    rng : numpy.random.Generator or int, optional
+        Draws the ks (a generator, or its seed); None gives the fixed ones.
 
     Returns
     -------
     list of int
-        The three k, each leaving at least one sample after it.
+        The three k in increasing order, each leaving at least one sample after it.
 
     >>> causal_ks(1000)
     [3, 200, 501]
+    >>> ks = causal_ks(1000, np.random.default_rng(0))
+    >>> ks[0] <= 10 < ks[1] <= 100 and 500 <= ks[2] <= 998
+    True
     """
     n = validate.count(n, "n", minimum=5)
-    return [min(k, n - 2) for k in (3, 200, n // 2 + 1)]
+    if rng is None:
+        return [min(k, n - 2) for k in (3, 200, n // 2 + 1)]
+    rng = validate.generator(rng)
+    spans = ((1, max(1, n // 100)), (n // 100 + 1, max(n // 100 + 1, n // 10)), (n // 2, n - 2))
+    return sorted(min(int(rng.integers(lo, hi + 1)), n - 2) for lo, hi in spans)
 
 
 def perturb_future(x, k, scale, rng):
@@ -232,6 +253,38 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     return float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
 
 
+def prefix_change(run, gyr, acc, mag, q, k):
+    """How much ``run``'s output on the samples up to k alone differs from the first k+1 rows of ``q``, its output
+    on all of them: a causal filter's output on a prefix of the data is the prefix of its output.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(gyr, acc, mag) -> (M, 4)``: the filter, called once more on the first k+1 samples.
+    gyr, acc, mag : array_like, shape (N, 3)
+        The data ``q`` was estimated from (``mag`` may be None: a 6D filter's).
+    q : array_like, shape (N, 4)
+        The filter's output on them.
+    k : int
+        The last sample kept (at most N - 1).
+
+    Returns
+    -------
+    float
+        The largest difference of any quaternion component; a causal filter gives 0 (at most :data:`CAUSAL_TOL`).
+    """
+    if not callable(run):
+        raise ValueError(f"run must be a function run(gyr, acc, mag) -> (N, 4); got {type(run).__name__}")
+    q = validate.array(q, "q")
+    k = validate.count(k, "k")
+    if q.ndim != 2 or k >= len(q):
+        raise ValueError(f"k must be a sample of q (k < {len(q) if q.ndim == 2 else 0}); got {k}")
+    head = [None if x is None else validate.array(x, name, dtype=float)[:k + 1]
+            for x, name in ((gyr, "gyr"), (acc, "acc"), (mag, "mag"))]
+    q2 = as_quaternions(run(*head), k + 1)
+    return float(np.max(np.abs(q2 - q[:k + 1])))
+
+
 @dataclass
 class SelfCheck:
     """What :func:`self_check` found.
@@ -292,8 +345,13 @@ class SelfCheck:
         return "\n".join(lines)
 
 
-def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
+def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks=False):
     """Run ``estimate`` on ``trials`` as the grader does: valid output, the time budget, the metrics, causality.
+
+    Causality is checked on the first trial that ran, as the grader checks it on a trial of its choice: the samples
+    after each k of :func:`causal_ks` are changed (:func:`causality_change`), then the filter is called on the
+    samples up to the last k alone (:func:`prefix_change`). The ks are the fixed ones unless ``random_ks``; the
+    grader draws its own with a secret, and a causal filter passes whatever they are.
 
     Parameters
     ----------
@@ -307,6 +365,9 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
         Seeds the causality check's noise.
     causality : bool, optional
         Run the causality check (on the first trial that ran).
+    random_ks : bool, optional
+        Draw the ks at random from ``seed`` (:func:`causal_ks` with a generator), as the grader does with its own
+        secret; by default the fixed ones, the same on every run.
 
     Returns
     -------
@@ -347,8 +408,9 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
     else:
         tr, q = first
         rng = np.random.default_rng(seed)
+        ks = causal_ks(len(tr), rng if random_ks else None)
         run = lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, tr.fs)    # noqa: E731
-        for k in causal_ks(len(tr)):
+        for k in ks:
             change = causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
             if change > CAUSAL_TOL:
                 out.causal, out.causal_message = False, (
@@ -356,9 +418,16 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True):
                     f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)")
                 break
         else:
-            out.causal, out.causal_message = True, (
-                f"causality: causal (the output up to k is unchanged when the samples after k change; "
-                f"k = {', '.join(map(str, causal_ks(len(tr))))} of {tr.name})")
+            change = prefix_change(run, tr.gyr, tr.acc, tr.mag, q, ks[-1])
+            if change > CAUSAL_TOL:
+                out.causal, out.causal_message = False, (
+                    f"causality: NOT causal -- given only the samples up to k = {ks[-1]} of {tr.name}, the filter's "
+                    f"estimate up to k differs by {change:.2g} from its estimate on the whole trial (use no later "
+                    "sample, nor the length of the data)")
+            else:
+                out.causal, out.causal_message = True, (
+                    f"causality: causal (the output up to k is unchanged when the samples after k change, and when "
+                    f"they are left out; k = {', '.join(map(str, ks))} of {tr.name})")
     return out
 
 
