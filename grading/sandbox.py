@@ -8,9 +8,9 @@ scores -- stays outside.  In the box
   of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
   course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path; the installed
   copies they replace covered by empty folders, :func:`package_paths`, so that no change of ``sys.path`` reaches
-  them), a private folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative paths behave as in
-  the student's copy; writable, in memory, size-limited, seeded with the submission's files) and a private ``/tmp``
-  (the same): nothing a box writes reaches the grader's disk;
+  them), a private folder where the student's lab folder sits in the course (``<course>/labs/<LAB>``: relative
+  paths behave as in the student's copy; writable, in memory, size-limited, seeded with the submission's files) and
+  a private ``/tmp`` (the same): nothing a box writes reaches the grader's disk;
 * solutions, submissions, classmates, the gradebook, the real library and the grading code do not exist;
 * there is no network (own network namespace), the processes are in their own PID namespace (when the box goes,
   every process it started goes with it) and the box dies with the judge (``--die-with-parent``);
