@@ -99,9 +99,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fusionlab.capstone import (CAUSAL_NOISE, CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR_VQF, RUBRIC,
-                                SECONDS_PER_SAMPLE, SENSORS, SHIPPED, Criterion, as_quaternions, budget_seconds,
-                                causal_ks, perturb_future)   # the rules, as the lab states them to the students
+from fusionlab.capstone import (CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR_VQF, RUBRIC, SECONDS_PER_SAMPLE,
+                                SENSORS, SHIPPED, as_quaternions, budget_seconds, causal_ks, first_change,
+                                prefix_change)   # the rules, as the lab states them to the students
 from grading import box as wire
 from grading import judge, sandbox
 
@@ -991,6 +991,10 @@ class StudentResult:
         return bool(self.trials) and all(r.status == "ok" for r in self.trials)
 
 
+class _NotRun(Exception):
+    """A call of the causality check that gave no quaternions (an error, over its budget, the box ended)."""
+
+
 def check_causality(runner, trial, q, seconds, rng):
     """(True/False/None, message): is ``estimate``'s output up to k unchanged when every sample after k changes, for
     three secret k (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``), and is its output on the samples up to
@@ -998,22 +1002,28 @@ def check_causality(runner, trial, q, seconds, rng):
     a box of its own (:meth:`Runner.call_fresh`), so that no call can replay what an earlier one returned. (For a
     6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
     n = len(trial)
-    sensors = (trial.gyr, trial.acc) if runner.sensors == "6D" else (trial.gyr, trial.acc, trial.mag)
-    for k in causal_ks(n, rng):
-        noisy = [perturb_future(x, k, scale, rng) for x, scale in zip(sensors, CAUSAL_NOISE)]
-        q2, status, why, _ = runner.call_fresh(trial, seconds, *noisy)
+    mag = None if runner.sensors == "6D" else trial.mag
+
+    def run(gyr, acc, mag):
+        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
         if q2 is None:
-            return None, f"not checked: with later samples changed, estimate {why} ({status})"
-        change = float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
-        if change > CAUSAL_TOL:
-            return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
-                           f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
-                           "seed)")
+            raise _NotRun(f"{why} ({status})")
+        return q2
+
+    try:
+        failed = first_change(run, trial.gyr, trial.acc, mag, q, causal_ks(n, rng), rng)
+    except _NotRun as exc:
+        return None, f"not checked: with later samples changed, estimate {exc}"
+    if failed:
+        k, change = failed
+        return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
+                       f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
+                       "seed)")
     k = prefix_k(n, rng)
-    q2, status, why, _ = runner.call_fresh(trial, seconds, *(x[:k + 1] for x in sensors))
-    if q2 is None:
-        return None, f"not checked: given the samples up to a k alone, estimate {why} ({status})"
-    change = float(np.max(np.abs(q2 - q[:k + 1])))
+    try:
+        change = prefix_change(run, trial.gyr, trial.acc, mag, q, k)
+    except _NotRun as exc:
+        return None, f"not checked: given the samples up to a k alone, estimate {exc}"
     if change > CAUSAL_TOL:
         return False, (f"NOT causal: given only the samples up to k = {k} of {trial.name}, its estimate up to k "
                        f"differs by {change:.2g} from its estimate on the whole trial (a filter may use no later "

@@ -126,6 +126,23 @@ def test_bad_arguments_are_named(call, words):
         call()
 
 
+def test_first_change_names_the_first_k_that_fails_and_passes_a_6d_filter_its_none():
+    gyr, acc, mag = (np.random.default_rng(3).normal(size=(400, 3)) for _ in range(3))
+    seen = []
+
+    def six(g, a, m):
+        seen.append(m)
+        return gyro_only(g, a, m, 100.0)
+
+    q = six(gyr, acc, None)
+    assert capstone.first_change(six, gyr, acc, None, q, [3, 200], np.random.default_rng(0)) is None
+    assert seen == [None] * 3
+    ahead = lambda g, a, m: looks_ahead(g, a, m, 100.0)          # noqa: E731
+    k, change = capstone.first_change(ahead, gyr, acc, mag, ahead(gyr, acc, mag), [3, 200],
+                                      np.random.default_rng(0))
+    assert k == 3 and change > capstone.CAUSAL_TOL
+
+
 @pytest.mark.parametrize("value, words", [
     (np.ones((4, 3)), r"shape \(4, 4\)"), ("q", "not an array of numbers"), (np.full((4, 4), np.nan), "NaN"),
     (np.ones((4, 4)), "unit quaternions"),

@@ -35,8 +35,8 @@ from . import metrics, validate
 
 __all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
            "Criterion", "NEAR_VQF", "SENSORS", "RUBRIC", "MAX_POINTS", "GATES", "budget_seconds", "causal_ks",
-           "perturb_future", "as_quaternions", "causality_change", "prefix_change", "self_check", "SelfCheck", "bar",
-           "BAR_FILE", "make_bar"]
+           "perturb_future", "as_quaternions", "causality_change", "first_change", "prefix_change", "self_check",
+           "SelfCheck", "bar", "BAR_FILE", "make_bar"]
 
 #: The eight BROAD trials that ship with the course (``data/broad/``); the capstone is scored on the other 31.
 SHIPPED = (2, 7, 11, 16, 25, 27, 29, 33)
@@ -232,13 +232,13 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     run : callable
         ``run(gyr, acc, mag) -> (N, 4)``: the filter, called once more on the changed data.
     gyr, acc, mag : array_like, shape (N, 3)
-        The data ``q`` was estimated from.
+        The data ``q`` was estimated from (``mag`` may be None: a 6D filter's, passed on as None).
     q : array_like, shape (N, 4)
         The filter's output on them.
     k : int
         The last sample kept.
     rng : numpy.random.Generator
-        Draws the noise (:data:`CAUSAL_NOISE`).
+        Draws the noise (:data:`CAUSAL_NOISE`), for gyr, acc and mag in this order.
 
     Returns
     -------
@@ -248,9 +248,38 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     if not callable(run):
         raise ValueError(f"run must be a function run(gyr, acc, mag) -> (N, 4); got {type(run).__name__}")
     q = validate.array(q, "q")
-    noisy = [perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
+    noisy = [None if x is None else perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
     q2 = as_quaternions(run(*noisy), len(q))
     return float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
+
+
+def first_change(run, gyr, acc, mag, q, ks, rng):
+    """The first k of ``ks`` at which :func:`causality_change` finds the output up to k changed beyond
+    :data:`CAUSAL_TOL`, with that change; None when it finds none (the filter passed at every k).
+
+    Parameters
+    ----------
+    run : callable
+        ``run(gyr, acc, mag) -> (N, 4)``, as for :func:`causality_change`.
+    gyr, acc, mag : array_like, shape (N, 3)
+        The data ``q`` was estimated from (``mag`` may be None).
+    q : array_like, shape (N, 4)
+        The filter's output on them.
+    ks : sequence of int
+        The ks, tried in order (:func:`causal_ks`).
+    rng : numpy.random.Generator
+        Draws the noise, k after k.
+
+    Returns
+    -------
+    tuple of (int, float) or None
+        ``(k, change)`` at the first k that fails.
+    """
+    for k in ks:
+        change = causality_change(run, gyr, acc, mag, q, k, rng)
+        if change > CAUSAL_TOL:
+            return k, change
+    return None
 
 
 def prefix_change(run, gyr, acc, mag, q, k):
@@ -410,13 +439,12 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks
         rng = np.random.default_rng(seed)
         ks = causal_ks(len(tr), rng if random_ks else None)
         run = lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, tr.fs)    # noqa: E731
-        for k in ks:
-            change = causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
-            if change > CAUSAL_TOL:
-                out.causal, out.causal_message = False, (
-                    f"causality: NOT causal -- changing the samples after k = {k} of {tr.name} changed the "
-                    f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)")
-                break
+        failed = first_change(run, tr.gyr, tr.acc, tr.mag, q, ks, rng)
+        if failed:
+            k, change = failed
+            out.causal, out.causal_message = False, (
+                f"causality: NOT causal -- changing the samples after k = {k} of {tr.name} changed the "
+                f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)")
         else:
             change = prefix_change(run, tr.gyr, tr.acc, tr.mag, q, ks[-1])
             if change > CAUSAL_TOL:

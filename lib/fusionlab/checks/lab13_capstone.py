@@ -92,13 +92,12 @@ def check_capstone_filter(estimate, sensors="9D"):
     if seconds > capstone.budget_seconds(n):
         raise Feedback(f"your estimate took {seconds:.1f} s for {n} samples, over the budget of "
                        f"{capstone.budget_seconds(n):.1f} s.")
-    rng = np.random.default_rng(1303)
-    for k in capstone.causal_ks(n):
-        change = capstone.causality_change(lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, 286.0),
-                                           gyr, acc, rec["mag"] * 100.0, q, k, rng)
-        if change > capstone.CAUSAL_TOL:
-            raise Feedback(f"your estimate is not causal: changing the samples after k = {k} changed its output up "
-                           f"to k by {change:.2g}. Use no later sample, no statistic of the whole record, and seed "
-                           "any random numbers.")
+    failed = capstone.first_change(lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, 286.0),
+                                   gyr, acc, rec["mag"] * 100.0, q, capstone.causal_ks(n), np.random.default_rng(1303))
+    if failed:
+        k, change = failed
+        raise Feedback(f"your estimate is not causal: changing the samples after k = {k} changed its output up "
+                       f"to k by {change:.2g}. Use no later sample, no statistic of the whole record, and seed "
+                       "any random numbers.")
     _ok(f"your estimate returns {n} unit quaternions for {n} samples ({sensors}), within its time budget, and is "
         "causal, on a synthetic hand-motion record. Its score is the leaderboard's.")
