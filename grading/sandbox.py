@@ -17,7 +17,11 @@ scores -- stays outside.  In the box
 * when the grader runs as root, each box runs as a user id of its own (one per student graded at once) with no
   capabilities, so that the process limit of one student is not a classmate's; otherwise as the instructor's own
   user inside a user namespace;
-* CPU time, address space, file size and (as root) the number of processes are limited (``setrlimit``).
+* CPU time, address space, file size and (as root) the number of processes are limited (``setrlimit``);
+* the kernel's key store (``add_key``, ``request_key``, ``keyctl``) cannot be used: a seccomp filter
+  (:func:`keyring_filter`) makes those calls fail with EPERM. Its keyrings belong to a user id, not to a box, and
+  outlive the box: two boxes of one slot (one student's boxes, or the next student graded in that slot) could
+  otherwise pass data to each other through them, and what a box stored would stay in the kernel after grading.
 """
 from __future__ import annotations
 
@@ -26,6 +30,7 @@ import fcntl
 import json
 import os
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -45,13 +50,71 @@ DEFAULT_LIMITS = {
 ETC = ["passwd", "group", "nsswitch.conf", "ld.so.cache", "ld.so.conf", "ld.so.conf.d", "localtime", "timezone",
        "alternatives", "fonts", "mime.types", "os-release"]
 
-# Runs inside the box as the first process: drop to nobody (as root), set the limits, start the kernel.
+# ---------------------------------------------------------------------------------------------------------------
+# The seccomp filter of every box: no kernel key store
+# ---------------------------------------------------------------------------------------------------------------
+
+# Per machine: the kernel's audit architecture number, the numbers of add_key, request_key and keyctl, and the first
+# number of a second ABI on the same architecture (x86_64's x32), refused entirely: no box needs it.
+KEYRING_SYSCALLS = {
+    "x86_64": (0xC000003E, (248, 249, 250), 0x40000000),
+    "aarch64": (0xC00000B7, (217, 218, 219), None),
+}
+
+
+class UnsupportedMachine(RuntimeError):
+    """This machine has no seccomp filter here (:data:`KEYRING_SYSCALLS`): a box cannot be made safe on it."""
+
+
+def _native_machine():
+    """The architecture this interpreter runs as: ``os.uname`` names the kernel's, a 32-bit Python differs."""
+    machine = os.uname().machine
+    return machine if struct.calcsize("P") == 8 else f"{machine} (a {8 * struct.calcsize('P')}-bit Python)"
+
+
+def keyring_filter(machine=None):
+    """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: ``add_key``,
+    ``request_key`` and ``keyctl`` fail with EPERM, every other call of the native architecture is allowed, and every
+    call of another architecture fails with EPERM. ``machine`` is named as ``os.uname().machine`` names it (this
+    machine by default); one not in :data:`KEYRING_SYSCALLS` raises :class:`UnsupportedMachine`."""
+    machine = _native_machine() if machine is None else machine
+    if machine not in KEYRING_SYSCALLS:
+        raise UnsupportedMachine(f"expected a machine of {' or '.join(KEYRING_SYSCALLS)}, this one is {machine}: "
+                                 f"no seccomp filter keeps the boxes from the kernel's key store here")
+    audit_arch, numbers, second_abi = KEYRING_SYSCALLS[machine]
+    ld, jeq, jge, ret = 0x20, 0x15, 0x35, 0x06      # BPF_LD|W|ABS, BPF_JMP|JEQ|K, BPF_JMP|JGE|K, BPF_RET|K
+    allow, refuse = 0x7FFF0000, 0x00050000 | 1      # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
+    deny = object()                                 # a jump to the last instruction, resolved below
+    program = [
+        # The numbers below mean these calls only on this architecture; a call made through another ABI the kernel
+        # also accepts (i386's int 0x80 on x86_64) has numbers of its own, so it is refused whatever it is.
+        (ld, 0, 0, 4),                              # seccomp_data.arch
+        (jeq, 0, deny, audit_arch),
+        (ld, 0, 0, 0),                              # seccomp_data.nr
+    ]
+    if second_abi is not None:
+        # x32 calls arrive with x86_64's arch and the number plus 0x40000000: refused, so that no such call slips past.
+        program.append((jge, deny, 0, second_abi))
+    # The key store: keyrings belong to a user id and outlive the box, a channel between boxes of one slot.
+    program += [(jeq, deny, 0, nr) for nr in numbers]
+    program += [(ret, 0, 0, allow), (ret, 0, 0, refuse)]
+    last = len(program) - 1
+
+    def skip(i, target):                            # a BPF jump counts the instructions it skips
+        return last - i - 1 if target is deny else target
+    return b"".join(struct.pack("=HBBI", code, skip(i, jt), skip(i, jf), k)
+                    for i, (code, jt, jf, k) in enumerate(program))
+
+
+# Runs inside the box as the first process: drop to nobody (as root), set the limits, install the seccomp filter
+# (keyring_filter), start the kernel.
 INSIDE = r"""
 import ctypes, json, os, resource, shutil, sys
 lim = json.loads(os.environ.pop("FUSIONLAB_BOX_LIMITS"))
 uid = os.environ.pop("FUSIONLAB_BOX_UID", "")
 mpl = os.environ.pop("FUSIONLAB_BOX_MPLCACHE", "")
 cwd = os.environ.pop("FUSIONLAB_BOX_CWD")
+seccomp = bytes.fromhex(os.environ.pop("FUSIONLAB_BOX_SECCOMP", ""))
 if uid:
     os.setgroups([])
     os.setgid(int(uid))
@@ -66,6 +129,16 @@ if os.path.isdir("/opt/seed"):  # the submission's files, into the box's own siz
             shutil.copyfile(src, dst)
 os.chdir(cwd)
 ctypes.CDLL(None, use_errno=True).prctl(38, 1, 0, 0, 0)  # PR_SET_NO_NEW_PRIVS
+class SockFprog(ctypes.Structure):  # struct sock_fprog: how many instructions, and where
+    _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_char_p)]
+if not seccomp or len(seccomp) % 8:
+    sys.exit(f"the box got no seccomp filter (expected a program of 8-byte instructions in FUSIONLAB_BOX_SECCOMP, "
+             f"got {len(seccomp)} bytes): no student code runs without it")
+libc = ctypes.CDLL(None, use_errno=True)
+fprog = SockFprog(len(seccomp) // 8, seccomp)
+if libc.prctl(22, ctypes.c_ulong(2), ctypes.byref(fprog), ctypes.c_ulong(0), ctypes.c_ulong(0)) != 0:
+    sys.exit(f"the box could not install its seccomp filter (prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER) failed: "
+             f"{os.strerror(ctypes.get_errno())}): no student code runs without it")
 resource.setrlimit(resource.RLIMIT_CPU, (lim["cpu_s"], lim["cpu_s"] + 5))
 resource.setrlimit(resource.RLIMIT_AS, (lim["memory_bytes"], lim["memory_bytes"]))
 resource.setrlimit(resource.RLIMIT_FSIZE, (lim["file_bytes"], lim["file_bytes"]))
@@ -286,7 +359,8 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
            "LANG": "C.UTF-8", "PYTHONPATH": ":".join(path), "PYTHONDONTWRITEBYTECODE": "1", "TMPDIR": "/tmp",
            "MPLBACKEND": "Agg", "MPLCONFIGDIR": "/tmp/.cache/matplotlib",
            "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "NBGRADER_EXECUTION": "autograde", "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd}
+           "NBGRADER_EXECUTION": "autograde", "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd,
+           "FUSIONLAB_BOX_SECCOMP": keyring_filter().hex()}
     if mpl:
         env["FUSIONLAB_BOX_MPLCACHE"] = "/opt/mplcache"
     if uid is not None:
@@ -322,6 +396,12 @@ def box_problem(course, lab, scratch, slots):
 
     Starts one box exactly as grading does (same mounts, limits and, as root, the user id of each slot), running
     ``print`` only: no student code. Called once by :mod:`grading.classgrade` before the model solution."""
+    try:
+        keyring_filter()
+    except UnsupportedMachine as exc:
+        return (f"grading cannot be made safe on this machine ({exc}), and student code is never run without that "
+                f"filter. Grade on an {' or '.join(KEYRING_SYSCALLS)} machine or VM instead (docs/instructors.md, "
+                f"section 7, 'Where to grade').")
     if shutil.which("bwrap") is None:
         return ("bubblewrap is not installed: install it (Debian/Ubuntu: apt-get install bubblewrap) and run again. "
                 "Student code is never run without the sandbox.")
