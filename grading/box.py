@@ -12,9 +12,13 @@ no expected value and no score.  It only
    ``get`` (a value).
 
 What goes over the pipe is data only -- numbers, strings, lists, dicts with string keys, numpy arrays of numbers,
-sympy expressions as ``srepr`` text and the attributes of the library's own objects -- encoded by :func:`encode` and
-read back by :func:`decode`, which refuses anything else.  The judge decodes replies with the same function and its
-own strict policy: no pickle, no code.
+sympy expressions as ``srepr`` text, and the few library types of :data:`WIRE_TYPES` as their fields -- encoded by
+:func:`encode` and read back by :func:`decode`, which refuses anything else.  No class is ever looked up by a name
+the other side wrote: a library object travels under a key of :data:`WIRE_TYPES` and is rebuilt from a fresh
+instance of that class, field by field, each field checked against the fresh instance's (same names, same kinds,
+arrays of the same shape), so a ``__del__`` or ``__reduce__`` of the student's choosing has nothing to run in.  The
+judge decodes replies with the same function and its own strict policy: no pickle, no code, and (:mod:`grading.judge`)
+no reply longer than it reads before parsing.
 
 Standard output and error of the student's code go to a capped file in the sandbox's private ``/tmp``: nothing a
 cell prints can reach the judge.
@@ -38,6 +42,98 @@ class WireError(ValueError):
     """A message that is not plain data of the kinds this protocol allows."""
 
 
+#: The library's own types that cross the pipe (a test passes one to the student's function, which changes it):
+#: key on the wire -> ``module:class``. Each is rebuilt from a fresh instance of its class, field by field; nothing
+#: else of the library (and nothing named by the sender) is ever rebuilt.
+WIRE_TYPES = {
+    "freescale.Tuning": "fusionlab.freescale:Tuning",      # a field of Kalman9
+    "freescale.Kalman9": "fusionlab.freescale:Kalman9",    # Lab 05, exercise 6: my_step(kf, ...) changes kf
+}
+MAX_WIRE_TEXT = 200            # characters of a text field of a library object (a frame name)
+
+
+_CLASSES = {}
+
+
+def _wire_classes():
+    """``{key: class}`` of :data:`WIRE_TYPES`, imported once, by this module's own names."""
+    import importlib
+
+    if not _CLASSES:
+        for key, where in WIRE_TYPES.items():
+            module, _, name = where.partition(":")
+            _CLASSES[key] = getattr(importlib.import_module(module), name)
+    return _CLASSES
+
+
+def wire_key(value):
+    """The :data:`WIRE_TYPES` key of ``value``'s exact class, or None (a subclass or a look-alike is not one)."""
+    module = type(value).__module__ or ""
+    if module.split(".")[0] != "fusionlab":
+        return None
+    return next((key for key, cls in _wire_classes().items() if type(value) is cls), None)
+
+
+def wire_fields(value):
+    """``{name: value}`` of the fields a library object of :data:`WIRE_TYPES` travels with."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value):
+        return {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+    return dict(vars(value))
+
+
+def _same_kind(name, value, template):
+    """``value`` for the field ``name`` whose fresh value is ``template``: of the same kind, or WireError."""
+    import numpy as np
+
+    if isinstance(template, np.ndarray):
+        if not isinstance(value, np.ndarray) or value.shape != template.shape or value.dtype.kind not in "biuf":
+            raise WireError(f"field {name} of a library object: expected an array of shape {template.shape}")
+        return value.astype(template.dtype)
+    if isinstance(template, bool) or template is None or isinstance(template, str):
+        if type(value) is not type(template) or (isinstance(value, str) and len(value) > MAX_WIRE_TEXT):
+            raise WireError(f"field {name} of a library object: expected a {type(template).__name__}")
+        return value
+    if isinstance(template, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise WireError(f"field {name} of a library object: expected a number")
+        return type(template)(value)
+    if wire_key(template) is not None:
+        if type(value) is not type(template):
+            raise WireError(f"field {name} of a library object: expected a {type(template).__name__}")
+        return value
+    raise WireError(f"field {name} of a library object cannot cross the pipe")
+
+
+def rebuild(key, state):
+    """The library object of :data:`WIRE_TYPES` ``key`` with the fields ``state`` (decoded values), made from a fresh
+    instance of its class: the same field names, each of the fresh value's kind. Raises WireError otherwise."""
+    import dataclasses
+
+    classes = _wire_classes()
+    if key not in classes:
+        raise WireError("an object of a type that does not cross the pipe")
+    fresh = classes[key]()
+    template = wire_fields(fresh)
+    if set(state) != set(template):
+        raise WireError(f"a {key} whose fields are not its class's")
+    fields = {name: _same_kind(name, state[name], template[name]) for name in template}
+    if dataclasses.is_dataclass(fresh):
+        try:
+            return dataclasses.replace(fresh, **fields)
+        except (ValueError, TypeError) as exc:
+            raise WireError(f"a {key} the library refuses ({exc})") from None
+    update(fresh, fields)
+    return fresh
+
+
+def update(obj, fields):
+    """Set the fields of the library object ``obj`` (a :data:`WIRE_TYPES` instance, not a frozen dataclass)."""
+    for name, value in fields.items():
+        setattr(obj, name, value)
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # The codec (shared by both sides: the judge imports these functions)
 # ---------------------------------------------------------------------------------------------------------------
@@ -51,8 +147,8 @@ def _float(x):
 def encode(value, depth=0, objects=True):
     """``value`` as JSON-ready plain data; raises :class:`WireError` for anything else.
 
-    Library objects (instances of classes of ``fusionlab``) travel as their class name and attributes when
-    ``objects`` is true; sympy expressions as their ``srepr`` text.
+    The library objects of :data:`WIRE_TYPES` travel as their key and fields when ``objects`` is true; sympy
+    expressions as their ``srepr`` text.
     """
     import numpy as np
 
@@ -92,18 +188,19 @@ def encode(value, depth=0, objects=True):
         import sympy
         if isinstance(value, (sympy.Basic, sympy.MatrixBase)):
             return {"__sympy__": sympy.srepr(value)}
-    if objects and module.split(".")[0] == "fusionlab" and hasattr(value, "__dict__"):
-        return {"__object__": f"{module}:{type(value).__qualname__}",
-                "state": {k: encode(v, depth + 1, objects) for k, v in vars(value).items()}}
+    key = wire_key(value) if objects else None
+    if key is not None:
+        return {"__object__": key,
+                "state": {k: encode(v, depth + 1, objects) for k, v in wire_fields(value).items()}}
     raise WireError(f"a {type(value).__name__} (only numbers, arrays of numbers, strings, lists, tuples and dicts "
                     f"are accepted)")
 
 
-def decode(data, *, make_object=None, make_sympy=None, depth=0):
+def decode(data, *, objects=False, make_sympy=None, depth=0):
     """The value that :func:`encode` encoded, checked strictly (dtype, shape, size); raises :class:`WireError`.
 
-    ``make_object(name, state)`` and ``make_sympy(text)`` build library objects and sympy expressions; without them
-    such values are refused.
+    With ``objects`` true, the library objects of :data:`WIRE_TYPES` are rebuilt (:func:`rebuild`); ``make_sympy(text)``
+    builds sympy expressions. Without them such values are refused.
     """
     import numpy as np
 
@@ -114,29 +211,39 @@ def decode(data, *, make_object=None, make_sympy=None, depth=0):
     if isinstance(data, float):
         return data
     if isinstance(data, list):
-        return [decode(v, make_object=make_object, make_sympy=make_sympy, depth=depth + 1) for v in data]
+        return [decode(v, objects=objects, make_sympy=make_sympy, depth=depth + 1) for v in data]
     if not isinstance(data, dict) or len(data) not in (1, 2, 3):
         raise WireError("an unknown kind of value")
-    sub = dict(make_object=make_object, make_sympy=make_sympy, depth=depth + 1)
+    sub = dict(objects=objects, make_sympy=make_sympy, depth=depth + 1)
     if set(data) == {"__float__"}:
         text = data["__float__"]
         if text not in ("nan", "inf", "-inf"):
             raise WireError("a bad float")
         return float(text)
     if set(data) == {"__complex__"}:
+        if not isinstance(data["__complex__"], list) or len(data["__complex__"]) != 2:
+            raise WireError("a bad complex number")
         re_, im = (decode(v, **sub) for v in data["__complex__"])
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (re_, im)):
             raise WireError("a bad complex number")
         return complex(re_, im)
     if set(data) == {"__ndarray__", "shape", "data"}:
-        dtype = np.dtype(str(data["__ndarray__"]))
+        try:
+            dtype = np.dtype(str(data["__ndarray__"]))
+        except (TypeError, ValueError):
+            raise WireError("an array of an unknown dtype") from None
         shape = data["shape"]
         if dtype.kind not in NUMERIC_KINDS or dtype.hasobject or dtype.fields is not None:
             raise WireError(f"an array of {dtype}")
         if not isinstance(shape, list) or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
                                                   for n in shape) or len(shape) > 32:
             raise WireError("a bad array shape")
-        raw = base64.b64decode(data["data"], validate=True)
+        if not isinstance(data["data"], str):
+            raise WireError("array data that is not text")
+        try:
+            raw = base64.b64decode(data["data"], validate=True)
+        except ValueError:
+            raise WireError("array data that is not base64") from None
         if len(raw) != math.prod(shape) * dtype.itemsize:
             raise WireError(f"array data of {len(raw)} bytes for shape {tuple(shape)} of {dtype}")
         return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
@@ -149,28 +256,13 @@ def decode(data, *, make_object=None, make_sympy=None, depth=0):
             raise WireError("a sympy expression where numbers were expected")
         return make_sympy(data["__sympy__"])
     if set(data) == {"__object__", "state"} and isinstance(data["state"], dict):
-        if make_object is None:
+        if not objects:
             raise WireError("an object where numbers were expected")
+        if not isinstance(data["__object__"], str) or data["__object__"] not in WIRE_TYPES:
+            raise WireError("an object of a type that does not cross the pipe")
         state = {str(k): decode(v, **sub) for k, v in data["state"].items()}
-        return make_object(str(data["__object__"]), state)
+        return rebuild(data["__object__"], state)
     raise WireError("an unknown kind of value")
-
-
-def library_object(name, state, *, into=None):
-    """Rebuild a ``fusionlab`` object from its class name and attributes, without running any of its code."""
-    import importlib
-
-    module, _, qualname = name.partition(":")
-    if module.split(".")[0] != "fusionlab":
-        raise WireError(f"an object of {module} (only the library's own objects are accepted)")
-    cls = importlib.import_module(module)
-    for part in qualname.split("."):
-        cls = getattr(cls, part)
-    if not isinstance(cls, type):
-        raise WireError(f"{name} is not a class")
-    obj = into if into is not None else object.__new__(cls)
-    obj.__dict__.update(state)
-    return obj
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -231,8 +323,8 @@ def run(requests, replies):
                             out[name] = {"kind": "unreadable", "error": str(exc)}
                 send({"ok": True, "names": out})
             elif op == "call":
-                args = decode(req["args"], make_object=library_object, make_sympy=_sympy_here)
-                kwargs = decode(req["kwargs"], make_object=library_object, make_sympy=_sympy_here)
+                args = decode(req["args"], objects=True, make_sympy=_sympy_here)
+                kwargs = decode(req["kwargs"], objects=True, make_sympy=_sympy_here)
                 try:
                     value = ns[req["name"]](*args, **kwargs)
                 except BaseException as exc:  # noqa: BLE001 -- the student's error is the answer
@@ -240,8 +332,7 @@ def run(requests, replies):
                     continue
                 try:
                     send({"ok": True, "value": encode(value),
-                          "objects": {str(i): encode(a) for i, a in enumerate(args)
-                                      if type(a).__module__.split(".")[0] == "fusionlab"}})
+                          "objects": {str(i): encode(a) for i, a in enumerate(args) if wire_key(a)}})
                 except WireError as exc:
                     send({"ok": False, "error": f"your function returned {exc}"})
             else:

@@ -33,6 +33,7 @@ import builtins
 import compileall
 import contextlib
 import copy
+import dataclasses
 import importlib
 import inspect
 import json
@@ -50,6 +51,7 @@ from pathlib import Path
 
 import nbformat
 
+from fusionlab import guard
 from grading import box as wire
 from grading import sandbox
 from grading.outputs import Budget
@@ -58,7 +60,10 @@ BOX = Path(wire.__file__).resolve()
 CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
 STUDENT_SECONDS = 900      # wall time of the whole submission
 MAX_RESTARTS = 3
-MAX_REPLY_BYTES = 256 << 20
+MAX_REPLY_BYTES = 16 << 20      # one reply of the box, counted while it is read: 18x the largest honest one of the 14
+                                # labs (0.89 MB, Lab 11); a reply over it fails its test and is never parsed
+MAX_REPLY_CONTAINERS = 200_000  # lists and dicts in one reply (``[`` and ``{`` counted before parsing; arrays
+                                # travel as one string each): 30x the most of an honest reply
 STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
                 "lab is graded. Write it yourself.")
 HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quaternion products, DCMs): absent in the box
@@ -299,13 +304,22 @@ class BoxTimeout(RuntimeError):
     pass
 
 
+class ReplyTooLarge(BoxDied):
+    """A reply over :data:`MAX_REPLY_BYTES` or :data:`MAX_REPLY_CONTAINERS`: the box is stopped, the reply never
+    parsed."""
+
+
 class Box:
-    """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output."""
+    """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output.
+
+    ``largest`` is the longest reply read so far (bytes; a test holds the honest ones well under the limit)."""
 
     def __init__(self, command, env=None):
         self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.DEVNULL, start_new_session=True, env=env)
-        self.buffer = b""
+        self.chunks, self.size = [], 0          # what has come of the next reply (no newline yet)
+        self.lines = []                         # whole replies read and not yet returned
+        self.largest = 0
         self.sel = selectors.DefaultSelector()
         self.sel.register(self.proc.stdout, selectors.EVENT_READ)
         os.set_blocking(self.proc.stdout.fileno(), False)
@@ -318,8 +332,11 @@ class Box:
             raise BoxDied("the box closed its input") from exc
 
     def receive(self, deadline):
-        """The next message, decoded as JSON (not yet as values); raises BoxTimeout or BoxDied."""
-        while b"\n" not in self.buffer:
+        """The next message, decoded as JSON (not yet as values); raises BoxTimeout, BoxDied or ReplyTooLarge.
+
+        A reply is counted while it is read: past :data:`MAX_REPLY_BYTES` the box is stopped and nothing more is
+        kept, so a flood costs the judge at most that much memory."""
+        while not self.lines:
             left = deadline - time.monotonic()
             if left <= 0:
                 raise BoxTimeout()
@@ -331,14 +348,31 @@ class Box:
             if not chunk:
                 self.proc.wait()
                 raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
-            self.buffer += chunk
-            if len(self.buffer) > MAX_REPLY_BYTES:
-                raise BoxDied("the box sent more than 256 MB at once")
-        line, _, self.buffer = self.buffer.partition(b"\n")
+            *whole, rest = chunk.split(b"\n")
+            for part in whole:
+                self.lines.append(b"".join(self.chunks) + part)
+                self.chunks, self.size = [], 0
+                self._check(len(self.lines[-1]))
+            self.chunks.append(rest)
+            self.size += len(rest)
+            self._check(self.size)
+        line = self.lines.pop(0)
+        self.largest = max(self.largest, len(line))
+        if line.count(b"[") + line.count(b"{") > MAX_REPLY_CONTAINERS:
+            self._too_large(f"more than {MAX_REPLY_CONTAINERS:,} lists and dicts in one reply")
         try:
             return json.loads(line)
-        except ValueError as exc:
+        except (ValueError, RecursionError) as exc:
             raise BoxDied("the box sent something that is not JSON") from exc
+
+    def _check(self, size):
+        if size > MAX_REPLY_BYTES:
+            self._too_large(f"a reply over {MAX_REPLY_BYTES >> 20} MB")
+
+    def _too_large(self, what):
+        self.chunks, self.size, self.lines = [], 0, []
+        self.kill()
+        raise ReplyTooLarge(f"the box sent {what}")
 
     def kill(self):
         if self.proc.poll() is None:
@@ -425,6 +459,7 @@ class Verdict:
     notes: list = field(default_factory=list)
     cell_errors: dict = field(default_factory=dict)
     seconds: float = 0.0
+    largest_reply: int = 0        # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
 
     @property
     def score(self):
@@ -649,12 +684,16 @@ def _sympy_trusted(text):
         raise wire.WireError(f"a sympy expression that cannot be read ({type(exc).__name__})") from None
 
 
-def _trusted_object(name, state):
-    return wire.library_object(name, state)
-
-
 class StudentError(AssertionError):
     """The student's code failed, or returned something that is not plain data."""
+
+
+class StudentRaised(StudentError):
+    """The student's function raised."""
+
+
+class NotData(StudentError):
+    """The student's function returned something that is not plain data."""
 
 
 class Session:
@@ -670,6 +709,7 @@ class Session:
         self.cell_errors = {}
         self.box = None
         self.work = None
+        self.largest = 0
         self.restarts = 0
         self.deadline = time.monotonic() + STUDENT_SECONDS
 
@@ -677,6 +717,8 @@ class Session:
         uid = sandbox.box_uid(self.slot)
         source = self.lab.course / "submitted" / self.student / self.lab.lab
         self.work = sandbox.private_folder(source if source.is_dir() else None, self.lab.scratch, uid)
+        if self.box is not None:
+            self.largest = max(self.largest, self.box.largest)
         self.box = Box(self.lab.box_command(self.gid, self.work, uid))
 
     def start(self):
@@ -747,7 +789,7 @@ class Session:
             if kind == "value":
                 try:
                     out[name] = {"kind": "value", "value": wire.decode(d.get("value"), make_sympy=_sympy_trusted,
-                                                                       make_object=_trusted_object)}
+                                                                       objects=True)}
                 except (wire.WireError, ValueError, TypeError) as exc:
                     out[name] = {"kind": "unreadable", "error": str(exc)}
             elif kind in ("function", "missing", "unreadable"):
@@ -758,7 +800,7 @@ class Session:
 
     def proxy(self, name, budget):
         def call(*args, **kwargs):
-            objects = {i: a for i, a in enumerate(args) if type(a).__module__.split(".")[0] == "fusionlab"}
+            objects = {i: a for i, a in enumerate(args) if wire.wire_key(a)}
             try:
                 message = {"op": "call", "name": name, "args": wire.encode(list(args)),
                            "kwargs": wire.encode(dict(kwargs))}
@@ -769,25 +811,29 @@ class Session:
                 raise BoxTimeout()
             reply = self.request(message, left)
             if not reply.get("ok"):
-                raise StudentError(f"your {name} raised {str(reply.get('error', 'an error'))[:500]}")
+                raise StudentRaised(f"your {name} raised {str(reply.get('error', 'an error'))[:500]}")
             try:
-                value = wire.decode(reply.get("value"), make_sympy=_sympy_trusted, make_object=_trusted_object)
-                for key, state in (reply.get("objects") or {}).items():
+                value = wire.decode(reply.get("value"), make_sympy=_sympy_trusted, objects=True)
+                changed = reply.get("objects") or {}
+                if not isinstance(changed, dict):
+                    raise wire.WireError("a list of changed objects that is not one")
+                for key, state in changed.items():
                     i = int(key)
-                    if i in objects:
-                        new = wire.decode(state, make_sympy=_sympy_trusted, make_object=_trusted_object)
+                    if i in objects:          # the library object the test passed in, as the student's code left it
+                        new = wire.decode(state, make_sympy=_sympy_trusted, objects=True)
                         if type(new) is not type(objects[i]):
                             raise wire.WireError("an object of another class in place of the one passed in")
-                        objects[i].__dict__.clear()
-                        objects[i].__dict__.update(new.__dict__)
-            except (wire.WireError, ValueError, TypeError, ImportError, AttributeError) as exc:
-                raise StudentError(f"your {name} returned {exc}") from None
+                        if not dataclasses.is_dataclass(new):
+                            wire.update(objects[i], wire.wire_fields(new))
+            except (wire.WireError, ValueError, TypeError) as exc:
+                raise NotData(f"your {name} returned {exc}") from None
             return value
         call.__name__ = name
         return call
 
     def close(self):
         if self.box is not None:
+            self.largest = max(self.largest, self.box.largest)
             self.box.kill()
         if self.work:
             shutil.rmtree(self.work, ignore_errors=True)
@@ -822,8 +868,56 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
             for i, e in session.cell_errors.items():
                 verdict.cell_errors.setdefault(session._where(i), e)
             session.close()
+            verdict.largest_reply = max(verdict.largest_reply, session.largest)
     verdict.seconds = time.monotonic() - t0
     return verdict
+
+
+HIDDEN_BEGIN, HIDDEN_END = "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"
+
+
+def test_parts(source):
+    """A test cell as ``[(hidden, code)]`` in order: the visible code and the code between nbgrader's hidden-test
+    markers. If a part does not compile on its own (a marker inside a block), the whole cell is one part, hidden if
+    it has hidden tests."""
+    parts, hidden, lines = [], False, []
+    for line in python_of(source).splitlines():
+        if line.strip() in (HIDDEN_BEGIN, HIDDEN_END):
+            parts.append((hidden, "\n".join(lines)))
+            hidden, lines = line.strip() == HIDDEN_BEGIN, []
+        else:
+            lines.append(line)
+    parts = [(h, code) for h, code in parts + [(hidden, "\n".join(lines))] if code.strip()]
+    try:
+        for _, code in parts:
+            compile(code, "<test>", "exec")
+    except SyntaxError:
+        return [(any(h for h, _ in parts), python_of(source))]
+    return parts
+
+
+def hidden_failure(gid, exc, lab):
+    """What a hidden test may say of its failure ``exc``: the exercise and the kind of failure, never a value,
+    an expected number or any text of the student's code (which saw the hidden inputs)."""
+    number = re.match(r"ex(\d+)_", gid or "")
+    where = f"exercise {number.group(1)}, hidden tests" if number else f"{gid}, hidden tests"
+    if isinstance(exc, ReplyTooLarge):
+        kind = f"your code sent back more than the judge reads (a reply over {MAX_REPLY_BYTES >> 20} MB)"
+    elif isinstance(exc, BoxTimeout):
+        kind = f"timed out (over {lab.cell_seconds} s)"
+    elif isinstance(exc, BoxDied):
+        kind = "your code ended the process"
+    elif isinstance(exc, StudentRaised):
+        kind = "your function raised an error"
+    elif isinstance(exc, NotData):
+        kind = "your function returned something that is not plain numbers"
+    elif isinstance(exc, guard.WrongShape):
+        kind = "wrong shape (or not numbers)"
+    elif isinstance(exc, AssertionError):
+        kind = "wrong value"
+    else:
+        kind = f"your result could not be used ({type(exc).__name__})"
+    return f"{where}: {kind}. The visible check above the test names the slip on cases you can see."
 
 
 def _run_test(lab, session, source, ns, reference, result):
@@ -835,6 +929,7 @@ def _run_test(lab, session, source, ns, reference, result):
         return
     names = [n for n in free_names(source) if n not in ns and not hasattr(builtins, n)]
     budget = {"deadline": time.monotonic() + lab.cell_seconds}
+    hidden = False
     try:
         own = [n for n in names if n not in reference]
         described = session.describe(own) if own else {}
@@ -849,13 +944,11 @@ def _run_test(lab, session, source, ns, reference, result):
                 ns[n] = d["value"]
             elif d["kind"] == "unreadable":
                 raise StudentError(f"{n} is not plain numbers ({d['error']})")
-        exec(compile(python_of(source), f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+        for part_hidden, code in test_parts(source):
+            hidden = hidden or part_hidden      # after hidden inputs were sent, nothing the student's code says is shown
+            exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
         result.score = result.points
         result.message = "passed"
-    except (BoxTimeout, BoxDied) as exc:
-        result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
-                          else f"your code ended the process ({exc})")
-        session.notes.append(f"test {gid}: {result.message}")
     except NameError as exc:
         missing = re.search(r"name '(\w+)' is not defined", str(exc))
         result.message = f"{missing.group(1)} is not defined by your notebook" if missing else _first_line(exc)
@@ -864,7 +957,17 @@ def _run_test(lab, session, source, ns, reference, result):
         if errs:
             result.message += f" (your answer cell failed: {errs[0]})"
     except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
-        result.message = _first_line(exc)[:1500]
+        if hidden:
+            result.message = hidden_failure(gid, exc, lab)
+        elif isinstance(exc, ReplyTooLarge):
+            result.message = f"your code sent back more than the judge reads (a reply over {MAX_REPLY_BYTES >> 20} MB)"
+        elif isinstance(exc, (BoxTimeout, BoxDied)):
+            result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
+                              else f"your code ended the process ({exc})")
+        else:
+            result.message = _first_line(exc)[:1500]
+        if isinstance(exc, (BoxTimeout, BoxDied)):
+            session.notes.append(f"test {gid}: {result.message}")
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -2,7 +2,9 @@
 ``grading/judge.py``): the codec's round trip, and what the judge refuses to build."""
 from __future__ import annotations
 
+import gc
 import json
+import types
 
 import numpy as np
 import pytest
@@ -48,13 +50,138 @@ def test_the_reader_refuses_what_is_not_plain_data(message, why):
         box.decode(message)
 
 
-def test_library_objects_come_only_from_the_library():
-    with pytest.raises(box.WireError, match="only the library's own objects"):
-        box.library_object("subprocess:Popen", {})
+def _gadget_names():
+    """Every class the old decoder would have rebuilt in the judge: ``fusionlab.<module>:<chain>`` for each class
+    reachable from a library module in one or two attribute steps (``fusionlab.datasets:tempfile._TemporaryFileCloser``,
+    ``fusionlab.accel_tilt:np.lib._datasource.DataSource`` is three: a sample of those too)."""
+    import importlib
+    import pkgutil
+
+    import fusionlab
+    names = set()
+    for info in pkgutil.iter_modules(fusionlab.__path__):
+        module = importlib.import_module(f"fusionlab.{info.name}")
+        for a in dir(module):
+            obj = getattr(module, a, None)
+            if isinstance(obj, type):
+                names.add(f"{module.__name__}:{a}")
+            elif isinstance(obj, types.ModuleType):
+                for b in dir(obj):
+                    if isinstance(getattr(obj, b, None), type):
+                        names.add(f"{module.__name__}:{a}.{b}")
+    return sorted(names | {"fusionlab.accel_tilt:np.lib._datasource.DataSource",
+                           "fusionlab.datasets:tempfile._TemporaryFileCloser", "fusionlab.freescale:Kalman9"})
+
+
+def test_no_class_is_rebuilt_from_a_name_the_sender_wrote(tmp_path):
+    canary = tmp_path / "classmate.ipynb"
+    canary.write_text("{}")
+    names = _gadget_names()
+    assert len(names) > 500 and "fusionlab.datasets:tempfile._TemporaryFileCloser" in names
+    state = {"name": str(canary), "file": None, "delete": True, "_destpath": str(tmp_path), "close_called": False}
+    for name in names:
+        for key in (name, name.replace(":", "."), name.split(":")[-1]):
+            message = {"__object__": key, "state": {"__dict__": {k: box.encode(v) for k, v in state.items()}}}
+            with pytest.raises(box.WireError, match="does not cross the pipe|an unknown kind"):
+                box.decode(json.loads(json.dumps(message)), objects=True, make_sympy=judge._sympy_trusted)
+    gc.collect()
+    assert canary.read_text() == "{}", "no __del__ of a gadget ran in this process"
+
+
+def test_a_library_object_crosses_as_its_fields_and_comes_back_as_its_own_class():
     from fusionlab import freescale
-    kf = freescale.Kalman9("NED")
-    back = box.decode(json.loads(json.dumps(box.encode(kf))), make_object=box.library_object)
-    assert type(back) is freescale.Kalman9 and np.array_equal(back.q, kf.q)
+    kf = freescale.Kalman9("Android")
+    kf.q = np.array([0.5, 0.5, 0.5, 0.5])
+    kf.delta_deg = 61.5
+    back = box.decode(json.loads(json.dumps(box.encode(kf))), objects=True)
+    assert type(back) is freescale.Kalman9 and type(back.tuning) is freescale.Tuning
+    assert back.frame == "Android" and back.delta_deg == 61.5 and np.array_equal(back.q, kf.q)
+    assert set(vars(back)) == set(vars(kf))
+    with pytest.raises(box.WireError, match="an object where numbers were expected"):
+        box.decode(json.loads(json.dumps(box.encode(kf))))
+
+
+def _kalman9_message(**change):
+    from fusionlab import freescale
+    message = json.loads(json.dumps(box.encode(freescale.Kalman9())))
+    message["state"].update({k: box.encode(v) for k, v in change.items()})
+    return message
+
+
+@pytest.mark.parametrize("change, why", [
+    ({"q": np.zeros(5)}, "field q of a library object: expected an array of shape \\(4,\\)"),
+    ({"q": "1, 0, 0, 0"}, "field q of a library object: expected an array"),
+    ({"delta_deg": True}, "field delta_deg of a library object: expected a number"),
+    ({"frame": "x" * 1000}, "field frame of a library object: expected a str"),
+    ({"__class__": 1}, "whose fields are not its class's"),
+    ({"tuning": {"a": 1}}, "field tuning of a library object: expected a Tuning"),
+])
+def test_a_library_object_with_other_fields_or_kinds_is_refused(change, why):
+    with pytest.raises(box.WireError, match=why):
+        box.decode(_kalman9_message(**change), objects=True)
+
+
+def test_the_library_refuses_a_tuning_it_would_not_build():
+    from fusionlab import freescale
+    message = json.loads(json.dumps(box.encode(freescale.Tuning())))
+    message["state"]["Q_wb"] = -1.0
+    with pytest.raises(box.WireError, match="the library refuses"):
+        box.decode(message, objects=True)
+
+
+def _random_message(rng, depth=0):
+    """A random JSON value shaped like the protocol's: plain values, the codec's tagged dicts with good and bad
+    contents, library-object messages under every key the codec knows and many it does not."""
+    keys = ["__float__", "__complex__", "__ndarray__", "shape", "data", "__tuple__", "__dict__", "__sympy__",
+            "__object__", "state", "__reduce__", "__class__", "x"]
+    leaf = [None, True, 3, -2**70, 2.5, "nan", "inf", "", "AAAAAAAAAAA=", "<f8", "|O", "os:system",
+            "freescale.Kalman9", "freescale.Tuning", "fusionlab.freescale:Kalman9", "Symbol('x')",
+            "__import__('os')", [], {}]
+    r = rng.random()
+    if depth > 4 or r < 0.35:
+        return leaf[rng.integers(len(leaf))]
+    if r < 0.55:
+        return [_random_message(rng, depth + 1) for _ in range(rng.integers(0, 4))]
+    if r < 0.75:
+        chosen = rng.choice(keys, size=rng.integers(1, 4), replace=False)
+        return {str(k): _random_message(rng, depth + 1) for k in chosen}
+    from fusionlab import freescale
+    samples = [freescale.Kalman9(), freescale.Tuning(), 1 + 2j, np.arange(3.0), (1, "a"), {"k": [1.0]}]
+    good = json.loads(json.dumps(box.encode(samples[rng.integers(len(samples))])))
+    if isinstance(good, dict) and "state" in good and rng.random() < 0.7:
+        field_ = rng.choice(sorted(good["state"]))
+        good["state"][str(field_)] = _random_message(rng, depth + 1)
+    return good
+
+
+def _only_data(value):
+    from fusionlab import freescale
+    if value is None or isinstance(value, (bool, int, float, complex, str)):
+        return True
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in box.NUMERIC_KINDS
+    if isinstance(value, (list, tuple)):
+        return all(_only_data(v) for v in value)
+    if isinstance(value, dict):
+        return all(isinstance(k, str) and _only_data(v) for k, v in value.items())
+    if type(value) in (freescale.Kalman9, freescale.Tuning):
+        return all(_only_data(v) for v in box.wire_fields(value).values())
+    return isinstance(value, (sp.Basic, sp.MatrixBase))
+
+
+def test_random_messages_decode_to_data_or_are_refused():
+    rng = np.random.default_rng(37)
+    decoded = refused = 0
+    for _ in range(5000):
+        message = _random_message(rng)
+        try:
+            value = box.decode(message, objects=True, make_sympy=judge._sympy_trusted)
+        except box.WireError:
+            refused += 1
+            continue
+        decoded += 1
+        assert _only_data(value), message
+    assert decoded > 1000 and refused > 500, (decoded, refused)
 
 
 def test_the_judge_rebuilds_sympy_without_parsing_any_text_the_student_sent():

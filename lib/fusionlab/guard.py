@@ -30,7 +30,7 @@ import numpy as np
 import numpy.linalg    # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
 import numpy.testing   # noqa: F401
 
-__all__ = ["ForbiddenCall", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact"]
+__all__ = ["ForbiddenCall", "WrongShape", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact"]
 
 # ---------------------------------------------------------------------------------------------------------------
 # Functions captured now, before any student code runs. C functions, ufuncs and ndarray methods: an answer cell can
@@ -70,6 +70,11 @@ _MISSING = object()
 # Modules whose attributes an answer cell must leave alone (``np.allclose = ...``, ``checks.check_x = ...``).
 _WATCHED = ("numpy", "scipy", "filterpy", "fusionlab")
 _IGNORED_BUILTINS = {"_", "__", "___", "get_ipython", "exit", "quit", "input", "display"}  # set per cell by IPython
+
+
+class WrongShape(AssertionError):
+    """A result of the wrong kind: not numbers, None, the wrong shape, or the wrong number of parts. (A grader that
+    may not say more than what failed tells this apart from a wrong value.)"""
 
 
 class ForbiddenCall(AssertionError):
@@ -316,16 +321,16 @@ _PLAIN = (_ndarray, _list, _tuple, _int, _float, complex, bool, np.generic)
 
 def _numbers(value, what, role):
     if value is None:
-        raise AssertionError(f"{what}: {role} is None -- did the function forget its `return`?")
+        raise WrongShape(f"{what}: {role} is None -- did the function forget its `return`?")
     if not _isinstance(value, _PLAIN):
-        raise AssertionError(f"{what}: {role} should be numbers (an array, a list or a float); got a "
+        raise WrongShape(f"{what}: {role} should be numbers (an array, a list or a float); got a "
                              f"{_type(value).__name__}")
     try:
         arr = _asarray(value)
         complex_ = arr.dtype.kind == "c"
         return _asarray(value, dtype=_complex if complex_ else _float)
     except (TypeError, ValueError) as err:
-        raise AssertionError(f"{what}: {role} cannot be read as numbers ({err})") from None
+        raise WrongShape(f"{what}: {role} cannot be read as numbers ({err})") from None
 
 
 def _index(flat, shape):
@@ -371,12 +376,12 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     >>> guard.assert_close(None, [1.0], what="x_post")
     Traceback (most recent call last):
         ...
-    AssertionError: x_post: your result is None -- did the function forget its `return`?
+    fusionlab.guard.WrongShape: x_post: your result is None -- did the function forget its `return`?
     """
     e = _numbers(expected, what, "the reference")
     a = _numbers(actual, what, "your result")
     if a.shape != e.shape and e.shape != ():
-        raise AssertionError(f"{what} should have shape {e.shape}; got {a.shape}")
+        raise WrongShape(f"{what} should have shape {e.shape}; got {a.shape}")
     if a.size == 0:
         return
     if e.shape != a.shape:                                                    # a scalar reference
@@ -492,7 +497,7 @@ def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol
         label = f" (case {i + 1} of {_len(cases)})" if _len(cases) > 1 else ""
         if _isinstance(what, _tuple):
             if not _isinstance(a, (_tuple, _list)) or _len(a) != _len(what):
-                raise AssertionError(f"your function must return {_len(what)} things ({', '.join(what)}); got "
+                raise WrongShape(f"your function must return {_len(what)} things ({', '.join(what)}); got "
                                      f"{_type(a).__name__}" + (f" of length {_len(a)}"
                                                                if _isinstance(a, (_tuple, _list)) else ""))
             for name, ai, ei in _zip(what, a, e):
