@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import types
 import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -98,6 +99,67 @@ def generate(course: Path, lab: str, release: Path):
 def _gradebook(course: Path):
     from nbgrader.api import Gradebook
     return Gradebook(f"sqlite:///{course / 'gradebook.db'}")
+
+
+BACKUPS = ".gradebook-backups"     # in the course root: the gradebook as it was before each run (the last KEEP_BACKUPS)
+KEEP_BACKUPS = 20
+
+
+def gradebook_counts(db: Path):
+    """``{"submissions": n, "auto": n, "manual": n}`` of the gradebook ``db``: submitted assignments, and grades with an
+    automatic and with a manual score. Raises sqlite3.DatabaseError if it cannot be read as a gradebook."""
+    import sqlite3
+
+    with contextlib.closing(sqlite3.connect(f"file:{db}?mode=ro", uri=True)) as con:
+        return {"submissions": con.execute("SELECT COUNT(*) FROM submitted_assignment").fetchone()[0],
+                "auto": con.execute("SELECT COUNT(*) FROM grade WHERE auto_score IS NOT NULL").fetchone()[0],
+                "manual": con.execute("SELECT COUNT(*) FROM grade WHERE manual_score IS NOT NULL").fetchone()[0]}
+
+
+def _sqlite_copy(src: Path, dest: Path):
+    """A consistent copy of the SQLite file ``src`` into ``dest`` (SQLite's own backup, not a file copy)."""
+    import sqlite3
+
+    with contextlib.closing(sqlite3.connect(f"file:{src}?mode=ro", uri=True)) as a, \
+            contextlib.closing(sqlite3.connect(dest)) as b:
+        a.backup(b)
+
+
+@contextlib.contextmanager
+def gradebook_kept(course: Path, lab: str, say=print):
+    """The run inside never loses a grade: ``gradebook.db`` is copied into :data:`BACKUPS` first, and if the run ends
+    with a gradebook that cannot be read, or with fewer submissions, automatic or manual scores than it began with,
+    the copy is put back (and said). Yields an object whose ``restored`` says so at the end; a run on a course without
+    a gradebook yet keeps nothing."""
+    db = course / "gradebook.db"
+    kept = types.SimpleNamespace(copy=None, restored=False)
+    if not db.is_file():
+        yield kept
+        return
+    before = gradebook_counts(db)
+    folder = course / BACKUPS
+    folder.mkdir(mode=0o700, exist_ok=True)
+    copy = folder / f"gradebook-{time.strftime('%Y%m%d-%H%M%S')}-{lab}.db"
+    _sqlite_copy(db, copy)
+    kept.copy = copy
+    for old in sorted(folder.glob("gradebook-*.db"))[:-KEEP_BACKUPS]:
+        old.unlink()
+    try:
+        yield kept
+    finally:
+        try:
+            after = gradebook_counts(db) if db.is_file() else None
+        except Exception:  # noqa: BLE001 -- whatever sqlite says, the gradebook is not readable
+            after = None
+        lost = after is None or any(after[k] < before[k] for k in before)
+        if lost:
+            db.unlink(missing_ok=True)
+            _sqlite_copy(copy, db)
+            kept.restored = True
+            said = "could not be read" if after is None else ", ".join(
+                f"{k} {before[k]} -> {after[k]}" for k in before if after[k] < before[k])
+            say(f"\nTHE GRADEBOOK WAS PUT BACK as it was before this run: at the end it {'' if after is None else 'had '}"
+                f"{said}. Nothing of this run is in it; the copy is {copy.relative_to(course)}.")
 
 
 def recorded_tests(course: Path, lab: str):
@@ -313,9 +375,11 @@ def main(argv=None):
     scratch = Path(tempfile.mkdtemp(prefix="cg-"))
     os.chmod(scratch, 0o755)
     results = []
+    kept = None
     stack = contextlib.ExitStack()
     try:
         mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
+        kept = stack.enter_context(gradebook_kept(course, lab, say=lambda text: print(text, file=sys.stderr)))
         problem = sandbox.box_problem(str(course), lab, scratch, mine)
         if problem:
             raise SystemExit(f"cannot grade {lab}: the sandbox does not start on this machine, so no student is "
@@ -371,6 +435,8 @@ def main(argv=None):
             print(f"scratch folder kept in {scratch}")
         else:
             shutil.rmtree(scratch, ignore_errors=True)
+    if kept is not None and kept.restored:
+        return 1
     failed = [r.student for r in results if not r.ok]
     if failed:
         print(f"\nnot graded: {', '.join(failed)} -- see the notes above; fix or reject those files and run again "

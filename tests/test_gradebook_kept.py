@@ -1,0 +1,84 @@
+"""A grading run never loses a grade: the gradebook is copied first and put back when a run ends with fewer
+submissions or scores than it began with, or with a gradebook that cannot be read (``grading.classgrade``)."""
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+from grading import classgrade
+
+
+def _gradebook(course, students):
+    from nbgrader.api import Gradebook
+    with warnings.catch_warnings(), Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+        warnings.simplefilter("ignore")
+        gb.add_assignment("02_kalman_falling_body")
+        for s in students:
+            gb.add_student(s)
+            gb.add_submission("02_kalman_falling_body", s)
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """A gradebook of three submissions, made once (nbgrader's migrations take seconds)."""
+    folder = tmp_path_factory.mktemp("gradebook")
+    path = os.environ.get("PATH", "")
+    os.environ["PATH"] = str(Path(sys.executable).parent) + os.pathsep + path
+    try:
+        _gradebook(folder, ["ana", "ben", "chloe"])
+        (folder / "other").mkdir()
+        _gradebook(folder / "other", ["mallory"])
+    finally:
+        os.environ["PATH"] = path
+    return folder
+
+
+@pytest.fixture
+def course(made, tmp_path):
+    shutil.copy(made / "gradebook.db", tmp_path / "gradebook.db")
+    return tmp_path
+
+
+def test_a_gradebook_deleted_and_made_anew_empty_is_put_back_and_said(course, made):
+    said = []
+    with classgrade.gradebook_kept(course, "02_kalman_falling_body", say=said.append) as kept:
+        (course / "gradebook.db").unlink()
+        shutil.copy(made / "other" / "gradebook.db", course / "gradebook.db")   # made anew, one student
+    assert kept.restored and "PUT BACK" in said[0] and "submissions 3 -> 1" in said[0]
+    assert classgrade.gradebook_counts(course / "gradebook.db")["submissions"] == 3
+
+
+def test_an_unreadable_gradebook_is_put_back(course):
+    said = []
+    with classgrade.gradebook_kept(course, "02_kalman_falling_body", say=said.append) as kept:
+        (course / "gradebook.db").write_bytes(b"not a database" * 100)
+    assert kept.restored and "could not be read" in said[0]
+    assert classgrade.gradebook_counts(course / "gradebook.db")["submissions"] == 3
+
+
+def test_a_run_that_adds_grades_is_kept_as_it_ends(course):
+    said = []
+    with classgrade.gradebook_kept(course, "02_kalman_falling_body", say=said.append) as kept:
+        from nbgrader.api import Gradebook
+        with warnings.catch_warnings(), Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+            warnings.simplefilter("ignore")
+            gb.add_student("dan")
+            gb.add_submission("02_kalman_falling_body", "dan")
+    assert not kept.restored and said == []
+    assert classgrade.gradebook_counts(course / "gradebook.db")["submissions"] == 4
+    assert classgrade.gradebook_counts(kept.copy)["submissions"] == 3, "the copy is the gradebook before the run"
+
+
+def test_only_the_last_copies_are_kept(course):
+    folder = course / classgrade.BACKUPS
+    folder.mkdir()
+    for i in range(classgrade.KEEP_BACKUPS + 5):
+        (folder / f"gradebook-2026010{i:02d}-000000-x.db").write_bytes(b"")
+    with classgrade.gradebook_kept(course, "02_kalman_falling_body", say=print):
+        pass
+    assert len(list(folder.glob("gradebook-*.db"))) == classgrade.KEEP_BACKUPS
