@@ -68,7 +68,8 @@ def run(course: Path, lab: str, workers: int):
     seconds = time.monotonic() - t0
     if res.returncode != 0:
         raise SystemExit(f"classgrade failed:\n{res.stdout}\n{res.stderr}")
-    return seconds
+    peak = re.search(r"peak memory of the grading process: (\d+) MB", res.stdout)
+    return seconds, int(peak.group(1)) if peak else float("nan")
 
 
 def main(argv=None):
@@ -85,10 +86,10 @@ def main(argv=None):
         rates = {w: [] for w in args.workers}
         for r in range(args.repeat):
             for w in args.workers:
-                seconds = run(course, args.lab, w)
+                seconds, peak = run(course, args.lab, w)
                 rates[w].append(60 * args.students / seconds)
-                print(f"  run {r + 1}, {w} worker(s): {seconds:.0f} s, {rates[w][-1]:.1f} students per minute",
-                      flush=True)
+                print(f"  run {r + 1}, {w} worker(s): {seconds:.0f} s, {rates[w][-1]:.1f} students per minute, "
+                      f"grading process peak {peak} MB", flush=True)
         for w, values in rates.items():
             print(f"{w} worker(s): median {statistics.median(values):.1f} students per minute "
                   f"over {len(values)} run(s)")

@@ -96,8 +96,9 @@ def _same_kind(name, value, template):
             raise WireError(f"field {name} of a library object: expected a {type(template).__name__}")
         return value
     if isinstance(template, (int, float)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise WireError(f"field {name} of a library object: expected a number")
+        kinds = int if isinstance(template, int) else (int, float)
+        if isinstance(value, bool) or not isinstance(value, kinds):
+            raise WireError(f"field {name} of a library object: expected {'an integer' if kinds is int else 'a number'}")
         return type(template)(value)
     if wire_key(template) is not None:
         if type(value) is not type(template):

@@ -319,6 +319,12 @@ def export(course: Path, lab: str, results: list[Result]):
 # The command
 # ----------------------------------------------------------------------------------------------------------------
 
+def peak_mb():
+    """The most memory (resident, MB) this process has held so far: the judge's, boxes not counted."""
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def students_of(course: Path, lab: str, only=None):
     found = sorted(p.parent.name for p in (course / "submitted").glob(f"*/{lab}") if p.is_dir())
     if only:
@@ -426,7 +432,8 @@ def main(argv=None):
         alike, pairs = similarity.report(course, lab, the_lab.release, the_lab.solution)
         print()
         print(summary(lab, results, seconds, args.workers, report))
-        print(f"\ngrades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
+        print(f"\npeak memory of the grading process: {peak_mb():.0f} MB")
+        print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
               f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")
     finally:

@@ -30,6 +30,7 @@ import time
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pytest
 
 from conftest import ROOT, nbgrader
@@ -144,6 +145,49 @@ def _attacks(root, port, half):
             "            time.sleep(3600)\n            os._exit(0)\n        _kids += 1\n    except OSError:\n"
             "        break\ntime.sleep(3600)\n")),
     }
+    # 12: objects that name a library module and a chain to a class with a __del__ (tempfile's closer, numpy's
+    # DataSource): sent as forged replies and returned; had the judge rebuilt them, they would delete a classmate's
+    # notebook, the gradebook and a folder of the course as they were dropped
+    victims = {"file": [str(root / "submitted" / "full" / LAB / f"{LAB}.ipynb"), gradebook],
+               "tree": str(root / "canary")}
+    gadgets = (
+        "import json, os\n"
+        f"_victims = {victims!r}\n"
+        "_closer = [{'__object__': 'fusionlab.datasets:tempfile._TemporaryFileCloser', 'state': {'__dict__': {\n"
+        "    'file': {'__object__': 'fusionlab.datasets:tempfile._TemporaryFileCloser', 'state': {'__dict__': {}}},\n"
+        "    'name': _v, 'delete': True, 'close_called': False}}} for _v in _victims['file']]\n"
+        "_source = {'__object__': 'fusionlab.accel_tilt:np.lib._datasource.DataSource', 'state': {'__dict__': {\n"
+        "    '_istmpdest': True, '_destpath': _victims['tree']}}}\n"
+        "_reply = json.dumps({'ok': True, 'value': {'__tuple__': _closer + [_source]},\n"
+        "                     'objects': {'0': _source}}) + '\\n'\n"
+        "for _fd in range(3, 30):\n    try:\n        os.write(_fd, _reply.encode())\n    except OSError:\n"
+        "        pass\n"
+        "class _Closer:\n    pass\n"
+        "_Closer.__module__, _Closer.__qualname__ = 'fusionlab.datasets', 'tempfile._TemporaryFileCloser'\n"
+        "_c = _Closer()\n_c.name, _c.delete, _c.close_called, _c.file = _victims['file'][0], True, False, _Closer()\n")
+    out["gadgets"] = _answers(half, gadgets + "return _c, _c, _c", gadgets + "return _c, _c")
+    # 13: the hidden inputs read back from the verdicts: an answer that passes the visible case, then returns zeros
+    # (hoping for "got 0, expected ..."), and one that raises with its arguments on its second call
+    out["leak_inputs"] = _answers(half, (
+        "global _calls2\n_calls2 = globals().get('_calls2', 0) + 1\n"
+        "if _calls2 == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
+        "return np.zeros((2, 2)), np.zeros((2, 1)), np.zeros(1)"), (
+        "global _calls3\n_calls3 = globals().get('_calls3', 0) + 1\n"
+        "if _calls3 > 1:\n    raise ValueError('LEAKED ' + repr((x, P, A, Q, B, u)))\n" + JUNK3))
+    # 14: one reply of 120 MB of empty dicts, written straight to every pipe the box holds
+    out["flood"] = _answers(half, JUNK2, (
+        "import os\n_line = b'{\"ok\": true, \"value\": [' + b'{}, ' * 40_000_000 + b'{}]}\\n'\n"
+        "for _fd in range(3, 30):\n    try:\n        os.write(_fd, _line)\n    except OSError:\n        pass\n"
+        + JUNK3))
+    # 15: the kernel's per-user key store as a channel between the boxes of one student: the box of exercise 2's
+    # test stores a key, the box of exercise 3's test finds it and only then answers with the model's code
+    honest3 = "return A @ x + B @ u, A @ P @ A.T + Q"
+    out["keyring"] = _answers(half, JUNK2, f"if _seen > 0:\n    {honest3}\n" + JUNK3, prelude=(
+        "import ctypes\n_libc = ctypes.CDLL(None, use_errno=True)\n_libc.syscall.restype = ctypes.c_long\n"
+        f"_seen = _libc.syscall(249 if __import__('platform').machine() == 'x86_64' else 218, b'user', "
+        f"b'{MARKER}', None, 0)\n"
+        f"_libc.syscall(248 if __import__('platform').machine() == 'x86_64' else 217, b'user', b'{MARKER}', b'1', "
+        "1, -4)\n"))
     # 10: a last cell that prints every cell the kernel ran, hoping for the hidden tests
     leak = nbformat.from_dict(half)
     leak.cells.append(nbformat.v4.new_code_cell("print(In)\nprint(globals().keys())"))
@@ -253,7 +297,10 @@ def graded(tmp_path_factory):
     (root / "submitted" / "not_json" / LAB).mkdir(parents=True)
     (root / "submitted" / "not_json" / LAB / f"{LAB}.ipynb").write_text("{ this is not a notebook")
 
-    keep = ("gradebook.db", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md", f"integrity_{LAB}.csv",
+    (root / "canary").mkdir()
+    (root / "canary" / "keep.txt").write_text("canary")
+    keep = ("gradebook.db", ".gradebook-backups", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md",
+            f"integrity_{LAB}.csv",
             f"similarity_{LAB}.md", f"similarity_{LAB}.csv")
     before = _tree_hash(root, keep)
     with sqlite3.connect(root / "gradebook.db") as con:
@@ -314,7 +361,8 @@ def test_honest_students_score_what_they_did(graded):
 
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
                                      "reference_from_source", "other_packages", "writes", "daemon", "network",
-                                     "read_others", "stuck", "fork_bomb", "print_in", "disk_fill"])
+                                     "read_others", "stuck", "fork_bomb", "print_in", "disk_fill", "gadgets",
+                                     "leak_inputs", "flood", "keyring"])
 def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
     assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
         graded["run"].stdout[-4000:]
@@ -411,3 +459,61 @@ def test_the_similarity_report_finds_a_pasted_library_function_and_twins_but_no_
 
 def test_a_pasted_library_function_earns_its_points_and_is_listed_not_hidden(graded):
     assert graded["scores"]["pasted_library"] == {"ex1_tests": 0, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}
+
+
+def test_objects_named_by_the_box_are_never_rebuilt_so_nothing_of_the_class_is_deleted(graded):
+    root = graded["root"]
+    assert (root / "canary" / "keep.txt").read_text() == "canary"
+    assert (root / "submitted" / "full" / LAB / f"{LAB}.ipynb").is_file()
+    assert _total(graded, "full") == FULL and _total(graded, "half") == HALF, "the classmates' grades are kept"
+    _, text = _autograded(graded, "gadgets", "ex2_tests")
+    assert "your my_state_space returned an object of a type that does not cross the pipe" in text, text
+    assert "PUT BACK" not in graded["run"].stderr, "the gradebook was never lost, so never restored"
+
+
+def _hidden_cases(solution, gid):
+    """The arguments of each hidden case of the test ``gid`` and the reference's results, from the solution's own
+    hidden code run with a guard that only records them."""
+    from fusionlab import falling_body, kalman
+    from grading import judge
+    [source] = [c.source for c in solution.cells if grade_id(c) == gid]
+    seen = {}
+    ns = {"np": np, "kf": kalman, "falling_body": falling_body, "my_predict": None, "my_state_space": None,
+          "guard": type("G", (), {"grade": staticmethod(lambda student, ref, cases, **k: seen.update(
+              cases=cases, expected=[ref(*c) for c in cases]))})}
+    for hidden, code in judge.test_parts(source):
+        if hidden:
+            exec(code, ns)  # noqa: S102 -- the course's own test cell
+    return seen["cases"], seen["expected"]
+
+
+def _digits(values):
+    """Five decimals of every value of ``values`` that is not 0 or 1 (those could be anywhere on a page)."""
+    flat = np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in values])
+    return {f"{abs(v):.5f}" for v in flat if round(abs(v), 5) not in (0.0, 1.0)}
+
+
+def test_no_hidden_input_or_expected_value_reaches_the_feedback(graded):
+    page = (graded["root"] / "feedback" / "leak_inputs" / LAB / f"{LAB}.html").read_text()
+    text = html.unescape(re.sub(r"<[^>]+>", "", page))
+    _, ex2 = _autograded(graded, "leak_inputs", "ex2_tests")
+    _, ex3 = _autograded(graded, "leak_inputs", "ex3_tests")
+    assert "exercise 2, hidden tests: wrong value" in ex2 and "expected" not in ex2, ex2
+    assert "exercise 3, hidden tests: your function raised an error" in ex3 and "LEAKED (array" not in text, ex3
+    cases3, expected3 = _hidden_cases(graded["solution"], "ex3_tests")
+    cases2, expected2 = _hidden_cases(graded["solution"], "ex2_tests")
+    numbers = _digits(cases3[0]) | _digits(expected3[0]) | _digits(cases2[0]) | _digits(expected2[0][:1])
+    assert len(numbers) > 40
+    assert sorted(n for n in numbers if n in text) == []
+
+
+def test_a_flood_on_the_pipe_fails_its_test_and_costs_the_judge_no_memory(graded):
+    _, text = _autograded(graded, "flood", "ex3_tests")
+    assert "a reply over 16 MB" in text, text
+    peak = int(re.search(r"peak memory of the grading process: (\d+) MB", graded["run"].stdout).group(1))
+    assert 100 < peak < 1000, f"the grading process peaked at {peak} MB"
+
+
+def test_the_key_store_carries_nothing_from_one_box_to_the_next(graded):
+    assert graded["scores"]["keyring"]["ex3_tests"] == 0
+    assert _processes_with(MARKER) == []

@@ -127,6 +127,9 @@ def test_the_library_refuses_a_tuning_it_would_not_build():
     message["state"]["Q_wb"] = -1.0
     with pytest.raises(box.WireError, match="the library refuses"):
         box.decode(message, objects=True)
+    message["state"]["Q_wb"], message["state"]["oversample"] = 0.5, 8.5
+    with pytest.raises(box.WireError, match="field oversample of a library object: expected an integer"):
+        box.decode(message, objects=True)
 
 
 def _random_message(rng, depth=0):
