@@ -7,7 +7,8 @@ autograded/, feedback/           -- grading results (not committed)
 """
 import ast
 import os
-import re
+
+from fusionlab import labformat
 
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
 from IPython.core.inputtransformer2 import TransformerManager
@@ -60,9 +61,10 @@ class HideTestSource(NbGraderPreprocessor):
 class ClearSolutionsForRunAll(ClearSolutions):
     """ClearSolutions for a release that Run All goes through, stopping nowhere.
 
-    * Each stub names its exercise: the ``{exercise}`` of ``ClearSolutions.code_stub`` becomes "exercise 4" for the
-      cell ``ex4_solution`` ("question 2" for ``q2_...``), so a later cell that needs the answer can say which
-      exercise to finish (``fusionlab.checks`` reads it back).
+    * Each stub names its exercise: the ``{stub}`` of ``ClearSolutions.code_stub`` becomes the line
+      :func:`fusionlab.labformat.stub` makes for the cell (``raise NotImplementedError('exercise 4 not attempted
+      yet')`` for ``ex4_solution``), so a later cell that needs the answer can say which exercise to finish
+      (``fusionlab.checks`` reads it back with :func:`fusionlab.labformat.unfinished`).
     * Every code cell that can fail in an untouched lab gets the tag ``raises-exception``, on which JupyterLab's
       Run All goes on instead of stopping: the answer, check and test cells, and every cell that uses a name an
       answer cell makes, directly or through another such cell (read from the solution source, before clearing).
@@ -70,11 +72,6 @@ class ClearSolutionsForRunAll(ClearSolutions):
     """
 
     TAG = "raises-exception"
-
-    @staticmethod
-    def exercise(cell):
-        m = re.match(r"(ex|q)(\d+[a-z]?)_", cell.metadata.get("nbgrader", {}).get("grade_id", ""))
-        return f"{'exercise' if m.group(1) == 'ex' else 'question'} {m.group(2)}" if m else "this exercise"
 
     @staticmethod
     def names(source):
@@ -119,7 +116,8 @@ class ClearSolutionsForRunAll(ClearSolutions):
 
     def preprocess_cell(self, cell, resources, cell_index):
         stubs = self.code_stub
-        self.code_stub = {lang: stub.replace("{exercise}", self.exercise(cell)) for lang, stub in stubs.items()}
+        line = labformat.stub(cell.metadata.get("nbgrader", {}).get("grade_id"))
+        self.code_stub = {lang: stub.replace("{stub}", line) for lang, stub in stubs.items()}
         try:
             return super().preprocess_cell(cell, resources, cell_index)
         finally:
@@ -133,11 +131,10 @@ c.CourseDirectory.source_directory = "solutions"
 c.CourseDirectory.release_directory = "labs"
 c.CourseDirectory.db_url = "sqlite:///gradebook.db"
 
-# What a student sees where a solution was: say what to do, not just "raise NotImplementedError()". {exercise} is
+# What a student sees where a solution was: say what to do, not just "raise NotImplementedError()". {stub} is
 # filled in per cell (ClearSolutionsForRunAll above), which also tags the cells Run All must not stop at.
 c.ClearSolutions.code_stub = c.ClearSolutionsForRunAll.code_stub = {
-    "python": "# YOUR CODE HERE -- replace this line with your answer (see the exercise above)\n"
-              "raise NotImplementedError('{exercise} not attempted yet')"}
+    "python": "# YOUR CODE HERE -- replace this line with your answer (see the exercise above)\n{stub}"}
 c.GenerateAssignment.preprocessors = [ClearSolutionsForRunAll if p is ClearSolutions else p
                                       for p in GenerateAssignment.class_traits()["preprocessors"].default()]
 c.ClearSolutions.text_stub = c.ClearSolutionsForRunAll.text_stub = \

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import nbformat
 
+from fusionlab import labformat
 from grading.classgrade import _env
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,9 +37,9 @@ def fill_answers(release, solution, exercises):
     nb = nbformat.from_dict(release)
     answers = {grade_id(c): c.source for c in solution.cells if grade_id(c)}
     for cell in nb.cells:
-        m = re.fullmatch(r"ex(\d+)_solution", grade_id(cell) or "")
-        if m and int(m.group(1)) in exercises:
-            cell.source = "\n".join(line for line in answers[m.group(0)].splitlines() if "### " not in line)
+        g = labformat.parse(grade_id(cell))
+        if g and g.kind == "ex" and g.role == "solution" and int(g.number) in exercises:
+            cell.source = "\n".join(line for line in answers[grade_id(cell)].splitlines() if "### " not in line)
     return nb
 
 

@@ -51,7 +51,7 @@ from pathlib import Path
 
 import nbformat
 
-from fusionlab import guard
+from fusionlab import guard, labformat
 from grading import box as wire
 from grading import sandbox
 from grading.outputs import Budget
@@ -106,7 +106,8 @@ def is_answer(cell):
 
 
 def is_check(cell):
-    return cell.get("cell_type") == "code" and (grade_id(cell) or "").endswith("_check") and not is_answer(cell)
+    g = labformat.parse(grade_id(cell))
+    return cell.get("cell_type") == "code" and g is not None and g.role == "check" and not is_answer(cell)
 
 
 def python_of(source):
@@ -165,7 +166,7 @@ def _without_guard_calls(source):
 # ---------------------------------------------------------------------------------------------------------------
 
 def _judge_guard():
-    from fusionlab import guard
+    from fusionlab import guard, labformat
 
     def grade(student_fn, reference_fn, cases, *, forbid=(), **kw):
         return guard.grade(student_fn, reference_fn, cases, forbid=(), **kw)
@@ -485,7 +486,7 @@ class Lab:
         self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
         self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
         self.points = {grade_id(c): float(nbg(c).get("points", 0)) for c in release.cells if is_test(c)}
-        setup = [c for c in release.cells if grade_id(c) == "imports"] or \
+        setup = [c for c in release.cells if grade_id(c) == labformat.SETUP] or \
                 [c for c in release.cells if c.cell_type == "code" and not is_answer(c)][:1]
         self.setup_source = _without_guard_calls(setup[0].source) if setup else ""
         self._base = None
@@ -597,7 +598,7 @@ class Lab:
             if is_test(mine) or is_check(mine):
                 continue
             answer = is_answer(mine) or not nbg(mine).get("locked")
-            cells.append((gid, python_of(source if answer else mine.source), answer or gid == "imports"))
+            cells.append((gid, python_of(source if answer else mine.source), answer or gid == labformat.SETUP))
         return [(gid, src) for gid, src, _ in prune(cells, need)], notes
 
     def _release_cell(self, gid):
@@ -902,8 +903,7 @@ def test_parts(source):
 def hidden_failure(gid, exc, lab):
     """What a hidden test may say of its failure ``exc``: the exercise and the kind of failure, never a value,
     an expected number or any text of the student's code (which saw the hidden inputs)."""
-    number = re.match(r"ex(\d+)_", gid or "")
-    where = f"exercise {number.group(1)}, hidden tests" if number else f"{gid}, hidden tests"
+    where = f"{labformat.label(gid) if labformat.parse(gid) else gid}, hidden tests"
     if isinstance(exc, ReplyTooLarge):
         kind = f"your code sent back more than the judge reads (a reply over {MAX_REPLY_BYTES >> 20} MB)"
     elif isinstance(exc, BoxTimeout):

@@ -26,12 +26,13 @@ import ast
 import csv
 import functools
 import io
-import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import nbformat
+
+from fusionlab import labformat
 
 K, WINDOW = 20, 6          # k-gram length and winnowing window (copydetect's scale: normalised characters)
 MIN_TOKENS = 80            # matched normalised characters for a pair of classmates to be listed
@@ -144,7 +145,8 @@ def answers(nb):
     out = {}
     for cell in nb.cells:
         gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
-        if cell.get("cell_type") == "code" and re.fullmatch(r"ex\d+[a-z]?_solution", gid or "") and gid not in out:
+        g = labformat.parse(gid)
+        if cell.get("cell_type") == "code" and g and g.kind == "ex" and g.role == "solution" and gid not in out:
             out[gid] = "\n".join(line for line in cell.get("source", "").splitlines() if "### " not in line)
     return out
 

@@ -15,7 +15,7 @@ LIB = ROOT / "lib" / "fusionlab"
 # Bottom to top: LAYERS[0] is row 1. A planned module that does not exist (yet) is fine; an existing module
 # without a row is not (a new module must be placed).
 LAYERS = (
-    ("validate", "guard"),                                                    # 1 numpy and the standard library only
+    ("validate", "guard", "labformat"),                                       # 1 numpy and the standard library only
     ("rotations", "earth"),                                                   # 2 the one convention, Earth constants
     ("conventions", "sensors", "accel_tilt", "inertial", "sensor_errors",     # 3 models on the convention, the seeds'
      "signals", "metrics", "calibration", "kalman"),                          #   conventions at the edge, metrics

@@ -15,7 +15,7 @@ import traceback
 
 import numpy as np
 
-from .. import datasets, guard
+from .. import datasets, guard, labformat
 from .exercises import EXERCISES
 
 __all__ = ["Feedback", "friendly_errors", "describe_difference", "check_close"]
@@ -152,8 +152,8 @@ def _where(got, expected, name, **tol):
 # ---------------------------------------------------------------------------------------------------------------
 # Unfinished exercises and the NameErrors they cause downstream
 # ---------------------------------------------------------------------------------------------------------------
-# The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (nbgrader_config.py names the
-# exercise). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
+# The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (fusionlab.labformat.stub, as
+# nbgrader_config.py writes them). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
 # NameError looks up the last cell that assigns the missing name (or, if none does, the last stopped cell that names
 # it), and if that cell stopped at an exercise, says which one; so does a provided test's bare ``assert`` about such a
 # name. Each is one short box, like a check's Feedback; a NameError of unknown origin (a slip in the student's own
@@ -163,14 +163,9 @@ def _where(got, expected, name, **tol):
 _HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
          "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
          "cell again.")
-_STUB = re.compile(r"\b(exercise|question)\s+([0-9]+[a-z]?)\s+not attempted yet")
 _stopped = {}                            # execution count of a cell that stopped -> the exercises it waits for
 
 
-def _unfinished(evalue):
-    """``'exercise 4'`` when ``evalue`` is a release stub's NotImplementedError, else None."""
-    m = _STUB.search(str(evalue))
-    return f"{m.group(1)} {m.group(2)}" if m else None
 
 
 def _assigned_names(source):
@@ -279,7 +274,7 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
         else:
             _show_box(shell, etype, evalue, tb, message)
         return None
-    what = _unfinished(evalue)
+    what = labformat.unfinished(evalue)
     if what is None:                                          # a NotImplementedError of the student's own
         shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         return None

@@ -1,0 +1,83 @@
+"""How a lab notebook is laid out for nbgrader: the grade ids of its cells, the stub an answer becomes in the release,
+and the setup cell. Formatted and parsed here only, so the course's nbgrader configuration, the student's feedback
+(:mod:`fusionlab.checks`) and the grading tools read one grammar.
+
+Grade ids (``grade_id`` in a cell's nbgrader metadata):
+
+* ``header`` (the title cell), ``imports`` (the setup cell every lab runs first);
+* ``ex4_solution`` (the answer the student writes), ``ex4_check`` (its visible check), ``ex4_tests`` (the locked
+  autograder cell: visible tests, then nbgrader's hidden tests);
+* ``q2`` (a written question, graded by hand), ``q2_answer`` / ``q2_check`` (a question answered in code).
+
+Examples
+--------
+>>> parse("ex4_tests")
+GradeId(kind='ex', number='4', role='tests')
+>>> label("q2_answer"), stub("ex4_solution")
+('question 2', "raise NotImplementedError('exercise 4 not attempted yet')")
+>>> unfinished("NotImplementedError: exercise 4 not attempted yet")
+'exercise 4'
+"""
+from __future__ import annotations
+
+import re
+from typing import NamedTuple
+
+__all__ = ["HEADER", "SETUP", "GradeId", "parse", "solution_id", "check_id", "autograder_id", "label", "stub",
+           "unfinished"]
+
+HEADER = "header"
+SETUP = "imports"
+_GRADE_ID = re.compile(r"(?P<kind>ex|q)(?P<number>[0-9]+[a-z]?)(?:_(?P<role>solution|check|tests|answer))?")
+_STUB = "raise NotImplementedError('{label} not attempted yet')"
+_UNFINISHED = re.compile(r"\b(exercise|question)\s+([0-9]+[a-z]?)\s+not attempted yet")
+
+
+class GradeId(NamedTuple):
+    """A grade id read: ``kind`` ``'ex'`` or ``'q'``, ``number`` (``'4'``, ``'2b'``), ``role`` (``'solution'``,
+    ``'check'``, ``'tests'``, ``'answer'``, or ``''`` for a written question)."""
+
+    kind: str
+    number: str
+    role: str
+
+
+def parse(grade_id):
+    """The :class:`GradeId` of an exercise's or a question's cell, or None (``header``, ``imports``, anything else)."""
+    m = _GRADE_ID.fullmatch(grade_id or "")
+    return GradeId(m["kind"], m["number"], m["role"] or "") if m else None
+
+
+def solution_id(number):
+    """``ex4_solution``: the grade id of exercise ``number``'s answer cell."""
+    return f"ex{number}_solution"
+
+
+def check_id(number):
+    """``ex4_check``: the grade id of exercise ``number``'s visible check."""
+    return f"ex{number}_check"
+
+
+def autograder_id(number):
+    """``ex4_tests``: the grade id of exercise ``number``'s autograder cell."""
+    return f"ex{number}_tests"
+
+
+def label(grade_id):
+    """``'exercise 4'`` for the cells of exercise 4, ``'question 2'`` for those of question 2, else
+    ``'this exercise'``."""
+    g = parse(grade_id)
+    if g is None:
+        return "this exercise"
+    return f"{'exercise' if g.kind == 'ex' else 'question'} {g.number}"
+
+
+def stub(grade_id):
+    """The line an answer cell's solution becomes in the release: it raises, naming the exercise to do."""
+    return _STUB.format(label=label(grade_id))
+
+
+def unfinished(text):
+    """``'exercise 4'`` when ``text`` holds the error of a release stub (:func:`stub`), else None."""
+    m = _UNFINISHED.search(str(text))
+    return f"{m.group(1)} {m.group(2)}" if m else None
