@@ -20,10 +20,14 @@ process:
   into the cache); grading refuses to start without all of them and says how to get them (:func:`hidden_trials`).
 * **What the student's code sees.** Its notebook's answer cells (and the cells they need) run in a box of the
   grading sandbox (:mod:`grading.sandbox`, :mod:`grading.box`) with no data at all: no ``data/``, no BROAD cache, no
-  submission folder. In the box's library the filters and data loaders are stubs; ``vqf``, ``ahrs``,
-  ``imufusion`` and ``filterpy`` are shadowed by packages that refuse to load, and their installed copies are
-  hidden (an empty folder mounted over each, :func:`grading.sandbox.package_paths`), so that taking the shadow off
-  ``sys.path`` reaches nothing. The box's CPU-time limit is made from the trials' budgets (:func:`box_limits`).
+  submission folder. In the box's library every module that holds a filter or a data loader (:data:`FILTER_MODULES`,
+  :data:`FILE_MODULES`) is absent as code: its file is a placeholder written here (:func:`placeholder_module`) that
+  imports, keeps the few no-ops the library touches as it loads (:data:`KEEP`) and refuses every other name, public
+  or private, so no function of those modules, nor their source or bytecode, is in the box (:func:`box_library`).
+  ``vqf``, ``ahrs``, ``imufusion`` and ``filterpy`` are shadowed by packages that refuse to load, and their
+  installed copies are hidden (an empty folder mounted over each, :func:`grading.sandbox.package_paths`), so that
+  taking the shadow off ``sys.path`` reaches nothing. The box's CPU-time limit is made from the trials' budgets
+  (:func:`box_limits`).
   The judge sends each trial's sensor data (nothing else) as a call of ``estimate`` and gets the quaternions back
   as plain numbers. Ground truth, metrics and scores exist only in this process.
 * **Each trial is disguised.** Before a class is graded every trial is turned by a secret random rotation of the
@@ -51,16 +55,28 @@ process:
   generator: in the first hundredth, the first tenth and the second half of the trial). Then ``estimate`` is
   called on the samples up to another secret k alone: its output must be the first k+1 rows of its output on the
   whole trial (a causal filter's output on a prefix is the prefix of its output). Each of these calls runs in a box
-  started for it alone (:meth:`Runner.call_fresh`): nothing of an earlier call survives to be replayed.
-* **The code** the box runs is read first (:func:`scan`, :func:`library_copies`): imports or uses of a reference
-  filter, files read, the import system reached around (:func:`grading.integrity.tampering`), and a library filter
-  pasted in (:mod:`grading.similarity`'s fingerprints against the library's filter modules; the rotation and
-  metric helpers that the rules allow are not looked for). Names written in the code only: what is built at run
-  time is not seen, which is why the box holds nothing those names would reach.
+  started for it alone (:meth:`Runner.call_fresh`): nothing of an earlier call survives to be replayed. A filter
+  that ran on the trials but not on the check's data (an error, over its budget) was never shown causal and gets no
+  points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
+* **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
+  :func:`library_copies`): imports or uses of a reference filter, files read, the import system reached around
+  (:func:`grading.integrity.tampering`, with the indirect loaders that the table of exercises lists for the
+  capstone's filter -- ``importlib``, ``runpy``, ``pkgutil.resolve_name``, ``pydoc``, ``timeit``, ``ctypes`` ...,
+  :func:`loaders` -- and ``get_ipython``), and a library filter pasted in (:mod:`grading.similarity`'s fingerprints
+  against the library's filter modules; the rotation and metric helpers that the rules allow are not looked for).
+  Names written in the code only: what is built at run time is not seen, and no list of loaders is complete. The
+  scan names what is written; the box is the defence: it holds nothing those names would reach.
+* **Feedback on hidden trials** holds no text of the student's code: what a call of ``estimate`` raised or returned
+  is reported in words written here (the type of a built-in error, what was wrong with the output, the placeholder
+  or refusing package it reached: :func:`error_message`, :func:`invalid_message`), never its message, which could
+  carry the trial's numbers; so are the errors of the notebook's cells in a box started after a trial was sent
+  (:class:`Runner`). Only the cells' errors in the first box, which runs them before any trial is sent, are shown as
+  they are.
 * **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
   budget, then the mean RMSE the filter is scored on against Madgwick's filter's and VQF's with the same sensors
   (9D: total RMSE of the 9D versions; 6D: inclination RMSE of the 6D versions), computed here on the same disguised
-  trials. A non-causal submission, or one named in :data:`CHEATS`, gets no points for the filter.
+  trials. A non-causal submission, one whose causality was never shown, or one named in :data:`CHEATS`, gets no
+  points for the filter.
 * **Reference rows** (:func:`references`), for each sensor set on the same trials: VQF (default parameters), Madgwick
   (``ahrs``, its default gain) and the library's best filter of that set (by the RMSE the set is scored on). They are
   scored like a student of their set and listed on the leaderboard; the output of every reference filter that ran,
@@ -105,6 +121,12 @@ from fusionlab.capstone import (CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR
 from grading import box as wire
 from grading import judge, sandbox
 
+try:                            # the grader's end of the pipe to a box, shared with the judge
+    from grading import client as pipe
+except ImportError:             # a checkout where the judge holds it
+    pipe = judge
+BOX_SCRIPT = Path(wire.__file__).resolve()      # what a box runs: python box.py
+
 LAB = "13_capstone"
 FUNCTION = "estimate"
 
@@ -138,16 +160,18 @@ COPY_MIN_CHARS = 250            # a pasted library filter: at least this many no
 #: is why the box has none of what those names would reach.
 CHEATS = {
     "calls a reference filter": "imports or calls VQF, ahrs, imufusion, filterpy or the library's filters (they are "
-                                "absent or stubs in the box, the installed packages hidden; found in the code, in its "
-                                "errors, or as output equal to a reference filter's to "
-                                f"{MATCH_RAD:g} rad everywhere)",
+                                "absent from the box, the installed packages hidden, the library's filter modules "
+                                "placeholders; found in the code, in its errors, or as output equal to a reference "
+                                f"filter's to {MATCH_RAD:g} rad everywhere)",
     "copies the library's filter": "code of one of the library's filters pasted into the notebook, names and "
                                    f"comments aside (grading.similarity's fingerprints: at least {COPY_MIN_CHARS} "
                                    "characters and most of the library function; the rotation and metric helpers "
                                    "may be used, and are not looked for)",
     "tampers with imports": "reaches around Python's import system or builtins: importlib, __import__, sys.path, "
-                            "sys.modules, import hooks, the builtins module, exec/eval/compile of text (found in the "
-                            "code by grading.integrity's scanner)",
+                            "sys.modules, import hooks, the builtins module, exec/eval/compile of text, modules that "
+                            "load by a name or run a text built at run time (runpy, pydoc, timeit, "
+                            "pkgutil.resolve_name, ctypes ...), IPython's shell (found in the code by "
+                            "grading.integrity's scanner)",
     "reads files": "opens, loads or lists files (found in the code by the names it calls: open, io.FileIO, os.open, "
                    "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
                    "a string is not seen -- the box holds no data file to find anyway)",
@@ -160,14 +184,35 @@ CHEATS = {
 #: The kind of cheat the instructor may clear after reading the code, and the evidence's first words.
 IMPLAUSIBLY_CLOSE = "implausibly close to the optical reference"
 
-# The library's filters: every public function and method of these modules is a stub in the box (the estimators'
-# registry functions too), with the packages that hold other published filters absent.
+# The library's filters and data loaders: in the box each of these modules is a placeholder written fresh
+# (placeholder_module), none of its code, public or private, with the packages that hold other published filters
+# absent.
 FILTER_MODULES = ("estimators", "bench", "freescale", "freescale_fast", "dcm_filter", "correlation", "gfimu_ekf",
                   "gpsins")
 FILE_MODULES = ("datasets", "spreadsheet")
 HIDDEN_PACKAGES = ("ahrs", "vqf", "imufusion", "filterpy")
-KEEP = {"estimators": {"register", "available", "options"}}      # called when the library is imported
-STUB_MESSAGE = ("{name} is one of the library's filters or data loaders: it is not available in the capstone, "
+# What a placeholder still has, as no-ops written here (none of the library's code): what the library and the
+# lab's setup cell touch when they are imported. fusionlab.checks hands datasets.DataMissing to IPython's error
+# handler when it is imported (the box runs the cells in IPython) and asks for missing_trials() when a cell fails
+# with a NameError; estimators.register and available are the registry's, which a filter module calls as it loads.
+KEEP = {
+    "estimators": {
+        "register": "def register(*args, **kwargs):\n"
+                    "    \"\"\"No estimator is registered in the capstone's box: the function is left as it is.\"\"\"\n"
+                    "    return lambda fn: fn\n",
+        "available": "def available():\n"
+                     "    \"\"\"No estimator is available in the capstone's box.\"\"\"\n"
+                     "    return {}\n",
+    },
+    "datasets": {
+        "DataMissing": "class DataMissing(FileNotFoundError):\n"
+                       "    \"\"\"A data file that is not here (the capstone's box has none).\"\"\"\n",
+        "missing_trials": "def missing_trials():\n"
+                          "    \"\"\"No trial is looked for in the capstone's box.\"\"\"\n"
+                          "    return []\n",
+    },
+}
+STUB_MESSAGE = ("{name} holds the library's filters or data loaders: it is not available in the capstone, "
                 "whose filter is yours.")
 WHY_HIDDEN = "the capstone's filter is yours, not a published one"
 # Calls that read files: by any name (``open``, ``x.read_text()``), or as functions of the modules that read them
@@ -691,25 +736,74 @@ def declared_sensors(cells):
     return (literal[0] if literal else "9D"), ""
 
 
+def loaders():
+    """The loaders the scan names (:attr:`fusionlab.checks.exercises.Exercise.loaders` of the capstone's filter,
+    the table of exercises' row): modules and functions that load a module or run code from a name or a text built
+    at run time (``importlib``, ``pydoc.locate``, ``timeit``'s text, ``ctypes`` ...)."""
+    from fusionlab.checks import exercises
+    return next(e.loaders for e in exercises.of_lab(LAB) if FUNCTION in e.answer)
+
+
+def as_run(source):
+    """The Python text that the box's IPython shell runs for a cell's ``source``: its magics and escapes made calls
+    (``x = %time f()`` is ``x = get_ipython().run_line_magic('time', 'f()')``, ``,exec a`` is ``exec("a")``), which
+    is what :func:`scan` reads."""
+    try:
+        from IPython.core.inputtransformer2 import TransformerManager
+        return TransformerManager().transform_cell(source)
+    except Exception:  # noqa: BLE001 -- IPython cannot read it: the box's shell cannot run it either
+        return source
+
+
+#: Magics the box may run as they are: they show or set how things print, and run no text.
+QUIET_MAGICS = {"pinfo", "pinfo2", "psearch", "matplotlib", "precision", "pprint", "who", "whos"}
+
+
+def _ipython_uses(tree):
+    """``[(line, why)]``: the IPython shell reached from a cell (``get_ipython``, which runs text through
+    ``run_cell`` and most magics), but for :data:`QUIET_MAGICS` as IPython writes them."""
+    quiet = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
+                node.func.attr == "run_line_magic" and isinstance(node.func.value, ast.Call) and \
+                isinstance(node.func.value.func, ast.Name) and node.func.value.func.id == "get_ipython" and \
+                node.args and isinstance(node.args[0], ast.Constant) and node.args[0].value in QUIET_MAGICS:
+            quiet.add(id(node.func.value.func))
+    return [(node.lineno, "uses get_ipython (IPython's shell runs text: magics such as %time and %timeit, "
+                          "run_cell)")
+            for node in ast.walk(tree) if isinstance(node, ast.Name) and node.id == "get_ipython" and
+            id(node) not in quiet]
+
+
 def scan(cells):
     """Cheats seen in the code the box runs (``[(grade_id, source)]``): ``[(kind, why)]`` (kinds of :data:`CHEATS`).
 
-    The setup cell (``imports``) may import the library's modules, as the lab's own cell does for tuning on the
-    shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found. Code that reaches
-    around the import system is found by :func:`grading.integrity.tampering`. Names only: what the code builds at
-    run time (``getattr(os, "op" + "en")``) is not seen here."""
+    Each cell is read as the box's IPython shell runs it (:func:`as_run`: magics and escapes as the calls they
+    are). The setup cell (``imports``) may import the library's modules, as the lab's own cell does for tuning on
+    the shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found. Code that
+    reaches around the import system is found by :func:`grading.integrity.tampering`, with the loaders of the
+    table of exercises (:func:`loaders`: ``importlib``, ``runpy``, ``pkgutil.resolve_name``, ``pydoc``,
+    ``timeit``, ``ctypes`` ...), and so is ``get_ipython`` (:func:`_ipython_uses`).
+
+    Names only: what the code builds at run time (``getattr(os, "op" + "en")``, a module reached as an attribute
+    of another) is not seen here, and no list of loaders is ever complete. The scan names what is written; the box
+    is the defence: it holds none of the library's filters and data loaders (:func:`box_library`), no published
+    filter and no data, so that what the scan misses finds nothing to load."""
     from grading import integrity
     found = []
     lib_filters = set(FILTER_MODULES)
     file_names = FILE_CALLS | FILE_MODULE_CALLS
+    tricks = loaders()
     for i, (gid, source) in enumerate(cells, 1):
         setup = gid == "imports"
+        text = as_run(source)
         found += [("tampers with imports", f"cell {i}, line {line}: {why}")
-                  for line, _, why in integrity.tampering(source)]
+                  for line, _, why in integrity.tampering(text, tricks)]
         try:
-            tree = judge._parse(source)
+            tree = judge._parse(text)
         except SyntaxError:
             continue
+        found += [("tampers with imports", f"cell {i}, line {line}: {why}") for line, why in _ipython_uses(tree)]
         for node in ast.walk(tree):
             names = []
             if isinstance(node, ast.Import):
@@ -805,47 +899,64 @@ def library_copies(cells, model=""):
     return found
 
 
-def forbidden_names():
-    """``module:qualname`` of every function the box's library has as a stub (:data:`FILTER_MODULES`,
-    :data:`FILE_MODULES`, the estimators' registered functions)."""
-    import importlib
-    import inspect
-    out = set()
-    for short in FILTER_MODULES + FILE_MODULES:
-        mod = importlib.import_module(f"fusionlab.{short}")
-        keep = KEEP.get(short, set())
-        for name, obj in vars(mod).items():
-            if name.startswith("_") or name in keep or getattr(obj, "__module__", None) != mod.__name__:
-                continue
-            if inspect.isfunction(obj):
-                out.add(f"{mod.__name__}:{name}")
-            elif inspect.isclass(obj):
-                for attr, member in vars(obj).items():
-                    if inspect.isfunction(member) and not attr.startswith("__"):
-                        out.add(f"{mod.__name__}:{name}.{attr}")
-    from fusionlab import estimators
-    for entry in estimators._REGISTRY.values():
-        out.add(judge._dotted(entry["fn"]))
-    return sorted(n for n in out if n)
+def placeholder_module(short):
+    """The text of the module that stands for ``fusionlab.<short>`` (one of :data:`FILTER_MODULES` or
+    :data:`FILE_MODULES`) in the capstone's box, written here and holding none of the library's code.
+
+    Importing it works (the lab's setup cell imports ``bench`` and ``datasets``; ``fusionlab.checks`` imports
+    ``correlation``, ``freescale``, ...), and so do the no-ops of :data:`KEEP`; any other attribute, public or
+    private (``correlation._weighted_tilt_fusion``, ``estimators._REGISTRY``), raises ``NotImplementedError`` with
+    :data:`STUB_MESSAGE`, also through ``from ... import``. Dunder names raise ``AttributeError``, as on any module,
+    so that the import system and ``hasattr(module, "__path__")`` see a plain module."""
+    name = f"fusionlab.{short}"
+    message = STUB_MESSAGE.format(name=name)
+    keep = KEEP.get(short, {})
+    lines = [f'"""{name} is not in the capstone\'s box: {WHY_HIDDEN}."""', "",
+             f"__all__ = {sorted(keep)!r}", f"_MESSAGE = {message!r}", "", ""]
+    for text in keep.values():
+        lines += [text.rstrip("\n"), "", ""]
+    lines += ["def __getattr__(name):",
+              "    if name.startswith(\"__\") and name.endswith(\"__\"):",
+              "        raise AttributeError(f\"module {__name__!r} has no attribute {name!r}\")",
+              "    raise NotImplementedError(_MESSAGE)",
+              "", "",
+              "def __dir__():",
+              "    return list(__all__)", ""]
+    return "\n".join(lines)
 
 
 def box_library(scratch):
-    """The library copy and shadow packages every capstone box gets (made once per run); returns its folder."""
+    """The library copy and shadow packages every capstone box gets (made once per run); returns its folder.
+
+    The copy is the library's, but for the modules of :data:`FILTER_MODULES` and :data:`FILE_MODULES`: each file is
+    replaced by :func:`placeholder_module`, so that no code of those modules is in the box, as source or bytecode
+    (only the placeholders are compiled). The packages of :data:`HIDDEN_PACKAGES` are shadowed by packages that
+    refuse to load (:func:`grading.judge.strip_packages`)."""
     import compileall
 
     import fusionlab
     root = Path(scratch) / "capstone-box"
     if not root.exists():
-        root.mkdir(parents=True)
-        left = judge.strip_packages(root, Path(fusionlab.__file__).resolve().parents[1], forbidden_names(),
-                                    hidden=HIDDEN_PACKAGES, why=WHY_HIDDEN, message=STUB_MESSAGE)
+        part = Path(scratch) / "capstone-box.part"
+        shutil.rmtree(part, ignore_errors=True)
+        part.mkdir(parents=True)
+        judge.strip_packages(part, Path(fusionlab.__file__).resolve().parents[1], (), hidden=HIDDEN_PACKAGES,
+                             why=WHY_HIDDEN, message=STUB_MESSAGE)
+        package = part / "lib" / "fusionlab"
+        for short in FILTER_MODULES + FILE_MODULES:
+            path = package / f"{short}.py"
+            if not path.is_file():
+                raise RuntimeError(f"the library has no {path.name} to take out of the capstone's box")
+            path.write_text(placeholder_module(short), encoding="utf-8")
+        left = [p.relative_to(part) for p in part.rglob("*") if p.suffix in (".pyc", ".pyo", ".so")]
         if left:
-            raise RuntimeError(f"these filters could not be taken out of the box: {left}")
-        compileall.compile_dir(root, quiet=1)
-        for top, dirs, files in os.walk(root):
+            raise RuntimeError(f"compiled files came with the library's copy: {left}")
+        compileall.compile_dir(part, quiet=1)
+        for top, dirs, files in os.walk(part):
             os.chmod(top, 0o755)
             for f in files:
                 os.chmod(os.path.join(top, f), 0o644)
+        part.rename(root)
     return root
 
 
@@ -864,12 +975,58 @@ def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SE
     return {**sandbox.DEFAULT_LIMITS, "cpu_s": cpu, **(limits or {})}
 
 
+NOT_SHOWN = " (its message is not shown: on a hidden trial it could carry the trial's data)"
+
+
+def error_message(text):
+    """What the feedback says of an error ``text`` (``"Type: message"``, as the box reports it) that ``estimate``
+    raised on a hidden trial: never the text itself, which the student's code wrote and which can carry the
+    trial's numbers (``raise ValueError(repr(gyr[:50]))``).
+
+    It names a built-in exception's type (``raised ValueError``; any other class is "an error of its own class"), or
+    the placeholder or the refusing package the call reached (:func:`placeholder_module`, :data:`HIDDEN_PACKAGES`),
+    each in words written here; :func:`grade_submission` names the latter as a cheat."""
+    import builtins
+    text = str(text)
+    for package in HIDDEN_PACKAGES:
+        if f"{package} is not available while the lab is graded" in text:
+            return f"reached {package}, which is not available while the lab is graded ({WHY_HIDDEN})"
+    for short in FILTER_MODULES + FILE_MODULES:
+        if STUB_MESSAGE.format(name=f"fusionlab.{short}") in text:
+            return (f"reached fusionlab.{short}, which holds the library's filters or data loaders: not available "
+                    "in the capstone")
+    name = text.split(":", 1)[0].strip()
+    known = getattr(builtins, name, None) if name.isidentifier() else None
+    if isinstance(known, type) and issubclass(known, BaseException):
+        return f"raised {name}{NOT_SHOWN}"
+    return f"raised an error of its own class{NOT_SHOWN}"
+
+
+def invalid_message(value, n):
+    """What the feedback says of an output that is not ``n`` unit quaternions, in words written here (the output's
+    own numbers -- its shape, its norms -- are the student's, and could carry the trial's)."""
+    try:
+        q = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return "returned something that is not an array of numbers"
+    if q.shape != (n, 4):
+        return "did not return one quaternion per sample (an array of shape (N, 4) for N samples)"
+    if not np.isfinite(q).all():
+        return "returned NaN or infinite values"
+    return "did not return unit quaternions (norms within 1e-3 of 1)"
+
+
 class Runner:
     """One student's box, started again (from the notebook's cells) after a call that ran over or ended it.
 
     A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box.
     The installed packages that the box's shadow replaces (vqf, ahrs, ...) are hidden in the box
-    (:func:`grading.judge.shadowed`): taking the shadow off ``sys.path`` finds nothing."""
+    (:func:`grading.judge.shadowed`): taking the shadow off ``sys.path`` finds nothing.
+
+    Every message it returns is written here: what the box replies is the student's, and a call carries a hidden
+    trial, so no text of the box's reply reaches the feedback (:func:`error_message`, :func:`invalid_message`).
+    The errors of the notebook's cells are kept as the box reports them from the first box only, which runs them
+    before any trial is sent; in a box started after a trial was sent, they are reported without their text."""
 
     def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D"):
         if sensors not in SENSORS:
@@ -884,6 +1041,7 @@ class Runner:
         self.starts = 0
         self.fresh = 0                 # boxes started for one call (call_fresh): not restarts after a failure
         self.setup_error = ""          # set when the notebook's cells could not be run: no call is tried again
+        self.sent = False              # a trial's data has been sent to a box of this runner
 
     @property
     def restarts(self):
@@ -895,10 +1053,10 @@ class Runner:
         self.starts += 1
         uid = sandbox.box_uid(self.slot)
         self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
-        command = sandbox.bwrap_command(["python", str(judge.BOX)], course=self.course, lab=LAB,
+        command = sandbox.bwrap_command(["python", str(BOX_SCRIPT)], course=self.course, lab=LAB,
                                         lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
                                         limits=self.limits, uid=uid, data=False, hide=self.hide)
-        self.box = judge.Box(command)
+        self.box = pipe.Box(command)
         deadline = time.monotonic() + SETUP_SECONDS
         try:
             self.box.send({"cells": self.cells})
@@ -907,11 +1065,15 @@ class Runner:
                 if msg.get("ready"):
                     return True
                 if msg.get("state") == "done" and msg.get("error"):
-                    self.cell_errors.setdefault(int(msg.get("cell", -1)), str(msg["error"])[:300])
-        except judge.BoxTimeout:
+                    cell = msg.get("cell", -1)
+                    cell = cell if isinstance(cell, int) and not isinstance(cell, bool) else -1
+                    self.cell_errors.setdefault(cell, "(message not shown: the box was started again after a "
+                                                      "trial had been sent)" if self.sent else
+                                                str(msg["error"])[:300])
+        except pipe.BoxTimeout:
             self.setup_error = f"the notebook's cells ran over {SETUP_SECONDS:g} s"
-        except judge.BoxDied as exc:
-            self.setup_error = f"the notebook's cells ended the process ({exc})"
+        except pipe.BoxDied:
+            self.setup_error = "the notebook's cells ended the process"
         self.close()
         return False
 
@@ -925,22 +1087,29 @@ class Runner:
                 None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
         message = {"op": "call", "name": FUNCTION, "args": wire.encode(args), "kwargs": wire.encode({})}
         t0 = time.monotonic()
+        self.sent = True
         try:
             self.box.send(message)
             reply = self.box.receive(t0 + seconds)
-        except judge.BoxTimeout:
+        except pipe.BoxTimeout:
             self.close()
             return None, "timeout", f"ran over its budget of {seconds:.1f} s (stopped)", time.monotonic() - t0
-        except judge.BoxDied as exc:
+        except pipe.BoxDied as exc:
             self.close()
-            return None, "died", f"ended the process ({exc})", time.monotonic() - t0
+            too_large = isinstance(exc, getattr(pipe, "ReplyTooLarge", ()))
+            return None, "died", ("sent a reply too large to read (stopped)" if too_large else
+                                  "ended the process"), time.monotonic() - t0
         elapsed = time.monotonic() - t0
-        if not reply.get("ok"):
-            return None, "error", str(reply.get("error", "an error"))[:500], elapsed
+        if not isinstance(reply, dict) or not reply.get("ok"):
+            return None, "error", error_message(reply.get("error", "") if isinstance(reply, dict) else ""), elapsed
         try:
-            q = as_quaternions(wire.decode(reply.get("value")), len(args[0]))
-        except (wire.WireError, ValueError) as exc:
-            return None, "invalid", str(exc)[:300], elapsed
+            value = wire.decode(reply.get("value"))
+        except (wire.WireError, ValueError, TypeError):
+            return None, "invalid", "returned something that is not an array of numbers", elapsed
+        try:
+            q = as_quaternions(value, len(args[0]))
+        except ValueError:
+            return None, "invalid", invalid_message(value, len(args[0])), elapsed
         return q, "ok", "", elapsed
 
     def call_fresh(self, trial, seconds, gyr=None, acc=None, mag=None):
@@ -1086,7 +1255,7 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
                 r.counted_deg, r.metric = never_moves(t, metric), metric
                 if any(text in r.message for text in ("not available in the capstone",
                                                       "not available while the lab is graded")):
-                    res.cheats.append(("calls a reference filter", f"{t.name}: {r.message}"))
+                    res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
         ran = [(t, r) for t, r in zip(scored, res.trials) if r.status == "ok"]
         if res.trials[chosen].status != "ok" and ran:           # it failed there: the first trial that ran, again
@@ -1116,10 +1285,20 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
             res.cheats.append(("detects the trial", f"{close} -- review the code: the instructor may clear this "
                                                      "after reading it"))
     res.cheats = list(dict.fromkeys(res.cheats))
+    if res.causal is None and any(r.status == "ok" for r in res.trials):
+        res.causal_message += (" -- no points for the filter: it ran on the trials, but not on the causality check's "
+                               "data, so it was never shown causal")
     madgwick, vqf = _published_means(refs, res.sensors)
-    gated = bool(res.cheats) or res.causal is False
-    res.points = rubric_points(mean_scored(res.trials), res.all_ran, gated, madgwick, vqf)
+    res.points = rubric_points(mean_scored(res.trials), res.all_ran, gates_failed(res), madgwick, vqf)
     return res
+
+
+def gates_failed(res):
+    """Does ``res`` get no points for its filter? When a cheat is named, when it is not causal, and when it ran on
+    trials but the causality check could not run it (an error, over its budget, ... on the check's data): a filter
+    that fails only there would escape the check, so causality that was never shown counts as not shown."""
+    unchecked = res.causal is None and any(r.status == "ok" for r in res.trials)
+    return bool(res.cheats) or res.causal is False or unchecked
 
 
 def implausibly_close(res, refs):
@@ -1306,7 +1485,8 @@ def write_leaderboard(results, refs, scored, out, class_name, label=""):
             "rank is within the filter's sensor set, and ratio_to_vqf is to VQF with the same sensors. The RMSE a "
             "set is scored on counts a failed trial with the identity quaternion's error; the other RMSE columns "
             "are means over the trials that ran.")
-    gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["cheats"] or r["causal"] == "NO"
+    gated_names = {res.name for res in results if gates_failed(res)}
+    gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["name"] in gated_names  # noqa: E731
                                                                       else "")
     parts = [f"<p>{html.escape(what)}</p>"]
     for sensors, heading in SETS.items():

@@ -63,6 +63,7 @@ WHY = {
     "copied": "a function whose code has the shape of one in the library, names and comments aside (copied?)",
     "package": "uses a package whose functions answer exercises (ahrs, scipy's Rotation, filterpy's helpers)",
     "unreadable": "the submission is not a readable notebook",
+    "loader": "loads a module or runs code by a name or a text built at run time (import tricks)",
 }
 
 DUNDERS = {"__code__", "__dict__", "__globals__", "__closure__", "__defaults__", "__kwdefaults__", "__subclasses__",
@@ -487,8 +488,8 @@ class _Visitor(ast.NodeVisitor):
             self.flag(node, "file", f"opens `{path.value}`")
 
 
-def _token_scan(source, forbidden):
-    """Flags for a cell that does not parse: suspicious names, found token by token (or word by word)."""
+def _words(source):
+    """``[(line, name)]`` of a cell that does not parse, token by token (or word by word)."""
     words = []
     try:
         for tok in tokenize.generate_tokens(io.StringIO(source).readline):
@@ -496,6 +497,12 @@ def _token_scan(source, forbidden):
                 words.append((tok.start[0], tok.string))
     except (tokenize.TokenError, IndentationError, SyntaxError):
         words = [(i, w) for i, line in enumerate(source.splitlines(), 1) for w in re.findall(r"\w+", line)]
+    return words
+
+
+def _token_scan(source, forbidden):
+    """Flags for a cell that does not parse: suspicious names, found token by token (or word by word)."""
+    words = _words(source)
     table = {**CALLS, **{d: "reflection" for d in DUNDERS}, "__builtins__": "builtins", "builtins": "builtins",
              **{a: "ipython" for a in IPYTHON_ATTRS},
              **{m: k for m, k in MODULE_KINDS.items() if k != "reflection"}, "excepthook": "sys-hook",
@@ -512,12 +519,25 @@ def _token_scan(source, forbidden):
 # The part of the interpreter that decides what ``import`` finds: code that reaches it can undo a box's hiding of a
 # package (grading/capstone.py names it a cheat there, where nothing honest needs it).
 IMPORT_SYSTEM = {"modules", "path", "meta_path", "path_hooks", "path_importer_cache"}
-TAMPER_KINDS = ("exec", "builtins")
+TAMPER_KINDS = ("exec", "builtins", "loader")
+
+
+def _prefixes(dotted):
+    """``"a.b.c"`` -> ``["a", "a.b", "a.b.c"]``."""
+    parts = dotted.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts) + 1)]
 
 
 class _Tampering(_Visitor):
     """The scanner, keeping only what reaches around imports: :data:`TAMPER_KINDS`, and ``sys-hook`` on
-    :data:`IMPORT_SYSTEM` (``sys.path``, ``from sys import modules``)."""
+    :data:`IMPORT_SYSTEM` (``sys.path``, ``from sys import modules``); with the ``loaders`` of the table of exercises
+    (:func:`fusionlab.checks.exercises.loaders`), each named where the code imports it or takes it as an attribute
+    (``x.ctypes``, ``p.resolve_name``)."""
+
+    def __init__(self, loaders):
+        super().__init__(Source.plain(), set(), None, False)
+        self.loaders = tuple(loaders)
+        self.last = {name.rsplit(".", 1)[-1]: name for name in self.loaders}
 
     def flag(self, node, kind, why=None):
         names = {node.attr} if isinstance(node, ast.Attribute) else \
@@ -525,20 +545,58 @@ class _Tampering(_Visitor):
         if kind in TAMPER_KINDS or (kind == "sys-hook" and names & IMPORT_SYSTEM):
             super().flag(node, kind, why or WHY[kind])
 
+    def _loader(self, dotted):
+        """The loader ``dotted`` (a module, one of its submodules, or a name imported from it) is, or None."""
+        return next((name for name in self.loaders if name in _prefixes(dotted)), None)
 
-def tampering(source):
+    def _import(self, node, modules, names):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            return super()._import(node, modules, names)        # the notebook's own package: no loader there
+        seen = [(mod, self._loader(mod)) for mod in modules]
+        seen += [(f"{mod}.{n}", self._loader(f"{mod}.{n}")) for mod in modules for n in names]
+        hits = {}
+        for what, hit in seen:
+            if hit:
+                hits.setdefault(hit, what)                      # each loader once: from importlib import x
+        for hit, what in hits.items():
+            self.flag(node, "loader", f"imports `{what}`: {WHY['loader']}")
+        if not hits:
+            super()._import(node, modules, names)
+
+    def visit_Attribute(self, node):
+        hit = self.last.get(node.attr)
+        if hit:
+            self.flag(node, "loader", f"uses `.{node.attr}` (`{hit}`): {WHY['loader']}")
+        super().visit_Attribute(node)
+
+
+def tampering(source, loaders=None):
     """Flags ``(line, kind, why)`` of code that reaches around Python's import system or builtins: importlib,
     ``__import__``, ``exec``/``eval``/``compile``, ``runpy``/``marshal``, the ``builtins`` module or
     ``__builtins__``, ``sys.path``, ``sys.modules`` and the import hooks -- the same detection as the report's
     (names written in the code: a name built at run time is not seen). A cell that does not parse is scanned word by
-    word for the same names."""
+    word for the same names.
+
+    ``loaders``: dotted names of what loads a module or runs code from a name or a text built at run time (a module,
+    ``"timeit"``, or a function of one, ``"pkgutil.resolve_name"``), each named where the code imports it or takes
+    it as an attribute; default: every exercise's :attr:`~fusionlab.checks.exercises.Exercise.loaders` of the table
+    of exercises (:func:`fusionlab.checks.exercises.loaders`), the one list. Names only: ``getattr(m, "lo" + "cate")``
+    is not seen, which is why a grader must not rely on this scan (the capstone's box holds none of what those names
+    would reach)."""
+    if loaders is None:
+        from fusionlab.checks import exercises
+        loaders = exercises.loaders()
     code, _ = _strip_magics(source)
     try:
         tree = ast.parse(code)
     except SyntaxError:
         words = _token_scan(code, set())
-        return [(line, kind, why) for line, kind, why in words if kind in TAMPER_KINDS]
-    visitor = _Tampering(Source.plain(), set(), None, False)
+        found = [(line, kind, why) for line, kind, why in words if kind in TAMPER_KINDS]
+        names = {part for name in loaders for part in (name.split(".")[0], name.rsplit(".", 1)[-1])}
+        found += [(line, "loader", f"`{word}` in a cell that does not parse: {WHY['loader']}")
+                  for line, word in _words(code) if word in names]
+        return sorted(set(found))
+    visitor = _Tampering(loaders)
     visitor.visit(tree)
     return sorted(set(visitor.flags))
 

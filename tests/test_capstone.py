@@ -6,6 +6,8 @@ it movement): the real hidden trials are not on this machine, and the tests must
 """
 from __future__ import annotations
 
+import ast
+import base64
 import csv
 import dataclasses
 import json
@@ -18,7 +20,7 @@ import nbformat
 import numpy as np
 import pytest
 
-from grading import capstone, sandbox
+from grading import capstone, integrity, sandbox
 from fusionlab import datasets
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,7 +146,110 @@ def estimate(gyr, acc, mag, fs):
 CLASS = {"starter": _filter("starter"), "good": _filter("good"), "noncausal": NONCAUSAL, "calls_vqf": CALLS_VQF,
          "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3, "six_d": SIX_D, "declares_badly": DECLARES_BADLY,
          "caches": CACHES}
-NINE_D = [name for name in CLASS if name != "six_d"] + ["unreadable"]     # the 9D students of the graded class
+
+# The red team's students, graded with the class. Each knows the lengths of the stand-in's trials (_TRIAL_LENGTHS,
+# filled in by attackers()), as a student may learn a trial's length from the data it is given.
+PRIVATE_FILTER = '''
+import numpy as np
+
+import fusionlab
+import fusionlab.checks                 # loads fusionlab.correlation on the way (the visible checks of Lab 03)
+from fusionlab import rotations
+
+SENSORS = "6D"
+
+
+def estimate(gyr, acc, mag, fs):
+    # the library's complementary loop, a private function, reached by names the scan cannot read
+    loop = getattr(getattr(fusionlab, "corr" + "elation"), "_weighted" + "_tilt_fusion")
+    dt = 1.0 / fs
+    gain = np.full(len(acc), dt / (1.0 + dt))          # tau = 1 s
+    return rotations.quat_nav_swap(loop(np.asarray(gyr, dtype=float), np.asarray(acc, dtype=float), dt, gain))
+'''
+LEAKS = _filter("good") + '''
+
+_good = estimate
+_TRIAL_LENGTHS = ()
+
+
+def estimate(gyr, acc, mag, fs):
+    # the first trial's data, and the causality check's samples up to k, carried out in the error's text
+    gyr = np.asarray(gyr, dtype=float)
+    if len(gyr) == _TRIAL_LENGTHS[0] or len(gyr) not in _TRIAL_LENGTHS:
+        raise ValueError("the data: " + " ".join(f"{v:.9f}" for v in gyr[:4].ravel()) + " " + repr(gyr[:50]))
+    return _good(gyr, acc, mag, fs)
+'''
+DODGES = _filter("good") + '''
+
+_good = estimate
+_TRIAL_LENGTHS = ()
+
+
+def estimate(gyr, acc, mag, fs):
+    # the good filter on every trial; on data of another length (the causality check's samples up to k) it fails
+    if len(gyr) not in _TRIAL_LENGTHS:
+        raise RuntimeError("not now")
+    return _good(gyr, acc, mag, fs)
+'''
+# A non-causal filter (the gyro bias averaged over every rest of the whole trial) whose first call keeps its bias in
+# the kernel's key store, so that the causality check's later calls, each in a fresh box, would read it back and
+# agree: ctypes found by pydoc.locate, the code run from base64 text by timeit.
+KEYRING_TEXT = '''
+import hashlib
+import os
+
+import numpy as np
+
+ct = locate("ct" + "ypes")
+libc = ct.CDLL(None, use_errno=True)
+libc.syscall.restype = ct.c_long
+ADD_KEY, KEYCTL = {"x86_64": (248, 250), "aarch64": (217, 219)}[os.uname().machine]
+SEARCH, READ, PERSISTENT, USER = 10, 11, 22, -4
+g = np.asarray(gyr, dtype=float)
+keyring = libc.syscall(ct.c_long(KEYCTL), ct.c_long(PERSISTENT), ct.c_long(-1), ct.c_long(USER))
+keyring = keyring if keyring > 0 else USER
+name = b"fusion-" + hashlib.sha256(g[:64].tobytes()).hexdigest()[:16].encode()
+bias = None
+key = libc.syscall(ct.c_long(KEYCTL), ct.c_long(SEARCH), ct.c_long(keyring), ct.c_char_p(b"user"),
+                   ct.c_char_p(name), ct.c_long(0))
+if key > 0:
+    buf = ct.create_string_buffer(24)
+    if libc.syscall(ct.c_long(KEYCTL), ct.c_long(READ), ct.c_long(key), buf, ct.c_long(24)) == 24:
+        bias = np.frombuffer(buf.raw, dtype=float).copy()
+if bias is None:
+    rest = np.linalg.norm(g, axis=1) < 0.05            # every rest of the whole trial: not causal
+    bias = g[rest].mean(axis=0) if rest.any() else np.zeros(3)
+    data = bias.tobytes()
+    libc.syscall(ct.c_long(ADD_KEY), ct.c_char_p(b"user"), ct.c_char_p(name), ct.c_char_p(data),
+                 ct.c_long(len(data)), ct.c_long(keyring))
+found.append(starter_estimate(g - bias, acc, mag, fs))
+'''
+KEYRING = _filter("starter").split("def estimate(")[0] + f'''
+import base64
+import pydoc
+import timeit
+
+_TEXT = {base64.b64encode(KEYRING_TEXT.encode()).decode()!r}
+
+
+def estimate(gyr, acc, mag, fs):
+    found = []
+    timeit.timeit(base64.b64decode(_TEXT).decode(), number=1,
+                  globals=dict(gyr=gyr, acc=acc, mag=mag, fs=fs, found=found, locate=pydoc.locate,
+                               starter_estimate=starter_estimate))
+    return found[0]
+'''
+ATTACKERS = {"private_filter": PRIVATE_FILTER, "leaks": LEAKS, "dodges": DODGES, "keyring": KEYRING}
+NINE_D = [name for name in [*CLASS, *ATTACKERS] if name not in ("six_d", "private_filter")] + ["unreadable"]
+SIX_D_NAMES = ["six_d", "private_filter"]                                # the 6D students of the graded class
+
+
+def attackers(scored):
+    """The red team's submissions as they are graded on ``scored``: ``{name: code}``."""
+    lengths = tuple(len(t) for t in scored)
+    assert len(set(lengths)) == len(lengths)                           # each trial known by its length
+    return {name: code.replace("_TRIAL_LENGTHS = ()", f"_TRIAL_LENGTHS = {lengths}")
+            for name, code in ATTACKERS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -155,7 +260,7 @@ def scored():
 @pytest.fixture(scope="module")
 def graded(scored, tmp_path_factory):
     out = tmp_path_factory.mktemp("capstone")
-    subs = {name: notebook(code) for name, code in CLASS.items()}
+    subs = {name: notebook(code) for name, code in {**CLASS, **attackers(scored)}.items()}
     subs["unreadable"] = "the notebook cannot be read (NotJSONError: ...)"     # as read_submissions reports it
     results, refs = capstone.grade_class(ROOT, subs, scored, out, "test class", workers=2, seed=SEED,
                                          label="STAND-IN: shipped trials 7, 29, 33 held back", progress=False,
@@ -169,8 +274,8 @@ def graded(scored, tmp_path_factory):
 
 def _expected_points(res, refs):
     vqf, mad = (capstone.mean_scored(refs[n].trials) for n in capstone.PUBLISHED[res.sensors])
-    return capstone.rubric_points(capstone.mean_scored(res.trials), res.all_ran, bool(res.cheats) or
-                                  res.causal is False, mad, vqf)
+    return capstone.rubric_points(capstone.mean_scored(res.trials), res.all_ran, capstone.gates_failed(res), mad,
+                                  vqf)
 
 
 def _points_by_hand(mean_deg, all_ran, madgwick_deg, vqf_deg):
@@ -250,6 +355,97 @@ def test_a_filter_that_calls_vqf_gets_nothing_and_is_named(graded):
 
 @pytest.mark.slow
 @needs_box
+def test_a_private_library_filter_reached_by_getattr_is_not_in_the_box(graded, scored):
+    """The library's complementary loop (correlation._weighted_tilt_fusion, private), reached by names built at run
+    time: a working 6D filter where the library is whole, which the scan does not see. In the box the module is a
+    placeholder: every trial fails, the placeholder is named, no points."""
+    res = graded[0]["private_filter"]
+    code = attackers(scored)["private_filter"]
+    assert capstone.scan(capstone.program_of(notebook(code))) == []          # the box, not the scan, stops it
+    ns = {}
+    exec(compile(code, "<private_filter>", "exec"), ns)                      # noqa: S102 -- the real library here
+    t = scored[0]
+    q = capstone.as_quaternions(ns["estimate"](t.gyr, t.acc, None, t.fs), len(t))
+    working = capstone.score_trial(capstone.TrialResult(t.name), q, t, "inclination_deg").inclination_deg
+    assert working < 0.2 * capstone.never_moves(t, "inclination_deg")       # a filter, outside the box
+    assert res.sensors == "6D" and [r.status for r in res.trials] == ["error"] * len(STAND_IN)
+    assert {k for k, _ in res.cheats} == {"calls a reference filter"}
+    assert all("reached fusionlab.correlation" in why and "not available in the capstone" in why
+               for _, why in res.cheats) and len(res.cheats) == len(STAND_IN)
+    assert res.total_points == 0 and res.causal is None
+
+
+def _numbers(text):
+    """The numbers of ``text`` written with at least five digits after the point (a trial's data as printed)."""
+    import re
+    return set(re.findall(r"\d\.\d{5,}(?:e[-+]\d+)?", text))
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_raises_with_the_trials_data_echoes_none_of_it(graded, scored):
+    """Its error on the first trial, and on the causality check's samples up to k, carries the data in its text: the
+    feedback page, the leaderboard and trials.csv hold the error's type, and not one number of the data."""
+    results, refs, out = graded
+    res = results["leaks"]
+    assert [r.status for r in res.trials] == ["error", "ok", "ok"]
+    assert res.trials[0].message == "raised ValueError" + capstone.NOT_SHOWN
+    assert res.causal is None and res.causal_message.startswith("not checked: given the samples up to a k alone, "
+                                                                "estimate raised ValueError")
+    assert res.total_points == 0 and res.cheats == []
+    data = set()
+    for t in scored:
+        gyr = np.asarray(t.gyr)
+        data |= {f"{v:.9f}" for v in gyr[:4].ravel()} | _numbers(repr(gyr[:50]))
+        data |= {f"{v:.9f}" for v in gyr[:8].ravel()}
+    assert len(data) > 100
+    pages = {"feedback": (out / "feedback" / "leaks" / "capstone.html").read_text(),
+             "leaderboard": (out / "leaderboard.html").read_text(), "csv": (out / "leaderboard.csv").read_text(),
+             "trials": (out / "trials.csv").read_text()}
+    for where, text in pages.items():
+        assert "the data:" not in text and "array(" not in text, where
+        assert not data & _numbers(text) and not any(d in text for d in data), where
+    assert "raised ValueError" in pages["feedback"] and "raised ValueError" in pages["trials"]
+    for folder in (out / "feedback").iterdir():                 # no page of the class echoes a student's error text
+        assert "the data:" not in (folder / "capstone.html").read_text(), folder.name
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_fails_only_on_the_causality_checks_data_gets_no_points(graded):
+    """The good filter on every trial, an error on the samples up to k alone: causality never shown, no points --
+    else a filter that recognises the check's calls and fails them would escape it."""
+    results, refs, _ = graded
+    res = results["dodges"]
+    assert res.all_ran and res.causal is None and "never shown causal" in res.causal_message, res.causal_message
+    for mine, good in zip(res.trials, results["good"].trials):
+        assert mine.total_deg == pytest.approx(good.total_deg, abs=1e-9)
+    assert capstone.gates_failed(res) and res.total_points == 0
+    would = capstone.rubric_points(capstone.mean_total(res.trials), True, False,
+                                   capstone.mean_total(refs["madgwick9"].trials),
+                                   capstone.mean_total(refs["vqf9"].trials))
+    assert sum(would.values()) == results["good"].total_points >= 5        # what the check's gate took
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_keeps_its_look_ahead_in_the_kernel_key_store_is_not_causal(graded):
+    """The gyro bias averaged over every rest of the whole trial, kept in the kernel's key store by the first call
+    (ctypes found by pydoc.locate, the code run from base64 text by timeit), so that each causality call, in a
+    fresh box, would read the whole trial's bias back. The boxes cannot reach the key store: each call computes
+    its bias from the data it is given, and the check finds the look-ahead. The scan names the loaders too."""
+    res = graded[0]["keyring"]
+    assert "ctypes" not in KEYRING and "add_key" not in KEYRING                 # in the base64 text only
+    assert res.all_ran
+    assert res.causal is False and "NOT causal" in res.causal_message, res.causal_message
+    assert {k for k, _ in res.cheats} == {"tampers with imports"}
+    whys = " ".join(why for _, why in res.cheats)
+    assert "imports `pydoc`" in whys and "imports `timeit`" in whys
+    assert res.total_points == 0
+
+
+@pytest.mark.slow
+@needs_box
 def test_a_filter_over_its_budget_is_stopped_on_each_trial(graded):
     res = graded[0]["times_out"]
     assert [r.status for r in res.trials] == ["timeout"] * len(STAND_IN)
@@ -263,7 +459,9 @@ def test_a_crash_on_trial_3_costs_that_trial_only(graded, scored):
     results, refs, _ = graded
     res = results["crashes_on_3"]
     assert [r.status for r in res.trials] == ["ok", "ok", "error"]
-    assert "index 3 is out of bounds" in res.trials[2].message
+    # the type of its error, not its text: on a hidden trial the text could carry the trial's data
+    assert res.trials[2].message == "raised RuntimeError" + capstone.NOT_SHOWN
+    assert "index 3" not in res.trials[2].message
     assert res.trials[2].counted_deg == pytest.approx(capstone.never_moves(scored[2]))
     good = results["good"]
     for mine, theirs in zip(res.trials[:2], good.trials[:2]):     # the same filter on the trials that ran
@@ -279,13 +477,13 @@ def test_the_leaderboard_lists_every_student_and_the_references(graded):
     results, refs, out = graded
     rows = list(csv.DictReader(open(out / "leaderboard.csv")))
     names = [r["name"] for r in rows]
-    assert set(CLASS) | {"unreadable"} <= set(names)
+    assert set(CLASS) | set(ATTACKERS) | {"unreadable"} <= set(names)
     broken = next(r for r in rows if r["name"] == "unreadable")
     assert broken["points"] == "0" and "cannot be read" in broken["notes"] and broken["rank"] == str(len(NINE_D))
     refs9 = {"vqf9", "madgwick9"} | {n for n in names if n.startswith("library best 9D")}
     refs6 = {"vqf6", "madgwick6"} | {n for n in names if n.startswith("library best 6D")}
     assert len(refs9) == len(refs6) == 3
-    for sensors, students, references in (("9D", NINE_D, refs9), ("6D", ["six_d"], refs6)):   # ranked apart
+    for sensors, students, references in (("9D", NINE_D, refs9), ("6D", SIX_D_NAMES, refs6)):   # ranked apart
         block = [r for r in rows if r["sensors"] == sensors]
         assert {r["name"] for r in block} == set(students) | references
         mine = [r for r in block if r["kind"] == "student"]
@@ -301,7 +499,7 @@ def test_the_leaderboard_lists_every_student_and_the_references(graded):
         assert (out / "feedback" / name / "trials.png").stat().st_size > 5000
         assert "Causality" in (out / "feedback" / name / "capstone.html").read_text()
     trial_rows = list(csv.DictReader(open(out / "trials.csv")))
-    assert len(trial_rows) == (len(CLASS) + 6) * len(STAND_IN)
+    assert len(trial_rows) == (len(CLASS) + len(ATTACKERS) + 6) * len(STAND_IN)
     assert {r["sensors"] for r in trial_rows if r["name"] in ("six_d", "vqf6", "madgwick6")} == {"6D"}
 
 
@@ -380,7 +578,7 @@ def test_a_6d_submission_receives_mag_none_and_a_failed_trial_counts_the_identit
                                     min_seconds=5.0)
     assert res.sensors == "6D"
     assert [r.status for r in res.trials] == ["ok", "error", "ok"], [r.message for r in res.trials]
-    assert "fails on its second call" in res.trials[1].message           # not "mag is ...": every call had None
+    assert res.trials[1].message.startswith("raised RuntimeError")      # not ValueError: every call had mag None
     assert res.causal is True                                             # ... the causality check's calls too
     for r, t in zip(res.trials, scored):
         identity = capstone.never_moves(t, "inclination_deg")
@@ -610,6 +808,43 @@ def test_the_code_scan_names_code_that_reaches_around_the_imports(code, why):
     assert found and {k for k, _ in found} == {"tampers with imports"} and why in found[0][1], found
 
 
+@pytest.mark.parametrize("code, why", [
+    ("import timeit\nt = timeit.timeit(text, globals=g)", "`timeit`"),
+    ("import pydoc\nc = pydoc.locate('ct' + 'ypes')", "`pydoc`"),
+    ("from pkgutil import resolve_name", "`pkgutil.resolve_name`"),
+    ("import pkgutil\nm = pkgutil.resolve_name('fusionlab.correlation')", "`.resolve_name`"),
+    ("import ctypes.util", "`ctypes.util`"),
+    ("c = np.ctypeslib.ctypes", "`.ctypes`"),
+    ("import runpy", "`runpy`"),
+    ("from importlib import import_module", "`importlib`"),
+    ("x = %time {text}", "get_ipython"),
+    ("def f(text):\n    r = !{text}\n    return r", "get_ipython"),
+    (",exec text", "exec"),
+])
+def test_the_code_scan_names_the_indirect_loaders_of_the_table(code, why):
+    found = capstone.scan([("filter", f"def estimate(gyr, acc, mag, fs):\n    pass\n{code}")])
+    assert found and {k for k, _ in found} == {"tampers with imports"} and why in found[0][1], found
+
+
+def test_the_loaders_come_from_the_table_of_exercises(monkeypatch):
+    from fusionlab.checks import exercises
+    row = next(e for e in exercises.of_lab(capstone.LAB) if e.answer == ("estimate",))
+    assert {"timeit", "pydoc", "runpy", "pkgutil.resolve_name", "ctypes", "importlib"} <= set(row.loaders)
+    assert capstone.loaders() == row.loaders and all(e.loaders == () for e in exercises.EXERCISES if e is not row)
+    assert exercises.loaders(capstone.LAB) == row.loaders == exercises.loaders()
+    code = [("filter", "import timeit\nimport pkgutil\nf = pkgutil.resolve_name('a:b')")]
+    assert len(capstone.scan(code)) == 2
+    fewer = dataclasses.replace(row, loaders=tuple(n for n in row.loaders if n != "timeit"))
+    monkeypatch.setattr(exercises, "EXERCISES", tuple(fewer if e is row else e for e in exercises.EXERCISES))
+    assert [why for _, why in capstone.scan(code)] == ["cell 1, line 3: uses `.resolve_name` (`pkgutil.resolve_name`): "
+                                                       + integrity.WHY["loader"]]
+
+
+def test_quiet_magics_and_help_are_not_tampering():
+    cells = [("filter", "x = %pinfo estimate\nestimate?\ny = %precision 3")]
+    assert capstone.scan(cells) == []
+
+
 def test_honest_code_does_not_tamper_with_imports():
     nb = nbformat.read(LAB_NOTEBOOK, as_version=4)       # the lab's setup cell (a magic, inspect, checks) and answer
     cells = capstone.program_of(nb) + [("filter", c) for c in CLASS.values()]
@@ -773,13 +1008,189 @@ def test_the_program_is_the_setup_and_answer_cells_without_the_tuning_cell():
 
 
 def test_the_box_library_has_no_filter_of_the_library(tmp_path):
+    import ast
+    import fusionlab
     root = capstone.box_library(tmp_path)
-    text = (root / "lib" / "fusionlab" / "estimators.py").read_text()
-    assert "is one of the library's filters" in text
+    real, box = Path(fusionlab.__file__).parent, root / "lib" / "fusionlab"
+    for short in capstone.FILTER_MODULES + capstone.FILE_MODULES:
+        text = (box / f"{short}.py").read_text()
+        assert text == capstone.placeholder_module(short) and "not available in the capstone" in text
+        defined = {n.name for n in ast.parse((real / f"{short}.py").read_text()).body
+                   if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+        mine = {n.name for n in ast.parse(text).body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+        assert mine <= set(capstone.KEEP.get(short, {})) | {"__getattr__", "__dir__"}, (short, mine)
+        assert len(defined) >= 2 and len(text) < 1500            # a few lines, none of the module's
+    assert "_weighted_tilt_fusion" in (real / "correlation.py").read_text()
+    for path in box.rglob("*"):                  # no copy of a filter module, as source or bytecode, anywhere
+        if path.is_file() and path.suffix in (".py", ".pyc"):
+            data = path.read_bytes()
+            assert b"def _weighted_tilt_fusion" not in data and b"_REGISTRY = {}" not in data, path
+            if path.suffix == ".pyc" and path.name.split(".")[0] in ("correlation", "estimators"):
+                assert b"_weighted_tilt_fusion" not in data and b"complementary_attitude" not in data, path
+    kept = [p for p in box.rglob("*.py") if p.stem not in capstone.FILTER_MODULES + capstone.FILE_MODULES]
+    assert {p.name for p in kept} >= {"rotations.py", "metrics.py", "capstone.py", "guard.py", "plotting.py"}
     assert (root / "shadow" / "vqf" / "__init__.py").read_text().startswith("raise ImportError")
-    names = capstone.forbidden_names()
-    assert "fusionlab.estimators:run" in names and "fusionlab.datasets:load_trial" in names
-    assert not any(n.startswith("fusionlab.rotations") for n in names)         # building blocks stay
+
+
+def test_a_placeholder_imports_and_refuses_every_other_name(tmp_path, monkeypatch):
+    """In a process of its own with the box's library first on the path: the lab's imports work, no name of a
+    filter module (public or private) is reached, the no-ops of KEEP are."""
+    root = capstone.box_library(tmp_path)
+    code = """
+import json, importlib
+from fusionlab import bench, capstone, checks, datasets, guard, metrics, plotting, rotations
+from fusionlab import correlation, estimators
+out = {}
+for label, get in (("private", lambda: correlation._weighted_tilt_fusion), ("registry", lambda: estimators._REGISTRY),
+                   ("run", lambda: estimators.run), ("load", lambda: datasets.load_trial),
+                   ("from", lambda: importlib.import_module("fusionlab.freescale").Kalman9)):
+    try:
+        get()
+        out[label] = "reached"
+    except NotImplementedError as exc:
+        out[label] = str(exc)
+out["register"] = estimators.register("mine", uses_mag=False, summary="", seed="")(len) is len
+out["available"] = estimators.available()
+out["missing"] = issubclass(datasets.DataMissing, FileNotFoundError) and datasets.missing_trials() == []
+out["dunder"] = hasattr(correlation, "__path__")
+out["from_import"] = ""
+try:
+    from fusionlab.gpsins import _ins_F
+except NotImplementedError as exc:
+    out["from_import"] = str(exc)
+print(json.dumps(out))
+"""
+    env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": str(root / "lib"), "MPLBACKEND": "Agg", "HOME": str(tmp_path)}
+    run = subprocess.run([sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(root / 'lib')!r})\n"
+                          + code], capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    message = capstone.STUB_MESSAGE.format(name="fusionlab.{}")
+    assert out.pop("private") == message.format("correlation") and out.pop("registry") == message.format("estimators")
+    assert out.pop("run") == message.format("estimators") and out.pop("load") == message.format("datasets")
+    assert out.pop("from") == message.format("freescale") and out.pop("from_import") == message.format("gpsins")
+    assert out == {"register": True, "available": {}, "missing": True, "dunder": False}
+
+
+@needs_box
+def test_the_box_holds_no_code_of_the_librarys_filters(tmp_path):
+    """Asked from inside a real box, after the lab's own setup cell ran there without an error: the private filter
+    of the red team and the estimators' registry are out of reach however they are named, and no file the box can
+    read holds the code of a filter module (source or bytecode)."""
+    import time
+
+    from grading import box as wire
+    from grading import judge
+    import fusionlab
+    nb = nbformat.read(LAB_NOTEBOOK, as_version=4)
+    setup = judge.python_of(next(c.source for c in nb.cells if judge.grade_id(c) == "imports"))
+    lib = Path(fusionlab.__file__).parent
+    gone = capstone.FILTER_MODULES + capstone.FILE_MODULES
+    kept = "".join(p.read_text() for p in lib.rglob("*.py") if p.stem not in gone)
+    markers = sorted({f"def {n.name}(" for short in ("correlation", "estimators", "dcm_filter", "datasets")
+                      for n in ast.parse((lib / f"{short}.py").read_text()).body
+                      if isinstance(n, ast.FunctionDef) and len(n.name) > 6})
+    keep = {f"def {name}(" for names in capstone.KEEP.values() for name in names}
+    markers = [m for m in markers if m not in kept and m not in keep]     # names the box may hold are no markers
+    probe = f'''
+import importlib, os, sys
+import fusionlab
+
+def probe():
+    out = {{}}
+    for label, get in (("getattr", lambda: getattr(getattr(fusionlab, "corr" + "elation"), "_weighted_tilt_fusion")),
+                       ("import", lambda: importlib.import_module("fusionlab.correlation")._weighted_tilt_fusion),
+                       ("registry", lambda: importlib.import_module("fusionlab.estimators")._REGISTRY),
+                       ("reload",
+                        lambda: importlib.reload(sys.modules["fusionlab.correlation"])._weighted_tilt_fusion)):
+        try:
+            get()
+            out[label] = "reached"
+        except NotImplementedError as exc:
+            out[label] = str(exc)
+    hits, read = [], 0
+    for top in (os.path.dirname(os.path.dirname(fusionlab.__file__)), "/opt", os.getcwd()):
+        for folder, _, files in os.walk(top):
+            for name in files:
+                try:
+                    with open(os.path.join(folder, name), "rb") as f:
+                        data = f.read()
+                except OSError:
+                    continue
+                read += 1
+                hits += [os.path.join(folder, name) for m in {markers!r} if m.encode() in data]
+                if name.split(".")[0] in ("correlation", "estimators") and b"_weighted_tilt_fusion" in data:
+                    hits.append(os.path.join(folder, name))
+    out["hits"], out["read"], out["lib"] = hits, read, os.path.dirname(fusionlab.__file__)
+    return out
+'''
+    runner = capstone.Runner([setup, probe], ROOT, tmp_path)
+    try:
+        assert runner.start(), runner.setup_error
+        assert runner.cell_errors == {}                       # the lab's imports, checks.friendly_errors() too
+        runner.box.send({"op": "call", "name": "probe", "args": wire.encode([]), "kwargs": wire.encode({})})
+        reply = runner.box.receive(time.monotonic() + 120)
+    finally:
+        runner.close()
+    assert reply.get("ok"), reply
+    out = wire.decode(reply["value"])
+    message = capstone.STUB_MESSAGE.format(name="fusionlab.{}")
+    assert out["getattr"] == out["import"] == out["reload"] == message.format("correlation")
+    assert out["registry"] == message.format("estimators")
+    assert out["hits"] == [] and out["read"] > 50 and out["lib"] == str(ROOT / "lib" / "fusionlab")
+    assert len(markers) > 20 and "def _weighted_tilt_fusion(" in markers
+
+
+def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scored, tmp_path, monkeypatch):
+    """The first box runs the cells before any trial is sent: their errors are the notebook's own. A box started
+    after a trial was sent could have kept something of it (a channel between boxes): its cells' errors are shown
+    without their text, and a call's reply never with its text."""
+    class Replay:
+        """judge.Box as the trusted side sees it: the replies of a box whose second cell fails with the data."""
+        def __init__(self, command, env=None):
+            self.replies = [{"cell": 0, "state": "done", "error": None},
+                            {"cell": 1, "state": "done", "error": f"ValueError: {scored[0].gyr[0, 0]!r}"},
+                            {"ready": True}, {"ok": False, "error": f"KeyError: {scored[0].gyr[1, 0]!r}"}]
+
+        def send(self, message):
+            pass
+
+        def receive(self, deadline):
+            return self.replies.pop(0)
+
+        def kill(self):
+            pass
+
+    monkeypatch.setattr(capstone.pipe, "Box", Replay)
+    runner = capstone.Runner(["x = 1", "y = 2"], ROOT, tmp_path)
+    assert runner.start()
+    assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}         # before any trial: as it is
+    runner.cell_errors.clear()
+    q, status, why, _ = runner.call(scored[0], 60)
+    assert (q, status, why) == (None, "error", "raised KeyError" + capstone.NOT_SHOWN)
+    assert runner.start() and repr(scored[0].gyr[0, 0]) not in str(runner.cell_errors)
+    assert runner.cell_errors == {1: "(message not shown: the box was started again after a trial had been sent)"}
+    runner.close()
+
+
+def test_the_grader_writes_every_message_of_a_call_itself():
+    """What a call's error or output said is the student's: the feedback names the type of a built-in error, or
+    what the call reached, in words written here."""
+    leak = "ValueError: [0.00123457 -0.0045678 ...] " + "9" * 300
+    assert capstone.error_message(leak) == "raised ValueError" + capstone.NOT_SHOWN
+    assert capstone.error_message("Trial_0_00123457: x") == "raised an error of its own class" + capstone.NOT_SHOWN
+    assert capstone.error_message("your function returned an array of object") == \
+        "raised an error of its own class" + capstone.NOT_SHOWN
+    placeholder = "NotImplementedError: " + capstone.STUB_MESSAGE.format(name="fusionlab.correlation") + " 0.00123"
+    assert capstone.error_message(placeholder) == ("reached fusionlab.correlation, which holds the library's filters "
+                                                   "or data loaders: not available in the capstone")
+    assert capstone.error_message("ImportError: vqf is not available while the lab is graded: 0.00123").startswith(
+        "reached vqf, which is not available while the lab is graded")
+    n = 10
+    for value, why in ((np.ones((n, 3)) * 0.00123457, "one quaternion per sample"), (["x0.00123457"], "not an array"),
+                       (np.full((n, 4), np.nan), "NaN"), (np.full((n, 4), 0.00123457), "unit quaternions")):
+        text = capstone.invalid_message(value, n)
+        assert why in text and "0.0012" not in text and "3)" not in text, (why, text)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -852,7 +1263,9 @@ def test_the_leaderboard_renders_in_chromium(graded):
         page.goto((out / "leaderboard.html").as_uri())
         rows = page.locator("table").first.locator("tr")
         assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
-        assert page.locator("tr.gated").count() == 3       # the non-causal one, the one that caches, the VQF caller
+        # the non-causal one, the one that caches, the VQF caller; of the red team the leaker, the dodger, the one
+        # with the key store, and (in the 6D table) the one with the library's private filter
+        assert page.locator("tr.gated").count() == 7
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
         page.goto((out / "feedback" / "good" / "capstone.html").as_uri())

@@ -6,7 +6,8 @@ Each :class:`Exercise` states once what every part of the course needs to know a
 * the grading tools' judge takes ``forbid`` out of the student's process while the exercise's hidden test runs
   (each is a stub in the library copy the student's code gets), and scores the test with ``points``;
 * the integrity report flags an answer that names one of ``forbid``;
-* the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing.
+* the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing;
+* the capstone's grader (``grading/capstone.py``) names any use of its exercise's ``loaders`` in the code it runs.
 
 The hidden test itself (its inputs and comparisons) is the exercise's test cell in the instructor's notebook,
 ``exN_tests``, as nbgrader keeps it; a test of the suite checks that each test cell names exactly these references and
@@ -19,12 +20,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check"]
+__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders"]
 
 
 @dataclass(frozen=True)
 class Exercise:
-    """One autograded exercise: its lab, number, points, the names the answer defines, its check, what it forbids."""
+    """One autograded exercise: its lab, number, points, the names the answer defines, its check, what it forbids.
+
+    ``loaders`` (empty but for the capstone's filter) names what loads a module or runs code from a name or a text
+    built at run time -- a module (``"timeit"``: any of it) or one function of a module (``"pkgutil.resolve_name"``):
+    the grader's scan of the code names any use of one of them as reaching around the imports. The scan reads names
+    written in the code only; the grader's box, which holds none of the library's filters, is what keeps a filter
+    out of reach.
+    """
 
     lab: str
     number: int
@@ -32,6 +40,7 @@ class Exercise:
     answer: tuple
     check: str
     forbid: tuple
+    loaders: tuple = ()
 
     @property
     def grade_id(self):
@@ -183,7 +192,9 @@ EXERCISES = (
              ('rotations.integrate_gyro_quat', 'rotations.integrate_gyro_dcm',
               'correlation._weighted_tilt_fusion')),       # the complementary filters' loop, with no correction
     Exercise('13_capstone', 2, 1, ('estimate',), 'check_capstone_filter',   # valid and causal; 10 more on the
-             ()),                                                            # leaderboard (grading/capstone.py)
+             (),                                                             # leaderboard (grading/capstone.py)
+             loaders=('importlib', '_imp', '_frozen_importlib', '_frozen_importlib_external', 'zipimport', 'runpy',
+                      'pkgutil.resolve_name', 'pydoc', 'timeit', 'ctypes', '_ctypes', 'cffi')),
 )
 
 
@@ -220,3 +231,20 @@ def by_check(check):
         if e.check == check:
             return e
     return None
+
+
+def loaders(lab=None):
+    """The ``loaders`` of the exercises (of ``lab`` only, when given), each once, in the table's order.
+
+    Parameters
+    ----------
+    lab : str, optional
+        A lab's folder name, e.g. ``"13_capstone"``; default every lab.
+
+    Returns
+    -------
+    tuple of str
+        Dotted names: a module (``"timeit"``) or a function of one (``"pkgutil.resolve_name"``).
+    """
+    rows = EXERCISES if lab is None else of_lab(lab)
+    return tuple(dict.fromkeys(name for e in rows for name in e.loaders))
