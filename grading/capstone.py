@@ -119,13 +119,7 @@ from fusionlab.capstone import (CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR
                                 SENSORS, SHIPPED, as_quaternions, budget_seconds, causal_ks, first_change,
                                 prefix_change)   # the rules, as the lab states them to the students
 from grading import box as wire
-from grading import judge, sandbox
-
-try:                            # the grader's end of the pipe to a box, shared with the judge
-    from grading import client as pipe
-except ImportError:             # a checkout where the judge holds it
-    pipe = judge
-BOX_SCRIPT = Path(wire.__file__).resolve()      # what a box runs: python box.py
+from grading import client, judge, sandbox
 
 LAB = "13_capstone"
 FUNCTION = "estimate"
@@ -1053,27 +1047,25 @@ class Runner:
         self.starts += 1
         uid = sandbox.box_uid(self.slot)
         self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
-        command = sandbox.bwrap_command(["python", str(BOX_SCRIPT)], course=self.course, lab=LAB,
+        command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
                                         lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
                                         limits=self.limits, uid=uid, data=False, hide=self.hide)
-        self.box = pipe.Box(command)
-        deadline = time.monotonic() + SETUP_SECONDS
+        self.box = client.Box(command)
+        errors = {}
         try:
-            self.box.send({"cells": self.cells})
-            while True:
-                msg = self.box.receive(deadline)
-                if msg.get("ready"):
-                    return True
-                if msg.get("state") == "done" and msg.get("error"):
-                    cell = msg.get("cell", -1)
-                    cell = cell if isinstance(cell, int) and not isinstance(cell, bool) else -1
-                    self.cell_errors.setdefault(cell, "(message not shown: the box was started again after a "
-                                                      "trial had been sent)" if self.sent else
-                                                str(msg["error"])[:300])
-        except pipe.BoxTimeout:
+            errors = client.run_program(self.box, self.cells, cell_seconds=SETUP_SECONDS,
+                                        deadline=time.monotonic() + SETUP_SECONDS)
+            return True
+        except client.BoxTimeout as exc:
+            errors = exc.errors
             self.setup_error = f"the notebook's cells ran over {SETUP_SECONDS:g} s"
-        except pipe.BoxDied:
+        except client.BoxDied as exc:
+            errors = exc.errors
             self.setup_error = "the notebook's cells ended the process"
+        finally:
+            for cell, text in errors.items():
+                self.cell_errors.setdefault(cell, "(message not shown: the box was started again after a trial had "
+                                                  "been sent)" if self.sent else text[:300])
         self.close()
         return False
 
@@ -1085,18 +1077,16 @@ class Runner:
                 float("nan")
         args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
                 None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
-        message = {"op": "call", "name": FUNCTION, "args": wire.encode(args), "kwargs": wire.encode({})}
         t0 = time.monotonic()
         self.sent = True
         try:
-            self.box.send(message)
-            reply = self.box.receive(t0 + seconds)
-        except pipe.BoxTimeout:
+            reply = client.call(self.box, FUNCTION, args, {}, t0 + seconds)
+        except client.BoxTimeout:
             self.close()
             return None, "timeout", f"ran over its budget of {seconds:.1f} s (stopped)", time.monotonic() - t0
-        except pipe.BoxDied as exc:
+        except client.BoxDied as exc:
             self.close()
-            too_large = isinstance(exc, getattr(pipe, "ReplyTooLarge", ()))
+            too_large = isinstance(exc, client.ReplyTooLarge)
             return None, "died", ("sent a reply too large to read (stopped)" if too_large else
                                   "ended the process"), time.monotonic() - t0
         elapsed = time.monotonic() - t0

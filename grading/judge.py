@@ -36,13 +36,9 @@ import copy
 import dataclasses
 import importlib
 import inspect
-import json
 import os
 import re
-import selectors
 import shutil
-import signal
-import subprocess
 import threading
 import time
 import types
@@ -53,20 +49,13 @@ import nbformat
 
 from fusionlab import guard, labformat
 from grading import box as wire
-from grading import sandbox
+from grading import client, sandbox
+from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.outputs import Budget
 
-BOX = Path(wire.__file__).resolve()
 CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
 STUDENT_SECONDS = 900      # wall time of the whole submission
 MAX_RESTARTS = 3
-# One reply of a box, counted while it is read; a reply over either limit fails its test, stops the box and is never
-# parsed. Measured on the model solutions of the 14 labs: at most 98 kB (Lab 13's filter on its synthetic record;
-# Lab 00's provided data 64 kB) and 20 lists and dicts. The capstone's filter returns (N, 4) quaternions: 2.3 MB as an
-# array for a 56,000-sample trial, so 16 MB holds a 23-minute trial at 286 Hz, and 200,000 lists one given as a list
-# of lists of 11 minutes.
-MAX_REPLY_BYTES = 16 << 20
-MAX_REPLY_CONTAINERS = 200_000  # ``[`` and ``{`` counted before parsing (an array travels as one string)
 STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
                 "lab is graded. Write it yourself.")
 HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quaternion products, DCMs): absent in the box
@@ -300,95 +289,6 @@ def shadowed(shadow: Path):
     return sandbox.package_paths(sorted(p.name for p in Path(shadow).iterdir() if p.is_dir()))
 
 
-class BoxDied(RuntimeError):
-    pass
-
-
-class BoxTimeout(RuntimeError):
-    pass
-
-
-class ReplyTooLarge(BoxDied):
-    """A reply over :data:`MAX_REPLY_BYTES` or :data:`MAX_REPLY_CONTAINERS`: the box is stopped, the reply never
-    parsed."""
-
-
-class Box:
-    """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output.
-
-    ``largest`` is the longest reply read so far (bytes; a test holds the honest ones well under the limit)."""
-
-    def __init__(self, command, env=None):
-        self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     stderr=subprocess.DEVNULL, start_new_session=True, env=env)
-        self.chunks, self.size = [], 0          # what has come of the next reply (no newline yet)
-        self.lines = []                         # whole replies read and not yet returned
-        self.largest = 0
-        self.sel = selectors.DefaultSelector()
-        self.sel.register(self.proc.stdout, selectors.EVENT_READ)
-        os.set_blocking(self.proc.stdout.fileno(), False)
-
-    def send(self, message):
-        try:
-            self.proc.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
-            self.proc.stdin.flush()
-        except (BrokenPipeError, OSError) as exc:
-            raise BoxDied("the box closed its input") from exc
-
-    def receive(self, deadline):
-        """The next message, decoded as JSON (not yet as values); raises BoxTimeout, BoxDied or ReplyTooLarge.
-
-        A reply is counted while it is read: past :data:`MAX_REPLY_BYTES` the box is stopped and nothing more is
-        kept, so a flood costs the judge at most that much memory."""
-        while not self.lines:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise BoxTimeout()
-            if not self.sel.select(timeout=min(left, 1.0)):
-                if self.proc.poll() is not None:
-                    raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
-                continue
-            chunk = self.proc.stdout.read(1 << 20)
-            if not chunk:
-                self.proc.wait()
-                raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
-            *whole, rest = chunk.split(b"\n")
-            for part in whole:
-                self.lines.append(b"".join(self.chunks) + part)
-                self.chunks, self.size = [], 0
-                self._check(len(self.lines[-1]))
-            self.chunks.append(rest)
-            self.size += len(rest)
-            self._check(self.size)
-        line = self.lines.pop(0)
-        self.largest = max(self.largest, len(line))
-        if line.count(b"[") + line.count(b"{") > MAX_REPLY_CONTAINERS:
-            self._too_large(f"more than {MAX_REPLY_CONTAINERS:,} lists and dicts in one reply")
-        try:
-            return json.loads(line)
-        except (ValueError, RecursionError) as exc:
-            raise BoxDied("the box sent something that is not JSON") from exc
-
-    def _check(self, size):
-        if size > MAX_REPLY_BYTES:
-            self._too_large(f"a reply over {MAX_REPLY_BYTES >> 20} MB")
-
-    def _too_large(self, what):
-        self.chunks, self.size, self.lines = [], 0, []
-        self.kill()
-        raise ReplyTooLarge(f"the box sent {what}")
-
-    def kill(self):
-        if self.proc.poll() is None:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait()
-        self.sel.close()
-        for f in (self.proc.stdin, self.proc.stdout):
-            with contextlib.suppress(OSError):
-                f.close()
-
-
 def _global_reads(node):
     """Names ``node`` loads from the enclosing module: inside a function or lambda, its parameters and the names it
     assigns are its own (a cell that rebinds at top level a name it reads still reads it)."""
@@ -609,7 +509,7 @@ class Lab:
 
     def box_command(self, gid, work, uid):
         root = self.box_root(gid)
-        return sandbox.bwrap_command(["python", str(BOX)], course=self.course, lab=self.lab,
+        return sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=self.lab,
                                      lib=root / "lib", shadow=root / "shadow", work=work,
                                      limits=self.limits, uid=uid, hide=shadowed(root / "shadow"))
 
@@ -723,7 +623,7 @@ class Session:
         self.work = sandbox.private_folder(source if source.is_dir() else None, self.lab.scratch, uid)
         if self.box is not None:
             self.largest = max(self.largest, self.box.largest)
-        self.box = Box(self.lab.box_command(self.gid, self.work, uid))
+        self.box = client.Box(self.lab.box_command(self.gid, self.work, uid))
 
     def start(self):
         """Start the box and run the program; a cell that runs over its time, or kills the box, is left out and the
@@ -731,30 +631,14 @@ class Session:
         while True:
             self._spawn()
             cells = ["pass" if i in self.skipped else src for i, (_, src) in enumerate(self.cells)]
-            current = None
             try:
-                self.box.send({"cells": cells})
-                while True:
-                    msg = self.box.receive(min(time.monotonic() + self.lab.cell_seconds + 30, self.deadline))
-                    if msg.get("ready"):
-                        return
-                    i = msg.get("cell")
-                    if not isinstance(i, int) or not 0 <= i < len(cells):
-                        raise BoxDied("the box sent a message that is not the judge's protocol")
-                    current = i
-                    if msg.get("state") == "done":
-                        if msg.get("error"):
-                            self.cell_errors[i] = str(msg["error"])[:600]
-                        current = None
-                    elif msg.get("state") == "start":
-                        msg = self.box.receive(min(time.monotonic() + self.lab.cell_seconds, self.deadline))
-                        if msg.get("cell") != i or msg.get("state") != "done":
-                            raise BoxDied("the box sent a message that is not the judge's protocol")
-                        if msg.get("error"):
-                            self.cell_errors[i] = str(msg["error"])[:600]
-                        current = None
+                self.cell_errors.update(client.run_program(self.box, cells, cell_seconds=self.lab.cell_seconds,
+                                                           deadline=self.deadline))
+                return
             except (BoxTimeout, BoxDied) as exc:
                 self.box.kill()
+                self.cell_errors.update(exc.errors)
+                current = exc.cell
                 where = self._where(current)
                 if time.monotonic() >= self.deadline:
                     self.notes.append(f"the notebook ran over {STUDENT_SECONDS} s in all and was stopped")
@@ -806,14 +690,9 @@ class Session:
         def call(*args, **kwargs):
             objects = {i: a for i, a in enumerate(args) if wire.wire_key(a)}
             try:
-                message = {"op": "call", "name": name, "args": wire.encode(list(args)),
-                           "kwargs": wire.encode(dict(kwargs))}
+                reply = client.call(self.box, name, args, kwargs, min(budget["deadline"], self.deadline))
             except wire.WireError as exc:
                 raise RuntimeError(f"the test passes {exc} to {name}: the judge cannot send it") from exc
-            left = budget["deadline"] - time.monotonic()
-            if left <= 0:
-                raise BoxTimeout()
-            reply = self.request(message, left)
             if not reply.get("ok"):
                 raise StudentRaised(f"your {name} raised {str(reply.get('error', 'an error'))[:500]}")
             try:
@@ -905,7 +784,7 @@ def hidden_failure(gid, exc, lab):
     an expected number or any text of the student's code (which saw the hidden inputs)."""
     where = f"{labformat.label(gid) if labformat.parse(gid) else gid}, hidden tests"
     if isinstance(exc, ReplyTooLarge):
-        kind = f"your code sent back more than the judge reads (a reply over {MAX_REPLY_BYTES >> 20} MB)"
+        kind = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
     elif isinstance(exc, BoxTimeout):
         kind = f"timed out (over {lab.cell_seconds} s)"
     elif isinstance(exc, BoxDied):
@@ -963,7 +842,7 @@ def _run_test(lab, session, source, ns, reference, result):
         if hidden:
             result.message = hidden_failure(gid, exc, lab)
         elif isinstance(exc, ReplyTooLarge):
-            result.message = f"your code sent back more than the judge reads (a reply over {MAX_REPLY_BYTES >> 20} MB)"
+            result.message = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
         elif isinstance(exc, (BoxTimeout, BoxDied)):
             result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
                               else f"your code ended the process ({exc})")

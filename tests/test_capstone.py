@@ -1146,7 +1146,7 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
     after a trial was sent could have kept something of it (a channel between boxes): its cells' errors are shown
     without their text, and a call's reply never with its text."""
     class Replay:
-        """judge.Box as the trusted side sees it: the replies of a box whose second cell fails with the data."""
+        """client.Box as the trusted side sees it: the replies of a box whose second cell fails with the data."""
         def __init__(self, command, env=None):
             self.replies = [{"cell": 0, "state": "done", "error": None},
                             {"cell": 1, "state": "done", "error": f"ValueError: {scored[0].gyr[0, 0]!r}"},
@@ -1161,7 +1161,7 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
         def kill(self):
             pass
 
-    monkeypatch.setattr(capstone.pipe, "Box", Replay)
+    monkeypatch.setattr(capstone.client, "Box", Replay)
     runner = capstone.Runner(["x = 1", "y = 2"], ROOT, tmp_path)
     assert runner.start()
     assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}         # before any trial: as it is

@@ -1,0 +1,155 @@
+"""The grader's end of the pipe to a box (:mod:`grading.box` in :mod:`grading.sandbox`): one client for the judge
+(:mod:`grading.judge`) and the capstone (:mod:`grading.capstone`).
+
+:class:`Box` starts a box and reads its replies, each bounded before it is parsed; :func:`run_program` runs a
+program of cells in it, timing each cell; :func:`call` asks it to call one of the student's functions. What comes
+back is JSON, not yet values: the caller decodes it with :func:`grading.box.decode` and its own policy.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import selectors
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+from grading import box as wire
+
+SCRIPT = Path(wire.__file__).resolve()     # what a box runs: ``python box.py`` (its codec is this module's too)
+
+# One reply of a box, counted while it is read; a reply over either limit fails its test, stops the box and is never
+# parsed. Measured on the model solutions of the 14 labs: at most 98 kB (Lab 13's filter on its synthetic record;
+# Lab 00's provided data 64 kB) and 20 lists and dicts. The capstone's filter returns (N, 4) quaternions: 2.3 MB as an
+# array for a 56,000-sample trial, so 16 MB holds a 23-minute trial at 286 Hz, and 200,000 lists one given as a list
+# of lists of 11 minutes.
+MAX_REPLY_BYTES = 16 << 20
+MAX_REPLY_CONTAINERS = 200_000  # ``[`` and ``{`` counted before parsing (an array travels as one string)
+
+
+class BoxDied(RuntimeError):
+    """The box ended, or broke the protocol."""
+
+
+class BoxTimeout(RuntimeError):
+    """The box did not answer in time."""
+
+
+class ReplyTooLarge(BoxDied):
+    """A reply over :data:`MAX_REPLY_BYTES` or :data:`MAX_REPLY_CONTAINERS`: the box is stopped, the reply never
+    parsed."""
+
+
+class Box:
+    """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output.
+
+    ``largest`` is the longest reply read so far (bytes; a test holds the honest ones well under the limit)."""
+
+    def __init__(self, command, env=None):
+        self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=subprocess.DEVNULL, start_new_session=True, env=env)
+        self.chunks, self.size = [], 0          # what has come of the next reply (no newline yet)
+        self.lines = []                         # whole replies read and not yet returned
+        self.largest = 0
+        self.sel = selectors.DefaultSelector()
+        self.sel.register(self.proc.stdout, selectors.EVENT_READ)
+        os.set_blocking(self.proc.stdout.fileno(), False)
+
+    def send(self, message):
+        try:
+            self.proc.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
+            self.proc.stdin.flush()
+        except (BrokenPipeError, OSError) as exc:
+            raise BoxDied("the box closed its input") from exc
+
+    def receive(self, deadline):
+        """The next message, decoded as JSON (not yet as values); raises BoxTimeout, BoxDied or ReplyTooLarge.
+
+        A reply is counted while it is read: past :data:`MAX_REPLY_BYTES` the box is stopped and nothing more is
+        kept, so a flood costs the judge at most that much memory."""
+        while not self.lines:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise BoxTimeout()
+            if not self.sel.select(timeout=min(left, 1.0)):
+                if self.proc.poll() is not None:
+                    raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+                continue
+            chunk = self.proc.stdout.read(1 << 20)
+            if not chunk:
+                self.proc.wait()
+                raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+            *whole, rest = chunk.split(b"\n")
+            for part in whole:
+                self.lines.append(b"".join(self.chunks) + part)
+                self.chunks, self.size = [], 0
+                self._check(len(self.lines[-1]))
+            self.chunks.append(rest)
+            self.size += len(rest)
+            self._check(self.size)
+        line = self.lines.pop(0)
+        self.largest = max(self.largest, len(line))
+        if line.count(b"[") + line.count(b"{") > MAX_REPLY_CONTAINERS:
+            self._too_large(f"more than {MAX_REPLY_CONTAINERS:,} lists and dicts in one reply")
+        try:
+            return json.loads(line)
+        except (ValueError, RecursionError) as exc:
+            raise BoxDied("the box sent something that is not JSON") from exc
+
+    def _check(self, size):
+        if size > MAX_REPLY_BYTES:
+            self._too_large(f"a reply over {MAX_REPLY_BYTES >> 20} MB")
+
+    def _too_large(self, what):
+        self.chunks, self.size, self.lines = [], 0, []
+        self.kill()
+        raise ReplyTooLarge(f"the box sent {what}")
+
+    def kill(self):
+        if self.proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait()
+        self.sel.close()
+        for f in (self.proc.stdin, self.proc.stdout):
+            with contextlib.suppress(OSError):
+                f.close()
+
+
+def run_program(box, cells, *, cell_seconds, deadline):
+    """Run the program ``cells`` (sources) in ``box`` until it is ready for calls: each cell within ``cell_seconds``
+    of its start, the whole before ``deadline`` (``time.monotonic()``). Returns ``{cell index: error text}`` of the
+    cells that raised. Raises BoxTimeout or BoxDied with ``cell`` set to the cell that was running (None if none)
+    and ``errors`` to the cells that had raised before it."""
+    errors, current = {}, None
+    try:
+        box.send({"cells": list(cells)})
+        while True:
+            msg = box.receive(min(time.monotonic() + cell_seconds + 30, deadline))
+            if msg.get("ready"):
+                return errors
+            i = msg.get("cell")
+            if not isinstance(i, int) or not 0 <= i < len(cells):
+                raise BoxDied("the box sent a message that is not the judge's protocol")
+            current = i
+            if msg.get("state") == "start":
+                msg = box.receive(min(time.monotonic() + cell_seconds, deadline))
+                if msg.get("cell") != i or msg.get("state") != "done":
+                    raise BoxDied("the box sent a message that is not the judge's protocol")
+            if msg.get("error"):
+                errors[i] = str(msg["error"])[:600]
+            current = None
+    except (BoxTimeout, BoxDied) as exc:
+        exc.cell, exc.errors = current, errors
+        raise
+
+
+def call(box, name, args, kwargs, deadline):
+    """The box's reply (JSON) to calling the student's ``name`` with ``args`` and ``kwargs`` (encoded here), by
+    ``deadline``. Raises BoxTimeout, BoxDied or ReplyTooLarge, and WireError for arguments that cannot be sent."""
+    if deadline - time.monotonic() <= 0:
+        raise BoxTimeout()
+    box.send({"op": "call", "name": name, "args": wire.encode(list(args)), "kwargs": wire.encode(dict(kwargs))})
+    return box.receive(deadline)
