@@ -26,7 +26,8 @@ LAYERS = (
     ("estimators",),                                                          # 7 the front door to the filters
     ("bench", "plotting"),                                                    # 8 what runs and draws the filters
     ("capstone",),                                                            # 9 the capstone's rules and self-check
-    ("checks", "widgets"),                                                    # 10 what only notebooks import
+    ("checks", "widgets", "nbgrader_compat"),                                 # 10 what only notebooks (and nbgrader's
+                                                                              #    configuration) import
     ("execute",),                                                             # 11 running the notebooks (tests)
 )
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}

@@ -1,0 +1,190 @@
+"""What this course changes in nbgrader, in one place: every class and patch written against nbgrader's own code.
+
+nbgrader has no setting for these, so they subclass its preprocessors and its validator and, for Validate's report,
+put the subclass under the name nbgrader looks it up by. Each relies on nbgrader's code as it is in the version
+:data:`WRITTEN_FOR` names (some of it private: :data:`RELIES_ON`); :func:`check_version` refuses any other with a
+message that says what to do, and a test checks that the names relied on are still there. The two configuration
+files (the course's ``nbgrader_config.py``, the student's ``jupyter/nbgrader_config.py``) only set options.
+
+* :class:`ClearSolutionsForRunAll` -- the release's answer stubs name their exercise, and the cells Run All must not
+  stop at are tagged (``generate_assignment``);
+* :class:`HideTestSource` -- a failed test's traceback cut to its last line in the feedback (``generate_feedback``);
+* :class:`RefuseAutograde` -- ``nbgrader autograde`` (and Formgrader's autograde button) refused: it runs the tests in
+  the student's kernel; the course grades with its judge (``make grade``);
+* :class:`SummaryValidator` and :func:`install_summary_validator` -- Validate's report says "6 of 9 tests pass".
+"""
+from __future__ import annotations
+
+import ast
+import html
+import sys
+
+import nbgrader
+from IPython.core.inputtransformer2 import TransformerManager
+from nbgrader import utils
+from nbgrader.preprocessors import ClearSolutions, NbGraderPreprocessor
+from nbgrader.validator import Validator
+
+from . import labformat
+
+__all__ = ["WRITTEN_FOR", "RELIES_ON", "check_version", "ClearSolutionsForRunAll", "HideTestSource",
+           "RefuseAutograde", "SummaryValidator", "install_summary_validator"]
+
+WRITTEN_FOR = "0.9."            # nbgrader 0.9.x (environment.txt pins 0.9.6)
+#: What of nbgrader the classes below rely on: (module, attribute path) -- the private ones above all.
+RELIES_ON = (
+    ("nbgrader.validator", "Validator._get_passed_cells"),
+    ("nbgrader.validator", "Validator._print_num_failed"),
+    ("nbgrader.validator", "Validator.validate"),
+    ("nbgrader.apps.validateapp", "Validator"),
+    ("nbgrader.server_extensions.validate_assignment.handlers", "Validator"),
+    ("nbgrader.preprocessors", "ClearSolutions.preprocess_cell"),
+    ("nbgrader.preprocessors", "ClearSolutions.code_stub"),
+    ("nbgrader.utils", "determine_grade"),
+)
+_VALIDATOR_USERS = ("nbgrader.apps.validateapp", "nbgrader.server_extensions.validate_assignment.handlers")
+
+
+def check_version(version=None):
+    """Raise RuntimeError unless ``version`` (default: the installed nbgrader's) is one these patches were written
+    for."""
+    version = nbgrader.__version__ if version is None else version
+    if not str(version).startswith(WRITTEN_FOR):
+        raise RuntimeError(f"this course's nbgrader settings (fusionlab.nbgrader_compat) were written for nbgrader "
+                           f"{WRITTEN_FOR}x and rely on its internals; this environment has nbgrader {version}. "
+                           f"Install the version environment.txt pins (make env), or check each name of "
+                           f"fusionlab.nbgrader_compat.RELIES_ON against the new version before changing "
+                           f"WRITTEN_FOR.")
+
+
+check_version()
+
+
+class ClearSolutionsForRunAll(ClearSolutions):
+    """ClearSolutions for a release that Run All goes through, stopping nowhere.
+
+    * Each stub names its exercise: the ``{stub}`` of ``ClearSolutions.code_stub`` becomes the line
+      :func:`fusionlab.labformat.stub` makes for the cell (``raise NotImplementedError('exercise 4 not attempted
+      yet')`` for ``ex4_solution``), so a later cell that needs the answer can say which exercise to finish
+      (``fusionlab.checks`` reads it back with :func:`fusionlab.labformat.unfinished`).
+    * Every code cell that can fail in an untouched lab gets the tag ``raises-exception``, on which JupyterLab's
+      Run All goes on instead of stopping: the answer, check and test cells, and every cell that uses a name an
+      answer cell makes, directly or through another such cell (read from the solution source, before clearing).
+      The tag changes nothing in grading (nbgrader runs every cell anyway) and the solutions do not carry it.
+    """
+
+    TAG = "raises-exception"
+
+    @staticmethod
+    def names(source):
+        """(names a cell reads from before it, names it binds at top level), of the cell as IPython runs it.
+
+        A name the cell binds anywhere (an assignment, a loop variable, a function's argument or local) does not
+        count as read from before: an approximation that is right for the cells of these labs.
+        """
+        try:
+            tree = ast.parse(TransformerManager().transform_cell(source))
+        except SyntaxError:
+            return None, set()
+        nodes = list(ast.walk(tree))
+        anywhere = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
+        anywhere |= {n.arg for n in nodes if isinstance(n, ast.arg)}
+        read = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - anywhere
+        bound = set()
+        for node in tree.body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                bound.add(node.name)
+            elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                bound.update((a.asname or a.name).split(".")[0] for a in node.names)
+            else:
+                bound.update(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store))
+        return read, bound
+
+    def preprocess(self, nb, resources):
+        tainted = set()                                     # names whose value depends on a student's answer
+        for cell in nb.cells:
+            if cell.cell_type != "code":
+                continue
+            meta = cell.metadata.get("nbgrader", {})
+            read, bound = self.names(cell.source)
+            if meta.get("solution") or meta.get("grade") or read is None or read & tainted:
+                tainted |= bound
+                tags = cell.metadata.setdefault("tags", [])
+                if self.TAG not in tags:
+                    tags.append(self.TAG)
+            else:
+                tainted -= bound                            # made afresh by a cell that cannot fail
+        return super().preprocess(nb, resources)
+
+    def preprocess_cell(self, cell, resources, cell_index):
+        stubs = self.code_stub
+        line = labformat.stub(cell.metadata.get("nbgrader", {}).get("grade_id"))
+        self.code_stub = {lang: stub.replace("{stub}", line) for lang, stub in stubs.items()}
+        try:
+            return super().preprocess_cell(cell, resources, cell_index)
+        finally:
+            self.code_stub = stubs
+
+
+class HideTestSource(NbGraderPreprocessor):
+    """Cut the traceback of a failed autograder-test cell down to its last line, ``ename: evalue``.
+
+    ClearHiddenTests clears a test cell's source, but the traceback in its outputs quotes the lines around the
+    failing assert -- the hidden tests themselves. The error output stays an error (the cell still scores 0);
+    only the quoted code goes.
+    """
+
+    def preprocess_cell(self, cell, resources, index):
+        nbgrader = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "code" and nbgrader.get("grade") and not nbgrader.get("solution"):
+            for output in cell.get("outputs", []):
+                if output.output_type == "error":
+                    output.traceback = [f"{output.ename}: {output.evalue}"]
+        return cell, resources
+
+
+class RefuseAutograde(NbGraderPreprocessor):
+    """Stops ``nbgrader autograde``: it would run the tests inside the student's kernel, where the student's code can
+    read the expected values and forge the outputs a score is read from. The course grades with its judge."""
+
+    def preprocess(self, nb, resources):
+        raise RuntimeError("nbgrader autograde is turned off in this course: it runs the tests in the student's own "
+                           "kernel. Grade with the trusted judge instead: make grade LAB=NN_name (docs/instructors.md, "
+                           "section 4).")
+
+
+class SummaryValidator(Validator):
+    """nbgrader's Validator whose report says how many of the notebook's tests pass."""
+
+    summary = None
+
+    def _get_passed_cells(self, nb):
+        passed = super()._get_passed_cells(nb)
+        graded = [(cell, utils.determine_grade(cell, self.log)) for cell in nb.cells if utils.is_grade(cell)]
+        tests = [score == top for cell, (score, top) in graded if not utils.is_solution(cell)]
+        empty = sum(1 for cell, (score, _) in graded if utils.is_solution(cell) and score == 0)  # left as released
+        self.summary = f"{sum(tests)} of {len(tests)} tests pass" + (
+            f"; {empty} answer{'s are' if empty > 1 else ' is'} still empty" if empty else "")
+        return passed
+
+    def validate(self, filename):
+        self.summary = None
+        results = super().validate(filename)
+        if self.summary and results.get("failed"):
+            results["summary"] = self.summary
+            last = results["failed"][-1]                # the dialog shows the failing cells, one after the other
+            last["error"] += f"\n\n<b>{html.escape(self.summary)}.</b>"
+        return results
+
+    def _print_num_failed(self, num_failed):
+        if self.summary:
+            self.stream.write(f"{self.summary}.\n")
+        super()._print_num_failed(num_failed)
+
+
+def install_summary_validator():
+    """Put :class:`SummaryValidator` under the name ``Validator`` in the modules that build nbgrader's validator by
+    that name (the Validate button's handler and ``nbgrader validate``), when they are loaded."""
+    for name in _VALIDATOR_USERS:
+        if name in sys.modules:
+            sys.modules[name].Validator = SummaryValidator
