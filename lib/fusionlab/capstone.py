@@ -90,7 +90,8 @@ RUBRIC = (
 )
 MAX_POINTS = sum(c.points for c in RUBRIC)
 #: Conditions without which the filter earns none of the rubric's points.
-GATES = ("causal: the estimate up to sample k does not change when later samples change or are left out",
+GATES = ("causal: the estimate up to sample k does not change when later samples change or are left out (a filter "
+         "that fails on the check's own calls cannot be checked, and is held like one that is not causal)",
          "its own: it calls no published filter (the library's, VQF, ahrs...) and copies none into its code, reads no "
          "file, does not reach around Python's imports, and does not recognise which trial it is given (an estimate "
          "far closer to the reference than every published filter's is held until the instructor has read the code)")
