@@ -348,7 +348,7 @@ def fetch(names=None, progress=True, out=None):
         print(f"{len(unverified)} of them have no SHA-256 in lib/fusionlab/data/broad_sha256.txt, so they were "
               "checked for length only; their sums (add them there once, from a copy you trust):", file=out)
         for name, path in unverified:
-            print(f"{datasets._sha256(path)}  {name}.mat", file=out)
+            print(f"{datasets.file_sha256(path)}  {name}.mat", file=out)
     return 0
 
 

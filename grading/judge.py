@@ -427,14 +427,14 @@ class Lab:
 
     def _forbidden(self, gid):
         """``module:qualname`` of what the exercise of the test ``gid`` forbids, from the table of exercises."""
-        from fusionlab.checks import _core, exercises
+        from fusionlab.checks import exercises
 
         entry = {e.grade_id: e for e in exercises.of_lab(self.lab)}.get(gid)
         if entry is None:
             raise LookupError(f"{self.lab}: test cell {gid} has no exercise in fusionlab.checks.exercises")
         out = set()
         for dotted in entry.forbid:
-            name = _dotted(_core._resolve(dotted))
+            name = _dotted(exercises.resolve(dotted))
             if name:
                 out.add(name)
         return out

@@ -63,7 +63,7 @@ def test_each_test_cell_names_exactly_the_references_of_its_entry(lab):
                 named.add(_canonical(eval(compile(ast.Expression(node), "<f>", "eval"), scope)))  # noqa: S307
             except NameError:
                 continue   # a name the cell makes itself (a lambda's wrapper): not a library function
-        table = {_canonical(_core._resolve(d)) for d in e.forbid}
+        table = {_canonical(exercises.resolve(d)) for d in e.forbid}
         assert named - {None} == table | reserved.get(e.number, set()), (e.grade_id, named, table)
 
 

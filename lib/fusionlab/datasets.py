@@ -68,8 +68,8 @@ import numpy as np
 from . import validate
 
 __all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "SHIPPED_DIR", "DataMissing", "TrialInfo",
-           "BroadTrial", "list_trials", "group_names", "trial_name", "known_sha256", "cache_dir", "shipped_dir",
-           "available_trials", "missing_trials", "fetch_trial", "load_trial", "broad"]
+           "BroadTrial", "list_trials", "group_names", "trial_name", "known_sha256", "file_sha256", "cache_dir",
+           "shipped_dir", "available_trials", "missing_trials", "fetch_trial", "load_trial", "broad"]
 
 #: Published address of the dataset's ``.mat`` files (a trial is ``BROAD_URL + name + '.mat'``).
 BROAD_URL = "https://github.com/dlaidig/broad/raw/main/data_mat/"
@@ -337,7 +337,19 @@ def _folder(folder):
     return d
 
 
-def _sha256(path):
+def file_sha256(path):
+    """The SHA-256 of a file, read in chunks (what ``broad_sha256.txt`` lists).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for chunk in iter(lambda: f.read(_CHUNK), b""):
@@ -352,7 +364,7 @@ def _sidecar(path):
 def _check_user_file(path, expected):
     """A file in a folder of the user's: verify it when the checksum is known; never touch it."""
     if expected is not None:
-        got = _sha256(path)
+        got = file_sha256(path)
         if got != expected:
             raise ValueError(f"checksum mismatch for {path}: sha256 is {got}, expected {expected} -- the file is "
                              "corrupt or truncated; copy it again from the published dataset")
@@ -466,7 +478,7 @@ def _fetch(name, folder, download, progress):
     path = cache / fname
     if path.is_file():
         want = expected or (_sidecar(path).read_text().split()[0] if _sidecar(path).is_file() else None)
-        if want is None or _sha256(path) == want:
+        if want is None or file_sha256(path) == want:
             if env_problem:
                 warnings.warn(f"{env_problem}; it is ignored, trial {name} is loaded from the cache", stacklevel=3)
             return path

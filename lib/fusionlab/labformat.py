@@ -34,8 +34,17 @@ _UNFINISHED = re.compile(r"\b(exercise|question)\s+([0-9]+[a-z]?)\s+not attempte
 
 
 class GradeId(NamedTuple):
-    """A grade id read: ``kind`` ``'ex'`` or ``'q'``, ``number`` (``'4'``, ``'2b'``), ``role`` (``'solution'``,
-    ``'check'``, ``'tests'``, ``'answer'``, or ``''`` for a written question)."""
+    """A grade id, read.
+
+    Parameters
+    ----------
+    kind : str
+        ``'ex'`` (an exercise) or ``'q'`` (a question).
+    number : str
+        ``'4'``, ``'2b'``.
+    role : str
+        ``'solution'``, ``'check'``, ``'tests'``, ``'answer'``, or ``''`` for a written question.
+    """
 
     kind: str
     number: str
@@ -43,29 +52,84 @@ class GradeId(NamedTuple):
 
 
 def parse(grade_id):
-    """The :class:`GradeId` of an exercise's or a question's cell, or None (``header``, ``imports``, anything else)."""
+    """The :class:`GradeId` of an exercise's or a question's cell.
+
+    Parameters
+    ----------
+    grade_id : str or None
+        A cell's grade id.
+
+    Returns
+    -------
+    GradeId or None
+        None for ``header``, ``imports`` and anything else.
+    """
     m = _GRADE_ID.fullmatch(grade_id or "")
     return GradeId(m["kind"], m["number"], m["role"] or "") if m else None
 
 
 def solution_id(number):
-    """``ex4_solution``: the grade id of exercise ``number``'s answer cell."""
+    """The grade id of an exercise's answer cell.
+
+    Parameters
+    ----------
+    number : int or str
+        The exercise's number.
+
+    Returns
+    -------
+    str
+        ``ex4_solution``.
+    """
     return f"ex{number}_solution"
 
 
 def check_id(number):
-    """``ex4_check``: the grade id of exercise ``number``'s visible check."""
+    """The grade id of an exercise's visible check.
+
+    Parameters
+    ----------
+    number : int or str
+        The exercise's number.
+
+    Returns
+    -------
+    str
+        ``ex4_check``.
+    """
     return f"ex{number}_check"
 
 
 def autograder_id(number):
-    """``ex4_tests``: the grade id of exercise ``number``'s autograder cell."""
+    """The grade id of an exercise's autograder cell.
+
+    Parameters
+    ----------
+    number : int or str
+        The exercise's number.
+
+    Returns
+    -------
+    str
+        ``ex4_tests``.
+    """
     return f"ex{number}_tests"
 
 
 def label(grade_id):
-    """``'exercise 4'`` for the cells of exercise 4, ``'question 2'`` for those of question 2, else
-    ``'this exercise'``."""
+    """What a student calls the exercise or question a cell belongs to.
+
+    Parameters
+    ----------
+    grade_id : str or None
+        A cell's grade id.
+
+    Returns
+    -------
+    str
+        ``'exercise 4'`` for the cells of exercise 4, ``'question 2'`` for those of question 2, else
+        ``'this exercise'``.
+    """
     g = parse(grade_id)
     if g is None:
         return "this exercise"
@@ -73,11 +137,33 @@ def label(grade_id):
 
 
 def stub(grade_id):
-    """The line an answer cell's solution becomes in the release: it raises, naming the exercise to do."""
+    """The line an answer cell's solution becomes in the release: it raises, naming the exercise to do.
+
+    Parameters
+    ----------
+    grade_id : str or None
+        The answer cell's grade id.
+
+    Returns
+    -------
+    str
+        ``raise NotImplementedError('exercise 4 not attempted yet')``.
+    """
     return _STUB.format(label=label(grade_id))
 
 
 def unfinished(text):
-    """``'exercise 4'`` when ``text`` holds the error of a release stub (:func:`stub`), else None."""
+    """The exercise a release stub's error (:func:`stub`) waits for.
+
+    Parameters
+    ----------
+    text : str or BaseException
+        An error or its text.
+
+    Returns
+    -------
+    str or None
+        ``'exercise 4'``, or None when ``text`` is not a stub's error.
+    """
     m = _UNFINISHED.search(str(text))
     return f"{m.group(1)} {m.group(2)}" if m else None

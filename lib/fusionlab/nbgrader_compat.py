@@ -46,8 +46,18 @@ _VALIDATOR_USERS = ("nbgrader.apps.validateapp", "nbgrader.server_extensions.val
 
 
 def check_version(version=None):
-    """Raise RuntimeError unless ``version`` (default: the installed nbgrader's) is one these patches were written
-    for."""
+    """Refuse an nbgrader these patches were not written for.
+
+    Parameters
+    ----------
+    version : str, optional
+        The version to check (default: the installed nbgrader's).
+
+    Raises
+    ------
+    RuntimeError
+        Unless ``version`` starts with :data:`WRITTEN_FOR`, saying what to do.
+    """
     version = nbgrader.__version__ if version is None else version
     if not str(version).startswith(WRITTEN_FOR):
         raise RuntimeError(f"this course's nbgrader settings (fusionlab.nbgrader_compat) were written for nbgrader "
@@ -71,12 +81,17 @@ class ClearSolutionsForRunAll(ClearSolutions):
       Run All goes on instead of stopping: the answer, check and test cells, and every cell that uses a name an
       answer cell makes, directly or through another such cell (read from the solution source, before clearing).
       The tag changes nothing in grading (nbgrader runs every cell anyway) and the solutions do not carry it.
+
+    Parameters
+    ----------
+    **kw
+        nbgrader's and traitlets' own options (``config=``, ...), passed on.
     """
 
     TAG = "raises-exception"
 
     @staticmethod
-    def names(source):
+    def _names(source):
         """(names a cell reads from before it, names it binds at top level), of the cell as IPython runs it.
 
         A name the cell binds anywhere (an assignment, a loop variable, a function's argument or local) does not
@@ -101,12 +116,26 @@ class ClearSolutionsForRunAll(ClearSolutions):
         return read, bound
 
     def preprocess(self, nb, resources):
+        """Tag the cells Run All must go past, then clear the solutions.
+
+        Parameters
+        ----------
+        nb : nbformat.NotebookNode
+            The source notebook.
+        resources : dict
+            nbgrader's resources.
+
+        Returns
+        -------
+        tuple
+            ``(nb, resources)``, the release notebook.
+        """
         tainted = set()                                     # names whose value depends on a student's answer
         for cell in nb.cells:
             if cell.cell_type != "code":
                 continue
             meta = cell.metadata.get("nbgrader", {})
-            read, bound = self.names(cell.source)
+            read, bound = self._names(cell.source)
             if meta.get("solution") or meta.get("grade") or read is None or read & tainted:
                 tainted |= bound
                 tags = cell.metadata.setdefault("tags", [])
@@ -117,6 +146,22 @@ class ClearSolutionsForRunAll(ClearSolutions):
         return super().preprocess(nb, resources)
 
     def preprocess_cell(self, cell, resources, cell_index):
+        """ClearSolutions' own step, with the cell's stub line (:func:`fusionlab.labformat.stub`) in the stub.
+
+        Parameters
+        ----------
+        cell : nbformat.NotebookNode
+            The cell.
+        resources : dict
+            nbgrader's resources.
+        cell_index : int
+            The cell's index.
+
+        Returns
+        -------
+        tuple
+            ``(cell, resources)``.
+        """
         stubs = self.code_stub
         line = labformat.stub(cell.metadata.get("nbgrader", {}).get("grade_id"))
         self.code_stub = {lang: stub.replace("{stub}", line) for lang, stub in stubs.items()}
@@ -132,9 +177,30 @@ class HideTestSource(NbGraderPreprocessor):
     ClearHiddenTests clears a test cell's source, but the traceback in its outputs quotes the lines around the
     failing assert -- the hidden tests themselves. The error output stays an error (the cell still scores 0);
     only the quoted code goes.
+
+    Parameters
+    ----------
+    **kw
+        nbgrader's and traitlets' own options (``config=``, ...), passed on.
     """
 
     def preprocess_cell(self, cell, resources, index):
+        """Cut the traceback of a failed test cell to its last line.
+
+        Parameters
+        ----------
+        cell : nbformat.NotebookNode
+            The cell.
+        resources : dict
+            nbgrader's resources.
+        index : int
+            The cell's index.
+
+        Returns
+        -------
+        tuple
+            ``(cell, resources)``.
+        """
         nbgrader = cell.metadata.get("nbgrader", {})
         if cell.cell_type == "code" and nbgrader.get("grade") and not nbgrader.get("solution"):
             for output in cell.get("outputs", []):
@@ -145,16 +211,42 @@ class HideTestSource(NbGraderPreprocessor):
 
 class RefuseAutograde(NbGraderPreprocessor):
     """Stops ``nbgrader autograde``: it would run the tests inside the student's kernel, where the student's code can
-    read the expected values and forge the outputs a score is read from. The course grades with its judge."""
+    read the expected values and forge the outputs a score is read from. The course grades with its judge.
+
+    Parameters
+    ----------
+    **kw
+        nbgrader's and traitlets' own options (``config=``, ...), passed on.
+    """
 
     def preprocess(self, nb, resources):
+        """Refuse, naming the command to use.
+
+        Parameters
+        ----------
+        nb : nbformat.NotebookNode
+            A submission.
+        resources : dict
+            nbgrader's resources.
+
+        Raises
+        ------
+        RuntimeError
+            Always.
+        """
         raise RuntimeError("nbgrader autograde is turned off in this course: it runs the tests in the student's own "
                            "kernel. Grade with the trusted judge instead: make grade LAB=NN_name (docs/instructors.md, "
                            "section 4).")
 
 
 class SummaryValidator(Validator):
-    """nbgrader's Validator whose report says how many of the notebook's tests pass."""
+    """nbgrader's Validator whose report says how many of the notebook's tests pass.
+
+    Parameters
+    ----------
+    **kwargs
+        nbgrader's and traitlets' own options, passed on.
+    """
 
     summary = None
 
@@ -168,6 +260,18 @@ class SummaryValidator(Validator):
         return passed
 
     def validate(self, filename):
+        """nbgrader's validation, with the count of passing tests added to a report that has failures.
+
+        Parameters
+        ----------
+        filename : str
+            The notebook.
+
+        Returns
+        -------
+        dict
+            nbgrader's results; ``summary`` holds the count when a test fails.
+        """
         self.summary = None
         results = super().validate(filename)
         if self.summary and results.get("failed"):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fusionlab import checks
-from fusionlab.checks import _core
+from fusionlab.checks import _core, exercises
 from message_pairs import equal_pairs
 
 NUDGES = (1e-7, 1e-5, 1e-3)
@@ -51,7 +51,7 @@ def test_the_pair_finder_sees_a_pair_printed_alike_and_passes_one_printed_apart(
 @pytest.mark.parametrize("name, ref", _one_function_checks(), ids=[n for n, _ in _one_function_checks()])
 def test_a_near_miss_is_printed_as_a_difference(name, ref, monkeypatch, no_message_prints_one_value_twice):
     monkeypatch.setattr(_core, "_REFERENCES", {})             # hand the library's own function to the check
-    fn = _core._resolve(ref)
+    fn = exercises.resolve(ref)
     for eps in NUDGES:
         try:
             getattr(checks, name)(_nudged(fn, eps))

@@ -16,7 +16,7 @@ import traceback
 import numpy as np
 
 from .. import datasets, guard, labformat
-from .exercises import EXERCISES
+from .exercises import EXERCISES, resolve
 
 __all__ = ["Feedback", "friendly_errors", "describe_difference", "check_close"]
 
@@ -410,21 +410,6 @@ def check_close(name, value, expected, tol, hint=""):
 _REFERENCES = {e.check: e.forbid for e in EXERCISES}   # check name -> the dotted names it forbids (the table)
 
 
-def _resolve(dotted):
-    """``"kalman.update"`` -> fusionlab.kalman.update; other packages by their full name (``"numpy.arctan2"``)."""
-    parts = dotted.split(".")
-    for i in range(len(parts) - 1, 0, -1):
-        for prefix in ("fusionlab.", ""):
-            try:
-                obj = importlib.import_module(prefix + ".".join(parts[:i]))
-            except ImportError:
-                continue
-            for attr in parts[i:]:
-                obj = getattr(obj, attr)
-            return obj
-    raise ImportError(dotted)
-
-
 def forbids(check):
     """Decorate a check so that every function it is given runs with its exercise's ``forbid`` out of reach.
 
@@ -443,7 +428,7 @@ def forbids(check):
         def call(*args, **kwargs):
             try:
                 names = _REFERENCES.get(check.__name__, ())
-                with guard.forbid(*(_resolve(n) for n in names), exercise=None):
+                with guard.forbid(*(resolve(n) for n in names), exercise=None):
                     return fn(*args, **kwargs)
             except guard.ForbiddenCall as err:
                 raise Feedback(str(err)) from None

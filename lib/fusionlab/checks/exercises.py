@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders"]
+__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders", "resolve"]
 
 
 @dataclass(frozen=True)
@@ -248,3 +248,22 @@ def loaders(lab=None):
     """
     rows = EXERCISES if lab is None else of_lab(lab)
     return tuple(dict.fromkeys(name for e in rows for name in e.loaders))
+
+
+def resolve(dotted):
+    """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
+    packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
+    there."""
+    import importlib
+
+    parts = dotted.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        for prefix in ("fusionlab.", ""):
+            try:
+                obj = importlib.import_module(prefix + ".".join(parts[:i]))
+            except ImportError:
+                continue
+            for attr in parts[i:]:
+                obj = getattr(obj, attr)
+            return obj
+    raise ImportError(dotted)
