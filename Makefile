@@ -42,6 +42,7 @@ solutions: env  ## re-execute every solution notebook in place (authors; one lab
 	  $(BIN)/python -c "$$STRIP_WIDGET_STATE" solutions/$$lab/$$lab.ipynb || exit 1; done
 
 labs: env  ## regenerate the student notebooks in labs/ from solutions/, and labs/docs (what the labs link to)
+	@$(BIN)/python -m grading.stamp $(LABS)
 	@db=$$(mktemp -d)/gradebook.db; for lab in $(LABS); do echo "==> generating labs/$$lab"; \
 	  $(BIN)/nbgrader generate_assignment $$lab --force --log-level=ERROR --db=sqlite:///$$db || exit 1; done
 	@echo "==> copying the documents the labs link to into labs/docs"

@@ -163,14 +163,29 @@ def gradebook_kept(course: Path, lab: str, say=print):
 
 
 def recorded_tests(course: Path, lab: str):
-    """The test cells of ``lab`` as the gradebook holds them (hidden tests included): {grade_id: source}."""
+    """The test cells of ``lab`` as the gradebook holds them (hidden tests included): {grade_id: source}.
+
+    The gradebook must record the test cells and points of the table of exercises
+    (:mod:`fusionlab.checks.exercises`), the lab's specification: a gradebook recorded from other solutions is
+    refused, saying what differs and what to do."""
+    from fusionlab.checks import exercises
+
     with warnings.catch_warnings(), _gradebook(course) as gb:
         warnings.simplefilter("ignore")
         nb = gb.find_notebook(lab, lab)
         solutions = {c.name for c in nb.solution_cells}
         sources = {c.name: c.source for c in nb.source_cells}
-        return {c.name: sources[c.name] for c in nb.grade_cells
-                if c.cell_type == "code" and c.name not in solutions}
+        tests = {c.name: c for c in nb.grade_cells if c.cell_type == "code" and c.name not in solutions}
+        table = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}
+        recorded = {name: float(c.max_score) for name, c in tests.items()}
+        if recorded != table:
+            differ = sorted(set(recorded) ^ set(table)) + sorted(g for g in set(recorded) & set(table)
+                                                                 if recorded[g] != table[g])
+            said = ", ".join(f"{g} ({recorded.get(g)} points recorded, {table.get(g)} in the table)" for g in differ)
+            raise SystemExit(f"gradebook.db records the test cells of {lab} otherwise than the table of exercises "
+                             f"(fusionlab.checks.exercises): {said}. Record the lab again from solutions/ "
+                             f"(make gradebook LABS={lab}), or fix the table.")
+        return {name: sources[name] for name in tests}
 
 
 def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> judge.Lab:

@@ -48,6 +48,7 @@ from pathlib import Path
 import nbformat
 
 from fusionlab import guard, labformat
+from fusionlab.checks import exercises
 from grading import box as wire
 from grading import client, sandbox
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
@@ -155,8 +156,6 @@ def _without_guard_calls(source):
 # ---------------------------------------------------------------------------------------------------------------
 
 def _judge_guard():
-    from fusionlab import guard, labformat
-
     def grade(student_fn, reference_fn, cases, *, forbid=(), **kw):
         return guard.grade(student_fn, reference_fn, cases, forbid=(), **kw)
 
@@ -385,7 +384,8 @@ class Lab:
                  cell_seconds=CELL_SECONDS):
         self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
         self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
-        self.points = {grade_id(c): float(nbg(c).get("points", 0)) for c in release.cells if is_test(c)}
+        self.points = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}   # the table's, checked against
+        # the gradebook's by grading.classgrade.recorded_tests before anyone is graded
         setup = [c for c in release.cells if grade_id(c) == labformat.SETUP] or \
                 [c for c in release.cells if c.cell_type == "code" and not is_answer(c)][:1]
         self.setup_source = _without_guard_calls(setup[0].source) if setup else ""
@@ -427,8 +427,6 @@ class Lab:
 
     def _forbidden(self, gid):
         """``module:qualname`` of what the exercise of the test ``gid`` forbids, from the table of exercises."""
-        from fusionlab.checks import exercises
-
         entry = {e.grade_id: e for e in exercises.of_lab(self.lab)}.get(gid)
         if entry is None:
             raise LookupError(f"{self.lab}: test cell {gid} has no exercise in fusionlab.checks.exercises")

@@ -80,3 +80,23 @@ def test_the_red_team_has_a_cheat_for_every_exercise_the_library_answers():
     cheats = {(lab, n) for lab, table in CHEATS.items() for n in table}
     assert cheats == with_reference - NO_REFERENCE
     assert {(e.lab, e.number) for e in exercises.EXERCISES if not e.forbid} == NO_REFERENCE
+
+
+def test_the_solutions_autograder_cells_are_as_the_table_stamps_them():
+    from grading import stamp
+    assert stamp.main(["--check"]) == 0
+
+
+def test_stamping_writes_the_tables_points_into_the_metadata_and_the_first_line():
+    from grading import stamp
+    nb = _solution("13_capstone")
+    [cell] = [c for c in nb.cells if grade_id(c) == "ex2_tests"]
+    cell.metadata.nbgrader["points"] = 7
+    cell.source = cell.source.replace("(1 point:", "(7 points:", 1)
+    assert stamp.stamp(nb, "13_capstone") == ["ex2_tests"]
+    assert cell.metadata.nbgrader["points"] == 1
+    assert cell.source.startswith("# Autograder: exercise 2 (1 point: your filter runs and is causal")
+    [cell] = [c for c in nb.cells if grade_id(c) == "ex1_tests"]
+    cell.source = "\n".join(cell.source.split("\n")[1:])          # the header line lost
+    assert stamp.stamp(nb, "13_capstone") == ["ex1_tests"]
+    assert cell.source.startswith("# Autograder: exercise 1 (2 points)\n")

@@ -82,3 +82,21 @@ def test_only_the_last_copies_are_kept(course):
     with classgrade.gradebook_kept(course, "02_kalman_falling_body", say=print):
         pass
     assert len(list(folder.glob("gradebook-*.db"))) == classgrade.KEEP_BACKUPS
+
+
+def test_a_gradebook_recorded_with_other_points_than_the_table_is_refused(tmp_path, monkeypatch):
+    import nbformat
+
+    from conftest import ROOT, nbgrader
+    lab = "02_kalman_falling_body"
+    shutil.copy(ROOT / "nbgrader_config.py", tmp_path)
+    shutil.copytree(ROOT / "jupyter", tmp_path / "jupyter")
+    (tmp_path / "solutions" / lab).mkdir(parents=True)
+    nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    for cell in nb.cells:
+        if cell.metadata.get("nbgrader", {}).get("grade_id") == "ex3_tests":
+            cell.metadata.nbgrader["points"] = 5
+    nbformat.write(nb, tmp_path / "solutions" / lab / f"{lab}.ipynb")
+    nbgrader(["generate_assignment", lab, "--force"], cwd=tmp_path)
+    with pytest.raises(SystemExit, match=r"ex3_tests \(5.0 points recorded, 2.0 in the table\).*make gradebook"):
+        classgrade.recorded_tests(tmp_path, lab)
