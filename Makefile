@@ -12,11 +12,15 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: formgrader test test-all test-budget solutions labs data bench release clean
+.PHONY: formgrader lint test test-all test-budget solutions labs data bench release clean
 
 formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
 	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
+
+lint: env  ## ruff on the Python sources (its rules in pyproject.toml; the notebooks are not linted)
+	@echo "==> ruff check: pyflakes, pycodestyle and bugbear on lib/, tests/, grading/, hub/"
+	@$(BIN)/ruff check .
 
 # One pytest run holds the unit tests, the library's doctests and strict nbval on every solution, on both cores
 # (-n 2; each test file stays in one process, so a module's fixture -- a class graded once -- serves all its tests;
