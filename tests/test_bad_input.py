@@ -1182,13 +1182,14 @@ def test_unit_slips_of_the_report_are_refused():
     with pytest.raises(ValueError, match=r"heading_offset must be in radians"):
         metrics.broad_rmse(q, q, heading_offset=5.0)
     from fusionlab import correlation
+    calls = (lambda fs: estimators.run("dcm_ahrs", GYR, ACC, fs, mag=MAG),
+             lambda fs: sensor_errors.gyro_noise(100, fs, arw=0.01, rng=1),
+             lambda fs: calibration.allan_deviation(RATE200, fs),
+             lambda fs: correlation.complementary_attitude(GYR, ACC, fs))
     for fs in (0.01, 1e9):
-        for call in (lambda: estimators.run("dcm_ahrs", GYR, ACC, fs, mag=MAG),
-                     lambda: sensor_errors.gyro_noise(100, fs, arw=0.01, rng=1),
-                     lambda: calibration.allan_deviation(RATE200, fs),
-                     lambda: correlation.complementary_attitude(GYR, ACC, fs)):
+        for call in calls:
             with pytest.raises(ValueError, match=r"fs must be a sample rate in Hz between 1 and 100000"):
-                call()
+                call(fs)
 
 
 @pytest.mark.parametrize("C, what", [(np.diag([1.0, 1.0, -1.0]), "reflection"), (np.zeros((3, 3)), "zero matrix")])

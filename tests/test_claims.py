@@ -53,7 +53,7 @@ NOT_A_CLAIM = [
                rf"\s*{_REF}"),
     re.compile(r"\$\$.*?\$\$", re.S), re.compile(r"\$[^$\n]+\$"), re.compile(r"`[^`\n]+`"),
     re.compile(r"\[[^\]\n]*\]\([^)\n]*\)"),                 # a link's target
-    re.compile(rf"\b(?:refs?\.?|Std|doi:|Data)\s*[\d.()/:]+(?:\s*[–-]\s*\d+)?(?:,\s*\d+)*"),  # a bibliography entry
+    re.compile(r"\b(?:refs?\.?|Std|doi:|Data)\s*[\d.()/:]+(?:\s*[–-]\s*\d+)?(?:,\s*\d+)*"),  # a bibliography entry
     re.compile(r"^\W*\(?[a-z]\)\s*\d+(?:\.\d+)?\s*—"),      # a rubric line: "(a) 0.75 — ..."
     re.compile(r"\b\d+(?:\.\d+)?\s*(?:points?|pts?)\b"),     # the marks of a question
     re.compile(r"\b\d{4}\b(?=[);,]| ?\))"),                  # a year in a reference: (Laidig et al., 2021)

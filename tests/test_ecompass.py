@@ -28,7 +28,7 @@ def test_rotation_matrix_eq34_maps_global_to_sensor_as_q_star_v_q():
 
 def test_seed002_quaternion_is_our_body_to_nav_quaternion_in_every_frame():
     q = _random_quats(1)[0]
-    for frame, nav in (("NED", "NED"), ("Android", "ENU"), ("Win8", "ENU")):
+    for frame, _nav in (("NED", "NED"), ("Android", "ENU"), ("Win8", "ENU")):
         assert np.allclose(conventions.quat_from_seed002(q, frame), q)
         # a flat, north-facing sensor (v5.00's flat reading) is the identity in every frame
         G = ecompass.accel_model([1.0, 0, 0, 0], frame=frame)

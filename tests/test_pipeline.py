@@ -64,7 +64,7 @@ def _assert_only_unfinished_exercise_errors(path):
     errors = [(i, o) for i, c in enumerate(nb.cells) if c.cell_type == "code" for o in c.get("outputs", [])
               if o.output_type == "error"]
     assert errors, "the untouched lab ran without a single unfinished-exercise error"
-    for i, e in errors:
+    for _, e in errors:
         if e.ename == "NameError":
             assert "made by an earlier cell" in e.evalue, f"NameError without the hint: {e.evalue}"
         else:

@@ -108,7 +108,7 @@ def test_freescale9_refuses_a_field_that_is_not_in_micro_tesla(trial27, factor, 
 @pytest.mark.parametrize("name", ["dcm_ahrs", "triad"])
 def test_scale_free_filters_give_the_same_attitude_in_any_field_unit(trial27, name):
     """What run()'s docstring promises for them: gauss or nT give the µT answer (within rounding)."""
-    gyr, acc, mag, fs = gyr_acc_mag_fs = trial27
+    gyr, acc, mag, fs = trial27
     ref = estimators.run(name, gyr[:3000], acc[:3000], fs, mag=mag[:3000])
     for factor in (0.01, 1000.0):
         q = estimators.run(name, gyr[:3000], acc[:3000], fs, mag=factor * mag[:3000])
@@ -482,7 +482,8 @@ def test_ecompass_noise_and_heading_refuse_m_s2_and_a_field_in_gauss_or_nT():
 
 def test_ellipsoid_fit_refuses_gauss_and_nT_and_a_radius_in_another_unit():
     rng = np.random.default_rng(3)
-    u = rng.standard_normal((200, 3)); u /= np.linalg.norm(u, axis=1, keepdims=True)
+    u = rng.standard_normal((200, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
     mag = 44.3 * u * [1.1, 0.9, 1.0] + [10.0, -5.0, 3.0]               # µT, soft and hard iron
     fit = calibration.fit_ellipsoid(mag, field_strength=44.3)
     assert np.allclose(np.linalg.norm(calibration.apply_ellipsoid(fit, mag), axis=1), 44.3, rtol=1e-6)

@@ -351,7 +351,8 @@ class DcmAhrs:
                     validate.exact_shape(v, name, (3,))
             if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
                 raise ValueError("gyr, acc_b and mag_b of an earlier step held NaN or inf: the filter's state is no "
-                                 "longer finite (step checks nothing on the way in; run_ahrs checks a recording)")
+                                 "longer finite (step checks nothing on the way in; run_ahrs checks a "
+                                 "recording)") from None
             raise
 
     def _step(self, gyr, acc_b, mag_b):
