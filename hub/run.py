@@ -169,7 +169,8 @@ def prepare(args, instructor, students):
     nbgrader_config(folder / "config" / "instructor", common + [f"c.CourseDirectory.root = {str(course)!r}"])
     s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
          "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
-         "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)), "exchange": str(exchange), "course_id": COURSE_ID,
+         "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)),
+         "exchange": str(exchange), "course_id": COURSE_ID,
          "memory_mb": args.memory_mb, "cpus": args.cpus, "idle_seconds": args.idle_seconds,
          "student_password": old.get("student_password") or secrets.token_urlsafe(9),
          "instructor_password": old.get("instructor_password") or secrets.token_urlsafe(32),
@@ -330,12 +331,14 @@ def main(argv=None):
         url = f"http://127.0.0.1:{s['port']}/"
         if not up(url + "hub/api", 90):
             raise SystemExit(f"the hub did not answer on {url} within 90 s: see {folder / 'jupyterhub.log'}")
+        limits = (f"{args.memory_mb or 'no'} MB and {args.cpus or 'no limit of'} CPU per server; idle servers stop "
+                  f"after {args.idle_seconds} s")
         print(f"""
 The course's JupyterHub is up ({time.monotonic() - t0:.0f} s): open {url}
   instructor  {instructor:<14} password {s['instructor_password']}  (Formgrader: {url}user/{instructor}/formgrader)
   students    {students[0]} ... {students[-1]}  password {s['student_password']}  (one password for all students)
   exchange    {s['exchange']} (course id {COURSE_ID}); the instructor's course: {s['course']}
-  limits      {args.memory_mb or 'no'} MB and {args.cpus or 'no limit of'} CPU per server; idle servers stop after {args.idle_seconds} s
+  limits      {limits}
   log         {folder / 'jupyterhub.log'}; API token for scripts: {folder / 'hub.json'} (api_token)
 Ctrl-C stops the hub and every server. `make hub-remove` removes the accounts and {folder}.
 READY""", flush=True)

@@ -57,8 +57,9 @@ import numpy as np
 
 from . import accel_tilt, datasets, estimators, metrics, rotations, validate
 
-__all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means", "format_table", "write_csv", "plot",
-           "main", "TRIAL_COLUMNS", "GROUP_COLUMNS", "TUNED", "LeaveOneOut", "leave_one_out", "format_loo"]
+__all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means",
+           "format_table", "write_csv", "plot", "main", "TRIAL_COLUMNS", "GROUP_COLUMNS", "TUNED", "LeaveOneOut",
+           "leave_one_out", "format_loo"]
 
 TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
                  "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg", "heading_offset_deg",

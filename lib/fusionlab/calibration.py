@@ -98,7 +98,8 @@ def _span_message(a):
     """Say how many independent directions the reference vectors span (for a rank-deficient system)."""
     centred = np.linalg.matrix_rank(a - a.mean(axis=0), tol=1e-9 * max(1.0, np.abs(a).max()))
     count = _WORDS[len(a)] if len(a) < len(_WORDS) else str(len(a))
-    return (f"the {count} positions span only {centred} {'axis' if centred == 1 else 'axes'} (counting the directions of their differences); "
+    return (f"the {count} positions span only {centred} {'axis' if centred == 1 else 'axes'} (counting the "
+            "directions of their differences); "
             "scale, misalignment and bias need positions that span all three (e.g. ±g on each axis)")
 
 
@@ -382,7 +383,8 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     Parameters
     ----------
     mag : array_like, shape (N, 3)
-        Raw magnetometer readings, µT (a median outside :data:`RAW_FIELD_UT`, gauss or nT, is refused); N >= 10, covering the sphere in more than one plane.
+        Raw magnetometer readings, µT (a median outside :data:`RAW_FIELD_UT`, gauss or nT, is refused); N >= 10,
+        covering the sphere in more than one plane.
     field_strength : float, optional
         The radius of the corrected sphere, µT (e.g. the local field, 44.3 µT for BROAD); by default the one that
         keeps the volume (det W = 1).

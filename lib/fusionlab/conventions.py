@@ -267,7 +267,8 @@ def dcm_to_seed001(C_bn):
 def seed001_quat_to_euler(q):
     """Seed 001 quaternion note §4 formulas, with atan2 as the note advises; returns ``[roll, pitch, yaw]``.
 
-    ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``, ``ψ = atan2(2(ad + bc), a² + b² - c² - d²)``.
+    ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``,
+    ``ψ = atan2(2(ad + bc), a² + b² - c² - d²)``.
     They are right only for a **body→inertial** quaternion (our ``q``); the note's text calls its quaternion
     inertial→body, for which they return nonsense (an erratum, shown in Lab 01).
 

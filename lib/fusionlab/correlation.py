@@ -8,8 +8,9 @@ is. Lab 3 does it in a spreadsheet, one column per step a)-l). Here each step is
 * **as printed** -- the equations as the thesis prints them: C-order ``atan2(z, y)`` (≈ 90° when level, eqs
   5.4-5.5), the difference-of-rates "integral" ``(R[n] - R[n-1])·Δt`` (eqs 5.13-5.14, an erratum), and the
   accelerometer *angle* in the ratio (eqs 5.15-5.16, ° against °/s);
-* **as meant** -- the reading the prose supports (our reading of §5.3.1 and step j)): Excel-order ``ATAN2`` (the tilt), the
-  rectangular increment ``R[n]·Δt``, and the *rate* of the moving-averaged accelerometer angle in the ratio.
+* **as meant** -- the reading the prose supports (our reading of §5.3.1 and step j)): Excel-order ``ATAN2`` (the
+  tilt), the rectangular increment ``R[n]·Δt``, and the *rate* of the moving-averaged accelerometer angle in the
+  ratio.
 
 The weighting direction is itself ambiguous: eq 5.17 weights the accelerometer angle by the
 ratio, lab step j) says "accelerometer weight is 1-Ratio". Both are offered (``accel_weight``).
@@ -292,7 +293,8 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
 
 
 def fuse(accel_deg, increment, weight, f0=None):
-    """Step k): ``F[n] = w[n]·A[n] + (1 - w[n])·(F[n-1] + I[n])`` with ``w`` the accelerometer weight (000 eqs 5.17-5.18).
+    """Step k): ``F[n] = w[n]·A[n] + (1 - w[n])·(F[n-1] + I[n])`` with ``w`` the accelerometer weight
+    (000 eqs 5.17-5.18).
 
     ``w`` is the ratio (eq 5.17) or 1 - ratio (lab step j): choose before calling (:func:`pipeline` does). ``w ≡ 0``
     is pure gyro integration from ``f0``; ``w ≡ 1`` returns the accelerometer angle. ``F[-1] = f0`` (default: the

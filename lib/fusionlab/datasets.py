@@ -754,8 +754,9 @@ def load_trial(name_or_number, folder=None, download=True, progress=True):
 
     >>> from fusionlab import datasets
     >>> trial = datasets.load_trial(2, download=False)
-    >>> trial
-    BroadTrial('02_undisturbed_slow_rotation_B', 53240 samples at 285.71 Hz (186.3 s), movement 32280 samples, reference lost in 1706)
+    >>> trial  # doctest: +NORMALIZE_WHITESPACE
+    BroadTrial('02_undisturbed_slow_rotation_B', 53240 samples at 285.71 Hz (186.3 s), movement 32280 samples,
+               reference lost in 1706)
     >>> trial.gyr.shape, trial.quat_ref.shape
     ((53240, 3), (53240, 4))
     """

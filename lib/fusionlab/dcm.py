@@ -47,10 +47,10 @@ import numpy as np
 
 from . import rotations, validate
 
-__all__ = ["G", "INCREMENT_TOL", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition", "ahrs_process_noise",
-           "accel_to_seed004", "accel_measurement_matrix", "mag_reference", "mag_measurement_matrix",
-           "orthogonality_pseudo_measurement", "orthogonality_covariance", "rows_to_dcm", "orthonormalize",
-           "level_and_compass", "inclination_from", "trusted_mask"]
+__all__ = ["G", "INCREMENT_TOL", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition",
+           "ahrs_process_noise", "accel_to_seed004", "accel_measurement_matrix", "mag_reference",
+           "mag_measurement_matrix", "orthogonality_pseudo_measurement", "orthogonality_covariance", "rows_to_dcm",
+           "orthonormalize", "level_and_compass", "inclination_from", "trusted_mask"]
 
 #: The constant gravity of the thesis' AHRS and GPS/INS models, m/s² (standard gravity; the thesis gives no value).
 G = 9.80665

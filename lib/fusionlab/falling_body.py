@@ -322,8 +322,9 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
     if t_eval is not None:
         t_eval = validate.array(t_eval, "t_eval")
         t_eval = t_eval[t_eval <= duration]
-    return solve_ivp(rhs, (0.0, duration), [validate.scalar(x0, "x0"), validate.scalar(v0, "v0")], method="RK45",
-                     rtol=1e-10, atol=1e-10, t_eval=t_eval, events=ground if validate.flag(stop_at_ground, "stop_at_ground") else None)
+    y0 = [validate.scalar(x0, "x0"), validate.scalar(v0, "v0")]
+    events = ground if validate.flag(stop_at_ground, "stop_at_ground") else None
+    return solve_ivp(rhs, (0.0, duration), y0, method="RK45", rtol=1e-10, atol=1e-10, t_eval=t_eval, events=events)
 
 
 # ----------------------------------------------------------------------------------------------------------------

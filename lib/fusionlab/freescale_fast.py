@@ -237,7 +237,8 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
     qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)               # (002 eq 15)
     ag_all, am_all = ecompass.weights(qa_all, qd_all / B2_all, 1.0)       # (002 eqs 64-65): only QvBQd/B² enters
-    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):                                 # ours: the held noise sets the Kalman Q_v, not the eCompass
+    # ours: the held noise sets the Kalman Q_v, not the eCompass
+    if validate.scalar(accel_hold, "accel_hold", nonnegative=True):
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
     free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
     if free[0]:

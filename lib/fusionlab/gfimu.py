@@ -1,9 +1,9 @@
 """Gyro-free IMU (GF-IMU): the model of twelve distributed accelerometers (seed 004, chapter 3).
 
 Four accelerometer triads, all aligned with the body axes: **A** at the origin, **B**, **C** and **D** at distance
-``d`` on the +x, +y and +z axes (seed 004 Fig. 3.2; the axis assignment is our reconstruction, docs/derivations.md §3). A triad at
-lever arm ``p`` reads ``a_p = a_o + ([α×] + [ω×]²) p`` (eq 3.4), so the differences to A are linear in the *angular
-information vector* (AIV)
+``d`` on the +x, +y and +z axes (seed 004 Fig. 3.2; the axis assignment is our reconstruction, docs/derivations.md
+§3). A triad at lever arm ``p`` reads ``a_p = a_o + ([α×] + [ω×]²) p`` (eq 3.4), so the differences to A are linear
+in the *angular information vector* (AIV)
 
     AIV = [α_x, α_y, α_z, ω_xω_y, ω_xω_z, ω_yω_z, ω_x², ω_y², ω_z²]  =  (1/d) · L · a          (eqs 3.8–3.10)
 
@@ -27,8 +27,9 @@ chapters 3–5) and :mod:`fusionlab.gfimu_dynamics` (the dynamic models and the 
 
 Reconstructed equations
 -----------------------
-The copy of the thesis this course was written from does not show equations 3.5–3.10 (the AIV formulas), the state-space matrices of chapter 5 (5.3, 5.9,
-5.15–5.18, 5.20, 5.22, 5.24, 5.28–5.30, 5.34, 5.36–5.39) and the smoothly constrained Kalman filter (5.50, 5.51).
+The copy of the thesis this course was written from does not show equations 3.5–3.10 (the AIV formulas), the
+state-space matrices of chapter 5 (5.3, 5.9, 5.15–5.18, 5.20, 5.22, 5.24, 5.28–5.30, 5.34, 5.36–5.39) and the
+smoothly constrained Kalman filter (5.50, 5.51).
 Every function that implements one of them, here and in the two filter modules, says "[R]" in its docstring; those
 marked "[R][V]" were checked numerically against the thesis' tables (Labs 06 and 07). Equations 3.4, 3.11–3.15,
 3.19–3.34, 4.50–4.54, 5.19, 5.21, 5.23, 5.25–5.27, 5.40–5.49 survived.

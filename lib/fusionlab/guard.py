@@ -30,7 +30,8 @@ import numpy as np
 import numpy.linalg    # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
 import numpy.testing   # noqa: F401
 
-__all__ = ["ForbiddenCall", "WrongShape", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade", "intact"]
+__all__ = ["ForbiddenCall", "WrongShape", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade",
+           "intact"]
 
 # ---------------------------------------------------------------------------------------------------------------
 # Functions captured now, before any student code runs. C functions, ufuncs and ndarray methods: an answer cell can
@@ -180,14 +181,16 @@ class forbid:
     A call that the student's code catches still counts when the block ends:
 
     >>> from fusionlab import guard, rotations
-    >>> with guard.forbid(rotations.skew, exercise=3):
+    >>> with guard.forbid(rotations.skew, exercise=3):  # doctest: +NORMALIZE_WHITESPACE
     ...     try:
     ...         rotations.skew([1.0, 2.0, 3.0])
     ...     except guard.ForbiddenCall:
     ...         pass
     Traceback (most recent call last):
         ...
-    fusionlab.guard.ForbiddenCall: your answer called rotations.skew, the library's own solution: exercise 3 asks you to write it yourself (your own functions from earlier exercises are fine). (rotations.skew was called; the error was caught inside your code, but the call still counts)
+    fusionlab.guard.ForbiddenCall: your answer called rotations.skew, the library's own solution: exercise 3 asks you
+    to write it yourself (your own functions from earlier exercises are fine). (rotations.skew was called; the error
+    was caught inside your code, but the call still counts)
     >>> float(rotations.skew([1.0, 2.0, 3.0])[0, 1])               # restored on exit
     -3.0
     """
@@ -369,10 +372,12 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     Examples
     --------
     >>> from fusionlab import guard
-    >>> guard.assert_close([[1.0, 0.0], [0.5, 1.0]], [[1.0, 0.0], [0.176, 1.0]], what="P_post")
+    >>> guard.assert_close([[1.0, 0.0], [0.5, 1.0]], [[1.0, 0.0], [0.176, 1.0]],
+    ...                    what="P_post")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    AssertionError: P_post differs from the reference by up to 0.324 at [1, 0] (got 0.5, expected 0.176; tolerance 1e-12 + 1e-09·|expected|)
+    AssertionError: P_post differs from the reference by up to 0.324 at [1, 0] (got 0.5, expected 0.176; tolerance
+    1e-12 + 1e-09·|expected|)
     >>> guard.assert_close(None, [1.0], what="x_post")
     Traceback (most recent call last):
         ...

@@ -25,12 +25,14 @@ __all__ = ["coriolis_acceleration", "precession_rate", "coriolis_force", "seed00
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# 5. The gyroscope: Coriolis (seed 000 §3.2, eqs 3.26-3.34) and integration drift (seed 001 sensors note §3, attitude note §3)
+# 5. The gyroscope: Coriolis (seed 000 §3.2, eqs 3.26-3.34) and integration drift (seed 001 sensors note §3,
+#    attitude note §3)
 # ----------------------------------------------------------------------------------------------------------------
 
 
 def coriolis_acceleration(omega, v):
-    """Apparent Coriolis acceleration in a frame rotating at ``omega``: ``-2 Ω × v`` in m/s² (seed 000 eq 3.33, corrected).
+    """Apparent Coriolis acceleration in a frame rotating at ``omega``: ``-2 Ω × v`` in m/s²
+    (seed 000 eq 3.33, corrected).
 
     Parameters
     ----------
@@ -95,7 +97,8 @@ def precession_rate(mass, arm, inertia, spin, g=earth.G):
 
 
 def coriolis_force(mass, omega, v):
-    """Coriolis force on a mass moving at ``v`` in a frame rotating at ``omega``: ``F = -2 m Ω × v`` in N (000 eq 3.34, corrected).
+    """Coriolis force on a mass moving at ``v`` in a frame rotating at ``omega``: ``F = -2 m Ω × v`` in N
+    (000 eq 3.34, corrected).
 
     This is the apparent force an observer *in the rotating frame* (the gyro's proof mass, the aircraft) sees
     deflect the mass. The thesis prints ``F = 2M(Ω × v)`` (:func:`seed000_eq334_printed`), which is the force the

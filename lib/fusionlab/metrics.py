@@ -1,8 +1,8 @@
 """Orientation error metrics of the BROAD benchmark (Laidig, Caruso, Cereatti, Seel, *Data* 6(7):72, 2021).
 
 Not from a seed: none of the four seeds tests on real data with a ground truth. The definitions are those of the
-dataset authors (their article and published evaluation code; the file format in ``data/broad/README.md``), written here with the
-library's quaternion functions:
+dataset authors (their article and published evaluation code; the file format in ``data/broad/README.md``), written
+here with the library's quaternion functions:
 
 * error quaternion in the **earth** frame: ``q_err = q_est ⊗ conj(q_ref)`` -- the rotation that takes the reference
   attitude to the estimate, written in navigation coordinates (both quaternions body→nav, same nav frame);

@@ -553,7 +553,8 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
     seed = validate.count(seed, "seed")
     duration, fs, rpm = validate.positive(duration, "duration"), validate.sample_rate(fs, "fs"), validate.positive(
         rpm, "rpm")
-    scale, bias, g = validate.scalar(scale, "scale"), validate.scalar(bias, "bias"), validate.scalar(g, "g", nonnegative=True)
+    scale, bias = validate.scalar(scale, "scale"), validate.scalar(bias, "bias")
+    g = validate.scalar(g, "g", nonnegative=True)
     if scale <= 0:
         raise ValueError(f"scale must be > 0 (a scale factor near 1; a negative one turns the Coriolis wave and the "
                          f"heading by 180°); got {scale}")

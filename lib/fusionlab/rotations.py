@@ -29,7 +29,8 @@ from . import validate
 
 __all__ = [
     "skew", "rot_x", "rot_y", "rot_z", "frame_rot_x", "frame_rot_y", "frame_rot_z",
-    "euler_to_dcm", "dcm_to_euler", "sequence_to_dcm", "dcm_to_sequence", "dcm_to_quat", "quat_to_dcm", "euler_to_quat", "quat_to_euler",
+    "euler_to_dcm", "dcm_to_euler", "sequence_to_dcm", "dcm_to_sequence", "dcm_to_quat", "quat_to_dcm",
+    "euler_to_quat", "quat_to_euler",
     "quat_multiply", "quat_conjugate", "quat_normalize", "quat_rotate", "quat_angle_between",
     "rotvec_to_quat", "quat_to_rotvec", "rodrigues_dcm", "dcm_renormalize", "is_rotation",
     "euler_rates_matrix", "body_rates_matrix", "integrate_gyro_dcm", "integrate_gyro_quat",

@@ -67,7 +67,8 @@ def _triad_params(M, S, beta, who, names=("M", "S", "beta")):
 def accel_measure(f, M, S, beta):
     """Accelerometer forward model, seed 001 sensors note §2: ``a_m = M_a (S_a(T) f − β(T))``.
 
-    ``f = (F − F_g)/m`` is the specific force (:func:`fusionlab.accel_tilt.specific_force`); the seed writes ``(1/m) S_a (F − F_g)``.
+    ``f = (F − F_g)/m`` is the specific force (:func:`fusionlab.accel_tilt.specific_force`); the seed writes
+    ``(1/m) S_a (F − F_g)``.
 
     Parameters
     ----------
@@ -511,7 +512,8 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     t = validate.nonnegative(t, "t").reshape(-1)
     a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
     vel = a[:, None] * t
-    pos = a[:, None] * t ** 2 * (1.0 if validate.flag(printed, "printed") else 0.5)               # printed a·t², kinematic ½·a·t²
+    coef = 1.0 if validate.flag(printed, "printed") else 0.5           # printed a·t², kinematic ½·a·t²
+    pos = a[:, None] * t ** 2 * coef
     return a, vel, pos
 
 
@@ -586,5 +588,6 @@ def observer_steady_state_error(L, T, bias):
     """
     L = validate.scalar(L, "L")
     if not 0.0 < L <= 1.0:
-        raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); got {L}")
+        raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); "
+                         f"got {L}")
     return (1 - L) * validate.positive(T, "T") * validate.array(bias, "bias") / L

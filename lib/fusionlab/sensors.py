@@ -156,7 +156,8 @@ def smd_dc_gain(m, k):
 
 
 def accel_from_displacement(x, m, k):
-    """Case acceleration from the proof-mass displacement in the flat band, ``a = -(k/m)·x`` (seed 000 eq 3.7, corrected).
+    """Case acceleration from the proof-mass displacement in the flat band, ``a = -(k/m)·x``
+    (seed 000 eq 3.7, corrected).
 
     The thesis prints ``a = -(m/k)·x`` (:func:`seed000_eq37_printed`); inverting ``x = -(m/k)·a`` (eq 3.6) gives
     ``k/m``, and only ``k/m`` (1/s²) turns metres into m/s².
@@ -242,7 +243,8 @@ def parallel_plate_capacitance(eps, area, gap):
 
 
 def differential_capacitances(c0, delta):
-    """The two gaps of a differential sensor, ``C1 = C0/(1+δ)`` and ``C2 = C0/(1-δ)`` with ``δ = x/x0`` (000 eqs 3.9-3.10).
+    """The two gaps of a differential sensor, ``C1 = C0/(1+δ)`` and ``C2 = C0/(1-δ)`` with ``δ = x/x0``
+    (000 eqs 3.9-3.10).
 
     Parameters
     ----------
@@ -636,7 +638,8 @@ def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
     float or ndarray
         One count, in the sensor's unit.
     """
-    return validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / validate.positive_array(sensitivity, "sensitivity")
+    return (validate.positive(v_ref, "v_ref") / adc_full_scale(bits)
+            / validate.positive_array(sensitivity, "sensitivity"))
 
 
 def null_offset(readings, expected=0.0):

@@ -80,7 +80,8 @@ def _smoothstep(u):
 
 def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 60.0), (7.0, -40.0),
                                      (9.0, 0.0), (11.0, 0.0))):
-    """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; the waypoints are ours), cosine ramps between waypoints.
+    """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; the waypoints are ours), cosine ramps
+    between waypoints.
 
     Default: level 0-1 s, to +60° over 1-3 s, hold, to -40° over 5-7 s, back to 0 over 7-9 s, level 9-11 s.
 
@@ -480,13 +481,13 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
                        bias_dps=(2.0, -3.0, 1.5), inclination_deg=66.0, field_gauss=0.48, acc_bias=True):
     """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1) -- ours.
 
-    Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of
-    sinusoids (up to about 60°, 40°, 100° from the start, 0.05-0.4 Hz) and the hand moves about ±10 cm (up to ≈1 m/s²), faded in
-    and out with cosine ramps; the motion passes through the initial attitude near the middle of the run.
-    Sensors: Table 6.1 noise densities, a constant gyro bias (``bias_dps``, °/s, ours, within the
-    5 °/s bias stability of Table 6.1; the filter starts it at 0), a random constant accelerometer bias of the Table 6.1 stability (``acc_bias``),
-    the field of Siegen (inclination 66°, 0.48 G). The gyro rates are exact: integrating the error-free rates with
-    :func:`fusionlab.dcm.A_matrix` reproduces the true attitude to machine precision.
+    Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of sinusoids
+    (up to about 60°, 40°, 100° from the start, 0.05-0.4 Hz) and the hand moves about ±10 cm (up to ≈1 m/s²), faded in
+    and out with cosine ramps; the motion passes through the initial attitude near the middle of the run. Sensors:
+    Table 6.1 noise densities, a constant gyro bias (``bias_dps``, °/s, ours, within the 5 °/s bias stability of
+    Table 6.1; the filter starts it at 0), a random constant accelerometer bias of the Table 6.1 stability
+    (``acc_bias``), the field of Siegen (inclination 66°, 0.48 G). The gyro rates are exact: integrating the error-free
+    rates with :func:`fusionlab.dcm.A_matrix` reproduces the true attitude to machine precision.
 
     Units at the edge: rad/s, m/s² **specific force** (+g on the up axis at rest, as a real accelerometer and as
     :func:`fusionlab.estimators.run` expect), gauss; true attitude body→NED.

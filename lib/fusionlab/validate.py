@@ -22,10 +22,12 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
-           "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad", "accel_ms2",
-           "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "series", "INNER_ERRORS", "exact_shape", "nonnegative", "positive_array", "UnknownOption",
-           "gyro_tilt_ratio", "rotation_vectors", "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT", "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN", "TILT_RATIO_MIN", "SWAP_GYR_MIN",
-           "SWAP_ACC_MAX"]
+           "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad",
+           "accel_ms2", "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "series", "INNER_ERRORS",
+           "exact_shape", "nonnegative", "positive_array", "UnknownOption", "gyro_tilt_ratio", "rotation_vectors",
+           "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT",
+           "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN",
+           "TILT_RATIO_MIN", "SWAP_GYR_MIN", "SWAP_ACC_MAX"]
 
 
 def _shape_text(shape, lead=""):
@@ -275,10 +277,11 @@ def quaternions(q, name, unit=True, tol=1e-6):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.quaternions([1.0, 0.0, 0.0, 0.1], "q")
+    >>> validate.quaternions([1.0, 0.0, 0.0, 0.1], "q")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: q must be unit quaternions [w, x, y, z] (norm 1 within 1e-06); worst norm error is 0.00499 -- normalise first (rotations.quat_normalize)
+    ValueError: q must be unit quaternions [w, x, y, z] (norm 1 within 1e-06); worst norm error is 0.00499 -- normalise
+    first (rotations.quat_normalize)
     """
     q = array(q, name, shape=(4,))
     if unit:
@@ -599,10 +602,11 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.angles_rad([0.1, 90.0], "yaw")
+    >>> validate.angles_rad([0.1, 90.0], "yaw")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: yaw must be in radians (|angle| <= 6.283); got a value of 90, which looks like degrees -- use np.radians(...)
+    ValueError: yaw must be in radians (|angle| <= 6.283); got a value of 90, which looks like degrees -- use
+    np.radians(...)
     """
     a = array(x, name)
     if a.size and float(np.max(np.abs(a))) > limit:
@@ -634,10 +638,11 @@ def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.rotation_vectors([0.0, 0.0, 90.0], "sigma")
+    >>> validate.rotation_vectors([0.0, 0.0, 90.0], "sigma")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: sigma must be rotation vectors in radians (angle |sigma| <= 6.283, one turn); got an angle of 90, which looks like degrees -- use np.radians(...)
+    ValueError: sigma must be rotation vectors in radians (angle |sigma| <= 6.283, one turn); got an angle of 90, which
+    looks like degrees -- use np.radians(...)
     """
     v = vectors(x, name)
     if v.size:
@@ -732,10 +737,11 @@ def options(given, allowed, where):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.options({"mn_sdt": 0.1}, ["mn_std", "gyr_std"], "ekf")
+    >>> validate.options({"mn_sdt": 0.1}, ["mn_std", "gyr_std"], "ekf")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    fusionlab.validate.UnknownOption: ekf got unknown keyword option(s) 'mn_sdt' (did you mean 'mn_std'?); it accepts: gyr_std, mn_std
+    fusionlab.validate.UnknownOption: ekf got unknown keyword option(s) 'mn_sdt' (did you mean 'mn_std'?); it accepts:
+    gyr_std, mn_std
     """
     unknown = sorted(set(given) - set(allowed))
     if unknown:
@@ -818,10 +824,11 @@ def covariances(P, name, n, tol=1e-9, definite=True):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.covariances([[[1.0, 0.0], [0.0, -4.0]]], "P", 2)
+    >>> validate.covariances([[[1.0, 0.0], [0.0, -4.0]]], "P", 2)  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: P must be positive definite covariance matrices (variances cannot be negative, and P is inverted); got smallest eigenvalue -4 (matrix 0)
+    ValueError: P must be positive definite covariance matrices (variances cannot be negative, and P is inverted); got
+    smallest eigenvalue -4 (matrix 0)
     """
     P = array(P, name, shape=(n, n))
     if P.size == 0:
@@ -934,10 +941,11 @@ def sample_rate(fs, name="fs", low=1.0, high=1e5):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.sample_rate(0.01)
+    >>> validate.sample_rate(0.01)  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: fs must be a sample rate in Hz between 1 and 100000; got 0.01 -- a sample interval dt in s? the rate is 1/dt = 100 Hz
+    ValueError: fs must be a sample rate in Hz between 1 and 100000; got 0.01 -- a sample interval dt in s? the rate is
+    1/dt = 100 Hz
     """
     v = positive(fs, name)
     if not low <= v <= high:
@@ -993,10 +1001,13 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
     >>> gyr = np.stack([rate, 0 * rate, 0 * rate], axis=1)
     >>> validate.gyro_rad(gyr, acc=acc, fs=100.0).shape
     (800, 3)
-    >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)
+    >>> validate.gyro_rad(np.degrees(gyr), acc=acc, fs=100.0)  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = 100 Hz not the record's sample rate? the tilt is integrated with it
+    ValueError: gyr must be in rad/s; the direction of gravity in acc turned only 0.0175 times as far as gyr says the
+    body tilted (median of 31 windows of 0.1 s in which gyr tilts it by more than 0.05 rad), which looks like deg/s
+    (1/57.3 = 0.0175) -- use np.radians(...); or is fs = 100 Hz not the record's sample rate? the tilt is integrated
+    with it
     """
     g = samples(gyr, name)
     if len(g):
@@ -1115,10 +1126,11 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.accel_ms2([[0.0, 0.0, 1.0], [0.0, 0.02, 0.99]], "acc")
+    >>> validate.accel_ms2([[0.0, 0.0, 1.0], [0.0, 0.02, 0.99]], "acc")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: acc must be in m/s²; got a median magnitude of 0.995, which looks like g (at rest it should be 9.807) -- multiply by 9.80665
+    ValueError: acc must be in m/s²; got a median magnitude of 0.995, which looks like g (at rest it should be 9.807) --
+    multiply by 9.80665
     """
     a = samples(acc, name) if per_sample else vectors(acc, name)
     if a.size:
@@ -1188,10 +1200,11 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.field_uT([[0.2, 0.0, 0.44]], "mag")
+    >>> validate.field_uT([[0.2, 0.0, 0.44]], "mag")  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: mag must be in µT (the Earth's field is 25-65 µT); got a median field strength of 0.4833, which looks like gauss -- multiply by 100
+    ValueError: mag must be in µT (the Earth's field is 25-65 µT); got a median field strength of 0.4833, which looks
+    like gauss -- multiply by 100
     """
     strength = np.ndim(mag) == 0 and not per_sample
     m = np.array([positive(mag, name)]) if strength else samples(mag, name) if per_sample else vectors(mag, name)
@@ -1279,10 +1292,11 @@ def time_step(dt, name="dt", low=1e-5, high=1.0):
     Examples
     --------
     >>> from fusionlab import validate
-    >>> validate.time_step(100.0)
+    >>> validate.time_step(100.0)  # doctest: +NORMALIZE_WHITESPACE
     Traceback (most recent call last):
         ...
-    ValueError: dt must be a time step in s between 1e-05 and 1; got 100 -- a sample rate fs in Hz? the step is 1/fs = 0.01 s
+    ValueError: dt must be a time step in s between 1e-05 and 1; got 100 -- a sample rate fs in Hz? the step is
+    1/fs = 0.01 s
     """
     v = positive(dt, name)
     if not low <= v <= high:

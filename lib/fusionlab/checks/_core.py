@@ -152,12 +152,12 @@ def _where(got, expected, name, **tol):
 # Unfinished exercises and the NameErrors they cause downstream
 # ---------------------------------------------------------------------------------------------------------------
 # The release's answer stubs raise NotImplementedError("exercise N not attempted yet") (fusionlab.labformat.stub, as
-# nbgrader_config.py writes them). When one stops a cell, the cell's execution count is remembered with the exercise it waits for; a later
-# NameError looks up the last cell that assigns the missing name (or, if none does, the last stopped cell that names
-# it), and if that cell stopped at an exercise, says which one; so does a provided test's bare ``assert`` about such a
-# name. Each is one short box, like a check's Feedback; a NameError of unknown origin (a slip in the student's own
-# code, most likely) keeps its traceback, whose line says where. Run All (whose cells are tagged raises-exception in
-# the release) then reads as a to-do list.
+# nbgrader_config.py writes them). When one stops a cell, the cell's execution count is remembered with the exercise it
+# waits for; a later NameError looks up the last cell that assigns the missing name (or, if none does, the last stopped
+# cell that names it), and if that cell stopped at an exercise, says which one; so does a provided test's bare
+# ``assert`` about such a name. Each is one short box, like a check's Feedback; a NameError of unknown origin (a slip in
+# the student's own code, most likely) keeps its traceback, whose line says where. Run All (whose cells are tagged
+# raises-exception in the release) then reads as a to-do list.
 
 _HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
          "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "

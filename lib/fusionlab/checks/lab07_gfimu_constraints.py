@@ -70,7 +70,8 @@ def check_constraints(fn):
         if np.allclose(e, -re, rtol=1e-9, atol=1e-15) and not np.allclose(re, 0, atol=1e-15):
             raise Feedback("e has the opposite sign: e₁ = x₁(x₂x₆ − x₃x₅) = ω_x (ω×α)_x, e₂ = x₂(x₃x₄ − x₁x₆).")
         if not np.allclose(e, re, rtol=1e-9, atol=1e-15):
-            raise Feedback(f"e differs from eq 5.40 at x = {np.round(x, 4)}: " + "expected {1}, got {0}.".format(*_pair(e, re)))
+            raise Feedback(f"e differs from eq 5.40 at x = {np.round(x, 4)}: "
+                           + "expected {1}, got {0}.".format(*_pair(e, re)))
         if not np.allclose(E, rE, rtol=1e-9, atol=1e-15):
             bad = np.argwhere(~np.isclose(E, rE, rtol=1e-9, atol=1e-15))[0]
             raise Feedback(f"E[{bad[0]}, {bad[1]}] is wrong: differentiate e_{bad[0] + 1} by x_{bad[1] + 1} "

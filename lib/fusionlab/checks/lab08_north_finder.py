@@ -58,8 +58,8 @@ def check_noise_printed(fn):
             (_nf.rate_noise_coefficient_exact(*case), "that is the exact propagation (the next exercise); here write "
                                                       "eq 4.44 as printed."),
         ], rtol=1e-9, atol=0)
-        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: " + "expected {1}, got {0}. ".format(*_pair(got, ref, 6)) + "Eq 4.44: "
-                              "2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
+        raise Feedback(msg or f"(ρ, d, l, ω_r) = {case}: " + "expected {1}, got {0}. ".format(*_pair(got, ref, 6))
+                              + "Eq 4.44: 2[1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²].")
     _ok(f"eq 4.44 as printed: {_nf.rate_noise_coefficient(*_noise_cases()[0]):.4f} for Table 4.1.")
 
 
@@ -139,7 +139,8 @@ def check_sync_sampling(fn):
         ref = _nf.synchronous_sampling(x, th)
         if abs(np.angle(np.exp(1j * (got - ref)))) < 1e-9:
             continue
-        where = f"heading {deg:.0f}°: " + "you return {}°, expected {}°. ".format(*_pair(np.degrees(got), np.degrees(ref), 5))
+        where = f"heading {deg:.0f}°: " + "you return {}°, expected {}°. ".format(
+            *_pair(np.degrees(got), np.degrees(ref), 5))
         def off(h):                                            # the student's heading minus h, in (-π, π]
             return np.angle(np.exp(1j * (got - h)))
         msg = _first_match(got, [
