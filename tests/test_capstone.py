@@ -1,4 +1,4 @@
-"""The capstone's grading (grading/capstone.py): a class of generated submissions graded end to end on a STAND-IN
+"""The capstone's grading (grading/capstone/): a class of generated submissions graded end to end on a STAND-IN
 hidden set, the rubric, the cheats, and `make capstone-data` without a network.
 
 The stand-in is three shipped trials (7, 29, 33) held back, cut to their first 16000 samples (56 s, about half of
@@ -601,7 +601,7 @@ def test_regrading_a_late_student_with_the_saved_seed_reuses_the_reference_rows(
     folder.mkdir(parents=True)
     nbformat.write(notebook(SIX_D), folder / f"{capstone.LAB}.ipynb")
     computed = []
-    monkeypatch.setattr(capstone, "references", lambda *a, **k: computed.append(1) or pytest.fail("recomputed"))
+    monkeypatch.setattr(capstone.scoring, "references", lambda *a, **k: computed.append(1) or pytest.fail("recomputed"))
     argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(late),
             "--class", "late", "--stand-in", *map(str, STAND_IN), "--max-samples", str(MAX_SAMPLES),
             "--student", "late"]
@@ -689,7 +689,7 @@ def _fake_references(calls):
 
 def test_the_reference_rows_are_cached_per_seed_trials_and_library(scored, tmp_path, monkeypatch):
     calls = []
-    monkeypatch.setattr(capstone, "references", _fake_references(calls))
+    monkeypatch.setattr(capstone.scoring, "references", _fake_references(calls))
     first = capstone.cached_references(scored, tmp_path, SEED)
     again = capstone.cached_references(scored, tmp_path, SEED)
     assert len(calls) == 1 and (tmp_path / capstone.REFERENCE_CACHE).is_file()             # reused
@@ -709,7 +709,7 @@ def test_the_reference_rows_are_cached_per_seed_trials_and_library(scored, tmp_p
     assert len(calls) == 4
     capstone.cached_references(cut, tmp_path, SEED + 1)
     assert len(calls) == 4
-    monkeypatch.setattr(capstone, "references_key", lambda s, seed: {"code": "another library", "seed": seed})
+    monkeypatch.setattr(capstone.scoring, "references_key", lambda s, seed: {"code": "another library", "seed": seed})
     capstone.cached_references(cut, tmp_path, SEED + 1)                       # the library changed
     assert len(calls) == 5
     (tmp_path / capstone.REFERENCE_CACHE).write_bytes(b"not a zip file")
@@ -912,7 +912,7 @@ class _InProcess:
 
 def _grade_in_process(monkeypatch, scored, make, code="def estimate(gyr, acc, mag, fs):\n    pass\n", **kw):
     refs = _fake_references([])(scored)                # every reference an estimate that never moves: tens of deg
-    monkeypatch.setattr(capstone, "Runner", lambda *a, **k: _InProcess(make, *a, **k))
+    monkeypatch.setattr(capstone.runner, "Runner", lambda *a, **k: _InProcess(make, *a, **k))
     return capstone.grade_submission("x", notebook(code), scored, refs, ROOT, None, seed=SEED, model="", **kw)
 
 
@@ -1161,7 +1161,7 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
         def kill(self):
             pass
 
-    monkeypatch.setattr(capstone.client, "Box", Replay)
+    monkeypatch.setattr(capstone.runner.client, "Box", Replay)
     runner = capstone.Runner(["x = 1", "y = 2"], ROOT, tmp_path)
     assert runner.start()
     assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}         # before any trial: as it is

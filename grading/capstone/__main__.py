@@ -1,0 +1,9 @@
+"""``python -m grading.capstone fetch`` and ``python -m grading.capstone grade ...``: :func:`grading.capstone.main`
+(in :mod:`grading.capstone.command`)."""
+import sys
+
+from .command import main
+
+
+if __name__ == "__main__":
+    sys.exit(main())

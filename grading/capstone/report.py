@@ -1,0 +1,283 @@
+"""The class: :func:`grade_class` grades every submission in the sandbox's boxes, then the leaderboard (HTML, CSV),
+the rows of every trial and each student's feedback page are written."""
+from __future__ import annotations
+
+import html
+import os
+import queue
+import shutil
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from fusionlab.capstone import GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE, SENSORS
+from grading import sandbox
+
+from .program import CHEATS, LAB, box_library, model_program
+from .runner import StudentResult, gates_failed, grade_submission
+from .scoring import PUBLISHED, cached_references, mean_scored, references_of, rubric_points
+
+COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
+           "ratio_to_vqf", "seconds", "trials_ok", "trials", "budget_held", "causal", "cheats", "notes")
+TRIAL_COLUMNS = ("name", "kind", "sensors", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
+                 "budget_s", "message")
+
+
+#: How each sensor set is named on the leaderboard and the feedback pages.
+SETS = {"9D": "9D filters (gyroscope, accelerometer, magnetometer): scored on mean total RMSE",
+        "6D": "6D filters (gyroscope and accelerometer; called with mag=None): scored on mean inclination RMSE, "
+              "which is all a filter without a magnetometer can know"}
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The class: leaderboard (HTML, CSV) and per-student feedback
+# ----------------------------------------------------------------------------------------------------------------
+
+def _row(name, kind, sensors, trials, vqf_deg, points=None, causal="", cheats="", notes=""):
+    """One leaderboard row. The column of the RMSE its sensor set is scored on is the mean as counted (a failed trial
+    with the identity's error); the other RMSE columns are means over the trials that ran."""
+    ok = [r for r in trials if r.status == "ok"]
+    secs = [r.seconds for r in trials if np.isfinite(r.seconds)]
+    means = {key: float(np.mean([getattr(r, key) for r in ok])) if ok else float("nan")
+             for key in ("total_deg", "heading_deg", "inclination_deg")}
+    means[SENSORS[sensors]] = m = mean_scored(trials)
+    return dict(rank="", name=name, kind=kind, sensors=sensors, points="" if points is None else f"{points:g}",
+                max_points="" if points is None else f"{MAX_POINTS:g}", **means,
+                ratio_to_vqf=m / vqf_deg, seconds=float(sum(secs)), trials_ok=len(ok), trials=len(trials),
+                budget_held="" if kind == "reference" or not trials else
+                ("yes" if all(r.status != "timeout" for r in trials) else "no"),
+                causal=causal, cheats=cheats, notes=notes)
+
+
+def _cheat_text(cheats):
+    """Each kind of cheat once, with its first evidence and how many more there are (the feedback lists all)."""
+    kinds = list(dict.fromkeys(k for k, _ in cheats))
+    parts = []
+    for kind in kinds:
+        whys = [w for k, w in cheats if k == kind]
+        parts.append(f"{kind}: {whys[0]}" + (f" (and {len(whys) - 1} more)" if len(whys) > 1 else ""))
+    return "; ".join(parts)
+
+
+def leaderboard_rows(results, refs):
+    """Rows of :data:`COLUMNS`, one block per sensor set (9D, then 6D). In each, the set's students are ranked
+    among themselves (rank 1 is the best of the set) by points, then by the mean RMSE the set is scored on, and the
+    set's reference rows sit among them; ``ratio_to_vqf`` is to VQF of the same sensors."""
+    out = []
+    for sensors, metric in SENSORS.items():
+        vqf = mean_scored(refs[PUBLISHED[sensors][0]].trials)
+        order = lambda r: r[metric] if np.isfinite(r[metric]) else np.inf     # noqa: E731
+        rows = []
+        for res in results:
+            if res.sensors != sensors:
+                continue
+            causal = {True: "yes", False: "NO", None: "not checked"}[res.causal]
+            rows.append(_row(res.name, "student", sensors, res.trials, vqf, res.total_points, causal,
+                             _cheat_text(res.cheats), "; ".join(res.notes + [res.error]).strip("; ")))
+        students = sorted(rows, key=lambda r: (-float(r["points"]), order(r)))
+        for i, r in enumerate(students, 1):
+            r["rank"] = i
+        refs_rows = sorted((_row(name, "reference", sensors, ref.trials, vqf, notes=ref.summary)
+                            for name, ref in references_of(refs, sensors).items()), key=order)
+        for r in students:                      # each reference sits above the first student it beats
+            while refs_rows and order(refs_rows[0]) <= order(r):
+                out.append(refs_rows.pop(0))
+            out.append(r)
+        out += refs_rows
+    return out
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return "" if not np.isfinite(v) else f"{v:.2f}"
+    return str(v)
+
+
+def write_csv(rows, path, columns):
+    """The leaderboard's CSV: :func:`fusionlab.bench.write_csv` with two decimals and empty cells for NaN."""
+    from fusionlab import bench
+    return bench.write_csv(rows, path, columns, fmt=_fmt)
+
+
+def trial_rows(results, refs):
+    rows = []
+    for kind, items in (("student", [(r.name, r.sensors, r.trials) for r in results]),
+                        ("reference", [(n, ref.sensors, ref.trials) for n, ref in refs.items()
+                                       if not n.startswith("_")])):
+        for name, sensors, trials in items:
+            for t in trials:
+                rows.append(dict(name=name, kind=kind, sensors=sensors, trial=t.trial, status=t.status,
+                                 total_deg=t.total_deg,
+                                 heading_deg=t.heading_deg, inclination_deg=t.inclination_deg, seconds=t.seconds,
+                                 budget_s=t.budget_s, message=t.message))
+    return rows
+
+
+STYLE = ("body{font-family:sans-serif;margin:2em;max-width:80em} table{border-collapse:collapse;margin:1em 0} "
+         "td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right} td.l,th.l{text-align:left} "
+         "tr.reference{background:#eef3fb;font-style:italic} tr.gated{background:#fbeeee} "
+         ".standin{background:#fff3c4;border:2px solid #d9a400;padding:.6em;font-weight:bold}")
+
+
+def _table(rows, columns, cls=None):
+    head = "".join(f"<th class='l'>{html.escape(c)}</th>" if c in ("name", "cheats", "notes", "rule", "trial",
+                                                                   "message") else f"<th>{html.escape(c)}</th>"
+                   for c in columns)
+    body = []
+    for r in rows:
+        klass = cls(r) if cls else ""
+        cells = "".join(f"<td class='l'>{html.escape(_fmt(r[c]))}</td>" if c in ("name", "cheats", "notes", "rule",
+                                                                                 "trial", "message")
+                        else f"<td>{html.escape(_fmt(r[c]))}</td>" for c in columns)
+        body.append(f"<tr class='{klass}'>{cells}</tr>")
+    return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+
+
+def _page(title, parts, label):
+    banner = f"<p class='standin'>{html.escape(label)}</p>" if label else ""
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{banner}{''.join(parts)}</body></html>")
+
+
+def _rubric_html():
+    rows = [dict(points=f"{c.points:g}", rule=c.rule) for c in RUBRIC]
+    gates = "".join(f"<li>{html.escape(g)}</li>" for g in GATES)
+    cheats = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in CHEATS.items())
+    return (f"<h2>Rubric (points for the filter, out of {MAX_POINTS:g})</h2>{_table(rows, ('points', 'rule'))}"
+            f"<p>Gates:</p><ul>{gates}</ul><p>Cheats looked for:</p><ul>{cheats}</ul>"
+            "<p>A trial without a valid estimate (error, over its budget, not unit quaternions) counts in the mean "
+            "with the error of an estimate that never moves (the identity quaternion).</p>")
+
+
+def write_leaderboard(results, refs, scored, out, class_name, label=""):
+    """``leaderboard.html``, ``leaderboard.csv``, ``trials.csv`` and each student's feedback page and figure."""
+    import matplotlib
+    matplotlib.use("Agg")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = leaderboard_rows(results, refs)
+    write_csv(rows, out / "leaderboard.csv", COLUMNS)
+    write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
+    what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each disguised by a secret turn of the "
+            "sensor frame and a secret start; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
+            "the trials; seconds: run time of estimate on all trials. 9D and 6D filters are ranked separately: a "
+            "rank is within the filter's sensor set, and ratio_to_vqf is to VQF with the same sensors. The RMSE a "
+            "set is scored on counts a failed trial with the identity quaternion's error; the other RMSE columns "
+            "are means over the trials that ran.")
+    gated_names = {res.name for res in results if gates_failed(res)}
+    gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["name"] in gated_names  # noqa: E731
+                                                                      else "")
+    parts = [f"<p>{html.escape(what)}</p>"]
+    for sensors, heading in SETS.items():
+        block = [r for r in rows if r["sensors"] == sensors]
+        parts += [f"<h2>{html.escape(heading)}</h2>", _table(block, COLUMNS, gated)]
+    page = _page(f"Capstone leaderboard: {class_name}", parts + [_rubric_html()], label)
+    (out / "leaderboard.html").write_text(page, encoding="utf-8")
+    for res in results:
+        feedback(res, refs, out / "feedback" / res.name, label)
+    return out / "leaderboard.html"
+
+
+def feedback(res, refs, folder, label=""):
+    """One student's page: their row, each trial against the references of their sensor set, the figure
+    (``trials.png``) of the RMSE they are scored on."""
+    import matplotlib.pyplot as plt
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    metric = SENSORS[res.sensors]
+    what = metric[:-4]                                       # total, inclination
+    vqf = refs[PUBLISHED[res.sensors][0]]
+    names = [r.trial for r in vqf.trials]
+    mine = {r.trial: r for r in res.trials}
+    shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
+    for n, ref in references_of(refs, res.sensors).items():
+        shown[n] = [getattr(r, metric) for r in ref.trials]
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(names) + 2), 4.2), constrained_layout=True)
+    x = np.arange(len(names))
+    width = 0.8 / len(shown)
+    for i, (n, vals) in enumerate(shown.items()):
+        ax.bar(x + (i - (len(shown) - 1) / 2) * width, np.nan_to_num(vals, nan=0.0), width, label=n)
+    for i, n in enumerate(names):
+        status = mine[n].status if n in mine else "not run"
+        if status != "ok":
+            ax.text(x[i], 0.1, status, ha="center", va="bottom", rotation=90, color="crimson",
+                    transform=ax.get_xaxis_transform())
+    ax.set_xticks(x, [n[:2] for n in names])
+    ax.set_xlabel("hidden trial (number)")
+    ax.set_ylabel(f"{what} RMSE (deg)")
+    ax.set_yscale("log")
+    ax.legend(fontsize=8)
+    ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
+                 f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {mean_scored(vqf.trials):.2f})", fontsize=10)
+    fig.savefig(folder / "trials.png", dpi=90)
+    plt.close(fig)
+    rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
+                 inclination_deg=r.inclination_deg, seconds=r.seconds, budget_s=r.budget_s, message=r.message)
+            for r in res.trials]
+    pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
+    flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
+    notes = "".join(f"<li>{html.escape(n)}</li>" for n in res.notes)
+    parts = [f"<p>Sensors: {html.escape(SETS[res.sensors])}; ranked among the {res.sensors} filters, against the "
+             f"reference filters with the same sensors.</p>",
+             f"<p>Causality: {html.escape(res.causal_message)}</p>",
+             f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
+             f"<ul>{flags}</ul>" if flags else "", f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
+             f"<img src='trials.png' alt='{what} RMSE per trial'>",
+             _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds", "budget_s",
+                           "message"))]
+    (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The class graded: every submission in a box of its own, then the leaderboard
+# ----------------------------------------------------------------------------------------------------------------
+
+def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed=0, label="", progress=True,
+                seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None, cleared=()):
+    """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
+    leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
+    :func:`cached_references`). ``cleared``: students whose estimate :data:`IMPLAUSIBLY_CLOSE` to the reference
+    the instructor has cleared after reading their code."""
+    cleared = set(cleared)
+    model = model_program(course)
+    scratch = Path(tempfile.mkdtemp(prefix="capstone-"))
+    os.chmod(scratch, 0o755)
+    try:
+        with sandbox.claimed_slots(max(1, workers)) as slots:
+            problem = sandbox.box_problem(str(course), LAB, scratch, slots)
+            if problem:
+                raise SystemExit(f"cannot grade the capstone: the sandbox does not start here.\n{problem}")
+            if progress:
+                print(f"==> reference filters on {len(scored)} trials", flush=True)
+            refs = cached_references(scored, out, seed, progress=progress)
+            box_library(scratch)
+            free = queue.Queue()
+            for s in slots:
+                free.put(s)
+
+            def one(student):
+                slot = free.get()
+                try:
+                    nb = submissions[student]
+                    if isinstance(nb, str):                 # a notebook that could not be read: why
+                        return StudentResult(student, error=nb, points=rubric_points(0, False, True, 0, 0))
+                    return grade_submission(student, nb, scored, refs, course, scratch, slot=slot, seed=seed,
+                                            seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
+                                            limits=limits, cleared=student in cleared, model=model)
+                finally:
+                    free.put(slot)
+
+            with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+                results = list(pool.map(one, sorted(submissions)))
+            for res in results:
+                if progress:
+                    print(f"  {res.name} ({res.sensors}): {res.total_points:g} / {MAX_POINTS:g}, mean "
+                          f"{SENSORS[res.sensors][:-4]} {mean_scored(res.trials):.2f} deg"
+                          + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
+                          + ("" if res.causal is not False else ", NOT causal"), flush=True)
+            write_leaderboard(results, refs, scored, out, class_name, label)
+            return results, refs
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)

@@ -1,0 +1,416 @@
+"""The box and one submission: the box's limits, the :class:`Runner` that calls ``estimate`` with sensor data only
+(what a call raised or returned is told in words written here), the causality check, and :func:`grade_submission`
+with the look-ups of its output (a reference filter's, the published reference, implausibly close to it)."""
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fusionlab.capstone import (CAUSAL_TOL, MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds,
+                                causal_ks, first_change, prefix_change)
+from grading import box as wire
+from grading import client, judge, sandbox
+
+from .program import (DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FOLLOW_RATIO, FUNCTION,
+                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE, WHY_HIDDEN, box_library,
+                      declared_sensors, library_copies, model_program, program_of, scan)
+from .scoring import (MATCH_RAD, MATCH_STRIDE, TrialResult, _published_means, mean_scored, never_moves,
+                      rubric_points, score_trial)
+
+SETUP_SECONDS = 60.0            # the notebook's cells, run once per box
+MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box (the fresh
+                                # boxes of the causality checks are not counted)
+CPU_PER_BUDGET = 2.0            # the box's CPU-time limit: this many CPU seconds per second of the trials' budgets
+CPU_SLACK_S = 60                # ... plus the notebook's cells (SETUP_SECONDS) and this; never below the sandbox's
+                                # default (box_limits): an honest filter within its budgets is never stopped by it
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# The box: the student's cells, then calls of estimate with sensor data only
+# ----------------------------------------------------------------------------------------------------------------
+
+def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
+    """The sandbox limits of a capstone box (:data:`grading.sandbox.DEFAULT_LIMITS`, then ``limits``), its CPU time
+    made from the budgets: one box may run the notebook's cells and every trial, each within its budget, so its
+    limit is :data:`CPU_PER_BUDGET` CPU seconds per second of the trials' budgets, plus :data:`SETUP_SECONDS` and
+    :data:`CPU_SLACK_S` (never below the sandbox's default; a ``cpu_s`` in ``limits`` is kept as given)."""
+    import math
+    budgets = sum(budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored)
+    cpu = max(sandbox.DEFAULT_LIMITS["cpu_s"], math.ceil(CPU_PER_BUDGET * budgets + SETUP_SECONDS + CPU_SLACK_S))
+    return {**sandbox.DEFAULT_LIMITS, "cpu_s": cpu, **(limits or {})}
+
+
+NOT_SHOWN = " (its message is not shown: on a hidden trial it could carry the trial's data)"
+
+
+def error_message(text):
+    """What the feedback says of an error ``text`` (``"Type: message"``, as the box reports it) that ``estimate``
+    raised on a hidden trial: never the text itself, which the student's code wrote and which can carry the
+    trial's numbers (``raise ValueError(repr(gyr[:50]))``).
+
+    It names a built-in exception's type (``raised ValueError``; any other class is "an error of its own class"), or
+    the placeholder or the refusing package the call reached (:func:`placeholder_module`, :data:`HIDDEN_PACKAGES`),
+    each in words written here; :func:`grade_submission` names the latter as a cheat."""
+    import builtins
+    text = str(text)
+    for package in HIDDEN_PACKAGES:
+        if f"{package} is not available while the lab is graded" in text:
+            return f"reached {package}, which is not available while the lab is graded ({WHY_HIDDEN})"
+    for short in FILTER_MODULES + FILE_MODULES:
+        if STUB_MESSAGE.format(name=f"fusionlab.{short}") in text:
+            return (f"reached fusionlab.{short}, which holds the library's filters or data loaders: not available "
+                    "in the capstone")
+    name = text.split(":", 1)[0].strip()
+    known = getattr(builtins, name, None) if name.isidentifier() else None
+    if isinstance(known, type) and issubclass(known, BaseException):
+        return f"raised {name}{NOT_SHOWN}"
+    return f"raised an error of its own class{NOT_SHOWN}"
+
+
+def invalid_message(value, n):
+    """What the feedback says of an output that is not ``n`` unit quaternions, in words written here (the output's
+    own numbers -- its shape, its norms -- are the student's, and could carry the trial's)."""
+    try:
+        q = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return "returned something that is not an array of numbers"
+    if q.shape != (n, 4):
+        return "did not return one quaternion per sample (an array of shape (N, 4) for N samples)"
+    if not np.isfinite(q).all():
+        return "returned NaN or infinite values"
+    return "did not return unit quaternions (norms within 1e-3 of 1)"
+
+
+class Runner:
+    """One student's box, started again (from the notebook's cells) after a call that ran over or ended it.
+
+    A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box.
+    The installed packages that the box's shadow replaces (vqf, ahrs, ...) are hidden in the box
+    (:func:`grading.judge.shadowed`): taking the shadow off ``sys.path`` finds nothing.
+
+    Every message it returns is written here: what the box replies is the student's, and a call carries a hidden
+    trial, so no text of the box's reply reaches the feedback (:func:`error_message`, :func:`invalid_message`).
+    The errors of the notebook's cells are kept as the box reports them from the first box only, which runs them
+    before any trial is sent; in a box started after a trial was sent, they are reported without their text."""
+
+    def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D"):
+        if sensors not in SENSORS:
+            raise ValueError(f"sensors must be one of {', '.join(SENSORS)}; got {sensors!r}")
+        self.cells, self.course, self.scratch, self.slot = cells, Path(course), Path(scratch), slot
+        self.sensors = sensors
+        self.limits = limits or {}
+        self.root = box_library(scratch)
+        self.hide = judge.shadowed(self.root / "shadow")
+        self.box = self.work = None
+        self.cell_errors = {}
+        self.starts = 0
+        self.fresh = 0                 # boxes started for one call (call_fresh): not restarts after a failure
+        self.setup_error = ""          # set when the notebook's cells could not be run: no call is tried again
+        self.sent = False              # a trial's data has been sent to a box of this runner
+
+    @property
+    def restarts(self):
+        """Boxes started after a call that ran over its budget or ended its box."""
+        return max(0, self.starts - self.fresh - 1)
+
+    def start(self):
+        self.close()
+        self.starts += 1
+        uid = sandbox.box_uid(self.slot)
+        self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
+        command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
+                                        lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
+                                        limits=self.limits, uid=uid, data=False, hide=self.hide)
+        self.box = client.Box(command)
+        errors = {}
+        try:
+            errors = client.run_program(self.box, self.cells, cell_seconds=SETUP_SECONDS,
+                                        deadline=time.monotonic() + SETUP_SECONDS)
+            return True
+        except client.BoxTimeout as exc:
+            errors = exc.errors
+            self.setup_error = f"the notebook's cells ran over {SETUP_SECONDS:g} s"
+        except client.BoxDied as exc:
+            errors = exc.errors
+            self.setup_error = "the notebook's cells ended the process"
+        finally:
+            for cell, text in errors.items():
+                self.cell_errors.setdefault(cell, "(message not shown: the box was started again after a trial had "
+                                                  "been sent)" if self.sent else text[:300])
+        self.close()
+        return False
+
+    def call(self, trial, seconds, gyr=None, acc=None, mag=None):
+        """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data
+        (``gyr``, ``acc``, ``mag`` instead of the trial's when given; no magnetometer at all for a 6D runner)."""
+        if self.box is None and (self.setup_error or self.restarts >= MAX_RESTARTS or not self.start()):
+            return None, "not run", self.setup_error or f"the box was started again {self.restarts} times", \
+                float("nan")
+        args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
+                None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
+        t0 = time.monotonic()
+        self.sent = True
+        try:
+            reply = client.call(self.box, FUNCTION, args, {}, t0 + seconds)
+        except client.BoxTimeout:
+            self.close()
+            return None, "timeout", f"ran over its budget of {seconds:.1f} s (stopped)", time.monotonic() - t0
+        except client.BoxDied as exc:
+            self.close()
+            too_large = isinstance(exc, client.ReplyTooLarge)
+            return None, "died", ("sent a reply too large to read (stopped)" if too_large else
+                                  "ended the process"), time.monotonic() - t0
+        elapsed = time.monotonic() - t0
+        if not isinstance(reply, dict) or not reply.get("ok"):
+            return None, "error", error_message(reply.get("error", "") if isinstance(reply, dict) else ""), elapsed
+        try:
+            value = wire.decode(reply.get("value"))
+        except (wire.WireError, ValueError, TypeError):
+            return None, "invalid", "returned something that is not an array of numbers", elapsed
+        try:
+            q = as_quaternions(value, len(args[0]))
+        except ValueError:
+            return None, "invalid", invalid_message(value, len(args[0])), elapsed
+        return q, "ok", "", elapsed
+
+    def call_fresh(self, trial, seconds, gyr=None, acc=None, mag=None):
+        """:meth:`call` in a box started for this call alone (the notebook's cells run again) and closed after it:
+        nothing of an earlier call -- its data, its output -- is left for this one to see."""
+        self.close()
+        if self.setup_error:
+            return None, "not run", self.setup_error, float("nan")
+        self.fresh += 1
+        if not self.start():
+            return None, "not run", self.setup_error, float("nan")
+        try:
+            return self.call(trial, seconds, gyr, acc, mag)
+        finally:
+            self.close()
+
+    def close(self):
+        if self.box is not None:
+            self.box.kill()
+            self.box = None
+        if self.work:
+            shutil.rmtree(self.work, ignore_errors=True)
+            self.work = None
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# One submission
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass
+class StudentResult:
+    name: str
+    trials: list = field(default_factory=list)
+    causal: bool | None = None
+    causal_message: str = ""
+    cheats: list = field(default_factory=list)      # (kind, why)
+    notes: list = field(default_factory=list)
+    points: dict = field(default_factory=dict)
+    error: str = ""
+    sensors: str = "9D"                             # as its code declares it (declared_sensors)
+
+    @property
+    def total_points(self):
+        return float(sum(self.points.values()))
+
+    @property
+    def all_ran(self):
+        return bool(self.trials) and all(r.status == "ok" for r in self.trials)
+
+
+class _NotRun(Exception):
+    """A call of the causality check that gave no quaternions (an error, over its budget, the box ended)."""
+
+
+def check_causality(runner, trial, q, seconds, rng):
+    """(True/False/None, message): is ``estimate``'s output up to k unchanged when every sample after k changes, for
+    three secret k (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``), and is its output on the samples up to
+    another secret k alone the first k+1 rows of ``q``, its output on the whole trial? Each of these calls runs in
+    a box of its own (:meth:`Runner.call_fresh`), so that no call can replay what an earlier one returned. (For a
+    6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
+    n = len(trial)
+    mag = None if runner.sensors == "6D" else trial.mag
+
+    def run(gyr, acc, mag):
+        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
+        if q2 is None:
+            raise _NotRun(f"{why} ({status})")
+        return q2
+
+    try:
+        failed = first_change(run, trial.gyr, trial.acc, mag, q, causal_ks(n, rng), rng)
+    except _NotRun as exc:
+        return None, f"not checked: with later samples changed, estimate {exc}"
+    if failed:
+        k, change = failed
+        return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
+                       f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
+                       "seed)")
+    k = prefix_k(n, rng)
+    try:
+        change = prefix_change(run, trial.gyr, trial.acc, mag, q, k)
+    except _NotRun as exc:
+        return None, f"not checked: given the samples up to a k alone, estimate {exc}"
+    if change > CAUSAL_TOL:
+        return False, (f"NOT causal: given only the samples up to k = {k} of {trial.name}, its estimate up to k "
+                       f"differs by {change:.2g} from its estimate on the whole trial (a filter may use no later "
+                       "sample, nor the length of the data)")
+    return True, ("causal (checked on one trial: the estimate up to k unchanged when the samples after k change, at "
+                  "three secret k, and when they are left out, at another; each call in a fresh box)")
+
+
+def prefix_k(n, rng):
+    """The secret k of the prefix check for a trial of ``n`` samples: anywhere after its first tenth."""
+    return int(rng.integers(max(1, n // 10), n - 1))
+
+
+def causality_trial(seed, n, rng=None):
+    """Index of the secret trial (of ``n``) on which the causality check runs, for the disguise's ``seed``."""
+    rng = np.random.default_rng([seed, 7]) if rng is None else rng
+    return int(rng.integers(n))
+
+
+def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0, seconds_per_sample=SECONDS_PER_SAMPLE,
+                     min_seconds=MIN_SECONDS, limits=None, cleared=False, model=None):
+    """Grade one notebook on the disguised trials ``scored``; every number is computed here.
+
+    ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
+    reference (it is then a note, not a cheat). ``model``: the lab's own program (:func:`model_program` of
+    ``course`` by default), what an honest answer may share with the library."""
+    res = StudentResult(name)
+    cells = program_of(nb)
+    res.cheats += scan(cells)
+    res.cheats += library_copies(cells, model_program(course) if model is None else model)
+    res.sensors, why = declared_sensors(cells)
+    metric = SENSORS[res.sensors]
+    if why:
+        res.notes.append(f"{DECLARATION}: {why}")
+    if _declared_outside(nb, cells):
+        res.notes.append(f"{DECLARATION} is set in a cell the grader does not run (only the answer cells and the "
+                         f"cells they need run): graded as {res.sensors}")
+    size = sum(len(src) for _, src in cells)
+    if size > EMBED_CHARS:
+        res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
+                         "published reference, say)?")
+    runner = Runner([src for _, src in cells], course, scratch, slot,
+                    box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors)
+    rng = np.random.default_rng([seed, 7])
+    chosen = causality_trial(seed, len(scored), rng)
+    try:
+        for i, t in enumerate(scored):
+            r = TrialResult(t.name, budget_s=budget_seconds(len(t), seconds_per_sample, min_seconds))
+            q, r.status, r.message, r.seconds = runner.call(t, r.budget_s)
+            if q is not None and r.seconds > r.budget_s:
+                r.status, q = "timeout", None
+                r.message = f"took {r.seconds:.1f} s, over its budget of {r.budget_s:.1f} s"
+            if q is not None:
+                score_trial(r, q, t, metric)
+                r.q = q
+                _look_for_cheats(res, r, t, refs)
+                if i != chosen:
+                    r.q = None                                  # a class of a few hundred would not fit otherwise
+            else:
+                r.counted_deg, r.metric = never_moves(t, metric), metric
+                if any(text in r.message for text in ("not available in the capstone",
+                                                      "not available while the lab is graded")):
+                    res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
+            res.trials.append(r)
+        ran = [(t, r) for t, r in zip(scored, res.trials) if r.status == "ok"]
+        if res.trials[chosen].status != "ok" and ran:           # it failed there: the first trial that ran, again
+            t, r = ran[0]
+            q, status, why, _ = runner.call(t, r.budget_s)
+            ran = [(t, dataclasses.replace(r, q=q))] if q is not None else []
+        else:
+            ran = [(scored[chosen], res.trials[chosen])] if ran else []
+        if ran:
+            t, r = ran[0]
+            res.causal, res.causal_message = check_causality(runner, t, r.q, r.budget_s, rng)
+            r.q = None
+        else:
+            res.causal_message = "not checked: estimate ran on no trial"
+        if runner.cell_errors:
+            res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
+        if runner.restarts:
+            res.notes.append(f"the box was started again {runner.restarts} times (after calls that ran over or "
+                             "ended it)")
+    finally:
+        runner.close()
+    close = implausibly_close(res, refs)
+    if close:
+        if cleared:
+            res.notes.append(f"cleared by the instructor, who read the code: {close}")
+        else:
+            res.cheats.append(("detects the trial", f"{close} -- review the code: the instructor may clear this "
+                                                     "after reading it"))
+    res.cheats = list(dict.fromkeys(res.cheats))
+    if res.causal is None and any(r.status == "ok" for r in res.trials):
+        res.causal_message += (" -- no points for the filter: it ran on the trials, but not on the causality check's "
+                               "data, so it was never shown causal")
+    madgwick, vqf = _published_means(refs, res.sensors)
+    res.points = rubric_points(mean_scored(res.trials), res.all_ran, gates_failed(res), madgwick, vqf)
+    return res
+
+
+def gates_failed(res):
+    """Does ``res`` get no points for its filter? When a cheat is named, when it is not causal, and when it ran on
+    trials but the causality check could not run it (an error, over its budget, ... on the check's data): a filter
+    that fails only there would escape the check, so causality that was never shown counts as not shown."""
+    unchecked = res.causal is None and any(r.status == "ok" for r in res.trials)
+    return bool(res.cheats) or res.causal is False or unchecked
+
+
+def implausibly_close(res, refs):
+    """The evidence (text) when ``res``'s scored RMSE is below :data:`IMPLAUSIBLE` x the best reference filter's
+    on at least half of the trials it ran; "" otherwise. The best on a trial is the lowest scored RMSE there of every
+    reference filter of the student's sensor set (VQF, Madgwick and each library filter that ran: ``refs['_all']``).
+    No honest filter is that far ahead of all of them on most trials; one that recognises each trial and returns
+    its published reference, turned into the disguised frame, is."""
+    best = {}
+    for ref in refs["_all"].values():
+        if ref.sensors == res.sensors:
+            for r in ref.trials:
+                best[r.trial] = min(best.get(r.trial, np.inf), r.counted_deg)
+    ran = [r for r in res.trials if r.status == "ok" and r.trial in best]
+    close = [r for r in ran if r.counted_deg < IMPLAUSIBLE * best[r.trial]]
+    if not ran or 2 * len(close) < len(ran):
+        return ""
+    what = SENSORS[res.sensors][:-4]
+    mine = float(np.mean([r.counted_deg for r in close]))
+    theirs = float(np.mean([best[r.trial] for r in close]))
+    return (f"{IMPLAUSIBLY_CLOSE}: its {what} RMSE is below {IMPLAUSIBLE:g} x the best reference filter's on "
+            f"{len(close)} of the {len(ran)} trials it ran (there {mine:.2f} deg against {theirs:.2f} deg on "
+            "average)")
+
+
+def _declared_outside(nb, cells):
+    """Does a code cell that the box does not run set ``SENSORS`` (a declaration the grader would not see)?"""
+    ran = {src for _, src in cells}
+    for cell in nb.cells:
+        if cell.get("cell_type") == "code":
+            src = judge.python_of(cell.get("source", ""))
+            if src not in ran and DECLARATION in judge._bound_names(src):
+                return True
+    return False
+
+
+def _look_for_cheats(res, r, t, refs):
+    from fusionlab import metrics, rotations
+    for ref in refs["_all"].values():
+        q_ref = next(x.q for x in ref.trials if x.trial == t.name)
+        if np.max(rotations.quat_angle_between(r.q[::MATCH_STRIDE], q_ref)) < MATCH_RAD:
+            res.cheats.append(("calls a reference filter", f"{t.name}: its output is {ref.name}'s to "
+                                                           f"{MATCH_RAD:g} rad at every sample"))
+    # total RMSE for either sensor set: a 6D output that never moves would be near a still trial's published
+    # inclination (a level sensor) and far from its turned one, without following anything
+    published = metrics.broad_rmse(r.q, t.published, t.movement).total_deg
+    if published < FOLLOW_RATIO * r.total_deg:
+        res.cheats.append(("detects the trial", f"{t.name}: {published:.2f} deg from the published reference, "
+                                                f"{r.total_deg:.2f} deg from the data it was given"))
