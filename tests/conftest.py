@@ -96,8 +96,9 @@ def no_message_prints_one_value_twice(request, monkeypatch):
 # Files whose module fixture takes minutes (a class graded in the sandbox, a browser), longest first. `make test` runs
 # on two cores with each file in one process (pytest-xdist, --dist loadfile, --no-loadscope-reorder): starting these
 # first lets the other process work through the short files meanwhile, instead of the longest file starting last.
-LONG_FIRST = ("test_hub.py", "test_grading_cheats.py", "test_judge.py", "test_capstone.py", "test_sandbox_check.py", "test_browser.py", "test_grading.py", "test_feedback.py",
-              "test_pipeline.py", "test_release.py", "test_long_run.py")
+LONG_FIRST = ("test_hub.py", "test_grading_cheats.py", "test_judge.py", "test_capstone.py", "test_sandbox_check.py",
+              "test_browser.py", "test_grading.py", "test_feedback.py", "test_pipeline.py", "test_release.py",
+              "test_long_run.py")
 
 
 def pytest_collection_modifyitems(config, items):

@@ -158,8 +158,9 @@ _SHOW = """async (i) => {
     return {widget: !!cell.node.querySelector('.jp-OutputArea-output .jupyter-widgets .widget-container, '
                                                + '.jp-OutputArea-output .jupyter-widgets.widget-container'),
             shown: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output')).map(n => n.innerText),
-            cut: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output .widget-label'))   // "measurement varianc…"
-                .filter(l => l.offsetWidth > 0 && l.scrollWidth > l.clientWidth + 1).map(l => l.innerText)};
+            cut: Array.from(cell.node.querySelectorAll('.jp-OutputArea-output .widget-label'))
+                .filter(l => l.offsetWidth > 0 && l.scrollWidth > l.clientWidth + 1)   // "measurement varianc…"
+                .map(l => l.innerText)};
 }"""
 
 
@@ -174,7 +175,8 @@ def _widget_cells(lab, kind="labs"):
 def _student_view(page):
     return page.evaluate("""() => ({
         plugins: Object.fromEntries(['create-assignment', 'formgrader', 'course-list', 'menu', 'validate-assignment',
-                                     'assignment-list'].map(p => [p, window.jupyterapp.hasPlugin('@jupyter/nbgrader:' + p)])),
+                                     'assignment-list']
+                                    .map(p => [p, window.jupyterapp.hasPlugin('@jupyter/nbgrader:' + p)])),
         text: document.body.innerText})""")
 
 
@@ -206,7 +208,8 @@ def test_run_all_goes_through_the_untouched_lab(browser, server, lab):
     first_cell, _ = feedback[0]
     box = next((t for t in page.evaluate(_SHOW, first_cell["index"])["shown"] if "✗" in t), None)
     assert box is not None, f"{lab}: the first feedback box does not show its ✗ message"
-    assert "Traceback" not in box and "fusionlab/checks" not in box, f"{lab}: the first feedback box shows a traceback:\n{box}"
+    assert "Traceback" not in box and "fusionlab/checks" not in box, \
+        f"{lab}: the first feedback box shows a traceback:\n{box}"
     assert len(box.splitlines()) <= 6, f"{lab}: the first feedback box is long:\n{box}"
     stubs = [o["evalue"] for _, o in errors if o["ename"] == "NotImplementedError"]
     assert all("not attempted yet" in e and ("exercise" in e or "question" in e) for e in stubs), stubs

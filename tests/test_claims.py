@@ -4,9 +4,10 @@ The rule, for each markdown cell of a solution notebook (prose, errata, model an
 header, whose time and points tests/test_lab_time.py holds to the README):
 
 * a number is **backed** when a code cell of the same notebook *prints* it (any output, to the number of significant
-  digits the prose gives, dropping at most one: "4.2" is backed by a printed 4.21, not by 4.213; a ratio "4.2×" only
-  by a printed ratio "4.21×") or *sets* it (a literal assigned to a name, passed to a
-  function, given as a default or written in a literal list: ``d = 0.1``, ``runs=60``, ``[1e-8] * 3``; not a literal inside arithmetic such as ``0.06**2``);
+  digits the prose gives, dropping at most one: "4.2" is backed by a printed 4.21, not by 4.213; a ratio "4.2×" only by
+  a printed ratio "4.21×") or *sets* it (a literal assigned to a name, passed to a function, given as a default or
+  written in a literal list: ``d = 0.1``, ``runs=60``, ``[1e-8] * 3``; not a literal inside arithmetic such as
+  ``0.06**2``);
 * a number is **quoted from a seed** when its sentence cites where it is printed: an equation (``eq 3.35``,
   ``(3.35)``), a table, a figure or a section of a seed (``Table 7.1``, ``Fig. 3.4``, ``§7.4``). That citation is
   the mark; tests/test_citations.py checks that it exists. A sentence that names `` `make bench` `` quotes the
@@ -57,7 +58,8 @@ NOT_A_CLAIM = [
     re.compile(r"^\W*\(?[a-z]\)\s*\d+(?:\.\d+)?\s*—"),      # a rubric line: "(a) 0.75 — ..."
     re.compile(r"\b\d+(?:\.\d+)?\s*(?:points?|pts?)\b"),     # the marks of a question
     re.compile(r"\b\d{4}\b(?=[);,]| ?\))"),                  # a year in a reference: (Laidig et al., 2021)
-    re.compile(r"\bWGS-84\b|\b[A-Z]+\d+[A-Z\d]*\b|\b\d+(?![eE][-+−]?\d)[A-Za-z]+\d*\b"),   # names: ADXL345, 9DOF, 3D, 2n
+    # names: ADXL345, 9DOF, 3D, 2n
+    re.compile(r"\bWGS-84\b|\b[A-Z]+\d+[A-Z\d]*\b|\b\d+(?![eE][-+−]?\d)[A-Za-z]+\d*\b"),
 ]
 SENTENCE = re.compile(r"(?<=[.!?;])\s+|\n\s*\n|\n(?=\s*(?:[*\-]|\d+[.)]|\([a-z]\))\s)")
 ABBREVIATION = re.compile(r"(?:\b(?:Figs?|[Ee]qs?|e\.g|i\.e|ch|cf|al|vs|refs?|No|approx)\.|\d\.)$")

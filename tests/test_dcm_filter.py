@@ -64,7 +64,8 @@ def test_fast_path_with_blocks_equals_readable_predict_over_the_block_product(ha
 
 
 def test_hand_motion_meets_the_thesis_figures(hand):
-    """What the thesis' AHRS figures show (seed 004 §6.5): Euler errors ≤ 1-2°, bias error < 0.1 °/s from ≈10 s, rows ≈ unit."""
+    """What the thesis' AHRS figures show (seed 004 §6.5): Euler errors ≤ 1-2°, bias error < 0.1 °/s from ≈10 s,
+    rows ≈ unit."""
     gyr, acc_b, mag_b = _inputs(hand)
     out = dcm_filter.run_ahrs(gyr, acc_b, mag_b, hand["fs"])
     t = hand["t"]
@@ -87,7 +88,8 @@ def test_tiny_steady_orthogonality_variance_makes_the_filter_worse(hand):
     gyr, acc_b, mag_b = _inputs(hand)
     errs = {}
     for R_ss in (1e-5, 1e-8):
-        out = dcm_filter.run_ahrs(gyr, acc_b, mag_b, hand["fs"], tuning=dataclasses.replace(dcm_filter.AhrsTuning(), R_ss=R_ss))
+        tuning = dataclasses.replace(dcm_filter.AhrsTuning(), R_ss=R_ss)
+        out = dcm_filter.run_ahrs(gyr, acc_b, mag_b, hand["fs"], tuning=tuning)
         errs[R_ss] = np.max(rotations.quat_angle_between(out["q"], hand["q"]))
     assert errs[1e-8] > 1.5 * errs[1e-5]
 

@@ -1,7 +1,7 @@
 """Docstrings that documentation tools can parse: numpydoc's validator on every public object of the modules below.
 
-Every flat module of the library is in DOCUMENTED. For each public function and class it defines (a name without a leading
-underscore whose ``__module__`` is the module), and each public method or property of such a class, numpydoc's
+Every flat module of the library is in DOCUMENTED. For each public function and class it defines (a name without a
+leading underscore whose ``__module__`` is the module), and each public method or property of such a class, numpydoc's
 validator must report none of:
 
 * PR01 -- a parameter of the signature has no entry under Parameters;

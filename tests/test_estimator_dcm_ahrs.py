@@ -74,7 +74,8 @@ def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
     info = estimators.available()["dcm_ahrs6"]
     assert info["uses_mag"] is False and info["seed"].startswith("004")
     assert estimators.options("dcm_ahrs") == {"acc_sigma_untrusted": dcm_filter.HANDHELD.acc_sigma_untrusted,
-                                              "hold": dcm_filter.HANDHELD.hold, "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau}
+                                              "hold": dcm_filter.HANDHELD.hold,
+                                              "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau}
     assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0}
 
 

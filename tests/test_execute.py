@@ -1,4 +1,5 @@
-"""``fusionlab.execute``: a notebook run top to bottom in a fresh kernel, with polls that cannot sleep through a reply."""
+"""``fusionlab.execute``: a notebook run top to bottom in a fresh kernel, with polls that cannot sleep through a
+reply."""
 from __future__ import annotations
 
 import asyncio

@@ -97,7 +97,8 @@ def test_singer_model_is_a_stationary_first_order_markov_process():
     assert phi == pytest.approx(np.exp(-beta * dt), rel=1e-15)                 # (5.5)
     assert q ** 2 / (1 - phi ** 2) == pytest.approx(sigma ** 2, rel=1e-12)      # steady-state variance σ²
     F1, Q1 = gd.singer_model(dt, beta, sigma, first_order=True)                # (5.7)
-    assert F1[3, 3] == pytest.approx(1 - beta * dt) and np.sqrt(Q1[3, 3]) == pytest.approx(sigma * np.sqrt(2 * beta * dt))
+    assert (F1[3, 3] == pytest.approx(1 - beta * dt)
+            and np.sqrt(Q1[3, 3]) == pytest.approx(sigma * np.sqrt(2 * beta * dt)))
     assert abs(F1[3, 3] - phi) < (beta * dt) ** 2 and F[0, 3] == dt
     # β → 0 at a fixed noise per step is the Wiener (CAA) model
     Fc, Qc = gd.caa_model(dt, 0.05)
@@ -124,7 +125,8 @@ def test_dynamic_ekf_takes_the_singer_model():
     caa, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.05, x0, 1e-3).run(rec.acc)
     same, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.caa_model(0.01, 0.05, 0)).run(rec.acc)
     assert np.array_equal(caa, same)
-    sing, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.singer_model(0.01, 2.0, 0.9, 0)).run(rec.acc)
+    sing, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3,
+                            process=gd.singer_model(0.01, 2.0, 0.9, 0)).run(rec.acc)
     assert 0 < np.max(np.abs(sing - caa)) and np.sqrt(np.mean((sing[:, :3] - om) ** 2)) < 0.03
     with pytest.raises(ValueError, match="F must have shape"):
         gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.singer_model(0.01, 2.0, 0.9))

@@ -34,7 +34,8 @@ def test_pseudo_linear_transition_equals_the_direct_propagation():
         acc, A, dt = rng.normal(0, 5, 3), dcm.A_matrix(rng.normal(0, 0.05, 3)), 0.02
         g_c = np.zeros(21)
         g_c[17] = dcm.G * dt
-        assert np.allclose(gpsins.ins_transition(x, acc, A, dt) @ x + g_c, gpsins.ins_propagate(x, acc, A, dt), atol=1e-12)
+        assert np.allclose(gpsins.ins_transition(x, acc, A, dt) @ x + g_c, gpsins.ins_propagate(x, acc, A, dt),
+                           atol=1e-12)
 
 
 def test_noise_free_mechanization_reproduces_the_flight_exactly():
@@ -254,8 +255,8 @@ def test_static_accelerometer_updates_correct_the_tilt_at_stops():
     car = simulate.car_record()
     t, fs = car["t"], car["fs"]
     rng = np.random.default_rng(12)
-    x0 = _ins_x(car["C0"], np.zeros(3), car["r0"] + 3 * rng.standard_normal(3), car["v0"] + 0.5 * rng.standard_normal(3),
-                np.zeros(3))
+    x0 = _ins_x(car["C0"], np.zeros(3), car["r0"] + 3 * rng.standard_normal(3),
+                car["v0"] + 0.5 * rng.standard_normal(3), np.zeros(3))
     P0 = np.r_[[1e-4] * 9, [np.radians(2000 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(2e-3 * 9.80665) ** 2] * 3]
     tilt = {}
     for name, still in (("gps", None), ("static", car["static"])):

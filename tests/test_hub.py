@@ -510,7 +510,8 @@ def test_thirty_students_fetch_and_submit_within_a_minute(big_hub):
     assert len(students) == 30
     t = time.monotonic()
     hub.start_servers(students)
-    print(f"\nmake hub with 31 accounts started in {hub.start_seconds:.0f} s; 30 servers in {time.monotonic() - t:.0f} s")
+    print(f"\nmake hub with 31 accounts started in {hub.start_seconds:.0f} s; "
+          f"30 servers in {time.monotonic() - t:.0f} s")
     hub.as_user(instructor, "nbgrader", "db", "assignment", "add", LAB, cwd=hub.course)
     hub.as_user(instructor, "nbgrader", "release_assignment", LAB, cwd=hub.course)
 

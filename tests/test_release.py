@@ -25,7 +25,8 @@ from grading import release
 
 VENV = Path(sys.prefix).resolve()  # the environment running the tests, reused by `make` in the release
 STUDENT_LABS = ["01_euler_rotations", "02_kalman_falling_body"]  # the student test on two labs keeps this short
-TOP = {".gitignore", "Makefile", "README.md", "course.mk", "data", "environment.txt", "labs", "lib", "pyproject.toml", "tests"}
+TOP = {".gitignore", "Makefile", "README.md", "course.mk", "data", "environment.txt", "labs", "lib", "pyproject.toml",
+       "tests"}
 NEVER = {"solutions", "grading", "submitted", "autograded", "feedback", "release", "nbgrader_config.py",
          "gradebook.db", "grades.csv", "authoring.md", "instructors.md", "conftest.py"}
 

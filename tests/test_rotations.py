@@ -188,7 +188,8 @@ def test_axis_angle_quaternion_of_90deg_about_z():
 
 TAIT_BRYAN = ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]
 
-# seed 000 eq 3.40, worked by hand: equivalent angles (deg, in the order applied) of the DCM at (ψ, θ, φ) = (40, -10, 10)
+# seed 000 eq 3.40, worked by hand: equivalent angles (deg, in the order applied) of the DCM at
+# (ψ, θ, φ) = (40, -10, 10)
 PART_A_SEQUENCES = {
     "ZYX": (40, -10, 10), "XYZ": (14.063, -1.111, 41.014), "ZXY": (41.754, 9.847, -10.151),
     "YXZ": (-1.145, 14.060, 40.736), "XZY": (13.097, 41.005, -1.472), "YZX": (-12.962, 39.273, 18.290),
@@ -716,7 +717,8 @@ def test_dcm_from_seed001_and_dcm_to_seed001_are_transposes_and_inverse():
     np.testing.assert_array_equal(R_IB, np.swapaxes(C, -1, -2))
     np.testing.assert_array_equal(conventions.dcm_from_seed001(R_IB), C)
     e = deg([30, 20, 45])
-    np.testing.assert_allclose(conventions.dcm_from_seed001(conventions.seed001_R_IB(*e)), rot.euler_to_dcm(e), atol=1e-15)
+    np.testing.assert_allclose(conventions.dcm_from_seed001(conventions.seed001_R_IB(*e)), rot.euler_to_dcm(e),
+                               atol=1e-15)
 
 
 @pytest.mark.parametrize("a_deg, b_deg", [((0, 90, 90), (-90, 90, 0)), ((20, -90, 30), (50, -90, 0))],
@@ -728,11 +730,12 @@ def test_seed001_gimbal_lock_equivalent_orientations(a_deg, b_deg):
 
 def test_seed001_gimbal_lock_depends_only_on_roll_minus_or_plus_yaw():
     d = 0.37
-    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d), conventions.seed001_R_IB(0.5, np.pi / 2, 0.2),
-                               atol=1e-15)
+    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d),
+                               conventions.seed001_R_IB(0.5, np.pi / 2, 0.2), atol=1e-15)
     np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, -np.pi / 2, 0.2 - d),
                                conventions.seed001_R_IB(0.5, -np.pi / 2, 0.2), atol=1e-15)
-    assert np.max(np.abs(conventions.seed001_R_IB(0.5 + d, 0.3, 0.2 + d) - conventions.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
+    assert np.max(np.abs(conventions.seed001_R_IB(0.5 + d, 0.3, 0.2 + d)
+                         - conventions.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
 
 
 def test_seed001_quat_to_euler_recovers_angles_from_our_quaternion():
@@ -758,22 +761,26 @@ NOTE_GLOBAL = {"NED": "NED", "Android": "ENU", "Win8": "ENU"}
 @pytest.mark.parametrize("nav", [None, "NED", "ENU"])
 def test_quat_to_seed002_inverts_quat_from_seed002(frame, nav):
     q = random_quats(np.random.default_rng(32), 50)
-    same_quat_up_to_sign(conventions.quat_from_seed002(conventions.quat_to_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
-    same_quat_up_to_sign(conventions.quat_to_seed002(conventions.quat_from_seed002(q, frame, nav), frame, nav), q, atol=1e-14)
+    same_quat_up_to_sign(conventions.quat_from_seed002(conventions.quat_to_seed002(q, frame, nav), frame, nav), q,
+                         atol=1e-14)
+    same_quat_up_to_sign(conventions.quat_to_seed002(conventions.quat_from_seed002(q, frame, nav), frame, nav), q,
+                         atol=1e-14)
 
 
 @pytest.mark.parametrize("frame, other_nav", [("Android", "NED"), ("Win8", "NED"), ("NED", "ENU")])
 def test_quat_from_seed002_nav_other_than_note_frame_is_nav_swap(frame, other_nav):
     q = random_quats(np.random.default_rng(33), 50)
     own = conventions.quat_from_seed002(q, frame)
-    np.testing.assert_allclose(conventions.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own), atol=1e-15)
+    np.testing.assert_allclose(conventions.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own),
+                               atol=1e-15)
     np.testing.assert_array_equal(conventions.quat_from_seed002(q, frame, nav=NOTE_GLOBAL[frame]), own)
 
 
 def test_quat_from_seed002_android_and_win8_share_the_enu_global_frame():
     q = random_quats(np.random.default_rng(34), 20)
     for nav in (None, "NED", "ENU"):
-        np.testing.assert_array_equal(conventions.quat_from_seed002(q, "Android", nav), conventions.quat_from_seed002(q, "Win8", nav))
+        np.testing.assert_array_equal(conventions.quat_from_seed002(q, "Android", nav),
+                                      conventions.quat_from_seed002(q, "Win8", nav))
 
 
 @pytest.mark.parametrize("frame, nav", [("NED", None), ("Android", None), ("Win8", None),
@@ -789,7 +796,8 @@ def test_quat_from_seed002_honours_note_sandwich_v_S_equals_q_conj_v_G_q(frame, 
 
 def test_quat_from_seed002_matches_note_eq34_global_to_sensor_matrix():
     q_note = random_quats(np.random.default_rng(36), 1)[0]
-    np.testing.assert_allclose(rot.quat_to_dcm(conventions.quat_from_seed002(q_note)).T, seed002_eq34(q_note), atol=1e-14)
+    np.testing.assert_allclose(rot.quat_to_dcm(conventions.quat_from_seed002(q_note)).T, seed002_eq34(q_note),
+                               atol=1e-14)
 
 
 def test_seed002_eq34_is_transpose_of_our_quat_to_dcm():

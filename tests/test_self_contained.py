@@ -19,8 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # Built from parts so that this file does not match itself.
 OUTSIDE = re.compile("|".join([re.escape(s) for s in ("shared" + "/", "/" + "work/", "/" + "root/")]
                                + [r"[\"']shar" r"ed[\"']\s*/"]))          # also a path built with "/"
-NOTES = re.compile(r"\bdig" r"ests?\b|\berrat" r"(?:um|a) \d|\bite" r"ms? \d|\bseed te" r"xt\b|\blost in the te" r"xt\b",
-                   re.IGNORECASE)
+NOTES = re.compile(r"\bdig" r"ests?\b|\berrat" r"(?:um|a) \d|\bite" r"ms? \d|\bseed te" r"xt\b"
+                   r"|\blost in the te" r"xt\b", re.IGNORECASE)
 HASH_WORDS = re.compile(r"sha|hash", re.IGNORECASE)       # a file's hex checksum is not a note
 TEXT_SUFFIXES = {".py", ".md", ".ipynb", ".txt", ".cfg", ".toml", ".json", ".yml", ".yaml", ".sh", ".html", ""}
 
@@ -56,7 +56,8 @@ def prose_of(path):
                                                        if not re.match(r"\s*[%!]", line))))
             pieces.append((f" cell {i}", src))
             for out in cell.get("outputs", []):
-                pieces.append((f" cell {i} output", json.dumps(out.get("text", out.get("data", {}).get("text/plain", "")))))
+                shown = out.get("text", out.get("data", {}).get("text/plain", ""))
+                pieces.append((f" cell {i} output", json.dumps(shown)))
         return pieces
     return [("", text)]
 

@@ -86,4 +86,5 @@ def test_the_report_names_each_pair_with_its_score_and_lines(tmp_path):
     similarity.write_report("01_euler_rotations", [pair], tmp_path / "s.md", tmp_path / "s.csv")
     text = (tmp_path / "s.md").read_text()
     assert "| ex5_solution | a | library rotations.rodrigues_dcm | 0.91 | 250 |" in text and "x = 1" in text
-    assert (tmp_path / "s.csv").read_text().splitlines()[1] == "ex5_solution,a,library rotations.rodrigues_dcm,0.910,250"
+    rows = (tmp_path / "s.csv").read_text().splitlines()
+    assert rows[1] == "ex5_solution,a,library rotations.rodrigues_dcm,0.910,250"

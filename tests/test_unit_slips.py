@@ -446,7 +446,8 @@ def test_freescale_refuses_a_recording_in_milligauss_unless_the_range_is_widened
     from fusionlab import freescale, freescale_fast
     gyr, acc, mag, fs = trial27
     Y, Gg, mG = np.degrees(gyr[:2000]), -acc[:2000] / G, 10.0 * mag[:2000]   # the Earth's field read in milligauss
-    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* median field strength of \d{3}\.?\d*, which looks like milligauss"):
+    with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* median field strength of \d{3}\.?\d*, "
+                                         r"which looks like milligauss"):
         freescale.Kalman9("NED").run(Y[:400], Gg[:400], mG[:400])
     with pytest.raises(ValueError, match=r"^mag_uT must be in µT .* milligauss -- multiply by 0.1"):
         freescale_fast.run_fast9(Y, Gg, mG, fs)
@@ -462,7 +463,8 @@ def test_freescale_refuses_a_recording_in_milligauss_unless_the_range_is_widened
 def test_a_single_field_reading_passed_as_the_accelerometer_is_refused(call):
     q = rotations.euler_to_quat([0.2, -0.1, 0.7])
     G1, B1 = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, np.radians(60.0))
-    with pytest.raises(ValueError, match=r"^G must be in g .* median magnitude of 50, which looks like another sensor's reading"):
+    with pytest.raises(ValueError, match=r"^G must be in g .* median magnitude of 50, "
+                                         r"which looks like another sensor's reading"):
         call(G1, B1)
 
 
@@ -767,7 +769,8 @@ def test_flags_and_an_excitation_that_is_not_positive_are_refused():
     (lambda: kalman.update_step(np.zeros(3), np.eye(2), np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"),
      r"^x must have shape \(2,\)"),
     (lambda: kalman.update_step(np.zeros(2), np.eye(2), np.ones(1), [[1.0, 0.0]], "abc", "joseph"), r"^R must "),
-    (lambda: kalman.update_step(np.zeros(2), None, np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"), r"^P is required"),
+    (lambda: kalman.update_step(np.zeros(2), None, np.ones(1), np.ones((1, 2)), np.eye(1), "joseph"),
+     r"^P is required"),
     (lambda: kalman.predict_step(np.zeros(2), np.eye(2), [[1.0, 0.0]], np.eye(2), None), r"^A must "),
     (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), None, None), r"^Q is required"),
     (lambda: kalman.predict_step(np.zeros(2), np.eye(2), np.eye(2), np.eye(2), np.ones(3)), r"^Bu must have shape"),
@@ -818,7 +821,8 @@ def test_one_series_check_and_single_numbers_where_one_is_meant():
     with pytest.raises(ValueError, match=r"^delta must be a single number"):
         freescale.geomag_tilt_error(np.eye(3), np.eye(3), [1.0, 1.0])
     M, S, beta = np.eye(3), np.ones(3), np.zeros(3)
-    for call in (lambda b: sensor_errors.mag_measure(b, M, S, beta), lambda b: sensor_errors.mag_correct(b, M, S, beta)):
+    for call in (lambda b: sensor_errors.mag_measure(b, M, S, beta),
+                 lambda b: sensor_errors.mag_correct(b, M, S, beta)):
         with pytest.raises(ValueError, match=r"^b(_m)? must have shape \(\.\.\., 3\); got \(\)"):
             call(45.0)
 
