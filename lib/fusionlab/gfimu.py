@@ -178,14 +178,13 @@ def aiv_map():
     ndarray, shape (9, 12)
         ``L`` (dimensionless).
     """
-    A, B, C, D = 0, 1, 2, 3
-
     def diff(triad, axis):
         row = np.zeros(12)
         row[3 * triad + axis] += 1.0
-        row[3 * A + axis] -= 1.0                                 # minus the central triad A
+        row[axis] -= 1.0                                         # minus the central triad A
         return row
 
+    _A, B, C, D = 0, 1, 2, 3                                     # A, the centre, only ever subtracted (in diff)
     x, y, z = 0, 1, 2
     SB, SC, SD = -diff(B, x), -diff(C, y), -diff(D, z)
     return np.array([
