@@ -21,14 +21,10 @@ from pathlib import Path
 import nbformat
 
 from fusionlab import labformat
+from grading.cells import grade_id
 from grading.classgrade import _env
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def grade_id(cell):
-    """The nbgrader ``grade_id`` of a notebook cell (None for a cell nbgrader does not know)."""
-    return cell.metadata.get("nbgrader", {}).get("grade_id")
 
 
 def fill_answers(release, solution, exercises):

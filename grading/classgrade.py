@@ -44,7 +44,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import judge, sandbox, similarity
+from grading import cells, judge, sandbox, similarity
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -192,7 +192,7 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
     release = nbformat.read(release_dir / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     tests = recorded_tests(course, lab)
-    order = [judge.grade_id(c) for c in release.cells]
+    order = [cells.grade_id(c) for c in release.cells]
     tests = dict(sorted(tests.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
     limits = {}
     if args.memory_mb:

@@ -27,8 +27,6 @@ from __future__ import annotations
 import argparse
 import ast
 import csv
-import difflib
-import functools
 import io
 import re
 import sys
@@ -37,152 +35,16 @@ from pathlib import Path
 
 import nbformat
 
-# Names every lab binds in its locked setup cell (aliases of modules) even when the scanner cannot see an import.
-MODULE_NAMES = {"np", "numpy", "plt", "matplotlib", "sp", "sympy", "scipy", "fusionlab", "builtins", "sys", "os",
-                "math", "IPython", "filterpy", "guard", "checks"}
-
-# kind -> why (one sentence a reviewer reads beside the offending line)
-WHY = {
-    "patch": "assigns or deletes an attribute of an imported module or object: it can change what the tests compare",
-    "rebind": "rebinds a name the locked setup cell or the tests rely on",
-    "reflection": "reflection (setattr/getattr/vars/globals, __code__, __dict__ ...) reaches code it should not touch",
-    "builtins": "touches the builtins every cell (and every test) uses",
-    "sys-hook": "changes interpreter machinery (sys.modules, sys.excepthook, settrace, import hooks, atexit)",
-    "ipython": "reaches the IPython shell (get_ipython, input/AST transformers, set_custom_exc, event callbacks)",
-    "exec": "runs code built at run time (exec, eval, compile, __import__, importlib)",
-    "reference": "uses the reference function this exercise asks you to write yourself",
-    "file": "writes a file, or reads the instructor's folders",
-    "process": "starts a process or a shell command",
-    "thread": "starts a thread or a timer that runs after the cell",
-    "network": "opens a network connection",
-    "ctypes": "calls native code (ctypes/cffi)",
-    "signal": "installs a signal handler",
-    "operator": "defines a class whose comparisons or conversions could fool an assert",
-    "foreign-cell": "carries nbgrader metadata with a grade_id this lab does not have (pasted from another lab?)",
-    "syntax": "does not parse as Python (scanned token by token instead)",
-    "copied": "a function whose code has the shape of one in the library, names and comments aside (copied?)",
-    "package": "uses a package whose functions answer exercises (ahrs, scipy's Rotation, filterpy's helpers)",
-    "unreadable": "the submission is not a readable notebook",
-    "loader": "loads a module or runs code by a name or a text built at run time (import tricks)",
-}
-
-DUNDERS = {"__code__", "__dict__", "__globals__", "__closure__", "__defaults__", "__kwdefaults__", "__subclasses__",
-           "__bases__", "__mro__", "__loader__", "__spec__", "__func__", "__wrapped__", "__setattr__", "__delattr__",
-           "__getattribute__", "__class__", "__self__", "__reduce__", "__reduce_ex__", "__subclasshook__",
-           "__file__"}
-CALLS = {  # bare names that are suspicious when called
-    "setattr": "reflection", "delattr": "reflection", "getattr": "reflection", "vars": "reflection",
-    "globals": "reflection", "locals": "reflection", "exec": "exec", "eval": "exec", "compile": "exec",
-    "__import__": "exec", "get_ipython": "ipython", "breakpoint": "sys-hook",
-}
-IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input_transformer_manager",
-                 "ast_transformers", "set_custom_exc", "custom_exceptions", "CustomTB", "register_magic_function",
-                 "register_magics", "run_cell", "run_cell_magic", "run_line_magic", "showtraceback",
-                 "_showtraceback", "showsyntaxerror", "InteractiveTB", "SyntaxTB", "user_ns", "user_global_ns",
-                 "set_hook", "prefilter_manager", "display_pub", "transform_cell", "run_cell_async", "do_execute",
-                 "dispatch_shell", "shell_handlers", "display_trap", "displayhook"}
-SYS_ATTRS = {"modules", "path", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks",
-             "path_importer_cache", "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
-             "breakpointhook", "audit"}
-MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
-    "builtins": "builtins", "ctypes": "ctypes", "cffi": "ctypes", "signal": "signal", "subprocess": "process",
-    "multiprocessing": "process", "pty": "process", "socket": "network", "urllib": "network", "requests": "network",
-    "http": "network", "httpx": "network", "ftplib": "network", "smtplib": "network", "urllib3": "network",
-    "aiohttp": "network", "websocket": "network", "importlib": "exec", "runpy": "exec", "code": "exec",
-    "codeop": "exec", "marshal": "exec", "types": "reflection", "inspect": "reflection", "gc": "reflection",
-    "atexit": "sys-hook", "threading": "thread", "_thread": "thread", "sched": "thread", "asyncio": "thread",
-    "shutil": "file", "tempfile": "file", "IPython": "ipython", "ipykernel": "ipython", "unittest": "reflection",
-    "concurrent": "process", "ahrs": "package", "filterpy": "package",
-}
-ANSWERING_NAMES = {"Rotation": "package", "q_prod": "package", "q2R": "package"}  # names that answer exercises
-OS_CALLS = {"system": "process", "popen": "process", "fork": "process", "forkpty": "process", "kill": "process",
-            "killpg": "process", "spawnl": "process", "spawnv": "process", "spawnve": "process", "spawnlp": "process",
-            "execv": "process", "execve": "process", "execl": "process", "execlp": "process", "execvp": "process",
-            "posix_spawn": "process", "_exit": "process", "remove": "file", "unlink": "file", "rename": "file",
-            "replace": "file", "rmdir": "file", "removedirs": "file", "makedirs": "file", "mkdir": "file",
-            "chmod": "file", "chdir": "file", "symlink": "file", "link": "file", "truncate": "file",
-            "putenv": "process", "environ": "process"}
-WRITE_METHODS = {"write_text", "write_bytes", "savetxt", "savez", "savez_compressed", "tofile", "to_csv",
-                 "to_excel", "to_pickle", "savefig", "touch", "mkdir", "unlink", "rmdir", "rename", "symlink_to",
-                 "dump"}
-OPERATOR_DUNDERS = {"__eq__", "__ne__", "__lt__", "__le__", "__gt__", "__ge__", "__bool__", "__array__",
-                    "__array_ufunc__", "__array_function__", "__array_interface__", "__float__", "__complex__",
-                    "__abs__", "__len__", "__index__", "__int__", "__getattr__"}
-INSTRUCTOR_PATHS = re.compile(r"\.\.|^/|solution|gradebook|autograded|submitted|feedback|nbgrader_config")
-# Harmless magics; any other magic is flagged (``!cmd`` and shell cell magics as processes).
-SAFE_MAGICS = {"matplotlib", "timeit", "time", "precision", "pprint", "who", "whos", "pinfo", "pinfo2", "psearch"}
-SHELL_MAGICS = {"system", "sx", "bash", "sh", "script", "perl", "ruby", "python", "python3", "pypy", "sc", "run",
-                "load", "writefile", "env", "store", "cd", "pushd", "popd", "rm", "mkdir", "mv", "cp"}
-
-
-# Copied from the library: calibrated on the model answers of all labs, whose closest library functions are up to
-# 0.976 alike (Lab 06 my_aiv_map ~ gfimu.aiv_map, 182 nodes; Lab 10 my_ins_F ~ gpsins._ins_F, 0.973), while a copy with
-# renamed variables, reordered independent lines and added comments is 1.0 alike.
-COPY_RATIO = 0.985
-COPY_MIN_NODES = 40
-LIBRARY = Path(__file__).resolve().parents[1] / "lib" / "fusionlab"
-
-
-def _shape(statements):
-    """(node types in order, the same with the statements sorted): what is left of code without its names."""
-    def types(node):
-        if isinstance(node, ast.expr_context):
-            return []
-        return [type(node).__name__] + [t for child in ast.iter_child_nodes(node) for t in types(child)]
-    if statements and isinstance(statements[0], ast.Expr) and isinstance(statements[0].value, ast.Constant) \
-            and isinstance(statements[0].value.value, str):
-        statements = statements[1:]                                           # the docstring
-    each = [types(s) for s in statements]
-    return [t for e in each for t in e], [t for e in sorted(each) for t in e]
-
-
-@functools.lru_cache(maxsize=4)
-def library_shapes(folder=LIBRARY):
-    """{"module.function": shape} for every function and method defined in the library's modules."""
-    out = {}
-
-    def collect(prefix, body):
-        for node in body:
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                out[f"{prefix}.{node.name}"] = _shape(node.body)
-                collect(f"{prefix}.{node.name}", node.body)
-            elif isinstance(node, ast.ClassDef):
-                collect(f"{prefix}.{node.name}", node.body)
-    for path in sorted(Path(folder).rglob("*.py")):                     # fusionlab.checks is a package
-        collect(".".join(path.relative_to(folder).with_suffix("").parts), ast.parse(path.read_text()).body)
-    return out
-
-
-def copied_from(function, library=None):
-    """(similarity, "module.function") of the library function closest to ``function`` (an ``ast.FunctionDef``), or
-    None below ``COPY_RATIO`` or for a function shorter than ``COPY_MIN_NODES``."""
-    mine = _shape(function.body)
-    n = len(mine[0])
-    if n < COPY_MIN_NODES:
-        return None
-    best = None
-    matcher = difflib.SequenceMatcher(None, autojunk=False)
-    for name, theirs in (library or library_shapes()).items():
-        m = len(theirs[0])
-        if 2 * min(n, m) / (n + m) < COPY_RATIO:                # the ratio cannot get there
-            continue
-        for a, b in zip(mine, theirs):
-            matcher.set_seqs(b, a)
-            if matcher.quick_ratio() >= COPY_RATIO:
-                ratio = matcher.ratio()
-                if ratio >= COPY_RATIO and (best is None or ratio > best[0]):
-                    best = (ratio, name)
-    return best
-
-
-def _nbg(cell):
-    return cell.metadata.get("nbgrader", {})
+from fusionlab import labformat
+from grading import cells, similarity
+from grading.flags import (ANSWERING_NAMES, CALLS, DUNDERS, INSTRUCTOR_PATHS, IPYTHON_ATTRS, MODULE_KINDS, MODULE_NAMES,
+                           OPERATOR_DUNDERS, OS_CALLS, SAFE_MAGICS, SHELL_MAGICS, SYS_ATTRS, WHY, WRITE_METHODS)
 
 
 def _exercise(grade_id):
     """The exercise number of ``exN_...``, or None."""
-    m = re.match(r"ex(\d+)_", grade_id or "")
-    return int(m.group(1)) if m else None
+    g = labformat.parse(grade_id)
+    return int(g.number) if g and g.kind == "ex" and g.number.isdigit() else None
 
 
 class Source:
@@ -190,15 +52,15 @@ class Source:
 
     def __init__(self, nb, lab):
         self.lab = lab
-        self.cells = {_nbg(c)["grade_id"]: c for c in nb.cells if _nbg(c).get("grade_id")}
-        provided = [c.source for c in nb.cells if c.cell_type == "code" and not _nbg(c).get("solution")]
+        self.cells = {cells.nbg(c)["grade_id"]: c for c in nb.cells if cells.nbg(c).get("grade_id")}
+        provided = [c.source for c in nb.cells if c.cell_type == "code" and not cells.nbg(c).get("solution")]
         self.provided = {text.strip() for text in provided}
         # an edited provided cell is judged by what the student wrote: lines of the course's own cells, and the
         # library functions those cells call, are not flags there
         self.provided_lines = {line.strip() for text in provided for line in text.splitlines()}
         self.provided_names = set()
         for c in nb.cells:
-            if c.cell_type == "code" and not _nbg(c).get("solution") and not _nbg(c).get("grade"):
+            if c.cell_type == "code" and not cells.nbg(c).get("solution") and not cells.nbg(c).get("grade"):
                 self.provided_names |= set(re.findall(r"\w+", c.source))
         self.forbid = {}  # exercise -> last names of what it forbids, from the table of exercises
         from fusionlab.checks import exercises
@@ -215,10 +77,10 @@ class Source:
                 tree = ast.parse(_strip_magics(cell.source)[0])
             except SyntaxError:
                 continue
-            test = _nbg(cell).get("grade") and not _nbg(cell).get("solution")
+            test = cells.nbg(cell).get("grade") and not cells.nbg(cell).get("solution")
             if test:
                 read |= {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
-            if _nbg(cell).get("solution"):
+            if cells.nbg(cell).get("solution"):
                 continue
             for node in tree.body:
                 if isinstance(node, (ast.Import, ast.ImportFrom)):
@@ -620,17 +482,17 @@ def scan_source(source, src, exercise=None, added=False):
     visitor.visit(tree)
     for node in ast.walk(tree):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-            match = copied_from(node)
+            match = similarity.copied_from(node)
             if match:
                 flags.append((node.lineno, "copied", f"`{node.name}` has the shape of `{match[1]}` in the library: "
-                                                     f"{match[0]:.1%} alike (flagged from {COPY_RATIO:.1%})"))
+                                                     f"{match[0]:.1%} alike (flagged from {similarity.COPY_RATIO:.1%})"))
     return flags + visitor.flags
 
 
 def _flags_of(src, nb):
     rows = []
     for index, cell in enumerate(nb.cells):
-        md = _nbg(cell)
+        md = cells.nbg(cell)
         gid = md.get("grade_id")
         label = gid or f"cell {index + 1}"
         if gid and gid not in src.cells:
@@ -640,7 +502,7 @@ def _flags_of(src, nb):
             continue
         if gid in src.cells:
             original = src.cells[gid]
-            if not _nbg(original).get("solution"):
+            if not cells.nbg(original).get("solution"):
                 continue  # locked: nbgrader replaces it with the instructor's version before grading
             found = scan_source(cell.source, src, exercise=_exercise(gid))
         elif cell.source.strip() in src.provided:

@@ -1080,10 +1080,10 @@ def test_the_box_holds_no_code_of_the_librarys_filters(tmp_path):
     import time
 
     from grading import box as wire
-    from grading import judge
+    from grading import cells
     import fusionlab
     nb = nbformat.read(LAB_NOTEBOOK, as_version=4)
-    setup = judge.python_of(next(c.source for c in nb.cells if judge.grade_id(c) == "imports"))
+    setup = cells.python_of(next(c.source for c in nb.cells if cells.grade_id(c) == "imports"))
     lib = Path(fusionlab.__file__).parent
     gone = capstone.FILTER_MODULES + capstone.FILE_MODULES
     kept = "".join(p.read_text() for p in lib.rglob("*.py") if p.stem not in gone)

@@ -15,7 +15,7 @@ import pytest
 
 from conftest import LABS, ROOT
 from fusionlab.checks import _core, exercises
-from grading import judge
+from grading import boxlib, cells
 from grading.bench_classgrade import grade_id
 from test_grading_cheats import CHEATS, NO_REFERENCE
 
@@ -25,19 +25,19 @@ def _solution(lab):
 
 
 def _canonical(obj):
-    return judge._dotted(obj)
+    return boxlib.dotted(obj)
 
 
 @pytest.mark.parametrize("lab", LABS)
 def test_every_test_cell_has_one_entry_with_its_points_and_answer(lab):
     nb = _solution(lab)
-    cells = {grade_id(c): c for c in nb.cells if grade_id(c)}
-    tests = {g: c for g, c in cells.items() if judge.is_test(c)}
+    by_id = {grade_id(c): c for c in nb.cells if grade_id(c)}
+    tests = {g: c for g, c in by_id.items() if cells.is_test(c)}
     entries = {e.grade_id: e for e in exercises.of_lab(lab)}
     assert set(tests) == set(entries)
     for gid, e in entries.items():
         assert float(tests[gid].metadata.nbgrader.points) == e.points, gid
-        bound = judge._bound_names(cells[f"ex{e.number}_solution"].source)
+        bound = cells.bound_names(by_id[f"ex{e.number}_solution"].source)
         assert set(e.answer) <= bound, (gid, e.answer, bound)
 
 
@@ -46,19 +46,19 @@ def test_each_test_cell_names_exactly_the_references_of_its_entry(lab):
     nb = _solution(lab)
     setup = next(c for c in nb.cells if grade_id(c) == "imports")
     base = {"__name__": "__check__"}
-    exec(compile(judge._without_guard_calls(setup.source), "<setup>", "exec"), base)  # noqa: S102
+    exec(compile(cells.without_guard_calls(setup.source), "<setup>", "exec"), base)  # noqa: S102
     reserved = {}
-    for node in ast.walk(ast.parse(judge.python_of(setup.source))):
+    for node in ast.walk(ast.parse(cells.python_of(setup.source))):
         if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "reserve":
             n = next(int(k.value.value) for k in node.keywords if k.arg == "exercise")
             reserved[n] = {_canonical(eval(compile(ast.Expression(a), "<a>", "eval"), base)) for a in node.args}
     for e in exercises.of_lab(lab):
         source = next(c.source for c in nb.cells if grade_id(c) == e.grade_id)
         scope = dict(base)
-        imports = [n for n in ast.parse(judge.python_of(source)).body if isinstance(n, (ast.Import, ast.ImportFrom))]
+        imports = [n for n in ast.parse(cells.python_of(source)).body if isinstance(n, (ast.Import, ast.ImportFrom))]
         exec(compile(ast.Module(imports, []), "<imports>", "exec"), scope)  # noqa: S102
         named = set()
-        for node in judge.forbidden_expressions(source):
+        for node in cells.forbidden_expressions(source):
             try:
                 named.add(_canonical(eval(compile(ast.Expression(node), "<f>", "eval"), scope)))  # noqa: S307
             except NameError:
@@ -70,9 +70,9 @@ def test_each_test_cell_names_exactly_the_references_of_its_entry(lab):
 def test_every_check_reads_its_forbids_from_the_table():
     assert set(_core._REFERENCES) == {e.check for e in exercises.EXERCISES}
     for lab in LABS:
-        cells = {grade_id(c): c.source for c in _solution(lab).cells if grade_id(c)}
+        sources = {grade_id(c): c.source for c in _solution(lab).cells if grade_id(c)}
         for e in exercises.of_lab(lab):
-            assert re.search(rf"checks\.{e.check}\(", cells[f"ex{e.number}_check"]), (lab, e.number, e.check)
+            assert re.search(rf"checks\.{e.check}\(", sources[f"ex{e.number}_check"]), (lab, e.number, e.check)
 
 
 def test_the_red_team_has_a_cheat_for_every_exercise_the_library_answers():

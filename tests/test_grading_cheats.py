@@ -18,7 +18,7 @@ import nbformat
 import pytest
 
 from conftest import ROOT
-from grading import judge, sandbox
+from grading import cells, judge, sandbox
 from grading.bench_classgrade import grade_id
 
 pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class (test_judge)
@@ -216,7 +216,7 @@ def graded(tmp_path_factory):
             scratch.chmod(0o755)
             release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
             solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-            tests = {grade_id(c): c.source for c in solution.cells if judge.is_test(c)}
+            tests = {grade_id(c): c.source for c in solution.cells if cells.is_test(c)}
             the_lab = judge.Lab(ROOT, lab, release, tests, solution, scratch)
             scores, messages = {}, {}
             with sandbox.claimed_slots(1) as [slot]:    # a user id no other grading run holds now

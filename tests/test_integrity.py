@@ -13,7 +13,7 @@ import pytest
 
 from conftest import LABS, ROOT
 from test_grading_cheats import NO_REFERENCE  # the exercises no library function answers
-from grading import integrity
+from grading import integrity, similarity
 
 LAB = "02_kalman_falling_body"
 SOURCE = ROOT / "solutions" / LAB / f"{LAB}.ipynb"
@@ -279,14 +279,14 @@ def test_the_copy_threshold_sits_between_the_model_answers_and_a_pasted_copy():
     nb = nbformat.read(ROOT / "solutions" / "06_gfimu_aiv" / "06_gfimu_aiv.ipynb", as_version=4)
     [cell] = [c for c in nb.cells if _gid(c) == "ex1_solution"]
     [fn] = [n for n in ast.parse(cell.source).body if isinstance(n, ast.FunctionDef) and n.name == "my_aiv_map"]
-    saved = integrity.COPY_RATIO
+    saved = similarity.COPY_RATIO
     try:
-        integrity.COPY_RATIO = 0.9
-        ratio, name = integrity.copied_from(fn)
+        similarity.COPY_RATIO = 0.9
+        ratio, name = similarity.copied_from(fn)
     finally:
-        integrity.COPY_RATIO = saved
-    assert name == "gfimu.aiv_map" and 0.95 < ratio < integrity.COPY_RATIO
+        similarity.COPY_RATIO = saved
+    assert name == "gfimu.aiv_map" and 0.95 < ratio < similarity.COPY_RATIO
     [cell] = [c for c in nbformat.read(SOURCE, as_version=4).cells if _gid(c) == "ex1_solution"]
     [joseph] = [n for n in ast.parse(cell.source).body if isinstance(n, ast.FunctionDef)]
-    assert len(integrity._shape(joseph.body)[0]) < integrity.COPY_MIN_NODES
-    assert integrity.copied_from(joseph) is None
+    assert len(similarity._shape(joseph.body)[0]) < similarity.COPY_MIN_NODES
+    assert similarity.copied_from(joseph) is None

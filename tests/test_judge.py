@@ -475,13 +475,13 @@ def _hidden_cases(solution, gid):
     """The arguments of each hidden case of the test ``gid`` and the reference's results, from the solution's own
     hidden code run with a guard that only records them."""
     from fusionlab import falling_body, kalman
-    from grading import judge
+    from grading import cells
     [source] = [c.source for c in solution.cells if grade_id(c) == gid]
     seen = {}
     ns = {"np": np, "kf": kalman, "falling_body": falling_body, "my_predict": None, "my_state_space": None,
           "guard": type("G", (), {"grade": staticmethod(lambda student, ref, cases, **k: seen.update(
               cases=cases, expected=[ref(*c) for c in cases]))})}
-    for hidden, code in judge.test_parts(source):
+    for hidden, code in cells.test_parts(source):
         if hidden:
             exec(code, ns)  # noqa: S102 -- the course's own test cell
     return seen["cases"], seen["expected"]

@@ -3,7 +3,7 @@
 CPython 3.11 keeps the depth counter of its converter from C to Python syntax trees in state the threads share; a
 thread switch inside a conversion (a collection running a ``__del__``) makes another thread's ``ast.parse`` fail with
 "SystemError: AST constructor recursion depth mismatch". A class run once left a student NOT GRADED that way.
-``grading.judge`` parses through one lock; this test drives the switch as hard as it can (a one-microsecond switch
+``grading.cells`` parses through one lock; this test drives the switch as hard as it can (a one-microsecond switch
 interval, a collection every few allocations, each one running Python code) and asserts no parse fails.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ import sys
 import threading
 import time
 
-from grading import judge
+from grading import cells
 
 SOURCE = "\n".join(f"def f{i}(x):\n    return [(a, b) for a in range(x) if a for b in {{1: (2, [3, (4, 5)])}}]"
                    for i in range(60))
@@ -57,5 +57,5 @@ def _parse_in_threads(parse, threads=4, seconds=3.0):
 
 
 def test_the_judge_parses_in_many_threads_at_once_without_a_failure():
-    errors = _parse_in_threads(judge._parse)
+    errors = _parse_in_threads(cells.parse)
     assert not errors, errors[:3]

@@ -1,5 +1,5 @@
 """What crosses between the student's box and the judge is data only, read strictly (``grading/box.py``,
-``grading/judge.py``): the codec's round trip, and what the judge refuses to build."""
+``grading/client.py``): the codec's round trip, and what the judge refuses to build."""
 from __future__ import annotations
 
 import gc
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from grading import box, judge
+from grading import box, client
 
 
 @pytest.mark.parametrize("value", [
@@ -83,7 +83,7 @@ def test_no_class_is_rebuilt_from_a_name_the_sender_wrote(tmp_path):
         for key in (name, name.replace(":", "."), name.split(":")[-1]):
             message = {"__object__": key, "state": {"__dict__": {k: box.encode(v) for k, v in state.items()}}}
             with pytest.raises(box.WireError, match="does not cross the pipe|an unknown kind"):
-                box.decode(json.loads(json.dumps(message)), objects=True, make_sympy=judge._sympy_trusted)
+                box.decode(json.loads(json.dumps(message)), objects=True, make_sympy=client.sympy_trusted)
     gc.collect()
     assert canary.read_text() == "{}", "no __del__ of a gadget ran in this process"
 
@@ -178,7 +178,7 @@ def test_random_messages_decode_to_data_or_are_refused():
     for _ in range(5000):
         message = _random_message(rng)
         try:
-            value = box.decode(message, objects=True, make_sympy=judge._sympy_trusted)
+            value = box.decode(message, objects=True, make_sympy=client.sympy_trusted)
         except box.WireError:
             refused += 1
             continue
@@ -190,8 +190,8 @@ def test_random_messages_decode_to_data_or_are_refused():
 def test_the_judge_rebuilds_sympy_without_parsing_any_text_the_student_sent():
     a, b = sp.symbols("a b", real=True)
     for expr in (sp.Matrix([[a**2 * b, 3 * a], [sp.Rational(1, 2), sp.Float(0.25)]]), sp.sin(a) * sp.exp(b) - 1):
-        assert judge._sympy_trusted(sp.srepr(expr)) == expr
+        assert client.sympy_trusted(sp.srepr(expr)) == expr
     for evil in ("Matrix('__import__(\"os\").system(\"echo pwned\")')", "Symbol('x; import os')", "Float('1e1;2')",
                  "Function('f')(Symbol('x'))", "Integer(2).__class__", "Lambda(Symbol('x'), Symbol('x'))"):
         with pytest.raises(box.WireError):
-            judge._sympy_trusted(evil)
+            client.sympy_trusted(evil)

@@ -92,7 +92,7 @@ def test_the_box_of_an_ordinary_user_hides_the_machine_and_the_network(tmp_path,
 def test_hidden_packages_are_covered_after_the_installation_is_mounted(tmp_path, monkeypatch):
     """``hide``: each installed copy of a package the shadow replaces is covered in the box (an empty read-only
     folder, /dev/null for a single-file module), so that taking the shadow off sys.path reaches nothing."""
-    from grading import judge
+    from grading import boxlib
     site = tmp_path / "site"
     (site / "vqf").mkdir(parents=True)
     (site / "vqf" / "__init__.py").write_text("")
@@ -103,7 +103,7 @@ def test_hidden_packages_are_covered_after_the_installation_is_mounted(tmp_path,
     assert {os.path.basename(p) for p in found} >= {"vqf", "imufusion.cpython-311-x86_64-linux-gnu.so", "ahrs.py"}
     shadow = tmp_path / "shadow"
     (shadow / "vqf").mkdir(parents=True)
-    assert str(site / "vqf") in judge.shadowed(shadow) and str(site / "ahrs.py") not in judge.shadowed(shadow)
+    assert str(site / "vqf") in boxlib.shadowed(shadow) and str(site / "ahrs.py") not in boxlib.shadowed(shadow)
     args, _ = _command(tmp_path, monkeypatch, euid=1000)
     assert "--remount-ro" not in args                                     # nothing hidden unless asked
     work = sandbox.private_folder(None, tmp_path)

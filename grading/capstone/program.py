@@ -4,12 +4,12 @@ of the library, whose filter and data-loader modules are placeholders written he
 from __future__ import annotations
 
 import ast
-import os
 import shutil
 from pathlib import Path
 
 from fusionlab.capstone import SENSORS
-from grading import judge
+from grading import boxlib
+from grading.cells import nbg, parse, prune, python_of
 
 from .scoring import MATCH_RAD
 
@@ -105,18 +105,18 @@ EMBED_CHARS = 200_000           # code the box runs beyond this size is listed f
 
 def program_of(nb):
     """The cells the box runs, as source: the setup cell (grade id ``imports``), every answer cell, and the other
-    cells those need (:func:`grading.judge.prune`). Tuning and plotting cells that define nothing the answers use
+    cells those need (:func:`grading.cells.prune`). Tuning and plotting cells that define nothing the answers use
     are left out (they read the shipped trials, which the box does not have)."""
-    cells = []
+    program = []
     for cell in nb.cells:
         if cell.get("cell_type") != "code":
             continue
-        meta = judge.nbg(cell)
+        meta = nbg(cell)
         if meta.get("grade") and not meta.get("solution"):
             continue                                   # a test cell: the judge's, not the student's
         must = bool(meta.get("solution")) or meta.get("grade_id") == "imports"
-        cells.append((meta.get("grade_id"), judge.python_of(cell.get("source", "")), must))
-    return [(gid, src) for gid, src, _ in judge.prune(cells, need=(FUNCTION,))]
+        program.append((meta.get("grade_id"), python_of(cell.get("source", "")), must))
+    return [(gid, src) for gid, src, _ in prune(program, need=(FUNCTION,))]
 
 
 DECLARATION = "SENSORS"       # the name a submission declares its sensor set with (fusionlab.capstone.SENSORS)
@@ -152,7 +152,7 @@ def declared_sensors(cells):
     literal, other = [], []
     for i, (_, source) in enumerate(cells, 1):
         try:
-            tree = judge._parse(source)
+            tree = parse(source)
         except SyntaxError:
             continue
         plain = set()
@@ -251,7 +251,7 @@ def scan(cells):
         found += [("tampers with imports", f"cell {i}, line {line}: {why}")
                   for line, _, why in integrity.tampering(text, tricks)]
         try:
-            tree = judge._parse(text)
+            tree = parse(text)
         except SyntaxError:
             continue
         found += [("tampers with imports", f"cell {i}, line {line}: {why}") for line, why in _ipython_uses(tree)]
@@ -382,16 +382,14 @@ def box_library(scratch):
     The copy is the library's, but for the modules of :data:`FILTER_MODULES` and :data:`FILE_MODULES`: each file is
     replaced by :func:`placeholder_module`, so that no code of those modules is in the box, as source or bytecode
     (only the placeholders are compiled). The packages of :data:`HIDDEN_PACKAGES` are shadowed by packages that
-    refuse to load (:func:`grading.judge.strip_packages`)."""
-    import compileall
-
+    refuse to load (:func:`grading.boxlib.strip_packages`)."""
     import fusionlab
     root = Path(scratch) / "capstone-box"
     if not root.exists():
         part = Path(scratch) / "capstone-box.part"
         shutil.rmtree(part, ignore_errors=True)
         part.mkdir(parents=True)
-        judge.strip_packages(part, Path(fusionlab.__file__).resolve().parents[1], (), hidden=HIDDEN_PACKAGES,
+        boxlib.strip_packages(part, Path(fusionlab.__file__).resolve().parents[1], (), hidden=HIDDEN_PACKAGES,
                              why=WHY_HIDDEN, message=STUB_MESSAGE)
         package = part / "lib" / "fusionlab"
         for short in FILTER_MODULES + FILE_MODULES:
@@ -402,10 +400,6 @@ def box_library(scratch):
         left = [p.relative_to(part) for p in part.rglob("*") if p.suffix in (".pyc", ".pyo", ".so")]
         if left:
             raise RuntimeError(f"compiled files came with the library's copy: {left}")
-        compileall.compile_dir(part, quiet=1)
-        for top, dirs, files in os.walk(part):
-            os.chmod(top, 0o755)
-            for f in files:
-                os.chmod(os.path.join(top, f), 0o644)
+        boxlib.seal(part)
         part.rename(root)
     return root

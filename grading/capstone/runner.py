@@ -14,7 +14,8 @@ import numpy as np
 from fusionlab.capstone import (CAUSAL_TOL, MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds,
                                 causal_ks, first_change, prefix_change)
 from grading import box as wire
-from grading import client, judge, sandbox
+from grading import boxlib, client, sandbox
+from grading.cells import bound_names, python_of
 
 from .program import (DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FOLLOW_RATIO, FUNCTION,
                       HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE, WHY_HIDDEN, box_library,
@@ -91,7 +92,7 @@ class Runner:
 
     A ``'6D'`` runner calls ``estimate`` with ``mag=None`` every time: the magnetometer never reaches the box.
     The installed packages that the box's shadow replaces (vqf, ahrs, ...) are hidden in the box
-    (:func:`grading.judge.shadowed`): taking the shadow off ``sys.path`` finds nothing.
+    (:func:`grading.boxlib.shadowed`): taking the shadow off ``sys.path`` finds nothing.
 
     Every message it returns is written here: what the box replies is the student's, and a call carries a hidden
     trial, so no text of the box's reply reaches the feedback (:func:`error_message`, :func:`invalid_message`).
@@ -105,7 +106,7 @@ class Runner:
         self.sensors = sensors
         self.limits = limits or {}
         self.root = box_library(scratch)
-        self.hide = judge.shadowed(self.root / "shadow")
+        self.hide = boxlib.shadowed(self.root / "shadow")
         self.box = self.work = None
         self.cell_errors = {}
         self.starts = 0
@@ -395,8 +396,8 @@ def _declared_outside(nb, cells):
     ran = {src for _, src in cells}
     for cell in nb.cells:
         if cell.get("cell_type") == "code":
-            src = judge.python_of(cell.get("source", ""))
-            if src not in ran and DECLARATION in judge._bound_names(src):
+            src = python_of(cell.get("source", ""))
+            if src not in ran and DECLARATION in bound_names(src):
                 return True
     return False
 

@@ -20,11 +20,12 @@ GradeId(kind='ex', number='4', role='tests')
 """
 from __future__ import annotations
 
+import ast
 import re
 from typing import NamedTuple
 
 __all__ = ["HEADER", "SETUP", "GradeId", "parse", "solution_id", "check_id", "autograder_id", "label", "stub",
-           "unfinished"]
+           "unfinished", "top_level_names"]
 
 HEADER = "header"
 SETUP = "imports"
@@ -167,3 +168,27 @@ def unfinished(text):
     """
     m = _UNFINISHED.search(str(text))
     return f"{m.group(1)} {m.group(2)}" if m else None
+
+
+def top_level_names(tree):
+    """The names a cell's code binds at top level: definitions, classes, imports and assignments.
+
+    Parameters
+    ----------
+    tree : ast.Module
+        The cell's code, parsed.
+
+    Returns
+    -------
+    set of str
+        The names (an import binds its top package, or its ``as`` name).
+    """
+    out = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            out.update((a.asname or a.name).split(".")[0] for a in node.names)
+        else:
+            out.update(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store))
+    return out

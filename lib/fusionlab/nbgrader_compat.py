@@ -105,15 +105,7 @@ class ClearSolutionsForRunAll(ClearSolutions):
         anywhere = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
         anywhere |= {n.arg for n in nodes if isinstance(n, ast.arg)}
         read = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - anywhere
-        bound = set()
-        for node in tree.body:
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-                bound.add(node.name)
-            elif isinstance(node, (ast.Import, ast.ImportFrom)):
-                bound.update((a.asname or a.name).split(".")[0] for a in node.names)
-            else:
-                bound.update(n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store))
-        return read, bound
+        return read, labformat.top_level_names(tree)
 
     def preprocess(self, nb, resources):
         """Tag the cells Run All must go past, then clear the solutions.
