@@ -74,7 +74,7 @@ grade: env  ## sandboxed autograde of a class: make grade LAB=02_kalman_falling_
 	@test -n "$(LAB)" || { echo "usage: make grade LAB=NN_name [WORKERS=2] [STUDENT=id]"; exit 2; }
 	@$(BIN)/python -m grading.classgrade $(LAB) --workers $(WORKERS) $(if $(STUDENT),--student $(STUDENT))
 
-# The capstone (Lab 13): scored on the BROAD trials the course does not ship, in the sandbox (grading/capstone.py).
+# The capstone (Lab 13): scored on the BROAD trials the course does not ship, in the sandbox (grading/capstone/).
 CLASS ?= class
 .PHONY: capstone-data capstone capstone-bar
 

@@ -98,7 +98,8 @@ def _same_kind(name, value, template):
     if isinstance(template, (int, float)):
         kinds = int if isinstance(template, int) else (int, float)
         if isinstance(value, bool) or not isinstance(value, kinds):
-            raise WireError(f"field {name} of a library object: expected {'an integer' if kinds is int else 'a number'}")
+            expected = "an integer" if kinds is int else "a number"
+            raise WireError(f"field {name} of a library object: expected {expected}")
         return type(template)(value)
     if wire_key(template) is not None:
         if type(value) is not type(template):

@@ -67,8 +67,9 @@ def python_of(source):
 
 
 def bound_names(source):
-    """Names a cell binds at top level (defs, classes, imports, assignments): :func:`fusionlab.labformat.top_level_names`
-    of the cell as :func:`python_of` makes it; empty if it does not parse."""
+    """Names a cell binds at top level (defs, classes, imports, assignments):
+    :func:`fusionlab.labformat.top_level_names` of the cell as :func:`python_of` makes it; empty if it does not
+    parse."""
     try:
         return labformat.top_level_names(parse(python_of(source)))
     except SyntaxError:

@@ -20,8 +20,9 @@ At the end ``grades.csv`` is written (``nbgrader export``, plus a ``status`` col
 ``submitted/`` is listed, a submission that could not be graded with the reason), the integrity report
 ``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run), the similarity report
 ``similarity_<LAB>.md/.csv`` (answers alike between classmates, or with the library: :mod:`grading.similarity`) and a
-summary: each student's score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).  The exit status is 1 if
-a submission could not be graded (its student is named), 0 otherwise.
+summary: each student's score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).
+The exit status is 1 if a submission could not be graded (its student is named), or if the gradebook had to be put
+back (:func:`gradebook_kept`), 0 otherwise.
 """
 from __future__ import annotations
 
@@ -158,8 +159,9 @@ def gradebook_kept(course: Path, lab: str, say=print):
             kept.restored = True
             said = "could not be read" if after is None else ", ".join(
                 f"{k} {before[k]} -> {after[k]}" for k in before if after[k] < before[k])
-            say(f"\nTHE GRADEBOOK WAS PUT BACK as it was before this run: at the end it {'' if after is None else 'had '}"
-                f"{said}. Nothing of this run is in it; the copy is {copy.relative_to(course)}.")
+            had = "" if after is None else "had "
+            say(f"\nTHE GRADEBOOK WAS PUT BACK as it was before this run: at the end it {had}{said}. Nothing of this "
+                f"run is in it; the copy is {copy.relative_to(course)}.")
 
 
 def recorded_tests(course: Path, lab: str):

@@ -49,7 +49,8 @@ IPYTHON_ATTRS = {"input_transformers_cleanup", "input_transformers_post", "input
                  "set_hook", "prefilter_manager", "display_pub", "transform_cell", "run_cell_async", "do_execute",
                  "dispatch_shell", "shell_handlers", "display_trap", "displayhook"}
 SYS_ATTRS = {"modules", "path", "excepthook", "settrace", "setprofile", "meta_path", "path_hooks",
-             "path_importer_cache", "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit", "stdout", "stderr",
+             "path_importer_cache", "displayhook", "unraisablehook", "addaudithook", "_getframe", "setrecursionlimit",
+             "stdout", "stderr",
              "breakpointhook", "audit"}
 MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
     "builtins": "builtins", "ctypes": "ctypes", "cffi": "ctypes", "signal": "signal", "subprocess": "process",

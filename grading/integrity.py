@@ -379,7 +379,7 @@ def _token_scan(source, forbidden):
 
 
 # The part of the interpreter that decides what ``import`` finds: code that reaches it can undo a box's hiding of a
-# package (grading/capstone.py names it a cheat there, where nothing honest needs it).
+# package (grading/capstone/ names it a cheat there, where nothing honest needs it).
 IMPORT_SYSTEM = {"modules", "path", "meta_path", "path_hooks", "path_importer_cache"}
 TAMPER_KINDS = ("exec", "builtins", "loader")
 
@@ -420,7 +420,7 @@ class _Tampering(_Visitor):
         for what, hit in seen:
             if hit:
                 hits.setdefault(hit, what)                      # each loader once: from importlib import x
-        for hit, what in hits.items():
+        for what in hits.values():
             self.flag(node, "loader", f"imports `{what}`: {WHY['loader']}")
         if not hits:
             super()._import(node, modules, names)
@@ -485,7 +485,8 @@ def scan_source(source, src, exercise=None, added=False):
             match = similarity.copied_from(node)
             if match:
                 flags.append((node.lineno, "copied", f"`{node.name}` has the shape of `{match[1]}` in the library: "
-                                                     f"{match[0]:.1%} alike (flagged from {similarity.COPY_RATIO:.1%})"))
+                                                     f"{match[0]:.1%} alike (flagged from "
+                                                     f"{similarity.COPY_RATIO:.1%})"))
     return flags + visitor.flags
 
 
@@ -550,9 +551,9 @@ def write_report(rows, path_md, path_csv, scores=None):
     flagged = [r for r in rows if r[2]]
     labs = sorted({lab for _, lab, _ in rows})
     md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
-          f"{len(rows)} submission{'s' * (len(rows) != 1)} scanned; **{len(flagged)} to REVIEW**. A flag is a construct that no honest "
-          "answer needs, found in a cell that runs at grading time. It does not change the grade: read the cell "
-          "before trusting the score.", "",
+          f"{len(rows)} submission{'s' * (len(rows) != 1)} scanned; **{len(flagged)} to REVIEW**. A flag is a "
+          "construct that no honest answer needs, found in a cell that runs at grading time. It does not change "
+          "the grade: read the cell before trusting the score.", "",
           "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
     for student, lab, flags in rows:
         kinds = sorted({f["kind"] for f in flags})

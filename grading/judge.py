@@ -118,7 +118,8 @@ class Lab:
         self.answer_names = set().union(*[cells.bound_names(c.source) for c in solution.cells
                                           if c.cell_type == "code" and cells.is_answer(c)] or [set()])
         self.provided_names = set().union(*[cells.bound_names(c.source) for c in release.cells
-                                            if c.cell_type == "code" and not cells.is_answer(c) and not cells.is_test(c)]
+                                            if c.cell_type == "code" and not cells.is_answer(c)
+                                            and not cells.is_test(c)]
                                           or [set()]) - self.answer_names
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
         self.unstubbed = {}
@@ -178,7 +179,8 @@ class Lab:
             else:
                 seq.append(("added", None, cell))
         if submitted is None:
-            seq = [("known", cells.grade_id(c), c) if cells.grade_id(c) else ("added", None, c) for c in self.release.cells]
+            seq = [("known", cells.grade_id(c), c) if cells.grade_id(c) else ("added", None, c)
+                   for c in self.release.cells]
             seen = set(order)
         for i, gid in enumerate(order):
             if gid in seen:
@@ -474,7 +476,7 @@ def _run_test(lab, session, source, ns, reference, result):
             elif d["kind"] == "unreadable":
                 raise StudentError(f"{n} is not plain numbers ({d['error']})")
         for part_hidden, code in cells.test_parts(source):
-            hidden = hidden or part_hidden      # after hidden inputs were sent, nothing the student's code says is shown
+            hidden = hidden or part_hidden      # once hidden inputs were sent, nothing the student's code says is shown
             exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
         result.score = result.points
         result.message = "passed"
@@ -489,7 +491,8 @@ def _run_test(lab, session, source, ns, reference, result):
         if hidden:
             result.message = hidden_failure(gid, exc, lab)
         elif isinstance(exc, ReplyTooLarge):
-            result.message = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
+            result.message = (f"your code sent back more than the judge reads (a reply over "
+                              f"{client.MAX_REPLY_BYTES >> 20} MB)")
         elif isinstance(exc, (BoxTimeout, BoxDied)):
             result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
                               else f"your code ended the process ({exc})")

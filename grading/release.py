@@ -8,8 +8,9 @@ there because `make lab` serves labs/ only), the library (lib/fusionlab with its
 pyproject.toml, the derivations the labs link to (docs/derivations.md) and the student JupyterLab view (jupyter/),
 when the repository has them, and, from grading/student/, the student README, Makefile (test), course.mk (env and lab,
 which the course's own Makefile includes too) and tests.
-It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.py or a gradebook: the builder copies a fixed list and refuses a notebook that still carries a
-solution or hidden-test region. ``tests/test_release.py`` checks the result line by line against every solution.
+It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.py or a gradebook: the builder copies
+a fixed list and refuses a notebook that still carries a solution or hidden-test region. ``tests/test_release.py``
+checks the result line by line against every solution.
 """
 from __future__ import annotations
 

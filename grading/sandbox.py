@@ -209,7 +209,7 @@ def private_folder(source, scratch, uid=None):
             else:
                 shutil.copy(src, os.path.join(work, name))
     if uid is not None:
-        for top, dirs, files in os.walk(work):
+        for top, _, files in os.walk(work):
             os.chown(top, uid, uid)
             for f in files:
                 os.chown(os.path.join(top, f), uid, uid, follow_symlinks=False)

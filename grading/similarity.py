@@ -15,9 +15,9 @@ covers at least :data:`MIN_SHARE` of an answer. The library holds several model 
 ``my_ins_F`` is ``gpsins._ins_F`` to 95 %), so an answer is listed against a library function only when it matches
 that function :data:`LIB_BEYOND` times more code than the model answer itself does (a paste brings the function's
 checks and details along) and covers :data:`LIB_SHARE` of the answer or of the function: writing the model answer is
-never a copy of the library. The report gives the score (the share of the answer covered), the exercise and the matching lines of
-both sides. Short answers (two lines of ``(I - KH) P (I - KH)ᵀ + K R Kᵀ``) are alike in every class and are not
-listed: a listed pair is worth a look, an unlisted one proves nothing.
+never a copy of the library. The report gives the score (the share of the answer covered), the exercise and the
+matching lines of both sides. Short answers (two lines of ``(I - KH) P (I - KH)ᵀ + K R Kᵀ``) are alike in every class
+and are not listed: a listed pair is worth a look, an unlisted one proves nothing.
 """
 from __future__ import annotations
 
@@ -192,7 +192,8 @@ def write_report(lab, pairs, path_md, path_csv):
           f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
           f"{MIN_SHARE:.0%} of an answer; an answer and a library function when the match covers {LIB_SHARE:.0%} "
           f"of either and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
-          "literals and comments do not count; an unlisted pair proves nothing.", "", "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
+          "literals and comments do not count; an unlisted pair proves nothing.", "",
+          "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
     md += [f"| {p.exercise} | {p.a} | {p.b} | {p.score:.2f} | {p.tokens} |" for p in pairs]
     for p in pairs:
         md += ["", f"## {p.a} ~ {p.b} ({p.exercise}, {p.score:.2f})", "", "```python", p.lines_a, "```", "",

@@ -313,7 +313,8 @@ def test_a_filter_that_reads_later_samples_is_caught_and_scores_nothing(graded):
     # without the gate it would have scored: the check, not the accuracy, takes its points
     refs = graded[1]
     would = capstone.rubric_points(capstone.mean_total(res.trials), res.all_ran, False,
-                                   capstone.mean_total(refs["madgwick9"].trials), capstone.mean_total(refs["vqf9"].trials))
+                                   capstone.mean_total(refs["madgwick9"].trials),
+                                   capstone.mean_total(refs["vqf9"].trials))
     assert sum(would.values()) >= 2
 
 

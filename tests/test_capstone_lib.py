@@ -247,7 +247,8 @@ def test_make_bar_writes_the_committed_table(tmp_path):
     path = capstone.make_bar(tmp_path / "bar.csv", progress=False)
     with open(path, newline="") as f, open(capstone.BAR_FILE, newline="") as g:
         new, old = list(csv.DictReader(f)), list(csv.DictReader(g))
-    assert [(r["estimator"], r["trial"], r["span"]) for r in new] == [(r["estimator"], r["trial"], r["span"]) for r in old]
+    key = [(r["estimator"], r["trial"], r["span"]) for r in old]
+    assert [(r["estimator"], r["trial"], r["span"]) for r in new] == key
     for a, b in zip(new, old):
         for key in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg"):
             assert float(a[key]) == pytest.approx(float(b[key]), rel=1e-4, abs=1e-6), (a["estimator"], a["trial"], key)

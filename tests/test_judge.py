@@ -214,7 +214,8 @@ def _pasted_update():
         elif isinstance(node, ast.arg) and node.arg in names:
             node.arg = names[node.arg]
     helpers = ("def gain_(PP, H, R):\n    return PP @ H.T @ np.linalg.inv(H @ PP @ H.T + R)\n\n"
-               "def joseph_(PP, KK, H, R):\n    M = np.eye(PP.shape[0]) - KK @ H\n    return M @ PP @ M.T + KK @ R @ KK.T\n\n"
+               "def joseph_(PP, KK, H, R):\n    M = np.eye(PP.shape[0]) - KK @ H\n"
+               "    return M @ PP @ M.T + KK @ R @ KK.T\n\n"
                "def info_(PP, H, R):\n    return np.linalg.inv(np.linalg.inv(PP) + H.T @ np.linalg.inv(R) @ H)\n\n")
     return helpers + "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
 

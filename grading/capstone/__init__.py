@@ -80,7 +80,8 @@ process:
 * **Reference rows** (:func:`references`), for each sensor set on the same trials: VQF (default parameters), Madgwick
   (``ahrs``, its default gain) and the library's best filter of that set (by the RMSE the set is scored on). They are
   scored like a student of their set and listed on the leaderboard; the output of every reference filter that ran,
-  either set, is what the match check compares a student's with, and their RMSEs set the plausibility gate's bar. They are computed once per disguise and kept in
+  either set, is what the match check compares a student's with, and their RMSEs set the plausibility gate's bar.
+  They are computed once per disguise and kept in
   ``<out>/references.npz`` (:func:`cached_references`), keyed by the seed, the trials (names, lengths, a hash of
   their disguised data) and a hash of the code (the library's source files, ``scoring.py``, the versions of vqf and
   ahrs): re-grading one student with the class's seed reuses them (Madgwick's filter alone takes seconds per

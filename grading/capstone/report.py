@@ -68,7 +68,7 @@ def leaderboard_rows(results, refs):
     out = []
     for sensors, metric in SENSORS.items():
         vqf = mean_scored(refs[PUBLISHED[sensors][0]].trials)
-        order = lambda r: r[metric] if np.isfinite(r[metric]) else np.inf     # noqa: E731
+        order = lambda r, metric=metric: r[metric] if np.isfinite(r[metric]) else np.inf
         rows = []
         for res in results:
             if res.sensors != sensors:

@@ -348,7 +348,7 @@ def file_sha256(path):
     Returns
     -------
     str
-        The hex digest.
+        The SHA-256 as 64 hexadecimal characters.
     """
     h = hashlib.sha256()
     with open(path, "rb") as f:

@@ -7,7 +7,7 @@ Each :class:`Exercise` states once what every part of the course needs to know a
   (each is a stub in the library copy the student's code gets), and scores the test with ``points``;
 * the integrity report flags an answer that names one of ``forbid``;
 * the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing;
-* the capstone's grader (``grading/capstone.py``) names any use of its exercise's ``loaders`` in the code it runs.
+* the capstone's grader (``grading/capstone/``) names any use of its exercise's ``loaders`` in the code it runs.
 
 The hidden test itself (its inputs and comparisons) is the exercise's test cell in the instructor's notebook,
 ``exN_tests``, as nbgrader keeps it; a test of the suite checks that each test cell names exactly these references and
@@ -192,7 +192,7 @@ EXERCISES = (
              ('rotations.integrate_gyro_quat', 'rotations.integrate_gyro_dcm',
               'correlation._weighted_tilt_fusion')),       # the complementary filters' loop, with no correction
     Exercise('13_capstone', 2, 1, ('estimate',), 'check_capstone_filter',   # valid and causal; 10 more on the
-             (),                                                             # leaderboard (grading/capstone.py)
+             (),                                                             # leaderboard (grading/capstone/)
              loaders=('importlib', '_imp', '_frozen_importlib', '_frozen_importlib_external', 'zipimport', 'runpy',
                       'pkgutil.resolve_name', 'pydoc', 'timeit', 'ctypes', '_ctypes', 'cffi')),
 )
