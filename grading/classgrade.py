@@ -75,18 +75,6 @@ def _env(extra=None):
     return env
 
 
-def _copy_files(src: Path, dest: Path, notebooks=True):
-    """Copy a folder without following or keeping symbolic links (a submitted link could point anywhere)."""
-    dest.mkdir(parents=True, exist_ok=True)
-    for p in sorted(src.iterdir()):
-        if p.is_symlink():
-            continue
-        if p.is_dir():
-            _copy_files(p, dest / p.name, notebooks)
-        elif p.is_file() and (notebooks or p.suffix != ".ipynb"):
-            shutil.copyfile(p, dest / p.name)
-
-
 def generate(course: Path, lab: str, release: Path):
     """Record ``lab`` (its cells, points, tests) in the course's gradebook; its release notebook goes to
     ``release``."""
@@ -269,7 +257,7 @@ def record(course: Path, lab: judge.Lab, student: str, result: Result):
     if dest.exists():
         shutil.rmtree(dest)
     src = course / "submitted" / student / lab.lab
-    _copy_files(src, dest, notebooks=False)
+    sandbox.copy_plain(src, dest, notebooks=False)
     nb = judge.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
     nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 

@@ -51,19 +51,50 @@ ETC = ["passwd", "group", "nsswitch.conf", "ld.so.cache", "ld.so.conf", "ld.so.c
        "alternatives", "fonts", "mime.types", "os-release"]
 
 # ---------------------------------------------------------------------------------------------------------------
-# The seccomp filter of every box: no kernel key store
+# The seccomp filter of every box: no kernel state shared with other boxes to signal through
 # ---------------------------------------------------------------------------------------------------------------
 
-# Per machine: the kernel's audit architecture number, the numbers of add_key, request_key and keyctl, and the first
-# number of a second ABI on the same architecture (x86_64's x32), refused entirely: no box needs it.
-KEYRING_SYSCALLS = {
-    "x86_64": (0xC000003E, (248, 249, 250), 0x40000000),
-    "aarch64": (0xC00000B7, (217, 218, 219), None),
+# Per machine (as os.uname().machine names it): the kernel's audit architecture number, and the first number of a
+# second ABI on the same architecture (x86_64's x32), refused entirely: no box needs it.
+SECCOMP_MACHINES = {
+    "x86_64": (0xC000003E, 0x40000000),
+    "aarch64": (0xC00000B7, None),
 }
+
+# The calls every box is refused (EPERM), by name: (x86_64's number, aarch64's number). Numbers from the kernel's
+# arch/x86/entry/syscalls/syscall_64.tbl and include/uapi/asm-generic/unistd.h. Plain reads (read, pread64, readv,
+# preadv) and readahead (it only fills the cache, which any read does) stay allowed.
+REFUSED_SYSCALLS = {
+    # The key store: keyrings belong to a user id, not to a box, and outlive it; two boxes of one slot (one
+    # student's boxes, or the next student graded in that slot) could pass data through them.
+    "add_key": (248, 217),
+    "request_key": (249, 218),
+    "keyctl": (250, 219),
+    # The page cache of the read-only files every box mounts (/usr, the Python installation) is one for the whole
+    # machine: a box that can evict a page and another that can see whether it is cached share a bit.
+    "fadvise64": (221, 223),        # POSIX_FADV_DONTNEED evicts a file's cached pages
+    "preadv2": (327, 286),          # RWF_NOWAIT fails when a page is not cached: a probe that does not fill it
+    "pwritev2": (328, 287),         # the same flags on the write side
+    "mincore": (27, 232),           # reports which pages of a mapping (a mapped file) are cached
+    "cachestat": (451, 451),        # reports how much of a file range is cached, dirty, evicted
+    "process_madvise": (440, 440),  # madvise (MADV_COLD, MADV_PAGEOUT) on a process's memory, its own included
+    # Asynchronous I/O runs reads, fadvise and madvise with flags of its own, where this filter does not see them.
+    "io_uring_setup": (425, 425),
+    "io_uring_enter": (426, 426),
+    "io_uring_register": (427, 427),
+    "io_setup": (206, 0),           # Linux AIO: io_submit takes RWF_NOWAIT in each request
+    "io_submit": (209, 2),
+}
+
+# madvise (x86_64 28, aarch64 233) is refused only with these advice values: they deactivate or reclaim the pages of
+# a mapping, a mapped file's page-cache pages included. Every other advice is allowed (malloc's free uses
+# MADV_DONTNEED, which only drops the process's own mappings).
+MADVISE = (28, 233)
+REFUSED_MADVICE = {20: "MADV_COLD", 21: "MADV_PAGEOUT"}
 
 
 class UnsupportedMachine(RuntimeError):
-    """This machine has no seccomp filter here (:data:`KEYRING_SYSCALLS`): a box cannot be made safe on it."""
+    """This machine has no seccomp filter here (:data:`SECCOMP_MACHINES`): a box cannot be made safe on it."""
 
 
 def _native_machine():
@@ -72,42 +103,48 @@ def _native_machine():
     return machine if struct.calcsize("P") == 8 else f"{machine} (a {8 * struct.calcsize('P')}-bit Python)"
 
 
-def keyring_filter(machine=None):
-    """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: ``add_key``,
-    ``request_key`` and ``keyctl`` fail with EPERM, every other call of the native architecture is allowed, and every
-    call of another architecture fails with EPERM. ``machine`` is named as ``os.uname().machine`` names it (this
-    machine by default); one not in :data:`KEYRING_SYSCALLS` raises :class:`UnsupportedMachine`."""
+def box_filter(machine=None):
+    """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: the calls of
+    :data:`REFUSED_SYSCALLS` and ``madvise`` with an advice of :data:`REFUSED_MADVICE` fail with EPERM, every other
+    call of the native architecture is allowed, and every call of another architecture fails with EPERM. ``machine``
+    is named as ``os.uname().machine`` names it (this machine by default); one not in :data:`SECCOMP_MACHINES` raises
+    :class:`UnsupportedMachine`."""
     machine = _native_machine() if machine is None else machine
-    if machine not in KEYRING_SYSCALLS:
-        raise UnsupportedMachine(f"expected a machine of {' or '.join(KEYRING_SYSCALLS)}, this one is {machine}: "
-                                 f"no seccomp filter keeps the boxes from the kernel's key store here")
-    audit_arch, numbers, second_abi = KEYRING_SYSCALLS[machine]
+    if machine not in SECCOMP_MACHINES:
+        raise UnsupportedMachine(f"expected a machine of {' or '.join(SECCOMP_MACHINES)}, this one is {machine}: "
+                                 f"no seccomp filter keeps the boxes from sharing kernel state here")
+    audit_arch, second_abi = SECCOMP_MACHINES[machine]
+    column = list(SECCOMP_MACHINES).index(machine)
     ld, jeq, jge, ret = 0x20, 0x15, 0x35, 0x06      # BPF_LD|W|ABS, BPF_JMP|JEQ|K, BPF_JMP|JGE|K, BPF_RET|K
     allow, refuse = 0x7FFF0000, 0x00050000 | 1      # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
-    deny = object()                                 # a jump to the last instruction, resolved below
+    ALLOW, DENY = "allow", "deny"                   # jumps to the last two instructions, resolved below
     program = [
         # The numbers below mean these calls only on this architecture; a call made through another ABI the kernel
         # also accepts (i386's int 0x80 on x86_64) has numbers of its own, so it is refused whatever it is.
         (ld, 0, 0, 4),                              # seccomp_data.arch
-        (jeq, 0, deny, audit_arch),
+        (jeq, 0, DENY, audit_arch),
         (ld, 0, 0, 0),                              # seccomp_data.nr
     ]
     if second_abi is not None:
         # x32 calls arrive with x86_64's arch and the number plus 0x40000000: refused, so that no such call slips past.
-        program.append((jge, deny, 0, second_abi))
-    # The key store: keyrings belong to a user id and outlive the box, a channel between boxes of one slot.
-    program += [(jeq, deny, 0, nr) for nr in numbers]
+        program.append((jge, DENY, 0, second_abi))
+    program += [(jeq, DENY, 0, numbers[column]) for numbers in REFUSED_SYSCALLS.values()]
+    # madvise: its third argument, the advice. The kernel reads it as an int, so the low 32 bits of args[2] are all
+    # that count: seccomp_data is nr (4), arch (4), ip (8), args[6] (8 each), so args[2] starts at byte 32, and its
+    # low half is there on these little-endian machines.
+    program += [(jeq, 0, ALLOW, MADVISE[column]), (ld, 0, 0, 16 + 8 * 2)]
+    program += [(jeq, DENY, 0, advice) for advice in REFUSED_MADVICE]
     program += [(ret, 0, 0, allow), (ret, 0, 0, refuse)]
-    last = len(program) - 1
+    where = {ALLOW: len(program) - 2, DENY: len(program) - 1}
 
     def skip(i, target):                            # a BPF jump counts the instructions it skips
-        return last - i - 1 if target is deny else target
+        return where[target] - i - 1 if target in where else target
     return b"".join(struct.pack("=HBBI", code, skip(i, jt), skip(i, jf), k)
                     for i, (code, jt, jf, k) in enumerate(program))
 
 
 # Runs inside the box as the first process: drop to nobody (as root), set the limits, install the seccomp filter
-# (keyring_filter), start the kernel.
+# (box_filter), start the kernel.
 INSIDE = r"""
 import ctypes, json, os, resource, shutil, sys
 lim = json.loads(os.environ.pop("FUSIONLAB_BOX_LIMITS"))
@@ -195,19 +232,28 @@ def _matplotlib_cache():
     return os.path.realpath(base) if os.path.isdir(base) else ""
 
 
+def copy_plain(src, dest, notebooks=True):
+    """Copy the folder ``src`` into ``dest``: its regular files and folders only, at every depth. A link is neither
+    followed nor kept (a submitted link could point at the solutions, the gradebook or the real library, and the
+    copy runs as root), nor is anything else that is not a plain file; ``notebooks=False`` leaves ``*.ipynb`` and
+    Jupyter's checkpoints out."""
+    os.makedirs(dest, exist_ok=True)
+    with os.scandir(src) as entries:
+        for e in entries:
+            if e.is_symlink() or (not notebooks and (e.name.endswith(".ipynb") or
+                                                     e.name.startswith(".ipynb_checkpoints"))):
+                continue
+            if e.is_dir(follow_symlinks=False):
+                copy_plain(e.path, os.path.join(dest, e.name), notebooks)
+            elif e.is_file(follow_symlinks=False):
+                shutil.copyfile(e.path, os.path.join(dest, e.name), follow_symlinks=False)
+
+
 def private_folder(source, scratch, uid=None):
     """A fresh writable folder holding what ``source`` holds, notebooks and links left out, owned by ``uid``."""
     work = tempfile.mkdtemp(prefix="box-", dir=scratch)
-    if source is not None and os.path.isdir(source):
-        for name in os.listdir(source):
-            src = os.path.join(source, name)
-            if name.endswith(".ipynb") or name.startswith(".ipynb_checkpoints") or os.path.islink(src):
-                continue
-            if os.path.isdir(src):
-                shutil.copytree(src, os.path.join(work, name), symlinks=False,
-                                ignore=shutil.ignore_patterns("*.ipynb"))
-            else:
-                shutil.copy(src, os.path.join(work, name))
+    if source is not None and os.path.isdir(source) and not os.path.islink(source):
+        copy_plain(source, work, notebooks=False)
     if uid is not None:
         for top, _, files in os.walk(work):
             os.chown(top, uid, uid)
@@ -360,7 +406,7 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
            "MPLBACKEND": "Agg", "MPLCONFIGDIR": "/tmp/.cache/matplotlib",
            "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
            "NBGRADER_EXECUTION": "autograde", "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd,
-           "FUSIONLAB_BOX_SECCOMP": keyring_filter().hex()}
+           "FUSIONLAB_BOX_SECCOMP": box_filter().hex()}
     if mpl:
         env["FUSIONLAB_BOX_MPLCACHE"] = "/opt/mplcache"
     if uid is not None:
@@ -397,10 +443,10 @@ def box_problem(course, lab, scratch, slots):
     Starts one box exactly as grading does (same mounts, limits and, as root, the user id of each slot), running
     ``print`` only: no student code. Called once by :mod:`grading.classgrade` before the model solution."""
     try:
-        keyring_filter()
+        box_filter()
     except UnsupportedMachine as exc:
         return (f"grading cannot be made safe on this machine ({exc}), and student code is never run without that "
-                f"filter. Grade on an {' or '.join(KEYRING_SYSCALLS)} machine or VM instead (docs/instructors.md, "
+                f"filter. Grade on an {' or '.join(SECCOMP_MACHINES)} machine or VM instead (docs/instructors.md, "
                 f"section 7, 'Where to grade').")
     if shutil.which("bwrap") is None:
         return ("bubblewrap is not installed: install it (Debian/Ubuntu: apt-get install bubblewrap) and run again. "
