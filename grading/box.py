@@ -29,12 +29,14 @@ import base64
 import json
 import math
 import os
+import re
 import sys
 
 NUMERIC_KINDS = "biufc"        # bool, int, unsigned, float, complex: the only array dtypes that cross the pipe
 MAX_DEPTH = 12
 MAX_ITEMS = 1_000_000          # list items per message
 MAX_TEXT = 1_000_000           # characters of one string
+DTYPE = re.compile(r"[<>|=]?[biufc][0-9]{1,2}")   # an array's dtype as encode writes it ('<f8', '|b1')
 OUTPUT_BYTES = 1_000_000       # what the student's code may print (kept in the sandbox, never read by the judge)
 
 
@@ -230,8 +232,11 @@ def decode(data, *, objects=False, make_sympy=None, depth=0):
             raise WireError("a bad complex number")
         return complex(re_, im)
     if set(data) == {"__ndarray__", "shape", "data"}:
+        text = data["__ndarray__"]
+        if not isinstance(text, str) or not DTYPE.fullmatch(text):   # checked before numpy parses it
+            raise WireError("an array of a dtype that is not a plain number")
         try:
-            dtype = np.dtype(str(data["__ndarray__"]))
+            dtype = np.dtype(text)
         except (TypeError, ValueError):
             raise WireError("an array of an unknown dtype") from None
         shape = data["shape"]

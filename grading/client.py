@@ -162,6 +162,10 @@ def call(box, name, args, kwargs, deadline):
 # sympy expressions, rebuilt on the trusted side
 # ---------------------------------------------------------------------------------------------------------------
 
+MAX_SYMPY_TEXT = 100_000        # characters of one expression (Lab 07's honest answers: under 2,000)
+MAX_SYMPY_NODES = 20_000        # parts of its syntax tree
+MAX_SYMPY_INT = 10**6           # the largest integer in it
+MAX_SYMPY_DIGITS = 100_000      # digits its integer powers may make, all together
 SYMPY_CLASSES = ("Symbol", "Dummy", "Integer", "Rational", "Float", "Add", "Mul", "Pow", "Matrix",
                  "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "sin", "cos", "tan", "exp", "log", "Abs")
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,60}")
@@ -171,14 +175,25 @@ _DECIMAL = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d{1,4})?")
 def sympy_trusted(text):
     """A sympy expression from its ``srepr`` text, built without eval or sympify: only the classes of
     :data:`SYMPY_CLASSES`, numbers, and strings only where ``srepr`` puts them (a symbol's name, a float's digits),
-    so no text the student sent is ever parsed as an expression here."""
+    so no text the student sent is ever parsed as an expression here. What it may cost is bounded before sympy
+    builds anything: the text's length (:data:`MAX_SYMPY_TEXT`), its nodes (:data:`MAX_SYMPY_NODES`), each integer
+    (:data:`MAX_SYMPY_INT`), a float's precision (100 digits, 400 bits), and the digits its powers can make
+    (:data:`MAX_SYMPY_DIGITS`: ``Pow(2, 4000000000)`` is 36 characters of text and gigabytes once sympy evaluates
+    it)."""
     import sympy
 
-    def build(node, owner=None, first=False):
+    spent = [0]                         # digits the powers built so far can make
+
+    def number(value):
+        if isinstance(value, int) and abs(value) > MAX_SYMPY_INT:
+            raise wire.WireError(f"a sympy expression with an integer over {MAX_SYMPY_INT:,}")
+        return value
+
+    def build(node, owner=None, first=False, scale=1):
         if isinstance(node, ast.Constant) and isinstance(node.value, bool):
             return node.value
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
-            return node.value
+            return number(node.value)
         if isinstance(node, ast.Constant) and isinstance(node.value, str):
             ok = first and ((owner in ("Symbol", "Dummy") and _IDENTIFIER.fullmatch(node.value)) or
                             (owner == "Float" and _DECIMAL.fullmatch(node.value)))
@@ -186,26 +201,51 @@ def sympy_trusted(text):
                 raise wire.WireError("a sympy expression with text where a number or a symbol belongs")
             return node.value
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
-            return -build(node.operand)
+            return -build(node.operand, scale=scale)
         if isinstance(node, (ast.List, ast.Tuple)):
-            return [build(e) for e in node.elts]
+            return [build(e, scale=scale) for e in node.elts]
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in SYMPY_CLASSES:
             name = node.func.id
-            args = [build(a, name, i == 0) for i, a in enumerate(node.args)]
+            inner = scale
+            if name == "Pow" and len(node.args) == 2:
+                exponent = _literal_size(node.args[1])
+                inner = scale * max(1, exponent)
+                spent[0] += inner * len(str(MAX_SYMPY_INT))
+                if spent[0] > MAX_SYMPY_DIGITS:
+                    raise wire.WireError("a sympy expression whose powers would make too many digits")
+            args = [build(a, name, i == 0, inner) for i, a in enumerate(node.args)]
+            if name == "Float" and len(args) > 1 and not (isinstance(args[1], int) and 0 < args[1] <= 100):
+                raise wire.WireError("a sympy float with a precision other than 1 to 100 digits")
             kwargs = {}
             for k in node.keywords:
-                value = build(k.value, name)
-                if k.arg is None or not isinstance(value, (bool, int)):
+                value = build(k.value, name, scale=scale)
+                if k.arg is None or not isinstance(value, (bool, int)) or (k.arg == "precision" and value > 400):
                     raise wire.WireError("a sympy expression with an unexpected keyword")
                 kwargs[k.arg] = value
             return getattr(sympy, name)(*args, **kwargs)
         raise wire.WireError("a sympy expression with something other than sympy's own classes in it")
 
-    if len(text) > wire.MAX_TEXT:
-        raise wire.WireError("a sympy expression longer than 1,000,000 characters")
+    if not isinstance(text, str) or len(text) > MAX_SYMPY_TEXT:
+        raise wire.WireError(f"a sympy expression longer than {MAX_SYMPY_TEXT:,} characters")
     try:
-        return build(cells.parse(text, mode="eval").body)
+        tree = cells.parse(text, mode="eval")
+        if sum(1 for _ in ast.walk(tree)) > MAX_SYMPY_NODES:
+            raise wire.WireError(f"a sympy expression of more than {MAX_SYMPY_NODES:,} parts")
+        return build(tree.body)
     except wire.WireError:
         raise
-    except (SyntaxError, ValueError, TypeError, RecursionError) as exc:
+    except (SyntaxError, ValueError, TypeError, RecursionError, OverflowError) as exc:
         raise wire.WireError(f"a sympy expression that cannot be read ({type(exc).__name__})") from None
+
+
+def _literal_size(node):
+    """|n| of a power's exponent written as ``Integer(n)``, ``Rational(p, q)`` (its p), ``-n`` or ``n``; 1 for a
+    symbolic exponent (which sympy does not expand)."""
+    while isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        node = node.operand
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("Integer", "Rational") \
+            and node.args:
+        node = node.args[0]
+    if isinstance(node, ast.Constant) and isinstance(node.value, int) and not isinstance(node.value, bool):
+        return abs(node.value)
+    return 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import json
+import time
 import types
 
 import numpy as np
@@ -38,7 +39,7 @@ def test_anything_else_is_refused_by_the_sender(value, why):
 
 
 @pytest.mark.parametrize("message, why", [
-    ({"__ndarray__": "|O", "shape": [1], "data": ""}, "array of object"),
+    ({"__ndarray__": "|O", "shape": [1], "data": ""}, "a dtype that is not a plain number"),
     ({"__ndarray__": "<f8", "shape": [3], "data": "AAAAAAAAAAA="}, "bytes for shape"),
     ({"__ndarray__": "<f8", "shape": [-1], "data": ""}, "bad array shape"),
     ({"__pickle__": "gASV"}, "unknown kind"),
@@ -195,3 +196,35 @@ def test_the_judge_rebuilds_sympy_without_parsing_any_text_the_student_sent():
                  "Function('f')(Symbol('x'))", "Integer(2).__class__", "Lambda(Symbol('x'), Symbol('x'))"):
         with pytest.raises(box.WireError):
             client.sympy_trusted(evil)
+
+
+def test_a_dtype_that_is_not_a_plain_number_is_refused_before_numpy_reads_it():
+    flood = {"__ndarray__": "i1," * 2_000_000, "shape": [1], "data": ""}
+    t0 = time.perf_counter()
+    with pytest.raises(box.WireError, match="not a plain number"):
+        box.decode(flood)
+    assert time.perf_counter() - t0 < 0.5
+    for text in ("<M8[ns]", "V8", "<U2", "O", "(2,)f8", "f8,i4", "<f8 "):
+        with pytest.raises(box.WireError):
+            box.decode({"__ndarray__": text, "shape": [0], "data": ""})
+
+
+@pytest.mark.parametrize("text", [
+    "Pow(Integer(2), Integer(4000000000))",                        # 36 characters; gigabytes once evaluated
+    "Pow(Pow(Pow(Integer(999999), Integer(100)), Integer(100)), Integer(100))",
+    "Mul(" + ", ".join(["Pow(Integer(999999), Integer(3000))"] * 50) + ")",
+    "Float('1.5', 1000000)", "Float('1.5', precision=10000000)", "Integer(10000001)",
+    "Add(" + ", ".join(["Symbol('x')"] * 30_000) + ")",
+])
+def test_a_sympy_expression_that_would_cost_the_judge_is_refused_before_sympy_builds_it(text):
+    t0 = time.perf_counter()
+    with pytest.raises(box.WireError, match="sympy"):
+        client.sympy_trusted(text)
+    assert time.perf_counter() - t0 < 1.0
+
+
+def test_honest_sympy_answers_stay_within_the_bounds():
+    a, b = sp.symbols("a b", real=True)
+    for expr in (a**-3 + b ** sp.Rational(1, 2), sp.Float("0.1", 30) * a, sp.Matrix(3, 3, lambda i, j: a**i * b**j),
+                 sp.Pow(a, 60) * 999_999):
+        assert client.sympy_trusted(sp.srepr(expr)) == expr
