@@ -18,7 +18,9 @@ c = get_config()  # noqa: F821 (provided by nbgrader)
 c.CourseDirectory.root = os.path.dirname(os.path.abspath(__file__))
 c.CourseDirectory.source_directory = "solutions"
 c.CourseDirectory.release_directory = "labs"
-c.CourseDirectory.db_url = "sqlite:///gradebook.db"
+# The course's own gradebook, wherever the process starts (Formgrader on a hub starts in the instructor's home; a
+# relative path would make it an empty gradebook there while grading writes the course's)
+c.CourseDirectory.db_url = "sqlite:///" + os.path.join(c.CourseDirectory.root, "gradebook.db")
 
 # What a student sees where a solution was: say what to do, not just "raise NotImplementedError()". {stub} is
 # filled in per cell (ClearSolutionsForRunAll, fusionlab.nbgrader_compat), which also tags the cells Run All must

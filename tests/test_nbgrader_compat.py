@@ -45,3 +45,13 @@ def test_validate_builds_the_counting_validator_once_installed():
 def test_nbgrader_autograde_is_refused_with_the_command_to_use():
     with pytest.raises(RuntimeError, match="make grade LAB=NN_name"):
         nbgrader_compat.RefuseAutograde().preprocess(None, {})
+
+
+def test_the_course_config_names_the_courses_gradebook_from_any_folder(tmp_path, monkeypatch):
+    """Formgrader on the hub starts in the instructor's home: a relative db_url made it read an empty gradebook."""
+    from traitlets.config.loader import PyFileConfigLoader
+
+    from conftest import ROOT
+    monkeypatch.chdir(tmp_path)
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(ROOT)).load_config()
+    assert config.CourseDirectory.db_url == f"sqlite:///{ROOT / 'gradebook.db'}"
