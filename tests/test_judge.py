@@ -188,6 +188,17 @@ def _attacks(root, port, half):
         f"b'{MARKER}', None, 0)\n"
         f"_libc.syscall(248 if __import__('platform').machine() == 'x86_64' else 217, b'user', b'{MARKER}', b'1', "
         "1, -4)\n"))
+    # 16: links nested in the submission folder to the solution notebook and the real library (the box is seeded
+    # from that folder as root); the links are made by the fixture beside the notebook
+    out["nested_links"] = _answers(half, (
+        "text = open('stuff/notes.txt').read()\n"
+        "raise ValueError(text[text.find('BEGIN HIDDEN'):][:3000])"), (
+        "import importlib.util\n"
+        "spec = importlib.util.spec_from_file_location('realkalman', 'stuff/reallib/kalman.py')\n"
+        "real = importlib.util.module_from_spec(spec)\nspec.loader.exec_module(real)\n"
+        "return real.predict(x, P, A, Q, B, u)"))
+    # 17: 36 characters of sympy that the judge would evaluate into gigabytes
+    out["sympy_bomb"] = _answers(half, JUNK2, "import sympy\nreturn sympy.Pow(2, 4_000_000_000, evaluate=False), P")
     # 10: a last cell that prints every cell the kernel ran, hoping for the hidden tests
     leak = nbformat.from_dict(half)
     leak.cells.append(nbformat.v4.new_code_cell("print(In)\nprint(globals().keys())"))
@@ -295,6 +306,10 @@ def graded(tmp_path_factory):
         dest = root / "submitted" / student / LAB
         dest.mkdir(parents=True)
         nbformat.write(nb, dest / f"{LAB}.ipynb")
+    links = root / "submitted" / "nested_links" / LAB / "stuff"
+    links.mkdir()
+    (links / "notes.txt").symlink_to(root / "solutions" / LAB / f"{LAB}.ipynb")
+    (links / "reallib").symlink_to(root / "lib" / "fusionlab")
     (root / "submitted" / "not_json" / LAB).mkdir(parents=True)
     (root / "submitted" / "not_json" / LAB / f"{LAB}.ipynb").write_text("{ this is not a notebook")
 
@@ -363,7 +378,7 @@ def test_honest_students_score_what_they_did(graded):
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
                                      "reference_from_source", "other_packages", "writes", "daemon", "network",
                                      "read_others", "stuck", "fork_bomb", "print_in", "disk_fill", "gadgets",
-                                     "leak_inputs", "flood", "keyring"])
+                                     "leak_inputs", "flood", "keyring", "nested_links", "sympy_bomb"])
 def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
     assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
         graded["run"].stdout[-4000:]
@@ -409,13 +424,14 @@ def test_the_course_the_gradebook_tests_and_the_network_are_untouched(graded):
     assert not graded["connected"], "nothing reached the network"
 
 
-def test_no_hidden_test_reaches_the_feedback_whatever_the_notebook_prints(graded):
-    page = (graded["root"] / "feedback" / "print_in" / LAB / f"{LAB}.html").read_text()
+@pytest.mark.parametrize("student", ["print_in", "nested_links"])
+def test_no_hidden_test_reaches_the_feedback_whatever_the_notebook_prints(graded, student):
+    page = (graded["root"] / "feedback" / student / LAB / f"{LAB}.html").read_text()
     text = html.unescape(re.sub(r"<[^>]+>", "", page))
     hidden = _hidden_lines(graded["solution"])
     assert len(hidden) > 10
     assert [line for line in hidden if line in text] == []
-    nb = nbformat.read(graded["root"] / "autograded" / "print_in" / LAB / f"{LAB}.ipynb", as_version=4)
+    nb = nbformat.read(graded["root"] / "autograded" / student / LAB / f"{LAB}.ipynb", as_version=4)
     assert "BEGIN HIDDEN TESTS" not in nbformat.writes(nb)
 
 
