@@ -18,10 +18,26 @@ scores -- stays outside.  In the box
   capabilities, so that the process limit of one student is not a classmate's; otherwise as the instructor's own
   user inside a user namespace;
 * CPU time, address space, file size and (as root) the number of processes are limited (``setrlimit``);
-* the kernel's key store (``add_key``, ``request_key``, ``keyctl``) cannot be used: a seccomp filter
-  (:func:`keyring_filter`) makes those calls fail with EPERM. Its keyrings belong to a user id, not to a box, and
-  outlive the box: two boxes of one slot (one student's boxes, or the next student graded in that slot) could
-  otherwise pass data to each other through them, and what a box stored would stay in the kernel after grading.
+* boxes share no kernel state they could signal through by a call that sets, resets or reads it, however many
+  boxes of one slot (one user id) or of different slots run at once or one after another: a seccomp filter
+  (:func:`box_filter`, the calls in :data:`REFUSED_SYSCALLS`) makes these calls fail with EPERM:
+
+  - the kernel's key store (``add_key``, ``request_key``, ``keyctl``): its keyrings belong to a user id, not to a
+    box, and outlive the box, so two boxes of one slot could pass data to each other through them, and what a box
+    stored would stay in the kernel after grading;
+  - what evicts or probes the page cache of the read-only files every box mounts (``/usr``, the Python
+    installation), which is one for the whole machine: ``posix_fadvise`` (``POSIX_FADV_DONTNEED`` evicts),
+    ``preadv2``/``pwritev2`` with flags (``RWF_NOWAIT`` fails on a page that is not cached), ``mincore`` and
+    ``cachestat`` (report residency), ``madvise`` with ``MADV_COLD`` or ``MADV_PAGEOUT`` (other advice is
+    allowed) and ``process_madvise``, and the asynchronous I/O interfaces (io_uring, Linux AIO) that would run the
+    same operations where the filter does not see them. Plain reads (``read``, ``pread``, ``readv``, ``preadv``
+    and ``preadv2`` without flags) and ``readahead`` stay allowed.
+
+  What remains is not closed. A box still fills the cache by reading, and can still tell a cached page from one
+  read from disk: by how long a read takes (noisy), or exactly, by the major-fault count ``getrusage`` reports after
+  the first touch of a page of a mapped file. Either probe reads the page it looks at, so it sees each page once;
+  with eviction refused a page leaves the cache only under memory pressure. A box can so leave one-way, one-shot
+  bits (pages of files nothing else reads) for a later box: slower and smaller than what is refused, not impossible.
 """
 from __future__ import annotations
 
@@ -61,36 +77,38 @@ SECCOMP_MACHINES = {
     "aarch64": (0xC00000B7, None),
 }
 
-# The calls every box is refused (EPERM), by name: (x86_64's number, aarch64's number). Numbers from the kernel's
+# The calls a box is refused (EPERM), by name: (x86_64's number, aarch64's number, when). ``when`` is None for a call
+# refused whatever its arguments, or (i, values): refused when the low 32 bits of argument i (an int to the kernel,
+# which ignores the high half) are one of values, or are not 0 when values is "any flag". Numbers from the kernel's
 # arch/x86/entry/syscalls/syscall_64.tbl and include/uapi/asm-generic/unistd.h. Plain reads (read, pread64, readv,
-# preadv) and readahead (it only fills the cache, which any read does) stay allowed.
+# preadv) and readahead (it only fills the cache, which any read does) are not in the table: allowed.
 REFUSED_SYSCALLS = {
     # The key store: keyrings belong to a user id, not to a box, and outlive it; two boxes of one slot (one
     # student's boxes, or the next student graded in that slot) could pass data through them.
-    "add_key": (248, 217),
-    "request_key": (249, 218),
-    "keyctl": (250, 219),
+    "add_key": (248, 217, None),
+    "request_key": (249, 218, None),
+    "keyctl": (250, 219, None),
     # The page cache of the read-only files every box mounts (/usr, the Python installation) is one for the whole
     # machine: a box that can evict a page and another that can see whether it is cached share a bit.
-    "fadvise64": (221, 223),        # POSIX_FADV_DONTNEED evicts a file's cached pages
-    "preadv2": (327, 286),          # RWF_NOWAIT fails when a page is not cached: a probe that does not fill it
-    "pwritev2": (328, 287),         # the same flags on the write side
-    "mincore": (27, 232),           # reports which pages of a mapping (a mapped file) are cached
-    "cachestat": (451, 451),        # reports how much of a file range is cached, dirty, evicted
-    "process_madvise": (440, 440),  # madvise (MADV_COLD, MADV_PAGEOUT) on a process's memory, its own included
-    # Asynchronous I/O runs reads, fadvise and madvise with flags of its own, where this filter does not see them.
-    "io_uring_setup": (425, 425),
-    "io_uring_enter": (426, 426),
-    "io_uring_register": (427, 427),
-    "io_setup": (206, 0),           # Linux AIO: io_submit takes RWF_NOWAIT in each request
-    "io_submit": (209, 2),
+    "fadvise64": (221, 223, None),          # POSIX_FADV_DONTNEED evicts a file's cached pages
+    "mincore": (27, 232, None),             # reports which pages of a mapping (a mapped file) are cached
+    "cachestat": (451, 451, None),          # reports how much of a file range is cached, dirty, evicted
+    "process_madvise": (440, 440, None),    # madvise (MADV_COLD, MADV_PAGEOUT) on a process's memory, its own too
+    # preadv2's RWF_NOWAIT fails when a page is not cached: a probe that does not fill it. Without flags (args[5])
+    # these are preadv and pwritev, which Python's os.preadv and os.pwritev call them as: allowed.
+    "preadv2": (327, 286, (5, "any flag")),
+    "pwritev2": (328, 287, (5, "any flag")),  # the same flags on the write side
+    # madvise: MADV_COLD (20) and MADV_PAGEOUT (21) deactivate or reclaim a mapping's pages, a mapped file's
+    # page-cache pages included. Any other advice is allowed (malloc's free uses MADV_DONTNEED, 4, which only drops
+    # the process's own mappings).
+    "madvise": (28, 233, (2, (20, 21))),
+    # Asynchronous I/O runs reads (RWF_NOWAIT), fadvise and madvise in requests this filter does not see.
+    "io_uring_setup": (425, 425, None),
+    "io_uring_enter": (426, 426, None),
+    "io_uring_register": (427, 427, None),
+    "io_setup": (206, 0, None),             # Linux AIO: io_submit takes RWF_NOWAIT in each request
+    "io_submit": (209, 2, None),
 }
-
-# madvise (x86_64 28, aarch64 233) is refused only with these advice values: they deactivate or reclaim the pages of
-# a mapping, a mapped file's page-cache pages included. Every other advice is allowed (malloc's free uses
-# MADV_DONTNEED, which only drops the process's own mappings).
-MADVISE = (28, 233)
-REFUSED_MADVICE = {20: "MADV_COLD", 21: "MADV_PAGEOUT"}
 
 
 class UnsupportedMachine(RuntimeError):
@@ -105,9 +123,9 @@ def _native_machine():
 
 def box_filter(machine=None):
     """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: the calls of
-    :data:`REFUSED_SYSCALLS` and ``madvise`` with an advice of :data:`REFUSED_MADVICE` fail with EPERM, every other
-    call of the native architecture is allowed, and every call of another architecture fails with EPERM. ``machine``
-    is named as ``os.uname().machine`` names it (this machine by default); one not in :data:`SECCOMP_MACHINES` raises
+    :data:`REFUSED_SYSCALLS` (with the arguments it names) fail with EPERM, every other call of the native
+    architecture is allowed, and every call of another architecture fails with EPERM. ``machine`` is named as
+    ``os.uname().machine`` names it (this machine by default); one not in :data:`SECCOMP_MACHINES` raises
     :class:`UnsupportedMachine`."""
     machine = _native_machine() if machine is None else machine
     if machine not in SECCOMP_MACHINES:
@@ -117,25 +135,31 @@ def box_filter(machine=None):
     column = list(SECCOMP_MACHINES).index(machine)
     ld, jeq, jge, ret = 0x20, 0x15, 0x35, 0x06      # BPF_LD|W|ABS, BPF_JMP|JEQ|K, BPF_JMP|JGE|K, BPF_RET|K
     allow, refuse = 0x7FFF0000, 0x00050000 | 1      # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
-    ALLOW, DENY = "allow", "deny"                   # jumps to the last two instructions, resolved below
+    to_allow, to_deny = "allow", "deny"             # jumps to the last two instructions, resolved below
     program = [
         # The numbers below mean these calls only on this architecture; a call made through another ABI the kernel
         # also accepts (i386's int 0x80 on x86_64) has numbers of its own, so it is refused whatever it is.
         (ld, 0, 0, 4),                              # seccomp_data.arch
-        (jeq, 0, DENY, audit_arch),
+        (jeq, 0, to_deny, audit_arch),
         (ld, 0, 0, 0),                              # seccomp_data.nr
     ]
     if second_abi is not None:
         # x32 calls arrive with x86_64's arch and the number plus 0x40000000: refused, so that no such call slips past.
-        program.append((jge, DENY, 0, second_abi))
-    program += [(jeq, DENY, 0, numbers[column]) for numbers in REFUSED_SYSCALLS.values()]
-    # madvise: its third argument, the advice. The kernel reads it as an int, so the low 32 bits of args[2] are all
-    # that count: seccomp_data is nr (4), arch (4), ip (8), args[6] (8 each), so args[2] starts at byte 32, and its
-    # low half is there on these little-endian machines.
-    program += [(jeq, 0, ALLOW, MADVISE[column]), (ld, 0, 0, 16 + 8 * 2)]
-    program += [(jeq, DENY, 0, advice) for advice in REFUSED_MADVICE]
+        program.append((jge, to_deny, 0, second_abi))
+    calls = [(numbers[column], when) for *numbers, when in REFUSED_SYSCALLS.values()]
+    program += [(jeq, to_deny, 0, nr) for nr, when in calls if when is None]
+    for nr, (arg, values) in [(nr, when) for nr, when in calls if when is not None]:
+        # seccomp_data is nr (4 bytes), arch (4), ip (8), args[6] (8 each): argument i starts at byte 16 + 8 i, and
+        # its low half is there on these little-endian machines. A block ends in a jump or a return: the
+        # accumulator it loads never reaches the next block, which compares the call's number.
+        block = [(ld, 0, 0, 16 + 8 * arg)]
+        if values == "any flag":
+            block.append((jeq, to_allow, to_deny, 0))
+        else:
+            block += [(jeq, to_deny, 0, value) for value in values] + [(ret, 0, 0, allow)]
+        program += [(jeq, 0, len(block), nr)] + block
     program += [(ret, 0, 0, allow), (ret, 0, 0, refuse)]
-    where = {ALLOW: len(program) - 2, DENY: len(program) - 1}
+    where = {to_allow: len(program) - 2, to_deny: len(program) - 1}
 
     def skip(i, target):                            # a BPF jump counts the instructions it skips
         return where[target] - i - 1 if target in where else target
