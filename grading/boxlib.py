@@ -17,6 +17,7 @@ from grading import cells, sandbox
 STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
                 "lab is graded. Write it yourself.")
 HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quaternion products, DCMs): absent in the box
+WHY_HIDDEN = "its functions answer exercises of the labs"     # what importing a hidden package says
 
 
 def dotted(obj):
@@ -54,7 +55,7 @@ def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
 
 
 def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES,
-                   why="its functions answer exercises of the labs", message=STUB_MESSAGE):
+                   why=WHY_HIDDEN, message=STUB_MESSAGE):
     """Build the box's library (``dest/lib``) and shadow packages (``dest/shadow``) without ``forbidden``.
 
     ``forbidden`` holds ``module:qualname`` names; the packages ``hidden`` are absent (importing one raises

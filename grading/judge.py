@@ -265,7 +265,11 @@ class StudentError(AssertionError):
 
 
 class StudentRaised(StudentError):
-    """The student's function raised."""
+    """The student's function raised; ``error`` is the box's text of the error (``Type: message``)."""
+
+    def __init__(self, message, error=""):
+        super().__init__(message)
+        self.error = error
 
 
 class NotData(StudentError):
@@ -366,7 +370,8 @@ class Session:
             except wire.WireError as exc:
                 raise RuntimeError(f"the test passes {exc} to {name}: the judge cannot send it") from exc
             if not reply.get("ok"):
-                raise StudentRaised(f"your {name} raised {str(reply.get('error', 'an error'))[:500]}")
+                error = str(reply.get("error", "an error"))
+                raise StudentRaised(f"your {name} raised {error[:500]}", error)
             try:
                 value = wire.decode(reply.get("value"), make_sympy=client.sympy_trusted, objects=True)
                 changed = reply.get("objects") or {}
@@ -428,6 +433,28 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
     return verdict
 
 
+_UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
+
+
+def known_error(error, lab, gid):
+    """The judge's own words for an error of the student's function that is exactly one the course raises (the
+    release's stub of an unfinished exercise, a reference stubbed out of the box, a package absent from it), or
+    None: a hidden test may name those, since their text is the course's, not the student's."""
+    m = _UNFINISHED.fullmatch(error)
+    if m:
+        return f"{m.group(1)} not attempted yet"
+    for name in sorted(lab.forbidden.get(gid, ())):
+        module, qualname = name.split(":")
+        stubbed = boxlib.STUB_MESSAGE.format(name=f"{module.rsplit('.', 1)[-1]}.{qualname}")
+        if error == f"NotImplementedError: {stubbed}":
+            return f"your function called {module.rsplit('.', 1)[-1]}.{qualname}, which {stubbed.split(' ', 1)[1]}"
+    for package in boxlib.HIDDEN_PACKAGES:
+        if error in (f"ImportError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
+                     f"ModuleNotFoundError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}"):
+            return f"your function imported {package}, which is not available while the lab is graded"
+    return None
+
+
 def hidden_failure(gid, exc, lab):
     """What a hidden test may say of its failure ``exc``: the exercise and the kind of failure, never a value,
     an expected number or any text of the student's code (which saw the hidden inputs)."""
@@ -439,7 +466,7 @@ def hidden_failure(gid, exc, lab):
     elif isinstance(exc, BoxDied):
         kind = "your code ended the process"
     elif isinstance(exc, StudentRaised):
-        kind = "your function raised an error"
+        kind = known_error(exc.error, lab, gid) or "your function raised an error"
     elif isinstance(exc, NotData):
         kind = "your function returned something that is not plain numbers"
     elif isinstance(exc, guard.WrongShape):

@@ -228,3 +228,19 @@ def test_honest_sympy_answers_stay_within_the_bounds():
     for expr in (a**-3 + b ** sp.Rational(1, 2), sp.Float("0.1", 30) * a, sp.Matrix(3, 3, lambda i, j: a**i * b**j),
                  sp.Pow(a, 60) * 999_999):
         assert client.sympy_trusted(sp.srepr(expr)) == expr
+
+
+def test_a_hidden_verdict_names_only_the_courses_own_errors_word_for_word():
+    from grading import boxlib, judge
+
+    class Lab:
+        forbidden = {"ex3_tests": {"fusionlab.kalman:predict"}}
+    stub = "NotImplementedError: " + boxlib.STUB_MESSAGE.format(name="kalman.predict")
+    assert "kalman.predict, which is the answer to an exercise" in judge.known_error(stub, Lab, "ex3_tests")
+    assert judge.known_error("NotImplementedError: exercise 3 not attempted yet", Lab, "ex3_tests") == \
+        "exercise 3 not attempted yet"
+    absent = f"ImportError: ahrs is not available while the lab is graded: {boxlib.WHY_HIDDEN}"
+    assert judge.known_error(absent, Lab, "ex3_tests").startswith("your function imported ahrs")
+    for forged in (stub + " 5.8138", "NotImplementedError: exercise 3 not attempted yet (P = 5.81)",
+                   stub.replace("kalman.predict", "kalman.update"), "ValueError: exercise 3 not attempted yet"):
+        assert judge.known_error(forged, Lab, "ex3_tests") is None, forged
