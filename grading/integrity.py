@@ -74,7 +74,7 @@ class Source:
             if cell.cell_type != "code":
                 continue
             try:
-                tree = ast.parse(_strip_magics(cell.source)[0])
+                tree = cells.parse(_strip_magics(cell.source)[0])
             except SyntaxError:
                 continue
             test = cells.nbg(cell).get("grade") and not cells.nbg(cell).get("solution")
@@ -450,7 +450,7 @@ def tampering(source, loaders=None):
         loaders = exercises.loaders()
     code, _ = _strip_magics(source)
     try:
-        tree = ast.parse(code)
+        tree = cells.parse(code)
     except SyntaxError:
         words = _token_scan(code, set())
         found = [(line, kind, why) for line, kind, why in words if kind in TAMPER_KINDS]
@@ -475,7 +475,7 @@ def scan_source(source, src, exercise=None, added=False):
     forbidden = src.forbid.get(exercise, set()) if exercise else (
         src.all_forbidden - src.provided_names if added else set())
     try:
-        tree = ast.parse(code)
+        tree = cells.parse(code)
     except SyntaxError as err:
         return flags + [(err.lineno or 1, "syntax", None)] + _token_scan(code, forbidden)
     visitor = _Visitor(src, forbidden, exercise, added)

@@ -34,6 +34,7 @@ from pathlib import Path
 import nbformat
 
 from fusionlab import labformat
+from grading import cells
 
 K, WINDOW = 20, 6          # k-gram length and winnowing window (copydetect's scale: normalised characters)
 MIN_TOKENS = 80            # matched normalised characters for a pair of classmates to be listed
@@ -121,7 +122,7 @@ def _library_functions(folder):
     for path in sorted(folder.rglob("*.py")):
         text = path.read_text()
         try:
-            tree = ast.parse(text)
+            tree = cells.parse(text)
         except SyntaxError:
             continue
         lines = text.splitlines(keepends=True)
@@ -273,7 +274,7 @@ def library_shapes(folder=LIBRARY):
             elif isinstance(node, ast.ClassDef):
                 collect(f"{prefix}.{node.name}", node.body)
     for path in sorted(Path(folder).rglob("*.py")):                     # fusionlab.checks is a package
-        collect(".".join(path.relative_to(folder).with_suffix("").parts), ast.parse(path.read_text()).body)
+        collect(".".join(path.relative_to(folder).with_suffix("").parts), cells.parse(path.read_text()).body)
     return out
 
 

@@ -59,3 +59,13 @@ def _parse_in_threads(parse, threads=4, seconds=3.0):
 def test_the_judge_parses_in_many_threads_at_once_without_a_failure():
     errors = _parse_in_threads(cells.parse)
     assert not errors, errors[:3]
+
+
+def test_every_parse_of_the_grading_tools_takes_the_lock():
+    """A class is graded by threads: one unlocked ``ast.parse`` (the integrity scan, the similarity report) beside a
+    locked one is enough for the race (seen: the capstone's threaded scan)."""
+    from pathlib import Path
+    root = Path(cells.__file__).resolve().parent
+    unlocked = [f"{p.relative_to(root)}:{i}" for p in sorted(root.rglob("*.py")) if p.name != "cells.py"
+                for i, line in enumerate(p.read_text().splitlines(), 1) if "ast.parse(" in line]
+    assert unlocked == []
