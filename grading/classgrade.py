@@ -291,7 +291,10 @@ def integrity(course: Path, lab: str, results: list[Result]):
 
 
 def export(course: Path, lab: str, results: list[Result]):
-    """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``."""
+    """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``
+    (:func:`with_status`)."""
+    import sqlite3
+
     res = subprocess.run([sys.executable, "-m", "nbgrader", "export", "--log-level=ERROR"], cwd=course, env=_env(),
                          capture_output=True, text=True)
     path = course / "grades.csv"
@@ -300,24 +303,40 @@ def export(course: Path, lab: str, results: list[Result]):
     with open(path, newline="") as fh:
         rows = list(csv.DictReader(fh))
         fields = list(rows[0].keys()) if rows else ["assignment", "student_id", "score", "max_score"]
+    with contextlib.closing(sqlite3.connect(f"file:{course / 'gradebook.db'}?mode=ro", uri=True)) as con:
+        submitted = set(con.execute("SELECT a.name, s.student_id FROM submitted_assignment s "
+                                    "JOIN assignment a ON s.assignment_id = a.id"))
     fields = [f for f in fields if f != "status"] + ["status"]
-    failed = {r.student: r.error for r in results if not r.ok}
-    for row in rows:
-        if row.get("assignment") == lab:
-            row["status"] = f"NOT GRADED: {failed[row['student_id']]}" if row["student_id"] in failed else (
-                "graded" if row.get("status") in (None, "", "graded") else row["status"])
-        else:
-            row.setdefault("status", "")
-    listed = {row["student_id"] for row in rows if row.get("assignment") == lab}
-    for student, why in failed.items():
-        if student not in listed:
-            rows.append({**{f: "" for f in fields}, "assignment": lab, "student_id": student,
-                         "status": f"NOT GRADED: {why}"})
+    rows = with_status(rows, fields, lab, {r.student: r.error for r in results if not r.ok}, submitted)
     with open(path, "w", newline="") as fh:
         out = csv.DictWriter(fh, fieldnames=fields)
         out.writeheader()
         out.writerows(rows)
     return True
+
+
+def with_status(rows, fields, lab, failed, submitted):
+    """The rows of ``nbgrader export`` with a ``status``: ``graded`` or ``NOT GRADED: <why>`` (``failed``) for
+    ``lab``, a row added for a student of ``lab`` the export does not list; ``graded`` or ``no submission`` for the
+    other labs, whose rows are kept only where someone submitted (``submitted``: (lab, student) pairs), so that a lab
+    recorded but never handed out adds no row of zeros."""
+    handed_in = {a for a, _ in submitted}
+    out = []
+    for row in rows:
+        if row.get("assignment") == lab:
+            row["status"] = f"NOT GRADED: {failed[row['student_id']]}" if row["student_id"] in failed else (
+                "graded" if row.get("status") in (None, "", "graded") else row["status"])
+        elif row.get("assignment") not in handed_in:
+            continue
+        else:
+            row["status"] = "graded" if (row["assignment"], row["student_id"]) in submitted else "no submission"
+        out.append(row)
+    listed = {row["student_id"] for row in out if row.get("assignment") == lab}
+    for student, why in failed.items():
+        if student not in listed:
+            out.append({**{f: "" for f in fields}, "assignment": lab, "student_id": student,
+                        "status": f"NOT GRADED: {why}"})
+    return out
 
 
 # ----------------------------------------------------------------------------------------------------------------
