@@ -433,6 +433,7 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
     return verdict
 
 
+TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
 _UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
 
 
@@ -460,7 +461,7 @@ def hidden_failure(gid, exc, lab):
     an expected number or any text of the student's code (which saw the hidden inputs)."""
     where = f"{labformat.label(gid) if labformat.parse(gid) else gid}, hidden tests"
     if isinstance(exc, ReplyTooLarge):
-        kind = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
+        kind = TOO_LARGE
     elif isinstance(exc, BoxTimeout):
         kind = f"timed out (over {lab.cell_seconds} s)"
     elif isinstance(exc, BoxDied):
@@ -518,8 +519,7 @@ def _run_test(lab, session, source, ns, reference, result):
         if hidden:
             result.message = hidden_failure(gid, exc, lab)
         elif isinstance(exc, ReplyTooLarge):
-            result.message = (f"your code sent back more than the judge reads (a reply over "
-                              f"{client.MAX_REPLY_BYTES >> 20} MB)")
+            result.message = TOO_LARGE
         elif isinstance(exc, (BoxTimeout, BoxDied)):
             result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
                               else f"your code ended the process ({exc})")
