@@ -3,8 +3,8 @@ Euler-angle UKF it is compared with.
 
 What is here
 ------------
-* The DCM filter: :func:`ins_propagate` (eqs 7.7-7.11), :func:`ins_transition` (the 21×21 pseudo-linear F, eqs
-  7.12-7.14), :func:`ins_process_noise` (eq 7.15), :func:`gps_measurement_matrix` (eq 7.17), :func:`run_gps_ins`
+* The DCM filter: :func:`ins_propagate` (eqs 7.7-7.11), :func:`ins_transition` (the 21×21 F of eq 7.12, used
+  in eq 7.14), :func:`ins_process_noise` (eq 7.15), :func:`gps_measurement_matrix` (eq 7.17), :func:`run_gps_ins`
   (the 21-state loosely coupled filter, with the static accelerometer update of eqs 7.18-7.19).
 * The comparison filter: :func:`euler_ins_fx` (eq 7.23), :func:`sigma_points_2n` (eqs 7.24-7.26) and
   :func:`run_euler_ukf` (the 15-state Euler-angle UKF on ``filterpy.kalman.UnscentedKalmanFilter``).
@@ -86,9 +86,10 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
 
 
 def ins_transition(x, acc, A_tilde, dt):
-    """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eqs 7.12-7.14, reconstructed).
+    """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eq 7.12, reconstructed).
 
-    ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows.
+    ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows is eq 7.14 (eq 7.13, between them, is the
+    filter's initial state and covariance).
     Blocks: ``F_{ci,ci} = Ãᵀ``, ``F_{ci,bg} = -Δt[ĉi×]``, ``F_{r,v} = Δt I``, ``F_{v,c} = Δt blkdiag(ãᵀ, ãᵀ, ãᵀ)``
     (``C ã`` is linear in the nine DCM elements), ``F_{v,ba} = -Δt Ĉ``; identity elsewhere on the diagonal.
 
@@ -120,9 +121,9 @@ def _ins_F(x, acc, A_tilde, dt):
     At = A_tilde.T
     for i in range(3):
         s = slice(3 * i, 3 * i + 3)
-        F[s, s] = At                                                                  # (004 eq 7.13)
+        F[s, s] = At                                                                  # (004 eq 7.12)
         F[s, 9:12] = -dt * rotations.skew(x[s])
-        F[15 + i, s] = dt * acc                                                       # (004 eq 7.14)
+        F[15 + i, s] = dt * acc                                                       # (004 eq 7.12)
     F[12:15, 15:18] = dt * np.eye(3)
     F[15:18, 18:21] = -dt * x[0:9].reshape(3, 3)
     return F
@@ -257,7 +258,7 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     """The 21-state loosely coupled DCM GPS/INS Kalman filter (004 §7.2) over a recording.
 
     Per IMU sample: ``Ã = A(ω̃ Δt)``, mean by the direct form (:func:`ins_propagate`, eqs 7.7-7.11), covariance
-    ``P⁻ = F P Fᵀ + Q`` with the pseudo-linear F (eqs 7.12-7.16); where ``gps`` has a fix, the linear update with
+    ``P⁻ = F P Fᵀ + Q`` with the pseudo-linear F (eqs 7.12, 7.14-7.16); where ``gps`` has a fix, the linear update with
     ``H = [0, I₆, 0]`` (eq 7.17). No orthonormalisation of the state (the thesis lists it as future work); the
     read-out ``C_bn`` is orthonormalised (SVD) for the Euler angles.
 
@@ -327,7 +328,7 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     gdt = g * dt
     xs, sd = np.empty((n, 21)), np.empty((n, 21))
     for k in range(n):
-        # --- F(x̂) (004 eqs 7.12-7.14) and Q (eq 7.15) at the previous estimate
+        # --- F(x̂) (004 eqs 7.12, 7.14) and Q (eq 7.15) at the previous estimate
         c = x[0:9].tolist()
         S = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0],
                       [0.0, -c[5], c[4]], [c[5], 0.0, -c[3]], [-c[4], c[3], 0.0],

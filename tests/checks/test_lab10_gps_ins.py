@@ -27,7 +27,7 @@ def with_block(F, rows, cols, value):
      "the bias is removed before rotating"),
     (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), slice(9, 12), slice(9, 12), 0.0),
      "random walks and r, v keep identity blocks"),
-    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), 9, 20, 1.0), "F is not eqs 7.12-7.14"),
+    (lambda x, a, A, dt: with_block(gpsins.ins_transition(x, a, A, dt), 9, 20, 1.0), "F is not the F of eq 7.12"),
     (lambda x, a, A, dt: gpsins.ins_transition(x, a, A, 0.02), "Use the argument dt everywhere"),
     (lambda x, a, A, dt: np.eye(15), "F is 21×21"),
 ])

@@ -14,7 +14,7 @@ __all__ = ["check_ins_transition", "check_sigma_points"]
 
 @forbids
 def check_ins_transition(fn):
-    """Check a student's ``fn(x, acc, A_tilde, dt) -> F`` (21×21; seed 004 eqs 7.12-7.14)."""
+    """Check a student's ``fn(x, acc, A_tilde, dt) -> F`` (21×21; seed 004 eq 7.12, in x̂⁻ = F x̂ + g_c of eq 7.14)."""
     rng = np.random.default_rng(713)
     C = rotations.euler_to_dcm([0.3, -0.1, 2.2])
     x = np.concatenate([C.ravel(), rng.normal(0, 0.01, 3), rng.normal(0, 100, 3), [60.0, 5.0, -2.0],
@@ -28,7 +28,7 @@ def check_ins_transition(fn):
         A1 = _dcm.A_matrix([0.005, 0.01, -0.02])
         _general_case(lambda: fn(x.copy(), acc.copy(), A1.copy(), 0.01), _gpsins.ins_transition(x, acc, A1, 0.01),
                       "Δt = 0.01 s", "Use the argument dt everywhere.", rtol=0, atol=1e-12)
-        _ok("F matches eqs 7.12-7.14: F x̂ + g_c is exactly the direct propagation of eqs 7.7-7.11.")
+        _ok("F matches eq 7.12: F x̂ + g_c (eq 7.14) is exactly the direct propagation of eqs 7.7-7.11.")
         return
     blocks = [("DCM rows (rows 0-8, columns 0-8)", slice(0, 9), slice(0, 9),
                "each row block is Ãᵀ: row i of C A is Aᵀ c_i."),
@@ -49,7 +49,7 @@ def check_ins_transition(fn):
                 hint = ("you multiplied column-wise; the state holds C row by row (c1, c2, c3), so v_i needs "
                         "c_i·ã: row 15+i has Δt ãᵀ in columns 3i..3i+2.")
             raise Feedback(f"the block {name} is wrong: {hint}")
-    raise Feedback(f"F is not eqs 7.12-7.14: {_where(F, ref, 'F', atol=1e-12)}.")
+    raise Feedback(f"F is not the F of eq 7.12: {_where(F, ref, 'F', atol=1e-12)}.")
 
 
 @forbids
