@@ -11,6 +11,7 @@ import base64
 import csv
 import dataclasses
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -275,14 +276,15 @@ def graded(scored, tmp_path_factory):
 def _expected_points(res, refs):
     vqf, mad = (capstone.mean_scored(refs[n].trials) for n in capstone.PUBLISHED[res.sensors])
     return capstone.rubric_points(capstone.mean_scored(res.trials), res.all_ran, capstone.gates_failed(res), mad,
-                                  vqf)
+                                  vqf, res.sensors)
 
 
-def _points_by_hand(mean_deg, all_ran, madgwick_deg, vqf_deg):
-    """The rubric's rows read literally, for a submission that passes the gates."""
-    return {"runs": 2.0 if all_ran else 0.0, "beats_madgwick": 3.0 if mean_deg < madgwick_deg else 0.0,
-            "near_vqf": 3.0 if mean_deg <= capstone.NEAR_VQF * vqf_deg else 0.0,
-            "beats_vqf": 2.0 if mean_deg < vqf_deg else 0.0}
+def _points_by_hand(mean_deg, all_ran, madgwick_deg, vqf_deg, sensors="9D"):
+    """The rubric's rows read literally, for a submission that passes the gates: 2 for running, and 8 times the
+    share of the way from Madgwick's mean to the full mark (VQF's, or 0.85 x VQF's in 6D) on a log scale."""
+    full = vqf_deg * (0.85 if sensors == "6D" else 1.0)
+    share = min(1.0, max(0.0, math.log(madgwick_deg / mean_deg) / math.log(madgwick_deg / full)))
+    return {"runs": 2.0 if all_ran else 0.0, "accuracy": round(8 * share, 1)}
 
 
 @pytest.mark.slow
@@ -297,7 +299,7 @@ def test_the_starter_and_the_good_filter_are_causal_clean_and_score_as_the_rubri
         assert res.points["runs"] == 2
     good = results["good"]
     assert capstone.mean_total(good.trials) < mad                 # the good filter beats Madgwick on the stand-in
-    assert good.points["beats_madgwick"] == 3
+    assert 0 < good.points["accuracy"] <= 8 and good.points["accuracy"] > results["starter"].points["accuracy"]
     assert capstone.mean_total(good.trials) < capstone.mean_total(results["starter"].trials)
     print("stand-in mean scored RMSE (9D total, 6D inclination), deg:",
           {n: round(capstone.mean_scored(r.trials), 2) for n, r in results.items()},
@@ -522,7 +524,7 @@ def test_a_6d_filter_is_scored_on_inclination_against_the_6d_references(graded):
     mean = float(np.mean([r.inclination_deg for r in res.trials]))
     mad6 = float(np.mean([r.inclination_deg for r in refs["madgwick6"].trials]))
     vqf6 = float(np.mean([r.inclination_deg for r in refs["vqf6"].trials]))
-    assert res.points == _points_by_hand(mean, True, mad6, vqf6)
+    assert res.points == _points_by_hand(mean, True, mad6, vqf6, "6D")
     # the 9D references' total RMSE is another scale: it is not what the 6D filter was compared with
     mad9 = capstone.mean_total(refs["madgwick9"].trials)
     assert abs(mad9 - mad6) > 1.0
@@ -586,7 +588,7 @@ def test_a_6d_submission_receives_mag_none_and_a_failed_trial_counts_the_identit
         assert r.metric == "inclination_deg" and r.counted_deg == pytest.approx(identity, abs=1e-9)
     assert res.trials[1].counted_deg != pytest.approx(capstone.never_moves(scored[1]), abs=1e-3)   # not the total
     mad6, vqf6 = (capstone.mean_scored(refs[n].trials) for n in ("madgwick6", "vqf6"))
-    assert res.points == _points_by_hand(capstone.mean_scored(res.trials), False, mad6, vqf6)
+    assert res.points == _points_by_hand(capstone.mean_scored(res.trials), False, mad6, vqf6, "6D")
 
 
 @pytest.mark.slow
@@ -628,11 +630,18 @@ def test_regrading_a_late_student_with_the_saved_seed_reuses_the_reference_rows(
 
 def test_the_rubric_gives_its_stated_points():
     pts = capstone.rubric_points
-    assert sum(pts(1.0, True, False, 5.0, 2.0).values()) == capstone.MAX_POINTS   # beats VQF: everything
-    assert pts(2.3, True, False, 5.0, 2.0) == {"runs": 2, "beats_madgwick": 3, "near_vqf": 3, "beats_vqf": 0}
-    assert pts(2.5, True, False, 5.0, 2.0) == {"runs": 2, "beats_madgwick": 3, "near_vqf": 0, "beats_vqf": 0}
-    assert pts(6.0, False, False, 5.0, 2.0) == {"runs": 0, "beats_madgwick": 0, "near_vqf": 0, "beats_vqf": 0}
-    assert sum(pts(1.0, True, True, 5.0, 2.0).values()) == 0                     # a cheat or not causal
+    assert pts(2.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}           # at VQF: everything
+    assert pts(1.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}           # below: capped
+    assert pts(5.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 0}           # at Madgwick's: none
+    assert pts(9.0, False, False, 5.0, 2.0) == {"runs": 0, "accuracy": 0}
+    assert pts(math.sqrt(10.0), True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 4}   # halfway on a log scale
+    for mean in (2.3, 2.9, 4.1):                                                     # smooth: no cliff
+        assert pts(mean, True, False, 5.0, 2.0) == _points_by_hand(mean, True, 5.0, 2.0)
+        assert pts(mean, True, False, 5.0, 2.0, "6D") == _points_by_hand(mean, True, 5.0, 2.0, "6D")
+    assert pts(1.7, True, False, 5.0, 2.0, "6D") == {"runs": 2, "accuracy": 8}      # 6D's full mark: 0.85 x VQF
+    assert pts(1.8, True, False, 5.0, 2.0, "6D")["accuracy"] < 8
+    assert sum(pts(1.0, True, True, 5.0, 2.0).values()) == 0                       # a cheat or not causal
+    assert sum(pts(float("nan"), False, True, 0, 0).values()) == 0                 # a notebook that cannot be read
 
 
 def test_the_declaration_is_read_from_the_code_and_anything_but_the_two_literals_is_9d_with_a_note():
@@ -754,26 +763,25 @@ def test_the_saved_seed_is_reused_only_for_the_same_trials(tmp_path):
     assert capstone.saved_seed(run, trials, True) is None
 
 
-def test_the_disguise_leaves_the_authors_metrics_of_a_filter_unchanged(scored):
+def test_the_disguise_moves_no_honest_score(scored):
+    """Cut and fresh noise, no turn of the frame: VQF and a filter that starts at the identity (not
+    rotation-equivariant, as Madgwick's is not) score as on the trial itself."""
     from fusionlab import bench, metrics
     vqf = {c.name: c for c in bench.contenders(["vqf9"])}["vqf9"]
-    plain = capstone.stand_in(STAND_IN[:1], MAX_SAMPLES)[0]
-    s = scored[0]
-    assert s.turn_deg > 5 and len(s) < len(plain)                  # turned and cut
-    assert s.movement.sum() == plain.movement.sum()                 # ... never inside the movement phase
-    a = metrics.broad_rmse(vqf.run(plain), plain.quat_ref, plain.movement).total_deg
-    b = metrics.broad_rmse(vqf.run(s), s.quat_ref, s.movement).total_deg
-    assert b == pytest.approx(a, rel=0.05)
+    for s, n in zip(scored, STAND_IN):
+        plain = capstone.stand_in([n], MAX_SAMPLES)[0]
+        assert len(s) < len(plain) and s.movement.sum() == plain.movement.sum()   # cut, never in the movement
+        for run in (vqf.run, lambda t: _identity_start(t.gyr, t.acc, t.mag, t.fs)):
+            a = metrics.broad_rmse(run(plain), plain.quat_ref, plain.movement).total_deg
+            b = metrics.broad_rmse(run(s), s.quat_ref, s.movement).total_deg
+            assert b == pytest.approx(a, rel=0.03), (s.name, a, b)
 
 
-def test_an_output_that_follows_the_published_reference_is_named(scored):
-    s = scored[0]
-    q = np.where(np.isnan(s.published), [1.0, 0, 0, 0], s.published)
-    res, r = capstone.StudentResult("x"), capstone.score_trial(capstone.TrialResult(s.name), q, s)
-    r.q = q
-    refs = {"_all": {}}
-    capstone._look_for_cheats(res, r, s, refs)
-    assert [k for k, _ in res.cheats] == ["detects the trial"]
+def _identity_start(gyr, acc, mag, fs):
+    """The gyro integrated from the identity, tilted towards gravity: its score depends on the sensor frame."""
+    from fusionlab import rotations
+    q = rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], np.asarray(gyr, dtype=float), 1.0 / fs)[1:]
+    return q
 
 
 def test_the_code_scan_names_imports_of_filters_and_file_reads():
@@ -925,8 +933,8 @@ def _tilt(acc):
 
 
 def test_an_estimate_implausibly_close_to_the_reference_is_named_and_may_be_cleared(scored, monkeypatch):
-    """A replay: the trial recognised, its published reference returned turned into the disguised frame (here the
-    disguised reference itself, as the best replay would give it)."""
+    """A replay: the trial recognised and its published reference returned (over the samples it was given, as the
+    best replay would give it)."""
     def make():
         def estimate(gyr, acc, mag, fs):
             t = next(t for t in scored if np.array_equal(t.gyr[0], gyr[0]))
@@ -989,8 +997,8 @@ def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(
 
 
 def test_the_disguise_adds_fresh_noise_so_no_raw_sample_names_the_trial(scored):
-    """The norms of the samples survive a turn: without the noise, those of the first samples were found again in
-    the published trial, to the last digit, at its secret start."""
+    """Without the noise, the first samples were found again in the published trial, to the last digit, at its
+    secret start (here through their norms, which no change of frame would hide)."""
     for s, n in zip(scored, STAND_IN):
         plain = capstone.stand_in([n], MAX_SAMPLES)[0]
         head = int(capstone.MAX_CROP_SECONDS * plain.fs) + 64

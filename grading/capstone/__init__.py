@@ -30,19 +30,17 @@ process:
   (:func:`box_limits`).
   The judge sends each trial's sensor data (nothing else) as a call of ``estimate`` and gets the quaternions back
   as plain numbers. Ground truth, metrics and scores exist only in this process.
-* **Each trial is disguised.** Before a class is graded every trial is turned by a secret random rotation of the
-  sensor frame (gyro, accelerometer and magnetometer alike, the reference to match), loses a secret number of
-  samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase), so that its length
-  does not name it either, and gets fresh white noise of about the sensors' own (:data:`DISGUISE_NOISE`), so that
-  no raw sample of the published trial (their norms survive a turn) is found again. A causal filter does not care
-  (the authors' error quaternion q_est * conj(q_ref) is unchanged by a turn of the body frame); a submission that
-  returns a published reference unturned is far off and is named (:data:`CHEATS`, ``detects the trial``).
-* **Plausibility.** A submission could still recognise a trial (from its movement, say), estimate the secret
-  turn from the rest before it and return the published reference turned into the disguised frame: an error far
-  below any filter's. A scored RMSE below :data:`IMPLAUSIBLE` x the best reference filter's on at least half of
-  the trials that ran is named (``detects the trial``: "implausibly close to the optical reference ... review the
-  code") and gets no points for the filter; the instructor who has read the code and trusts it grades again with
-  ``--cleared <student>`` (:func:`implausibly_close`).
+* **Each trial is disguised, and no honest score moves.** Before a class is graded every trial loses a secret number
+  of samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase), so that its length
+  does not name it, and gets fresh white noise of about the sensors' own (:data:`DISGUISE_NOISE`), so that no raw
+  sample of the published trial is found again. The sensor frame is not turned: a turn changes the score of a
+  filter that is not rotation-equivariant (Madgwick's, any filter with a fixed start), so honest filters would be
+  scored with luck (:func:`disguise` states the measured effects).
+* **Plausibility.** A submission could still recognise a trial (from its movement, say) and return its published
+  reference: an error far below any filter's. A scored RMSE below :data:`IMPLAUSIBLE` x the best reference
+  filter's on at least half of the trials that ran is named (``detects the trial``: "implausibly close to the
+  optical reference ... review the code") and gets no points for the filter; the instructor who has read the code
+  and trusts it grades again with ``--cleared <student>`` (:func:`implausibly_close`).
 * **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
   RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
   the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A filter
@@ -72,10 +70,11 @@ process:
   carry the trial's numbers; so are the errors of the notebook's cells in a box started after a trial was sent
   (:class:`Runner`). Only the cells' errors in the first box, which runs them before any trial is sent, are shown as
   they are.
-* **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: a valid estimate on every trial within its
-  budget, then the mean RMSE the filter is scored on against Madgwick's filter's and VQF's with the same sensors
-  (9D: total RMSE of the 9D versions; 6D: inclination RMSE of the 6D versions), computed here on the same disguised
-  trials. A non-causal submission, one whose causality was never shown, or one named in :data:`CHEATS`, gets no
+* **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: 2 for a valid estimate on every trial
+  within its budget, and up to 8 that grow with the mean RMSE the filter is scored on, on a log scale from
+  Madgwick's filter's mean to VQF's with the same sensors (9D: total RMSE of the 9D versions; 6D: inclination RMSE of
+  the 6D versions; :func:`fusionlab.capstone.accuracy_points`), both computed here on the same trials as the
+  student's. A non-causal submission, one whose causality was never shown, or one named in :data:`CHEATS`, gets no
   points for the filter.
 * **Reference rows** (:func:`references`), for each sensor set on the same trials: VQF (default parameters), Madgwick
   (``ahrs``, its default gain) and the library's best filter of that set (by the RMSE the set is scored on). They are
@@ -113,13 +112,13 @@ Where it is (each part imports only from those listed above it; this package's n
 """
 from __future__ import annotations
 
-from fusionlab.capstone import (CAUSAL_TOL, GATES, MAX_POINTS, MIN_SECONDS, NEAR_VQF, RUBRIC, SECONDS_PER_SAMPLE,
-                                SENSORS, SHIPPED, as_quaternions, budget_seconds, causal_ks, first_change,
-                                prefix_change)   # the rules, as the lab states them to the students
+from fusionlab.capstone import (CAUSAL_TOL, FULL_MARKS, GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE,
+                                SENSORS, SHIPPED, accuracy_points, as_quaternions, budget_seconds, causal_ks,
+                                first_change, prefix_change)   # the rules, as the lab states them to the students
 
 from .command import main, read_submissions, saved_seed
 from .program import (CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
-                      FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FOLLOW_RATIO, FUNCTION,
+                      FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FUNCTION,
                       HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS, STUB_MESSAGE,
                       WHY_HIDDEN, as_run, box_library, declared_sensors, library_copies, loaders, model_program,
                       placeholder_module, program_of, scan)
@@ -129,7 +128,7 @@ from .runner import (CPU_PER_BUDGET, CPU_SLACK_S, MAX_RESTARTS, NOT_SHOWN, SETUP
                      _declared_outside, _look_for_cheats, box_limits, causality_trial, check_causality,
                      error_message, gates_failed, grade_submission, implausibly_close, invalid_message, prefix_k)
 from .scoring import (CACHE_FORMAT, MATCH_RAD, MATCH_STRIDE, PUBLISHED, REFERENCE_CACHE, Reference, TrialResult,
-                      cached_references, load_references, mean_scored, mean_total, never_moves, references,
-                      references_key, references_of, rubric_points, save_references, score_trial)
+                      cached_references, load_references, mean_scored, mean_total, never_moves, published_means,
+                      references, references_key, references_of, rubric_points, save_references, score_trial)
 from .trials import (DISGUISE_NOISE, MAX_CROP_SECONDS, MAX_END_CROP_SECONDS, CapstoneDataMissing, Scored, disguise,
                      fetch, hidden_names, hidden_trials, stand_in)

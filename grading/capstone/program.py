@@ -16,8 +16,6 @@ from .scoring import MATCH_RAD
 LAB = "13_capstone"
 FUNCTION = "estimate"
 
-FOLLOW_RATIO = 0.25             # an output this much closer to the published reference than to the disguised one
-                                # follows the published reference: the trial was recognised
 IMPLAUSIBLE = 0.5               # a scored RMSE below this fraction of the best reference filter's on that trial (any
                                 # filter of its sensor set, VQF's, Madgwick's and every library filter's), on at least
                                 # half of the trials that ran: no honest filter is that far ahead of all of them, a
@@ -46,9 +44,9 @@ CHEATS = {
     "reads files": "opens, loads or lists files (found in the code by the names it calls: open, io.FileIO, os.open, "
                    "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
                    "a string is not seen -- the box holds no data file to find anyway)",
-    "detects the trial": "its output follows a trial's published reference instead of the data it was given "
-                         f"(closer to the undisguised reference than {FOLLOW_RATIO:g} x its error), or is implausibly "
-                         f"close to the optical reference: a scored RMSE below {IMPLAUSIBLE:g} x the best reference "
+    "detects the trial": "its output is implausibly close to the optical reference, as one that recognised each "
+                         f"trial and returned its published reference would be: a scored RMSE below {IMPLAUSIBLE:g} "
+                         "x the best reference "
                          "filter's on at least half of the trials it ran. The instructor reads the code of such a "
                          "filter and may clear this flag (grade again with --cleared <student>)",
 }

@@ -160,8 +160,8 @@ def write_leaderboard(results, refs, scored, out, class_name, label=""):
     rows = leaderboard_rows(results, refs)
     write_csv(rows, out / "leaderboard.csv", COLUMNS)
     write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
-    what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each disguised by a secret turn of the "
-            "sensor frame and a secret start; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
+    what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each cut at a secret start and end "
+            "and given fresh sensor noise; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
             "the trials; seconds: run time of estimate on all trials. 9D and 6D filters are ranked separately: a "
             "rank is within the filter's sensor set, and ratio_to_vqf is to VQF with the same sensors. The RMSE a "
             "set is scored on counts a failed trial with the identity quaternion's error; the other RMSE columns "
@@ -194,27 +194,38 @@ def feedback(res, refs, folder, label=""):
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
         shown[n] = [getattr(r, metric) for r in ref.trials]
-    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(names) + 2), 4.2), constrained_layout=True)
+    # one column of markers per trial (yours a black dot, each reference its own marker), on a log scale: readable
+    # at 3 trials as at 31, in a figure of fixed size
+    fig, ax = plt.subplots(figsize=(10, 4.2), constrained_layout=True)
     x = np.arange(len(names))
-    width = 0.8 / len(shown)
-    for i, (n, vals) in enumerate(shown.items()):
-        ax.bar(x + (i - (len(shown) - 1) / 2) * width, np.nan_to_num(vals, nan=0.0), width, label=n)
+    markers = {"you": ("o", "k", 7)}
+    for i, n in enumerate(n for n in shown if n != "you"):
+        markers[n] = ("_^sv"[i % 4], f"C{i}", 7)
+    for n, vals in shown.items():
+        marker, color, size = markers[n]
+        ax.plot(x, vals, ls="none", marker=marker, color=color, ms=size, mew=2, label=n, zorder=3 if n == "you" else 2)
     for i, n in enumerate(names):
         status = mine[n].status if n in mine else "not run"
         if status != "ok":
-            ax.text(x[i], 0.1, status, ha="center", va="bottom", rotation=90, color="crimson",
+            ax.text(x[i], 0.02, status, ha="center", va="bottom", rotation=90, color="crimson", fontsize=8,
                     transform=ax.get_xaxis_transform())
-    ax.set_xticks(x, [n[:2] for n in names])
+    ax.set_xticks(x, [n[:2] for n in names], fontsize=8 if len(names) > 20 else 10)
+    ax.set_xlim(-0.7, len(names) - 0.3)
+    ax.grid(axis="y", which="both", alpha=0.3)
     ax.set_xlabel("hidden trial (number)")
     ax.set_ylabel(f"{what} RMSE (deg)")
     ax.set_yscale("log")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, ncols=len(shown))
     ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
                  f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {mean_scored(vqf.trials):.2f})", fontsize=10)
     fig.savefig(folder / "trials.png", dpi=90)
     plt.close(fig)
+    # each trial with the references' RMSE on the same data beside the student's
+    ref_cols = {f"{n}_{what}": {r.trial: getattr(r, metric) for r in ref.trials}
+                for n, ref in references_of(refs, res.sensors).items()}
     rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
-                 inclination_deg=r.inclination_deg, seconds=r.seconds, budget_s=r.budget_s, message=r.message)
+                 inclination_deg=r.inclination_deg, **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
+                 seconds=r.seconds, budget_s=r.budget_s, message=r.message)
             for r in res.trials]
     pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
     flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
@@ -225,8 +236,8 @@ def feedback(res, refs, folder, label=""):
              f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
              f"<ul>{flags}</ul>" if flags else "", f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
              f"<img src='trials.png' alt='{what} RMSE per trial'>",
-             _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds", "budget_s",
-                           "message"))]
+             _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", *ref_cols, "seconds",
+                           "budget_s", "message"))]
     (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
 
 
@@ -262,7 +273,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                 try:
                     nb = submissions[student]
                     if isinstance(nb, str):                 # a notebook that could not be read: why
-                        return StudentResult(student, error=nb, points=rubric_points(0, False, True, 0, 0))
+                        return StudentResult(student, error=nb, points=rubric_points(float("nan"), False, True, 0, 0))
                     return grade_submission(student, nb, scored, refs, course, scratch, slot=slot, seed=seed,
                                             seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
                                             limits=limits, cleared=student in cleared, model=model)

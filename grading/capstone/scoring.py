@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fusionlab.capstone import NEAR_VQF, RUBRIC, SENSORS
+from fusionlab.capstone import RUBRIC, SENSORS, accuracy_points
 
 MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
 MATCH_STRIDE = 5                # ... compared at every 5th sample
@@ -237,17 +237,19 @@ def mean_total(trials):
     return mean_scored(trials)
 
 
-def _published_means(refs, sensors):
+def published_means(refs, sensors):
     """(Madgwick's, VQF's) mean scored RMSE of one sensor set: what :func:`rubric_points` compares with."""
     vqf, madgwick = PUBLISHED[sensors]
     return mean_scored(refs[madgwick].trials), mean_scored(refs[vqf].trials)
 
 
-def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg):
+def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg, sensors="9D"):
     """Points of each rubric criterion (:data:`RUBRIC`) for a mean RMSE (total for a 9D filter, inclination for a
-    6D one), against Madgwick's and VQF's of the same sensor set; none when ``gated_out``."""
+    6D one), against Madgwick's and VQF's of the same sensor set (:func:`fusionlab.capstone.accuracy_points`); none
+    when ``gated_out``."""
     if gated_out:
         return {c.key: 0.0 for c in RUBRIC}
-    earned = {"runs": all_ran, "beats_madgwick": mean_deg < madgwick_deg,
-              "near_vqf": mean_deg <= NEAR_VQF * vqf_deg, "beats_vqf": mean_deg < vqf_deg}
-    return {c.key: float(c.points) if earned[c.key] else 0.0 for c in RUBRIC}
+    points = {c.key: float(c.points) for c in RUBRIC}
+    earned = {"runs": points["runs"] if all_ran else 0.0,
+              "accuracy": accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors) if np.isfinite(mean_deg) else 0.0}
+    return {c.key: round(earned[c.key], 1) for c in RUBRIC}
