@@ -210,7 +210,8 @@ def read_submission(course: Path, lab: str, student: str):
 
 
 def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) -> Result:
-    """Grade one submission (runs in a worker thread, under a user id no other running student has)."""
+    """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
+    process of its own, :func:`grading.judge.judge_apart`)."""
     t0 = time.monotonic()
     result = Result(student)
     try:
@@ -220,7 +221,7 @@ def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) ->
         return result
     slot = slots.get()
     try:
-        result.verdict = judge.judge(lab, nb, student, slot)
+        result.verdict = judge.judge_apart(lab, nb, student, slot)
     finally:
         slots.put(slot)
     result.ok = True
@@ -414,6 +415,8 @@ def main(argv=None):
         if problem:
             raise SystemExit(f"cannot grade {lab}: the sandbox does not start on this machine, so no student is "
                              f"graded.\n{problem}")
+        files, size = sandbox.warm(sandbox.view(course))
+        print(f"every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True)
         if not args.no_generate:
             print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
             generate(course, lab, scratch / "release")
@@ -456,7 +459,10 @@ def main(argv=None):
         alike, pairs = similarity.report(course, lab, the_lab.release, the_lab.solution)
         print()
         print(summary(lab, results, seconds, args.workers, report))
-        print(f"\npeak memory of the grading process: {peak_mb():.0f} MB")
+        judged = [r.verdict.judge_mb for r in results if r.verdict is not None]
+        print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
+              f"(at most {judge.JUDGE_MEMORY_BYTES >> 30} GB of address space each): "
+              f"{max(judged, default=0):.0f} MB")
         print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
               f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")

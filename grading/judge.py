@@ -32,6 +32,7 @@ import builtins
 import contextlib
 import copy
 import dataclasses
+import json
 import re
 import shutil
 import time
@@ -46,7 +47,7 @@ from fusionlab.checks import exercises
 from grading import box as wire
 from grading import boxlib, cells, client, sandbox
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
-from grading.outputs import Budget
+from grading.outputs import Budget, inert, inert_markdown
 
 CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
 STUDENT_SECONDS = 900      # wall time of the whole submission
@@ -88,6 +89,7 @@ class Verdict:
     cell_errors: dict = field(default_factory=dict)
     seconds: float = 0.0
     largest_reply: int = 0        # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
+    judge_mb: float = 0.0         # the most memory the process that judged it held (MB; judge_apart)
 
     @property
     def score(self):
@@ -124,6 +126,9 @@ class Lab:
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
         self.unstubbed = {}
         self._reference = {}
+
+    def __getstate__(self):
+        return {**self.__dict__, "_base": None}          # the setup's namespace holds modules: run again there
 
     def box_root(self, gid):
         """The box's library and shadow packages for the test ``gid``: its references and forbidden functions are
@@ -292,6 +297,7 @@ class Session:
         self.largest = 0
         self.restarts = 0
         self.deadline = time.monotonic() + STUDENT_SECONDS
+        self.budget = {"deadline": self.deadline}     # of the test's calls: set when the test starts
 
     def _spawn(self):
         uid = sandbox.box_uid(self.slot)
@@ -410,27 +416,96 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
     """Grade one submission (``submitted``: the notebook, or None when it could not be read).
 
     Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
-    that test) with that test's references stubbed, then answers the test's calls; one student's boxes run one after
-    the other under the same user id (``slot``)."""
+    that test) with that test's references stubbed, then answers the test's calls; one student's boxes run under the
+    same user id (``slot``).
+
+    In two rounds: first the visible part of every test, each in its box, whose verdicts may quote the student's
+    code; then, in the boxes kept open, the hidden parts, whose verdicts name only the kind of failure. No box's
+    words reach the feedback after any box of the student has seen a hidden input, so a channel between the boxes
+    (the kernel's page cache is one no sandbox closes) cannot carry hidden inputs into a verdict."""
     t0 = time.monotonic()
     verdict = Verdict()
     base = lab.base()
     stopped = set()
-    for gid, source in lab.tests.items():
-        result = TestResult(gid, lab.points.get(gid, 0.0))
-        verdict.tests.append(result)
-        reference = lab.reference_values(gid, slot)
-        session = Session(lab, submitted, student, slot, gid, need=cells.free_names(source), stopped=stopped)
-        try:
-            _run_test(lab, session, source, dict(base), reference, result)
-        finally:
-            verdict.notes += [n for n in session.notes if n not in verdict.notes]
-            for i, e in session.cell_errors.items():
-                verdict.cell_errors.setdefault(session._where(i), e)
-            session.close()
-            verdict.largest_reply = max(verdict.largest_reply, session.largest)
+    kept = []                      # (session, result, ns, hidden parts) of the tests whose visible part passed
+    try:
+        for gid, source in lab.tests.items():
+            result = TestResult(gid, lab.points.get(gid, 0.0))
+            verdict.tests.append(result)
+            reference = lab.reference_values(gid, slot)
+            session = Session(lab, submitted, student, slot, gid, need=cells.free_names(source), stopped=stopped)
+            ns = dict(base)
+            rest = _visible_part(lab, session, source, ns, reference, result)
+            if rest:
+                kept.append((session, result, ns, rest))
+            else:
+                _close(session, verdict)
+        while kept:
+            session, result, ns, rest = kept.pop(0)
+            try:
+                _hidden_part(lab, session, ns, rest, result)
+            finally:
+                _close(session, verdict)
+    finally:
+        for session, *_ in kept:               # a failure of the judge itself: no box is left running
+            _close(session, verdict)
     verdict.seconds = time.monotonic() - t0
     return verdict
+
+
+def _close(session, verdict):
+    verdict.notes += [n for n in session.notes if n not in verdict.notes]
+    for i, e in session.cell_errors.items():
+        verdict.cell_errors.setdefault(session._where(i), e)
+    session.close()
+    verdict.largest_reply = max(verdict.largest_reply, session.largest)
+
+
+#: The address space of the process that judges one student (:func:`judge_apart`): the test code computes with the
+#: student's values there (``B @ u``), and values shaped to blow up in it (a 15 000 x 1 x 1 array times a 1 x 15 000
+#: one: 1.8 GB from a reply of 240 kB) then fail that student's test, not the class's grading.
+JUDGE_MEMORY_BYTES = 3 << 30
+
+
+def _judge_child(conn, lab, submitted, student, slot, memory_bytes):
+    import resource
+    # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
+    resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    try:
+        verdict = judge(lab, submitted, student, slot)
+        verdict.judge_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        conn.send_bytes(json.dumps({"verdict": dataclasses.asdict(verdict)}).encode())
+    except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
+        conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
+    finally:
+        conn.close()
+
+
+def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES) -> Verdict:
+    """:func:`judge`, in a process of its own with ``memory_bytes`` of address space, started from a clean server
+    process (not forked from this one's threads). What comes back is JSON: the verdict's numbers and texts."""
+    import multiprocessing
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["grading.judge"])
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_judge_child, args=(send, lab, submitted, student, slot, memory_bytes))
+    child.start()
+    send.close()
+    try:
+        reply = json.loads(receive.recv_bytes())
+    except EOFError:
+        child.join()
+        raise RuntimeError(f"the judge's process for {student} ended without a verdict (exit status "
+                           f"{child.exitcode})") from None
+    finally:
+        receive.close()
+    child.join()
+    if "error" in reply:
+        raise RuntimeError(f"the judge failed in its own process: {reply['error']}")
+    d = reply["verdict"]
+    return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
+                   cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
+                   largest_reply=int(d["largest_reply"]), judge_mb=float(d["judge_mb"]))
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
@@ -472,6 +547,8 @@ def hidden_failure(gid, exc, lab):
         kind = "your function returned something that is not plain numbers"
     elif isinstance(exc, guard.WrongShape):
         kind = "wrong shape (or not numbers)"
+    elif isinstance(exc, NameError):
+        kind = "a name it uses is not defined by your notebook"
     elif isinstance(exc, AssertionError):
         kind = "wrong value"
     else:
@@ -479,16 +556,20 @@ def hidden_failure(gid, exc, lab):
     return f"{where}: {kind}. The visible check above the test names the slip on cases you can see."
 
 
-def _run_test(lab, session, source, ns, reference, result):
+def _visible_part(lab, session, source, ns, reference, result):
+    """Start the test's box and run the visible part of its cell. Returns the parts left to run (from the first
+    hidden one) when the visible part passed, else None with ``result`` filled (passed, or failed with a message
+    that may quote the student's code: no box of theirs has seen a hidden input yet)."""
     gid = result.grade_id
     try:
         session.start()
     except BoxDied:
         result.message = "not run: the notebook above this test could not be run (see the notes)"
-        return
+        return None
+    session.budget["deadline"] = time.monotonic() + lab.cell_seconds       # the test's time, both parts together
     names = [n for n in cells.free_names(source) if n not in ns and not hasattr(builtins, n)]
-    budget = {"deadline": time.monotonic() + lab.cell_seconds}
-    hidden = False
+    parts = cells.test_parts(source)
+    first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
     try:
         own = [n for n in names if n not in reference]
         described = session.describe(own) if own else {}
@@ -498,35 +579,58 @@ def _run_test(lab, session, source, ns, reference, result):
                 continue
             d = described[n]
             if d["kind"] == "function":
-                ns[n] = session.proxy(n, budget)
+                ns[n] = session.proxy(n, session.budget)
             elif d["kind"] == "value":
                 ns[n] = d["value"]
             elif d["kind"] == "unreadable":
                 raise StudentError(f"{n} is not plain numbers ({d['error']})")
-        for part_hidden, code in cells.test_parts(source):
-            hidden = hidden or part_hidden      # once hidden inputs were sent, nothing the student's code says is shown
+        for _, code in parts[:first_hidden]:
             exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
-        result.score = result.points
-        result.message = "passed"
-    except NameError as exc:
+    except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
+        _failed(lab, session, result, exc, hidden=False)
+        return None
+    if first_hidden == len(parts):
+        result.score, result.message = result.points, "passed"
+        return None
+    session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
+    return parts[first_hidden:]
+
+
+def _hidden_part(lab, session, ns, parts, result):
+    """Run the rest of a test (its hidden parts, and anything after them) in its box, with the time its visible part
+    left; a failure is told by :func:`hidden_failure`."""
+    session.budget["deadline"] = time.monotonic() + session.budget.pop("left")
+    try:
+        for _, code in parts:
+            exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+    except Exception as exc:  # noqa: BLE001
+        _failed(lab, session, result, exc, hidden=True)
+        return
+    result.score, result.message = result.points, "passed"
+
+
+def _failed(lab, session, result, exc, hidden):
+    """Fill ``result`` for the failure ``exc`` of its test: 0 points, and the message the student may read."""
+    gid = result.grade_id
+    if isinstance(exc, NameError) and not hidden:
         missing = re.search(r"name '(\w+)' is not defined", str(exc))
         result.message = f"{missing.group(1)} is not defined by your notebook" if missing else _first_line(exc)
         prefix = gid.split("_")[0] + "_"
         errs = [e for i, e in session.cell_errors.items() if (session.cells[i][0] or "").startswith(prefix)]
         if errs:
             result.message += f" (your answer cell failed: {errs[0]})"
-    except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
-        if hidden:
-            result.message = hidden_failure(gid, exc, lab)
-        elif isinstance(exc, ReplyTooLarge):
-            result.message = TOO_LARGE
-        elif isinstance(exc, (BoxTimeout, BoxDied)):
-            result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
-                              else f"your code ended the process ({exc})")
-        else:
-            result.message = _first_line(exc)[:1500]
-        if isinstance(exc, (BoxTimeout, BoxDied)):
-            session.notes.append(f"test {gid}: {result.message}")
+        return
+    if hidden:
+        result.message = hidden_failure(gid, exc, lab)
+    elif isinstance(exc, ReplyTooLarge):
+        result.message = TOO_LARGE
+    elif isinstance(exc, (BoxTimeout, BoxDied)):
+        result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
+                          else f"your code ended the process ({exc})")
+    else:
+        result.message = _first_line(exc)[:1500]
+    if isinstance(exc, (BoxTimeout, BoxDied)):
+        session.notes.append(f"test {gid}: {result.message}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -545,13 +649,13 @@ def autograded_notebook(lab: Lab, submitted, verdict: Verdict):
     nb = nbformat.v4.new_notebook(metadata=copy.deepcopy(lab.release.metadata))
 
     def outputs(cell):
-        return [o for o in (budget.admit(nbformat.from_dict(o)) for o in cell.get("outputs", []) or [])
-                if o is not None]
+        kept = (inert(nbformat.from_dict(o)) for o in cell.get("outputs", []) or [] if isinstance(o, dict))
+        return [o for o in (budget.admit(o) for o in kept if o is not None) if o is not None]
 
     for kind, gid, cell in seq:
         if kind == "added":
             new = (nbformat.v4.new_code_cell(cell.get("source", "")) if cell.get("cell_type") == "code"
-                   else nbformat.v4.new_markdown_cell(cell.get("source", "")))
+                   else nbformat.v4.new_markdown_cell(inert_markdown(cell.get("source", ""))))
             if new.cell_type == "code":
                 new.outputs = outputs(cell)
             nb.cells.append(new)
@@ -563,6 +667,8 @@ def autograded_notebook(lab: Lab, submitted, verdict: Verdict):
         else:
             if cells.is_answer(mine) or not cells.nbg(mine).get("locked"):
                 mine.source = cell.get("source", "")
+                if mine.cell_type == "markdown":
+                    mine.source = inert_markdown(mine.source)
             if mine.cell_type == "code":
                 mine.outputs = outputs(cell) if cell is not lab._release_cell(gid) else []
         nb.cells.append(mine)

@@ -1,12 +1,16 @@
-"""Byte caps on the outputs a submission brings into the autograded notebook and the feedback built from it.
+"""What a submission brings into the autograded notebook and the feedback built from it: capped, and inert.
 
 A student's saved outputs are kept in the notebook the instructor and the student see after grading (the judge's
 verdict replaces the outputs of the test cells). An output can be anything a notebook file holds, so each is capped
-in bytes, with a visible note where it was cut: :class:`Budget` admits outputs one by one.
+in bytes, with a visible note where it was cut: :class:`Budget` admits outputs one by one. And since Formgrader and
+the feedback page show that notebook in the instructor's browser, from the instructor's Jupyter server, nothing of
+the student's may run there: :func:`inert` keeps of an output only kinds that carry no script (text, PNG and JPEG
+images), and :func:`inert_markdown` turns the HTML tags of a student's Markdown into text.
 """
 from __future__ import annotations
 
 import json
+import re
 
 from nbformat.notebooknode import NotebookNode
 
@@ -96,3 +100,36 @@ class Budget:
             self.truncated += 1
         self.used += output_bytes(out)
         return out
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Nothing of the student's runs in the instructor's browser
+
+#: The kinds of rich output kept: none of them can carry a script (HTML, SVG, JavaScript, Markdown with raw HTML,
+#: widgets are dropped; their text/plain stays).
+INERT_MIME = ("text/plain", "image/png", "image/jpeg")
+
+
+def inert(out):
+    """``out`` with only what cannot run in a browser: streams and errors as they are (rendered as escaped text), rich
+    outputs reduced to :data:`INERT_MIME` (None when nothing is left), metadata dropped."""
+    kind = out.get("output_type")
+    if kind in ("stream", "error"):
+        return out
+    if kind not in ("display_data", "execute_result"):
+        return None
+    data = {k: v for k, v in (out.get("data") or {}).items() if k in INERT_MIME and isinstance(v, (str, list))}
+    if not data:
+        return None
+    out = NotebookNode({**out, "data": NotebookNode(data), "metadata": NotebookNode()})
+    return out
+
+
+_TAG = re.compile(r"<(?=[A-Za-z/!?])")
+
+
+def inert_markdown(source):
+    """A student's Markdown with every HTML tag turned into text (``<img onerror=...>`` shows as written and does
+    nothing): ``<`` before a letter, ``/``, ``!`` or ``?`` becomes ``&lt;``. Math and prose keep their meaning."""
+    text = "".join(source) if isinstance(source, list) else str(source)
+    return _TAG.sub("&lt;", text)

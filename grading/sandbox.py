@@ -4,7 +4,8 @@
 and answers calls with plain data over a pipe.  The judge -- the tests, the expected values, the comparisons and the
 scores -- stays outside.  In the box
 
-* the file system holds only the system (``/usr``, a few files of ``/etc``), the Python installation, the lab's copy
+* the file system holds only the shared libraries the Python installation loads (:func:`system_files`, not the
+  rest of ``/usr``), a few files of ``/etc``, the Python installation, the lab's copy
   of the library in which the reference answers are stubs (mounted where the course's ``lib/`` is, read-only), the
   course's ``data/`` (read-only), packages that shadow installed ones (read-only, first on the path; the installed
   copies they replace covered by empty folders, :func:`package_paths`, so that no change of ``sys.path`` reaches
@@ -33,22 +34,27 @@ scores -- stays outside.  In the box
     same operations where the filter does not see them. Plain reads (``read``, ``pread``, ``readv``, ``preadv``
     and ``preadv2`` without flags) and ``readahead`` stay allowed.
 
-  What remains is not closed. A box still fills the cache by reading, and can still tell a cached page from one
-  read from disk: by how long a read takes (noisy), or exactly, by the major-fault count ``getrusage`` reports after
-  the first touch of a page of a mapped file. Either probe reads the page it looks at, so it sees each page once;
-  with eviction refused a page leaves the cache only under memory pressure. A box can so leave one-way, one-shot
-  bits (pages of files nothing else reads) for a later box: slower and smaller than what is refused, not impossible.
+  A box still fills the cache by reading, and can tell a cached page from one read from disk, exactly, by the
+  major-fault count ``getrusage`` reports after its first touch of a page of a mapped file: a box touching pages
+  nothing else reads and a later box counting faults on them share bits (an outside review carried a class's hidden
+  inputs that way). So every file a box can read (:func:`view`) is read into the page cache before a class is
+  graded (:func:`warm`): a touch then changes nothing, and with eviction refused nothing leaves the cache but under
+  the machine's own memory pressure. Timing a read stays possible, and says as little: the page is cached.
 """
 from __future__ import annotations
 
 import contextlib
 import fcntl
+import functools
 import json
 import os
+import re
 import shutil
+import stat
 import struct
 import subprocess
 import sys
+import sysconfig
 import tempfile
 
 FIRST_UID = 200_000   # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
@@ -210,26 +216,110 @@ os.execv(sys.executable, [sys.executable, *sys.argv[1:]])
 """
 
 
+@functools.lru_cache(maxsize=1)
+def system_files():
+    """The files of the system a box needs, as ``[(source, dest)]``: the shared libraries the interpreter and every
+    extension module of the Python installation load (as ``ldd`` finds them, the dynamic loader included; ``dest``
+    in the real folder of the name ``ldd`` gives, the source the file it points to), and the time zones. Nothing
+    else of ``/usr`` is in a box: every file a box can read is one :func:`warm` keeps in the page cache."""
+    prefixes = sorted({os.path.realpath(sys.prefix), os.path.realpath(sys.base_prefix)})
+    objects = [os.path.realpath(sys.executable)]
+    for prefix in prefixes:
+        for top, _, files in os.walk(prefix):
+            objects += [os.path.join(top, f) for f in files if ".so" in f and not f.endswith((".py", ".pyc"))]
+    found = set()
+    for i in range(0, len(objects), 200):
+        out = subprocess.run(["ldd", *objects[i:i + 200]], capture_output=True, text=True).stdout
+        found.update(re.findall(r"(/\S+) \(0x[0-9a-f]+\)", out))
+    inside = tuple(p.rstrip("/") + "/" for p in prefixes)
+    files = []
+    for path in sorted(found):
+        dest = os.path.join(os.path.realpath(os.path.dirname(path)), os.path.basename(path))
+        if not dest.startswith(inside) and os.path.isfile(path):
+            files.append((os.path.realpath(path), dest))
+    return files
+
+
 def _system_binds():
-    args = ["--ro-bind", "/usr", "/usr"]
+    args = []
     for top in ("/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"):
         if os.path.islink(top):
             args += ["--symlink", os.readlink(top), top]
-        elif os.path.isdir(top):
-            args += ["--ro-bind", top, top]
+    for source, dest in system_files():
+        args += ["--ro-bind", source, dest]
+    args += ["--ro-bind-try", "/usr/share/zoneinfo", "/usr/share/zoneinfo"]
     for name in ETC:
         args += ["--ro-bind-try", f"/etc/{name}", f"/etc/{name}"]
     return args
 
 
+def _python_prefixes():
+    """The virtual environment and the installation it is based on (for a system Python, only its own folders of
+    ``/usr``: the standard library and the interpreter), at their real paths."""
+    out = set()
+    for p in {os.path.realpath(sys.prefix), os.path.realpath(sys.base_prefix)}:
+        if p == "/usr" or p.startswith("/usr/"):
+            paths = sysconfig.get_paths()
+            out |= {os.path.realpath(paths[k]) for k in ("stdlib", "platstdlib")}
+            out.add(os.path.realpath(sys.executable))
+        else:
+            out.add(p)
+    return sorted(out)
+
+
 def _python_binds():
-    """The virtual environment and the installation it is based on, read-only, at their real paths."""
-    prefixes = {os.path.realpath(sys.prefix), os.path.realpath(sys.base_prefix)}
     args = []
-    for p in sorted(prefixes):
-        if not p.startswith("/usr/") and p != "/usr":
-            args += ["--ro-bind", p, p]
+    for p in _python_prefixes():
+        args += ["--ro-bind", p, p]
     return args
+
+
+def view(course, lib=None, data=True):
+    """Every file and folder a box of ``course`` can read that is not private to it: the system's
+    (:func:`system_files`), the Python installation, the library, the course's data and the BROAD trials (with
+    ``data``), the matplotlib cache."""
+    course = os.path.realpath(course)
+    out = [dest for _, dest in system_files()] + ["/usr/share/zoneinfo"] + [f"/etc/{n}" for n in ETC]
+    out += _python_prefixes() + [os.path.realpath(lib or os.path.join(course, "lib"))]
+    if data:
+        out.append(os.path.join(course, "data"))
+        binds, _ = _data_binds()
+        out += [binds[i + 1] for i, a in enumerate(binds) if a == "--ro-bind"]
+    out += [_matplotlib_cache(), os.path.join(os.path.dirname(os.path.realpath(__file__)), "box.py")]  # what it runs
+    return [p for p in out if p and os.path.exists(p)]
+
+
+def warm(paths, chunk=1 << 20):
+    """Read every regular file under ``paths`` once, so that all of it is in the page cache: returns (files, bytes).
+
+    The page cache is the machine's, not a box's: a box that touches a page nothing else has read, and a later box
+    that counts its page faults on that page, share a bit (the seccomp filter refuses the calls that evict pages or
+    ask whether they are cached, not plain reads and faults). When every page a box can read is cached before the
+    boxes start, and none can be evicted by a box, touching changes nothing and a fault count says nothing. Called
+    once per grading run, over :func:`view` (about 2 GB here, read from memory when it is cached already)."""
+    files = size = 0
+    seen = set()
+    buffer = bytearray(chunk)
+    for root in paths:
+        walk = [(os.path.dirname(root), [], [os.path.basename(root)])] if os.path.isfile(root) else os.walk(root)
+        for top, _, names in walk:
+            for name in names:
+                path = os.path.join(top, name)
+                try:
+                    st = os.stat(path)
+                except OSError:
+                    continue
+                if not stat.S_ISREG(st.st_mode) or (st.st_dev, st.st_ino) in seen:
+                    continue
+                seen.add((st.st_dev, st.st_ino))
+                try:
+                    with open(path, "rb", buffering=0) as f:
+                        while f.readinto(buffer):
+                            pass
+                except OSError:
+                    continue
+                files, size = files + 1, size + st.st_size
+    return files, size
 
 
 def _data_binds():

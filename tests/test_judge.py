@@ -62,6 +62,11 @@ def _answers(nb, ex2, ex3, prelude=""):
     return _set(nb, "ex3_solution", f"def my_predict(x, P, A, Q, B, u):\n{body(ex3)}\n")
 
 
+XSS_MARKDOWN = "My answer <img src=x onerror=\"document.title='XSS-IMG'\"> <script>document.title='XSS-MD'</script>"
+XSS_JS = "window.XSS_JS = 1"
+XSS_HTML = "<b onmouseover=\"document.title='XSS-HTML'\">bold</b><script>window.XSS_HTML = 1</script>"
+XSS_IFRAME = "<iframe srcdoc=\"<script>parent.XSS_FRAME = 1</script>\"></iframe>"
+XSS_MARKS = ("<img src=x", "<script>document.title", "window.XSS_JS", "<b onmouseover", "window.XSS_HTML", "<iframe")
 JUNK2 = "return np.eye(2), np.zeros((2, 2)), np.zeros(2)"
 JUNK3 = "return np.zeros_like(x), np.zeros_like(P)"
 
@@ -199,6 +204,22 @@ def _attacks(root, port, half):
         "return real.predict(x, P, A, Q, B, u)"))
     # 17: 36 characters of sympy that the judge would evaluate into gigabytes
     out["sympy_bomb"] = _answers(half, JUNK2, "import sympy\nreturn sympy.Pow(2, 4_000_000_000, evaluate=False), P")
+    # 18: values shaped to blow up in the judge's own arithmetic: exercise 2's test computes B @ u, and a B of
+    # 40 000 x 1 x 1 times a u of 1 x 40 000 (640 kB of reply) is 12.8 GB
+    out["amplify"] = _answers(half, (
+        "global _calls_amp\n_calls_amp = globals().get('_calls_amp', 0) + 1\n"
+        "if _calls_amp == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
+        "return np.eye(2), np.ones((40_000, 1, 1)), np.ones((1, 40_000))"), JUNK3)
+    # 19: scripts for the instructor's browser (Formgrader and the feedback page are served by the instructor's
+    # Jupyter server): raw HTML in a written answer, a saved JavaScript output, an added cell with an iframe
+    xss = nbformat.from_dict(_answers(half, JUNK2, JUNK3))
+    [q1] = [c for c in xss.cells if grade_id(c) == "q1"]
+    q1.source = XSS_MARKDOWN
+    [ex2] = [c for c in xss.cells if grade_id(c) == "ex2_solution"]
+    ex2.outputs = [nbformat.v4.new_output("display_data", data={"application/javascript": XSS_JS,
+                                                                "text/html": XSS_HTML, "text/plain": "a plot"})]
+    xss.cells.append(nbformat.v4.new_markdown_cell(XSS_IFRAME))
+    out["xss"] = xss
     # 10: a last cell that prints every cell the kernel ran, hoping for the hidden tests
     leak = nbformat.from_dict(half)
     leak.cells.append(nbformat.v4.new_code_cell("print(In)\nprint(globals().keys())"))
@@ -378,7 +399,8 @@ def test_honest_students_score_what_they_did(graded):
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
                                      "reference_from_source", "other_packages", "writes", "daemon", "network",
                                      "read_others", "stuck", "fork_bomb", "print_in", "disk_fill", "gadgets",
-                                     "leak_inputs", "flood", "keyring", "nested_links", "sympy_bomb"])
+                                     "leak_inputs", "flood", "keyring", "nested_links", "sympy_bomb", "amplify",
+                                     "xss"])
 def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
     assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
         graded["run"].stdout[-4000:]
@@ -529,6 +551,33 @@ def test_a_flood_on_the_pipe_fails_its_test_and_costs_the_judge_no_memory(graded
     assert "a reply over 16 MB" in text, text
     peak = int(re.search(r"peak memory of the grading process: (\d+) MB", graded["run"].stdout).group(1))
     assert 100 < peak < 1000, f"the grading process peaked at {peak} MB"
+
+
+def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_process(graded):
+    """The judge of each student runs in a process of its own with a bounded address space: the 12.8 GB product
+    fails that student's test at once, and neither the class's grading process nor a judge process grows."""
+    _, text = _autograded(graded, "amplify", "ex2_tests")
+    assert "exercise 2, hidden tests: your result could not be used (MemoryError)" in text, text
+    out = graded["run"].stdout
+    child = int(re.search(r"of one student's judge process \(at most 3 GB of address space each\): (\d+) MB",
+                          out).group(1))
+    assert 100 < child < 1500, f"a judge process peaked at {child} MB"
+
+
+def test_nothing_of_a_student_runs_in_formgrader_or_the_feedback_page(graded):
+    """The autograded notebook keeps a student's written answer and outputs as text: Formgrader's own exporter and
+    the feedback page show the words, and no tag or script of theirs."""
+    from nbconvert import HTMLExporter
+    from nbgrader.server_extensions.formgrader import handlers
+    path = graded["root"] / "autograded" / "xss" / LAB / f"{LAB}.ipynb"
+    formgrade = HTMLExporter(template_name="formgrade", extra_template_basedirs=[handlers.template_path])
+    shown = {"assignment_id": LAB, "notebook_id": LAB, "submission_id": "1", "index": 0, "total": 1, "base_url": "",
+             "student": "xss", "last_name": "", "first_name": "", "notebook_path": str(path)}    # as Formgrader gives
+    pages = {"Formgrader": formgrade.from_filename(str(path), resources=shown)[0],
+             "feedback": (graded["root"] / "feedback" / "xss" / LAB / f"{LAB}.html").read_text()}
+    for where, page in pages.items():
+        assert "My answer" in page and "a plot" in page, where
+        assert [m for m in XSS_MARKS if m in page] == [], where
 
 
 def test_the_key_store_carries_nothing_from_one_box_to_the_next(graded):

@@ -463,6 +463,93 @@ def test_a_page_cache_bit_set_by_one_box_is_not_seen_by_another(tmp_path, monkey
         assert {name: r[:2] for name, r in got.items()} == {name: [-1, EPERM] for name in got} and len(got) == 10, got
 
 
+FAULTS = textwrap.dedent("""
+    import json, mmap, os, resource, sys
+    path, pages, touch = sys.argv[1], json.loads(sys.argv[2]), sys.argv[3] == "touch"
+    fd = os.open(path, os.O_RDONLY)
+    m = mmap.mmap(fd, os.fstat(fd).st_size, prot=mmap.PROT_READ)
+    m.madvise(mmap.MADV_RANDOM)                    # no read-around: one page per fault
+    seen = []
+    for p in pages:
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_majflt
+        m[p * 4096]
+        seen.append(resource.getrusage(resource.RUSAGE_SELF).ru_majflt == before)    # True: it was cached
+    print(json.dumps(seen))
+""")
+
+
+def _faults(tmp_path, slot, path, pages, touch):
+    """Box run as grading runs one: touch ``pages`` of ``path`` (a sender) or probe them (a receiver); for each
+    page, whether it was in the page cache, by the major-fault count (what no filter refuses)."""
+    course = tmp_path / "course"
+    (course / "lib").mkdir(parents=True, exist_ok=True)
+    (course / "labs" / LAB).mkdir(parents=True, exist_ok=True)
+    uid = sandbox.box_uid(slot)
+    work = sandbox.private_folder(None, tmp_path, uid)
+    command = sandbox.bwrap_command(["python", "-c", FAULTS, path, json.dumps(pages), "touch" if touch else "probe"],
+                                    course=course, lab=LAB, lib=course / "lib", work=work, uid=uid, data=False)
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert run.returncode == 0, run.stderr[-2000:]
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def _evict(path):
+    """Drop ``path`` from the page cache (outside any box); False when the kernel kept some of it."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
+        try:
+            os.preadv(fd, [bytearray(4096)], 20 * 4096, os.RWF_NOWAIT)
+            return False
+        except BlockingIOError:
+            return True
+    finally:
+        os.close(fd)
+
+
+@NEEDS_BWRAP
+def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_box(tmp_path):
+    """The channel the seccomp filter leaves: box A touches pages of a file nothing else reads, box B counts its
+    major faults on them (exact, no call refused). Shown working on a file just evicted, then closed: grading
+    first reads every file a box can read (``sandbox.warm`` over ``sandbox.view``), and B sees every page cached
+    whatever A did."""
+    path, _ = _venv_file()
+    view = sandbox.view(tmp_path / "course", data=False)
+    assert any(path == v or path.startswith(v.rstrip("/") + "/") for v in view), "the file is one a box can read"
+    touched, pages = [20, 60], [20, 40, 60, 80]
+    with sandbox.claimed_slots(2) as (a, b):
+        if not _evict(path):
+            pytest.skip("the kernel here keeps the file cached after POSIX_FADV_DONTNEED")
+        _faults(tmp_path, a, path, touched, touch=True)
+        assert _faults(tmp_path, b, path, pages, touch=False) == [True, False, True, False], \
+            "without the warming, box B reads box A's bits"
+        assert _evict(path)
+        files, size = sandbox.warm(view)
+        assert size > 100 << 20 and files > 1000, (files, size)
+        _faults(tmp_path, a, path, touched, touch=True)
+        assert _faults(tmp_path, b, path, pages, touch=False) == [True] * 4, "every page was cached before A ran"
+
+
+def test_a_box_reads_nothing_the_warming_leaves_out(tmp_path):
+    """Every folder and file mounted read-only into a box (the system's libraries, the Python installation, the
+    library, the data, the box's own script) is in ``sandbox.view``: none can hold a page no grading run has read.
+    The private folders (the submission's copy, /tmp, the lab folder) are the box's own."""
+    course = tmp_path / "course"
+    (course / "lib").mkdir(parents=True)
+    (course / "data").mkdir()
+    (course / "labs" / LAB).mkdir(parents=True)
+    work = tmp_path / "work"
+    work.mkdir()
+    from grading import client
+    args = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=course, lab=LAB, lib=course / "lib",
+                                 work=str(work))
+    view = [os.path.realpath(v) for v in sandbox.view(course)]
+    sources = [os.path.realpath(args[i + 1]) for i, a in enumerate(args) if a in ("--ro-bind", "--ro-bind-try")]
+    outside = [src for src in sources if src != os.path.realpath(work) and src != "/dev/null"
+               and not any(src == v or src.startswith(v.rstrip("/") + "/") for v in view)]
+    assert outside == [] and "/usr" not in sources, outside
+
+
 @NEEDS_BWRAP
 def test_an_ordinary_workload_runs_in_the_box(tmp_path, slot):
     """numpy, a thread, a fork, a child process and plain reads: the filter refuses nothing else, and is in

@@ -263,7 +263,11 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
             if progress:
                 print(f"==> reference filters on {len(scored)} trials", flush=True)
             refs = cached_references(scored, out, seed, progress=progress)
-            box_library(scratch)
+            lib = box_library(scratch)
+            files, size = sandbox.warm(sandbox.view(course, lib=lib, data=False) + [str(lib)])
+            if progress:
+                print(f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB",
+                      flush=True)
             free = queue.Queue()
             for s in slots:
                 free.put(s)

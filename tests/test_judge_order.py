@@ -1,0 +1,95 @@
+"""The judge's two rounds: every visible part before any hidden part, so that no verdict a student reads is written
+after one of their boxes has seen a hidden input.
+
+The boxes of one student can signal to each other through the kernel (the page cache of a shared library file: a
+box touches pages, a later box counts its page faults); no sandbox short of a virtual machine closes every such
+channel. Here the channel is perfect, a dict the fake boxes share, and the student's function uses it as the red
+team's did: it stores the inputs of the hidden cases it is called with, and a later test's call raises an error
+that carries them. The judge's verdicts must hold none of them, and the honest control must still pass.
+"""
+from __future__ import annotations
+
+import types
+
+from grading import judge
+from grading.cells import HIDDEN_BEGIN, HIDDEN_END
+
+SECRET = 0.7318293       # a hidden case's input, as a test cell holds it
+SHOWN = 0.25             # a visible case's input
+
+TESTS = {
+    "ex1_tests": f"guard.assert_close(f({SHOWN}), 2 * {SHOWN}, what='f of the visible case')\n"
+                 f"{HIDDEN_BEGIN}\nguard.assert_close(f({SECRET}), 2 * {SECRET}, what='f of a hidden case')\n"
+                 f"{HIDDEN_END}",
+    "ex2_tests": f"guard.assert_close(g({SHOWN}), 3 * {SHOWN}, what='g of the visible case')\n"
+                 f"{HIDDEN_BEGIN}\nguard.assert_close(g(0.5), 1.5, what='g of a hidden case')\n{HIDDEN_END}",
+}
+
+
+class FakeSession:
+    """A box that answers ``f`` and ``g`` as the student's code would, with a channel to every other box."""
+    channel: dict = {}
+    log: list = []
+
+    def __init__(self, lab, submitted, student, slot, gid, need=(), stopped=None):
+        self.gid, self.student = gid, student
+        self.notes, self.cell_errors, self.cells, self.largest = [], {}, [], 0
+        self.budget = {"deadline": float("inf")}
+
+    def start(self):
+        self.log.append(("start", self.gid))
+
+    def describe(self, names):
+        return {n: {"kind": "function"} for n in names}
+
+    def proxy(self, name, budget):
+        cheat = self.student == "cheat"
+
+        def call(x):
+            self.log.append((name, self.gid, x))
+            if cheat and self.channel.get("seen"):
+                raise judge.StudentRaised(f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
+                                          f"ValueError: LEAKED {self.channel['seen']}")
+            if cheat and x != SHOWN:
+                self.channel.setdefault("seen", []).append(x)        # what a box saw, for the boxes after it
+            return 2 * x if name == "f" else 3 * x
+        return call
+
+    def _where(self, i):
+        return "the notebook"
+
+    def close(self):
+        self.log.append(("close", self.gid))
+
+
+def _lab():
+    return types.SimpleNamespace(tests=TESTS, points={"ex1_tests": 1.0, "ex2_tests": 1.0}, cell_seconds=10,
+                                 forbidden={}, base=lambda: {"guard": judge.guard},
+                                 reference_values=lambda gid, slot: {})
+
+
+def _judge(student, monkeypatch):
+    FakeSession.channel, FakeSession.log = {}, []
+    monkeypatch.setattr(judge, "Session", FakeSession)
+    return judge.judge(_lab(), None, student)
+
+
+def test_every_visible_part_runs_before_any_hidden_input_is_sent(monkeypatch):
+    verdict = _judge("honest", monkeypatch)
+    assert [t.message for t in verdict.tests] == ["passed", "passed"] and verdict.score == 2
+    calls = [entry for entry in FakeSession.log if entry[0] in ("f", "g")]
+    assert calls == [("f", "ex1_tests", SHOWN), ("g", "ex2_tests", SHOWN), ("f", "ex1_tests", SECRET),
+                     ("g", "ex2_tests", 0.5)]
+    log = FakeSession.log                      # the first box is kept open until its hidden part has run
+    assert log.index(("g", "ex2_tests", SHOWN)) < log.index(("close", "ex1_tests"))
+    assert log[-1] == ("close", "ex2_tests")
+
+
+def test_a_channel_between_boxes_carries_no_hidden_input_into_a_verdict(monkeypatch):
+    verdict = _judge("cheat", monkeypatch)
+    text = " ".join([t.message for t in verdict.tests] + verdict.notes)
+    assert str(SECRET) not in text and "LEAKED" not in text, text
+    # the later test's hidden part did read the channel: its verdict names the kind of failure only
+    assert verdict.tests[1].message.startswith("exercise 2, hidden tests: your function raised an error"), \
+        verdict.tests[1].message
+    assert verdict.tests[0].message == "passed"
