@@ -40,6 +40,10 @@ CELLS = {
     "test_none": "assert np.shape(f_vec) == (3,), 'f_vec must be three numbers'",
     "bare_assert": "x = 2\nassert x + 1 == 4",
     "assert_in_function": "def mine3():\n    assert False, 'my own invariant'\nmine3()",
+    # an autograder test cell: the guard's comparison fails on a wrong answer, and its shape check on a wrong shape
+    "guard_test": "# Autograder: exercise 5 (2 points)\nfrom fusionlab import guard\n"
+                  "guard.assert_close(np.eye(2) * 2, np.eye(2), what='A at the lab\\'s values')",
+    "guard_shape": "guard.assert_close(np.zeros(3), np.eye(2), what='P')",
 }
 
 
@@ -120,17 +124,28 @@ def test_a_provided_tests_assert_is_one_short_box_naming_the_exercise(run):
     assert "Traceback" in shown and "assert False, 'my own invariant'" in shown and "✗" not in shown, shown
 
 
+def test_an_autograder_tests_failed_comparison_is_one_short_box_without_the_guards_lines(run):
+    for name, words in (("guard_test", "A at the lab's values differs from the reference"),
+                        ("guard_shape", "P should have shape (2, 2); got (3,)")):
+        shown = run[name]["shown"]
+        assert run[name]["error"].ename in ("AssertionError", "WrongShape") and _is_box(shown, 3), shown
+        assert shown.startswith("✗ " + words), shown
+        assert "guard.py" not in shown and "Traceback" not in shown and "autograder test" in shown, shown
+
+
 def test_validate_and_autograde_reports_have_no_percent_tb_hint(monkeypatch):
     """nbgrader sets NBGRADER_EXECUTION while it runs a notebook (Validate, autograding): its report has no cell."""
     monkeypatch.setenv("NBGRADER_EXECUTION", "validate")
-    names = ("setup", "stub_fn", "check_stub", "stub_cell", "uses_after", "stub_none", "test_none")
+    names = ("setup", "stub_fn", "check_stub", "stub_cell", "uses_after", "stub_none", "test_none", "wrong")
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(CELLS[n]) for n in names])
     run_notebook(nb, timeout=120)
     shown = {n: ANSI.sub("", "\n".join(o.traceback)) for n, c in zip(names, nb.cells) for o in c.outputs
              if o.output_type == "error"}
-    assert set(shown) == {"check_stub", "stub_cell", "uses_after", "stub_none", "test_none"}, shown
+    assert set(shown) == {"check_stub", "stub_cell", "uses_after", "stub_none", "test_none", "wrong"}, shown
     for name, text in shown.items():
         assert text.startswith("✗ ") and "%tb" not in text and "Traceback" not in text, (name, text)
+        assert max(len(line) for line in text.splitlines()) <= 100, (name, text)    # the dialog cuts long lines
+    assert len(shown["wrong"].splitlines()) > 1 and "det(C) = -1" in shown["wrong"], shown["wrong"]
 
 
 def test_a_students_own_errors_keep_their_traceback(run):

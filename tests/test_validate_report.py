@@ -67,6 +67,10 @@ def test_make_validate_says_how_many_tests_pass_and_shows_no_percent_tb(half_ans
     assert report.index(m.group(0)) < report.index("The following cell failed:")   # the count comes first
     assert "%tb" not in report and "Traceback" not in report, report
     assert "✗" in report
+    # no warning above the report, and no line of a ✗ box cut off ("...") by the report's width
+    assert "without encryption" not in run.stdout + run.stderr, run.stderr[-2000:]
+    boxes = report.split("The error was:")[1:]
+    assert boxes and not [b for b in boxes if "✗" in b and "..." in b.split("=" * 20)[0]], report
 
 
 def test_the_validate_buttons_answer_ends_with_the_count(half_answered):

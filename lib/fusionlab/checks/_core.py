@@ -10,6 +10,7 @@ import functools
 import linecache
 import os
 import re
+import textwrap
 import traceback
 
 import numpy as np
@@ -44,10 +45,12 @@ def _box(message, footnote=None):
     The footnote (how to see the full traceback with ``%tb``) is left out while nbgrader runs the notebook -- its
     Validate button, ``nbgrader validate`` or autograding, which set ``NBGRADER_EXECUTION`` --: their report quotes
     the box in a dialog or a file, where no new cell can be run."""
-    lines = [_RED + line + _END for line in str(message).splitlines() or [""]]
+    text = str(message).splitlines() or [""]
     if os.environ.get("NBGRADER_EXECUTION"):
         footnote = None
-    return lines + ([_DIM + footnote + _END] if footnote else [])
+        # Validate's dialog shows each line as it is, cut at the dialog's edge: wrapped here instead
+        text = [part for line in text for part in textwrap.wrap(line, 100, subsequent_indent="  ") or [""]]
+    return [_RED + line + _END for line in text] + ([_DIM + footnote + _END] if footnote else [])
 
 
 def _full_traceback(exc):
@@ -212,11 +215,20 @@ def _show_box(shell, etype, evalue, tb, message):
 
 def _failed_assert(shell, etype, evalue, tb, count):
     """A bare ``assert`` of a cell (a provided test) as a box: its message, or the line when it has none, and the
-    unfinished exercise its names wait for. None for an assert inside a function (the student's own code, whose
-    traceback says where)."""
-    last = tb
-    while last.tb_next is not None:
-        last = last.tb_next
+    unfinished exercise its names wait for; so is a test cell's failed comparison of :mod:`fusionlab.guard` (an
+    autograder test: its message says what differs, and the traceback would only show the guard's own lines). None
+    for an assert inside a function (the student's own code, whose traceback says where)."""
+    frames = []
+    while tb is not None:
+        frames.append(tb)
+        tb = tb.tb_next
+    last = frames[-1]
+    if last.tb_frame.f_globals.get("__name__") == "fusionlab.guard":     # guard.assert_close(...) in a test cell
+        cell = next((f for f in reversed(frames) if f.tb_frame.f_code.co_name == "<module>"), None)
+        if cell is None or not issubclass(etype, AssertionError):
+            return None
+        return (f"✗ {evalue}\n→ This is the exercise's autograder test; the check above it names the usual slips. "
+                "Fix your answer, run its cell, then this one.")
     if etype is not AssertionError or last.tb_frame.f_code.co_name != "<module>":
         return None
     line = linecache.getline(last.tb_frame.f_code.co_filename, last.tb_lineno).strip()
