@@ -11,7 +11,7 @@ from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
 from nbgrader.converters import GenerateAssignment
 from nbgrader.preprocessors import ClearHiddenTests, ClearSolutions, GetGrades
 
-from fusionlab.nbgrader_compat import ClearSolutionsForRunAll, HideTestSource, RefuseAutograde
+from fusionlab.nbgrader_compat import ClearSolutionsForRunAll, HideTestSource, OfflineFeedback, RefuseAutograde
 
 c = get_config()  # noqa: F821 (provided by nbgrader)
 
@@ -45,7 +45,9 @@ c.Autograde.sanitize_preprocessors = [RefuseAutograde]
 
 # Neither the feedback HTML nor anything else may reveal the hidden tests: the judge's autograded notebook holds
 # none, and the feedback pipeline strips them again and cuts a traceback to its last line.
-c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, HideTestSource, CSSHTMLHeaderPreprocessor]
+# OfflineFeedback: the page reads offline (math as MathML, links into the course as text, long lines wrapped).
+c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, HideTestSource, CSSHTMLHeaderPreprocessor,
+                                    OfflineFeedback]
 
 # Validate's report as the student gets it ("6 of 9 tests pass"): the student view's settings, loaded here too so
 # that `nbgrader validate` in this folder reports the same.

@@ -17,8 +17,11 @@ from __future__ import annotations
 
 import ast
 import html
+import posixpath
+import re
 import sys
 
+import nbformat
 import nbgrader
 from IPython.core.inputtransformer2 import TransformerManager
 from nbgrader import utils
@@ -28,7 +31,8 @@ from nbgrader.validator import Validator
 from . import labformat
 
 __all__ = ["WRITTEN_FOR", "RELIES_ON", "check_version", "ClearSolutionsForRunAll", "HideTestSource",
-           "RefuseAutograde", "SummaryValidator", "install_summary_validator"]
+           "offline_markdown", "OfflineFeedback", "FEEDBACK_CSS", "RefuseAutograde", "SummaryValidator",
+           "install_summary_validator"]
 
 WRITTEN_FOR = "0.9."            # nbgrader 0.9.x (environment.txt pins 0.9.6)
 #: What of nbgrader the classes below rely on: (module, attribute path) -- the private ones above all.
@@ -199,6 +203,87 @@ class HideTestSource(NbGraderPreprocessor):
                 if output.output_type == "error":
                     output.traceback = [f"{output.ename}: {output.evalue}"]
         return cell, resources
+
+
+#: The feedback page's own style: long lines of an output (a test's "Failed: ...") wrap instead of running off the page.
+FEEDBACK_CSS = ("div.output_area pre, div.output_subarea pre, .output_error pre { white-space: pre-wrap; "
+                "word-break: break-word; }\n")
+_FENCE = re.compile(r"(```.*?```|`[^`\n]*`)", re.S)
+_MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$(?![\s$])(.+?)(?<![\\\s$])\$", re.S)
+_LINK = re.compile(r"\[([^\]]+)\]\(((?!(?:https?:|mailto:|#|/))[^)\s]+)\)")
+
+
+def offline_markdown(source, folder="labs/NN_name"):
+    """``source`` (a Markdown cell) as a page read offline shows it: each ``$...$`` and ``$$...$$`` as MathML, which
+    the browser draws itself (MathJax would come from the web), and each link relative to the lab's ``folder`` as
+    its text and the path in the course folder (from ``feedback/<student>/<lab>/`` the link would lead nowhere).
+    Code is left as it is; math that cannot be converted stays TeX.
+
+    Parameters
+    ----------
+    source : str
+        The cell's Markdown.
+    folder : str, optional
+        Where the notebook sits in the course (``labs/<lab>``): what a relative link starts from.
+
+    Returns
+    -------
+    str
+
+    >>> offline_markdown("see [*References*](../docs/references.md)", "labs/02_kalman_falling_body")
+    'see *References* (in the course folder: labs/docs/references.md)'
+    >>> offline_markdown("$x^2$ and `$y$`").startswith('<math')
+    True
+    """
+    from latex2mathml.converter import convert
+
+    def math(m):
+        tex, display = (m.group(1), "block") if m.group(1) is not None else (m.group(2), "inline")
+        try:
+            return convert(tex.strip(), display=display)
+        except Exception:  # noqa: BLE001 -- any TeX the converter does not know stays TeX
+            return m.group(0)
+
+    def link(m):
+        return f"{m.group(1)} (in the course folder: {posixpath.normpath(posixpath.join(folder, m.group(2)))})"
+    parts = _FENCE.split("".join(source) if isinstance(source, list) else str(source))
+    return "".join(part if i % 2 else _LINK.sub(link, _MATH.sub(math, part)) for i, part in enumerate(parts))
+
+
+class OfflineFeedback(NbGraderPreprocessor):
+    """The feedback page as a student reads it, offline: its math drawn by the browser (MathML), its links into the
+    course written out, long output lines wrapped (:data:`FEEDBACK_CSS`). Runs last in the course's
+    ``GenerateFeedback.preprocessors``, after ``CSSHTMLHeaderPreprocessor`` has set the page's styles.
+
+    Parameters
+    ----------
+    **kw
+        nbgrader's and traitlets' own options (``config=``, ...), passed on.
+    """
+
+    def preprocess(self, nb, resources):
+        """Every Markdown cell through :func:`offline_markdown`; the wrapping style added to the page's.
+
+        Parameters
+        ----------
+        nb : nbformat.NotebookNode
+            The autograded notebook.
+        resources : dict
+            nbgrader's resources (``resources['nbgrader']['assignment']`` names the lab).
+
+        Returns
+        -------
+        tuple
+            ``(nb, resources)``.
+        """
+        lab = (resources.get("nbgrader") or {}).get("assignment") or "NN_name"
+        for cell in nb.cells:
+            if cell.cell_type == "markdown":
+                cell.source = offline_markdown(cell.source, f"labs/{lab}")
+        # the page's style goes in as a cell of its own: the exporter's template runs CSSHTMLHeaderPreprocessor again
+        # (its conf.json), which would drop a style added to resources['inlining']
+        nb.cells.insert(0, nbformat.v4.new_markdown_cell(f"<style>{FEEDBACK_CSS}</style>"))
+        return nb, resources
 
 
 class RefuseAutograde(NbGraderPreprocessor):
