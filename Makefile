@@ -56,6 +56,8 @@ data: env  ## regenerate the datasets in data/ (byte-identical; checksums in dat
 	@echo "==> regenerating data/lab03 (terminal logs, true angles) and the Lab 03 spreadsheet"
 	@$(BIN)/python -m fusionlab.simulate --out data/
 	@$(BIN)/python -m fusionlab.spreadsheet --log data/lab03/motion.log --xlsx data/lab03_fusion.xlsx
+	@echo "==> regenerating data/phone (BROAD trial 2 written in phone apps' export formats)"
+	@$(BIN)/python -m fusionlab.recordings --out data/phone/ >/dev/null
 
 bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
 	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"

@@ -19,7 +19,8 @@ LAYERS = (
     ("rotations", "earth"),                                                   # 2 the one convention, Earth constants
     ("conventions", "sensors", "accel_tilt", "inertial", "sensor_errors",     # 3 models on the convention, the seeds'
      "signals", "metrics", "calibration", "kalman"),                          #   conventions at the edge, metrics
-    ("simulate", "datasets", "spreadsheet", "ecompass", "gfimu", "dcm"),      # 4 recordings; the equations of a method
+    ("simulate", "datasets", "recordings", "spreadsheet", "ecompass",         # 4 recordings; the equations of a method
+     "gfimu", "dcm"),
     ("falling_body", "correlation", "freescale", "gfimu_ekf",                 # 5 one module per seed method's filters
      "gfimu_dynamics", "northfinder", "dcm_filter", "gpsins"),
     ("freescale_fast",),                                                      # 6 fast paths of row 5's filters

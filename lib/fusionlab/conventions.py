@@ -22,12 +22,18 @@ seed      how it differs from the library                             converter
           the same numbers as ours; NED, Android or Win8 (ENU) frames :func:`quat_to_seed002`
 004       ``C_b^n`` in NED: the same as ours                          :func:`dcm_from_seed004`
 BROAD     body→ENU quaternion ``[w, x, y, z]``                         :func:`fusionlab.rotations.quat_nav_swap`
+phone     axes: x right, y up the screen, z out of the screen         :func:`fusionlab.recordings.load_recording`
+          (Android and iOS alike); accelerometer: Android and
+          phyphox read specific force in m/s², +9.81 on z face up
+          (ours); iOS Core Motion the gravity vector in g, -1 on z
+          face up; Android's rotation vector is body→ENU
 ========  ==========================================================  ==========================================
 
 The seeds: 000, the master's thesis on MEMS accelerometer and gyroscope fusion (ch. 3 §3.3-3.5 and its lab 1);
 001, the CH Robotics notes *Understanding Euler Angles* (§3-5) and *Understanding Quaternions* (§4); 002,
 M. Pedley and M. Stanley, *Sensor Fusion Kalman Filters*, Freescale application note (its eq 34 and coordinate
-systems); 004, E. Edwan's dissertation (ch. 2). BROAD is the benchmark dataset of Laidig et al. The passive
+systems); 004, E. Edwan's dissertation (ch. 2). BROAD is the benchmark dataset of Laidig et al.; a phone is a
+student's own, read from an app's export. The passive
 elementary matrices the seeds print are :func:`fusionlab.rotations.frame_rot_x` ... ``frame_rot_z``.
 
 Angles are radians and rates rad/s, as everywhere in the library; a leading batch axis is accepted where a
