@@ -341,7 +341,7 @@ class _Source:
             try:
                 with zipfile.ZipFile(self.path) as z:
                     data = z.read(member)
-            except (zipfile.BadZipFile, OSError, EOFError, zlib_error()) as exc:
+            except (zipfile.BadZipFile, OSError, EOFError, _zlib_error()) as exc:
                 raise ValueError(f"{self.where(member)} cannot be read from the archive ({exc}): truncated or "
                                  "damaged? export it again") from None
         else:
@@ -354,7 +354,7 @@ class _Source:
         return data.decode("latin-1")
 
 
-def zlib_error():
+def _zlib_error():
     """The exception class zlib raises on a damaged stream (imported lazily)."""
     import zlib
     return zlib.error
@@ -712,14 +712,14 @@ def _detect(src):
     """The format of an export from its files: Sensor Logger's names and headers, phyphox's, else a plain CSV."""
     if src.find("Metadata.csv") or src.find("TotalAcceleration.csv"):
         return "sensor_logger"
-    gyro = src.find("Gyroscope.csv") or (src.members[0] if src.kind == "file" else src.find("Raw Data.csv"))
-    if gyro is None:
-        return None
-    head = src.text(gyro).lstrip("\ufeff").split("\n", 1)[0].lower()
-    if head.startswith("time,seconds_elapsed") or head.startswith("time;seconds_elapsed"):
-        return "sensor_logger"
-    if "time (s)" in head:
-        return "phyphox"
+    names = ([src.members[0]] if src.kind == "file" else
+             [src.find(n) for n in ("Gyroscope.csv", "Accelerometer.csv", "Magnetometer.csv", "Raw Data.csv")])
+    for member in [m for m in names if m]:
+        head = src.text(member).lstrip("\ufeff").split("\n", 1)[0].lower()
+        if head.startswith("time,seconds_elapsed") or head.startswith("time;seconds_elapsed"):
+            return "sensor_logger"
+        if "time (s)" in head:
+            return "phyphox"
     return None
 
 
@@ -891,20 +891,28 @@ def _settle_acc(raw, stated_unit, stated_sign, fs, where, check):
 
 
 def _settle_gyr(gyr, acc, fs, stated, where, check):
+    """The summary line of the gyro (``gyr`` in the file's numbers), refusing a unit the tilt of gravity contradicts."""
     unit, by = stated.value, stated.by
     if not check:
         return f"gyr: {unit} ({by}); physics not checked (check=False)"
-    ratio, n = validate.gyro_tilt_ratio(gyr, acc, fs)
-    if n >= validate.TILT_WINDOWS_MIN:
-        seen = f"gravity turned {ratio:.2f} times as far as the gyro tilts the phone ({n} windows of 0.1 s)"
-        if ratio < validate.TILT_RATIO_MIN:
-            raise ValueError(f"{where}: read in {unit} ({by}), {seen}: the gyro is in deg/s -- pass "
-                             f"{_fix('gyr', 'deg/s')}")
-        if ratio > 1.0 / validate.TILT_RATIO_MIN ** 2:
-            raise ValueError(f"{where}: read in {unit} ({by}), {seen}: the gyro is in rad/s -- pass "
-                             f"{_fix('gyr', 'rad/s')}")
-        return f"gyr: {unit} ({by}); physics agrees: {seen}"
-    norm = np.linalg.norm(gyr, axis=1)
+    other = "deg/s" if unit == "rad/s" else "rad/s"
+    rad = gyr * UNITS["gyr"][unit]                         # gyr as the file has it, read in the stated unit
+    ratio, n = validate.gyro_tilt_ratio(rad, acc, fs)
+    ratio_o, n_o = validate.gyro_tilt_ratio(gyr * UNITS["gyr"][other], acc, fs)
+
+    def fits(r, k):
+        return k >= validate.TILT_WINDOWS_MIN and validate.TILT_RATIO_MIN <= r <= 1.0 / validate.TILT_RATIO_MIN
+
+    def seen(r, k, u):
+        return f"read in {u}, gravity turned {r:.2f} times as far as the gyro tilts the phone ({k} windows of 0.1 s)"
+
+    if fits(ratio, n):
+        return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}"
+    if fits(ratio_o, n_o):
+        why = seen(ratio, n, unit) if n else f"read in {unit}, the gyro hardly turns while gravity does"
+        raise ValueError(f"{where}: {why} ({by}); {seen(ratio_o, n_o, other)}: the gyro is in {other} -- pass "
+                         f"{_fix('gyr', other)}")
+    norm = np.linalg.norm(rad, axis=1)
     top, med = float(norm.max()), float(np.median(norm))
     if top > 50.0 or med > 10.0:
         raise ValueError(f"{where}: read in {unit} ({by}), the gyro peaks at {top:.4g} rad/s with a median of "
@@ -1010,7 +1018,7 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
     >>> rec.gyr.shape, rec.mag.shape, rec.quat_ref is None
     ((2991, 3), (2991, 3), True)
     """
-    p = Path(validate_path(path))
+    p = Path(_path_arg(path))
     validate.choice(format, "format", (None, *FORMATS))
     if acc_convention is not None:
         validate.choice(acc_convention, "acc_convention", ACC_CONVENTIONS)
@@ -1067,7 +1075,7 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
     st = export.streams
     acc, acc_line = _settle_acc(values["acc"], export.units["acc"], export.convention, fs, st["acc"].where, check)
     gyr = values["gyr"] * UNITS["gyr"][export.units["gyr"].value]
-    checks = [acc_line, _settle_gyr(gyr, acc, fs, export.units["gyr"], st["gyr"].where, check)]
+    checks = [acc_line, _settle_gyr(values["gyr"], acc, fs, export.units["gyr"], st["gyr"].where, check)]
     mag = None
     if "mag" in values:
         mag = values["mag"] * UNITS["mag"][export.units["mag"].value]
@@ -1081,7 +1089,7 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
     return Recording(name or p.stem, fs, *frozen, float(export.t0 + start), summary)
 
 
-def validate_path(path):
+def _path_arg(path):
     """``path`` as a str, refusing what is not a path.
 
     Parameters

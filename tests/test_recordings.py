@@ -1,0 +1,293 @@
+"""fusionlab.recordings: every example export of data/phone/ loads and matches BROAD within what resampling costs;
+every unit and sign slip is refused with the argument that fixes it; every bad file is refused with its file and line.
+
+The tolerances are the costs measured on these files (the module's doc, its table) with a margin of about 1.3:
+worst of the five exports, gyro RMS 0.0096 rad/s (max 0.18), acc RMS 0.077 m/s² (max 1.59), field RMS 0.56 µT
+(max 3.7), gyro-integrated attitude 0.72° after 31 s.
+"""
+from __future__ import annotations
+
+import hashlib
+import re
+import shutil
+import zipfile
+
+import numpy as np
+import pytest
+
+from fusionlab import datasets, recordings, rotations
+
+PHONE = recordings.EXAMPLES_DIR
+PLAIN = dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag": ["mx", "my", "mz"]},
+             units={"t": "ms", "gyr": "deg/s", "acc": "g", "mag": "nT"})
+EPOCH = recordings._EPOCH_NS * 1e-9
+EXPORTS = {                                   # file: (keyword arguments, the app clock's offset from BROAD's segment)
+    "phyphox_trial02.zip": ({}, 0.0),
+    "phyphox_trial02_semicolon": ({}, 0.0),
+    "sensorlogger_android_trial02.zip": ({}, EPOCH),
+    "sensorlogger_ios_trial02.zip": ({}, EPOCH),
+    "plain_trial02.csv": (PLAIN, 0.0),
+}
+RMS_TOL = {"gyr": 0.0125, "acc": 0.10, "mag": 0.75}
+MAX_TOL = {"gyr": 0.24, "acc": 2.1, "mag": 4.8}
+ATTITUDE_TOL_DEG = 1.0
+
+
+@pytest.fixture(scope="module")
+def broad():
+    """BROAD trial 2 over the examples' segment: instants from its start, and the three sensors."""
+    trial = datasets.load_trial(2, download=False)
+    i0, i1 = (int(round(s * trial.fs)) for s in recordings._SEGMENT)
+    return (np.arange(i1 - i0) / trial.fs, {k: getattr(trial, k)[i0:i1] for k in ("gyr", "acc", "mag")}, trial.fs)
+
+
+def _truth(broad, instants, key):
+    t, sig, _ = broad
+    return np.stack([np.interp(instants, t, sig[key][:, j]) for j in range(3)], axis=1)
+
+
+@pytest.mark.parametrize("name", list(EXPORTS))
+def test_every_example_export_round_trips_to_broad_within_the_measured_resampling_cost(name, broad):
+    kwargs, offset = EXPORTS[name]
+    rec = recordings.load_recording(PHONE / name, **kwargs)
+    instants = rec.t0 - offset + rec.t
+    assert rec.quat_ref is None and rec.mag is not None and 28.0 < rec.duration < 32.0
+    assert rec.fs == pytest.approx(95.238, abs=0.01)
+    for key in ("gyr", "acc", "mag"):
+        err = getattr(rec, key) - _truth(broad, instants, key)
+        rms, top = float(np.sqrt(np.mean(err ** 2))), float(np.abs(err).max())
+        assert rms < RMS_TOL[key] and top < MAX_TOL[key], f"{name} {key}: RMS {rms:.4g}, max {top:.4g}"
+    # the test can fail: the same comparison 20 ms off (two BROAD samples and a half) exceeds the gyro's tolerance
+    late = rec.gyr - _truth(broad, instants + 0.02, "gyr")
+    assert np.sqrt(np.mean(late ** 2)) > RMS_TOL["gyr"]
+    t, sig, fs = broad
+    q0 = np.array([1.0, 0.0, 0.0, 0.0])
+    mine = rotations.integrate_gyro_quat(q0, rec.gyr, 1.0 / rec.fs)[-1]
+    j0, j1 = np.searchsorted(t, [instants[0], instants[-1] + 1.0 / rec.fs])
+    theirs = rotations.integrate_gyro_quat(q0, sig["gyr"][j0:j1], 1.0 / fs)[-1]
+    assert np.degrees(rotations.quat_angle_between(mine, theirs)) < ATTITUDE_TOL_DEG
+
+
+def test_the_summary_reports_each_sensor_its_gaps_and_dropped_samples():
+    rec = recordings.load_recording(PHONE / "phyphox_trial02.zip")
+    gyr = next(s for s in rec.summary.sensors if s.sensor == "gyr")
+    assert gyr.dropped == 4 and len(gyr.gaps) == 1
+    start, length, line = gyr.gaps[0]
+    assert start == pytest.approx(20.0, abs=0.05) and length == pytest.approx(0.0525, abs=0.004) and line == 2000
+    mag = next(s for s in rec.summary.sensors if s.sensor == "mag")
+    assert mag.rate == pytest.approx(47.62, abs=0.01) and mag.dropped == 0
+    text = str(rec)
+    assert "4 dropped: 53 ms at 19.98 s (line 2000)" in text and "Gyroscope.csv" in text
+    assert "physics agrees" in text and rec.summary.dropped == 4
+    android = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
+    assert android.summary.platform == "android" and android.summary.dropped == 3
+    assert "Accelerometer.csv (linear) + Gravity.csv" in str(android.summary)
+
+
+def test_the_phones_own_orientation_is_kept_as_quat_phone_never_as_a_reference(broad):
+    rec = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
+    assert rec.quat_ref is None and rec.quat_phone.shape == (len(rec), 4)
+    assert np.allclose(np.linalg.norm(rec.quat_phone, axis=1), 1.0, atol=1e-12)
+    # an estimate of the phone: its gravity (body z of ENU) follows the accelerometer at rest within a degree
+    up = rotations.quat_rotate(rotations.quat_conjugate(rec.quat_phone[:500]), np.array([0.0, 0.0, 1.0]))
+    f = rec.acc[:500] / np.linalg.norm(rec.acc[:500], axis=1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(np.sum(up * f, axis=1), -1, 1))).max() < 1.0
+    assert recordings.load_recording(PHONE / "sensorlogger_ios_trial02.zip").quat_phone is None
+
+
+def test_the_examples_regenerate_byte_identical(tmp_path):
+    recordings.make_examples(tmp_path)
+    sums = (PHONE / "SHA256SUMS").read_text(encoding="utf-8")
+    assert (tmp_path / "SHA256SUMS").read_text(encoding="utf-8") == sums
+    for line in sums.splitlines():
+        digest, name = line.split()
+        assert hashlib.sha256((PHONE / name).read_bytes()).hexdigest() == digest, f"{name} differs from SHA256SUMS"
+    assert "\n".join(sums.splitlines()) in (PHONE / "README.md").read_text(encoding="utf-8")
+    assert max(f.stat().st_size for f in PHONE.rglob("*") if f.is_file()) < 300_000
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# Units and conventions: what the physics contradicts is refused, with the argument that fixes it
+# ------------------------------------------------------------------------------------------------------------------
+
+
+def _unzip(name, tmp_path):
+    folder = tmp_path / name.replace(".zip", "")
+    with zipfile.ZipFile(PHONE / name) as z:
+        z.extractall(folder)
+    return folder
+
+
+def _edit(path, fn):
+    path.write_text(fn(path.read_text(encoding="utf-8")), encoding="utf-8")
+
+
+def _plain(tmp_path, **units):
+    return recordings.load_recording(PHONE / "plain_trial02.csv", columns=PLAIN["columns"],
+                                     units={**PLAIN["units"], **units})
+
+
+@pytest.mark.parametrize("units, message", [
+    ({"acc": "m/s^2"}, "which is g, not m/s^2 as units= says -- pass units={'acc': 'g'}"),
+    ({"gyr": "rad/s"}, "the gyro is in deg/s -- pass units={'gyr': 'deg/s'}"),
+    ({"mag": "uT"}, "the magnetometer is in nT -- pass units={'mag': 'nT'}"),
+])
+def test_a_wrong_declared_unit_is_refused_with_the_fix(tmp_path, units, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        _plain(tmp_path, **units)
+
+
+def test_an_ios_export_read_with_androids_conventions_is_refused_unit_first_then_sign(tmp_path):
+    folder = _unzip("sensorlogger_ios_trial02.zip", tmp_path)
+    _edit(folder / "Metadata.csv", lambda s: s.replace(",ios,", ",android,"))
+    with pytest.raises(ValueError, match=r"TotalAcceleration.csv: .* which is g, not m/s\^2 as Sensor Logger on "
+                                         r"android says -- pass units=\{'acc': 'g'\}"):
+        recordings.load_recording(folder)
+    with pytest.raises(ValueError, match=r"z reads -9.82 m/s².* this is the gravity convention -- pass "
+                                         r"acc_convention='gravity'"):
+        recordings.load_recording(folder, units={"acc": "g"})
+    rec = recordings.load_recording(folder, units={"acc": "g"}, acc_convention="gravity")
+    assert rec.acc[:100, 2].mean() == pytest.approx(9.8, abs=0.05)
+
+
+def test_a_declared_sign_the_rest_posture_contradicts_is_refused_and_check_false_trusts_it():
+    with pytest.raises(ValueError, match=r"this is the specific force convention -- pass acc_convention='specific "
+                                         r"force' \(or, if the phone really lay face down, check=False\)"):
+        recordings.load_recording(PHONE / "plain_trial02.csv", acc_convention="gravity", **PLAIN)
+    rec = recordings.load_recording(PHONE / "plain_trial02.csv", acc_convention="gravity", check=False, **PLAIN)
+    assert rec.acc[:100, 2].mean() == pytest.approx(-9.8, abs=0.05)
+    assert "physics not checked (check=False)" in str(rec.summary)
+
+
+def test_what_an_export_does_not_state_is_inferred_from_physics_and_said_in_the_summary(tmp_path):
+    folder = _unzip("sensorlogger_ios_trial02.zip", tmp_path)
+    (folder / "Metadata.csv").unlink()
+    rec = recordings.load_recording(folder)
+    assert rec.acc[:100, 2].mean() == pytest.approx(9.8, abs=0.05)
+    text = str(rec.summary)
+    assert "g (not stated; inferred from the physics" in text
+    assert "gravity (not stated; inferred: still and flat" in text
+    with pytest.raises(ValueError, match="does not state the accelerometer's unit and check=False"):
+        recordings.load_recording(folder, check=False)
+
+
+def test_linear_acceleration_without_gravity_is_refused(tmp_path):
+    folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
+    (folder / "Gravity.csv").unlink()
+    with pytest.raises(ValueError, match=r"Accelerometer.csv: .* linear acceleration \(gravity removed\), not the "
+                                         r"specific force"):
+        recordings.load_recording(folder)
+
+
+def test_a_phyphox_header_with_the_wrong_unit_is_refused_with_the_fix(tmp_path):
+    folder = tmp_path / "phy"
+    shutil.copytree(PHONE / "phyphox_trial02_semicolon", folder)
+    _edit(folder / "Gyroscope.csv", lambda s: s.replace("(rad/s)", "(deg/s)"))
+    with pytest.raises(ValueError, match=r"the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}"):
+        recordings.load_recording(folder)
+    assert recordings.load_recording(folder, units={"gyr": "rad/s"}).gyr.shape[1] == 3
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# Bad files: refused whole, naming the file and the line
+# ------------------------------------------------------------------------------------------------------------------
+
+
+def _lines(path, fn):
+    lines = path.read_text(encoding="utf-8").splitlines()
+    path.write_text("\n".join(fn(lines)) + "\n", encoding="utf-8")
+
+
+def _swap(lines, k):
+    lines[k], lines[k + 1] = lines[k + 1], lines[k]
+    return lines
+
+
+BAD = [  # (export, file, edit of its lines, the message: file, line and what)
+    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: ls[:-1] + [ls[-1][:30]],
+     r"Gyroscope.csv, line 3140: has \d of the header's 4 fields: the file is truncated"),
+    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: ls[:-1] + [ls[-1].rsplit("E", 1)[0] + "E"],
+     r"Gyroscope.csv, line 3140: column 'Z \(rad/s\)' holds .*, not a number -- the last line looks truncated"),
+    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:101] + [ls[100]] + ls[101:],
+     r"Gyroscope.csv, line 102: the time stamp repeats line 101's"),
+    ("sensorlogger_android_trial02", "Magnetometer.csv", lambda ls: _swap(ls, 50),
+     r"Magnetometer.csv, line 52: time goes backwards"),
+    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: [ls[0].replace(",x", ",gx")] + ls[1:],
+     r"Gyroscope.csv, line 1: the header .* lacks x: not a header Sensor Logger writes .* an unknown app version"),
+    ("phyphox_trial02_semicolon", "Accelerometer.csv", lambda ls: [ls[0].replace("X (m/s^2)", "Ax (m/s^2)")] + ls[1:],
+     r"Accelerometer.csv, line 1: the header .* is not one phyphox writes .* an unknown app version"),
+    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: [],
+     r"Gyroscope.csv is empty \(line 1: no header\)"),
+    ("phyphox_trial02_semicolon", "Magnetometer.csv", lambda ls: ls[:1],
+     r"Magnetometer.csv holds a header and no data \(line 1 only\)"),
+    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:10] + [ls[10].replace(",", ";")] + ls[11:],
+     r"Gyroscope.csv, line 11: separated by ';' where the header uses ',': mixed separators"),
+    ("phyphox_trial02_semicolon", "Accelerometer.csv", lambda ls: ls[:20] + [ls[20].replace(",", ".")] + ls[21:],
+     r"Accelerometer.csv, line 21: .* decimal point where line 2 has a decimal comma: mixed decimal marks"),
+    ("sensorlogger_android_trial02", "Magnetometer.csv", lambda ls: ls[:30] + ["x" + ls[30]] + ls[31:],
+     r"Magnetometer.csv, line 31: time .* is not a time stamp in ns"),
+    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:200] + ls[260:],
+     r"Gyroscope.csv, line 201: 0.6\d\d s without a gyr sample .* longer than max_gap = 0.25 s"),
+]
+
+
+@pytest.mark.parametrize("export, file, edit, message", BAD, ids=[m[:40] for *_, m in BAD])
+def test_a_bad_file_is_refused_naming_the_file_and_the_line(tmp_path, export, file, edit, message):
+    if (PHONE / (export + ".zip")).exists():
+        folder = _unzip(export + ".zip", tmp_path)
+    else:
+        folder = tmp_path / export
+        shutil.copytree(PHONE / export, folder)
+    _lines(folder / file, edit)
+    with pytest.raises(ValueError, match=message) as info:
+        recordings.load_recording(folder)
+    assert str(folder / file) in str(info.value) or file in str(info.value)
+
+
+def test_a_missing_sensor_sensors_that_do_not_overlap_and_a_truncated_zip_are_refused(tmp_path):
+    folder = _unzip("sensorlogger_ios_trial02.zip", tmp_path)
+    (folder / "Gyroscope.csv").unlink()
+    with pytest.raises(ValueError, match=r"has no Gyroscope.csv: a Sensor Logger export needs the gyroscope"):
+        recordings.load_recording(folder)
+    folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
+    _lines(folder / "Magnetometer.csv",
+           lambda ls: [ls[0]] + [",".join([str(int(r.split(",")[0]) + 40 * 10**9), *r.split(",")[1:]]) for r in ls[1:]])
+    with pytest.raises(ValueError, match=r"the sensors do not overlap in time .* mag 4\d\.\d+-7\d\.\d+ s \(.*"
+                                         r"Magnetometer.csv\)"):
+        recordings.load_recording(folder)
+    cut = tmp_path / "cut.zip"
+    cut.write_bytes((PHONE / "phyphox_trial02.zip").read_bytes()[:50_000])
+    with pytest.raises(ValueError, match=r"cut.zip is not a readable zip archive .* truncated or damaged"):
+        recordings.load_recording(cut)
+    (tmp_path / "x.csv").write_text("a,b,c\n1,2,3\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"x.csv is neither a phyphox nor a Sensor Logger export .* pass columns="):
+        recordings.load_recording(tmp_path / "x.csv")
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(format="excel"), r"format must be one of None, 'phyphox', 'sensor_logger', 'csv'; got 'excel'"),
+    (dict(units={"acc": "furlong"}), r"units\['acc'\] must be one of 'm/s\^2', 'g'; got 'furlong'"),
+    (dict(units={"speed": "m/s"}), r"units has an unknown key 'speed'"),
+    (dict(units="g"), r"units must be a dict"),
+    (dict(acc_convention="up"), r"acc_convention must be one of 'specific force', 'gravity'; got 'up'"),
+    (dict(fs=-5.0), r"fs must be a positive"),
+    (dict(max_gap=0.0), r"max_gap must be > 0"),
+    (dict(check="yes"), r"check must be True or False"),
+    (dict(name=3), r"name must be a string"),
+    (dict(columns={"t": "time_ms", "acc": ["ax", "ay", "az"]}, units={"t": "ms", "acc": "g"}),
+     r"columns must map 'gyr'"),
+    (dict(columns={"t": "time_ms", "gyr": ["gx", "gy"], "acc": ["ax", "ay", "az"]},
+          units={"t": "ms", "gyr": "deg/s", "acc": "g"}), r"columns\['gyr'\] must be a list of 3 column names"),
+    (dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
+          units={"t": "ms", "acc": "g"}), r"units must state the unit of 'gyr' for a plain CSV"),
+    (dict(columns={"t": "time", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
+          units={"t": "ms", "gyr": "deg/s", "acc": "g"}), r"columns\['t'\] names 'time', which is not in the header"),
+])
+def test_bad_arguments_are_refused_naming_the_argument(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        recordings.load_recording(PHONE / "plain_trial02.csv", **kwargs)
+
+
+def test_a_path_that_is_not_there_is_refused(tmp_path):
+    with pytest.raises(ValueError, match=r"path must name an export folder, a .zip or a .csv file; .* does not exist"):
+        recordings.load_recording(tmp_path / "nothing.zip")
