@@ -84,6 +84,21 @@ def test_the_summary_reports_each_sensor_its_gaps_and_dropped_samples():
     assert "Accelerometer.csv (linear) + Gravity.csv" in str(android.summary)
 
 
+def test_a_combined_phyphox_raw_data_file_loads_like_the_per_sensor_files(tmp_path, broad):
+    with zipfile.ZipFile(PHONE / "phyphox_trial02.zip") as z:
+        gyro = z.read("Gyroscope.csv").decode().splitlines()[1:]
+        acc = z.read("Accelerometer.csv").decode().splitlines()[1:]
+    n = min(len(gyro), len(acc))              # one time column for both: the gyro's stamps, the accelerometer's values
+    rows = [g + "," + ",".join(a.split(",")[1:]) for g, a in zip(gyro[:n], acc[:n])]
+    head = ('"Time (s)","Gyroscope x (rad/s)","Gyroscope y (rad/s)","Gyroscope z (rad/s)","Acceleration x (m/s^2)",'
+            '"Acceleration y (m/s^2)","Acceleration z (m/s^2)"')
+    (tmp_path / "Raw Data.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    rec = recordings.load_recording(tmp_path / "Raw Data.csv")
+    assert rec.summary.format == "phyphox" and rec.mag is None
+    err = rec.gyr - _truth(broad, rec.t0 + rec.t, "gyr")
+    assert np.sqrt(np.mean(err ** 2)) < RMS_TOL["gyr"]
+
+
 def test_the_phones_own_orientation_is_kept_as_quat_phone_never_as_a_reference(broad):
     rec = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
     assert rec.quat_ref is None and rec.quat_phone.shape == (len(rec), 4)

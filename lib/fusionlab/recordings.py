@@ -7,7 +7,8 @@
 * **phyphox** -- a folder or ``.zip`` with one CSV per sensor (``Accelerometer.csv``, ``Gyroscope.csv``,
   ``Magnetometer.csv``; header ``"Time (s)","X (rad/s)",...`` or ``"Gyroscope x (rad/s)",...``), or one combined
   ``Raw Data.csv``; comma, semicolon or tab separated, with a decimal point or the decimal comma some locales export.
-  The header states the units; phyphox writes the accelerometer as specific force in m/s² on both platforms.
+  The header states the units; the accelerometer with gravity is read as specific force (+9.81 m/s² on z face
+  up), which the rest posture checks.
 * **Sensor Logger** -- a folder or ``.zip`` of CSVs with ``time`` (epoch, ns), ``seconds_elapsed`` and the axes in
   ``z, y, x`` order; ``Metadata.csv`` names the platform. ``TotalAcceleration.csv`` is the accelerometer with
   gravity; ``Accelerometer.csv`` is the linear acceleration (gravity removed), which is used only with
