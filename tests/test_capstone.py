@@ -1351,3 +1351,18 @@ def test_the_disguise_cuts_both_ends_by_secret_amounts_but_never_the_movement():
     lost = [len(whole) - len(c) for c in cut]
     assert len(set(lost)) == 4 and max(lost) > capstone.MAX_CROP_SECONDS * whole.fs      # the end loses some too
     assert max(lost) < (capstone.MAX_CROP_SECONDS + capstone.MAX_END_CROP_SECONDS) * whole.fs
+
+
+def test_a_few_embedded_references_are_enough_to_be_held():
+    """The hidden trials' references are public: a submission could carry a few and recognise just those trials.
+    Implausibly close on two trials of ten is held (half would have let four of ten through); on one it is not."""
+    refs = {"_all": {"vqf9": capstone.Reference("vqf9", "", [capstone.TrialResult(f"t{i}", counted_deg=2.0)
+                                                               for i in range(10)], "9D")}}
+
+    def student(close):
+        return capstone.StudentResult("x", trials=[capstone.TrialResult(f"t{i}", counted_deg=0.2 if i < close else 3.0)
+                                                   for i in range(10)])
+    assert capstone.implausibly_close(student(1), refs) == ""
+    for close in (2, 4):
+        why = capstone.implausibly_close(student(close), refs)
+        assert why.startswith(capstone.IMPLAUSIBLY_CLOSE) and f"on {close} of the 10 trials" in why, why

@@ -95,7 +95,7 @@ def test_header_ends_with_what_to_hand_in_and_how_to_validate_it(lab):
     header = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4).cells[0].source
     rows = [line for line in header.splitlines() if line.startswith("|")]
     assert rows[-1].startswith("| **Hand in** |"), f"{lab}: the last row of the header table is not **Hand in**"
-    for words in (f"`{lab}.ipynb`", "**Validate**", f"`nbgrader validate labs/{lab}/{lab}.ipynb`"):
+    for words in (f"`{lab}.ipynb`", "**Validate**", f"`make validate LAB={lab}`"):
         assert words in rows[-1], f"{lab}: the Hand in row does not say {words}"
 
 

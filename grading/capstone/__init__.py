@@ -34,13 +34,14 @@ process:
   of samples at its start (under 0.5 s) and at its end (under 3 s, none of the movement phase), so that its length
   does not name it, and gets fresh white noise of about the sensors' own (:data:`DISGUISE_NOISE`), so that no raw
   sample of the published trial is found again. The sensor frame is not turned: a turn changes the score of a
-  filter that is not rotation-equivariant (Madgwick's, any filter with a fixed start), so honest filters would be
-  scored with luck (:func:`disguise` states the measured effects).
+  filter that is not rotation-equivariant (Madgwick's, whose gradient step depends on the axes), so honest filters
+  would be scored with luck (:func:`disguise` states the measured effects).
 * **Plausibility.** A submission could still recognise a trial (from its movement, say) and return its published
   reference: an error far below any filter's. A scored RMSE below :data:`IMPLAUSIBLE` x the best reference
-  filter's on at least half of the trials that ran is named (``detects the trial``: "implausibly close to the
-  optical reference ... review the code") and gets no points for the filter; the instructor who has read the code
-  and trusts it grades again with ``--cleared <student>`` (:func:`implausibly_close`).
+  filter's on at least two trials (and a tenth of those that ran, :data:`IMPLAUSIBLE_TRIALS`) is named (``detects
+  the trial``: "implausibly close to the optical reference ... review the code") and gets no points for the filter;
+  the instructor who has read the code and trusts it grades again with ``--cleared <student>``
+  (:func:`implausibly_close`).
 * **Scores.** The dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`: total, heading and inclination
   RMSE in degrees over the movement phase), per trial and as their mean, as :mod:`fusionlab.bench` computes them;
   the run time of each call, against a time budget per trial (:func:`fusionlab.capstone.budget_seconds`). A filter
@@ -119,9 +120,9 @@ from fusionlab.capstone import (CAUSAL_TOL, FULL_MARKS, GATES, MAX_POINTS, MIN_S
 from .command import main, read_submissions, saved_seed
 from .program import (CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
                       FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FUNCTION,
-                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS, STUB_MESSAGE,
-                      WHY_HIDDEN, as_run, box_library, declared_sensors, library_copies, loaders, model_program,
-                      placeholder_module, program_of, scan)
+                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS,
+                      STUB_MESSAGE, WHY_HIDDEN, as_run, box_library, declared_sensors, library_copies, loaders,
+                      model_program, placeholder_module, program_of, scan)
 from .report import (COLUMNS, SETS, STYLE, TRIAL_COLUMNS, feedback, grade_class, leaderboard_rows, trial_rows,
                      write_csv, write_leaderboard)
 from .runner import (CPU_PER_BUDGET, CPU_SLACK_S, MAX_RESTARTS, NOT_SHOWN, SETUP_SECONDS, Runner, StudentResult,

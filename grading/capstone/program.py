@@ -18,9 +18,11 @@ FUNCTION = "estimate"
 
 IMPLAUSIBLE = 0.5               # a scored RMSE below this fraction of the best reference filter's on that trial (any
                                 # filter of its sensor set, VQF's, Madgwick's and every library filter's), on at least
-                                # half of the trials that ran: no honest filter is that far ahead of all of them, a
-                                # filter that recognises the trial and returns its reference is (the instructor reads
-                                # the code and may clear it: --cleared)
+                                # IMPLAUSIBLE_TRIALS of the trials that ran: no honest filter is that far ahead of all
+                                # of them, a filter that recognises the trial and returns its reference is (the
+                                # instructor reads the code and may clear it: --cleared)
+IMPLAUSIBLE_TRIALS = (2, 0.1)   # ... at least 2 trials and a tenth of those that ran (not half: the references of the
+                                # hidden trials are public, and a few embedded ones would pass a test of half)
 COPY_MIN_CHARS = 250            # a pasted library filter: at least this many normalised characters matched (a
                                 # filter's worth, not a quaternion product), with grading.similarity's shares
 
@@ -47,7 +49,9 @@ CHEATS = {
     "detects the trial": "its output is implausibly close to the optical reference, as one that recognised each "
                          f"trial and returned its published reference would be: a scored RMSE below {IMPLAUSIBLE:g} "
                          "x the best reference "
-                         "filter's on at least half of the trials it ran. The instructor reads the code of such a "
+                         "filter's on at least two trials, and a tenth of those it ran (a student could embed the "
+                         "published references of some hidden trials and recognise just those). The instructor "
+                         "reads the code of such a "
                          "filter and may clear this flag (grade again with --cleared <student>)",
 }
 #: The kind of cheat the instructor may clear after reading the code, and the evidence's first words.

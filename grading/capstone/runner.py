@@ -4,6 +4,7 @@ with the look-ups of its output (a reference filter's output, one implausibly cl
 from __future__ import annotations
 
 import dataclasses
+import math
 import shutil
 import time
 from dataclasses import dataclass, field
@@ -18,7 +19,8 @@ from grading import boxlib, client, sandbox
 from grading.cells import bound_names, python_of
 
 from .program import (DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FUNCTION,
-                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE, WHY_HIDDEN, box_library,
+                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE,
+                      WHY_HIDDEN, box_library,
                       declared_sensors, library_copies, model_program, program_of, scan)
 from .scoring import (MATCH_RAD, MATCH_STRIDE, TrialResult, published_means, mean_scored, never_moves,
                       rubric_points, score_trial)
@@ -370,10 +372,10 @@ def gates_failed(res):
 
 def implausibly_close(res, refs):
     """The evidence (text) when ``res``'s scored RMSE is below :data:`IMPLAUSIBLE` x the best reference filter's
-    on at least half of the trials it ran; "" otherwise. The best on a trial is the lowest scored RMSE there of every
-    reference filter of the student's sensor set (VQF, Madgwick and each library filter that ran: ``refs['_all']``).
-    No honest filter is that far ahead of all of them on most trials; one that recognises each trial and returns
-    its published reference is."""
+    on at least :data:`IMPLAUSIBLE_TRIALS` of the trials it ran (2, and a tenth); "" otherwise. The best on a trial
+    is the lowest scored RMSE there of every reference filter of the student's sensor set (VQF, Madgwick and each
+    library filter that ran: ``refs['_all']``). No honest filter is that far ahead of all of them on several trials;
+    one that recognises trials and returns their published references is."""
     best = {}
     for ref in refs["_all"].values():
         if ref.sensors == res.sensors:
@@ -381,7 +383,8 @@ def implausibly_close(res, refs):
                 best[r.trial] = min(best.get(r.trial, np.inf), r.counted_deg)
     ran = [r for r in res.trials if r.status == "ok" and r.trial in best]
     close = [r for r in ran if r.counted_deg < IMPLAUSIBLE * best[r.trial]]
-    if not ran or 2 * len(close) < len(ran):
+    least, share = IMPLAUSIBLE_TRIALS
+    if not ran or len(close) < max(least, math.ceil(share * len(ran))):
         return ""
     what = SENSORS[res.sensors][:-4]
     mine = float(np.mean([r.counted_deg for r in close]))

@@ -14,9 +14,10 @@ trials the course does not ship, with the dataset authors' metrics (:func:`fusio
 * **On time**: a call on a trial of N samples may take :func:`budget_seconds` ``(N)``.
 * **Its own**: numpy, scipy and the course's rotation and metric helpers, but no published filter (the library's
   estimators, VQF, ``ahrs``..., nor their code pasted in) and no file: the grader runs the filter where neither
-  exists. The grader's data are each trial turned by a secret rotation, cut at secret places and given a little
-  fresh sensor noise, so that no trial can be recognised from its samples; an estimate far closer to the
-  reference than any published filter's on most trials is held until the instructor has read its code.
+  exists. The grader's data are each trial cut at secret places and given a little fresh sensor noise (not turned:
+  that would change the score of a filter whose steps depend on the axes), so that no trial is recognised from its
+  samples; an estimate far closer to the reference than any published filter's on several trials is held until
+  the instructor has read its code.
 * **Points** from :data:`RUBRIC` (:func:`accuracy_points`), not from rank: 2 for running, and up to 8 that grow
   smoothly as the mean RMSE goes from Madgwick's towards VQF's.
 
