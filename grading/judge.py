@@ -28,6 +28,7 @@ the student's answers in their cells, and the judge's verdict as the only output
 """
 from __future__ import annotations
 
+import ast
 import builtins
 import contextlib
 import copy
@@ -467,8 +468,9 @@ def _close(session, verdict):
 JUDGE_MEMORY_BYTES = 3 << 30
 
 
-def _judge_child(conn, lab, submitted, student, slot, memory_bytes):
+def _judge_child(conn, lab, submitted, student, slot, memory_bytes, system):
     import resource
+    sandbox.system_files(known=system)
     # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
     try:
@@ -481,14 +483,33 @@ def _judge_child(conn, lab, submitted, student, slot, memory_bytes):
         conn.close()
 
 
+def _imported_modules(source):
+    """The modules ``source`` imports at its top level (``import a.b``, ``from a import b``: ``a`` and ``a.b``, which
+    may not be a module; the fork server passes over a name it cannot import), by name."""
+    try:
+        tree = cells.parse(cells.python_of(source))
+    except SyntaxError:
+        return []
+    names = []
+    for node in tree.body:
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]   # a name may be a module
+    return list(dict.fromkeys(names))
+
+
 def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES) -> Verdict:
     """:func:`judge`, in a process of its own with ``memory_bytes`` of address space, started from a clean server
     process (not forked from this one's threads). What comes back is JSON: the verdict's numbers and texts."""
     import multiprocessing
     ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["grading.judge"])
+    # the server imports once what every judge process needs: this module and what the lab's setup cell imports
+    # (matplotlib, the library's modules ...), which each process would otherwise import again (a second or so)
+    ctx.set_forkserver_preload(["grading.judge", *_imported_modules(lab.setup_source)])
     receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_judge_child, args=(send, lab, submitted, student, slot, memory_bytes))
+    child = ctx.Process(target=_judge_child, args=(send, lab, submitted, student, slot, memory_bytes,
+                                                   sandbox.system_files()))
     child.start()
     send.close()
     try:
