@@ -71,7 +71,8 @@ def student_readme(root=ROOT):
 # link must stay inside it. (path in labs/docs, the repository file, or None for the README's References section)
 LABS_DOCS = "labs/docs"
 STUDENT_DOCS = [("references.md", None), ("derivations.md", "docs/derivations.md"),
-                ("data/README.md", "data/README.md"), ("data/broad/README.md", "data/broad/README.md")]
+                ("data/README.md", "data/README.md"), ("data/broad/README.md", "data/broad/README.md"),
+                ("data/phone/README.md", "data/phone/README.md")]
 _LINK = re.compile(r"(\]\()([^)\s#]+)(#[^)\s]*)?(\))")
 
 

@@ -126,6 +126,11 @@ CHEATS = {
     "13_capstone": {
         1: "return rotations.integrate_gyro_quat(q0, gyr, 1.0 / fs)[1:]",
     },
+    "14_phone_imu": {
+        1: "return cal.gyro_bias_from_rest(np.asarray(gyr)[np.asarray(rest, dtype=bool)])[0]",
+        2: "return float(np.degrees(accel_tilt.tilt_3d(np.mean(acc, axis=0))[2]))",
+        3: "return np.degrees(rotations.quat_angle_between(q1, q2))",
+    },
 }
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh,
 # the capstone's filter of the student's own).

@@ -82,7 +82,7 @@ def test_archive_is_the_folder_and_is_reproducible(built, tmp_path):
 
 
 MD_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
-CITED = ("README *References*", "docs/derivations.md", "data/README.md", "data/broad/README.md")
+CITED = ("README *References*", "docs/derivations.md", "data/README.md", "data/broad/README.md", "data/phone/README.md")
 
 
 def _relative_links(text):

@@ -195,6 +195,13 @@ EXERCISES = (
              (),                                                             # leaderboard (grading/capstone/)
              loaders=('importlib', '_imp', '_frozen_importlib', '_frozen_importlib_external', 'zipimport', 'runpy',
                       'pkgutil.resolve_name', 'pydoc', 'timeit', 'ctypes', '_ctypes', 'cffi')),
+    # 14_phone_imu
+    Exercise('14_phone_imu', 1, 1, ('my_gyro_bias',), 'check_phone_gyro_bias',
+             ('calibration.gyro_bias_from_rest',)),
+    Exercise('14_phone_imu', 2, 2, ('my_tilt_deg',), 'check_rest_tilt',
+             ('accel_tilt.tilt_3d',)),
+    Exercise('14_phone_imu', 3, 2, ('my_rotation_angle_deg',), 'check_rotation_angle',
+             ('rotations.quat_angle_between',)),
 )
 
 
