@@ -32,7 +32,11 @@ scores -- stays outside.  In the box
     ``cachestat`` (report residency), ``madvise`` with ``MADV_COLD`` or ``MADV_PAGEOUT`` (other advice is
     allowed) and ``process_madvise``, and the asynchronous I/O interfaces (io_uring, Linux AIO) that would run the
     same operations where the filter does not see them. Plain reads (``read``, ``pread``, ``readv``, ``preadv``
-    and ``preadv2`` without flags) and ``readahead`` stay allowed.
+    and ``preadv2`` without flags) and ``readahead`` stay allowed;
+  - new namespaces (``unshare``, ``setns``, ``clone`` with a ``CLONE_NEW*`` flag): a user namespace would hand the
+    box every capability inside it, and with them the kernel's mount, network and key code; ``clone3``, whose flags
+    a filter cannot read, is answered ENOSYS (:data:`MISSING_SYSCALLS`), as an older kernel would, so the C library
+    falls back to ``clone``. Forks, threads and child processes work as before.
 
   A box still fills the cache by reading, and can tell a cached page from one read from disk, exactly, by the
   major-fault count ``getrusage`` reports after its first touch of a page of a mapped file: a box touching pages
@@ -84,9 +88,14 @@ SECCOMP_MACHINES = {
 
 # The calls a box is refused (EPERM), by name: (x86_64's number, aarch64's number, when). ``when`` is None for a call
 # refused whatever its arguments, or (i, values): refused when the low 32 bits of argument i (an int to the kernel,
-# which ignores the high half) are one of values, or are not 0 when values is "any flag". Numbers from the kernel's
+# which ignores the high half) are one of values (a tuple), are not 0 (values "any flag"), or have any bit of
+# values (an int, a mask) set. Numbers from the kernel's
 # arch/x86/entry/syscalls/syscall_64.tbl and include/uapi/asm-generic/unistd.h. Plain reads (read, pread64, readv,
 # preadv) and readahead (it only fills the cache, which any read does) are not in the table: allowed.
+# clone's flags that make a new namespace: CLONE_NEWNS, NEWCGROUP, NEWUTS, NEWIPC, NEWUSER, NEWPID, NEWNET
+# (include/uapi/linux/sched.h).
+NAMESPACE_FLAGS = 0x00020000 | 0x02000000 | 0x04000000 | 0x08000000 | 0x10000000 | 0x20000000 | 0x40000000
+
 REFUSED_SYSCALLS = {
     # The key store: keyrings belong to a user id, not to a box, and outlive it; two boxes of one slot (one
     # student's boxes, or the next student graded in that slot) could pass data through them.
@@ -113,6 +122,19 @@ REFUSED_SYSCALLS = {
     "io_uring_register": (427, 427, None),
     "io_setup": (206, 0, None),             # Linux AIO: io_submit takes RWF_NOWAIT in each request
     "io_submit": (209, 2, None),
+    # New namespaces: a user namespace gives a box every capability inside it, and with them the kernel's mount,
+    # network and key code as new attack surface; no box needs one (bwrap made the box's own before the filter).
+    # As root the boxes run under a slot's user id, where bwrap's --disable-userns cannot be used.
+    "unshare": (272, 97, None),
+    "setns": (308, 268, None),
+    "clone": (56, 220, (0, NAMESPACE_FLAGS)),  # fork and threads pass none of these flags: allowed
+}
+
+# Calls answered ENOSYS, as a kernel without them would: clone3 takes its flags in a structure in memory, which a
+# seccomp filter cannot read, so it is refused whatever it asks; the C library then falls back to clone, whose
+# flags the filter reads. (x86_64's number, aarch64's number.)
+MISSING_SYSCALLS = {
+    "clone3": (435, 435),
 }
 
 
@@ -128,7 +150,8 @@ def _native_machine():
 
 def box_filter(machine=None):
     """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: the calls of
-    :data:`REFUSED_SYSCALLS` (with the arguments it names) fail with EPERM, every other call of the native
+    :data:`REFUSED_SYSCALLS` (with the arguments it names) fail with EPERM, those of :data:`MISSING_SYSCALLS`
+    with ENOSYS, every other call of the native
     architecture is allowed, and every call of another architecture fails with EPERM. ``machine`` is named as
     ``os.uname().machine`` names it (this machine by default); one not in :data:`SECCOMP_MACHINES` raises
     :class:`UnsupportedMachine`."""
@@ -138,9 +161,10 @@ def box_filter(machine=None):
                                  f"no seccomp filter keeps the boxes from sharing kernel state here")
     audit_arch, second_abi = SECCOMP_MACHINES[machine]
     column = list(SECCOMP_MACHINES).index(machine)
-    ld, jeq, jge, ret = 0x20, 0x15, 0x35, 0x06      # BPF_LD|W|ABS, BPF_JMP|JEQ|K, BPF_JMP|JGE|K, BPF_RET|K
+    ld, jeq, jge, jset, ret = 0x20, 0x15, 0x35, 0x45, 0x06  # BPF_LD|W|ABS, BPF_JMP|JEQ/JGE/JSET|K, BPF_RET|K
     allow, refuse = 0x7FFF0000, 0x00050000 | 1      # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
-    to_allow, to_deny = "allow", "deny"             # jumps to the last two instructions, resolved below
+    missing = 0x00050000 | 38                       # SECCOMP_RET_ERRNO | ENOSYS
+    to_allow, to_deny, to_missing = "allow", "deny", "missing"   # the last three instructions, resolved below
     program = [
         # The numbers below mean these calls only on this architecture; a call made through another ABI the kernel
         # also accepts (i386's int 0x80 on x86_64) has numbers of its own, so it is refused whatever it is.
@@ -153,6 +177,7 @@ def box_filter(machine=None):
         program.append((jge, to_deny, 0, second_abi))
     calls = [(numbers[column], when) for *numbers, when in REFUSED_SYSCALLS.values()]
     program += [(jeq, to_deny, 0, nr) for nr, when in calls if when is None]
+    program += [(jeq, to_missing, 0, numbers[column]) for numbers in MISSING_SYSCALLS.values()]
     for nr, (arg, values) in [(nr, when) for nr, when in calls if when is not None]:
         # seccomp_data is nr (4 bytes), arch (4), ip (8), args[6] (8 each): argument i starts at byte 16 + 8 i, and
         # its low half is there on these little-endian machines. A block ends in a jump or a return: the
@@ -160,11 +185,13 @@ def box_filter(machine=None):
         block = [(ld, 0, 0, 16 + 8 * arg)]
         if values == "any flag":
             block.append((jeq, to_allow, to_deny, 0))
+        elif isinstance(values, int):                # a mask: refused when any of its bits is set
+            block.append((jset, to_deny, to_allow, values))
         else:
             block += [(jeq, to_deny, 0, value) for value in values] + [(ret, 0, 0, allow)]
         program += [(jeq, 0, len(block), nr)] + block
-    program += [(ret, 0, 0, allow), (ret, 0, 0, refuse)]
-    where = {to_allow: len(program) - 2, to_deny: len(program) - 1}
+    program += [(ret, 0, 0, allow), (ret, 0, 0, refuse), (ret, 0, 0, missing)]
+    where = {to_allow: len(program) - 3, to_deny: len(program) - 2, to_missing: len(program) - 1}
 
     def skip(i, target):                            # a BPF jump counts the instructions it skips
         return where[target] - i - 1 if target in where else target

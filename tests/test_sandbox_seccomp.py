@@ -39,6 +39,14 @@ LAB = "02_kalman_falling_body"
 NEEDS_BWRAP = pytest.mark.skipif(not shutil.which("bwrap"), reason="needs bubblewrap (apt-get install bubblewrap)")
 EPERM, ENOKEY = 1, 126
 ALLOW, REFUSE = 0x7FFF0000, 0x00050000 | EPERM          # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
+ENOSYS = 38
+MISSING = 0x00050000 | ENOSYS                             # SECCOMP_RET_ERRNO | ENOSYS
+# unshare, setns, clone, clone3: (x86_64, aarch64), and clone's flags (include/uapi/linux/sched.h)
+NS_CALLS = {"unshare": (272, 97), "setns": (308, 268), "clone": (56, 220), "clone3": (435, 435)}
+CLONE_NEW = {"NEWNS": 0x00020000, "NEWCGROUP": 0x02000000, "NEWUTS": 0x04000000, "NEWIPC": 0x08000000,
+             "NEWUSER": 0x10000000, "NEWPID": 0x20000000, "NEWNET": 0x40000000}
+FORK_FLAGS = 0x01200011                                   # CLONE_CHILD_SETTID | CHILD_CLEARTID | SIGCHLD: fork()
+THREAD_FLAGS = 0x003D0F00                                 # what glibc's pthread_create passes
 X86_64, AARCH64, I386 = 0xC000003E, 0xC00000B7, 0x40000003
 KEY_CALLS = {"x86_64": (248, 249, 250), "aarch64": (217, 218, 219)}   # add_key, request_key, keyctl
 # The page-cache calls, by name: (x86_64, aarch64), from the kernel's syscall tables; written out here, not taken
@@ -198,8 +206,8 @@ def _verdict(program, arch, nr, *args):
         if code == 0x20:                                     # BPF_LD | BPF_W | BPF_ABS
             acc = struct.unpack_from("=I", data, k)[0]
             pc += 1
-        elif code in (0x15, 0x25, 0x35):                     # BPF_JMP | JEQ / JGT / JGE, against k
-            taken = {0x15: acc == k, 0x25: acc > k, 0x35: acc >= k}[code]
+        elif code in (0x15, 0x25, 0x35, 0x45):               # BPF_JMP | JEQ / JGT / JGE / JSET, against k
+            taken = {0x15: acc == k, 0x25: acc > k, 0x35: acc >= k, 0x45: bool(acc & k)}[code]
             pc += 1 + (jt if taken else jf)
         elif code == 0x06:                                   # BPF_RET | BPF_K
             return k
@@ -210,11 +218,11 @@ def _verdict(program, arch, nr, *args):
 
 def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_x86_64():
     program = sandbox.box_filter("x86_64")
-    assert len(program) % 8 == 0 and 6 * 8 <= len(program) <= 32 * 8, len(program)
+    assert len(program) % 8 == 0 and 6 * 8 <= len(program) <= 48 * 8, len(program)
     assert struct.unpack("=HBBI", program[:8]) == (0x20, 0, 0, 4), "the first instruction loads the arch"
     for nr in KEY_CALLS["x86_64"]:
         assert _verdict(program, X86_64, nr) == REFUSE, nr
-    for nr in (0, 1, 2, 9, 56, 57, 59, 60, 202, 231, 247, 251, 317, 435):   # read, write, mmap, clone, fork, futex...
+    for nr in (0, 1, 2, 9, 56, 57, 59, 60, 202, 231, 247, 251, 317):   # read, write, mmap, clone, fork, futex...
         assert _verdict(program, X86_64, nr) == ALLOW, nr
     for nr in (248, 249, 250, 0, 1, 60):                      # the x32 ABI: same arch, number + 0x40000000
         assert _verdict(program, X86_64, 0x40000000 | nr) == REFUSE, nr
@@ -261,9 +269,30 @@ def test_the_filter_refuses_each_page_cache_call_and_allows_plain_reads(machine)
         assert _verdict(program, I386, 219, 0, 4096, MADV_DONTNEED) == REFUSE, "i386's madvise"
 
 
+@pytest.mark.parametrize("machine", ["x86_64", "aarch64"])
+def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
+    program = sandbox.box_filter(machine)
+    arch, column = {"x86_64": (X86_64, 0), "aarch64": (AARCH64, 1)}[machine]
+    unshare, setns, clone, clone3 = (NS_CALLS[name][column] for name in ("unshare", "setns", "clone", "clone3"))
+    for name, flag in CLONE_NEW.items():
+        assert _verdict(program, arch, unshare, flag) == REFUSE, name
+        assert _verdict(program, arch, clone, flag | 17) == REFUSE, name                    # with SIGCHLD
+        assert _verdict(program, arch, clone, (0xFFFFFFFF << 32) | flag | FORK_FLAGS) == REFUSE, name
+    assert _verdict(program, arch, unshare, 0) == REFUSE and _verdict(program, arch, setns, 3, 0) == REFUSE
+    for flags in (0, 17, FORK_FLAGS, THREAD_FLAGS, 1 << 32 | CLONE_NEW["NEWUSER"] >> 4):
+        assert _verdict(program, arch, clone, flags) == ALLOW, hex(flags)
+    assert _verdict(program, arch, clone, 17, CLONE_NEW["NEWUSER"]) == ALLOW, "the flags are the first argument"
+    assert _verdict(program, arch, clone3, 0x7F0000000000, 88) == MISSING, "clone3 is answered ENOSYS"
+    if machine == "x86_64":
+        assert _verdict(program, X86_64, 0x40000000 | clone, 0) == REFUSE, "x32's clone"
+
+
 def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     table = sandbox.REFUSED_SYSCALLS
-    assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS}
+    assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS,
+                          "unshare", "setns", "clone"}
+    assert table["clone"] == (56, 220, (0, sum(CLONE_NEW.values()))), table["clone"]
+    assert sandbox.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"]}
     assert {name: table[name] for name in CACHE_CALLS} == {name: (*numbers, None) for name, numbers in
                                                           CACHE_CALLS.items()}
     assert [table[name] for name in ("add_key", "request_key", "keyctl")] == \
@@ -284,7 +313,7 @@ def test_the_numbers_are_those_of_the_kernel_headers_here():
             continue
         text = open(path).read()
         defined = dict(re.findall(r"#define (__NR\w+)\s+(\w+)", text))
-        for name, numbers in sandbox.REFUSED_SYSCALLS.items():
+        for name, numbers in {**sandbox.REFUSED_SYSCALLS, **sandbox.MISSING_SYSCALLS}.items():
             value = defined.get(f"__NR_{name}")
             while value in defined:                           # __NR_fadvise64 is __NR3264_fadvise64 on aarch64
                 value = defined[value]
@@ -588,6 +617,38 @@ def test_an_ordinary_workload_runs_in_the_box(tmp_path, slot):
     assert got["env"] is False, "INSIDE takes the filter out of the environment"
     if os.geteuid() == 0:
         assert got["uid"] == sandbox.box_uid(slot), got
+
+
+@NEEDS_BWRAP
+def test_a_box_cannot_make_a_namespace_and_still_forks_and_starts_threads(tmp_path, slot):
+    """unshare/setns/clone with CLONE_NEW* fail with EPERM and clone3 with ENOSYS in a real box; os.fork,
+    threading and subprocess (which glibc runs through clone after clone3's ENOSYS) still work."""
+    got = _run_probe("""
+        import subprocess, threading
+        NS = {"x86_64": (272, 308, 56, 435), "aarch64": (97, 268, 220, 435)}[os.uname().machine]
+        unshare, setns, clone, clone3 = NS
+        out = {"unshare user": call(unshare, 0x10000000), "unshare net": call(unshare, 0x40000000),
+               "setns": call(setns, os.open("/proc/self/ns/uts", os.O_RDONLY), 0),
+               "clone user": call(clone, 0x10000000 | 17, 0, 0, 0, 0),
+               "clone3": call(clone3, ctypes.create_string_buffer(88), 88)}
+        ctypes.set_errno(0)
+        out["libc unshare"] = [libc.unshare(0x10000000), ctypes.get_errno()]       # the C library's own wrapper
+        box = {}
+        t = threading.Thread(target=lambda: box.update(thread=1))
+        t.start()
+        t.join()
+        pid = os.fork()
+        if pid == 0:
+            os._exit(5)
+        out["fork"] = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+        out["thread"] = box.get("thread")
+        out["child"] = subprocess.run([sys.executable, "-c", "print(6 * 7)"], capture_output=True,
+                                      text=True).stdout.strip()
+        print(json.dumps(out))
+    """, tmp_path=tmp_path, slot=slot)
+    assert got == {"unshare user": [-1, EPERM], "unshare net": [-1, EPERM], "setns": [-1, EPERM],
+                   "clone user": [-1, EPERM], "clone3": [-1, ENOSYS], "libc unshare": [-1, EPERM],
+                   "fork": 5, "thread": 1, "child": "42"}, got
 
 
 @NEEDS_BWRAP
