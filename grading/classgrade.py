@@ -463,6 +463,11 @@ def main(argv=None):
         print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
               f"(at most {judge.JUDGE_MEMORY_BYTES >> 30} GB of address space each): "
               f"{max(judged, default=0):.0f} MB")
+        users = sorted({r.verdict.judge_uid for r in results if r.verdict is not None})
+        if users:
+            print("each student's judge ran as " + ("root (NOT dropped)" if 0 in users else
+                  f"user {', '.join(map(str, users))}, not root (grading.launcher starts the boxes)"
+                  if os.geteuid() == 0 else "the grader's own user"))
         print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
               f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")

@@ -13,6 +13,7 @@ import json
 import os
 import re
 import selectors
+import shutil
 import signal
 import subprocess
 import time
@@ -45,25 +46,57 @@ class ReplyTooLarge(BoxDied):
     parsed."""
 
 
+class Started:
+    """A box process this process started itself (``subprocess.Popen``), and the private folder it was given, which
+    :meth:`end` removes with it."""
+
+    def __init__(self, proc, work=None):
+        self.proc, self.work = proc, work
+
+    def poll(self):
+        return self.proc.poll()
+
+    def end(self):
+        """Kill the box (its whole process group) if it runs, wait for it, remove its folder; its exit status."""
+        if self.proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+        status = self.proc.wait()
+        if self.work:
+            shutil.rmtree(self.work, ignore_errors=True)
+        return status
+
+
+def start(command, env=None, work=None):
+    """Start ``command`` (a box) with pipes on its standard input and output: (process, its input, its output), as
+    :class:`Box` takes them."""
+    proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            start_new_session=True, env=env)
+    return Started(proc, work), proc.stdin, proc.stdout
+
+
 class Box:
     """One run of :mod:`grading.box` in the sandbox, talked to over its standard input and output.
 
-    ``largest`` is the longest reply read so far (bytes; a test holds the honest ones well under the limit)."""
+    ``started`` is (process, input, output) as :func:`start` returns them, or as :mod:`grading.launcher` hands them
+    over from the process that started the box: the process has ``poll()`` (its exit status, or None while it runs)
+    and ``end()`` (stop it, remove its folder, return its exit status). ``largest`` is the longest reply read so far
+    (bytes; a test holds the honest ones well under the limit)."""
 
-    def __init__(self, command, env=None):
-        self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     stderr=subprocess.DEVNULL, start_new_session=True, env=env)
+    def __init__(self, started):
+        self.process, self.stdin, self.stdout = started
+        self.returncode = None
         self.chunks, self.size = [], 0          # what has come of the next reply (no newline yet)
         self.lines = []                         # whole replies read and not yet returned
         self.largest = 0
         self.sel = selectors.DefaultSelector()
-        self.sel.register(self.proc.stdout, selectors.EVENT_READ)
-        os.set_blocking(self.proc.stdout.fileno(), False)
+        self.sel.register(self.stdout, selectors.EVENT_READ)
+        os.set_blocking(self.stdout.fileno(), False)
 
     def send(self, message):
         try:
-            self.proc.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
-            self.proc.stdin.flush()
+            self.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
+            self.stdin.flush()
         except (BrokenPipeError, OSError) as exc:
             raise BoxDied("the box closed its input") from exc
 
@@ -77,13 +110,13 @@ class Box:
             if left <= 0:
                 raise BoxTimeout()
             if not self.sel.select(timeout=min(left, 1.0)):
-                if self.proc.poll() is not None:
-                    raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+                status = self.process.poll()
+                if status is not None:
+                    raise BoxDied(f"the box ended (exit status {status})")
                 continue
-            chunk = self.proc.stdout.read(1 << 20)
+            chunk = self.stdout.read(1 << 20)
             if not chunk:
-                self.proc.wait()
-                raise BoxDied(f"the box ended (exit status {self.proc.returncode})")
+                raise BoxDied(f"the box ended (exit status {self.kill()})")
             *whole, rest = chunk.split(b"\n")
             for part in whole:
                 self.lines.append(b"".join(self.chunks) + part)
@@ -111,14 +144,14 @@ class Box:
         raise ReplyTooLarge(f"the box sent {what}")
 
     def kill(self):
-        if self.proc.poll() is None:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait()
-        self.sel.close()
-        for f in (self.proc.stdin, self.proc.stdout):
-            with contextlib.suppress(OSError):
-                f.close()
+        """Stop the box and remove its folder (once; again is a no-op); its exit status."""
+        if self.returncode is None:
+            self.returncode = self.process.end()
+            self.sel.close()
+            for f in (self.stdin, self.stdout):
+                with contextlib.suppress(OSError):
+                    f.close()
+        return self.returncode
 
 
 def run_program(box, cells, *, cell_seconds, deadline):

@@ -34,8 +34,8 @@ import contextlib
 import copy
 import dataclasses
 import json
+import os
 import re
-import shutil
 import time
 import types
 from dataclasses import dataclass, field
@@ -46,7 +46,7 @@ import nbformat
 from fusionlab import guard, labformat
 from fusionlab.checks import exercises
 from grading import box as wire
-from grading import boxlib, cells, client, sandbox
+from grading import boxlib, cells, client, launcher, sandbox
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.outputs import Budget, inert, inert_markdown
 
@@ -91,6 +91,7 @@ class Verdict:
     seconds: float = 0.0
     largest_reply: int = 0        # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
     judge_mb: float = 0.0         # the most memory the process that judged it held (MB; judge_apart)
+    judge_uid: int = -1           # the user that process ran as (judge_apart; not root: grading.launcher)
 
     @property
     def score(self):
@@ -241,14 +242,14 @@ class Lab:
                                      limits=self.limits, uid=uid, hide=boxlib.shadowed(root / "shadow"))
 
     # -- values of the provided cells, from the model solution ------------------------------------------------------
-    def reference_values(self, gid, slot=0):
+    def reference_values(self, gid, boxes):
         """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
-        as the student's (made once per lab and test)."""
+        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test)."""
         if gid not in self._reference:
             wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - set(self.base()))
             values = {}
             if wanted:
-                session = Session(self, self.solution, "model solution", slot, gid, need=wanted)
+                session = Session(self, self.solution, boxes, gid, need=wanted, files=False)
                 try:
                     session.start()
                     values = session.describe(wanted)
@@ -285,8 +286,8 @@ class NotData(StudentError):
 class Session:
     """The box of one submission: started, run through its program, then asked for calls and values."""
 
-    def __init__(self, lab: Lab, submitted, student, slot, gid, need=(), stopped=None):
-        self.lab, self.submitted, self.student, self.slot, self.gid = lab, submitted, student, slot, gid
+    def __init__(self, lab: Lab, submitted, boxes, gid, need=(), stopped=None, files=True):
+        self.lab, self.submitted, self.boxes, self.gid, self.files = lab, submitted, boxes, gid, files
         self.cells, self.notes = lab.program(submitted, upto=gid, need=need)
         # cells stopped in an earlier box of this student (over time, or ended the process) are left out from the
         # start: a stuck cell costs its time once per student, not once per test
@@ -294,19 +295,15 @@ class Session:
         self.skipped = {i for i, cell in enumerate(self.cells) if tuple(cell) in self.stopped}
         self.cell_errors = {}
         self.box = None
-        self.work = None
         self.largest = 0
         self.restarts = 0
         self.deadline = time.monotonic() + STUDENT_SECONDS
         self.budget = {"deadline": self.deadline}     # of the test's calls: set when the test starts
 
     def _spawn(self):
-        uid = sandbox.box_uid(self.slot)
-        source = self.lab.course / "submitted" / self.student / self.lab.lab
-        self.work = sandbox.private_folder(source if source.is_dir() else None, self.lab.scratch, uid)
         if self.box is not None:
             self.largest = max(self.largest, self.box.largest)
-        self.box = client.Box(self.lab.box_command(self.gid, self.work, uid))
+        self.box = self.boxes.start(self.gid, files=self.files)
 
     def start(self):
         """Start the box and run the program; a cell that runs over its time, or kills the box, is left out and the
@@ -402,8 +399,6 @@ class Session:
         if self.box is not None:
             self.largest = max(self.largest, self.box.largest)
             self.box.kill()
-        if self.work:
-            shutil.rmtree(self.work, ignore_errors=True)
 
 
 def _first_line(exc):
@@ -413,7 +408,7 @@ def _first_line(exc):
     return text if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {text}"
 
 
-def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
+def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
     """Grade one submission (``submitted``: the notebook, or None when it could not be read).
 
     Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
@@ -423,8 +418,11 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
     In two rounds: first the visible part of every test, each in its box, whose verdicts may quote the student's
     code; then, in the boxes kept open, the hidden parts, whose verdicts name only the kind of failure. No box's
     words reach the feedback after any box of the student has seen a hidden input, so a channel between the boxes
-    (the kernel's page cache is one no sandbox closes) cannot carry hidden inputs into a verdict."""
+    (the kernel's page cache is one no sandbox closes) cannot carry hidden inputs into a verdict.
+
+    ``boxes`` starts the boxes (:mod:`grading.launcher`; by default in this process)."""
     t0 = time.monotonic()
+    boxes = launcher.LocalBoxes(lab, student, slot) if boxes is None else boxes
     verdict = Verdict()
     base = lab.base()
     stopped = set()
@@ -433,8 +431,8 @@ def judge(lab: Lab, submitted, student: str, slot=0) -> Verdict:
         for gid, source in lab.tests.items():
             result = TestResult(gid, lab.points.get(gid, 0.0))
             verdict.tests.append(result)
-            reference = lab.reference_values(gid, slot)
-            session = Session(lab, submitted, student, slot, gid, need=cells.free_names(source), stopped=stopped)
+            reference = lab.reference_values(gid, boxes)
+            session = Session(lab, submitted, boxes, gid, need=cells.free_names(source), stopped=stopped)
             ns = dict(base)
             rest = _visible_part(lab, session, source, ns, reference, result)
             if rest:
@@ -473,13 +471,18 @@ def _judge_child(conn, lab, submitted, student, slot, memory_bytes, system):
     sandbox.system_files(known=system)
     # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    boxes = None
     try:
-        verdict = judge(lab, submitted, student, slot)
+        boxes = launcher.split(lab, student, slot)    # as root: the boxes' launcher stays root, this process does not
+        verdict = judge(lab, submitted, student, slot, boxes)
         verdict.judge_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        verdict.judge_uid = os.getuid()
         conn.send_bytes(json.dumps({"verdict": dataclasses.asdict(verdict)}).encode())
     except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
         conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
     finally:
+        if boxes is not None:
+            boxes.close()                             # every box ended before the verdict is read
         conn.close()
 
 
@@ -526,7 +529,8 @@ def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_ME
     d = reply["verdict"]
     return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
                    cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
-                   largest_reply=int(d["largest_reply"]), judge_mb=float(d["judge_mb"]))
+                   largest_reply=int(d["largest_reply"]), judge_mb=float(d["judge_mb"]),
+                   judge_uid=int(d["judge_uid"]))
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"

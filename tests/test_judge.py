@@ -34,6 +34,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, nbgrader
+from grading import launcher, sandbox
 from grading.bench_classgrade import fill_answers, grade_id
 from test_feedback import _hidden_lines
 
@@ -551,6 +552,17 @@ def test_a_flood_on_the_pipe_fails_its_test_and_costs_the_judge_no_memory(graded
     assert "a reply over 16 MB" in text, text
     peak = int(re.search(r"peak memory of the grading process: (\d+) MB", graded["run"].stdout).group(1))
     assert 100 < peak < 1000, f"the grading process peaked at {peak} MB"
+
+
+def test_the_judges_give_up_root_before_they_read_a_reply(graded):
+    """As root, each student's judge runs as a user of its own slot (grading.launcher), never as root."""
+    said = re.search(r"each student's judge ran as (.*)", graded["run"].stdout).group(1)
+    if os.geteuid() != 0:
+        assert said == "the grader's own user", said
+        return
+    users = [int(u) for u in re.fullmatch(r"user ([\d, ]+), not root \(grading.launcher starts the boxes\)",
+                                          said).group(1).split(", ")]
+    assert users and set(users) <= {launcher.judge_uid(s) for s in range(sandbox.MAX_SLOTS)}, users
 
 
 def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_process(graded):

@@ -31,8 +31,8 @@ class FakeSession:
     channel: dict = {}
     log: list = []
 
-    def __init__(self, lab, submitted, student, slot, gid, need=(), stopped=None):
-        self.gid, self.student = gid, student
+    def __init__(self, lab, submitted, boxes, gid, need=(), stopped=None, files=True):
+        self.gid, self.student = gid, boxes.student
         self.notes, self.cell_errors, self.cells, self.largest = [], {}, [], 0
         self.budget = {"deadline": float("inf")}
 
@@ -65,7 +65,7 @@ class FakeSession:
 def _lab():
     return types.SimpleNamespace(tests=TESTS, points={"ex1_tests": 1.0, "ex2_tests": 1.0}, cell_seconds=10,
                                  forbidden={}, base=lambda: {"guard": judge.guard},
-                                 reference_values=lambda gid, slot: {})
+                                 reference_values=lambda gid, boxes: {})
 
 
 def _judge(student, monkeypatch):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,7 +128,7 @@ class Runner:
         command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
                                         lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
                                         limits=self.limits, uid=uid, data=False, hide=self.hide)
-        self.box = client.Box(command)
+        self.box = client.Box(client.start(command, work=self.work))     # ended with the box: kill() removes it
         errors = {}
         try:
             errors = client.run_program(self.box, self.cells, cell_seconds=SETUP_SECONDS,
@@ -199,9 +198,7 @@ class Runner:
         if self.box is not None:
             self.box.kill()
             self.box = None
-        if self.work:
-            shutil.rmtree(self.work, ignore_errors=True)
-            self.work = None
+        self.work = None
 
 
 # ----------------------------------------------------------------------------------------------------------------

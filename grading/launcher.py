@@ -1,0 +1,186 @@
+"""Boxes started by root for a judge that is not root.
+
+Grading as root gives every box a user id of its own (:func:`grading.sandbox.box_uid`), which takes root to set up.
+The judge of one student -- the process that reads the student's replies and runs the tests on them -- needs none of
+it, so it does not keep it: :func:`split` forks a *launcher* that stays root, and the judge then runs as a user of its
+own (:func:`judge_uid`: not root, not a box's user, not another judge's), with no groups, no capabilities and
+``no_new_privs``. Whatever a reply could make the judge do, it does as that user: it cannot delete or write the
+course's files, the gradebook or a classmate's submission, and cannot signal or trace a box, the launcher or another
+student's judge.
+
+The launcher does three things only, each asked for over a socket in a message of a few words: start a box for one
+of the lab's test cells (seeded with the student's own files or with none), say whether a box of its own still runs,
+and end one (stop it, remove its folder). It hands the judge the two ends of the box's pipes (``SCM_RIGHTS``) and
+answers nothing else; when the judge closes the socket (or dies), it ends every box it started and exits.
+
+Not as root there is nothing to give up: :class:`LocalBoxes` starts the boxes in the judge's own process, with the
+same two calls.
+"""
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import socket
+
+from grading import client, sandbox
+
+#: Judges run as users above the boxes' (:data:`grading.sandbox.FIRST_UID` + slot): one per slot, as the boxes.
+JUDGE_FIRST_UID = sandbox.FIRST_UID + sandbox.MAX_SLOTS
+_MESSAGE_BYTES = 4096
+
+
+def judge_uid(slot):
+    """The user the judge of slot ``slot`` runs as when grading as root."""
+    if not isinstance(slot, int) or not 0 <= slot < sandbox.MAX_SLOTS:
+        raise ValueError(f"slot must be an int in [0, {sandbox.MAX_SLOTS}); got {slot!r}")
+    return JUDGE_FIRST_UID + slot
+
+
+def _start(lab, student, slot, gid, files):
+    """Start the box of test ``gid`` for ``student`` (its folder seeded with the submission's files when ``files``):
+    (process, input, output) as :class:`grading.client.Box` takes them."""
+    if gid not in lab.tests:
+        raise ValueError(f"expected a test cell of {lab.lab}, got {gid!r}")
+    uid = sandbox.box_uid(slot)
+    source = lab.course / "submitted" / student / lab.lab
+    work = sandbox.private_folder(source if files and source.is_dir() else None, lab.scratch, uid)
+    return client.start(lab.box_command(gid, work, uid), work=work)
+
+
+class LocalBoxes:
+    """The boxes of one student's judge, started in the judge's own process (not root, or a test)."""
+
+    def __init__(self, lab, student, slot):
+        self.lab, self.student, self.slot = lab, student, slot
+
+    def start(self, gid, files=True):
+        """A :class:`grading.client.Box` running the box of test ``gid``."""
+        return client.Box(_start(self.lab, self.student, self.slot, gid, files))
+
+    def close(self):
+        pass
+
+
+# -- as root: the launcher and the judge's end of its socket ------------------------------------------------------
+
+def _serve(sock, lab, student, slot):
+    """The launcher's loop: answer the judge's requests until it closes the socket; then end every box."""
+    boxes = {}
+    try:
+        while True:
+            try:
+                data = sock.recv(_MESSAGE_BYTES)
+            except OSError:
+                break
+            if not data:
+                break
+            fds = []
+            try:
+                request = json.loads(data)
+                if not isinstance(request, dict) or len(request) != 1:
+                    raise ValueError("expected one of start, poll, end")
+                (what, arg), = request.items()
+                if what == "start" and isinstance(arg, list) and len(arg) == 2 and isinstance(arg[0], str) \
+                        and isinstance(arg[1], bool):
+                    process, stdin, stdout = _start(lab, student, slot, arg[0], arg[1])
+                    n = len(boxes)
+                    boxes[n] = (process, stdin, stdout)
+                    reply, fds = {"box": n}, [stdin.fileno(), stdout.fileno()]
+                elif what in ("poll", "end") and type(arg) is int and arg in boxes:
+                    process = boxes[arg][0]
+                    reply = {"status": process.poll() if what == "poll" else process.end()}
+                else:
+                    raise ValueError(f"expected start [gid, files], poll n or end n, got {what!r}")
+            except Exception as exc:  # noqa: BLE001 -- a request it cannot answer is said, and the loop goes on
+                reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
+            socket.send_fds(sock, [json.dumps(reply).encode()], fds)
+            if fds:                                   # the judge holds the pipes now: the launcher keeps no end
+                for f in boxes[reply["box"]][1:]:
+                    f.close()
+    finally:
+        for process, *_ in boxes.values():
+            process.end()
+
+
+class _Remote:
+    """A box the launcher started: ``poll`` and ``end`` are asked of it."""
+
+    def __init__(self, boxes, n):
+        self.boxes, self.n = boxes, n
+
+    def poll(self):
+        return self.boxes.ask({"poll": self.n})["status"]
+
+    def end(self):
+        try:
+            return self.boxes.ask({"end": self.n})["status"]
+        except OSError:
+            return None
+
+
+class RemoteBoxes:
+    """The judge's end of the launcher's socket: the boxes it starts, as :class:`LocalBoxes` would."""
+
+    def __init__(self, sock, launcher_pid):
+        self.sock, self.launcher_pid = sock, launcher_pid
+
+    def ask(self, request, fds=0):
+        self.sock.send(json.dumps(request).encode())
+        data, got, *_ = socket.recv_fds(self.sock, _MESSAGE_BYTES, fds)
+        if not data:
+            raise OSError("the launcher of the boxes has gone")
+        reply = json.loads(data)
+        if "error" in reply:
+            for fd in got:
+                os.close(fd)
+            raise RuntimeError(f"the launcher could not do {request}: {reply['error']}")
+        return (reply, got) if fds else reply
+
+    def start(self, gid, files=True):
+        reply, fds = self.ask({"start": [gid, bool(files)]}, fds=2)
+        if len(fds) != 2:
+            raise RuntimeError(f"the launcher sent {len(fds)} pipe ends for a box, expected 2")
+        return client.Box((_Remote(self, reply["box"]), os.fdopen(fds[0], "wb"), os.fdopen(fds[1], "rb")))
+
+    def close(self):
+        """Close the socket (the launcher ends every box it started and exits) and wait for the launcher."""
+        self.sock.close()
+        os.waitpid(self.launcher_pid, 0)
+
+
+def drop_root(uid):
+    """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing
+    it runs can gain a privilege back (a set-user-id program runs as the caller)."""
+    os.setgroups([])
+    os.setresgid(uid, uid, uid)
+    os.setresuid(uid, uid, uid)
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.prctl(38, 1, 0, 0, 0) != 0:                        # PR_SET_NO_NEW_PRIVS
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_NO_NEW_PRIVS) failed")
+    if os.getuid() != uid or os.geteuid() != uid or os.getgroups():
+        raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
+
+
+def split(lab, student, slot):
+    """The boxes of one student's judge. As root: fork the launcher, and run the rest of this process as
+    :func:`judge_uid` (call it in a process of its own: :func:`grading.judge.judge_apart`). Otherwise
+    :class:`LocalBoxes`."""
+    if os.geteuid() != 0:
+        return LocalBoxes(lab, student, slot)
+    for gid in lab.tests:                                      # made by root: the judge cannot write the scratch
+        lab.box_root(gid)
+    ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+    pid = os.fork()
+    if pid == 0:                                               # the launcher: root, answers requests, then exits
+        status = 0
+        try:
+            ours.close()
+            _serve(theirs, lab, student, slot)
+        except BaseException:  # noqa: BLE001 -- nothing of a failed launcher may run on as the judge
+            status = 1
+        finally:
+            os._exit(status)
+    theirs.close()
+    drop_root(judge_uid(slot))
+    return RemoteBoxes(ours, pid)

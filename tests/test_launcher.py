@@ -1,0 +1,193 @@
+"""The judge does not run as root (``grading.launcher``): as root, a launcher forked before the judge gives up root
+starts the boxes and hands over their pipes; the judge runs as a user of its own and cannot touch the course."""
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+import types
+from pathlib import Path
+
+import pytest
+
+from grading import client, launcher, sandbox
+
+AS_ROOT = pytest.mark.skipif(os.geteuid() != 0, reason="the launcher splits off only when grading as root")
+
+# A stand-in box: says its pid, then echoes every line it reads.
+ECHO = "import os, sys\nprint(os.getpid(), flush=True)\nfor line in sys.stdin:\n    print(line, end='', flush=True)\n"
+
+
+def _fake_lab(tmp_path):
+    scratch = tmp_path / "scratch"
+    scratch.mkdir(exist_ok=True)
+    os.chmod(tmp_path, 0o755)
+    return types.SimpleNamespace(tests={"ex1_tests": ""}, lab="01_x", course=tmp_path, scratch=scratch,
+                                 box_root=lambda gid: None,
+                                 box_command=lambda gid, work, uid: [sys.executable, "-c", ECHO])
+
+
+def _in_child(body):
+    """Run ``body()`` in a forked child (it may give up root there); its JSON-able result, or the error it raised."""
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(r)
+        try:
+            out = {"ok": body()}
+        except BaseException as exc:  # noqa: BLE001 -- reported to the test
+            out = {"error": f"{type(exc).__name__}: {exc}"}
+        os.write(w, json.dumps(out).encode())
+        os._exit(0)
+    os.close(w)
+    with os.fdopen(r) as f:
+        data = f.read()
+    os.waitpid(pid, 0)
+    got = json.loads(data)
+    assert "error" not in got, got["error"]
+    return got["ok"]
+
+
+def _gone(pid, seconds=10):
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        with open(f"/proc/{pid}/stat") as f:            # a zombie not yet reaped by its new parent is gone too
+            if f.read().split(") ", 1)[1].startswith("Z"):
+                return True
+        time.sleep(0.05)
+    return False
+
+
+def test_judge_uids_are_neither_root_nor_a_box_user():
+    assert launcher.judge_uid(0) == sandbox.FIRST_UID + sandbox.MAX_SLOTS
+    uids = {launcher.judge_uid(s) for s in range(sandbox.MAX_SLOTS)}
+    boxes = {sandbox.FIRST_UID + s for s in range(sandbox.MAX_SLOTS)}
+    assert len(uids) == sandbox.MAX_SLOTS and not uids & boxes and 0 not in uids
+    for bad in (-1, sandbox.MAX_SLOTS, 1.0, "3", None):
+        with pytest.raises(ValueError, match="slot must be an int in"):
+            launcher.judge_uid(bad)
+
+
+def test_not_as_root_the_boxes_start_in_the_judges_own_process(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)
+    boxes = launcher.split(_fake_lab(tmp_path), "ana", 3)
+    assert isinstance(boxes, launcher.LocalBoxes) and os.getuid() == os.getuid()
+
+
+@pytest.fixture
+def course():
+    """A folder readable by all (pytest's own are root's alone), as a course is."""
+    folder = Path(tempfile.mkdtemp(prefix="course-"))
+    os.chmod(folder, 0o755)
+    yield folder
+    shutil.rmtree(folder)
+
+
+@AS_ROOT
+def test_the_judge_gives_up_root_and_cannot_touch_the_course(course):
+    tmp_path = course
+    canary = tmp_path / "gradebook.db"
+    canary.write_text("grades")
+    os.chmod(tmp_path, 0o755)
+    os.chmod(canary, 0o644)
+    parent = os.getpid()
+
+    def body():
+        launcher.drop_root(launcher.judge_uid(7))
+        tried = {}
+        for name, attempt in [("unlink", lambda: os.unlink(canary)), ("write", lambda: open(canary, "a")),
+                              ("create", lambda: open(tmp_path / "new", "w")),
+                              ("signal the grader", lambda: os.kill(parent, 0)), ("root again", lambda: os.setuid(0)),
+                              ("chown", lambda: os.chown(canary, launcher.judge_uid(7), -1))]:
+            try:
+                attempt()
+                tried[name] = "done"
+            except PermissionError:
+                tried[name] = "refused"
+        status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
+        return {"uid": os.getuid(), "gid": os.getgid(), "groups": os.getgroups(), "tried": tried,
+                "read": canary.read_text(), "no_new_privs": status["NoNewPrivs"].strip(),
+                "caps": status["CapEff"].strip()}
+
+    got = _in_child(body)
+    assert got["uid"] == got["gid"] == launcher.judge_uid(7) and got["groups"] == [], got
+    assert got["tried"] == {name: "refused" for name in got["tried"]} and len(got["tried"]) == 6, got["tried"]
+    assert (got["no_new_privs"], got["caps"]) == ("1", "0000000000000000"), got
+    assert got["read"] == "grades" and canary.read_text() == "grades"
+
+
+@AS_ROOT
+def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course):
+    lab = _fake_lab(course)
+
+    def body():
+        boxes = launcher.split(lab, "ana", 4)
+        box = boxes.start("ex1_tests")
+        deadline = time.monotonic() + 20
+        box_pid = box.receive(deadline)
+        box.send({"a": [1, 2.5]})
+        echoed = box.receive(deadline)
+        refused = []
+        for request in ({"start": ["ex9_tests", True]}, {"start": ["../../etc", False]}, {"poll": 5}, {"end": -1},
+                        {"poll": "0"}, {"unlink": "/"}, {"start": ["ex1_tests", True], "end": 0}, []):
+            try:
+                boxes.ask(request)
+                refused.append(None)
+            except RuntimeError as exc:
+                refused.append(str(exc))
+        running = boxes.ask({"poll": 0})["status"]
+        work = [p.name for p in lab.scratch.iterdir()]
+        status = box.kill()
+        after = [p.name for p in lab.scratch.iterdir()]
+        second = boxes.start("ex1_tests", files=False)
+        second_pid = second.receive(deadline)
+        pid = boxes.launcher_pid
+        boxes.close()                                   # with the second box still running
+        return {"uid": os.getuid(), "pid": box_pid, "echoed": echoed, "refused": refused, "running": running,
+                "work": work, "status": status, "after": after, "second": second_pid, "launcher": pid}
+
+    got = _in_child(body)
+    assert got["uid"] == launcher.judge_uid(4) and got["echoed"] == {"a": [1, 2.5]}, got
+    assert all(r and "the launcher could not do" in r for r in got["refused"]), got["refused"]
+    assert "expected a test cell of 01_x, got 'ex9_tests'" in got["refused"][0], got["refused"][0]
+    assert got["running"] is None and got["status"] == -9, got
+    assert len(got["work"]) == 1 and got["after"] == [], "ending a box removes its folder"
+    assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), \
+        "closing the judge's end ends every box and the launcher"
+    assert list(lab.scratch.iterdir()) == []
+
+
+@AS_ROOT
+def test_a_judge_that_dies_leaves_no_box_behind(course):
+    lab = _fake_lab(course)
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:                                        # the judge: starts a box, says its pid and dies at once
+        os.close(r)
+        boxes = launcher.split(lab, "ana", 2)
+        box = boxes.start("ex1_tests")
+        os.write(w, json.dumps([box.receive(time.monotonic() + 20), boxes.launcher_pid]).encode())
+        os._exit(1)
+    os.close(w)
+    with os.fdopen(r) as f:
+        box_pid, launcher_pid = json.loads(f.read())
+    os.waitpid(pid, 0)
+    assert _gone(box_pid) and _gone(launcher_pid), "the launcher ends the boxes of a judge that died, then exits"
+    end = time.monotonic() + 10
+    while list(lab.scratch.iterdir()) and time.monotonic() < end:
+        time.sleep(0.05)
+    assert list(lab.scratch.iterdir()) == []
+
+
+def test_a_box_started_here_is_ended_with_its_folder(tmp_path):
+    work = tmp_path / "box-1"
+    work.mkdir()
+    box = client.Box(client.start([sys.executable, "-c", ECHO], work=str(work)))
+    assert isinstance(box.receive(time.monotonic() + 20), int)
+    assert box.kill() == -9 and not work.exists() and box.kill() == -9, "once; again is a no-op"
+    assert Path(tmp_path).exists()
