@@ -320,3 +320,56 @@ def test_the_6d_full_mark_gives_the_model_filter_the_same_points_in_either_senso
             uncalibrated = 8 * np.log(ref[madgwick] / mine) / np.log(ref[madgwick] / ref[vqf])
     assert points["6D"] == pytest.approx(points["9D"], abs=0.25), points
     assert uncalibrated > points["9D"] + 0.5, (uncalibrated, points)
+
+
+# --- Exercise 2's autograded point: the test cell itself finds look-ahead in any sensor ---------------------------
+
+def _exercise2_test(estimate, sensors):
+    """Run exercise 2's autograder test cell, from the instructor's notebook, on ``estimate`` declared ``sensors``,
+    with the names the notebook gives it (the judge runs the same cell in its own process)."""
+    import nbformat
+
+    from conftest import ROOT
+    from fusionlab import guard
+    from grading import cells
+    nb = nbformat.read(ROOT / "solutions" / "13_capstone" / "13_capstone.ipynb", as_version=4)
+    [cell] = [c for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("grade_id") == "ex2_tests"]
+    scope = {"np": np, "guard": guard, "estimate": estimate, "SENSORS": sensors}
+    exec(compile(cells.python_of(cell.source), "<ex2_tests>", "exec"), scope)  # noqa: S102 -- the course's own cell
+
+
+def _gyro_bias_of_the_whole_record(estimate):
+    """The model filter on the gyro less its mean over the whole record: a bias estimate that looks ahead."""
+    def cheat(gyr, acc, mag, fs):
+        gyr = np.asarray(gyr, dtype=float)
+        return estimate(gyr - gyr.mean(axis=0), acc, mag, fs)
+    return cheat
+
+
+def _hard_iron_of_the_whole_record(estimate):
+    """The model filter on the field less a fifth of its mean over the whole record: look-ahead in the magnetometer
+    only."""
+    def cheat(gyr, acc, mag, fs):
+        return estimate(gyr, acc, None if mag is None else mag - 0.2 * np.mean(mag, axis=0), fs)
+    return cheat
+
+
+def test_exercise_2s_test_passes_the_model_filter_in_both_sensor_sets():
+    estimate = _solution_estimate()
+    for sensors in ("9D", "6D"):
+        _exercise2_test(estimate, sensors)
+
+
+@pytest.mark.parametrize("cheat, sensors", [
+    (_gyro_bias_of_the_whole_record, "9D"),
+    (_gyro_bias_of_the_whole_record, "6D"),
+    (_hard_iron_of_the_whole_record, "9D"),
+    (lambda estimate: looks_ahead, "9D"),             # the mean accelerometer of the whole record
+])
+def test_exercise_2s_test_fails_a_filter_with_a_statistic_of_the_whole_record(cheat, sensors):
+    """The autograded point is for a causal filter: the cell changes every sensor's samples after k, the gyro by a
+    constant rate, so that a bias taken as the mean gyro of the whole record moves the estimate before k. (It once
+    changed the accelerometer only, and a whole-record gyro bias passed.)"""
+    with pytest.raises(AssertionError, match=r"your estimate up to k = 1000 when every sensor's samples after it "
+                                             r"change"):
+        _exercise2_test(cheat(_solution_estimate()), sensors)
