@@ -15,7 +15,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from fusionlab import datasets, recordings, rotations
+from fusionlab import datasets, recordings, rotations, signals
 
 PHONE = recordings.EXAMPLES_DIR
 PLAIN = dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag": ["mx", "my", "mz"]},
@@ -108,6 +108,17 @@ def test_the_phones_own_orientation_is_kept_as_quat_phone_never_as_a_reference(b
     f = rec.acc[:500] / np.linalg.norm(rec.acc[:500], axis=1, keepdims=True)
     assert np.degrees(np.arccos(np.clip(np.sum(up * f, axis=1), -1, 1))).max() < 1.0
     assert recordings.load_recording(PHONE / "sensorlogger_ios_trial02.zip").quat_phone is None
+
+
+def test_a_recording_and_a_broad_trial_share_one_definition_of_length_time_and_duration():
+    rec = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
+    trial = datasets.load_trial(2, download=False).slice(0, 1000)
+    for r in (rec, trial):
+        assert isinstance(r, signals.Sampled) and len(r) == len(r.gyr) == len(r.t)
+        assert r.t[0] == 0.0 and r.t[1] == pytest.approx(1 / r.fs) and r.duration == pytest.approx(len(r) / r.fs)
+    assert len(rec) == 2991 and rec.duration == pytest.approx(2991 / rec.fs)
+    for name in ("__len__", "t", "duration"):
+        assert name not in vars(recordings.Recording) and name not in vars(datasets.BroadTrial), name
 
 
 def test_the_examples_regenerate_byte_identical(tmp_path):

@@ -102,7 +102,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import earth, validate
+from . import earth, signals, validate
 
 __all__ = ["load_recording", "Recording", "Summary", "SensorReport", "FORMATS", "ACC_CONVENTIONS", "UNITS",
            "MIN_OVERLAP", "MAX_GAP", "make_examples", "main"]
@@ -231,11 +231,12 @@ class Summary:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Recording:
+class Recording(signals.Sampled):
     """A phone's recording on one uniform time base (arrays read-only); each field is an attribute of the same name.
 
     The same kind of object as :class:`fusionlab.datasets.BroadTrial` (``gyr``, ``acc``, ``mag``, ``fs``, ``t``,
-    ``quat_ref``), with what a phone adds: ``quat_phone``, its own orientation estimate, and the ``summary``.
+    ``quat_ref``; ``len(rec)``, ``t`` and ``duration`` are those of :class:`fusionlab.signals.Sampled`, the base of
+    both), with what a phone adds: ``quat_phone``, its own orientation estimate, and the ``summary``.
 
     Parameters
     ----------
@@ -266,19 +267,6 @@ class Recording:
     quat_phone: object
     t0: float
     summary: Summary
-
-    def __len__(self):
-        return len(self.gyr)
-
-    @property
-    def t(self):
-        """ndarray, shape (N,): time of each sample, s, from 0."""
-        return np.arange(len(self)) / self.fs
-
-    @property
-    def duration(self):
-        """float: length of the recording, s."""
-        return len(self) / self.fs
 
     @property
     def quat_ref(self):
