@@ -96,7 +96,7 @@ import csv
 import hashlib
 import io
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -272,6 +272,56 @@ class Recording(signals.Sampled):
     def quat_ref(self):
         """None: a phone recording has no ground truth (``quat_phone`` is the phone's estimate, not a reference)."""
         return None
+
+    def window(self, t0, t1):
+        """The same recording cut to the samples whose time (:attr:`t`, s from its first sample) is in ``[t0, t1)``.
+
+        A rest phase for a calibration, or the moving part alone, without index arithmetic: ``t1`` may be the
+        :attr:`duration`, which keeps the last sample.
+
+        Parameters
+        ----------
+        t0 : float
+            Start of the window, s from the first sample, ``0 <= t0 < t1``.
+        t1 : float
+            End of the window, s (the sample at ``t1`` itself is left out), ``t1 <= duration``.
+
+        Returns
+        -------
+        Recording
+            The window (at least one sample), on the same time base: ``fs`` and ``name`` kept, every array cut
+            alike, ``t0`` the app's clock at its first sample, and the summary's ``samples`` and ``start`` those of
+            the window.
+
+        Examples
+        --------
+        >>> from fusionlab import recordings
+        >>> rec = recordings.load_recording(recordings.EXAMPLES_DIR / "sensorlogger_android_trial02.zip")
+        >>> still = rec.window(2.0, 9.0)
+        >>> len(still), round(float(still.t0 - rec.t0), 3), still.acc.shape
+        (667, 2.006, (667, 3))
+        """
+        t0 = validate.scalar(t0, "t0")
+        t1 = validate.scalar(t1, "t1")
+        if not t0 < t1:
+            raise ValueError(f"t1 must be later than t0; got t0={t0!r}, t1={t1!r}")
+        if not 0.0 <= t0 < self.duration:
+            raise ValueError(f"t0 must be within the recording, 0 <= t0 < {self.duration:.4g} s; got {t0!r}")
+        if t1 > self.duration:
+            raise ValueError(f"t1 must be within the recording, t1 <= {self.duration:.4g} s (its duration); got "
+                             f"{t1!r}")
+        t = self.t
+        keep = np.flatnonzero((t >= t0) & (t < t1))
+        if keep.size == 0:
+            raise ValueError(f"t0, t1 must hold at least one sample (one every {1 / self.fs:.4g} s); [{t0!r}, "
+                             f"{t1!r}) holds none")
+        cut = slice(int(keep[0]), int(keep[-1]) + 1)
+        summary = replace(self.summary, samples=int(keep.size),
+                          start=float(self.summary.start + t[cut.start]))
+        return Recording(self.name, self.fs, _frozen(self.gyr[cut]), _frozen(self.acc[cut]),
+                         None if self.mag is None else _frozen(self.mag[cut]),
+                         None if self.quat_phone is None else _frozen(self.quat_phone[cut]),
+                         float(self.t0 + t[cut.start]), summary)
 
     def __repr__(self):
         extra = (", no magnetometer" if self.mag is None else "") + (", phone orientation" if self.quat_phone
