@@ -29,11 +29,14 @@ class Feedback(AssertionError):
     and autograding run the notebook for a report, where there is no next cell (:func:`_box`).
     """
 
+    #: The dim line under the message (left out where nbgrader runs the notebook: :func:`_box`).
+    footnote = "(%tb in a new cell shows where the check stopped)"
+
     def _render_traceback_(self):
         if getattr(self, "_shown", False):             # %tb asks again: the curious get the whole traceback
             return _full_traceback(self)
         self._shown = True
-        return _box("✗ " + str(self), "(%tb in a new cell shows where the check stopped)")
+        return _box("✗ " + str(self), self.footnote)
 
 
 _RED, _DIM, _END = "\x1b[1;31m", "\x1b[2m", "\x1b[0m"
