@@ -47,6 +47,8 @@ CELLS = {
     # Lab 14's loading cell: an export the loader refuses is one box; the same call outside the box keeps its traceback
     "refused": "from fusionlab import recordings\nwith checks.refusal_box():\n"
                "    rec = recordings.load_recording('no_such_export.zip')",
+    "uses_refused": "n_samples = len(rec)",
+    "uses_knock_on": "print(n_samples)",
     "refused_unboxed": "rec = recordings.load_recording('no_such_export.zip')",
 }
 
@@ -143,6 +145,11 @@ def test_an_export_the_loader_refuses_is_one_box_in_lab_14s_loading_cell_only(ru
     assert shown.startswith("✗ path must name an export folder, a .zip or a .csv file; no_such_export.zip does "
                             "not exist\n→ load_recording refused this export"), shown
     assert shown.splitlines()[-1] == "(%tb in a new cell shows the full traceback)", shown
+    for name in ("uses_refused", "uses_knock_on"):             # the cells after it say why their name is missing
+        shown = run[name]["shown"]
+        assert run[name]["error"].ename == "NameError" and _is_box(shown, 3), shown
+        assert "made by the loading cell, which stopped because load_recording refused the export" in shown, shown
+        assert "exercise" not in shown, shown
     shown = run["refused_unboxed"]["shown"]                    # errors are not hidden in general
     assert run["refused_unboxed"]["error"].ename == "ValueError" and "Traceback" in shown and "✗" not in shown
 

@@ -19,6 +19,8 @@ class RecordingRefused(Feedback):
     what to do next. ``%tb`` in the next cell shows the loader's traceback (its ``__cause__``)."""
 
     footnote = "(%tb in a new cell shows the full traceback)"
+    knock_on = ("This name is made by the loading cell, which stopped because load_recording refused the export: "
+                "its ✗ box says why and what fixes it. Fix that, run the loading cell, then this one.")
 
 
 _NEXT = ("→ load_recording refused this export: the line above names the file (and the line in it) and what fixes "
