@@ -85,6 +85,7 @@ that is not a number, time stamps repeated or going backwards.
     rec = recordings.load_recording("data/phone/sensorlogger_android_trial02.zip")
     print(rec.summary)                           # rates, jitter, gaps, dropped samples, what was checked
     rec.gyr, rec.acc, rec.mag, rec.fs            # as a BROAD trial's
+    still = rec.window(0.0, 10.0)                # the first 10 s: a Recording too, on the same time base
 
 ``python -m fusionlab.recordings --out data/phone/`` writes the example exports (``make data``): BROAD trial 2
 written in each app's format, byte-identical on every run (seeded); ``data/phone/README.md`` says what each is.
