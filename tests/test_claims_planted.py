@@ -1,7 +1,7 @@
 """The claims and citation tests catch the wrong numbers an outside audit planted, each in a temporary copy of a
 solution notebook: a number backed only by a figure's size, a number printed for another trial, another column of the
 same table, a count of trials changed, a seed-cited sentence given a number neither printed nor in the seed, and a
-swapped section number. The unedited notebook has no such failure; the edited copy has exactly the planted one.
+swapped section number; and, in Lab 14's Part D, another filter's number and one printed nowhere. The unedited notebook has no such failure; the edited copy has exactly the planted one.
 """
 from __future__ import annotations
 
@@ -18,6 +18,7 @@ from test_citations import table, wrong_citations
 LAB03 = ROOT / "solutions" / "03_correlation_fusion" / "03_correlation_fusion.ipynb"
 LAB10 = ROOT / "solutions" / "10_gps_ins" / "10_gps_ins.ipynb"
 LAB13 = ROOT / "solutions" / "13_capstone" / "13_capstone.ipynb"
+LAB14 = ROOT / "solutions" / "14_phone_imu" / "14_phone_imu.ipynb"
 
 # (notebook, what the edit does, where: a pattern whose group 'n' is the number, the number planted)
 PLANTS = [
@@ -27,6 +28,12 @@ PLANTS = [
      "2.41"),
     (LAB13, "31 hidden trials -> 9", r"each of the (?P<n>31) hidden trials", "9"),
     (LAB10, "yaw 0.76° -> 0.35° in a sentence citing Table 7.1", r"yaw reaches about (?P<n>0\.76)°", "0.35"),
+    (LAB14, "VQF 9D's 0.40° against the phone -> dcm_ahrs's 0.55°, another row", r"agrees best with the phone "
+     r"\((?P<n>0\.40)° at", "0.55"),
+    (LAB14, "the debiased gyro's 1.48° off the truth -> dcm_ahrs's 1.90°", r"brings the gyro alone to (?P<n>1\.48)°",
+     "1.90"),
+    (LAB14, "dcm_ahrs6's 0.56° off the truth -> 0.65°, printed nowhere", r"`dcm_ahrs6` and `vqf6` end at (?P<n>0\.56)°",
+     "0.65"),
 ]
 
 

@@ -220,6 +220,8 @@ def test_trial_numbers_known_from_the_data():
     assert len(tr) == 53240 and int(tr.movement.sum()) == 32280
     assert int(np.isnan(tr.quat_ref).any(axis=1).sum()) == 1706
     assert repr(tr).startswith("BroadTrial('02_undisturbed_slow_rotation_B', 53240 samples at 285.71 Hz")
+    assert tr.duration == pytest.approx(53240 * 7 / 2000) and tr.t.shape == (53240,)
+    assert tr.t[0] == 0.0 and tr.t[-1] == pytest.approx(53239 * 7 / 2000)
     part = tr.slice(11000, 12000)
     assert len(part) == 1000 and int(part.movement.sum()) == 551 and part.name == tr.name
     np.testing.assert_array_equal(part.gyr, tr.gyr[11000:12000])

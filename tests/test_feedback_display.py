@@ -44,6 +44,12 @@ CELLS = {
     "guard_test": "# Autograder: exercise 5 (2 points)\nfrom fusionlab import guard\n"
                   "guard.assert_close(np.eye(2) * 2, np.eye(2), what='A at the lab\\'s values')",
     "guard_shape": "guard.assert_close(np.zeros(3), np.eye(2), what='P')",
+    # Lab 14's loading cell: an export the loader refuses is one box; the same call outside the box keeps its traceback
+    "refused": "from fusionlab import recordings\nwith checks.refusal_box():\n"
+               "    rec = recordings.load_recording('no_such_export.zip')",
+    "uses_refused": "n_samples = len(rec)",
+    "uses_knock_on": "print(n_samples)",
+    "refused_unboxed": "rec = recordings.load_recording('no_such_export.zip')",
 }
 
 
@@ -131,6 +137,21 @@ def test_an_autograder_tests_failed_comparison_is_one_short_box_without_the_guar
         assert run[name]["error"].ename in ("AssertionError", "WrongShape") and _is_box(shown, 3), shown
         assert shown.startswith("✗ " + words), shown
         assert "guard.py" not in shown and "Traceback" not in shown and "autograder test" in shown, shown
+
+
+def test_an_export_the_loader_refuses_is_one_box_in_lab_14s_loading_cell_only(run):
+    shown = run["refused"]["shown"]
+    assert run["refused"]["error"].ename == "RecordingRefused" and _is_box(shown, 3), shown
+    assert shown.startswith("✗ path must name an export folder, a .zip or a .csv file; no_such_export.zip does "
+                            "not exist\n→ load_recording refused this export"), shown
+    assert shown.splitlines()[-1] == "(%tb in a new cell shows the full traceback)", shown
+    for name in ("uses_refused", "uses_knock_on"):             # the cells after it say why their name is missing
+        shown = run[name]["shown"]
+        assert run[name]["error"].ename == "NameError" and _is_box(shown, 3), shown
+        assert "made by the loading cell, which stopped because load_recording refused the export" in shown, shown
+        assert "exercise" not in shown, shown
+    shown = run["refused_unboxed"]["shown"]                    # errors are not hidden in general
+    assert run["refused_unboxed"]["error"].ename == "ValueError" and "Traceback" in shown and "✗" not in shown
 
 
 def test_validate_and_autograde_reports_have_no_percent_tb_hint(monkeypatch):

@@ -15,7 +15,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from fusionlab import datasets, recordings, rotations
+from fusionlab import datasets, recordings, rotations, signals
 
 PHONE = recordings.EXAMPLES_DIR
 PLAIN = dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag": ["mx", "my", "mz"]},
@@ -108,6 +108,55 @@ def test_the_phones_own_orientation_is_kept_as_quat_phone_never_as_a_reference(b
     f = rec.acc[:500] / np.linalg.norm(rec.acc[:500], axis=1, keepdims=True)
     assert np.degrees(np.arccos(np.clip(np.sum(up * f, axis=1), -1, 1))).max() < 1.0
     assert recordings.load_recording(PHONE / "sensorlogger_ios_trial02.zip").quat_phone is None
+
+
+def test_a_recording_and_a_broad_trial_share_one_definition_of_length_time_and_duration():
+    rec = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
+    trial = datasets.load_trial(2, download=False).slice(0, 1000)
+    for r in (rec, trial):
+        assert isinstance(r, signals.Sampled) and len(r) == len(r.gyr) == len(r.t)
+        assert r.t[0] == 0.0 and r.t[1] == pytest.approx(1 / r.fs) and r.duration == pytest.approx(len(r) / r.fs)
+    assert len(rec) == 2991 and rec.duration == pytest.approx(2991 / rec.fs)
+    for name in ("__len__", "t", "duration"):
+        assert name not in vars(recordings.Recording) and name not in vars(datasets.BroadTrial), name
+
+
+def test_a_window_keeps_the_samples_in_t0_to_t1_and_their_time_on_the_apps_clock():
+    rec = recordings.load_recording(PHONE / "sensorlogger_android_trial02.zip")
+    part = rec.window(2.0, 9.0)
+    inside = np.flatnonzero((rec.t >= 2.0) & (rec.t < 9.0))
+    assert len(part) == len(inside) == 667 and part.fs == rec.fs and part.name == rec.name
+    for key in ("gyr", "acc", "mag", "quat_phone"):
+        np.testing.assert_array_equal(getattr(part, key), getattr(rec, key)[inside[0]:inside[-1] + 1])
+        with pytest.raises(ValueError):
+            getattr(part, key)[0, 0] = 1.0                  # read-only, like the recording's
+    assert part.t0 == rec.t0 + rec.t[inside[0]] and rec.t[inside[0]] >= 2.0 > rec.t[inside[0] - 1]
+    assert part.summary.samples == 667 and part.summary.start == pytest.approx(rec.summary.start + rec.t[inside[0]])
+    assert part.summary.sensors == rec.summary.sensors and part.quat_ref is None
+    # [t0, t1): a window ending at a sample's time leaves that sample out; one ending at the duration keeps the last
+    k = 100
+    assert len(rec.window(0.0, rec.t[k])) == k and len(rec.window(rec.t[k], rec.duration)) == len(rec) - k
+    np.testing.assert_array_equal(rec.window(0.0, rec.duration).gyr, rec.gyr)
+    # a recording without magnetometer or orientation cuts alike
+    ios = recordings.load_recording(PHONE / "sensorlogger_ios_trial02.zip").window(1.0, 1.5)
+    assert ios.quat_phone is None and ios.mag.shape == (len(ios), 3) and 0 < len(ios) <= 48
+
+
+@pytest.mark.parametrize("t0, t1, message", [
+    (float("nan"), 5.0, r"t0 must be a finite number"),
+    (0.0, float("inf"), r"t1 must be a finite number"),
+    ("1", 5.0, r"t0 must be a single number"),
+    (0.0, [5.0], r"t1 must be a single number"),
+    (5.0, 5.0, r"t1 must be later than t0; got t0=5.0, t1=5.0"),
+    (6.0, 5.0, r"t1 must be later than t0"),
+    (-0.5, 5.0, r"t0 must be within the recording, 0 <= t0 < 31.4\d* s; got -0.5"),
+    (1.0, 40.0, r"t1 must be within the recording, t1 <= 31.4\d* s \(its duration\); got 40.0"),
+    (1.001, 1.002, r"t0, t1 must hold at least one sample \(one every 0.0105 s\)"),
+])
+def test_a_window_outside_the_recording_or_without_a_sample_is_refused_naming_the_argument(t0, t1, message):
+    rec = recordings.load_recording(PHONE / "phyphox_trial02.zip")
+    with pytest.raises(ValueError, match=message):
+        rec.window(t0, t1)
 
 
 def test_the_examples_regenerate_byte_identical(tmp_path):

@@ -65,7 +65,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import validate
+from . import signals, validate
 
 __all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "SHIPPED_DIR", "DataMissing", "TrialInfo",
            "BroadTrial", "list_trials", "group_names", "trial_name", "known_sha256", "file_sha256", "cache_dir",
@@ -571,8 +571,9 @@ def _download(url, dest, expected, progress):
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class BroadTrial:
-    """One BROAD trial (arrays read-only); each field is an attribute of the same name.
+class BroadTrial(signals.Sampled):
+    """One BROAD trial (arrays read-only); each field is an attribute of the same name, and ``len(trial)``, ``t`` and
+    ``duration`` are those of :class:`fusionlab.signals.Sampled`.
 
     Parameters
     ----------
@@ -604,19 +605,6 @@ class BroadTrial:
     mag: np.ndarray
     quat_ref: np.ndarray
     movement: np.ndarray
-
-    def __len__(self):
-        return len(self.gyr)
-
-    @property
-    def t(self):
-        """ndarray, shape (N,): time of each sample, s, from 0."""
-        return np.arange(len(self)) / self.fs
-
-    @property
-    def duration(self):
-        """float: length of the recording, s."""
-        return len(self) / self.fs
 
     def slice(self, start=None, stop=None):
         """The same trial cut to samples ``start:stop`` (for a quick look or a fast test).

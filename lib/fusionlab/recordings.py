@@ -85,6 +85,7 @@ that is not a number, time stamps repeated or going backwards.
     rec = recordings.load_recording("data/phone/sensorlogger_android_trial02.zip")
     print(rec.summary)                           # rates, jitter, gaps, dropped samples, what was checked
     rec.gyr, rec.acc, rec.mag, rec.fs            # as a BROAD trial's
+    still = rec.window(0.0, 10.0)                # the first 10 s: a Recording too, on the same time base
 
 ``python -m fusionlab.recordings --out data/phone/`` writes the example exports (``make data``): BROAD trial 2
 written in each app's format, byte-identical on every run (seeded); ``data/phone/README.md`` says what each is.
@@ -96,13 +97,13 @@ import csv
 import hashlib
 import io
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from . import earth, validate
+from . import earth, signals, validate
 
 __all__ = ["load_recording", "Recording", "Summary", "SensorReport", "FORMATS", "ACC_CONVENTIONS", "UNITS",
            "MIN_OVERLAP", "MAX_GAP", "make_examples", "main"]
@@ -231,11 +232,12 @@ class Summary:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Recording:
+class Recording(signals.Sampled):
     """A phone's recording on one uniform time base (arrays read-only); each field is an attribute of the same name.
 
     The same kind of object as :class:`fusionlab.datasets.BroadTrial` (``gyr``, ``acc``, ``mag``, ``fs``, ``t``,
-    ``quat_ref``), with what a phone adds: ``quat_phone``, its own orientation estimate, and the ``summary``.
+    ``quat_ref``; ``len(rec)``, ``t`` and ``duration`` are those of :class:`fusionlab.signals.Sampled`, the base of
+    both), with what a phone adds: ``quat_phone``, its own orientation estimate, and the ``summary``.
 
     Parameters
     ----------
@@ -267,23 +269,60 @@ class Recording:
     t0: float
     summary: Summary
 
-    def __len__(self):
-        return len(self.gyr)
-
-    @property
-    def t(self):
-        """ndarray, shape (N,): time of each sample, s, from 0."""
-        return np.arange(len(self)) / self.fs
-
-    @property
-    def duration(self):
-        """float: length of the recording, s."""
-        return len(self) / self.fs
-
     @property
     def quat_ref(self):
         """None: a phone recording has no ground truth (``quat_phone`` is the phone's estimate, not a reference)."""
         return None
+
+    def window(self, t0, t1):
+        """The same recording cut to the samples whose time (:attr:`t`, s from its first sample) is in ``[t0, t1)``.
+
+        A rest phase for a calibration, or the moving part alone, without index arithmetic: ``t1`` may be the
+        :attr:`duration`, which keeps the last sample.
+
+        Parameters
+        ----------
+        t0 : float
+            Start of the window, s from the first sample, ``0 <= t0 < t1``.
+        t1 : float
+            End of the window, s (the sample at ``t1`` itself is left out), ``t1 <= duration``.
+
+        Returns
+        -------
+        Recording
+            The window (at least one sample), on the same time base: ``fs`` and ``name`` kept, every array cut
+            alike, ``t0`` the app's clock at its first sample, and the summary's ``samples`` and ``start`` those of
+            the window.
+
+        Examples
+        --------
+        >>> from fusionlab import recordings
+        >>> rec = recordings.load_recording(recordings.EXAMPLES_DIR / "sensorlogger_android_trial02.zip")
+        >>> still = rec.window(2.0, 9.0)
+        >>> len(still), round(float(still.t0 - rec.t0), 3), still.acc.shape
+        (667, 2.006, (667, 3))
+        """
+        t0 = validate.scalar(t0, "t0")
+        t1 = validate.scalar(t1, "t1")
+        if not t0 < t1:
+            raise ValueError(f"t1 must be later than t0; got t0={t0!r}, t1={t1!r}")
+        if not 0.0 <= t0 < self.duration:
+            raise ValueError(f"t0 must be within the recording, 0 <= t0 < {self.duration:.4g} s; got {t0!r}")
+        if t1 > self.duration:
+            raise ValueError(f"t1 must be within the recording, t1 <= {self.duration:.4g} s (its duration); got "
+                             f"{t1!r}")
+        t = self.t
+        keep = np.flatnonzero((t >= t0) & (t < t1))
+        if keep.size == 0:
+            raise ValueError(f"t0, t1 must hold at least one sample (one every {1 / self.fs:.4g} s); [{t0!r}, "
+                             f"{t1!r}) holds none")
+        cut = slice(int(keep[0]), int(keep[-1]) + 1)
+        summary = replace(self.summary, samples=int(keep.size),
+                          start=float(self.summary.start + t[cut.start]))
+        return Recording(self.name, self.fs, _frozen(self.gyr[cut]), _frozen(self.acc[cut]),
+                         None if self.mag is None else _frozen(self.mag[cut]),
+                         None if self.quat_phone is None else _frozen(self.quat_phone[cut]),
+                         float(self.t0 + t[cut.start]), summary)
 
     def __repr__(self):
         extra = (", no magnetometer" if self.mag is None else "") + (", phone orientation" if self.quat_phone

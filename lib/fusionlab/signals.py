@@ -8,7 +8,9 @@ disturbance rejection", Information Fusion 91, 2023: its rest detection and magn
 them uses a sample after the one it answers for.
 
 Units: SI (s, Hz, rad/s, m/s²); the magnetometer in any unit (the reference is in the unit it is given). Records
-are arrays of shape (N, 3), one row per sample.
+are arrays of shape (N, 3), one row per sample. :class:`Sampled` is what a whole record shares, a BROAD trial
+(:class:`fusionlab.datasets.BroadTrial`) and a phone's recording (:class:`fusionlab.recordings.Recording`) alike:
+its length, the time of each sample and its duration on one uniform time base.
 """
 from __future__ import annotations
 
@@ -16,7 +18,31 @@ import numpy as np
 
 from . import validate
 
-__all__ = ["trailing_max", "lowpass", "rest_detect", "RestDetector", "field_reference"]
+__all__ = ["Sampled", "trailing_max", "lowpass", "rest_detect", "RestDetector", "field_reference"]
+
+
+class Sampled:
+    """What every record on one uniform time base has: ``len()``, the time of each sample and the duration.
+
+    A base of the records' classes (:class:`fusionlab.datasets.BroadTrial`, :class:`fusionlab.recordings.Recording`),
+    which give it two attributes: ``gyr``, one row per sample, and ``fs``, the sample rate in Hz. Sample ``k`` is
+    at ``k / fs`` seconds from the first.
+    """
+
+    __slots__ = ()
+
+    def __len__(self):
+        return len(self.gyr)
+
+    @property
+    def t(self):
+        """ndarray, shape (N,): time of each sample, s, from 0."""
+        return np.arange(len(self)) / self.fs
+
+    @property
+    def duration(self):
+        """float: length of the recording, s."""
+        return len(self) / self.fs
 
 
 # ----------------------------------------------------------------------------------------------------------------

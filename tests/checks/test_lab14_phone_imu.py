@@ -78,3 +78,29 @@ def test_check_rotation_angle_names_the_slip(wrong, message):
     with pytest.raises(checks.Feedback, match=message):
         checks.check_rotation_angle(wrong)
     checks.check_rotation_angle(angle)
+
+
+def test_a_refused_export_becomes_one_box_with_the_loaders_message_and_what_to_do_next(tmp_path):
+    from fusionlab import recordings
+    bad = tmp_path / "phone.csv"
+    bad.write_text("time,gx\n0.0,0.1\n")
+    with pytest.raises(checks.RecordingRefused) as err:
+        with checks.refusal_box():
+            recordings.load_recording(bad, units={"acc": "furlongs"})
+    message = str(err.value)
+    assert message.startswith("units['acc'] must be one of"), message                 # the loader's own words first
+    assert "MY_UNITS, MY_COLUMNS or MY_OPTIONS" in message and "MY_RECORDING = None" in message
+    assert isinstance(err.value.__cause__, ValueError)                              # %tb still reaches the loader
+    assert err.value.footnote == "(%tb in a new cell shows the full traceback)"
+    with pytest.raises(checks.RecordingRefused, match=r"path must name an export folder.*\n→ load_recording refused"):
+        with checks.refusal_box():
+            recordings.load_recording(tmp_path / "missing.zip")
+
+
+def test_the_refusal_box_leaves_other_errors_and_a_good_load_alone():
+    with pytest.raises(TypeError, match="my own slip"):                             # not the loader's: its traceback
+        with checks.refusal_box():
+            raise TypeError("my own slip")
+    with checks.refusal_box():
+        done = True
+    assert done

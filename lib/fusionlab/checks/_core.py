@@ -29,11 +29,17 @@ class Feedback(AssertionError):
     and autograding run the notebook for a report, where there is no next cell (:func:`_box`).
     """
 
+    #: The dim line under the message (left out where nbgrader runs the notebook: :func:`_box`).
+    footnote = "(%tb in a new cell shows where the check stopped)"
+    #: For a box that stops a cell making names later cells use (a loading cell): what a later NameError on one of
+    #: them says instead of the hint for an unfinished exercise. None: the usual hint.
+    knock_on = None
+
     def _render_traceback_(self):
         if getattr(self, "_shown", False):             # %tb asks again: the curious get the whole traceback
             return _full_traceback(self)
         self._shown = True
-        return _box("✗ " + str(self), "(%tb in a new cell shows where the check stopped)")
+        return _box("✗ " + str(self), self.footnote)
 
 
 _RED, _DIM, _END = "\x1b[1;31m", "\x1b[2m", "\x1b[0m"
@@ -184,6 +190,7 @@ def _assigned_names(source):
 
 
 _DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
+_KNOCK_ON = {}                           # name left undefined by a cell a Feedback with a knock_on stopped -> its hint
 
 
 def _data_hint(missing):
@@ -257,6 +264,11 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
         return None
     if issubclass(etype, NameError):
         name = getattr(evalue, "name", None) or (re.findall(r"'([^']+)'", str(evalue)) or [""])[0]
+        if name in _KNOCK_ON:                                 # its cell stopped at a box that said why
+            hint = _KNOCK_ON[name]
+            _KNOCK_ON.update(dict.fromkeys(_assigned_names(hist[-1]), hint))
+            _show_box(shell, etype, etype(f"{evalue}\n→ {hint}"), tb, f"✗ {evalue}\n→ {hint}")
+            return None
         missing = datasets.missing_trials()
         if missing and name in _DATA_NAMES:                   # the name waits for data, not for an exercise
             _DATA_NAMES.update(_assigned_names(hist[-1]))
@@ -279,6 +291,8 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
             shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         return None
     if issubclass(etype, AssertionError):
+        if getattr(evalue, "knock_on", None):
+            _KNOCK_ON.update(dict.fromkeys(_assigned_names(hist[-1]), evalue.knock_on))
         message = _failed_assert(shell, etype, evalue, tb, count)
         if message is None:                                   # a check's Feedback box, or an assert in a function
             shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)

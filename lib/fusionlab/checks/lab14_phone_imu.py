@@ -1,14 +1,59 @@
 """Lab 14, your own phone as an IMU: the gyro bias over the rest samples, the tilt of a phone at rest from gravity,
-the angle between two attitudes: the visible checks of its exercises (see :mod:`fusionlab.checks`).
+the angle between two attitudes: the visible checks of its exercises (see :mod:`fusionlab.checks`); and
+:func:`refusal_box`, which shows an export the loader refuses as one ✗ box in the lab's loading cell.
 """
 from __future__ import annotations
+
+import contextlib
 
 import numpy as np
 
 from .. import accel_tilt, calibration, rotations
 from ._core import Feedback, _call, _first_match, _general_case, _ok, _pair, forbids
 
-__all__ = ["check_phone_gyro_bias", "check_rest_tilt", "check_rotation_angle"]
+__all__ = ["check_phone_gyro_bias", "check_rest_tilt", "check_rotation_angle", "refusal_box", "RecordingRefused"]
+
+
+class RecordingRefused(Feedback):
+    """An export :func:`fusionlab.recordings.load_recording` refused, shown as one ✗ box: the loader's message and
+    what to do next. ``%tb`` in the next cell shows the loader's traceback (its ``__cause__``)."""
+
+    footnote = "(%tb in a new cell shows the full traceback)"
+    knock_on = ("This name is made by the loading cell, which stopped because load_recording refused the export: "
+                "its ✗ box says why and what fixes it. Fix that, run the loading cell, then this one.")
+
+
+_NEXT = ("→ load_recording refused this export: the line above names the file (and the line in it) and what fixes "
+         "it. An argument it names goes in MY_UNITS, MY_COLUMNS or MY_OPTIONS in this cell; a damaged or cut file "
+         "needs exporting again. Then run this cell again. Until then, MY_RECORDING = None runs the lab on the "
+         "examples.")
+
+
+@contextlib.contextmanager
+def refusal_box():
+    """Around Lab 14's loading call: a ``ValueError`` -- how :func:`fusionlab.recordings.load_recording` refuses a
+    file or an argument, naming the file, the line and the argument that fixes it -- stops the cell as one ✗ box (a
+    :class:`RecordingRefused`) with that message and what to do next, not as a traceback through the loader. Any
+    other error passes unchanged (a slip in the student's own code keeps its traceback).
+
+    Yields
+    ------
+    None
+        The ``with`` block runs as it is.
+
+    Examples
+    --------
+    >>> with refusal_box():
+    ...     raise ValueError("my.csv, line 3: 'x' is not a number")
+    Traceback (most recent call last):
+    ...
+    fusionlab.checks.lab14_phone_imu.RecordingRefused: my.csv, line 3: 'x' is not a number
+    → load_recording refused this export: ...
+    """
+    try:
+        yield
+    except ValueError as exc:
+        raise RecordingRefused(f"{exc}\n{_NEXT}") from exc
 
 
 def _lab14_gyro():
