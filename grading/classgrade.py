@@ -45,7 +45,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import cells, judge, sandbox, similarity
+from grading import cells, judge, launcher, sandbox, similarity
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -411,7 +411,7 @@ def main(argv=None):
     try:
         mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
         kept = stack.enter_context(gradebook_kept(course, lab, say=lambda text: print(text, file=sys.stderr)))
-        problem = sandbox.box_problem(str(course), lab, scratch, mine)
+        problem = sandbox.box_problem(str(course), lab, scratch, mine) or launcher.judge_problem(mine)
         if problem:
             raise SystemExit(f"cannot grade {lab}: the sandbox does not start on this machine, so no student is "
                              f"graded.\n{problem}")
@@ -427,6 +427,11 @@ def main(argv=None):
             release_dir = course / "labs"
         t0 = time.monotonic()
         the_lab = load_lab(course, lab, release_dir, scratch, args)
+        blocked = launcher.unreadable(mine[0])
+        if blocked:
+            the_lab.judge_reads_all = True
+            print(f"{blocked} is readable by root alone: the judges run as users of their own but keep one "
+                  f"capability, reading files (CAP_DAC_READ_SEARCH), to import from it", flush=True)
         model = judge.judge(the_lab, the_lab.solution, "model solution", slot=mine[0])
         if model.score < model.max_score:
             wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)

@@ -128,6 +128,7 @@ class Lab:
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
         self.unstubbed = {}
         self._reference = {}
+        self.judge_reads_all = False     # as root: the judges keep CAP_DAC_READ_SEARCH (grading.launcher.drop_root)
 
     def __getstate__(self):
         return {**self.__dict__, "_base": None}          # the setup's namespace holds modules: run again there

@@ -22,6 +22,7 @@ import ctypes
 import json
 import os
 import socket
+import sys
 
 from grading import client, sandbox
 
@@ -149,17 +150,88 @@ class RemoteBoxes:
         os.waitpid(self.launcher_pid, 0)
 
 
-def drop_root(uid):
-    """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing
-    it runs can gain a privilege back (a set-user-id program runs as the caller)."""
+_CAP_DAC_READ_SEARCH = 2
+
+
+def drop_root(uid, read_all=False):
+    """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing it
+    runs can gain a privilege back (a set-user-id program runs as the caller). With ``read_all`` it keeps one
+    capability, ``CAP_DAC_READ_SEARCH`` (read any file, list any folder; no writing, no signals): for a machine where
+    Python or the course sits in a folder only root may read (``/root/.pyenv``), from which the judge imports."""
+    libc = ctypes.CDLL(None, use_errno=True)
+
+    def prctl(*args):
+        if libc.prctl(*[ctypes.c_ulong(a) for a in args]) != 0:
+            raise OSError(ctypes.get_errno(), f"prctl{args} failed")
+    if read_all:
+        prctl(8, 1, 0, 0, 0)                                   # PR_SET_KEEPCAPS: the permitted set survives setuid
     os.setgroups([])
     os.setresgid(uid, uid, uid)
     os.setresuid(uid, uid, uid)
-    libc = ctypes.CDLL(None, use_errno=True)
-    if libc.prctl(38, 1, 0, 0, 0) != 0:                        # PR_SET_NO_NEW_PRIVS
-        raise OSError(ctypes.get_errno(), "prctl(PR_SET_NO_NEW_PRIVS) failed")
+    if read_all:
+        prctl(8, 0, 0, 0, 0)
+        header = (ctypes.c_uint32 * 2)(0x20080522, 0)          # _LINUX_CAPABILITY_VERSION_3, this process
+        bit = 1 << _CAP_DAC_READ_SEARCH
+        data = (ctypes.c_uint32 * 6)(bit, bit, 0, 0, 0, 0)     # effective, permitted, inheritable (two words)
+        if libc.capset(header, data) != 0:
+            raise OSError(ctypes.get_errno(), "capset failed")
+    prctl(38, 1, 0, 0, 0)                                      # PR_SET_NO_NEW_PRIVS
     if os.getuid() != uid or os.geteuid() != uid or os.getgroups():
         raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
+
+
+def _in_dropped_child(slot, read_all, task):
+    """Run ``task()`` (returns a string) in a child process that has given up root as :func:`judge_uid`; what it
+    returned, or what stopped it."""
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        said = ""
+        try:
+            os.close(r)
+            drop_root(judge_uid(slot), read_all=read_all)
+            said = task()
+        except Exception as exc:  # noqa: BLE001 -- said to the grader
+            said = f"{type(exc).__name__}: {exc}"
+        finally:
+            os.write(w, said.encode()[:4000])
+            os._exit(0)
+    os.close(w)
+    with os.fdopen(r, "rb") as f:
+        said = f.read().decode()
+    os.waitpid(pid, 0)
+    return said
+
+
+def judge_problem(slots):
+    """Why the judges of ``slots`` cannot run as their own users here, as a message saying what to do; None if they
+    can (or not root: nothing is given up). Each is tried in a child process."""
+    if os.geteuid() != 0:
+        return None
+    for slot in slots:
+        said = _in_dropped_child(slot, True, lambda: "")
+        if said:
+            return (f"the judge of each student runs as a user of its own (here {judge_uid(slot)}), not root, and "
+                    f"could not become that user ({said}). This is root inside a user namespace without that id: "
+                    f"run make grade as the real root, or as an ordinary user.")
+    return None
+
+
+def unreadable(slot, paths=None):
+    """The first folder of ``paths`` (by default the import path, from which the judge imports the library and
+    Python's packages) that the judge of ``slot`` cannot read as its own user, or None (or not root)."""
+    if os.geteuid() != 0:
+        return None
+    paths = [p for p in (sys.path if paths is None else paths) if p and os.path.isdir(p)]
+
+    def first_refused():
+        for path in paths:
+            try:
+                os.listdir(path)
+            except PermissionError:
+                return path
+        return ""
+    return _in_dropped_child(slot, False, first_refused) or None
 
 
 def split(lab, student, slot):
@@ -182,5 +254,5 @@ def split(lab, student, slot):
         finally:
             os._exit(status)
     theirs.close()
-    drop_root(judge_uid(slot))
+    drop_root(judge_uid(slot), read_all=getattr(lab, "judge_reads_all", False))
     return RemoteBoxes(ours, pid)

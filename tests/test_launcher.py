@@ -191,3 +191,35 @@ def test_a_box_started_here_is_ended_with_its_folder(tmp_path):
     assert isinstance(box.receive(time.monotonic() + 20), int)
     assert box.kill() == -9 and not work.exists() and box.kill() == -9, "once; again is a no-op"
     assert Path(tmp_path).exists()
+
+
+@AS_ROOT
+def test_a_folder_the_judge_cannot_read_is_found_and_the_judge_may_keep_reading_alone(course):
+    assert launcher.judge_problem([0, 1]) is None
+    hidden = course / "private"
+    (hidden / "lib").mkdir(parents=True)
+    (hidden / "lib" / "secret.txt").write_text("answers")
+    os.chmod(hidden, 0o700)
+    assert launcher.unreadable(3, [str(course), str(hidden / "lib")]) == str(hidden / "lib")
+    assert launcher.unreadable(3, [str(course)]) is None
+
+    def body():
+        launcher.drop_root(launcher.judge_uid(3), read_all=True)
+        status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
+        tried = {}
+        for name, attempt in [("write", lambda: open(hidden / "lib" / "secret.txt", "a")),
+                              ("create", lambda: open(course / "new", "w")),
+                              ("unlink", lambda: os.unlink(hidden / "lib" / "secret.txt")),
+                              ("signal", lambda: os.kill(1, 0)), ("root again", lambda: os.setuid(0))]:
+            try:
+                attempt()
+                tried[name] = "done"
+            except PermissionError:
+                tried[name] = "refused"
+        return {"read": (hidden / "lib" / "secret.txt").read_text(), "tried": tried, "uid": os.getuid(),
+                "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")]}
+
+    got = _in_child(body)
+    assert got["read"] == "answers" and got["uid"] == launcher.judge_uid(3), got
+    assert got["caps"] == ["0000000000000004", "0000000000000004", "0000000000000000", "0000000000000000"], got
+    assert got["tried"] == {name: "refused" for name in got["tried"]} and len(got["tried"]) == 5, got["tried"]
