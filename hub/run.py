@@ -10,7 +10,8 @@ What it does, in order (``docs/hub.md`` has the whole story):
    password: they log in to the hub only.
 2. The hub's folder (``--dir``): the hub's database and secrets, ``hub.json`` (what ``hub/jupyterhub_config.py``
    reads; root only), nbgrader's exchange (``exchange/``, writable by all as nbgrader wants; the course id is
-   ``fusionlab``), the two ``nbgrader_config.py`` files that point the instructor and the students at it, and the
+   ``fusionlab``), the two ``nbgrader_config.py`` files that point the instructor and the students at it, the
+   servers' terminal (bash with the course's ``.venv/bin`` first on PATH: :func:`terminal_settings`), and the
    students' JupyterLab settings: the student view's, plus a menu *Nbgrader* with one entry, *Assignment List*
    (the student view hides nbgrader's own menu, which also holds Formgrader and Course List).
 3. The instructor's copy of the course: a clone of this repository in the instructor's home (``~/course``), the
@@ -31,6 +32,7 @@ import json
 import os
 import pwd
 import secrets
+import shlex
 import signal
 import stat
 import subprocess
@@ -146,6 +148,34 @@ def student_settings(folder):
     return settings
 
 
+def terminal_settings(config, venv):
+    """The terminals of every server on the hub: bash with the course's environment (``venv``/bin) first on PATH.
+
+    JupyterLab starts a terminal as a login shell when its server has no terminal of its own (a spawned server has
+    none), and a login shell's /etc/profile sets PATH afresh, dropping the environment the spawner put first: the
+    instructor's ``nbgrader`` was "command not found". So each server's configuration (``config``/instructor and
+    ``config``/student, on its JUPYTER_CONFIG_PATH) names the terminal's command: an interactive bash that reads
+    /etc/bash.bashrc, the user's ~/.bashrc, then puts ``venv``/bin first. Returns the start file's path."""
+    bin_dir = str(Path(venv) / "bin")
+    rc = config / "terminal.bashrc"
+    rc.write_text(
+        "# A terminal of the course's hub (written by make hub, hub/run.py): the user's own ~/.bashrc, then the\n"
+        "# course's environment first on PATH (nbgrader, python, jupyter).\n"
+        '[ -f ~/.bashrc ] && . ~/.bashrc\n'
+        f"_bin={shlex.quote(bin_dir)}\n"
+        '_p=":$PATH:"\n'
+        'while [[ $_p == *":$_bin:"* ]]; do _p=${_p/":$_bin:"/:}; done\n'
+        '_p=${_p#:}; _p=${_p%:}\n'
+        'export PATH="$_bin${_p:+:$_p}"; unset _bin _p\n')
+    os.chmod(rc, 0o644)
+    server = {"ServerApp": {"terminado_settings": {"shell_command": ["/bin/bash", "--rcfile", str(rc), "-i"]}}}
+    for view in ("instructor", "student"):
+        path = config / view / "jupyter_server_config.json"
+        path.write_text(json.dumps(server, indent=1))
+        os.chmod(path, 0o644)
+    return rc
+
+
 def prepare(args, instructor, students):
     folder = Path(args.dir).resolve()
     folder.mkdir(parents=True, exist_ok=True)
@@ -167,6 +197,7 @@ def prepare(args, instructor, students):
     common = [f"c.CourseDirectory.course_id = {COURSE_ID!r}", f"c.Exchange.root = {str(exchange)!r}"]
     nbgrader_config(folder / "config" / "student", common)
     nbgrader_config(folder / "config" / "instructor", common + [f"c.CourseDirectory.root = {str(course)!r}"])
+    terminal_settings(folder / "config", ROOT / ".venv")
     s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
          "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
          "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)),
@@ -338,6 +369,7 @@ The course's JupyterHub is up ({time.monotonic() - t0:.0f} s): open {url}
   instructor  {instructor:<14} password {s['instructor_password']}  (Formgrader: {url}user/{instructor}/formgrader)
   students    {students[0]} ... {students[-1]}  password {s['student_password']}  (one password for all students)
   exchange    {s['exchange']} (course id {COURSE_ID}); the instructor's course: {s['course']}
+  terminals   {s['venv']}/bin first on PATH (nbgrader, python, jupyter: the course's environment)
   limits      {limits}
   log         {folder / 'jupyterhub.log'}; API token for scripts: {folder / 'hub.json'} (api_token)
 Ctrl-C stops the hub and every server. `make hub-remove` removes the accounts and {folder}.
