@@ -14,9 +14,9 @@ export STRIP_WIDGET_STATE
 
 .PHONY: formgrader lint test test-all test-budget solutions labs data release clean
 
-formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
+formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment [ARGS=...]
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
-	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
+	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(SETTINGS) $(ALLOW_ROOT) $(ARGS)
 
 lint: env  ## ruff on the Python sources (its rules in pyproject.toml; the notebooks are not linted)
 	@echo "==> ruff check: pyflakes, pycodestyle and bugbear on lib/, tests/, grading/, hub/"

@@ -19,8 +19,8 @@ What it does, in order (``docs/hub.md`` has the whole story):
 4. Every server runs this repository's ``.venv`` and library, so the repository stays readable, but its parts that
    only an instructor may see (``solutions/``, ``grading/``, ``tests/``, ``.git``, the gradebook, ...) are closed to
    other users while the hub runs. If the interpreter of ``.venv`` sits where other users cannot go (a Python built
-   in root's home), ``make hub`` stops and says what to do, or with ``--share-interpreter`` gives the folders on the
-   way the traversal bit (x only). The modes come back when the hub stops.
+   in root's home), ``make hub`` stops before step 1 and says what to do, or with ``--share-interpreter`` gives the
+   folders on the way the traversal bit (x only). The modes come back when the hub stops.
 5. JupyterHub, then: the URL and the accounts are printed; Ctrl-C (or SIGTERM) stops the hub, every server, the
    proxy and any process left of the accounts.
 """
@@ -201,6 +201,7 @@ def prepare(args, instructor, students):
     s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
          "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
          "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)),
+         "instructor_settings": str(ROOT / "jupyter" / "lab" / "settings"),
          "exchange": str(exchange), "course_id": COURSE_ID,
          "memory_mb": args.memory_mb, "cpus": args.cpus, "idle_seconds": args.idle_seconds,
          "student_password": old.get("student_password") or secrets.token_urlsafe(9),
@@ -218,20 +219,27 @@ def unreachable(path):
     return [p for p in reversed(real.parents) if not stat.S_IMODE(p.stat().st_mode) & 0o001]
 
 
-def open_interpreter(folder, share):
-    """Every server runs the course's .venv: its interpreter must be reachable by the accounts. With ``share``, the
-    folders on its way get the traversal bit for others (x only: nothing can be listed), recorded to be undone."""
+def closed_way_to_interpreter(share):
+    """The folders on the way to the course's interpreter that the accounts cannot enter (none: ``[]``). Every
+    server runs the course's .venv, so without ``share`` such folders stop ``make hub`` here, before it creates an
+    account or clones the course."""
     python = ROOT / ".venv" / "bin" / "python"
     closed = unreachable(python)
-    if not closed:
-        return []
-    if not share:
+    if closed and not share:
         raise SystemExit(
             f"the course's environment runs {os.path.realpath(python)}, and other users cannot reach it "
             f"({', '.join(map(str, closed))} not open to them), so no account's server could start. Either build "
             f".venv from a Python every user can run (rm -rf .venv; make env PYTHON=/usr/bin/python3.11), or let "
             f"make hub open only the way to it while the hub runs: make hub ARGS=--share-interpreter (adds o+x, "
             f"traversal only, to {', '.join(map(str, closed))}; taken back when the hub stops)")
+    return closed
+
+
+def open_interpreter(folder, closed):
+    """Give the folders ``closed`` (:func:`closed_way_to_interpreter`) the traversal bit for others (x only: nothing
+    can be listed) while the hub runs, recorded in ``folder`` to be undone."""
+    if not closed:
+        return []
     opened = {}
     for p in closed:
         mode = stat.S_IMODE(p.stat().st_mode)
@@ -332,6 +340,7 @@ def main(argv=None):
         if not need.exists():
             raise SystemExit(f"{need} is missing: run `make hub` (it installs the hub first)")
     t0 = time.monotonic()
+    closed_way = closed_way_to_interpreter(args.share_interpreter)      # refuses before anything is made
     instructor, students = accounts(args.prefix, args.students)
     say(f"accounts: {instructor} and {len(students)} student(s), group {GROUP}")
     make_accounts([instructor, *students])
@@ -348,7 +357,7 @@ def main(argv=None):
     hub = None
     try:
         restore_modes(folder)                  # a run that was killed left its changes recorded: undo them first
-        opened = open_interpreter(folder, args.share_interpreter)
+        opened = open_interpreter(folder, closed_way)
         if opened:
             say(f"opened for traversal (x only) while the hub runs, so the accounts reach the interpreter: "
                 f"{', '.join(opened)}")

@@ -1,7 +1,8 @@
 """What ``make hub`` (hub/run.py) writes and checks before any account exists, tested without a hub, root or npm.
 
 tests/test_hub.py runs the hub itself (root, the proxy from npm, Chromium); these are the parts that need none:
-the servers' terminal settings, and the refusal of an interpreter the accounts cannot reach.
+the servers' terminal settings, the refusal of an interpreter the accounts cannot reach, and the instructor's
+`make formgrader` (its ARGS, no news pop-up).
 """
 from __future__ import annotations
 
@@ -54,3 +55,40 @@ def test_each_servers_terminal_is_bash_with_the_course_environment_first(config,
         nbgrader, python, path = got.stdout.split()
         assert (nbgrader, python) == (str(VENV / "bin" / "nbgrader"), str(VENV / "bin" / "python")), got
         assert path.split(":") == [str(VENV / "bin"), "/usr/bin", "/bin"], path     # first, and only once
+
+
+def test_make_hub_refuses_an_unreachable_interpreter_before_it_makes_anything(tmp_path, monkeypatch):
+    """Without --share-interpreter, an interpreter the accounts cannot reach stops make hub before any account,
+    folder or clone exists; with it, make hub goes on to the accounts."""
+    repo = tmp_path / "repo"
+    for need in (repo / ".venv" / "bin" / "jupyterhub",
+                 repo / "hub" / "node_modules" / ".bin" / "configurable-http-proxy"):
+        need.parent.mkdir(parents=True)
+        need.touch()
+    monkeypatch.setattr(run, "ROOT", repo)
+    monkeypatch.setattr(run, "HUB", repo / "hub")
+    monkeypatch.setattr(run.os, "geteuid", lambda: 0)
+    monkeypatch.setattr(run, "unreachable", lambda path: [Path("/root")])
+    made = []
+    for step in ("make_accounts", "link_docs", "prepare"):
+        monkeypatch.setattr(run, step, lambda *args, step=step: made.append(step) or (_ for _ in ()).throw(
+            RuntimeError(step)))
+    folder = tmp_path / "hub"
+    with pytest.raises(SystemExit, match="--share-interpreter"):
+        run.main(["--dir", str(folder)])
+    assert made == [] and not folder.exists()
+    with pytest.raises(RuntimeError, match="make_accounts"):
+        run.main(["--dir", str(folder), "--share-interpreter"])
+    assert made == ["make_accounts"]
+
+
+def test_make_formgrader_passes_args_and_turns_the_news_off():
+    """`make formgrader ARGS=...` hands ARGS to jupyter lab, as `make hub` and `make lab` do, and starts it with the
+    settings that turn off the Jupyter news pop-up (also the instructor's server on the hub: hub/spawner.py)."""
+    got = subprocess.run(["make", "-n", "-s", "-o", "env", "-o", ".venv/.installed", "formgrader",
+                          "ARGS=--ServerApp.port=8123"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    line = next(x for x in got.splitlines() if " lab " in x)
+    settings = ROOT / "jupyter" / "lab" / "settings"
+    assert "--ServerApp.port=8123" in line.split() and f"--LabApp.app_settings_dir={settings}" in line.split(), line
+    news = json.loads((settings / "overrides.json").read_text())["@jupyterlab/apputils-extension:notification"]
+    assert news == {"fetchNews": "false", "checkForUpdates": False}
