@@ -1240,6 +1240,18 @@ def test_capstone_data_without_a_network_says_so_and_writes_nothing(monkeypatch,
     assert not (tmp_path / "cache" / "broad").exists()                       # not even an empty cache folder
 
 
+def test_capstone_data_and_grading_count_the_trials_here_alike(monkeypatch, tmp_path, capsys):
+    """A trial already here after the first that cannot be fetched counts as here for both commands."""
+    _no_data(monkeypatch, tmp_path)
+    cache = tmp_path / "cache" / "broad"
+    cache.mkdir(parents=True)
+    shutil.copy(ROOT / "data" / "broad" / "29_disturbed_stationary_magnet_B.mat", cache)
+    assert capstone.fetch(names=[7, 29, 2], progress=False) == 2            # stops at trial 7, the first
+    assert "1 of 3 hidden trials are here" in capsys.readouterr().out
+    with pytest.raises(capstone.CapstoneDataMissing, match="3 hidden BROAD trials and 2 of them are not"):
+        capstone.hidden_trials(names=[7, 29, 2])
+
+
 def test_capstone_data_fetches_checked_files_from_a_mirror(monkeypatch, tmp_path, capsys):
     """The same command with the published files reachable (a local mirror of two shipped trials standing in)."""
     _no_data(monkeypatch, tmp_path)
