@@ -12,11 +12,11 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: formgrader lint test test-all test-budget solutions labs data bench release clean
+.PHONY: formgrader lint test test-all test-budget solutions labs data release clean
 
-formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment
+formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment [ARGS=...]
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
-	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(ALLOW_ROOT)
+	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(SETTINGS) $(ALLOW_ROOT) $(ARGS)
 
 lint: env  ## ruff on the Python sources (its rules in pyproject.toml; the notebooks are not linted)
 	@echo "==> ruff check: pyflakes, pycodestyle and bugbear on lib/, tests/, grading/, hub/"
@@ -58,10 +58,6 @@ data: env  ## regenerate the datasets in data/ (byte-identical; checksums in dat
 	@$(BIN)/python -m fusionlab.spreadsheet --log data/lab03/motion.log --xlsx data/lab03_fusion.xlsx
 	@echo "==> regenerating data/phone (BROAD trial 2 written in phone apps' export formats)"
 	@$(BIN)/python -m fusionlab.recordings --out data/phone/ >/dev/null
-
-bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
-	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"
-	@$(BIN)/python -m fusionlab.bench --out .bench
 
 # Grading: the course's own gradebook.db (the instructor's, git-ignored), student code run only in the sandbox.
 WORKERS ?= 2

@@ -6,8 +6,8 @@
 It holds the release notebooks (labs/, with labs/docs/: the documents the labs link to, which `make labs` copies
 there because `make lab` serves labs/ only), the library (lib/fusionlab with its data files), data/, environment.txt,
 pyproject.toml, the derivations the labs link to (docs/derivations.md) and the student JupyterLab view (jupyter/),
-when the repository has them, and, from grading/student/, the student README, Makefile (test), course.mk (env and lab,
-which the course's own Makefile includes too) and tests.
+when the repository has them, and, from grading/student/, the student README, Makefile (test), course.mk (env, lab,
+validate and bench, which the course's own Makefile includes too) and tests.
 It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.py or a gradebook: the builder copies
 a fixed list and refuses a notebook that still carries a solution or hidden-test region. ``tests/test_release.py``
 checks the result line by line against every solution.
@@ -64,6 +64,27 @@ def student_readme(root=ROOT):
     text = (STUDENT / "README.md").read_text()
     for key, body in parts.items():
         text = text.replace("{{" + key + "}}", body)
+    return _only_release_targets(text)
+
+
+def release_targets():
+    """The make targets of the release: those of its Makefile and of course.mk, which it includes."""
+    return {m for name in ("Makefile", "course.mk")
+            for m in re.findall(r"^([a-z][a-z0-9-]*):(?!=)", (STUDENT / name).read_text(), flags=re.M)}
+
+
+def _only_release_targets(text):
+    """``text`` with no `make TARGET` the release lacks: an instructor's target named in parentheses in what the
+    README shares with the repository's (the capstone row's "(`make capstone`)") is dropped; one named anywhere
+    else stops the build, naming it."""
+    targets = release_targets()
+    text = re.sub(r" \(`make ([a-z][a-z0-9-]*)[^`]*`\)", lambda m: "" if m.group(1) not in targets else m.group(0),
+                  text)
+    missing = sorted({t for t in re.findall(r"\bmake ([a-z][a-z0-9-]*)", text)
+                      if t not in targets and f"`make {t}" in text})
+    if missing:
+        raise SystemExit(f"the student README names make targets its Makefile lacks: {', '.join(missing)}; "
+                         f"say it without the target in README.md, or give grading/student/ the target")
     return text
 
 

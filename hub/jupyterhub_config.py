@@ -47,6 +47,7 @@ c.CourseSpawner.venv = s["venv"]
 c.CourseSpawner.instructor_config = os.path.join(STATE, "config", "instructor")
 c.CourseSpawner.student_config = os.path.join(STATE, "config", "student")
 c.CourseSpawner.student_view = s["student_view"]
+c.CourseSpawner.instructor_settings = s["instructor_settings"]
 c.CourseSpawner.student_settings = s["student_settings"]
 c.Spawner.cmd = [os.path.join(s["venv"], "bin", "jupyterhub-singleuser")]
 c.Spawner.default_url = "/lab"

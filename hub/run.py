@@ -10,7 +10,8 @@ What it does, in order (``docs/hub.md`` has the whole story):
    password: they log in to the hub only.
 2. The hub's folder (``--dir``): the hub's database and secrets, ``hub.json`` (what ``hub/jupyterhub_config.py``
    reads; root only), nbgrader's exchange (``exchange/``, writable by all as nbgrader wants; the course id is
-   ``fusionlab``), the two ``nbgrader_config.py`` files that point the instructor and the students at it, and the
+   ``fusionlab``), the two ``nbgrader_config.py`` files that point the instructor and the students at it, the
+   servers' terminal (bash with the course's ``.venv/bin`` first on PATH: :func:`terminal_settings`), and the
    students' JupyterLab settings: the student view's, plus a menu *Nbgrader* with one entry, *Assignment List*
    (the student view hides nbgrader's own menu, which also holds Formgrader and Course List).
 3. The instructor's copy of the course: a clone of this repository in the instructor's home (``~/course``), the
@@ -18,8 +19,8 @@ What it does, in order (``docs/hub.md`` has the whole story):
 4. Every server runs this repository's ``.venv`` and library, so the repository stays readable, but its parts that
    only an instructor may see (``solutions/``, ``grading/``, ``tests/``, ``.git``, the gradebook, ...) are closed to
    other users while the hub runs. If the interpreter of ``.venv`` sits where other users cannot go (a Python built
-   in root's home), ``make hub`` stops and says what to do, or with ``--share-interpreter`` gives the folders on the
-   way the traversal bit (x only). The modes come back when the hub stops.
+   in root's home), ``make hub`` stops before step 1 and says what to do, or with ``--share-interpreter`` gives the
+   folders on the way the traversal bit (x only). The modes come back when the hub stops.
 5. JupyterHub, then: the URL and the accounts are printed; Ctrl-C (or SIGTERM) stops the hub, every server, the
    proxy and any process left of the accounts.
 """
@@ -31,6 +32,7 @@ import json
 import os
 import pwd
 import secrets
+import shlex
 import signal
 import stat
 import subprocess
@@ -146,6 +148,34 @@ def student_settings(folder):
     return settings
 
 
+def terminal_settings(config, venv):
+    """The terminals of every server on the hub: bash with the course's environment (``venv``/bin) first on PATH.
+
+    JupyterLab starts a terminal as a login shell when its server has no terminal of its own (a spawned server has
+    none), and a login shell's /etc/profile sets PATH afresh, dropping the environment the spawner put first: the
+    instructor's ``nbgrader`` was "command not found". So each server's configuration (``config``/instructor and
+    ``config``/student, on its JUPYTER_CONFIG_PATH) names the terminal's command: an interactive bash that reads
+    /etc/bash.bashrc, the user's ~/.bashrc, then puts ``venv``/bin first. Returns the start file's path."""
+    bin_dir = str(Path(venv) / "bin")
+    rc = config / "terminal.bashrc"
+    rc.write_text(
+        "# A terminal of the course's hub (written by make hub, hub/run.py): the user's own ~/.bashrc, then the\n"
+        "# course's environment first on PATH (nbgrader, python, jupyter).\n"
+        '[ -f ~/.bashrc ] && . ~/.bashrc\n'
+        f"_bin={shlex.quote(bin_dir)}\n"
+        '_p=":$PATH:"\n'
+        'while [[ $_p == *":$_bin:"* ]]; do _p=${_p/":$_bin:"/:}; done\n'
+        '_p=${_p#:}; _p=${_p%:}\n'
+        'export PATH="$_bin${_p:+:$_p}"; unset _bin _p\n')
+    os.chmod(rc, 0o644)
+    server = {"ServerApp": {"terminado_settings": {"shell_command": ["/bin/bash", "--rcfile", str(rc), "-i"]}}}
+    for view in ("instructor", "student"):
+        path = config / view / "jupyter_server_config.json"
+        path.write_text(json.dumps(server, indent=1))
+        os.chmod(path, 0o644)
+    return rc
+
+
 def prepare(args, instructor, students):
     folder = Path(args.dir).resolve()
     folder.mkdir(parents=True, exist_ok=True)
@@ -167,9 +197,11 @@ def prepare(args, instructor, students):
     common = [f"c.CourseDirectory.course_id = {COURSE_ID!r}", f"c.Exchange.root = {str(exchange)!r}"]
     nbgrader_config(folder / "config" / "student", common)
     nbgrader_config(folder / "config" / "instructor", common + [f"c.CourseDirectory.root = {str(course)!r}"])
+    terminal_settings(folder / "config", ROOT / ".venv")
     s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
          "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
          "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)),
+         "instructor_settings": str(ROOT / "jupyter" / "lab" / "settings"),
          "exchange": str(exchange), "course_id": COURSE_ID,
          "memory_mb": args.memory_mb, "cpus": args.cpus, "idle_seconds": args.idle_seconds,
          "student_password": old.get("student_password") or secrets.token_urlsafe(9),
@@ -187,20 +219,27 @@ def unreachable(path):
     return [p for p in reversed(real.parents) if not stat.S_IMODE(p.stat().st_mode) & 0o001]
 
 
-def open_interpreter(folder, share):
-    """Every server runs the course's .venv: its interpreter must be reachable by the accounts. With ``share``, the
-    folders on its way get the traversal bit for others (x only: nothing can be listed), recorded to be undone."""
+def closed_way_to_interpreter(share):
+    """The folders on the way to the course's interpreter that the accounts cannot enter (none: ``[]``). Every
+    server runs the course's .venv, so without ``share`` such folders stop ``make hub`` here, before it creates an
+    account or clones the course."""
     python = ROOT / ".venv" / "bin" / "python"
     closed = unreachable(python)
-    if not closed:
-        return []
-    if not share:
+    if closed and not share:
         raise SystemExit(
             f"the course's environment runs {os.path.realpath(python)}, and other users cannot reach it "
             f"({', '.join(map(str, closed))} not open to them), so no account's server could start. Either build "
             f".venv from a Python every user can run (rm -rf .venv; make env PYTHON=/usr/bin/python3.11), or let "
             f"make hub open only the way to it while the hub runs: make hub ARGS=--share-interpreter (adds o+x, "
             f"traversal only, to {', '.join(map(str, closed))}; taken back when the hub stops)")
+    return closed
+
+
+def open_interpreter(folder, closed):
+    """Give the folders ``closed`` (:func:`closed_way_to_interpreter`) the traversal bit for others (x only: nothing
+    can be listed) while the hub runs, recorded in ``folder`` to be undone."""
+    if not closed:
+        return []
     opened = {}
     for p in closed:
         mode = stat.S_IMODE(p.stat().st_mode)
@@ -301,6 +340,7 @@ def main(argv=None):
         if not need.exists():
             raise SystemExit(f"{need} is missing: run `make hub` (it installs the hub first)")
     t0 = time.monotonic()
+    closed_way = closed_way_to_interpreter(args.share_interpreter)      # refuses before anything is made
     instructor, students = accounts(args.prefix, args.students)
     say(f"accounts: {instructor} and {len(students)} student(s), group {GROUP}")
     make_accounts([instructor, *students])
@@ -317,7 +357,7 @@ def main(argv=None):
     hub = None
     try:
         restore_modes(folder)                  # a run that was killed left its changes recorded: undo them first
-        opened = open_interpreter(folder, args.share_interpreter)
+        opened = open_interpreter(folder, closed_way)
         if opened:
             say(f"opened for traversal (x only) while the hub runs, so the accounts reach the interpreter: "
                 f"{', '.join(opened)}")
@@ -338,6 +378,7 @@ The course's JupyterHub is up ({time.monotonic() - t0:.0f} s): open {url}
   instructor  {instructor:<14} password {s['instructor_password']}  (Formgrader: {url}user/{instructor}/formgrader)
   students    {students[0]} ... {students[-1]}  password {s['student_password']}  (one password for all students)
   exchange    {s['exchange']} (course id {COURSE_ID}); the instructor's course: {s['course']}
+  terminals   {s['venv']}/bin first on PATH (nbgrader, python, jupyter: the course's environment)
   limits      {limits}
   log         {folder / 'jupyterhub.log'}; API token for scripts: {folder / 'hub.json'} (api_token)
 Ctrl-C stops the hub and every server. `make hub-remove` removes the accounts and {folder}.

@@ -4,7 +4,8 @@
 with what the course adds:
 
 * the instructor's server starts on the instructor's copy of the course, with every nbgrader tool (Formgrader,
-  Create Assignment, Course List) and nbgrader configured for the exchange (``CourseDirectory.root`` set);
+  Create Assignment, Course List), nbgrader configured for the exchange (``CourseDirectory.root`` set) and no
+  Jupyter news pop-up (the settings of ``jupyter/lab/settings``);
 * a student's server starts on the student's home folder with the student view of ``make lab`` (the repository's
   ``jupyter/`` folder: only the *Assignments* panel and **Validate** of nbgrader) and the exchange;
 * memory and CPU are limited per server (``Spawner.mem_limit``, ``Spawner.cpu_limit``) by a control group of its
@@ -121,6 +122,8 @@ class CourseSpawner(LocalProcessSpawner):
                                      "course root)").tag(config=True)
     student_config = Unicode(help="a folder with the students' nbgrader_config.py (exchange, course id)").tag(
         config=True)
+    instructor_settings = Unicode(help="the instructor's JupyterLab settings (the repository's jupyter/lab/settings: "
+                                       "no news pop-up, no update check)").tag(config=True)
     student_view = Unicode(help="the student view's configuration folder (the repository's jupyter/)").tag(
         config=True)
     student_settings = Unicode(help="the students' JupyterLab settings: the student view's (jupyter/lab/settings) "
@@ -138,6 +141,7 @@ class CourseSpawner(LocalProcessSpawner):
     def get_args(self):
         if self.user.name == self.instructor:
             self.notebook_dir = self.course
+            self.args = [f"--LabApp.app_settings_dir={self.instructor_settings}"] if self.instructor_settings else []
         else:
             self.notebook_dir = "~"
             self.args = [f"--LabApp.app_settings_dir={self.student_settings}"]

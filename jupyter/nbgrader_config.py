@@ -6,9 +6,10 @@ extension reads its configuration on each press; `make validate LAB=NN_name` run
 and the course's own nbgrader_config.py loads this file too. Nothing here concerns grading.
 
 nbgrader lists each failing test cell and stops there. The course adds the count a student wants first: "6 of 9
-tests pass" -- at the end of the Validate dialog and at the top of `nbgrader validate`'s report. nbgrader has no
-setting for it: fusionlab.nbgrader_compat puts a validator that reports it under the name nbgrader builds its
-validator by (this file is read after those modules are loaded, before each validation).
+tests pass" (and how many written answers are still empty) -- at the top of the Validate dialog and of
+`nbgrader validate`'s report, above the failing cells. nbgrader has no setting for it: fusionlab.nbgrader_compat
+puts a validator that reports it under the name nbgrader builds its validator by (this file is read after those
+modules are loaded, before each validation).
 """
 from fusionlab.nbgrader_compat import install_summary_validator
 

@@ -273,3 +273,24 @@ def test_a_labs_link_to_a_course_document_opens_it_in_jupyterlab(browser, server
     page.wait_for_function("() => window.jupyterapp.shell.currentWidget.node.innerText.includes('seed 004')",
                            timeout=30_000)
     page.close()
+
+
+def test_the_validate_dialog_starts_with_the_count(browser, server):
+    """Validate on the untouched lab: the dialog's first line is how many tests pass (nbgrader's dialog would list
+    the failing cells first, jupyter/nbgrader_config.py), and each empty written answer is named once."""
+    nb = nbformat.read(ROOT / "labs" / WIDGET_LAB / f"{WIDGET_LAB}.ipynb", as_version=4)
+    tests = sum(1 for c in nb.cells if c.metadata.get("nbgrader", {}).get("grade")
+                and not c.metadata["nbgrader"].get("solution"))
+    written = sum(1 for c in nb.cells if c.metadata.get("nbgrader", {}).get("grade")
+                  and c.metadata["nbgrader"].get("solution") and c.cell_type == "markdown")
+    page = _open(browser, server, f"labs/{WIDGET_LAB}/{WIDGET_LAB}.ipynb")
+    page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate", exact=True).click()
+    page.wait_for_function("() => { const d = document.querySelector('#validation-message');"
+                           "        return d && d.innerText.includes('The following cell failed'); }", timeout=240_000)
+    shown = page.evaluate("() => document.querySelector('#validation-message').innerText").strip()
+    screenshot(page.locator(".jp-Dialog-content"), f"{WIDGET_LAB}_validate_dialog")
+    first = shown.splitlines()[0]
+    assert first == f"0 of {tests} tests pass; {written} written answers are still empty.", shown[:2000]
+    assert shown.count("You did not provide a response.") == written, shown
+    assert shown.count("The following cell failed:") == tests + written, shown    # the count's entry shows no heading
+    page.close()

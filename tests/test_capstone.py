@@ -10,8 +10,10 @@ import ast
 import base64
 import csv
 import dataclasses
+import html
 import json
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -1240,6 +1242,18 @@ def test_capstone_data_without_a_network_says_so_and_writes_nothing(monkeypatch,
     assert not (tmp_path / "cache" / "broad").exists()                       # not even an empty cache folder
 
 
+def test_capstone_data_and_grading_count_the_trials_here_alike(monkeypatch, tmp_path, capsys):
+    """A trial already here after the first that cannot be fetched counts as here for both commands."""
+    _no_data(monkeypatch, tmp_path)
+    cache = tmp_path / "cache" / "broad"
+    cache.mkdir(parents=True)
+    shutil.copy(ROOT / "data" / "broad" / "29_disturbed_stationary_magnet_B.mat", cache)
+    assert capstone.fetch(names=[7, 29, 2], progress=False) == 2            # stops at trial 7, the first
+    assert "1 of 3 hidden trials are here" in capsys.readouterr().out
+    with pytest.raises(capstone.CapstoneDataMissing, match="3 hidden BROAD trials and 2 of them are not"):
+        capstone.hidden_trials(names=[7, 29, 2])
+
+
 def test_capstone_data_fetches_checked_files_from_a_mirror(monkeypatch, tmp_path, capsys):
     """The same command with the published files reachable (a local mirror of two shipped trials standing in)."""
     _no_data(monkeypatch, tmp_path)
@@ -1366,3 +1380,65 @@ def test_a_few_embedded_references_are_enough_to_be_held():
     for close in (2, 4):
         why = capstone.implausibly_close(student(close), refs)
         assert why.startswith(capstone.IMPLAUSIBLY_CLOSE) and f"on {close} of the 10 trials" in why, why
+
+
+def _fake_class():
+    """Two students (9D and 6D) and the four published reference rows on three trials, without a box."""
+    from grading.capstone.scoring import Reference, TrialResult
+    names = ["07_undisturbed_fast_rotation_B", "29_disturbed_stationary_magnet_B", "33_mixed_motion_A"]
+
+    def trials(total, inclination, heading, metric):
+        return [TrialResult(n, seconds=1.0, budget_s=9.0, total_deg=t, heading_deg=h, inclination_deg=i,
+                            counted_deg=t if metric == "total_deg" else i, metric=metric)
+                for n, t, i, h in zip(names, total, inclination, heading)]
+    refs = {"vqf9": Reference("vqf9", "VQF 9D", trials([2.1, 3.2, 2.6], [1.0, 1.2, 1.1], [1.8, 2.9, 2.3], "total_deg")),
+            "madgwick9": Reference("madgwick9", "Madgwick 9D", trials([4.5, 6.3, 5.2], [2, 2.5, 2.2], [4, 6, 5],
+                                                                      "total_deg")),
+            "vqf6": Reference("vqf6", "VQF 6D", trials([60, 90, 75], [1.1, 1.4, 1.2], [60, 90, 75], "inclination_deg"),
+                              sensors="6D"),
+            "madgwick6": Reference("madgwick6", "Madgwick 6D", trials([56, 110, 80], [2.0, 2.6, 2.3], [56, 110, 80],
+                                                                      "inclination_deg"), sensors="6D")}
+    results = [capstone.StudentResult("nine d", trials([3.0, 4.1, 3.5], [1.5, 1.6, 1.4], [2.6, 3.8, 3.1],
+                                                       "total_deg"), causal=True, causal_message="causal",
+                                      points={"accuracy": 5.0}, sensors="9D"),
+               capstone.StudentResult("six_d", trials([58, 100, 70], [1.5, 1.9, 1.6], [58, 100, 70],
+                                                      "inclination_deg"), causal=True, causal_message="causal",
+                                      points={"accuracy": 6.0}, sensors="6D")]
+    return results, refs, names
+
+
+def test_the_leaderboard_reads_in_words_and_links_each_students_page(tmp_path):
+    from grading.capstone import report
+    results, refs, _ = _fake_class()
+    page = report.write_leaderboard(results, refs, [], tmp_path, "spring", label="STAND-IN: shipped trials").read_text()
+    assert "<th>total_deg</th>" not in page and "ratio_to_vqf" not in page and "<th>total RMSE (deg)</th>" in page
+    for res in results:                                           # the name opens the student's page, which exists
+        href = f"feedback/{res.name.replace(' ', '%20')}/capstone.html"
+        assert f"<a href='{href}'>{res.name}</a>" in page
+        assert (tmp_path / "feedback" / res.name / "capstone.html").exists()
+    six_d, note = page.index("<h2>" + report.SETS["6D"].split(":")[0]), html.escape(report.UNOBSERVABLE_HEADING)
+    assert page.count(note) == 1 and page.index(note) > six_d                # said once, in the 6D block
+    mine = {r.name: (tmp_path / "feedback" / r.name / "capstone.html").read_text() for r in results}
+    assert note in mine["six_d"] and note not in mine["nine d"]
+    assert "vqf6: inclination RMSE (deg)" in mine["six_d"] and "vqf6_inclination" not in mine["six_d"]
+
+
+@pytest.mark.parametrize("stand_in", [True, False])
+def test_the_students_figure_has_plain_ticks_an_honest_label_and_a_legend_off_the_markers(stand_in):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from grading.capstone import report
+    results, refs, names = _fake_class()
+    res = results[0]
+    shown = {"you": [r.total_deg for r in res.trials], "vqf9": [r.total_deg for r in refs["vqf9"].trials],
+             "madgwick9": [r.total_deg for r in refs["madgwick9"].trials]}
+    fig = report.trials_figure(res, names, shown, {r.trial: r for r in res.trials}, 2.63, stand_in=stand_in)
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_yticklabels() + ax.get_yticklabels(minor=True) if t.get_text()]
+    assert len(labels) >= 3 and all(re.fullmatch(r"\d+(\.\d+)?", t) for t in labels), labels   # 2, 3, 4, 6
+    assert ("hidden trial" in ax.get_xlabel()) is not stand_in and ("stand-in" in ax.get_xlabel()) is stand_in
+    legend = fig.legends[0].get_window_extent()
+    assert not legend.overlaps(ax.get_window_extent()), "the legend lies on the axes"
+    plt.close(fig)

@@ -234,6 +234,18 @@ def test_student_readme(built):
     for instructor_only in ("solutions/", "nbgrader_config", "instructors.md", "authoring.md", "gradebook",
                             "autograde", "formgrader"):
         assert instructor_only not in text, instructor_only
+    # every make target the README names is one of the release's (`make help` lists them): no `make capstone`
+    listed = subprocess.run(["make", "-s", "help"], cwd=course, capture_output=True, text=True, check=True).stdout
+    listed = {line.split()[0] for line in listed.splitlines() if line.strip()}
+    named = set(re.findall(r"`make ([a-z][a-z0-9-]*)", text))
+    assert {"lab", "test", "validate", "bench"} <= named <= listed, (named, listed)
+
+
+def test_the_student_readme_drops_an_instructors_target_and_refuses_one_it_cannot_drop():
+    text = "scored on the hidden trials (`make capstone CLASS=x`) |\n`make lab` starts it\n"
+    assert release._only_release_targets(text) == "scored on the hidden trials |\n`make lab` starts it\n"
+    with pytest.raises(SystemExit, match="capstone"):
+        release._only_release_targets("then run `make capstone` as well")
 
 
 def _make(course, *args, timeout=900, **kwargs):

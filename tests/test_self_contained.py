@@ -134,3 +134,21 @@ def test_every_seed_id_a_lab_uses_is_defined_in_its_header(path):
     follows = next(line for line in header.splitlines() if line.startswith("| **Follows**"))
     read_first = next(line for line in header.splitlines() if line.startswith("| **Read first**"))
     assert not NOTES.search(follows + read_first)
+
+
+def _unobtainable_seeds():
+    """The seeds whose row in the References says their author is not known: no student can get a copy."""
+    refs = (ROOT / "labs" / "docs" / "references.md").read_text(encoding="utf-8")
+    return set(re.findall(r"^\| seed (00\d) \|[^\n]*not known to us", refs, flags=re.M))
+
+
+@pytest.mark.parametrize("path", LAB_SOLUTIONS, ids=[p.stem for p in LAB_SOLUTIONS])
+def test_read_first_sends_no_one_to_a_document_they_cannot_get(path):
+    """Read first may name such a seed only where it says this notebook holds what the lab uses of it."""
+    assert _unobtainable_seeds() == {"000"}                    # the thesis with no title page
+    header = "".join(json.loads(path.read_text(encoding="utf-8"))["cells"][0]["source"])
+    read_first = next(line for line in header.splitlines() if line.startswith("| **Read first**"))
+    for clause in read_first.split(";"):
+        for seed in _unobtainable_seeds():
+            if re.search(rf"\bseed {seed}\b", clause):
+                assert "this notebook" in clause, f"{path.stem}: Read first sends students to seed {seed}: {clause}"

@@ -9,6 +9,7 @@ import shutil
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from urllib.parse import quote
 
 import numpy as np
 
@@ -24,6 +25,19 @@ COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg
 TRIAL_COLUMNS = ("name", "kind", "sensors", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
                  "budget_s", "message")
 
+
+#: The column headings of the leaderboard and the feedback pages, in words (the CSVs keep the short names).
+HEADINGS = {"rank": "rank", "name": "name", "kind": "kind", "sensors": "sensors", "points": "points",
+            "max_points": "of", "total_deg": "total RMSE (deg)", "heading_deg": "heading RMSE (deg)",
+            "inclination_deg": "inclination RMSE (deg)", "ratio_to_vqf": "scored RMSE / VQF's",
+            "seconds": "run time (s)", "trials_ok": "trials that ran", "trials": "trials", "budget_held":
+            "within the time budget", "causal": "causal", "cheats": "cheats", "notes": "notes", "trial": "trial",
+            "status": "status", "budget_s": "time budget (s)", "message": "message", "rule": "rule"}
+_LEFT = ("name", "cheats", "notes", "rule", "trial", "message")
+#: Said wherever a 6D filter's total or heading RMSE is shown.
+UNOBSERVABLE_HEADING = ("A 6D filter's total and heading RMSE include its heading, which no filter can observe "
+                        "without a magnetometer (it drifts freely), so they are large and say nothing of the filter: "
+                        "it is scored on inclination.")
 
 #: How each sensor set is named on the leaderboard and the feedback pages.
 SETS = {"9D": "9D filters (gyroscope, accelerometer, magnetometer): scored on mean total RMSE",
@@ -121,17 +135,23 @@ STYLE = ("body{font-family:sans-serif;margin:2em;max-width:80em} table{border-co
          ".standin{background:#fff3c4;border:2px solid #d9a400;padding:.6em;font-weight:bold}")
 
 
-def _table(rows, columns, cls=None):
-    head = "".join(f"<th class='l'>{html.escape(c)}</th>" if c in ("name", "cheats", "notes", "rule", "trial",
-                                                                   "message") else f"<th>{html.escape(c)}</th>"
-                   for c in columns)
+def _table(rows, columns, cls=None, headings=None, links=None):
+    """An HTML table of ``rows``; a column's heading is ``headings[c]``, else :data:`HEADINGS`'s, else its name; a
+    name in ``links`` (``{name: href}``) links to its page."""
+    headings = {**HEADINGS, **(headings or {})}
+    links = links or {}
+    head = "".join(f"<th class='l'>{html.escape(headings.get(c, c))}</th>" if c in _LEFT
+                   else f"<th>{html.escape(headings.get(c, c))}</th>" for c in columns)
     body = []
     for r in rows:
         klass = cls(r) if cls else ""
-        cells = "".join(f"<td class='l'>{html.escape(_fmt(r[c]))}</td>" if c in ("name", "cheats", "notes", "rule",
-                                                                                 "trial", "message")
-                        else f"<td>{html.escape(_fmt(r[c]))}</td>" for c in columns)
-        body.append(f"<tr class='{klass}'>{cells}</tr>")
+        cells = []
+        for c in columns:
+            text = html.escape(_fmt(r[c]))
+            if c == "name" and r[c] in links:
+                text = f"<a href='{html.escape(links[r[c]], quote=True)}'>{text}</a>"
+            cells.append(f"<td class='l'>{text}</td>" if c in _LEFT else f"<td>{text}</td>")
+        body.append(f"<tr class='{klass}'>{''.join(cells)}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
 
 
@@ -162,22 +182,69 @@ def write_leaderboard(results, refs, scored, out, class_name, label=""):
     write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
     what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each cut at a secret start and end "
             "and given fresh sensor noise; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
-            "the trials; seconds: run time of estimate on all trials. 9D and 6D filters are ranked separately: a "
-            "rank is within the filter's sensor set, and ratio_to_vqf is to VQF with the same sensors. The RMSE a "
-            "set is scored on counts a failed trial with the identity quaternion's error; the other RMSE columns "
-            "are means over the trials that ran.")
+            "the trials; run time: of estimate on all trials. 9D and 6D filters are ranked separately: a "
+            "rank is within the filter's sensor set, and the scored RMSE is divided by VQF's with the same sensors. "
+            "The RMSE a set is scored on counts a failed trial with the identity quaternion's error; the other RMSE "
+            "columns are means over the trials that ran. A student's name opens their page.")
     gated_names = {res.name for res in results if gates_failed(res)}
     gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["name"] in gated_names  # noqa: E731
                                                                       else "")
+    links = {res.name: f"feedback/{quote(res.name)}/capstone.html" for res in results}
     parts = [f"<p>{html.escape(what)}</p>"]
     for sensors, heading in SETS.items():
         block = [r for r in rows if r["sensors"] == sensors]
-        parts += [f"<h2>{html.escape(heading)}</h2>", _table(block, COLUMNS, gated)]
+        note = f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if sensors == "6D" else ""
+        parts += [f"<h2>{html.escape(heading)}</h2>", note, _table(block, COLUMNS, gated, links=links)]
     page = _page(f"Capstone leaderboard: {class_name}", parts + [_rubric_html()], label)
     (out / "leaderboard.html").write_text(page, encoding="utf-8")
     for res in results:
         feedback(res, refs, out / "feedback" / res.name, label)
     return out / "leaderboard.html"
+
+
+def _plain_log_formatter(**kwargs):
+    """Tick labels of a log axis as plain numbers (2, 3, 4, 6; 0.5) on the ticks matplotlib's own log formatter
+    labels (which writes them 2×10⁰)."""
+    from matplotlib import ticker
+
+    class PlainLog(ticker.LogFormatterSciNotation):
+        def __call__(self, x, pos=None):
+            return f"{x:g}" if super().__call__(x, pos) else ""
+    return PlainLog(**kwargs)
+
+
+def trials_figure(res, names, shown, mine, vqf_mean, stand_in=False):
+    """A student's figure: one column of markers per trial (theirs a black dot, each reference its own marker) of
+    the RMSE they are scored on, on a log scale with plain numbers: readable at 3 trials as at 31, in a figure of
+    fixed size; the legend below the axes, where it covers no marker. Returns the figure."""
+    import matplotlib.pyplot as plt
+    what = SENSORS[res.sensors][:-4]
+    fig, ax = plt.subplots(figsize=(10, 4.6), layout="constrained")
+    x = np.arange(len(names))
+    markers = {"you": ("o", "k", 7)}
+    for i, n in enumerate(n for n in shown if n != "you"):
+        markers[n] = ("_^sv"[i % 4], f"C{i}", 7)
+    for n, vals in shown.items():
+        marker, color, size = markers[n]
+        ax.plot(x, vals, ls="none", marker=marker, color=color, ms=size, mew=2, label=n, zorder=3 if n == "you" else 2)
+    for i, n in enumerate(names):
+        status = mine[n].status if n in mine else "not run"
+        if status != "ok":
+            ax.text(x[i], 0.02, status, ha="center", va="bottom", rotation=90, color="crimson", fontsize=8,
+                    transform=ax.get_xaxis_transform())
+    ax.set_xticks(x, [n[:2] for n in names], fontsize=8 if len(names) > 20 else 10)
+    ax.set_xlim(-0.7, len(names) - 0.3)
+    ax.grid(axis="y", which="both", alpha=0.3)
+    ax.set_xlabel("shipped trial held back as a stand-in (number)" if stand_in else
+                  "hidden trial (number)")
+    ax.set_ylabel(f"{what} RMSE (deg)")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(_plain_log_formatter())
+    ax.yaxis.set_minor_formatter(_plain_log_formatter(labelOnlyBase=False))
+    fig.legend(fontsize=8, ncols=len(shown), loc="outside lower center")
+    ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
+                 f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {vqf_mean:.2f})", fontsize=10)
+    return fig
 
 
 def feedback(res, refs, folder, label=""):
@@ -194,35 +261,13 @@ def feedback(res, refs, folder, label=""):
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
         shown[n] = [getattr(r, metric) for r in ref.trials]
-    # one column of markers per trial (yours a black dot, each reference its own marker), on a log scale: readable
-    # at 3 trials as at 31, in a figure of fixed size
-    fig, ax = plt.subplots(figsize=(10, 4.2), constrained_layout=True)
-    x = np.arange(len(names))
-    markers = {"you": ("o", "k", 7)}
-    for i, n in enumerate(n for n in shown if n != "you"):
-        markers[n] = ("_^sv"[i % 4], f"C{i}", 7)
-    for n, vals in shown.items():
-        marker, color, size = markers[n]
-        ax.plot(x, vals, ls="none", marker=marker, color=color, ms=size, mew=2, label=n, zorder=3 if n == "you" else 2)
-    for i, n in enumerate(names):
-        status = mine[n].status if n in mine else "not run"
-        if status != "ok":
-            ax.text(x[i], 0.02, status, ha="center", va="bottom", rotation=90, color="crimson", fontsize=8,
-                    transform=ax.get_xaxis_transform())
-    ax.set_xticks(x, [n[:2] for n in names], fontsize=8 if len(names) > 20 else 10)
-    ax.set_xlim(-0.7, len(names) - 0.3)
-    ax.grid(axis="y", which="both", alpha=0.3)
-    ax.set_xlabel("hidden trial (number)")
-    ax.set_ylabel(f"{what} RMSE (deg)")
-    ax.set_yscale("log")
-    ax.legend(fontsize=8, ncols=len(shown))
-    ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
-                 f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {mean_scored(vqf.trials):.2f})", fontsize=10)
+    fig = trials_figure(res, names, shown, mine, mean_scored(vqf.trials), stand_in=bool(label))
     fig.savefig(folder / "trials.png", dpi=90)
     plt.close(fig)
     # each trial with the references' RMSE on the same data beside the student's
     ref_cols = {f"{n}_{what}": {r.trial: getattr(r, metric) for r in ref.trials}
                 for n, ref in references_of(refs, res.sensors).items()}
+    ref_headings = {f"{n}_{what}": f"{n}: {what} RMSE (deg)" for n in references_of(refs, res.sensors)}
     rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
                  inclination_deg=r.inclination_deg, **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
                  seconds=r.seconds, budget_s=r.budget_s, message=r.message)
@@ -236,8 +281,9 @@ def feedback(res, refs, folder, label=""):
              f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
              f"<ul>{flags}</ul>" if flags else "", f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
              f"<img src='trials.png' alt='{what} RMSE per trial'>",
+             f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if res.sensors == "6D" else "",
              _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", *ref_cols, "seconds",
-                           "budget_s", "message"))]
+                           "budget_s", "message"), headings=ref_headings)]
     (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
 
 

@@ -35,6 +35,19 @@ def hidden_names():
     return [t.name for t in datasets.list_trials() if t.number not in SHIPPED]
 
 
+def absent(names, folder=None):
+    """Those of the trials ``names`` that are not on this computer (no download): what ``make capstone`` and
+    ``make capstone-data`` both count, over the whole list."""
+    from fusionlab import datasets
+    missing = []
+    for name in names:
+        try:
+            datasets.fetch_trial(name, folder=folder, download=False, progress=False)
+        except FileNotFoundError:            # DataMissing, or not in the folder given
+            missing.append(name)
+    return missing
+
+
 def hidden_trials(folder=None, names=None):
     """Load the hidden trials (without a download), or raise :class:`CapstoneDataMissing` saying how to get them.
 
@@ -51,12 +64,7 @@ def hidden_trials(folder=None, names=None):
     """
     from fusionlab import datasets
     names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
-    missing = []
-    for name in names:
-        try:
-            datasets.fetch_trial(name, folder=folder, download=False, progress=False)
-        except FileNotFoundError:            # DataMissing, or not in the folder given
-            missing.append(name)
+    missing = absent(names, folder)
     if missing:
         shown = ", ".join(missing[:4]) + (f" and {len(missing) - 4} more" if len(missing) > 4 else "")
         raise CapstoneDataMissing(
@@ -105,7 +113,7 @@ def fetch(names=None, progress=True, out=None):
     names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
     print(f"==> the capstone's {len(names)} hidden BROAD trials, into {datasets.cache_dir()} (checked download)",
           file=out, flush=True)
-    have, unverified = 0, []
+    unverified = []
     cache = Path(datasets.cache_dir())
     had_cache = cache.exists()
     for name in names:
@@ -119,6 +127,7 @@ def fetch(names=None, progress=True, out=None):
             url = (os.environ.get(datasets.ENV_URL) or datasets.BROAD_URL).rstrip("/") + f"/{name}.mat"
             if not had_cache and cache.is_dir() and not any(cache.iterdir()):
                 cache.rmdir()                                  # made for this run and still empty: leave no trace
+            have = len(names) - len(absent(names))              # over the whole list, as make capstone counts
             print(f"\nstopped: {name} could not be downloaded from {url} ({reason}).\n{have} of {len(names)} "
                   f"hidden trials are here, each complete and checked (nothing partial is kept). Connect to the "
                   f"internet and run `make capstone-data` again: it fetches only what is missing. Or put the "
@@ -126,7 +135,6 @@ def fetch(names=None, progress=True, out=None):
                   f"which ships to the students). The capstone cannot be graded until all {len(names)} are here.",
                   file=out, flush=True)
             return 2
-        have += 1
         if datasets.known_sha256(name) is None:
             unverified.append((name, path))
         for w in caught:

@@ -1,5 +1,5 @@
 # What the course repository's Makefile and the student release's Makefile share: the environment in .venv and
-# JupyterLab on labs/ as a student sees it. Both include this file (the release ships it beside its Makefile), so
+# JupyterLab on labs/ as a student sees it, Validate in a terminal and the benchmark. Both include this file (the release ships it beside its Makefile), so
 # a student runs the very recipes the course is tested with.
 SHELL   := /bin/bash
 PYTHON  ?= $(shell command -v python3.11 || command -v python3)
@@ -15,7 +15,7 @@ SETTINGS     := $(if $(wildcard jupyter/lab/settings),--LabApp.app_settings_dir=
 ALLOW_ROOT   := $(if $(filter 0,$(shell id -u)),--allow-root)
 ARGS    ?=
 
-.PHONY: help env lab validate
+.PHONY: help env lab validate bench
 
 help:  ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(filter %.mk,$(MAKEFILE_LIST)) $(filter-out %.mk,$(MAKEFILE_LIST)) | sed 's/:.*## /\t/' | column -t -s $$'\t'
@@ -36,3 +36,7 @@ lab: env  ## start JupyterLab on labs/ as a student sees it (prints the URL to o
 validate: env  ## what the Validate button reports, in the terminal: make validate LAB=01_euler_rotations
 	@test -n "$(LAB)" || { echo "usage: make validate LAB=NN_name"; exit 2; }
 	@$(STUDENT_VIEW) $(BIN)/nbgrader validate labs/$(LAB)/$(LAB).ipynb
+
+bench: env  ## every filter on every available BROAD trial: table, CSV and figure in .bench/
+	@echo "==> benchmark (the trials shipped in data/broad/, plus any in FUSIONLAB_BROAD_DIR or the cache)"
+	@$(BIN)/python -m fusionlab.bench --out .bench

@@ -11,7 +11,7 @@ files (the course's ``nbgrader_config.py``, the student's ``jupyter/nbgrader_con
 * :class:`HideTestSource` -- a failed test's traceback cut to its last line in the feedback (``generate_feedback``);
 * :class:`RefuseAutograde` -- ``nbgrader autograde`` (and Formgrader's autograde button) refused: it runs the tests in
   the student's kernel; the course grades with its judge (``make grade``);
-* :class:`SummaryValidator` and :func:`install_summary_validator` -- Validate's report says "6 of 9 tests pass".
+* :class:`SummaryValidator` and :func:`install_summary_validator` -- Validate's report says first "6 of 9 tests pass".
 """
 from __future__ import annotations
 
@@ -40,6 +40,7 @@ RELIES_ON = (
     ("nbgrader.validator", "Validator._get_passed_cells"),
     ("nbgrader.validator", "Validator._print_num_failed"),
     ("nbgrader.validator", "Validator.validate"),
+    ("nbgrader.validator", "Validator.validate_and_print"),
     ("nbgrader.apps.validateapp", "Validator"),
     ("nbgrader.server_extensions.validate_assignment.handlers", "Validator"),
     ("nbgrader.preprocessors", "ClearSolutions.preprocess_cell"),
@@ -316,8 +317,16 @@ class RefuseAutograde(NbGraderPreprocessor):
                            "section 4).")
 
 
+# The Validate dialog (nbgrader's lab extension) writes, for each failing cell, "The following cell failed:", the
+# cell's source and its error, the error as HTML, and nothing before them: the count would come after the last of
+# them. So the dialog's answer starts with an entry of its own whose error is the count and whose style hides the
+# two parts above it (the heading and an empty source) in that dialog (#validation-message) only.
+_DIALOG_HEAD = ("<style>#validation-message > div:nth-child(-n+2) {{ display: none; }}</style>"
+                "<b>{summary}.</b>\n{cells} below, in the notebook's order.")
+
+
 class SummaryValidator(Validator):
-    """nbgrader's Validator whose report says how many of the notebook's tests pass.
+    """nbgrader's Validator whose report says first how many of the notebook's tests pass.
 
     Parameters
     ----------
@@ -326,6 +335,7 @@ class SummaryValidator(Validator):
     """
 
     summary = None
+    _printing = False
 
     def _get_passed_cells(self, nb):
         passed = super()._get_passed_cells(nb)
@@ -333,7 +343,7 @@ class SummaryValidator(Validator):
         tests = [score == top for cell, (score, top) in graded if not utils.is_solution(cell)]
         empty = sum(1 for cell, (score, _) in graded if utils.is_solution(cell) and score == 0)  # left as released
         self.summary = f"{sum(tests)} of {len(tests)} tests pass" + (
-            f"; {empty} answer{'s are' if empty > 1 else ' is'} still empty" if empty else "")
+            f"; {empty} written answer{'s are' if empty > 1 else ' is'} still empty" if empty else "")
         return passed
 
     def validate(self, filename):
@@ -347,15 +357,33 @@ class SummaryValidator(Validator):
         Returns
         -------
         dict
-            nbgrader's results; ``summary`` holds the count when a test fails.
+            nbgrader's results; ``summary`` holds the count when a test fails, and for the Validate dialog the list
+            ``failed`` starts with an entry that shows it.
         """
         self.summary = None
         results = super().validate(filename)
-        if self.summary and results.get("failed"):
+        failed = results.get("failed")
+        if self.summary and failed:
             results["summary"] = self.summary
-            last = results["failed"][-1]                # the dialog shows the failing cells, one after the other
-            last["error"] += f"\n\n<b>{html.escape(self.summary)}.</b>"
+            if not self._printing:
+                cells = f"{len(failed)} cell{'s fail' if len(failed) > 1 else ' fails'}"
+                head = _DIALOG_HEAD.format(summary=html.escape(self.summary), cells=cells)
+                failed.insert(0, {"source": "", "error": head, "raw_error": f"{self.summary}."})
         return results
+
+    def validate_and_print(self, filename):
+        """``nbgrader validate``'s report: the count, nbgrader's line on the failures, then the failing cells.
+
+        Parameters
+        ----------
+        filename : str
+            The notebook.
+        """
+        self._printing = True
+        try:
+            super().validate_and_print(filename)
+        finally:
+            self._printing = False
 
     def _print_num_failed(self, num_failed):
         if self.summary:
