@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders", "resolve"]
+__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders", "qualified", "resolve"]
 
 
 @dataclass(frozen=True)
@@ -257,20 +257,31 @@ def loaders(lab=None):
     return tuple(dict.fromkeys(name for e in rows for name in e.loaders))
 
 
-def resolve(dotted):
-    """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
-    packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
-    there."""
+def qualified(dotted):
+    """The module and the attribute path a dotted name of the table stands for: ``"kalman.update"`` is
+    ``("fusionlab.kalman", "update")``, other packages by their full name (``"filterpy.kalman.KalmanFilter.predict"``
+    is ``("filterpy.kalman", "KalmanFilter.predict")``). Raises ImportError for a name whose module is not there."""
     import importlib
 
     parts = dotted.split(".")
     for i in range(len(parts) - 1, 0, -1):
         for prefix in ("fusionlab.", ""):
             try:
-                obj = importlib.import_module(prefix + ".".join(parts[:i]))
+                importlib.import_module(prefix + ".".join(parts[:i]))
             except ImportError:
                 continue
-            for attr in parts[i:]:
-                obj = getattr(obj, attr)
-            return obj
+            return prefix + ".".join(parts[:i]), ".".join(parts[i:])
     raise ImportError(dotted)
+
+
+def resolve(dotted):
+    """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
+    packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
+    there."""
+    import importlib
+
+    module, path = qualified(dotted)
+    obj = importlib.import_module(module)
+    for attr in path.split("."):
+        obj = getattr(obj, attr)
+    return obj
