@@ -8,6 +8,7 @@ cheat is missing: adding an exercise means one entry and its cells.
 from __future__ import annotations
 
 import ast
+import dataclasses
 import re
 
 import nbformat
@@ -132,8 +133,6 @@ def test_every_forbid_a_cell_names_is_the_tables_spelled_through_the_cells_impor
 
 
 def test_a_changed_table_entry_changes_the_stamped_cells(monkeypatch):
-    import dataclasses
-
     from grading import stamp
     row = next(e for e in exercises.of_lab("02_kalman_falling_body") if e.number == 1)
     changed = dataclasses.replace(row, forbid=("kalman.expanded_covariance", "kalman.joseph_covariance",
@@ -159,8 +158,6 @@ def test_a_changed_table_entry_changes_the_stamped_cells(monkeypatch):
 
 
 def test_stamping_refuses_a_name_the_cells_cannot_reach_and_an_exercise_with_nowhere_to_forbid(monkeypatch):
-    import dataclasses
-
     from grading import stamp
     rows = {(e.lab, e.number): e for e in exercises.EXERCISES}
     unreachable = dataclasses.replace(rows["02_kalman_falling_body", 2], forbid=("gpsins.ins_transition",))
@@ -184,3 +181,37 @@ def test_a_name_is_spelled_through_its_module_first_then_through_a_class_the_cel
     assert stamp.spell("filterpy.kalman.KalmanFilter.predict", [setup]) == "KalmanFilter.predict"
     assert stamp.spell("filterpy.kalman.JulierSigmaPoints.sigma_points", [stamp.imports(
         "from filterpy.kalman import JulierSigmaPoints as _JSP")]) == "_JSP.sigma_points"
+
+
+def test_what_answers_exercises_beyond_forbid_is_stated_once_in_the_table_and_read_by_the_grading_tools():
+    from grading import flags
+    from grading.capstone import program
+    assert set(exercises.PACKAGES.values()) <= {"absent", "kept"}
+    for dotted in exercises.ANSWERING:
+        assert callable(exercises.resolve(dotted)), dotted      # each names a class or function that is there
+    absent = tuple(p for p, where in exercises.PACKAGES.items() if where == "absent")
+    assert boxlib.HIDDEN_PACKAGES == exercises.hidden_packages() == absent
+    assert {m for m, kind in flags.MODULE_KINDS.items() if kind == "package"} == set(exercises.PACKAGES)
+    assert set(flags.ANSWERING_NAMES) == {d.rsplit(".", 1)[-1] for d in exercises.ANSWERING}
+    assert set(flags.ANSWERING_NAMES.values()) == {"package"}
+    capstone = [e for e in exercises.EXERCISES if e.packages]
+    assert [(e.lab, e.number) for e in capstone] == [(program.LAB, 2)], "only the capstone's filter has packages"
+    assert program.HIDDEN_PACKAGES == exercises.hidden_packages(program.LAB) == (*absent, *(
+        p for p in capstone[0].packages if p not in absent))
+
+
+def test_a_package_a_labs_setup_cell_imports_is_never_absent_from_its_box():
+    from grading import stamp
+    for lab in LABS:
+        setup = next(c for c in _solution(lab).cells if grade_id(c) == "imports")
+        imported = {target.split(".")[0] for _, target in stamp.imports(setup.source)}
+        assert not imported & set(exercises.hidden_packages(lab)), lab
+
+
+def test_the_hidden_packages_follow_a_changed_table_entry(monkeypatch):
+    row = next(e for e in exercises.EXERCISES if e.packages)
+    fewer = dataclasses.replace(row, packages=tuple(p for p in row.packages if p != "imufusion"))
+    monkeypatch.setattr(exercises, "EXERCISES", tuple(fewer if e is row else e for e in exercises.EXERCISES))
+    assert "imufusion" not in exercises.hidden_packages(row.lab) and "vqf" in exercises.hidden_packages(row.lab)
+    monkeypatch.setattr(exercises, "PACKAGES", {**exercises.PACKAGES, "filterpy": "absent"})
+    assert exercises.hidden_packages() == ("ahrs", "filterpy")
