@@ -111,7 +111,8 @@ def _render(items, source, start, end, paren):
 def forbid_sites(source):
     """Where a test or setup cell names what an exercise forbids: ``[(start, end, paren, kind, exercise)]``, the
     text to replace (``source[start:end]``), whether it is a whole tuple, ``"forbid"``, ``"release"`` or
-    ``"reserve"``, and the exercise a reserve or release names (else None). A ``guard.forbid(*names)`` or
+    ``"reserve"``, and the exercise a reserve or release names (else None); a call that names nothing yet
+    (``guard.reserve(exercise=5)``) has an empty span where the names go. A ``guard.forbid(*names)`` or
     ``forbid=names`` is not one: the tuple bound to ``names`` in the cell is."""
     text = cells.python_of(source)
     tree = cells.parse(text)
@@ -141,6 +142,10 @@ def forbid_sites(source):
                            and isinstance(k.value, ast.Constant)), None)
             if node.args:
                 span(node.args[0], node.args[-1], False, f.attr, number)
+            else:                                   # guard.reserve(exercise=5): the names go before the keywords
+                at = (_offset(lines, node.keywords[0].lineno, node.keywords[0].col_offset) if node.keywords else
+                      _offset(lines, node.end_lineno, node.end_col_offset) - 1)
+                sites.append((at, at, False, f.attr, number))
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name) and \
                 node.targets[0].id in named and isinstance(node.value, (ast.Tuple, ast.List)):
@@ -160,7 +165,10 @@ def _stamp_forbids(source, rows, scopes, where, exercise=None):
             row = rows[exercise] if kind != "reserve" and number in (None, exercise) else None
         if row is None:
             continue
-        out += [source[at:start], _render([spell(d, scopes, where) for d in row.forbid], source, start, end, paren)]
+        text = _render([spell(d, scopes, where) for d in row.forbid], source, start, end, paren)
+        if start == end and text and source[end] != ")":
+            text += ", "                            # put before the call's keywords
+        out += [source[at:start], text]
         at = end
     return "".join(out) + source[at:]
 

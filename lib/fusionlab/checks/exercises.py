@@ -6,7 +6,7 @@ Each :class:`Exercise` states once what every part of the course needs to know a
 * the grading tools' judge takes ``forbid`` out of the student's process while the exercise's hidden test runs
   (each is a stub in the library copy the student's code gets), and scores the test with ``points``;
 * the integrity report flags an answer that names one of ``forbid``;
-* the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing;
+* the red-team tests check that calling the reference (one of ``forbid``) scores nothing;
 * the capstone's grader (``grading/capstone/``) names any use of its exercise's ``loaders`` in the code it runs;
 * the box that runs an exercise holds none of its ``packages``, nor those :data:`PACKAGES` says no box holds
   (:func:`hidden_packages`); the integrity report flags any import of :data:`PACKAGES` and any use of
