@@ -12,11 +12,12 @@ import os
 import shutil
 from pathlib import Path
 
+from fusionlab.checks import exercises
 from grading import cells, sandbox
 
 STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
                 "lab is graded. Write it yourself.")
-HIDDEN_PACKAGES = ("ahrs",)  # packages whose functions answer exercises (quaternion products, DCMs): absent in the box
+HIDDEN_PACKAGES = exercises.hidden_packages()  # packages whose functions answer exercises: absent from every box
 WHY_HIDDEN = "its functions answer exercises of the labs"     # what importing a hidden package says
 
 

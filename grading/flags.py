@@ -1,8 +1,11 @@
 """What the integrity report (:mod:`grading.integrity`) flags, as data: each kind of flag with the sentence a reviewer
-reads beside it, and the names, modules, calls and magics that raise each kind."""
+reads beside it, and the names, modules, calls and magics that raise each kind. What answers exercises (the packages
+and names of the kind ``package``) is the table of exercises' (:mod:`fusionlab.checks.exercises`)."""
 from __future__ import annotations
 
 import re
+
+from fusionlab.checks import exercises
 
 # Names every lab binds in its locked setup cell (aliases of modules) even when the scanner cannot see an import.
 MODULE_NAMES = {"np", "numpy", "plt", "matplotlib", "sp", "sympy", "scipy", "fusionlab", "builtins", "sys", "os",
@@ -60,9 +63,11 @@ MODULE_KINDS = {  # importing any of these (or a submodule) is flagged
     "codeop": "exec", "marshal": "exec", "types": "reflection", "inspect": "reflection", "gc": "reflection",
     "atexit": "sys-hook", "threading": "thread", "_thread": "thread", "sched": "thread", "asyncio": "thread",
     "shutil": "file", "tempfile": "file", "IPython": "ipython", "ipykernel": "ipython", "unittest": "reflection",
-    "concurrent": "process", "ahrs": "package", "filterpy": "package",
+    "concurrent": "process",
+    **{package: "package" for package in exercises.PACKAGES},   # packages whose functions answer exercises
 }
-ANSWERING_NAMES = {"Rotation": "package", "q_prod": "package", "q2R": "package"}  # names that answer exercises
+# names that answer exercises (scipy's Rotation, ahrs's q_prod ...), from the table of exercises
+ANSWERING_NAMES = {dotted.rsplit(".", 1)[-1]: "package" for dotted in exercises.ANSWERING}
 OS_CALLS = {"system": "process", "popen": "process", "fork": "process", "forkpty": "process", "kill": "process",
             "killpg": "process", "spawnl": "process", "spawnv": "process", "spawnve": "process", "spawnlp": "process",
             "execv": "process", "execve": "process", "execl": "process", "execlp": "process", "execvp": "process",

@@ -10,7 +10,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:  # the instructor tools in grading/ import as a package, however pytest is started
+# The instructor tools in grading/ import as a package, however pytest is started. `pip install -e .` maps grading
+# too (pyproject.toml), but to the checkout it ran in, and a venv installed before it did not: this checkout's first.
+if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 if str(ROOT / "tests") not in sys.path:  # the tests' shared helpers (numeric_helpers, longrun_record) import by name
     sys.path.insert(0, str(ROOT / "tests"))

@@ -324,3 +324,34 @@ def test_make_test_in_the_release_catches_a_crash_in_provided_code(built):
         assert "cell 1" not in run.stdout and "cell 2" not in run.stdout  # unfinished exercise, and what follows
     finally:
         shutil.rmtree(lab)
+
+
+def _packages(project):
+    """(packages, package_dir, whether an editable install is a plain .pth) as setuptools reads ``project``."""
+    import warnings
+
+    from setuptools.command import editable_wheel
+    from setuptools.config.pyprojecttoml import apply_configuration
+    from setuptools.dist import Distribution
+    here = os.getcwd()
+    os.chdir(project)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")                    # [tool.setuptools] in pyproject.toml is "beta"
+            dist = apply_configuration(Distribution(), "pyproject.toml")
+    finally:
+        os.chdir(here)
+    return (sorted(dist.packages), dist.package_dir,
+            editable_wheel._simple_layout(dist.packages, dist.package_dir, str(project)))
+
+
+def test_pip_install_e_installs_the_library_and_the_grading_tools_and_the_release_only_the_library(tmp_path):
+    packages, package_dir, _ = _packages(ROOT)
+    assert {"fusionlab", "fusionlab.checks", "grading", "grading.capstone"} <= set(packages)
+    assert not [p for p in packages if p.startswith("grading.student")], "the release's templates are no package"
+    assert package_dir.get("fusionlab") == "lib/fusionlab" and "grading" not in package_dir    # ./grading
+    shutil.copy(ROOT / "pyproject.toml", tmp_path)                 # the release ships it, and lib/ but no grading/
+    shutil.copytree(ROOT / "lib", tmp_path / "lib", ignore=shutil.ignore_patterns("__pycache__"))
+    packages, package_dir, plain = _packages(tmp_path)
+    assert [p for p in packages if not p.startswith("fusionlab")] == [] and "fusionlab" in packages
+    assert plain, "the student's editable install stays a .pth to lib/"

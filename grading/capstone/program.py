@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 
 from fusionlab.capstone import SENSORS
+from fusionlab.checks import exercises
 from grading import boxlib
 from grading.cells import nbg, parse, prune, python_of
 
@@ -63,7 +64,7 @@ IMPLAUSIBLY_CLOSE = "implausibly close to the optical reference"
 FILTER_MODULES = ("estimators", "bench", "freescale", "freescale_fast", "dcm_filter", "correlation", "gfimu_ekf",
                   "gpsins")
 FILE_MODULES = ("datasets", "spreadsheet")
-HIDDEN_PACKAGES = ("ahrs", "vqf", "imufusion", "filterpy")
+HIDDEN_PACKAGES = exercises.hidden_packages(LAB)   # the filter's packages in the table of exercises, and every box's
 # What a placeholder still has, as no-ops written here (none of the library's code): what the library and the
 # lab's setup cell touch when they are imported. fusionlab.checks hands datasets.DataMissing to IPython's error
 # handler when it is imported (the box runs the cells in IPython) and asks for missing_trials() when a cell fails

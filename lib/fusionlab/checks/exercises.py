@@ -6,12 +6,15 @@ Each :class:`Exercise` states once what every part of the course needs to know a
 * the grading tools' judge takes ``forbid`` out of the student's process while the exercise's hidden test runs
   (each is a stub in the library copy the student's code gets), and scores the test with ``points``;
 * the integrity report flags an answer that names one of ``forbid``;
-* the red-team tests check that calling the first of ``forbid`` (the reference) scores nothing;
-* the capstone's grader (``grading/capstone/``) names any use of its exercise's ``loaders`` in the code it runs.
+* the red-team tests check that calling the reference (one of ``forbid``) scores nothing;
+* the capstone's grader (``grading/capstone/``) names any use of its exercise's ``loaders`` in the code it runs;
+* the box that runs an exercise holds none of its ``packages``, nor those :data:`PACKAGES` says no box holds
+  (:func:`hidden_packages`); the integrity report flags any import of :data:`PACKAGES` and any use of
+  :data:`ANSWERING`.
 
 The hidden test itself (its inputs and comparisons) is the exercise's test cell in the instructor's notebook,
-``exN_tests``, as nbgrader keeps it; a test of the suite checks that each test cell names exactly these references and
-points, so that adding an exercise means one entry here and its cells.
+``exN_tests``, as nbgrader keeps it; ``make labs`` stamps this table's points and ``forbid`` into it
+(``grading/stamp.py``), so that adding an exercise means one entry here and its cells.
 
 ``forbid`` holds dotted names: ``"kalman.update"`` is ``fusionlab.kalman.update``, other packages by their full name
 (``"numpy.arctan2"``, ``"filterpy.kalman.predict"``).
@@ -20,7 +23,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Exercise", "EXERCISES", "of_lab", "by_check", "loaders", "resolve"]
+__all__ = ["Exercise", "EXERCISES", "PACKAGES", "ANSWERING", "of_lab", "by_check", "loaders", "hidden_packages",
+           "qualified", "resolve"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +36,10 @@ class Exercise:
     the grader's scan of the code names any use of one of them as reaching around the imports. The scan reads names
     written in the code only; the grader's box, which holds none of the library's filters, is what keeps a filter
     out of reach.
+
+    ``packages`` (empty but for the capstone's filter) names packages that hold a published answer to the whole
+    exercise (VQF's filter, ahrs's): the box that runs it has none of them (importing one raises ImportError there)
+    and the capstone's grader names an import of one as calling a reference filter.
     """
 
     lab: str
@@ -41,6 +49,7 @@ class Exercise:
     check: str
     forbid: tuple
     loaders: tuple = ()
+    packages: tuple = ()
 
     @property
     def grade_id(self):
@@ -194,7 +203,8 @@ EXERCISES = (
     Exercise('13_capstone', 2, 1, ('estimate',), 'check_capstone_filter',   # valid and causal; 10 more on the
              (),                                                             # leaderboard (grading/capstone/)
              loaders=('importlib', '_imp', '_frozen_importlib', '_frozen_importlib_external', 'zipimport', 'runpy',
-                      'pkgutil.resolve_name', 'pydoc', 'timeit', 'ctypes', '_ctypes', 'cffi')),
+                      'pkgutil.resolve_name', 'pydoc', 'timeit', 'ctypes', '_ctypes', 'cffi'),
+             packages=('ahrs', 'vqf', 'imufusion', 'filterpy')),
     # 14_phone_imu
     Exercise('14_phone_imu', 1, 1, ('my_gyro_bias',), 'check_phone_gyro_bias',
              ('calibration.gyro_bias_from_rest',)),
@@ -203,6 +213,36 @@ EXERCISES = (
     Exercise('14_phone_imu', 3, 2, ('my_rotation_angle_deg',), 'check_rotation_angle',
              ('rotations.quat_angle_between',)),
 )
+
+#: What answers exercises of many labs beyond each one's ``forbid``: packages whose functions do (ahrs's quaternion
+#: products and DCMs, filterpy's Kalman steps), each with where it is while a lab is graded: ``"absent"`` from every
+#: lab's box (importing it there raises ImportError), or ``"kept"`` (a lab's setup cell imports filterpy; the
+#: functions of it that answer an exercise are stubs while that exercise is graded, through its ``forbid``). The
+#: integrity report flags any import of one.
+PACKAGES = {"ahrs": "absent", "filterpy": "kept"}
+
+#: Classes and functions of other packages that answer exercises, by dotted name (scipy's ``Rotation``, ahrs's
+#: quaternion product and DCM): the integrity report flags any use of their names.
+ANSWERING = ("scipy.spatial.transform.Rotation", "ahrs.common.orientation.q_prod", "ahrs.common.orientation.q2R")
+
+
+def hidden_packages(lab=None):
+    """The packages absent from the box that grades ``lab``, each once: those :data:`PACKAGES` keeps out of every
+    lab's box, then the ``packages`` of the lab's exercises (with no ``lab``: those of every box).
+
+    Parameters
+    ----------
+    lab : str, optional
+        A lab's folder name, e.g. ``"13_capstone"``.
+
+    Returns
+    -------
+    tuple of str
+        Top-level package names (``"ahrs"``).
+    """
+    every = [name for name, where in PACKAGES.items() if where == "absent"]
+    rows = of_lab(lab) if lab is not None else ()
+    return tuple(dict.fromkeys([*every, *(name for e in rows for name in e.packages)]))
 
 
 def of_lab(lab):
@@ -257,20 +297,31 @@ def loaders(lab=None):
     return tuple(dict.fromkeys(name for e in rows for name in e.loaders))
 
 
-def resolve(dotted):
-    """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
-    packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
-    there."""
+def qualified(dotted):
+    """The module and the attribute path a dotted name of the table stands for: ``"kalman.update"`` is
+    ``("fusionlab.kalman", "update")``, other packages by their full name (``"filterpy.kalman.KalmanFilter.predict"``
+    is ``("filterpy.kalman", "KalmanFilter.predict")``). Raises ImportError for a name whose module is not there."""
     import importlib
 
     parts = dotted.split(".")
     for i in range(len(parts) - 1, 0, -1):
         for prefix in ("fusionlab.", ""):
             try:
-                obj = importlib.import_module(prefix + ".".join(parts[:i]))
+                importlib.import_module(prefix + ".".join(parts[:i]))
             except ImportError:
                 continue
-            for attr in parts[i:]:
-                obj = getattr(obj, attr)
-            return obj
+            return prefix + ".".join(parts[:i]), ".".join(parts[i:])
     raise ImportError(dotted)
+
+
+def resolve(dotted):
+    """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
+    packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
+    there."""
+    import importlib
+
+    module, path = qualified(dotted)
+    obj = importlib.import_module(module)
+    for attr in path.split("."):
+        obj = getattr(obj, attr)
+    return obj
