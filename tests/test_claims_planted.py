@@ -1,7 +1,8 @@
 """The claims and citation tests catch the wrong numbers an outside audit planted, each in a temporary copy of a
 solution notebook: a number backed only by a figure's size, a number printed for another trial, another column of the
 same table, a count of trials changed, a seed-cited sentence given a number neither printed nor in the seed, and a
-swapped section number; and, in Lab 14's Part D, another filter's number and one printed nowhere. The unedited notebook has no such failure; the edited copy has exactly the planted one.
+swapped section number; and, in Lab 14's Part D, another filter's number and one printed nowhere. The unedited
+notebook has no such failure; the edited copy has exactly the planted one.
 """
 from __future__ import annotations
 
