@@ -33,8 +33,6 @@ import builtins
 import contextlib
 import copy
 import dataclasses
-import json
-import os
 import re
 import time
 import types
@@ -423,7 +421,7 @@ def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
 
     ``boxes`` starts the boxes (:mod:`grading.launcher`; by default in this process)."""
     t0 = time.monotonic()
-    boxes = launcher.LocalBoxes(lab, student, slot) if boxes is None else boxes
+    boxes = launcher.LabBoxes(lab, student, slot) if boxes is None else boxes
     verdict = Verdict()
     base = lab.base()
     stopped = set()
@@ -467,24 +465,14 @@ def _close(session, verdict):
 JUDGE_MEMORY_BYTES = 3 << 30
 
 
-def _judge_child(conn, lab, submitted, student, slot, memory_bytes, system):
-    import resource
+def _judge_child(lab, submitted, student, slot, system):
+    """The judge's process (:func:`judge_apart`): as root, the boxes' launcher stays root and this process does not."""
     sandbox.system_files(known=system)
-    # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
-    resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
-    boxes = None
+    boxes = launcher.split(launcher.LabBoxes(lab, student, slot), slot, read_all=lab.judge_reads_all)
     try:
-        boxes = launcher.split(lab, student, slot)    # as root: the boxes' launcher stays root, this process does not
-        verdict = judge(lab, submitted, student, slot, boxes)
-        verdict.judge_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        verdict.judge_uid = os.getuid()
-        conn.send_bytes(json.dumps({"verdict": dataclasses.asdict(verdict)}).encode())
-    except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
-        conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
+        return {"verdict": dataclasses.asdict(judge(lab, submitted, student, slot, boxes))}
     finally:
-        if boxes is not None:
-            boxes.close()                             # every box ended before the verdict is read
-        conn.close()
+        boxes.close()                                 # every box ended before the verdict is read
 
 
 def _imported_modules(source):
@@ -504,34 +492,18 @@ def _imported_modules(source):
 
 
 def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES) -> Verdict:
-    """:func:`judge`, in a process of its own with ``memory_bytes`` of address space, started from a clean server
-    process (not forked from this one's threads). What comes back is JSON: the verdict's numbers and texts."""
-    import multiprocessing
-    ctx = multiprocessing.get_context("forkserver")
+    """:func:`judge`, in a process of its own with ``memory_bytes`` of address space (:func:`grading.launcher.apart`;
+    as root, not root: :func:`grading.launcher.split`). What comes back is JSON: the verdict's numbers and texts."""
     # the server imports once what every judge process needs: this module and what the lab's setup cell imports
     # (matplotlib, the library's modules ...), which each process would otherwise import again (a second or so)
-    ctx.set_forkserver_preload(["grading.judge", *_imported_modules(lab.setup_source)])
-    receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_judge_child, args=(send, lab, submitted, student, slot, memory_bytes,
-                                                   sandbox.system_files()))
-    child.start()
-    send.close()
-    try:
-        reply = json.loads(receive.recv_bytes())
-    except EOFError:
-        child.join()
-        raise RuntimeError(f"the judge's process for {student} ended without a verdict (exit status "
-                           f"{child.exitcode})") from None
-    finally:
-        receive.close()
-    child.join()
-    if "error" in reply:
-        raise RuntimeError(f"the judge failed in its own process: {reply['error']}")
+    reply = launcher.apart(_judge_child, (lab, submitted, student, slot, sandbox.system_files()),
+                           preload=["grading.judge", *_imported_modules(lab.setup_source)],
+                           memory_bytes=memory_bytes, who=student)
     d = reply["verdict"]
     return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
                    cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
-                   largest_reply=int(d["largest_reply"]), judge_mb=float(d["judge_mb"]),
-                   judge_uid=int(d["judge_uid"]))
+                   largest_reply=int(d["largest_reply"]), judge_mb=float(reply["process"]["mb"]),
+                   judge_uid=int(reply["process"]["uid"]))
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"

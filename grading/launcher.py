@@ -13,8 +13,9 @@ of the lab's test cells (seeded with the student's own files or with none), say 
 and end one (stop it, remove its folder). It hands the judge the two ends of the box's pipes (``SCM_RIGHTS``) and
 answers nothing else; when the judge closes the socket (or dies), it ends every box it started and exits.
 
-Not as root there is nothing to give up: :class:`LocalBoxes` starts the boxes in the judge's own process, with the
-same two calls.
+Not as root there is nothing to give up: the boxes start in the judge's own process, with the same calls. The
+capstone's grader uses the same split (:class:`grading.capstone.runner.CapstoneBoxes`), and both run each student in
+a process of its own (:func:`apart`).
 """
 from __future__ import annotations
 
@@ -38,26 +39,34 @@ def judge_uid(slot):
     return JUDGE_FIRST_UID + slot
 
 
-def _start(lab, student, slot, gid, files):
-    """Start the box of test ``gid`` for ``student`` (its folder seeded with the submission's files when ``files``):
-    (process, input, output) as :class:`grading.client.Box` takes them."""
-    if gid not in lab.tests:
-        raise ValueError(f"expected a test cell of {lab.lab}, got {gid!r}")
-    uid = sandbox.box_uid(slot)
-    source = lab.course / "submitted" / student / lab.lab
-    work = sandbox.private_folder(source if files and source.is_dir() else None, lab.scratch, uid)
-    return client.start(lab.box_command(gid, work, uid), work=work)
-
-
-class LocalBoxes:
-    """The boxes of one student's judge, started in the judge's own process (not root, or a test)."""
+class LabBoxes:
+    """The boxes of one student's judge: the box of each test cell of ``lab`` (its key: the cell's grade id), its
+    folder seeded with the student's submitted files or with none. Started in this process by :meth:`start`; as
+    root, :func:`split` hands the same object to the launcher, which calls :meth:`open`."""
 
     def __init__(self, lab, student, slot):
         self.lab, self.student, self.slot = lab, student, slot
 
-    def start(self, gid, files=True):
-        """A :class:`grading.client.Box` running the box of test ``gid``."""
-        return client.Box(_start(self.lab, self.student, self.slot, gid, files))
+    def keys(self):
+        return set(self.lab.tests)
+
+    def prepare(self):
+        """What a box needs that the judge, no longer root, could not make: each test's library copy."""
+        for gid in self.lab.tests:
+            self.lab.box_root(gid)
+
+    def open(self, key, files):
+        """Start the box of test ``key``: (process, input, output) as :class:`grading.client.Box` takes them."""
+        if key not in self.keys():
+            raise ValueError(f"expected a test cell of {self.lab.lab}, got {key!r}")
+        uid = sandbox.box_uid(self.slot)
+        source = self.lab.course / "submitted" / self.student / self.lab.lab
+        work = sandbox.private_folder(source if files and source.is_dir() else None, self.lab.scratch, uid)
+        return client.start(self.lab.box_command(key, work, uid), work=work)
+
+    def start(self, key, files=True):
+        """A :class:`grading.client.Box` running the box ``key``, started in this process."""
+        return client.Box(self.open(key, files))
 
     def close(self):
         pass
@@ -65,7 +74,7 @@ class LocalBoxes:
 
 # -- as root: the launcher and the judge's end of its socket ------------------------------------------------------
 
-def _serve(sock, lab, student, slot):
+def _serve(sock, maker):
     """The launcher's loop: answer the judge's requests until it closes the socket; then end every box."""
     boxes = {}
     try:
@@ -84,7 +93,9 @@ def _serve(sock, lab, student, slot):
                 (what, arg), = request.items()
                 if what == "start" and isinstance(arg, list) and len(arg) == 2 and isinstance(arg[0], str) \
                         and isinstance(arg[1], bool):
-                    process, stdin, stdout = _start(lab, student, slot, arg[0], arg[1])
+                    if arg[0] not in maker.keys():
+                        raise ValueError(f"expected a box of {sorted(maker.keys())}, got {arg[0]!r}")
+                    process, stdin, stdout = maker.open(arg[0], arg[1])
                     n = len(boxes)
                     boxes[n] = (process, stdin, stdout)
                     reply, fds = {"box": n}, [stdin.fileno(), stdout.fileno()]
@@ -92,7 +103,7 @@ def _serve(sock, lab, student, slot):
                     process = boxes[arg][0]
                     reply = {"status": process.poll() if what == "poll" else process.end()}
                 else:
-                    raise ValueError(f"expected start [gid, files], poll n or end n, got {what!r}")
+                    raise ValueError(f"expected start [key, files], poll n or end n, got {what!r}")
             except Exception as exc:  # noqa: BLE001 -- a request it cannot answer is said, and the loop goes on
                 reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
             socket.send_fds(sock, [json.dumps(reply).encode()], fds)
@@ -121,7 +132,7 @@ class _Remote:
 
 
 class RemoteBoxes:
-    """The judge's end of the launcher's socket: the boxes it starts, as :class:`LocalBoxes` would."""
+    """The judge's end of the launcher's socket: the boxes it starts, as :meth:`LabBoxes.start` would."""
 
     def __init__(self, sock, launcher_pid):
         self.sock, self.launcher_pid = sock, launcher_pid
@@ -138,8 +149,8 @@ class RemoteBoxes:
             raise RuntimeError(f"the launcher could not do {request}: {reply['error']}")
         return (reply, got) if fds else reply
 
-    def start(self, gid, files=True):
-        reply, fds = self.ask({"start": [gid, bool(files)]}, fds=2)
+    def start(self, key, files=True):
+        reply, fds = self.ask({"start": [key, bool(files)]}, fds=2)
         if len(fds) != 2:
             raise RuntimeError(f"the launcher sent {len(fds)} pipe ends for a box, expected 2")
         return client.Box((_Remote(self, reply["box"]), os.fdopen(fds[0], "wb"), os.fdopen(fds[1], "rb")))
@@ -157,7 +168,7 @@ def drop_root(uid, read_all=False):
     """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing it
     runs can gain a privilege back (a set-user-id program runs as the caller). With ``read_all`` it keeps one
     capability, ``CAP_DAC_READ_SEARCH`` (read any file, list any folder; no writing, no signals): for a machine where
-    Python or the course sits in a folder only root may read (``/root/.pyenv``), from which the judge imports."""
+    Python or the course sits in a folder only root may read (Python in root's home), from which the judge imports."""
     libc = ctypes.CDLL(None, use_errno=True)
 
     def prctl(*args):
@@ -234,25 +245,65 @@ def unreadable(slot, paths=None):
     return _in_dropped_child(slot, False, first_refused) or None
 
 
-def split(lab, student, slot):
-    """The boxes of one student's judge. As root: fork the launcher, and run the rest of this process as
-    :func:`judge_uid` (call it in a process of its own: :func:`grading.judge.judge_apart`). Otherwise
-    :class:`LocalBoxes`."""
+def split(maker, slot, read_all=False):
+    """The boxes of one student (``maker``: :class:`LabBoxes`, or the capstone's). As root: fork the launcher, which
+    starts them with ``maker.open``, and run the rest of this process as :func:`judge_uid` (``read_all``: keeping
+    ``CAP_DAC_READ_SEARCH``; call it in a process of its own: :func:`apart`); returns the judge's end. Otherwise
+    ``maker`` itself, which starts them here."""
     if os.geteuid() != 0:
-        return LocalBoxes(lab, student, slot)
-    for gid in lab.tests:                                      # made by root: the judge cannot write the scratch
-        lab.box_root(gid)
+        return maker
+    maker.prepare()                                            # made by root: the judge cannot write the scratch
     ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     pid = os.fork()
     if pid == 0:                                               # the launcher: root, answers requests, then exits
         status = 0
         try:
             ours.close()
-            _serve(theirs, lab, student, slot)
+            _serve(theirs, maker)
         except BaseException:  # noqa: BLE001 -- nothing of a failed launcher may run on as the judge
             status = 1
         finally:
             os._exit(status)
     theirs.close()
-    drop_root(judge_uid(slot), read_all=getattr(lab, "judge_reads_all", False))
+    drop_root(judge_uid(slot), read_all=read_all)
     return RemoteBoxes(ours, pid)
+
+
+def _apart_child(conn, target, args, memory_bytes):
+    import resource
+    # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
+    resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    try:
+        out = target(*args)
+        out["process"] = {"mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "uid": os.getuid()}
+        conn.send_bytes(json.dumps(out).encode())
+    except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
+        conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
+    finally:
+        conn.close()
+
+
+def apart(target, args, *, preload, memory_bytes, who):
+    """``target(*args)`` (a module's function returning a dict of plain data) in a process of its own with
+    ``memory_bytes`` of address space, started from a clean server process (not forked from this one's threads),
+    which imports ``preload`` once for all. What comes back is that dict as JSON, with ``"process"``: the most
+    memory the process held (MB) and the user it ran as. ``who`` names the student in an error."""
+    import multiprocessing
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(list(preload))
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_apart_child, args=(send, target, args, memory_bytes))
+    child.start()
+    send.close()
+    try:
+        reply = json.loads(receive.recv_bytes())
+    except EOFError:
+        child.join()
+        raise RuntimeError(f"the process grading {who} ended without a result (exit status {child.exitcode})") \
+            from None
+    finally:
+        receive.close()
+    child.join()
+    if "error" in reply:
+        raise RuntimeError(f"grading {who} failed in its own process: {reply['error']}")
+    return reply

@@ -1098,7 +1098,8 @@ def test_every_bad_argument_is_named_or_harmless(module):
 # kalman.predict, are covered above, and tests/test_kalman.py asserts the two give the same numbers.
 UNCHECKED = {kalman.update_step, kalman.predict_step,
              gpsins.euler_ins_fx,      # the UKF's fx, run 2n times a sample: run_euler_ukf checks at its door
-             gfimu_ekf.table53_monte_carlo}   # a whole experiment (minutes a call): its filters are covered above
+             gfimu_ekf.table53_monte_carlo,   # a whole experiment (minutes a call): its filters are covered above
+             signals.Sampled}          # a base class with no constructor: BroadTrial and Recording check their input
 
 
 def test_every_public_function_is_covered():

@@ -13,6 +13,7 @@ import dataclasses
 import html
 import json
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -23,7 +24,7 @@ import nbformat
 import numpy as np
 import pytest
 
-from grading import capstone, integrity, sandbox
+from grading import capstone, integrity, launcher, sandbox
 from fusionlab import datasets
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -306,6 +307,23 @@ def test_the_starter_and_the_good_filter_are_causal_clean_and_score_as_the_rubri
     print("stand-in mean scored RMSE (9D total, 6D inclination), deg:",
           {n: round(capstone.mean_scored(r.trials), 2) for n, r in results.items()},
           {n: round(capstone.mean_scored(r.trials), 2) for n, r in refs.items() if not n.startswith("_")})
+
+
+@pytest.mark.slow
+@needs_box
+def test_each_student_is_graded_in_a_process_of_its_own_that_is_not_root(graded):
+    """As root, each student's grading process gives up root before any box replies (grading.launcher): a reply
+    the process misread could not write the course or signal a box."""
+
+    results, _, _ = graded
+    ran = [r for r in results.values() if r.process]
+    assert len(ran) == len(results) - 1 and "unreadable" not in [r.name for r in ran], sorted(results)
+    users = {r.process["uid"] for r in ran}
+    if os.geteuid() == 0:
+        assert users <= {launcher.judge_uid(s) for s in range(sandbox.MAX_SLOTS)} and 0 not in users, users
+    else:
+        assert users == {os.getuid()}, users
+    assert all(0 < r.process["mb"] < 4096 for r in ran), [r.process for r in ran]
 
 
 @pytest.mark.slow
@@ -901,7 +919,7 @@ class _InProcess:
     made again for every fresh box (nothing survives); the limits the grader asked for are kept in ``made``."""
     made = []
 
-    def __init__(self, make, cells, course, scratch, slot=0, limits=None, sensors="9D"):
+    def __init__(self, make, cells, course, scratch, slot=0, limits=None, sensors="9D", boxes=None):
         self.make, self.sensors, self.limits = make, sensors, limits
         self.estimate, self.cell_errors, self.restarts, self.fresh = make(), {}, 0, 0
         _InProcess.made.append(self)

@@ -75,8 +75,8 @@ def test_judge_uids_are_neither_root_nor_a_box_user():
 
 def test_not_as_root_the_boxes_start_in_the_judges_own_process(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "geteuid", lambda: 1000)
-    boxes = launcher.split(_fake_lab(tmp_path), "ana", 3)
-    assert isinstance(boxes, launcher.LocalBoxes) and os.getuid() == os.getuid()
+    boxes = launcher.split(launcher.LabBoxes(_fake_lab(tmp_path), "ana", 3), 3)
+    assert isinstance(boxes, launcher.LabBoxes) and os.getuid() == os.getuid()
 
 
 @pytest.fixture
@@ -126,7 +126,7 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
     lab = _fake_lab(course)
 
     def body():
-        boxes = launcher.split(lab, "ana", 4)
+        boxes = launcher.split(launcher.LabBoxes(lab, "ana", 4), 4)
         box = boxes.start("ex1_tests")
         deadline = time.monotonic() + 20
         box_pid = box.receive(deadline)
@@ -154,7 +154,7 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
     got = _in_child(body)
     assert got["uid"] == launcher.judge_uid(4) and got["echoed"] == {"a": [1, 2.5]}, got
     assert all(r and "the launcher could not do" in r for r in got["refused"]), got["refused"]
-    assert "expected a test cell of 01_x, got 'ex9_tests'" in got["refused"][0], got["refused"][0]
+    assert "expected a box of ['ex1_tests'], got 'ex9_tests'" in got["refused"][0], got["refused"][0]
     assert got["running"] is None and got["status"] == -9, got
     assert len(got["work"]) == 1 and got["after"] == [], "ending a box removes its folder"
     assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), \
@@ -169,7 +169,7 @@ def test_a_judge_that_dies_leaves_no_box_behind(course):
     pid = os.fork()
     if pid == 0:                                        # the judge: starts a box, says its pid and dies at once
         os.close(r)
-        boxes = launcher.split(lab, "ana", 2)
+        boxes = launcher.split(launcher.LabBoxes(lab, "ana", 2), 2)
         box = boxes.start("ex1_tests")
         os.write(w, json.dumps([box.receive(time.monotonic() + 20), boxes.launcher_pid]).encode())
         os._exit(1)

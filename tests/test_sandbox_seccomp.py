@@ -1,4 +1,4 @@
-"""Boxes share no kernel state they could signal through (``grading.sandbox.box_filter``, installed by ``INSIDE``).
+"""Boxes share no kernel state they could signal through (``grading.seccomp.box_filter``, installed by ``INSIDE``).
 
 The key store: keyrings belong to a user id, not to a process tree, and outlive the processes that fill them: every
 box of one slot runs as one user, so a key stored by one box (a capstone filter's look-ahead result) could be read
@@ -33,7 +33,7 @@ import uuid
 import pytest
 
 from conftest import ROOT
-from grading import sandbox
+from grading import sandbox, seccomp
 
 LAB = "02_kalman_falling_body"
 NEEDS_BWRAP = pytest.mark.skipif(not shutil.which("bwrap"), reason="needs bubblewrap (apt-get install bubblewrap)")
@@ -217,7 +217,7 @@ def _verdict(program, arch, nr, *args):
 
 
 def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_x86_64():
-    program = sandbox.box_filter("x86_64")
+    program = seccomp.box_filter("x86_64")
     assert len(program) % 8 == 0 and 6 * 8 <= len(program) <= 48 * 8, len(program)
     assert struct.unpack("=HBBI", program[:8]) == (0x20, 0, 0, 4), "the first instruction loads the arch"
     for nr in KEY_CALLS["x86_64"]:
@@ -231,7 +231,7 @@ def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_x86_64():
 
 
 def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_aarch64():
-    program = sandbox.box_filter("aarch64")
+    program = seccomp.box_filter("aarch64")
     for nr in KEY_CALLS["aarch64"]:
         assert _verdict(program, AARCH64, nr) == REFUSE, nr
     for nr in (56, 63, 64, 93, 98, 172, 216, 220, 221, 222, 248, 249, 250):  # openat, read, write, exit, futex...
@@ -242,7 +242,7 @@ def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_aarch64()
 
 @pytest.mark.parametrize("machine", ["x86_64", "aarch64"])
 def test_the_filter_refuses_each_page_cache_call_and_allows_plain_reads(machine):
-    program = sandbox.box_filter(machine)
+    program = seccomp.box_filter(machine)
     arch, column = {"x86_64": (X86_64, 0), "aarch64": (AARCH64, 1)}[machine]
     for name, numbers in CACHE_CALLS.items():
         assert _verdict(program, arch, numbers[column], 3, 0, 4096) == REFUSE, name
@@ -271,7 +271,7 @@ def test_the_filter_refuses_each_page_cache_call_and_allows_plain_reads(machine)
 
 @pytest.mark.parametrize("machine", ["x86_64", "aarch64"])
 def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
-    program = sandbox.box_filter(machine)
+    program = seccomp.box_filter(machine)
     arch, column = {"x86_64": (X86_64, 0), "aarch64": (AARCH64, 1)}[machine]
     unshare, setns, clone, clone3 = (NS_CALLS[name][column] for name in ("unshare", "setns", "clone", "clone3"))
     for name, flag in CLONE_NEW.items():
@@ -288,11 +288,11 @@ def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
 
 
 def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
-    table = sandbox.REFUSED_SYSCALLS
+    table = seccomp.REFUSED_SYSCALLS
     assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS,
                           "unshare", "setns", "clone"}
     assert table["clone"] == (56, 220, (0, sum(CLONE_NEW.values()))), table["clone"]
-    assert sandbox.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"]}
+    assert seccomp.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"]}
     assert {name: table[name] for name in CACHE_CALLS} == {name: (*numbers, None) for name, numbers in
                                                           CACHE_CALLS.items()}
     assert [table[name] for name in ("add_key", "request_key", "keyctl")] == \
@@ -300,7 +300,7 @@ def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     assert table["madvise"] == (28, 233, (2, (MADV_COLD, MADV_PAGEOUT))), table["madvise"]
     assert (table["preadv2"], table["pwritev2"]) == ((327, 286, (5, "any flag")), (328, 287, (5, "any flag")))
     for name in ("read", "pread64", "readv", "preadv", "readahead", "mmap", "munmap"):
-        assert name not in sandbox.REFUSED_SYSCALLS, name
+        assert name not in seccomp.REFUSED_SYSCALLS, name
 
 
 def test_the_numbers_are_those_of_the_kernel_headers_here():
@@ -313,7 +313,7 @@ def test_the_numbers_are_those_of_the_kernel_headers_here():
             continue
         text = open(path).read()
         defined = dict(re.findall(r"#define (__NR\w+)\s+(\w+)", text))
-        for name, numbers in {**sandbox.REFUSED_SYSCALLS, **sandbox.MISSING_SYSCALLS}.items():
+        for name, numbers in {**seccomp.REFUSED_SYSCALLS, **seccomp.MISSING_SYSCALLS}.items():
             value = defined.get(f"__NR_{name}")
             while value in defined:                           # __NR_fadvise64 is __NR3264_fadvise64 on aarch64
                 value = defined[value]
@@ -326,10 +326,10 @@ def test_the_numbers_are_those_of_the_kernel_headers_here():
 
 def test_a_machine_without_a_filter_is_refused_by_name_and_stops_grading(monkeypatch):
     for machine in ("riscv64", "i686", "aarch64_be", "x86_64 (a 32-bit Python)"):
-        with pytest.raises(sandbox.UnsupportedMachine, match=r"expected a machine of x86_64 or aarch64, this one is"):
-            sandbox.box_filter(machine)
-    monkeypatch.setattr(sandbox, "_native_machine", lambda: "riscv64")
-    with pytest.raises(sandbox.UnsupportedMachine, match="riscv64"):
+        with pytest.raises(seccomp.UnsupportedMachine, match=r"expected a machine of x86_64 or aarch64, this one is"):
+            seccomp.box_filter(machine)
+    monkeypatch.setattr(seccomp, "_native_machine", lambda: "riscv64")
+    with pytest.raises(seccomp.UnsupportedMachine, match="riscv64"):
         sandbox.bwrap_command(["python", "box.py"], course=ROOT, lab=LAB, lib=ROOT / "lib", work=str(ROOT))
     said = sandbox.box_problem(str(ROOT), LAB, "/nonexistent", [0])
     assert said.startswith("grading cannot be made safe on this machine (expected a machine of x86_64 or aarch64, "
@@ -341,7 +341,7 @@ def test_the_box_is_handed_this_machines_filter(tmp_path):
     work = sandbox.private_folder(None, tmp_path)
     args = sandbox.bwrap_command(["python", "box.py"], course=tmp_path, lab=LAB, lib=tmp_path, work=work)
     env = {args[i + 1]: args[i + 2] for i, a in enumerate(args) if a == "--setenv"}
-    assert bytes.fromhex(env["FUSIONLAB_BOX_SECCOMP"]) == sandbox.box_filter(os.uname().machine)
+    assert bytes.fromhex(env["FUSIONLAB_BOX_SECCOMP"]) == seccomp.box_filter(os.uname().machine)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -400,7 +400,7 @@ def test_a_secret_stored_by_one_box_is_not_found_by_the_next_box_of_the_slot(tmp
     if os.geteuid() == 0:                                    # the channel is real here: no filter, no refusal
         _keys_work_outside_a_box()
         with monkeypatch.context() as m:
-            m.setattr(sandbox, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
+            m.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
             stored = _run_probe(store(["USER"]), tmp_path=tmp_path, slot=slot)
             assert stored["USER"][0] > 0, f"without the filter the first box stores its key: {stored}"
             found = _run_probe(look, tmp_path=tmp_path, slot=slot)
@@ -474,7 +474,7 @@ def test_a_page_cache_bit_set_by_one_box_is_not_seen_by_another(tmp_path, monkey
     """
     with sandbox.claimed_slots(2) as (a, b):
         with monkeypatch.context() as m:                      # the channel is real here: no filter, no refusal
-            m.setattr(sandbox, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
+            m.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
             assert _run_probe(clear_bit, tmp_path=tmp_path, slot=a) == {"read": 4096, "evict": [0, 0]}
             unfiltered = _run_probe(probe, tmp_path=tmp_path, slot=b)
             zero = unfiltered.pop("probe")
@@ -654,7 +654,7 @@ def test_a_box_cannot_make_a_namespace_and_still_forks_and_starts_threads(tmp_pa
 @NEEDS_BWRAP
 def test_a_box_that_cannot_install_its_filter_runs_nothing_and_is_reported(tmp_path, slot, monkeypatch):
     """A program the kernel refuses (it does not end in a return): INSIDE stops before the student's code."""
-    monkeypatch.setattr(sandbox, "box_filter", lambda: struct.pack("=HBBI", 0x20, 0, 0, 4))
+    monkeypatch.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x20, 0, 0, 4))
     run = _in_box("print('student code ran')", tmp_path=tmp_path, slot=slot)
     assert run.returncode != 0 and "student code ran" not in run.stdout, run.stdout
     assert "could not install its seccomp filter (prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER) failed: Invalid " \

@@ -14,10 +14,10 @@ from urllib.parse import quote
 import numpy as np
 
 from fusionlab.capstone import GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE, SENSORS
-from grading import sandbox
+from grading import launcher, sandbox
 
 from .program import CHEATS, LAB, box_library, model_program
-from .runner import StudentResult, gates_failed, grade_submission
+from .runner import StudentResult, gates_failed, grade_apart
 from .scoring import PUBLISHED, cached_references, mean_scored, references_of, rubric_points
 
 COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
@@ -303,7 +303,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
     os.chmod(scratch, 0o755)
     try:
         with sandbox.claimed_slots(max(1, workers)) as slots:
-            problem = sandbox.box_problem(str(course), LAB, scratch, slots)
+            problem = sandbox.box_problem(str(course), LAB, scratch, slots) or launcher.judge_problem(slots)
             if problem:
                 raise SystemExit(f"cannot grade the capstone: the sandbox does not start here.\n{problem}")
             if progress:
@@ -314,6 +314,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
             if progress:
                 print(f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB",
                       flush=True)
+            read_all = launcher.unreadable(slots[0]) is not None     # as root: the graders keep reading (see there)
             free = queue.Queue()
             for s in slots:
                 free.put(s)
@@ -324,9 +325,9 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                     nb = submissions[student]
                     if isinstance(nb, str):                 # a notebook that could not be read: why
                         return StudentResult(student, error=nb, points=rubric_points(float("nan"), False, True, 0, 0))
-                    return grade_submission(student, nb, scored, refs, course, scratch, slot=slot, seed=seed,
-                                            seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
-                                            limits=limits, cleared=student in cleared, model=model)
+                    return grade_apart(student, nb, scored, refs, course, scratch, slot=slot, read_all=read_all,
+                                       seed=seed, seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
+                                       limits=limits, cleared=student in cleared, model=model)
                 finally:
                     free.put(slot)
 
@@ -338,6 +339,11 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                           f"{SENSORS[res.sensors][:-4]} {mean_scored(res.trials):.2f} deg"
                           + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
                           + ("" if res.causal is not False else ", NOT causal"), flush=True)
+            users = sorted({r.process["uid"] for r in results if r.process})
+            if progress and users:
+                print("  each student was graded in a process of its own, as " + (
+                      "root (NOT dropped)" if 0 in users else f"user {', '.join(map(str, users))}, not root"
+                      if os.geteuid() == 0 else "the grader's own user"), flush=True)
             write_leaderboard(results, refs, scored, out, class_name, label)
             return results, refs
     finally:

@@ -14,7 +14,7 @@ import numpy as np
 from fusionlab.capstone import (CAUSAL_TOL, MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds,
                                 causal_ks, first_change, prefix_change)
 from grading import box as wire
-from grading import boxlib, client, sandbox
+from grading import boxlib, client, launcher, sandbox
 from grading.cells import bound_names, python_of
 
 from .program import (DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FUNCTION,
@@ -88,6 +88,41 @@ def invalid_message(value, n):
     return "did not return unit quaternions (norms within 1e-3 of 1)"
 
 
+class CapstoneBoxes:
+    """The capstone's boxes of one student, all alike (key :attr:`KEY`): no files, the library copy without its
+    filters (:func:`box_library`), no data. Started in this process by :meth:`start`; as root,
+    :func:`grading.launcher.split` hands the object to the launcher, which calls :meth:`open`."""
+
+    KEY = "capstone"
+
+    def __init__(self, course, scratch, slot=0, limits=None):
+        self.course, self.scratch, self.slot, self.limits = Path(course), Path(scratch), slot, limits or {}
+        self.root = box_library(scratch)
+        self.hide = boxlib.shadowed(self.root / "shadow")
+
+    def keys(self):
+        return {self.KEY}
+
+    def prepare(self):
+        pass                                            # box_library was made when this object was
+
+    def open(self, key, files=False):
+        if key != self.KEY or files:
+            raise ValueError(f"expected the capstone's box ({self.KEY!r}, no files), got {key!r}, files={files}")
+        uid = sandbox.box_uid(self.slot)
+        work = sandbox.private_folder(None, self.scratch, uid)              # empty: the box has no files
+        command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
+                                        lib=self.root / "lib", shadow=self.root / "shadow", work=work,
+                                        limits=self.limits, uid=uid, data=False, hide=self.hide)
+        return client.start(command, work=work)                            # ended with the box, folder and all
+
+    def start(self, key=KEY, files=False):
+        return client.Box(self.open(key, files))
+
+    def close(self):
+        pass
+
+
 class Runner:
     """One student's box, started again (from the notebook's cells) after a call that ran over or ended it.
 
@@ -100,15 +135,14 @@ class Runner:
     The errors of the notebook's cells are kept as the box reports them from the first box only, which runs them
     before any trial is sent; in a box started after a trial was sent, they are reported without their text."""
 
-    def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D"):
+    def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D", boxes=None):
         if sensors not in SENSORS:
             raise ValueError(f"sensors must be one of {', '.join(SENSORS)}; got {sensors!r}")
-        self.cells, self.course, self.scratch, self.slot = cells, Path(course), Path(scratch), slot
-        self.sensors = sensors
-        self.limits = limits or {}
-        self.root = box_library(scratch)
-        self.hide = boxlib.shadowed(self.root / "shadow")
-        self.box = self.work = None
+        self.cells, self.sensors = cells, sensors
+        local = CapstoneBoxes(course, scratch, slot, limits)
+        self.root, self.hide = local.root, local.hide
+        self.boxes = local if boxes is None else boxes  # as root, in a process apart: the launcher's (grade_apart)
+        self.box = None
         self.cell_errors = {}
         self.starts = 0
         self.fresh = 0                 # boxes started for one call (call_fresh): not restarts after a failure
@@ -123,12 +157,7 @@ class Runner:
     def start(self):
         self.close()
         self.starts += 1
-        uid = sandbox.box_uid(self.slot)
-        self.work = sandbox.private_folder(None, self.scratch, uid)        # empty: the box has no files
-        command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
-                                        lib=self.root / "lib", shadow=self.root / "shadow", work=self.work,
-                                        limits=self.limits, uid=uid, data=False, hide=self.hide)
-        self.box = client.Box(client.start(command, work=self.work))     # ended with the box: kill() removes it
+        self.box = self.boxes.start(CapstoneBoxes.KEY, files=False)
         errors = {}
         try:
             errors = client.run_program(self.box, self.cells, cell_seconds=SETUP_SECONDS,
@@ -198,7 +227,6 @@ class Runner:
         if self.box is not None:
             self.box.kill()
             self.box = None
-        self.work = None
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -216,6 +244,7 @@ class StudentResult:
     points: dict = field(default_factory=dict)
     error: str = ""
     sensors: str = "9D"                             # as its code declares it (declared_sensors)
+    process: dict = field(default_factory=dict)     # of the process that graded it (grade_apart): peak MB, user
 
     @property
     def total_points(self):
@@ -279,7 +308,7 @@ def causality_trial(seed, n, rng=None):
 
 
 def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0, seconds_per_sample=SECONDS_PER_SAMPLE,
-                     min_seconds=MIN_SECONDS, limits=None, cleared=False, model=None):
+                     min_seconds=MIN_SECONDS, limits=None, cleared=False, model=None, boxes=None):
     """Grade one notebook on the disguised trials ``scored``; every number is computed here.
 
     ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
@@ -301,7 +330,7 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
         res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
                          "published reference, say)?")
     runner = Runner([src for _, src in cells], course, scratch, slot,
-                    box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors)
+                    box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors, boxes=boxes)
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
     try:
@@ -409,3 +438,33 @@ def _look_for_cheats(res, r, t, refs):
         if np.max(rotations.quat_angle_between(r.q[::MATCH_STRIDE], q_ref)) < MATCH_RAD:
             res.cheats.append(("calls a reference filter", f"{t.name}: its output is {ref.name}'s to "
                                                            f"{MATCH_RAD:g} rad at every sample"))
+
+
+#: The address space of the process that grades one student (:func:`grade_apart`): the trials it scores on, and the
+#: student's quaternions, are arrays of a few MB each.
+GRADER_MEMORY_BYTES = 4 << 30
+
+
+def _graded_apart(name, nb, scored, refs, course, scratch, slot, read_all, kw):
+    """:func:`grade_submission` in the process :func:`grade_apart` starts: as root, its boxes are started by the
+    launcher and this process gives up root before any box replies."""
+    limits = box_limits(scored, kw.get("seconds_per_sample", SECONDS_PER_SAMPLE), kw.get("min_seconds", MIN_SECONDS),
+                        kw.get("limits"))
+    boxes = launcher.split(CapstoneBoxes(course, scratch, slot, limits), slot, read_all=read_all)
+    try:
+        res = grade_submission(name, nb, scored, refs, course, scratch, slot=slot, boxes=boxes, **kw)
+    finally:
+        boxes.close()
+    for r in res.trials:
+        r.q = None
+    return {"result": dataclasses.asdict(res)}
+
+
+def grade_apart(name, nb, scored, refs, course, scratch, *, slot=0, read_all=False, **kw):
+    """:func:`grade_submission` (``kw``: its keywords) in a process of its own (:func:`grading.launcher.apart`),
+    which, as root, is not root once a box has replied; what comes back is its numbers and texts."""
+    reply = launcher.apart(_graded_apart, (name, nb, scored, refs, course, scratch, slot, read_all, kw),
+                           preload=["grading.capstone.runner"], memory_bytes=GRADER_MEMORY_BYTES, who=name)
+    d = reply["result"]
+    return StudentResult(**{**d, "trials": [TrialResult(**t) for t in d["trials"]],
+                             "cheats": [tuple(c) for c in d["cheats"]], "process": reply["process"]})
