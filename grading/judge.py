@@ -135,7 +135,8 @@ class Lab:
                                             and not cells.is_test(c)]
                                           or [set()]) - self.answer_names
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
-        # each test's visible check (the release's cell exN_check) and the check it calls, for the slip of a failure
+        # each test's visible check (the release's cell exN_check) and the check it calls, for the slip of a failure;
+        # the provided values it reads come from the model run (reference_values), the answers are always run
         self.checks = {labformat.autograder_id(g.number): c.source for c in release.cells if cells.is_check(c)
                        for g in [labformat.parse(cells.grade_id(c))] if g.kind == "ex"}
         self.check_names = {e.grade_id: e.check for e in exercises.of_lab(lab)}
@@ -258,23 +259,34 @@ class Lab:
     # -- values of the provided cells, from the model solution ------------------------------------------------------
     def reference_values(self, gid, boxes):
         """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
-        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test)."""
+        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test). Values
+        that only the test's visible check reads come with them where the model run makes them (for :func:`_slip`)."""
         if gid not in self._reference:
-            wanted = sorted(set(cells.free_names(self.tests[gid] + "\n" + self.checks.get(gid, "")))
-                            & self.provided_names - set(self.base()))
+            base = set(self.base())
+            wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - base)
+            try:
+                extra = sorted(set(cells.free_names(self.checks.get(gid, ""))) & self.provided_names - base
+                               - set(wanted))
+            except SyntaxError:
+                extra = []
             values = {}
-            if wanted:
-                session = Session(self, self.solution, boxes, gid, need=wanted, files=False)
+            if wanted or extra:
+                session = Session(self, self.solution, boxes, gid, need=wanted + extra, files=False)
                 try:
                     session.start()
-                    values = session.describe(wanted)
+                    values = session.describe(wanted) if wanted else {}
+                    if extra:
+                        try:                          # the check's slip is unknown without them, the score is not
+                            values.update(session.describe(extra))
+                        except Exception:  # noqa: BLE001
+                            pass
                 finally:
                     session.close()
-                missing = [n for n, d in values.items() if d["kind"] != "value"]
+                missing = [n for n in wanted if values[n]["kind"] != "value"]
                 if missing:
                     raise RuntimeError(f"the model solution of {self.lab} does not make {missing} before {gid}: "
                                        f"{session.cell_errors}")
-            self._reference[gid] = {n: d["value"] for n, d in values.items()}
+            self._reference[gid] = {n: d["value"] for n, d in values.items() if d["kind"] == "value"}
         return self._reference[gid]
 
 
@@ -447,9 +459,7 @@ def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
             result = TestResult(gid, lab.points.get(gid, 0.0))
             verdict.tests.append(result)
             reference = lab.reference_values(gid, boxes)
-            check = getattr(lab, "checks", {}).get(gid, "")          # its names too: the check may run (_slip)
-            session = Session(lab, submitted, boxes, gid, need=cells.free_names(source + "\n" + check),
-                              stopped=stopped)
+            session = Session(lab, submitted, boxes, gid, need=cells.free_names(source), stopped=stopped)
             ns = dict(base)
             rest = _visible_part(lab, session, source, ns, reference, result)
             if rest:

@@ -64,8 +64,12 @@ LAB02_PLANTED = {
                             "    I_KH = np.eye(len(P)) - K @ H\n"
                             "    return x + K @ (z - H @ x), I_KH @ P @ I_KH.T + K @ R @ K.T, K\n"),
 }
-# answers that are wrong in a way no check names, or that fail: the outcome, not a slip
+# answers that are wrong in a way no check names, or that fail, or right: the outcome, not a slip
 LAB02_OTHER = {
+    slips.PASSED: (4, "def my_update(x, P, z, H, R):\n"                  # the update without my_joseph
+                      "    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)\n"
+                      "    I_KH = np.eye(len(P)) - K @ H\n"
+                      "    return x + K @ (z - H @ x), I_KH @ P @ I_KH.T + K @ R @ K.T, K\n"),
     slips.UNRECOGNISED: (3, "def my_predict(x, P, A, Q, B, u):\n    return A @ x + B @ u, 2 * (A @ P @ A.T + Q)\n"),
     slips.RAISED: (2, "def my_state_space(k, m, g, dt):\n    raise ValueError('I do not know yet')\n"),
 }
