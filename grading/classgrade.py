@@ -19,8 +19,10 @@
 At the end ``grades.csv`` is written (``nbgrader export``, plus a ``status`` column: every student of
 ``submitted/`` is listed, a submission that could not be graded with the reason), the integrity report
 ``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run), the similarity report
-``similarity_<LAB>.md/.csv`` (answers alike between classmates, or with the library: :mod:`grading.similarity`) and a
-summary: each student's score and what the judge had to do (cells stopped, missing or duplicated, integrity flags).
+``similarity_<LAB>.md/.csv`` (answers alike between classmates, or with the library: :mod:`grading.similarity`), the
+report of common slips ``slips_<LAB>.html/.csv`` (for each exercise, what its visible check says of the wrong answers:
+:mod:`grading.slipreport`; the HTML names no student) and a summary: each student's score and what the judge had
+to do (cells stopped, missing or duplicated, integrity flags).
 The exit status is 1 if a submission could not be graded (its student is named), or if the gradebook had to be put
 back (:func:`gradebook_kept`), 0 otherwise.
 """
@@ -45,7 +47,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import cells, judge, launcher, sandbox, similarity
+from grading import cells, judge, launcher, sandbox, similarity, slipreport
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -461,6 +463,7 @@ def main(argv=None):
         seconds = time.monotonic() - t0
         exported = export(course, lab, results)
         report = integrity(course, lab, results)
+        slips_html, slips_csv = slipreport.write(course, lab, results)
         alike, pairs = similarity.report(course, lab, the_lab.release, the_lab.solution)
         print()
         print(summary(lab, results, seconds, args.workers, report))
@@ -475,7 +478,8 @@ def main(argv=None):
                   if os.geteuid() == 0 else "the grader's own user"))
         print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
-              f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look)")
+              f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look); common slips: {slips_html.name} and "
+              f"{slips_csv.name}")
     finally:
         stack.close()
         if args.keep_scratch:

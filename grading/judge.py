@@ -23,6 +23,11 @@ the same kind of box, made once per lab (:meth:`Lab.reference_values`), which mu
 
 :func:`judge` grades one submission and returns a :class:`Verdict`: the score of each test cell, the judge's message
 for it, and what had to be done (cells stopped, the box restarted, cells missing or duplicated in the notebook).
+For a test that failed, the judge also runs the exercise's visible check (the release's ``exN_check`` cell) the same
+way, on the check's own time, and records which of the slips it names the answer shows (``TestResult.slip``: an id of
+:mod:`fusionlab.checks.slips`); that is for the instructor's report of common slips (:mod:`grading.slipreport`), not
+for the score or the feedback.
+
 :func:`autograded_notebook` builds the notebook that nbgrader's Formgrader and feedback show: the release notebook,
 the student's answers in their cells, and the judge's verdict as the only output of each test cell.
 """
@@ -33,6 +38,7 @@ import builtins
 import contextlib
 import copy
 import dataclasses
+import io
 import re
 import time
 import types
@@ -42,13 +48,15 @@ from pathlib import Path
 import nbformat
 
 from fusionlab import guard, labformat
-from fusionlab.checks import exercises
+from fusionlab.checks import exercises, slips
+from fusionlab.checks._core import Feedback
 from grading import box as wire
 from grading import boxlib, cells, client, launcher, sandbox
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.outputs import Budget, inert, inert_markdown
 
 CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
+CHECK_SECONDS = 20         # wall time of the visible check run on a failed answer, for its slip (not for the score)
 STUDENT_SECONDS = 900      # wall time of the whole submission
 MAX_RESTARTS = 3
 
@@ -79,6 +87,7 @@ class TestResult:
     points: float
     score: float = 0.0
     message: str = ""
+    slip: str = ""      # what the exercise's visible check makes of the answer (fusionlab.checks.slips; _slip)
 
 
 @dataclass
@@ -124,6 +133,11 @@ class Lab:
                                             and not cells.is_test(c)]
                                           or [set()]) - self.answer_names
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
+        # each test's visible check (the release's cell exN_check) and the check it calls, for the slip of a failure;
+        # the provided values it reads come from the model run (reference_values), the answers are always run
+        self.checks = {labformat.autograder_id(g.number): c.source for c in release.cells if cells.is_check(c)
+                       for g in [labformat.parse(cells.grade_id(c))] if g.kind == "ex"}
+        self.check_names = {e.grade_id: e.check for e in exercises.of_lab(lab)}
         self.unstubbed = {}
         self._reference = {}
         self.judge_reads_all = False     # as root: the judges keep CAP_DAC_READ_SEARCH (grading.launcher.drop_root)
@@ -243,22 +257,34 @@ class Lab:
     # -- values of the provided cells, from the model solution ------------------------------------------------------
     def reference_values(self, gid, boxes):
         """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
-        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test)."""
+        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test). Values
+        that only the test's visible check reads come with them where the model run makes them (for :func:`_slip`)."""
         if gid not in self._reference:
-            wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - set(self.base()))
+            base = set(self.base())
+            wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - base)
+            try:
+                extra = sorted(set(cells.free_names(self.checks.get(gid, ""))) & self.provided_names - base
+                               - set(wanted))
+            except SyntaxError:
+                extra = []
             values = {}
-            if wanted:
-                session = Session(self, self.solution, boxes, gid, need=wanted, files=False)
+            if wanted or extra:
+                session = Session(self, self.solution, boxes, gid, need=wanted + extra, files=False)
                 try:
                     session.start()
-                    values = session.describe(wanted)
+                    values = session.describe(wanted) if wanted else {}
+                    if extra:
+                        try:                          # the check's slip is unknown without them, the score is not
+                            values.update(session.describe(extra))
+                        except Exception:  # noqa: BLE001
+                            pass
                 finally:
                     session.close()
-                missing = [n for n, d in values.items() if d["kind"] != "value"]
+                missing = [n for n in wanted if values[n]["kind"] != "value"]
                 if missing:
                     raise RuntimeError(f"the model solution of {self.lab} does not make {missing} before {gid}: "
                                        f"{session.cell_errors}")
-            self._reference[gid] = {n: d["value"] for n, d in values.items()}
+            self._reference[gid] = {n: d["value"] for n, d in values.items() if d["kind"] == "value"}
         return self._reference[gid]
 
 
@@ -565,33 +591,41 @@ def _visible_part(lab, session, source, ns, reference, result):
         result.message = "not run: the notebook above this test could not be run (see the notes)"
         return None
     session.budget["deadline"] = time.monotonic() + lab.cell_seconds       # the test's time, both parts together
-    names = [n for n in cells.free_names(source) if n not in ns and not hasattr(builtins, n)]
     parts = cells.test_parts(source)
     first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
     try:
-        own = [n for n in names if n not in reference]
-        described = session.describe(own) if own else {}
-        for n in names:
-            if n in reference:
-                ns[n] = copy.deepcopy(reference[n])
-                continue
-            d = described[n]
-            if d["kind"] == "function":
-                ns[n] = session.proxy(n, session.budget)
-            elif d["kind"] == "value":
-                ns[n] = d["value"]
-            elif d["kind"] == "unreadable":
-                raise StudentError(f"{n} is not plain numbers ({d['error']})")
+        _names(session, source, ns, reference, session.budget)
         for _, code in parts[:first_hidden]:
             exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
     except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
         _failed(lab, session, result, exc, hidden=False)
+        _slip(lab, session, reference, result, exc)
         return None
     if first_hidden == len(parts):
-        result.score, result.message = result.points, "passed"
+        result.score, result.message, result.slip = result.points, "passed", slips.PASSED
         return None
     session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
     return parts[first_hidden:]
+
+
+def _names(session, source, ns, reference, budget):
+    """Put in ``ns`` the names ``source`` reads that it lacks: values of provided cells from ``reference``, the
+    student's functions as proxies to the box (calls timed by ``budget``), the student's values as the box sends
+    them; a name the box does not have is left out (the code's NameError says so)."""
+    names = [n for n in cells.free_names(source) if n not in ns and not hasattr(builtins, n)]
+    own = [n for n in names if n not in reference]
+    described = session.describe(own) if own else {}
+    for n in names:
+        if n in reference:
+            ns[n] = copy.deepcopy(reference[n])
+            continue
+        d = described[n]
+        if d["kind"] == "function":
+            ns[n] = session.proxy(n, budget)
+        elif d["kind"] == "value":
+            ns[n] = d["value"]
+        elif d["kind"] == "unreadable":
+            raise StudentError(f"{n} is not plain numbers ({d['error']})")
 
 
 def _hidden_part(lab, session, ns, parts, result):
@@ -603,8 +637,67 @@ def _hidden_part(lab, session, ns, parts, result):
             exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
     except Exception as exc:  # noqa: BLE001
         _failed(lab, session, result, exc, hidden=True)
+        _slip(lab, session, None, result, exc)
         return
-    result.score, result.message = result.points, "passed"
+    result.score, result.message, result.slip = result.points, "passed", slips.PASSED
+
+
+_BOX_FAILED = (BoxTimeout, BoxDied, ReplyTooLarge)
+
+
+def _unguarded(module):
+    """``module`` (the checks) as the judge calls it: each check without its forbid (``forbids``: the references are
+    stubs in the box already, and a forbid would swap functions of this process under its other threads)."""
+    return types.SimpleNamespace(**{k: getattr(v, "unguarded", v) for k, v in vars(module).items()
+                                    if not k.startswith("__")})
+
+
+def _slip(lab, session, reference, result, failure):
+    """Set ``result.slip`` for a failed test (the instructor's class report of common slips; never the score, never
+    the feedback): what the exercise's visible check, the release's cell ``exN_check``, says of the answer, read by
+    :func:`fusionlab.checks.slips.outcome`. The check runs here, in the judge, as the tests do: the student's functions
+    answer from the test's box, within :data:`CHECK_SECONDS` of their own. After a hidden part the box has seen the
+    hidden inputs; what it can carry into the report is which of the check's fixed outcomes is recorded.
+
+    An answer the box could not run to the end (raised, timed out, returned no numbers) is :data:`slips.RAISED`,
+    the release's stub :data:`slips.NOT_ATTEMPTED`; a check that passes or names no listed slip is
+    :data:`slips.UNRECOGNISED`."""
+    gid = result.grade_id
+    source = getattr(lab, "checks", {}).get(gid, "")
+    outcome = _code_failed(session, gid, failure)
+    if source and outcome != slips.NOT_ATTEMPTED and not isinstance(failure, _BOX_FAILED) \
+            and getattr(session, "box", None) is not None:
+        check_ns = lab.base()                       # the student's names again, as proxies on the check's own time
+        if "checks" in check_ns:
+            check_ns["checks"] = _unguarded(check_ns["checks"])
+        budget = {"deadline": time.monotonic() + min(CHECK_SECONDS, lab.cell_seconds)}
+        try:
+            if reference is None:                    # after a hidden part: the values of the provided cells again
+                reference = lab.reference_values(gid, session.boxes)
+            _names(session, source, check_ns, reference, budget)
+            with contextlib.redirect_stdout(io.StringIO()):                 # the ✓ line of a check that passes
+                exec(compile(cells.python_of(source), f"<{gid} check>", "exec"), check_ns)  # noqa: S102
+        except Feedback as exc:
+            said = slips.outcome(lab.check_names.get(gid, ""), str(exc))
+            outcome = said if said != slips.UNRECOGNISED else outcome
+        except Exception as exc:  # noqa: BLE001 -- the slip is unknown; the score stands as the test left it
+            outcome = outcome or _code_failed(session, gid, exc)
+    result.slip = outcome or slips.UNRECOGNISED
+
+
+def _code_failed(session, gid, exc):
+    """:data:`slips.NOT_ATTEMPTED` or :data:`slips.RAISED` when ``exc`` is the student's code failing (the release's
+    stub, an answer cell that stopped, an error, a timeout, a reply that is not numbers), else None."""
+    if isinstance(exc, StudentRaised):
+        return slips.NOT_ATTEMPTED if _UNFINISHED.fullmatch(exc.error) else slips.RAISED
+    if isinstance(exc, NameError):
+        prefix = gid.split("_")[0] + "_"
+        errs = [e for i, e in getattr(session, "cell_errors", {}).items()
+                if (session.cells[i][0] or "").startswith(prefix)]
+        return slips.NOT_ATTEMPTED if not errs or any(_UNFINISHED.search(str(e)) for e in errs) else slips.RAISED
+    if isinstance(exc, (StudentError, *_BOX_FAILED)):
+        return slips.RAISED
+    return None
 
 
 def _failed(lab, session, result, exc, hidden):

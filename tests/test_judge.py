@@ -1,7 +1,8 @@
 """Red team for the trusted judge (``python -m grading.classgrade``, ``make grade``).
 
 One scratch course (config, library, data, grading tools, solutions of labs 01 and 02) receives a class of lab 02:
-three honest students (complete, exercises 1 and 4 done, untouched) and one student per attack. Every attacker but
+three honest students (complete, exercises 1 and 4 done, untouched), three whose answers hold slips the visible checks
+name (``SLIPS``: the report of common slips must count exactly these) and one student per attack. Every attacker but
 two is the "half" student (exercises 1 and 4 answered honestly: 5 of 9 points) with the attack in the answer cells
 of exercises 2 and 3, where a successful attack would earn the 4 points the student did not work for; so each
 attacker must score exactly 5. A single ``classgrade`` run with two workers grades them all, as an instructor would;
@@ -27,6 +28,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import nbformat
@@ -34,9 +36,11 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, nbgrader
+from fusionlab.checks import slips
 from grading import launcher, sandbox
 from grading.bench_classgrade import fill_answers, grade_id
 from test_feedback import _hidden_lines
+from test_slips import LAB02_OTHER, LAB02_PLANTED
 
 pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
                                 reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
@@ -45,6 +49,13 @@ LAB = "02_kalman_falling_body"
 POINTS = {"ex1_tests": 2, "ex2_tests": 2, "ex3_tests": 2, "ex4_tests": 3}
 FULL, HALF = 9, 5
 MARKER = "fusionlab-attack-marker"
+# students with planted slips: test -> the slip its answer holds (tests/test_slips.py's answers); the others pass
+SLIPS = {"slips_one": {"ex1_tests": "joseph.short_form", "ex2_tests": "state_space.drag_sign",
+                       "ex3_tests": "predict.no_control", "ex4_tests": "update.innovation_sign"},
+         "slips_two": {"ex1_tests": "joseph.short_form", "ex2_tests": "state_space.gravity_sign",
+                       "ex3_tests": "predict.no_Q", "ex4_tests": "update.gain_no_R"},
+         "slips_three": {"ex1_tests": "joseph.no_noise_term", "ex2_tests": slips.RAISED,
+                         "ex3_tests": slips.UNRECOGNISED}}
 TIMEOUT = 10
 
 
@@ -253,6 +264,17 @@ def _pasted_update():
     return helpers + "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
 
 
+def _planted(full, planted):
+    """``full`` with the answers of ``planted`` (test -> slip); exercise 4 does not call my_joseph (whose slip would
+    be its slip too)."""
+    answers = {**LAB02_PLANTED, **LAB02_OTHER}
+    nb = _set(full, "ex4_solution", answers[slips.PASSED][1])
+    for slip in planted.values():
+        number, source = answers[slip]
+        nb = _set(nb, f"ex{number}_solution", source)
+    return nb
+
+
 def _metadata_edited(full):
     """11: test cell emptied and unlocked, points raised, a duplicated grade id, a deleted test cell."""
     nb = nbformat.from_dict(full)
@@ -323,6 +345,7 @@ def graded(tmp_path_factory):
 
     class_ = {"full": full, "half": half, "none": release, "metadata_edited": _metadata_edited(full),
               "pasted_library": _set(release, "ex4_solution", _pasted_update())}
+    class_.update({student: _planted(full, planted) for student, planted in SLIPS.items()})
     class_.update(_attacks(root, listener.getsockname()[1], half))
     for student, nb in class_.items():
         dest = root / "submitted" / student / LAB
@@ -339,7 +362,7 @@ def graded(tmp_path_factory):
     (root / "canary" / "keep.txt").write_text("canary")
     keep = ("gradebook.db", ".gradebook-backups", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md",
             f"integrity_{LAB}.csv",
-            f"similarity_{LAB}.md", f"similarity_{LAB}.csv")
+            f"similarity_{LAB}.md", f"similarity_{LAB}.csv", f"slips_{LAB}.html", f"slips_{LAB}.csv")
     before = _tree_hash(root, keep)
     with sqlite3.connect(root / "gradebook.db") as con:
         sources = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
@@ -395,6 +418,27 @@ def test_honest_students_score_what_they_did(graded):
     assert _total(graded, "full") == FULL
     assert _total(graded, "half") == HALF
     assert _total(graded, "none") == 0
+
+
+def test_the_report_of_common_slips_counts_the_slips_planted_and_its_page_names_no_student(graded):
+    with open(graded["root"] / f"slips_{LAB}.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    got = {(r["student"], r["grade_id"]): r["slip"] for r in rows}
+    assert {r["student"] for r in rows} == set(graded["students"])          # not_json was not graded
+    expected = {**SLIPS, "full": {}, "half": {"ex2_tests": slips.NOT_ATTEMPTED, "ex3_tests": slips.NOT_ATTEMPTED},
+                "none": dict.fromkeys(POINTS, slips.NOT_ATTEMPTED)}
+    for student, planted in expected.items():
+        assert {g: got[student, g] for g in POINTS} == {g: planted.get(g, slips.PASSED) for g in POINTS}, student
+    named = Counter(r["slip"] for r in rows if r["slip"] not in slips.OUTCOMES)
+    assert named == Counter(s for p in SLIPS.values() for s in p.values() if s not in slips.OUTCOMES), \
+        [(r["student"], r["grade_id"], r["slip"]) for r in rows if r["slip"] not in slips.OUTCOMES]
+    page = (graded["root"] / f"slips_{LAB}.html").read_text()
+    for slip, count in named.items():
+        shown = re.search(r'<td class="count">(\d+)</td><td>' + re.escape(html.escape(slips.text(slip)))
+                          + f" <code>{re.escape(slip)}</code>", page)
+        assert shown and int(shown.group(1)) == count, slip
+    assert not [s for s in graded["students"] if "_" in s and s in page]
+    assert "common slips: slips_02_kalman_falling_body.html" in graded["run"].stdout
 
 
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",

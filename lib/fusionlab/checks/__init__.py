@@ -8,7 +8,8 @@ order, a printed-seed typo. Notebooks call these in the visible test cell right 
 (``checks.check_predict(my_predict)``); the hidden tests compare with the library.
 
 One file per lab, named after the lab's folder (``lab02_kalman_falling_body.py`` holds Lab 02's checks); ``_core.py``
-holds :class:`Feedback` and what the checks share. Everything public is re-exported here.
+holds :class:`Feedback` and what the checks share. Everything public is re-exported here. ``slips.py`` gives the
+slips the checks name identifiers (the grading tools' class report of common slips counts them).
 
 Every lab's locked setup cell imports this package, and through it :mod:`fusionlab.guard` -- first, so that the guard
 records numpy, the library and IPython's hooks before any answer cell runs -- and :func:`friendly_errors`, which
@@ -21,6 +22,7 @@ from . import (_core, lab00_mems_sensors, lab01_euler_rotations, lab02_kalman_fa
                lab03_correlation_fusion, lab04_ecompass, lab05_freescale_kalman, lab06_gfimu_aiv,
                lab07_gfimu_constraints, lab08_north_finder, lab09_dcm_ahrs, lab10_gps_ins, lab11_real_data,
                lab12_sensor_errors, lab13_capstone, lab14_phone_imu)
+from . import slips  # noqa: F401  (the named slips, as data)
 from ._core import *  # noqa: F401,F403
 from .lab00_mems_sensors import *  # noqa: F401,F403
 from .lab01_euler_rotations import *  # noqa: F401,F403

@@ -462,4 +462,7 @@ def forbids(check):
     @functools.wraps(check)
     def run(*args, **kwargs):
         return check(*(guarded(a) for a in args), **kwargs)
+    # the check without the forbid, for the grading tools' judge: there the student's functions run in a box whose
+    # library has the references as stubs already, and the forbid would swap the judge's own functions
+    run.unguarded = check
     return run

@@ -1,0 +1,183 @@
+"""The named slips of the visible checks, as data: one list that the checks' messages, the grading tools' class
+report of common slips and the tests read.
+
+A visible check (:mod:`fusionlab.checks`) stops at the first slip the student's answer shows and names it in its
+message: "you computed q ⊗ p", "your matrix is the transpose of C_bn". Each :class:`Slip` here gives such a message
+an identifier: ``says`` is a piece of the message, word for word, that only the message of that slip of that check
+holds (tests/test_slips.py checks that every ``says`` is among its check's strings, and that a planted wrong answer
+is told by its slip). :func:`outcome` reads a check's message back into an identifier.
+
+The trusted judge (``grading/judge.py``) runs an exercise's visible check on the answer of a student whose test
+failed, through the same box as the test, and records what :func:`outcome` makes of it in the verdict; the class
+report (``grading/slipreport.py``) counts them. Besides the named slips, an outcome is one of :data:`PASSED`,
+:data:`NOT_ATTEMPTED`, :data:`RAISED` (the student's code raised, ran out of time, or returned no numbers) and
+:data:`UNRECOGNISED` (a wrong answer no listed slip describes).
+
+The slips of the labs in :data:`LABS` are listed; the checks of the other labs name theirs in words only, and their
+wrong answers count as unrecognised until they are listed here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Slip", "SLIPS", "LABS", "PASSED", "NOT_ATTEMPTED", "RAISED", "UNRECOGNISED", "OUTCOMES", "of_check",
+           "named", "outcome", "text", "by_id"]
+
+PASSED, NOT_ATTEMPTED, RAISED, UNRECOGNISED = "passed", "not_attempted", "raised", "unrecognised"
+#: The outcomes that are not a named slip, in words.
+OUTCOMES = {PASSED: "passed", NOT_ATTEMPTED: "not attempted",
+            RAISED: "raised an error, ran out of time or returned no numbers",
+            UNRECOGNISED: "unrecognised wrong answer (no check names it)"}
+
+#: The labs whose checks' slips are all listed in :data:`SLIPS`.
+LABS = ("01_euler_rotations", "02_kalman_falling_body")
+
+#: What :func:`fusionlab.checks._core._answer` and ``_answered`` say of an answer that is still the release's stub.
+_UNFINISHED = ("is not written yet: replace `raise NotImplementedError(...)`", "is still None: finish the exercise")
+
+
+@dataclass(frozen=True)
+class Slip:
+    """One slip a check names: ``id`` (``"quat_multiply.q_times_p"``), the ``check`` whose message names it (``""``:
+    any check, a slip of :mod:`fusionlab.checks._core`) and ``says``, the piece of that message that tells it."""
+
+    id: str
+    check: str
+    says: str
+
+
+def _slips(check, *pairs):
+    short = check.removeprefix("check_")
+    return tuple(Slip(f"{short}.{name}" if check else name, check, says) for name, says in pairs)
+
+
+SLIPS = (
+    # any check (fusionlab.checks._core)
+    *_slips("", ("no_return", "returned None -- did you forget the `return` statement?"),
+            ("not_a_tuple", "things (a tuple); it returned")),
+    # 01_euler_rotations
+    *_slips("check_euler_to_dcm",
+            ("shape", "expected a 3×3 matrix"),
+            ("transposed", "your matrix is the transpose of C_bn -- it maps navigation to body"),
+            ("radians_twice", "the angles were converted to radians twice"),
+            ("order", "the elementary rotations are multiplied in the wrong order"),
+            ("eq339_printed", "this is seed 000 eq 3.39 as printed"),
+            ("roll_pitch_swapped", "roll and pitch are swapped"),
+            ("reflection", "det(C) = -1: a reflection, not a rotation"),
+            ("not_orthonormal", "your matrix is not orthonormal (C @ C.T != I)")),
+    *_slips("check_body_gravity",
+            ("shape", "f_body should be a 3-vector"),
+            ("not_transposed", "use the transpose: v_b = C_bn.T @ v_n (C_bn maps body to navigation)."),
+            ("sign", "the sign is wrong: an accelerometer at rest reads +g *up*")),
+    *_slips("check_sequence_angles",
+            ("shape", "give three angles for"),
+            ("radians", "angles look like radians; this answer is asked in degrees"),
+            ("reversed", "angles are in reverse order")),
+    *_slips("check_renormalize",
+            ("rows", "you renormalised the rows")),
+    *_slips("check_rodrigues",
+            ("printed_coefficient", "you used the printed coefficient (1 - cos σ)/σ"),
+            ("not_finite", "the result is not finite -- guard the 0/0 at σ → 0")),
+    *_slips("check_lock_roll",
+            ("printed_rule", "that is the thesis' printed rule")),
+    *_slips("check_quat_multiply",
+            ("shape", "p ⊗ q is a quaternion: shape (4,)"),
+            ("q_times_p", "you computed q ⊗ p: the product does not commute"),
+            ("scalar_last", "your formula reads the quaternions as [x, y, z, w]"),
+            ("dot_sign", "the scalar part has the wrong sign of the dot product"),
+            ("conjugate", "you returned the conjugate (p ⊗ q)*"),
+            ("normalised", "do not normalise: the product of two quaternions is exact as it is")),
+    *_slips("check_quat_to_dcm",
+            ("shape", "C(q) is a 3×3 matrix; got shape"),
+            ("transposed", "your matrix is the transpose of C_bn: it maps navigation to body"),
+            ("scalar_last", "your formula reads q as [x, y, z, w]"),
+            ("both", "two slips: the scalar is read last"),
+            ("not_finite", "your C(q) is not finite"),
+            ("not_orthonormal", "your C(q) is not orthonormal")),
+    # 02_kalman_falling_body
+    *_slips("check_joseph",
+            ("fixed_size", "does it assume 2 states (np.eye(2))?"),
+            ("shape", "P_post must have the shape of P"),
+            ("short_form", "this is the short form (I - KH)P"),
+            ("no_noise_term", "the measurement-noise term K R Kᵀ is missing"),
+            ("noise_sign", "the K R Kᵀ term has the wrong sign"),
+            ("no_R", "R is missing from the second term: it is K R Kᵀ"),
+            ("no_first_term", "the first term (I - KH) P (I - KH)ᵀ is missing"),
+            ("bracket_sign", "the sign inside the brackets: (I - KH), not (I + KH)"),
+            ("no_transpose", "the second (I - KH) needs a transpose"),
+            ("transpose_left", "the transpose is on the wrong factor"),
+            ("KtRK", "the noise term is K R Kᵀ (K first), not Kᵀ R K"),
+            ("eq427_printed", "this is eq 4.27 as printed")),
+    *_slips("check_state_space",
+            ("A_shape", "A must be 2×2"),
+            ("A_transposed", "A is transposed: the first row is"),
+            ("drag_sign", "the drag term has the wrong sign"),
+            ("k_over_m", "k/m is upside down"),
+            ("lost_one", "A[1, 1] lost the 1"),
+            ("Bu_undefined", "B @ u is not defined for B of shape"),
+            ("gravity_sign", "gravity enters with the wrong sign"),
+            ("no_dt", "B u is the change over one step, -g·dt, not -g"),
+            ("gravity_row", "gravity is acting on the position row")),
+    *_slips("check_predict",
+            ("no_control", "the control term is missing: x' = A x + B u"),
+            ("A_transposed", "use A, not its transpose: x' = A @ x + B @ u"),
+            ("not_projected", "x was not projected at all"),
+            ("no_Q", "Q is missing: P' = A P Aᵀ + Q"),
+            ("transposes_swapped", "the transposes are swapped: P' = A P Aᵀ + Q"),
+            ("no_second_transpose", "the second A needs a transpose: P' = A P Aᵀ + Q"),
+            ("no_dynamics", "P must be carried through the dynamics"),
+            ("lab_sizes", "right for the falling body, wrong for a general model")),
+    *_slips("check_update",
+            ("gain_no_R", "R is missing from the gain"),
+            ("not_inverted", "the bracket must be inverted"),
+            ("extra_H", "an extra H: K = P Hᵀ (H P Hᵀ + R)⁻¹"),
+            ("innovation_sign", "the innovation has the wrong sign"),
+            ("no_innovation", "use the innovation z - H x̂, not z alone"),
+            ("no_prior", "eq 4.8 adds a correction to the prior"),
+            ("innovation_without_H", "the innovation must use H: z - H @ x̂"),
+            ("P_not_updated", "P was not updated"),
+            ("no_noise_term", "the K R Kᵀ term of eq 4.17 is missing")),
+)
+
+_BY_ID = {s.id: s for s in SLIPS}
+if len(_BY_ID) != len(SLIPS):
+    raise RuntimeError("fusionlab.checks.slips: two slips share an id")
+
+
+def by_id(slip_id):
+    """The :class:`Slip` of ``slip_id``; raises KeyError for an id that is not listed."""
+    return _BY_ID[slip_id]
+
+
+def of_check(check):
+    """The slips the check named ``check`` (``"check_quat_multiply"``) may name: its own, then any check's."""
+    if not isinstance(check, str):
+        raise ValueError(f"check must be a check's name (a str); got {type(check).__name__}")
+    return tuple(s for s in SLIPS if s.check == check) + tuple(s for s in SLIPS if not s.check)
+
+
+def named(check, message):
+    """The id of the first slip of ``check`` that ``message`` (a check's Feedback) names, or None."""
+    if not isinstance(message, str):
+        raise ValueError(f"message must be a str; got {type(message).__name__}")
+    return next((s.id for s in of_check(check) if s.says in message), None)
+
+
+def outcome(check, message):
+    """What the message of a failed check says of the answer: a slip's id, :data:`NOT_ATTEMPTED` (the answer is
+    still the release's stub) or :data:`UNRECOGNISED`."""
+    slip = named(check, message)
+    if slip is not None:
+        return slip
+    if any(words in message for words in _UNFINISHED):
+        return NOT_ATTEMPTED
+    return UNRECOGNISED
+
+
+def text(slip_id):
+    """``slip_id`` in words: the check's own words for a slip, the outcome's words otherwise."""
+    if slip_id in OUTCOMES:
+        return OUTCOMES[slip_id]
+    if slip_id not in _BY_ID:
+        raise ValueError(f"slip_id {slip_id!r} is neither a listed slip nor an outcome")
+    return _BY_ID[slip_id].says
