@@ -47,7 +47,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import cells, judge, launcher, sandbox, similarity, slipreport
+from grading import cells, judge, launcher, outputs, sandbox, similarity, slipreport
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -261,7 +261,7 @@ def record(course: Path, lab: judge.Lab, student: str, result: Result):
         shutil.rmtree(dest)
     src = course / "submitted" / student / lab.lab
     sandbox.copy_plain(src, dest, notebooks=False)
-    nb = judge.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
+    nb = outputs.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
     nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 
 

@@ -9,10 +9,15 @@ images), and :func:`inert_markdown` turns the HTML tags of a student's Markdown 
 """
 from __future__ import annotations
 
+import copy
 import json
 import re
 
+import nbformat
+
 from nbformat.notebooknode import NotebookNode
+
+from grading import cells
 
 TEXT_BYTES = 100_000          # a stream, a traceback or a text result
 RICH_BYTES = 1_000_000        # an output holding an image or HTML (the largest figure of the labs is 0.45 MB)
@@ -133,3 +138,53 @@ def inert_markdown(source):
     nothing): ``<`` before a letter, ``/``, ``!`` or ``?`` becomes ``&lt;``. Math and prose keep their meaning."""
     text = "".join(source) if isinstance(source, list) else str(source)
     return _TAG.sub("&lt;", text)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The notebook the instructor and the student see
+# ---------------------------------------------------------------------------------------------------------------
+
+def autograded_notebook(lab, submitted, verdict):
+    """The submission as the instructor and the student see it after grading: its cells in its order, each cell of
+    the lab with the release's source and metadata (the student's source in answer cells and in cells students may
+    edit), deleted cells put back, cells the lab does not have kept without nbgrader metadata, and the judge's verdict
+    as the only output of each test cell. Test cells show their visible part only: the hidden tests are never in
+    it. ``lab`` is the judge's (:class:`grading.judge.Lab`), ``verdict`` its verdict of the submission."""
+    seq, _ = lab.layout(submitted)
+    results = {t.grade_id: t for t in verdict.tests}
+    budget = Budget()
+    nb = nbformat.v4.new_notebook(metadata=copy.deepcopy(lab.release.metadata))
+
+    def outputs(cell):
+        kept = (inert(nbformat.from_dict(o)) for o in cell.get("outputs", []) or [] if isinstance(o, dict))
+        return [o for o in (budget.admit(o) for o in kept if o is not None) if o is not None]
+
+    for kind, gid, cell in seq:
+        if kind == "added":
+            new = (nbformat.v4.new_code_cell(cell.get("source", "")) if cell.get("cell_type") == "code"
+                   else nbformat.v4.new_markdown_cell(inert_markdown(cell.get("source", ""))))
+            if new.cell_type == "code":
+                new.outputs = outputs(cell)
+            nb.cells.append(new)
+            continue
+        mine = copy.deepcopy(lab._release_cell(gid))
+        if cells.is_test(mine):
+            t = results.get(gid)
+            mine.outputs = [_verdict_output(t)] if t else []
+        else:
+            if cells.is_answer(mine) or not cells.nbg(mine).get("locked"):
+                mine.source = cell.get("source", "")
+                if mine.cell_type == "markdown":
+                    mine.source = inert_markdown(mine.source)
+            if mine.cell_type == "code":
+                mine.outputs = outputs(cell) if cell is not lab._release_cell(gid) else []
+        nb.cells.append(mine)
+    return nb
+
+
+def _verdict_output(t):
+    if t.score >= t.points:
+        return nbformat.v4.new_output("stream", name="stdout", text=f"✓ passed ({t.points:g} of {t.points:g} "
+                                                                     f"points)\n")
+    return nbformat.v4.new_output("error", ename="Failed", evalue=f"{t.message} (0 of {t.points:g} points)",
+                                  traceback=[f"Failed: {t.message} (0 of {t.points:g} points)"])
