@@ -468,9 +468,11 @@ def main(argv=None):
         print()
         print(summary(lab, results, seconds, args.workers, report))
         judged = [r.verdict.judge_mb for r in results if r.verdict is not None]
+        cpu = [r.verdict.judge_cpu_s for r in results if r.verdict is not None]
         print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
               f"(at most {judge.JUDGE_MEMORY_BYTES >> 30} GB of address space each): "
-              f"{max(judged, default=0):.0f} MB")
+              f"{max(judged, default=0):.0f} MB, {max(cpu, default=0):.1f} s of CPU (at most "
+              f"{launcher.APART_CPU_SECONDS} s each)")
         users = sorted({r.verdict.judge_uid for r in results if r.verdict is not None})
         if users:
             print("each student's judge ran as " + ("root (NOT dropped)" if 0 in users else

@@ -201,6 +201,7 @@ MAX_SYMPY_INT = 10**6           # the largest integer in it
 MAX_SYMPY_DIGITS = 100_000      # digits its integer powers may make, all together
 SYMPY_CLASSES = ("Symbol", "Dummy", "Integer", "Rational", "Float", "Add", "Mul", "Pow", "Matrix",
                  "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "sin", "cos", "tan", "exp", "log", "Abs")
+_MATRIX_OK = ("Matrix", "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "Add", "Mul")  # may hold a matrix
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,60}")
 _DECIMAL = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d{1,4})?")
 
@@ -247,6 +248,10 @@ def sympy_trusted(text):
                 if spent[0] > MAX_SYMPY_DIGITS:
                     raise wire.WireError("a sympy expression whose powers would make too many digits")
             args = [build(a, name, i == 0, inner) for i, a in enumerate(node.args)]
+            if name not in _MATRIX_OK and any(isinstance(a, (sympy.MatrixBase, sympy.MatrixExpr)) for a in args):
+                # a matrix raised to a power (or under exp, sin ...) stays unevaluated here and costs its power, or
+                # a matrix function, when a test turns it into numbers: Pow(12 x 12 integers, 9000) ran for minutes
+                raise wire.WireError(f"a sympy expression with a matrix inside {name}")
             if name == "Float" and len(args) > 1 and not (isinstance(args[1], int) and 0 < args[1] <= 100):
                 raise wire.WireError("a sympy float with a precision other than 1 to 100 digits")
             kwargs = {}

@@ -96,6 +96,7 @@ class Verdict:
     largest_reply: int = 0        # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
     judge_mb: float = 0.0         # the most memory the process that judged it held (MB; judge_apart)
     judge_uid: int = -1           # the user that process ran as (judge_apart; not root: grading.launcher)
+    judge_cpu_s: float = 0.0      # its CPU time, s (the boxes' not counted; bounded: launcher.APART_CPU_SECONDS)
 
     @property
     def score(self):
@@ -392,10 +393,11 @@ def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_ME
     return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
                    cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
                    largest_reply=int(d["largest_reply"]), judge_mb=float(reply["process"]["mb"]),
-                   judge_uid=int(reply["process"]["uid"]))
+                   judge_uid=int(reply["process"]["uid"]), judge_cpu_s=float(reply["process"]["cpu_s"]))
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"
+NOT_ATTEMPTED = "not attempted yet (your function, or one it calls, is still the release's stub)"
 _UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
 
 
@@ -403,9 +405,8 @@ def known_error(error, lab, gid):
     """The judge's own words for an error of the student's function that is exactly one the course raises (the
     release's stub of an unfinished exercise, a reference stubbed out of the box, a package absent from it), or
     None: a hidden test may name those, since their text is the course's, not the student's."""
-    m = _UNFINISHED.fullmatch(error)
-    if m:
-        return f"{m.group(1)} not attempted yet"
+    if _UNFINISHED.fullmatch(error):          # its number is not repeated: the student could choose it
+        return NOT_ATTEMPTED
     for name in sorted(lab.forbidden.get(gid, ())):
         module, qualname = name.split(":")
         stubbed = boxlib.STUB_MESSAGE.format(name=f"{module.rsplit('.', 1)[-1]}.{qualname}")

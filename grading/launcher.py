@@ -22,6 +22,7 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import signal
 import socket
 import sys
 
@@ -30,6 +31,9 @@ from grading import client, sandbox
 #: Judges run as users above the boxes' (:data:`grading.sandbox.FIRST_UID` + slot): one per slot, as the boxes.
 JUDGE_FIRST_UID = sandbox.FIRST_UID + sandbox.MAX_SLOTS
 _MESSAGE_BYTES = 4096
+#: The CPU time of the process that grades one student (:func:`apart`), its boxes not counted: an honest Lab 02
+#: student's judge uses about 3 s; a reply built to cost the tests' arithmetic minutes stops there.
+APART_CPU_SECONDS = 120
 
 
 def judge_uid(slot):
@@ -269,13 +273,15 @@ def split(maker, slot, read_all=False):
     return RemoteBoxes(ours, pid)
 
 
-def _apart_child(conn, target, args, memory_bytes):
+def _apart_child(conn, target, args, memory_bytes, cpu_seconds):
     import resource
-    # the soft limit only: the boxes this process starts inherit it, and each sets its own (grading.sandbox)
+    # soft limits only: the boxes this process starts inherit them, and each sets its own (grading.sandbox)
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, resource.getrlimit(resource.RLIMIT_CPU)[1]))
     try:
         out = target(*args)
-        out["process"] = {"mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "uid": os.getuid()}
+        use = resource.getrusage(resource.RUSAGE_SELF)
+        out["process"] = {"mb": use.ru_maxrss / 1024, "uid": os.getuid(), "cpu_s": use.ru_utime + use.ru_stime}
         conn.send_bytes(json.dumps(out).encode())
     except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
         conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
@@ -283,22 +289,28 @@ def _apart_child(conn, target, args, memory_bytes):
         conn.close()
 
 
-def apart(target, args, *, preload, memory_bytes, who):
+def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SECONDS):
     """``target(*args)`` (a module's function returning a dict of plain data) in a process of its own with
-    ``memory_bytes`` of address space, started from a clean server process (not forked from this one's threads),
-    which imports ``preload`` once for all. What comes back is that dict as JSON, with ``"process"``: the most
-    memory the process held (MB) and the user it ran as. ``who`` names the student in an error."""
+    ``memory_bytes`` of address space and ``cpu_seconds`` of its own CPU time (the boxes' time is theirs), started
+    from a clean server process (not forked from this one's threads), which imports ``preload`` once for all. What
+    comes back is that dict as JSON, with ``"process"``: the most memory the process held (``mb``), its CPU time
+    (``cpu_s``) and the user it ran as (``uid``). ``who`` names the student in an error: a process that ran over
+    its CPU time is said to have."""
     import multiprocessing
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(preload))
     receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_apart_child, args=(send, target, args, memory_bytes))
+    child = ctx.Process(target=_apart_child, args=(send, target, args, memory_bytes, cpu_seconds))
     child.start()
     send.close()
     try:
         reply = json.loads(receive.recv_bytes())
     except EOFError:
         child.join()
+        if child.exitcode == -signal.SIGXCPU:
+            raise RuntimeError(f"the process grading {who} ran over its {cpu_seconds} s of CPU time and was stopped "
+                               f"(a reply that costs the grader's arithmetic that much is the student's; read "
+                               f"their code)") from None
         raise RuntimeError(f"the process grading {who} ended without a result (exit status {child.exitcode})") \
             from None
     finally:

@@ -48,6 +48,8 @@ DEFAULT_LIMITS = {
     "file_bytes": 256 << 20,    # largest file a process may write
     "tmp_bytes": 256 << 20,     # size of the private /tmp
     "nproc": 256,               # processes and threads of the box's own user (only when grading as root)
+    "nofile": 1024,             # open files per process: 256 processes of a box then hold at most 262,144, far from
+                                # the machine's limit (fs.file-max), which a box must not exhaust for the others
 }
 
 # Files of /etc a Python kernel needs (user names, the dynamic linker, time zone); the rest of /etc stays outside.
@@ -91,6 +93,7 @@ resource.setrlimit(resource.RLIMIT_CPU, (lim["cpu_s"], lim["cpu_s"] + 5))
 resource.setrlimit(resource.RLIMIT_AS, (lim["memory_bytes"], lim["memory_bytes"]))
 resource.setrlimit(resource.RLIMIT_FSIZE, (lim["file_bytes"], lim["file_bytes"]))
 resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+resource.setrlimit(resource.RLIMIT_NOFILE, (lim["nofile"], lim["nofile"]))
 if mpl and os.path.isdir(mpl):
     shutil.copytree(mpl, "/tmp/.cache/matplotlib", dirs_exist_ok=True)
 os.execv(sys.executable, [sys.executable, *sys.argv[1:]])
@@ -359,6 +362,33 @@ def package_paths(names):
     return sorted(out)
 
 
+# What /proc tells of the whole machine that a box could change and another box read: an exact channel between two
+# students graded at once (an outside review carried a hidden value through the count of open files, file-nr,
+# and would through the number of processes, free memory, file locks ...). Hidden in every box: the folders under
+# an empty read-only tmpfs, the files under /dev/null (reading one is refused). What a Python kernel reads of
+# /proc -- self/, cpuinfo, mounts -- stays. (The call sysinfo, which says the same, is refused: grading.seccomp.)
+PROC_HIDDEN_FOLDERS = ("sys", "pressure", "sysvipc", "fs", "irq", "bus", "tty", "driver", "scsi", "acpi")
+PROC_HIDDEN_FILES = ("loadavg", "stat", "meminfo", "vmstat", "zoneinfo", "buddyinfo", "pagetypeinfo", "slabinfo",
+                     "diskstats", "partitions", "interrupts", "softirqs", "schedstat", "locks", "swaps", "uptime",
+                     "key-users", "keys", "timer_list", "sched_debug", "kallsyms", "vmallocinfo", "iomem",
+                     "ioports", "mtrr", "latency_stats", "lock_stat", "misc", "modules", "kpagecount", "kpageflags",
+                     "kpagecgroup", "sysrq-trigger", "dma", "cgroups", "crypto", "devices", "filesystems",
+                     "consoles", "cmdline")
+
+
+def proc_masks(proc="/proc"):
+    """bwrap's arguments that hide :data:`PROC_HIDDEN_FOLDERS` and :data:`PROC_HIDDEN_FILES` in the box's /proc
+    (those this kernel has: a mount needs its target)."""
+    args = []
+    for name in PROC_HIDDEN_FOLDERS:
+        if os.path.isdir(os.path.join(proc, name)):
+            args += ["--perms", "0555", "--tmpfs", f"/proc/{name}", "--remount-ro", f"/proc/{name}"]
+    for name in PROC_HIDDEN_FILES:
+        if os.path.isfile(os.path.join(proc, name)):
+            args += ["--ro-bind", "/dev/null", f"/proc/{name}"]
+    return args
+
+
 def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True, hide=()):
     """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
 
@@ -384,6 +414,7 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
         args += ["--unshare-user", "--disable-userns"]
     args += ["--proc", "/proc", "--dev", "/dev",
              "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", "/tmp"]
+    args += proc_masks()
     args += _system_binds() + _python_binds() + data_args
     for path in hide:               # after the installation's mounts, which they cover
         path = os.path.realpath(path)

@@ -84,11 +84,14 @@ REFUSED_SYSCALLS = {
     "clone": (56, 220, (0, NAMESPACE_FLAGS)),  # fork and threads pass none of these flags: allowed
 }
 
-# Calls answered ENOSYS, as a kernel without them would: clone3 takes its flags in a structure in memory, which a
-# seccomp filter cannot read, so it is refused whatever it asks; the C library then falls back to clone, whose
-# flags the filter reads. (x86_64's number, aarch64's number.)
+# Calls answered ENOSYS, as a kernel without them would (x86_64's number, aarch64's number). clone3 takes its flags
+# in a structure in memory, which a seccomp filter cannot read, so it is refused whatever it asks; the C library then
+# falls back to clone, whose flags the filter reads.
 MISSING_SYSCALLS = {
     "clone3": (435, 435),
+    # what sysinfo says is the whole machine's (free memory, the number of processes): a box could change it and
+    # another read it, as /proc's counters (hidden in the box: grading.sandbox.PROC_HIDDEN_FILES)
+    "sysinfo": (99, 179),
 }
 
 

@@ -618,6 +618,8 @@ def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_p
     child = int(re.search(r"of one student's judge process \(at most 3 GB of address space each\): (\d+) MB",
                           out).group(1))
     assert 100 < child < 1500, f"a judge process peaked at {child} MB"
+    cpu = float(re.search(r"MB, ([\d.]+) s of CPU \(at most 120 s each\)", out).group(1))
+    assert 0 < cpu < 60, f"a judge process used {cpu} s of CPU"
 
 
 def test_nothing_of_a_student_runs_in_formgrader_or_the_feedback_page(graded):

@@ -223,3 +223,14 @@ def test_a_folder_the_judge_cannot_read_is_found_and_the_judge_may_keep_reading_
     assert got["read"] == "answers" and got["uid"] == launcher.judge_uid(3), got
     assert got["caps"] == ["0000000000000004", "0000000000000004", "0000000000000000", "0000000000000000"], got
     assert got["tried"] == {name: "refused" for name in got["tried"]} and len(got["tried"]) == 5, got["tried"]
+
+
+def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped_and_named():
+    got = launcher.apart(dict, ({"a": [1, 2]},), preload=[], memory_bytes=1 << 30, who="ana", cpu_seconds=5)
+    assert got["a"] == [1, 2] and set(got["process"]) == {"mb", "uid", "cpu_s"}, got
+    assert got["process"]["uid"] == os.getuid() and 0 <= got["process"]["cpu_s"] < 5, got
+    t0 = time.monotonic()
+    with pytest.raises(RuntimeError, match=r"the process grading bob ran over its 1 s of CPU time and was stopped"):
+        launcher.apart(eval, ("sum(range(10 ** 12)) and {}",), preload=[], memory_bytes=1 << 30, who="bob",
+                       cpu_seconds=1)
+    assert time.monotonic() - t0 < 30

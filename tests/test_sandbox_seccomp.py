@@ -283,6 +283,7 @@ def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
         assert _verdict(program, arch, clone, flags) == ALLOW, hex(flags)
     assert _verdict(program, arch, clone, 17, CLONE_NEW["NEWUSER"]) == ALLOW, "the flags are the first argument"
     assert _verdict(program, arch, clone3, 0x7F0000000000, 88) == MISSING, "clone3 is answered ENOSYS"
+    assert _verdict(program, arch, (99, 179)[column], 0x7F0000000000) == MISSING, "sysinfo is answered ENOSYS"
     if machine == "x86_64":
         assert _verdict(program, X86_64, 0x40000000 | clone, 0) == REFUSE, "x32's clone"
 
@@ -292,7 +293,7 @@ def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS,
                           "unshare", "setns", "clone"}
     assert table["clone"] == (56, 220, (0, sum(CLONE_NEW.values()))), table["clone"]
-    assert seccomp.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"]}
+    assert seccomp.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"], "sysinfo": (99, 179)}
     assert {name: table[name] for name in CACHE_CALLS} == {name: (*numbers, None) for name, numbers in
                                                           CACHE_CALLS.items()}
     assert [table[name] for name in ("add_key", "request_key", "keyctl")] == \
@@ -649,6 +650,42 @@ def test_a_box_cannot_make_a_namespace_and_still_forks_and_starts_threads(tmp_pa
     assert got == {"unshare user": [-1, EPERM], "unshare net": [-1, EPERM], "setns": [-1, EPERM],
                    "clone user": [-1, EPERM], "clone3": [-1, ENOSYS], "libc unshare": [-1, EPERM],
                    "fork": 5, "thread": 1, "child": "42"}, got
+
+
+@NEEDS_BWRAP
+def test_a_box_reads_no_counter_of_the_whole_machine(tmp_path, slot):
+    """The counters another box could move (open files, processes, free memory, locks ...) are hidden in /proc and
+    sysinfo is refused; what a Python kernel reads of /proc still reads; a process holds at most 1024 files."""
+    outside = {name: os.access(f"/proc/{name}", os.R_OK) for name in ("sys/fs/file-nr", "loadavg", "meminfo", "stat")}
+    assert all(outside.values()), outside
+    got = _run_probe("""
+        import resource
+        def reads(path):
+            try:
+                with open(path) as f:
+                    return len(f.read()) > 0
+            except OSError as exc:
+                return exc.errno
+        NR = {"x86_64": 99, "aarch64": 179}[os.uname().machine]
+        held = []
+        try:
+            for _ in range(2000):
+                held.append(os.open("/dev/null", os.O_RDONLY))
+        except OSError as exc:
+            opened = [len(held), exc.errno]
+        for fd in held:
+            os.close(fd)
+        print(json.dumps({"hidden": {p: reads(p) for p in ("/proc/sys/fs/file-nr", "/proc/sys/fs/inode-nr",
+                                                          "/proc/loadavg", "/proc/meminfo", "/proc/stat",
+                                                          "/proc/locks", "/proc/vmstat", "/proc/uptime")},
+                          "kept": {p: reads(p) for p in ("/proc/self/status", "/proc/cpuinfo", "/proc/self/maps")},
+                          "sysinfo": call(NR, ctypes.create_string_buffer(256)), "cpus": os.cpu_count(),
+                          "nofile": resource.getrlimit(resource.RLIMIT_NOFILE), "opened": opened}))
+    """, tmp_path=tmp_path, slot=slot)
+    assert all(v is not True for v in got["hidden"].values()), got["hidden"]
+    assert got["kept"] == {p: True for p in got["kept"]}, got["kept"]
+    assert got["sysinfo"] == [-1, ENOSYS] and got["cpus"] == os.cpu_count(), got
+    assert got["nofile"] == [1024, 1024] and got["opened"][1] == 24 and 1000 < got["opened"][0] < 1024, got
 
 
 @NEEDS_BWRAP
