@@ -3,9 +3,9 @@
 :class:`CourseSpawner` is JupyterHub's ``LocalProcessSpawner`` (a server is a process of the account's Unix user)
 with what the course adds:
 
-* the instructor's server starts on the instructor's copy of the course, with every nbgrader tool (Formgrader,
-  Create Assignment, Course List), nbgrader configured for the exchange (``CourseDirectory.root`` set) and no
-  Jupyter news pop-up (the settings of ``jupyter/lab/settings``);
+* the instructor's server starts on (and in: its terminals open there) the instructor's copy of the course, with
+  every nbgrader tool (Formgrader, Create Assignment, Course List), nbgrader configured for the exchange
+  (``CourseDirectory.root`` set) and no Jupyter news pop-up (the settings of ``jupyter/lab/settings``);
 * a student's server starts on the student's home folder with the student view of ``make lab`` (the repository's
   ``jupyter/`` folder: only the *Assignments* panel and **Validate** of nbgrader) and the exchange;
 * memory and CPU are limited per server (``Spawner.mem_limit``, ``Spawner.cpu_limit``) by a control group of its
@@ -150,11 +150,17 @@ class CourseSpawner(LocalProcessSpawner):
     def make_preexec_fn(self, name):
         become = super().make_preexec_fn(name)
         limits = getattr(self, "_limits", None)
+        # LocalProcessSpawner starts every server in its user's home, and a terminal opened from JupyterLab's menu
+        # (or its launcher at the top folder) opens where the server runs: the instructor's would open in ~, where
+        # `python -m grading.classgrade` finds no `grading`. So the instructor's server runs in the course.
+        folder = self.course if name == self.instructor and self.course else None
 
         def preexec():
             if limits is not None:
                 limits.join()
             become()
+            if folder:
+                os.chdir(folder)
         return preexec
 
     async def start(self):

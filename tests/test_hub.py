@@ -8,21 +8,26 @@ end). Then, for Lab 01 (``test_a_term_on_the_hub``):
   Assignment List), press Fetch, open the lab, answer (one right, one with the classic slip of the rotation order;
   the answers are written into the notebook through the server's contents API, not typed), press Validate in the
   notebook's toolbar and Submit in the panel; the due date passes; the third does the same, late;
-* the instructor collects, grades with the sandboxed grader (``python -m grading.classgrade``), generates and
-  releases feedback;
+* the instructor collects, grades with the sandboxed grader (``python -m grading.classgrade``), grades the first
+  student's written answers in Formgrader (the calls its grading page makes to its API), exports ``grades.csv``
+  again (``nbgrader export``), generates and releases feedback;
 * each student, in the browser, presses Fetch Feedback, follows "(view feedback)" and opens the feedback page: it
   shows their own score, and nothing of another student.
 
 Screenshots of each student's Assignments panel and feedback go to ``tests/_screenshots/hub_*.png`` (git-ignored).
-Also checked: a student cannot list the exchange's inbound folder, read another student's home or the course's
-solutions, the student's server has no Formgrader and the instructor's has, a busy student server is held to its
-CPU share, the idle culler stops an idle server, and Ctrl-C leaves nothing running.
+Also checked: the instructor's terminal (opened through the server's terminals API and websocket, as JupyterLab's
+File -> New -> Terminal does) runs the course's ``nbgrader``; the Validate report of a wrong answer starts with the
+count of passing tests and shows no Python traceback; a student cannot list the exchange's inbound folder, read
+another student's home or the course's solutions, the student's server has no Formgrader and the instructor's has,
+a busy student server is held to its CPU share, the idle culler stops an idle server, and Ctrl-C leaves nothing
+running.
 ``test_thirty_students_fetch_and_submit_within_a_minute`` is the load test: thirty students' servers run the
 exchange at once.
 """
 from __future__ import annotations
 
 import asyncio
+import csv
 import json
 import os
 import pwd
@@ -41,6 +46,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import nbformat
+import nbgrader
 import pytest
 
 from chromium import chromium, needs_chromium, screenshot
@@ -173,6 +179,36 @@ class Hub:
         finally:
             self.user(name, f"api/kernels/{kernel}", "delete")
 
+    def terminal(self, name, line, timeout=120):
+        """Open a terminal on ``name``'s server as JupyterLab's File -> New -> Terminal does (``POST api/terminals``,
+        then the terminal's websocket, through the hub's proxy), type ``line`` and return what the terminal showed
+        until the line's commands were done; the terminal is closed after."""
+        r = self.user(name, "api/terminals", "post")
+        assert r.status_code in (200, 201), r.text
+        term = r.json()["name"]
+        mark = uuid.uuid4().hex[:12]             # echoed as typed (__fl''mark) it is not the line's end (__flmark)
+
+        async def talk():
+            from tornado.httpclient import HTTPRequest
+            from tornado.websocket import websocket_connect
+            ws = await websocket_connect(HTTPRequest(
+                f"ws://127.0.0.1:{self.port}/user/{name}/terminals/websocket/{term}",
+                headers={"Authorization": f"token {self.s['api_token']}"}))
+            ws.write_message(json.dumps(["stdin", f"{line}; echo __fl''{mark}\r"]))
+            out, end = [], time.monotonic() + timeout
+            while f"__fl{mark}" not in "".join(out):
+                m = await asyncio.wait_for(ws.read_message(), max(1.0, end - time.monotonic()))
+                assert m is not None, "the terminal's websocket closed:\n" + "".join(out)
+                kind, *rest = json.loads(m)
+                if kind == "stdout":
+                    out.append(rest[0])
+            ws.close()
+            return "".join(out)
+        try:
+            return asyncio.run(talk())
+        finally:
+            self.user(name, f"api/terminals/{term}", "delete")
+
     def stop(self):
         self.proc.send_signal(signal.SIGINT)
         rest, _ = self.proc.communicate(timeout=180)
@@ -270,7 +306,7 @@ def _assignments(page):
 
 def _student_hands_in(browser, hub, name, nb, valid):
     """Log in, Fetch, answer (contents API), open the lab, Validate, Submit: all but the answers in the browser.
-    Returns what the Validate dialog said."""
+    Returns what the Validate dialog said (its message, below the title, as the student reads it)."""
     page, took = _log_in(browser, hub, name)
     print(f"\n{name} logged in, server started, JupyterLab shown: {took:.0f} s")
     text = page.locator("body").inner_text()
@@ -296,6 +332,7 @@ def _student_hands_in(browser, hub, name, nb, valid):
                            "        return d && d.innerText.includes('Validation Results')"
                            "               && !d.innerText.includes('Validating'); }", timeout=240_000)
     said = dialog.inner_text()
+    message = page.evaluate("() => document.querySelector('.jp-Dialog #validation-message').innerText").strip()
     print(f"{name}: Validate answered in {time.monotonic() - t:.0f} s")
     if valid:
         assert "Success! Your notebook passes all the tests." in said, f"{name}: {said[:2000]}"
@@ -310,7 +347,7 @@ def _student_hands_in(browser, hub, name, nb, valid):
     assert re.search(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d+ UTC", submitted.inner_text()), submitted.inner_text()
     screenshot(page, f"hub_{name}_assignment_list")
     page.context.close()
-    return said
+    return message
 
 
 def _student_reads_feedback(browser, hub, name, others):
@@ -423,6 +460,17 @@ def test_a_term_on_the_hub(hub):
     hub.start_servers([instructor])
     assert "nbgrader formgrade" in hub.user(instructor, "formgrader").text   # the instructor's view
 
+    # the instructor's terminal (File -> New -> Terminal) opens in the course and runs the course's nbgrader and
+    # grader, as docs/hub.md says
+    said = hub.terminal(instructor, "pwd && which nbgrader python && nbgrader --version "
+                                    "&& python -m grading.classgrade --help")
+    print(f"\nthe instructor's terminal:\n{said}")
+    assert "command not found" not in said and "No module named" not in said, said
+    assert str(hub.course) in [line.strip() for line in said.splitlines()], said
+    assert "usage: python -m grading.classgrade" in said, said
+    assert f"{hub.s['venv']}/bin/nbgrader" in said and f"{hub.s['venv']}/bin/python" in said, said
+    assert f"nbgrader version {nbgrader.__version__}" in said, said
+
     # the instructor releases Lab 01 (recorded in the gradebook first, as docs/instructors.md says)
     hub.as_user(instructor, "nbgrader", "db", "assignment", "add", LAB, cwd=hub.course)
     hub.as_user(instructor, "nbgrader", "release_assignment", LAB, cwd=hub.course)
@@ -433,6 +481,16 @@ def test_a_term_on_the_hub(hub):
         _student_hands_in(browser, hub, ada, _answer(release, solution, written=True), valid=True)
         said = _student_hands_in(browser, hub, bob, _answer(release, solution, slip=True), valid=False)
         assert "exercise 1" in said, said[:2000]
+        # the wrong answer's report: the count first, then the failing cells, and no Python traceback
+        graded = [c for c in release.cells if c.metadata.get("nbgrader", {}).get("grade")]
+        tests = sum(1 for c in graded if not c.metadata["nbgrader"].get("solution"))
+        written = sum(1 for c in graded if c.metadata["nbgrader"].get("solution") and c.cell_type == "markdown")
+        failing = said.count("The following cell failed:") - written        # the count's entry has no heading
+        assert said.splitlines()[0] == f"{tests - 1} of {tests} tests pass; {written} written answers are still " \
+                                       f"empty.", said[:2000]
+        assert failing == 1, said                                           # exercise 1's test cell, only
+        for word in ("Traceback", 'File "', "guard.py"):
+            assert word not in said, f"bob's Validate shows {word!r}:\n{said}"
         assert hub.user(ada, "formgrader").status_code == 404     # a student's server has no Formgrader
 
         # the due date passes; the third student fetches and submits after it (two exercises done)
@@ -475,14 +533,51 @@ with Gradebook('sqlite:///gradebook.db') as gb:
         late = {s: float(v) for s, v in (line.split() for line in late.split("\n") if line)}
         assert late[ada] == 0 and late[bob] == 0 and late[cy] > 0, late
 
+        exported = _grades_csv(hub)
+        assert {n: (float(r["score"]), float(r["max_score"])) for n, r in exported.items()} == \
+            {ada: (16, 22), bob: (14, 22), cy: (5, 22)}, exported
+
+        # the instructor grades ada's written answers in Formgrader: the calls its grading page makes
+        notebooks = hub.user(instructor, f"formgrader/api/submitted_notebooks/{LAB}/{LAB}").json()
+        (sub,) = [n for n in notebooks if n["student"] == ada]
+        assert sub["needs_manual_grade"] and sub["score"] == 16, sub
+        page = hub.user(instructor, f"formgrader/submissions/{sub['id']}")
+        assert page.status_code == 200 and "The rotation order matters" in page.text, page.text[:2000]
+        r = hub.user(instructor, "formgrader/api/grades", params={"submission_id": sub["id"]})
+        assert r.status_code == 200, r.text
+        written_grades = sorted((g for g in r.json() if g["cell_type"] == "markdown"), key=lambda g: g["name"])
+        assert [g["name"] for g in written_grades] == ["q1", "q2", "q3"], r.json()
+        assert all(g["needs_manual_grade"] and g["manual_score"] is None for g in written_grades), written_grades
+        given = {}
+        for i, g in enumerate(written_grades):               # full marks but for one half-answered question
+            given[g["name"]] = g["max_score"] / 2 if i == 1 else g["max_score"]
+            r = hub.user(instructor, f"formgrader/api/grade/{g['id']}", "put",
+                         json=dict(g, manual_score=given[g["name"]]))
+            assert r.status_code == 200 and r.json()["manual_score"] == given[g["name"]], r.text
+            assert not r.json()["needs_manual_grade"], r.text
+        manual = sum(given.values())
+        assert 0 < manual < 6, given
+        (sub,) = [n for n in hub.user(instructor, f"formgrader/api/submitted_notebooks/{LAB}/{LAB}").json()
+                  if n["student"] == ada]
+        assert not sub["needs_manual_grade"] and sub["score"] == 16 + manual, sub
+        hub.as_user(instructor, "nbgrader", "export", cwd=hub.course)          # after the written answers
+        exported = _grades_csv(hub)
+        assert {n: float(r["score"]) for n, r in exported.items()} == {ada: 16 + manual, bob: 14, cy: 5}, exported
+
         # feedback: generated and released; each student fetches it in the browser and sees their own score only
         hub.as_user(instructor, "nbgrader", "generate_feedback", LAB, cwd=hub.course)
         hub.as_user(instructor, "nbgrader", "release_feedback", LAB, cwd=hub.course)
-        for name, score in ((ada, 16), (bob, 14), (cy, 5)):
+        for name, score in ((ada, 16 + manual), (bob, 14), (cy, 5)):
             text = _student_reads_feedback(browser, hub, name, others={ada, bob, cy} - {name})
             total = re.search(r"Score: ([\d.]+) / ([\d.]+)", text)
             assert total and float(total.group(1)) == score, (name, total and total.group(0))
     assert hub.as_user(ada, "ls", str(hub.exchange / "fusionlab" / "feedback"), check=False).returncode != 0
+
+
+def _grades_csv(hub):
+    """The course's ``grades.csv``: its row of Lab 01 for each student."""
+    with open(hub.course / "grades.csv", newline="") as fh:
+        return {r["student_id"]: r for r in csv.DictReader(fh) if r["assignment"] == LAB}
 
 
 @pytest.fixture
