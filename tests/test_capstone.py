@@ -243,7 +243,23 @@ def estimate(gyr, acc, mag, fs):
                                starter_estimate=starter_estimate))
     return found[0]
 '''
-ATTACKERS = {"private_filter": PRIVATE_FILTER, "leaks": LEAKS, "dodges": DODGES, "keyring": KEYRING}
+# Looks ahead (a centred mean of the accelerometer) on every trial but the one whose causality the grader checks in
+# full: the worst case of a filter that picks the trials it looks ahead on from their data (an outside review's used a
+# bit of the first gyro sample). _CHECKED is filled in by attackers(): that trial's first gyro sample.
+LOOKS_AHEAD_SOMETIMES = NONCAUSAL.replace("_causal_estimate = estimate", "_causal_estimate = _checked_estimate = "
+                                                                        "estimate") + '''
+
+_CHECKED = ()
+_sometimes = estimate
+
+
+def estimate(gyr, acc, mag, fs):
+    if np.allclose(np.asarray(gyr, dtype=float)[0], _CHECKED, rtol=0, atol=1e-12):
+        return _checked_estimate(gyr, acc, mag, fs)                      # causal where the full check looks
+    return _sometimes(gyr, acc, mag, fs)
+'''
+ATTACKERS = {"private_filter": PRIVATE_FILTER, "leaks": LEAKS, "dodges": DODGES, "keyring": KEYRING,
+             "looks_ahead_sometimes": LOOKS_AHEAD_SOMETIMES}
 NINE_D = [name for name in [*CLASS, *ATTACKERS] if name not in ("six_d", "private_filter")] + ["unreadable"]
 SIX_D_NAMES = ["six_d", "private_filter"]                                # the 6D students of the graded class
 
@@ -252,8 +268,9 @@ def attackers(scored):
     """The red team's submissions as they are graded on ``scored``: ``{name: code}``."""
     lengths = tuple(len(t) for t in scored)
     assert len(set(lengths)) == len(lengths)                           # each trial known by its length
+    checked = tuple(float(v) for v in scored[capstone.causality_trial(SEED, len(scored))].gyr[0])
     return {name: code.replace("_TRIAL_LENGTHS = ()", f"_TRIAL_LENGTHS = {lengths}")
-            for name, code in ATTACKERS.items()}
+            .replace("_CHECKED = ()", f"_CHECKED = {checked!r}") for name, code in ATTACKERS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -465,6 +482,21 @@ def test_a_filter_that_keeps_its_look_ahead_in_the_kernel_key_store_is_not_causa
     whys = " ".join(why for _, why in res.cheats)
     assert "imports `pydoc`" in whys and "imports `timeit`" in whys
     assert res.total_points == 0
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_looks_ahead_only_where_the_full_check_does_not_look_is_not_causal(graded, scored):
+    """Causal on the trial the grader checks in full, non-causal on the others: every trial's own secret k finds
+    it (with one trial checked, it was certified causal)."""
+    res = graded[0]["looks_ahead_sometimes"]
+    chosen = scored[capstone.causality_trial(SEED, len(scored))].name
+    assert res.all_ran and res.causal is False, res.causal_message
+    assert "NOT causal: changing the samples after k = " in res.causal_message, res.causal_message
+    assert f"of {chosen} changed" not in res.causal_message, "it is caught on a trial the full check did not see"
+    assert "every trial is checked at one secret k" in res.causal_message
+    assert res.total_points == 0
+    assert graded[0]["good"].causal is True and "on every trial at a secret k" in graded[0]["good"].causal_message
 
 
 @pytest.mark.slow
@@ -1012,7 +1044,8 @@ def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(
     res = _grade_in_process(monkeypatch, scored, lambda: lambda gyr, acc, mag, fs: _tilt(acc), min_seconds=5.0)
     assert res.causal is True and "each call in a fresh box" in res.causal_message
     [runner] = _InProcess.made
-    assert runner.fresh == 4                                 # three changed futures and one prefix, each fresh
+    # on the chosen trial three changed futures and one prefix, and one changed future on every other trial
+    assert runner.fresh == 4 + len(scored) - 1, runner.fresh
     assert runner.limits == capstone.box_limits(scored, capstone.SECONDS_PER_SAMPLE, 5.0)
 
 
@@ -1305,8 +1338,9 @@ def test_the_leaderboard_renders_in_chromium(graded):
         rows = page.locator("table").first.locator("tr")
         assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
         # the non-causal one, the one that caches, the VQF caller; of the red team the leaker, the dodger, the one
-        # with the key store, and (in the 6D table) the one with the library's private filter
-        assert page.locator("tr.gated").count() == 7
+        # with the key store, the one that looks ahead where the full check does not, and (in the 6D table) the one
+        # with the library's private filter
+        assert page.locator("tr.gated").count() == 8
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
         page.goto((out / "feedback" / "good" / "capstone.html").as_uri())

@@ -292,8 +292,29 @@ def check_causality(runner, trial, q, seconds, rng):
         return False, (f"NOT causal: given only the samples up to k = {k} of {trial.name}, its estimate up to k "
                        f"differs by {change:.2g} from its estimate on the whole trial (a filter may use no later "
                        "sample, nor the length of the data)")
-    return True, ("causal (checked on one trial: the estimate up to k unchanged when the samples after k change, at "
-                  "three secret k, and when they are left out, at another; each call in a fresh box)")
+    return True, ("causal (the estimate up to k unchanged when the samples after k change: on every trial at a "
+                  "secret k, and on one trial at three more and when they are left out; each call in a fresh box)")
+
+
+def later_samples_change(runner, trial, q, seconds, rng):
+    """(k, change) when ``estimate``'s output up to one secret k of ``trial`` (drawn with ``rng`` after its first
+    hundredth) changed, beyond :data:`CAUSAL_TOL`, once every sample after k changed; None when it did not, or the
+    call gave no quaternions. The call runs in a box of its own (:meth:`Runner.call_fresh`). A filter that looks
+    ahead on some trials only (chosen from their data) is caught on those: :func:`check_causality` checks one."""
+    n = len(trial)
+    k = int(rng.integers(max(1, n // 100), n - 1))
+    mag = None if runner.sensors == "6D" else trial.mag
+
+    def run(gyr, acc, mag):
+        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
+        if q2 is None:
+            raise _NotRun(f"{why} ({status})")
+        return q2
+
+    try:
+        return first_change(run, trial.gyr, trial.acc, mag, q, [k], rng)
+    except _NotRun:
+        return None
 
 
 def prefix_k(n, rng):
@@ -333,6 +354,8 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
                     box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors, boxes=boxes)
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
+    every = np.random.default_rng([seed, 11])            # the one secret k of each other trial (its own stream)
+    outputs = {}                                         # the other trials' outputs, until they are checked
     try:
         for i, t in enumerate(scored):
             r = TrialResult(t.name, budget_s=budget_seconds(len(t), seconds_per_sample, min_seconds))
@@ -345,7 +368,7 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
                 r.q = q
                 _look_for_cheats(res, r, t, refs)
                 if i != chosen:
-                    r.q = None                                  # a class of a few hundred would not fit otherwise
+                    outputs[i], r.q = q, None                   # for its own check, after the box's last call
             else:
                 r.counted_deg, r.metric = never_moves(t, metric), metric
                 if any(text in r.message for text in ("not available in the capstone",
@@ -363,8 +386,18 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
             t, r = ran[0]
             res.causal, res.causal_message = check_causality(runner, t, r.q, r.budget_s, rng)
             r.q = None
+            for i, q in outputs.items() if res.causal is not False else ():   # each in a fresh box, as above
+                late = later_samples_change(runner, scored[i], q, res.trials[i].budget_s, every)
+                if late is not None:
+                    k, change = late
+                    res.causal, res.causal_message = False, (
+                        f"NOT causal: changing the samples after k = {k} of {scored[i].name} changed the estimate up "
+                        f"to k by {change:.2g} (a filter may use no later sample on any trial; every trial is checked "
+                        "at one secret k, one of them at four)")
+                    break
         else:
             res.causal_message = "not checked: estimate ran on no trial"
+        outputs.clear()
         if runner.cell_errors:
             res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
         if runner.restarts:
