@@ -66,7 +66,11 @@ def run(course: Path, lab: str, workers: int):
     if res.returncode != 0:
         raise SystemExit(f"classgrade failed:\n{res.stdout}\n{res.stderr}")
     peak = re.search(r"peak memory of the grading process: (\d+) MB", res.stdout)
-    return seconds, int(peak.group(1)) if peak else float("nan")
+    judge = re.search(r"judge process .*?: (\d+) MB, ([\d.]+) s of CPU", res.stdout)
+    users = re.search(r"each student's judge ran as (.*)", res.stdout)
+    said = (f"; largest judge process {judge.group(1)} MB, {judge.group(2)} s of CPU" if judge else "") + \
+           (f"; judges ran as {users.group(1)}" if users else "")
+    return seconds, (int(peak.group(1)) if peak else float("nan")), said
 
 
 def main(argv=None):
@@ -83,10 +87,10 @@ def main(argv=None):
         rates = {w: [] for w in args.workers}
         for r in range(args.repeat):
             for w in args.workers:
-                seconds, peak = run(course, args.lab, w)
+                seconds, peak, said = run(course, args.lab, w)
                 rates[w].append(60 * args.students / seconds)
                 print(f"  run {r + 1}, {w} worker(s): {seconds:.0f} s, {rates[w][-1]:.1f} students per minute, "
-                      f"grading process peak {peak} MB", flush=True)
+                      f"grading process peak {peak} MB{said}", flush=True)
         for w, values in rates.items():
             print(f"{w} worker(s): median {statistics.median(values):.1f} students per minute "
                   f"over {len(values)} run(s)")
