@@ -22,9 +22,11 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import shutil
 import signal
 import socket
 import sys
+import tempfile
 
 from grading import client, sandbox
 
@@ -258,6 +260,9 @@ def split(maker, slot, read_all=False):
     if os.geteuid() != 0:
         return maker
     maker.prepare()                                            # made by root: the judge cannot write the scratch
+    # the judge's own temporary folder (matplotlib's, when it cannot write root's): the launcher removes it at its end
+    own = tempfile.mkdtemp(prefix="fusionlab-judge-")
+    os.chown(own, judge_uid(slot), judge_uid(slot))
     ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     pid = os.fork()
     if pid == 0:                                               # the launcher: root, answers requests, then exits
@@ -268,9 +273,11 @@ def split(maker, slot, read_all=False):
         except BaseException:  # noqa: BLE001 -- nothing of a failed launcher may run on as the judge
             status = 1
         finally:
+            shutil.rmtree(own, ignore_errors=True)
             os._exit(status)
     theirs.close()
     drop_root(judge_uid(slot), read_all=read_all)
+    os.environ["TMPDIR"] = os.environ["MPLCONFIGDIR"] = tempfile.tempdir = own
     return RemoteBoxes(ours, pid)
 
 

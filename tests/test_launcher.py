@@ -147,9 +147,12 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
         second = boxes.start("ex1_tests", files=False)
         second_pid = second.receive(deadline)
         pid = boxes.launcher_pid
+        own = tempfile.mkdtemp(prefix="matplotlib-")           # what matplotlib makes where root's cache is closed
+        owner = os.stat(os.path.dirname(own)).st_uid
         boxes.close()                                   # with the second box still running
         return {"uid": os.getuid(), "pid": box_pid, "echoed": echoed, "refused": refused, "running": running,
-                "work": work, "status": status, "after": after, "second": second_pid, "launcher": pid}
+                "work": work, "status": status, "after": after, "second": second_pid, "launcher": pid,
+                "own": own, "owner": owner}
 
     got = _in_child(body)
     assert got["uid"] == launcher.judge_uid(4) and got["echoed"] == {"a": [1, 2.5]}, got
@@ -160,6 +163,9 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
     assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), \
         "closing the judge's end ends every box and the launcher"
     assert list(lab.scratch.iterdir()) == []
+    assert got["owner"] == launcher.judge_uid(4) and os.path.basename(os.path.dirname(got["own"])).startswith(
+        "fusionlab-judge-"), got
+    assert not os.path.exists(os.path.dirname(got["own"])), "the judge's temporary folder goes with the launcher"
 
 
 @AS_ROOT
