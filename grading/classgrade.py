@@ -432,8 +432,7 @@ def main(argv=None):
         blocked = launcher.unreadable(mine[0])
         if blocked:
             the_lab.judge_reads_all = True
-            print(f"{blocked} is readable by root alone: the judges run as users of their own but keep one "
-                  f"capability, reading files (CAP_DAC_READ_SEARCH), to import from it", flush=True)
+            print(launcher.reach_message(blocked, mine[0]), flush=True)
         model = judge.judge(the_lab, the_lab.solution, "model solution", slot=mine[0])
         if model.score < model.max_score:
             wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)
@@ -478,6 +477,9 @@ def main(argv=None):
             print("each student's judge ran as " + ("root (NOT dropped)" if 0 in users else
                   f"user {', '.join(map(str, users))}, not root (grading.launcher starts the boxes)"
                   if os.geteuid() == 0 else "the grader's own user"))
+            caps = {r.verdict.judge_caps for r in results if r.verdict is not None}
+            print("  with no capability" if caps == {0} else
+                  f"  keeping capabilities {', '.join(f'{c:#x}' for c in sorted(caps))} (see above)")
         print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
               f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
               f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look); common slips: {slips_html.name} and "

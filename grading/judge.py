@@ -97,6 +97,7 @@ class Verdict:
     judge_mb: float = 0.0         # the most memory the process that judged it held (MB; judge_apart)
     judge_uid: int = -1           # the user that process ran as (judge_apart; not root: grading.launcher)
     judge_cpu_s: float = 0.0      # its CPU time, s (the boxes' not counted; bounded: launcher.APART_CPU_SECONDS)
+    judge_caps: int = 0           # its effective capabilities (a bit mask; 0 unless it had to keep reading)
 
     @property
     def score(self):
@@ -393,7 +394,8 @@ def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_ME
     return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
                    cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
                    largest_reply=int(d["largest_reply"]), judge_mb=float(reply["process"]["mb"]),
-                   judge_uid=int(reply["process"]["uid"]), judge_cpu_s=float(reply["process"]["cpu_s"]))
+                   judge_uid=int(reply["process"]["uid"]), judge_cpu_s=float(reply["process"]["cpu_s"]),
+                   judge_caps=int(reply["process"]["caps"]))
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"

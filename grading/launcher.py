@@ -169,14 +169,19 @@ class RemoteBoxes:
 
 
 _CAP_DAC_READ_SEARCH = 2
+_CLONE_NEWNS, _MS_BIND, _MS_MOVE, _MS_REC, _MS_PRIVATE = 0x20000, 0x1000, 0x2000, 0x4000, 1 << 18
+
+
+def _libc():
+    return ctypes.CDLL(None, use_errno=True)
 
 
 def drop_root(uid, read_all=False):
     """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing it
     runs can gain a privilege back (a set-user-id program runs as the caller). With ``read_all`` it keeps one
-    capability, ``CAP_DAC_READ_SEARCH`` (read any file, list any folder; no writing, no signals): for a machine where
-    Python or the course sits in a folder only root may read (Python in root's home), from which the judge imports."""
-    libc = ctypes.CDLL(None, use_errno=True)
+    capability, ``CAP_DAC_READ_SEARCH`` (read any file, list any folder; no writing, no signals): the last resort
+    of :func:`open_view`, where a process may not have a mount namespace of its own."""
+    libc = _libc()
 
     def prctl(*args):
         if libc.prctl(*[ctypes.c_ulong(a) for a in args]) != 0:
@@ -198,6 +203,59 @@ def drop_root(uid, read_all=False):
         raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
 
 
+def closed_folders(paths):
+    """``{folder: entries}``: for each of ``paths``, the first folder on its way from ``/`` that other users may not
+    enter (no ``o+x``: root's home, say), with the entry of it on that way (``/root`` -> ``.pyenv``). ``{}`` when
+    every path is open to all."""
+    out = {}
+    for path in paths:
+        parts = os.path.abspath(path).split(os.sep)[1:]
+        for i in range(len(parts) - 1):
+            folder = os.sep + os.path.join(*parts[:i + 1])
+            try:
+                closed = not os.stat(folder).st_mode & 0o001
+            except OSError:
+                break
+            if closed:
+                out.setdefault(folder, set()).add(parts[i + 1])
+                break
+    return {folder: sorted(entries) for folder, entries in out.items()}
+
+
+def open_view(paths, stage):
+    """Give this process a view of the file system of its own (a mount namespace) in which each folder of
+    :func:`closed_folders` of ``paths`` is an empty, open folder holding only the entries on the way to ``paths``
+    (root's home shows ``.pyenv`` and nothing else), so that a judge that is not root imports from there without
+    any capability. Root, before :func:`drop_root`, in a process with one thread; ``stage`` is an empty folder
+    outside them for the moves. The machine's own view is not changed. Returns the folders opened; raises OSError
+    where the kernel refuses (root of a user namespace without mount rights)."""
+    closed = closed_folders(paths)
+    if not closed:
+        return []
+    libc = _libc()
+
+    def call(name, *args):
+        if getattr(libc, name)(*args) != 0:
+            errno = ctypes.get_errno()
+            raise OSError(errno, f"{name}{tuple(a.decode() if isinstance(a, bytes) else a for a in args)}: "
+                                 f"{os.strerror(errno)}")
+    call("unshare", _CLONE_NEWNS)
+    call("mount", None, b"/", None, ctypes.c_ulong(_MS_REC | _MS_PRIVATE), None)
+    for n, (folder, entries) in enumerate(closed.items()):
+        aside = []
+        for k, entry in enumerate(entries):
+            source, held = os.path.join(folder, entry), os.path.join(stage, f"{n}-{k}")
+            os.mkdir(held) if os.path.isdir(source) else open(held, "w").close()
+            call("mount", source.encode(), held.encode(), None, ctypes.c_ulong(_MS_BIND | _MS_REC), None)
+            aside.append((held, entry, os.path.isdir(source)))
+        call("mount", b"tmpfs", folder.encode(), b"tmpfs", ctypes.c_ulong(0), b"mode=0755,size=64k")
+        for held, entry, is_dir in aside:
+            target = os.path.join(folder, entry)
+            os.mkdir(target) if is_dir else open(target, "w").close()
+            call("mount", held.encode(), target.encode(), None, ctypes.c_ulong(_MS_MOVE), None)
+    return list(closed)
+
+
 def _in_dropped_child(slot, read_all, task):
     """Run ``task()`` (returns a string) in a child process that has given up root as :func:`judge_uid`; what it
     returned, or what stopped it."""
@@ -207,7 +265,8 @@ def _in_dropped_child(slot, read_all, task):
         said = ""
         try:
             os.close(r)
-            drop_root(judge_uid(slot), read_all=read_all)
+            if read_all is not None:                           # None: the task gives up root itself
+                drop_root(judge_uid(slot), read_all=read_all)
             said = task()
         except Exception as exc:  # noqa: BLE001 -- said to the grader
             said = f"{type(exc).__name__}: {exc}"
@@ -252,11 +311,44 @@ def unreadable(slot, paths=None):
     return _in_dropped_child(slot, False, first_refused) or None
 
 
+def view_problem(slot, paths=None):
+    """Why the judge of ``slot`` cannot reach ``paths`` (the import path by default) through :func:`open_view` as
+    its own user, with no capability; "" when it can. Tried in a child process."""
+    paths = [p for p in (sys.path if paths is None else paths) if p and os.path.isdir(p)]
+
+    def task():
+        stage = tempfile.mkdtemp()
+        try:
+            open_view(paths, stage)
+        except OSError as exc:
+            return f"no view of its own: {exc}"
+        drop_root(judge_uid(slot))
+        for path in paths:
+            try:
+                os.listdir(path)
+            except PermissionError:
+                return f"{path} is still closed in its view"
+        return ""
+    return _in_dropped_child(slot, None, task)
+
+
+def reach_message(blocked, slot):
+    """What a grading run says when the import path crosses ``blocked``, a folder only root may read."""
+    problem = view_problem(slot)
+    if not problem:
+        return (f"{blocked} is readable by root alone: each judge sees, in a view of its own, only the folders on "
+                f"the way to Python's files there, and keeps no capability")
+    return (f"{blocked} is readable by root alone and the judges get no view of their own here ({problem}): they "
+            f"keep one capability, reading files (CAP_DAC_READ_SEARCH), to import from it")
+
+
 def split(maker, slot, read_all=False):
     """The boxes of one student (``maker``: :class:`LabBoxes`, or the capstone's). As root: fork the launcher, which
-    starts them with ``maker.open``, and run the rest of this process as :func:`judge_uid` (``read_all``: keeping
-    ``CAP_DAC_READ_SEARCH``; call it in a process of its own: :func:`apart`); returns the judge's end. Otherwise
-    ``maker`` itself, which starts them here."""
+    starts them with ``maker.open``, and run the rest of this process as :func:`judge_uid` (call it in a process of
+    its own: :func:`apart`); returns the judge's end. Otherwise ``maker`` itself, which starts them here.
+    ``read_all``: the import path crosses a folder only root may enter (:func:`unreadable`), which the judge sees
+    through a view of its own (:func:`open_view`), or, where the kernel gives it none (:func:`view_problem`), by
+    keeping ``CAP_DAC_READ_SEARCH``."""
     if os.geteuid() != 0:
         return maker
     maker.prepare()                                            # made by root: the judge cannot write the scratch
@@ -276,7 +368,14 @@ def split(maker, slot, read_all=False):
             shutil.rmtree(own, ignore_errors=True)
             os._exit(status)
     theirs.close()
-    drop_root(judge_uid(slot), read_all=read_all)
+    keep = False
+    if read_all:
+        try:
+            stage = tempfile.mkdtemp(dir=own)
+            open_view(sys.path, stage)
+        except OSError:
+            keep = True                                        # no namespace here: the capability, as a last resort
+    drop_root(judge_uid(slot), read_all=keep)
     os.environ["TMPDIR"] = os.environ["MPLCONFIGDIR"] = tempfile.tempdir = own
     return RemoteBoxes(ours, pid)
 
@@ -289,7 +388,8 @@ def _apart_child(conn, target, args, memory_bytes, cpu_seconds):
     try:
         out = target(*args)
         use = resource.getrusage(resource.RUSAGE_SELF)
-        out["process"] = {"mb": use.ru_maxrss / 1024, "uid": os.getuid(), "cpu_s": use.ru_utime + use.ru_stime}
+        out["process"] = {"mb": use.ru_maxrss / 1024, "uid": os.getuid(), "cpu_s": use.ru_utime + use.ru_stime,
+                          "caps": _effective_capabilities()}
         conn.send_bytes(json.dumps(out).encode())
     except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
         conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
@@ -297,12 +397,18 @@ def _apart_child(conn, target, args, memory_bytes, cpu_seconds):
         conn.close()
 
 
+def _effective_capabilities():
+    """This process's effective capabilities, as the kernel's bit mask (0: none)."""
+    with open("/proc/self/status") as f:
+        return next((int(line.split(":")[1], 16) for line in f if line.startswith("CapEff:")), -1)
+
+
 def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SECONDS):
     """``target(*args)`` (a module's function returning a dict of plain data) in a process of its own with
     ``memory_bytes`` of address space and ``cpu_seconds`` of its own CPU time (the boxes' time is theirs), started
     from a clean server process (not forked from this one's threads), which imports ``preload`` once for all. What
     comes back is that dict as JSON, with ``"process"``: the most memory the process held (``mb``), its CPU time
-    (``cpu_s``) and the user it ran as (``uid``). ``who`` names the student in an error: a process that ran over
+    (``cpu_s``), the user it ran as (``uid``) and its effective capabilities at the end (``caps``, a bit mask). ``who`` names the student in an error: a process that ran over
     its CPU time is said to have."""
     import multiprocessing
     ctx = multiprocessing.get_context("forkserver")

@@ -599,7 +599,8 @@ def test_a_flood_on_the_pipe_fails_its_test_and_costs_the_judge_no_memory(graded
 
 
 def test_the_judges_give_up_root_before_they_read_a_reply(graded):
-    """As root, each student's judge runs as a user of its own slot (grading.launcher), never as root."""
+    """As root, each student's judge runs as a user of its own slot (grading.launcher), never as root, and keeps no
+    capability (where Python lies in root's home, the judge sees it through a view of its own)."""
     said = re.search(r"each student's judge ran as (.*)", graded["run"].stdout).group(1)
     if os.geteuid() != 0:
         assert said == "the grader's own user", said
@@ -607,6 +608,7 @@ def test_the_judges_give_up_root_before_they_read_a_reply(graded):
     users = [int(u) for u in re.fullmatch(r"user ([\d, ]+), not root \(grading.launcher starts the boxes\)",
                                           said).group(1).split(", ")]
     assert users and set(users) <= {launcher.judge_uid(s) for s in range(sandbox.MAX_SLOTS)}, users
+    assert "\n  with no capability\n" in graded["run"].stdout, "no capability kept, Python in root's home or not"
 
 
 def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_process(graded):

@@ -231,6 +231,42 @@ def test_a_folder_the_judge_cannot_read_is_found_and_the_judge_may_keep_reading_
     assert got["tried"] == {name: "refused" for name in got["tried"]} and len(got["tried"]) == 5, got["tried"]
 
 
+@AS_ROOT
+def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_and_no_capability_is_kept(course):
+    """Root's home (0700) holding Python: the judge sees, in a mount namespace of its own, an open folder with only
+    the entry on the way to the path it imports from; a sibling secret stays out of its view, and the machine's own
+    view of the folder is unchanged."""
+    home = course / "home"
+    (home / "py" / "lib").mkdir(parents=True)
+    (home / "py" / "lib" / "mod.txt").write_text("module")
+    (home / "secret.txt").write_text("answers")
+    os.chmod(home, 0o700)
+    path = str(home / "py" / "lib")
+    assert launcher.closed_folders([path, str(course)]) == {str(home): ["py"]}
+    assert launcher.unreadable(3, [path]) == path
+    assert launcher.view_problem(3, [path]) == ""
+
+    def body():
+        stage = tempfile.mkdtemp(dir=str(course))
+        opened = launcher.open_view([path], stage)
+        launcher.drop_root(launcher.judge_uid(3))
+        status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
+        try:
+            open(home / "py" / "lib" / "mod.txt", "a")
+            wrote = "done"
+        except OSError:
+            wrote = "refused"
+        return {"opened": opened, "read": (home / "py" / "lib" / "mod.txt").read_text(), "wrote": wrote,
+                "listed": sorted(os.listdir(home)), "secret": (home / "secret.txt").exists(),
+                "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")]}
+
+    got = _in_child(body)
+    assert got["opened"] == [str(home)] and got["read"] == "module" and got["wrote"] == "refused", got
+    assert got["listed"] == ["py"] and not got["secret"], got
+    assert got["caps"] == ["0000000000000000"] * 4, got
+    assert sorted(os.listdir(home)) == ["py", "secret.txt"] and os.stat(home).st_mode & 0o777 == 0o700
+
+
 def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped_and_named():
     got = launcher.apart(dict, ({"a": [1, 2]},), preload=[], memory_bytes=1 << 30, who="ana", cpu_seconds=5)
     assert got["a"] == [1, 2] and set(got["process"]) == {"mb", "uid", "cpu_s"}, got

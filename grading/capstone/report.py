@@ -314,7 +314,10 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
             if progress:
                 print(f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB",
                       flush=True)
-            read_all = launcher.unreadable(slots[0]) is not None     # as root: the graders keep reading (see there)
+            blocked = launcher.unreadable(slots[0])                 # as root: a folder the graders must reach
+            read_all = blocked is not None
+            if read_all and progress:
+                print(f"  {launcher.reach_message(blocked, slots[0])}", flush=True)
             free = queue.Queue()
             for s in slots:
                 free.put(s)
