@@ -408,8 +408,8 @@ def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SEC
     ``memory_bytes`` of address space and ``cpu_seconds`` of its own CPU time (the boxes' time is theirs), started
     from a clean server process (not forked from this one's threads), which imports ``preload`` once for all. What
     comes back is that dict as JSON, with ``"process"``: the most memory the process held (``mb``), its CPU time
-    (``cpu_s``), the user it ran as (``uid``) and its effective capabilities at the end (``caps``, a bit mask). ``who`` names the student in an error: a process that ran over
-    its CPU time is said to have."""
+    (``cpu_s``), the user it ran as (``uid``) and its effective capabilities at the end (``caps``, a bit mask).
+    ``who`` names the student in an error: a process that ran over its CPU time is said to have."""
     import multiprocessing
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(preload))
