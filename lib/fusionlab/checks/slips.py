@@ -13,8 +13,11 @@ report (``grading/slipreport.py``) counts them. Besides the named slips, an outc
 :data:`NOT_ATTEMPTED`, :data:`RAISED` (the student's code raised, ran out of time, or returned no numbers) and
 :data:`UNRECOGNISED` (a wrong answer no listed slip describes).
 
-The slips of the labs in :data:`LABS` are listed; the checks of the other labs name theirs in words only, and their
-wrong answers count as unrecognised until they are listed here.
+The slips of the labs in :data:`LABS` are listed, one section per lab, in
+the order of its exercises. A check's messages that only say where a wrong answer differs ("entry [1, 0] of P_post
+is 0.3 (expected 0.25)") name no slip: such an answer is unrecognised. A lab added to the course names its slips in
+words only, and its wrong answers count as unrecognised, until its section is written here and it joins
+:data:`LABS` (tests/test_slips.py then asks a planted wrong answer for every slip it lists).
 """
 from __future__ import annotations
 
@@ -30,7 +33,7 @@ OUTCOMES = {PASSED: "passed", NOT_ATTEMPTED: "not attempted",
             UNRECOGNISED: "unrecognised wrong answer (no check names it)"}
 
 #: The labs whose checks' slips are all listed in :data:`SLIPS`.
-LABS = ("01_euler_rotations", "02_kalman_falling_body")
+LABS = ("00_mems_sensors", "01_euler_rotations", "02_kalman_falling_body")
 
 #: What :func:`fusionlab.checks._core._answer` and ``_answered`` say of an answer that is still the release's stub.
 _UNFINISHED = ("is not written yet: replace `raise NotImplementedError(...)`", "is still None: finish the exercise")
@@ -55,6 +58,65 @@ SLIPS = (
     # any check (fusionlab.checks._core)
     *_slips("", ("no_return", "returned None -- did you forget the `return` statement?"),
             ("not_a_tuple", "things (a tuple); it returned")),
+    # 00_mems_sensors
+    *_slips("check_smd_magnitude",
+            ("complex", "your function returns complex numbers: that is H(jω) itself"),
+            ("shape", "give one amplitude per frequency"),
+            ("negative", "your amplitudes are negative: |H| is a magnitude"),
+            ("dc_gain", "you returned the DC gain m/k at every frequency"),
+            ("no_damping", "the damping term (b/m)·jω is missing"),
+            ("off_resonance", "right at ω = 0 but off near resonance")),
+    *_slips("check_accel_from_bridge",
+            ("eq313_printed", "that is eq 3.13 as printed, with m/k"),
+            ("sign", "the sign is flipped: a = -(k/m)·x"),
+            ("factor_2", "a factor of 2 is missing: Vout = δ·Vin/2")),
+    *_slips("check_adc_to_physical",
+            ("two_to_bits", "you divided by 2**bits; the thesis' ADC resolution is 2**bits - 1"),
+            ("no_zero", "the zero level is not subtracted (eq 3.15)"),
+            ("multiplied", "multiply by the sensitivity? Divide"),
+            ("hard_coded_1023", "1023 is hard-coded; use 2**bits - 1")),
+    *_slips("check_adc_096",
+            ("v_ref", "Solve 0.96 = (508·V/1023 - 1.35)/0.300 for V."),
+            ("zero", "Solve 0.96 = (508·3.0/1023 - Z)/0.300 for Z."),
+            ("sens", "Solve 0.96 = (508·3.0/1023 - 1.35)/S for S, in V/g (not mV/g).")),
+    *_slips("check_adc_step",
+            ("factor_1000", "off by a factor of 1000: mg, not g?"),
+            ("levels_1024", "2**10 = 1024 levels give 1023 steps: divide by 1023")),
+    *_slips("check_atan2",
+            ("third_quadrant_nan", "no case covers y < 0, x < 0"),
+            ("plus_pi", "is outside (-π, π]: in the third quadrant subtract π"),
+            ("degrees", "your result is in degrees; return radians."),
+            ("swapped", "the arguments are swapped: this is Excel's order ATAN2(x, y)")),
+    *_slips("check_roll_pitch",
+            ("shape", "return two numbers (roll, pitch)"),
+            ("degrees", "your angles are in degrees; return radians."),
+            ("swapped", "roll and pitch are swapped -- return (roll, pitch)."),
+            ("printed_arctan", "arctan(a_y/a_z) (seed 001 as printed) only covers |roll| < 90°"),
+            ("roll_180", "roll is off by 180°"),
+            ("asin", "pitch is wrong when |a| ≠ g"),
+            ("pitch_sign", "pitch has the wrong sign: nose up")),
+    *_slips("check_precession_rate",
+            ("upside_down", "that is I ω / (M g D), upside down"),
+            ("no_g", "g is missing: the torque of the weight is M g D"),
+            ("degrees", "that looks like °/s; the answer is asked in rad/s."),
+            ("spin_squared", "ω appears squared"),
+            ("spin_on_top", "the spin belongs in the denominator"),
+            ("fixed_g", "Use the argument g, not 9.80665, inside your function.")),
+    *_slips("check_coriolis_force",
+            ("shape", "return a 3-vector"),
+            ("eq334_printed", "the sign is that of eq 3.34 as printed, +2M(Ω × v)"),
+            ("factor_2", "a factor of 2 is missing: F = -2 m Ω × v."),
+            ("acceleration", "you returned an acceleration; multiply by the mass")),
+    *_slips("check_integrate_rate",
+            ("one_more", "your result has one value more than the input"),
+            ("shape", "return one angle per rate sample"),
+            ("channels", "Integrate along axis 0 (np.cumsum(..., axis=0)) and give angle0 a default of 0."),
+            ("off_by_one", "off by one sample: θ[0] must be angle0"),
+            ("no_angle0", "angle0 is ignored: start the integral at angle0."),
+            ("trapezoid", "that is the trapezoidal rule")),
+    *_slips("check_gyro_bias",
+            ("sign", "bias_hat has the wrong sign"),
+            ("whole_record", "you averaged the whole record; the exercise asks for the first 5 s only.")),
     # 01_euler_rotations
     *_slips("check_euler_to_dcm",
             ("shape", "expected a 3×3 matrix"),
