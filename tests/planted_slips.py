@@ -13,8 +13,10 @@ those in).
 from __future__ import annotations
 
 import numpy as np
+import sympy as sp
 
-from fusionlab import conventions, kalman, rotations
+from fusionlab import (conventions, ecompass, freescale as fz, gfimu, gfimu_dynamics as gd, gfimu_ekf as ge, kalman,
+                       northfinder as nf, rotations)
 
 G0 = 9.80665
 
@@ -268,7 +270,331 @@ LAB02 = {
 }
 
 
-PLANTED = {"00_mems_sensors": LAB00, "01_euler_rotations": LAB01, "02_kalman_falling_body": LAB02}
+# ---------------------------------------------------------------------------------------------------------------
+# 03_correlation_fusion
+# ---------------------------------------------------------------------------------------------------------------
+
+def moving_average(x, n):                                # causal, expanding start (eq 5.7)
+    x = np.asarray(x, dtype=float)
+    return np.array([x[max(0, i - n + 1):i + 1].mean() for i in range(len(x))])
+
+
+def ratio(g, a, eps=1e-12):
+    return np.abs(g) / (np.abs(g) + np.abs(a) + eps)
+
+
+def fuse(a, inc, w, f0):
+    out, prev = [], f0
+    for an, i, wn in zip(a, inc, w):
+        prev = wn * an + (1 - wn) * (prev + i)
+        out.append(prev)
+    return np.array(out)
+
+
+def _unguarded_ratio(g, a):
+    with np.errstate(invalid="ignore"):
+        return np.abs(g) / (np.abs(g) + np.abs(a))
+
+
+LAB03 = {
+    "moving_average.dropped_start": (1, lambda x, n: np.convolve(x, np.ones(n) / n, mode="valid")),
+    "moving_average.fixed_n": (1, lambda x, n: moving_average(x, 3)),
+    "moving_average.centred": (1, lambda x, n: np.convolve(x, np.ones(n) / n, mode="same")),
+    "moving_average.start": (1, lambda x, n: np.r_[x[:n - 1], np.convolve(x, np.ones(n) / n, mode="valid")]),
+    "moving_average.no_divide": (1, lambda x, n: n * moving_average(x, n)),
+    "ratio.zero_over_zero": (2, _unguarded_ratio),
+    "ratio.no_abs": (2, lambda g, a: np.divide(g, g + a, out=np.zeros(len(g)), where=(g + a) != 0)),
+    "ratio.one_minus": (2, lambda g, a: 1 - ratio(g, a)),
+    "fuse.weights_swapped": (3, lambda a, inc, w, f0: fuse(a, inc, 1 - np.asarray(w), f0)),
+    "fuse.not_recursive": (3, lambda a, inc, w, f0: w * a + (1 - w) * inc),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 04_ecompass
+# ---------------------------------------------------------------------------------------------------------------
+
+def profile(s, r, alpha):
+    return sum(a * np.outer(sk, rk) for a, sk, rk in zip(alpha, s, r))
+
+
+def kappa(s, r, alpha, z_sign=1.0):                      # [[σ, zᵀ], [z, B + Bᵀ - σI]]
+    B = profile(s, r, alpha)
+    z = z_sign * sum(a * np.cross(sk, rk) for a, sk, rk in zip(alpha, s, r))
+    sigma = np.trace(B)
+    return np.block([[np.array([[sigma]]), z[None, :]], [z[:, None], B + B.T - sigma * np.eye(3)]])
+
+
+def largest(K):
+    q = np.linalg.eigh(K)[1][:, -1]
+    return q * np.sign(q[0])
+
+
+def weights(G, Bc, B, scaled=True, guard=True):
+    qa = abs(np.dot(G, G) - 1)
+    qd = abs(np.dot(Bc, Bc) - B * B) / (B * B if scaled else 1)
+    if guard and qa + qd == 0:
+        return 0.5, 0.5
+    with np.errstate(invalid="ignore"):
+        return qd / (qa + qd), qa / (qa + qd)
+
+
+LAB04 = {
+    "profile_matrix.shape": (1, lambda s, r, a: profile(s, r, a)[:2, :2]),
+    "profile_matrix.transposed": (1, lambda s, r, a: profile(s, r, a).T),
+    "profile_matrix.no_weights": (1, lambda s, r, a: profile(s, r, np.ones(len(a)))),
+    "profile_matrix.two_pairs": (1, lambda s, r, a: a[0] * np.outer(s[0], r[0]) + a[1] * np.outer(s[1], r[1])),
+    "kappa.shape": (2, lambda s, r, a: profile(s, r, a)),
+    "kappa.swapped": (2, lambda s, r, a: kappa(r, s, a)),
+    "kappa.no_weights": (2, lambda s, r, a: kappa(s, r, np.ones(len(a)))),
+    "kappa.z_sign": (2, lambda s, r, a: kappa(s, r, a) * np.r_[[[1, -1, -1, -1]], np.ones((3, 4))]),
+    "kappa.not_symmetric": (2, lambda s, r, a: kappa(s, r, a) + np.triu(np.ones((4, 4)), 1)),
+    "kappa.trace": (2, lambda s, r, a: kappa(s, r, a) + np.eye(4)),
+    "kappa.two_pairs": (2, lambda s, r, a: kappa(s[:2], r[:2], a[:2])),
+    "largest_eigenvector.shape": (3, lambda K: largest(K)[1:]),
+    "largest_eigenvector.sign": (3, lambda K: -largest(K)),
+    "largest_eigenvector.scalar_last": (3, lambda K: largest(K)[[1, 2, 3, 0]]),
+    "largest_eigenvector.other_eigenvalue": (3, lambda K: np.linalg.eigh(K)[1][:, 0]),
+    "largest_eigenvector.row": (3, lambda K: np.linalg.eigh(K)[1][-1]),
+    "weights.shape": (4, lambda G, Bc, B: np.array([*weights(G, Bc, B), 0.0])),
+    "weights.zero_over_zero": (4, lambda G, Bc, B: weights(G, Bc, B, guard=False)),
+    "weights.swapped": (4, lambda G, Bc, B: weights(G, Bc, B)[::-1]),
+    "weights.no_B2": (4, lambda G, Bc, B: weights(G, Bc, B, scaled=False)),
+    "weights.fixed_B": (4, lambda G, Bc, B: weights(G, Bc, 50.0)),
+    "heading.degrees": (5, lambda G, Bc: np.degrees(ecompass.tilt_compensated_heading(G, Bc)) + 360.0),
+    "heading.sign": (5, lambda G, Bc: -ecompass.tilt_compensated_heading(G, Bc)),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 05_freescale_kalman
+# ---------------------------------------------------------------------------------------------------------------
+
+def offset_blocks(dt, factor):                          # C with its two offset blocks factor·I3
+    C = fz.measurement_matrix(dt, 9)
+    C[0:3, 6:9] = C[3:6, 6:9] = factor * np.eye(3)
+    return C
+
+
+def entries(M, **values):                               # M with entries e<i>_<j> set
+    M = np.array(M, dtype=float)
+    for key, value in values.items():
+        i, j = map(int, key[1:].split("_"))
+        M[i, j] = value
+    return M
+
+
+def qrot_note(u, v, tol=1e-12, flip_axis=False, equal_axis=(1.0, -1.0, 0.0), follow_u=False, sign=-1,
+              scalar_last=False, normalise=True, unit=True):
+    """Eqs 66-76 as a student writes them; the keywords make the slips."""
+    u, v = np.asarray(u, float), np.asarray(v, float)
+    if normalise:
+        u, v = u / np.linalg.norm(u), v / np.linalg.norm(v)
+    w = 1 + u @ v
+    if w <= tol:                                         # 180°: q0 = 0, axis u × (1, 1, 1) (eqs 73-75)
+        ax = np.cross(np.ones(3), u) if flip_axis else np.cross(u, np.ones(3))
+        n = np.linalg.norm(ax)
+        equal = np.asarray(equal_axis) * (np.sign(u[0]) if follow_u else 1.0)
+        ax = ax / n if n > 1e-12 else equal / np.linalg.norm(equal)
+        q = np.r_[0.0, ax]
+    else:
+        with np.errstate(invalid="ignore", divide="ignore"):         # 0/0 where the 180° test is left out
+            q = np.r_[w, sign * np.cross(u, v)] / (np.sqrt(2 * w) if unit else 1.0)
+    return np.roll(q, -1) if scalar_last else q
+
+
+def half_angle_axis(u, v):                               # axis u × v / |u × v|: 0/0 for parallel vectors
+    u, v = np.asarray(u, float) / np.linalg.norm(u), np.asarray(v, float) / np.linalg.norm(v)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ax = -np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+    a = np.arccos(np.clip(u @ v, -1, 1))
+    return np.r_[np.cos(a / 2), np.sin(a / 2) * ax]
+
+
+LAB05 = {
+    "measurement_matrix.shape": (1, lambda dt: fz.measurement_matrix(dt, 9)[:, :9]),
+    "measurement_matrix.offset_sign": (1, lambda dt: offset_blocks(dt, fz.alpha(dt) / 2)),
+    "measurement_matrix.alpha": (1, lambda dt: offset_blocks(dt, -fz.alpha(dt))),
+    "measurement_matrix.degrees": (1, lambda dt: offset_blocks(dt, -dt / 2)),
+    "process_noise.shape": (2, lambda x, dt, *a: fz.process_noise(x, dt)[:9, :9]),
+    "process_noise.not_symmetric": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e0_6=1.0)),
+    "process_noise.gb_sign": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt),
+                                                           e0_6=fz.alpha(dt) / 4 + x[0] * x[6],
+                                                           e6_0=fz.alpha(dt) / 4 + x[0] * x[6])),
+    "process_noise.no_Qwdelta": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e9_9=x[9] ** 2)),
+    "process_noise.no_Qwb": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e6_6=x[6] ** 2)),
+    "process_noise.fixed_constants": (2, lambda x, dt, Q_vY=1e4, Q_wb=0.5, Q_wdelta=20.0: fz.process_noise(x, dt)),
+    "measurement_noise.shape": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)[:6, :6]),
+    "measurement_noise.no_floor": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)
+                                   + 0.25 * (qd - max(qd, 7.0)) / B**2 * np.diag([0.0] * 3 + [1.0] * 3 + [0.0])),
+    "measurement_noise.quarter": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)
+                                  + 0.75 * qa * np.diag([1.0] * 3 + [0.0] * 4)),
+    "measurement_noise.delta_entry": (3, lambda qa, qd, dt, B=50.0: entries(fz.measurement_noise(qa, qd, dt, B=B),
+                                                                             e6_6=1.0)),
+    "measurement_noise.fixed_B": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt)),
+    "gain.shape": (4, lambda Qw, C, Qv: fz.kalman_gain(Qw, C, Qv).T),
+    "gain.no_Qv": (4, lambda Qw, C, Qv: Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T)),
+    "gain.per_axis": (4, lambda Qw, C, Qv: fz.nominal_gain(9)),          # the note's numbers, whatever the input
+    "qrot.shape": (5, lambda u, v: qrot_note(u, v)[1:]),
+    "qrot.half_turn_not_finite": (5, lambda u, v: qrot_note(u, v, tol=-1.0)),
+    "qrot.parallel_not_finite": (5, half_angle_axis),
+    "qrot.eq74_axis": (5, lambda u, v: qrot_note(u, v, flip_axis=True)),
+    "qrot.eq75_axis": (5, lambda u, v: qrot_note(u, v, follow_u=True)),
+    "qrot.q0_sign": (5, lambda u, v: -qrot_note(u, v)),
+    "qrot.conjugate": (5, lambda u, v: qrot_note(u, v, sign=+1)),
+    "qrot.scalar_last": (5, lambda u, v: qrot_note(u, v, scalar_last=True)),
+    "qrot.not_normalised": (5, lambda u, v: qrot_note(u, v, normalise=False)),
+    "qrot.not_unit": (5, lambda u, v: qrot_note(u, v, unit=False)),
+    "qrot.other_axis": (5, lambda u, v: qrot_note(u, v, equal_axis=(0.0, 1.0, -1.0))),
+    "step.not_stored": (6, lambda kf, gyr, G, Bc: None),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 06_gfimu_aiv
+# ---------------------------------------------------------------------------------------------------------------
+
+def noise(N, dt, d, factors=(1, 1, 1), m_sign=-1):
+    return tuple(f * m for f, m in zip(factors, gfimu.three_state_noise(N, dt, d, m_sign=m_sign)))
+
+
+def correlated(x, P, y, R, M, m=1.0, residual="h", p_right=True):
+    H = gfimu.quadratic_jacobian(x)
+    Mm = m * M
+    K = (P @ H.T + Mm) @ np.linalg.inv(H @ P @ H.T + H @ Mm + Mm.T @ H.T + R)
+    r = y - (gfimu.quadratic_terms(x) if residual == "h" else H @ x)
+    return x + K @ r, P - K @ (H @ P + Mm.T) if p_right else P
+
+
+def ordinary(x, P, y, R, M):
+    H = gfimu.quadratic_jacobian(x)
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    return x + K @ (y - gfimu.quadratic_terms(x)), P - K @ H @ P
+
+
+LAB06 = {
+    "aiv_map.shape": (1, lambda: gfimu.aiv_map()[:6]),
+    "aiv_map.not_halved": (1, lambda: 2 * gfimu.aiv_map()),
+    "aiv_map.alpha_sign": (1, lambda: _set(gfimu.aiv_map(), 0, slice(None), -gfimu.aiv_map()[0])),
+    "aiv_map.central_columns": (1, lambda: _set(gfimu.aiv_map(), slice(None), slice(0, 3), 0.0)),
+    "aiv_map.squares_sign": (1, lambda: _set(gfimu.aiv_map(), slice(6, 9), slice(None), -gfimu.aiv_map()[6:])),
+    "quadratic_jacobian.shape": (2, lambda x: gfimu.quadratic_jacobian(x).T),
+    "quadratic_jacobian.no_factor_2": (2, lambda x: gfimu.quadratic_jacobian(x)
+                                       * np.array([1, 1, 1, .5, .5, .5])[:, None]),
+    "quadratic_jacobian.column_order": (2, lambda x: gfimu.quadratic_jacobian(x)[:, ::-1]),
+    "three_state_noise.shape": (3, lambda N, dt, d: (np.eye(2), *noise(N, dt, d)[1:])),
+    "three_state_noise.dt_squared": (3, lambda N, dt, d: (noise(N, dt, d)[0] / dt**2, *noise(N, dt, d)[1:])),
+    "three_state_noise.M_printed_sign": (3, lambda N, dt, d: noise(N, dt, d, m_sign=1)),
+    "three_state_noise.fixed_constants": (3, lambda N, dt, d: noise(500 * gfimu.UG, 0.01, 1.0)),
+    "correlated_update.shape": (4, lambda *a: (correlated(*a)[0][:2], correlated(*a)[1])),
+    "correlated_update.ordinary": (4, ordinary),
+    "correlated_update.M_sign": (4, lambda *a: correlated(*a, m=-1.0)),
+    "correlated_update.linear_residual": (4, lambda *a: correlated(*a, residual="Hx")),
+    "correlated_update.P_wrong": (4, lambda *a: correlated(*a, p_right=False)),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 07_gfimu_constraints
+# ---------------------------------------------------------------------------------------------------------------
+
+def h15(x):
+    return gd.aiv_measurement_jacobian(x)[1]
+
+
+def _lie_of_h():
+    """L¹h of the reduced model, typed out from the markdown: what a function that ignores its L returns."""
+    return gd.observability_matrix(augmented=False, order=3)[2][1]
+
+
+LAB07 = {
+    "dynamic_jacobian.shape": (1, lambda x: h15(x)[:, :9]),
+    "dynamic_jacobian.bias_columns": (1, lambda x: _set(h15(x), slice(None), slice(6, 15), 0.0)),
+    "dynamic_jacobian.alpha_rows": (1, lambda x: _set(h15(x), slice(0, 3), slice(3, 6), 0.0)),
+    "dynamic_jacobian.no_factor_2": (1, lambda x: _set(h15(x), slice(3, 9), slice(0, 3), h15(x)[3:, :3] / 2)),
+    "lie_derivative.shape": (2, lambda L, f, x: L.jacobian(x)),
+    "lie_derivative.returned_h": (2, lambda L, f, x: L),
+    "lie_derivative.second_order": (2, lambda L, f, x: sp.Matrix(_lie_of_h())),
+    "constraints.shape": (3, lambda x: (ge.constraints(x), ge.constraint_jacobian(x)[:, :3])),
+    "constraints.e_sign": (3, lambda x: (-ge.constraints(x), ge.constraint_jacobian(x))),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 08_north_finder
+# ---------------------------------------------------------------------------------------------------------------
+
+def omega_x(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, wr, k=2.0, lever=(1.0, 1.0), central=True, sign=-1.0):
+    dC, dB = (a_Cz - a_Az) / d * lever[0], (a_Bz - a_Az) / d * lever[1]
+    return (a_rC - (a_Az if central else 0.0) + sign * (dC * l + dB * rho)) / (k * rho * wr)
+
+
+def noise_printed(rho, d, l, wr):
+    return 2 * (1 / (2 * rho * wr) ** 2 + 1 / (2 * d * wr) ** 2 + l**2 / (2 * d * rho * wr) ** 2)
+
+
+def noise_exact(rho, d, l, wr, central=-1.0):
+    weight_A = central + l / d + rho / d
+    return (1 + (l / d) ** 2 + (rho / d) ** 2 + weight_A**2) / (2 * rho * wr) ** 2
+
+
+def demodulate(x, th, zero_mean=True, signs=True, use_atan2=True, s_sign=-1.0, degrees=False):
+    sl = nf.whole_turns(th)
+    x, th = x[sl], th[sl]
+    rc, rs = (np.sign(np.cos(th)), np.sign(np.sin(th))) if signs else (np.cos(th), np.sin(th))
+    if zero_mean:
+        rc, rs = rc - rc.mean(), rs - rs.mean()
+    c, s = np.sum(x * rc), s_sign * np.sum(x * rs)
+    h = np.arctan2(s, c) if use_atan2 else np.arctan(s / c)
+    return np.degrees(h) if degrees else h
+
+
+def tilted(zeta, roll, pitch, lat, pick=min):
+    """Eqs 4.41-4.43 as a student writes them; ``pick=max`` keeps the other root."""
+    from fusionlab import earth
+    sf, cf, st, ct, tz = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch), np.tan(zeta)
+    W = earth.OMEGA_IE
+    I, J = W * np.cos(lat) * (st * sf * tz - ct), -W * np.cos(lat) * cf * tz
+    K = W * np.sin(lat) * (st + ct * sf * tz)
+    V, a = np.arctan2(I, J), np.arcsin(np.clip(K / np.hypot(I, J), -1, 1))
+
+    def phase(psi):
+        w = rotations.euler_to_dcm([roll, pitch, psi]).T @ earth.earth_rate_ned(lat)
+        return np.arctan2(w[0], w[1])
+    best = pick((a - V, np.pi - a - V), key=lambda psi: abs(np.angle(np.exp(1j * (phase(psi) - zeta)))))
+    return float(np.angle(np.exp(1j * best)))
+
+
+LAB08 = {
+    "omega_x.terms_swapped": (1, lambda rC, A, B, C, *rest: omega_x(rC, A, C, B, *rest)),
+    "omega_x.no_factor_2": (1, lambda *a: omega_x(*a, k=1.0)),
+    "omega_x.no_central": (1, lambda *a: omega_x(*a, central=False)),
+    "omega_x.no_d": (1, lambda *a: omega_x(*a, lever=(a[4], a[4]))),
+    "omega_x.terms_added": (1, lambda *a: omega_x(*a, sign=1.0)),
+    "noise_printed.no_factor_2": (2, lambda *a: noise_printed(*a) / 2),
+    "noise_printed.exact": (2, noise_exact),
+    "noise_exact.printed": (3, noise_printed),
+    "noise_exact.no_central": (3, lambda rho, d, l, wr: (1 + (l / d) ** 2 + (rho / d) ** 2) / (2 * rho * wr) ** 2),
+    "noise_exact.central_sign": (3, lambda *a: noise_exact(*a, central=1.0)),
+    "demodulate.sign": (4, lambda x, th: demodulate(x, th, s_sign=1.0)),
+    "demodulate.arctan": (4, lambda x, th: demodulate(x, th, use_atan2=False)),
+    "demodulate.not_zero_mean": (4, lambda x, th: demodulate(x, th, zero_mean=False)),
+    "demodulate.sine_references": (4, lambda x, th: demodulate(x, th, signs=False)),
+    "demodulate.degrees": (4, lambda x, th: demodulate(x, th, degrees=True)),
+    "sync_sampling.sign": (5, lambda x, th: -nf.synchronous_sampling(x, th)),
+    "sync_sampling.off_180": (5, lambda x, th: nf.synchronous_sampling(x, th) + np.pi),
+    "sync_sampling.not_nearest": (5, lambda x, th: nf.synchronous_sampling(x, th) + np.radians(0.2)),
+    "tilted_heading.level": (6, lambda z, r, p, lat: tilted(z, 0.0, 0.0, lat)),
+    "tilted_heading.swapped": (6, lambda z, r, p, lat: tilted(z, p, r, lat)),
+    "tilted_heading.degrees": (6, lambda z, r, p, lat: np.degrees(tilted(z, r, p, lat))),
+    "tilted_heading.other_root": (6, lambda z, r, p, lat: tilted(z, r, p, lat, pick=max)),
+    "tilted_heading.phase": (6, lambda z, r, p, lat: tilted(z, r, p, lat) + 0.01),
+}
+
+
+PLANTED = {"00_mems_sensors": LAB00, "01_euler_rotations": LAB01, "02_kalman_falling_body": LAB02,
+           "03_correlation_fusion": LAB03, "04_ecompass": LAB04, "05_freescale_kalman": LAB05, "06_gfimu_aiv": LAB06,
+           "07_gfimu_constraints": LAB07, "08_north_finder": LAB08}
 
 #: The slips of any check (fusionlab.checks._core): slip id -> (lab, exercise number, answer).
 GENERIC = {
