@@ -12,11 +12,14 @@ those in).
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import sympy as sp
+from scipy.linalg import cholesky
 
-from fusionlab import (conventions, ecompass, freescale as fz, gfimu, gfimu_dynamics as gd, gfimu_ekf as ge, kalman,
-                       northfinder as nf, rotations)
+from fusionlab import (conventions, dcm, ecompass, freescale as fz, gfimu, gfimu_dynamics as gd, gfimu_ekf as ge,
+                       gpsins, kalman, northfinder as nf, rotations)
 
 G0 = 9.80665
 
@@ -592,9 +595,295 @@ LAB08 = {
 }
 
 
+# ---------------------------------------------------------------------------------------------------------------
+# 09_dcm_ahrs
+# ---------------------------------------------------------------------------------------------------------------
+
+def h_a(g, c1=0.0, c3=None):
+    return np.hstack([c1 * np.eye(3), (g if c3 is None else c3) * np.eye(3), np.zeros((3, 3))])
+
+
+def h_m(d, c1=None, c3=None, bias=0.0):
+    return np.hstack([(np.cos(d) if c1 is None else c1) * np.eye(3), (np.sin(d) if c3 is None else c3) * np.eye(3),
+                      bias * np.ones((3, 3))])
+
+
+def dcm_predict(x, P, gyr, dt, N, qb, with_Q=True, transpose=False, bias_sign=1.0, degrees=False, Q_scale=1.0,
+                F_T=False):
+    A = dcm.A_matrix((np.radians(gyr) if degrees else gyr) * dt)
+    F = dcm.ahrs_transition(x[0:3], x[3:6], A.T if transpose else A, dt)
+    F[0:6, 6:9] *= bias_sign
+    Q = dcm.ahrs_process_noise(x[0:3], x[3:6], dt, N, qb) * Q_scale if with_Q else 0
+    return F @ x, (F.T @ P @ F if F_T else F @ P @ F.T) + Q
+
+
+LAB09 = {
+    "dcm_measurement_matrices.H_a_shape": (1, {"my_H_a": lambda g: h_a(g)[:, :6], "my_H_m": h_m}),
+    "dcm_measurement_matrices.H_a_sign": (1, {"my_H_a": lambda g: -h_a(g), "my_H_m": h_m}),
+    "dcm_measurement_matrices.H_a_c1": (1, {"my_H_a": lambda g: h_a(g, c1=g, c3=0.0), "my_H_m": h_m}),
+    "dcm_measurement_matrices.H_a_no_g": (1, {"my_H_a": lambda g: h_a(g, c3=1.0), "my_H_m": h_m}),
+    "dcm_measurement_matrices.H_m_shape": (1, {"my_H_a": h_a, "my_H_m": lambda d: h_m(d)[:2]}),
+    "dcm_measurement_matrices.H_m_swapped": (1, {"my_H_a": h_a, "my_H_m": lambda d: h_m(d, np.sin(d), np.cos(d))}),
+    "dcm_measurement_matrices.H_m_radians": (1, {"my_H_a": h_a, "my_H_m": lambda d: h_m(np.radians(d))}),
+    "dcm_measurement_matrices.H_m_bias": (1, {"my_H_a": h_a, "my_H_m": lambda d: h_m(d, bias=0.1)}),
+    "dcm_predict.shape": (2, lambda *a: (dcm_predict(*a)[0][:6], dcm_predict(*a)[1])),
+    "dcm_predict.A_not_transposed": (2, lambda *a: dcm_predict(*a, transpose=True)),
+    "dcm_predict.bias_sign": (2, lambda *a: dcm_predict(*a, bias_sign=-1.0)),
+    "dcm_predict.no_bias": (2, lambda *a: dcm_predict(*a, bias_sign=0.0)),
+    "dcm_predict.radians": (2, lambda *a: dcm_predict(*a, degrees=True)),
+    "dcm_predict.no_Q": (2, lambda *a: dcm_predict(*a, with_Q=False)),
+    "dcm_predict.transposes_swapped": (2, lambda *a: dcm_predict(*a, F_T=True)),
+    "dcm_predict.Q_scale": (2, lambda *a: dcm_predict(*a, Q_scale=1 / a[3] ** 2)),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 10_gps_ins
+# ---------------------------------------------------------------------------------------------------------------
+
+def ins_F(x, a, A, dt, rows=None, cols=None, value=None):
+    F = gpsins.ins_transition(x, a, A, dt)
+    return F if rows is None else _set(F, rows, cols, value(a, A, dt))
+
+
+def sigma_points(x, P, scale=True, lower=False, weight=None, order=None):
+    n = len(x)
+    L = cholesky(n * P if scale else P, lower=lower)
+    pts = np.vstack([x + L, x - L])
+    return (pts if order is None else pts[order]), np.full(2 * n, 0.5 / n if weight is None else weight)
+
+
+def _block(rows, cols, value):
+    return lambda x, a, A, dt: ins_F(x, a, A, dt, rows, cols, value)
+
+
+LAB10 = {
+    "ins_transition.shape": (1, lambda x, a, A, dt: ins_F(x, a, A, dt)[:15, :15]),
+    "ins_transition.fixed_dt": (1, lambda x, a, A, dt: ins_F(x, a, A, 0.02)),
+    "ins_transition.dcm_block": (1, _block(slice(0, 9), slice(0, 9), lambda a, A, dt: np.eye(9))),
+    "ins_transition.A_not_transposed": (1, lambda x, a, A, dt: ins_F(x, a, A.T, dt)),
+    "ins_transition.gyro_bias_block": (1, _block(slice(0, 9), slice(9, 12), lambda a, A, dt: 0.0)),
+    "ins_transition.position_block": (1, _block(slice(12, 15), slice(15, 18), lambda a, A, dt: 0.0)),
+    "ins_transition.velocity_dcm_block": (1, _block(slice(15, 18), slice(0, 9), lambda a, A, dt: 0.0)),
+    "ins_transition.column_wise": (1, _block(slice(15, 18), slice(0, 9), lambda a, A, dt: dt * np.kron(a, np.eye(3)))),
+    "ins_transition.accel_bias_block": (1, _block(slice(15, 18), slice(18, 21), lambda a, A, dt: 0.0)),
+    "ins_transition.identity_blocks": (1, _block(slice(9, 12), slice(9, 12), lambda a, A, dt: 0.0)),
+    "sigma_points.shape": (2, lambda x, P: (sigma_points(x, P)[0][:4], sigma_points(x, P)[1])),
+    "sigma_points.fixed_n": (2, lambda x, P: sigma_points(x[:4], P[:4, :4]) if len(x) == 4 else
+                             sigma_points(np.zeros(4), np.eye(4))),
+    "sigma_points.weights": (2, lambda x, P: sigma_points(x, P, weight=1.0)),
+    "sigma_points.no_n": (2, lambda x, P: sigma_points(x, P, scale=False)),
+    "sigma_points.lower_rows": (2, lambda x, P: sigma_points(x, P, lower=True)),
+    "sigma_points.order": (2, lambda x, P: sigma_points(x, P, order=np.r_[4:8, 0:4])),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 11_real_data
+# ---------------------------------------------------------------------------------------------------------------
+
+def heading_error(q, order=(0, 3), half=False, signed=False, degrees=False):
+    q = np.asarray(q, dtype=float)
+    w, z = q[..., order[0]], q[..., order[1]]
+    a = np.arctan2(z, w) if signed else np.arctan2(np.abs(z), np.abs(w))
+    a = a if half else 2 * a
+    return np.degrees(a) if degrees else a
+
+
+def inclination_error(q, order=(0, 3), root=True, half=False, degrees=False):
+    q = np.asarray(q, dtype=float)
+    s = q[..., order[0]] ** 2 + q[..., order[1]] ** 2
+    a = np.arccos(np.clip(np.sqrt(s) if root else s, 0, 1)) * (1 if half else 2)
+    return np.degrees(a) if degrees else a
+
+
+def rmse(angle, movement, mask=True, skip_nan=True, degrees=True, square=True):
+    a = np.asarray(angle, dtype=float)
+    keep = (movement if mask else np.ones(len(a), bool)) & (~np.isnan(a) if skip_nan else True)
+    r = np.sqrt(np.mean(a[keep] ** 2)) if square else np.mean(np.abs(a[keep]))
+    return float(np.degrees(r) if degrees else r)
+
+
+LAB11 = {
+    "broad_heading.shape": (1, lambda q: heading_error(q)[:10]),
+    "broad_heading.degrees": (1, lambda q: heading_error(q, degrees=True)),
+    "broad_heading.half": (1, lambda q: heading_error(q, half=True)),
+    "broad_heading.sign": (1, lambda q: heading_error(q, signed=True)),
+    "broad_heading.scalar_last": (1, lambda q: heading_error(q, order=(3, 2))),
+    "broad_heading.component": (1, lambda q: heading_error(q, order=(0, 1))),
+    "broad_inclination.no_sqrt": (2, lambda q: inclination_error(q, root=False)),
+    "broad_inclination.shape": (2, lambda q: inclination_error(q)[:10]),
+    "broad_inclination.degrees": (2, lambda q: inclination_error(q, degrees=True)),
+    "broad_inclination.half": (2, lambda q: inclination_error(q, half=True)),
+    "broad_inclination.sign": (2, lambda q: -inclination_error(q)),
+    "broad_inclination.scalar_last": (2, lambda q: inclination_error(q, order=(3, 2))),
+    "broad_inclination.component": (2, lambda q: inclination_error(q, order=(0, 2))),
+    "broad_rmse.nan": (3, lambda a, m: rmse(a, m, skip_nan=False)),
+    "broad_rmse.radians": (3, lambda a, m: rmse(a, m, degrees=False)),
+    "broad_rmse.no_mask": (3, lambda a, m: rmse(a, m, mask=False)),
+    "broad_rmse.mean_abs": (3, lambda a, m: rmse(a, m, square=False)),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 12_sensor_errors
+# ---------------------------------------------------------------------------------------------------------------
+
+def quadric(mag, order=(1, 2, 3), two=2.0, rhs=1.0):
+    x, y, z = np.asarray(mag, dtype=float).T
+    cross = {1: y * z, 2: x * z, 3: x * y}
+    D = np.stack([x * x, y * y, z * z, *(two * cross[i] for i in order), two * x, two * y, two * z], 1)
+    return np.linalg.solve(D.T @ D, D.T @ np.full(len(D), rhs))
+
+
+def arw(taus, adev, tau_max, every=False, sign=0.5, log=True, move=True):
+    m = np.ones(len(taus), bool) if every else np.asarray(taus) <= tau_max
+    moved = adev[m] * taus[m] ** sign if move else adev[m]
+    return float(np.exp(np.mean(np.log(moved)))) if log else float(np.mean(moved))
+
+
+def remove_gravity(q, f, g, sign=-1.0, conj=False, rotate=True):
+    v = rotations.quat_rotate(rotations.quat_conjugate(q) if conj else q, f) if rotate else np.asarray(f)
+    return v + [0, 0, sign * g]
+
+
+LAB12 = {
+    "quadric_fit.shape": (1, lambda mag: quadric(mag)[:6]),
+    "quadric_fit.no_factor_2": (1, lambda mag: quadric(mag, two=1.0)),
+    "quadric_fit.sign": (1, lambda mag: quadric(mag, rhs=-1.0)),
+    "quadric_fit.cross_order": (1, lambda mag: quadric(mag, order=(3, 2, 1))),
+    "arw_reading.fixed_range": (2, lambda t, a, tm: arw(t, a, 0.5)),
+    "arw_reading.degrees": (2, lambda t, a, tm: np.degrees(arw(t, a, tm))),
+    "arw_reading.arithmetic_mean": (2, lambda t, a, tm: arw(t, a, tm, log=False)),
+    "arw_reading.slope_sign": (2, lambda t, a, tm: arw(t, a, tm, sign=-0.5)),
+    "arw_reading.every_tau": (2, lambda t, a, tm: arw(t, a, tm, every=True)),
+    "arw_reading.sigma_only": (2, lambda t, a, tm: arw(t, a, tm, move=False)),
+    "remove_gravity.shape": (3, lambda q, f, g: remove_gravity(q, f, g)[:, :2]),
+    "remove_gravity.fixed_g": (3, lambda q, f, g: remove_gravity(q, f, 9.8)),
+    "remove_gravity.added": (3, lambda q, f, g: remove_gravity(q, f, g, sign=1.0)),
+    "remove_gravity.vertical_sign": (3, lambda q, f, g: remove_gravity(q, f, g) * [1, 1, -1]),
+    "remove_gravity.conjugate": (3, lambda q, f, g: remove_gravity(q, f, g, conj=True)),
+    "remove_gravity.not_rotated": (3, lambda q, f, g: remove_gravity(q, f, g, rotate=False)),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 13_capstone
+# ---------------------------------------------------------------------------------------------------------------
+
+def integrate(q0, gyr, fs, side="right", half=False, small=False, keep_q0=False, before=False, flip=False):
+    q = np.asarray(q0, dtype=float)
+    out = [q]
+    for w in np.asarray(gyr, dtype=float):
+        s = w / fs / (2 if half else 1)
+        dq = rotations.quat_normalize(np.r_[1.0, s / 2]) if small else rotations.rotvec_to_quat(s)
+        q = rotations.quat_multiply(q, dq) if side == "right" else rotations.quat_multiply(dq, q)
+        out.append(q)
+    out = np.array(out)
+    out = out if keep_q0 else out[:-1] if before else out[1:]
+    return -out if flip else out
+
+
+def gyro_only(gyr, acc, mag, fs):                         # a causal filter: the gyro integrated from the identity
+    return rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], gyr, 1.0 / fs)[1:]
+
+
+def slow(gyr, acc, mag, fs):                              # over the budget (tests/test_slips.py shrinks it to 0.1 s)
+    time.sleep(0.2)
+    return gyro_only(gyr, acc, mag, fs)
+
+
+def looks_ahead(gyr, acc, mag, fs):                       # tilted by the mean of the whole record
+    return rotations.quat_multiply(gyro_only(gyr, acc, mag, fs), rotations.rotvec_to_quat(1e-3 * np.mean(acc, 0)))
+
+
+def _unnormalised(q0, gyr, fs):                           # [1, σ/2] increments, never normalised
+    q, out = np.asarray(q0, dtype=float), []
+    for w in np.asarray(gyr, dtype=float):
+        q = rotations.quat_multiply(q, np.r_[1.0, w / fs / 2])
+        out.append(q)
+    return np.array(out)
+
+
+LAB13 = {
+    "integrate_gyro.before": (1, lambda q0, g, fs: integrate(q0, g, fs, before=True)),
+    "integrate_gyro.keeps_q0": (1, lambda q0, g, fs: integrate(q0, g, fs, keep_q0=True)),
+    "integrate_gyro.shape": (1, lambda q0, g, fs: integrate(q0, g, fs)[:, :3]),
+    "integrate_gyro.sign": (1, lambda q0, g, fs: integrate(q0, g, fs, flip=True)),
+    "integrate_gyro.fs": (1, lambda q0, g, fs: integrate(q0, g, 100.0)),
+    "integrate_gyro.left_product": (1, lambda q0, g, fs: integrate(q0, g, fs, side="left")),
+    "integrate_gyro.half_angle": (1, lambda q0, g, fs: integrate(q0, g, fs, half=True)),
+    "integrate_gyro.small_angle": (1, lambda q0, g, fs: integrate(q0, g, fs, small=True)),
+    "integrate_gyro.not_unit": (1, _unnormalised),
+    "capstone_filter.sensors": (2, {"estimate": gyro_only, "SENSORS": "3D"}),
+    "capstone_filter.not_quaternions": (2, lambda g, a, m, fs: np.ones((len(g), 3))),
+    "capstone_filter.too_slow": (2, slow),
+    "capstone_filter.not_causal": (2, looks_ahead),
+}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 14_phone_imu
+# ---------------------------------------------------------------------------------------------------------------
+
+def gyro_bias(gyr, rest, unit=1.0, how="mean", where=True):
+    g = np.asarray(gyr)
+    picked = g[np.asarray(rest, bool)] if where is True else (g if where is None else g[~np.asarray(rest, bool)])
+    return unit * {"mean": np.mean, "sum": np.sum, "median": np.median}[how](picked, axis=0)
+
+
+def tilt(acc, unit="deg", mean_first=True, axis=2, norm=None, down=False):
+    a = np.asarray(acc, dtype=float)
+    m = a.mean(axis=0) if mean_first else a
+    m = -m if down else m
+    horiz = np.hypot(*np.delete(m, axis, axis=-1).T)
+    angle = np.mean(np.arctan2(horiz, m[..., axis]) if norm is None else np.arccos(m[..., axis] / norm))
+    return float(np.degrees(angle) if unit == "deg" else angle)
+
+
+def _phone_at_rest():
+    """The notebook's own rest record (the check's first case): what an answer that reads it, not its argument,
+    uses."""
+    rng = np.random.default_rng(1402)
+    t, a = np.radians(35.0), np.radians(120.0)
+    return 9.81 * np.array([np.sin(t) * np.cos(a), np.sin(t) * np.sin(a), np.cos(t)]) + rng.normal(0, 0.05, (300, 3))
+
+
+def rotation_angle(q1, q2, unit="deg", half=False, signed=False):
+    w = np.sum(np.asarray(q1, dtype=float) * np.asarray(q2, dtype=float), axis=-1)     # w of q1* ⊗ q2
+    a = (1 if half else 2) * np.arccos(np.clip(w if signed else np.abs(w), -1, 1))
+    return np.degrees(a) if unit == "deg" else a
+
+
+LAB14 = {
+    "phone_gyro_bias.shape": (1, lambda g, r: gyro_bias(g, r)[:2]),
+    "phone_gyro_bias.fixed_range": (1, lambda g, r: np.asarray(g)[20:380].mean(axis=0)),
+    "phone_gyro_bias.whole_record": (1, lambda g, r: gyro_bias(g, r, where=None)),
+    "phone_gyro_bias.degrees": (1, lambda g, r: gyro_bias(g, r, unit=180 / np.pi)),
+    "phone_gyro_bias.sum": (1, lambda g, r: gyro_bias(g, r, how="sum")),
+    "phone_gyro_bias.not_rest": (1, lambda g, r: gyro_bias(g, r, where=False)),
+    "phone_gyro_bias.median": (1, lambda g, r: gyro_bias(g, r, how="median")),
+    "phone_gyro_bias.over_axes": (1, lambda g, r: np.full(3, np.mean(np.asarray(g)[r]))),
+    "rest_tilt.shape": (2, lambda a: [tilt(a), tilt(a)]),
+    "rest_tilt.other_tilts": (2, lambda a: tilt(_phone_at_rest())),
+    "rest_tilt.radians": (2, lambda a: tilt(a, unit="rad")),
+    "rest_tilt.elevation": (2, lambda a: 90.0 - tilt(a)),
+    "rest_tilt.from_down": (2, lambda a: tilt(a, down=True)),
+    "rest_tilt.divided_by_981": (2, lambda a: tilt(a, norm=9.81)),
+    "rest_tilt.standard_gravity": (2, lambda a: tilt(a, norm=G0)),
+    "rest_tilt.per_sample": (2, lambda a: tilt(a, mean_first=False)),
+    "rest_tilt.x_axis": (2, lambda a: tilt(a, axis=0)),
+    "rotation_angle.shape": (3, lambda a, b: rotation_angle(a, b)[:5]),
+    "rotation_angle.radians": (3, lambda a, b: rotation_angle(a, b, unit="rad")),
+    "rotation_angle.half": (3, lambda a, b: rotation_angle(a, b, half=True)),
+    "rotation_angle.above_180": (3, lambda a, b: rotation_angle(a, b, signed=True)),
+}
+
+
 PLANTED = {"00_mems_sensors": LAB00, "01_euler_rotations": LAB01, "02_kalman_falling_body": LAB02,
            "03_correlation_fusion": LAB03, "04_ecompass": LAB04, "05_freescale_kalman": LAB05, "06_gfimu_aiv": LAB06,
-           "07_gfimu_constraints": LAB07, "08_north_finder": LAB08}
+           "07_gfimu_constraints": LAB07, "08_north_finder": LAB08, "09_dcm_ahrs": LAB09, "10_gps_ins": LAB10,
+           "11_real_data": LAB11, "12_sensor_errors": LAB12, "13_capstone": LAB13, "14_phone_imu": LAB14}
 
 #: The slips of any check (fusionlab.checks._core): slip id -> (lab, exercise number, answer).
 GENERIC = {

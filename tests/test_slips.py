@@ -180,6 +180,8 @@ def test_every_slip_of_the_labs_listed_is_reached_by_a_planted_wrong_answer(slip
 
 
 def test_every_planted_answer_is_for_a_listed_slip_of_its_lab():
+    tables = [*planted_slips.PLANTED.values(), LAB01_PLANTED, LAB02_PLANTED, planted_slips.GENERIC]
+    assert sum(map(len, tables)) == len(PLANTED), "a slip is planted twice"
     covered = set(COVERED)
     for slip, (lab, number, _) in PLANTED.items():
         assert slip in covered, f"{slip}: planted, but no listed slip of a lab in slips.LABS"

@@ -13,7 +13,7 @@ report (``grading/slipreport.py``) counts them. Besides the named slips, an outc
 :data:`NOT_ATTEMPTED`, :data:`RAISED` (the student's code raised, ran out of time, or returned no numbers) and
 :data:`UNRECOGNISED` (a wrong answer no listed slip describes).
 
-The slips of the labs in :data:`LABS` are listed, one section per lab, in
+The slips of the labs in :data:`LABS` -- every lab with autograded exercises -- are listed, one section per lab, in
 the order of its exercises. A check's messages that only say where a wrong answer differs ("entry [1, 0] of P_post
 is 0.3 (expected 0.25)") name no slip: such an answer is unrecognised. A lab added to the course names its slips in
 words only, and its wrong answers count as unrecognised, until its section is written here and it joins
@@ -34,7 +34,8 @@ OUTCOMES = {PASSED: "passed", NOT_ATTEMPTED: "not attempted",
 
 #: The labs whose checks' slips are all listed in :data:`SLIPS`.
 LABS = ("00_mems_sensors", "01_euler_rotations", "02_kalman_falling_body", "03_correlation_fusion", "04_ecompass",
-        "05_freescale_kalman", "06_gfimu_aiv", "07_gfimu_constraints", "08_north_finder")
+        "05_freescale_kalman", "06_gfimu_aiv", "07_gfimu_constraints", "08_north_finder", "09_dcm_ahrs", "10_gps_ins",
+        "11_real_data", "12_sensor_errors", "13_capstone", "14_phone_imu")
 
 #: What :func:`fusionlab.checks._core._answer` and ``_answered`` say of an answer that is still the release's stub.
 _UNFINISHED = ("is not written yet: replace `raise NotImplementedError(...)`", "is still None: finish the exercise")
@@ -54,6 +55,15 @@ def _slips(check, *pairs):
     short = check.removeprefix("check_")
     return tuple(Slip(f"{short}.{name}" if check else name, check, says) for name, says in pairs)
 
+
+#: The slips of Lab 11's heading and inclination errors, whose checks share one function's messages
+#: (``_broad_angle_check``: "your heading error returns degrees", "your inclination error returns degrees").
+_BROAD = (("shape", "must return one angle per error quaternion"),
+          ("degrees", "returns degrees: return radians (np.degrees only for display)."),
+          ("half", "is half the angle: a quaternion holds half angles"),
+          ("sign", "has the wrong sign for some quaternions: q and -q are the same rotation"),
+          ("scalar_last", "reads the quaternion as [x, y, z, w]"),
+          ("component", "the heading axis is the vertical, the nav z axis, so use z = q[..., 3]."))
 
 SLIPS = (
     # any check (fusionlab.checks._core)
@@ -346,6 +356,114 @@ SLIPS = (
             ("degrees", "return radians, not degrees."),
             ("other_root", "that is the other root of eq 4.43"),
             ("phase", "a table at your heading would not show the phase ζ")),
+    # 09_dcm_ahrs
+    *_slips("check_dcm_measurement_matrices",
+            ("H_a_shape", "H_a maps the 9 states [c1, c3, b_g] to the 3 accelerometer axes"),
+            ("H_a_sign", "H_a has the sign of the specific force"),
+            ("H_a_c1", "gravity is along the third nav axis (down)"),
+            ("H_a_no_g", "scale the identity by g"),
+            ("H_m_shape", "H_m is 3×9"),
+            ("H_m_swapped", "cos and sin are swapped: h_n = [cos δ, 0, sin δ]"),
+            ("H_m_radians", "the inclination is passed in radians: use np.cos(inclination) directly."),
+            ("H_m_bias", "the magnetometer does not depend on the gyro bias")),
+    *_slips("check_dcm_predict",
+            ("shape", "return x_pred with shape (9,) and P_pred with shape (9, 9)"),
+            ("A_not_transposed", "each row propagates with Ãᵀ: row i of C A is Aᵀ c_i (eq 6.11) -- you used Ã c_i."),
+            ("bias_sign", "the bias term has the wrong sign"),
+            ("no_bias", "the bias term -Δt [ĉ×] b_g is missing"),
+            ("radians", "gyr is already in rad/s: σ = gyr · dt, no np.radians."),
+            ("no_Q", "Q is missing: P⁻ = F P Fᵀ + Q (eq 6.13)."),
+            ("transposes_swapped", "transposes swapped: P⁻ = F P Fᵀ + Q."),
+            ("Q_scale", "Q scales with Δt (N² Δt), not with 1/Δt")),
+    # 10_gps_ins
+    *_slips("check_ins_transition",
+            ("shape", "F is 21×21 (9 DCM elements, b_g, r, v, b_a)"),
+            ("fixed_dt", "Use the argument dt everywhere."),
+            ("dcm_block", "each row block is Ãᵀ: row i of C A is Aᵀ c_i."),
+            ("A_not_transposed", "you used Ã; each row block is Ãᵀ (row i of C A is Aᵀ c_i)."),
+            ("gyro_bias_block", "row block i is -Δt [ĉ_i×] (eq 7.7)"),
+            ("position_block", "r ← r + v Δt."),
+            ("velocity_dcm_block", "v_i gets Δt c_i·ã, so row 15+i holds Δt ãᵀ"),
+            ("column_wise", "you multiplied column-wise; the state holds C row by row"),
+            ("accel_bias_block", "-Δt Ĉ: the bias is removed before rotating"),
+            ("identity_blocks", "random walks and r, v keep identity blocks.")),
+    *_slips("check_sigma_points",
+            ("shape", "2n = 8 points of dimension 4 and 8 weights"),
+            ("fixed_n", "Use n = len(x), not 4."),
+            ("weights", "the points are right; every weight is 1/(2n)"),
+            ("no_n", "scale P by n before the Cholesky factor"),
+            ("lower_rows", "you took rows of the lower factor"),
+            ("order", "your points reproduce P but are not ordered as asked")),
+    # 11_real_data
+    *_slips("check_broad_heading", *_BROAD),
+    *_slips("check_broad_inclination",
+            ("no_sqrt", "the square root is missing, cos(ε/2) = √(w² + z²)"), *_BROAD),
+    *_slips("check_broad_rmse",
+            ("nan", "your RMSE is NaN: skip the samples whose reference is lost"),
+            ("radians", "your RMSE is in radians"),
+            ("no_mask", "your RMSE uses every sample"),
+            ("mean_abs", "that is the mean absolute error")),
+    # 12_sensor_errors
+    *_slips("check_quadric_fit",
+            ("shape", "return the 9 coefficients [a, b, c, f, g, h, p, q, r]"),
+            ("no_factor_2", "your cross and linear columns lack the factor 2"),
+            ("sign", "your coefficients have the wrong sign"),
+            ("cross_order", "the cross-term columns are in another order")),
+    *_slips("check_arw_reading",
+            ("fixed_range", "Fit the points with τ <= tau_max (the argument), not a fixed range."),
+            ("degrees", "your N is in degrees: keep the unit of adev"),
+            ("arithmetic_mean", "that is the arithmetic mean of σ√τ"),
+            ("slope_sign", "wrong sign of the slope: on the ARW line"),
+            ("every_tau", "you used every τ: fit only the white-noise part"),
+            ("sigma_only", "you averaged σ itself")),
+    *_slips("check_remove_gravity",
+            ("shape", "return one ENU acceleration per sample"),
+            ("fixed_g", "Use the argument g, not 9.8."),
+            ("added", "gravity added instead of removed"),
+            ("vertical_sign", "the vertical has the wrong sign: ENU's z points up."),
+            ("conjugate", "you rotated with the conjugate (nav→body)"),
+            ("not_rotated", "rotate the specific force into the navigation frame before removing gravity")),
+    # 13_capstone
+    *_slips("check_integrate_gyro",
+            ("before", "row k of yours is the attitude before sample k"),
+            ("keeps_q0", "leave q0 out, so that row k is the attitude after sample k"),
+            ("shape", "must return one quaternion per gyro sample"),
+            ("sign", "your attitudes are right but some have the opposite sign"),
+            ("fs", "Check how you use fs and the start."),
+            ("left_product", "that turns about axes fixed in ENU"),
+            ("half_angle", "your increment turns by half the angle"),
+            ("small_angle", "you used the small-angle increment [1, σ/2] (normalised)"),
+            ("not_unit", "your quaternions are not of unit length")),
+    *_slips("check_capstone_filter",
+            ("sensors", 'SENSORS must be "9D" or "6D"'),
+            ("not_quaternions", "your estimate does not return one unit quaternion per sample"),
+            ("too_slow", "your estimate is too slow"),
+            ("not_causal", "your estimate is not causal")),
+    # 14_phone_imu
+    *_slips("check_phone_gyro_bias",
+            ("shape", "return one bias per axis"),
+            ("fixed_range", "Average over the samples the argument rest marks, not a fixed range."),
+            ("whole_record", "that is the mean of the whole record: the turns are in it"),
+            ("degrees", "your bias is in °/s"),
+            ("sum", "that is the sum over the rest samples"),
+            ("not_rest", "you averaged the samples where rest is False"),
+            ("median", "that is the median"),
+            ("over_axes", "you averaged over the axes too")),
+    *_slips("check_rest_tilt",
+            ("shape", "return one angle in degrees (of the mean specific force)"),
+            ("other_tilts", "Take the angle of the mean specific force from the phone's z axis."),
+            ("radians", "your tilt is in radians"),
+            ("elevation", "that is the elevation of the screen normal above the horizontal"),
+            ("from_down", "that is the angle from down"),
+            ("divided_by_981", "you divided by 9.81 m/s²"),
+            ("standard_gravity", "you divided by standard gravity"),
+            ("per_sample", "you averaged the angles of each sample"),
+            ("x_axis", "that is the angle of the x axis")),
+    *_slips("check_rotation_angle",
+            ("shape", "return one angle per pair of quaternions"),
+            ("radians", "your angles are in radians"),
+            ("half", "that is half the angle"),
+            ("above_180", "some angles are above 180°: q and −q are the same attitude")),
 )
 
 _BY_ID = {s.id: s for s in SLIPS}
