@@ -1,14 +1,16 @@
-"""The named slips of the visible checks (``fusionlab.checks.slips``): every slip listed is said by its check, a
-planted wrong answer is told by its slip, and the class report of common slips (``grading.slipreport``) counts
-what the verdicts hold.
+"""The named slips of the visible checks (``fusionlab.checks.slips``): every slip listed is said by its check, every
+slip of every lab listed is reached by a planted wrong answer that its check tells by that slip, and the class report
+of common slips (``grading.slipreport``) counts what the verdicts hold.
 
-The planted answers are the typical wrong answers each check names; ``LAB02_PLANTED`` is also handed in by a class
-of lab 02 graded by the judge (``tests/test_judge.py``), whose report must count exactly these.
+The planted answers are the typical wrong answers each check names: answer cells here for Lab 01 and Lab 02
+(``LAB02_PLANTED`` is also handed in by a class of lab 02 graded by the judge, ``tests/test_judge.py``, whose report
+must count exactly these), and one answer for each of the other slips in ``tests/planted_slips.py``.
 """
 from __future__ import annotations
 
 import ast
 import csv
+import functools
 import html
 import importlib
 import inspect
@@ -17,7 +19,8 @@ import re
 import numpy as np
 import pytest
 
-from fusionlab import checks, rotations
+import planted_slips
+from fusionlab import capstone, checks, rotations
 from fusionlab.checks import exercises, slips
 
 # slip id -> (exercise, the answer cell that makes it): lab 01, and lab 02 (handed in by test_judge's class)
@@ -73,22 +76,33 @@ LAB02_OTHER = {
     slips.UNRECOGNISED: (3, "def my_predict(x, P, A, Q, B, u):\n    return A @ x + B @ u, 2 * (A @ P @ A.T + Q)\n"),
     slips.RAISED: (2, "def my_state_space(k, m, g, dt):\n    raise ValueError('I do not know yet')\n"),
 }
-_CHECK_ARGS = {"check_body_gravity": ("f_body", "C_ex"), "check_sequence_angles": ("angles_xyz", "XYZ", "C_ex")}
+# the arguments of a check cell that are not the exercise's answer names in order (the release's ``exN_check``)
+_CHECK_ARGS = {"check_body_gravity": ("f_body", "C_ex"), "check_sequence_angles": ("angles_xyz", "XYZ", "C_ex"),
+               "check_adc_096": ("v_ref_096", "zero_096", "sens_096"), "check_gyro_bias": ("bias_hat", "still"),
+               "check_capstone_filter": ("estimate", "SENSORS")}
 
 
-def _lab01_namespace():
+def _namespace():
+    """The names a check cell finds besides the answer: the labs' setup and data it passes on."""
     return {"np": np, "rotations": rotations, "rot_x": rotations.rot_x, "rot_y": rotations.rot_y,
-            "rot_z": rotations.rot_z, "C_ex": rotations.euler_to_dcm(np.radians([10.0, -10.0, 40.0]))}
+            "rot_z": rotations.rot_z, "C_ex": rotations.euler_to_dcm(np.radians([10.0, -10.0, 40.0])),
+            "still": planted_slips.STILL, "SENSORS": "9D"}
 
 
-def _outcome(lab, number, source):
-    """What the exercise's visible check, run here on the answer ``source``, makes of it."""
+def _outcome(lab, number, answer):
+    """What the exercise's visible check, run here on ``answer`` as the judge runs it (the check without its
+    forbid), makes of it. ``answer`` is an answer cell's source, a dict of the names the cell defines, or the one
+    thing it defines."""
     [entry] = [e for e in exercises.of_lab(lab) if e.number == number]
-    ns = _lab01_namespace()
-    exec(source, ns)  # noqa: S102 -- the test's own planted answer
+    ns = _namespace()
+    if isinstance(answer, str):
+        exec(answer, ns)  # noqa: S102 -- the test's own planted answer
+    else:
+        ns.update(answer if isinstance(answer, dict) else {entry.answer[0]: answer})
     args = [ns[a] if a in ns else a for a in _CHECK_ARGS.get(entry.check, entry.answer)]
+    check = getattr(checks, entry.check)
     try:
-        getattr(checks, entry.check)(*args)
+        getattr(check, "unguarded", check)(*args)
     except checks.Feedback as exc:
         return slips.outcome(entry.check, str(exc))
     except ValueError:
@@ -96,6 +110,20 @@ def _outcome(lab, number, source):
     return slips.PASSED
 
 
+def _lab_of(check):
+    return exercises.by_check(check).lab
+
+
+# every planted answer: slip id -> (lab, exercise number, answer)
+PLANTED = {**{slip: (lab, *planted) for lab, table in planted_slips.PLANTED.items() for slip, planted in table.items()},
+           **{slip: ("01_euler_rotations", *planted) for slip, planted in LAB01_PLANTED.items()},
+           **{slip: ("02_kalman_falling_body", *planted) for slip, planted in LAB02_PLANTED.items()},
+           **planted_slips.GENERIC}
+# the slips of the labs listed, and those of any check: each must have its planted answer
+COVERED = [s.id for s in slips.SLIPS if not s.check or _lab_of(s.check) in slips.LABS]
+
+
+@functools.lru_cache(maxsize=None)
 def _strings(module):
     """Every text a module's code holds: each string constant, and the constant parts of each f-string."""
     out = []
@@ -142,11 +170,29 @@ def test_the_outcome_of_a_message_is_its_slip_the_stub_or_unrecognised():
         slips.outcome("check_predict", None)
 
 
-@pytest.mark.parametrize("lab, planted", [("01_euler_rotations", LAB01_PLANTED),
-                                          ("02_kalman_falling_body", {**LAB02_PLANTED, **LAB02_OTHER})])
-def test_a_planted_wrong_answer_is_told_by_its_slip(lab, planted):
-    for slip, (number, source) in planted.items():
-        assert _outcome(lab, number, source) == slip, (slip, source)
+@pytest.mark.parametrize("slip", COVERED)
+def test_every_slip_of_the_labs_listed_is_reached_by_a_planted_wrong_answer(slip, monkeypatch):
+    assert slip in PLANTED, f"{slip}: no planted wrong answer (tests/planted_slips.py) reaches this slip"
+    lab, number, answer = PLANTED[slip]
+    if slip == "capstone_filter.too_slow":                  # the budget of 10 s, shrunk so that the test need not wait
+        monkeypatch.setattr(capstone, "budget_seconds", lambda n: 0.1)
+    assert _outcome(lab, number, answer) == slip
+
+
+def test_every_planted_answer_is_for_a_listed_slip_of_its_lab():
+    tables = [*planted_slips.PLANTED.values(), LAB01_PLANTED, LAB02_PLANTED, planted_slips.GENERIC]
+    assert sum(map(len, tables)) == len(PLANTED), "a slip is planted twice"
+    covered = set(COVERED)
+    for slip, (lab, number, _) in PLANTED.items():
+        assert slip in covered, f"{slip}: planted, but no listed slip of a lab in slips.LABS"
+        check = slips.by_id(slip).check
+        assert not check or exercises.by_check(check) == next(e for e in exercises.of_lab(lab) if e.number == number)
+
+
+@pytest.mark.parametrize("outcome", sorted(LAB02_OTHER))
+def test_an_answer_no_check_names_is_passed_unrecognised_or_raised(outcome):
+    number, source = LAB02_OTHER[outcome]
+    assert _outcome("02_kalman_falling_body", number, source) == outcome
 
 
 # ---------------------------------------------------------------------------------------------------------------

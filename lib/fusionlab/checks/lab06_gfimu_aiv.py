@@ -70,7 +70,7 @@ def check_three_state_noise(fn):
     shapes = {"Q": (Q.shape, (3, 3)), "R": (R.shape, (6, 6)), "M": (M.shape, (3, 6))}
     for name, (got, want) in shapes.items():
         if got != want:
-            raise Feedback(f"{name} should have shape {want}; got {got}")
+            raise Feedback(f"the noise matrices have the wrong shape: {name} should have shape {want}; got {got}")
     for name, got, ref in (("Q", Q, rQ), ("R", R, rR)):
         if np.allclose(got, ref, rtol=1e-9, atol=1e-12):
             continue

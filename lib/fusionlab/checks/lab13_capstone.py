@@ -88,9 +88,10 @@ def check_capstone_filter(estimate, sensors="9D"):
     try:
         q = capstone.as_quaternions(q, n)
     except ValueError as exc:
-        raise Feedback(f"{exc} (for {n} samples{', mag=None: a 6D filter' if mag is None else ''}).") from None
+        raise Feedback(f"your estimate does not return one unit quaternion per sample: {exc} (for {n} samples"
+                       f"{', mag=None: a 6D filter' if mag is None else ''}).") from None
     if seconds > capstone.budget_seconds(n):
-        raise Feedback(f"your estimate took {seconds:.1f} s for {n} samples, over the budget of "
+        raise Feedback(f"your estimate is too slow: it took {seconds:.1f} s for {n} samples, over the budget of "
                        f"{capstone.budget_seconds(n):.1f} s.")
     failed = capstone.first_change(lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, 286.0),
                                    gyr, acc, rec["mag"] * 100.0, q, capstone.causal_ks(n), np.random.default_rng(1303))
