@@ -47,7 +47,7 @@ from pathlib import Path
 
 import nbformat
 
-from grading import cells, judge, launcher, outputs, sandbox, similarity, slipreport
+from grading import cells, cgroup, judge, launcher, outputs, sandbox, similarity, slipreport
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -419,6 +419,7 @@ def main(argv=None):
                              f"graded.\n{problem}")
         files, size = sandbox.warm(sandbox.view(course))
         print(f"every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True)
+        print(cgroup.said(sandbox.box_bytes()), flush=True)
         if not args.no_generate:
             print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
             generate(course, lab, scratch / "release")

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from grading import box as wire
-from grading import cells
+from grading import cells, cgroup
 
 SCRIPT = Path(wire.__file__).resolve()     # what a box runs: ``python box.py`` (its codec is this module's too)
 
@@ -47,32 +47,42 @@ class ReplyTooLarge(BoxDied):
 
 
 class Started:
-    """A box process this process started itself (``subprocess.Popen``), and the private folder it was given, which
-    :meth:`end` removes with it."""
+    """A box process this process started itself (``subprocess.Popen``), the private folder it was given and the
+    memory group of its processes (:mod:`grading.cgroup`, or None), which :meth:`end` removes with it."""
 
-    def __init__(self, proc, work=None):
-        self.proc, self.work = proc, work
+    def __init__(self, proc, work=None, group=None):
+        self.proc, self.work, self.group = proc, work, group
 
     def poll(self):
         return self.proc.poll()
 
     def end(self):
-        """Kill the box (its whole process group) if it runs, wait for it, remove its folder; its exit status."""
+        """Kill the box (its whole process group, and every process left in its memory group) if it runs, wait for
+        it, remove its folder and its memory group; its exit status."""
         if self.proc.poll() is None:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(self.proc.pid, signal.SIGKILL)
         status = self.proc.wait()
+        if self.group is not None:
+            self.group.end()
         if self.work:
             shutil.rmtree(self.work, ignore_errors=True)
         return status
 
 
-def start(command, env=None, work=None):
+def start(command, env=None, work=None, memory_bytes=None):
     """Start ``command`` (a box) with pipes on its standard input and output: (process, its input, its output), as
-    :class:`Box` takes them."""
-    proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            start_new_session=True, env=env)
-    return Started(proc, work), proc.stdin, proc.stdout
+    :class:`Box` takes them. With ``memory_bytes`` (as root, where the machine allows: :func:`grading.cgroup.make`)
+    every process of the box is in a memory group of its own held to that much memory together."""
+    group = cgroup.make("box", memory_bytes) if memory_bytes else None
+    try:
+        proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                start_new_session=True, env=env, preexec_fn=group.join if group else None)
+    except BaseException:
+        if group is not None:
+            group.end()
+        raise
+    return Started(proc, work, group), proc.stdin, proc.stdout
 
 
 class Box:

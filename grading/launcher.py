@@ -69,7 +69,8 @@ class LabBoxes:
         uid = sandbox.box_uid(self.slot)
         source = self.lab.course / "submitted" / self.student / self.lab.lab
         work = sandbox.private_folder(source if files and source.is_dir() else None, self.lab.scratch, uid)
-        return client.start(self.lab.box_command(key, work, uid), work=work)
+        return client.start(self.lab.box_command(key, work, uid), work=work,
+                            memory_bytes=sandbox.box_bytes(getattr(self.lab, "limits", None)))
 
     def start(self, key, files=True):
         """A :class:`grading.client.Box` running the box ``key``, started in this process."""

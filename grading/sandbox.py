@@ -45,6 +45,8 @@ FIRST_UID = 200_000   # as root, box i runs as user FIRST_UID + i: no two studen
 DEFAULT_LIMITS = {
     "cpu_s": 600,               # CPU seconds per process of the box (the per-cell wall-clock limit is nbgrader's)
     "memory_bytes": 4 << 30,    # address space per process
+    "box_bytes": 4 << 30,       # memory of every process of the box together (as root, where the machine gives a
+                                # memory group: grading.cgroup); an honest lab box holds a few hundred MB
     "file_bytes": 256 << 20,    # largest file a process may write
     "tmp_bytes": 256 << 20,     # size of the private /tmp
     "nproc": 256,               # processes and threads of the box's own user (only when grading as root)
@@ -387,6 +389,12 @@ def proc_masks(proc="/proc"):
         if os.path.isfile(os.path.join(proc, name)):
             args += ["--ro-bind", "/dev/null", f"/proc/{name}"]
     return args
+
+
+def box_bytes(limits=None):
+    """The memory every process of a box may hold together (``box_bytes`` of :data:`DEFAULT_LIMITS`, then
+    ``limits``): what :func:`grading.client.start` gives the box's memory group."""
+    return int({**DEFAULT_LIMITS, **(limits or {})}["box_bytes"])
 
 
 def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True, hide=()):

@@ -269,7 +269,7 @@ def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_a
 
 def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped_and_named():
     got = launcher.apart(dict, ({"a": [1, 2]},), preload=[], memory_bytes=1 << 30, who="ana", cpu_seconds=5)
-    assert got["a"] == [1, 2] and set(got["process"]) == {"mb", "uid", "cpu_s"}, got
+    assert got["a"] == [1, 2] and set(got["process"]) == {"mb", "uid", "cpu_s", "caps"}, got
     assert got["process"]["uid"] == os.getuid() and 0 <= got["process"]["cpu_s"] < 5, got
     t0 = time.monotonic()
     with pytest.raises(RuntimeError, match=r"the process grading bob ran over its 1 s of CPU time and was stopped"):

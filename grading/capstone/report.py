@@ -14,7 +14,7 @@ from urllib.parse import quote
 import numpy as np
 
 from fusionlab.capstone import GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE, SENSORS
-from grading import launcher, sandbox
+from grading import cgroup, launcher, sandbox
 
 from .program import CHEATS, LAB, box_library, model_program
 from .runner import StudentResult, gates_failed, grade_apart
@@ -314,6 +314,7 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
             if progress:
                 print(f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB",
                       flush=True)
+                print(f"  {cgroup.said(sandbox.box_bytes())}", flush=True)
             blocked = launcher.unreadable(slots[0])                 # as root: a folder the graders must reach
             read_all = blocked is not None
             if read_all and progress:

@@ -112,7 +112,8 @@ class CapstoneBoxes:
         command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
                                         lib=self.root / "lib", shadow=self.root / "shadow", work=work,
                                         limits=self.limits, uid=uid, data=False, hide=self.hide)
-        return client.start(command, work=work)                            # ended with the box, folder and all
+        return client.start(command, work=work,                            # ended with the box, folder and all
+                            memory_bytes=sandbox.box_bytes(self.limits))
 
     def start(self, key=KEY, files=False):
         return client.Box(self.open(key, files))
