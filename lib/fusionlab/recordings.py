@@ -10,11 +10,13 @@
   The header states the units; the accelerometer with gravity is read as specific force (+9.81 m/s² on z face
   up), which the rest posture checks.
 * **Sensor Logger** -- a folder or ``.zip`` of CSVs with ``time`` (epoch, ns), ``seconds_elapsed`` and the axes in
-  ``z, y, x`` order; ``Metadata.csv`` names the platform. ``TotalAcceleration.csv`` is the accelerometer with
-  gravity; ``Accelerometer.csv`` is the linear acceleration (gravity removed), which is used only with
+  ``z, y, x`` order; ``Metadata.csv`` names the platform. ``TotalAcceleration.csv`` (Android) is the accelerometer
+  with gravity; ``Accelerometer.csv`` is the linear acceleration (gravity removed), which is used only with
   ``Gravity.csv`` beside it (their sum is the raw reading: Android's linear acceleration is the accelerometer minus
-  its gravity, iOS's user acceleration plus its gravity is the raw reading). ``Orientation.csv`` (``qw, qx, qy, qz``)
-  is the phone's own orientation estimate, kept as :attr:`Recording.quat_phone`, never as a reference.
+  its gravity, iOS's user acceleration plus its gravity is the raw reading; iOS writes no TotalAcceleration.csv).
+  Both platforms write m/s² (iOS's Core Motion g converted; only the uncalibrated accelerometer, not read here, stays
+  in g on iOS); iOS keeps Core Motion's sign. ``Orientation.csv`` (``qw, qx, qy, qz``) is the phone's own
+  orientation estimate, kept as :attr:`Recording.quat_phone`, never as a reference.
 * **a plain CSV** whose columns the caller maps (``columns=``) and whose units the caller states (``units=``).
 
 Units and signs at this edge
@@ -709,9 +711,10 @@ def _read_sensor_logger(src):
         q = stream("Orientation.csv", "quat_phone")
         streams["quat_phone"] = q
     if platform and not standard:
+        # m/s² on both platforms: Sensor Logger converts Core Motion's g (only its uncalibrated accelerometer, not
+        # read here, stays in g on iOS); the sign stays the platform's
         by = f"Sensor Logger on {platform}"
-        units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by),
-                 "acc": _Stated("m/s^2" if platform == "android" else "g", by)}
+        units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by), "acc": _Stated("m/s^2", by)}
         convention = _Stated("specific force" if platform == "android" else "gravity", by)
     else:                                                  # units the export does not state: the physics decides
         by = "Sensor Logger (both platforms)"
@@ -1314,13 +1317,16 @@ def make_examples(out, broad_dir=None):
                                          s="Accelerometer|Gravity|Gyroscope|Magnetometer|Orientation")}
     written += _write(out, "sensorlogger_android_trial02.zip", files)
 
-    # Sensor Logger, iOS: TotalAcceleration.csv in g and the gravity-vector sign (-1 on z face up), rad/s, µT
+    # Sensor Logger, iOS: as the app writes it there, Accelerometer.csv (Core Motion's user acceleration) and
+    # Gravity.csv, both in m/s² and with Core Motion's gravity-vector sign (gravity -9.81 on z face up: their sum is
+    # minus the specific force); rad/s, µT
     ia, ig, im = (_clock(next(rngs), 100.0, n, fs, 0.0005, d) for d in (None, (12.0, 2), None))
-    files = {"TotalAcceleration.csv": _sl_csv(ns[ia], (-acc / earth.G)[ia][:, ::-1]),
+    files = {"Accelerometer.csv": _sl_csv(ns[ia], (gravity - acc)[ia][:, ::-1]),
+             "Gravity.csv": _sl_csv(ns[ia], (-gravity)[ia][:, ::-1]),
              "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
              "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
-             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10",
-                                         s="TotalAcceleration|Gyroscope|Magnetometer")}
+             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10|10",
+                                         s="Accelerometer|Gravity|Gyroscope|Magnetometer")}
     written += _write(out, "sensorlogger_ios_trial02.zip", files)
 
     # a plain CSV of another logger: one clock, ms; gyro in deg/s, accelerometer in g (specific force), field in nT,
