@@ -314,6 +314,47 @@ def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_
         recordings.load_recording(folder, units={"acc": "g"})
 
 
+def test_a_phyphox_custom_experiments_columns_are_read_by_their_unit_and_a_mislabelled_gyro_is_refused(tmp_path):
+    # an experiment built in phyphox's editor: its own column names, unquoted, CRLF line ends, and a gyro whose
+    # header says deg/s over numbers in rad/s
+    folder = _phyphox_custom(tmp_path / "custom", *_still_then_tilting())
+    with pytest.raises(ValueError, match=r"Gyroscope.csv: read in deg/s, the gyro hardly turns while gravity does "
+                                         r"\(the header of Gyroscope.csv\); read in rad/s, gravity turned 1.0\d times "
+                                         r"as far .*: the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}"):
+        recordings.load_recording(folder)
+    rec = recordings.load_recording(folder, units={"gyr": "rad/s"})
+    assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01) and rec.gyr[-10:, 0] == pytest.approx(1.0, abs=0.01)
+    assert ("Accelerometer.csv: Accel_X (m/s^2), Accel_Y (m/s^2), Accel_Z (m/s^2) are not phyphox's own column "
+            "names (a custom experiment's): read as the file's accelerometer by their unit") in str(rec.summary)
+    # a name that is not one axis of a quantity stays refused, with a fix that works for a folder of files
+    _edit(folder / "Accelerometer.csv", lambda s: s.replace("Accel_X", "AccelX"))
+    with pytest.raises(ValueError, match=r"Accelerometer.csv, line 1: .* is not one phyphox writes .* name its "
+                                         r"columns as phyphox does"):
+        recordings.load_recording(folder, units={"gyr": "rad/s"})
+
+
+def _phyphox_custom(folder, t, gyr, acc, gyro_unit="deg/s", acc_every=1):
+    folder.mkdir()
+    for name, head, tt, v in (("Accelerometer.csv", "Accel_{} (m/s^2)", t[::acc_every], acc[::acc_every]),
+                              ("Gyroscope.csv", "Gyroscope {} (" + gyro_unit + ")", t, gyr)):
+        rows = [",".join(f"{x:.9E}" for x in (ti, *vi)) for ti, vi in zip(tt, v)]
+        text = "\r\n".join([",".join(["Time (s)", *(head.format(a) for a in ("X", "Y", "Z"))]), *rows]) + "\r\n"
+        (folder / name).write_bytes(text.replace("E+0", "E").replace("E-0", "E-").encode("utf-8"))
+    return folder
+
+
+def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_holds(tmp_path):
+    # phyphox's 'Acceleration with g' exported as one Raw Data.csv, with its absolute-value column
+    t, _, acc = _still_then_tilting()
+    head = ('"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
+            '"Absolute acceleration (m/s^2)"')
+    rows = [",".join(f"{x:.9E}" for x in (ti, *a, np.linalg.norm(a))) for ti, a in zip(t, acc)]
+    (tmp_path / "Raw Data.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"Raw Data.csv holds no gyroscope: both are needed \(it holds the "
+                                         r"accelerometer\) -- record the gyroscope and the accelerometer together"):
+        recordings.load_recording(tmp_path / "Raw Data.csv")
+
+
 # ------------------------------------------------------------------------------------------------------------------
 # Bad files: refused whole, naming the file and the line
 # ------------------------------------------------------------------------------------------------------------------

@@ -5,8 +5,10 @@
 ``t``), so that a filter of the course runs on a student's own phone as it runs on BROAD:
 
 * **phyphox** -- a folder or ``.zip`` with one CSV per sensor (``Accelerometer.csv``, ``Gyroscope.csv``,
-  ``Magnetometer.csv``; header ``"Time (s)","X (rad/s)",...`` or ``"Gyroscope x (rad/s)",...``), or one combined
-  ``Raw Data.csv``; comma, semicolon or tab separated, with a decimal point or the decimal comma some locales export.
+  ``Magnetometer.csv``; header ``"Time (s)","X (rad/s)",...`` or ``"Gyroscope x (rad/s)",...``, or an experiment
+  built in phyphox's editor naming them itself, ``Accel_X (m/s^2)``, read as the file's sensor by their unit), or one
+  combined ``Raw Data.csv``; comma, semicolon or tab separated, with a decimal point or the decimal comma some locales
+  export.
   The header states the units; the accelerometer with gravity is read as specific force (+9.81 m/s² on z face
   up), which the rest posture checks.
 * **Sensor Logger** -- a folder or ``.zip`` of CSVs with ``time`` (epoch, ns), ``seconds_elapsed`` and the axes in
@@ -555,16 +557,23 @@ _PHYPHOX_FILES = {"acc": ("Accelerometer.csv", "Acceleration with g.csv"), "gyr"
                   "mag": ("Magnetometer.csv",), "lin": ("Linear Accelerometer.csv", "Linear Acceleration.csv")}
 _PHYPHOX_QUANTITIES = {"acceleration": "acc", "gyroscope": "gyr", "magnetic field": "mag",
                        "linear acceleration": "lin"}
+_SENSOR_NAMES = {"acc": "accelerometer", "gyr": "gyroscope", "mag": "magnetometer", "lin": "linear acceleration"}
 _SL_FILES = ("Gyroscope.csv", "TotalAcceleration.csv", "Accelerometer.csv", "Gravity.csv", "Magnetometer.csv",
              "Orientation.csv")
 
 
 def _phyphox_columns(table, default):
-    """{sensor: (unit, [col x, col y, col z])} and the time column of a phyphox header; None if it is not one."""
-    time_col, found = None, {}
+    """The time column of a phyphox header, {sensor: (unit, [col x, col y, col z])}, and the column names a custom
+    experiment gave (read as the file's own sensor, by their unit); (None, {}, []) if it is not one.
+
+    phyphox's own experiments write ``X (rad/s)`` or ``Gyroscope x (rad/s)``; an experiment built in its editor
+    names its columns freely (``Accel_X (m/s^2)``): in a per-sensor file such a name is the file's sensor when its
+    unit is that sensor's (a name ending in the axis after a space or ``_``).
+    """
+    time_col, found, custom = None, {}, []
     for i, name in enumerate(table.names):
         if "(" not in name or not name.endswith(")"):
-            return None, {}
+            return None, {}, []
         label, unit = name[:-1].rsplit("(", 1)
         label, unit = label.strip().lower(), unit.strip()
         if label == "time" and unit == "s":
@@ -572,18 +581,22 @@ def _phyphox_columns(table, default):
             continue
         if label.startswith("absolute"):
             continue
-        if not label or label[-1] not in "xyz" or (len(label) > 1 and label[-2] != " "):
-            return None, {}
-        quantity = label[:-1].strip()
+        if not label or label[-1] not in "xyz" or (len(label) > 1 and label[-2] not in " _"):
+            return None, {}, []
+        quantity = label[:-1].rstrip(" _")
         sensor = _PHYPHOX_QUANTITIES.get(quantity) if quantity else default
         known = _HEADER_UNITS.get(unit.lower() if unit.lower() != "g" else "g")
+        if sensor is None and default is not None and known is not None and known[0] == (
+                "acc" if default == "lin" else default):
+            sensor = default
+            custom.append(name)
         if sensor is None or known is None or known[0] != ("acc" if sensor == "lin" else sensor):
-            return None, {}
+            return None, {}, []
         entry = found.setdefault(sensor, [known[1], {}])
         entry[1]["xyz".index(label[-1])] = i
     if time_col is None or any(len(cols) != 3 for _, cols in found.values()):
-        return None, {}
-    return time_col, {s: (u, [cols[k] for k in range(3)]) for s, (u, cols) in found.items()}
+        return None, {}, []
+    return time_col, {s: (u, [cols[k] for k in range(3)]) for s, (u, cols) in found.items()}, custom
 
 
 def _read_phyphox(src):
@@ -596,11 +609,17 @@ def _read_phyphox(src):
                          "(Magnetometer.csv optional) or Raw Data.csv")
     for default, member in tables:
         table = _read_table(src.text(member), src.where(member))
-        time_col, cols = _phyphox_columns(table, default)
+        time_col, cols, custom = _phyphox_columns(table, default)
         if time_col is None or not cols:
+            fix = ("read it as a plain CSV with columns= and units=" if src.kind == "file" else
+                   "name its columns as phyphox does (\"X (m/s^2)\"), or put the sensors in one CSV and read it with "
+                   "columns= and units=")
             raise ValueError(f"{table.where}, line 1: the header {table.names} is not one phyphox writes (expected "
                              "\"Time (s)\" and X/Y/Z columns with their units, e.g. \"X (rad/s)\" or \"Gyroscope x "
-                             "(rad/s)\"): an unknown app version? read it as a plain CSV with columns= and units=")
+                             f"(rad/s)\"): an unknown app version? {fix}")
+        if custom:
+            notes.append(f"{Path(member).name}: {', '.join(custom)} are not phyphox's own column names (a custom "
+                         f"experiment's): read as the file's {_SENSOR_NAMES[default]} by their unit")
         t = table.numbers([time_col])[:, 0]
         shared = len(cols) > 1
         for sensor, (unit, c) in cols.items():
@@ -1099,7 +1118,9 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
         export = _read_plain(src, columns, units)
     for key in ("gyr", "acc"):
         if key not in export.streams:
-            raise ValueError(f"{p} holds no {'gyroscope' if key == 'gyr' else 'accelerometer'}: both are needed")
+            held = ", ".join(_SENSOR_NAMES[k] for k in export.streams if k in _SENSOR_NAMES) or "no sensor"
+            raise ValueError(f"{p} holds no {_SENSOR_NAMES[key]}: both are needed (it holds the {held}) -- record the "
+                             "gyroscope and the accelerometer together")
     if units and export.format != "csv":
         if "t" in units:
             raise ValueError(f"units['t'] is for a plain CSV; the {export.format} export states its time unit")
@@ -1124,8 +1145,9 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
         mag = values["mag"] * UNITS["mag"][export.units["mag"].value]
         checks.append(_settle_mag(mag, export.units["mag"], st["mag"].where, check))
     checks += [f"note: {n}" for n in export.notes]
+    gyro_rate = next(r.rate for r in reports if r.sensor == "gyr")
     method = ("linear interpolation onto the gyro's median rate" if len(grid) and np.isclose(
-        fs, reports[0].rate) else f"linear interpolation onto {fs:.2f} Hz")
+        fs, gyro_rate) else f"linear interpolation onto {fs:.2f} Hz")
     summary = Summary(str(path), export.format, export.platform, fs, len(grid), float(start - origin), method,
                       reports, tuple(checks))
     frozen = [_frozen(a) if a is not None else None for a in (gyr, acc, mag, values.get("quat_phone"))]
