@@ -309,7 +309,7 @@ def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_
     text = str(rec.summary)
     assert f"acc: m/s^2 (Sensor Logger on {platform}; physics agrees: median |acc| 9.8" in text
     assert f"{sign} (Sensor Logger on {platform}); physics agrees: still and flat at 0.0-1.5 s" in text
-    assert "gravity turned 1.0" in text
+    assert "gravity turned 1.0" in text and "the way the gyro turns it (median cosine +1.00)" in text
     with pytest.raises(ValueError, match=r"which is m/s\^2, not g as units= says -- pass units=\{'acc': 'm/s\^2'\}"):
         recordings.load_recording(folder, units={"acc": "g"})
 
@@ -343,6 +343,18 @@ def _phyphox_custom(folder, t, gyr, acc, gyro_unit="deg/s", acc_every=1):
     return folder
 
 
+def test_too_little_tilt_to_check_a_gyros_unit_is_said_in_the_summary_with_what_the_other_unit_shows(tmp_path):
+    # 1.2 s of tilting: 11 windows count in rad/s, under the 20 the unit check needs -- loaded as the header says,
+    # and the summary says what the other unit showed; the accelerometer at half the gyro's rate: still the gyro's
+    t, gyr, acc = _still_then_tilting(tilting=1.2)
+    rec = recordings.load_recording(_phyphox_custom(tmp_path / "short", t, gyr, acc, acc_every=2))
+    assert rec.gyr[-10:, 0] == pytest.approx(np.radians(1.0), abs=1e-4)
+    text = str(rec.summary)
+    assert ("gyr: deg/s (the header of Gyroscope.csv); too little motion for the tilt check (0 windows; read in "
+            "rad/s, 11 windows count (ratio 1.00), under the 20 the check needs)") in text
+    assert rec.summary.method == "linear interpolation onto the gyro's median rate" and rec.fs == pytest.approx(100.0)
+
+
 def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_holds(tmp_path):
     # phyphox's 'Acceleration with g' exported as one Raw Data.csv, with its absolute-value column
     t, _, acc = _still_then_tilting()
@@ -353,6 +365,24 @@ def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_h
     with pytest.raises(ValueError, match=r"Raw Data.csv holds no gyroscope: both are needed \(it holds the "
                                          r"accelerometer\) -- record the gyroscope and the accelerometer together"):
         recordings.load_recording(tmp_path / "Raw Data.csv")
+
+
+def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as_a_mirrored_frame(tmp_path):
+    # z, y, x read as x, y, z in every file: each sensor's numbers plausible, the magnitudes consistent, the frame
+    # left-handed -- gravity turns against the gyro
+    folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
+    for name in ("Accelerometer.csv", "Gravity.csv", "Gyroscope.csv", "Magnetometer.csv"):
+        _edit(folder / name, lambda s: s.replace("seconds_elapsed,z,y,x", "seconds_elapsed,x,y,z", 1))
+    message = r"Gyroscope.csv: .* the gyro turns gravity the opposite way.*median cosine -0.99 .* a mirrored frame"
+    with pytest.raises(ValueError, match=message):
+        recordings.load_recording(folder)
+    folder = _sensor_logger_export(tmp_path / "flipped", "android")
+    _lines(folder / "Gyroscope.csv", lambda ls: [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in
+                                                                     r.split(",")[2:])]) for r in ls[1:]])
+    with pytest.raises(ValueError, match=r"median cosine -1.00 over 25 windows.* one sensor's sign flipped"):
+        recordings.load_recording(folder)
+    rec = recordings.load_recording(folder, check=False)                       # trusted as stated when asked to
+    assert rec.gyr[-10:, 0] == pytest.approx(-1.0, abs=0.01)
 
 
 # ------------------------------------------------------------------------------------------------------------------

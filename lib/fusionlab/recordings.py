@@ -41,12 +41,19 @@ quantity   the physics                                                    what i
 ``gyr``    the gyro's tilt against the turn of gravity in the             rad/s from °/s (×57.3)
            accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`),
            or, with too little motion, its peak and median rate
+``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
+           turns it, median cosine near +1 (-1 mirrored), over the same   one (``z, y, x`` read as ``x, y, z``)
+           windows (at least 20)                                          or a gyro of the opposite sign
 ``mag``    the median field strength: 25-65 µT on Earth                   µT from nT, gauss, mT
 =========  =============================================================  =====================================
 
 The sign of the accelerometer cannot be read from the gyro: gravity and its opposite are both fixed in the Earth
 frame, and the gyro turns both alike (``du/dt = u × ω`` is linear in ``u``). The check is therefore the rest
 posture; a recording that rests face down passes ``check=False`` (the summary then says nothing was checked).
+What the physics cannot see is not refused but written in the summary as unchecked: the sign of a recording that
+never lies still and flat for half a second, and the gyro's unit and handedness with fewer than 20 windows in which
+it tilts the phone (hand-held snippets of a few seconds cut from real exports of both apps had 0 to 9 such windows;
+one of 5 s of shaking had 36, and there a header's °/s over numbers in rad/s was refused).
 The phone's axes are the same on Android and iOS: x to the right, y up the screen, z out of the screen
 (:mod:`fusionlab.conventions`).
 
@@ -969,7 +976,15 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         return f"read in {u}, gravity turned {r:.2f} times as far as the gyro tilts the phone ({k} windows of 0.1 s)"
 
     if fits(ratio, n):
-        return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}"
+        cos, k = _tilt_direction(rad, acc, fs)
+        turns = f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
+        if k >= validate.TILT_WINDOWS_MIN and cos < 0.0:
+            raise ValueError(f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
+                             f"accelerometer (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
+                             "near +1): a mirrored frame -- axes read in the wrong order (Sensor Logger writes z, y, "
+                             "x; columns= lists x, y, z) or one sensor's sign flipped; no unit fixes it: check the "
+                             "file's header or columns=")
+        return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}, {turns}"
     if fits(ratio_o, n_o):
         why = seen(ratio, n, unit) if n else f"read in {unit}, the gyro hardly turns while gravity does"
         raise ValueError(f"{where}: {why} ({by}); {seen(ratio_o, n_o, other)}: the gyro is in {other} -- pass "
@@ -979,8 +994,37 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
     if top > 50.0 or med > 10.0:
         raise ValueError(f"{where}: read in {unit} ({by}), the gyro peaks at {top:.4g} rad/s with a median of "
                          f"{med:.3g}, far beyond a turning hand: the gyro is in deg/s -- pass {_fix('gyr', 'deg/s')}")
-    return (f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows), peak {top:.3g} rad/s and "
-            f"median {med:.3g} plausible")
+    hint = (f"; read in {other}, {n_o} windows count (ratio {ratio_o:.2f}), under the {validate.TILT_WINDOWS_MIN} "
+            "the check needs" if 0 < n_o < validate.TILT_WINDOWS_MIN else "")
+    return (f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows{hint}), peak {top:.3g} rad/s "
+            f"and median {med:.3g} plausible")
+
+
+def _tilt_direction(gyr, acc, fs):
+    """The median cosine between the turn of gravity the accelerometer shows and the one the gyro (rad/s) predicts,
+    over the windows of :func:`fusionlab.validate.gyro_tilt_ratio` that count, and their number.
+
+    Near +1 for a right-handed phone whatever the units and the accelerometer's sign; near -1 for a mirrored frame
+    (two axes swapped in both sensors, as ``z, y, x`` read as ``x, y, z``) or a gyro of the opposite sign: the
+    magnitude ratio cannot see either.
+    """
+    m = max(1, int(round(validate.TILT_WINDOW * fs)))
+    nb = min(len(gyr), len(acc)) // m
+    if nb < 2:
+        return float("nan"), 0
+    a = acc[:nb * m].reshape(nb, m, 3).mean(axis=1)
+    size = np.linalg.norm(a, axis=1)
+    u = a / np.maximum(size, 1e-300)[:, None]
+    turn = gyr[:nb * m].reshape(nb, m, 3).sum(axis=1) / fs
+    predicted = np.cross(u[:-1], 0.5 * (turn[:-1] + turn[1:]))
+    observed = u[1:] - u[:-1]
+    p, o = np.linalg.norm(predicted, axis=1), np.linalg.norm(observed, axis=1)
+    use = ((size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size)) & (p > validate.TILT_MIN)
+           & (o > 0))
+    if not np.any(use):
+        return float("nan"), 0
+    cos = np.sum(predicted[use] * observed[use], axis=1) / (p[use] * o[use])
+    return float(np.median(cos)), int(use.sum())
 
 
 def _settle_mag(mag, stated, where, check):
