@@ -201,17 +201,18 @@ def test_a_wrong_declared_unit_is_refused_with_the_fix(tmp_path, units, message)
         _plain(tmp_path, **units)
 
 
-def test_an_ios_export_read_with_androids_conventions_is_refused_unit_first_then_sign(tmp_path):
+def test_an_ios_export_read_with_androids_conventions_is_refused_by_its_sign_and_one_in_g_by_its_unit(tmp_path):
+    # both platforms write m/s² (Sensor Logger converts Core Motion's g): the unit agrees, the rest posture shows
+    # Core Motion's gravity-vector sign
     folder = _unzip("sensorlogger_ios_trial02.zip", tmp_path)
     _edit(folder / "Metadata.csv", lambda s: s.replace(",ios,", ",android,"))
-    with pytest.raises(ValueError, match=r"TotalAcceleration.csv: .* which is g, not m/s\^2 as Sensor Logger on "
-                                         r"android says -- pass units=\{'acc': 'g'\}"):
+    with pytest.raises(ValueError, match=r"Accelerometer.csv \+ Gravity.csv: still and flat at .*, z reads -9.82 m/s².*"
+                                         r"this is the gravity convention -- pass acc_convention='gravity'"):
         recordings.load_recording(folder)
-    with pytest.raises(ValueError, match=r"z reads -9.82 m/s².* this is the gravity convention -- pass "
-                                         r"acc_convention='gravity'"):
-        recordings.load_recording(folder, units={"acc": "g"})
-    rec = recordings.load_recording(folder, units={"acc": "g"}, acc_convention="gravity")
+    rec = recordings.load_recording(folder, acc_convention="gravity")
     assert rec.acc[:100, 2].mean() == pytest.approx(9.8, abs=0.05)
+    with pytest.raises(ValueError, match=r"which is m/s\^2, not g as units= says -- pass units=\{'acc': 'm/s\^2'\}"):
+        recordings.load_recording(PHONE / "sensorlogger_ios_trial02.zip", units={"acc": "g"})
 
 
 def test_a_declared_sign_the_rest_posture_contradicts_is_refused_and_check_false_trusts_it():
@@ -229,7 +230,7 @@ def test_what_an_export_does_not_state_is_inferred_from_physics_and_said_in_the_
     rec = recordings.load_recording(folder)
     assert rec.acc[:100, 2].mean() == pytest.approx(9.8, abs=0.05)
     text = str(rec.summary)
-    assert "g (not stated; inferred from the physics" in text
+    assert "m/s^2 (not stated; inferred from the physics" in text
     assert "gravity (not stated; inferred: still and flat" in text
     with pytest.raises(ValueError, match="does not state the accelerometer's unit and check=False"):
         recordings.load_recording(folder, check=False)
@@ -250,6 +251,138 @@ def test_a_phyphox_header_with_the_wrong_unit_is_refused_with_the_fix(tmp_path):
     with pytest.raises(ValueError, match=r"the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}"):
         recordings.load_recording(folder)
     assert recordings.load_recording(folder, units={"gyr": "rad/s"}).gyr.shape[1] == 3
+
+
+# ------------------------------------------------------------------------------------------------------------------
+# What the apps' own exports look like: written here in small, with the quirks of the files phones write
+# ------------------------------------------------------------------------------------------------------------------
+
+G = 9.80665
+
+
+def _still_then_tilting(fs=100.0, still=1.5, tilting=2.5, rate=1.0):
+    """t (s), gyro (rad/s) and specific force (m/s²) of a phone lying face up, then turning about its x axis."""
+    t = np.arange(int((still + tilting) * fs)) / fs
+    theta = rate * np.clip(t - still, 0.0, None)
+    gyr = np.zeros((len(t), 3))
+    gyr[t >= still, 0] = rate
+    acc = np.stack([np.zeros_like(t), G * np.sin(theta), G * np.cos(theta)], axis=1)
+    wobble = np.random.default_rng(7).normal(0.0, 1e-3, (len(t), 6))        # a phone's noise, far below the motion
+    return t, gyr + wobble[:, :3], acc + wobble[:, 3:]
+
+
+def _sensor_logger_csv(path, t, v, names=("z", "y", "x")):
+    ns = 1_662_982_563_186_761_700 + np.round(t * 1e9).astype(np.int64)
+    rows = [",".join([str(k), repr(float(s)), *(repr(float(x)) for x in row[::-1])]) for k, s, row in zip(ns, t, v)]
+    path.write_text("\n".join([",".join(("time", "seconds_elapsed", *names)), *rows]) + "\n", encoding="utf-8")
+
+
+def _sensor_logger_export(folder, platform):
+    """A Sensor Logger export as the app writes it: Metadata.csv without a final newline and, on Android (1.28),
+    with its epoch and time zone columns and no standardisation; on iOS (1.10) Accelerometer.csv (user
+    acceleration) and Gravity.csv in m/s² with Core Motion's sign, and no TotalAcceleration.csv."""
+    folder.mkdir()
+    t, gyr, acc = _still_then_tilting()
+    if platform == "android":
+        meta = ("version,device name,recording epoch time,recording time,recording timezone,platform,appVersion,"
+                "device id,sensors,sampleRateMs\n3,SM-X,1662982563186,2022-09-12_11-36-02,Europe/Amsterdam,android,"
+                "1.28,0000,Gyroscope|TotalAcceleration,10|10")
+        _sensor_logger_csv(folder / "TotalAcceleration.csv", t, acc)
+    else:
+        meta = ("version,device name,recording time,platform,appVersion,device id,sensors,sampleRateMs\n"
+                "3,iPhone 12 mini,2022-09-12_11-36-02,ios,1.10.4,0000,Accelerometer|Gravity|Gyroscope,10|10|10")
+        user = np.random.default_rng(8).normal(0.0, 0.02, acc.shape)
+        _sensor_logger_csv(folder / "Accelerometer.csv", t, -user)
+        _sensor_logger_csv(folder / "Gravity.csv", t, -(acc - user))
+    (folder / "Metadata.csv").write_text(meta, encoding="utf-8")
+    _sensor_logger_csv(folder / "Gyroscope.csv", t, gyr)
+    return folder
+
+
+@pytest.mark.parametrize("platform, sign", [("android", "specific force"), ("ios", "gravity")])
+def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_read(tmp_path, platform, sign):
+    folder = _sensor_logger_export(tmp_path / platform, platform)
+    rec = recordings.load_recording(folder)
+    assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01)                  # specific force, face up
+    assert rec.acc[-1] == pytest.approx([0.0, G * np.sin(2.49), G * np.cos(2.49)], abs=0.05)   # its last sample
+    assert rec.gyr[-10:, 0] == pytest.approx(1.0, abs=0.01) and rec.summary.platform == platform
+    text = str(rec.summary)
+    assert f"acc: m/s^2 (Sensor Logger on {platform}; physics agrees: median |acc| 9.8" in text
+    assert f"{sign} (Sensor Logger on {platform}); physics agrees: still and flat at 0.0-1.5 s" in text
+    assert "gravity turned 1.0" in text and "the way the gyro turns it (median cosine +1.00)" in text
+    with pytest.raises(ValueError, match=r"which is m/s\^2, not g as units= says -- pass units=\{'acc': 'm/s\^2'\}"):
+        recordings.load_recording(folder, units={"acc": "g"})
+
+
+def test_a_phyphox_custom_experiments_columns_are_read_by_their_unit_and_a_mislabelled_gyro_is_refused(tmp_path):
+    # an experiment built in phyphox's editor: its own column names, unquoted, CRLF line ends, and a gyro whose
+    # header says deg/s over numbers in rad/s
+    folder = _phyphox_custom(tmp_path / "custom", *_still_then_tilting())
+    with pytest.raises(ValueError, match=r"Gyroscope.csv: read in deg/s, the gyro hardly turns while gravity does "
+                                         r"\(the header of Gyroscope.csv\); read in rad/s, gravity turned 1.0\d times "
+                                         r"as far .*: the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}"):
+        recordings.load_recording(folder)
+    rec = recordings.load_recording(folder, units={"gyr": "rad/s"})
+    assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01) and rec.gyr[-10:, 0] == pytest.approx(1.0, abs=0.01)
+    assert ("Accelerometer.csv: Accel_X (m/s^2), Accel_Y (m/s^2), Accel_Z (m/s^2) are not phyphox's own column "
+            "names (a custom experiment's): read as the file's accelerometer by their unit") in str(rec.summary)
+    # a name that is not one axis of a quantity stays refused, with a fix that works for a folder of files
+    _edit(folder / "Accelerometer.csv", lambda s: s.replace("Accel_X", "AccelX"))
+    with pytest.raises(ValueError, match=r"Accelerometer.csv, line 1: .* is not one phyphox writes .* name its "
+                                         r"columns as phyphox does"):
+        recordings.load_recording(folder, units={"gyr": "rad/s"})
+
+
+def _phyphox_custom(folder, t, gyr, acc, gyro_unit="deg/s", acc_every=1):
+    folder.mkdir()
+    for name, head, tt, v in (("Accelerometer.csv", "Accel_{} (m/s^2)", t[::acc_every], acc[::acc_every]),
+                              ("Gyroscope.csv", "Gyroscope {} (" + gyro_unit + ")", t, gyr)):
+        rows = [",".join(f"{x:.9E}" for x in (ti, *vi)) for ti, vi in zip(tt, v)]
+        text = "\r\n".join([",".join(["Time (s)", *(head.format(a) for a in ("X", "Y", "Z"))]), *rows]) + "\r\n"
+        (folder / name).write_bytes(text.replace("E+0", "E").replace("E-0", "E-").encode("utf-8"))
+    return folder
+
+
+def test_too_little_tilt_to_check_a_gyros_unit_is_said_in_the_summary_with_what_the_other_unit_shows(tmp_path):
+    # 1.2 s of tilting: 11 windows count in rad/s, under the 20 the unit check needs -- loaded as the header says,
+    # and the summary says what the other unit showed; the accelerometer at half the gyro's rate: still the gyro's
+    t, gyr, acc = _still_then_tilting(tilting=1.2)
+    rec = recordings.load_recording(_phyphox_custom(tmp_path / "short", t, gyr, acc, acc_every=2))
+    assert rec.gyr[-10:, 0] == pytest.approx(np.radians(1.0), abs=1e-4)
+    text = str(rec.summary)
+    assert ("gyr: deg/s (the header of Gyroscope.csv); too little motion for the tilt check (0 windows; read in "
+            "rad/s, 11 windows count (ratio 1.00), under the 20 the check needs)") in text
+    assert rec.summary.method == "linear interpolation onto the gyro's median rate" and rec.fs == pytest.approx(100.0)
+
+
+def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_holds(tmp_path):
+    # phyphox's 'Acceleration with g' exported as one Raw Data.csv, with its absolute-value column
+    t, _, acc = _still_then_tilting()
+    head = ('"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
+            '"Absolute acceleration (m/s^2)"')
+    rows = [",".join(f"{x:.9E}" for x in (ti, *a, np.linalg.norm(a))) for ti, a in zip(t, acc)]
+    (tmp_path / "Raw Data.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"Raw Data.csv holds no gyroscope: both are needed \(it holds the "
+                                         r"accelerometer\) -- record the gyroscope and the accelerometer together"):
+        recordings.load_recording(tmp_path / "Raw Data.csv")
+
+
+def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as_a_mirrored_frame(tmp_path):
+    # z, y, x read as x, y, z in every file: each sensor's numbers plausible, the magnitudes consistent, the frame
+    # left-handed -- gravity turns against the gyro
+    folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
+    for name in ("Accelerometer.csv", "Gravity.csv", "Gyroscope.csv", "Magnetometer.csv"):
+        _edit(folder / name, lambda s: s.replace("seconds_elapsed,z,y,x", "seconds_elapsed,x,y,z", 1))
+    message = r"Gyroscope.csv: .* the gyro turns gravity the opposite way.*median cosine -0.99 .* a mirrored frame"
+    with pytest.raises(ValueError, match=message):
+        recordings.load_recording(folder)
+    folder = _sensor_logger_export(tmp_path / "flipped", "android")
+    _lines(folder / "Gyroscope.csv", lambda ls: [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in
+                                                                     r.split(",")[2:])]) for r in ls[1:]])
+    with pytest.raises(ValueError, match=r"median cosine -1.00 over 25 windows.* one sensor's sign flipped"):
+        recordings.load_recording(folder)
+    rec = recordings.load_recording(folder, check=False)                       # trusted as stated when asked to
+    assert rec.gyr[-10:, 0] == pytest.approx(-1.0, abs=0.01)
 
 
 # ------------------------------------------------------------------------------------------------------------------

@@ -5,16 +5,20 @@
 ``t``), so that a filter of the course runs on a student's own phone as it runs on BROAD:
 
 * **phyphox** -- a folder or ``.zip`` with one CSV per sensor (``Accelerometer.csv``, ``Gyroscope.csv``,
-  ``Magnetometer.csv``; header ``"Time (s)","X (rad/s)",...`` or ``"Gyroscope x (rad/s)",...``), or one combined
-  ``Raw Data.csv``; comma, semicolon or tab separated, with a decimal point or the decimal comma some locales export.
+  ``Magnetometer.csv``; header ``"Time (s)","X (rad/s)",...`` or ``"Gyroscope x (rad/s)",...``, or an experiment
+  built in phyphox's editor naming them itself, ``Accel_X (m/s^2)``, read as the file's sensor by their unit), or one
+  combined ``Raw Data.csv``; comma, semicolon or tab separated, with a decimal point or the decimal comma some locales
+  export.
   The header states the units; the accelerometer with gravity is read as specific force (+9.81 m/s² on z face
   up), which the rest posture checks.
 * **Sensor Logger** -- a folder or ``.zip`` of CSVs with ``time`` (epoch, ns), ``seconds_elapsed`` and the axes in
-  ``z, y, x`` order; ``Metadata.csv`` names the platform. ``TotalAcceleration.csv`` is the accelerometer with
-  gravity; ``Accelerometer.csv`` is the linear acceleration (gravity removed), which is used only with
+  ``z, y, x`` order; ``Metadata.csv`` names the platform. ``TotalAcceleration.csv`` (Android) is the accelerometer
+  with gravity; ``Accelerometer.csv`` is the linear acceleration (gravity removed), which is used only with
   ``Gravity.csv`` beside it (their sum is the raw reading: Android's linear acceleration is the accelerometer minus
-  its gravity, iOS's user acceleration plus its gravity is the raw reading). ``Orientation.csv`` (``qw, qx, qy, qz``)
-  is the phone's own orientation estimate, kept as :attr:`Recording.quat_phone`, never as a reference.
+  its gravity, iOS's user acceleration plus its gravity is the raw reading; iOS writes no TotalAcceleration.csv).
+  Both platforms write m/s² (iOS's Core Motion g converted; only the uncalibrated accelerometer, not read here, stays
+  in g on iOS); iOS keeps Core Motion's sign. ``Orientation.csv`` (``qw, qx, qy, qz``) is the phone's own
+  orientation estimate, kept as :attr:`Recording.quat_phone`, never as a reference.
 * **a plain CSV** whose columns the caller maps (``columns=``) and whose units the caller states (``units=``).
 
 Units and signs at this edge
@@ -37,12 +41,19 @@ quantity   the physics                                                    what i
 ``gyr``    the gyro's tilt against the turn of gravity in the             rad/s from °/s (×57.3)
            accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`),
            or, with too little motion, its peak and median rate
+``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
+           turns it, median cosine near +1 (-1 mirrored), over the same   one (``z, y, x`` read as ``x, y, z``)
+           windows (at least 20)                                          or a gyro of the opposite sign
 ``mag``    the median field strength: 25-65 µT on Earth                   µT from nT, gauss, mT
 =========  =============================================================  =====================================
 
 The sign of the accelerometer cannot be read from the gyro: gravity and its opposite are both fixed in the Earth
 frame, and the gyro turns both alike (``du/dt = u × ω`` is linear in ``u``). The check is therefore the rest
 posture; a recording that rests face down passes ``check=False`` (the summary then says nothing was checked).
+What the physics cannot see is not refused but written in the summary as unchecked: the sign of a recording that
+never lies still and flat for half a second, and the gyro's unit and handedness with fewer than 20 windows in which
+it tilts the phone (hand-held snippets of a few seconds cut from real exports of both apps had 0 to 9 such windows;
+one of 5 s of shaking had 36, and there a header's °/s over numbers in rad/s was refused).
 The phone's axes are the same on Android and iOS: x to the right, y up the screen, z out of the screen
 (:mod:`fusionlab.conventions`).
 
@@ -553,16 +564,23 @@ _PHYPHOX_FILES = {"acc": ("Accelerometer.csv", "Acceleration with g.csv"), "gyr"
                   "mag": ("Magnetometer.csv",), "lin": ("Linear Accelerometer.csv", "Linear Acceleration.csv")}
 _PHYPHOX_QUANTITIES = {"acceleration": "acc", "gyroscope": "gyr", "magnetic field": "mag",
                        "linear acceleration": "lin"}
+_SENSOR_NAMES = {"acc": "accelerometer", "gyr": "gyroscope", "mag": "magnetometer", "lin": "linear acceleration"}
 _SL_FILES = ("Gyroscope.csv", "TotalAcceleration.csv", "Accelerometer.csv", "Gravity.csv", "Magnetometer.csv",
              "Orientation.csv")
 
 
 def _phyphox_columns(table, default):
-    """{sensor: (unit, [col x, col y, col z])} and the time column of a phyphox header; None if it is not one."""
-    time_col, found = None, {}
+    """The time column of a phyphox header, {sensor: (unit, [col x, col y, col z])}, and the column names a custom
+    experiment gave (read as the file's own sensor, by their unit); (None, {}, []) if it is not one.
+
+    phyphox's own experiments write ``X (rad/s)`` or ``Gyroscope x (rad/s)``; an experiment built in its editor
+    names its columns freely (``Accel_X (m/s^2)``): in a per-sensor file such a name is the file's sensor when its
+    unit is that sensor's (a name ending in the axis after a space or ``_``).
+    """
+    time_col, found, custom = None, {}, []
     for i, name in enumerate(table.names):
         if "(" not in name or not name.endswith(")"):
-            return None, {}
+            return None, {}, []
         label, unit = name[:-1].rsplit("(", 1)
         label, unit = label.strip().lower(), unit.strip()
         if label == "time" and unit == "s":
@@ -570,18 +588,22 @@ def _phyphox_columns(table, default):
             continue
         if label.startswith("absolute"):
             continue
-        if not label or label[-1] not in "xyz" or (len(label) > 1 and label[-2] != " "):
-            return None, {}
-        quantity = label[:-1].strip()
+        if not label or label[-1] not in "xyz" or (len(label) > 1 and label[-2] not in " _"):
+            return None, {}, []
+        quantity = label[:-1].rstrip(" _")
         sensor = _PHYPHOX_QUANTITIES.get(quantity) if quantity else default
         known = _HEADER_UNITS.get(unit.lower() if unit.lower() != "g" else "g")
+        if sensor is None and default is not None and known is not None and known[0] == (
+                "acc" if default == "lin" else default):
+            sensor = default
+            custom.append(name)
         if sensor is None or known is None or known[0] != ("acc" if sensor == "lin" else sensor):
-            return None, {}
+            return None, {}, []
         entry = found.setdefault(sensor, [known[1], {}])
         entry[1]["xyz".index(label[-1])] = i
     if time_col is None or any(len(cols) != 3 for _, cols in found.values()):
-        return None, {}
-    return time_col, {s: (u, [cols[k] for k in range(3)]) for s, (u, cols) in found.items()}
+        return None, {}, []
+    return time_col, {s: (u, [cols[k] for k in range(3)]) for s, (u, cols) in found.items()}, custom
 
 
 def _read_phyphox(src):
@@ -594,11 +616,17 @@ def _read_phyphox(src):
                          "(Magnetometer.csv optional) or Raw Data.csv")
     for default, member in tables:
         table = _read_table(src.text(member), src.where(member))
-        time_col, cols = _phyphox_columns(table, default)
+        time_col, cols, custom = _phyphox_columns(table, default)
         if time_col is None or not cols:
+            fix = ("read it as a plain CSV with columns= and units=" if src.kind == "file" else
+                   "name its columns as phyphox does (\"X (m/s^2)\"), or put the sensors in one CSV and read it with "
+                   "columns= and units=")
             raise ValueError(f"{table.where}, line 1: the header {table.names} is not one phyphox writes (expected "
                              "\"Time (s)\" and X/Y/Z columns with their units, e.g. \"X (rad/s)\" or \"Gyroscope x "
-                             "(rad/s)\"): an unknown app version? read it as a plain CSV with columns= and units=")
+                             f"(rad/s)\"): an unknown app version? {fix}")
+        if custom:
+            notes.append(f"{Path(member).name}: {', '.join(custom)} are not phyphox's own column names (a custom "
+                         f"experiment's): read as the file's {_SENSOR_NAMES[default]} by their unit")
         t = table.numbers([time_col])[:, 0]
         shared = len(cols) > 1
         for sensor, (unit, c) in cols.items():
@@ -709,9 +737,10 @@ def _read_sensor_logger(src):
         q = stream("Orientation.csv", "quat_phone")
         streams["quat_phone"] = q
     if platform and not standard:
+        # m/s² on both platforms: Sensor Logger converts Core Motion's g (only its uncalibrated accelerometer, not
+        # read here, stays in g on iOS); the sign stays the platform's
         by = f"Sensor Logger on {platform}"
-        units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by),
-                 "acc": _Stated("m/s^2" if platform == "android" else "g", by)}
+        units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by), "acc": _Stated("m/s^2", by)}
         convention = _Stated("specific force" if platform == "android" else "gravity", by)
     else:                                                  # units the export does not state: the physics decides
         by = "Sensor Logger (both platforms)"
@@ -947,7 +976,15 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         return f"read in {u}, gravity turned {r:.2f} times as far as the gyro tilts the phone ({k} windows of 0.1 s)"
 
     if fits(ratio, n):
-        return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}"
+        cos, k = _tilt_direction(rad, acc, fs)
+        turns = f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
+        if k >= validate.TILT_WINDOWS_MIN and cos < 0.0:
+            raise ValueError(f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
+                             f"accelerometer (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
+                             "near +1): a mirrored frame -- axes read in the wrong order (Sensor Logger writes z, y, "
+                             "x; columns= lists x, y, z) or one sensor's sign flipped; no unit fixes it: check the "
+                             "file's header or columns=")
+        return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}, {turns}"
     if fits(ratio_o, n_o):
         why = seen(ratio, n, unit) if n else f"read in {unit}, the gyro hardly turns while gravity does"
         raise ValueError(f"{where}: {why} ({by}); {seen(ratio_o, n_o, other)}: the gyro is in {other} -- pass "
@@ -957,8 +994,37 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
     if top > 50.0 or med > 10.0:
         raise ValueError(f"{where}: read in {unit} ({by}), the gyro peaks at {top:.4g} rad/s with a median of "
                          f"{med:.3g}, far beyond a turning hand: the gyro is in deg/s -- pass {_fix('gyr', 'deg/s')}")
-    return (f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows), peak {top:.3g} rad/s and "
-            f"median {med:.3g} plausible")
+    hint = (f"; read in {other}, {n_o} windows count (ratio {ratio_o:.2f}), under the {validate.TILT_WINDOWS_MIN} "
+            "the check needs" if 0 < n_o < validate.TILT_WINDOWS_MIN else "")
+    return (f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows{hint}), peak {top:.3g} rad/s "
+            f"and median {med:.3g} plausible")
+
+
+def _tilt_direction(gyr, acc, fs):
+    """The median cosine between the turn of gravity the accelerometer shows and the one the gyro (rad/s) predicts,
+    over the windows of :func:`fusionlab.validate.gyro_tilt_ratio` that count, and their number.
+
+    Near +1 for a right-handed phone whatever the units and the accelerometer's sign; near -1 for a mirrored frame
+    (two axes swapped in both sensors, as ``z, y, x`` read as ``x, y, z``) or a gyro of the opposite sign: the
+    magnitude ratio cannot see either.
+    """
+    m = max(1, int(round(validate.TILT_WINDOW * fs)))
+    nb = min(len(gyr), len(acc)) // m
+    if nb < 2:
+        return float("nan"), 0
+    a = acc[:nb * m].reshape(nb, m, 3).mean(axis=1)
+    size = np.linalg.norm(a, axis=1)
+    u = a / np.maximum(size, 1e-300)[:, None]
+    turn = gyr[:nb * m].reshape(nb, m, 3).sum(axis=1) / fs
+    predicted = np.cross(u[:-1], 0.5 * (turn[:-1] + turn[1:]))
+    observed = u[1:] - u[:-1]
+    p, o = np.linalg.norm(predicted, axis=1), np.linalg.norm(observed, axis=1)
+    use = ((size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size)) & (p > validate.TILT_MIN)
+           & (o > 0))
+    if not np.any(use):
+        return float("nan"), 0
+    cos = np.sum(predicted[use] * observed[use], axis=1) / (p[use] * o[use])
+    return float(np.median(cos)), int(use.sum())
 
 
 def _settle_mag(mag, stated, where, check):
@@ -1096,7 +1162,9 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
         export = _read_plain(src, columns, units)
     for key in ("gyr", "acc"):
         if key not in export.streams:
-            raise ValueError(f"{p} holds no {'gyroscope' if key == 'gyr' else 'accelerometer'}: both are needed")
+            held = ", ".join(_SENSOR_NAMES[k] for k in export.streams if k in _SENSOR_NAMES) or "no sensor"
+            raise ValueError(f"{p} holds no {_SENSOR_NAMES[key]}: both are needed (it holds the {held}) -- record the "
+                             "gyroscope and the accelerometer together")
     if units and export.format != "csv":
         if "t" in units:
             raise ValueError(f"units['t'] is for a plain CSV; the {export.format} export states its time unit")
@@ -1121,8 +1189,9 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
         mag = values["mag"] * UNITS["mag"][export.units["mag"].value]
         checks.append(_settle_mag(mag, export.units["mag"], st["mag"].where, check))
     checks += [f"note: {n}" for n in export.notes]
+    gyro_rate = next(r.rate for r in reports if r.sensor == "gyr")
     method = ("linear interpolation onto the gyro's median rate" if len(grid) and np.isclose(
-        fs, reports[0].rate) else f"linear interpolation onto {fs:.2f} Hz")
+        fs, gyro_rate) else f"linear interpolation onto {fs:.2f} Hz")
     summary = Summary(str(path), export.format, export.platform, fs, len(grid), float(start - origin), method,
                       reports, tuple(checks))
     frozen = [_frozen(a) if a is not None else None for a in (gyr, acc, mag, values.get("quat_phone"))]
@@ -1314,13 +1383,16 @@ def make_examples(out, broad_dir=None):
                                          s="Accelerometer|Gravity|Gyroscope|Magnetometer|Orientation")}
     written += _write(out, "sensorlogger_android_trial02.zip", files)
 
-    # Sensor Logger, iOS: TotalAcceleration.csv in g and the gravity-vector sign (-1 on z face up), rad/s, µT
+    # Sensor Logger, iOS: as the app writes it there, Accelerometer.csv (Core Motion's user acceleration) and
+    # Gravity.csv, both in m/s² and with Core Motion's gravity-vector sign (gravity -9.81 on z face up: their sum is
+    # minus the specific force); rad/s, µT
     ia, ig, im = (_clock(next(rngs), 100.0, n, fs, 0.0005, d) for d in (None, (12.0, 2), None))
-    files = {"TotalAcceleration.csv": _sl_csv(ns[ia], (-acc / earth.G)[ia][:, ::-1]),
+    files = {"Accelerometer.csv": _sl_csv(ns[ia], (gravity - acc)[ia][:, ::-1]),
+             "Gravity.csv": _sl_csv(ns[ia], (-gravity)[ia][:, ::-1]),
              "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
              "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
-             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10",
-                                         s="TotalAcceleration|Gyroscope|Magnetometer")}
+             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10|10",
+                                         s="Accelerometer|Gravity|Gyroscope|Magnetometer")}
     written += _write(out, "sensorlogger_ios_trial02.zip", files)
 
     # a plain CSV of another logger: one clock, ms; gyro in deg/s, accelerometer in g (specific force), field in nT,
