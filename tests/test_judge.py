@@ -37,7 +37,7 @@ import pytest
 
 from conftest import ROOT, nbgrader
 from fusionlab.checks import slips
-from grading import launcher, sandbox
+from grading import launcher, sandbox, slipreport
 from grading.bench_classgrade import fill_answers, grade_id
 from test_feedback import _hidden_lines
 from test_slips import LAB02_OTHER, LAB02_PLANTED
@@ -439,6 +439,17 @@ def test_the_report_of_common_slips_counts_the_slips_planted_and_its_page_names_
         assert shown and int(shown.group(1)) == count, slip
     assert not [s for s in graded["students"] if "_" in s and s in page]
     assert "common slips: slips_02_kalman_falling_body.html" in graded["run"].stdout
+
+    # each wrong answer's example: an answer cell that made it, as graded (the planted slip's own); the attackers'
+    # code (markup, scripts) is text in it
+    wrong = {f"example-{r['grade_id']}-{r['slip']}" for r in rows
+             if r["slip"] not in slips.OUTCOMES or r["slip"] in (slips.UNRECOGNISED, slips.RAISED)}
+    assert set(re.findall(r'<details class="example" id="([^"]+)">', page)) == wrong
+    for gid, slip in sorted({(g, s) for p in SLIPS.values() for g, s in p.items() if s not in slips.OUTCOMES}):
+        shown = re.search(f'id="example-{gid}-{slip}"><summary>example</summary><pre><code>(.*?)</code>', page, re.S)
+        assert shown and html.unescape(shown.group(1)) == LAB02_PLANTED[slip][1].rstrip(), (gid, slip)
+    assert "<script" not in page and "<img" not in page and "<iframe" not in page
+    assert set(slipreport.names_of(graded["root"])) >= {r["student"] for r in rows}     # the gradebook's students
 
 
 @pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",

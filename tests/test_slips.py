@@ -9,12 +9,14 @@ must count exactly these), and one answer for each of the other slips in ``tests
 from __future__ import annotations
 
 import ast
+import contextlib
 import csv
 import functools
 import html
 import importlib
 import inspect
 import re
+import sqlite3
 
 import numpy as np
 import pytest
@@ -206,18 +208,76 @@ def _verdict(slips_of):
                                                  "", slips_of.get(g, "passed")) for g, p in points.items()])
 
 
+REPORT_LAB = "02_kalman_falling_body"
+# a made-up graded class of lab 02: student -> test -> outcome (the tests not named passed); fay is not graded
+REPORT_CLASS = {"ann": {"ex1_tests": "joseph.short_form", "ex3_tests": "predict.no_control"},
+                "bob": {"ex1_tests": "joseph.short_form", "ex3_tests": "predict.no_Q"},
+                "cyd": {"ex3_tests": slips.UNRECOGNISED, "ex2_tests": slips.NOT_ATTEMPTED},
+                "dee": {"ex3_tests": slips.RAISED}, "eve": {}}
+REPORT_NAMES = {"ann": ("Ann", "Lee", "ann.lee@example.edu"), "bob": ("Bob", "Okafor", "bob.okafor@example.edu"),
+                "cyd": ("Cyd", "Rao", "cyd.rao@example.edu"), "dee": ("Dee", "Wu", "dee.wu@example.edu"),
+                "eve": ("Eve", "Moss", "eve.moss@example.edu")}
+XSS_SLIPS = "</code></pre><script>window.XSS_SLIPS = 1</script><img src=x onerror=\"window.XSS_SLIPS = 2\">"
+RAISED_LINES = 100
+# the answer cells the class handed in, where they are not the model's: (student, exercise) -> source
+REPORT_ANSWERS = {
+    # ann's slip is the one shown for joseph.short_form (first in sorted order): her id, name and email go
+    ("ann", 1): "# Exercise 1 -- Ann Lee (ann), ann.lee@example.edu\n"
+                "def my_joseph(P, K, H, R):\n"
+                "    ann_identity = np.eye(len(P))   # ann: the identity, I checked\n"
+                "    note = 'written by Ann Lee'\n"
+                "    return (ann_identity - K @ H) @ P  # short and sweet\n",
+    ("bob", 1): LAB02_PLANTED["joseph.short_form"][1].replace("def", "# Bob Okafor\ndef", 1),
+    ("ann", 3): LAB02_PLANTED["predict.no_control"][1],
+    ("bob", 3): "def my_predict(x, P, A, Q, B, u):\n    return A @ x + B @ u, A @ P @ A.T  # BOB's answer\n",
+    ("cyd", 3): LAB02_OTHER[slips.UNRECOGNISED][1] + f"LABEL = {XSS_SLIPS!r}\n",
+    ("cyd", 2): "raise NotImplementedError('exercise 2 not attempted yet')",
+    ("dee", 3): "def my_predict(x, P, A, Q, B, u):\n" + "".join(f"    step_{i} = {i}\n" for i in range(RAISED_LINES))
+                + "    raise ValueError('dee gave up')\n",
+}
+
+
+def _notebook(student):
+    """``student``'s notebook as graded: the answer cells of exercises 1 to 3 (nbgrader's metadata, sources of
+    :data:`REPORT_ANSWERS` or a right answer)."""
+    import nbformat
+    nb = nbformat.v4.new_notebook()
+    for n in (1, 2, 3):
+        cell = nbformat.v4.new_code_cell(REPORT_ANSWERS.get((student, n), f"# exercise {n}: right\n"))
+        cell.metadata["nbgrader"] = {"grade_id": f"ex{n}_solution", "solution": True, "grade": False,
+                                     "locked": False, "schema_version": 3}
+        nb.cells.append(cell)
+    return nb
+
+
+def report_class(course):
+    """The graded class of :data:`REPORT_CLASS` in ``course``: each graded student's autograded notebook (fay's is
+    not there: the judge could not read it) and their names in the gradebook (its table of students only: the class
+    of ``tests/test_judge.py`` reads a whole one). Returns the results of the run."""
+    import nbformat
+
+    from grading.classgrade import Result
+
+    with contextlib.closing(sqlite3.connect(course / "gradebook.db")) as con, con:   # nbgrader's table of students
+        con.execute("CREATE TABLE student (id VARCHAR(128) NOT NULL PRIMARY KEY, first_name VARCHAR(128), "
+                    "last_name VARCHAR(128), email VARCHAR(128), lms_user_id VARCHAR(128))")
+        con.executemany("INSERT INTO student VALUES (?, ?, ?, ?, NULL)",
+                        [(s, *names) for s, names in REPORT_NAMES.items()])
+    for student in REPORT_CLASS:
+        folder = course / "autograded" / student / REPORT_LAB
+        folder.mkdir(parents=True)
+        nbformat.write(_notebook(student), folder / f"{REPORT_LAB}.ipynb")
+    results = [Result(s, ok=True, verdict=_verdict(v)) for s, v in REPORT_CLASS.items()]
+    results.append(Result("fay", error="no file"))                      # not graded: in neither file
+    return results
+
+
 def test_the_report_counts_each_slip_orders_exercises_by_students_stopped_and_names_no_one_in_html(tmp_path):
     from grading import slipreport
     from grading.classgrade import Result
 
-    lab = "02_kalman_falling_body"
-    made = {"ann": {"ex1_tests": "joseph.short_form", "ex3_tests": "predict.no_control"},
-            "bob": {"ex1_tests": "joseph.short_form", "ex3_tests": "predict.no_Q"},
-            "cyd": {"ex3_tests": slips.UNRECOGNISED, "ex2_tests": slips.NOT_ATTEMPTED},
-            "dee": {"ex3_tests": slips.RAISED}, "eve": {}}
-    results = [Result(s, ok=True, verdict=_verdict(v)) for s, v in made.items()]
-    results.append(Result("fay", error="no file"))                      # not graded: in neither file
-    html_path, csv_path = slipreport.write(tmp_path, lab, results)
+    lab, made = REPORT_LAB, REPORT_CLASS
+    html_path, csv_path = slipreport.write(tmp_path, lab, report_class(tmp_path))
     with open(csv_path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert {r["student"] for r in rows} == set(made)
@@ -225,7 +285,7 @@ def test_the_report_counts_each_slip_orders_exercises_by_students_stopped_and_na
         (s, g): v for s, gs in made.items() for g, v in gs.items()}
     page = html_path.read_text()
     for student in made:
-        assert not re.search(rf"\b{student}\b", page)
+        assert not re.search(rf"\b{student}\b", page, re.I)
     order = [page.index(f"Exercise {n}") for n in (3, 1, 2)]              # 4, 2 and 1 students stopped
     assert order == sorted(order)
     assert "stopped 2 of 5 students; pass rate 60 %" in page[page.index("Exercise 1"):]
@@ -242,3 +302,63 @@ def test_the_report_counts_each_slip_orders_exercises_by_students_stopped_and_na
         rows = list(csv.DictReader(fh))
     assert {r["student"] for r in rows} == set(made)
     assert {r["slip"] for r in rows if r["student"] == "ann"} == {"passed"}
+    assert "Ann" not in html_path.read_text()                             # bob's answer is joseph.short_form's now
+
+
+def test_each_wrong_answer_unfolds_one_example_anonymised_and_inert(tmp_path):
+    from grading import slipreport
+
+    html_path, _ = slipreport.write(tmp_path, REPORT_LAB, report_class(tmp_path))
+    page = html_path.read_text()
+    rows = re.findall(r'<tr class="[^"]+" data-slip="([^"]+)">(.*?)</tr>', page, re.S)
+    assert len(rows) == 9
+    folds = {slip: re.findall(r'<details class="example" id="([^"]+)"><summary>example</summary><pre><code>(.*?)'
+                              r'</code></pre></details></td>$', row, re.S) for slip, row in rows}
+    examples = dict(fold for found in folds.values() for fold in found)
+    # one of each named slip and of unrecognised and raised, under its bar; none of not attempted or passed
+    assert sorted(examples) == sorted(f"example-{g}-{s}" for g, s in [
+        ("ex1_tests", "joseph.short_form"), ("ex3_tests", "predict.no_control"), ("ex3_tests", "predict.no_Q"),
+        ("ex3_tests", slips.UNRECOGNISED), ("ex3_tests", slips.RAISED)])
+    assert all(len(found) == (slip not in (slips.PASSED, slips.NOT_ATTEMPTED)) for slip, found in folds.items())
+    code = {k: html.unescape(v) for k, v in examples.items()}
+
+    # the first of the slip's students in sorted order: ann's, her id, name and email gone, her code kept
+    short = code["example-ex1_tests-joseph.short_form"]
+    assert short == ("def my_joseph(P, K, H, R):\n    student_identity = np.eye(len(P))\n"
+                     "    note = 'written by student student'\n"
+                     "    return (student_identity - K @ H) @ P  # short and sweet"), short
+    assert code["example-ex3_tests-predict.no_Q"] == ("def my_predict(x, P, A, Q, B, u):\n"      # BOB's comment gone
+                                                      "    return A @ x + B @ u, A @ P @ A.T")
+    for who in [*REPORT_CLASS, *(w for n in REPORT_NAMES.values() for w in n)]:
+        assert not re.search(rf"(?<![A-Za-z0-9]){re.escape(who)}(?![A-Za-z0-9])", page, re.I), who
+
+    # a long answer is cut, saying so; the student's markup is text
+    raised = code[f"example-ex3_tests-{slips.RAISED}"]
+    assert len(raised.splitlines()) == slipreport.EXAMPLE_LINES + 1
+    assert raised.endswith(f"({RAISED_LINES + 2 - slipreport.EXAMPLE_LINES} more lines not shown)")
+    assert XSS_SLIPS in code[f"example-ex3_tests-{slips.UNRECOGNISED}"]
+    for tag in ("<script", "<img", "onerror=\"", "</pre><script"):
+        assert tag not in page, tag
+    assert "default-src 'none'" in page
+
+    # no notebook to read: the bars stay, without an example
+    for folder in (tmp_path / "autograded").iterdir():
+        for nb in folder.rglob("*.ipynb"):
+            nb.unlink()
+    slipreport.write(tmp_path, REPORT_LAB, [])
+    bare = html_path.read_text()
+    assert "<details" not in bare and bare.count("<tr") == 9
+
+
+@pytest.mark.parametrize("source, expected", [
+    ("x = 1  # s123's\n# S123 wrote it\ny = 's123'\n", "x = 1\ny = 'student'\n"),      # the id, any case
+    ("s123_total = 2  # Lee\nannual = 'Ann Lee, ann.lee@u.edu'\n",
+     "student_total = 2\nannual = 'student student, student'\n"),
+    ("np.max(x)  # max\nmax_value = f'{x} by Max'\n", "np.max(x)\nmax_value = f'{x} by student'\n"),
+    ("def f(:  # Ann's broken cell\n    return 'Ann'  # fine\n",                      # not Python: line by line
+     "def f(:\n    return 'student'  # fine\n"),
+])
+def test_an_example_keeps_no_trace_of_its_author(source, expected):
+    from grading.slipreport import anonymised
+    names = ("Ann", "Lee", "ann.lee@u.edu") if "Ann" in source or "Lee" in source else ("Max", "Power")
+    assert anonymised(source, "s123", names) == expected
