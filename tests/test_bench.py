@@ -243,6 +243,69 @@ def test_leave_one_out_refuses_a_grid_without_the_default_and_a_single_trial(sim
         bench.leave_one_out(sim_trials, "nope", {"tau": (1.0,)})
 
 
+def _grouped(trials, inside):
+    """The trials with the groups 'undisturbed' (index in ``inside``) or 'disturbed'."""
+    return [datasets._make_trial(t.name, ("all_trials", "undisturbed" if i in inside else "disturbed"), t.description,
+                                 t.fs, t.gyr, t.acc, t.mag, t.quat_ref, t.movement) for i, t in enumerate(trials)]
+
+
+def test_leave_one_group_out_chooses_on_the_other_side_and_reuses_the_runs(sim_trials):
+    trials = _grouped(sim_trials, inside=(0,))
+    grid = {"tau": (0.5, 1.0, 4.0)}
+    r = bench.leave_one_group_out(trials, "complementary", grid)
+    assert r.group == "undisturbed" and list(r.in_group) == [True, False, False] and r.metric == "inclination"
+    inside_pick = int(np.argmin(r.rmse_deg[1:].mean(axis=0)))          # chosen on the two disturbed ones
+    outside_pick = int(np.argmin(r.rmse_deg[0]))                       # chosen on the undisturbed one
+    assert r.chosen == (r.combos[inside_pick], r.combos[outside_pick], r.combos[outside_pick])
+    np.testing.assert_array_equal(r.logo_deg, [r.rmse_deg[0, inside_pick], r.rmse_deg[1, outside_pick],
+                                               r.rmse_deg[2, outside_pick]])
+    assert np.array_equal(r.default_deg, r.rmse_deg[:, 1]) and r.logo_mean == pytest.approx(np.mean(r.logo_deg))
+    loo = bench.leave_one_out(trials, "complementary", grid)
+    np.testing.assert_array_equal(loo.rmse_deg, r.rmse_deg)             # the same runs
+    again = bench.leave_one_group_out(trials, "complementary", grid, runs=loo)
+    np.testing.assert_array_equal(again.logo_deg, r.logo_deg)
+    assert again.chosen == r.chosen
+    text = bench.format_loo([loo], [dict(estimator="vqf6", inclination_rmse_deg=0.5, error="")], [r])
+    assert "leave one group out" in text and "group out" in text
+    assert (f"{loo.default_mean / 0.5:.2f} / {loo.loo_mean / 0.5:.2f} / {r.logo_mean / 0.5:.2f} x vqf6 (0.50)"
+            in text)
+    assert "chosen for the group out -- on the undisturbed: tau=" in text
+
+
+def test_leave_one_group_out_names_what_is_wrong(sim_trials):
+    trials = _grouped(sim_trials, inside=(0,))
+    grid = {"tau": (0.5, 1.0)}
+    with pytest.raises(ValueError, match="trials must hold trials both in and outside group 'undisturbed'; got 3"):
+        bench.leave_one_group_out(_grouped(sim_trials, inside=(0, 1, 2)), "complementary", grid)
+    with pytest.raises(ValueError, match="group must be a BROAD group other than 'all_trials'"):
+        bench.leave_one_group_out(trials, "complementary", grid, group="all_trials")
+    with pytest.raises(ValueError, match="grid must hold the registered default of tau"):
+        bench.leave_one_group_out(trials, "complementary", {"tau": (0.5, 2.0)})
+    loo = bench.leave_one_out(trials, "complementary", grid)
+    with pytest.raises(ValueError, match="runs must be a leave_one_out of 'complementary' on the same trials"):
+        bench.leave_one_group_out(trials[:2], "complementary", grid, runs=loo)
+    with pytest.raises(ValueError, match="runs must be a LeaveOneOut"):
+        bench.leave_one_group_out(trials, "complementary", grid, runs={"rmse": 1})
+
+
+def test_command_line_prints_and_writes_the_group_out_scores(tmp_path, capsys, monkeypatch):
+    """Two short real trials, one undisturbed and one disturbed; a one-value grid keeps it to four runs."""
+    monkeypatch.setitem(bench.TUNED, "complementary", {"tau": (1.0,)})
+    for name in [n for n in bench.TUNED if n != "complementary"]:
+        monkeypatch.delitem(bench.TUNED, name)
+    out = tmp_path / "out"
+    code = bench.main(["--trials", "2", "25", "--folder", str(BROAD), "--max-samples", str(N), "--estimators",
+                       "complementary", "--out", str(out), "--no-progress", "--no-external"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "leave one group out: chosen on the trials outside 'undisturbed'" in text
+    with open(out / "bench_loo.csv", newline="") as f:
+        table = list(csv.DictReader(f))
+    assert tuple(table[0]) == bench.LOO_COLUMNS and len(table) == 2
+    assert all(row["group_chosen"] == "tau=1" and float(row["group_out_deg"]) == float(row["default_deg"])
+               for row in table)
+
+
 def test_every_tuned_grid_holds_the_registered_defaults():
     for name, grid in bench.TUNED.items():
         defaults = estimators.options(name)

@@ -30,13 +30,15 @@ heading. The column ``total_aligned_deg`` scores every estimate once more after 
 offset (``heading_offset='mean'`` of :func:`fusionlab.metrics.broad_rmse`; our addition, not the authors' metric).
 Compare 6-axis filters on inclination (or on the aligned total), 9-axis filters on total.
 
-**Honest tuning: leave one trial out.** A few options of the suite's filters were chosen by looking at the
-mean error over the very trials the benchmark scores (:data:`TUNED` lists them, with a small grid around each
-default). Their eight-trial score is therefore partly tuning. :func:`leave_one_out` gives the figure a reader
-can trust: for each trial, every tuned option is chosen from the grid on the *other* trials and the filter is
-scored on the one left out; the mean of those scores is the leave-one-out figure, printed beside the eight-trial
-one and the ratio to VQF (``bench_loo.csv``). VQF runs with its published default parameters, which its authors
-chose on BROAD as a whole; nothing of VQF is tuned here.
+**Honest tuning: leave one trial out, leave one group out.** A few options of the suite's filters were chosen by
+looking at the mean error over the very trials the benchmark scores (:data:`TUNED` lists them, with a small grid
+around each default). Their eight-trial score is therefore partly tuning. :func:`leave_one_out` gives a figure a
+reader can trust more: for each trial, every tuned option is chosen from the grid on the *other* trials and the
+filter is scored on the one left out. Seven of eight trials still share the left-out trial's kind of motion, so
+:func:`leave_one_group_out` splits the trials by motion instead: options chosen on the undisturbed trials are scored
+on the disturbed ones, and the reverse -- the closer stand-in for trials never seen. Both means are printed beside
+the eight-trial one with their ratios to VQF (``bench_loo.csv``). VQF runs with its published default parameters,
+which its authors chose on BROAD as a whole; nothing of VQF is tuned here.
 
 The run is deterministic (no random numbers); only the timing columns vary between runs.
 """
@@ -59,14 +61,15 @@ from . import accel_tilt, datasets, estimators, metrics, rotations, validate
 
 __all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means",
            "format_table", "write_csv", "plot", "main", "TRIAL_COLUMNS", "GROUP_COLUMNS", "TUNED", "LeaveOneOut",
-           "leave_one_out", "format_loo"]
+           "leave_one_out", "LeaveOneGroupOut", "leave_one_group_out", "format_loo"]
 
 TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
                  "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg", "heading_offset_deg",
                  "seconds", "samples_per_s", "error")
 GROUP_COLUMNS = ("estimator", "source", "sensors", "group", "n_trials", "total_rmse_deg", "heading_rmse_deg",
                  "inclination_rmse_deg", "total_aligned_deg", "samples_per_s")
-LOO_COLUMNS = ("estimator", "metric", "trial", "default_deg", "left_out_deg", "chosen")
+LOO_COLUMNS = ("estimator", "metric", "trial", "default_deg", "left_out_deg", "chosen", "group_out_deg",
+               "group_chosen")
 METRICS = (("total_rmse_deg", "total"), ("heading_rmse_deg", "heading"), ("inclination_rmse_deg", "inclination"))
 
 
@@ -474,6 +477,43 @@ class LeaveOneOut:
         return float(np.mean(self.default_deg))
 
 
+def _grid_runs(trials, estimator, grid, progress, what):
+    """Check a tuning grid and run the estimator once per combination of its values on every trial.
+
+    The one place :func:`leave_one_out` and :func:`leave_one_group_out` run filters. Returns ``(metric, names,
+    combos, rmse, default)``: ``rmse[i, c]`` is trial ``i`` with ``combos[c]``, ``default`` the index of the
+    registered defaults.
+    """
+    from tqdm.auto import tqdm
+
+    info = _estimator(estimator)
+    grid = TUNED.get(estimator) if grid is None else grid
+    if not grid:
+        raise ValueError(f"grid must name at least one option of {estimator!r}; got {grid!r}")
+    defaults = estimators.options(estimator)
+    unknown = [k for k in grid if k not in defaults]
+    if unknown:
+        raise ValueError(f"grid must name options of {estimator!r} ({', '.join(defaults)}); got {unknown}")
+    missing = [k for k, v in grid.items() if defaults[k] not in v]
+    if missing:
+        raise ValueError(f"grid must hold the registered default of {', '.join(missing)}")
+    if len(trials) < 2 or not all(isinstance(t, datasets.BroadTrial) for t in trials):
+        raise ValueError(f"trials must be a list of at least two BroadTrial; got {len(trials)}")
+    uses_mag = info["uses_mag"]
+    metric = "total" if uses_mag else "inclination"
+    names = tuple(grid)
+    combos = tuple(itertools.product(*(tuple(grid[k]) for k in names)))
+    rmse = np.full((len(trials), len(combos)), np.nan)
+    with tqdm(total=rmse.size, desc=f"{what} {estimator}", unit="run", disable=not progress) as bar:
+        for i, tr in enumerate(trials):
+            for c, values in enumerate(combos):
+                q = estimators.run(estimator, gyr=tr.gyr, acc=tr.acc, fs=tr.fs, mag=tr.mag if uses_mag else None,
+                                   frame="ENU", **dict(zip(names, values)))
+                rmse[i, c] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
+                bar.update()
+    return metric, names, combos, rmse, combos.index(tuple(defaults[k] for k in names))
+
+
 def leave_one_out(trials, estimator, grid=None, progress=False):
     """Leave-one-trial-out score of an estimator whose options were chosen on data.
 
@@ -496,46 +536,130 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
     LeaveOneOut
         The scores.
     """
-    from tqdm.auto import tqdm
-
-    info = _estimator(estimator)
-    grid = TUNED.get(estimator) if grid is None else grid
-    if not grid:
-        raise ValueError(f"grid must name at least one option of {estimator!r}; got {grid!r}")
-    defaults = estimators.options(estimator)
-    unknown = [k for k in grid if k not in defaults]
-    if unknown:
-        raise ValueError(f"grid must name options of {estimator!r} ({', '.join(defaults)}); got {unknown}")
-    missing = [k for k, v in grid.items() if defaults[k] not in v]
-    if missing:
-        raise ValueError(f"grid must hold the registered default of {', '.join(missing)}")
     trials = list(trials)
-    if len(trials) < 2 or not all(isinstance(t, datasets.BroadTrial) for t in trials):
-        raise ValueError(f"trials must be a list of at least two BroadTrial; got {len(trials)}")
-    uses_mag = info["uses_mag"]
-    metric = "total" if uses_mag else "inclination"
-    names = tuple(grid)
-    combos = tuple(itertools.product(*(tuple(grid[k]) for k in names)))
-    rmse = np.full((len(trials), len(combos)), np.nan)
-    with tqdm(total=rmse.size, desc=f"leave-one-out {estimator}", unit="run", disable=not progress) as bar:
-        for i, tr in enumerate(trials):
-            for c, values in enumerate(combos):
-                q = estimators.run(estimator, gyr=tr.gyr, acc=tr.acc, fs=tr.fs, mag=tr.mag if uses_mag else None,
-                                   frame="ENU", **dict(zip(names, values)))
-                rmse[i, c] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
-                bar.update()
+    metric, names, combos, rmse, default = _grid_runs(trials, estimator, grid, progress, "leave-one-out")
     others = (rmse.sum(axis=0)[None, :] - rmse) / (len(trials) - 1)     # mean over the other trials, per trial
     pick = np.argmin(others, axis=1)
-    default = combos.index(tuple(defaults[k] for k in names))
     return LeaveOneOut(estimator, metric, names, combos, tuple(t.name for t in trials), rmse,
                        tuple(combos[c] for c in pick), rmse[np.arange(len(trials)), pick], rmse[:, default])
 
 
-def format_loo(results, rows=()):
-    """Text: per tuned estimator, the eight-trial score (defaults) and the leave-one-out score.
+@dataclass(frozen=True)
+class LeaveOneGroupOut:
+    """Result of :func:`leave_one_group_out` for one estimator.
+
+    Parameters
+    ----------
+    estimator : str
+        The registered estimator.
+    metric : {'total', 'inclination'}
+        The fair RMSE scored: total for 9D, inclination for 6D.
+    group : str
+        The BROAD group that splits the trials: the trials in it, and the others.
+    options : tuple of str
+        The tuned options.
+    combos : tuple of tuple
+        The combinations of their values.
+    trials : tuple
+        The trials' names.
+    in_group : ndarray of bool, shape (T,)
+        Whether each trial is in ``group``.
+    rmse_deg : ndarray, shape (T, C)
+        ``rmse_deg[i, c]``: RMSE of trial ``i`` with the option values ``combos[c]``, deg.
+    chosen : tuple
+        ``chosen[i]``: the combination chosen on the other side of the split (the same for every trial of a side).
+    logo_deg : ndarray, shape (T,)
+        ``logo_deg[i]``: trial ``i`` scored with it, deg.
+    default_deg : ndarray, shape (T,)
+        ``default_deg[i]``: trial ``i`` with the registered defaults, deg.
+    """
+
+    estimator: str
+    metric: str
+    group: str
+    options: tuple
+    combos: tuple
+    trials: tuple
+    in_group: np.ndarray
+    rmse_deg: np.ndarray
+    chosen: tuple
+    logo_deg: np.ndarray
+    default_deg: np.ndarray
+
+    @property
+    def logo_mean(self):
+        """Mean over all the trials of the score with options chosen on the other side of the split, deg."""
+        return float(np.mean(self.logo_deg))
+
+    @property
+    def default_mean(self):
+        """Mean over the trials with the registered defaults, deg."""
+        return float(np.mean(self.default_deg))
+
+
+def leave_one_group_out(trials, estimator, grid=None, group="undisturbed", progress=False, runs=None):
+    """Leave-one-group-out score: options chosen on one kind of motion, scored on another.
+
+    The trials are split by a BROAD group (by default ``'undisturbed'``: trials 02/07/11/16 of the shipped eight
+    against the disturbed 25/27/29/33). The combination of the grid with the smallest mean RMSE over the trials of
+    one side is scored on every trial of the other side, and the reverse; the mean over all trials is the figure.
+    Unlike :func:`leave_one_out`, where seven of eight trials share the motions of the one left out, no trial here
+    is scored with options chosen on its own kind of motion: a closer stand-in for trials never seen.
+
+    Parameters
+    ----------
+    trials : list of fusionlab.datasets.BroadTrial
+        At least one trial in ``group`` and one outside it.
+    estimator : str
+        A registered estimator.
+    grid : dict, optional
+        ``{option: values}``; default ``TUNED[estimator]``; must hold the registered defaults.
+    group : str, optional
+        A BROAD group name (:func:`fusionlab.datasets.group_names`) other than ``'all_trials'``.
+    progress : bool, optional
+        A tqdm bar over the runs.
+    runs : LeaveOneOut, optional
+        A :func:`leave_one_out` result of the same estimator, grid and trials: its runs are reused, none is made.
+
+    Returns
+    -------
+    LeaveOneGroupOut
+        The scores.
+    """
+    trials = list(trials)
+    if not isinstance(group, str) or group not in datasets.group_names() or group == "all_trials":
+        others = ", ".join(datasets.group_names()[1:])
+        raise ValueError(f"group must be a BROAD group other than 'all_trials' ({others}); got {group!r}")
+    if runs is None:
+        metric, names, combos, rmse, default = _grid_runs(trials, estimator, grid, progress, "leave-one-group-out")
+    else:
+        if not isinstance(runs, LeaveOneOut):
+            raise ValueError(f"runs must be a LeaveOneOut of leave_one_out; got {type(runs).__name__}")
+        grid = TUNED.get(estimator) if grid is None else grid
+        same = (runs.estimator == estimator and runs.trials == tuple(getattr(t, "name", None) for t in trials)
+                and grid is not None and runs.options == tuple(grid)
+                and runs.combos == tuple(itertools.product(*(tuple(grid[k]) for k in runs.options))))
+        if not same:
+            raise ValueError(f"runs must be a leave_one_out of {estimator!r} on the same trials and grid")
+        metric, names, combos, rmse = runs.metric, runs.options, runs.combos, runs.rmse_deg
+        defaults = estimators.options(estimator)
+        default = combos.index(tuple(defaults[k] for k in names))
+    inside = np.array([group in t.groups for t in trials])
+    if inside.all() or not inside.any():
+        raise ValueError(f"trials must hold trials both in and outside group {group!r}; got "
+                         f"{int(inside.sum())} of {len(trials)} in it")
+    pick = np.empty(len(trials), int)
+    for side in (inside, ~inside):
+        pick[side] = np.argmin(rmse[~side].mean(axis=0))          # chosen on the other side
+    return LeaveOneGroupOut(estimator, metric, group, names, combos, tuple(t.name for t in trials), inside, rmse,
+                            tuple(combos[c] for c in pick), rmse[np.arange(len(trials)), pick], rmse[:, default])
+
+
+def format_loo(results, rows=(), groups=()):
+    """Text: per tuned estimator, the eight-trial score (defaults), the leave-one-out and leave-one-group-out scores.
 
     Also their ratios to VQF (the mean over the same trials in ``rows``, when VQF ran), and the options chosen when
-    each trial was out.
+    each trial (or group) was out.
 
     Parameters
     ----------
@@ -543,6 +667,8 @@ def format_loo(results, rows=()):
         One per tuned estimator.
     rows : sequence of dict, optional
         Result rows of :func:`run_benchmark` (:data:`TRIAL_COLUMNS`).
+    groups : sequence of LeaveOneGroupOut, optional
+        :func:`leave_one_group_out` results of the same estimators (matched by name; a column each when given).
 
     Returns
     -------
@@ -556,21 +682,39 @@ def format_loo(results, rows=()):
             vqf["9D" if name == "vqf9" else "6D"] = (name, float(np.mean(vals)))
     if not results:
         return "leave one trial out: no tuned estimator ran"
+    by_name = {g.estimator: g for g in groups}
     lines = [f"leave one trial out: each tuned option chosen on the other {len(results[0].trials) - 1} trials "
-             "(grid: fusionlab.bench.TUNED), scored on the one left out",
-             f"{'estimator':<14}{'metric':<12}{'all trials':>11}{'left out':>10}  vs VQF (defaults / left out)"]
+             "(grid: fusionlab.bench.TUNED), scored on the one left out"]
+    if by_name:
+        g0 = next(iter(by_name.values()))
+        lines.append(f"leave one group out: chosen on the trials outside '{g0.group}', scored on those in it, and "
+                     "the reverse")
+    head = "all trials / left out" + (" / group out" if by_name else "")
+    lines.append(f"{'estimator':<14}{'metric':<12}{'all trials':>11}{'left out':>10}"
+                 + (f"{'group out':>11}" if by_name else "") + f"  vs VQF ({head})")
     for r in results:
         sens = "9D" if r.metric == "total" else "6D"
+        g = by_name.get(r.estimator)
+        means = [r.default_mean, r.loo_mean] + ([g.logo_mean] if g is not None else [])
         ratio = ""
         if sens in vqf:
             name, v = vqf[sens]
-            ratio = f"{r.default_mean / v:.2f} / {r.loo_mean / v:.2f} x {name} ({v:.2f})"
-        lines.append(f"{r.estimator:<14}{r.metric:<12}{r.default_mean:>11.2f}{r.loo_mean:>10.2f}  {ratio}")
+            ratio = " / ".join(f"{m / v:.2f}" for m in means) + f" x {name} ({v:.2f})"
+        cells = f"{r.default_mean:>11.2f}{r.loo_mean:>10.2f}"
+        if by_name:
+            cells += f"{g.logo_mean:>11.2f}" if g is not None else f"{'-':>11}"
+        lines.append(f"{r.estimator:<14}{r.metric:<12}{cells}  {ratio}")
         picks = ", ".join(f"{t[:2]}: " + " ".join(f"{o}={v:g}" for o, v in zip(r.options, c))
                           for t, c in zip(r.trials, r.chosen))
         lines.append(f"    chosen without each trial -- {picks}")
-    lines.append("all trials: the registered defaults, chosen on these same trials; left out: the honest figure. "
-                 "VQF: its published defaults, chosen by its authors on BROAD, nothing tuned here")
+        if g is not None:
+            sides = []
+            for inside, label in ((True, f"on the {g.group}"), (False, "on the others")):
+                i = int(np.flatnonzero(g.in_group == inside)[0])
+                sides.append(f"{label}: " + " ".join(f"{o}={v:g}" for o, v in zip(g.options, g.chosen[i])))
+            lines.append(f"    chosen for the group out -- {'; '.join(sides)}")
+    lines.append("all trials: the registered defaults, chosen on these same trials; left out / group out: the honest "
+                 "figures. VQF: its published defaults, chosen by its authors on BROAD, nothing tuned here")
     return "\n".join(lines)
 
 
@@ -768,7 +912,8 @@ def main(argv=None):
     p.add_argument("--no-external", action="store_true", help="skip VQF and ahrs even when installed")
     p.add_argument("--max-samples", type=int, help="use only the first N samples of each trial (quick runs)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--no-loo", action="store_true", help="skip the leave-one-trial-out scores of the tuned filters")
+    p.add_argument("--no-loo", action="store_true", help="skip the leave-one-trial-out and leave-one-group-out "
+                                                         "scores of the tuned filters")
     a = p.parse_args(argv)
     import matplotlib
     matplotlib.use("Agg")                                  # a file, never a window
@@ -784,12 +929,22 @@ def main(argv=None):
         if a.max_samples is not None:
             trials = [t.slice(0, int(a.max_samples)) for t in trials]
         loo = [leave_one_out(trials, n, progress=not a.no_progress) for n in tuned]
+        split = [t for t in trials if "undisturbed" in t.groups]
+        logo = ([leave_one_group_out(trials, r.estimator, runs=r) for r in loo]
+                if 0 < len(split) < len(trials) else [])              # the same runs, split by motion
         print()
-        print(format_loo(loo, rows))
-        write_csv([dict(estimator=r.estimator, metric=r.metric, trial=t, default_deg=d, left_out_deg=lo,
-                        chosen=" ".join(f"{o}={v:g}" for o, v in zip(r.options, c)))
-                   for r in loo for t, d, lo, c in zip(r.trials, r.default_deg, r.loo_deg, r.chosen)],
-                  out / "bench_loo.csv", LOO_COLUMNS)
+        print(format_loo(loo, rows, logo))
+        by_name = {g.estimator: g for g in logo}
+        loo_rows = []
+        for r in loo:
+            g = by_name.get(r.estimator)
+            for i, (t, d, lo, c) in enumerate(zip(r.trials, r.default_deg, r.loo_deg, r.chosen)):
+                loo_rows.append(dict(estimator=r.estimator, metric=r.metric, trial=t, default_deg=d, left_out_deg=lo,
+                                     chosen=" ".join(f"{o}={v:g}" for o, v in zip(r.options, c)),
+                                     group_out_deg=g.logo_deg[i] if g is not None else np.nan,
+                                     group_chosen=" ".join(f"{o}={v:g}" for o, v in zip(g.options, g.chosen[i]))
+                                     if g is not None else ""))
+        write_csv(loo_rows, out / "bench_loo.csv", LOO_COLUMNS)
     write_csv(rows, out / "bench_trials.csv")
     write_csv(group_means(rows), out / "bench_groups.csv", GROUP_COLUMNS)
     import matplotlib.pyplot as plt

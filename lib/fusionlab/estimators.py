@@ -363,26 +363,32 @@ def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD.acc_sig
     """
     acc_b = dcm.accel_to_seed004(acc)
     ref, _ = signals.field_reference(mag, fs)
-    return _run_dcm_ahrs(gyr, acc, acc_b, mag / ref[:, None], fs, acc_sigma_untrusted, hold, acc_lp_tau)
+    return _run_dcm_ahrs(gyr, acc, acc_b, mag / ref[:, None], fs, acc_sigma_untrusted, hold, acc_lp_tau,
+                         dcm_filter.HANDHELD)
 
 
-def _run_dcm_ahrs(gyr, acc, acc_b, h, fs, acc_sigma_untrusted, hold, acc_lp_tau):
+def _run_dcm_ahrs(gyr, acc, acc_b, h, fs, acc_sigma_untrusted, hold, acc_lp_tau, base):
     from dataclasses import replace
     g = float(np.linalg.norm(acc[0]))
     g = g if abs(g / dcm.G - 1) < 0.05 else dcm.G
     every = max(1, int(round(fs / DCM_AHRS_UPDATE_HZ)))
-    tuning = replace(dcm_filter.HANDHELD, hold=validate.positive(hold, "hold"),
+    tuning = replace(base, hold=validate.positive(hold, "hold"),
                      acc_sigma_untrusted=validate.positive(acc_sigma_untrusted, "acc_sigma_untrusted"),
                      acc_lp_tau=validate.positive(acc_lp_tau, "acc_lp_tau"))
     return dcm_filter.run_ahrs(gyr, acc_b, h, fs, update_every=every, g=g, tuning=tuning, init_seconds=0.0)["q"]
 
 
 @register("dcm_ahrs6", uses_mag=False, seed="004 §6.4 without the magnetometer (rows c3 and gyro bias; ours)",
-          summary="the DCM AHRS without the magnetometer: accelerometer + orthogonality updates, gyro bias estimated")
-def _dcm_ahrs6(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD.acc_sigma_untrusted,
-               hold=dcm_filter.HANDHELD.hold, acc_lp_tau=3.0):
+          summary="the DCM AHRS without the magnetometer: accelerometer + orthogonality updates, gyro bias estimated; "
+                  "the accelerometer low-passed in an almost inertial frame from the first sample (tuning "
+                  "dcm_filter.HANDHELD6)")
+def _dcm_ahrs6(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD6.acc_sigma_untrusted,
+               hold=dcm_filter.HANDHELD6.hold, acc_lp_tau=dcm_filter.HANDHELD6.acc_lp_tau):
     """As ``dcm_ahrs`` with ``mag_b=None`` (:func:`fusionlab.dcm_filter.run_ahrs`): the accelerometer observes
-    ``c3`` and the horizontal gyro bias; the heading starts at 0 and is the gyro's. Same tuning, ``g`` and update
-    rate, except ``acc_lp_tau = 3 s`` (VQF's value), which the eight BROAD trials prefer for the 6D filter (1 s for
-    the 9D one); any ``mag`` passed is ignored."""
-    return _run_dcm_ahrs(gyr, acc, dcm.accel_to_seed004(acc), None, fs, acc_sigma_untrusted, hold, acc_lp_tau)
+    ``c3`` and the horizontal gyro bias; the heading starts at 0 and is the gyro's. Same ``g`` and update rate; the
+    tuning is :data:`fusionlab.dcm_filter.HANDHELD6`: ``acc_lp_tau = 3 s`` (VQF's value), which the eight BROAD
+    trials prefer for the 6D filter (1 s for the 9D one), and the low-pass from the first sample on, as VQF
+    (Laidig & Seel 2023) low-passes it, not only once the bias is known (``HANDHELD6`` gives the evidence); any
+    ``mag`` passed is ignored."""
+    return _run_dcm_ahrs(gyr, acc, dcm.accel_to_seed004(acc), None, fs, acc_sigma_untrusted, hold, acc_lp_tau,
+                         dcm_filter.HANDHELD6)
