@@ -298,7 +298,10 @@ def run(requests, replies):
     from IPython.core.interactiveshell import InteractiveShell
     import matplotlib.pyplot as plt
 
-    shell = InteractiveShell.instance()
+    from traitlets.config import Config
+    config = Config()
+    config.HistoryManager.enabled = False           # history in memory: no database file, no file lock to take
+    shell = InteractiveShell.instance(config=config)
     shell.display_pub.publish = lambda *a, **k: None  # rich outputs (figures, widgets) go nowhere
     for i, source in enumerate(program["cells"]):
         send({"cell": i, "state": "start"})

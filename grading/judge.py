@@ -442,7 +442,7 @@ def hidden_failure(gid, exc, lab):
     elif isinstance(exc, AssertionError):
         kind = "wrong value"
     else:
-        kind = f"your result could not be used ({type(exc).__name__})"
+        kind = "your result could not be used"
     return f"{where}: {kind}. The visible check above the test names the slip on cases you can see."
 
 
@@ -471,6 +471,15 @@ def _visible_part(lab, session, source, ns, reference, result):
         result.score, result.message, result.slip = result.points, "passed", slips.PASSED
         return None
     session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
+    # the slip the report records if a hidden part fails, asked now, before the box sees a hidden input: asked
+    # after, the box could pick which of the check's outcomes to show from the hidden inputs (bits in the report)
+    if _slip(lab, session, reference, result, None):
+        try:                                         # the check's call ran over or ended the box: a fresh one
+            session.box.kill()
+            session.start()
+        except BoxDied:
+            result.message = "not run: the notebook above this test could not be run (see the notes)"
+            return None
     return parts[first_hidden:]
 
 
@@ -503,8 +512,8 @@ def _hidden_part(lab, session, ns, parts, result):
             exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
     except Exception as exc:  # noqa: BLE001
         _failed(lab, session, result, exc, hidden=True)
-        _slip(lab, session, None, result, exc)
-        return
+        result.slip = _code_failed(session, result.grade_id, exc) or result.slip    # the kind of failure, or the
+        return                                                                       # slip asked before (above)
     result.score, result.message, result.slip = result.points, "passed", slips.PASSED
 
 
@@ -522,15 +531,18 @@ def _slip(lab, session, reference, result, failure):
     """Set ``result.slip`` for a failed test (the instructor's class report of common slips; never the score, never
     the feedback): what the exercise's visible check, the release's cell ``exN_check``, says of the answer, read by
     :func:`fusionlab.checks.slips.outcome`. The check runs here, in the judge, as the tests do: the student's functions
-    answer from the test's box, within :data:`CHECK_SECONDS` of their own. After a hidden part the box has seen the
-    hidden inputs; what it can carry into the report is which of the check's fixed outcomes is recorded.
+    answer from the test's box, within :data:`CHECK_SECONDS` of their own. It is asked before the box sees any
+    hidden input (after the visible part, ``failure`` None), so that which of the check's outcomes is recorded
+    cannot depend on a hidden input; a hidden part that fails then keeps that slip (or says the code raised).
 
     An answer the box could not run to the end (raised, timed out, returned no numbers) is :data:`slips.RAISED`,
     the release's stub :data:`slips.NOT_ATTEMPTED`; a check that passes or names no listed slip is
-    :data:`slips.UNRECOGNISED`."""
+    :data:`slips.UNRECOGNISED`. Returns True when the check left the box unusable (a call over its time, a box that
+    ended): the caller starts it again before the box is asked anything more."""
     gid = result.grade_id
     source = getattr(lab, "checks", {}).get(gid, "")
     outcome = _code_failed(session, gid, failure)
+    broken = False
     if source and outcome != slips.NOT_ATTEMPTED and not isinstance(failure, _BOX_FAILED) \
             and getattr(session, "box", None) is not None:
         check_ns = lab.base()                       # the student's names again, as proxies on the check's own time
@@ -548,7 +560,9 @@ def _slip(lab, session, reference, result, failure):
             outcome = said if said != slips.UNRECOGNISED else outcome
         except Exception as exc:  # noqa: BLE001 -- the slip is unknown; the score stands as the test left it
             outcome = outcome or _code_failed(session, gid, exc)
+            broken = isinstance(exc, _BOX_FAILED)
     result.slip = outcome or slips.UNRECOGNISED
+    return broken
 
 
 def _code_failed(session, gid, exc):

@@ -14,6 +14,9 @@ boxes of one slot (one user id) or of different slots run at once or one after a
   allowed) and ``process_madvise``, and the asynchronous I/O interfaces (io_uring, Linux AIO) that would run the
   same operations where the filter does not see them. Plain reads (``read``, ``pread``, ``readv``, ``preadv``
   and ``preadv2`` without flags) and ``readahead`` stay allowed;
+- watching or locking a file (``inotify_*``, ``fanotify_*``, ``flock``, and ``fcntl``'s locks, leases and
+  ``F_NOTIFY``): every box mounts the same read-only files, so a watch or a lock on one reaches every box that
+  opens it at the same time;
 - new namespaces (``unshare``, ``setns``, ``clone`` with a ``CLONE_NEW*`` flag): a user namespace would hand the
   box every capability inside it, and with them the kernel's mount, network and key code; ``clone3``, whose flags
   a filter cannot read, is answered ENOSYS (:data:`MISSING_SYSCALLS`), as an older kernel would, so the C library
@@ -82,6 +85,21 @@ REFUSED_SYSCALLS = {
     "unshare": (272, 97, None),
     "setns": (308, 268, None),
     "clone": (56, 220, (0, NAMESPACE_FLAGS)),  # fork and threads pass none of these flags: allowed
+    # The files every box mounts read-only (the Python installation, the library's copy, the time zones) are the
+    # same inodes in every box: a box that watches one (inotify, fanotify, dnotify) sees another box open it, and a
+    # lock one box holds on it another sees (flock, and fcntl's record locks, open-file-description locks and
+    # leases); an outside review carried a class's hidden inputs that way, box to box. No box needs either: the
+    # kernel in a box keeps its history in memory, and its private files are its own.
+    "inotify_init": (253, None, None),      # aarch64 has only inotify_init1
+    "inotify_init1": (294, 26, None),
+    "inotify_add_watch": (254, 27, None),
+    "fanotify_init": (300, 262, None),
+    "fanotify_mark": (301, 263, None),
+    "flock": (73, 32, None),
+    # fcntl (args[1]): F_GETLK 5, F_SETLK 6, F_SETLKW 7, F_OFD_GETLK 36, F_OFD_SETLK 37, F_OFD_SETLKW 38,
+    # F_SETLEASE 1024, F_GETLEASE 1025, F_NOTIFY 1026 (include/uapi/asm-generic/fcntl.h, linux/fcntl.h); every
+    # other command (F_GETFL, F_SETFD, F_DUPFD ...) is allowed
+    "fcntl": (72, 25, (1, (5, 6, 7, 36, 37, 38, 1024, 1025, 1026))),
 }
 
 # Calls answered ENOSYS, as a kernel without them would (x86_64's number, aarch64's number). clone3 takes its flags
@@ -132,7 +150,7 @@ def box_filter(machine=None):
     if second_abi is not None:
         # x32 calls arrive with x86_64's arch and the number plus 0x40000000: refused, so that no such call slips past.
         program.append((jge, to_deny, 0, second_abi))
-    calls = [(numbers[column], when) for *numbers, when in REFUSED_SYSCALLS.values()]
+    calls = [(numbers[column], when) for *numbers, when in REFUSED_SYSCALLS.values() if numbers[column] is not None]
     program += [(jeq, to_deny, 0, nr) for nr, when in calls if when is None]
     program += [(jeq, to_missing, 0, numbers[column]) for numbers in MISSING_SYSCALLS.values()]
     for nr, (arg, values) in [(nr, when) for nr, when in calls if when is not None]:

@@ -93,3 +93,35 @@ def test_a_channel_between_boxes_carries_no_hidden_input_into_a_verdict(monkeypa
     assert verdict.tests[1].message.startswith("exercise 2, hidden tests: your function raised an error"), \
         verdict.tests[1].message
     assert verdict.tests[0].message == "passed"
+
+
+def test_the_slip_the_report_records_is_asked_before_the_box_sees_a_hidden_input(monkeypatch):
+    """The class report's slip comes from the exercise's visible check, which the judge asks of the student's code.
+    Asked after the hidden part, a box could pick the check's outcome from the hidden inputs it saw (one bit a test
+    here: a named slip or none); asked before, the hidden input has not reached any box yet."""
+    check = ("from fusionlab.checks._core import Feedback\n"
+             f"if f({SHOWN}) != 2 * {SHOWN}:\n"
+             "    raise Feedback('expected a 3×3 matrix')\n")
+    lab = _lab()
+    lab.checks, lab.check_names = {"ex1_tests": check}, {"ex1_tests": "check_euler_to_dcm"}
+
+    class Picky(FakeSession):
+        """Right on the visible case until it has seen the hidden one; then wrong on both (a failed hidden test)."""
+        box, boxes = object(), None              # a box that runs (the judge asks the check of it)
+
+        def proxy(self, name, budget):
+            def call(x):
+                self.log.append((name, self.gid, x))
+                if x != SHOWN:
+                    self.channel.setdefault("seen", []).append(x)
+                    return -1.0
+                return -1.0 if self.channel.get("seen") else 2 * x if name == "f" else 3 * x
+            return call
+
+    FakeSession.channel, FakeSession.log = {}, []
+    monkeypatch.setattr(judge, "Session", Picky)
+    verdict = judge.judge(lab, None, "picky")
+    assert verdict.tests[0].message.startswith("exercise 1, hidden tests: wrong value"), verdict.tests[0].message
+    assert verdict.tests[0].slip == "unrecognised", "the check ran before the box saw the hidden input"
+    calls = [entry[2] for entry in FakeSession.log if entry[0] == "f"]
+    assert calls == [SHOWN, SHOWN, SECRET], "the visible part, then the check, then the hidden part"

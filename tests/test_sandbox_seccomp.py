@@ -58,6 +58,12 @@ CACHE_CALLS = {"fadvise64": (221, 223), "mincore": (27, 232), "cachestat": (451,
 # with any flag (their sixth; RWF_HIPRI 1, RWF_NOWAIT 8).
 MADVISE, PREADV2, PWRITEV2 = {"x86_64": 28, "aarch64": 233}, {"x86_64": 327, "aarch64": 286}, {"x86_64": 328,
                                                                                               "aarch64": 287}
+# Watching and locking the files every box shares: (x86_64, aarch64; None where the call does not exist there), and
+# fcntl's refused commands (include/uapi/asm-generic/fcntl.h, include/uapi/linux/fcntl.h)
+WATCH_CALLS = {"inotify_init": (253, None), "inotify_init1": (294, 26), "inotify_add_watch": (254, 27),
+               "fanotify_init": (300, 262), "fanotify_mark": (301, 263)}
+FCNTL_REFUSED = {"F_GETLK": 5, "F_SETLK": 6, "F_SETLKW": 7, "F_OFD_GETLK": 36, "F_OFD_SETLK": 37, "F_OFD_SETLKW": 38,
+                 "F_SETLEASE": 1024, "F_GETLEASE": 1025, "F_NOTIFY": 1026}
 MADV_DONTNEED, MADV_COLD, MADV_PAGEOUT = 4, 20, 21
 RWF_HIPRI, RWF_NOWAIT = 1, 8
 # Calls every box needs, allowed: read, pread64, readv, preadv, readahead, mmap, munmap, madvise's own number is
@@ -218,7 +224,7 @@ def _verdict(program, arch, nr, *args):
 
 def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_x86_64():
     program = seccomp.box_filter("x86_64")
-    assert len(program) % 8 == 0 and 6 * 8 <= len(program) <= 48 * 8, len(program)
+    assert len(program) % 8 == 0 and 6 * 8 <= len(program) <= 64 * 8, len(program)
     assert struct.unpack("=HBBI", program[:8]) == (0x20, 0, 0, 4), "the first instruction loads the arch"
     for nr in KEY_CALLS["x86_64"]:
         assert _verdict(program, X86_64, nr) == REFUSE, nr
@@ -291,7 +297,10 @@ def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
 def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     table = seccomp.REFUSED_SYSCALLS
     assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS,
-                          "unshare", "setns", "clone"}
+                          "unshare", "setns", "clone", *WATCH_CALLS, "flock", "fcntl"}
+    assert {name: table[name] for name in WATCH_CALLS} == {n: (*numbers, None) for n, numbers in WATCH_CALLS.items()}
+    assert table["flock"] == (73, 32, None)
+    assert table["fcntl"] == (72, 25, (1, tuple(FCNTL_REFUSED.values()))), table["fcntl"]
     assert table["clone"] == (56, 220, (0, sum(CLONE_NEW.values()))), table["clone"]
     assert seccomp.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"], "sysinfo": (99, 179)}
     assert {name: table[name] for name in CACHE_CALLS} == {name: (*numbers, None) for name, numbers in
@@ -302,6 +311,21 @@ def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     assert (table["preadv2"], table["pwritev2"]) == ((327, 286, (5, "any flag")), (328, 287, (5, "any flag")))
     for name in ("read", "pread64", "readv", "preadv", "readahead", "mmap", "munmap"):
         assert name not in seccomp.REFUSED_SYSCALLS, name
+
+
+@pytest.mark.parametrize("machine", ["x86_64", "aarch64"])
+def test_the_filter_refuses_watching_and_locking_files_and_allows_fcntls_other_commands(machine):
+    program = seccomp.box_filter(machine)
+    arch, column = {"x86_64": (X86_64, 0), "aarch64": (AARCH64, 1)}[machine]
+    for name, numbers in WATCH_CALLS.items():
+        if numbers[column] is not None:
+            assert _verdict(program, arch, numbers[column]) == REFUSE, name
+    assert _verdict(program, arch, (73, 32)[column], 3, 2) == REFUSE, "flock"
+    fcntl = (72, 25)[column]
+    for name, cmd in FCNTL_REFUSED.items():
+        assert _verdict(program, arch, fcntl, 3, cmd) == REFUSE, name
+    for cmd in (0, 1, 2, 3, 4, 1030, 1031, 8, 9):            # F_DUPFD, F_GETFD, F_SETFD, F_GETFL, F_SETFL, ...
+        assert _verdict(program, arch, fcntl, 3, cmd) == ALLOW, cmd
 
 
 def test_the_numbers_are_those_of_the_kernel_headers_here():
@@ -448,6 +472,46 @@ def test_each_page_cache_call_in_a_box_fails_with_eperm_and_plain_reads_work(tmp
                    "madvise MADV_COLD": [-1, EPERM],
                    "madvise MADV_PAGEOUT": [-1, EPERM], "process_madvise": [-1, EPERM],
                    "io_uring_setup": [-1, EPERM], "io_setup": [-1, EPERM]}, got
+
+
+WATCH_PROBE = """
+    import fcntl, struct
+    got = {}
+    target = os.path.dirname(os.__file__)                    # the Python installation every box mounts
+    fd = os.open(os.__file__, os.O_RDONLY)
+    lock = struct.pack("hhqqi", fcntl.F_RDLCK, 0, 0, 0, 0)
+    for name, fn in [("flock", lambda: fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)),
+                     ("F_SETLK", lambda: fcntl.fcntl(fd, fcntl.F_SETLK, lock)),
+                     ("F_GETLK", lambda: fcntl.fcntl(fd, fcntl.F_GETLK, lock)),
+                     ("F_OFD_SETLK", lambda: fcntl.fcntl(fd, 37, lock)),
+                     ("F_OFD_GETLK", lambda: fcntl.fcntl(fd, 36, lock)),
+                     ("F_SETLEASE", lambda: fcntl.fcntl(fd, fcntl.F_SETLEASE, fcntl.F_RDLCK)),
+                     ("F_GETLEASE", lambda: fcntl.fcntl(fd, fcntl.F_GETLEASE)),
+                     ("F_NOTIFY", lambda: fcntl.fcntl(os.open(target, os.O_RDONLY), fcntl.F_NOTIFY, 1)),
+                     ("F_GETFL", lambda: fcntl.fcntl(fd, fcntl.F_GETFL))]:
+        got[name] = oserror(fn)
+    nr = {"x86_64": (294, 254), "aarch64": (26, 27)}[os.uname().machine]
+    got["inotify_init1"] = call(nr[0], 0)
+    got["inotify_add_watch"] = call(nr[1], 3, target.encode(), 1)
+    print(json.dumps(got))
+"""
+
+
+@NEEDS_BWRAP
+def test_a_box_can_neither_watch_nor_lock_a_file_every_box_shares(tmp_path, slot):
+    """The Python installation's files are the same inodes in every box: no watch, lock or lease on them (an
+    outside review passed a class's hidden inputs box to box through inotify and flock), and fcntl's other
+    commands still work. Outside a box the same calls work, so the refusal is the filter's."""
+    outside = _run_probe(WATCH_PROBE)
+    assert all(outside[name][0] == 0 for name in ("flock", "F_SETLK", "F_GETLK", "F_OFD_SETLK", "F_OFD_GETLK",
+                                                  "F_GETLEASE", "F_NOTIFY")), outside
+    assert outside["inotify_init1"][0] >= 0, outside
+    got = _run_probe(WATCH_PROBE, tmp_path=tmp_path, slot=slot)
+    assert got.pop("F_GETFL") == [0, 0], "fcntl's other commands are allowed"
+    assert got == {name: [-1, EPERM, "PermissionError"] for name in ("flock", "F_SETLK", "F_GETLK", "F_OFD_SETLK",
+                                                                    "F_OFD_GETLK", "F_SETLEASE", "F_GETLEASE",
+                                                                    "F_NOTIFY")} | {
+        "inotify_init1": [-1, EPERM], "inotify_add_watch": [-1, EPERM]}, got
 
 
 @NEEDS_BWRAP
