@@ -16,15 +16,20 @@
    are kept), and the notebook that Formgrader and the feedback show into ``autograded/<student>/<LAB>/``: the
    student's answers, and the judge's verdict as the only output of each test cell (no hidden test in it).
 
+Every file read from ``submitted/`` is read by :mod:`grading.submission` (no link followed, sizes capped, a bad
+``timestamp.txt`` ignored and never quoted).
+
 At the end ``grades.csv`` is written (``nbgrader export``, plus a ``status`` column: every student of
-``submitted/`` is listed, a submission that could not be graded with the reason), the integrity report
+``submitted/`` is listed, a submission that could not be graded with the reason; a run on some students keeps the
+others' statuses), the integrity report
 ``integrity_<LAB>.md/.csv`` (merged with the rows of students not graded in this run), the similarity report
 ``similarity_<LAB>.md/.csv`` (answers alike between classmates, or with the library: :mod:`grading.similarity`), the
 report of common slips ``slips_<LAB>.html/.csv`` (for each exercise, what its visible check says of the wrong answers:
 :mod:`grading.slipreport`; the HTML names no student) and a summary: each student's score and what the judge had
-to do (cells stopped, missing or duplicated, integrity flags).
-The exit status is 1 if a submission could not be graded (its student is named), or if the gradebook had to be put
-back (:func:`gradebook_kept`), 0 otherwise.
+to do (cells stopped, missing or duplicated, integrity flags). Each report is written on its own: one that fails is
+said, and the others and the summary still are.
+The exit status is 1 if a submission could not be graded (its student is named), a report could not be written, or
+the gradebook had to be put back (:func:`gradebook_kept`), 0 otherwise.
 """
 from __future__ import annotations
 
@@ -47,7 +52,8 @@ from pathlib import Path
 
 import nbformat
 
-from grading import cells, cgroup, judge, launcher, outputs, sandbox, similarity, slipreport
+from grading import cells, cgroup, judge, launcher, outputs, sandbox, similarity, slipreport, submission
+from grading.submission import read_submission, students_of  # noqa: F401 -- the one reader, named here too
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -195,22 +201,6 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
                      cell_seconds=args.timeout or judge.CELL_SECONDS)
 
 
-def read_submission(course: Path, lab: str, student: str):
-    """The submitted notebook, or raise ValueError saying why it cannot be read."""
-    path = course / "submitted" / student / lab / f"{lab}.ipynb"
-    if not path.is_file() or path.is_symlink():
-        raise ValueError(f"no file {lab}.ipynb in submitted/{student}/{lab}/")
-    if path.stat().st_size > 100 << 20:
-        raise ValueError("the notebook is larger than 100 MB")
-    try:
-        nb = nbformat.read(path, as_version=4)
-    except Exception as e:  # noqa: BLE001 -- whatever nbformat says, the file is not a notebook
-        raise ValueError(f"the notebook cannot be read ({type(e).__name__}: {str(e)[:200]})") from None
-    if not isinstance(nb.get("cells"), list):
-        raise ValueError("the notebook has no list of cells")
-    return nb
-
-
 def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) -> Result:
     """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
     process of its own, :func:`grading.judge.judge_apart`)."""
@@ -221,6 +211,7 @@ def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) ->
     except ValueError as e:
         result.error = str(e)
         return result
+    _, note = submission.left_out(course, lab.lab, student)
     slot = slots.get()
     try:
         result.verdict = judge.judge_apart(lab, nb, student, slot)
@@ -228,14 +219,9 @@ def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) ->
         slots.put(slot)
     result.ok = True
     result.score, result.max_score = result.verdict.score, result.verdict.max_score
-    result.notes = list(result.verdict.notes)
+    result.notes = ([note] if note else []) + list(result.verdict.notes)
     result.seconds = time.monotonic() - t0
     return result
-
-
-def _timestamp(course: Path, lab: str, student: str):
-    path = course / "submitted" / student / lab / "timestamp.txt"
-    return path.read_text().strip()[:100] if path.is_file() else None
 
 
 def record(course: Path, lab: judge.Lab, student: str, result: Result):
@@ -246,7 +232,9 @@ def record(course: Path, lab: judge.Lab, student: str, result: Result):
     with warnings.catch_warnings(), _gradebook(course) as gb:
         warnings.simplefilter("ignore", SAWarning)
         gb.update_or_create_student(student)
-        ts = _timestamp(course, lab.lab, student)
+        ts, note = submission.timestamp(course, lab.lab, student)
+        if note:
+            result.notes.append(note)
         gb.update_or_create_submission(lab.lab, student, **({"timestamp": ts} if ts else {}))
         sub = gb.find_submission_notebook(lab.lab, lab.lab, student)
         for g in sub.grades:
@@ -266,79 +254,102 @@ def record(course: Path, lab: judge.Lab, student: str, result: Result):
 
 
 def integrity(course: Path, lab: str, results: list[Result]):
-    """Write ``integrity_<LAB>.md/.csv``: this run's students scanned, earlier rows of the others kept."""
+    """Write ``integrity_<LAB>.md/.csv``: this run's students scanned (a notebook :func:`read_submission` refuses is
+    listed NOT GRADED with the reason, never scanned), earlier rows of the others kept."""
     from grading import integrity as scanner
 
     source = course / "solutions" / lab / f"{lab}.ipynb"
     md, csv_path = course / f"integrity_{lab}.md", course / f"integrity_{lab}.csv"
     rows, done = [], {r.student for r in results}
     for r in results:
-        submitted = course / "submitted" / r.student / lab / f"{lab}.ipynb"
         try:
-            r.flags = list(scanner.scan_notebook(source, submitted)) if submitted.is_file() else []
+            nb = read_submission(course, lab, r.student)
+        except ValueError as e:
+            rows.append((r.student, lab, [scanner.not_graded(str(e))]))
+            continue
+        try:
+            r.flags = list(scanner.scan_notebook(source, nb))
         except Exception as e:  # noqa: BLE001 -- a notebook the scanner cannot read is itself worth a look
             r.flags = [{"cell": "-", "kind": "unreadable", "line": 0, "code": "", "why": f"{type(e).__name__}: {e}"}]
         rows.append((r.student, lab, r.flags))
-    if csv_path.is_file():  # a run on some students: keep the others' rows
-        earlier = {}
-        with open(csv_path, newline="") as fh:
-            for row in csv.DictReader(fh):
-                if row["student"] in done or row["lab"] != lab:
-                    continue
-                flags = earlier.setdefault(row["student"], [])
-                if row["status"] == "REVIEW":
-                    flags.append({k: row[k] for k in ("cell", "line", "kind", "code", "why")})
-        rows += [(s, lab, f) for s, f in earlier.items()]
+    rows += [(s, lab, f) for s, f in scanner.earlier_rows(csv_path, lab, done).items()]
     scanner.write_report(rows, md, csv_path)
     return md
 
 
 def export(course: Path, lab: str, results: list[Result]):
     """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``
-    (:func:`with_status`)."""
+    (:func:`with_status`): this run's students as graded now, the others as the ``grades.csv`` before it said (a run
+    on some students keeps the others' statuses), else as the gradebook says."""
     import sqlite3
 
+    path = course / "grades.csv"
+    earlier = earlier_statuses(path, lab)
     res = subprocess.run([sys.executable, "-m", "nbgrader", "export", "--log-level=ERROR"], cwd=course, env=_env(),
                          capture_output=True, text=True)
-    path = course / "grades.csv"
     if res.returncode != 0 or not path.is_file():
         return False
-    with open(path, newline="") as fh:
+    with open(path, newline="", errors="backslashreplace") as fh:
         rows = list(csv.DictReader(fh))
         fields = list(rows[0].keys()) if rows else ["assignment", "student_id", "score", "max_score"]
     with contextlib.closing(sqlite3.connect(f"file:{course / 'gradebook.db'}?mode=ro", uri=True)) as con:
         submitted = set(con.execute("SELECT a.name, s.student_id FROM submitted_assignment s "
                                     "JOIN assignment a ON s.assignment_id = a.id"))
     fields = [f for f in fields if f != "status"] + ["status"]
-    rows = with_status(rows, fields, lab, {r.student: r.error for r in results if not r.ok}, submitted)
-    with open(path, "w", newline="") as fh:
+    this_run = {r.student: ("graded" if r.ok else f"NOT GRADED: {r.error}") for r in results}
+    rows = with_status(rows, fields, lab, this_run, submitted, earlier, students_of(course, lab))
+    with open(path, "w", newline="", errors="backslashreplace") as fh:
         out = csv.DictWriter(fh, fieldnames=fields)
         out.writeheader()
         out.writerows(rows)
     return True
 
 
-def with_status(rows, fields, lab, failed, submitted):
-    """The rows of ``nbgrader export`` with a ``status``: ``graded`` or ``NOT GRADED: <why>`` (``failed``) for
-    ``lab``, a row added for a student of ``lab`` the export does not list; ``graded`` or ``no submission`` for the
-    other labs, whose rows are kept only where someone submitted (``submitted``: (lab, student) pairs), so that a lab
-    recorded but never handed out adds no row of zeros."""
+def earlier_statuses(path: Path, lab: str):
+    """``{student: status}`` of ``lab`` in the ``grades.csv`` at ``path`` as an earlier run wrote it (empty when there
+    is none, or it has no status column: a plain ``nbgrader export``)."""
+    if not path.is_file():
+        return {}
+    try:
+        with open(path, newline="", errors="backslashreplace") as fh:
+            return {row["student_id"]: row["status"] for row in csv.DictReader(fh)
+                    if row.get("assignment") == lab and row.get("student_id") and row.get("status")}
+    except (OSError, csv.Error, KeyError):
+        return {}
+
+
+def with_status(rows, fields, lab, this_run, submitted, earlier=None, students=()):
+    """The rows of ``nbgrader export`` with a ``status`` for ``lab``: ``this_run``'s ({student: "graded" or
+    "NOT GRADED: <why>"}), else the ``earlier`` run's for a student not in this run, else ``graded`` where the
+    gradebook has the submission (``submitted``: (lab, student) pairs); a row is added for each student of
+    ``this_run``, ``earlier`` and ``students`` (those of ``submitted/``) the export does not list (``NOT GRADED: not
+    graded yet`` for one that no run graded). The other labs' rows say ``graded`` or ``no submission``, and are kept
+    only where someone submitted, so that a lab recorded but never handed out adds no row of zeros."""
+    earlier = earlier or {}
     handed_in = {a for a, _ in submitted}
+
+    def status(student):
+        if student in this_run:
+            return this_run[student]
+        if student in earlier:
+            return earlier[student]
+        return "graded" if (lab, student) in submitted else \
+            f"NOT GRADED: not graded yet (make grade LAB={lab} STUDENT={student})"
+
     out = []
     for row in rows:
         if row.get("assignment") == lab:
-            row["status"] = f"NOT GRADED: {failed[row['student_id']]}" if row["student_id"] in failed else (
-                "graded" if row.get("status") in (None, "", "graded") else row["status"])
+            row["status"] = status(row["student_id"])
         elif row.get("assignment") not in handed_in:
             continue
         else:
             row["status"] = "graded" if (row["assignment"], row["student_id"]) in submitted else "no submission"
         out.append(row)
     listed = {row["student_id"] for row in out if row.get("assignment") == lab}
-    for student, why in failed.items():
+    for student in sorted(set(this_run) | set(earlier) | set(students)):
         if student not in listed:
             out.append({**{f: "" for f in fields}, "assignment": lab, "student_id": student,
-                        "status": f"NOT GRADED: {why}"})
+                        "status": status(student)})
     return out
 
 
@@ -352,15 +363,37 @@ def peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def students_of(course: Path, lab: str, only=None):
-    found = sorted(p.parent.name for p in (course / "submitted").glob(f"*/{lab}") if p.is_dir())
-    if only:
-        missing = [s for s in only if s not in found]
-        if missing:
-            raise SystemExit(f"no submission of {lab} for: {', '.join(missing)} (expected "
-                             f"submitted/<student>/{lab}/{lab}.ipynb)")
-        found = [s for s in found if s in only]
-    return found
+def write_reports(course: Path, lab: str, results: list[Result], release, model):
+    """Write ``grades.csv`` (:func:`export`), the integrity report (:func:`integrity`), the report of common slips and
+    the similarity report, each on its own: one that fails is said (what failed and why) and the others are still
+    written; the scores already in ``gradebook.db`` are not touched. Returns (the line that says where each report
+    went, the names of those not written)."""
+    said, unwritten = [], []
+
+    def step(name, write):
+        try:
+            return write()
+        except Exception as e:  # noqa: BLE001 -- one report that fails must not cost the others or the summary
+            unwritten.append(name)
+            said.append(f"{name} NOT written ({type(e).__name__}: {str(e)[:300]})")
+            return None
+
+    exported = step("grades.csv", lambda: export(course, lab, results))
+    if exported is not None:
+        said.append("grades.csv written" if exported else "grades.csv NOT written (nbgrader export failed)")
+        if not exported:
+            unwritten.append("grades.csv")
+    report = step("the integrity report", lambda: integrity(course, lab, results))
+    if report is not None:
+        said.append(f"integrity report: {report.name} and {report.with_suffix('.csv').name}")
+    slips = step("the report of common slips", lambda: slipreport.write(course, lab, results))
+    if slips is not None:
+        said.append(f"common slips: {slips[0].name} and {slips[1].name}")
+    alike = step("the similarity report", lambda: similarity.report(course, lab, release, model))
+    if alike is not None:
+        said.append(f"similarity report: {alike[0].name} ({len(alike[1])} pair{'s' * (len(alike[1]) != 1)} worth "
+                     f"a look)")
+    return "; ".join(said), unwritten
 
 
 def summary(lab: str, results: list[Result], seconds: float, workers: int, report) -> str:
@@ -392,6 +425,9 @@ def main(argv=None):
     ap.add_argument("--no-generate", action="store_true", help="do not re-record the lab in gradebook.db first")
     ap.add_argument("--keep-scratch", action="store_true", help="keep the scratch folder (prints where)")
     args = ap.parse_args(argv)
+    for stream in (sys.stdout, sys.stderr):       # a note or a report may quote any text a notebook holds
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="backslashreplace")
 
     course = Path(args.course).resolve()
     lab = args.lab.strip("/").split("/")[-1]
@@ -407,7 +443,7 @@ def main(argv=None):
         raise SystemExit(f"no submissions: put them in submitted/<student>/{lab}/{lab}.ipynb")
     scratch = Path(tempfile.mkdtemp(prefix="cg-"))
     os.chmod(scratch, 0o755)
-    results = []
+    results, unwritten = [], []
     kept = None
     stack = contextlib.ExitStack()
     try:
@@ -461,12 +497,9 @@ def main(argv=None):
                 state = f"{result.score:g}/{result.max_score:g}" if result.ok else "NOT GRADED"
                 print(f"  {student}: {state} ({result.seconds:.0f} s)", flush=True)
         seconds = time.monotonic() - t0
-        exported = export(course, lab, results)
-        report = integrity(course, lab, results)
-        slips_html, slips_csv = slipreport.write(course, lab, results)
-        alike, pairs = similarity.report(course, lab, the_lab.release, the_lab.solution)
+        said, unwritten = write_reports(course, lab, results, the_lab.release, the_lab.solution)
         print()
-        print(summary(lab, results, seconds, args.workers, report))
+        print(summary(lab, results, seconds, args.workers, Path(f"integrity_{lab}.md")))
         judged = [r.verdict.judge_mb for r in results if r.verdict is not None]
         cpu = [r.verdict.judge_cpu_s for r in results if r.verdict is not None]
         print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
@@ -481,10 +514,7 @@ def main(argv=None):
             caps = {r.verdict.judge_caps for r in results if r.verdict is not None}
             print("  with no capability" if caps == {0} else
                   f"  keeping capabilities {', '.join(f'{c:#x}' for c in sorted(caps))} (see above)")
-        print(f"grades.csv {'written' if exported else 'NOT written (nbgrader export failed)'}; integrity report: "
-              f"{report.name} and {report.with_suffix('.csv').name}; similarity report: {alike.name} "
-              f"({len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look); common slips: {slips_html.name} and "
-              f"{slips_csv.name}")
+        print(said)
     finally:
         stack.close()
         if args.keep_scratch:
@@ -493,12 +523,14 @@ def main(argv=None):
             shutil.rmtree(scratch, ignore_errors=True)
     if kept is not None and kept.restored:
         return 1
+    if unwritten:
+        print(f"\nreports not written: {', '.join(unwritten)} -- see above; the grades in gradebook.db are kept",
+              file=sys.stderr)
     failed = [r.student for r in results if not r.ok]
     if failed:
         print(f"\nnot graded: {', '.join(failed)} -- see the notes above; fix or reject those files and run again "
               f"with --student", file=sys.stderr)
-        return 1
-    return 0
+    return 1 if failed or unwritten else 0
 
 
 if __name__ == "__main__":

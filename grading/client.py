@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from grading import box as wire
-from grading import cells, cgroup
+from grading import cells, cgroup, sandbox
 
 SCRIPT = Path(wire.__file__).resolve()     # what a box runs: ``python box.py`` (its codec is this module's too)
 
@@ -35,6 +35,15 @@ MAX_REPLY_CONTAINERS = 200_000  # ``[`` and ``{`` counted before parsing (an arr
 
 class BoxDied(RuntimeError):
     """The box ended, or broke the protocol."""
+
+
+def ended(status):
+    """What a box that ended with ``status`` says: the exit status, or why when the box said why
+    (:data:`grading.sandbox.SEED_FAILED`: the submission's files did not fit in its folder)."""
+    if status == sandbox.SEED_FAILED:
+        return ("the box could not copy the files handed in beside the notebook into its folder (they hold more than "
+                "it can take), so the notebook was not run")
+    return f"the box ended (exit status {status})"
 
 
 class BoxTimeout(RuntimeError):
@@ -122,11 +131,11 @@ class Box:
             if not self.sel.select(timeout=min(left, 1.0)):
                 status = self.process.poll()
                 if status is not None:
-                    raise BoxDied(f"the box ended (exit status {status})")
+                    raise BoxDied(ended(status))
                 continue
             chunk = self.stdout.read(1 << 20)
             if not chunk:
-                raise BoxDied(f"the box ended (exit status {self.kill()})")
+                raise BoxDied(ended(self.kill()))
             *whole, rest = chunk.split(b"\n")
             for part in whole:
                 self.lines.append(b"".join(self.chunks) + part)

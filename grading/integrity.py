@@ -523,15 +523,50 @@ def _flags_of(src, nb):
     return rows
 
 
-def scan_notebook(source_nb_path, submitted_nb_path):
-    """Flags of one submission: a list of {"cell", "kind", "line", "code", "why"} (empty when nothing is found)."""
+def scan_notebook(source_nb_path, submitted):
+    """Flags of one submission: a list of {"cell", "kind", "line", "code", "why"} (empty when nothing is found).
+    ``submitted`` is the notebook as :func:`grading.submission.read_submission` read it, or the path of a notebook
+    file of the course's own (a solution, a release)."""
     source_nb_path = Path(source_nb_path)
     src = Source(nbformat.read(source_nb_path, as_version=4), source_nb_path.parent.name)
+    if isinstance(submitted, dict):
+        return _flags_of(src, submitted)
     try:
-        nb = nbformat.read(submitted_nb_path, as_version=4)
+        nb = nbformat.read(submitted, as_version=4)
     except Exception as err:  # noqa: BLE001 -- any unreadable file is reported, never a crash of the whole class
         return [dict(cell="-", kind="unreadable", line=0, code=str(err).splitlines()[0][:160], why=WHY["unreadable"])]
     return _flags_of(src, nb)
+
+
+NOT_GRADED = "NOT GRADED"
+
+
+def not_graded(why):
+    """The one "flag" of a submission grading refused (:func:`grading.submission.read_submission`): it was not
+    scanned, and the report says why instead of calling it clean."""
+    return dict(cell="-", kind="not-graded", line=0, code="", why=why)
+
+
+def _status(flags):
+    return NOT_GRADED if any(f["kind"] == "not-graded" for f in flags) else "REVIEW" if flags else "clean"
+
+
+def earlier_rows(path_csv, lab, done=()):
+    """``{student: flags}`` of ``lab`` in the report CSV an earlier run wrote, for the students not in ``done``: a
+    run on some students keeps the others' rows (clean, REVIEW with its flags, NOT GRADED with its reason)."""
+    earlier = {}
+    if not Path(path_csv).is_file():
+        return earlier
+    with open(path_csv, newline="", errors="backslashreplace") as fh:
+        for row in csv.DictReader(fh):
+            if row["student"] in done or row["lab"] != lab:
+                continue
+            flags = earlier.setdefault(row["student"], [])
+            if row["status"] == NOT_GRADED:
+                flags.append(not_graded(row["why"]))
+            elif row["status"] == "REVIEW":
+                flags.append({k: row[k] for k in ("cell", "line", "kind", "code", "why")})
+    return earlier
 
 
 def _md_cell(text):
@@ -544,30 +579,41 @@ def write_report(rows, path_md, path_csv, scores=None):
     ``scores`` maps (student, lab) to the autograded score shown beside the status; by default they are read from
     the ``gradebook.db`` beside the report, when there is one.
     """
-    rows = sorted(rows, key=lambda r: (not r[2], r[0], r[1]))  # flagged first
+    rows = sorted(rows, key=lambda r: (_status(r[2]) != "REVIEW", _status(r[2]) != NOT_GRADED, r[0], r[1]))
     if scores is None:
         scores = {(student, lab): score for lab in {r[1] for r in rows}
                   for student, score in _scores(Path(path_md).resolve().parent, lab).items()}
-    flagged = [r for r in rows if r[2]]
+    flagged = [r for r in rows if _status(r[2]) == "REVIEW"]
+    refused = [r for r in rows if _status(r[2]) == NOT_GRADED]
     labs = sorted({lab for _, lab, _ in rows})
     md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
-          f"{len(rows)} submission{'s' * (len(rows) != 1)} scanned; **{len(flagged)} to REVIEW**. A flag is a "
-          "construct that no honest answer needs, found in a cell that runs at grading time. It does not change "
-          "the grade: read the cell before trusting the score.", "",
+          f"{len(rows) - len(refused)} submission{'s' * (len(rows) - len(refused) != 1)} scanned; "
+          f"**{len(flagged)} to REVIEW**"
+          + (f"; {len(refused)} NOT GRADED, so not scanned (the reason is beside each)" if refused else "")
+          + ". A flag is a construct that no honest answer needs, found in a cell that runs at grading time. It does "
+          "not change the grade: read the cell before trusting the score.", "",
           "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
     for student, lab, flags in rows:
+        status = _status(flags)
+        if status == NOT_GRADED:
+            md.append(f"| {student} | {lab} | {status} | | | {_md_cell(flags[0]['why'])} |")
+            continue
         kinds = sorted({f["kind"] for f in flags})
-        md.append(f"| {student} | {lab} | {'REVIEW' if flags else 'clean'} | {scores.get((student, lab), '')} | "
+        md.append(f"| {student} | {lab} | {status} | {scores.get((student, lab), '')} | "
                   f"{len(flags)} | {', '.join(kinds)} |")
     for student, lab, flags in flagged:
         md += ["", f"## {student} ({lab})", "", "| cell | line | kind | code | why |", "|---|---|---|---|---|"]
         md += [f"| {f['cell']} | {f['line']} | {f['kind']} | `{_md_cell(f['code'])}` | {_md_cell(f['why'])} |"
                for f in flags]
-    Path(path_md).write_text("\n".join(md) + "\n")
-    with open(path_csv, "w", newline="") as fh:
+    Path(path_md).write_text("\n".join(md) + "\n", errors="backslashreplace")
+    with open(path_csv, "w", newline="", errors="backslashreplace") as fh:
         out = csv.writer(fh)
         out.writerow(["student", "lab", "status", "cell", "line", "kind", "code", "why"])
         for student, lab, flags in rows:
+            status = _status(flags)
+            if status == NOT_GRADED:
+                out.writerow([student, lab, status, "", "", "", "", flags[0]["why"]])
+                continue
             if not flags:
                 out.writerow([student, lab, "clean", "", "", "", "", ""])
             for f in flags:
@@ -600,15 +646,17 @@ def main(argv=None):
     source_dir = course / "solutions" / args.lab
     if not source_dir.is_dir():
         parser.error(f"no source notebook folder {source_dir}")
+    from grading.submission import read_submission, students_of
+    source = source_dir / f"{args.lab}.ipynb"
     rows = []
-    for path in sorted(course.glob(f"submitted/*/{args.lab}/*.ipynb")):
-        source = source_dir / path.name
-        if not source.exists():
-            source = source_dir / f"{args.lab}.ipynb"
-        rows.append((path.parts[-3], args.lab, scan_notebook(source, path)))
+    for student in students_of(course, args.lab):
+        try:
+            rows.append((student, args.lab, scan_notebook(source, read_submission(course, args.lab, student))))
+        except ValueError as e:
+            rows.append((student, args.lab, [not_graded(str(e))]))
     md, csv_path = course / f"integrity_{args.lab}.md", course / f"integrity_{args.lab}.csv"
     write_report(rows, md, csv_path)
-    flagged = sorted(student for student, _, flags in rows if flags)
+    flagged = sorted(student for student, _, flags in rows if _status(flags) == "REVIEW")
     print(f"{len(rows)} submission{'s' * (len(rows) != 1)} of {args.lab} scanned, {len(flagged)} to review"
           + (f": {', '.join(flagged)}" if flagged else "") + f"\n{md}\n{csv_path}")
     return 0

@@ -54,6 +54,11 @@ DEFAULT_LIMITS = {
                                 # the machine's limit (fs.file-max), which a box must not exhaust for the others
 }
 
+SEED_FILE_BYTES = 20 << 20     # a file handed in beside the notebook (a recording, a CSV) may hold this much ...
+SEED_TOTAL_BYTES = 50 << 20    # ... and all of them together this much ...
+SEED_FILES = 200               # ... in at most this many files: the rest is neither seeded nor kept (plain_files)
+SEED_FAILED = 75               # the exit status of a box whose folder could not take the submission's files
+
 # Files of /etc a Python kernel needs (user names, the dynamic linker, time zone); the rest of /etc stays outside.
 ETC = ["passwd", "group", "nsswitch.conf", "ld.so.cache", "ld.so.conf", "ld.so.conf.d", "localtime", "timezone",
        "alternatives", "fonts", "mime.types", "os-release"]
@@ -73,12 +78,15 @@ if uid:
     os.setuid(int(uid))
     resource.setrlimit(resource.RLIMIT_NPROC, (lim["nproc"], lim["nproc"]))
 if os.path.isdir("/opt/seed"):  # the submission's files, into the box's own size-limited folder, as its user
-    for name in os.listdir("/opt/seed"):
-        src, dst = os.path.join("/opt/seed", name), os.path.join(cwd, name)
-        if os.path.isdir(src) and not os.path.islink(src):
-            shutil.copytree(src, dst, symlinks=False, copy_function=shutil.copyfile)
-        elif os.path.isfile(src) and not os.path.islink(src):
-            shutil.copyfile(src, dst)
+    try:
+        for name in os.listdir("/opt/seed"):
+            src, dst = os.path.join("/opt/seed", name), os.path.join(cwd, name)
+            if os.path.isdir(src) and not os.path.islink(src):
+                shutil.copytree(src, dst, symlinks=False, copy_function=shutil.copyfile)
+            elif os.path.isfile(src) and not os.path.islink(src):
+                shutil.copyfile(src, dst)
+    except OSError:        # said by the exit status (grading.client reads it): the box's stderr goes nowhere
+        os._exit(@SEED_FAILED@)
 os.chdir(cwd)
 ctypes.CDLL(None, use_errno=True).prctl(38, 1, 0, 0, 0)  # PR_SET_NO_NEW_PRIVS
 class SockFprog(ctypes.Structure):  # struct sock_fprog: how many instructions, and where
@@ -99,7 +107,7 @@ resource.setrlimit(resource.RLIMIT_NOFILE, (lim["nofile"], lim["nofile"]))
 if mpl and os.path.isdir(mpl):
     shutil.copytree(mpl, "/tmp/.cache/matplotlib", dirs_exist_ok=True)
 os.execv(sys.executable, [sys.executable, *sys.argv[1:]])
-"""
+""".replace("@SEED_FAILED@", str(SEED_FAILED))
 
 
 _SYSTEM_FILES = []
@@ -245,21 +253,79 @@ def _matplotlib_cache():
     return os.path.realpath(base) if os.path.isdir(base) else ""
 
 
-def copy_plain(src, dest, notebooks=True):
-    """Copy the folder ``src`` into ``dest``: its regular files and folders only, at every depth. A link is neither
-    followed nor kept (a submitted link could point at the solutions, the gradebook or the real library, and the
-    copy runs as root), nor is anything else that is not a plain file; ``notebooks=False`` leaves ``*.ipynb`` and
-    Jupyter's checkpoints out."""
-    os.makedirs(dest, exist_ok=True)
-    with os.scandir(src) as entries:
+def _held(st):
+    """The bytes a file costs: its apparent size or the disk it holds, whichever is larger (a sparse file of 1 GB
+    holds nothing on disk, and becomes 1 GB when copied)."""
+    return max(st.st_size, st.st_blocks * 512)
+
+
+def plain_files(src, notebooks=True):
+    """``(kept, left_out)`` of the folder ``src``: its plain files at every depth (links and what is not a plain file
+    are neither followed nor listed; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints out), each as
+    ``(path relative to src, bytes)``, a folder's files before its subfolders', in sorted order. A file over
+    :data:`SEED_FILE_BYTES`, or one that would take the files kept over :data:`SEED_TOTAL_BYTES` or
+    :data:`SEED_FILES`, is left out (:func:`_held`: the larger of apparent and allocated
+    size). The same list for every box of a student and for ``autograded/``."""
+    kept, left, total = [], [], 0
+    stack = [(src, "")]
+    while stack:
+        folder, rel = stack.pop()
+        try:
+            with os.scandir(folder) as it:
+                entries = sorted(it, key=lambda e: e.name)
+        except OSError:
+            continue
+        inner = []
         for e in entries:
             if e.is_symlink() or (not notebooks and (e.name.endswith(".ipynb") or
                                                      e.name.startswith(".ipynb_checkpoints"))):
                 continue
+            path = os.path.join(rel, e.name) if rel else e.name
             if e.is_dir(follow_symlinks=False):
-                copy_plain(e.path, os.path.join(dest, e.name), notebooks)
+                inner.append((e.path, path))
             elif e.is_file(follow_symlinks=False):
-                shutil.copyfile(e.path, os.path.join(dest, e.name), follow_symlinks=False)
+                size = _held(e.stat(follow_symlinks=False))
+                if size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES or len(kept) >= SEED_FILES:
+                    left.append((path, size))
+                else:
+                    kept.append((path, size))
+                    total += size
+        stack += reversed(inner)
+    return kept, left
+
+
+def _copy_file(src, dest, size):
+    """Copy the plain file ``src`` (never through a link) into ``dest``, at most ``size`` bytes."""
+    fd = os.open(src, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    with os.fdopen(fd, "rb") as fin:
+        if not stat.S_ISREG(os.fstat(fin.fileno()).st_mode):
+            return
+        with open(dest, "wb") as fout:
+            left = size
+            while left > 0:
+                chunk = fin.read(min(left, 1 << 20))
+                if not chunk:
+                    break
+                fout.write(chunk)
+                left -= len(chunk)
+
+
+def copy_plain(src, dest, notebooks=True):
+    """Copy the folder ``src`` into ``dest``: its regular files and folders only, at every depth, within the caps of
+    :func:`plain_files`; returns the files left out, ``[(path, bytes)]``. A link is neither followed nor kept (a
+    submitted link could point at the solutions, the gradebook or the real library, and the copy runs as root), nor
+    is anything else that is not a plain file; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints
+    out."""
+    os.makedirs(dest, exist_ok=True)
+    kept, left = plain_files(src, notebooks)
+    for path, size in kept:
+        target = os.path.join(dest, path)
+        os.makedirs(os.path.dirname(target), exist_ok=True)
+        try:
+            _copy_file(os.path.join(src, path), target, size)
+        except OSError:
+            continue
+    return left
 
 
 def private_folder(source, scratch, uid=None):

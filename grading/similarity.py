@@ -187,7 +187,11 @@ def find_pairs(submissions: dict, release, model, library=None):
     return found
 
 
-def write_report(lab, pairs, path_md, path_csv):
+def write_report(lab, pairs, path_md, path_csv, refused=None):
+    """Write the report of ``pairs`` (Markdown and CSV); ``refused`` ({student: why}) lists the submissions that
+    grading refuses (:func:`grading.submission.read_submission`), compared with no one. Any text can be written: a
+    character UTF-8 cannot hold (a lone surrogate) is written as its escape."""
+    refused = refused or {}
     md = [f"# Similarity report: {lab}", "",
           f"{len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look (winnowing fingerprints, copydetect). Two "
           f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
@@ -196,11 +200,14 @@ def write_report(lab, pairs, path_md, path_csv):
           "literals and comments do not count; an unlisted pair proves nothing.", "",
           "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
     md += [f"| {p.exercise} | {p.a} | {p.b} | {p.score:.2f} | {p.tokens} |" for p in pairs]
+    if refused:
+        md += ["", f"NOT GRADED, so compared with no one ({len(refused)}):", ""]
+        md += [f"- {student}: {why}" for student, why in sorted(refused.items())]
     for p in pairs:
         md += ["", f"## {p.a} ~ {p.b} ({p.exercise}, {p.score:.2f})", "", "```python", p.lines_a, "```", "",
                "```python", p.lines_b, "```"]
-    Path(path_md).write_text("\n".join(md) + "\n")
-    with open(path_csv, "w", newline="") as fh:
+    Path(path_md).write_text("\n".join(md) + "\n", errors="backslashreplace")
+    with open(path_csv, "w", newline="", errors="backslashreplace") as fh:
         out = csv.writer(fh)
         out.writerow(["exercise", "student", "alike_with", "score", "matched_tokens"])
         for p in pairs:
@@ -208,15 +215,20 @@ def write_report(lab, pairs, path_md, path_csv):
 
 
 def report(course: Path, lab: str, release, model):
-    subs = {}
-    for path in sorted((course / "submitted").glob(f"*/{lab}/{lab}.ipynb")):
+    """Write ``similarity_<lab>.md/.csv`` for the submissions of ``course``, each read by
+    :func:`grading.submission.read_submission` (a notebook it refuses is compared with no one, and the report says
+    why); returns (the Markdown's path, the pairs)."""
+    from grading.submission import read_submission, students_of
+
+    subs, refused = {}, {}
+    for student in students_of(course, lab):
         try:
-            subs[path.parts[-3]] = nbformat.read(path, as_version=4)
-        except Exception:  # noqa: BLE001 -- an unreadable notebook is named by the grading summary already
-            continue
+            subs[student] = read_submission(course, lab, student)
+        except ValueError as e:
+            refused[student] = str(e)
     pairs = find_pairs(subs, release, model)
     md, csv_path = course / f"similarity_{lab}.md", course / f"similarity_{lab}.csv"
-    write_report(lab, pairs, md, csv_path)
+    write_report(lab, pairs, md, csv_path, refused)
     return md, pairs
 
 

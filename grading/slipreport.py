@@ -72,14 +72,14 @@ def write(course, lab, results):
     rows = rows_of(lab, results)
     done = {r.student for r in results}
     if csv_path.is_file():
-        with open(csv_path, newline="") as fh:
+        with open(csv_path, newline="", errors="backslashreplace") as fh:
             rows += [row for row in csv.DictReader(fh) if row.get("lab") == lab and row.get("student") not in done]
     rows.sort(key=lambda row: (row["student"], _number(row["grade_id"])))
-    with open(csv_path, "w", newline="") as fh:
+    with open(csv_path, "w", newline="", errors="backslashreplace") as fh:
         out = csv.DictWriter(fh, fieldnames=FIELDS, extrasaction="ignore")
         out.writeheader()
         out.writerows(rows)
-    html_path.write_text(page(lab, rows, examples_of(course, lab, rows, names_of(course))))
+    html_path.write_text(page(lab, rows, examples_of(course, lab, rows, names_of(course))), errors="backslashreplace")
     return html_path, csv_path
 
 
@@ -132,12 +132,17 @@ def answer_of(course, lab, student, grade_id):
     if g is None or g.kind != "ex":
         return None
     want = labformat.solution_id(g.number)
+    from grading.submission import read_submission
+
     for folder in ("autograded", "submitted"):
         path = Path(course) / folder / student / lab / f"{lab}.ipynb"
         try:
-            if not path.is_file() or path.is_symlink() or path.stat().st_size > NOTEBOOK_BYTES:
+            if folder == "submitted":               # the student's own folder: read as grading reads it
+                nb = read_submission(course, lab, student)
+            elif not path.is_file() or path.is_symlink() or path.stat().st_size > NOTEBOOK_BYTES:
                 continue
-            nb = nbformat.read(path, as_version=4)
+            else:                                   # written by the grader
+                nb = nbformat.read(path, as_version=4)
             for cell in nb.get("cells", []):
                 meta = cell.get("metadata", {}).get("nbgrader", {}) if isinstance(cell, dict) else {}
                 if isinstance(meta, dict) and meta.get("grade_id") == want:

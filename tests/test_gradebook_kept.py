@@ -107,12 +107,12 @@ def test_grades_csv_keeps_only_labs_handed_in_and_says_who_did_not_submit():
     labs = ("01_euler_rotations", "02_kalman_falling_body", "03_correlation_fusion")
     rows = [{"assignment": lab, "student_id": s, "score": "0.0"} for lab in labs for s in ("ana", "ben")]
     submitted = {("02_kalman_falling_body", "ana"), ("02_kalman_falling_body", "ben"), ("01_euler_rotations", "ana")}
-    out = classgrade.with_status(rows, fields, "02_kalman_falling_body", {"ben": "the notebook cannot be read"},
-                                 submitted)
+    out = classgrade.with_status(rows, fields, "02_kalman_falling_body",
+                                 {"ana": "graded", "ben": "NOT GRADED: the notebook cannot be read"}, submitted)
     status = {(r["assignment"], r["student_id"]): r["status"] for r in out}
     assert status == {("01_euler_rotations", "ana"): "graded", ("01_euler_rotations", "ben"): "no submission",
                       ("02_kalman_falling_body", "ana"): "graded",
                       ("02_kalman_falling_body", "ben"): "NOT GRADED: the notebook cannot be read"}
-    out = classgrade.with_status([], fields, "02_kalman_falling_body", {"cy": "no file"}, set())
+    out = classgrade.with_status([], fields, "02_kalman_falling_body", {"cy": "NOT GRADED: no file"}, set())
     assert out == [{"assignment": "02_kalman_falling_body", "student_id": "cy", "score": "",
                     "status": "NOT GRADED: no file"}]

@@ -210,15 +210,16 @@ def test_report_and_cli(tmp_path):
     (course / "submitted" / "bad" / LAB / f"{LAB}.ipynb").write_text("{ not json")
     assert integrity.main([LAB, "--course", str(course)]) == 0
     md = (course / f"integrity_{LAB}.md").read_text()
-    assert "3 submissions scanned; **2 to REVIEW**" in md
+    assert "2 submissions scanned; **1 to REVIEW**; 1 NOT GRADED, so not scanned" in md
     assert "| eve | 02_kalman_falling_body | REVIEW |" in md and "| ada | 02_kalman_falling_body | clean |" in md
     assert "| ex1_solution | 4 | patch | `np.allclose = lambda *a, **k: True` |" in md
-    assert "| bad | 02_kalman_falling_body | REVIEW |" in md and "unreadable" in md
+    assert "| bad | 02_kalman_falling_body | NOT GRADED | | | the notebook cannot be read (NotJSONError" in md
     with open(course / f"integrity_{LAB}.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert [(r["student"], r["status"], r["kind"]) for r in rows] == [
-        ("bad", "REVIEW", "unreadable"), ("eve", "REVIEW", "patch"), ("ada", "clean", "")]
-    assert rows[1]["line"] == "4" and rows[1]["cell"] == "ex1_solution"
+        ("eve", "REVIEW", "patch"), ("bad", "NOT GRADED", ""), ("ada", "clean", "")]
+    assert rows[0]["line"] == "4" and rows[0]["cell"] == "ex1_solution"
+    assert rows[1]["why"].startswith("the notebook cannot be read (NotJSONError")
 
 
 def test_report_text_is_short_and_explains_each_kind():
