@@ -441,6 +441,8 @@ def hidden_failure(gid, exc, lab):
         kind = "a name it uses is not defined by your notebook"
     elif isinstance(exc, AssertionError):
         kind = "wrong value"
+    elif isinstance(exc, MemoryError):
+        kind = "your result could not be used (the test's arithmetic on it ran out of memory)"
     else:
         kind = "your result could not be used"
     return f"{where}: {kind}. The visible check above the test names the slip on cases you can see."
