@@ -1077,9 +1077,16 @@ def test_the_box_library_has_no_filter_of_the_library(tmp_path):
     import fusionlab
     root = capstone.box_library(tmp_path)
     real, box = Path(fusionlab.__file__).parent, root / "lib" / "fusionlab"
-    for short in capstone.FILTER_MODULES + capstone.FILE_MODULES:
+    absent = capstone.absent_modules()
+    assert set(capstone.FILTER_MODULES + capstone.FILE_MODULES) < set(absent)
+    assert {"kalman", "ecompass", "accel_tilt", "dcm", "signals", "calibration"} <= set(absent)     # building blocks
+    assert {p.stem for p in box.glob("*.py")} - set(absent) == set(fusionlab.capstone.BOX_MODULES) | {"__init__"}
+    for short in absent:
         text = (box / f"{short}.py").read_text()
-        assert text == capstone.placeholder_module(short) and "not available in the capstone" in text
+        filt = short in capstone.FILTER_MODULES + capstone.FILE_MODULES
+        assert text == capstone.placeholder_module(short)
+        said = (capstone.STUB_MESSAGE if filt else capstone.BLOCK_MESSAGE).format(name=f"fusionlab.{short}")
+        assert f"_MESSAGE = {said!r}" in text, short
         defined = {n.name for n in ast.parse((real / f"{short}.py").read_text()).body
                    if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
         mine = {n.name for n in ast.parse(text).body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
@@ -1092,7 +1099,7 @@ def test_the_box_library_has_no_filter_of_the_library(tmp_path):
             assert b"def _weighted_tilt_fusion" not in data and b"_REGISTRY = {}" not in data, path
             if path.suffix == ".pyc" and path.name.split(".")[0] in ("correlation", "estimators"):
                 assert b"_weighted_tilt_fusion" not in data and b"complementary_attitude" not in data, path
-    kept = [p for p in box.rglob("*.py") if p.stem not in capstone.FILTER_MODULES + capstone.FILE_MODULES]
+    kept = [p for p in box.rglob("*.py") if p.stem not in absent]
     assert {p.name for p in kept} >= {"rotations.py", "metrics.py", "capstone.py", "guard.py", "plotting.py"}
     assert (root / "shadow" / "vqf" / "__init__.py").read_text().startswith("raise ImportError")
 
@@ -1108,7 +1115,8 @@ from fusionlab import correlation, estimators
 out = {}
 for label, get in (("private", lambda: correlation._weighted_tilt_fusion), ("registry", lambda: estimators._REGISTRY),
                    ("run", lambda: estimators.run), ("load", lambda: datasets.load_trial),
-                   ("from", lambda: importlib.import_module("fusionlab.freescale").Kalman9)):
+                   ("from", lambda: importlib.import_module("fusionlab.freescale").Kalman9),
+                   ("block", lambda: importlib.import_module("fusionlab.kalman").predict)):
     try:
         get()
         out[label] = "reached"
@@ -1134,6 +1142,7 @@ print(json.dumps(out))
     assert out.pop("private") == message.format("correlation") and out.pop("registry") == message.format("estimators")
     assert out.pop("run") == message.format("estimators") and out.pop("load") == message.format("datasets")
     assert out.pop("from") == message.format("freescale") and out.pop("from_import") == message.format("gpsins")
+    assert out.pop("block") == capstone.BLOCK_MESSAGE.format(name="fusionlab.kalman")
     assert out == {"register": True, "available": {}, "missing": True, "dunder": False}
 
 
@@ -1150,7 +1159,7 @@ def test_the_box_holds_no_code_of_the_librarys_filters(tmp_path):
     nb = nbformat.read(LAB_NOTEBOOK, as_version=4)
     setup = cells.python_of(next(c.source for c in nb.cells if cells.grade_id(c) == "imports"))
     lib = Path(fusionlab.__file__).parent
-    gone = capstone.FILTER_MODULES + capstone.FILE_MODULES
+    gone = capstone.absent_modules()
     kept = "".join(p.read_text() for p in lib.rglob("*.py") if p.stem not in gone)
     markers = sorted({f"def {n.name}(" for short in ("correlation", "estimators", "dcm_filter", "datasets")
                       for n in ast.parse((lib / f"{short}.py").read_text()).body
@@ -1251,6 +1260,10 @@ def test_the_grader_writes_every_message_of_a_call_itself():
     placeholder = "NotImplementedError: " + capstone.STUB_MESSAGE.format(name="fusionlab.correlation") + " 0.00123"
     assert capstone.error_message(placeholder) == ("reached fusionlab.correlation, which holds the library's filters "
                                                    "or data loaders: not available in the capstone")
+    block = "NotImplementedError: " + capstone.BLOCK_MESSAGE.format(name="fusionlab.kalman") + " 0.00123"
+    said = capstone.error_message(block)       # a building block the rules do not allow: the call fails, no cheat
+    assert said.startswith("reached fusionlab.kalman, which the capstone's box does not hold") and "0.0012" not in said
+    assert "not available in the capstone" not in said and "not available while the lab is graded" not in said
     assert capstone.error_message("ImportError: vqf is not available while the lab is graded: 0.00123").startswith(
         "reached vqf, which is not available while the lab is graded")
     n = 10

@@ -181,6 +181,41 @@ def test_self_check_scores_like_the_metrics_and_passes_a_causal_filter(short):
         drawn.causal_message
 
 
+def test_outside_box_names_the_library_modules_a_filter_reaches_beyond_the_graders_box(short):
+    """Through a module bound to a name, a function imported from a module, a helper of the filter's own, a method
+    of its class, a nested function and a decorator; not for rotations, metrics, numpy or the standard library."""
+    import functools
+
+    from fusionlab import accel_tilt, ecompass
+    from fusionlab.signals import lowpass as lp                         # noqa: F401 (reached by the filter below)
+
+    class Tilt:
+        def step(self, a):
+            return accel_tilt.tilt_3d(a)
+
+    def helper(a):
+        def inner():
+            return lp
+        return inner
+
+    def mixed(gyr, acc, mag, fs):
+        Tilt().step(acc[0])
+        helper(acc)
+        return gyro_only(gyr, acc, mag, fs)
+
+    def compass(gyr, acc, mag, fs):
+        return ecompass
+
+    assert capstone.outside_box(gyro_only) == [] and capstone.outside_box(looks_ahead) == []
+    assert capstone.outside_box(mixed) == ["fusionlab.accel_tilt", "fusionlab.signals"]
+    assert capstone.outside_box(functools.wraps(compass)(lambda *a: compass(*a))) == ["fusionlab.ecompass"]
+    report = capstone.self_check(mixed, short[:1], causality=False)
+    assert report.outside == ["fusionlab.accel_tilt", "fusionlab.signals"] and not report.ok
+    assert "library modules the grader's box does not hold: fusionlab.accel_tilt, fusionlab.signals" in str(report)
+    with pytest.raises(ValueError, match="estimate must be your filter"):
+        capstone.outside_box("estimate")
+
+
 def test_self_check_finds_a_filter_that_looks_ahead(short):
     report = capstone.self_check(looks_ahead, short)
     assert report.causal is False and not report.ok

@@ -20,10 +20,15 @@ process:
   into the cache); grading refuses to start without all of them and says how to get them (:func:`hidden_trials`).
 * **What the student's code sees.** Its notebook's answer cells (and the cells they need) run in a box of the
   grading sandbox (:mod:`grading.sandbox`, :mod:`grading.box`) with no data at all: no ``data/``, no BROAD cache, no
-  submission folder. In the box's library every module that holds a filter or a data loader (:data:`FILTER_MODULES`,
-  :data:`FILE_MODULES`) is absent as code: its file is a placeholder written here (:func:`placeholder_module`) that
-  imports, keeps the few no-ops the library touches as it loads (:data:`KEEP`) and refuses every other name, public
-  or private, so no function of those modules, nor their source or bytecode, is in the box (:func:`box_library`).
+  submission folder. The box's library holds the modules the rules allow and the notebook needs
+  (:data:`fusionlab.capstone.BOX_MODULES`: rotations, metrics and what they and the lab's setup cell import); every
+  other module -- the filters and data loaders (:data:`FILTER_MODULES`, :data:`FILE_MODULES`), and the building
+  blocks the rules do not allow (Kalman steps, eCompass, tilt formulas: :func:`absent_modules`) -- is absent as
+  code: its file is a placeholder written here (:func:`placeholder_module`) that imports, keeps the few no-ops the
+  library touches as it loads (:data:`KEEP`) and refuses every other name, public or private, so no function of
+  those modules, nor their source or bytecode, is in the box (:func:`box_library`). Reaching a filter or data
+  module is named as a cheat; reaching a building block fails the call (:data:`BLOCK_MESSAGE`), and the student's
+  own checks name it before they hand in (:func:`fusionlab.capstone.outside_box`).
   ``vqf``, ``ahrs``, ``imufusion`` and ``filterpy`` are shadowed by packages that refuse to load, and their
   installed copies are hidden (an empty folder mounted over each, :func:`grading.sandbox.package_paths`), so that
   taking the shadow off ``sys.path`` reaches nothing. The box's CPU-time limit is made from the trials' budgets
@@ -118,10 +123,10 @@ from fusionlab.capstone import (CAUSAL_TOL, FULL_MARKS, GATES, MAX_POINTS, MIN_S
                                 first_change, prefix_change)   # the rules, as the lab states them to the students
 
 from .command import main, read_submissions, saved_seed
-from .program import (CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
+from .program import (BLOCK_MESSAGE, CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
                       FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FUNCTION,
                       HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS,
-                      STUB_MESSAGE, WHY_HIDDEN, as_run, box_library, declared_sensors, library_copies, loaders,
+                      STUB_MESSAGE, WHY_HIDDEN, absent_modules, as_run, box_library, declared_sensors, library_copies, loaders,
                       model_program, placeholder_module, program_of, scan)
 from .report import (COLUMNS, SETS, STYLE, TRIAL_COLUMNS, feedback, grade_class, leaderboard_rows, trial_rows,
                      write_csv, write_leaderboard)

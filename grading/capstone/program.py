@@ -7,7 +7,7 @@ import ast
 import shutil
 from pathlib import Path
 
-from fusionlab.capstone import SENSORS
+from fusionlab.capstone import ALLOWED_MODULES, BOX_MODULES, SENSORS
 from fusionlab.checks import exercises
 from grading import boxlib
 from grading.cells import nbg, parse, prune, python_of
@@ -88,6 +88,10 @@ KEEP = {
 }
 STUB_MESSAGE = ("{name} holds the library's filters or data loaders: it is not available in the capstone, "
                 "whose filter is yours.")
+# What the placeholder of every other module the box does not hold says (its Kalman steps, eCompass, tilt
+# formulas...): the rules allow the rotation and metric helpers only. Reaching one fails the call, and is no cheat.
+BLOCK_MESSAGE = ("{name} is not in the capstone's box: a capstone filter may use numpy, scipy, math and the "
+                 f"library's {' and '.join(ALLOWED_MODULES)} only (fusionlab.capstone.outside_box).")
 WHY_HIDDEN = "the capstone's filter is yours, not a published one"
 # Calls that read files: by any name (``open``, ``x.read_text()``), or as functions of the modules that read them
 # (``np.load``, ``os.listdir``; a method of the student's own called ``load`` is not one).
@@ -301,7 +305,8 @@ def _filter_functions():
 
 def _allowed_code():
     """The source of every other module of the library (rotations, metrics, dcm, signals, ...): what a filter may
-    use, and copy. Its fingerprints do not count as a copy (a filter function built like a rotation helper is not
+    use (rotations, metrics) or write again itself (a Kalman step, a tilt formula are textbook code, not a
+    filter). Its fingerprints do not count as a copy (a filter function built like a rotation helper is not
     copied when the helper is)."""
     import fusionlab
     folder = Path(fusionlab.__file__).resolve().parent
@@ -353,9 +358,24 @@ def library_copies(cells, model=""):
     return found
 
 
+def absent_modules():
+    """The library's modules that the capstone's box holds as placeholders (:func:`placeholder_module`): every
+    module of ``fusionlab``'s top level but :data:`fusionlab.capstone.BOX_MODULES`, the filters and data loaders
+    (:data:`FILTER_MODULES`, :data:`FILE_MODULES`) among them. Subpackages (``fusionlab.checks``) stay."""
+    import fusionlab
+    folder = Path(fusionlab.__file__).resolve().parent
+    names = tuple(sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__" and p.stem not in BOX_MODULES))
+    missing = sorted(set(FILTER_MODULES + FILE_MODULES) - set(names))
+    if missing:
+        raise RuntimeError(f"the capstone's box would keep filter or data modules {missing}: take them out of "
+                           "fusionlab.capstone.BOX_MODULES")
+    return names
+
+
 def placeholder_module(short):
-    """The text of the module that stands for ``fusionlab.<short>`` (one of :data:`FILTER_MODULES` or
-    :data:`FILE_MODULES`) in the capstone's box, written here and holding none of the library's code.
+    """The text of the module that stands for ``fusionlab.<short>`` (one of :func:`absent_modules`) in the
+    capstone's box, written here and holding none of the library's code. A filter or data module's names say
+    :data:`STUB_MESSAGE` (reaching one is a cheat); every other absent module's say :data:`BLOCK_MESSAGE`.
 
     Importing it works (the lab's setup cell imports ``bench`` and ``datasets``; ``fusionlab.checks`` imports
     ``correlation``, ``freescale``, ...), and so do the no-ops of :data:`KEEP`; any other attribute, public or
@@ -363,7 +383,7 @@ def placeholder_module(short):
     :data:`STUB_MESSAGE`, also through ``from ... import``. Dunder names raise ``AttributeError``, as on any module,
     so that the import system and ``hasattr(module, "__path__")`` see a plain module."""
     name = f"fusionlab.{short}"
-    message = STUB_MESSAGE.format(name=name)
+    message = (STUB_MESSAGE if short in FILTER_MODULES + FILE_MODULES else BLOCK_MESSAGE).format(name=name)
     keep = KEEP.get(short, {})
     lines = [f'"""{name} is not in the capstone\'s box: {WHY_HIDDEN}."""', "",
              f"__all__ = {sorted(keep)!r}", f"_MESSAGE = {message!r}", "", ""]
@@ -382,8 +402,8 @@ def placeholder_module(short):
 def box_library(scratch):
     """The library copy and shadow packages every capstone box gets (made once per run); returns its folder.
 
-    The copy is the library's, but for the modules of :data:`FILTER_MODULES` and :data:`FILE_MODULES`: each file is
-    replaced by :func:`placeholder_module`, so that no code of those modules is in the box, as source or bytecode
+    The copy is the library's, but for the modules of :func:`absent_modules` (the filters and data loaders, and
+    every other module the rules do not allow): each file is replaced by :func:`placeholder_module`, so that no code of those modules is in the box, as source or bytecode
     (only the placeholders are compiled). The packages of :data:`HIDDEN_PACKAGES` are shadowed by packages that
     refuse to load (:func:`grading.boxlib.strip_packages`)."""
     import fusionlab
@@ -395,7 +415,7 @@ def box_library(scratch):
         boxlib.strip_packages(part, Path(fusionlab.__file__).resolve().parents[1], (), hidden=HIDDEN_PACKAGES,
                              why=WHY_HIDDEN, message=STUB_MESSAGE)
         package = part / "lib" / "fusionlab"
-        for short in FILTER_MODULES + FILE_MODULES:
+        for short in absent_modules():
             path = package / f"{short}.py"
             if not path.is_file():
                 raise RuntimeError(f"the library has no {path.name} to take out of the capstone's box")

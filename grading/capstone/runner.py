@@ -17,9 +17,9 @@ from grading import box as wire
 from grading import boxlib, client, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .program import (DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FUNCTION,
+from .program import (BLOCK_MESSAGE, DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FUNCTION,
                       HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE,
-                      WHY_HIDDEN, box_library,
+                      WHY_HIDDEN, absent_modules, box_library,
                       declared_sensors, library_copies, model_program, program_of, scan)
 from .scoring import (MATCH_RAD, MATCH_STRIDE, TrialResult, published_means, mean_scored, never_moves,
                       rubric_points, score_trial)
@@ -69,6 +69,10 @@ def error_message(text):
         if STUB_MESSAGE.format(name=f"fusionlab.{short}") in text:
             return (f"reached fusionlab.{short}, which holds the library's filters or data loaders: not available "
                     "in the capstone")
+    for short in absent_modules():
+        if BLOCK_MESSAGE.format(name=f"fusionlab.{short}") in text:
+            return (f"reached fusionlab.{short}, which the capstone's box does not hold (a capstone filter may use "
+                    "numpy, scipy, math and the library's rotations and metrics only)")
     return f"raised an error{NOT_SHOWN}"
 
 

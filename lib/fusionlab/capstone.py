@@ -12,9 +12,11 @@ trials the course does not ship, with the dataset authors' metrics (:func:`fusio
   k+1 rows of its output on the whole trial. The grader makes each of these calls in a fresh process, so no call
   can see what an earlier one was given.
 * **On time**: a call on a trial of N samples may take :func:`budget_seconds` ``(N)``.
-* **Its own**: numpy, scipy and the course's rotation and metric helpers, but no published filter (the library's
-  estimators, VQF, ``ahrs``..., nor their code pasted in) and no file: the grader runs the filter where neither
-  exists. The grader's data are each trial cut at secret places and given a little fresh sensor noise (not turned:
+* **Its own**: numpy, scipy and the course's rotation and metric helpers (:data:`ALLOWED_MODULES`), but no
+  published filter (the library's estimators, VQF, ``ahrs``..., nor their code pasted in), none of the library's
+  other modules (its Kalman steps, eCompass, tilt formulas...) and no file: the grader runs the filter where none
+  of them exists (the library there holds :data:`BOX_MODULES` only; :func:`outside_box` names what a filter
+  reaches beyond them, and :func:`self_check` reports it). The grader's data are each trial cut at secret places and given a little fresh sensor noise (not turned:
   that would change the score of a filter whose steps depend on the axes), so that no trial is recognised from its
   samples; an estimate far closer to the reference than any published filter's on several trials is held until
   the instructor has read its code.
@@ -36,7 +38,7 @@ import numpy as np
 from . import metrics, validate
 
 __all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
-           "Criterion", "FULL_MARKS", "SENSORS", "RUBRIC", "accuracy_points", "MAX_POINTS", "GATES", "budget_seconds",
+           "Criterion", "FULL_MARKS", "SENSORS", "ALLOWED_MODULES", "BOX_MODULES", "outside_box", "RUBRIC", "accuracy_points", "MAX_POINTS", "GATES", "budget_seconds",
            "causal_ks",
            "perturb_future", "as_quaternions", "causality_change", "first_change", "prefix_change", "self_check",
            "SelfCheck", "bar", "BAR_FILE", "make_bar"]
@@ -53,6 +55,82 @@ HOLD_OUT = (7, 29, 33)
 #: about 0.01 ms per sample.
 SECONDS_PER_SAMPLE = 5e-4
 MIN_SECONDS = 10.0
+
+#: The library's modules a capstone filter may use: the rules' rotation and metric helpers ...
+ALLOWED_MODULES = ("rotations", "metrics")
+#: ... and every module the grader's box holds: those, what they import, and what the lab's notebook needs to run
+#: (its setup cell, its checks, its plots). Each other module of the library is, in that box, a placeholder that
+#: refuses its names (the grading tools write it); a filter that calls one fails on every hidden trial.
+BOX_MODULES = ALLOWED_MODULES + ("validate", "capstone", "conventions", "earth", "guard", "plotting", "labformat",
+                                 "nbgrader_compat", "execute", "widgets")
+
+
+def outside_box(estimate):
+    """The library's modules that ``estimate`` reaches by name and the grader's box does not hold.
+
+    Follows the names the function's code (and its nested functions) looks up among its globals or takes from an
+    enclosing function, and the functions and classes of the same notebook it calls, as far as they go: a module bound to a name (``from fusionlab import
+    kalman``), a function or class imported from one (``from fusionlab.kalman import predict``). What is reached
+    through ``getattr`` with a built string is not seen; the grader's box refuses it anyway.
+
+    Parameters
+    ----------
+    estimate : callable
+        The student's filter.
+
+    Returns
+    -------
+    list of str
+        Dotted module names, ``["fusionlab.kalman"]``, sorted; empty when the filter stays within
+        :data:`BOX_MODULES`, numpy, scipy and the standard library.
+    """
+    import types
+    if not callable(estimate):
+        raise ValueError(f"estimate must be your filter, a function; got {type(estimate).__name__}")
+    home = getattr(estimate, "__module__", None)
+    found, seen, todo = set(), set(), [estimate]
+
+    def library_module(obj):
+        name = obj.__name__ if isinstance(obj, types.ModuleType) else getattr(obj, "__module__", None)
+        if not isinstance(name, str) or not name.startswith("fusionlab."):
+            return None
+        short = name.split(".")[1]
+        return None if short in BOX_MODULES or short == "checks" else f"fusionlab.{short}"
+
+    while todo:
+        obj = todo.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if isinstance(obj, type):
+            todo += [v for v in vars(obj).values() if isinstance(v, (types.FunctionType, staticmethod, classmethod))]
+            continue
+        fn = getattr(obj, "__func__", obj)
+        while callable(getattr(fn, "__wrapped__", None)) and id(fn.__wrapped__) not in seen:   # a decorated one
+            seen.add(id(fn))
+            fn = fn.__wrapped__
+        code, glob = getattr(fn, "__code__", None), getattr(fn, "__globals__", None)
+        if code is None or glob is None:
+            continue
+        values = []
+        for cell in getattr(fn, "__closure__", None) or ():            # names of an enclosing function
+            try:
+                values.append(cell.cell_contents)
+            except ValueError:                                          # a cell not filled yet
+                pass
+        codes = [code]
+        while codes:
+            c = codes.pop()
+            codes += [k for k in c.co_consts if isinstance(k, types.CodeType)]
+            values += [glob[name] for name in c.co_names if name in glob]
+        for value in values:
+            where = library_module(value)
+            if where:
+                found.add(where)
+            elif isinstance(value, (types.FunctionType, type)) and getattr(value, "__module__", None) == home:
+                todo.append(value)
+    return sorted(found)
+
 
 #: Noise added after k to the gyro (rad/s), accelerometer (m/s^2) and magnetometer (uT) by the causality check.
 CAUSAL_NOISE = (0.5, 3.0, 20.0)
@@ -378,16 +456,21 @@ class SelfCheck:
         The causality check's verdict (None: not checked).
     causal_message : str
         What the check found.
+    outside : list of str
+        The library's modules the filter reaches that the grader's box does not hold (:func:`outside_box`).
     """
     rows: list = field(default_factory=list)
     sensors: str = "9D"
     causal: bool | None = None
     causal_message: str = ""
+    outside: list = field(default_factory=list)
 
     @property
     def ok(self):
-        """True when every trial gave a valid estimate within its budget and the filter is causal."""
-        return bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True
+        """True when every trial gave a valid estimate within its budget, the filter is causal and it uses no module
+        of the library that the grader's box does not hold."""
+        return (bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True
+                and not self.outside)
 
     def mean(self, key=None):
         """The mean of one metric over the trials that ran (NaN when none did).
@@ -421,6 +504,10 @@ class SelfCheck:
             "yes" if all(r["status"] == "ok" for r in timed) else "NO"
         lines.append(f"time budget held on every trial: {held}")
         lines.append(self.causal_message)
+        if self.outside:
+            lines.append(f"library modules the grader's box does not hold: {', '.join(self.outside)} -- the filter "
+                         "fails on every hidden trial; use numpy, scipy, math and the library's "
+                         f"{' and '.join(ALLOWED_MODULES)} only")
         return "\n".join(lines)
 
 
@@ -460,7 +547,7 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks
         raise ValueError("trials must hold at least one trial")
     sensors = validate.choice(sensors, "sensors", tuple(SENSORS))
     seed = validate.count(seed, "seed")
-    out = SelfCheck(sensors=sensors)
+    out = SelfCheck(sensors=sensors, outside=outside_box(estimate))
     first = None
     for tr in trials:
         row = dict(trial=tr.name, status="ok", message="", total_deg=np.nan, heading_deg=np.nan,

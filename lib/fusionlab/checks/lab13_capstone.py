@@ -71,13 +71,19 @@ def check_integrate_gyro(fn):
 @forbids
 def check_capstone_filter(estimate, sensors="9D"):
     """Check a student's capstone filter ``estimate(gyr, acc, mag, fs) -> (N, 4)`` on a short synthetic hand-motion
-    record (no data needed): N unit quaternions, within the time budget, causal (as :func:`fusionlab.capstone.
-    self_check` checks it). Its accuracy is the leaderboard's business, not this check's."""
+    record (no data needed): no module of the library beyond what the grader's box holds
+    (:func:`fusionlab.capstone.outside_box`), N unit quaternions, within the time budget, causal (as
+    :func:`fusionlab.capstone.self_check` checks it). Its accuracy is the leaderboard's business, not this check's."""
     import time
 
     from .. import capstone, simulate
     if sensors not in capstone.SENSORS:
         raise Feedback(f'SENSORS must be "9D" or "6D" (in the cell of exercise 2); got {sensors!r}')
+    outside = capstone.outside_box(estimate) if callable(estimate) else []
+    if outside:
+        raise Feedback(f"your estimate uses {', '.join(outside)}, which the grader's box does not hold: there it "
+                       "would fail on every hidden trial. Use numpy, scipy, math and the library's "
+                       f"{' and '.join(capstone.ALLOWED_MODULES)} only, and write the rest yourself.")
     rec = simulate.hand_motion_record(seed=1302, fs=286.0, duration=8.0, still=2.0)
     gyr, acc = rec["gyr"], rec["acc"]
     mag = rec["mag"] * 100.0 if sensors == "9D" else None            # gauss -> µT; a 6D filter gets none
