@@ -262,7 +262,8 @@ def _held(st):
 def plain_files(src, notebooks=True):
     """``(kept, left_out)`` of the folder ``src``: its plain files at every depth (links and what is not a plain file
     are neither followed nor listed; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints out), each as
-    ``(path relative to src, bytes)``, a folder's files before its subfolders', in sorted order. A file over
+    ``(path relative to src, bytes)``, a folder's files before its subfolders', in sorted order. A hard link (a file
+    with another name elsewhere: no copy nbgrader makes has one) is left out, and so is a file over
     :data:`SEED_FILE_BYTES`, or one that would take the files kept over :data:`SEED_TOTAL_BYTES` or
     :data:`SEED_FILES`, is left out (:func:`_held`: the larger of apparent and allocated
     size). The same list for every box of a student and for ``autograded/``."""
@@ -284,8 +285,9 @@ def plain_files(src, notebooks=True):
             if e.is_dir(follow_symlinks=False):
                 inner.append((e.path, path))
             elif e.is_file(follow_symlinks=False):
-                size = _held(e.stat(follow_symlinks=False))
-                if size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES or len(kept) >= SEED_FILES:
+                st = e.stat(follow_symlinks=False)
+                size = _held(st)
+                if st.st_nlink > 1 or size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES or len(kept) >= SEED_FILES:
                     left.append((path, size))
                 else:
                     kept.append((path, size))

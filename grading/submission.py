@@ -4,7 +4,7 @@ notebook, ``timestamp.txt``) is opened here, and only here.
 The grader runs as root and a submission folder is the student's: a link in it (the notebook, ``timestamp.txt``, the
 lab folder or the student's folder) could point at the solutions, the gradebook or any file of the machine. So each
 file is reached one folder at a time from ``submitted/``, never following a link (``O_NOFOLLOW`` at every step), and
-only a regular file is read, up to a size. Whatever is refused is refused with a reason an instructor can act on, and
+only a regular file with no other name (no hard link) is read, up to a size. Whatever is refused is refused with a reason an instructor can act on, and
 no message quotes what such a file holds.
 
 :func:`read_submission` is the one reader of a submitted notebook: grading (:mod:`grading.classgrade`), the integrity
@@ -69,9 +69,14 @@ def _open(course, lab, student, name):
             if e.errno == errno.ELOOP:
                 raise ValueError(f"{where}{name} is a link, not the student's own file") from None
             raise
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
             os.close(fd)
             raise ValueError(f"{where}{name} is not a plain file")
+        if st.st_nlink > 1:     # another name of a file elsewhere: nbgrader's submission is a copy, which has none
+            os.close(fd)
+            raise ValueError(f"{where}{name} is a hard link (the file has {st.st_nlink} names), not the student's "
+                             "own copy")
         return fd
     finally:
         for d in fds:
@@ -159,12 +164,14 @@ def left_out(course, lab, student):
     _, left = sandbox.plain_files(folder, notebooks=False)
     if not left:
         return [], None
+    linked = {path for path, _ in left if os.lstat(folder / path).st_nlink > 1}
     them = "it" if len(left) == 1 else "them"
-    names = ", ".join(f"{path} ({_size(size)})" for path, size in left[:5])
+    names = ", ".join(f"{path} ({'a hard link' if path in linked else _size(size)})" for path, size in left[:5])
     more = f" and {len(left) - 5} more" if len(left) > 5 else ""
     return left, (f"{names}{more} left out: a file beside the notebook may hold {sandbox.SEED_FILE_BYTES >> 20} MB, "
-                  f"all of them {sandbox.SEED_TOTAL_BYTES >> 20} MB in {sandbox.SEED_FILES} files; the notebook was "
-                  f"graded without {them}, and autograded/ and the feedback do not hold {them}")
+                  f"all of them {sandbox.SEED_TOTAL_BYTES >> 20} MB in {sandbox.SEED_FILES} files, and be no hard "
+                  f"link; the notebook was graded without {them}, and autograded/ and the feedback do not hold "
+                  f"{them}")
 
 
 def _size(n):

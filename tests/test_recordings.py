@@ -485,6 +485,18 @@ def test_bad_arguments_are_refused_naming_the_argument(kwargs, message):
         recordings.load_recording(PHONE / "plain_trial02.csv", **kwargs)
 
 
+@pytest.mark.parametrize("wrong, right", [("s", "ms"), ("us", "ms"), ("ns", "ms")])
+def test_a_wrong_time_unit_is_refused_naming_the_unit_that_fits(wrong, right):
+    """The plain example's times are milliseconds: read as s, us or ns they give a rate no IMU records at, and the
+    message names units={'t': 'ms'}, not max_gap."""
+    units = dict(PLAIN["units"], t=wrong)
+    with pytest.raises(ValueError, match=rf"with units\['t'\] = '{wrong}', the samples come .* times a second, "
+                                         rf"not a rate a phone or an IMU records at \(5-2000 Hz\): the column "
+                                         rf"'time_ms' is likely in '{right}' -- pass units={{'t': '{right}', ...}}"):
+        recordings.load_recording(PHONE / "plain_trial02.csv", columns=PLAIN["columns"], units=units)
+    assert 5 <= recordings.load_recording(PHONE / "plain_trial02.csv", **PLAIN).fs <= 2000
+
+
 def test_a_path_that_is_not_there_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"path must name an export folder, a .zip or a .csv file; .* does not exist"):
         recordings.load_recording(tmp_path / "nothing.zip")

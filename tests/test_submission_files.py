@@ -162,6 +162,29 @@ def test_no_report_reads_a_linked_notebook_and_each_says_it_was_not_graded(cours
 
 # -- A large (sparse) file beside the notebook -----------------------------------------------------------------------
 
+def test_a_hard_link_is_neither_read_nor_copied_and_is_named(course, tmp_path):
+    """A second name of a file elsewhere (nbgrader's submission is a copy, which has none): the notebook and
+    timestamp.txt are refused, a file beside them is left out and named, never read."""
+    _hand_in(course, "alice", _full(course))
+    folder = course / "submitted" / "alice" / LAB
+    os.link(folder / f"{LAB}.ipynb", tmp_path / "elsewhere.ipynb")
+    with pytest.raises(ValueError, match=rf"{LAB}.ipynb is a hard link \(the file has 2 names\)"):
+        submission.read_submission(course, LAB, "alice")
+    os.unlink(tmp_path / "elsewhere.ipynb")
+    assert submission.read_submission(course, LAB, "alice").cells
+    (folder / "timestamp.txt").write_text("2026-12-01 10:00:00.000000 UTC")
+    os.link(folder / "timestamp.txt", tmp_path / "stamp")
+    assert submission.timestamp(course, LAB, "alice")[1].startswith("timestamp.txt ignored (submitted/alice/")
+    os.unlink(tmp_path / "stamp")
+    assert submission.timestamp(course, LAB, "alice") == ("2026-12-01 10:00:00.000000 UTC", None)
+    (tmp_path / "secret.csv").write_text("the other name\n")
+    os.link(tmp_path / "secret.csv", folder / "data.csv")
+    (folder / "own.csv").write_text("t\n0\n")
+    left, note = submission.left_out(course, LAB, "alice")
+    assert [p for p, _ in left] == ["data.csv"] and "data.csv (a hard link) left out" in note, note
+    assert [p for p, _ in sandbox.plain_files(folder, notebooks=False)[0]] == ["own.csv", "timestamp.txt"]
+
+
 def _sparse(path, size):
     with open(path, "wb") as fh:
         fh.truncate(size)

@@ -136,6 +136,10 @@ UNITS = {
 MIN_OVERLAP = 1.0
 #: The longest gap in a sensor's samples accepted by default, s (a longer one is refused).
 MAX_GAP = 0.25
+#: The sample rates a phone or an IMU records at, Hz: a plain CSV whose times, in the unit ``units['t']`` states,
+#: give a rate outside them has its time unit wrong (the range spans less than the factor 1000 between two units,
+#: so at most one unit fits).
+RATES = (5.0, 2000.0)
 
 _SENSORS = ("gyr", "acc", "mag")
 _HEADER_UNITS = {                                            # unit spellings in the apps' headers
@@ -767,6 +771,7 @@ def _read_plain(src, columns, units):
         return lookup[name]
 
     t = table.numbers([col(columns["t"], "t")])[:, 0] * UNITS["t"][units["t"]]
+    _check_time_unit(t, table.where, columns["t"], units["t"])
     streams, stated = {}, {}
     for sensor in ("gyr", "acc", "mag", "quat_phone"):
         if sensor in columns:
@@ -775,6 +780,24 @@ def _read_plain(src, columns, units):
             if sensor in UNITS:
                 stated[sensor] = _Stated(units[sensor], "units=")
     return _Export("csv", None, streams, stated, _Stated(None, None), 0.0, [])
+
+
+def _check_time_unit(t, where, column, unit):
+    """Refuse times whose median step, in the unit stated, is not a rate of :data:`RATES`, naming the unit that
+    fits (``units={'t': ...}``)."""
+    dt = np.diff(t[np.isfinite(t)])
+    dt = dt[dt > 0]
+    if not dt.size:
+        return                                  # no two times in order: the checks of the times say what is wrong
+    rate = 1.0 / float(np.median(dt))
+    if RATES[0] <= rate <= RATES[1]:
+        return
+    scale = UNITS["t"][unit]
+    fits = [u for u, k in UNITS["t"].items() if RATES[0] <= rate * scale / k <= RATES[1]]
+    fix = (f": the column {column!r} is likely in {fits[0]!r} -- pass units={{'t': {fits[0]!r}, ...}}" if fits else
+           f"; check units['t'] (one of {sorted(UNITS['t'])}) and the column columns['t'] = {column!r}")
+    raise ValueError(f"{where}: with units['t'] = {unit!r}, the samples come {rate:.3g} times a second, not a rate "
+                     f"a phone or an IMU records at ({RATES[0]:g}-{RATES[1]:g} Hz){fix}")
 
 
 def _detect(src):
