@@ -287,7 +287,8 @@ def plain_files(src, notebooks=True):
             elif e.is_file(follow_symlinks=False):
                 st = e.stat(follow_symlinks=False)
                 size = _held(st)
-                if st.st_nlink > 1 or size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES or len(kept) >= SEED_FILES:
+                if (st.st_nlink > 1 or size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES
+                        or len(kept) >= SEED_FILES):
                     left.append((path, size))
                 else:
                     kept.append((path, size))

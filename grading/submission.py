@@ -4,8 +4,8 @@ notebook, ``timestamp.txt``) is opened here, and only here.
 The grader runs as root and a submission folder is the student's: a link in it (the notebook, ``timestamp.txt``, the
 lab folder or the student's folder) could point at the solutions, the gradebook or any file of the machine. So each
 file is reached one folder at a time from ``submitted/``, never following a link (``O_NOFOLLOW`` at every step), and
-only a regular file with no other name (no hard link) is read, up to a size. Whatever is refused is refused with a reason an instructor can act on, and
-no message quotes what such a file holds.
+only a regular file with no other name (no hard link) is read, up to a size. Whatever is refused is refused
+with a reason an instructor can act on, and no message quotes what such a file holds.
 
 :func:`read_submission` is the one reader of a submitted notebook: grading (:mod:`grading.classgrade`), the integrity
 report (:mod:`grading.integrity`), the similarity report (:mod:`grading.similarity`) and the example answers of the

@@ -126,7 +126,8 @@ from .command import main, read_submissions, saved_seed
 from .program import (BLOCK_MESSAGE, CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
                       FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FUNCTION,
                       HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS,
-                      STUB_MESSAGE, WHY_HIDDEN, absent_modules, as_run, box_library, declared_sensors, library_copies, loaders,
+                      STUB_MESSAGE, WHY_HIDDEN, absent_modules, as_run, box_library, declared_sensors, library_copies,
+                      loaders,
                       model_program, placeholder_module, program_of, scan)
 from .report import (COLUMNS, SETS, STYLE, TRIAL_COLUMNS, feedback, grade_class, leaderboard_rows, trial_rows,
                      write_csv, write_leaderboard)

@@ -403,9 +403,9 @@ def box_library(scratch):
     """The library copy and shadow packages every capstone box gets (made once per run); returns its folder.
 
     The copy is the library's, but for the modules of :func:`absent_modules` (the filters and data loaders, and
-    every other module the rules do not allow): each file is replaced by :func:`placeholder_module`, so that no code of those modules is in the box, as source or bytecode
-    (only the placeholders are compiled). The packages of :data:`HIDDEN_PACKAGES` are shadowed by packages that
-    refuse to load (:func:`grading.boxlib.strip_packages`)."""
+    every other module the rules do not allow): each file is replaced by :func:`placeholder_module`, so that no
+    code of those modules is in the box, as source or bytecode (only the placeholders are compiled). The packages
+    of :data:`HIDDEN_PACKAGES` are shadowed by packages that refuse to load (:func:`grading.boxlib.strip_packages`)."""
     import fusionlab
     root = Path(scratch) / "capstone-box"
     if not root.exists():

@@ -16,10 +16,10 @@ trials the course does not ship, with the dataset authors' metrics (:func:`fusio
   published filter (the library's estimators, VQF, ``ahrs``..., nor their code pasted in), none of the library's
   other modules (its Kalman steps, eCompass, tilt formulas...) and no file: the grader runs the filter where none
   of them exists (the library there holds :data:`BOX_MODULES` only; :func:`outside_box` names what a filter
-  reaches beyond them, and :func:`self_check` reports it). The grader's data are each trial cut at secret places and given a little fresh sensor noise (not turned:
-  that would change the score of a filter whose steps depend on the axes), so that no trial is recognised from its
-  samples; an estimate far closer to the reference than any published filter's on several trials is held until
-  the instructor has read its code.
+  reaches beyond them, and :func:`self_check` reports it). The grader's data are each trial cut at secret
+  places and given a little fresh sensor noise (not turned: that would change the score of a filter whose steps
+  depend on the axes), so that no trial is recognised from its samples; an estimate far closer to the reference
+  than any published filter's on several trials is held until the instructor has read its code.
 * **Points** from :data:`RUBRIC` (:func:`accuracy_points`), not from rank: 2 for running, and up to 8 that grow
   smoothly as the mean RMSE goes from Madgwick's towards VQF's.
 
@@ -38,7 +38,8 @@ import numpy as np
 from . import metrics, validate
 
 __all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
-           "Criterion", "FULL_MARKS", "SENSORS", "ALLOWED_MODULES", "BOX_MODULES", "outside_box", "RUBRIC", "accuracy_points", "MAX_POINTS", "GATES", "budget_seconds",
+           "Criterion", "FULL_MARKS", "SENSORS", "ALLOWED_MODULES", "BOX_MODULES", "outside_box", "RUBRIC",
+           "accuracy_points", "MAX_POINTS", "GATES", "budget_seconds",
            "causal_ks",
            "perturb_future", "as_quaternions", "causality_change", "first_change", "prefix_change", "self_check",
            "SelfCheck", "bar", "BAR_FILE", "make_bar"]
@@ -69,9 +70,10 @@ def outside_box(estimate):
     """The library's modules that ``estimate`` reaches by name and the grader's box does not hold.
 
     Follows the names the function's code (and its nested functions) looks up among its globals or takes from an
-    enclosing function, and the functions and classes of the same notebook it calls, as far as they go: a module bound to a name (``from fusionlab import
-    kalman``), a function or class imported from one (``from fusionlab.kalman import predict``). What is reached
-    through ``getattr`` with a built string is not seen; the grader's box refuses it anyway.
+    enclosing function, and the functions and classes of the same notebook it calls, as far as they go: a module
+    bound to a name (``from fusionlab import kalman``), a function or class imported from one
+    (``from fusionlab.kalman import predict``). What is reached through ``getattr`` with a built string is not
+    seen; the grader's box refuses it anyway.
 
     Parameters
     ----------
