@@ -11,7 +11,9 @@
    the run stops (the lab's tests would be wrong, not the students).
 3. Each submission ``submitted/<student>/<LAB>/<LAB>.ipynb`` is graded by :func:`grading.judge.judge`: the tests
    run in this process, the student's code in sandboxed boxes that only return data (see :mod:`grading.judge`).
-   Several students are graded at once (``--workers``), each under a user id of its own.
+   Several students are graded at once (``--workers``), each under a user id of its own, in two rounds
+   (:func:`grade_class`): the visible part of every student's tests, then the hidden parts, so that no student's
+   visible verdict is written while any box holds a hidden input.
 4. This process writes each student's scores into ``gradebook.db`` (manual scores and extra credit already there
    are kept), and the notebook that Formgrader and the feedback show into ``autograded/<student>/<LAB>/``: the
    student's answers, and the judge's verdict as the only output of each test cell (no hidden test in it).
@@ -69,6 +71,7 @@ class Result:
     error: str = ""
     flags: list = field(default_factory=list)
     verdict: judge.Verdict | None = None
+    notebook: object = field(default=None, repr=False)   # the submission as read in the first round, for the second
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -201,27 +204,67 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
                      cell_seconds=args.timeout or judge.CELL_SECONDS)
 
 
-def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue) -> Result:
+def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH,
+              earlier: Result | None = None) -> Result:
     """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
-    process of its own, :func:`grading.judge.judge_apart`)."""
+    process of its own, :func:`grading.judge.judge_apart`): ``part`` as :func:`grading.judge.judge`; with
+    ``part=HIDDEN``, ``earlier`` is this student's result of the :data:`~grading.judge.VISIBLE` round."""
     t0 = time.monotonic()
-    result = Result(student)
-    try:
-        nb = read_submission(course, lab.lab, student)
-    except ValueError as e:
-        result.error = str(e)
-        return result
-    _, note = submission.left_out(course, lab.lab, student)
+    if earlier is None:
+        result = Result(student)
+        try:
+            result.notebook = read_submission(course, lab.lab, student)
+        except ValueError as e:
+            result.error = str(e)
+            return result
+        _, note = submission.left_out(course, lab.lab, student)
+        result.notes = [note] if note else []
+    else:
+        result = earlier
     slot = slots.get()
     try:
-        result.verdict = judge.judge_apart(lab, nb, student, slot)
+        verdict = judge.judge_apart(lab, result.notebook, student, slot, part=part,
+                                    earlier=earlier.verdict if earlier is not None else None)
     finally:
         slots.put(slot)
+    result.verdict = verdict
     result.ok = True
-    result.score, result.max_score = result.verdict.score, result.verdict.max_score
-    result.notes = ([note] if note else []) + list(result.verdict.notes)
-    result.seconds = time.monotonic() - t0
+    result.score, result.max_score = verdict.score, verdict.max_score
+    result.notes = result.notes + [n for n in verdict.notes if n not in result.notes]
+    result.seconds += time.monotonic() - t0
     return result
+
+
+def grade_class(lab: judge.Lab, course: Path, students: list, slots: queue.Queue, workers: int, say=print):
+    """Grade ``students`` in two rounds, ``workers`` at a time: the visible parts of every student's tests, then the
+    hidden parts (:func:`grading.judge.judge`). No student's visible round runs while a box has a hidden input, so
+    what one student's boxes learn of the hidden inputs (a channel between boxes on the machine: the load of its
+    cores, its page cache) cannot reach a classmate's feedback, which quotes only the visible round. Returns
+    :class:`Result` in the order the students finished; the ones not graded carry the reason."""
+    def run(part, todo):
+        done = []
+        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+            futures = {pool.submit(grade_one, lab, course, r.student if isinstance(r, Result) else r, slots, part,
+                                   r if isinstance(r, Result) else None): r for r in todo}
+            for fut in as_completed(futures):
+                r = futures[fut]
+                student = r.student if isinstance(r, Result) else r
+                try:
+                    done.append(fut.result())
+                except Exception as e:  # noqa: BLE001 -- a failure of the judge on one student: name it, go on
+                    done.append(Result(student, error=f"the judge failed: {type(e).__name__}: {e}"))
+                if part == judge.VISIBLE:
+                    left = sum(t.pending for t in done[-1].verdict.tests) if done[-1].ok else 0
+                    say(f"  {student}: visible parts graded, {left} test(s) with hidden parts left "
+                        f"({done[-1].seconds:.0f} s)" if done[-1].ok else f"  {student}: NOT GRADED", flush=True)
+        return done
+    say(f"round 1 of 2: the visible part of every test, {len(students)} submission(s)", flush=True)
+    first = run(judge.VISIBLE, students)
+    second = [r for r in first if r.ok and any(t.pending for t in r.verdict.tests)]
+    say(f"round 2 of 2: the hidden parts, {len(second)} submission(s) (no visible part runs in this round)",
+        flush=True)
+    again = {r.student: r for r in run(judge.HIDDEN, second)}
+    return [again.get(r.student, r) for r in first]
 
 
 def record(course: Path, lab: judge.Lab, student: str, result: Result):
@@ -396,6 +439,21 @@ def write_reports(course: Path, lab: str, results: list[Result], release, model)
     return "; ".join(said), unwritten
 
 
+def rounds_said(results: list[Result]) -> str:
+    """Whether the two rounds of :func:`grade_class` were apart, from the times the judges' processes kept."""
+    ends = [r.verdict.rounds[judge.VISIBLE][1] for r in results
+            if r.verdict is not None and judge.VISIBLE in r.verdict.rounds]
+    starts = [r.verdict.rounds[judge.HIDDEN][0] for r in results
+              if r.verdict is not None and judge.HIDDEN in r.verdict.rounds]
+    if not starts:
+        return "no hidden part was run (no visible part passed that had one)"
+    gap = min(starts) - max(ends, default=min(starts))
+    if gap < 0:
+        return f"WARNING: a hidden part began {-gap:.1f} s before the last visible part ended"
+    return (f"rounds apart: the last visible part ended before the first hidden part began ({len(ends)} visible "
+            f"rounds, {len(starts)} hidden)")
+
+
 def summary(lab: str, results: list[Result], seconds: float, workers: int, report) -> str:
     graded = [r for r in results if r.ok]
     width = max([len(r.student) for r in results] + [7])
@@ -480,26 +538,20 @@ def main(argv=None):
         slots = queue.Queue()
         for slot in mine:
             slots.put(slot)
-        with ThreadPoolExecutor(max_workers=max(1, args.workers)) as pool:
-            futures = {pool.submit(grade_one, the_lab, course, s, slots): s for s in students}
-            for fut in as_completed(futures):
-                student = futures[fut]
+        for result in grade_class(the_lab, course, students, slots, args.workers):
+            if result.ok:
                 try:
-                    result = fut.result()
-                except Exception as e:  # noqa: BLE001 -- a failure of the judge on one student: name it, go on
-                    result = Result(student, error=f"the judge failed: {type(e).__name__}: {e}")
-                if result.ok:
-                    try:
-                        record(course, the_lab, student, result)
-                    except Exception as e:  # noqa: BLE001 -- report it with the student's name, grade the others
-                        result.ok, result.error = False, f"could not record the scores: {type(e).__name__}: {e}"
-                results.append(result)
-                state = f"{result.score:g}/{result.max_score:g}" if result.ok else "NOT GRADED"
-                print(f"  {student}: {state} ({result.seconds:.0f} s)", flush=True)
+                    record(course, the_lab, result.student, result)
+                except Exception as e:  # noqa: BLE001 -- report it with the student's name, grade the others
+                    result.ok, result.error = False, f"could not record the scores: {type(e).__name__}: {e}"
+            results.append(result)
+            state = f"{result.score:g}/{result.max_score:g}" if result.ok else "NOT GRADED"
+            print(f"  {result.student}: {state} ({result.seconds:.0f} s)", flush=True)
         seconds = time.monotonic() - t0
         said, unwritten = write_reports(course, lab, results, the_lab.release, the_lab.solution)
         print()
         print(summary(lab, results, seconds, args.workers, Path(f"integrity_{lab}.md")))
+        print(rounds_said(results))
         judged = [r.verdict.judge_mb for r in results if r.verdict is not None]
         cpu = [r.verdict.judge_cpu_s for r in results if r.verdict is not None]
         print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "

@@ -85,6 +85,7 @@ class TestResult:
     score: float = 0.0
     message: str = ""
     slip: str = ""      # what the exercise's visible check makes of the answer (fusionlab.checks.slips; _slip)
+    pending: bool = False   # the visible part passed and the hidden parts are still to run (judge(part=VISIBLE))
 
 
 @dataclass
@@ -98,6 +99,7 @@ class Verdict:
     judge_uid: int = -1           # the user that process ran as (judge_apart; not root: grading.launcher)
     judge_cpu_s: float = 0.0      # its CPU time, s (the boxes' not counted; bounded: launcher.APART_CPU_SECONDS)
     judge_caps: int = 0           # its effective capabilities (a bit mask; 0 unless it had to keep reading)
+    rounds: dict = field(default_factory=dict)   # part -> [start, end] (time.monotonic: one clock for every process)
 
     @property
     def score(self):
@@ -298,7 +300,16 @@ def _first_line(exc):
     return text if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {text}"
 
 
-def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
+#: The parts of a grading run (:func:`judge`): the visible parts of every test, the hidden parts, or both in turn.
+VISIBLE, HIDDEN, BOTH = "visible", "hidden", "both"
+
+#: The message of a test whose visible part passed in the first round and failed when run again, in a fresh box, before
+#: its hidden part (the second round may not quote the box: other boxes have seen hidden inputs by then).
+CHANGED = ("failed: the test's visible part passed, then failed when the test ran again for its hidden part "
+           "(does your code give the same result every time it runs?)")
+
+
+def judge(lab: Lab, submitted, student: str, slot=0, boxes=None, part=BOTH, earlier: Verdict | None = None) -> Verdict:
     """Grade one submission (``submitted``: the notebook, or None when it could not be read).
 
     Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
@@ -306,14 +317,38 @@ def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
     same user id (``slot``).
 
     In two rounds: first the visible part of every test, each in its box, whose verdicts may quote the student's
-    code; then, in the boxes kept open, the hidden parts, whose verdicts name only the kind of failure. No box's
-    words reach the feedback after any box of the student has seen a hidden input, so a channel between the boxes
-    (the kernel's page cache is one no sandbox closes) cannot carry hidden inputs into a verdict.
+    code; then the hidden parts, whose verdicts name only the kind of failure. No box's words reach the feedback
+    after any box has seen a hidden input, so a channel between boxes (the kernel's page cache, the load of the
+    machine's cores: none that a sandbox closes) cannot carry hidden inputs into a verdict.
+
+    ``part`` is :data:`BOTH` (the two rounds for this student, the hidden parts in the boxes kept open: one student
+    graded alone), :data:`VISIBLE` (the first round only: each test whose hidden parts are left is ``pending``) or
+    :data:`HIDDEN` (the second round of ``earlier``, a :data:`VISIBLE` verdict: each pending test runs again in a fresh
+    box, its visible part quietly, then its hidden parts). A class is graded :data:`VISIBLE` for every student, then
+    :data:`HIDDEN` (:mod:`grading.classgrade`), so that no student's visible round runs beside another's hidden one.
 
     ``boxes`` starts the boxes (:mod:`grading.launcher`; by default in this process)."""
+    if part not in (VISIBLE, HIDDEN, BOTH):
+        raise ValueError(f"part must be {VISIBLE!r}, {HIDDEN!r} or {BOTH!r}, got {part!r}")
+    if (part == HIDDEN) != (earlier is not None):
+        raise ValueError("earlier (the verdict of the visible round) is given with part=HIDDEN, and only then")
     t0 = time.monotonic()
     boxes = launcher.LabBoxes(lab, student, slot) if boxes is None else boxes
-    verdict = Verdict()
+    verdict = copy.deepcopy(earlier) if earlier is not None else Verdict()
+    try:
+        if part == HIDDEN:
+            _second_round(lab, submitted, boxes, verdict)
+        else:
+            _first_round(lab, submitted, boxes, verdict, keep_open=part == BOTH)
+    finally:
+        verdict.seconds += time.monotonic() - t0
+        verdict.rounds[part] = [t0, time.monotonic()]
+    return verdict
+
+
+def _first_round(lab, submitted, boxes, verdict, keep_open):
+    """The visible part of every test; then, if ``keep_open``, the hidden parts in the boxes kept open, else each test
+    with hidden parts left is marked ``pending`` and its box closed."""
     base = lab.base()
     stopped = set()
     kept = []                      # (session, result, ns, hidden parts) of the tests whose visible part passed
@@ -325,9 +360,10 @@ def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
             session = Session(lab, submitted, boxes, gid, need=cells.free_names(source), stopped=stopped)
             ns = dict(base)
             rest = _visible_part(lab, session, source, ns, reference, result)
-            if rest:
+            if rest and keep_open:
                 kept.append((session, result, ns, rest))
             else:
+                result.pending = bool(rest)
                 _close(session, verdict)
         while kept:
             session, result, ns, rest = kept.pop(0)
@@ -338,8 +374,54 @@ def judge(lab: Lab, submitted, student: str, slot=0, boxes=None) -> Verdict:
     finally:
         for session, *_ in kept:               # a failure of the judge itself: no box is left running
             _close(session, verdict)
-    verdict.seconds = time.monotonic() - t0
-    return verdict
+
+
+def _second_round(lab, submitted, boxes, verdict):
+    """The hidden parts of the ``pending`` tests of a :data:`VISIBLE` verdict, each in a fresh box that runs the
+    notebook and the test's visible part again first. Nothing the box says reaches the verdict as words: a cell's
+    error, a note or a visible part that now fails is told by a fixed message (:data:`CHANGED`)."""
+    base = lab.base()
+    stopped = set()
+    for result in verdict.tests:
+        if not result.pending:
+            continue
+        result.pending = False
+        source = lab.tests[result.grade_id]
+        reference = lab.reference_values(result.grade_id, boxes)
+        session = Session(lab, submitted, boxes, result.grade_id, need=cells.free_names(source), stopped=stopped)
+        ns = dict(base)
+        try:
+            rest = _visible_again(lab, session, source, ns, reference, result)
+            if rest:
+                _hidden_part(lab, session, ns, rest, result)
+        finally:
+            said = f"test {result.grade_id}: {result.message}"      # a fixed message (_failed), the box's words never
+            if said in session.notes and said not in verdict.notes:
+                verdict.notes.append(said)
+            verdict.largest_reply = max(verdict.largest_reply, session.largest)
+            session.close()                    # its other notes and cell errors were told in the first round
+
+
+def _visible_again(lab, session, source, ns, reference, result):
+    """:func:`_visible_part` in the second round: the parts left to run, or None with :data:`CHANGED` in ``result``.
+    The time of the test (both parts) starts again."""
+    try:
+        session.start()
+    except BoxDied:
+        result.message = CHANGED
+        return None
+    session.budget["deadline"] = time.monotonic() + lab.cell_seconds
+    parts = cells.test_parts(source)
+    first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
+    try:
+        _names(session, source, ns, reference, session.budget)
+        for _, code in parts[:first_hidden]:
+            exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+    except Exception:  # noqa: BLE001 -- told by a fixed message, whatever it was
+        result.message = CHANGED
+        return None
+    session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
+    return parts[first_hidden:]
 
 
 def _close(session, verdict):
@@ -356,12 +438,12 @@ def _close(session, verdict):
 JUDGE_MEMORY_BYTES = 3 << 30
 
 
-def _judge_child(lab, submitted, student, slot, system):
+def _judge_child(lab, submitted, student, slot, system, part, earlier):
     """The judge's process (:func:`judge_apart`): as root, the boxes' launcher stays root and this process does not."""
     sandbox.system_files(known=system)
     boxes = launcher.split(launcher.LabBoxes(lab, student, slot), slot, read_all=lab.judge_reads_all)
     try:
-        return {"verdict": dataclasses.asdict(judge(lab, submitted, student, slot, boxes))}
+        return {"verdict": dataclasses.asdict(judge(lab, submitted, student, slot, boxes, part, earlier))}
     finally:
         boxes.close()                                 # every box ended before the verdict is read
 
@@ -382,20 +464,27 @@ def _imported_modules(source):
     return list(dict.fromkeys(names))
 
 
-def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES) -> Verdict:
+def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES, part=BOTH,
+                earlier: Verdict | None = None) -> Verdict:
     """:func:`judge`, in a process of its own with ``memory_bytes`` of address space (:func:`grading.launcher.apart`;
     as root, not root: :func:`grading.launcher.split`). What comes back is JSON: the verdict's numbers and texts."""
     # the server imports once what every judge process needs: this module and what the lab's setup cell imports
     # (matplotlib, the library's modules ...), which each process would otherwise import again (a second or so)
-    reply = launcher.apart(_judge_child, (lab, submitted, student, slot, sandbox.system_files()),
+    reply = launcher.apart(_judge_child, (lab, submitted, student, slot, sandbox.system_files(), part, earlier),
                            preload=["grading.judge", *_imported_modules(lab.setup_source)],
                            memory_bytes=memory_bytes, who=student)
-    d = reply["verdict"]
-    return Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
-                   cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
-                   largest_reply=int(d["largest_reply"]), judge_mb=float(reply["process"]["mb"]),
-                   judge_uid=int(reply["process"]["uid"]), judge_cpu_s=float(reply["process"]["cpu_s"]),
-                   judge_caps=int(reply["process"]["caps"]))
+    d, p = reply["verdict"], reply["process"]
+    verdict = Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
+                      cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
+                      largest_reply=int(d["largest_reply"]), judge_mb=float(p["mb"]), judge_uid=int(p["uid"]),
+                      judge_cpu_s=float(p["cpu_s"]), judge_caps=int(p["caps"]),
+                      rounds={k: [float(a), float(b)] for k, (a, b) in dict(d["rounds"]).items()})
+    if earlier is not None:                  # the two processes of one student as one: the most, the sum, either
+        verdict.judge_mb = max(verdict.judge_mb, earlier.judge_mb)
+        verdict.judge_cpu_s += earlier.judge_cpu_s
+        verdict.judge_caps |= earlier.judge_caps
+        verdict.judge_uid = 0 if 0 in (verdict.judge_uid, earlier.judge_uid) else verdict.judge_uid
+    return verdict
 
 
 TOO_LARGE = f"your code sent back more than the judge reads (a reply over {client.MAX_REPLY_BYTES >> 20} MB)"

@@ -405,6 +405,11 @@ def test_the_class_run_names_every_student_and_refuses_only_the_unreadable_one(g
     assert run.returncode == 1, run.stdout[-3000:] + run.stderr[-3000:]
     assert "not graded: not_json" in run.stderr
     assert "model solution: 9 / 9" in run.stdout
+    # every student's visible round before any hidden one (grading.classgrade.grade_class), by the judges' clocks
+    assert re.search(r"^rounds apart: the last visible part ended before the first hidden part began", run.stdout,
+                     re.M), run.stdout[-3000:]
+    assert run.stdout.index("round 2 of 2") > max(run.stdout.index(f"  {s}: visible parts graded")
+                                                  for s in ("full", "half"))
     for student in graded["students"] + ["not_json"]:
         assert re.search(rf"^{re.escape(student)}\s", run.stdout, re.M), student
     with open(graded["root"] / "grades.csv", newline="") as fh:

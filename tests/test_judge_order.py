@@ -125,3 +125,109 @@ def test_the_slip_the_report_records_is_asked_before_the_box_sees_a_hidden_input
     assert verdict.tests[0].slip == "unrecognised", "the check ran before the box saw the hidden input"
     calls = [entry[2] for entry in FakeSession.log if entry[0] == "f"]
     assert calls == [SHOWN, SHOWN, SECRET], "the visible part, then the check, then the hidden part"
+
+
+class Colluding(FakeSession):
+    """Two classmates' boxes with one channel between them (on a real machine: the load of the cores they share):
+    the sender's boxes store the hidden inputs they see, and any box that finds one in the channel raises an error
+    that carries it."""
+    def proxy(self, name, budget):
+        def call(x):
+            self.log.append((name, self.gid, x))
+            if self.channel.get("seen"):
+                raise judge.StudentRaised(f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
+                                          f"ValueError: LEAKED {self.channel['seen']}")
+            if x != SHOWN:
+                self.channel.setdefault("seen", []).append(x)
+            return 2 * x if name == "f" else 3 * x
+        return call
+
+
+def _words(verdict):
+    return " ".join([t.message for t in verdict.tests] + verdict.notes + list(verdict.cell_errors.values()))
+
+
+def test_a_class_in_two_rounds_carries_no_classmates_hidden_input_into_a_visible_verdict(monkeypatch):
+    monkeypatch.setattr(judge, "Session", Colluding)
+    # one student after the other, each in two rounds of their own: the channel is real, the receiver's visible
+    # verdict quotes the sender's hidden input
+    Colluding.channel, Colluding.log = {}, []
+    judge.judge(_lab(), None, "sender")
+    assert str(SECRET) in _words(judge.judge(_lab(), None, "receiver"))
+
+    # the class's order (grading.classgrade.grade_class): every visible round, then every hidden round
+    Colluding.channel, Colluding.log = {}, []
+    first = {s: judge.judge(_lab(), None, s, part=judge.VISIBLE) for s in ("sender", "receiver")}
+    assert all(t.pending and not t.message for v in first.values() for t in v.tests)
+    assert not Colluding.channel, "no box saw a hidden input in the first round"
+    final = {s: judge.judge(_lab(), None, s, part=judge.HIDDEN, earlier=first[s]) for s in first}
+    for student, verdict in final.items():
+        assert str(SECRET) not in _words(verdict) and "LEAKED" not in _words(verdict), (student, _words(verdict))
+        assert not any(t.pending for t in verdict.tests)
+    assert final["sender"].tests[0].message == "passed"
+    assert [t.message for t in final["receiver"].tests] == [judge.CHANGED] * 2
+    assert final["sender"].rounds["visible"][1] <= final["sender"].rounds["hidden"][0]
+
+
+def test_an_honest_student_scores_the_same_in_one_run_or_two_rounds(monkeypatch):
+    monkeypatch.setattr(judge, "Session", FakeSession)
+    FakeSession.channel, FakeSession.log = {}, []
+    both = judge.judge(_lab(), None, "honest")
+    first = judge.judge(_lab(), None, "honest", part=judge.VISIBLE)
+    assert [t.pending for t in first.tests] == [True, True] and first.score == 0
+    second = judge.judge(_lab(), None, "honest", part=judge.HIDDEN, earlier=first)
+    assert [(t.score, t.message) for t in second.tests] == [(t.score, t.message) for t in both.tests]
+    assert second.score == 2 and first.tests[0].pending, "the first round's verdict is not changed"
+    hidden_calls = [e for e in FakeSession.log if e[0] in ("f", "g")][-4:]
+    assert hidden_calls == [("f", "ex1_tests", SHOWN), ("f", "ex1_tests", SECRET),
+                            ("g", "ex2_tests", SHOWN), ("g", "ex2_tests", 0.5)], \
+        "the second round runs each test again, visible part first, in a box of its own"
+
+
+def test_the_parts_of_a_run_are_checked(monkeypatch):
+    import pytest
+    monkeypatch.setattr(judge, "Session", FakeSession)
+    with pytest.raises(ValueError, match="part must be"):
+        judge.judge(_lab(), None, "x", part="hiden")
+    with pytest.raises(ValueError, match="earlier"):
+        judge.judge(_lab(), None, "x", part=judge.HIDDEN)
+
+
+def test_a_class_runs_no_visible_part_beside_a_hidden_one(monkeypatch):
+    """grade_class with two workers and judges that take a while: every student's visible round ends before any
+    hidden round begins (the times are the judges' own)."""
+    import queue
+    import threading
+    import time
+
+    from grading import classgrade
+
+    spans, lock = [], threading.Lock()
+
+    def judge_apart(lab, nb, student, slot, part=judge.BOTH, earlier=None):
+        t0 = time.monotonic()
+        time.sleep(0.05 if student != "slow" else 0.3)
+        with lock:
+            spans.append((part, student, t0, time.monotonic()))
+        tests = [judge.TestResult("ex1_tests", 1.0, pending=part == judge.VISIBLE)]
+        if part == judge.HIDDEN:
+            tests[0].score, tests[0].message = 1.0, "passed"
+        return judge.Verdict(tests=tests)
+
+    monkeypatch.setattr(classgrade.judge, "judge_apart", judge_apart)
+    monkeypatch.setattr(classgrade, "read_submission", lambda course, lab, student: {"cells": []})
+    monkeypatch.setattr(classgrade.submission, "left_out", lambda course, lab, student: ([], ""))
+    slots = queue.Queue()
+    for s in (0, 1):
+        slots.put(s)
+    lab = types.SimpleNamespace(lab="02_kalman_falling_body")
+    students = ["slow", "a", "b", "c", "d"]
+    said = []
+    results = classgrade.grade_class(lab, None, students, slots, 2, say=lambda *a, **k: said.append(a[0]))
+    assert sorted(r.student for r in results) == sorted(students)
+    assert all(r.ok and r.score == 1.0 for r in results)
+    visible = [s for s in spans if s[0] == judge.VISIBLE]
+    hidden = [s for s in spans if s[0] == judge.HIDDEN]
+    assert len(visible) == len(hidden) == 5
+    assert max(end for *_, end in visible) <= min(start for _, _, start, _ in hidden)
+    assert said[0].startswith("round 1 of 2") and any(s.startswith("round 2 of 2") for s in said)
