@@ -67,6 +67,15 @@ class _Recording:
 
 
 @pytest.fixture(autouse=True)
+def numpy_print_options_restored():
+    """A test that runs a lab's set-up cell (``np.set_printoptions(precision=3)``) leaves the next test's printing,
+    and a later doctest in the same worker, as it found them."""
+    import numpy as np
+    with np.printoptions():
+        yield
+
+
+@pytest.fixture(autouse=True)
 def no_message_prints_one_value_twice(request, monkeypatch):
     """In tests/checks, every message a check raises while a test feeds it its slips (``pytest.raises(checks.Feedback,
     ...)``) is read for a comparison that prints one value twice ("you return 0.7318 rad, expected 0.7318 rad"): a
