@@ -55,6 +55,7 @@ from pathlib import Path
 import nbformat
 
 from grading import cells, cgroup, judge, launcher, outputs, sandbox, similarity, slipreport, submission
+from grading.lab import CELL_SECONDS, Lab
 from grading.submission import read_submission, students_of  # noqa: F401 -- the one reader, named here too
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
@@ -189,7 +190,7 @@ def recorded_tests(course: Path, lab: str):
         return {name: sources[name] for name in tests}
 
 
-def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> judge.Lab:
+def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> Lab:
     release = nbformat.read(release_dir / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     tests = recorded_tests(course, lab)
@@ -200,11 +201,11 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
         limits["memory_bytes"] = args.memory_mb << 20
     if args.cpu_seconds:
         limits["cpu_s"] = args.cpu_seconds
-    return judge.Lab(course, lab, release, tests, solution, scratch, limits=limits,
-                     cell_seconds=args.timeout or judge.CELL_SECONDS)
+    return Lab(course, lab, release, tests, solution, scratch, limits=limits,
+                     cell_seconds=args.timeout or CELL_SECONDS)
 
 
-def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH,
+def grade_one(lab: Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH,
               earlier: Result | None = None) -> Result:
     """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
     process of its own, :func:`grading.judge.judge_apart`): ``part`` as :func:`grading.judge.judge`; with
@@ -235,7 +236,7 @@ def grade_one(lab: judge.Lab, course: Path, student: str, slots: queue.Queue, pa
     return result
 
 
-def grade_class(lab: judge.Lab, course: Path, students: list, slots: queue.Queue, workers: int, say=print):
+def grade_class(lab: Lab, course: Path, students: list, slots: queue.Queue, workers: int, say=print):
     """Grade ``students`` in two rounds, ``workers`` at a time: the visible parts of every student's tests, then the
     hidden parts (:func:`grading.judge.judge`). No student's visible round runs while a box has a hidden input, so
     what one student's boxes learn of the hidden inputs (a channel between boxes on the machine: the load of its
@@ -267,7 +268,7 @@ def grade_class(lab: judge.Lab, course: Path, students: list, slots: queue.Queue
     return [again.get(r.student, r) for r in first]
 
 
-def record(course: Path, lab: judge.Lab, student: str, result: Result):
+def record(course: Path, lab: Lab, student: str, result: Result):
     """Write one student's autograded scores into the gradebook and the autograded notebook into the course."""
     from sqlalchemy.exc import SAWarning
 
@@ -477,7 +478,7 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2, help="submissions graded at once (default 2)")
     ap.add_argument("--student", action="append", help="grade only this student (repeatable)")
     ap.add_argument("--course", default=".", help="the course root (default: the current folder)")
-    ap.add_argument("--timeout", type=int, help=f"seconds per cell and per test (default {judge.CELL_SECONDS})")
+    ap.add_argument("--timeout", type=int, help=f"seconds per cell and per test (default {CELL_SECONDS})")
     ap.add_argument("--memory-mb", type=int, help="address space per sandboxed process (default 4096)")
     ap.add_argument("--cpu-seconds", type=int, help="CPU seconds per sandboxed process (default 600)")
     ap.add_argument("--no-generate", action="store_true", help="do not re-record the lab in gradebook.db first")

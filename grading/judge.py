@@ -19,7 +19,7 @@ the student's value, and gets back plain data, decoded strictly.  So
 
 Values a test reads from a *provided* cell of the notebook (the lab's data, ``still``, ``q_demo``) are not taken
 from the student's box, where the student could have changed them: they come from a run of the model solution in
-the same kind of box, made once per lab (:meth:`Lab.reference_values`), which must itself score full marks.
+the same kind of box, made once per lab (:meth:`grading.lab.Lab.reference_values`), which must itself score full marks.
 
 :func:`judge` grades one submission and returns a :class:`Verdict`: the score of each test cell, the judge's message
 for it, and what had to be done (cells stopped, the box restarted, cells missing or duplicated in the notebook).
@@ -44,34 +44,17 @@ import re
 import time
 import types
 from dataclasses import dataclass, field
-from pathlib import Path
 
 
 from fusionlab import guard, labformat
-from fusionlab.checks import exercises, slips
+from fusionlab.checks import slips
 from fusionlab.checks._core import Feedback
 from grading import boxlib, cells, client, launcher, sandbox
+from grading.lab import Lab
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.session import NotData, Session, StudentError, StudentRaised
 
-CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
 CHECK_SECONDS = 20         # wall time of the visible check run on a failed answer, for its slip (not for the score)
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# The guard as the judge runs it: the same comparisons, nothing to forbid (the box has no references to call)
-# ---------------------------------------------------------------------------------------------------------------
-
-def _judge_guard():
-    def grade(student_fn, reference_fn, cases, *, forbid=(), **kw):
-        return guard.grade(student_fn, reference_fn, cases, forbid=(), **kw)
-
-    def nothing(*args, **kwargs):
-        return None
-
-    return types.SimpleNamespace(assert_close=guard.assert_close, assert_equal=guard.assert_equal, grade=grade,
-                                 forbid=lambda *a, **k: contextlib.nullcontext(), reserve=nothing, release=nothing,
-                                 intact=nothing, ForbiddenCall=guard.ForbiddenCall)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -108,185 +91,6 @@ class Verdict:
     @property
     def max_score(self):
         return sum(t.points for t in self.tests)
-
-
-class Lab:
-    """Everything the judge needs of one lab, prepared once per class run.
-
-    ``release`` is the release notebook (no solutions, no hidden tests), ``tests`` maps each test cell's grade id to
-    its full source as the gradebook holds it, ``solution`` is the instructor's notebook (for the model run).
-    """
-
-    def __init__(self, course: Path, lab: str, release, tests: dict, solution, scratch: Path, limits=None,
-                 cell_seconds=CELL_SECONDS):
-        self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
-        self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
-        self.points = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}   # the table's, checked against
-        # the gradebook's by grading.classgrade.recorded_tests before anyone is graded
-        setup = [c for c in release.cells if cells.grade_id(c) == labformat.SETUP] or \
-                [c for c in release.cells if c.cell_type == "code" and not cells.is_answer(c)][:1]
-        self.setup_source = cells.without_guard_calls(setup[0].source) if setup else ""
-        self._base = None
-        self.answer_names = set().union(*[cells.bound_names(c.source) for c in solution.cells
-                                          if c.cell_type == "code" and cells.is_answer(c)] or [set()])
-        self.provided_names = set().union(*[cells.bound_names(c.source) for c in release.cells
-                                            if c.cell_type == "code" and not cells.is_answer(c)
-                                            and not cells.is_test(c)]
-                                          or [set()]) - self.answer_names
-        self.forbidden = {gid: self._forbidden(gid) for gid in tests}
-        # each test's visible check (the release's cell exN_check) and the check it calls, for the slip of a failure;
-        # the provided values it reads come from the model run (reference_values), the answers are always run
-        self.checks = {labformat.autograder_id(g.number): c.source for c in release.cells if cells.is_check(c)
-                       for g in [labformat.parse(cells.grade_id(c))] if g.kind == "ex"}
-        self.check_names = {e.grade_id: e.check for e in exercises.of_lab(lab)}
-        self.unstubbed = {}
-        self._reference = {}
-        self.judge_reads_all = False     # as root: the judges keep CAP_DAC_READ_SEARCH (grading.launcher.drop_root)
-
-    def __getstate__(self):
-        return {**self.__dict__, "_base": None}          # the setup's namespace holds modules: run again there
-
-    def box_root(self, gid):
-        """The box's library and shadow packages for the test ``gid``: its references and forbidden functions are
-        stubs (made once per lab and test)."""
-        root = self.scratch / f"box-{self.lab}-{gid}"
-        if not root.exists():
-            root.mkdir(parents=True)
-            import fusionlab  # the library the judge computes with is the one the box gets (references stubbed)
-            self.unstubbed[gid] = boxlib.strip_packages(root, Path(fusionlab.__file__).resolve().parents[1],
-                                                        self.forbidden[gid])
-            boxlib.seal(root)                     # the box mounts it read-only: compiled once here, not per box
-        return root
-
-    # -- the trusted namespace -------------------------------------------------------------------------------
-    def base(self):
-        """The namespace of the lab's setup cell, run here (the judge's own imports), with the judge's guard."""
-        if self._base is None:
-            ns = {"__name__": "__judge__"}
-            exec(compile(self.setup_source, f"<{self.lab} setup>", "exec"), ns)  # noqa: S102 -- the course's cell
-            ns["guard"] = _judge_guard()
-            self._base = ns
-        return dict(self._base)
-
-    def _forbidden(self, gid):
-        """``module:qualname`` of what the exercise of the test ``gid`` forbids, from the table of exercises."""
-        entry = {e.grade_id: e for e in exercises.of_lab(self.lab)}.get(gid)
-        if entry is None:
-            raise LookupError(f"{self.lab}: test cell {gid} has no exercise in fusionlab.checks.exercises")
-        out = set()
-        for dotted in entry.forbid:
-            name = boxlib.dotted(exercises.resolve(dotted))
-            if name:
-                out.add(name)
-        return out
-
-    # -- the student's program ----------------------------------------------------------------------------------
-    def layout(self, submitted):
-        """The submission's cells in its own order, read against the release: ``(kind, grade_id, cell)`` with kind
-        ``"known"`` (a cell of the lab, found by grade id: the first one when a grade id is duplicated, put back at
-        its place when deleted) or ``"added"`` (a cell the lab does not have), and notes on what was found."""
-        notes = []
-        known = {cells.grade_id(c): c for c in self.release.cells if cells.grade_id(c)}
-        order = [cells.grade_id(c) for c in self.release.cells if cells.grade_id(c)]
-        seq, seen = [], set()
-        for cell in submitted.cells if submitted is not None else []:
-            gid = cells.grade_id(cell)
-            if gid in known:
-                if gid in seen:
-                    notes.append(f"cell {gid} appears more than once in the notebook: the first one was graded")
-                    continue
-                seen.add(gid)
-                seq.append(("known", gid, cell))
-            else:
-                seq.append(("added", None, cell))
-        if submitted is None:
-            seq = [("known", cells.grade_id(c), c) if cells.grade_id(c) else ("added", None, c)
-                   for c in self.release.cells]
-            seen = set(order)
-        for i, gid in enumerate(order):
-            if gid in seen:
-                continue
-            if cells.is_answer(known[gid]):
-                notes.append(f"answer cell {gid} is missing from the notebook: graded as not attempted")
-            elif not cells.is_test(known[gid]):
-                notes.append(f"cell {gid} was deleted from the notebook: put back from the lab")
-            earlier = [k for k, (_, g, _) in enumerate(seq) if g in order[:i]]
-            seq.insert(earlier[-1] + 1 if earlier else 0, ("known", gid, known[gid]))
-            seen.add(gid)
-        return seq, notes
-
-    def program(self, submitted, upto=None, need=()):
-        """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: the code
-        cells above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
-
-        Provided (locked) cells come from the release, whatever the submission holds; answer cells and the cells the
-        student added or may edit come from the submission. Test cells and visible checks are not run in the box:
-        the judge runs the tests. Of the provided cells (locked, or unmarked and as the release has them) only those
-        that make or change a name the other cells, or the names ``need``, read are run: the setup cell, every answer
-        and every cell the student added or edited always are (:func:`prune`)."""
-        seq, notes = self.layout(submitted)
-        released = {c.source.strip() for c in self.release.cells if c.cell_type == "code" and not cells.grade_id(c)}
-        program = []
-        for kind, gid, cell in seq:
-            if upto is not None and gid == upto:
-                break
-            if cell.get("cell_type") != "code":
-                continue
-            source = cell.get("source", "")
-            if kind == "added":
-                program.append((None, cells.python_of(source), source.strip() not in released))
-                continue
-            mine = self._release_cell(gid)
-            if cells.is_test(mine) or cells.is_check(mine):
-                continue
-            answer = cells.is_answer(mine) or not cells.nbg(mine).get("locked")
-            program.append((gid, cells.python_of(source if answer else mine.source), answer or gid == labformat.SETUP))
-        return [(gid, src) for gid, src, _ in cells.prune(program, need)], notes
-
-    def _release_cell(self, gid):
-        for c in self.release.cells:
-            if cells.grade_id(c) == gid:
-                return c
-        raise KeyError(gid)
-
-    def box_command(self, gid, work, uid):
-        root = self.box_root(gid)
-        return sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=self.lab,
-                                     lib=root / "lib", shadow=root / "shadow", work=work,
-                                     limits=self.limits, uid=uid, hide=boxlib.shadowed(root / "shadow"))
-
-    # -- values of the provided cells, from the model solution ------------------------------------------------------
-    def reference_values(self, gid, boxes):
-        """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
-        as the student's (started by ``boxes``, with none of the student's files; made once per lab and test). Values
-        that only the test's visible check reads come with them where the model run makes them (for :func:`_slip`)."""
-        if gid not in self._reference:
-            base = set(self.base())
-            wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - base)
-            try:
-                extra = sorted(set(cells.free_names(self.checks.get(gid, ""))) & self.provided_names - base
-                               - set(wanted))
-            except SyntaxError:
-                extra = []
-            values = {}
-            if wanted or extra:
-                session = Session(self, self.solution, boxes, gid, need=wanted + extra, files=False)
-                try:
-                    session.start()
-                    values = session.describe(wanted) if wanted else {}
-                    if extra:
-                        try:                          # the check's slip is unknown without them, the score is not
-                            values.update(session.describe(extra))
-                        except Exception:  # noqa: BLE001
-                            pass
-                finally:
-                    session.close()
-                missing = [n for n in wanted if values[n]["kind"] != "value"]
-                if missing:
-                    raise RuntimeError(f"the model solution of {self.lab} does not make {missing} before {gid}: "
-                                       f"{session.cell_errors}")
-            self._reference[gid] = {n: d["value"] for n, d in values.items() if d["kind"] == "value"}
-        return self._reference[gid]
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -149,7 +149,7 @@ def autograded_notebook(lab, submitted, verdict):
     the lab with the release's source and metadata (the student's source in answer cells and in cells students may
     edit), deleted cells put back, cells the lab does not have kept without nbgrader metadata, and the judge's verdict
     as the only output of each test cell. Test cells show their visible part only: the hidden tests are never in
-    it. ``lab`` is the judge's (:class:`grading.judge.Lab`), ``verdict`` its verdict of the submission."""
+    it. ``lab`` is the judge's (:class:`grading.lab.Lab`), ``verdict`` its verdict of the submission."""
     seq, _ = lab.layout(submitted)
     results = {t.grade_id: t for t in verdict.tests}
     budget = Budget()

@@ -20,6 +20,7 @@ import pytest
 from conftest import ROOT
 from grading import cells, judge, sandbox
 from grading.bench_classgrade import grade_id
+from grading.lab import Lab
 
 pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class (test_judge)
               pytest.mark.skipif(shutil.which("bwrap") is None,
@@ -222,7 +223,7 @@ def graded(tmp_path_factory):
             release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
             solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
             tests = {grade_id(c): c.source for c in solution.cells if cells.is_test(c)}
-            the_lab = judge.Lab(ROOT, lab, release, tests, solution, scratch)
+            the_lab = Lab(ROOT, lab, release, tests, solution, scratch)
             scores, messages = {}, {}
             with sandbox.claimed_slots(1) as [slot]:    # a user id no other grading run holds now
                 verdicts = {student: judge.judge(the_lab, nb, student, slot)

@@ -1,6 +1,6 @@
-"""The integrity scanner (grading/integrity.py): every construct no honest answer needs is flagged with its cell and
-line; every model answer and every untouched release of every lab is clean; the report lists flagged students for
-REVIEW."""
+"""The integrity scanner (grading/codescan.py, read by grading/integrity.py): every construct no honest answer needs is
+flagged with its cell and line; every model answer and every untouched release of every lab is clean; the report
+lists flagged students for REVIEW."""
 from __future__ import annotations
 
 import ast
@@ -13,7 +13,7 @@ import pytest
 
 from conftest import LABS, ROOT
 from test_grading_cheats import NO_REFERENCE  # the exercises no library function answers
-from grading import integrity, similarity
+from grading import codescan, integrity, similarity
 
 LAB = "02_kalman_falling_body"
 SOURCE = ROOT / "solutions" / LAB / f"{LAB}.ipynb"
@@ -164,14 +164,14 @@ def test_an_honestly_edited_provided_cell_is_judged_by_the_new_lines_only(tmp_pa
 
 def test_reference_names_come_from_the_table_of_exercises():
     from fusionlab.checks import exercises
-    src = integrity.Source(nbformat.read(SOURCE, as_version=4), LAB)
+    src = codescan.Source(nbformat.read(SOURCE, as_version=4), LAB)
     for e in exercises.of_lab(LAB):
         assert src.forbid[e.number] == {name.rsplit(".", 1)[-1] for name in e.forbid}
     assert "joseph_covariance" in src.forbid[1] and "predict" in src.forbid[3]
     # the names are what the answer of that exercise is checked against
-    assert [k for _, k, _ in integrity.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=1)] == \
+    assert [k for _, k, _ in codescan.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=1)] == \
         ["reference"]
-    assert integrity.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=3) == []
+    assert codescan.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=3) == []
 
 
 
@@ -181,8 +181,8 @@ def test_every_exercise_names_its_reference_functions_in_its_own_tests(lab):
     """The scanner reads the reference functions from the table of exercises, so every exercise a library function
     answers must name it there."""
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-    graded = {integrity._exercise(_gid(c)) for c in nb.cells if (_gid(c) or "").endswith("_tests")}
-    src = integrity.Source(nb, lab)
+    graded = {codescan.exercise_of(_gid(c)) for c in nb.cells if (_gid(c) or "").endswith("_tests")}
+    src = codescan.Source(nb, lab)
     unnamed = {n for n in graded if not src.forbid.get(n)}
     assert unnamed == {n for lab_, n in NO_REFERENCE if lab_ == lab}, unnamed
     if lab == "00_mems_sensors":           # the value exercises, reserved in the setup cell and released in the test
@@ -194,7 +194,7 @@ def test_model_answers_and_the_untouched_release_are_clean(lab):
     source = ROOT / "solutions" / lab / f"{lab}.ipynb"
     assert integrity.scan_notebook(source, source) == []
     assert integrity.scan_notebook(source, ROOT / "labs" / lab / f"{lab}.ipynb") == []
-    assert integrity.Source(nbformat.read(source, as_version=4), lab).all_forbidden, "no reference names for " + lab
+    assert codescan.Source(nbformat.read(source, as_version=4), lab).all_forbidden, "no reference names for " + lab
 
 
 def test_report_and_cli(tmp_path):

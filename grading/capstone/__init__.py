@@ -64,7 +64,7 @@ process:
   points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
   :func:`library_copies`): imports or uses of a reference filter, files read, the import system reached around
-  (:func:`grading.integrity.tampering`, with the indirect loaders that the table of exercises lists for the
+  (:func:`grading.codescan.tampering`, with the indirect loaders that the table of exercises lists for the
   capstone's filter -- ``importlib``, ``runpy``, ``pkgutil.resolve_name``, ``pydoc``, ``timeit``, ``ctypes`` ...,
   :func:`loaders` -- and ``get_ipython``), and a library filter pasted in (:mod:`grading.similarity`'s fingerprints
   against the library's filter modules; the rotation and metric helpers that the rules allow are not looked for).

@@ -43,7 +43,7 @@ CHEATS = {
                             "sys.modules, import hooks, the builtins module, exec/eval/compile of text, modules that "
                             "load by a name or run a text built at run time (runpy, pydoc, timeit, "
                             "pkgutil.resolve_name, ctypes ...), IPython's shell (found in the code by "
-                            "grading.integrity's scanner)",
+                            "grading.codescan)",
     "reads files": "opens, loads or lists files (found in the code by the names it calls: open, io.FileIO, os.open, "
                    "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
                    "a string is not seen -- the box holds no data file to find anyway)",
@@ -239,7 +239,7 @@ def scan(cells):
     Each cell is read as the box's IPython shell runs it (:func:`as_run`: magics and escapes as the calls they
     are). The setup cell (``imports``) may import the library's modules, as the lab's own cell does for tuning on
     the shipped trials; what any cell *uses* of them (``bench.x``, ``load_trial``) is still found. Code that
-    reaches around the import system is found by :func:`grading.integrity.tampering`, with the loaders of the
+    reaches around the import system is found by :func:`grading.codescan.tampering`, with the loaders of the
     table of exercises (:func:`loaders`: ``importlib``, ``runpy``, ``pkgutil.resolve_name``, ``pydoc``,
     ``timeit``, ``ctypes`` ...), and so is ``get_ipython`` (:func:`_ipython_uses`).
 
@@ -247,7 +247,7 @@ def scan(cells):
     of another) is not seen here, and no list of loaders is ever complete. The scan names what is written; the box
     is the defence: it holds none of the library's filters and data loaders (:func:`box_library`), no published
     filter and no data, so that what the scan misses finds nothing to load."""
-    from grading import integrity
+    from grading import codescan
     found = []
     lib_filters = set(FILTER_MODULES)
     file_names = FILE_CALLS | FILE_MODULE_CALLS
@@ -256,7 +256,7 @@ def scan(cells):
         setup = gid == "imports"
         text = as_run(source)
         found += [("tampers with imports", f"cell {i}, line {line}: {why}")
-                  for line, _, why in integrity.tampering(text, tricks)]
+                  for line, _, why in codescan.tampering(text, tricks)]
         try:
             tree = parse(text)
         except SyntaxError:
