@@ -21,7 +21,7 @@ from fusionlab import labformat
 _AST_LOCK = threading.Lock()
 
 
-def parse(source, mode="exec"):
+def parse(source: str, mode: str = "exec") -> ast.AST:
     """``ast.parse``, one thread at a time. A class is graded by threads, and CPython 3.11 keeps the depth counter of
     its converter between C and Python syntax trees in state the threads share: two threads parsing at once can fail
     with "SystemError: AST constructor recursion depth mismatch" (seen grading a class), which would leave a student
@@ -35,38 +35,38 @@ def _node(cell):
     return cell if hasattr(cell, "metadata") else nbformat.from_dict(cell)
 
 
-def nbg(cell):
+def nbg(cell: dict) -> dict:
     """The cell's nbgrader metadata (empty when it has none)."""
     return cell.get("metadata", {}).get("nbgrader", {}) or {}
 
 
-def grade_id(cell):
+def grade_id(cell: dict) -> str | None:
     """The cell's grade id, or None."""
     return nbg(cell).get("grade_id")
 
 
-def is_test(cell):
+def is_test(cell: dict) -> bool:
     """An autograder test cell: graded, not an answer (nbgrader's own reading of the metadata)."""
     cell = _node(cell)
     return cell.get("cell_type") == "code" and utils.is_grade(cell) and not utils.is_solution(cell)
 
 
-def is_answer(cell):
+def is_answer(cell: dict) -> bool:
     """A cell the student answers in (nbgrader's ``solution`` cells)."""
     return bool(utils.is_solution(_node(cell)))
 
 
-def is_check(cell):
+def is_check(cell: dict) -> bool:
     g = labformat.parse(grade_id(cell))
     return cell.get("cell_type") == "code" and g is not None and g.role == "check" and not is_answer(cell)
 
 
-def python_of(source):
+def python_of(source: str) -> str:
     """The cell as Python: IPython magics and shell escapes dropped (the judge and the box run no magics)."""
     return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines())
 
 
-def bound_names(source):
+def bound_names(source: str) -> set[str]:
     """Names a cell binds at top level (defs, classes, imports, assignments):
     :func:`fusionlab.labformat.top_level_names` of the cell as :func:`python_of` makes it; empty if it does not
     parse."""
@@ -76,7 +76,7 @@ def bound_names(source):
         return set()
 
 
-def free_names(source):
+def free_names(source: str) -> list[str]:
     """Names a test cell reads without binding them anywhere in the cell."""
     tree = parse(python_of(source))
     nodes = list(ast.walk(tree))
@@ -88,7 +88,7 @@ def free_names(source):
     return sorted({n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - bound)
 
 
-def without_guard_calls(source):
+def without_guard_calls(source: str) -> str:
     """The setup cell as the judge runs it: the grading guard's and the checks' calls dropped (they act on a
     student's kernel, and the judge has none), and numpy's print options left alone (they are the process's)."""
     tree = parse(python_of(source))
@@ -105,7 +105,7 @@ def without_guard_calls(source):
     return ast.unparse(tree)
 
 
-def forbidden_expressions(source):
+def forbidden_expressions(source: str) -> list[ast.expr]:
     """The expressions a test cell names as references or forbidden: ``guard.grade``'s second argument, every
     ``forbid=...``, the arguments of ``guard.forbid(...)`` and ``guard.release(...)``; names bound in the cell to a
     tuple stand for its items."""
@@ -136,7 +136,7 @@ def forbidden_expressions(source):
     return [n for n in found if isinstance(n, (ast.Attribute, ast.Name))]
 
 
-def global_reads(node):
+def global_reads(node: ast.AST) -> set[str]:
     """Names ``node`` loads from the enclosing module: inside a function or lambda, its parameters and the names it
     assigns are its own (a cell that rebinds at top level a name it reads still reads it)."""
     if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
@@ -155,7 +155,7 @@ def global_reads(node):
     return set().union(*[global_reads(child) for child in ast.iter_child_nodes(node)])
 
 
-def reads_and_writes(source):
+def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
     """(names a cell reads from the notebook, names it binds, names whose objects it changes in place), or None if it
     does not parse."""
     try:
@@ -173,7 +173,7 @@ def reads_and_writes(source):
     return global_reads(tree), bound_names(source), changed
 
 
-def prune(cells, need=()):
+def prune(cells: list[tuple[str | None, str, bool]], need=()) -> list[tuple[str | None, str, bool]]:
     """The cells of ``cells`` = [(grade_id, source, must_run)] that must run, in order: every ``must_run`` cell, and
     every other cell that binds or changes a name read by a kept cell (or named in ``need``), to a fixed point. If a
     kept cell does not parse, nothing is left out."""
@@ -195,7 +195,7 @@ def prune(cells, need=()):
 HIDDEN_BEGIN, HIDDEN_END = "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"
 
 
-def test_parts(source):
+def test_parts(source: str) -> list[tuple[bool, str]]:
     """A test cell as ``[(hidden, code)]`` in order: the visible code and the code between nbgrader's hidden-test
     markers. If a part does not compile on its own (a marker inside a block), the whole cell is one part, hidden if
     it has hidden tests."""

@@ -26,7 +26,7 @@ from grading.flags import (ANSWERING_NAMES, CALLS, DUNDERS, INSTRUCTOR_PATHS, IP
                            OPERATOR_DUNDERS, OS_CALLS, SAFE_MAGICS, SHELL_MAGICS, SYS_ATTRS, WHY, WRITE_METHODS)
 
 
-def exercise_of(grade_id):
+def exercise_of(grade_id: str | None) -> int | None:
     """The exercise number of ``exN_...``, or None."""
     g = labformat.parse(grade_id)
     return int(g.number) if g and g.kind == "ex" and g.number.isdigit() else None
@@ -417,7 +417,7 @@ class _Tampering(_Visitor):
         super().visit_Attribute(node)
 
 
-def tampering(source, loaders=None):
+def tampering(source: str, loaders=None) -> list[tuple[int, str, str]]:
     """Flags ``(line, kind, why)`` of code that reaches around Python's import system or builtins: importlib,
     ``__import__``, ``exec``/``eval``/``compile``, ``runpy``/``marshal``, the ``builtins`` module or
     ``__builtins__``, ``sys.path``, ``sys.modules`` and the import hooks -- the same detection as the report's
@@ -448,7 +448,8 @@ def tampering(source, loaders=None):
     return sorted(set(visitor.flags))
 
 
-def scan_source(source, src, exercise=None, added=False):
+def scan_source(source: str, src: Source, exercise: int | None = None,
+                added: bool = False) -> list[tuple[int, str, str]]:
     """Flags (line, kind, why) of one cell's code."""
     code, magics = _strip_magics(source)
     flags = []

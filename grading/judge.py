@@ -113,7 +113,8 @@ CHANGED = ("failed: the test's visible part passed, then failed when the test ra
            "(does your code give the same result every time it runs?)")
 
 
-def judge(lab: Lab, submitted, student: str, slot=0, boxes=None, part=BOTH, earlier: Verdict | None = None) -> Verdict:
+def judge(lab: Lab, submitted: dict | None, student: str, slot: int = 0, boxes=None, part: str = BOTH,
+          earlier: Verdict | None = None) -> Verdict:
     """Grade one submission (``submitted``: the notebook, or None when it could not be read).
 
     Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
@@ -268,7 +269,8 @@ def _imported_modules(source):
     return list(dict.fromkeys(names))
 
 
-def judge_apart(lab: Lab, submitted, student: str, slot=0, memory_bytes=JUDGE_MEMORY_BYTES, part=BOTH,
+def judge_apart(lab: Lab, submitted: dict | None, student: str, slot: int = 0, memory_bytes: int = JUDGE_MEMORY_BYTES,
+                part: str = BOTH,
                 earlier: Verdict | None = None) -> Verdict:
     """:func:`judge`, in a process of its own with ``memory_bytes`` of address space (:func:`grading.launcher.apart`;
     as root, not root: :func:`grading.launcher.split`). What comes back is JSON: the verdict's numbers and texts."""
@@ -296,7 +298,7 @@ NOT_ATTEMPTED = "not attempted yet (your function, or one it calls, is still the
 _UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
 
 
-def known_error(error, lab, gid):
+def known_error(error: str, lab: Lab, gid: str) -> str | None:
     """The judge's own words for an error of the student's function that is exactly one the course raises (the
     release's stub of an unfinished exercise, a reference stubbed out of the box, a package absent from it), or
     None: a hidden test may name those, since their text is the course's, not the student's."""
@@ -314,7 +316,7 @@ def known_error(error, lab, gid):
     return None
 
 
-def hidden_failure(gid, exc, lab):
+def hidden_failure(gid: str, exc: BaseException, lab: Lab) -> str:
     """What a hidden test may say of its failure ``exc``: the exercise and the kind of failure, never a value,
     an expected number or any text of the student's code (which saw the hidden inputs)."""
     where = f"{labformat.label(gid) if labformat.parse(gid) else gid}, hidden tests"

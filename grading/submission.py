@@ -35,7 +35,7 @@ TIMESTAMP = re.compile(r"\d{4}-\d{2}-\d{2}[ T]\d{2}:\d{2}:\d{2}(\.\d{1,6})?( ?([
 NOT_A_DATE = "timestamp.txt ignored: it is not a date nbgrader writes; the submission is graded without its time"
 
 
-def students_of(course, lab, only=None):
+def students_of(course: str | Path, lab: str, only: list[str] | None = None) -> list[str]:
     """The students with a folder ``submitted/<student>/<lab>`` (sorted); with ``only``, those of them, and
     SystemExit naming any of ``only`` who has none."""
     found = sorted(p.parent.name for p in (Path(course) / "submitted").glob(f"*/{lab}") if p.is_dir())
@@ -83,7 +83,7 @@ def _open(course, lab, student, name):
             os.close(d)
 
 
-def read_bytes(course, lab, student, name, limit):
+def read_bytes(course: str | Path, lab: str, student: str, name: str, limit: int) -> bytes:
     """The bytes of ``submitted/<student>/<lab>/<name>`` (:func:`_open`); ValueError if it holds more than
     ``limit``, FileNotFoundError if there is no such file."""
     fd = _open(course, lab, student, name)
@@ -96,7 +96,7 @@ def read_bytes(course, lab, student, name, limit):
     return data
 
 
-def read_submission(course, lab, student):
+def read_submission(course: str | Path, lab: str, student: str) -> nbformat.NotebookNode:
     """The submitted notebook ``submitted/<student>/<lab>/<lab>.ipynb``, or raise ValueError saying why it cannot
     be read: no such file, a link (of the notebook or of a folder above it, up to ``submitted/``), not a plain
     file, over :data:`NOTEBOOK_BYTES`, not a notebook, or text that is not Unicode (a lone surrogate, which no
@@ -128,7 +128,7 @@ def read_submission(course, lab, student):
     return nb
 
 
-def timestamp(course, lab, student):
+def timestamp(course: str | Path, lab: str, student: str) -> tuple[str | None, str | None]:
     """(the submission's time as nbgrader wrote it in ``timestamp.txt``, or None; a note for the instructor, or
     None). A file that is a link, not a plain file, too long or not a date in nbgrader's format is ignored, as a
     missing one is (the gradebook keeps the time it had), and the note says so without quoting it."""
@@ -155,7 +155,7 @@ def timestamp(course, lab, student):
     return None, NOT_A_DATE
 
 
-def left_out(course, lab, student):
+def left_out(course: str | Path, lab: str, student: str) -> tuple[list[tuple[str, int]], str | None]:
     """The files beside the notebook that neither the boxes nor ``autograded/`` get (over the caps of
     :func:`grading.sandbox.plain_files`), ``[(path, bytes)]``, and the note that names them (None when none is)."""
     from grading import sandbox
