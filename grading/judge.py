@@ -215,17 +215,24 @@ def _visible_again(lab, session, source, ns, reference, result):
     except BoxDied:
         result.message = CHANGED
         return None
-    session.budget["deadline"] = time.monotonic() + lab.cell_seconds
-    parts = cells.test_parts(source)
-    first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
     try:
-        _names(session, source, ns, reference, session.budget)
-        for _, code in parts[:first_hidden]:
-            exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+        rest = _run_visible(lab, session, source, ns, reference, result.grade_id)
     except Exception:  # noqa: BLE001 -- told by a fixed message, whatever it was
         result.message = CHANGED
         return None
     session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
+    return rest
+
+
+def _run_visible(lab, session, source, ns, reference, gid):
+    """Run the visible part of test cell ``source`` in ``ns`` (the test's time starts: both parts together); the
+    parts left, from the first hidden one. Raises what the test raised."""
+    session.budget["deadline"] = time.monotonic() + lab.cell_seconds
+    parts = cells.test_parts(source)
+    first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
+    _names(session, source, ns, reference, session.budget)
+    for _, code in parts[:first_hidden]:
+        exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
     return parts[first_hidden:]
 
 
@@ -353,18 +360,13 @@ def _visible_part(lab, session, source, ns, reference, result):
     except BoxDied:
         result.message = "not run: the notebook above this test could not be run (see the notes)"
         return None
-    session.budget["deadline"] = time.monotonic() + lab.cell_seconds       # the test's time, both parts together
-    parts = cells.test_parts(source)
-    first_hidden = next((i for i, (hidden, _) in enumerate(parts) if hidden), len(parts))
     try:
-        _names(session, source, ns, reference, session.budget)
-        for _, code in parts[:first_hidden]:
-            exec(compile(code, f"<{gid}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
+        rest = _run_visible(lab, session, source, ns, reference, gid)
     except Exception as exc:  # noqa: BLE001 -- any failure of the test is 0 points, with its message
         _failed(lab, session, result, exc, hidden=False)
         _slip(lab, session, reference, result, exc)
         return None
-    if first_hidden == len(parts):
+    if not rest:
         result.score, result.message, result.slip = result.points, "passed", slips.PASSED
         return None
     session.budget["left"] = max(0.0, session.budget["deadline"] - time.monotonic())
@@ -377,7 +379,7 @@ def _visible_part(lab, session, source, ns, reference, result):
         except BoxDied:
             result.message = "not run: the notebook above this test could not be run (see the notes)"
             return None
-    return parts[first_hidden:]
+    return rest
 
 
 def _names(session, source, ns, reference, budget):

@@ -262,6 +262,17 @@ class _NotRun(Exception):
     """A call of the causality check that gave no quaternions (an error, over its budget, the box ended)."""
 
 
+def _fresh_run(runner, trial, seconds):
+    """``run(gyr, acc, mag) -> q`` of ``trial`` with other samples, each call in a fresh box; :class:`_NotRun` when a
+    call gives no quaternions."""
+    def run(gyr, acc, mag):
+        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
+        if q2 is None:
+            raise _NotRun(f"{why} ({status})")
+        return q2
+    return run
+
+
 def check_causality(runner, trial, q, seconds, rng):
     """(True/False/None, message): is ``estimate``'s output up to k unchanged when every sample after k changes, for
     three secret k (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``), and is its output on the samples up to
@@ -270,12 +281,7 @@ def check_causality(runner, trial, q, seconds, rng):
     6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
     n = len(trial)
     mag = None if runner.sensors == "6D" else trial.mag
-
-    def run(gyr, acc, mag):
-        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
-        if q2 is None:
-            raise _NotRun(f"{why} ({status})")
-        return q2
+    run = _fresh_run(runner, trial, seconds)
 
     try:
         failed = first_change(run, trial.gyr, trial.acc, mag, q, causal_ks(n, rng), rng)
@@ -307,12 +313,7 @@ def later_samples_change(runner, trial, q, seconds, rng):
     n = len(trial)
     k = int(rng.integers(max(1, n // 100), n - 1))
     mag = None if runner.sensors == "6D" else trial.mag
-
-    def run(gyr, acc, mag):
-        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
-        if q2 is None:
-            raise _NotRun(f"{why} ({status})")
-        return q2
+    run = _fresh_run(runner, trial, seconds)
 
     try:
         return first_change(run, trial.gyr, trial.acc, mag, q, [k], rng)
