@@ -413,30 +413,37 @@ def write_reports(course: Path, lab: str, results: list[Result], release, model)
     written; the scores already in ``gradebook.db`` are not touched. Returns (the line that says where each report
     went, the names of those not written)."""
     said, unwritten = [], []
+    failed = {}
 
     def step(name, write):
         try:
             return write()
         except Exception as e:  # noqa: BLE001 -- one report that fails must not cost the others or the summary
-            unwritten.append(name)
-            said.append(f"{name} NOT written ({type(e).__name__}: {str(e)[:300]})")
+            failed[name] = f"{name} NOT written ({type(e).__name__}: {str(e)[:300]})"
             return None
 
-    exported = step("grades.csv", lambda: export(course, lab, results))
-    if exported is not None:
-        said.append("grades.csv written" if exported else "grades.csv NOT written (nbgrader export failed)")
-        if not exported:
-            unwritten.append("grades.csv")
-    report = step("the integrity report", lambda: integrity(course, lab, results))
-    if report is not None:
-        said.append(f"integrity report: {report.name} and {report.with_suffix('.csv').name}")
-    slips = step("the report of common slips", lambda: slipreport.write(course, lab, results))
-    if slips is not None:
-        said.append(f"common slips: {slips[0].name} and {slips[1].name}")
-    alike = step("the similarity report", lambda: similarity.report(course, lab, release, model))
-    if alike is not None:
-        said.append(f"similarity report: {alike[0].name} ({len(alike[1])} pair{'s' * (len(alike[1]) != 1)} worth "
-                     f"a look)")
+    # nbgrader's export runs as a process of its own: the other reports are written meanwhile
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        exporting = pool.submit(step, "grades.csv", lambda: export(course, lab, results))
+        report = step("the integrity report", lambda: integrity(course, lab, results))
+        slips = step("the report of common slips", lambda: slipreport.write(course, lab, results))
+        alike = step("the similarity report", lambda: similarity.report(course, lab, release, model))
+        exported = exporting.result()
+    for name in ("grades.csv", "the integrity report", "the report of common slips", "the similarity report"):
+        if name in failed:
+            unwritten.append(name)
+            said.append(failed[name])
+        elif name == "grades.csv" and exported is not None:
+            said.append("grades.csv written" if exported else "grades.csv NOT written (nbgrader export failed)")
+            if not exported:
+                unwritten.append("grades.csv")
+        elif name == "the integrity report" and report is not None:
+            said.append(f"integrity report: {report.name} and {report.with_suffix('.csv').name}")
+        elif name == "the report of common slips" and slips is not None:
+            said.append(f"common slips: {slips[0].name} and {slips[1].name}")
+        elif name == "the similarity report" and alike is not None:
+            said.append(f"similarity report: {alike[0].name} ({len(alike[1])} pair{'s' * (len(alike[1]) != 1)} "
+                        f"worth a look)")
     return "; ".join(said), unwritten
 
 
