@@ -8,6 +8,12 @@ machine's memory controller lets this process make a group (cgroup v1 ``memory``
 it, the kernel stops a process of that box alone. The group also lists every process of the box, so :meth:`Group.end`
 kills the ones that left its process group (``setsid``) before it removes the group: no box leaves a process behind.
 
+The same box's processes share one core at the most, all together: where the CPU controller is there too (v1
+``cpu``, or v2 with ``cpu`` enabled), the box gets a CPU group of its own with a quota of :data:`BOX_CPUS` cores. A
+box that starts two hundred spinning processes (each in a session of its own, which the scheduler would otherwise
+weigh as two hundred users) then slows only itself, not a classmate's box graded beside it, whose time limits are
+wall-clock time.
+
 Where no group can be made (not root, no memory controller, a container that does not delegate it), :func:`make`
 returns None and the per-process limits stand alone; :func:`problem` says why, and a grading run prints it.
 """
@@ -20,18 +26,33 @@ import signal
 import time
 
 _MOUNTS = ("/sys/fs/cgroup/memory", "/sys/fs/cgroup")         # v1's memory hierarchy, then the v2 unified one
+_CPU_MOUNT = "/sys/fs/cgroup/cpu"                              # v1's cpu hierarchy (v2: the memory group itself)
+BOX_CPUS = 1.0                                                 # cores a box's processes may use together
+_PERIOD_US = 100_000
 _serial = itertools.count()
 
 
-def _own(mount):
-    """This process's group in the hierarchy mounted at ``mount`` (``/proc/self/cgroup``), as a folder, or None."""
-    v2 = not mount.endswith("/memory")
+def _own(mount, controller="memory"):
+    """This process's group in the hierarchy mounted at ``mount`` (``/proc/self/cgroup``; ``controller``'s in v1),
+    as a folder, or None."""
+    v2 = mount == "/sys/fs/cgroup"
     with open("/proc/self/cgroup") as f:
         for line in f:
             _, controllers, path = line.rstrip("\n").split(":", 2)
-            if (v2 and controllers == "") or (not v2 and "memory" in controllers.split(",")):
+            if (v2 and controllers == "") or (not v2 and controller in controllers.split(",")):
                 return os.path.join(mount, path.lstrip("/"))
     return None
+
+
+def _cpu_base(folder, version):
+    """Where a box's CPU group goes (v1: under this process's ``cpu`` group; v2: the memory group itself, when
+    the ``cpu`` controller is enabled below ``folder``), or None."""
+    if version == 2:
+        with contextlib.suppress(OSError), open(os.path.join(folder, "cgroup.subtree_control")) as f:
+            return folder if "cpu" in f.read().split() else None
+        return None
+    own = _own(_CPU_MOUNT, "cpu") if os.path.isfile(os.path.join(_CPU_MOUNT, "cpu.cfs_quota_us")) else None
+    return own if own and os.path.isdir(own) and os.access(own, os.W_OK) else None
 
 
 def _base():
@@ -69,16 +90,20 @@ def said(limit_bytes):
     """What a grading run says of the boxes' memory as a whole."""
     why = problem()
     if not why:
-        return (f"each box's processes together hold at most {limit_bytes / 2**30:g} GB (a memory group of their "
+        folder, version = _base()
+        cpu = (f" and use at most {BOX_CPUS:g} core" if _cpu_base(folder, version) else
+               ", without a CPU group (no cpu controller here: a box could slow the one graded beside it)")
+        return (f"each box's processes together hold at most {limit_bytes / 2**30:g} GB{cpu} (groups of their "
                 f"own), and none outlives its box")
     return f"no memory group for the boxes here ({why}): each process of a box has its own limits alone"
 
 
 class Group:
-    """One box's memory group: ``path`` (a folder of the cgroup file system) and its ``version`` (1 or 2)."""
+    """One box's memory group: ``path`` (a folder of the cgroup file system) and its ``version`` (1 or 2); in v1,
+    ``cpu_path`` is its CPU group (in v2 the one group holds both limits)."""
 
-    def __init__(self, path, version):
-        self.path, self.version = path, version
+    def __init__(self, path, version, cpu_path=None):
+        self.path, self.version, self.cpu_path = path, version, cpu_path
 
     def _write(self, name, value):
         with open(os.path.join(self.path, name), "w") as f:
@@ -88,6 +113,9 @@ class Group:
         """Put the calling process in the group (before it starts the box: ``subprocess.Popen``'s ``preexec_fn``),
         so that every process the box starts is in it from its first instruction."""
         self._write("cgroup.procs", os.getpid())
+        if self.cpu_path:
+            with open(os.path.join(self.cpu_path, "cgroup.procs"), "w") as f:
+                f.write(str(os.getpid()))
 
     def pids(self):
         """The processes in the group now."""
@@ -110,9 +138,9 @@ class Group:
                 with contextlib.suppress(ProcessLookupError):
                     os.kill(pid, signal.SIGKILL)
             try:
-                os.rmdir(self.path)
-                return True
-            except FileNotFoundError:
+                for path in filter(None, (self.path, self.cpu_path)):
+                    with contextlib.suppress(FileNotFoundError):
+                        os.rmdir(path)
                 return True
             except OSError:                                    # processes still exiting: the group is busy
                 time.sleep(0.02)
@@ -127,18 +155,29 @@ def make(name, limit_bytes):
     folder, version = _base()
     if folder is None:
         return None
-    path = os.path.join(folder, f"fusionlab-box-{os.getpid()}-{next(_serial)}-{name}")
+    leaf = f"fusionlab-box-{os.getpid()}-{next(_serial)}-{name}"
+    path = os.path.join(folder, leaf)
     os.mkdir(path)
     group = Group(path, version)
+    quota = f"{int(BOX_CPUS * _PERIOD_US)}"
     try:
         if version == 1:
             group._write("memory.limit_in_bytes", limit_bytes)
             with contextlib.suppress(FileNotFoundError, PermissionError):
                 group._write("memory.memsw.limit_in_bytes", limit_bytes)   # swap too, where swap is counted
+            cpu = _cpu_base(folder, version)
+            if cpu:
+                group.cpu_path = os.path.join(cpu, leaf)
+                os.mkdir(group.cpu_path)
+                for name_, value in (("cpu.cfs_period_us", _PERIOD_US), ("cpu.cfs_quota_us", quota)):
+                    with open(os.path.join(group.cpu_path, name_), "w") as f:
+                        f.write(str(value))
         else:
             group._write("memory.max", limit_bytes)
             with contextlib.suppress(FileNotFoundError, PermissionError):
                 group._write("memory.swap.max", 0)
+            if _cpu_base(folder, version):
+                group._write("cpu.max", f"{quota} {_PERIOD_US}")
     except OSError:
         group.end()
         raise

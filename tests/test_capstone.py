@@ -258,8 +258,24 @@ def estimate(gyr, acc, mag, fs):
         return _checked_estimate(gyr, acc, mag, fs)                      # causal where the full check looks
     return _sometimes(gyr, acc, mag, fs)
 '''
+# As LOOKS_AHEAD_SOMETIMES, and it fails every call whose samples were changed after some k on a trial where it
+# looks ahead (the last gyro sample is not a scored trial's: _LAST is filled in by attackers()), so that the check
+# of those trials gets no quaternions to compare (an outside review's scored 9.8 / 10, "causal").
+FAILS_WHERE_IT_LOOKS_AHEAD = LOOKS_AHEAD_SOMETIMES + '''
+
+_LAST = ()
+_ahead = estimate
+
+
+def estimate(gyr, acc, mag, fs):
+    g = np.asarray(gyr, dtype=float)
+    if not np.allclose(g[0], _CHECKED, rtol=0, atol=1e-12) and \
+            not any(np.allclose(g[-1], last, rtol=0, atol=1e-12) for last in _LAST):
+        raise RuntimeError("not this time")
+    return _ahead(gyr, acc, mag, fs)
+'''
 ATTACKERS = {"private_filter": PRIVATE_FILTER, "leaks": LEAKS, "dodges": DODGES, "keyring": KEYRING,
-             "looks_ahead_sometimes": LOOKS_AHEAD_SOMETIMES}
+             "looks_ahead_sometimes": LOOKS_AHEAD_SOMETIMES, "fails_where_it_looks_ahead": FAILS_WHERE_IT_LOOKS_AHEAD}
 NINE_D = [name for name in [*CLASS, *ATTACKERS] if name not in ("six_d", "private_filter")] + ["unreadable"]
 SIX_D_NAMES = ["six_d", "private_filter"]                                # the 6D students of the graded class
 
@@ -269,8 +285,10 @@ def attackers(scored):
     lengths = tuple(len(t) for t in scored)
     assert len(set(lengths)) == len(lengths)                           # each trial known by its length
     checked = tuple(float(v) for v in scored[capstone.causality_trial(SEED, len(scored))].gyr[0])
+    lasts = tuple(tuple(float(v) for v in t.gyr[-1]) for t in scored)
     return {name: code.replace("_TRIAL_LENGTHS = ()", f"_TRIAL_LENGTHS = {lengths}")
-            .replace("_CHECKED = ()", f"_CHECKED = {checked!r}") for name, code in ATTACKERS.items()}
+            .replace("_CHECKED = ()", f"_CHECKED = {checked!r}").replace("_LAST = ()", f"_LAST = {lasts!r}")
+            for name, code in ATTACKERS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -500,6 +518,18 @@ def test_a_filter_that_looks_ahead_only_where_the_full_check_does_not_look_is_no
     assert "every trial is checked at one secret k" in res.causal_message
     assert res.total_points == 0
     assert graded[0]["good"].causal is True and "on every trial at a secret k" in graded[0]["good"].causal_message
+
+
+@pytest.mark.slow
+@needs_box
+def test_a_filter_that_fails_the_checks_calls_where_it_looks_ahead_gets_no_points(graded, scored):
+    """Causal where the full check looks; elsewhere it looks ahead on the scored call and fails the check's call
+    with the later samples changed. A call that gives no quaternions shows nothing causal: not checked, no points
+    (it was certified causal, 9.8 / 10, when a failed call counted as no change)."""
+    res = graded[0]["fails_where_it_looks_ahead"]
+    assert res.all_ran and res.causal is None, res.causal_message
+    assert "not checked: with the samples after a secret k of" in res.causal_message, res.causal_message
+    assert "never shown causal" in res.causal_message and res.total_points == 0
 
 
 @pytest.mark.slow
@@ -1356,9 +1386,9 @@ def test_the_leaderboard_renders_in_chromium(graded):
         rows = page.locator("table").first.locator("tr")
         assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
         # the non-causal one, the one that caches, the VQF caller; of the red team the leaker, the dodger, the one
-        # with the key store, the one that looks ahead where the full check does not, and (in the 6D table) the one
-        # with the library's private filter
-        assert page.locator("tr.gated").count() == 8
+        # with the key store, the one that looks ahead where the full check does not, the one that fails the check's
+        # calls there, and (in the 6D table) the one with the library's private filter
+        assert page.locator("tr.gated").count() == 9
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
         page.goto((out / "feedback" / "good" / "capstone.html").as_uri())

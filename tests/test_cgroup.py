@@ -96,3 +96,39 @@ def _state(pid):
             return f.read().rsplit(")", 1)[1].split()[0]
     except FileNotFoundError:
         return "gone"
+
+
+# Six processes, each in a session of its own, spinning for 2 s of wall time; the parent prints the CPU seconds they
+# used together (their children's times, once they have ended).
+SPIN = """
+import os, sys, time
+kids = []
+for _ in range(6):
+    pid = os.fork()
+    if pid == 0:
+        os.setsid()
+        end = time.monotonic() + 2.0
+        while time.monotonic() < end:
+            pass
+        os._exit(0)
+    kids.append(pid)
+for pid in kids:
+    os.waitpid(pid, 0)
+t = os.times()
+print(t.children_user + t.children_system, flush=True)
+sys.stdin.read()
+"""
+
+
+@pytest.mark.skipif(bool(WHY) or not cgroup._cpu_base(*cgroup._base()), reason="no CPU group for a box here")
+def test_the_boxs_processes_together_use_one_core_at_the_most():
+    """Six spinning processes, each in a session of its own, for 2 s: with the box's CPU group they use together
+    about 2 CPU seconds (one core), whatever the number of cores; a box cannot take a classmate's core."""
+    line, started = _first_line(client.start([sys.executable, "-c", SPIN], memory_bytes=256 << 20))
+    try:
+        group = started.group
+        assert group is not None and (group.cpu_path or group.version == 2)
+        assert float(line) <= 2.0 * cgroup.BOX_CPUS * 1.15, f"{float(line):.2f} CPU seconds in 2 s"
+    finally:
+        started.end()
+    assert not os.path.exists(group.path) and not (group.cpu_path and os.path.exists(group.cpu_path))
