@@ -24,6 +24,9 @@ from pathlib import Path
 import nbformat
 
 NOTEBOOK_BYTES = 100 << 20   # a notebook larger than this is not read
+#: JSON objects and lists a notebook may hold, counted as the ``{`` and ``[`` of its bytes before it is parsed (those
+#: in strings too: an upper bound). The course's solutions hold under 1,000; 30 MB of ``{},`` parsed held 5 GB.
+NOTEBOOK_CONTAINERS = 200_000
 TIMESTAMP_BYTES = 200        # nbgrader writes some 30 characters
 
 # nbgrader's own format (ExchangeSubmit's timestamp_format, "%Y-%m-%d %H:%M:%S.%f %Z"), and the ISO form its
@@ -97,10 +100,10 @@ def read_bytes(course: str | Path, lab: str, student: str, name: str, limit: int
 
 
 def read_submission(course: str | Path, lab: str, student: str) -> nbformat.NotebookNode:
-    """The submitted notebook ``submitted/<student>/<lab>/<lab>.ipynb``, or raise ValueError saying why it cannot
-    be read: no such file, a link (of the notebook or of a folder above it, up to ``submitted/``), not a plain
-    file, over :data:`NOTEBOOK_BYTES`, not a notebook, or text that is not Unicode (a lone surrogate, which no
-    editor writes and no report could hold)."""
+    """The submitted notebook ``submitted/<student>/<lab>/<lab>.ipynb``, or raise ValueError saying why it cannot be
+    read: no such file, a link (of the notebook or of a folder above it, up to ``submitted/``), not a plain file,
+    over :data:`NOTEBOOK_BYTES`, with over :data:`NOTEBOOK_CONTAINERS` objects and lists, not a notebook, or text
+    that is not Unicode (a lone surrogate, which no editor writes and no report could hold)."""
     name = f"{lab}.ipynb"
     try:
         data = read_bytes(course, lab, student, name, NOTEBOOK_BYTES)
@@ -110,6 +113,11 @@ def read_submission(course: str | Path, lab: str, student: str) -> nbformat.Note
         raise ValueError(str(e).replace(f"{name} is larger than", "the notebook is larger than")) from None
     except OSError as e:
         raise ValueError(f"the notebook cannot be opened ({e.strerror})") from None
+    containers = data.count(b"{") + data.count(b"[")
+    if containers > NOTEBOOK_CONTAINERS:
+        raise ValueError(f"the notebook holds about {containers:,} JSON objects and lists, over the "
+                         f"{NOTEBOOK_CONTAINERS:,} that are read (a lab's notebook holds a few thousand): it is not "
+                         f"read; ask for the notebook again with its outputs cleared")
     try:
         nb = nbformat.reads(data.decode("utf-8"), as_version=4)
     except Exception as e:  # noqa: BLE001 -- whatever nbformat says, the file is not a notebook

@@ -155,6 +155,17 @@ def test_assert_close_says_where_and_by_how_much():
         guard.assert_close({"a": 1}, [1.0], what="z")
 
 
+@pytest.mark.parametrize("empty", [[], np.zeros(0), np.zeros((0, 3)), ()])
+def test_an_empty_result_never_equals_a_number(empty):
+    """An empty answer passed every test whose reference is one number: the elementwise comparison of nothing is
+    vacuously true (an outside review's Lab 00 answers returned [] and scored 5 of 18, "passed")."""
+    with pytest.raises(guard.WrongShape, match=r"the tilt is empty \(shape \(0(, 3)?,?\)\); expected a number"):
+        guard.assert_close(empty, 0.7318, what="the tilt")
+    with pytest.raises(guard.WrongShape, match="expected a number"):
+        guard.assert_close(empty, 0.0)
+    guard.assert_close(np.zeros(0), np.zeros(0))                    # empty where the reference is empty: equal
+
+
 def test_comparisons_survive_a_patched_numpy(monkeypatch):
     for name in ("allclose", "isclose", "abs", "max", "all", "any", "isfinite", "isnan", "array_equal"):
         monkeypatch.setattr(np, name, lambda *a, **k: True)

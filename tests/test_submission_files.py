@@ -274,6 +274,20 @@ def test_a_notebook_with_a_lone_surrogate_is_refused_with_a_reason_and_the_repor
     assert unwritten == [] and "similarity report" in said
 
 
+def test_a_notebook_of_millions_of_empty_objects_is_refused_before_it_is_parsed(course):
+    """A notebook under the size cap whose bulk is a list of empty dicts in a cell's metadata ("{}," is 3 bytes and
+    some 170 once parsed: 30 MB held 5 GB in the grading process) is refused from its bytes, unparsed; the
+    course's own notebooks hold far fewer objects than the cap."""
+    nb = _full(course)
+    nb.cells[0].metadata["padding"] = [{}] * (submission.NOTEBOOK_CONTAINERS + 1)
+    _hand_in(course, "zed", nb)
+    with pytest.raises(ValueError, match=r"holds about [\d,]+ JSON objects and lists, over the 200,000 that are read"):
+        submission.read_submission(course, LAB, "zed")
+    for path in (ROOT / "solutions").glob("*/*.ipynb"):
+        data = path.read_bytes()
+        assert data.count(b"{") + data.count(b"[") < submission.NOTEBOOK_CONTAINERS / 50, path.name
+
+
 def test_a_report_that_fails_is_said_and_the_others_and_the_grades_are_kept(course, tmp_path, monkeypatch):
     lab = _lab(course, tmp_path)
     _hand_in(course, "alice", _full(course))

@@ -347,8 +347,8 @@ def _index(flat, shape):
 def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     """Fail unless ``actual`` equals ``expected`` within ``atol + rtol·|expected|``, element by element.
 
-    Shapes must agree (a scalar expected value is compared with every element). NaN must be where the reference
-    has NaN. Only functions captured at import are used: ``np.allclose = lambda *a, **k: True`` changes nothing.
+    Shapes must agree (a scalar expected value is compared with every element, and an empty result never equals
+    it). NaN must be where the reference has NaN. Only functions captured at import are used: ``np.allclose = lambda *a, **k: True`` changes nothing.
     The message says where and by how much: "P_post differs from the reference by up to 0.324 at [1, 0]".
 
     Parameters
@@ -387,8 +387,10 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     a = _numbers(actual, what, "your result")
     if a.shape != e.shape and e.shape != ():
         raise WrongShape(f"{what} should have shape {e.shape}; got {a.shape}")
-    if a.size == 0:
-        return
+    if a.size == 0:                   # empty: right only where the reference is empty too, never for a number
+        if e.size == 0:
+            return
+        raise WrongShape(f"{what} is empty (shape {a.shape}); expected a number")
     if e.shape != a.shape:                                                    # a scalar reference
         full = _empty(a.shape, dtype=e.dtype)
         full[...] = e
