@@ -305,21 +305,27 @@ NOT_ATTEMPTED = "not attempted yet (your function, or one it calls, is still the
 _UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
 
 
+FORBIDDEN_CALLED = ("your function called a library function that this exercise forbids (the answer to an exercise, "
+                    "not available while the lab is graded)")
+HIDDEN_IMPORTED = "your function imported a package that is not available while the lab is graded"
+
+
 def known_error(error: str, lab: Lab, gid: str) -> str | None:
     """The judge's own words for an error of the student's function that is exactly one the course raises (the
     release's stub of an unfinished exercise, a reference stubbed out of the box, a package absent from it), or
-    None: a hidden test may name those, since their text is the course's, not the student's."""
-    if _UNFINISHED.fullmatch(error):          # its number is not repeated: the student could choose it
+    None: a hidden test may say those, since their text is the course's, not the student's. Which exercise, which
+    function or which package is not said: the student's code, having seen the hidden inputs, could choose it."""
+    if _UNFINISHED.fullmatch(error):
         return NOT_ATTEMPTED
-    for name in sorted(lab.forbidden.get(gid, ())):
+    for name in lab.forbidden.get(gid, ()):
         module, qualname = name.split(":")
         stubbed = boxlib.STUB_MESSAGE.format(name=f"{module.rsplit('.', 1)[-1]}.{qualname}")
         if error == f"NotImplementedError: {stubbed}":
-            return f"your function called {module.rsplit('.', 1)[-1]}.{qualname}, which {stubbed.split(' ', 1)[1]}"
+            return FORBIDDEN_CALLED
     for package in boxlib.HIDDEN_PACKAGES:
         if error in (f"ImportError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
                      f"ModuleNotFoundError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}"):
-            return f"your function imported {package}, which is not available while the lab is graded"
+            return HIDDEN_IMPORTED
     return None
 
 
