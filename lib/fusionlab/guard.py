@@ -348,8 +348,9 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     """Fail unless ``actual`` equals ``expected`` within ``atol + rtol·|expected|``, element by element.
 
     Shapes must agree (a scalar expected value is compared with every element, and an empty result never equals
-    it). NaN must be where the reference has NaN. Only functions captured at import are used: ``np.allclose = lambda *a, **k: True`` changes nothing.
-    The message says where and by how much: "P_post differs from the reference by up to 0.324 at [1, 0]".
+    it). NaN must be where the reference has NaN. Only functions captured at import are used:
+    ``np.allclose = lambda *a, **k: True`` changes nothing. The message says where and by how much: "P_post differs
+    from the reference by up to 0.324 at [1, 0]".
 
     Parameters
     ----------
