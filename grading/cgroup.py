@@ -105,17 +105,15 @@ class Group:
     def __init__(self, path, version, cpu_path=None):
         self.path, self.version, self.cpu_path = path, version, cpu_path
 
-    def _write(self, name, value):
-        with open(os.path.join(self.path, name), "w") as f:
+    def _write(self, name, value, folder=None):
+        with open(os.path.join(folder or self.path, name), "w") as f:
             f.write(str(value))
 
     def join(self):
         """Put the calling process in the group (before it starts the box: ``subprocess.Popen``'s ``preexec_fn``),
         so that every process the box starts is in it from its first instruction."""
-        self._write("cgroup.procs", os.getpid())
-        if self.cpu_path:
-            with open(os.path.join(self.cpu_path, "cgroup.procs"), "w") as f:
-                f.write(str(os.getpid()))
+        for folder in filter(None, (self.path, self.cpu_path)):
+            self._write("cgroup.procs", os.getpid(), folder)
 
     def pids(self):
         """The processes in the group now."""
@@ -159,24 +157,22 @@ def make(name, limit_bytes):
     path = os.path.join(folder, leaf)
     os.mkdir(path)
     group = Group(path, version)
-    quota = f"{int(BOX_CPUS * _PERIOD_US)}"
+    cpu, quota = _cpu_base(folder, version), int(BOX_CPUS * _PERIOD_US)
     try:
         if version == 1:
             group._write("memory.limit_in_bytes", limit_bytes)
             with contextlib.suppress(FileNotFoundError, PermissionError):
                 group._write("memory.memsw.limit_in_bytes", limit_bytes)   # swap too, where swap is counted
-            cpu = _cpu_base(folder, version)
             if cpu:
                 group.cpu_path = os.path.join(cpu, leaf)
                 os.mkdir(group.cpu_path)
-                for name_, value in (("cpu.cfs_period_us", _PERIOD_US), ("cpu.cfs_quota_us", quota)):
-                    with open(os.path.join(group.cpu_path, name_), "w") as f:
-                        f.write(str(value))
+                group._write("cpu.cfs_period_us", _PERIOD_US, group.cpu_path)
+                group._write("cpu.cfs_quota_us", quota, group.cpu_path)
         else:
             group._write("memory.max", limit_bytes)
             with contextlib.suppress(FileNotFoundError, PermissionError):
                 group._write("memory.swap.max", 0)
-            if _cpu_base(folder, version):
+            if cpu:
                 group._write("cpu.max", f"{quota} {_PERIOD_US}")
     except OSError:
         group.end()

@@ -429,21 +429,22 @@ def write_reports(course: Path, lab: str, results: list[Result], release, model)
         slips = step("the report of common slips", lambda: slipreport.write(course, lab, results))
         alike = step("the similarity report", lambda: similarity.report(course, lab, release, model))
         exported = exporting.result()
-    for name in ("grades.csv", "the integrity report", "the report of common slips", "the similarity report"):
+
+    def tell(name, value, text):
         if name in failed:
             unwritten.append(name)
             said.append(failed[name])
-        elif name == "grades.csv" and exported is not None:
-            said.append("grades.csv written" if exported else "grades.csv NOT written (nbgrader export failed)")
-            if not exported:
-                unwritten.append("grades.csv")
-        elif name == "the integrity report" and report is not None:
-            said.append(f"integrity report: {report.name} and {report.with_suffix('.csv').name}")
-        elif name == "the report of common slips" and slips is not None:
-            said.append(f"common slips: {slips[0].name} and {slips[1].name}")
-        elif name == "the similarity report" and alike is not None:
-            said.append(f"similarity report: {alike[0].name} ({len(alike[1])} pair{'s' * (len(alike[1]) != 1)} "
-                        f"worth a look)")
+        elif value is not None:
+            said.append(text(value))
+
+    tell("grades.csv", exported,
+         lambda ok: "grades.csv written" if ok else "grades.csv NOT written (nbgrader export failed)")
+    if exported is False:
+        unwritten.append("grades.csv")
+    tell("the integrity report", report, lambda r: f"integrity report: {r.name} and {r.with_suffix('.csv').name}")
+    tell("the report of common slips", slips, lambda paths: f"common slips: {paths[0].name} and {paths[1].name}")
+    tell("the similarity report", alike, lambda a: f"similarity report: {a[0].name} ({len(a[1])} "
+                                                   f"pair{'s' * (len(a[1]) != 1)} worth a look)")
     return "; ".join(said), unwritten
 
 
