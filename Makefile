@@ -12,15 +12,20 @@ nbformat.write(nb, sys.argv[1])
 endef
 export STRIP_WIDGET_STATE
 
-.PHONY: formgrader lint test test-all test-budget solutions labs data release clean
+.PHONY: formgrader lint format test test-all test-budget solutions labs data release clean
 
 formgrader: env  ## instructors: JupyterLab on the course root with nbgrader's Formgrader and Create Assignment [ARGS=...]
 	@echo "==> JupyterLab for instructors (Nbgrader menu -> Formgrader) -- open the URL printed below; Ctrl-C to stop"
 	@$(BIN)/jupyter lab --no-browser --notebook-dir=. $(SETTINGS) $(ALLOW_ROOT) $(ARGS)
 
-lint: env  ## ruff on the Python sources (its rules in pyproject.toml; the notebooks are not linted)
+lint: env  ## ruff on the Python sources: its lint rules and its format (pyproject.toml; the notebooks are not linted)
 	@echo "==> ruff check: pyflakes, pycodestyle and bugbear on lib/, tests/, grading/, hub/"
 	@$(BIN)/ruff check .
+	@echo "==> ruff format --check: the sources as the formatter writes them (make format applies it)"
+	@$(BIN)/ruff format --check .
+
+format: env  ## authors: write the Python sources in the formatter's layout (what make lint checks)
+	@$(BIN)/ruff format .
 
 # One pytest run holds the unit tests, the library's doctests and strict nbval on every solution, on both cores
 # (-n 2; each test file stays in one process, so a module's fixture -- a class graded once -- serves all its tests;

@@ -5,6 +5,7 @@ labs/NN_name/NN_name.ipynb       -- the release notebooks students open (generat
 submitted/<student>/NN_name/     -- collected submissions (not committed)
 autograded/, feedback/           -- grading results (not committed)
 """
+
 import os
 
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
@@ -26,11 +27,15 @@ c.CourseDirectory.db_url = "sqlite:///" + os.path.join(c.CourseDirectory.root, "
 # filled in per cell (ClearSolutionsForRunAll, fusionlab.nbgrader_compat), which also tags the cells Run All must
 # not stop at.
 c.ClearSolutions.code_stub = c.ClearSolutionsForRunAll.code_stub = {
-    "python": "# YOUR CODE HERE -- replace this line with your answer (see the exercise above)\n{stub}"}
-c.GenerateAssignment.preprocessors = [ClearSolutionsForRunAll if p is ClearSolutions else p
-                                      for p in GenerateAssignment.class_traits()["preprocessors"].default()]
-c.ClearSolutions.text_stub = c.ClearSolutionsForRunAll.text_stub = \
+    "python": "# YOUR CODE HERE -- replace this line with your answer (see the exercise above)\n{stub}"
+}
+c.GenerateAssignment.preprocessors = [
+    ClearSolutionsForRunAll if p is ClearSolutions else p
+    for p in GenerateAssignment.class_traits()["preprocessors"].default()
+]
+c.ClearSolutions.text_stub = c.ClearSolutionsForRunAll.text_stub = (
     "YOUR ANSWER HERE (a few sentences; see the question above)"
+)
 
 # Outputs are cleared in the release; hidden tests are stripped and restored at grading time.
 c.ClearOutput.enabled = True
@@ -46,8 +51,13 @@ c.Autograde.sanitize_preprocessors = [RefuseAutograde]
 # Neither the feedback HTML nor anything else may reveal the hidden tests: the judge's autograded notebook holds
 # none, and the feedback pipeline strips them again and cuts a traceback to its last line.
 # OfflineFeedback: the page reads offline (math as MathML, links into the course as text, long lines wrapped).
-c.GenerateFeedback.preprocessors = [GetGrades, ClearHiddenTests, HideTestSource, CSSHTMLHeaderPreprocessor,
-                                    OfflineFeedback]
+c.GenerateFeedback.preprocessors = [
+    GetGrades,
+    ClearHiddenTests,
+    HideTestSource,
+    CSSHTMLHeaderPreprocessor,
+    OfflineFeedback,
+]
 
 # Validate's report as the student gets it ("6 of 9 tests pass"): the student view's settings, loaded here too so
 # that `nbgrader validate` in this folder reports the same.

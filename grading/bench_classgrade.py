@@ -6,6 +6,7 @@ a third with exercises 1 and 4 done, a third untouched), then grades the whole c
 gradebook, and prints the wall time and students per minute of every run and their median.  The course folder this
 runs from is only read.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -22,7 +23,7 @@ import nbformat
 
 from fusionlab import labformat
 from grading.cells import grade_id
-from grading.classgrade import _env
+from grading.gradebook import nbgrader_env
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -44,8 +45,12 @@ def build(course: Path, lab: str, students: int):
         shutil.copytree(ROOT / name, course / name, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "nbgrader_config.py", course)
     shutil.copytree(ROOT / "solutions" / lab, course / "solutions" / lab)
-    subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", lab, "--force", "--log-level=ERROR"],
-                   cwd=course, env=_env(), check=True)
+    subprocess.run(
+        [sys.executable, "-m", "nbgrader", "generate_assignment", lab, "--force", "--log-level=ERROR"],
+        cwd=course,
+        env=nbgrader_env(),
+        check=True,
+    )
     release = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     kinds = [fill_answers(release, solution, range(1, 100)), fill_answers(release, solution, {1, 4}), release]
@@ -60,16 +65,22 @@ def run(course: Path, lab: str, workers: int):
     shutil.copy(course / "gradebook.start.db", course / "gradebook.db")
     shutil.rmtree(course / "autograded", ignore_errors=True)
     t0 = time.monotonic()
-    res = subprocess.run([sys.executable, "-m", "grading.classgrade", lab, "--workers", str(workers),
-                          "--no-generate"], cwd=course, env=_env(), capture_output=True, text=True)
+    res = subprocess.run(
+        [sys.executable, "-m", "grading.classgrade", lab, "--workers", str(workers), "--no-generate"],
+        cwd=course,
+        env=nbgrader_env(),
+        capture_output=True,
+        text=True,
+    )
     seconds = time.monotonic() - t0
     if res.returncode != 0:
         raise SystemExit(f"classgrade failed:\n{res.stdout}\n{res.stderr}")
     peak = re.search(r"peak memory of the grading process: (\d+) MB", res.stdout)
     judge = re.search(r"judge process .*?: (\d+) MB, ([\d.]+) s of CPU", res.stdout)
     users = re.search(r"each student's judge ran as (.*)", res.stdout)
-    said = (f"; largest judge process {judge.group(1)} MB, {judge.group(2)} s of CPU" if judge else "") + \
-           (f"; judges ran as {users.group(1)}" if users else "")
+    said = (f"; largest judge process {judge.group(1)} MB, {judge.group(2)} s of CPU" if judge else "") + (
+        f"; judges ran as {users.group(1)}" if users else ""
+    )
     return seconds, (int(peak.group(1)) if peak else float("nan")), said
 
 
@@ -89,11 +100,15 @@ def main(argv=None):
             for w in args.workers:
                 seconds, peak, said = run(course, args.lab, w)
                 rates[w].append(60 * args.students / seconds)
-                print(f"  run {r + 1}, {w} worker(s): {seconds:.0f} s, {rates[w][-1]:.1f} students per minute, "
-                      f"grading process peak {peak} MB{said}", flush=True)
+                print(
+                    f"  run {r + 1}, {w} worker(s): {seconds:.0f} s, {rates[w][-1]:.1f} students per minute, "
+                    f"grading process peak {peak} MB{said}",
+                    flush=True,
+                )
         for w, values in rates.items():
-            print(f"{w} worker(s): median {statistics.median(values):.1f} students per minute "
-                  f"over {len(values)} run(s)")
+            print(
+                f"{w} worker(s): median {statistics.median(values):.1f} students per minute over {len(values)} run(s)"
+            )
 
 
 if __name__ == "__main__":

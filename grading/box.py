@@ -23,6 +23,7 @@ no reply longer than it reads before parsing.
 Standard output and error of the student's code go to a capped file in the sandbox's private ``/tmp``: nothing a
 cell prints can reach the judge.
 """
+
 from __future__ import annotations
 
 import base64
@@ -32,12 +33,12 @@ import os
 import re
 import sys
 
-NUMERIC_KINDS = "biufc"        # bool, int, unsigned, float, complex: the only array dtypes that cross the pipe
+NUMERIC_KINDS = "biufc"  # bool, int, unsigned, float, complex: the only array dtypes that cross the pipe
 MAX_DEPTH = 12
-MAX_ITEMS = 1_000_000          # list items per message
-MAX_TEXT = 1_000_000           # characters of one string
-DTYPE = re.compile(r"[<>|=]?[biufc][0-9]{1,2}")   # an array's dtype as encode writes it ('<f8', '|b1')
-OUTPUT_BYTES = 1_000_000       # what the student's code may print (kept in the sandbox, never read by the judge)
+MAX_ITEMS = 1_000_000  # list items per message
+MAX_TEXT = 1_000_000  # characters of one string
+DTYPE = re.compile(r"[<>|=]?[biufc][0-9]{1,2}")  # an array's dtype as encode writes it ('<f8', '|b1')
+OUTPUT_BYTES = 1_000_000  # what the student's code may print (kept in the sandbox, never read by the judge)
 
 
 class WireError(ValueError):
@@ -48,10 +49,10 @@ class WireError(ValueError):
 #: key on the wire -> ``module:class``. Each is rebuilt from a fresh instance of its class, field by field; nothing
 #: else of the library (and nothing named by the sender) is ever rebuilt.
 WIRE_TYPES = {
-    "freescale.Tuning": "fusionlab.freescale:Tuning",      # a field of Kalman9
-    "freescale.Kalman9": "fusionlab.freescale:Kalman9",    # Lab 05, exercise 6: my_step(kf, ...) changes kf
+    "freescale.Tuning": "fusionlab.freescale:Tuning",  # a field of Kalman9
+    "freescale.Kalman9": "fusionlab.freescale:Kalman9",  # Lab 05, exercise 6: my_step(kf, ...) changes kf
 }
-MAX_WIRE_TEXT = 200            # characters of a text field of a library object (a frame name)
+MAX_WIRE_TEXT = 200  # characters of a text field of a library object (a frame name)
 
 
 _CLASSES = {}
@@ -142,6 +143,7 @@ def update(obj, fields):
 # The codec (shared by both sides: the judge imports these functions)
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def _float(x):
     if math.isfinite(x):
         return x
@@ -163,7 +165,7 @@ def encode(value, depth=0, objects=True):
             raise WireError("a string longer than 1,000,000 characters")
         return value
     if isinstance(value, int) and not isinstance(value, bool):
-        return value if abs(value) < 2 ** 63 else _float(float(value))
+        return value if abs(value) < 2**63 else _float(float(value))
     if isinstance(value, float):
         return _float(value)
     if isinstance(value, complex):
@@ -176,8 +178,11 @@ def encode(value, depth=0, objects=True):
         arr = np.ascontiguousarray(value)
         if arr.dtype.byteorder == ">":
             arr = arr.astype(arr.dtype.newbyteorder("<"))
-        return {"__ndarray__": arr.dtype.str, "shape": list(arr.shape),
-                "data": base64.b64encode(arr.tobytes()).decode("ascii")}
+        return {
+            "__ndarray__": arr.dtype.str,
+            "shape": list(arr.shape),
+            "data": base64.b64encode(arr.tobytes()).decode("ascii"),
+        }
     if isinstance(value, (list, tuple)):
         if len(value) > MAX_ITEMS:
             raise WireError("a list of more than 1,000,000 items")
@@ -190,14 +195,15 @@ def encode(value, depth=0, objects=True):
     module = type(value).__module__ or ""
     if module.split(".")[0] == "sympy":
         import sympy
+
         if isinstance(value, (sympy.Basic, sympy.MatrixBase)):
             return {"__sympy__": sympy.srepr(value)}
     key = wire_key(value) if objects else None
     if key is not None:
-        return {"__object__": key,
-                "state": {k: encode(v, depth + 1, objects) for k, v in wire_fields(value).items()}}
-    raise WireError(f"a {type(value).__name__} (only numbers, arrays of numbers, strings, lists, tuples and dicts "
-                    f"are accepted)")
+        return {"__object__": key, "state": {k: encode(v, depth + 1, objects) for k, v in wire_fields(value).items()}}
+    raise WireError(
+        f"a {type(value).__name__} (only numbers, arrays of numbers, strings, lists, tuples and dicts are accepted)"
+    )
 
 
 def decode(data, *, objects=False, make_sympy=None, depth=0):
@@ -233,7 +239,7 @@ def decode(data, *, objects=False, make_sympy=None, depth=0):
         return complex(re_, im)
     if set(data) == {"__ndarray__", "shape", "data"}:
         text = data["__ndarray__"]
-        if not isinstance(text, str) or not DTYPE.fullmatch(text):   # checked before numpy parses it
+        if not isinstance(text, str) or not DTYPE.fullmatch(text):  # checked before numpy parses it
             raise WireError("an array of a dtype that is not a plain number")
         try:
             dtype = np.dtype(text)
@@ -242,8 +248,11 @@ def decode(data, *, objects=False, make_sympy=None, depth=0):
         shape = data["shape"]
         if dtype.kind not in NUMERIC_KINDS or dtype.hasobject or dtype.fields is not None:
             raise WireError(f"an array of {dtype}")
-        if not isinstance(shape, list) or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
-                                                  for n in shape) or len(shape) > 32:
+        if (
+            not isinstance(shape, list)
+            or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)
+            or len(shape) > 32
+        ):
             raise WireError("a bad array shape")
         if not isinstance(data["data"], str):
             raise WireError("array data that is not text")
@@ -276,6 +285,7 @@ def decode(data, *, objects=False, make_sympy=None, depth=0):
 # The runner (student side)
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def _short(exc):
     text = f"{type(exc).__name__}: {exc}"
     return text if len(text) < 600 else text[:600] + " ..."
@@ -283,24 +293,28 @@ def _short(exc):
 
 def _sympy_here(text):
     import sympy
+
     return eval(text, vars(sympy).copy())  # noqa: S307 -- in the student's own process, on the judge's own inputs
 
 
 def run(requests, replies):
     """Run the program read from ``requests``, then answer requests until the pipe closes."""
+
     def send(message):
         replies.write((json.dumps(message, allow_nan=False) + "\n").encode())
         replies.flush()
 
     program = json.loads(requests.readline())
     import matplotlib
+
     matplotlib.use("Agg")
     from IPython.core.interactiveshell import InteractiveShell
     import matplotlib.pyplot as plt
 
     from traitlets.config import Config
+
     config = Config()
-    config.HistoryManager.enabled = False           # history in memory: no database file, no file lock to take
+    config.HistoryManager.enabled = False  # history in memory: no database file, no file lock to take
     shell = InteractiveShell.instance(config=config)
     shell.display_pub.publish = lambda *a, **k: None  # rich outputs (figures, widgets) go nowhere
     for i, source in enumerate(program["cells"]):
@@ -341,8 +355,13 @@ def run(requests, replies):
                     send({"ok": False, "error": _short(exc)})
                     continue
                 try:
-                    send({"ok": True, "value": encode(value),
-                          "objects": {str(i): encode(a) for i, a in enumerate(args) if wire_key(a)}})
+                    send(
+                        {
+                            "ok": True,
+                            "value": encode(value),
+                            "objects": {str(i): encode(a) for i, a in enumerate(args) if wire_key(a)},
+                        }
+                    )
                 except WireError as exc:
                     send({"ok": False, "error": f"your function returned {exc}"})
             else:
@@ -356,8 +375,9 @@ def main():
     replies = os.fdopen(os.dup(1), "wb")
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)
-    out = os.open(os.path.join(os.environ.get("TMPDIR", "/tmp"), "box-output.txt"),
-                  os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    out = os.open(
+        os.path.join(os.environ.get("TMPDIR", "/tmp"), "box-output.txt"), os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600
+    )
     os.dup2(out, 1)
     os.dup2(out, 2)
     sys.stdout = open(1, "w", buffering=1, closefd=False)

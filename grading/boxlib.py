@@ -2,6 +2,7 @@
 other packages with their answering functions stubbed, and packages absent altogether (:func:`strip_packages`);
 :func:`shadowed` names the installed copies a box must not reach; :func:`seal` readies the copy for mounting.
 """
+
 from __future__ import annotations
 
 import ast
@@ -15,10 +16,12 @@ from pathlib import Path
 from fusionlab.checks import exercises
 from grading import cells, sandbox
 
-STUB_MESSAGE = ("{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
-                "lab is graded. Write it yourself.")
+STUB_MESSAGE = (
+    "{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
+    "lab is graded. Write it yourself."
+)
 HIDDEN_PACKAGES = exercises.hidden_packages()  # packages whose functions answer exercises: absent from every box
-WHY_HIDDEN = "its functions answer exercises of the labs"     # what importing a hidden package says
+WHY_HIDDEN = "its functions answer exercises of the labs"  # what importing a hidden package says
 
 
 def dotted(obj):
@@ -43,9 +46,13 @@ def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
                     doc = ast.get_docstring(node)
                     msg = message.format(name=f"{path.stem}.{name}")
                     node.body = ([ast.Expr(ast.Constant(doc))] if doc else []) + cells.parse(
-                        f"raise NotImplementedError({msg!r})").body
-                    node.decorator_list = [d for d in node.decorator_list
-                                           if isinstance(d, ast.Name) and d.id in ("staticmethod", "classmethod")]
+                        f"raise NotImplementedError({msg!r})"
+                    ).body
+                    node.decorator_list = [
+                        d
+                        for d in node.decorator_list
+                        if isinstance(d, ast.Name) and d.id in ("staticmethod", "classmethod")
+                    ]
                     done.add(name)
             elif isinstance(node, ast.ClassDef):
                 visit(node.body, prefix + node.name + ".")
@@ -55,8 +62,7 @@ def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
     return done
 
 
-def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES,
-                   why=WHY_HIDDEN, message=STUB_MESSAGE):
+def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES, why=WHY_HIDDEN, message=STUB_MESSAGE):
     """Build the box's library (``dest/lib``) and shadow packages (``dest/shadow``) without ``forbidden``.
 
     ``forbidden`` holds ``module:qualname`` names; the packages ``hidden`` are absent (importing one raises
@@ -69,7 +75,8 @@ def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES,
     for package in hidden:
         (dest / "shadow" / package).mkdir()
         (dest / "shadow" / package / "__init__.py").write_text(
-            f"raise ImportError({f'{package} is not available while the lab is graded: {why}'!r})\n")
+            f"raise ImportError({f'{package} is not available while the lab is graded: {why}'!r})\n"
+        )
     by_file, left = {}, []
     for name in sorted(forbidden):
         module, qualname = name.split(":")

@@ -8,6 +8,7 @@ own ``utils`` and :mod:`fusionlab.labformat`), and what its code reads and binds
 
 Parsing goes through :func:`parse`, which one thread at a time may run (see its docstring).
 """
+
 from __future__ import annotations
 
 import ast
@@ -83,8 +84,12 @@ def free_names(source: str) -> list[str]:
     bound = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del))}
     bound |= {n.arg for n in nodes if isinstance(n, ast.arg)}
     bound |= {n.name for n in nodes if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
-    bound |= {(a.asname or a.name).split(".")[0] for n in nodes if isinstance(n, (ast.Import, ast.ImportFrom))
-              for a in n.names}
+    bound |= {
+        (a.asname or a.name).split(".")[0]
+        for n in nodes
+        if isinstance(n, (ast.Import, ast.ImportFrom))
+        for a in n.names
+    }
     return sorted({n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - bound)
 
 
@@ -110,8 +115,11 @@ def forbidden_expressions(source: str) -> list[ast.expr]:
     ``forbid=...``, the arguments of ``guard.forbid(...)`` and ``guard.release(...)``; names bound in the cell to a
     tuple stand for its items."""
     tree = parse(python_of(source))
-    bound = {n.targets[0].id: n.value for n in ast.walk(tree)
-             if isinstance(n, ast.Assign) and len(n.targets) == 1 and isinstance(n.targets[0], ast.Name)}
+    bound = {
+        n.targets[0].id: n.value
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Assign) and len(n.targets) == 1 and isinstance(n.targets[0], ast.Name)
+    }
 
     def items(node, depth=0):
         if isinstance(node, (ast.Tuple, ast.List, ast.Set)):

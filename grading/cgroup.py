@@ -17,6 +17,7 @@ wall-clock time.
 Where no group can be made (not root, no memory controller, a container that does not delegate it), :func:`make`
 returns None and the per-process limits stand alone; :func:`problem` says why, and a grading run prints it.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -25,9 +26,9 @@ import os
 import signal
 import time
 
-_MOUNTS = ("/sys/fs/cgroup/memory", "/sys/fs/cgroup")         # v1's memory hierarchy, then the v2 unified one
-_CPU_MOUNT = "/sys/fs/cgroup/cpu"                              # v1's cpu hierarchy (v2: the memory group itself)
-BOX_CPUS = 1.0                                                 # cores a box's processes may use together
+_MOUNTS = ("/sys/fs/cgroup/memory", "/sys/fs/cgroup")  # v1's memory hierarchy, then the v2 unified one
+_CPU_MOUNT = "/sys/fs/cgroup/cpu"  # v1's cpu hierarchy (v2: the memory group itself)
+BOX_CPUS = 1.0  # cores a box's processes may use together
 _PERIOD_US = 100_000
 _serial = itertools.count()
 
@@ -91,10 +92,15 @@ def said(limit_bytes):
     why = problem()
     if not why:
         folder, version = _base()
-        cpu = (f" and use at most {BOX_CPUS:g} core" if _cpu_base(folder, version) else
-               ", without a CPU group (no cpu controller here: a box could slow the one graded beside it)")
-        return (f"each box's processes together hold at most {limit_bytes / 2**30:g} GB{cpu} (groups of their "
-                f"own), and none outlives its box")
+        cpu = (
+            f" and use at most {BOX_CPUS:g} core"
+            if _cpu_base(folder, version)
+            else ", without a CPU group (no cpu controller here: a box could slow the one graded beside it)"
+        )
+        return (
+            f"each box's processes together hold at most {limit_bytes / 2**30:g} GB{cpu} (groups of their "
+            f"own), and none outlives its box"
+        )
     return f"no memory group for the boxes here ({why}): each process of a box has its own limits alone"
 
 
@@ -140,7 +146,7 @@ class Group:
                     with contextlib.suppress(FileNotFoundError):
                         os.rmdir(path)
                 return True
-            except OSError:                                    # processes still exiting: the group is busy
+            except OSError:  # processes still exiting: the group is busy
                 time.sleep(0.02)
         return False
 
@@ -162,7 +168,7 @@ def make(name, limit_bytes):
         if version == 1:
             group._write("memory.limit_in_bytes", limit_bytes)
             with contextlib.suppress(FileNotFoundError, PermissionError):
-                group._write("memory.memsw.limit_in_bytes", limit_bytes)   # swap too, where swap is counted
+                group._write("memory.memsw.limit_in_bytes", limit_bytes)  # swap too, where swap is counted
             if cpu:
                 group.cpu_path = os.path.join(cpu, leaf)
                 os.mkdir(group.cpu_path)

@@ -31,30 +31,27 @@ report of common slips ``slips_<LAB>.html/.csv`` (for each exercise, what its vi
 to do (cells stopped, missing or duplicated, integrity flags). Each report is written on its own: one that fails is
 said, and the others and the summary still are.
 The exit status is 1 if a submission could not be graded (its student is named), a report could not be written, or
-the gradebook had to be put back (:func:`gradebook_kept`), 0 otherwise.
+the gradebook had to be put back (:func:`grading.gradebook.gradebook_kept`), 0 otherwise.
 """
+
 from __future__ import annotations
 
 import argparse
 import contextlib
-import csv
 import os
 import queue
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
-import types
-import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import nbformat
 
-from grading import cells, cgroup, judge, launcher, outputs, sandbox, similarity, slipreport, submission
+from grading import cells, cgroup, gradebook, judge, launcher, sandbox, similarity, slipreport, submission
 from grading.lab import CELL_SECONDS, Lab
 from grading.submission import read_submission, students_of  # noqa: F401 -- the one reader, named here too
 
@@ -72,128 +69,18 @@ class Result:
     error: str = ""
     flags: list = field(default_factory=list)
     verdict: judge.Verdict | None = None
-    notebook: object = field(default=None, repr=False)   # the submission as read in the first round, for the second
+    notebook: object = field(default=None, repr=False)  # the submission as read in the first round, for the second
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The trusted side: commands, files, gradebook
 # ----------------------------------------------------------------------------------------------------------------
 
-def _env(extra=None):
-    """This interpreter's bin first on PATH (nbgrader runs ``alembic`` by name)."""
-    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""),
-               MPLBACKEND="Agg")
-    env.update(extra or {})
-    return env
-
-
-def generate(course: Path, lab: str, release: Path):
-    """Record ``lab`` (its cells, points, tests) in the course's gradebook; its release notebook goes to
-    ``release``."""
-    res = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", lab, "--force",
-                          f"--CourseDirectory.release_directory={release}", "--log-level=ERROR"],
-                         cwd=course, env=_env(), capture_output=True, text=True)
-    if res.returncode != 0:
-        raise SystemExit(f"could not record {lab} in gradebook.db:\n{res.stdout}{res.stderr}")
-
-
-def _gradebook(course: Path):
-    from nbgrader.api import Gradebook
-    return Gradebook(f"sqlite:///{course / 'gradebook.db'}")
-
-
-BACKUPS = ".gradebook-backups"     # in the course root: the gradebook as it was before each run (the last KEEP_BACKUPS)
-KEEP_BACKUPS = 20
-
-
-def gradebook_counts(db: Path):
-    """``{"submissions": n, "auto": n, "manual": n}`` of the gradebook ``db``: submitted assignments, and grades with an
-    automatic and with a manual score. Raises sqlite3.DatabaseError if it cannot be read as a gradebook."""
-    import sqlite3
-
-    with contextlib.closing(sqlite3.connect(f"file:{db}?mode=ro", uri=True)) as con:
-        return {"submissions": con.execute("SELECT COUNT(*) FROM submitted_assignment").fetchone()[0],
-                "auto": con.execute("SELECT COUNT(*) FROM grade WHERE auto_score IS NOT NULL").fetchone()[0],
-                "manual": con.execute("SELECT COUNT(*) FROM grade WHERE manual_score IS NOT NULL").fetchone()[0]}
-
-
-def _sqlite_copy(src: Path, dest: Path):
-    """A consistent copy of the SQLite file ``src`` into ``dest`` (SQLite's own backup, not a file copy)."""
-    import sqlite3
-
-    with contextlib.closing(sqlite3.connect(f"file:{src}?mode=ro", uri=True)) as a, \
-            contextlib.closing(sqlite3.connect(dest)) as b:
-        a.backup(b)
-
-
-@contextlib.contextmanager
-def gradebook_kept(course: Path, lab: str, say=print):
-    """The run inside never loses a grade: ``gradebook.db`` is copied into :data:`BACKUPS` first, and if the run ends
-    with a gradebook that cannot be read, or with fewer submissions, automatic or manual scores than it began with,
-    the copy is put back (and said). Yields an object whose ``restored`` says so at the end; a run on a course without
-    a gradebook yet keeps nothing."""
-    db = course / "gradebook.db"
-    kept = types.SimpleNamespace(copy=None, restored=False)
-    if not db.is_file():
-        yield kept
-        return
-    before = gradebook_counts(db)
-    folder = course / BACKUPS
-    folder.mkdir(mode=0o700, exist_ok=True)
-    copy = folder / f"gradebook-{time.strftime('%Y%m%d-%H%M%S')}-{lab}.db"
-    _sqlite_copy(db, copy)
-    kept.copy = copy
-    for old in sorted(folder.glob("gradebook-*.db"))[:-KEEP_BACKUPS]:
-        old.unlink()
-    try:
-        yield kept
-    finally:
-        try:
-            after = gradebook_counts(db) if db.is_file() else None
-        except Exception:  # noqa: BLE001 -- whatever sqlite says, the gradebook is not readable
-            after = None
-        lost = after is None or any(after[k] < before[k] for k in before)
-        if lost:
-            db.unlink(missing_ok=True)
-            _sqlite_copy(copy, db)
-            kept.restored = True
-            said = "could not be read" if after is None else ", ".join(
-                f"{k} {before[k]} -> {after[k]}" for k in before if after[k] < before[k])
-            had = "" if after is None else "had "
-            say(f"\nTHE GRADEBOOK WAS PUT BACK as it was before this run: at the end it {had}{said}. Nothing of this "
-                f"run is in it; the copy is {copy.relative_to(course)}.")
-
-
-def recorded_tests(course: Path, lab: str):
-    """The test cells of ``lab`` as the gradebook holds them (hidden tests included): {grade_id: source}.
-
-    The gradebook must record the test cells and points of the table of exercises
-    (:mod:`fusionlab.checks.exercises`), the lab's specification: a gradebook recorded from other solutions is
-    refused, saying what differs and what to do."""
-    from fusionlab.checks import exercises
-
-    with warnings.catch_warnings(), _gradebook(course) as gb:
-        warnings.simplefilter("ignore")
-        nb = gb.find_notebook(lab, lab)
-        solutions = {c.name for c in nb.solution_cells}
-        sources = {c.name: c.source for c in nb.source_cells}
-        tests = {c.name: c for c in nb.grade_cells if c.cell_type == "code" and c.name not in solutions}
-        table = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}
-        recorded = {name: float(c.max_score) for name, c in tests.items()}
-        if recorded != table:
-            differ = sorted(set(recorded) ^ set(table)) + sorted(g for g in set(recorded) & set(table)
-                                                                 if recorded[g] != table[g])
-            said = ", ".join(f"{g} ({recorded.get(g)} points recorded, {table.get(g)} in the table)" for g in differ)
-            raise SystemExit(f"gradebook.db records the test cells of {lab} otherwise than the table of exercises "
-                             f"(fusionlab.checks.exercises): {said}. Record the lab again from solutions/ "
-                             f"(make gradebook LABS={lab}), or fix the table.")
-        return {name: sources[name] for name in tests}
-
 
 def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> Lab:
     release = nbformat.read(release_dir / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-    tests = recorded_tests(course, lab)
+    tests = gradebook.recorded_tests(course, lab)
     order = [cells.grade_id(c) for c in release.cells]
     tests = dict(sorted(tests.items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))
     limits = {}
@@ -201,12 +88,12 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
         limits["memory_bytes"] = args.memory_mb << 20
     if args.cpu_seconds:
         limits["cpu_s"] = args.cpu_seconds
-    return Lab(course, lab, release, tests, solution, scratch, limits=limits,
-                     cell_seconds=args.timeout or CELL_SECONDS)
+    return Lab(course, lab, release, tests, solution, scratch, limits=limits, cell_seconds=args.timeout or CELL_SECONDS)
 
 
-def grade_one(lab: Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH,
-              earlier: Result | None = None) -> Result:
+def grade_one(
+    lab: Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH, earlier: Result | None = None
+) -> Result:
     """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
     process of its own, :func:`grading.judge.judge_apart`): ``part`` as :func:`grading.judge.judge`; with
     ``part=HIDDEN``, ``earlier`` is this student's result of the :data:`~grading.judge.VISIBLE` round."""
@@ -224,8 +111,9 @@ def grade_one(lab: Lab, course: Path, student: str, slots: queue.Queue, part=jud
         result = earlier
     slot = slots.get()
     try:
-        verdict = judge.judge_apart(lab, result.notebook, student, slot, part=part,
-                                    earlier=earlier.verdict if earlier is not None else None)
+        verdict = judge.judge_apart(
+            lab, result.notebook, student, slot, part=part, earlier=earlier.verdict if earlier is not None else None
+        )
     finally:
         slots.put(slot)
     result.verdict = verdict
@@ -242,11 +130,22 @@ def grade_class(lab: Lab, course: Path, students: list, slots: queue.Queue, work
     what one student's boxes learn of the hidden inputs (a channel between boxes on the machine: the load of its
     cores, its page cache) cannot reach a classmate's feedback, which quotes only the visible round. Returns
     :class:`Result` in the order the students finished; the ones not graded carry the reason."""
+
     def run(part, todo):
         done = []
         with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            futures = {pool.submit(grade_one, lab, course, r.student if isinstance(r, Result) else r, slots, part,
-                                   r if isinstance(r, Result) else None): r for r in todo}
+            futures = {
+                pool.submit(
+                    grade_one,
+                    lab,
+                    course,
+                    r.student if isinstance(r, Result) else r,
+                    slots,
+                    part,
+                    r if isinstance(r, Result) else None,
+                ): r
+                for r in todo
+            }
             for fut in as_completed(futures):
                 r = futures[fut]
                 student = r.student if isinstance(r, Result) else r
@@ -256,45 +155,21 @@ def grade_class(lab: Lab, course: Path, students: list, slots: queue.Queue, work
                     done.append(Result(student, error=f"the judge failed: {type(e).__name__}: {e}"))
                 if part == judge.VISIBLE:
                     left = sum(t.pending for t in done[-1].verdict.tests) if done[-1].ok else 0
-                    say(f"  {student}: visible parts graded, {left} test(s) with hidden parts left "
-                        f"({done[-1].seconds:.0f} s)" if done[-1].ok else f"  {student}: NOT GRADED", flush=True)
+                    say(
+                        f"  {student}: visible parts graded, {left} test(s) with hidden parts left "
+                        f"({done[-1].seconds:.0f} s)"
+                        if done[-1].ok
+                        else f"  {student}: NOT GRADED",
+                        flush=True,
+                    )
         return done
+
     say(f"round 1 of 2: the visible part of every test, {len(students)} submission(s)", flush=True)
     first = run(judge.VISIBLE, students)
     second = [r for r in first if r.ok and any(t.pending for t in r.verdict.tests)]
-    say(f"round 2 of 2: the hidden parts, {len(second)} submission(s) (no visible part runs in this round)",
-        flush=True)
+    say(f"round 2 of 2: the hidden parts, {len(second)} submission(s) (no visible part runs in this round)", flush=True)
     again = {r.student: r for r in run(judge.HIDDEN, second)}
     return [again.get(r.student, r) for r in first]
-
-
-def record(course: Path, lab: Lab, student: str, result: Result):
-    """Write one student's autograded scores into the gradebook and the autograded notebook into the course."""
-    from sqlalchemy.exc import SAWarning
-
-    scores = {t.grade_id: t.score for t in result.verdict.tests}
-    with warnings.catch_warnings(), _gradebook(course) as gb:
-        warnings.simplefilter("ignore", SAWarning)
-        gb.update_or_create_student(student)
-        ts, note = submission.timestamp(course, lab.lab, student)
-        if note:
-            result.notes.append(note)
-        gb.update_or_create_submission(lab.lab, student, **({"timestamp": ts} if ts else {}))
-        sub = gb.find_submission_notebook(lab.lab, lab.lab, student)
-        for g in sub.grades:
-            if g.name in scores:
-                g.auto_score, g.needs_manual_grade = scores[g.name], False
-            else:
-                g.auto_score = None
-                g.needs_manual_grade = g.manual_score is None
-        gb.db.commit()
-    dest = course / "autograded" / student / lab.lab
-    if dest.exists():
-        shutil.rmtree(dest)
-    src = course / "submitted" / student / lab.lab
-    sandbox.copy_plain(src, dest, notebooks=False)
-    nb = outputs.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
-    nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 
 
 def integrity(course: Path, lab: str, results: list[Result]):
@@ -321,89 +196,15 @@ def integrity(course: Path, lab: str, results: list[Result]):
     return md
 
 
-def export(course: Path, lab: str, results: list[Result]):
-    """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``
-    (:func:`with_status`): this run's students as graded now, the others as the ``grades.csv`` before it said (a run
-    on some students keeps the others' statuses), else as the gradebook says."""
-    import sqlite3
-
-    path = course / "grades.csv"
-    earlier = earlier_statuses(path, lab)
-    res = subprocess.run([sys.executable, "-m", "nbgrader", "export", "--log-level=ERROR"], cwd=course, env=_env(),
-                         capture_output=True, text=True)
-    if res.returncode != 0 or not path.is_file():
-        return False
-    with open(path, newline="", errors="backslashreplace") as fh:
-        rows = list(csv.DictReader(fh))
-        fields = list(rows[0].keys()) if rows else ["assignment", "student_id", "score", "max_score"]
-    with contextlib.closing(sqlite3.connect(f"file:{course / 'gradebook.db'}?mode=ro", uri=True)) as con:
-        submitted = set(con.execute("SELECT a.name, s.student_id FROM submitted_assignment s "
-                                    "JOIN assignment a ON s.assignment_id = a.id"))
-    fields = [f for f in fields if f != "status"] + ["status"]
-    this_run = {r.student: ("graded" if r.ok else f"NOT GRADED: {r.error}") for r in results}
-    rows = with_status(rows, fields, lab, this_run, submitted, earlier, students_of(course, lab))
-    with open(path, "w", newline="", errors="backslashreplace") as fh:
-        out = csv.DictWriter(fh, fieldnames=fields)
-        out.writeheader()
-        out.writerows(rows)
-    return True
-
-
-def earlier_statuses(path: Path, lab: str):
-    """``{student: status}`` of ``lab`` in the ``grades.csv`` at ``path`` as an earlier run wrote it (empty when there
-    is none, or it has no status column: a plain ``nbgrader export``)."""
-    if not path.is_file():
-        return {}
-    try:
-        with open(path, newline="", errors="backslashreplace") as fh:
-            return {row["student_id"]: row["status"] for row in csv.DictReader(fh)
-                    if row.get("assignment") == lab and row.get("student_id") and row.get("status")}
-    except (OSError, csv.Error, KeyError):
-        return {}
-
-
-def with_status(rows, fields, lab, this_run, submitted, earlier=None, students=()):
-    """The rows of ``nbgrader export`` with a ``status`` for ``lab``: ``this_run``'s ({student: "graded" or
-    "NOT GRADED: <why>"}), else the ``earlier`` run's for a student not in this run, else ``graded`` where the
-    gradebook has the submission (``submitted``: (lab, student) pairs); a row is added for each student of
-    ``this_run``, ``earlier`` and ``students`` (those of ``submitted/``) the export does not list (``NOT GRADED: not
-    graded yet`` for one that no run graded). The other labs' rows say ``graded`` or ``no submission``, and are kept
-    only where someone submitted, so that a lab recorded but never handed out adds no row of zeros."""
-    earlier = earlier or {}
-    handed_in = {a for a, _ in submitted}
-
-    def status(student):
-        if student in this_run:
-            return this_run[student]
-        if student in earlier:
-            return earlier[student]
-        return "graded" if (lab, student) in submitted else \
-            f"NOT GRADED: not graded yet (make grade LAB={lab} STUDENT={student})"
-
-    out = []
-    for row in rows:
-        if row.get("assignment") == lab:
-            row["status"] = status(row["student_id"])
-        elif row.get("assignment") not in handed_in:
-            continue
-        else:
-            row["status"] = "graded" if (row["assignment"], row["student_id"]) in submitted else "no submission"
-        out.append(row)
-    listed = {row["student_id"] for row in out if row.get("assignment") == lab}
-    for student in sorted(set(this_run) | set(earlier) | set(students)):
-        if student not in listed:
-            out.append({**{f: "" for f in fields}, "assignment": lab, "student_id": student,
-                        "status": status(student)})
-    return out
-
-
 # ----------------------------------------------------------------------------------------------------------------
 # The command
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def peak_mb():
     """The most memory (resident, MB) this process has held so far: the judge's, boxes not counted."""
     import resource
+
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
@@ -424,7 +225,7 @@ def write_reports(course: Path, lab: str, results: list[Result], release, model)
 
     # nbgrader's export runs as a process of its own: the other reports are written meanwhile
     with ThreadPoolExecutor(max_workers=1) as pool:
-        exporting = pool.submit(step, "grades.csv", lambda: export(course, lab, results))
+        exporting = pool.submit(step, "grades.csv", lambda: gradebook.export(course, lab, results))
         report = step("the integrity report", lambda: integrity(course, lab, results))
         slips = step("the report of common slips", lambda: slipreport.write(course, lab, results))
         alike = step("the similarity report", lambda: similarity.report(course, lab, release, model))
@@ -437,37 +238,52 @@ def write_reports(course: Path, lab: str, results: list[Result], release, model)
         elif value is not None:
             said.append(text(value))
 
-    tell("grades.csv", exported,
-         lambda ok: "grades.csv written" if ok else "grades.csv NOT written (nbgrader export failed)")
+    tell(
+        "grades.csv",
+        exported,
+        lambda ok: "grades.csv written" if ok else "grades.csv NOT written (nbgrader export failed)",
+    )
     if exported is False:
         unwritten.append("grades.csv")
     tell("the integrity report", report, lambda r: f"integrity report: {r.name} and {r.with_suffix('.csv').name}")
     tell("the report of common slips", slips, lambda paths: f"common slips: {paths[0].name} and {paths[1].name}")
-    tell("the similarity report", alike, lambda a: f"similarity report: {a[0].name} ({len(a[1])} "
-                                                   f"pair{'s' * (len(a[1]) != 1)} worth a look)")
+    tell(
+        "the similarity report",
+        alike,
+        lambda a: f"similarity report: {a[0].name} ({len(a[1])} pair{'s' * (len(a[1]) != 1)} worth a look)",
+    )
     return "; ".join(said), unwritten
 
 
 def rounds_said(results: list[Result]) -> str:
     """Whether the two rounds of :func:`grade_class` were apart, from the times the judges' processes kept."""
-    ends = [r.verdict.rounds[judge.VISIBLE][1] for r in results
-            if r.verdict is not None and judge.VISIBLE in r.verdict.rounds]
-    starts = [r.verdict.rounds[judge.HIDDEN][0] for r in results
-              if r.verdict is not None and judge.HIDDEN in r.verdict.rounds]
+    ends = [
+        r.verdict.rounds[judge.VISIBLE][1]
+        for r in results
+        if r.verdict is not None and judge.VISIBLE in r.verdict.rounds
+    ]
+    starts = [
+        r.verdict.rounds[judge.HIDDEN][0] for r in results if r.verdict is not None and judge.HIDDEN in r.verdict.rounds
+    ]
     if not starts:
         return "no hidden part was run (no visible part passed that had one)"
     gap = min(starts) - max(ends, default=min(starts))
     if gap < 0:
         return f"WARNING: a hidden part began {-gap:.1f} s before the last visible part ended"
-    return (f"rounds apart: the last visible part ended before the first hidden part began ({len(ends)} visible "
-            f"rounds, {len(starts)} hidden)")
+    return (
+        f"rounds apart: the last visible part ended before the first hidden part began ({len(ends)} visible "
+        f"rounds, {len(starts)} hidden)"
+    )
 
 
 def summary(lab: str, results: list[Result], seconds: float, workers: int, report) -> str:
     graded = [r for r in results if r.ok]
     width = max([len(r.student) for r in results] + [7])
-    lines = [f"{lab}: {len(graded)} of {len(results)} submissions graded in {seconds:.0f} s with {workers} "
-             f"worker(s) ({60 * len(results) / max(seconds, 1e-9):.1f} students per minute)", ""]
+    lines = [
+        f"{lab}: {len(graded)} of {len(results)} submissions graded in {seconds:.0f} s with {workers} "
+        f"worker(s) ({60 * len(results) / max(seconds, 1e-9):.1f} students per minute)",
+        "",
+    ]
     lines.append(f"{'student':<{width}}  {'autograded':>12}  notes")
     for r in sorted(results, key=lambda r: r.student):
         score = f"{r.score:g} / {r.max_score:g}" if r.ok else "NOT GRADED"
@@ -492,7 +308,7 @@ def main(argv=None):
     ap.add_argument("--no-generate", action="store_true", help="do not re-record the lab in gradebook.db first")
     ap.add_argument("--keep-scratch", action="store_true", help="keep the scratch folder (prints where)")
     args = ap.parse_args(argv)
-    for stream in (sys.stdout, sys.stderr):       # a note or a report may quote any text a notebook holds
+    for stream in (sys.stdout, sys.stderr):  # a note or a report may quote any text a notebook holds
         with contextlib.suppress(AttributeError, ValueError):
             stream.reconfigure(errors="backslashreplace")
 
@@ -515,17 +331,18 @@ def main(argv=None):
     stack = contextlib.ExitStack()
     try:
         mine = stack.enter_context(sandbox.claimed_slots(max(1, args.workers)))
-        kept = stack.enter_context(gradebook_kept(course, lab, say=lambda text: print(text, file=sys.stderr)))
+        kept = stack.enter_context(gradebook.gradebook_kept(course, lab, say=lambda text: print(text, file=sys.stderr)))
         problem = sandbox.box_problem(str(course), lab, scratch, mine) or launcher.judge_problem(mine)
         if problem:
-            raise SystemExit(f"cannot grade {lab}: the sandbox does not start on this machine, so no student is "
-                             f"graded.\n{problem}")
+            raise SystemExit(
+                f"cannot grade {lab}: the sandbox does not start on this machine, so no student is graded.\n{problem}"
+            )
         files, size = sandbox.warm(sandbox.view(course))
         print(f"every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True)
         print(cgroup.said(sandbox.box_bytes()), flush=True)
         if not args.no_generate:
             print(f"recording {lab} in gradebook.db from solutions/{lab} ...", flush=True)
-            generate(course, lab, scratch / "release")
+            gradebook.generate(course, lab, scratch / "release")
             release_dir = scratch / "release"
         elif not (course / "gradebook.db").is_file():
             raise SystemExit("gradebook.db does not exist: run without --no-generate (or `make gradebook`)")
@@ -540,17 +357,22 @@ def main(argv=None):
         model = judge.judge(the_lab, the_lab.solution, "model solution", slot=mine[0])
         if model.score < model.max_score:
             wrong = "; ".join(f"{t.grade_id}: {t.message}" for t in model.tests if t.score < t.points)
-            raise SystemExit(f"the model solution of {lab} scores {model.score:g} / {model.max_score:g} under the "
-                             f"judge, so its tests are wrong, not the students: {wrong}")
-        print(f"model solution: {model.score:g} / {model.max_score:g} ({model.seconds:.0f} s); grading "
-              f"{len(students)} submission(s), {args.workers} at a time, each in the sandbox", flush=True)
+            raise SystemExit(
+                f"the model solution of {lab} scores {model.score:g} / {model.max_score:g} under the "
+                f"judge, so its tests are wrong, not the students: {wrong}"
+            )
+        print(
+            f"model solution: {model.score:g} / {model.max_score:g} ({model.seconds:.0f} s); grading "
+            f"{len(students)} submission(s), {args.workers} at a time, each in the sandbox",
+            flush=True,
+        )
         slots = queue.Queue()
         for slot in mine:
             slots.put(slot)
         for result in grade_class(the_lab, course, students, slots, args.workers):
             if result.ok:
                 try:
-                    record(course, the_lab, result.student, result)
+                    gradebook.record(course, the_lab, result.student, result)
                 except Exception as e:  # noqa: BLE001 -- report it with the student's name, grade the others
                     result.ok, result.error = False, f"could not record the scores: {type(e).__name__}: {e}"
             results.append(result)
@@ -563,18 +385,30 @@ def main(argv=None):
         print(rounds_said(results))
         judged = [r.verdict.judge_mb for r in results if r.verdict is not None]
         cpu = [r.verdict.judge_cpu_s for r in results if r.verdict is not None]
-        print(f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
-              f"(at most {judge.JUDGE_MEMORY_BYTES >> 30} GB of address space each): "
-              f"{max(judged, default=0):.0f} MB, {max(cpu, default=0):.1f} s of CPU (at most "
-              f"{launcher.APART_CPU_SECONDS} s each)")
+        print(
+            f"\npeak memory of the grading process: {peak_mb():.0f} MB; of one student's judge process "
+            f"(at most {judge.JUDGE_MEMORY_BYTES >> 30} GB of address space each): "
+            f"{max(judged, default=0):.0f} MB, {max(cpu, default=0):.1f} s of CPU (at most "
+            f"{launcher.APART_CPU_SECONDS} s each)"
+        )
         users = sorted({r.verdict.judge_uid for r in results if r.verdict is not None})
         if users:
-            print("each student's judge ran as " + ("root (NOT dropped)" if 0 in users else
-                  f"user {', '.join(map(str, users))}, not root (grading.launcher starts the boxes)"
-                  if os.geteuid() == 0 else "the grader's own user"))
+            print(
+                "each student's judge ran as "
+                + (
+                    "root (NOT dropped)"
+                    if 0 in users
+                    else f"user {', '.join(map(str, users))}, not root (grading.launcher starts the boxes)"
+                    if os.geteuid() == 0
+                    else "the grader's own user"
+                )
+            )
             caps = {r.verdict.judge_caps for r in results if r.verdict is not None}
-            print("  with no capability" if caps == {0} else
-                  f"  keeping capabilities {', '.join(f'{c:#x}' for c in sorted(caps))} (see above)")
+            print(
+                "  with no capability"
+                if caps == {0}
+                else f"  keeping capabilities {', '.join(f'{c:#x}' for c in sorted(caps))} (see above)"
+            )
         print(said)
     finally:
         stack.close()
@@ -585,12 +419,17 @@ def main(argv=None):
     if kept is not None and kept.restored:
         return 1
     if unwritten:
-        print(f"\nreports not written: {', '.join(unwritten)} -- see above; the grades in gradebook.db are kept",
-              file=sys.stderr)
+        print(
+            f"\nreports not written: {', '.join(unwritten)} -- see above; the grades in gradebook.db are kept",
+            file=sys.stderr,
+        )
     failed = [r.student for r in results if not r.ok]
     if failed:
-        print(f"\nnot graded: {', '.join(failed)} -- see the notes above; fix or reject those files and run again "
-              f"with --student", file=sys.stderr)
+        print(
+            f"\nnot graded: {', '.join(failed)} -- see the notes above; fix or reject those files and run again "
+            f"with --student",
+            file=sys.stderr,
+        )
     return 1 if failed or unwritten else 0
 
 

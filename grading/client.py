@@ -5,6 +5,7 @@
 program of cells in it, timing each cell; :func:`call` asks it to call one of the student's functions. What comes
 back is JSON, not yet values: the caller decodes it with :func:`grading.box.decode` and its own policy.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -20,9 +21,9 @@ import time
 from pathlib import Path
 
 from grading import box as wire
-from grading import cells, cgroup, sandbox
+from grading import cells, cgroup, handin
 
-SCRIPT = Path(wire.__file__).resolve()     # what a box runs: ``python box.py`` (its codec is this module's too)
+SCRIPT = Path(wire.__file__).resolve()  # what a box runs: ``python box.py`` (its codec is this module's too)
 
 # One reply of a box, counted while it is read; a reply over either limit fails its test, stops the box and is never
 # parsed. Measured on the model solutions of the 14 labs: at most 98 kB (Lab 13's filter on its synthetic record;
@@ -39,10 +40,12 @@ class BoxDied(RuntimeError):
 
 def ended(status):
     """What a box that ended with ``status`` says: the exit status, or why when the box said why
-    (:data:`grading.sandbox.SEED_FAILED`: the submission's files did not fit in its folder)."""
-    if status == sandbox.SEED_FAILED:
-        return ("the box could not copy the files handed in beside the notebook into its folder (they hold more than "
-                "it can take), so the notebook was not run")
+    (:data:`grading.handin.SEED_FAILED`: the submission's files did not fit in its folder)."""
+    if status == handin.SEED_FAILED:
+        return (
+            "the box could not copy the files handed in beside the notebook into its folder (they hold more than "
+            "it can take), so the notebook was not run"
+        )
     return f"the box ended (exit status {status})"
 
 
@@ -85,8 +88,15 @@ def start(command, env=None, work=None, memory_bytes=None):
     every process of the box is in a memory group of its own held to that much memory together."""
     group = cgroup.make("box", memory_bytes) if memory_bytes else None
     try:
-        proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                start_new_session=True, env=env, preexec_fn=group.join if group else None)
+        proc = subprocess.Popen(
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,
+            env=env,
+            preexec_fn=group.join if group else None,
+        )
     except BaseException:
         if group is not None:
             group.end()
@@ -105,8 +115,8 @@ class Box:
     def __init__(self, started):
         self.process, self.stdin, self.stdout = started
         self.returncode = None
-        self.chunks, self.size = [], 0          # what has come of the next reply (no newline yet)
-        self.lines = []                         # whole replies read and not yet returned
+        self.chunks, self.size = [], 0  # what has come of the next reply (no newline yet)
+        self.lines = []  # whole replies read and not yet returned
         self.largest = 0
         self.sel = selectors.DefaultSelector()
         self.sel.register(self.stdout, selectors.EVENT_READ)
@@ -214,12 +224,30 @@ def call(box, name, args, kwargs, deadline):
 # sympy expressions, rebuilt on the trusted side
 # ---------------------------------------------------------------------------------------------------------------
 
-MAX_SYMPY_TEXT = 100_000        # characters of one expression (Lab 07's honest answers: under 2,000)
-MAX_SYMPY_NODES = 20_000        # parts of its syntax tree
-MAX_SYMPY_INT = 10**6           # the largest integer in it
-MAX_SYMPY_DIGITS = 100_000      # digits its integer powers may make, all together
-SYMPY_CLASSES = ("Symbol", "Dummy", "Integer", "Rational", "Float", "Add", "Mul", "Pow", "Matrix",
-                 "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "sin", "cos", "tan", "exp", "log", "Abs")
+MAX_SYMPY_TEXT = 100_000  # characters of one expression (Lab 07's honest answers: under 2,000)
+MAX_SYMPY_NODES = 20_000  # parts of its syntax tree
+MAX_SYMPY_INT = 10**6  # the largest integer in it
+MAX_SYMPY_DIGITS = 100_000  # digits its integer powers may make, all together
+SYMPY_CLASSES = (
+    "Symbol",
+    "Dummy",
+    "Integer",
+    "Rational",
+    "Float",
+    "Add",
+    "Mul",
+    "Pow",
+    "Matrix",
+    "ImmutableDenseMatrix",
+    "MutableDenseMatrix",
+    "Tuple",
+    "sin",
+    "cos",
+    "tan",
+    "exp",
+    "log",
+    "Abs",
+)
 _MATRIX_OK = ("Matrix", "ImmutableDenseMatrix", "MutableDenseMatrix", "Tuple", "Add", "Mul")  # may hold a matrix
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,60}")
 _DECIMAL = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d{1,4})?")
@@ -235,7 +263,7 @@ def sympy_trusted(text):
     it)."""
     import sympy
 
-    spent = [0]                         # digits the powers built so far can make
+    spent = [0]  # digits the powers built so far can make
 
     def number(value):
         if isinstance(value, int) and abs(value) > MAX_SYMPY_INT:
@@ -248,8 +276,10 @@ def sympy_trusted(text):
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
             return number(node.value)
         if isinstance(node, ast.Constant) and isinstance(node.value, str):
-            ok = first and ((owner in ("Symbol", "Dummy") and _IDENTIFIER.fullmatch(node.value)) or
-                            (owner == "Float" and _DECIMAL.fullmatch(node.value)))
+            ok = first and (
+                (owner in ("Symbol", "Dummy") and _IDENTIFIER.fullmatch(node.value))
+                or (owner == "Float" and _DECIMAL.fullmatch(node.value))
+            )
             if not ok:
                 raise wire.WireError("a sympy expression with text where a number or a symbol belongs")
             return node.value
@@ -300,8 +330,12 @@ def _literal_size(node):
     symbolic exponent (which sympy does not expand)."""
     while isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
         node = node.operand
-    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("Integer", "Rational") \
-            and node.args:
+    if (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id in ("Integer", "Rational")
+        and node.args
+    ):
         node = node.args[0]
     if isinstance(node, ast.Constant) and isinstance(node.value, int) and not isinstance(node.value, bool):
         return abs(node.value)

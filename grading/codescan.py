@@ -13,6 +13,7 @@ their statements sorted (so reordering independent lines changes nothing), and t
 one-line formula written honestly is the library's formula (Lab 02's model ``my_joseph`` is ``kalman._joseph`` node
 for node), so a short copy cannot be told from an honest answer.
 """
+
 from __future__ import annotations
 
 import ast
@@ -22,8 +23,22 @@ import tokenize
 
 from fusionlab import labformat
 from grading import cells, similarity
-from grading.flags import (ANSWERING_NAMES, CALLS, DUNDERS, INSTRUCTOR_PATHS, IPYTHON_ATTRS, MODULE_KINDS, MODULE_NAMES,
-                           OPERATOR_DUNDERS, OS_CALLS, SAFE_MAGICS, SHELL_MAGICS, SYS_ATTRS, WHY, WRITE_METHODS)
+from grading.flags import (
+    ANSWERING_NAMES,
+    CALLS,
+    DUNDERS,
+    INSTRUCTOR_PATHS,
+    IPYTHON_ATTRS,
+    MODULE_KINDS,
+    MODULE_NAMES,
+    OPERATOR_DUNDERS,
+    OS_CALLS,
+    SAFE_MAGICS,
+    SHELL_MAGICS,
+    SYS_ATTRS,
+    WHY,
+    WRITE_METHODS,
+)
 
 
 def exercise_of(grade_id: str | None) -> int | None:
@@ -49,6 +64,7 @@ class Source:
                 self.provided_names |= set(re.findall(r"\w+", c.source))
         self.forbid = {}  # exercise -> last names of what it forbids, from the table of exercises
         from fusionlab.checks import exercises
+
         for e in exercises.of_lab(lab):
             self.forbid[e.number] = {name.rsplit(".", 1)[-1] for name in e.forbid}
         # names the locked cells bind at top level (imports, definitions, constants) and the tests read
@@ -132,7 +148,7 @@ class _Visitor(ast.NodeVisitor):
         self.src, self.forbidden, self.exercise, self.added = source, forbidden, exercise, added
         self.flags = []
         self.scopes = [set()]  # names local to the enclosing functions
-        self.called = set()    # ids of the Name nodes that are called (an alias is a name taken, not called)
+        self.called = set()  # ids of the Name nodes that are called (an alias is a name taken, not called)
 
     def flag(self, node, kind, why=None):
         self.flags.append((node.lineno, kind, why))
@@ -235,8 +251,11 @@ class _Visitor(ast.NodeVisitor):
             if top in MODULE_KINDS and not (top == "IPython" and mod.startswith("IPython.display")):
                 self.flag(node, MODULE_KINDS[top], f"imports `{mod}`: {WHY[MODULE_KINDS[top]]}")
             elif mod in ("os", "sys") and names & (set(OS_CALLS) | SYS_ATTRS):
-                self.flag(node, "sys-hook" if mod == "sys" else OS_CALLS[min(names & set(OS_CALLS))],
-                          f"imports {', '.join(sorted(names))} from `{mod}`")
+                self.flag(
+                    node,
+                    "sys-hook" if mod == "sys" else OS_CALLS[min(names & set(OS_CALLS))],
+                    f"imports {', '.join(sorted(names))} from `{mod}`",
+                )
         self._reference(node, names)
 
     def _rebinds(self, node):
@@ -244,8 +263,11 @@ class _Visitor(ast.NodeVisitor):
             name = a.asname or a.name.split(".")[0]
             if a.name == "*":
                 self.flag(node, "rebind", f"`from {node.module} import *` can rebind any name")
-            elif len(self.scopes) == 1 and name in self.src.protected and (
-                    self.src.import_of.get(name, name) != _import_target(node, a)):
+            elif (
+                len(self.scopes) == 1
+                and name in self.src.protected
+                and (self.src.import_of.get(name, name) != _import_target(node, a))
+            ):
                 self.flag(node, "rebind", f"binds `{name}` to `{_import_target(node, a)}`")
 
     def visit_Import(self, node):
@@ -322,8 +344,9 @@ class _Visitor(ast.NodeVisitor):
                 self.flag(node, "thread", f"calls `.{attr}()`")
             elif attr == "get_ipython":
                 self.flag(node, "ipython", "calls `get_ipython()`")
-            elif attr == "register" and (root == "atexit" or isinstance(func.value, ast.Attribute)
-                                         and func.value.attr == "events"):
+            elif attr == "register" and (
+                root == "atexit" or isinstance(func.value, ast.Attribute) and func.value.attr == "events"
+            ):
                 self.flag(node, "sys-hook" if root == "atexit" else "ipython", f"calls `.{attr}()` of {root}")
         self.generic_visit(node)
 
@@ -350,10 +373,19 @@ def _words(source):
 def _token_scan(source, forbidden):
     """Flags for a cell that does not parse: suspicious names, found token by token (or word by word)."""
     words = _words(source)
-    table = {**CALLS, **{d: "reflection" for d in DUNDERS}, "__builtins__": "builtins", "builtins": "builtins",
-             **{a: "ipython" for a in IPYTHON_ATTRS},
-             **{m: k for m, k in MODULE_KINDS.items() if k != "reflection"}, "excepthook": "sys-hook",
-             "settrace": "sys-hook", "system": "process", "popen": "process", "fork": "process"}
+    table = {
+        **CALLS,
+        **{d: "reflection" for d in DUNDERS},
+        "__builtins__": "builtins",
+        "builtins": "builtins",
+        **{a: "ipython" for a in IPYTHON_ATTRS},
+        **{m: k for m, k in MODULE_KINDS.items() if k != "reflection"},
+        "excepthook": "sys-hook",
+        "settrace": "sys-hook",
+        "system": "process",
+        "popen": "process",
+        "fork": "process",
+    }
     flags = []
     for line, word in words:
         if word in table:
@@ -387,8 +419,13 @@ class _Tampering(_Visitor):
         self.last = {name.rsplit(".", 1)[-1]: name for name in self.loaders}
 
     def flag(self, node, kind, why=None):
-        names = {node.attr} if isinstance(node, ast.Attribute) else \
-            {a.name for a in node.names} if isinstance(node, ast.ImportFrom) else set()
+        names = (
+            {node.attr}
+            if isinstance(node, ast.Attribute)
+            else {a.name for a in node.names}
+            if isinstance(node, ast.ImportFrom)
+            else set()
+        )
         if kind in TAMPER_KINDS or (kind == "sys-hook" and names & IMPORT_SYSTEM):
             super().flag(node, kind, why or WHY[kind])
 
@@ -398,13 +435,13 @@ class _Tampering(_Visitor):
 
     def _import(self, node, modules, names):
         if isinstance(node, ast.ImportFrom) and node.level:
-            return super()._import(node, modules, names)        # the notebook's own package: no loader there
+            return super()._import(node, modules, names)  # the notebook's own package: no loader there
         seen = [(mod, self._loader(mod)) for mod in modules]
         seen += [(f"{mod}.{n}", self._loader(f"{mod}.{n}")) for mod in modules for n in names]
         hits = {}
         for what, hit in seen:
             if hit:
-                hits.setdefault(hit, what)                      # each loader once: from importlib import x
+                hits.setdefault(hit, what)  # each loader once: from importlib import x
         for what in hits.values():
             self.flag(node, "loader", f"imports `{what}`: {WHY['loader']}")
         if not hits:
@@ -432,6 +469,7 @@ def tampering(source: str, loaders=None) -> list[tuple[int, str, str]]:
     would reach)."""
     if loaders is None:
         from fusionlab.checks import exercises
+
         loaders = exercises.loaders()
     code, _ = _strip_magics(source)
     try:
@@ -440,16 +478,20 @@ def tampering(source: str, loaders=None) -> list[tuple[int, str, str]]:
         words = _token_scan(code, set())
         found = [(line, kind, why) for line, kind, why in words if kind in TAMPER_KINDS]
         names = {part for name in loaders for part in (name.split(".")[0], name.rsplit(".", 1)[-1])}
-        found += [(line, "loader", f"`{word}` in a cell that does not parse: {WHY['loader']}")
-                  for line, word in _words(code) if word in names]
+        found += [
+            (line, "loader", f"`{word}` in a cell that does not parse: {WHY['loader']}")
+            for line, word in _words(code)
+            if word in names
+        ]
         return sorted(set(found))
     visitor = _Tampering(loaders)
     visitor.visit(tree)
     return sorted(set(visitor.flags))
 
 
-def scan_source(source: str, src: Source, exercise: int | None = None,
-                added: bool = False) -> list[tuple[int, str, str]]:
+def scan_source(
+    source: str, src: Source, exercise: int | None = None, added: bool = False
+) -> list[tuple[int, str, str]]:
     """Flags (line, kind, why) of one cell's code."""
     code, magics = _strip_magics(source)
     flags = []
@@ -458,8 +500,9 @@ def scan_source(source: str, src: Source, exercise: int | None = None,
             flags.append((line, "process", f"shell command or magic `{name}`"))
         elif name not in SAFE_MAGICS:
             flags.append((line, "ipython", f"IPython magic `%{name}`"))
-    forbidden = src.forbid.get(exercise, set()) if exercise else (
-        src.all_forbidden - src.provided_names if added else set())
+    forbidden = (
+        src.forbid.get(exercise, set()) if exercise else (src.all_forbidden - src.provided_names if added else set())
+    )
     try:
         tree = cells.parse(code)
     except SyntaxError as err:
@@ -470,7 +513,13 @@ def scan_source(source: str, src: Source, exercise: int | None = None,
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
             match = similarity.copied_from(node)
             if match:
-                flags.append((node.lineno, "copied", f"`{node.name}` has the shape of `{match[1]}` in the library: "
-                                                     f"{match[0]:.1%} alike (flagged from "
-                                                     f"{similarity.COPY_RATIO:.1%})"))
+                flags.append(
+                    (
+                        node.lineno,
+                        "copied",
+                        f"`{node.name}` has the shape of `{match[1]}` in the library: "
+                        f"{match[0]:.1%} alike (flagged from "
+                        f"{similarity.COPY_RATIO:.1%})",
+                    )
+                )
     return flags + visitor.flags

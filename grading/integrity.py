@@ -13,6 +13,7 @@ function with the shape of a library function flagged ``copied``) is :mod:`gradi
 
 A flag does not change a grade. It lists the submission for REVIEW: read the cell before trusting the score.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -34,8 +35,15 @@ def _flags_of(src, nb):
         gid = md.get("grade_id")
         label = gid or f"cell {index + 1}"
         if gid and gid not in src.cells:
-            rows.append(dict(cell=label, kind="foreign-cell", line=1, code=cell.source.split("\n", 1)[0][:120],
-                             why=WHY["foreign-cell"]))
+            rows.append(
+                dict(
+                    cell=label,
+                    kind="foreign-cell",
+                    line=1,
+                    code=cell.source.split("\n", 1)[0][:120],
+                    why=WHY["foreign-cell"],
+                )
+            )
         if cell.cell_type != "code" or not cell.source.strip():
             continue
         if gid in src.cells:
@@ -47,8 +55,14 @@ def _flags_of(src, nb):
             continue  # a provided cell, untouched
         else:
             found = scan_source(cell.source, src, exercise=exercise_of(gid), added=True)
-            found = [f for f in found if not (0 < f[0] <= len(cell.source.splitlines())
-                                              and cell.source.splitlines()[f[0] - 1].strip() in src.provided_lines)]
+            found = [
+                f
+                for f in found
+                if not (
+                    0 < f[0] <= len(cell.source.splitlines())
+                    and cell.source.splitlines()[f[0] - 1].strip() in src.provided_lines
+                )
+            ]
         lines = cell.source.splitlines()
         seen = set()
         for line, kind, why in found:
@@ -118,30 +132,41 @@ def write_report(rows, path_md, path_csv, scores=None):
     """
     rows = sorted(rows, key=lambda r: (_status(r[2]) != "REVIEW", _status(r[2]) != NOT_GRADED, r[0], r[1]))
     if scores is None:
-        scores = {(student, lab): score for lab in {r[1] for r in rows}
-                  for student, score in _scores(Path(path_md).resolve().parent, lab).items()}
+        scores = {
+            (student, lab): score
+            for lab in {r[1] for r in rows}
+            for student, score in _scores(Path(path_md).resolve().parent, lab).items()
+        }
     flagged = [r for r in rows if _status(r[2]) == "REVIEW"]
     refused = [r for r in rows if _status(r[2]) == NOT_GRADED]
     labs = sorted({lab for _, lab, _ in rows})
-    md = [f"# Integrity report: {', '.join(labs) or 'no submissions'}", "",
-          f"{len(rows) - len(refused)} submission{'s' * (len(rows) - len(refused) != 1)} scanned; "
-          f"**{len(flagged)} to REVIEW**"
-          + (f"; {len(refused)} NOT GRADED, so not scanned (the reason is beside each)" if refused else "")
-          + ". A flag is a construct that no honest answer needs, found in a cell that runs at grading time. It does "
-          "not change the grade: read the cell before trusting the score.", "",
-          "| student | lab | status | score | flags | kinds |", "|---|---|---|---|---|---|"]
+    md = [
+        f"# Integrity report: {', '.join(labs) or 'no submissions'}",
+        "",
+        f"{len(rows) - len(refused)} submission{'s' * (len(rows) - len(refused) != 1)} scanned; "
+        f"**{len(flagged)} to REVIEW**"
+        + (f"; {len(refused)} NOT GRADED, so not scanned (the reason is beside each)" if refused else "")
+        + ". A flag is a construct that no honest answer needs, found in a cell that runs at grading time. It does "
+        "not change the grade: read the cell before trusting the score.",
+        "",
+        "| student | lab | status | score | flags | kinds |",
+        "|---|---|---|---|---|---|",
+    ]
     for student, lab, flags in rows:
         status = _status(flags)
         if status == NOT_GRADED:
             md.append(f"| {student} | {lab} | {status} | | | {_md_cell(flags[0]['why'])} |")
             continue
         kinds = sorted({f["kind"] for f in flags})
-        md.append(f"| {student} | {lab} | {status} | {scores.get((student, lab), '')} | "
-                  f"{len(flags)} | {', '.join(kinds)} |")
+        md.append(
+            f"| {student} | {lab} | {status} | {scores.get((student, lab), '')} | {len(flags)} | {', '.join(kinds)} |"
+        )
     for student, lab, flags in flagged:
         md += ["", f"## {student} ({lab})", "", "| cell | line | kind | code | why |", "|---|---|---|---|---|"]
-        md += [f"| {f['cell']} | {f['line']} | {f['kind']} | `{_md_cell(f['code'])}` | {_md_cell(f['why'])} |"
-               for f in flags]
+        md += [
+            f"| {f['cell']} | {f['line']} | {f['kind']} | `{_md_cell(f['code'])}` | {_md_cell(f['why'])} |"
+            for f in flags
+        ]
     Path(path_md).write_text("\n".join(md) + "\n", errors="backslashreplace")
     with open(path_csv, "w", newline="", errors="backslashreplace") as fh:
         out = csv.writer(fh)
@@ -163,6 +188,7 @@ def _scores(course, lab):
     if not db.exists():
         return {}
     from nbgrader.api import Gradebook, MissingEntry
+
     out = {}
     with Gradebook(f"sqlite:///{db}") as gb:
         for student in gb.students:
@@ -184,6 +210,7 @@ def main(argv=None):
     if not source_dir.is_dir():
         parser.error(f"no source notebook folder {source_dir}")
     from grading.submission import read_submission, students_of
+
     source = source_dir / f"{args.lab}.ipynb"
     rows = []
     for student in students_of(course, args.lab):
@@ -194,8 +221,11 @@ def main(argv=None):
     md, csv_path = course / f"integrity_{args.lab}.md", course / f"integrity_{args.lab}.csv"
     write_report(rows, md, csv_path)
     flagged = sorted(student for student, _, flags in rows if _status(flags) == "REVIEW")
-    print(f"{len(rows)} submission{'s' * (len(rows) != 1)} of {args.lab} scanned, {len(flagged)} to review"
-          + (f": {', '.join(flagged)}" if flagged else "") + f"\n{md}\n{csv_path}")
+    print(
+        f"{len(rows)} submission{'s' * (len(rows) != 1)} of {args.lab} scanned, {len(flagged)} to review"
+        + (f": {', '.join(flagged)}" if flagged else "")
+        + f"\n{md}\n{csv_path}"
+    )
     return 0
 
 

@@ -32,6 +32,7 @@ for the score or the feedback.
 release notebook, the student's answers in their cells, and the judge's verdict as the only output of each test
 cell.
 """
+
 from __future__ import annotations
 
 import ast
@@ -54,12 +55,13 @@ from grading.lab import Lab
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.session import NotData, Session, StudentError, StudentRaised
 
-CHECK_SECONDS = 20         # wall time of the visible check run on a failed answer, for its slip (not for the score)
+CHECK_SECONDS = 20  # wall time of the visible check run on a failed answer, for its slip (not for the score)
 
 
 # ---------------------------------------------------------------------------------------------------------------
 # A lab, as the judge sees it
 # ---------------------------------------------------------------------------------------------------------------
+
 
 @dataclass
 class TestResult:
@@ -67,8 +69,8 @@ class TestResult:
     points: float
     score: float = 0.0
     message: str = ""
-    slip: str = ""      # what the exercise's visible check makes of the answer (fusionlab.checks.slips; _slip)
-    pending: bool = False   # the visible part passed and the hidden parts are still to run (judge(part=VISIBLE))
+    slip: str = ""  # what the exercise's visible check makes of the answer (fusionlab.checks.slips; _slip)
+    pending: bool = False  # the visible part passed and the hidden parts are still to run (judge(part=VISIBLE))
 
 
 @dataclass
@@ -77,12 +79,12 @@ class Verdict:
     notes: list = field(default_factory=list)
     cell_errors: dict = field(default_factory=dict)
     seconds: float = 0.0
-    largest_reply: int = 0        # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
-    judge_mb: float = 0.0         # the most memory the process that judged it held (MB; judge_apart)
-    judge_uid: int = -1           # the user that process ran as (judge_apart; not root: grading.launcher)
-    judge_cpu_s: float = 0.0      # its CPU time, s (the boxes' not counted; bounded: launcher.APART_CPU_SECONDS)
-    judge_caps: int = 0           # its effective capabilities (a bit mask; 0 unless it had to keep reading)
-    rounds: dict = field(default_factory=dict)   # part -> [start, end] (time.monotonic: one clock for every process)
+    largest_reply: int = 0  # bytes of the longest reply of the student's boxes (the limit is MAX_REPLY_BYTES)
+    judge_mb: float = 0.0  # the most memory the process that judged it held (MB; judge_apart)
+    judge_uid: int = -1  # the user that process ran as (judge_apart; not root: grading.launcher)
+    judge_cpu_s: float = 0.0  # its CPU time, s (the boxes' not counted; bounded: launcher.APART_CPU_SECONDS)
+    judge_caps: int = 0  # its effective capabilities (a bit mask; 0 unless it had to keep reading)
+    rounds: dict = field(default_factory=dict)  # part -> [start, end] (time.monotonic: one clock for every process)
 
     @property
     def score(self):
@@ -97,6 +99,7 @@ class Verdict:
 # One submission
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def _first_line(exc):
     text = str(exc).strip() or type(exc).__name__
     if isinstance(exc, NameError):
@@ -109,12 +112,21 @@ VISIBLE, HIDDEN, BOTH = "visible", "hidden", "both"
 
 #: The message of a test whose visible part passed in the first round and failed when run again, in a fresh box, before
 #: its hidden part (the second round may not quote the box: other boxes have seen hidden inputs by then).
-CHANGED = ("failed: the test's visible part passed, then failed when the test ran again for its hidden part "
-           "(does your code give the same result every time it runs?)")
+CHANGED = (
+    "failed: the test's visible part passed, then failed when the test ran again for its hidden part "
+    "(does your code give the same result every time it runs?)"
+)
 
 
-def judge(lab: Lab, submitted: dict | None, student: str, slot: int = 0, boxes=None, part: str = BOTH,
-          earlier: Verdict | None = None) -> Verdict:
+def judge(
+    lab: Lab,
+    submitted: dict | None,
+    student: str,
+    slot: int = 0,
+    boxes=None,
+    part: str = BOTH,
+    earlier: Verdict | None = None,
+) -> Verdict:
     """Grade one submission (``submitted``: the notebook, or None when it could not be read).
 
     Each test cell gets a box of its own, which runs the notebook's code cells above it (as the notebook does before
@@ -156,7 +168,7 @@ def _first_round(lab, submitted, boxes, verdict, keep_open):
     with hidden parts left is marked ``pending`` and its box closed."""
     base = lab.base()
     stopped = set()
-    kept = []                      # (session, result, ns, hidden parts) of the tests whose visible part passed
+    kept = []  # (session, result, ns, hidden parts) of the tests whose visible part passed
     try:
         for gid, source in lab.tests.items():
             result = TestResult(gid, lab.points.get(gid, 0.0))
@@ -177,7 +189,7 @@ def _first_round(lab, submitted, boxes, verdict, keep_open):
             finally:
                 _close(session, verdict)
     finally:
-        for session, *_ in kept:               # a failure of the judge itself: no box is left running
+        for session, *_ in kept:  # a failure of the judge itself: no box is left running
             _close(session, verdict)
 
 
@@ -200,11 +212,11 @@ def _second_round(lab, submitted, boxes, verdict):
             if rest:
                 _hidden_part(lab, session, ns, rest, result)
         finally:
-            said = f"test {result.grade_id}: {result.message}"      # a fixed message (_failed), the box's words never
+            said = f"test {result.grade_id}: {result.message}"  # a fixed message (_failed), the box's words never
             if said in session.notes and said not in verdict.notes:
                 verdict.notes.append(said)
             verdict.largest_reply = max(verdict.largest_reply, session.largest)
-            session.close()                    # its other notes and cell errors were told in the first round
+            session.close()  # its other notes and cell errors were told in the first round
 
 
 def _visible_again(lab, session, source, ns, reference, result):
@@ -257,7 +269,7 @@ def _judge_child(lab, submitted, student, slot, system, part, earlier):
     try:
         return {"verdict": dataclasses.asdict(judge(lab, submitted, student, slot, boxes, part, earlier))}
     finally:
-        boxes.close()                                 # every box ended before the verdict is read
+        boxes.close()  # every box ended before the verdict is read
 
 
 def _imported_modules(source):
@@ -272,27 +284,44 @@ def _imported_modules(source):
         if isinstance(node, ast.Import):
             names += [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
-            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]   # a name may be a module
+            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]  # a name may be a module
     return list(dict.fromkeys(names))
 
 
-def judge_apart(lab: Lab, submitted: dict | None, student: str, slot: int = 0, memory_bytes: int = JUDGE_MEMORY_BYTES,
-                part: str = BOTH,
-                earlier: Verdict | None = None) -> Verdict:
+def judge_apart(
+    lab: Lab,
+    submitted: dict | None,
+    student: str,
+    slot: int = 0,
+    memory_bytes: int = JUDGE_MEMORY_BYTES,
+    part: str = BOTH,
+    earlier: Verdict | None = None,
+) -> Verdict:
     """:func:`judge`, in a process of its own with ``memory_bytes`` of address space (:func:`grading.launcher.apart`;
     as root, not root: :func:`grading.launcher.split`). What comes back is JSON: the verdict's numbers and texts."""
     # the server imports once what every judge process needs: this module and what the lab's setup cell imports
     # (matplotlib, the library's modules ...), which each process would otherwise import again (a second or so)
-    reply = launcher.apart(_judge_child, (lab, submitted, student, slot, sandbox.system_files(), part, earlier),
-                           preload=["grading.judge", *_imported_modules(lab.setup_source)],
-                           memory_bytes=memory_bytes, who=student)
+    reply = launcher.apart(
+        _judge_child,
+        (lab, submitted, student, slot, sandbox.system_files(), part, earlier),
+        preload=["grading.judge", *_imported_modules(lab.setup_source)],
+        memory_bytes=memory_bytes,
+        who=student,
+    )
     d, p = reply["verdict"], reply["process"]
-    verdict = Verdict(tests=[TestResult(**t) for t in d["tests"]], notes=list(d["notes"]),
-                      cell_errors=dict(d["cell_errors"]), seconds=float(d["seconds"]),
-                      largest_reply=int(d["largest_reply"]), judge_mb=float(p["mb"]), judge_uid=int(p["uid"]),
-                      judge_cpu_s=float(p["cpu_s"]), judge_caps=int(p["caps"]),
-                      rounds={k: [float(a), float(b)] for k, (a, b) in dict(d["rounds"]).items()})
-    if earlier is not None:                  # the two processes of one student as one: the most, the sum, either
+    verdict = Verdict(
+        tests=[TestResult(**t) for t in d["tests"]],
+        notes=list(d["notes"]),
+        cell_errors=dict(d["cell_errors"]),
+        seconds=float(d["seconds"]),
+        largest_reply=int(d["largest_reply"]),
+        judge_mb=float(p["mb"]),
+        judge_uid=int(p["uid"]),
+        judge_cpu_s=float(p["cpu_s"]),
+        judge_caps=int(p["caps"]),
+        rounds={k: [float(a), float(b)] for k, (a, b) in dict(d["rounds"]).items()},
+    )
+    if earlier is not None:  # the two processes of one student as one: the most, the sum, either
         verdict.judge_mb = max(verdict.judge_mb, earlier.judge_mb)
         verdict.judge_cpu_s += earlier.judge_cpu_s
         verdict.judge_caps |= earlier.judge_caps
@@ -305,8 +334,10 @@ NOT_ATTEMPTED = "not attempted yet (your function, or one it calls, is still the
 _UNFINISHED = re.compile(r"NotImplementedError: ((?:exercise|question) [0-9]{1,2}[a-z]?) not attempted yet")
 
 
-FORBIDDEN_CALLED = ("your function called a library function that this exercise forbids (the answer to an exercise, "
-                    "not available while the lab is graded)")
+FORBIDDEN_CALLED = (
+    "your function called a library function that this exercise forbids (the answer to an exercise, "
+    "not available while the lab is graded)"
+)
 HIDDEN_IMPORTED = "your function imported a package that is not available while the lab is graded"
 
 
@@ -323,8 +354,10 @@ def known_error(error: str, lab: Lab, gid: str) -> str | None:
         if error == f"NotImplementedError: {stubbed}":
             return FORBIDDEN_CALLED
     for package in boxlib.HIDDEN_PACKAGES:
-        if error in (f"ImportError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
-                     f"ModuleNotFoundError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}"):
+        if error in (
+            f"ImportError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
+            f"ModuleNotFoundError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
+        ):
             return HIDDEN_IMPORTED
     return None
 
@@ -379,7 +412,7 @@ def _visible_part(lab, session, source, ns, reference, result):
     # the slip the report records if a hidden part fails, asked now, before the box sees a hidden input: asked
     # after, the box could pick which of the check's outcomes to show from the hidden inputs (bits in the report)
     if _slip(lab, session, reference, result, None):
-        try:                                         # the check's call ran over or ended the box: a fresh one
+        try:  # the check's call ran over or ended the box: a fresh one
             session.box.kill()
             session.start()
         except BoxDied:
@@ -417,8 +450,8 @@ def _hidden_part(lab, session, ns, parts, result):
             exec(compile(code, f"<{result.grade_id}>", "exec"), ns)  # noqa: S102 -- the gradebook's own test
     except Exception as exc:  # noqa: BLE001
         _failed(lab, session, result, exc, hidden=True)
-        result.slip = _code_failed(session, result.grade_id, exc) or result.slip    # the kind of failure, or the
-        return                                                                       # slip asked before (above)
+        result.slip = _code_failed(session, result.grade_id, exc) or result.slip  # the kind of failure, or the
+        return  # slip asked before (above)
     result.score, result.message, result.slip = result.points, "passed", slips.PASSED
 
 
@@ -428,8 +461,9 @@ _BOX_FAILED = (BoxTimeout, BoxDied, ReplyTooLarge)
 def _unguarded(module):
     """``module`` (the checks) as the judge calls it: each check without its forbid (``forbids``: the references are
     stubs in the box already, and a forbid would swap functions of this process under its other threads)."""
-    return types.SimpleNamespace(**{k: getattr(v, "unguarded", v) for k, v in vars(module).items()
-                                    if not k.startswith("__")})
+    return types.SimpleNamespace(
+        **{k: getattr(v, "unguarded", v) for k, v in vars(module).items() if not k.startswith("__")}
+    )
 
 
 def _slip(lab, session, reference, result, failure):
@@ -448,17 +482,21 @@ def _slip(lab, session, reference, result, failure):
     source = getattr(lab, "checks", {}).get(gid, "")
     outcome = _code_failed(session, gid, failure)
     broken = False
-    if source and outcome != slips.NOT_ATTEMPTED and not isinstance(failure, _BOX_FAILED) \
-            and getattr(session, "box", None) is not None:
-        check_ns = lab.base()                       # the student's names again, as proxies on the check's own time
+    if (
+        source
+        and outcome != slips.NOT_ATTEMPTED
+        and not isinstance(failure, _BOX_FAILED)
+        and getattr(session, "box", None) is not None
+    ):
+        check_ns = lab.base()  # the student's names again, as proxies on the check's own time
         if "checks" in check_ns:
             check_ns["checks"] = _unguarded(check_ns["checks"])
         budget = {"deadline": time.monotonic() + min(CHECK_SECONDS, lab.cell_seconds)}
         try:
-            if reference is None:                    # after a hidden part: the values of the provided cells again
+            if reference is None:  # after a hidden part: the values of the provided cells again
                 reference = lab.reference_values(gid, session.boxes)
             _names(session, source, check_ns, reference, budget)
-            with contextlib.redirect_stdout(io.StringIO()):                 # the ✓ line of a check that passes
+            with contextlib.redirect_stdout(io.StringIO()):  # the ✓ line of a check that passes
                 exec(compile(cells.python_of(source), f"<{gid} check>", "exec"), check_ns)  # noqa: S102
         except Feedback as exc:
             said = slips.outcome(lab.check_names.get(gid, ""), str(exc))
@@ -477,8 +515,9 @@ def _code_failed(session, gid, exc):
         return slips.NOT_ATTEMPTED if _UNFINISHED.fullmatch(exc.error) else slips.RAISED
     if isinstance(exc, NameError):
         prefix = gid.split("_")[0] + "_"
-        errs = [e for i, e in getattr(session, "cell_errors", {}).items()
-                if (session.cells[i][0] or "").startswith(prefix)]
+        errs = [
+            e for i, e in getattr(session, "cell_errors", {}).items() if (session.cells[i][0] or "").startswith(prefix)
+        ]
         return slips.NOT_ATTEMPTED if not errs or any(_UNFINISHED.search(str(e)) for e in errs) else slips.RAISED
     if isinstance(exc, (StudentError, *_BOX_FAILED)):
         return slips.RAISED
@@ -501,8 +540,11 @@ def _failed(lab, session, result, exc, hidden):
     elif isinstance(exc, ReplyTooLarge):
         result.message = TOO_LARGE
     elif isinstance(exc, (BoxTimeout, BoxDied)):
-        result.message = (f"your code ran over {lab.cell_seconds} s in this test" if isinstance(exc, BoxTimeout)
-                          else f"your code ended the process ({exc})")
+        result.message = (
+            f"your code ran over {lab.cell_seconds} s in this test"
+            if isinstance(exc, BoxTimeout)
+            else f"your code ended the process ({exc})"
+        )
     else:
         result.message = _first_line(exc)[:1500]
     if isinstance(exc, (BoxTimeout, BoxDied)):

@@ -2,6 +2,7 @@
 solution; the box each test gets (the library with that exercise's references stubbed), the program a submission's
 box runs before a test, and the values a test reads from provided cells, from a run of the model solution.
 Prepared once per class run (:mod:`grading.classgrade`) and handed to each student's judge (:mod:`grading.judge`)."""
+
 from __future__ import annotations
 
 import contextlib
@@ -13,12 +14,13 @@ from fusionlab.checks import exercises
 from grading import boxlib, cells, client, sandbox
 from grading.session import Session
 
-CELL_SECONDS = 60          # wall time of one cell of the student's program, or of one test cell's calls
+CELL_SECONDS = 60  # wall time of one cell of the student's program, or of one test cell's calls
 
 
 # ---------------------------------------------------------------------------------------------------------------
 # The guard as the judge runs it: the same comparisons, nothing to forbid (the box has no references to call)
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def _judge_guard():
     def grade(student_fn, reference_fn, cases, *, forbid=(), **kw):
@@ -27,10 +29,16 @@ def _judge_guard():
     def nothing(*args, **kwargs):
         return None
 
-    return types.SimpleNamespace(assert_close=guard.assert_close, assert_equal=guard.assert_equal, grade=grade,
-                                 forbid=lambda *a, **k: contextlib.nullcontext(), reserve=nothing, release=nothing,
-                                 intact=nothing, ForbiddenCall=guard.ForbiddenCall)
-
+    return types.SimpleNamespace(
+        assert_close=guard.assert_close,
+        assert_equal=guard.assert_equal,
+        grade=grade,
+        forbid=lambda *a, **k: contextlib.nullcontext(),
+        reserve=nothing,
+        release=nothing,
+        intact=nothing,
+        ForbiddenCall=guard.ForbiddenCall,
+    )
 
 
 class Lab:
@@ -40,34 +48,58 @@ class Lab:
     its full source as the gradebook holds it, ``solution`` is the instructor's notebook (for the model run).
     """
 
-    def __init__(self, course: Path, lab: str, release, tests: dict, solution, scratch: Path, limits=None,
-                 cell_seconds=CELL_SECONDS):
+    def __init__(
+        self,
+        course: Path,
+        lab: str,
+        release,
+        tests: dict,
+        solution,
+        scratch: Path,
+        limits=None,
+        cell_seconds=CELL_SECONDS,
+    ):
         self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
         self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
-        self.points = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}   # the table's, checked against
-        # the gradebook's by grading.classgrade.recorded_tests before anyone is graded
-        setup = [c for c in release.cells if cells.grade_id(c) == labformat.SETUP] or \
-                [c for c in release.cells if c.cell_type == "code" and not cells.is_answer(c)][:1]
+        self.points = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}  # the table's, checked against
+        # the gradebook's by grading.gradebook.recorded_tests before anyone is graded
+        setup = [c for c in release.cells if cells.grade_id(c) == labformat.SETUP] or [
+            c for c in release.cells if c.cell_type == "code" and not cells.is_answer(c)
+        ][:1]
         self.setup_source = cells.without_guard_calls(setup[0].source) if setup else ""
         self._base = None
-        self.answer_names = set().union(*[cells.bound_names(c.source) for c in solution.cells
-                                          if c.cell_type == "code" and cells.is_answer(c)] or [set()])
-        self.provided_names = set().union(*[cells.bound_names(c.source) for c in release.cells
-                                            if c.cell_type == "code" and not cells.is_answer(c)
-                                            and not cells.is_test(c)]
-                                          or [set()]) - self.answer_names
+        self.answer_names = set().union(
+            *[cells.bound_names(c.source) for c in solution.cells if c.cell_type == "code" and cells.is_answer(c)]
+            or [set()]
+        )
+        self.provided_names = (
+            set().union(
+                *[
+                    cells.bound_names(c.source)
+                    for c in release.cells
+                    if c.cell_type == "code" and not cells.is_answer(c) and not cells.is_test(c)
+                ]
+                or [set()]
+            )
+            - self.answer_names
+        )
         self.forbidden = {gid: self._forbidden(gid) for gid in tests}
         # each test's visible check (the release's cell exN_check) and the check it calls, for the slip of a failure;
         # the provided values it reads come from the model run (reference_values), the answers are always run
-        self.checks = {labformat.autograder_id(g.number): c.source for c in release.cells if cells.is_check(c)
-                       for g in [labformat.parse(cells.grade_id(c))] if g.kind == "ex"}
+        self.checks = {
+            labformat.autograder_id(g.number): c.source
+            for c in release.cells
+            if cells.is_check(c)
+            for g in [labformat.parse(cells.grade_id(c))]
+            if g.kind == "ex"
+        }
         self.check_names = {e.grade_id: e.check for e in exercises.of_lab(lab)}
         self.unstubbed = {}
         self._reference = {}
-        self.judge_reads_all = False     # as root: the judges keep CAP_DAC_READ_SEARCH (grading.launcher.drop_root)
+        self.judge_reads_all = False  # as root: the judges keep CAP_DAC_READ_SEARCH (grading.launcher.drop_root)
 
     def __getstate__(self):
-        return {**self.__dict__, "_base": None}          # the setup's namespace holds modules: run again there
+        return {**self.__dict__, "_base": None}  # the setup's namespace holds modules: run again there
 
     def box_root(self, gid):
         """The box's library and shadow packages for the test ``gid``: its references and forbidden functions are
@@ -76,9 +108,11 @@ class Lab:
         if not root.exists():
             root.mkdir(parents=True)
             import fusionlab  # the library the judge computes with is the one the box gets (references stubbed)
-            self.unstubbed[gid] = boxlib.strip_packages(root, Path(fusionlab.__file__).resolve().parents[1],
-                                                        self.forbidden[gid])
-            boxlib.seal(root)                     # the box mounts it read-only: compiled once here, not per box
+
+            self.unstubbed[gid] = boxlib.strip_packages(
+                root, Path(fusionlab.__file__).resolve().parents[1], self.forbidden[gid]
+            )
+            boxlib.seal(root)  # the box mounts it read-only: compiled once here, not per box
         return root
 
     # -- the trusted namespace -------------------------------------------------------------------------------
@@ -123,8 +157,9 @@ class Lab:
             else:
                 seq.append(("added", None, cell))
         if submitted is None:
-            seq = [("known", cells.grade_id(c), c) if cells.grade_id(c) else ("added", None, c)
-                   for c in self.release.cells]
+            seq = [
+                ("known", cells.grade_id(c), c) if cells.grade_id(c) else ("added", None, c) for c in self.release.cells
+            ]
             seen = set(order)
         for i, gid in enumerate(order):
             if gid in seen:
@@ -174,9 +209,17 @@ class Lab:
 
     def box_command(self, gid, work, uid):
         root = self.box_root(gid)
-        return sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=self.lab,
-                                     lib=root / "lib", shadow=root / "shadow", work=work,
-                                     limits=self.limits, uid=uid, hide=boxlib.shadowed(root / "shadow"))
+        return sandbox.bwrap_command(
+            ["python", str(client.SCRIPT)],
+            course=self.course,
+            lab=self.lab,
+            lib=root / "lib",
+            shadow=root / "shadow",
+            work=work,
+            limits=self.limits,
+            uid=uid,
+            hide=boxlib.shadowed(root / "shadow"),
+        )
 
     # -- values of the provided cells, from the model solution ------------------------------------------------------
     def reference_values(self, gid, boxes):
@@ -187,8 +230,9 @@ class Lab:
             base = set(self.base())
             wanted = sorted(set(cells.free_names(self.tests[gid])) & self.provided_names - base)
             try:
-                extra = sorted(set(cells.free_names(self.checks.get(gid, ""))) & self.provided_names - base
-                               - set(wanted))
+                extra = sorted(
+                    set(cells.free_names(self.checks.get(gid, ""))) & self.provided_names - base - set(wanted)
+                )
             except SyntaxError:
                 extra = []
             values = {}
@@ -198,7 +242,7 @@ class Lab:
                     session.start()
                     values = session.describe(wanted) if wanted else {}
                     if extra:
-                        try:                          # the check's slip is unknown without them, the score is not
+                        try:  # the check's slip is unknown without them, the score is not
                             values.update(session.describe(extra))
                         except Exception:  # noqa: BLE001
                             pass
@@ -206,7 +250,8 @@ class Lab:
                     session.close()
                 missing = [n for n in wanted if values[n]["kind"] != "value"]
                 if missing:
-                    raise RuntimeError(f"the model solution of {self.lab} does not make {missing} before {gid}: "
-                                       f"{session.cell_errors}")
+                    raise RuntimeError(
+                        f"the model solution of {self.lab} does not make {missing} before {gid}: {session.cell_errors}"
+                    )
             self._reference[gid] = {n: d["value"] for n, d in values.items() if d["kind"] == "value"}
         return self._reference[gid]

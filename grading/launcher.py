@@ -17,6 +17,7 @@ Not as root there is nothing to give up: the boxes start in the judge's own proc
 capstone's grader uses the same split (:class:`grading.capstone.runner.CapstoneBoxes`), and both run each student in
 a process of its own (:func:`apart`).
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -28,7 +29,7 @@ import socket
 import sys
 import tempfile
 
-from grading import client, sandbox
+from grading import client, handin, sandbox
 
 #: Judges run as users above the boxes' (:data:`grading.sandbox.FIRST_UID` + slot): one per slot, as the boxes.
 JUDGE_FIRST_UID = sandbox.FIRST_UID + sandbox.MAX_SLOTS
@@ -68,9 +69,12 @@ class LabBoxes:
             raise ValueError(f"expected a test cell of {self.lab.lab}, got {key!r}")
         uid = sandbox.box_uid(self.slot)
         source = self.lab.course / "submitted" / self.student / self.lab.lab
-        work = sandbox.private_folder(source if files and source.is_dir() else None, self.lab.scratch, uid)
-        return client.start(self.lab.box_command(key, work, uid), work=work,
-                            memory_bytes=sandbox.box_bytes(getattr(self.lab, "limits", None)))
+        work = handin.private_folder(source if files and source.is_dir() else None, self.lab.scratch, uid)
+        return client.start(
+            self.lab.box_command(key, work, uid),
+            work=work,
+            memory_bytes=sandbox.box_bytes(getattr(self.lab, "limits", None)),
+        )
 
     def start(self, key, files=True):
         """A :class:`grading.client.Box` running the box ``key``, started in this process."""
@@ -81,6 +85,7 @@ class LabBoxes:
 
 
 # -- as root: the launcher and the judge's end of its socket ------------------------------------------------------
+
 
 def _serve(sock, maker):
     """The launcher's loop: answer the judge's requests until it closes the socket; then end every box."""
@@ -98,9 +103,14 @@ def _serve(sock, maker):
                 request = json.loads(data)
                 if not isinstance(request, dict) or len(request) != 1:
                     raise ValueError("expected one of start, poll, end")
-                (what, arg), = request.items()
-                if what == "start" and isinstance(arg, list) and len(arg) == 2 and isinstance(arg[0], str) \
-                        and isinstance(arg[1], bool):
+                ((what, arg),) = request.items()
+                if (
+                    what == "start"
+                    and isinstance(arg, list)
+                    and len(arg) == 2
+                    and isinstance(arg[0], str)
+                    and isinstance(arg[1], bool)
+                ):
                     if arg[0] not in maker.keys():
                         raise ValueError(f"expected a box of {sorted(maker.keys())}, got {arg[0]!r}")
                     process, stdin, stdout = maker.open(arg[0], arg[1])
@@ -115,7 +125,7 @@ def _serve(sock, maker):
             except Exception as exc:  # noqa: BLE001 -- a request it cannot answer is said, and the loop goes on
                 reply = {"error": f"{type(exc).__name__}: {exc}"[:300]}
             socket.send_fds(sock, [json.dumps(reply).encode()], fds)
-            if fds:                                   # the judge holds the pipes now: the launcher keeps no end
+            if fds:  # the judge holds the pipes now: the launcher keeps no end
                 for f in boxes[reply["box"]][1:]:
                     f.close()
     finally:
@@ -187,19 +197,20 @@ def drop_root(uid, read_all=False):
     def prctl(*args):
         if libc.prctl(*[ctypes.c_ulong(a) for a in args]) != 0:
             raise OSError(ctypes.get_errno(), f"prctl{args} failed")
+
     if read_all:
-        prctl(8, 1, 0, 0, 0)                                   # PR_SET_KEEPCAPS: the permitted set survives setuid
+        prctl(8, 1, 0, 0, 0)  # PR_SET_KEEPCAPS: the permitted set survives setuid
     os.setgroups([])
     os.setresgid(uid, uid, uid)
     os.setresuid(uid, uid, uid)
     if read_all:
         prctl(8, 0, 0, 0, 0)
-        header = (ctypes.c_uint32 * 2)(0x20080522, 0)          # _LINUX_CAPABILITY_VERSION_3, this process
+        header = (ctypes.c_uint32 * 2)(0x20080522, 0)  # _LINUX_CAPABILITY_VERSION_3, this process
         bit = 1 << _CAP_DAC_READ_SEARCH
-        data = (ctypes.c_uint32 * 6)(bit, bit, 0, 0, 0, 0)     # effective, permitted, inheritable (two words)
+        data = (ctypes.c_uint32 * 6)(bit, bit, 0, 0, 0, 0)  # effective, permitted, inheritable (two words)
         if libc.capset(header, data) != 0:
             raise OSError(ctypes.get_errno(), "capset failed")
-    prctl(38, 1, 0, 0, 0)                                      # PR_SET_NO_NEW_PRIVS
+    prctl(38, 1, 0, 0, 0)  # PR_SET_NO_NEW_PRIVS
     if os.getuid() != uid or os.geteuid() != uid or os.getgroups():
         raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
 
@@ -212,7 +223,7 @@ def closed_folders(paths):
     for path in paths:
         parts = os.path.abspath(path).split(os.sep)[1:]
         for i in range(len(parts) - 1):
-            folder = os.sep + os.path.join(*parts[:i + 1])
+            folder = os.sep + os.path.join(*parts[: i + 1])
             try:
                 closed = not os.stat(folder).st_mode & 0o001
             except OSError:
@@ -238,8 +249,10 @@ def open_view(paths, stage):
     def call(name, *args):
         if getattr(libc, name)(*args) != 0:
             errno = ctypes.get_errno()
-            raise OSError(errno, f"{name}{tuple(a.decode() if isinstance(a, bytes) else a for a in args)}: "
-                                 f"{os.strerror(errno)}")
+            raise OSError(
+                errno, f"{name}{tuple(a.decode() if isinstance(a, bytes) else a for a in args)}: {os.strerror(errno)}"
+            )
+
     call("unshare", _CLONE_NEWNS)
     call("mount", None, b"/", None, ctypes.c_ulong(_MS_REC | _MS_PRIVATE), None)
     for n, (folder, entries) in enumerate(closed.items()):
@@ -266,7 +279,7 @@ def _in_dropped_child(slot, read_all, task):
         said = ""
         try:
             os.close(r)
-            if read_all is not None:                           # None: the task gives up root itself
+            if read_all is not None:  # None: the task gives up root itself
                 drop_root(judge_uid(slot), read_all=read_all)
             said = task()
         except Exception as exc:  # noqa: BLE001 -- said to the grader
@@ -289,9 +302,11 @@ def judge_problem(slots):
     for slot in slots:
         said = _in_dropped_child(slot, True, lambda: "")
         if said:
-            return (f"the judge of each student runs as a user of its own (here {judge_uid(slot)}), not root, and "
-                    f"could not become that user ({said}). This is root inside a user namespace without that id: "
-                    f"run make grade as the real root, or as an ordinary user.")
+            return (
+                f"the judge of each student runs as a user of its own (here {judge_uid(slot)}), not root, and "
+                f"could not become that user ({said}). This is root inside a user namespace without that id: "
+                f"run make grade as the real root, or as an ordinary user."
+            )
     return None
 
 
@@ -309,6 +324,7 @@ def unreadable(slot, paths=None):
             except PermissionError:
                 return path
         return ""
+
     return _in_dropped_child(slot, False, first_refused) or None
 
 
@@ -330,6 +346,7 @@ def view_problem(slot, paths=None):
             except PermissionError:
                 return f"{path} is still closed in its view"
         return ""
+
     return _in_dropped_child(slot, None, task)
 
 
@@ -337,10 +354,14 @@ def reach_message(blocked, slot):
     """What a grading run says when the import path crosses ``blocked``, a folder only root may read."""
     problem = view_problem(slot)
     if not problem:
-        return (f"{blocked} is readable by root alone: each judge sees, in a view of its own, only the folders on "
-                f"the way to Python's files there, and keeps no capability")
-    return (f"{blocked} is readable by root alone and the judges get no view of their own here ({problem}): they "
-            f"keep one capability, reading files (CAP_DAC_READ_SEARCH), to import from it")
+        return (
+            f"{blocked} is readable by root alone: each judge sees, in a view of its own, only the folders on "
+            f"the way to Python's files there, and keeps no capability"
+        )
+    return (
+        f"{blocked} is readable by root alone and the judges get no view of their own here ({problem}): they "
+        f"keep one capability, reading files (CAP_DAC_READ_SEARCH), to import from it"
+    )
 
 
 def split(maker, slot, read_all=False):
@@ -352,13 +373,13 @@ def split(maker, slot, read_all=False):
     keeping ``CAP_DAC_READ_SEARCH``."""
     if os.geteuid() != 0:
         return maker
-    maker.prepare()                                            # made by root: the judge cannot write the scratch
+    maker.prepare()  # made by root: the judge cannot write the scratch
     # the judge's own temporary folder (matplotlib's, when it cannot write root's): the launcher removes it at its end
     own = tempfile.mkdtemp(prefix="fusionlab-judge-")
     os.chown(own, judge_uid(slot), judge_uid(slot))
     ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     pid = os.fork()
-    if pid == 0:                                               # the launcher: root, answers requests, then exits
+    if pid == 0:  # the launcher: root, answers requests, then exits
         status = 0
         try:
             ours.close()
@@ -375,7 +396,7 @@ def split(maker, slot, read_all=False):
             stage = tempfile.mkdtemp(dir=own)
             open_view(sys.path, stage)
         except OSError:
-            keep = True                                        # no namespace here: the capability, as a last resort
+            keep = True  # no namespace here: the capability, as a last resort
     drop_root(judge_uid(slot), read_all=keep)
     os.environ["TMPDIR"] = os.environ["MPLCONFIGDIR"] = tempfile.tempdir = own
     return RemoteBoxes(ours, pid)
@@ -383,14 +404,19 @@ def split(maker, slot, read_all=False):
 
 def _apart_child(conn, target, args, memory_bytes, cpu_seconds):
     import resource
+
     # soft limits only: the boxes this process starts inherit them, and each sets its own (grading.sandbox)
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, resource.getrlimit(resource.RLIMIT_AS)[1]))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, resource.getrlimit(resource.RLIMIT_CPU)[1]))
     try:
         out = target(*args)
         use = resource.getrusage(resource.RUSAGE_SELF)
-        out["process"] = {"mb": use.ru_maxrss / 1024, "uid": os.getuid(), "cpu_s": use.ru_utime + use.ru_stime,
-                          "caps": _effective_capabilities()}
+        out["process"] = {
+            "mb": use.ru_maxrss / 1024,
+            "uid": os.getuid(),
+            "cpu_s": use.ru_utime + use.ru_stime,
+            "caps": _effective_capabilities(),
+        }
         conn.send_bytes(json.dumps(out).encode())
     except BaseException as exc:  # noqa: BLE001 -- told to the parent, which names the student
         conn.send_bytes(json.dumps({"error": f"{type(exc).__name__}: {str(exc)[:500]}"}).encode())
@@ -412,6 +438,7 @@ def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SEC
     (``cpu_s``), the user it ran as (``uid``) and its effective capabilities at the end (``caps``, a bit mask).
     ``who`` names the student in an error: a process that ran over its CPU time is said to have."""
     import multiprocessing
+
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(preload))
     receive, send = ctx.Pipe(duplex=False)
@@ -423,11 +450,12 @@ def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SEC
     except EOFError:
         child.join()
         if child.exitcode == -signal.SIGXCPU:
-            raise RuntimeError(f"the process grading {who} ran over its {cpu_seconds} s of CPU time and was stopped "
-                               f"(a reply that costs the grader's arithmetic that much is the student's; read "
-                               f"their code)") from None
-        raise RuntimeError(f"the process grading {who} ended without a result (exit status {child.exitcode})") \
-            from None
+            raise RuntimeError(
+                f"the process grading {who} ran over its {cpu_seconds} s of CPU time and was stopped "
+                f"(a reply that costs the grader's arithmetic that much is the student's; read "
+                f"their code)"
+            ) from None
+        raise RuntimeError(f"the process grading {who} ended without a result (exit status {child.exitcode})") from None
     finally:
         receive.close()
     child.join()

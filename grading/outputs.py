@@ -7,6 +7,7 @@ the feedback page show that notebook in the instructor's browser, from the instr
 the student's may run there: :func:`inert` keeps of an output only kinds that carry no script (text, PNG and JPEG
 images), and :func:`inert_markdown` turns the HTML tags of a student's Markdown into text.
 """
+
 from __future__ import annotations
 
 import copy
@@ -19,15 +20,15 @@ from nbformat.notebooknode import NotebookNode
 
 from grading import cells
 
-TEXT_BYTES = 100_000          # a stream, a traceback or a text result
-RICH_BYTES = 1_000_000        # an output holding an image or HTML (the largest figure of the labs is 0.45 MB)
-NOTEBOOK_BYTES = 8_000_000    # all outputs of a notebook (the largest lab holds 1.3 MB)
-
+TEXT_BYTES = 100_000  # a stream, a traceback or a text result
+RICH_BYTES = 1_000_000  # an output holding an image or HTML (the largest figure of the labs is 0.45 MB)
+NOTEBOOK_BYTES = 8_000_000  # all outputs of a notebook (the largest lab holds 1.3 MB)
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Output sizes
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def _text(value):
     return "".join(value) if isinstance(value, list) else value if isinstance(value, str) else json.dumps(value)
@@ -40,7 +41,8 @@ def output_bytes(out):
         return len(_text(out.get("text", "")).encode("utf-8", "replace"))
     if kind == "error":
         return len(_text(out.get("evalue", "")).encode("utf-8", "replace")) + sum(
-            len(line.encode("utf-8", "replace")) for line in out.get("traceback", []))
+            len(line.encode("utf-8", "replace")) for line in out.get("traceback", [])
+        )
     return sum(len(_text(v).encode("utf-8", "replace")) for v in out.get("data", {}).values())
 
 
@@ -49,8 +51,10 @@ def _is_rich(out):
 
 
 def _note(size, limit):
-    return (f"\n[... output truncated by the grader: {size:,} bytes, the limit is {limit:,} bytes per output and "
-            f"{NOTEBOOK_BYTES:,} bytes per notebook ...]\n")
+    return (
+        f"\n[... output truncated by the grader: {size:,} bytes, the limit is {limit:,} bytes per output and "
+        f"{NOTEBOOK_BYTES:,} bytes per notebook ...]\n"
+    )
 
 
 def truncate_output(out, limit):
@@ -65,9 +69,9 @@ def truncate_output(out, limit):
         tb = out.get("traceback", [])
         lines, used = [], 0
         for line in tb[:3] + tb[-3:] if len(tb) > 6 else tb:
-            lines.append(line[:max(keep // 6, 200)])
+            lines.append(line[: max(keep // 6, 200)])
             used += len(lines[-1])
-        new["evalue"] = _text(out.get("evalue", ""))[:max(keep - used, 200)]
+        new["evalue"] = _text(out.get("evalue", ""))[: max(keep - used, 200)]
         new["traceback"] = lines + [_note(size, limit).strip()]
     else:
         text = _text(out.get("data", {}).get("text/plain", ""))
@@ -77,9 +81,12 @@ def truncate_output(out, limit):
 
 
 def _dropped_note():
-    return NotebookNode(output_type="stream", name="stderr",
-                        text=f"[... further output dropped by the grader: the notebook's outputs reached "
-                             f"{NOTEBOOK_BYTES:,} bytes ...]\n")
+    return NotebookNode(
+        output_type="stream",
+        name="stderr",
+        text=f"[... further output dropped by the grader: the notebook's outputs reached "
+        f"{NOTEBOOK_BYTES:,} bytes ...]\n",
+    )
 
 
 class Budget:
@@ -144,6 +151,7 @@ def inert_markdown(source):
 # The notebook the instructor and the student see
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def autograded_notebook(lab, submitted, verdict):
     """The submission as the instructor and the student see it after grading: its cells in its order, each cell of
     the lab with the release's source and metadata (the student's source in answer cells and in cells students may
@@ -161,8 +169,11 @@ def autograded_notebook(lab, submitted, verdict):
 
     for kind, gid, cell in seq:
         if kind == "added":
-            new = (nbformat.v4.new_code_cell(cell.get("source", "")) if cell.get("cell_type") == "code"
-                   else nbformat.v4.new_markdown_cell(inert_markdown(cell.get("source", ""))))
+            new = (
+                nbformat.v4.new_code_cell(cell.get("source", ""))
+                if cell.get("cell_type") == "code"
+                else nbformat.v4.new_markdown_cell(inert_markdown(cell.get("source", "")))
+            )
             if new.cell_type == "code":
                 new.outputs = outputs(cell)
             nb.cells.append(new)
@@ -184,7 +195,10 @@ def autograded_notebook(lab, submitted, verdict):
 
 def _verdict_output(t):
     if t.score >= t.points:
-        return nbformat.v4.new_output("stream", name="stdout", text=f"✓ passed ({t.points:g} of {t.points:g} "
-                                                                     f"points)\n")
-    return nbformat.v4.new_output("error", ename="Failed", evalue=f"{t.message} (0 of {t.points:g} points)",
-                                  traceback=[f"Failed: {t.message} (0 of {t.points:g} points)"])
+        return nbformat.v4.new_output("stream", name="stdout", text=f"✓ passed ({t.points:g} of {t.points:g} points)\n")
+    return nbformat.v4.new_output(
+        "error",
+        ename="Failed",
+        evalue=f"{t.message} (0 of {t.points:g} points)",
+        traceback=[f"Failed: {t.message} (0 of {t.points:g} points)"],
+    )

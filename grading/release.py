@@ -12,6 +12,7 @@ It never holds solutions/, grading/, the rest of docs/, tests/, nbgrader_config.
 a fixed list and refuses a notebook that still carries a solution or hidden-test region. ``tests/test_release.py``
 checks the result line by line against every solution.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -31,11 +32,21 @@ ARCHIVE = "fusionlab-course.tar.gz"
 TOP = "fusionlab-course"
 
 # (source in the repository, destination in the release); a missing optional entry is skipped
-SHIP = [("labs", "labs", True), ("lib/fusionlab", "lib/fusionlab", True), ("data", "data", True),
-        ("environment.txt", "environment.txt", True), ("pyproject.toml", "pyproject.toml", True),
-        ("docs/derivations.md", "docs/derivations.md", False), ("jupyter", "jupyter", False)]
-FROM_TEMPLATES = [("Makefile", "Makefile"), ("course.mk", "course.mk"), ("tests", "tests"),
-                  ("gitignore", ".gitignore")]
+SHIP = [
+    ("labs", "labs", True),
+    ("lib/fusionlab", "lib/fusionlab", True),
+    ("data", "data", True),
+    ("environment.txt", "environment.txt", True),
+    ("pyproject.toml", "pyproject.toml", True),
+    ("docs/derivations.md", "docs/derivations.md", False),
+    ("jupyter", "jupyter", False),
+]
+FROM_TEMPLATES = [
+    ("Makefile", "Makefile"),
+    ("course.mk", "course.mk"),
+    ("tests", "tests"),
+    ("gitignore", ".gitignore"),
+]
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", ".ipynb_checkpoints", "*.egg-info", ".DS_Store")
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
 README_SECTIONS = ("Labs", "Conventions")  # taken from the repository README for the student one
@@ -69,8 +80,11 @@ def student_readme(root=ROOT):
 
 def release_targets():
     """The make targets of the release: those of its Makefile and of course.mk, which it includes."""
-    return {m for name in ("Makefile", "course.mk")
-            for m in re.findall(r"^([a-z][a-z0-9-]*):(?!=)", (STUDENT / name).read_text(), flags=re.M)}
+    return {
+        m
+        for name in ("Makefile", "course.mk")
+        for m in re.findall(r"^([a-z][a-z0-9-]*):(?!=)", (STUDENT / name).read_text(), flags=re.M)
+    }
 
 
 def _only_release_targets(text):
@@ -78,22 +92,30 @@ def _only_release_targets(text):
     README shares with the repository's (the capstone row's "(`make capstone`)") is dropped; one named anywhere
     else stops the build, naming it."""
     targets = release_targets()
-    text = re.sub(r" \(`make ([a-z][a-z0-9-]*)[^`]*`\)", lambda m: "" if m.group(1) not in targets else m.group(0),
-                  text)
-    missing = sorted({t for t in re.findall(r"\bmake ([a-z][a-z0-9-]*)", text)
-                      if t not in targets and f"`make {t}" in text})
+    text = re.sub(
+        r" \(`make ([a-z][a-z0-9-]*)[^`]*`\)", lambda m: "" if m.group(1) not in targets else m.group(0), text
+    )
+    missing = sorted(
+        {t for t in re.findall(r"\bmake ([a-z][a-z0-9-]*)", text) if t not in targets and f"`make {t}" in text}
+    )
     if missing:
-        raise SystemExit(f"the student README names make targets its Makefile lacks: {', '.join(missing)}; "
-                         f"say it without the target in README.md, or give grading/student/ the target")
+        raise SystemExit(
+            f"the student README names make targets its Makefile lacks: {', '.join(missing)}; "
+            f"say it without the target in README.md, or give grading/student/ the target"
+        )
     return text
 
 
 # The documents the labs cite, copied into labs/docs/ (`make labs`): `make lab` serves only labs/, so a notebook's
 # link must stay inside it. (path in labs/docs, the repository file, or None for the README's References section)
 LABS_DOCS = "labs/docs"
-STUDENT_DOCS = [("references.md", None), ("derivations.md", "docs/derivations.md"),
-                ("data/README.md", "data/README.md"), ("data/broad/README.md", "data/broad/README.md"),
-                ("data/phone/README.md", "data/phone/README.md")]
+STUDENT_DOCS = [
+    ("references.md", None),
+    ("derivations.md", "docs/derivations.md"),
+    ("data/README.md", "data/README.md"),
+    ("data/broad/README.md", "data/broad/README.md"),
+    ("data/phone/README.md", "data/phone/README.md"),
+]
 _LINK = re.compile(r"(\]\()([^)\s#]+)(#[^)\s]*)?(\))")
 
 
@@ -118,7 +140,9 @@ def student_docs(root=ROOT):
                 return m.group(0)
             new = os.path.relpath(copy_of[str(Path(os.path.normpath(target)))], Path(dest).parent)
             return m.group(1) + new + (m.group(3) or "") + m.group(4)
+
         return _LINK.sub(one, text)
+
     return {dest: relink(dest, src, text) for dest, (src, text) in texts.items()}
 
 
@@ -134,8 +158,11 @@ def write_student_docs(root=ROOT):
 
 
 def _check_docs(course, root):
-    shipped = {str(p.relative_to(course / LABS_DOCS)): p.read_text() for p in (course / LABS_DOCS).rglob("*")
-               if p.is_file()} if (course / LABS_DOCS).is_dir() else {}
+    shipped = (
+        {str(p.relative_to(course / LABS_DOCS)): p.read_text() for p in (course / LABS_DOCS).rglob("*") if p.is_file()}
+        if (course / LABS_DOCS).is_dir()
+        else {}
+    )
     if shipped != student_docs(root):
         raise SystemExit(f"{LABS_DOCS} is not what the README and docs/ make: regenerate it with `make labs`")
 
@@ -159,11 +186,14 @@ def source_date(root=ROOT, environ=None):
             raise SystemExit(f"SOURCE_DATE_EPOCH must be a whole number of seconds since 1970; got {value!r}")
         return int(value)
     try:
-        out = subprocess.run(["git", "-C", str(root), "log", "-1", "--format=%ct"], capture_output=True, text=True,
-                             check=True).stdout.strip()
+        out = subprocess.run(
+            ["git", "-C", str(root), "log", "-1", "--format=%ct"], capture_output=True, text=True, check=True
+        ).stdout.strip()
     except (OSError, subprocess.CalledProcessError) as exc:
-        raise SystemExit(f"cannot date the release: {root} is not a git checkout with a commit ({exc}); set "
-                         "SOURCE_DATE_EPOCH to the date to stamp (seconds since 1970)") from None
+        raise SystemExit(
+            f"cannot date the release: {root} is not a git checkout with a commit ({exc}); set "
+            "SOURCE_DATE_EPOCH to the date to stamp (seconds since 1970)"
+        ) from None
     return int(out)
 
 
@@ -228,8 +258,9 @@ def main(argv=None):
         return 0
     course, archive = build(args.out)
     files = sum(1 for p in course.rglob("*") if p.is_file())
-    print(f"student course: {course} ({files} files)\narchive:        {archive} "
-          f"({archive.stat().st_size / 1e6:.1f} MB)")
+    print(
+        f"student course: {course} ({files} files)\narchive:        {archive} ({archive.stat().st_size / 1e6:.1f} MB)"
+    )
     return 0
 
 

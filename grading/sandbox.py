@@ -23,6 +23,7 @@ scores -- stays outside.  In the box
   :data:`INSIDE` before the student's code runs), and every file a box can read is in the page cache before a class
   is graded (:func:`view`, :func:`warm`), so that a page fault tells a box nothing.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -38,30 +39,38 @@ import sysconfig
 import tempfile
 
 from grading import seccomp
+from grading.handin import SEED_FAILED, private_folder
 
-FIRST_UID = 200_000   # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
-                      # (slots are claimed machine-wide: claimed_slots)
+FIRST_UID = 200_000  # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
+# (slots are claimed machine-wide: claimed_slots)
 
 DEFAULT_LIMITS = {
-    "cpu_s": 600,               # CPU seconds per process of the box (the per-cell wall-clock limit is nbgrader's)
-    "memory_bytes": 4 << 30,    # address space per process
-    "box_bytes": 4 << 30,       # memory of every process of the box together (as root, where the machine gives a
-                                # memory group: grading.cgroup); an honest lab box holds a few hundred MB
-    "file_bytes": 256 << 20,    # largest file a process may write
-    "tmp_bytes": 256 << 20,     # size of the private /tmp
-    "nproc": 256,               # processes and threads of the box's own user (only when grading as root)
-    "nofile": 1024,             # open files per process: 256 processes of a box then hold at most 262,144, far from
-                                # the machine's limit (fs.file-max), which a box must not exhaust for the others
+    "cpu_s": 600,  # CPU seconds per process of the box (the per-cell wall-clock limit is nbgrader's)
+    "memory_bytes": 4 << 30,  # address space per process
+    "box_bytes": 4 << 30,  # memory of every process of the box together (as root, where the machine gives a
+    # memory group: grading.cgroup); an honest lab box holds a few hundred MB
+    "file_bytes": 256 << 20,  # largest file a process may write
+    "tmp_bytes": 256 << 20,  # size of the private /tmp
+    "nproc": 256,  # processes and threads of the box's own user (only when grading as root)
+    "nofile": 1024,  # open files per process: 256 processes of a box then hold at most 262,144, far from
+    # the machine's limit (fs.file-max), which a box must not exhaust for the others
 }
 
-SEED_FILE_BYTES = 20 << 20     # a file handed in beside the notebook (a recording, a CSV) may hold this much ...
-SEED_TOTAL_BYTES = 50 << 20    # ... and all of them together this much ...
-SEED_FILES = 200               # ... in at most this many files: the rest is neither seeded nor kept (plain_files)
-SEED_FAILED = 75               # the exit status of a box whose folder could not take the submission's files
-
 # Files of /etc a Python kernel needs (user names, the dynamic linker, time zone); the rest of /etc stays outside.
-ETC = ["passwd", "group", "nsswitch.conf", "ld.so.cache", "ld.so.conf", "ld.so.conf.d", "localtime", "timezone",
-       "alternatives", "fonts", "mime.types", "os-release"]
+ETC = [
+    "passwd",
+    "group",
+    "nsswitch.conf",
+    "ld.so.cache",
+    "ld.so.conf",
+    "ld.so.conf.d",
+    "localtime",
+    "timezone",
+    "alternatives",
+    "fonts",
+    "mime.types",
+    "os-release",
+]
 
 # Runs inside the box as the first process: drop to nobody (as root), set the limits, install the seccomp filter
 # (grading.seccomp.box_filter), start the kernel.
@@ -136,7 +145,7 @@ def _find_system_files():
             objects += [os.path.join(top, f) for f in files if ".so" in f and not f.endswith((".py", ".pyc"))]
     found = set()
     for i in range(0, len(objects), 200):
-        out = subprocess.run(["ldd", *objects[i:i + 200]], capture_output=True, text=True).stdout
+        out = subprocess.run(["ldd", *objects[i : i + 200]], capture_output=True, text=True).stdout
         found.update(re.findall(r"(/\S+) \(0x[0-9a-f]+\)", out))
     inside = tuple(p.rstrip("/") + "/" for p in prefixes)
     files = []
@@ -238,7 +247,8 @@ def _data_binds():
         args += ["--ro-bind", mirror, mirror]
         env += ["--setenv", "FUSIONLAB_BROAD_DIR", mirror]
     cache_root = os.environ.get("FUSIONLAB_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "fusionlab")
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "fusionlab"
+    )
     if os.path.isdir(os.path.join(cache_root, "broad")):
         broad = os.path.realpath(os.path.join(cache_root, "broad"))
         args += ["--ro-bind", broad, "/opt/fusionlab-cache/broad"]
@@ -249,100 +259,9 @@ def _data_binds():
 def _matplotlib_cache():
     """The grader's matplotlib cache (font list), copied into each box so the kernel does not rebuild it."""
     base = os.environ.get("MPLCONFIGDIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "matplotlib")
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "matplotlib"
+    )
     return os.path.realpath(base) if os.path.isdir(base) else ""
-
-
-def _held(st):
-    """The bytes a file costs: its apparent size or the disk it holds, whichever is larger (a sparse file of 1 GB
-    holds nothing on disk, and becomes 1 GB when copied)."""
-    return max(st.st_size, st.st_blocks * 512)
-
-
-def plain_files(src, notebooks=True):
-    """``(kept, left_out)`` of the folder ``src``: its plain files at every depth (links and what is not a plain file
-    are neither followed nor listed; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints out), each as
-    ``(path relative to src, bytes)``, a folder's files before its subfolders', in sorted order. A hard link (a file
-    with another name elsewhere: no copy nbgrader makes has one) is left out, and so is a file over
-    :data:`SEED_FILE_BYTES`, or one that would take the files kept over :data:`SEED_TOTAL_BYTES` or
-    :data:`SEED_FILES`, is left out (:func:`_held`: the larger of apparent and allocated
-    size). The same list for every box of a student and for ``autograded/``."""
-    kept, left, total = [], [], 0
-    stack = [(src, "")]
-    while stack:
-        folder, rel = stack.pop()
-        try:
-            with os.scandir(folder) as it:
-                entries = sorted(it, key=lambda e: e.name)
-        except OSError:
-            continue
-        inner = []
-        for e in entries:
-            if e.is_symlink() or (not notebooks and (e.name.endswith(".ipynb") or
-                                                     e.name.startswith(".ipynb_checkpoints"))):
-                continue
-            path = os.path.join(rel, e.name) if rel else e.name
-            if e.is_dir(follow_symlinks=False):
-                inner.append((e.path, path))
-            elif e.is_file(follow_symlinks=False):
-                st = e.stat(follow_symlinks=False)
-                size = _held(st)
-                if (st.st_nlink > 1 or size > SEED_FILE_BYTES or total + size > SEED_TOTAL_BYTES
-                        or len(kept) >= SEED_FILES):
-                    left.append((path, size))
-                else:
-                    kept.append((path, size))
-                    total += size
-        stack += reversed(inner)
-    return kept, left
-
-
-def _copy_file(src, dest, size):
-    """Copy the plain file ``src`` (never through a link) into ``dest``, at most ``size`` bytes."""
-    fd = os.open(src, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
-    with os.fdopen(fd, "rb") as fin:
-        if not stat.S_ISREG(os.fstat(fin.fileno()).st_mode):
-            return
-        with open(dest, "wb") as fout:
-            left = size
-            while left > 0:
-                chunk = fin.read(min(left, 1 << 20))
-                if not chunk:
-                    break
-                fout.write(chunk)
-                left -= len(chunk)
-
-
-def copy_plain(src, dest, notebooks=True):
-    """Copy the folder ``src`` into ``dest``: its regular files and folders only, at every depth, within the caps of
-    :func:`plain_files`; returns the files left out, ``[(path, bytes)]``. A link is neither followed nor kept (a
-    submitted link could point at the solutions, the gradebook or the real library, and the copy runs as root), nor
-    is anything else that is not a plain file; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints
-    out."""
-    os.makedirs(dest, exist_ok=True)
-    kept, left = plain_files(src, notebooks)
-    for path, size in kept:
-        target = os.path.join(dest, path)
-        os.makedirs(os.path.dirname(target), exist_ok=True)
-        try:
-            _copy_file(os.path.join(src, path), target, size)
-        except OSError:
-            continue
-    return left
-
-
-def private_folder(source, scratch, uid=None):
-    """A fresh writable folder holding what ``source`` holds, notebooks and links left out, owned by ``uid``."""
-    work = tempfile.mkdtemp(prefix="box-", dir=scratch)
-    if source is not None and os.path.isdir(source) and not os.path.islink(source):
-        copy_plain(source, work, notebooks=False)
-    if uid is not None:
-        for top, _, files in os.walk(work):
-            os.chown(top, uid, uid)
-            for f in files:
-                os.chown(os.path.join(top, f), uid, uid, follow_symlinks=False)
-    os.chmod(work, 0o700)
-    return work
 
 
 def _with_parent_folders(args):
@@ -393,8 +312,10 @@ def claimed_slots(n):
     ends, however it ends, lets its locks go."""
     if n < 1:
         raise ValueError(f"n must be 1 or more slots, got {n!r}")
-    folder = os.path.join("/run/lock" if os.access("/run/lock", os.W_OK) else tempfile.gettempdir(),
-                          f"fusionlab-grading-slots-{os.geteuid()}")
+    folder = os.path.join(
+        "/run/lock" if os.access("/run/lock", os.W_OK) else tempfile.gettempdir(),
+        f"fusionlab-grading-slots-{os.geteuid()}",
+    )
     os.makedirs(folder, mode=0o700, exist_ok=True)
     held = []
     try:
@@ -420,6 +341,7 @@ def package_paths(names):
     """Every copy of the packages ``names`` on the grader's ``sys.path``: each package's folder, or the file of a
     single-file module (``name.py``, an extension module); none is imported. Names not found are left out."""
     from importlib.machinery import all_suffixes
+
     out = set()
     for entry in sys.path:
         entry = os.path.realpath(entry or ".")
@@ -428,8 +350,11 @@ def package_paths(names):
         for name in names:
             if os.path.isdir(os.path.join(entry, name)):
                 out.add(os.path.join(entry, name))
-            out.update(os.path.join(entry, f"{name}{suffix}") for suffix in all_suffixes()
-                       if os.path.isfile(os.path.join(entry, f"{name}{suffix}")))
+            out.update(
+                os.path.join(entry, f"{name}{suffix}")
+                for suffix in all_suffixes()
+                if os.path.isfile(os.path.join(entry, f"{name}{suffix}"))
+            )
     return sorted(out)
 
 
@@ -439,12 +364,48 @@ def package_paths(names):
 # an empty read-only tmpfs, the files under /dev/null (reading one is refused). What a Python kernel reads of
 # /proc -- self/, cpuinfo, mounts -- stays. (The call sysinfo, which says the same, is refused: grading.seccomp.)
 PROC_HIDDEN_FOLDERS = ("sys", "pressure", "sysvipc", "fs", "irq", "bus", "tty", "driver", "scsi", "acpi")
-PROC_HIDDEN_FILES = ("loadavg", "stat", "meminfo", "vmstat", "zoneinfo", "buddyinfo", "pagetypeinfo", "slabinfo",
-                     "diskstats", "partitions", "interrupts", "softirqs", "schedstat", "locks", "swaps", "uptime",
-                     "key-users", "keys", "timer_list", "sched_debug", "kallsyms", "vmallocinfo", "iomem",
-                     "ioports", "mtrr", "latency_stats", "lock_stat", "misc", "modules", "kpagecount", "kpageflags",
-                     "kpagecgroup", "sysrq-trigger", "dma", "cgroups", "crypto", "devices", "filesystems",
-                     "consoles", "cmdline")
+PROC_HIDDEN_FILES = (
+    "loadavg",
+    "stat",
+    "meminfo",
+    "vmstat",
+    "zoneinfo",
+    "buddyinfo",
+    "pagetypeinfo",
+    "slabinfo",
+    "diskstats",
+    "partitions",
+    "interrupts",
+    "softirqs",
+    "schedstat",
+    "locks",
+    "swaps",
+    "uptime",
+    "key-users",
+    "keys",
+    "timer_list",
+    "sched_debug",
+    "kallsyms",
+    "vmallocinfo",
+    "iomem",
+    "ioports",
+    "mtrr",
+    "latency_stats",
+    "lock_stat",
+    "misc",
+    "modules",
+    "kpagecount",
+    "kpageflags",
+    "kpagecgroup",
+    "sysrq-trigger",
+    "dma",
+    "cgroups",
+    "crypto",
+    "devices",
+    "filesystems",
+    "consoles",
+    "cmdline",
+)
 
 
 def proc_masks(proc="/proc"):
@@ -482,18 +443,37 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
     python = os.path.join(os.path.realpath(sys.prefix), "bin", "python")
     cwd = os.path.join(course, "labs", lab)
     data_args, data_env = _data_binds() if data else ([], [])
-    args = ["bwrap", "--die-with-parent", "--new-session",
-            "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
-            "--hostname", "grading"]
+    args = [
+        "bwrap",
+        "--die-with-parent",
+        "--new-session",
+        "--unshare-pid",
+        "--unshare-net",
+        "--unshare-ipc",
+        "--unshare-uts",
+        "--unshare-cgroup-try",
+        "--hostname",
+        "grading",
+    ]
     if uid is not None:
         args += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
     else:
         args += ["--unshare-user", "--disable-userns"]
-    args += ["--proc", "/proc", "--dev", "/dev",
-             "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", "/tmp"]
+    args += [
+        "--proc",
+        "/proc",
+        "--dev",
+        "/dev",
+        "--perms",
+        "1777",
+        "--size",
+        str(limits["tmp_bytes"]),
+        "--tmpfs",
+        "/tmp",
+    ]
     args += proc_masks()
     args += _system_binds() + _python_binds() + data_args
-    for path in hide:               # after the installation's mounts, which they cover
+    for path in hide:  # after the installation's mounts, which they cover
         path = os.path.realpath(path)
         if os.path.isdir(path):
             args += ["--perms", "0555", "--tmpfs", path, "--remount-ro", path]
@@ -517,12 +497,24 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
         args += ["--ro-bind", src, dest]
     args += ["--ro-bind", work, "/opt/seed", "--perms", "1777", "--size", str(limits["tmp_bytes"]), "--tmpfs", cwd]
     args = _with_parent_folders(args)
-    env = {"PATH": f"{os.path.dirname(python)}:/usr/local/bin:/usr/bin:/bin", "HOME": "/tmp", "USER": "student",
-           "LANG": "C.UTF-8", "PYTHONPATH": ":".join(path), "PYTHONDONTWRITEBYTECODE": "1", "TMPDIR": "/tmp",
-           "MPLBACKEND": "Agg", "MPLCONFIGDIR": "/tmp/.cache/matplotlib",
-           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "NBGRADER_EXECUTION": "autograde", "FUSIONLAB_BOX_LIMITS": json.dumps(limits), "FUSIONLAB_BOX_CWD": cwd,
-           "FUSIONLAB_BOX_SECCOMP": seccomp.box_filter().hex()}
+    env = {
+        "PATH": f"{os.path.dirname(python)}:/usr/local/bin:/usr/bin:/bin",
+        "HOME": "/tmp",
+        "USER": "student",
+        "LANG": "C.UTF-8",
+        "PYTHONPATH": ":".join(path),
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "TMPDIR": "/tmp",
+        "MPLBACKEND": "Agg",
+        "MPLCONFIGDIR": "/tmp/.cache/matplotlib",
+        "OMP_NUM_THREADS": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "NBGRADER_EXECUTION": "autograde",
+        "FUSIONLAB_BOX_LIMITS": json.dumps(limits),
+        "FUSIONLAB_BOX_CWD": cwd,
+        "FUSIONLAB_BOX_SECCOMP": seccomp.box_filter().hex(),
+    }
     if mpl:
         env["FUSIONLAB_BOX_MPLCACHE"] = "/opt/mplcache"
     if uid is not None:
@@ -540,8 +532,10 @@ def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, 
 # Can a box start here? Asked once, before anyone is graded
 # ---------------------------------------------------------------------------------------------------------------
 
-WHERE_TO_GRADE = ("or grade on a machine or VM where it can (docs/instructors.md, section 7, 'Where to grade': copy "
-                  "submitted/ and gradebook.db there, run make grade, copy gradebook.db and autograded/ back)")
+WHERE_TO_GRADE = (
+    "or grade on a machine or VM where it can (docs/instructors.md, section 7, 'Where to grade': copy "
+    "submitted/ and gradebook.db there, run make grade, copy gradebook.db and autograded/ back)"
+)
 
 
 def _mapped_uids(path="/proc/self/uid_map"):
@@ -562,26 +556,38 @@ def box_problem(course, lab, scratch, slots):
         seccomp.box_filter()
     except seccomp.UnsupportedMachine as exc:
         machines = " or ".join(seccomp.SECCOMP_MACHINES)
-        return (f"grading cannot be made safe on this machine ({exc}), and student code is never run without that "
-                f"filter. Grade on an {machines} machine or VM instead (docs/instructors.md, section 7, 'Where to "
-                f"grade').")
+        return (
+            f"grading cannot be made safe on this machine ({exc}), and student code is never run without that "
+            f"filter. Grade on an {machines} machine or VM instead (docs/instructors.md, section 7, 'Where to "
+            f"grade')."
+        )
     if shutil.which("bwrap") is None:
-        return ("bubblewrap is not installed: install it (Debian/Ubuntu: apt-get install bubblewrap) and run again. "
-                "Student code is never run without the sandbox.")
+        return (
+            "bubblewrap is not installed: install it (Debian/Ubuntu: apt-get install bubblewrap) and run again. "
+            "Student code is never run without the sandbox."
+        )
     uids = [box_uid(slot) for slot in slots]
     if uids[0] is not None:
         ranges = _mapped_uids()
         unmapped = [u for u in uids if not any(first <= u < first + count for first, count in ranges)]
         if unmapped:
-            return (f"the grader runs as root, but in a user namespace that has no user id {unmapped[0]} (its map: "
-                    f"{', '.join(f'{n} id(s) from {first}' for first, n in ranges)}), so a box cannot run as a user "
-                    f"of its own (one per student graded at once, from {FIRST_UID}). This is root inside "
-                    f"`unshare --user --map-root-user` or a rootless container. Run make grade as the real root, or "
-                    f"as an ordinary user (bubblewrap then makes the user namespace itself), {WHERE_TO_GRADE}.")
+            return (
+                f"the grader runs as root, but in a user namespace that has no user id {unmapped[0]} (its map: "
+                f"{', '.join(f'{n} id(s) from {first}' for first, n in ranges)}), so a box cannot run as a user "
+                f"of its own (one per student graded at once, from {FIRST_UID}). This is root inside "
+                f"`unshare --user --map-root-user` or a rootless container. Run make grade as the real root, or "
+                f"as an ordinary user (bubblewrap then makes the user namespace itself), {WHERE_TO_GRADE}."
+            )
     try:
         work = private_folder(None, scratch, uids[0])
-        command = bwrap_command(["python", "-c", "print('box ok')"], course=course, lab=lab,
-                                lib=os.path.join(course, "lib"), work=work, uid=uids[0])
+        command = bwrap_command(
+            ["python", "-c", "print('box ok')"],
+            course=course,
+            lab=lab,
+            lib=os.path.join(course, "lib"),
+            work=work,
+            uid=uids[0],
+        )
         run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
     except (OSError, subprocess.SubprocessError) as exc:
         return f"a test box could not be started ({type(exc).__name__}: {exc}); {WHERE_TO_GRADE}."
@@ -589,9 +595,11 @@ def box_problem(course, lab, scratch, slots):
         return None
     said = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}, nothing on stderr"])[-1][:400]
     if run.stderr.startswith("bwrap:") and ("namespace" in run.stderr or "uid map" in run.stderr):
-        return (f"bubblewrap cannot create the namespaces a box needs ({said}). Allow them: Debian, `sysctl "
-                f"kernel.unprivileged_userns_clone=1`; Ubuntu 24.04, `sysctl "
-                f"kernel.apparmor_restrict_unprivileged_userns=0` (or an AppArmor profile for bwrap); any system, "
-                f"`sysctl user.max_user_namespaces` above 0; in a container, a runtime that allows them (Docker: "
-                f"--security-opt seccomp=unconfined --security-opt apparmor=unconfined), {WHERE_TO_GRADE}.")
+        return (
+            f"bubblewrap cannot create the namespaces a box needs ({said}). Allow them: Debian, `sysctl "
+            f"kernel.unprivileged_userns_clone=1`; Ubuntu 24.04, `sysctl "
+            f"kernel.apparmor_restrict_unprivileged_userns=0` (or an AppArmor profile for bwrap); any system, "
+            f"`sysctl user.max_user_namespaces` above 0; in a container, a runtime that allows them (Docker: "
+            f"--security-opt seccomp=unconfined --security-opt apparmor=unconfined), {WHERE_TO_GRADE}."
+        )
     return f"a test box did not start ({said}); {WHERE_TO_GRADE}."

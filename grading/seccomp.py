@@ -30,6 +30,7 @@ a class is graded (:func:`grading.sandbox.warm`): a touch then changes nothing, 
 leaves the cache but under the machine's own memory pressure. Timing a read stays possible, and says as little:
 the page is cached.
 """
+
 from __future__ import annotations
 
 import os
@@ -61,10 +62,10 @@ REFUSED_SYSCALLS = {
     "keyctl": (250, 219, None),
     # The page cache of the read-only files every box mounts (/usr, the Python installation) is one for the whole
     # machine: a box that can evict a page and another that can see whether it is cached share a bit.
-    "fadvise64": (221, 223, None),          # POSIX_FADV_DONTNEED evicts a file's cached pages
-    "mincore": (27, 232, None),             # reports which pages of a mapping (a mapped file) are cached
-    "cachestat": (451, 451, None),          # reports how much of a file range is cached, dirty, evicted
-    "process_madvise": (440, 440, None),    # madvise (MADV_COLD, MADV_PAGEOUT) on a process's memory, its own too
+    "fadvise64": (221, 223, None),  # POSIX_FADV_DONTNEED evicts a file's cached pages
+    "mincore": (27, 232, None),  # reports which pages of a mapping (a mapped file) are cached
+    "cachestat": (451, 451, None),  # reports how much of a file range is cached, dirty, evicted
+    "process_madvise": (440, 440, None),  # madvise (MADV_COLD, MADV_PAGEOUT) on a process's memory, its own too
     # preadv2's RWF_NOWAIT fails when a page is not cached: a probe that does not fill it. Without flags (args[5])
     # these are preadv and pwritev, which Python's os.preadv and os.pwritev call them as: allowed.
     "preadv2": (327, 286, (5, "any flag")),
@@ -77,7 +78,7 @@ REFUSED_SYSCALLS = {
     "io_uring_setup": (425, 425, None),
     "io_uring_enter": (426, 426, None),
     "io_uring_register": (427, 427, None),
-    "io_setup": (206, 0, None),             # Linux AIO: io_submit takes RWF_NOWAIT in each request
+    "io_setup": (206, 0, None),  # Linux AIO: io_submit takes RWF_NOWAIT in each request
     "io_submit": (209, 2, None),
     # New namespaces: a user namespace gives a box every capability inside it, and with them the kernel's mount,
     # network and key code as new attack surface; no box needs one (bwrap made the box's own before the filter).
@@ -90,7 +91,7 @@ REFUSED_SYSCALLS = {
     # lock one box holds on it another sees (flock, and fcntl's record locks, open-file-description locks and
     # leases); an outside review carried a class's hidden inputs that way, box to box. No box needs either: the
     # kernel in a box keeps its history in memory, and its private files are its own.
-    "inotify_init": (253, None, None),      # aarch64 has only inotify_init1
+    "inotify_init": (253, None, None),  # aarch64 has only inotify_init1
     "inotify_init1": (294, 26, None),
     "inotify_add_watch": (254, 27, None),
     "fanotify_init": (300, 262, None),
@@ -132,20 +133,22 @@ def box_filter(machine=None):
     :class:`UnsupportedMachine`."""
     machine = _native_machine() if machine is None else machine
     if machine not in SECCOMP_MACHINES:
-        raise UnsupportedMachine(f"expected a machine of {' or '.join(SECCOMP_MACHINES)}, this one is {machine}: "
-                                 f"no seccomp filter keeps the boxes from sharing kernel state here")
+        raise UnsupportedMachine(
+            f"expected a machine of {' or '.join(SECCOMP_MACHINES)}, this one is {machine}: "
+            f"no seccomp filter keeps the boxes from sharing kernel state here"
+        )
     audit_arch, second_abi = SECCOMP_MACHINES[machine]
     column = list(SECCOMP_MACHINES).index(machine)
     ld, jeq, jge, jset, ret = 0x20, 0x15, 0x35, 0x45, 0x06  # BPF_LD|W|ABS, BPF_JMP|JEQ/JGE/JSET|K, BPF_RET|K
-    allow, refuse = 0x7FFF0000, 0x00050000 | 1      # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
-    missing = 0x00050000 | 38                       # SECCOMP_RET_ERRNO | ENOSYS
-    to_allow, to_deny, to_missing = "allow", "deny", "missing"   # the last three instructions, resolved below
+    allow, refuse = 0x7FFF0000, 0x00050000 | 1  # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
+    missing = 0x00050000 | 38  # SECCOMP_RET_ERRNO | ENOSYS
+    to_allow, to_deny, to_missing = "allow", "deny", "missing"  # the last three instructions, resolved below
     program = [
         # The numbers below mean these calls only on this architecture; a call made through another ABI the kernel
         # also accepts (i386's int 0x80 on x86_64) has numbers of its own, so it is refused whatever it is.
-        (ld, 0, 0, 4),                              # seccomp_data.arch
+        (ld, 0, 0, 4),  # seccomp_data.arch
         (jeq, 0, to_deny, audit_arch),
-        (ld, 0, 0, 0),                              # seccomp_data.nr
+        (ld, 0, 0, 0),  # seccomp_data.nr
     ]
     if second_abi is not None:
         # x32 calls arrive with x86_64's arch and the number plus 0x40000000: refused, so that no such call slips past.
@@ -160,7 +163,7 @@ def box_filter(machine=None):
         block = [(ld, 0, 0, 16 + 8 * arg)]
         if values == "any flag":
             block.append((jeq, to_allow, to_deny, 0))
-        elif isinstance(values, int):                # a mask: refused when any of its bits is set
+        elif isinstance(values, int):  # a mask: refused when any of its bits is set
             block.append((jset, to_deny, to_allow, values))
         else:
             block += [(jeq, to_deny, 0, value) for value in values] + [(ret, 0, 0, allow)]
@@ -168,7 +171,9 @@ def box_filter(machine=None):
     program += [(ret, 0, 0, allow), (ret, 0, 0, refuse), (ret, 0, 0, missing)]
     where = {to_allow: len(program) - 3, to_deny: len(program) - 2, to_missing: len(program) - 1}
 
-    def skip(i, target):                            # a BPF jump counts the instructions it skips
+    def skip(i, target):  # a BPF jump counts the instructions it skips
         return where[target] - i - 1 if target in where else target
-    return b"".join(struct.pack("=HBBI", code, skip(i, jt), skip(i, jf), k)
-                    for i, (code, jt, jf, k) in enumerate(program))
+
+    return b"".join(
+        struct.pack("=HBBI", code, skip(i, jt), skip(i, jf), k) for i, (code, jt, jf, k) in enumerate(program)
+    )

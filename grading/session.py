@@ -1,6 +1,7 @@
 """One submission's box as the judge sees it (:class:`Session`): started from the lab's program, run through it (a
 cell over its time, or one that ends the process, left out and the program run again), then asked to describe the
 values it made and to call the student's functions, whose replies are decoded as data (:mod:`grading.box`)."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -10,8 +11,8 @@ from grading import box as wire
 from grading import client
 from grading.client import BoxDied, BoxTimeout
 
-STUDENT_SECONDS = 900      # wall time of the whole submission
-MAX_RESTARTS = 3           # boxes started again after a cell ran over its time or ended the process
+STUDENT_SECONDS = 900  # wall time of the whole submission
+MAX_RESTARTS = 3  # boxes started again after a cell ran over its time or ended the process
 
 
 class StudentError(AssertionError):
@@ -45,7 +46,7 @@ class Session:
         self.largest = 0
         self.restarts = 0
         self.deadline = time.monotonic() + STUDENT_SECONDS
-        self.budget = {"deadline": self.deadline}     # of the test's calls: set when the test starts
+        self.budget = {"deadline": self.deadline}  # of the test's calls: set when the test starts
 
     def _spawn(self):
         if self.box is not None:
@@ -59,8 +60,9 @@ class Session:
             self._spawn()
             program = ["pass" if i in self.skipped else src for i, (_, src) in enumerate(self.cells)]
             try:
-                self.cell_errors.update(client.run_program(self.box, program, cell_seconds=self.lab.cell_seconds,
-                                                           deadline=self.deadline))
+                self.cell_errors.update(
+                    client.run_program(self.box, program, cell_seconds=self.lab.cell_seconds, deadline=self.deadline)
+                )
                 return
             except (BoxTimeout, BoxDied) as exc:
                 self.box.kill()
@@ -71,13 +73,18 @@ class Session:
                     self.notes.append(f"the notebook ran over {STUDENT_SECONDS} s in all and was stopped")
                     raise BoxDied("time") from exc
                 if current is None or self.restarts >= MAX_RESTARTS:
-                    self.notes.append(f"the notebook could not be run ({exc or 'no reply'}); tests that need it "
-                                      f"score 0")
+                    self.notes.append(
+                        f"the notebook could not be run ({exc or 'no reply'}); tests that need it score 0"
+                    )
                     raise BoxDied(str(exc)) from exc
-                why = (f"ran over {self.lab.cell_seconds} s" if isinstance(exc, BoxTimeout)
-                       else f"ended the process ({exc})")
-                self.notes.append(f"{where} {why}: it was stopped, and the notebook was run again from the start "
-                                  f"without it")
+                why = (
+                    f"ran over {self.lab.cell_seconds} s"
+                    if isinstance(exc, BoxTimeout)
+                    else f"ended the process ({exc})"
+                )
+                self.notes.append(
+                    f"{where} {why}: it was stopped, and the notebook was run again from the start without it"
+                )
                 self.skipped.add(current)
                 self.stopped.add(tuple(self.cells[current]))
                 self.restarts += 1
@@ -103,8 +110,10 @@ class Session:
             kind = d.get("kind")
             if kind == "value":
                 try:
-                    out[name] = {"kind": "value", "value": wire.decode(d.get("value"), make_sympy=client.sympy_trusted,
-                                                                       objects=True)}
+                    out[name] = {
+                        "kind": "value",
+                        "value": wire.decode(d.get("value"), make_sympy=client.sympy_trusted, objects=True),
+                    }
                 except (wire.WireError, ValueError, TypeError) as exc:
                     out[name] = {"kind": "unreadable", "error": str(exc)}
             elif kind in ("function", "missing", "unreadable"):
@@ -130,7 +139,7 @@ class Session:
                     raise wire.WireError("a list of changed objects that is not one")
                 for key, state in changed.items():
                     i = int(key)
-                    if i in objects:          # the library object the test passed in, as the student's code left it
+                    if i in objects:  # the library object the test passed in, as the student's code left it
                         new = wire.decode(state, make_sympy=client.sympy_trusted, objects=True)
                         if type(new) is not type(objects[i]):
                             raise wire.WireError("an object of another class in place of the one passed in")
@@ -139,6 +148,7 @@ class Session:
             except (wire.WireError, ValueError, TypeError) as exc:
                 raise NotData(f"your {name} returned {exc}") from None
             return value
+
         call.__name__ = name
         return call
 

@@ -19,6 +19,7 @@ never a copy of the library. The report gives the score (the share of the answer
 matching lines of both sides. Short answers (two lines of ``(I - KH) P (I - KH)ᵀ + K R Kᵀ``) are alike in every class
 and are not listed: a listed pair is worth a look, an unlisted one proves nothing.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,11 +37,11 @@ import nbformat
 from fusionlab import labformat
 from grading import cells
 
-K, WINDOW = 20, 6          # k-gram length and winnowing window (copydetect's scale: normalised characters)
-MIN_TOKENS = 80            # matched normalised characters for a pair of classmates to be listed
-MIN_SHARE = 0.80           # share of the answer that the match covers, for a pair of classmates
-LIB_SHARE = 0.60           # the same for an answer and a library function ...
-LIB_BEYOND = 1.3           # ... whose match must also be this much longer than the model answer's with it
+K, WINDOW = 20, 6  # k-gram length and winnowing window (copydetect's scale: normalised characters)
+MIN_TOKENS = 80  # matched normalised characters for a pair of classmates to be listed
+MIN_SHARE = 0.80  # share of the answer that the match covers, for a pair of classmates
+LIB_SHARE = 0.60  # the same for an answer and a library function ...
+LIB_BEYOND = 1.3  # ... whose match must also be this much longer than the model answer's with it
 LIB_MIN_TOKENS = 60
 LIBRARY = Path(__file__).resolve().parents[1] / "lib" / "fusionlab"
 
@@ -73,8 +74,9 @@ def _boilerplate(boilerplate):
 def _fingerprint(code, boilerplate=()):
     from copydetect import CodeFingerprint
 
-    return CodeFingerprint("answer.py", K, WINDOW, boilerplate=list(_boilerplate(boilerplate)), fp=io.StringIO(code),
-                           language="python")
+    return CodeFingerprint(
+        "answer.py", K, WINDOW, boilerplate=list(_boilerplate(boilerplate)), fp=io.StringIO(code), language="python"
+    )
 
 
 def _line_numbers(code, slices):
@@ -132,11 +134,11 @@ def _library_functions(folder):
                 # the lines of the def (as ast.get_source_segment, without splitting the file again per function)
                 # (offsets count UTF-8 bytes)
                 first, last = node.lineno - 1, node.end_lineno - 1
-                head = lines[first].encode()[node.col_offset:].decode()
+                head = lines[first].encode()[node.col_offset :].decode()
                 if first == last:
-                    seg = lines[first].encode()[node.col_offset:node.end_col_offset].decode()
+                    seg = lines[first].encode()[node.col_offset : node.end_col_offset].decode()
                 else:
-                    seg = head + "".join(lines[first + 1:last]) + lines[last].encode()[:node.end_col_offset].decode()
+                    seg = head + "".join(lines[first + 1 : last]) + lines[last].encode()[: node.end_col_offset].decode()
                 if seg.count("\n") >= 2:
                     out.append((f"{module}.{node.name}", seg))
     return tuple(out)
@@ -165,7 +167,7 @@ def find_pairs(submissions: dict, release, model, library=None):
         codes = {s: a[gid] for s, a in by_student.items() if gid in a and a[gid].strip() != stubs.get(gid, "").strip()}
         students = sorted(codes)
         for i, s in enumerate(students):
-            for t in students[i + 1:]:
+            for t in students[i + 1 :]:
                 share, tokens, la, lb, share_b = compare(codes[s], codes[t], boiler)
                 share = max(share, share_b)
                 if tokens >= MIN_TOKENS and share >= MIN_SHARE:
@@ -192,20 +194,35 @@ def write_report(lab, pairs, path_md, path_csv, refused=None):
     grading refuses (:func:`grading.submission.read_submission`), compared with no one. Any text can be written: a
     character UTF-8 cannot hold (a lone surrogate) is written as its escape."""
     refused = refused or {}
-    md = [f"# Similarity report: {lab}", "",
-          f"{len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look (winnowing fingerprints, copydetect). Two "
-          f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
-          f"{MIN_SHARE:.0%} of an answer; an answer and a library function when the match covers {LIB_SHARE:.0%} "
-          f"of either and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
-          "literals and comments do not count; an unlisted pair proves nothing.", "",
-          "| exercise | student | alike with | score | matched |", "|---|---|---|---|---|"]
+    md = [
+        f"# Similarity report: {lab}",
+        "",
+        f"{len(pairs)} pair{'s' * (len(pairs) != 1)} worth a look (winnowing fingerprints, copydetect). Two "
+        f"classmates are listed when the matched code is at least {MIN_TOKENS} normalised characters and covers "
+        f"{MIN_SHARE:.0%} of an answer; an answer and a library function when the match covers {LIB_SHARE:.0%} "
+        f"of either and is {LIB_BEYOND:g} times what the model answer matches of that function. Names, "
+        "literals and comments do not count; an unlisted pair proves nothing.",
+        "",
+        "| exercise | student | alike with | score | matched |",
+        "|---|---|---|---|---|",
+    ]
     md += [f"| {p.exercise} | {p.a} | {p.b} | {p.score:.2f} | {p.tokens} |" for p in pairs]
     if refused:
         md += ["", f"NOT GRADED, so compared with no one ({len(refused)}):", ""]
         md += [f"- {student}: {why}" for student, why in sorted(refused.items())]
     for p in pairs:
-        md += ["", f"## {p.a} ~ {p.b} ({p.exercise}, {p.score:.2f})", "", "```python", p.lines_a, "```", "",
-               "```python", p.lines_b, "```"]
+        md += [
+            "",
+            f"## {p.a} ~ {p.b} ({p.exercise}, {p.score:.2f})",
+            "",
+            "```python",
+            p.lines_a,
+            "```",
+            "",
+            "```python",
+            p.lines_b,
+            "```",
+        ]
     Path(path_md).write_text("\n".join(md) + "\n", errors="backslashreplace")
     with open(path_csv, "w", newline="", errors="backslashreplace") as fh:
         out = csv.writer(fh)
@@ -262,13 +279,19 @@ COPY_MIN_NODES = 40
 
 def _shape(statements):
     """(node types in order, the same with the statements sorted): what is left of code without its names."""
+
     def types(node):
         if isinstance(node, ast.expr_context):
             return []
         return [type(node).__name__] + [t for child in ast.iter_child_nodes(node) for t in types(child)]
-    if statements and isinstance(statements[0], ast.Expr) and isinstance(statements[0].value, ast.Constant) \
-            and isinstance(statements[0].value.value, str):
-        statements = statements[1:]                                           # the docstring
+
+    if (
+        statements
+        and isinstance(statements[0], ast.Expr)
+        and isinstance(statements[0].value, ast.Constant)
+        and isinstance(statements[0].value.value, str)
+    ):
+        statements = statements[1:]  # the docstring
     each = [types(s) for s in statements]
     return [t for e in each for t in e], [t for e in sorted(each) for t in e]
 
@@ -285,7 +308,8 @@ def library_shapes(folder=LIBRARY):
                 collect(f"{prefix}.{node.name}", node.body)
             elif isinstance(node, ast.ClassDef):
                 collect(f"{prefix}.{node.name}", node.body)
-    for path in sorted(Path(folder).rglob("*.py")):                     # fusionlab.checks is a package
+
+    for path in sorted(Path(folder).rglob("*.py")):  # fusionlab.checks is a package
         collect(".".join(path.relative_to(folder).with_suffix("").parts), cells.parse(path.read_text()).body)
     return out
 
@@ -301,7 +325,7 @@ def copied_from(function, library=None):
     matcher = difflib.SequenceMatcher(None, autojunk=False)
     for name, theirs in (library or library_shapes()).items():
         m = len(theirs[0])
-        if 2 * min(n, m) / (n + m) < COPY_RATIO:                # the ratio cannot get there
+        if 2 * min(n, m) / (n + m) < COPY_RATIO:  # the ratio cannot get there
             continue
         for a, b in zip(mine, theirs):
             matcher.set_seqs(b, a)

@@ -16,6 +16,7 @@ describes. This module counts them.
   name in strings too, and every comment that names them taken out), cut to :data:`EXAMPLE_LINES` lines. Plain HTML
   and CSS, no script, and a policy that lets none run: the student's code is text in it, escaped.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -36,15 +37,15 @@ from fusionlab.checks import slips
 FIELDS = ["student", "lab", "exercise", "grade_id", "points", "score", "slip", "says"]
 #: The outcomes whose bar links to an example answer: every named slip, and these.
 EXAMPLED = (slips.UNRECOGNISED, slips.RAISED)
-EXAMPLE_LINES = 60           # an example longer than this is cut, saying so
+EXAMPLE_LINES = 60  # an example longer than this is cut, saying so
 EXAMPLE_CHARS = 6000
-NOTEBOOK_BYTES = 100 << 20   # a notebook larger than this is not read for an example (classgrade refuses it too)
+NOTEBOOK_BYTES = 100 << 20  # a notebook larger than this is not read for an example (classgrade refuses it too)
 
 
 def _says(slip):
     try:
         return slips.text(slip)
-    except ValueError:              # an id of an earlier run that the list no longer holds
+    except ValueError:  # an id of an earlier run that the list no longer holds
         return slip
 
 
@@ -57,8 +58,18 @@ def rows_of(lab, results):
         for t in r.verdict.tests:
             g = labformat.parse(t.grade_id)
             slip = t.slip or (slips.PASSED if t.score >= t.points else slips.UNRECOGNISED)
-            out.append({"student": r.student, "lab": lab, "exercise": g.number if g else "", "grade_id": t.grade_id,
-                        "points": f"{t.points:g}", "score": f"{t.score:g}", "slip": slip, "says": _says(slip)})
+            out.append(
+                {
+                    "student": r.student,
+                    "lab": lab,
+                    "exercise": g.number if g else "",
+                    "grade_id": t.grade_id,
+                    "points": f"{t.points:g}",
+                    "score": f"{t.score:g}",
+                    "slip": slip,
+                    "says": _says(slip),
+                }
+            )
     return out
 
 
@@ -94,8 +105,10 @@ def exercises_of(rows):
     students the exercise stopped (most first), then by number."""
     tests = {}
     for row in rows:
-        t = tests.setdefault(row["grade_id"], {"grade_id": row["grade_id"], "exercise": row["exercise"],
-                                               "points": row["points"], "outcomes": Counter()})
+        t = tests.setdefault(
+            row["grade_id"],
+            {"grade_id": row["grade_id"], "exercise": row["exercise"], "points": row["points"], "outcomes": Counter()},
+        )
         t["outcomes"][row["slip"]] += 1
     for t in tests.values():
         t["students"] = sum(t["outcomes"].values())
@@ -109,6 +122,7 @@ def exercises_of(rows):
 # ---------------------------------------------------------------------------------------------------------------
 # One anonymised example answer of each slip
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def names_of(course):
     """``{student id: [first name, last name, email]}`` as the course's gradebook holds them (empty where it has
@@ -137,11 +151,11 @@ def answer_of(course, lab, student, grade_id):
     for folder in ("autograded", "submitted"):
         path = Path(course) / folder / student / lab / f"{lab}.ipynb"
         try:
-            if folder == "submitted":               # the student's own folder: read as grading reads it
+            if folder == "submitted":  # the student's own folder: read as grading reads it
                 nb = read_submission(course, lab, student)
             elif not path.is_file() or path.is_symlink() or path.stat().st_size > NOTEBOOK_BYTES:
                 continue
-            else:                                   # written by the grader
+            else:  # written by the grader
                 nb = nbformat.read(path, as_version=4)
             for cell in nb.get("cells", []):
                 meta = cell.get("metadata", {}).get("nbgrader", {}) if isinstance(cell, dict) else {}
@@ -208,7 +222,7 @@ def anonymised(source, student, names=()):
                     edits.append(cut_comment(tok.start[0], tok.start[1], at(*tok.end)))
                 elif tok.type in _STRINGS and named is not None and named.search(tok.string):
                     edits.append((at(*tok.start), at(*tok.end), named.sub("student", tok.string)))
-        except (tokenize.TokenError, SyntaxError):      # not Python as a whole: line by line, names anywhere
+        except (tokenize.TokenError, SyntaxError):  # not Python as a whole: line by line, names anywhere
             edits = []
             for row, line in enumerate(lines, 1):
                 hash_at = line.find("#")
@@ -293,41 +307,64 @@ def page(lab, rows, examples=None):
     examples = examples or {}
     tests = exercises_of(rows)
     students = len({row["student"] for row in rows})
-    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-           f'<meta http-equiv="Content-Security-Policy" content="{_POLICY}">',
-           f"<title>Common slips: {esc(lab)}</title><style>{_CSS}</style></head><body>",
-           f"<h1>What the class got wrong: {esc(lab)}</h1>",
-           f"<p>{students} student{'s' * (students != 1)} graded. For each exercise: how many passed, and for the "
-           "others what the exercise's visible check says of their answer, run by the judge on it (the slip it "
-           "names, in its own words). The exercises that stopped the most students come first. Students are named "
-           "only in the CSV beside this page. Under a wrong answer's words, <i>example</i> unfolds one answer cell "
-           "that made it, anonymised (its author's id and the comments that name them taken out).</p>"]
+    out = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        f'<meta http-equiv="Content-Security-Policy" content="{_POLICY}">',
+        f"<title>Common slips: {esc(lab)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>What the class got wrong: {esc(lab)}</h1>",
+        f"<p>{students} student{'s' * (students != 1)} graded. For each exercise: how many passed, and for the "
+        "others what the exercise's visible check says of their answer, run by the judge on it (the slip it "
+        "names, in its own words). The exercises that stopped the most students come first. Students are named "
+        "only in the CSV beside this page. Under a wrong answer's words, <i>example</i> unfolds one answer cell "
+        "that made it, anonymised (its author's id and the comments that name them taken out).</p>",
+    ]
     if lab not in slips.LABS:
-        out.append("<p><b>The checks of this lab have no slips listed yet</b> (fusionlab/checks/slips.py lists "
-                   f"those of {', '.join(map(esc, slips.LABS))}): their wrong answers count as unrecognised.</p>")
+        out.append(
+            "<p><b>The checks of this lab have no slips listed yet</b> (fusionlab/checks/slips.py lists "
+            f"those of {', '.join(map(esc, slips.LABS))}): their wrong answers count as unrecognised.</p>"
+        )
     for t in tests:
         n = t["students"]
         title = f"Exercise {esc(t['exercise'])}" if t["exercise"] else esc(t["grade_id"])
         wrong = t["named"] + t["unrecognised"]
-        out += [f'<section id="{esc(t["grade_id"])}">',
-                f"<h2>{title} <small>({esc(t['grade_id'])}, {esc(t['points'])} points)</small></h2>",
-                f"<p>stopped {t['stopped']} of {n} students; pass rate {_pct(t['passed'], n)}. "
-                + (f"{t['unrecognised']} of {wrong} wrong answers ({_pct(t['unrecognised'], wrong)}) no check "
-                   "recognises." if wrong else "No wrong answer.") + "</p>", "<table>"]
-        named = sorted(((s, c) for s, c in t["outcomes"].items() if s not in slips.OUTCOMES),
-                       key=lambda sc: (-sc[1], sc[0]))
-        others = [(s, t["outcomes"][s]) for s in (slips.UNRECOGNISED, slips.RAISED, slips.NOT_ATTEMPTED,
-                                                  slips.PASSED) if t["outcomes"][s]]
+        out += [
+            f'<section id="{esc(t["grade_id"])}">',
+            f"<h2>{title} <small>({esc(t['grade_id'])}, {esc(t['points'])} points)</small></h2>",
+            f"<p>stopped {t['stopped']} of {n} students; pass rate {_pct(t['passed'], n)}. "
+            + (
+                f"{t['unrecognised']} of {wrong} wrong answers ({_pct(t['unrecognised'], wrong)}) no check recognises."
+                if wrong
+                else "No wrong answer."
+            )
+            + "</p>",
+            "<table>",
+        ]
+        named = sorted(
+            ((s, c) for s, c in t["outcomes"].items() if s not in slips.OUTCOMES), key=lambda sc: (-sc[1], sc[0])
+        )
+        others = [
+            (s, t["outcomes"][s])
+            for s in (slips.UNRECOGNISED, slips.RAISED, slips.NOT_ATTEMPTED, slips.PASSED)
+            if t["outcomes"][s]
+        ]
         for slip, count in named + others:
             width = 100 * count / n if n else 0
             ident = "" if slip in slips.OUTCOMES else f" <code>{esc(slip)}</code>"
             example = examples.get((t["grade_id"], slip))
-            fold = "" if example is None else (
-                f'<details class="example" id="{_anchor(t["grade_id"], slip)}"><summary>example</summary>'
-                f"<pre><code>{esc(example)}</code></pre></details>")
-            out.append(f'<tr class="{esc(slip if slip in slips.OUTCOMES else "slip")}" data-slip="{esc(slip)}">'
-                       f'<td class="bar"><div class="bar" style="width: {width:.1f}%"></div></td>'
-                       f'<td class="count">{count}</td><td>{esc(_says(slip))}{ident}{fold}</td></tr>')
+            fold = (
+                ""
+                if example is None
+                else (
+                    f'<details class="example" id="{_anchor(t["grade_id"], slip)}"><summary>example</summary>'
+                    f"<pre><code>{esc(example)}</code></pre></details>"
+                )
+            )
+            out.append(
+                f'<tr class="{esc(slip if slip in slips.OUTCOMES else "slip")}" data-slip="{esc(slip)}">'
+                f'<td class="bar"><div class="bar" style="width: {width:.1f}%"></div></td>'
+                f'<td class="count">{count}</td><td>{esc(_says(slip))}{ident}{fold}</td></tr>'
+            )
         out += ["</table>", "</section>"]
     out.append("</body></html>")
     return "\n".join(out) + "\n"

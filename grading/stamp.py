@@ -17,6 +17,7 @@ itself; a name neither imports is an error that says what to import. So a test c
 says: it states where the exercise forbids, the stamp what. A notebook is written only when something changed;
 ``--check`` changes nothing and exits 1 naming the cells that differ.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,7 +34,7 @@ from grading import cells
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = re.compile(r"# Autograder: exercise \S+ \([0-9.]+ points?(?P<rest>:[^)]*)?\)")
-WIDTH = 120                 # the line length of the sources (pyproject.toml's ruff line-length)
+WIDTH = 120  # the line length of the sources (pyproject.toml's ruff line-length)
 
 
 def header(exercise, rest=""):
@@ -51,8 +52,11 @@ def imports(source):
         if isinstance(node, ast.Import):
             for a in node.names:
                 parts = a.name.split(".")
-                out += [(a.asname, a.name)] if a.asname else [(".".join(parts[:i]), ".".join(parts[:i]))
-                                                                for i in range(1, len(parts) + 1)]
+                out += (
+                    [(a.asname, a.name)]
+                    if a.asname
+                    else [(".".join(parts[:i]), ".".join(parts[:i])) for i in range(1, len(parts) + 1)]
+                )
         elif isinstance(node, ast.ImportFrom) and not node.level:
             out += [(a.asname or a.name, f"{node.module}.{a.name}") for a in node.names if a.name != "*"]
     return out
@@ -67,22 +71,28 @@ def spell(dotted, scopes, where=""):
         for expr, target in scope:
             if target == module:
                 return f"{expr}.{path}"
-    within = [(len(target), expr, target) for scope in scopes for expr, target in scope
-              if f"{module}.{path}" == target or f"{module}.{path}".startswith(target + ".")]
+    within = [
+        (len(target), expr, target)
+        for scope in scopes
+        for expr, target in scope
+        if f"{module}.{path}" == target or f"{module}.{path}".startswith(target + ".")
+    ]
     within = [w for w in within if w[2].startswith(module + ".")]
     if within:
         _, expr, target = max(within, key=lambda w: w[0])
-        return expr + f"{module}.{path}"[len(target):]
+        return expr + f"{module}.{path}"[len(target) :]
     short = module.removeprefix("fusionlab.")
     how = f"from fusionlab import {short}" if module.startswith("fusionlab.") else f"import {module}"
-    raise ValueError(f"{where}: the table forbids {dotted}, which neither the cell nor the setup cell imports a "
-                     f"module to reach: add `{how}` to the cell")
+    raise ValueError(
+        f"{where}: the table forbids {dotted}, which neither the cell nor the setup cell imports a "
+        f"module to reach: add `{how}` to the cell"
+    )
 
 
 def _offset(lines, lineno, col):
     """The index in ``"\n".join(lines)`` of the node position (``lineno``, byte ``col``) of ``ast``."""
     line = lines[lineno - 1]
-    return sum(len(x) + 1 for x in lines[:lineno - 1]) + len(line.encode()[:col].decode())
+    return sum(len(x) + 1 for x in lines[: lineno - 1]) + len(line.encode()[:col].decode())
 
 
 def _render(items, source, start, end, paren):
@@ -90,7 +100,7 @@ def _render(items, source, start, end, paren):
     :data:`WIDTH` with what comes before and after it on its lines, else wrapped under its first item."""
     head = source.rfind("\n", 0, start) + 1
     tail = source.find("\n", end)
-    before, after = source[head:start], source[end:len(source) if tail < 0 else tail]
+    before, after = source[head:start], source[end : len(source) if tail < 0 else tail]
     body = ", ".join(items) + ("," if paren and len(items) == 1 else "")
     one = "(" + body + ")" if paren else body
     if len(items) < 2 or len(before) + len(one) + len(after) <= WIDTH:
@@ -120,8 +130,15 @@ def forbid_sites(source):
     named, sites = set(), []
 
     def span(first, last, paren, kind, exercise=None):
-        sites.append((_offset(lines, first.lineno, first.col_offset),
-                      _offset(lines, last.end_lineno, last.end_col_offset), paren, kind, exercise))
+        sites.append(
+            (
+                _offset(lines, first.lineno, first.col_offset),
+                _offset(lines, last.end_lineno, last.end_col_offset),
+                paren,
+                kind,
+                exercise,
+            )
+        )
 
     for node in ast.walk(tree):
         if not isinstance(node, ast.Call):
@@ -138,17 +155,27 @@ def forbid_sites(source):
             if any(isinstance(a, ast.Starred) for a in node.args):
                 named |= {a.value.id for a in node.args if isinstance(a, ast.Starred) and isinstance(a.value, ast.Name)}
                 continue
-            number = next((k.value.value for k in node.keywords if k.arg == "exercise"
-                           and isinstance(k.value, ast.Constant)), None)
+            number = next(
+                (k.value.value for k in node.keywords if k.arg == "exercise" and isinstance(k.value, ast.Constant)),
+                None,
+            )
             if node.args:
                 span(node.args[0], node.args[-1], False, f.attr, number)
-            else:                                   # guard.reserve(exercise=5): the names go before the keywords
-                at = (_offset(lines, node.keywords[0].lineno, node.keywords[0].col_offset) if node.keywords else
-                      _offset(lines, node.end_lineno, node.end_col_offset) - 1)
+            else:  # guard.reserve(exercise=5): the names go before the keywords
+                at = (
+                    _offset(lines, node.keywords[0].lineno, node.keywords[0].col_offset)
+                    if node.keywords
+                    else _offset(lines, node.end_lineno, node.end_col_offset) - 1
+                )
                 sites.append((at, at, False, f.attr, number))
     for node in ast.walk(tree):
-        if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name) and \
-                node.targets[0].id in named and isinstance(node.value, (ast.Tuple, ast.List)):
+        if (
+            isinstance(node, ast.Assign)
+            and len(node.targets) == 1
+            and isinstance(node.targets[0], ast.Name)
+            and node.targets[0].id in named
+            and isinstance(node.value, (ast.Tuple, ast.List))
+        ):
             span(node.value, node.value, True, "forbid")
     return sorted(sites)
 
@@ -167,7 +194,7 @@ def _stamp_forbids(source, rows, scopes, where, exercise=None):
             continue
         text = _render([spell(d, scopes, where) for d in row.forbid], source, start, end, paren)
         if start == end and text and source[end] != ")":
-            text += ", "                            # put before the call's keywords
+            text += ", "  # put before the call's keywords
         out += [source[at:start], text]
         at = end
     return "".join(out) + source[at:]
@@ -198,8 +225,10 @@ def stamp(nb, lab):
         first = header(e, m["rest"] if m else "")
         source = "\n".join([first, *lines[1:]] if m else [first, *lines])
         if e.forbid and not forbid_sites(source):
-            raise ValueError(f"{lab} {gid}: the table forbids {', '.join(e.forbid)}, but the test cell has no "
-                             "forbid=(...), guard.forbid(...) or guard.release(...) to name them in")
+            raise ValueError(
+                f"{lab} {gid}: the table forbids {', '.join(e.forbid)}, but the test cell has no "
+                "forbid=(...), guard.forbid(...) or guard.release(...) to name them in"
+            )
         source = _stamp_forbids(source, {e.number: e}, [imports(source), base], f"{lab} {gid}", e.number)
         if source != cell.source or cell.metadata.nbgrader.get("points") != e.points:
             cell.source = source

@@ -12,6 +12,7 @@ report (:mod:`grading.integrity`), the similarity report (:mod:`grading.similari
 report of common slips (:mod:`grading.slipreport`) all go through it, so a notebook that grading refuses is in no
 report as if it were the student's.
 """
+
 from __future__ import annotations
 
 import datetime
@@ -23,16 +24,18 @@ from pathlib import Path
 
 import nbformat
 
-NOTEBOOK_BYTES = 100 << 20   # a notebook larger than this is not read
+NOTEBOOK_BYTES = 100 << 20  # a notebook larger than this is not read
 #: JSON objects and lists a notebook may hold, counted as the ``{`` and ``[`` of its bytes before it is parsed (those
 #: in strings too: an upper bound). The course's solutions hold under 1,000; 30 MB of ``{},`` parsed held 5 GB.
 NOTEBOOK_CONTAINERS = 200_000
-TIMESTAMP_BYTES = 200        # nbgrader writes some 30 characters
+TIMESTAMP_BYTES = 200  # nbgrader writes some 30 characters
 
 # nbgrader's own format (ExchangeSubmit's timestamp_format, "%Y-%m-%d %H:%M:%S.%f %Z"), and the ISO form its
 # gradebook and older versions write: a date, a time, fractions of a second, a zone name or offset
-TIMESTAMP = re.compile(r"\d{4}-\d{2}-\d{2}[ T]\d{2}:\d{2}:\d{2}(\.\d{1,6})?( ?([A-Za-z][A-Za-z0-9_+/-]{0,31}|"
-                       r"[+-]\d{2}:?\d{2}))?")
+TIMESTAMP = re.compile(
+    r"\d{4}-\d{2}-\d{2}[ T]\d{2}:\d{2}:\d{2}(\.\d{1,6})?( ?([A-Za-z][A-Za-z0-9_+/-]{0,31}|"
+    r"[+-]\d{2}:?\d{2}))?"
+)
 
 
 NOT_A_DATE = "timestamp.txt ignored: it is not a date nbgrader writes; the submission is graded without its time"
@@ -45,8 +48,9 @@ def students_of(course: str | Path, lab: str, only: list[str] | None = None) -> 
     if only:
         missing = [s for s in only if s not in found]
         if missing:
-            raise SystemExit(f"no submission of {lab} for: {', '.join(missing)} (expected "
-                             f"submitted/<student>/{lab}/{lab}.ipynb)")
+            raise SystemExit(
+                f"no submission of {lab} for: {', '.join(missing)} (expected submitted/<student>/{lab}/{lab}.ipynb)"
+            )
         found = [s for s in found if s in only]
     return found
 
@@ -63,8 +67,9 @@ def _open(course, lab, student, name):
                 fds.append(os.open(part, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=fds[-1]))
             except OSError as e:
                 if e.errno in (errno.ELOOP, errno.ENOTDIR):
-                    raise ValueError(f"{what} is a link or not a folder: a submission must be the student's own "
-                                     f"files") from None
+                    raise ValueError(
+                        f"{what} is a link or not a folder: a submission must be the student's own files"
+                    ) from None
                 raise
         try:
             fd = os.open(name, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK, dir_fd=fds[-1])
@@ -76,10 +81,11 @@ def _open(course, lab, student, name):
         if not stat.S_ISREG(st.st_mode):
             os.close(fd)
             raise ValueError(f"{where}{name} is not a plain file")
-        if st.st_nlink > 1:     # another name of a file elsewhere: nbgrader's submission is a copy, which has none
+        if st.st_nlink > 1:  # another name of a file elsewhere: nbgrader's submission is a copy, which has none
             os.close(fd)
-            raise ValueError(f"{where}{name} is a hard link (the file has {st.st_nlink} names), not the student's "
-                             "own copy")
+            raise ValueError(
+                f"{where}{name} is a hard link (the file has {st.st_nlink} names), not the student's own copy"
+            )
         return fd
     finally:
         for d in fds:
@@ -115,9 +121,11 @@ def read_submission(course: str | Path, lab: str, student: str) -> nbformat.Note
         raise ValueError(f"the notebook cannot be opened ({e.strerror})") from None
     containers = data.count(b"{") + data.count(b"[")
     if containers > NOTEBOOK_CONTAINERS:
-        raise ValueError(f"the notebook holds about {containers:,} JSON objects and lists, over the "
-                         f"{NOTEBOOK_CONTAINERS:,} that are read (a lab's notebook holds a few thousand): it is not "
-                         f"read; ask for the notebook again with its outputs cleared")
+        raise ValueError(
+            f"the notebook holds about {containers:,} JSON objects and lists, over the "
+            f"{NOTEBOOK_CONTAINERS:,} that are read (a lab's notebook holds a few thousand): it is not "
+            f"read; ask for the notebook again with its outputs cleared"
+        )
     try:
         nb = nbformat.reads(data.decode("utf-8"), as_version=4)
     except Exception as e:  # noqa: BLE001 -- whatever nbformat says, the file is not a notebook
@@ -130,9 +138,11 @@ def read_submission(course: str | Path, lab: str, student: str) -> nbformat.Note
             (text if isinstance(text, str) else "".join(map(str, text))).encode("utf-8")
         except UnicodeEncodeError:
             gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id") or f"cell {i + 1}"
-            raise ValueError(f"the notebook holds text that is not Unicode ({gid} has a lone surrogate such as "
-                             f"\\ud800, which no editor writes): it cannot be run; ask for the notebook again "
-                             f"without it") from None
+            raise ValueError(
+                f"the notebook holds text that is not Unicode ({gid} has a lone surrogate such as "
+                f"\\ud800, which no editor writes): it cannot be run; ask for the notebook again "
+                f"without it"
+            ) from None
     return nb
 
 
@@ -152,9 +162,10 @@ def timestamp(course: str | Path, lab: str, student: str) -> tuple[str | None, s
     except UnicodeDecodeError:
         value = None
     if value == "":
-        return None, None                                   # empty: nbgrader ignores it too
+        return None, None  # empty: nbgrader ignores it too
     if value is not None and TIMESTAMP.fullmatch(value):
         from nbgrader.utils import parse_utc
+
         try:
             if isinstance(parse_utc(value), datetime.datetime):
                 return value, None
@@ -165,21 +176,23 @@ def timestamp(course: str | Path, lab: str, student: str) -> tuple[str | None, s
 
 def left_out(course: str | Path, lab: str, student: str) -> tuple[list[tuple[str, int]], str | None]:
     """The files beside the notebook that neither the boxes nor ``autograded/`` get (over the caps of
-    :func:`grading.sandbox.plain_files`), ``[(path, bytes)]``, and the note that names them (None when none is)."""
-    from grading import sandbox
+    :func:`grading.handin.plain_files`), ``[(path, bytes)]``, and the note that names them (None when none is)."""
+    from grading import handin
 
     folder = Path(course) / "submitted" / student / lab
-    _, left = sandbox.plain_files(folder, notebooks=False)
+    _, left = handin.plain_files(folder, notebooks=False)
     if not left:
         return [], None
     linked = {path for path, _ in left if os.lstat(folder / path).st_nlink > 1}
     them = "it" if len(left) == 1 else "them"
     names = ", ".join(f"{path} ({'a hard link' if path in linked else _size(size)})" for path, size in left[:5])
     more = f" and {len(left) - 5} more" if len(left) > 5 else ""
-    return left, (f"{names}{more} left out: a file beside the notebook may hold {sandbox.SEED_FILE_BYTES >> 20} MB, "
-                  f"all of them {sandbox.SEED_TOTAL_BYTES >> 20} MB in {sandbox.SEED_FILES} files, and be no hard "
-                  f"link; the notebook was graded without {them}, and autograded/ and the feedback do not hold "
-                  f"{them}")
+    return left, (
+        f"{names}{more} left out: a file beside the notebook may hold {handin.SEED_FILE_BYTES >> 20} MB, "
+        f"all of them {handin.SEED_TOTAL_BYTES >> 20} MB in {handin.SEED_FILES} files, and be no hard "
+        f"link; the notebook was graded without {them}, and autograded/ and the feedback do not hold "
+        f"{them}"
+    )
 
 
 def _size(n):

@@ -11,6 +11,7 @@ and sets up
 * the idle culler (``jupyterhub-idle-culler``): a server idle for ``idle_seconds`` is stopped;
 * a service token (``course-admin``) that scripts and the course's tests use to start servers and call them.
 """
+
 import json
 import os
 import sys
@@ -18,7 +19,7 @@ import sys
 c = get_config()  # noqa: F821 (provided by JupyterHub)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-if os.path.dirname(HERE) not in sys.path:          # the repository: `hub.spawner` imports from there
+if os.path.dirname(HERE) not in sys.path:  # the repository: `hub.spawner` imports from there
     sys.path.insert(0, os.path.dirname(HERE))
 STATE = os.environ["FUSIONLAB_HUB_DIR"]
 with open(os.path.join(STATE, "hub.json")) as fh:
@@ -30,7 +31,7 @@ c.JupyterHub.hub_port = s["hub_port"]
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{s['proxy_api_port']}"
 c.JupyterHub.db_url = f"sqlite:///{STATE}/jupyterhub.sqlite"
 c.JupyterHub.cookie_secret_file = os.path.join(STATE, "jupyterhub_cookie_secret")
-c.JupyterHub.cleanup_servers = True                 # the servers stop with the hub (Ctrl-C leaves none)
+c.JupyterHub.cleanup_servers = True  # the servers stop with the hub (Ctrl-C leaves none)
 c.ConfigurableHTTPProxy.command = [os.path.join(HERE, "node_modules", ".bin", "configurable-http-proxy")]
 c.ConfigurableHTTPProxy.pid_file = os.path.join(STATE, "proxy.pid")
 
@@ -62,8 +63,14 @@ c.JupyterHub.services = [
     {"name": "course-admin", "api_token": s["api_token"]},
 ]
 c.JupyterHub.load_roles = [
-    {"name": "idle-culler", "services": ["idle-culler"],
-     "scopes": ["list:users", "read:users:activity", "read:servers", "delete:servers"]},
-    {"name": "course-admin", "services": ["course-admin"],
-     "scopes": ["admin:users", "admin:servers", "access:servers", "list:users", "read:users"]},
+    {
+        "name": "idle-culler",
+        "services": ["idle-culler"],
+        "scopes": ["list:users", "read:users:activity", "read:servers", "delete:servers"],
+    },
+    {
+        "name": "course-admin",
+        "services": ["course-admin"],
+        "scopes": ["admin:users", "admin:servers", "access:servers", "list:users", "read:users"],
+    },
 ]

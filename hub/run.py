@@ -24,6 +24,7 @@ What it does, in order (``docs/hub.md`` has the whole story):
 5. JupyterHub, then: the URL and the accounts are printed; Ctrl-C (or SIGTERM) stops the hub, every server, the
    proxy and any process left of the accounts.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -80,8 +81,20 @@ def make_accounts(names):
         subprocess.run(["groupadd", "--system", GROUP], check=True)
     for name in names:
         if not ours(name):
-            subprocess.run(["useradd", "--create-home", "--gid", GROUP, "--shell", "/bin/bash",
-                            "--comment", "fusionlab hub account", name], check=True)
+            subprocess.run(
+                [
+                    "useradd",
+                    "--create-home",
+                    "--gid",
+                    GROUP,
+                    "--shell",
+                    "/bin/bash",
+                    "--comment",
+                    "fusionlab hub account",
+                    name,
+                ],
+                check=True,
+            )
         home = pwd.getpwnam(name).pw_dir
         os.chmod(home, 0o700)
 
@@ -108,8 +121,9 @@ def remove(prefix, folder):
         group = grp.getgrnam(GROUP)
     except KeyError:
         group = None
-    names = sorted(u.pw_name for u in pwd.getpwall()
-                   if group and u.pw_gid == group.gr_gid and u.pw_name.startswith(prefix))
+    names = sorted(
+        u.pw_name for u in pwd.getpwall() if group and u.pw_gid == group.gr_gid and u.pw_name.startswith(prefix)
+    )
     for name in names:
         stop_processes([pwd.getpwnam(name).pw_uid])
         subprocess.run(["userdel", "--remove", name], check=False, capture_output=True)
@@ -129,8 +143,12 @@ def nbgrader_config(path, lines):
 
 # The student view hides nbgrader's menu (it holds Formgrader and Course List), which leaves no way to open the
 # Assignments panel; on the hub, where the panel is how labs come and go, a menu of its own opens it.
-ASSIGNMENTS_MENU = {"id": "jp-mainmenu-nbgrader", "label": "Nbgrader", "rank": 900,
-                    "items": [{"command": "nbgrader:open-assignment-list", "rank": 0}]}
+ASSIGNMENTS_MENU = {
+    "id": "jp-mainmenu-nbgrader",
+    "label": "Nbgrader",
+    "rank": 900,
+    "items": [{"command": "nbgrader:open-assignment-list", "rank": 0}],
+}
 
 
 def student_settings(folder):
@@ -161,12 +179,13 @@ def terminal_settings(config, venv):
     rc.write_text(
         "# A terminal of the course's hub (written by make hub, hub/run.py): the user's own ~/.bashrc, then the\n"
         "# course's environment first on PATH (nbgrader, python, jupyter).\n"
-        '[ -f ~/.bashrc ] && . ~/.bashrc\n'
+        "[ -f ~/.bashrc ] && . ~/.bashrc\n"
         f"_bin={shlex.quote(bin_dir)}\n"
         '_p=":$PATH:"\n'
         'while [[ $_p == *":$_bin:"* ]]; do _p=${_p/":$_bin:"/:}; done\n'
-        '_p=${_p#:}; _p=${_p%:}\n'
-        'export PATH="$_bin${_p:+:$_p}"; unset _bin _p\n')
+        "_p=${_p#:}; _p=${_p%:}\n"
+        'export PATH="$_bin${_p:+:$_p}"; unset _bin _p\n'
+    )
     os.chmod(rc, 0o644)
     server = {"ServerApp": {"terminado_settings": {"shell_command": ["/bin/bash", "--rcfile", str(rc), "-i"]}}}
     for view in ("instructor", "student"):
@@ -184,8 +203,10 @@ def prepare(args, instructor, students):
     exchange.mkdir(exist_ok=True)
     os.chmod(exchange, 0o777)
     if unreachable(exchange):
-        raise SystemExit(f"other users cannot reach {folder} ({', '.join(map(str, unreachable(exchange)))} not open "
-                         f"to them), so nbgrader's exchange in it would not work: choose a --dir they can enter")
+        raise SystemExit(
+            f"other users cannot reach {folder} ({', '.join(map(str, unreachable(exchange)))} not open "
+            f"to them), so nbgrader's exchange in it would not work: choose a --dir they can enter"
+        )
     settings = folder / "hub.json"
     old = json.loads(settings.read_text()) if settings.is_file() else {}
     home = Path(pwd.getpwnam(instructor).pw_dir)
@@ -198,15 +219,26 @@ def prepare(args, instructor, students):
     nbgrader_config(folder / "config" / "student", common)
     nbgrader_config(folder / "config" / "instructor", common + [f"c.CourseDirectory.root = {str(course)!r}"])
     terminal_settings(folder / "config", ROOT / ".venv")
-    s = {"port": args.port, "hub_port": args.port + 1, "proxy_api_port": args.port + 2,
-         "instructor": instructor, "students": students, "course": str(course), "venv": str(ROOT / ".venv"),
-         "student_view": str(ROOT / "jupyter"), "student_settings": str(student_settings(folder)),
-         "instructor_settings": str(ROOT / "jupyter" / "lab" / "settings"),
-         "exchange": str(exchange), "course_id": COURSE_ID,
-         "memory_mb": args.memory_mb, "cpus": args.cpus, "idle_seconds": args.idle_seconds,
-         "student_password": old.get("student_password") or secrets.token_urlsafe(9),
-         "instructor_password": old.get("instructor_password") or secrets.token_urlsafe(32),
-         "api_token": old.get("api_token") or secrets.token_hex(32)}
+    s = {
+        "port": args.port,
+        "hub_port": args.port + 1,
+        "proxy_api_port": args.port + 2,
+        "instructor": instructor,
+        "students": students,
+        "course": str(course),
+        "venv": str(ROOT / ".venv"),
+        "student_view": str(ROOT / "jupyter"),
+        "student_settings": str(student_settings(folder)),
+        "instructor_settings": str(ROOT / "jupyter" / "lab" / "settings"),
+        "exchange": str(exchange),
+        "course_id": COURSE_ID,
+        "memory_mb": args.memory_mb,
+        "cpus": args.cpus,
+        "idle_seconds": args.idle_seconds,
+        "student_password": old.get("student_password") or secrets.token_urlsafe(9),
+        "instructor_password": old.get("instructor_password") or secrets.token_urlsafe(32),
+        "api_token": old.get("api_token") or secrets.token_hex(32),
+    }
     settings.touch(mode=0o600)
     os.chmod(settings, 0o600)
     settings.write_text(json.dumps(s, indent=1))
@@ -231,7 +263,8 @@ def closed_way_to_interpreter(share):
             f"({', '.join(map(str, closed))} not open to them), so no account's server could start. Either build "
             f".venv from a Python every user can run (rm -rf .venv; make env PYTHON=/usr/bin/python3.11), or let "
             f"make hub open only the way to it while the hub runs: make hub ARGS=--share-interpreter (adds o+x, "
-            f"traversal only, to {', '.join(map(str, closed))}; taken back when the hub stops)")
+            f"traversal only, to {', '.join(map(str, closed))}; taken back when the hub stops)"
+        )
     return closed
 
 
@@ -318,16 +351,23 @@ def up(url, timeout):
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m hub.run", description=__doc__.split("\n\n")[0])
     ap.add_argument("--students", type=int, default=3, help="student accounts (default 3)")
-    ap.add_argument("--port", type=int, default=8000, help="the hub's port on 127.0.0.1 (default 8000; the next "
-                                                           "two ports are the hub's and the proxy's own)")
+    ap.add_argument(
+        "--port",
+        type=int,
+        default=8000,
+        help="the hub's port on 127.0.0.1 (default 8000; the next two ports are the hub's and the proxy's own)",
+    )
     ap.add_argument("--dir", default="/srv/fusionlab-hub", help="the hub's folder (default /srv/fusionlab-hub)")
     ap.add_argument("--prefix", default="fl-", help="account names start with this (default fl-)")
     ap.add_argument("--memory-mb", type=int, default=2048, help="memory per server, MB (default 2048; 0: none)")
     ap.add_argument("--cpus", type=float, default=1.0, help="CPU cores per server (default 1; 0: no limit)")
     ap.add_argument("--idle-seconds", type=int, default=3600, help="the idle culler stops a server idle this long")
-    ap.add_argument("--share-interpreter", action="store_true",
-                    help="if the course's Python sits in a folder other users cannot enter (a private home), give "
-                         "the folders on its way the traversal bit while the hub runs")
+    ap.add_argument(
+        "--share-interpreter",
+        action="store_true",
+        help="if the course's Python sits in a folder other users cannot enter (a private home), give "
+        "the folders on its way the traversal bit while the hub runs",
+    )
     ap.add_argument("--remove", action="store_true", help="remove the accounts and the hub's folder, then exit")
     args = ap.parse_args(argv)
 
@@ -340,15 +380,18 @@ def main(argv=None):
         if not need.exists():
             raise SystemExit(f"{need} is missing: run `make hub` (it installs the hub first)")
     t0 = time.monotonic()
-    closed_way = closed_way_to_interpreter(args.share_interpreter)      # refuses before anything is made
+    closed_way = closed_way_to_interpreter(args.share_interpreter)  # refuses before anything is made
     instructor, students = accounts(args.prefix, args.students)
     say(f"accounts: {instructor} and {len(students)} student(s), group {GROUP}")
     make_accounts([instructor, *students])
     link_docs(students)
     folder, s = prepare(args, instructor, students)
     uids = [pwd.getpwnam(n).pw_uid for n in (instructor, *students)]
-    env = dict(os.environ, FUSIONLAB_HUB_DIR=str(folder),
-               PATH=f"{ROOT / '.venv' / 'bin'}{os.pathsep}{os.environ.get('PATH', '')}")
+    env = dict(
+        os.environ,
+        FUSIONLAB_HUB_DIR=str(folder),
+        PATH=f"{ROOT / '.venv' / 'bin'}{os.pathsep}{os.environ.get('PATH', '')}",
+    )
     stopping = []
 
     def stop(signum, frame):
@@ -356,38 +399,53 @@ def main(argv=None):
 
     hub = None
     try:
-        restore_modes(folder)                  # a run that was killed left its changes recorded: undo them first
+        restore_modes(folder)  # a run that was killed left its changes recorded: undo them first
         opened = open_interpreter(folder, closed_way)
         if opened:
-            say(f"opened for traversal (x only) while the hub runs, so the accounts reach the interpreter: "
-                f"{', '.join(opened)}")
+            say(
+                f"opened for traversal (x only) while the hub runs, so the accounts reach the interpreter: "
+                f"{', '.join(opened)}"
+            )
         closed = close_repository(folder)
         say(f"closed to other users while the hub runs: {', '.join(Path(p).name for p in closed) or 'nothing'}")
         signal.signal(signal.SIGINT, stop)
         signal.signal(signal.SIGTERM, stop)
         log = open(folder / "jupyterhub.log", "ab")
-        hub = subprocess.Popen([str(ROOT / ".venv" / "bin" / "jupyterhub"), "-f", str(HUB / "jupyterhub_config.py")],
-                               cwd=folder, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        hub = subprocess.Popen(
+            [str(ROOT / ".venv" / "bin" / "jupyterhub"), "-f", str(HUB / "jupyterhub_config.py")],
+            cwd=folder,
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
         url = f"http://127.0.0.1:{s['port']}/"
         if not up(url + "hub/api", 90):
             raise SystemExit(f"the hub did not answer on {url} within 90 s: see {folder / 'jupyterhub.log'}")
-        limits = (f"{args.memory_mb or 'no'} MB and {args.cpus or 'no limit of'} CPU per server; idle servers stop "
-                  f"after {args.idle_seconds} s")
-        print(f"""
+        limits = (
+            f"{args.memory_mb or 'no'} MB and {args.cpus or 'no limit of'} CPU per server; idle servers stop "
+            f"after {args.idle_seconds} s"
+        )
+        print(
+            f"""
 The course's JupyterHub is up ({time.monotonic() - t0:.0f} s): open {url}
-  instructor  {instructor:<14} password {s['instructor_password']}  (Formgrader: {url}user/{instructor}/formgrader)
-  students    {students[0]} ... {students[-1]}  password {s['student_password']}  (one password for all students)
-  exchange    {s['exchange']} (course id {COURSE_ID}); the instructor's course: {s['course']}
-  terminals   {s['venv']}/bin first on PATH (nbgrader, python, jupyter: the course's environment)
+  instructor  {instructor:<14} password {s["instructor_password"]}  (Formgrader: {url}user/{instructor}/formgrader)
+  students    {students[0]} ... {students[-1]}  password {s["student_password"]}  (one password for all students)
+  exchange    {s["exchange"]} (course id {COURSE_ID}); the instructor's course: {s["course"]}
+  terminals   {s["venv"]}/bin first on PATH (nbgrader, python, jupyter: the course's environment)
   limits      {limits}
-  log         {folder / 'jupyterhub.log'}; API token for scripts: {folder / 'hub.json'} (api_token)
+  log         {folder / "jupyterhub.log"}; API token for scripts: {folder / "hub.json"} (api_token)
 Ctrl-C stops the hub and every server. `make hub-remove` removes the accounts and {folder}.
-READY""", flush=True)
+READY""",
+            flush=True,
+        )
         while not stopping and hub.poll() is None:
             time.sleep(0.5)
         if hub.poll() is not None and not stopping:
-            print(f"the hub stopped by itself (exit status {hub.returncode}): see {folder / 'jupyterhub.log'}",
-                  file=sys.stderr)
+            print(
+                f"the hub stopped by itself (exit status {hub.returncode}): see {folder / 'jupyterhub.log'}",
+                file=sys.stderr,
+            )
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -408,6 +466,7 @@ READY""", flush=True)
             pid_file.unlink(missing_ok=True)
         left = stop_processes(uids)
         from hub.spawner import Limits
+
         Limits.remove_all([instructor, *students])
         restore_modes(folder)
         say(f"stopped{f' ({left} process(es) of the accounts were still running: stopped too)' if left else ''}")

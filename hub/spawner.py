@@ -15,6 +15,7 @@ with what the course adds:
 The paths are this class's settings, which ``hub/jupyterhub_config.py`` sets from what ``make hub`` (:mod:`hub.run`)
 prepared.
 """
+
 from __future__ import annotations
 
 import os
@@ -60,9 +61,13 @@ class Limits:
 
     def _v1(self):
         folders = []
-        for controller, files in (("memory", {"memory.limit_in_bytes": self.memory_bytes}),
-                                  ("cpu", {"cpu.cfs_period_us": 100_000,
-                                           "cpu.cfs_quota_us": int(self.cpus * 100_000) if self.cpus else None})):
+        for controller, files in (
+            ("memory", {"memory.limit_in_bytes": self.memory_bytes}),
+            (
+                "cpu",
+                {"cpu.cfs_period_us": 100_000, "cpu.cfs_quota_us": int(self.cpus * 100_000) if self.cpus else None},
+            ),
+        ):
             own = self._own(controller)
             if own is None or not any(files.values()):
                 continue
@@ -97,6 +102,7 @@ class Limits:
     def remove_all(names):
         """Remove the groups of these accounts wherever they are (a server whose start failed leaves its own)."""
         import glob
+
         for pattern in ("fusionlab-hub", "*/fusionlab-hub", "*/**/fusionlab-hub"):
             for parent in glob.glob(os.path.join(ROOT, pattern), recursive=True):
                 for name in names:
@@ -114,20 +120,27 @@ class CourseSpawner(LocalProcessSpawner):
     """LocalProcessSpawner with the course's two views, the exchange and per-server limits (module docstring)."""
 
     instructor = Unicode(help="the instructor's account: the one server with nbgrader's instructor tools").tag(
-        config=True)
+        config=True
+    )
     course = Unicode(help="the instructor's copy of the course (its nbgrader_config.py): that server's root").tag(
-        config=True)
+        config=True
+    )
     venv = Unicode(help="the course's environment: its bin goes first on every server's PATH").tag(config=True)
-    instructor_config = Unicode(help="a folder with the instructor's nbgrader_config.py (exchange, course id, "
-                                     "course root)").tag(config=True)
+    instructor_config = Unicode(
+        help="a folder with the instructor's nbgrader_config.py (exchange, course id, course root)"
+    ).tag(config=True)
     student_config = Unicode(help="a folder with the students' nbgrader_config.py (exchange, course id)").tag(
-        config=True)
-    instructor_settings = Unicode(help="the instructor's JupyterLab settings (the repository's jupyter/lab/settings: "
-                                       "no news pop-up, no update check)").tag(config=True)
-    student_view = Unicode(help="the student view's configuration folder (the repository's jupyter/)").tag(
-        config=True)
-    student_settings = Unicode(help="the students' JupyterLab settings: the student view's (jupyter/lab/settings) "
-                                    "and a menu that opens the Assignments panel").tag(config=True)
+        config=True
+    )
+    instructor_settings = Unicode(
+        help="the instructor's JupyterLab settings (the repository's jupyter/lab/settings: "
+        "no news pop-up, no update check)"
+    ).tag(config=True)
+    student_view = Unicode(help="the student view's configuration folder (the repository's jupyter/)").tag(config=True)
+    student_settings = Unicode(
+        help="the students' JupyterLab settings: the student view's (jupyter/lab/settings) "
+        "and a menu that opens the Assignments panel"
+    ).tag(config=True)
 
     def get_env(self):
         env = super().get_env()
@@ -161,6 +174,7 @@ class CourseSpawner(LocalProcessSpawner):
             become()
             if folder:
                 os.chdir(folder)
+
         return preexec
 
     async def start(self):
@@ -172,8 +186,9 @@ class CourseSpawner(LocalProcessSpawner):
                 self._limits = limits
                 self.log.info("%s: limits %s", self.user.name, ", ".join(limits.folders))
             except OSError as exc:
-                self.log.warning("%s: memory and CPU limits are not enforced here (control groups: %s)",
-                                 self.user.name, exc)
+                self.log.warning(
+                    "%s: memory and CPU limits are not enforced here (control groups: %s)", self.user.name, exc
+                )
         return await super().start()
 
     async def stop(self, now=False):

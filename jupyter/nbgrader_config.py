@@ -11,6 +11,7 @@ tests pass" (and how many written answers are still empty) -- at the top of the 
 puts a validator that reports it under the name nbgrader builds its validator by (this file is read after those
 modules are loaded, before each validation).
 """
+
 from fusionlab.nbgrader_compat import install_summary_validator
 
 install_summary_validator()

@@ -14,6 +14,7 @@ Exit status 1 if a median is over its budget, so ``make test-budget`` can stand 
     python tests/budget.py labs --repeat 3
     python tests/budget.py suite --repeat 3
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,8 +36,9 @@ def load():
 
 def fast_tier_commands():
     """The pytest commands of ``make test``, as make prints them (``make -n``), so this never drifts from it."""
-    out = subprocess.run(["make", "-n", "--no-print-directory", "test"], cwd=ROOT, capture_output=True,
-                         text=True, check=True).stdout
+    out = subprocess.run(
+        ["make", "-n", "--no-print-directory", "test"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
     return [line for line in out.splitlines() if "-m pytest" in line]
 
 
@@ -49,13 +51,17 @@ def time_suite(repeat, budget):
         for command in commands:
             run = subprocess.run(command, shell=True, cwd=ROOT, capture_output=True, text=True)
             if run.returncode != 0:
-                sys.exit(f"run {k + 1}: the fast tier failed, so its time means nothing:\n{command}\n"
-                         f"{run.stdout[-3000:]}{run.stderr[-2000:]}")
+                sys.exit(
+                    f"run {k + 1}: the fast tier failed, so its time means nothing:\n{command}\n"
+                    f"{run.stdout[-3000:]}{run.stderr[-2000:]}"
+                )
         times.append(time.perf_counter() - start)
         print(f"run {k + 1}: {times[-1]:6.1f} s   (load average {before} before, {load()} after)", flush=True)
     median = statistics.median(times)
-    print(f"fast tier: median {median:.1f} s of {repeat} against a budget of {budget:.0f} s "
-          f"({'within' if median <= budget else 'OVER'})")
+    print(
+        f"fast tier: median {median:.1f} s of {repeat} against a budget of {budget:.0f} s "
+        f"({'within' if median <= budget else 'OVER'})"
+    )
     return median <= budget
 
 
@@ -63,10 +69,12 @@ def run_lab(lab):
     """Wall time of one Run All of ``lab``'s solution in a fresh kernel, kernel start included."""
     import nbformat
     from fusionlab.execute import run_notebook
+
     nb = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     start = time.perf_counter()
-    run_notebook(nb, cwd=ROOT / "solutions" / lab, timeout=120, allow_errors=False,
-                 stderr=subprocess.DEVNULL)                           # the kernel's own warnings are not news here
+    run_notebook(
+        nb, cwd=ROOT / "solutions" / lab, timeout=120, allow_errors=False, stderr=subprocess.DEVNULL
+    )  # the kernel's own warnings are not news here
     return time.perf_counter() - start
 
 
@@ -79,10 +87,15 @@ def time_labs(repeat, budget, labs):
         median = statistics.median(times)
         if median > budget:
             over.append(lab)
-        print(f"{lab:26s} {median:6.1f}s  {' '.join(f'{t:5.1f}' for t in times):17s} {before}"
-              f"{'   OVER ' + format(budget, '.0f') + ' s' if median > budget else ''}", flush=True)
-    print(f"{len(labs) - len(over)} of {len(labs)} labs within {budget:.0f} s" +
-          (f"; over: {', '.join(over)}" if over else ""))
+        print(
+            f"{lab:26s} {median:6.1f}s  {' '.join(f'{t:5.1f}' for t in times):17s} {before}"
+            f"{'   OVER ' + format(budget, '.0f') + ' s' if median > budget else ''}",
+            flush=True,
+        )
+    print(
+        f"{len(labs) - len(over)} of {len(labs)} labs within {budget:.0f} s"
+        + (f"; over: {', '.join(over)}" if over else "")
+    )
     return not over
 
 

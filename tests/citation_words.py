@@ -7,6 +7,7 @@ sentence still says what §5.3.1 is about, not what §5.4.1 is.
 Where citations are read: the markdown of every solution notebook, the text its code cells print, and the messages of
 the checks (``lib/fusionlab/checks``), whose seed is the lab's.
 """
+
 from __future__ import annotations
 
 import ast
@@ -24,7 +25,7 @@ def _sentence(text, start, end):
     """The sentence of ``text`` around the span [start, end)."""
     before = [m.end() for m in END.finditer(text, 0, start)]
     after = END.search(text, end)
-    return text[before[-1] if before else 0:after.start() if after else len(text)]
+    return text[before[-1] if before else 0 : after.start() if after else len(text)]
 
 
 def cited(text, fallback, where):
@@ -35,16 +36,16 @@ def cited(text, fallback, where):
     text = MD_LINK.sub(r"\1", text)
     found = []
     for m in CITATION.finditer(text):
-        if m.group("kind") == "§" and COURSE_OWN.search(text[max(0, m.start() - 40):m.start()]):
+        if m.group("kind") == "§" and COURSE_OWN.search(text[max(0, m.start() - 40) : m.start()]):
             continue
         para = text.rfind("\n\n", 0, m.start()) + 1
-        seeds = [next(g for g in s.groups() if g) for s in SEED.finditer(text[para:m.start() + 4])]
+        seeds = [next(g for g in s.groups() if g) for s in SEED.finditer(text[para : m.start() + 4])]
         seed = seeds[-1] if seeds else fallback
         if seed is None:
             continue
         kind = {"§": "§", "T": "Table "}.get(m.group("kind")[0], "eq ")
         end = text.find("\n\n", m.end())
-        window = text[max(0, m.start() - 300):end if end >= 0 else len(text)]
+        window = text[max(0, m.start() - 300) : end if end >= 0 else len(text)]
         sentence = " ".join(MATH.sub(" ", window).split())
         for n in _numbers(m.group("nums")):
             found.append((seed, f"{kind}{n}".replace("§ ", "§"), sentence, where))
@@ -94,11 +95,13 @@ def unnamed(found, rows):
     bad = []
     for seed, key, sentence, where in found:
         if (seed, key) not in rows:
-            continue                                    # tests/test_citations.py says which rows are missing
+            continue  # tests/test_citations.py says which rows are missing
         words = rows[(seed, key)][1]
         if not words or not says(sentence, words):
-            bad.append(f"{where}: seed {seed} {key} ({rows[(seed, key)][0]}; words: {'; '.join(words) or 'none'}) "
-                       f"in: {sentence[:160]}")
+            bad.append(
+                f"{where}: seed {seed} {key} ({rows[(seed, key)][0]}; words: {'; '.join(words) or 'none'}) "
+                f"in: {sentence[:160]}"
+            )
     return bad
 
 

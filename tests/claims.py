@@ -7,6 +7,7 @@ notebook, never a figure's size or style. A number quoted from a seed is backed 
 place in tests/seed_numbers.csv (the seeds themselves are not part of the course); one quoted from the benchmark by
 the README's table and lib/fusionlab/data/capstone_bar.csv.
 """
+
 from __future__ import annotations
 
 import ast
@@ -20,19 +21,53 @@ from notebook_text import ROOT, is_header, load, outputs, read_text, source
 
 SEED_TABLE = Path(__file__).with_name("seed_numbers.csv")
 
-NUMBER = re.compile(r"(?<![\w.^_\\/{-])(?P<sign>[−-])?"
-                    r"(?P<num>\d{1,3}(?:,\d{3})+|\d{1,3}(?:[ \u202f\u00a0]\d{3})+(?![\d.])|\d+)"
-                    r"(?P<frac>\.\d+)?"
-                    r"(?:[eE](?P<exp>[−+-]?\d+)|\s?[·×]\s?10(?P<sup>[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))?(?![\w]|\.\d)")
+NUMBER = re.compile(
+    r"(?<![\w.^_\\/{-])(?P<sign>[−-])?"
+    r"(?P<num>\d{1,3}(?:,\d{3})+|\d{1,3}(?:[ \u202f\u00a0]\d{3})+(?![\d.])|\d+)"
+    r"(?P<frac>\.\d+)?"
+    r"(?:[eE](?P<exp>[−+-]?\d+)|\s?[·×]\s?10(?P<sup>[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))?(?![\w]|\.\d)"
+)
 RANGE_DASH = re.compile(r"(?<=\d)\s*[–]\s*(?=\d)")
 RATIO = re.compile(r"\s?(?:×|times\b)(?!\s*\d)")
 _SUP = str.maketrans("⁻⁺⁰¹²³⁴⁵⁶⁷⁸⁹", "-+0123456789")
 
 # units, longest first; a unit is what follows a number (after at most one space)
-_UNITS = ["°/h/√Hz", "µrad/s/√Hz", "µ°/s/√Hz", "°/√h", "°/h", "°/s", "rad/s²", "rad/s", "m/s²", "m/s", "µrad", "mrad",
-          "rad", "µg/√Hz", "µg", "mg", "dB", "ms", "µs", "kHz", "Hz", "km", "cm", "mm", "µT", "nT", "rpm", "deg/s",
-          "deg",
-          "°", "%", "s", "m", "g"]
+_UNITS = [
+    "°/h/√Hz",
+    "µrad/s/√Hz",
+    "µ°/s/√Hz",
+    "°/√h",
+    "°/h",
+    "°/s",
+    "rad/s²",
+    "rad/s",
+    "m/s²",
+    "m/s",
+    "µrad",
+    "mrad",
+    "rad",
+    "µg/√Hz",
+    "µg",
+    "mg",
+    "dB",
+    "ms",
+    "µs",
+    "kHz",
+    "Hz",
+    "km",
+    "cm",
+    "mm",
+    "µT",
+    "nT",
+    "rpm",
+    "deg/s",
+    "deg",
+    "°",
+    "%",
+    "s",
+    "m",
+    "g",
+]
 UNIT = re.compile(r"\s?(?P<u>" + "|".join(re.escape(u) for u in _UNITS) + r")(?![\w²/])")
 _ALIAS = {"deg": "°", "deg/s": "°/s"}
 
@@ -63,12 +98,14 @@ def _printed_unit(line, end):
     return u
 
 
-STOP = set("""the a an and or of to in on at by for from with as is are be was were it its this that these those
+STOP = set(
+    """the a an and or of to in on at by for from with as is are be was were it its this that these those
 which what when where who how than then there their they them we our ours you your his her not no nor but if so such
 into onto over under about after before between each every all any both more most less least only also same other
 one two three four five six seven eight nine ten per via vs gives give given gets get has have had does did do
 can could would should may might must will shall here now just very much many few while whose out up down off
-deg rad ms hz""".split())
+deg rad ms hz""".split()
+)
 
 
 def words(text):
@@ -132,8 +169,10 @@ def section_at(marks, offset):
     return [s for o, s in marks if o <= offset][-1]
 
 
-REFERS = re.compile(r"\b(?:Parts?\s+(?P<parts>[A-Z](?:\s*(?:,|and|–|-)\s*[A-Z])*)\b|(?P<ex>Exercises?|Q)\s*"
-                    r"(?P<n>\d+(?:\s*(?:,|and|–)\s*\d+)*))")
+REFERS = re.compile(
+    r"\b(?:Parts?\s+(?P<parts>[A-Z](?:\s*(?:,|and|–|-)\s*[A-Z])*)\b|(?P<ex>Exercises?|Q)\s*"
+    r"(?P<n>\d+(?:\s*(?:,|and|–)\s*\d+)*))"
+)
 
 
 def referred_sections(sentence, names):
@@ -159,31 +198,112 @@ def referred_sections(sentence, names):
 @dataclass
 class Printed:
     value: float
-    sig: int | None          # None: a literal set in code
+    sig: int | None  # None: a literal set in code
     ratio: bool
     unit: str | None
-    units: frozenset         # the units the line names in words
-    context: frozenset       # the words of its line (and of its table's header, for a row with no words of its own)
+    units: frozenset  # the units the line names in words
+    context: frozenset  # the words of its line (and of its table's header, for a row with no words of its own)
     section: int
     text: str = ""
-    other: frozenset = frozenset()   # the words of a table's other columns
+    other: frozenset = frozenset()  # the words of a table's other columns
     column: frozenset | None = None  # in a table: the words of its column's header
     table: int | None = None
-    row: frozenset = frozenset()      # the words of its own line
-    beside: frozenset = frozenset()   # the words right before and after it on its line
+    row: frozenset = frozenset()  # the words of its own line
+    beside: frozenset = frozenset()  # the words right before and after it on its line
 
 
-PLOT_CALLS = {"figure", "subplots", "plot", "loglog", "semilogx", "semilogy", "scatter", "bar", "barh", "hist",
-              "axhline",
-              "axvline", "axhspan", "axvspan", "fill_between", "text", "annotate", "legend", "set_xlim", "set_ylim",
-              "xlim", "ylim", "set_xticks", "set_yticks", "grid", "tight_layout", "subplots_adjust", "add_subplot",
-              "colorbar", "imshow", "pcolormesh", "contour", "step", "errorbar", "set_title", "suptitle", "savefig",
-              "set_aspect", "twinx", "inset_axes", "stem", "boxplot", "violinplot", "quiver", "arrow", "Rectangle",
-              "Circle", "FancyArrowPatch", "set_position", "margins", "tick_params", "set_size_inches"}
-PLOT_KEYWORDS = {"figsize", "dpi", "alpha", "lw", "linewidth", "ms", "markersize", "fontsize", "size", "width",
-                 "height", "s", "zorder", "pad", "wspace", "hspace", "rotation", "ncol", "bins", "loc", "labelsize",
-                 "length", "headwidth", "headlength", "ls", "capsize", "elinewidth", "framealpha", "shrink", "aspect",
-                 "bottom", "top", "left", "right", "color", "c"}
+PLOT_CALLS = {
+    "figure",
+    "subplots",
+    "plot",
+    "loglog",
+    "semilogx",
+    "semilogy",
+    "scatter",
+    "bar",
+    "barh",
+    "hist",
+    "axhline",
+    "axvline",
+    "axhspan",
+    "axvspan",
+    "fill_between",
+    "text",
+    "annotate",
+    "legend",
+    "set_xlim",
+    "set_ylim",
+    "xlim",
+    "ylim",
+    "set_xticks",
+    "set_yticks",
+    "grid",
+    "tight_layout",
+    "subplots_adjust",
+    "add_subplot",
+    "colorbar",
+    "imshow",
+    "pcolormesh",
+    "contour",
+    "step",
+    "errorbar",
+    "set_title",
+    "suptitle",
+    "savefig",
+    "set_aspect",
+    "twinx",
+    "inset_axes",
+    "stem",
+    "boxplot",
+    "violinplot",
+    "quiver",
+    "arrow",
+    "Rectangle",
+    "Circle",
+    "FancyArrowPatch",
+    "set_position",
+    "margins",
+    "tick_params",
+    "set_size_inches",
+}
+PLOT_KEYWORDS = {
+    "figsize",
+    "dpi",
+    "alpha",
+    "lw",
+    "linewidth",
+    "ms",
+    "markersize",
+    "fontsize",
+    "size",
+    "width",
+    "height",
+    "s",
+    "zorder",
+    "pad",
+    "wspace",
+    "hspace",
+    "rotation",
+    "ncol",
+    "bins",
+    "loc",
+    "labelsize",
+    "length",
+    "headwidth",
+    "headlength",
+    "ls",
+    "capsize",
+    "elinewidth",
+    "framealpha",
+    "shrink",
+    "aspect",
+    "bottom",
+    "top",
+    "left",
+    "right",
+    "color",
+    "c",
+}
 
 
 def _call_name(node):
@@ -246,7 +366,7 @@ def printed_lines(text, section):
     number's column (and the other columns' header words, which the prose must not name)."""
     found = []
     for block in re.split(r"\n\s*\n", text):
-        lines = [re.sub(r"(?<=\d)x\b", "×", line) for line in block.splitlines()]   # a ratio printed "1.36x"
+        lines = [re.sub(r"(?<=\d)x\b", "×", line) for line in block.splitlines()]  # a ratio printed "1.36x"
         headers = []
         for line in lines:
             nums = list(NUMBER.finditer(line))
@@ -263,7 +383,7 @@ def printed_lines(text, section):
                 if table:
                     column = set()
                     row = _segments(line)
-                    label = not NUMBER.fullmatch(row[0][2] and line[row[0][0]:row[0][1]] or "0")
+                    label = not NUMBER.fullmatch(row[0][2] and line[row[0][0] : row[0][1]] or "0")
                     k = nums.index(m)
                     for h in headers:
                         segs = _segments(h)
@@ -284,13 +404,27 @@ def printed_lines(text, section):
                         other |= set().union(*(sg[2] for sg in segs if sg is not best))
                 elif len(own) < 2 and headers:
                     context |= words(headers[-1])
-                found.append(Printed(abs(v), sig, bool(PRINTED_RATIO.match(line, m.end())),
-                                     _printed_unit(line, m.end()),
-                                     units, frozenset(context), section, line.strip(), frozenset(other - context),
-                                     frozenset(column) if column is not None else None,
-                                     id(headers) if table else None, frozenset(own),
-                                     frozenset(words(" ".join(line[:m.start()].split()[-3:]) + " "
-                                                     + " ".join(line[m.end():].split()[:3])))))
+                found.append(
+                    Printed(
+                        abs(v),
+                        sig,
+                        bool(PRINTED_RATIO.match(line, m.end())),
+                        _printed_unit(line, m.end()),
+                        units,
+                        frozenset(context),
+                        section,
+                        line.strip(),
+                        frozenset(other - context),
+                        frozenset(column) if column is not None else None,
+                        id(headers) if table else None,
+                        frozenset(own),
+                        frozenset(
+                            words(
+                                " ".join(line[: m.start()].split()[-3:]) + " " + " ".join(line[m.end() :].split()[:3])
+                            )
+                        ),
+                    )
+                )
     return found
 
 
@@ -306,8 +440,10 @@ def backing(nb):
         if cell["cell_type"] != "code":
             continue
         pool += printed_lines(outputs(cell), sec[i][-1][1])
-        pool += [Printed(v, None, False, None, frozenset(), names, sec[i][-1][1])
-                 for v, names in set_in_code(source(cell), named=True)]
+        pool += [
+            Printed(v, None, False, None, frozenset(), names, sec[i][-1][1])
+            for v, names in set_in_code(source(cell), named=True)
+        ]
     return pool
 
 
@@ -327,35 +463,48 @@ def matches(x, sig, v, printed_sig):
 # the prose
 
 _EQ = r"[1-9]\d?\.[1-9]\d?"
-_REF = (r"\d+(?:\.\d+)*(?:\s*[–-]\s*\d+(?:\.\d+)*)*"
-        r"(?:\s*(?:,\s*and|,\s*also|\(also|,|and|&)\s*\d+(?:\.\d+)*(?:\s*[–-]\s*\d+(?:\.\d+)*)*)*")
-SEED_MARK = re.compile(rf"`make bench`|\b(?:eqs?\.?|Tables?|Figs?\.?|Figures?)\s*{_REF}|§\s*{_REF}"
-                       rf"|\(\s*{_EQ}(?:\s*(?:[–-]|,|and)\s*{_EQ})*(?=\s*[),;])",
-                       re.IGNORECASE)
-CITED = re.compile(rf"(?:\b(?P<kind>[Ee]qs?\.?|Tables?|Figs?\.?|Figures?)|(?P<sec>§))\s*(?P<nums>{_REF})"
-                   rf"|\((?P<bare>\s*{_EQ}(?:\s*(?:[–-]|,|and)\s*{_EQ})*)(?=\s*[),;])")
+_REF = (
+    r"\d+(?:\.\d+)*(?:\s*[–-]\s*\d+(?:\.\d+)*)*"
+    r"(?:\s*(?:,\s*and|,\s*also|\(also|,|and|&)\s*\d+(?:\.\d+)*(?:\s*[–-]\s*\d+(?:\.\d+)*)*)*"
+)
+SEED_MARK = re.compile(
+    rf"`make bench`|\b(?:eqs?\.?|Tables?|Figs?\.?|Figures?)\s*{_REF}|§\s*{_REF}"
+    rf"|\(\s*{_EQ}(?:\s*(?:[–-]|,|and)\s*{_EQ})*(?=\s*[),;])",
+    re.IGNORECASE,
+)
+CITED = re.compile(
+    rf"(?:\b(?P<kind>[Ee]qs?\.?|Tables?|Figs?\.?|Figures?)|(?P<sec>§))\s*(?P<nums>{_REF})"
+    rf"|\((?P<bare>\s*{_EQ}(?:\s*(?:[–-]|,|and)\s*{_EQ})*)(?=\s*[),;])"
+)
 NOT_A_CLAIM = [
     SEED_MARK,
-    re.compile(rf"\b(?:Labs?|[Ee]xercises?|[Qq]uestions?|Q|Part|[Ss]teps?|[Ss]eeds?|cells?|rows?|columns?|chapters?|ch\.)"
-               rf"\s*{_REF}"),
-    re.compile(r"\$\$.*?\$\$", re.S), re.compile(r"\$[^$\n]+\$"), re.compile(r"`[^`\n]+`"),
-    re.compile(r"\[[^\]\n]*\]\([^)\n]*\)"),                 # a link's target
+    re.compile(
+        rf"\b(?:Labs?|[Ee]xercises?|[Qq]uestions?|Q|Part|[Ss]teps?|[Ss]eeds?|cells?|rows?|columns?|chapters?|ch\.)"
+        rf"\s*{_REF}"
+    ),
+    re.compile(r"\$\$.*?\$\$", re.S),
+    re.compile(r"\$[^$\n]+\$"),
+    re.compile(r"`[^`\n]+`"),
+    re.compile(r"\[[^\]\n]*\]\([^)\n]*\)"),  # a link's target
     re.compile(r"\b(?:refs?\.?|Std|doi:|Data)\s*[\d.()/:]+(?:\s*[–-]\s*\d+)?(?:,\s*\d+)*"),  # a bibliography entry
-    re.compile(r"^\W*\(?[a-z]\)\s*\d+(?:\.\d+)?\s*—"),      # a rubric line: "(a) 0.75 — ..."
-    re.compile(r"\b\d+(?:\.\d+)?\s*(?:points?|pts?)\b(?!\s+(?:per|of|a|the|in)\b)"),     # the marks of a question
-    re.compile(r"\b\d{4}\b(?=[);,]| ?\))"),                  # a year in a reference: (Laidig et al., 2021)
-    re.compile(r"±\s?90\s?°"),                               # the pitch of gimbal lock: geometry, not a result
+    re.compile(r"^\W*\(?[a-z]\)\s*\d+(?:\.\d+)?\s*—"),  # a rubric line: "(a) 0.75 — ..."
+    re.compile(r"\b\d+(?:\.\d+)?\s*(?:points?|pts?)\b(?!\s+(?:per|of|a|the|in)\b)"),  # the marks of a question
+    re.compile(r"\b\d{4}\b(?=[);,]| ?\))"),  # a year in a reference: (Laidig et al., 2021)
+    re.compile(r"±\s?90\s?°"),  # the pitch of gimbal lock: geometry, not a result
     # names: ADXL345, 9DOF, 3D, 2n
     re.compile(r"\bWGS-84\b|\b[A-Z]+\d+[A-Z\d]*\b|\b\d+(?![eE][-+−]?\d)[A-Za-z]+\d*\b"),
 ]
 SENTENCE = re.compile(r"(?<=[.!?;])\s+|\n\s*\n|\n(?=\s*(?:[*\-]|\d+[.)]|\([a-z]\))\s)")
 ABBREVIATION = re.compile(r"(?:\b(?:Figs?|[Ee]qs?|e\.g|i\.e|ch|cf|al|vs|refs?|No|approx)\.|\d\.)$")
 # a small integer is a claim where it counts something
-COUNTED = re.compile(r"\s+"
-                     r"(?:(?!(?:the|a|an|of|and|or|to|in|on|at|by|for|with|per)\b)[A-Za-z]{3,}[\s-]){0,2}?"
-                     r"(?:trials?|recordings?|samples?|runs?|turns?|periods?|fixes|windows?|"
-                     r"states?|triads?|positions?|accelerometers?|gyros?|steps|seeds?|filters?|sigma points|cases|"
-                     r"orders?|knobs?|sweeps?|passes|outages?|users?|students?|axes|rotations?|digits?|bins?)\b", re.I)
+COUNTED = re.compile(
+    r"\s+"
+    r"(?:(?!(?:the|a|an|of|and|or|to|in|on|at|by|for|with|per)\b)[A-Za-z]{3,}[\s-]){0,2}?"
+    r"(?:trials?|recordings?|samples?|runs?|turns?|periods?|fixes|windows?|"
+    r"states?|triads?|positions?|accelerometers?|gyros?|steps|seeds?|filters?|sigma points|cases|"
+    r"orders?|knobs?|sweeps?|passes|outages?|users?|students?|axes|rotations?|digits?|bins?)\b",
+    re.I,
+)
 
 
 def sentences(text):
@@ -374,7 +523,7 @@ def prose(cell):
     """The text of a markdown cell that can claim: no solution markers, no rubric, no display math."""
     text = re.sub(r"### (BEGIN|END) SOLUTION", " ", source(cell))
     text = re.split(r"\*?Rubric\b", text)[0]
-    text = re.sub(r"^#+ .*$", " ", text, flags=re.M)                       # a heading names, it does not claim
+    text = re.sub(r"^#+ .*$", " ", text, flags=re.M)  # a heading names, it does not claim
     return re.sub(r"\$\$.*?\$\$", " ", text, flags=re.S)
 
 
@@ -388,14 +537,14 @@ class Claim:
     unit: str | None
     window: frozenset
     sentence: str
-    cited: list = field(default_factory=list)      # (seed, place) the sentence quotes from
+    cited: list = field(default_factory=list)  # (seed, place) the sentence quotes from
     clause: int = 0
     at: int = 0
     lead: str = ""
     after: frozenset = frozenset()
     clause_words: frozenset = frozenset()
     offset: int = 0
-    bench: bool = False              # its paragraph quotes the benchmark
+    bench: bool = False  # its paragraph quotes the benchmark
     counted: frozenset | None = None  # a small integer that counts: the noun ("trial")
 
 
@@ -414,7 +563,7 @@ def places(sentence, seed):
     its ends and what lies between (compared as numbers)."""
     out = []
     for m in CITED.finditer(sentence):
-        s = _seed_of(sentence[:m.start()], seed)
+        s = _seed_of(sentence[: m.start()], seed)
         kind = "eq" if m.group("bare") else (m.group("kind") or m.group("sec")).lower().rstrip(".")
         nums = m.group("bare") or m.group("nums")
         kind = {"eqs": "eq", "tables": "table", "figs": "fig", "figure": "fig", "figures": "fig"}.get(kind, kind)
@@ -444,7 +593,7 @@ def claims(nb):
             for sentence in sentences(para):
                 if sentence.rstrip().endswith("?"):
                     continue
-                prefix = para[:para.find(sentence)] if sentence in para else ""
+                prefix = para[: para.find(sentence)] if sentence in para else ""
                 at = source(cell).find(sentence.strip()[:40])
                 for c in _claims_of(i, sentence, _seed_of(prefix, seed)):
                     c.offset = max(at, 0)
@@ -472,22 +621,37 @@ def _claims_of(i, sentence, seed):
             counted = frozenset(words(cm.group(0).split()[-1]))
         clause = max([0] + [e + 1 for e in clause_ends if e < m.start()])
         start = max([clause] + [n.end() for n in ms if n.end() <= m.start()])
-        window = words(sentence[start:m.start()]) - _unit_words
+        window = words(sentence[start : m.start()]) - _unit_words
         j = k
-        while not window and j > 0 and ms[j - 1].end() > clause:           # a list: (3.85°, 4.36°) shares its words
+        while not window and j > 0 and ms[j - 1].end() > clause:  # a list: (3.85°, 4.36°) shares its words
             j -= 1
             lead = max([clause] + [n.end() for n in ms if n.end() <= ms[j].start()])
-            window = words(sentence[lead:ms[j].start()]) - _unit_words
+            window = words(sentence[lead : ms[j].start()]) - _unit_words
         nxt = min([e for e in clause_ends if e > m.end()] + [n.start() for n in ms if n.start() > m.end()])
-        after = words(sentence[m.end():nxt]) - _unit_words
-        range_end = re.match(r"\s*–\s*\d+(?:\.\d+)?", bare[m.end():])
+        after = words(sentence[m.end() : nxt]) - _unit_words
+        range_end = re.match(r"\s*–\s*\d+(?:\.\d+)?", bare[m.end() :])
         end = m.end() + (range_end.end() if range_end else 0)
         ratio = bool(RATIO.match(bare, m.end())) or bool(RATIO.match(bare, end))
         unit = _unit(bare, m.end()) or (_unit(bare, end) if range_end else None)
-        out.append(Claim(i, m.group(0).strip(), x, sig, ratio, unit, frozenset(window), " ".join(sentence.split()),
-                         cited, clause, m.start(), sentence[max(start, 0):m.start()], frozenset(after),
-                         frozenset(words(sentence[clause:min(e for e in clause_ends if e >= m.end())]) - _unit_words),
-                         counted=counted))
+        out.append(
+            Claim(
+                i,
+                m.group(0).strip(),
+                x,
+                sig,
+                ratio,
+                unit,
+                frozenset(window),
+                " ".join(sentence.split()),
+                cited,
+                clause,
+                m.start(),
+                sentence[max(start, 0) : m.start()],
+                frozenset(after),
+                frozenset(words(sentence[clause : min(e for e in clause_ends if e >= m.end())]) - _unit_words),
+                counted=counted,
+            )
+        )
     return out
 
 
@@ -496,6 +660,7 @@ _unit_words = words(" ".join(_UNITS) + " deg rad")
 
 # ----------------------------------------------------------------------------------------------------------------
 # seed numbers
+
 
 def seed_table():
     """{(seed, kind, number): [values]} from tests/seed_numbers.csv."""
@@ -549,15 +714,18 @@ def candidates(claim, pool, allowed):
     if claim.ratio:
         near = [p for p in near if p.sig is None or p.ratio]
     if claim.unit:
-        near = [p for p in near if p.sig is None or p.unit == claim.unit
-                or (p.unit is None and (not p.units or claim.unit in p.units))]
+        near = [
+            p
+            for p in near
+            if p.sig is None or p.unit == claim.unit or (p.unit is None and (not p.units or claim.unit in p.units))
+        ]
     return near
 
 
 def same_quantity(claim, p):
     """The words around the claim name what the printed number is (its line, or its row and column), and no other
     column of its table; a line or a prose clause with no words cannot tell, and passes."""
-    if p.sig is None:                                     # set in code: a count only under its own name (runs=10)
+    if p.sig is None:  # set in code: a count only under its own name (runs=10)
         return claim.counted is None or bool(claim.counted & p.context)
     if claim.counted is not None:
         return bool(claim.counted & p.beside)
@@ -577,14 +745,16 @@ def why_unbacked(claim, near, seeds, bench):
         return None
     if any(math.isclose(claim.x, v, rel_tol=1e-9) or float(f"{v:.{claim.sig}g}") == claim.x for v in seeds):
         return None
-    if claim.bench and any(math.isclose(claim.x, v, rel_tol=1e-9) or float(f"{v:.{claim.sig}g}") == claim.x
-                                            for v in bench):
+    if claim.bench and any(
+        math.isclose(claim.x, v, rel_tol=1e-9) or float(f"{v:.{claim.sig}g}") == claim.x for v in bench
+    ):
         return None
     if near:
         return "printed in its section only for another quantity: " + " | ".join(sorted({p.text[:70] for p in near}))
     if claim.cited:
-        return "neither printed in its section nor listed in tests/seed_numbers.csv for " + \
-            ", ".join(f"{s} {k} {lo}" + (f"–{hi}" if hi != lo else "") for s, k, lo, hi in claim.cited)
+        return "neither printed in its section nor listed in tests/seed_numbers.csv for " + ", ".join(
+            f"{s} {k} {lo}" + (f"–{hi}" if hi != lo else "") for s, k, lo, hi in claim.cited
+        )
     return "not printed in its section (with its unit) nor set there"
 
 
@@ -606,8 +776,11 @@ def unpaired(claim, prev, near, near_prev, clause_claims):
     return not any(a.table == b.table and a.column == b.column for a in tables for b in others)
 
 
-COMPARES = re.compile(r"\b(?:larger|smaller|bigger|better|worse|higher|lower|faster|slower|more accurate|less accurate)"
-                      r"\s+than\b|\brecovers\b|\bstays? near (?:0|zero)\b|\bnear zero\b|\bbeats?\b", re.IGNORECASE)
+COMPARES = re.compile(
+    r"\b(?:larger|smaller|bigger|better|worse|higher|lower|faster|slower|more accurate|less accurate)"
+    r"\s+than\b|\brecovers\b|\bstays? near (?:0|zero)\b|\bnear zero\b|\bbeats?\b",
+    re.IGNORECASE,
+)
 
 
 def unbacked(nb):
@@ -624,15 +797,20 @@ def unbacked(nb):
     found = claims(nb)
     for c in found:
         own = section_at(sec[c.cell], c.offset)
-        allowed = everything if SUMMARY_TITLE.match(titles.get(own, "")) else {own} | referred_sections(c.sentence,
-                                                                                                          names)
+        allowed = (
+            everything if SUMMARY_TITLE.match(titles.get(own, "")) else {own} | referred_sections(c.sentence, names)
+        )
         near = candidates(c, pool, allowed)
         if not any(same_quantity(c, p) for p in near):
             near += [p for p in candidates(c, pool, everything) if restated(c, p)]
         reason = why_unbacked(c, near, seed_values(c.cited, table), bench)
         same_clause = [d for d in found if d.cell == c.cell and d.sentence == c.sentence and d.clause == c.clause]
-        if not reason and prev is not None and prev.sentence == c.sentence and unpaired(c, prev, near, near_prev,
-                                                                                           same_clause):
+        if (
+            not reason
+            and prev is not None
+            and prev.sentence == c.sentence
+            and unpaired(c, prev, near, near_prev, same_clause)
+        ):
             reason = "compared with a number of another column of its table"
         if reason:
             bad.append((c.cell, c.shown, reason, c.sentence))

@@ -1,4 +1,5 @@
 """Shared fixtures: a scratch nbgrader course built from this repository's solutions."""
+
 from __future__ import annotations
 
 import os
@@ -21,11 +22,13 @@ LABS = sorted(p.name for p in (ROOT / "solutions").iterdir() if p.is_dir() and p
 
 def nbgrader(args, cwd, timeout=600):
     """Run an nbgrader command in ``cwd`` with this interpreter's bin first on PATH (nbgrader calls `alembic`)."""
-    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""),
-               MPLBACKEND="Agg")
+    env = dict(
+        os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg"
+    )
     exe = Path(sys.executable).parent / "nbgrader"
-    res = subprocess.run([str(exe), *args, "--log-level=WARN"], cwd=cwd, env=env, capture_output=True, text=True,
-                         timeout=timeout)
+    res = subprocess.run(
+        [str(exe), *args, "--log-level=WARN"], cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout
+    )
     if res.returncode != 0:
         raise AssertionError(f"nbgrader {' '.join(args)} failed ({res.returncode}):\n{res.stdout}\n{res.stderr}")
     return res
@@ -47,6 +50,7 @@ def course(tmp_path_factory):
 def library_as_student(monkeypatch):
     """Let a test hand the library's own functions to a check as the "student's" answer (checks forbid them)."""
     from fusionlab import checks
+
     monkeypatch.setattr(checks._core, "_REFERENCES", {})
 
 
@@ -61,6 +65,7 @@ class _Recording:
 
     def __exit__(self, etype, exc, tb):
         from fusionlab.checks import _core
+
         if isinstance(exc, _core.Feedback):
             self.said.append(str(exc))
         return self.ctx.__exit__(etype, exc, tb)
@@ -71,6 +76,7 @@ def numpy_print_options_restored():
     """A test that runs a lab's set-up cell (``np.set_printoptions(precision=3)``) leaves the next test's printing,
     and a later doctest in the same worker, as it found them."""
     import numpy as np
+
     with np.printoptions():
         yield
 
@@ -88,28 +94,41 @@ def no_message_prints_one_value_twice(request, monkeypatch):
         return
     from fusionlab.checks import _core
     from message_pairs import equal_pairs
+
     raises = pytest.raises
 
     def recording_raises(expected, *args, **kwargs):
-        if args:                                   # the call form: pytest.raises(E, fn, *args)
+        if args:  # the call form: pytest.raises(E, fn, *args)
             info = raises(expected, *args, **kwargs)
             if isinstance(info.value, _core.Feedback):
                 said.append(str(info.value))
             return info
         return _Recording(raises(expected, **kwargs), said)
+
     monkeypatch.setattr(pytest, "raises", recording_raises)
     yield said
     bad = [(pair, msg) for msg in said for pair in equal_pairs(msg)]
     assert not bad, "a check's message shows two equal numbers for different values:\n" + "\n".join(
-        f"  {a!s} vs {b!s} in: {msg}" for (a, b, _), msg in bad)
+        f"  {a!s} vs {b!s} in: {msg}" for (a, b, _), msg in bad
+    )
 
 
 # Files whose module fixture takes minutes (a class graded in the sandbox, a browser), longest first. `make test` runs
 # on two cores with each file in one process (pytest-xdist, --dist loadfile, --no-loadscope-reorder): starting these
 # first lets the other process work through the short files meanwhile, instead of the longest file starting last.
-LONG_FIRST = ("test_hub.py", "test_grading_cheats.py", "test_judge.py", "test_capstone.py", "test_sandbox_check.py",
-              "test_browser.py", "test_grading.py", "test_feedback.py", "test_pipeline.py", "test_release.py",
-              "test_long_run.py")
+LONG_FIRST = (
+    "test_hub.py",
+    "test_grading_cheats.py",
+    "test_judge.py",
+    "test_capstone.py",
+    "test_sandbox_check.py",
+    "test_browser.py",
+    "test_grading.py",
+    "test_feedback.py",
+    "test_pipeline.py",
+    "test_release.py",
+    "test_long_run.py",
+)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -4,6 +4,7 @@ numbers are the same: a check that failed has two *different* values, so the mes
 A comparison is a number (or a bracketed vector) followed, in the same clause, by a comparing phrase (``expected``,
 ``the true ... is``, ``should be``, ``instead of``) and the number after it; or ``expected X, got Y``.
 """
+
 from __future__ import annotations
 
 import re
@@ -22,14 +23,14 @@ def equal_pairs(message):
     message, found = str(message), []
     for k in COMPARING.finditer(message):
         after = FIRST.match(message, k.end())
-        clause = re.split(r"[;\n]|: (?=[A-Za-z])", message[:k.start()])[-1][-80:]
+        clause = re.split(r"[;\n]|: (?=[A-Za-z])", message[: k.start()])[-1][-80:]
         before = LAST.search(clause)
         if not after or not before:
             continue
         a, b = (re.sub(r"\s+", "", v).replace("−", "-") for v in (before.group("a"), after.group("b")))
         if a == b:
-            found.append((before.group("a"), after.group("b"), clause + message[k.start():after.end()]))
-    for m in REVERSED.finditer(message):                  # "expected 0.25, got 0.25"
+            found.append((before.group("a"), after.group("b"), clause + message[k.start() : after.end()]))
+    for m in REVERSED.finditer(message):  # "expected 0.25, got 0.25"
         a, b = (re.sub(r"\s+", "", m.group(k)).replace("−", "-") for k in ("a", "b"))
         if a == b:
             found.append((m.group("a"), m.group("b"), m.group(0)))

@@ -5,6 +5,7 @@ A notebook is read as plain JSON (no kernel). With ``FUSIONLAB_TEXT_REV`` set to
 solutions (and the README) as they were at that revision, which shows what a test would have said of an older text:
 ``FUSIONLAB_TEXT_REV=26b7554 .venv/bin/python -m pytest tests/test_claims.py``.
 """
+
 from __future__ import annotations
 
 import json
@@ -24,8 +25,9 @@ def read_text(path):
     path = Path(path)
     if REV:
         rel = path.resolve().relative_to(ROOT).as_posix()
-        return subprocess.run(["git", "show", f"{REV}:{rel}"], cwd=ROOT, capture_output=True, check=True,
-                              text=True).stdout
+        return subprocess.run(
+            ["git", "show", f"{REV}:{rel}"], cwd=ROOT, capture_output=True, check=True, text=True
+        ).stdout
     return path.read_text(encoding="utf-8")
 
 
@@ -82,6 +84,7 @@ def lab_number(path):
 def default_seed_of(lab):
     """The first seed a lab's *Follows* row names (``lab`` is its two-digit number), or None."""
     import re
+
     nb = next((p for p in SOLUTIONS if p.name.startswith(lab)), None)
     if nb is None:
         return None

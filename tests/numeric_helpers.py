@@ -1,4 +1,5 @@
 """Small numerical helpers that several test files share (one copy, imported; conftest.py puts tests/ on the path)."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -10,6 +10,7 @@ check may name (``fusionlab.checks._core``), each with the lab it is planted in.
 as answer cells in ``tests/test_slips.py`` (``LAB01_PLANTED``, ``LAB02_PLANTED``: a class the judge grades hands
 those in).
 """
+
 from __future__ import annotations
 
 import time
@@ -18,8 +19,19 @@ import numpy as np
 import sympy as sp
 from scipy.linalg import cholesky
 
-from fusionlab import (conventions, dcm, ecompass, freescale as fz, gfimu, gfimu_dynamics as gd, gfimu_ekf as ge,
-                       gpsins, kalman, northfinder as nf, rotations)
+from fusionlab import (
+    conventions,
+    dcm,
+    ecompass,
+    freescale as fz,
+    gfimu,
+    gfimu_dynamics as gd,
+    gfimu_ekf as ge,
+    gpsins,
+    kalman,
+    northfinder as nf,
+    rotations,
+)
 
 G0 = 9.80665
 
@@ -35,7 +47,8 @@ def _set(M, rows, cols, value):
 # 00_mems_sensors
 # ---------------------------------------------------------------------------------------------------------------
 
-def smd(omega, m, k, b, damped=True):                    # |H(jω)| of eq 3.5
+
+def smd(omega, m, k, b, damped=True):  # |H(jω)| of eq 3.5
     s = 1j * np.asarray(omega)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.abs(-1 / (s**2 + (b / m * s if damped else 0) + k / m))
@@ -51,7 +64,7 @@ def adc(counts, zero, sens, v_ref=3.0, bits=10, levels=None, subtract=True, divi
     return volts / sens if divide else volts * sens
 
 
-def atan2(y, x, third=-np.pi, printed=False):           # eq 3.21 by cases
+def atan2(y, x, third=-np.pi, printed=False):  # eq 3.21 by cases
     if x > 0:
         return np.arctan(y / x)
     if x < 0 and y >= 0:
@@ -72,7 +85,7 @@ def precession(mass, arm, inertia, spin, g=G0):
     return mass * g * arm / (inertia * spin)
 
 
-def euler_steps(rate, dt, angle0=0.0):                  # forward Euler, θ[0] = angle0
+def euler_steps(rate, dt, angle0=0.0):  # forward Euler, θ[0] = angle0
     rate = np.asarray(rate, dtype=float)
     return angle0 + np.concatenate([np.zeros((1, *rate.shape[1:])), np.cumsum(rate, axis=0)[:-1]]) * dt
 
@@ -99,7 +112,7 @@ LAB00 = {
     "adc_to_physical.hard_coded_1023": (3, lambda c, z, s, v, b: adc(c, z, s, v, b, levels=1023)),
     "adc_096.v_ref": (4, {"v_ref_096": 3.3, "zero_096": _Z096, "sens_096": _S096}),
     "adc_096.zero": (4, {"v_ref_096": _V096, "zero_096": 1.35 - 0.288, "sens_096": _S096}),
-    "adc_096.sens": (4, {"v_ref_096": _V096, "zero_096": _Z096, "sens_096": 1e3 * _S096}),     # mV/g
+    "adc_096.sens": (4, {"v_ref_096": _V096, "zero_096": _Z096, "sens_096": 1e3 * _S096}),  # mV/g
     "adc_step.factor_1000": (5, {"lsb_accel_mg": 3.0 / 1023 / 0.3, "lsb_gyro_dps": 3.0 / 1023 / 0.0091}),
     "adc_step.levels_1024": (5, {"lsb_accel_mg": 1e3 * 3.0 / 1024 / 0.3, "lsb_gyro_dps": 3.0 / 1023 / 0.0091}),
     "atan2.third_quadrant_nan": (6, lambda y, x: atan2(y, x, printed=True)),
@@ -139,11 +152,12 @@ LAB00 = {
 # 01_euler_rotations (the slips LAB01_PLANTED of tests/test_slips.py does not plant)
 # ---------------------------------------------------------------------------------------------------------------
 
-def c_bn(r, p, y):                                       # written out: the library's euler_to_dcm is forbidden
+
+def c_bn(r, p, y):  # written out: the library's euler_to_dcm is forbidden
     return rotations.rot_z(y) @ rotations.rot_y(p) @ rotations.rot_x(r)
 
 
-def renormalise_columns(R):                              # seed 000 eqs 3.59-3.65
+def renormalise_columns(R):  # seed 000 eqs 3.59-3.65
     c1, c2 = R[:, 0], R[:, 1]
     e = c1 @ c2
     c1, c2 = c1 - e / 2 * c2, c2 - e / 2 * c1
@@ -165,12 +179,12 @@ def hamilton(p, q):
     return np.r_[pw * qw - pv @ qv, pw * qv + qw * pv + np.cross(pv, qv)]
 
 
-def c_of_q(q):                                           # column j is e_j turned by q ⊗ (0, e_j) ⊗ q*
+def c_of_q(q):  # column j is e_j turned by q ⊗ (0, e_j) ⊗ q*
     conj = np.r_[q[0], -np.asarray(q[1:])]
     return np.column_stack([hamilton(hamilton(q, np.r_[0.0, e]), conj)[1:] for e in np.eye(3)])
 
 
-def c_of_gibbs(q):                                       # from the Gibbs vector g = v / w: 0/0 at w = 0
+def c_of_gibbs(q):  # from the Gibbs vector g = v / w: 0/0 at w = 0
     with np.errstate(all="ignore"):
         gx, gy, gz = np.asarray(q[1:]) / q[0]
         S = np.array([[0.0, -gz, gy], [gz, 0.0, -gx], [-gy, gx, 0.0]])
@@ -210,6 +224,7 @@ LAB01 = {
 # 02_kalman_falling_body (the slips LAB02_PLANTED of tests/test_slips.py does not plant)
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def joseph(P, K, H, R, inner=-1.0, noise=1.0, R_in=True, t_right=True):
     I_KH = np.eye(len(P)) + inner * K @ H
     first = I_KH @ P @ (I_KH.T if t_right else I_KH)
@@ -240,15 +255,22 @@ LAB02 = {
     "joseph.no_first_term": (1, lambda P, K, H, R: K @ R @ K.T),
     "joseph.bracket_sign": (1, lambda P, K, H, R: joseph(P, K, H, R, inner=1.0)),
     "joseph.no_transpose": (1, lambda P, K, H, R: joseph(P, K, H, R, t_right=False)),
-    "joseph.transpose_left": (1, lambda P, K, H, R: (np.eye(len(P)) - K @ H).T @ P @ (np.eye(len(P)) - K @ H)
-                              + K @ R @ K.T),
-    "joseph.KtRK": (1, lambda P, K, H, R: joseph(P, K, H, R, noise=0.0) + K.T @ R @ K
-                    if K.shape[0] == K.shape[1] else joseph(P, K, H, R)),
-    "joseph.eq427_printed": (1, lambda P, K, H, R: kalman.seed000_eq427_printed(P, K, H, R)
-                             if H.shape[0] == H.shape[1] else joseph(P, K, H, R)),
+    "joseph.transpose_left": (
+        1,
+        lambda P, K, H, R: (np.eye(len(P)) - K @ H).T @ P @ (np.eye(len(P)) - K @ H) + K @ R @ K.T,
+    ),
+    "joseph.KtRK": (
+        1,
+        lambda P, K, H, R: (
+            joseph(P, K, H, R, noise=0.0) + K.T @ R @ K if K.shape[0] == K.shape[1] else joseph(P, K, H, R)
+        ),
+    ),
+    "joseph.eq427_printed": (
+        1,
+        lambda P, K, H, R: kalman.seed000_eq427_printed(P, K, H, R) if H.shape[0] == H.shape[1] else joseph(P, K, H, R),
+    ),
     "state_space.A_shape": (2, lambda k, m, g, dt: (np.eye(3), np.eye(2), np.zeros(2))),
-    "state_space.A_transposed": (2, lambda k, m, g, dt: (state_space(k, m, g, dt)[0].T,
-                                                          *state_space(k, m, g, dt)[1:])),
+    "state_space.A_transposed": (2, lambda k, m, g, dt: (state_space(k, m, g, dt)[0].T, *state_space(k, m, g, dt)[1:])),
     "state_space.k_over_m": (2, lambda k, m, g, dt: state_space(k, m, g, dt, a11=1 - m / k * dt)),
     "state_space.lost_one": (2, lambda k, m, g, dt: state_space(k, m, g, dt, a11=-k / m * dt)),
     "state_space.Bu_undefined": (2, lambda k, m, g, dt: state_space(k, m, g, dt, bu=[0.0, 0.0, -g * dt])),
@@ -262,14 +284,23 @@ LAB02 = {
     # only the gravity column of the falling body's B: right there, wrong for a general B and u
     "predict.lab_sizes": (3, lambda x, P, A, Q, B, u: (A @ x + B[:, 1] * u[1], A @ P @ A.T + Q)),
     "update.not_inverted": (4, lambda *a: update(*a, gain=lambda P, H, R: P @ H.T @ (H @ P @ H.T + R))),
-    "update.extra_H": (4, lambda *a: update(*a, gain=lambda P, H, R: P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
-                                            @ (H if H.shape[0] == H.shape[1] else np.eye(len(R))))),
+    "update.extra_H": (
+        4,
+        lambda *a: update(
+            *a,
+            gain=lambda P, H, R: (
+                P @ H.T @ np.linalg.inv(H @ P @ H.T + R) @ (H if H.shape[0] == H.shape[1] else np.eye(len(R)))
+            ),
+        ),
+    ),
     "update.no_innovation": (4, lambda *a: update(*a, state=lambda x, K, z, H: x + K @ z)),
     "update.no_prior": (4, lambda *a: update(*a, state=lambda x, K, z, H: K @ z)),
-    "update.innovation_without_H": (4, lambda *a: update(*a, state=lambda x, K, z, H: x + K @ (z - x[:len(z)]))),
+    "update.innovation_without_H": (4, lambda *a: update(*a, state=lambda x, K, z, H: x + K @ (z - x[: len(z)]))),
     "update.P_not_updated": (4, lambda *a: update(*a, cov=lambda P, K, H: P)),
-    "update.no_noise_term": (4, lambda *a: update(*a, cov=lambda P, K, H: (np.eye(len(P)) - K @ H) @ P
-                                                  @ (np.eye(len(P)) - K @ H).T)),
+    "update.no_noise_term": (
+        4,
+        lambda *a: update(*a, cov=lambda P, K, H: (np.eye(len(P)) - K @ H) @ P @ (np.eye(len(P)) - K @ H).T),
+    ),
 }
 
 
@@ -277,9 +308,10 @@ LAB02 = {
 # 03_correlation_fusion
 # ---------------------------------------------------------------------------------------------------------------
 
-def moving_average(x, n):                                # causal, expanding start (eq 5.7)
+
+def moving_average(x, n):  # causal, expanding start (eq 5.7)
     x = np.asarray(x, dtype=float)
-    return np.array([x[max(0, i - n + 1):i + 1].mean() for i in range(len(x))])
+    return np.array([x[max(0, i - n + 1) : i + 1].mean() for i in range(len(x))])
 
 
 def ratio(g, a, eps=1e-12):
@@ -303,7 +335,7 @@ LAB03 = {
     "moving_average.dropped_start": (1, lambda x, n: np.convolve(x, np.ones(n) / n, mode="valid")),
     "moving_average.fixed_n": (1, lambda x, n: moving_average(x, 3)),
     "moving_average.centred": (1, lambda x, n: np.convolve(x, np.ones(n) / n, mode="same")),
-    "moving_average.start": (1, lambda x, n: np.r_[x[:n - 1], np.convolve(x, np.ones(n) / n, mode="valid")]),
+    "moving_average.start": (1, lambda x, n: np.r_[x[: n - 1], np.convolve(x, np.ones(n) / n, mode="valid")]),
     "moving_average.no_divide": (1, lambda x, n: n * moving_average(x, n)),
     "ratio.zero_over_zero": (2, _unguarded_ratio),
     "ratio.no_abs": (2, lambda g, a: np.divide(g, g + a, out=np.zeros(len(g)), where=(g + a) != 0)),
@@ -317,11 +349,12 @@ LAB03 = {
 # 04_ecompass
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def profile(s, r, alpha):
     return sum(a * np.outer(sk, rk) for a, sk, rk in zip(alpha, s, r))
 
 
-def kappa(s, r, alpha, z_sign=1.0):                      # [[σ, zᵀ], [z, B + Bᵀ - σI]]
+def kappa(s, r, alpha, z_sign=1.0):  # [[σ, zᵀ], [z, B + Bᵀ - σI]]
     B = profile(s, r, alpha)
     z = z_sign * sum(a * np.cross(sk, rk) for a, sk, rk in zip(alpha, s, r))
     sigma = np.trace(B)
@@ -373,13 +406,14 @@ LAB04 = {
 # 05_freescale_kalman
 # ---------------------------------------------------------------------------------------------------------------
 
-def offset_blocks(dt, factor):                          # C with its two offset blocks factor·I3
+
+def offset_blocks(dt, factor):  # C with its two offset blocks factor·I3
     C = fz.measurement_matrix(dt, 9)
     C[0:3, 6:9] = C[3:6, 6:9] = factor * np.eye(3)
     return C
 
 
-def entries(M, **values):                               # M with entries e<i>_<j> set
+def entries(M, **values):  # M with entries e<i>_<j> set
     M = np.array(M, dtype=float)
     for key, value in values.items():
         i, j = map(int, key[1:].split("_"))
@@ -387,26 +421,36 @@ def entries(M, **values):                               # M with entries e<i>_<j
     return M
 
 
-def qrot_note(u, v, tol=1e-12, flip_axis=False, equal_axis=(1.0, -1.0, 0.0), follow_u=False, sign=-1,
-              scalar_last=False, normalise=True, unit=True):
+def qrot_note(
+    u,
+    v,
+    tol=1e-12,
+    flip_axis=False,
+    equal_axis=(1.0, -1.0, 0.0),
+    follow_u=False,
+    sign=-1,
+    scalar_last=False,
+    normalise=True,
+    unit=True,
+):
     """Eqs 66-76 as a student writes them; the keywords make the slips."""
     u, v = np.asarray(u, float), np.asarray(v, float)
     if normalise:
         u, v = u / np.linalg.norm(u), v / np.linalg.norm(v)
     w = 1 + u @ v
-    if w <= tol:                                         # 180°: q0 = 0, axis u × (1, 1, 1) (eqs 73-75)
+    if w <= tol:  # 180°: q0 = 0, axis u × (1, 1, 1) (eqs 73-75)
         ax = np.cross(np.ones(3), u) if flip_axis else np.cross(u, np.ones(3))
         n = np.linalg.norm(ax)
         equal = np.asarray(equal_axis) * (np.sign(u[0]) if follow_u else 1.0)
         ax = ax / n if n > 1e-12 else equal / np.linalg.norm(equal)
         q = np.r_[0.0, ax]
     else:
-        with np.errstate(invalid="ignore", divide="ignore"):         # 0/0 where the 180° test is left out
+        with np.errstate(invalid="ignore", divide="ignore"):  # 0/0 where the 180° test is left out
             q = np.r_[w, sign * np.cross(u, v)] / (np.sqrt(2 * w) if unit else 1.0)
     return np.roll(q, -1) if scalar_last else q
 
 
-def half_angle_axis(u, v):                               # axis u × v / |u × v|: 0/0 for parallel vectors
+def half_angle_axis(u, v):  # axis u × v / |u × v|: 0/0 for parallel vectors
     u, v = np.asarray(u, float) / np.linalg.norm(u), np.asarray(v, float) / np.linalg.norm(v)
     with np.errstate(invalid="ignore", divide="ignore"):
         ax = -np.cross(u, v) / np.linalg.norm(np.cross(u, v))
@@ -421,23 +465,35 @@ LAB05 = {
     "measurement_matrix.degrees": (1, lambda dt: offset_blocks(dt, -dt / 2)),
     "process_noise.shape": (2, lambda x, dt, *a: fz.process_noise(x, dt)[:9, :9]),
     "process_noise.not_symmetric": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e0_6=1.0)),
-    "process_noise.gb_sign": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt),
-                                                           e0_6=fz.alpha(dt) / 4 + x[0] * x[6],
-                                                           e6_0=fz.alpha(dt) / 4 + x[0] * x[6])),
+    "process_noise.gb_sign": (
+        2,
+        lambda x, dt, *a: entries(
+            fz.process_noise(x, dt), e0_6=fz.alpha(dt) / 4 + x[0] * x[6], e6_0=fz.alpha(dt) / 4 + x[0] * x[6]
+        ),
+    ),
     "process_noise.no_Qwdelta": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e9_9=x[9] ** 2)),
     "process_noise.no_Qwb": (2, lambda x, dt, *a: entries(fz.process_noise(x, dt), e6_6=x[6] ** 2)),
     "process_noise.fixed_constants": (2, lambda x, dt, Q_vY=1e4, Q_wb=0.5, Q_wdelta=20.0: fz.process_noise(x, dt)),
     "measurement_noise.shape": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)[:6, :6]),
-    "measurement_noise.no_floor": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)
-                                   + 0.25 * (qd - max(qd, 7.0)) / B**2 * np.diag([0.0] * 3 + [1.0] * 3 + [0.0])),
-    "measurement_noise.quarter": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B)
-                                  + 0.75 * qa * np.diag([1.0] * 3 + [0.0] * 4)),
-    "measurement_noise.delta_entry": (3, lambda qa, qd, dt, B=50.0: entries(fz.measurement_noise(qa, qd, dt, B=B),
-                                                                             e6_6=1.0)),
+    "measurement_noise.no_floor": (
+        3,
+        lambda qa, qd, dt, B=50.0: (
+            fz.measurement_noise(qa, qd, dt, B=B)
+            + 0.25 * (qd - max(qd, 7.0)) / B**2 * np.diag([0.0] * 3 + [1.0] * 3 + [0.0])
+        ),
+    ),
+    "measurement_noise.quarter": (
+        3,
+        lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt, B=B) + 0.75 * qa * np.diag([1.0] * 3 + [0.0] * 4),
+    ),
+    "measurement_noise.delta_entry": (
+        3,
+        lambda qa, qd, dt, B=50.0: entries(fz.measurement_noise(qa, qd, dt, B=B), e6_6=1.0),
+    ),
     "measurement_noise.fixed_B": (3, lambda qa, qd, dt, B=50.0: fz.measurement_noise(qa, qd, dt)),
     "gain.shape": (4, lambda Qw, C, Qv: fz.kalman_gain(Qw, C, Qv).T),
     "gain.no_Qv": (4, lambda Qw, C, Qv: Qw @ C.T @ np.linalg.inv(C @ Qw @ C.T)),
-    "gain.per_axis": (4, lambda Qw, C, Qv: fz.nominal_gain(9)),          # the note's numbers, whatever the input
+    "gain.per_axis": (4, lambda Qw, C, Qv: fz.nominal_gain(9)),  # the note's numbers, whatever the input
     "qrot.shape": (5, lambda u, v: qrot_note(u, v)[1:]),
     "qrot.half_turn_not_finite": (5, lambda u, v: qrot_note(u, v, tol=-1.0)),
     "qrot.parallel_not_finite": (5, half_angle_axis),
@@ -456,6 +512,7 @@ LAB05 = {
 # ---------------------------------------------------------------------------------------------------------------
 # 06_gfimu_aiv
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def noise(N, dt, d, factors=(1, 1, 1), m_sign=-1):
     return tuple(f * m for f, m in zip(factors, gfimu.three_state_noise(N, dt, d, m_sign=m_sign)))
@@ -482,8 +539,10 @@ LAB06 = {
     "aiv_map.central_columns": (1, lambda: _set(gfimu.aiv_map(), slice(None), slice(0, 3), 0.0)),
     "aiv_map.squares_sign": (1, lambda: _set(gfimu.aiv_map(), slice(6, 9), slice(None), -gfimu.aiv_map()[6:])),
     "quadratic_jacobian.shape": (2, lambda x: gfimu.quadratic_jacobian(x).T),
-    "quadratic_jacobian.no_factor_2": (2, lambda x: gfimu.quadratic_jacobian(x)
-                                       * np.array([1, 1, 1, .5, .5, .5])[:, None]),
+    "quadratic_jacobian.no_factor_2": (
+        2,
+        lambda x: gfimu.quadratic_jacobian(x) * np.array([1, 1, 1, 0.5, 0.5, 0.5])[:, None],
+    ),
     "quadratic_jacobian.column_order": (2, lambda x: gfimu.quadratic_jacobian(x)[:, ::-1]),
     "three_state_noise.shape": (3, lambda N, dt, d: (np.eye(2), *noise(N, dt, d)[1:])),
     "three_state_noise.dt_squared": (3, lambda N, dt, d: (noise(N, dt, d)[0] / dt**2, *noise(N, dt, d)[1:])),
@@ -500,6 +559,7 @@ LAB06 = {
 # ---------------------------------------------------------------------------------------------------------------
 # 07_gfimu_constraints
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def h15(x):
     return gd.aiv_measurement_jacobian(x)[1]
@@ -526,6 +586,7 @@ LAB07 = {
 # ---------------------------------------------------------------------------------------------------------------
 # 08_north_finder
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def omega_x(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, wr, k=2.0, lever=(1.0, 1.0), central=True, sign=-1.0):
     dC, dB = (a_Cz - a_Az) / d * lever[0], (a_Bz - a_Az) / d * lever[1]
@@ -555,6 +616,7 @@ def demodulate(x, th, zero_mean=True, signs=True, use_atan2=True, s_sign=-1.0, d
 def tilted(zeta, roll, pitch, lat, pick=min):
     """Eqs 4.41-4.43 as a student writes them; ``pick=max`` keeps the other root."""
     from fusionlab import earth
+
     sf, cf, st, ct, tz = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch), np.tan(zeta)
     W = earth.OMEGA_IE
     I, J = W * np.cos(lat) * (st * sf * tz - ct), -W * np.cos(lat) * cf * tz
@@ -564,6 +626,7 @@ def tilted(zeta, roll, pitch, lat, pick=min):
     def phase(psi):
         w = rotations.euler_to_dcm([roll, pitch, psi]).T @ earth.earth_rate_ned(lat)
         return np.arctan2(w[0], w[1])
+
     best = pick((a - V, np.pi - a - V), key=lambda psi: abs(np.angle(np.exp(1j * (phase(psi) - zeta)))))
     return float(np.angle(np.exp(1j * best)))
 
@@ -599,17 +662,24 @@ LAB08 = {
 # 09_dcm_ahrs
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def h_a(g, c1=0.0, c3=None):
     return np.hstack([c1 * np.eye(3), (g if c3 is None else c3) * np.eye(3), np.zeros((3, 3))])
 
 
 def h_m(d, c1=None, c3=None, bias=0.0):
-    return np.hstack([(np.cos(d) if c1 is None else c1) * np.eye(3), (np.sin(d) if c3 is None else c3) * np.eye(3),
-                      bias * np.ones((3, 3))])
+    return np.hstack(
+        [
+            (np.cos(d) if c1 is None else c1) * np.eye(3),
+            (np.sin(d) if c3 is None else c3) * np.eye(3),
+            bias * np.ones((3, 3)),
+        ]
+    )
 
 
-def dcm_predict(x, P, gyr, dt, N, qb, with_Q=True, transpose=False, bias_sign=1.0, degrees=False, Q_scale=1.0,
-                F_T=False):
+def dcm_predict(
+    x, P, gyr, dt, N, qb, with_Q=True, transpose=False, bias_sign=1.0, degrees=False, Q_scale=1.0, F_T=False
+):
     A = dcm.A_matrix((np.radians(gyr) if degrees else gyr) * dt)
     F = dcm.ahrs_transition(x[0:3], x[3:6], A.T if transpose else A, dt)
     F[0:6, 6:9] *= bias_sign
@@ -641,6 +711,7 @@ LAB09 = {
 # 10_gps_ins
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def ins_F(x, a, A, dt, rows=None, cols=None, value=None):
     F = gpsins.ins_transition(x, a, A, dt)
     return F if rows is None else _set(F, rows, cols, value(a, A, dt))
@@ -669,8 +740,10 @@ LAB10 = {
     "ins_transition.accel_bias_block": (1, _block(slice(15, 18), slice(18, 21), lambda a, A, dt: 0.0)),
     "ins_transition.identity_blocks": (1, _block(slice(9, 12), slice(9, 12), lambda a, A, dt: 0.0)),
     "sigma_points.shape": (2, lambda x, P: (sigma_points(x, P)[0][:4], sigma_points(x, P)[1])),
-    "sigma_points.fixed_n": (2, lambda x, P: sigma_points(x[:4], P[:4, :4]) if len(x) == 4 else
-                             sigma_points(np.zeros(4), np.eye(4))),
+    "sigma_points.fixed_n": (
+        2,
+        lambda x, P: sigma_points(x[:4], P[:4, :4]) if len(x) == 4 else sigma_points(np.zeros(4), np.eye(4)),
+    ),
     "sigma_points.weights": (2, lambda x, P: sigma_points(x, P, weight=1.0)),
     "sigma_points.no_n": (2, lambda x, P: sigma_points(x, P, scale=False)),
     "sigma_points.lower_rows": (2, lambda x, P: sigma_points(x, P, lower=True)),
@@ -681,6 +754,7 @@ LAB10 = {
 # ---------------------------------------------------------------------------------------------------------------
 # 11_real_data
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def heading_error(q, order=(0, 3), half=False, signed=False, degrees=False):
     q = np.asarray(q, dtype=float)
@@ -729,6 +803,7 @@ LAB11 = {
 # 12_sensor_errors
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def quadric(mag, order=(1, 2, 3), two=2.0, rhs=1.0):
     x, y, z = np.asarray(mag, dtype=float).T
     cross = {1: y * z, 2: x * z, 3: x * y}
@@ -771,6 +846,7 @@ LAB12 = {
 # 13_capstone
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def integrate(q0, gyr, fs, side="right", half=False, small=False, keep_q0=False, before=False, flip=False):
     q = np.asarray(q0, dtype=float)
     out = [q]
@@ -784,20 +860,20 @@ def integrate(q0, gyr, fs, side="right", half=False, small=False, keep_q0=False,
     return -out if flip else out
 
 
-def gyro_only(gyr, acc, mag, fs):                         # a causal filter: the gyro integrated from the identity
+def gyro_only(gyr, acc, mag, fs):  # a causal filter: the gyro integrated from the identity
     return rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], gyr, 1.0 / fs)[1:]
 
 
-def slow(gyr, acc, mag, fs):                              # over the budget (tests/test_slips.py shrinks it to 0.1 s)
+def slow(gyr, acc, mag, fs):  # over the budget (tests/test_slips.py shrinks it to 0.1 s)
     time.sleep(0.2)
     return gyro_only(gyr, acc, mag, fs)
 
 
-def looks_ahead(gyr, acc, mag, fs):                       # tilted by the mean of the whole record
+def looks_ahead(gyr, acc, mag, fs):  # tilted by the mean of the whole record
     return rotations.quat_multiply(gyro_only(gyr, acc, mag, fs), rotations.rotvec_to_quat(1e-3 * np.mean(acc, 0)))
 
 
-def _unnormalised(q0, gyr, fs):                           # [1, σ/2] increments, never normalised
+def _unnormalised(q0, gyr, fs):  # [1, σ/2] increments, never normalised
     q, out = np.asarray(q0, dtype=float), []
     for w in np.asarray(gyr, dtype=float):
         q = rotations.quat_multiply(q, np.r_[1.0, w / fs / 2])
@@ -826,6 +902,7 @@ LAB13 = {
 # 14_phone_imu
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def gyro_bias(gyr, rest, unit=1.0, how="mean", where=True):
     g = np.asarray(gyr)
     picked = g[np.asarray(rest, bool)] if where is True else (g if where is None else g[~np.asarray(rest, bool)])
@@ -850,7 +927,7 @@ def _phone_at_rest():
 
 
 def rotation_angle(q1, q2, unit="deg", half=False, signed=False):
-    w = np.sum(np.asarray(q1, dtype=float) * np.asarray(q2, dtype=float), axis=-1)     # w of q1* ⊗ q2
+    w = np.sum(np.asarray(q1, dtype=float) * np.asarray(q2, dtype=float), axis=-1)  # w of q1* ⊗ q2
     a = (1 if half else 2) * np.arccos(np.clip(w if signed else np.abs(w), -1, 1))
     return np.degrees(a) if unit == "deg" else a
 
@@ -880,10 +957,23 @@ LAB14 = {
 }
 
 
-PLANTED = {"00_mems_sensors": LAB00, "01_euler_rotations": LAB01, "02_kalman_falling_body": LAB02,
-           "03_correlation_fusion": LAB03, "04_ecompass": LAB04, "05_freescale_kalman": LAB05, "06_gfimu_aiv": LAB06,
-           "07_gfimu_constraints": LAB07, "08_north_finder": LAB08, "09_dcm_ahrs": LAB09, "10_gps_ins": LAB10,
-           "11_real_data": LAB11, "12_sensor_errors": LAB12, "13_capstone": LAB13, "14_phone_imu": LAB14}
+PLANTED = {
+    "00_mems_sensors": LAB00,
+    "01_euler_rotations": LAB01,
+    "02_kalman_falling_body": LAB02,
+    "03_correlation_fusion": LAB03,
+    "04_ecompass": LAB04,
+    "05_freescale_kalman": LAB05,
+    "06_gfimu_aiv": LAB06,
+    "07_gfimu_constraints": LAB07,
+    "08_north_finder": LAB08,
+    "09_dcm_ahrs": LAB09,
+    "10_gps_ins": LAB10,
+    "11_real_data": LAB11,
+    "12_sensor_errors": LAB12,
+    "13_capstone": LAB13,
+    "14_phone_imu": LAB14,
+}
 
 #: The slips of any check (fusionlab.checks._core): slip id -> (lab, exercise number, answer).
 GENERIC = {

@@ -3,6 +3,7 @@
 Reference values: seed 000 eqs 3.17-3.21 and seed 001's attitude note §2 (φ = 2.5 rad reads -0.64 rad with arctan;
 naive atan2 at φ = 0.3 reads -2.84). Random inputs use fixed seeds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -13,8 +14,14 @@ from fusionlab import rotations as rot
 
 
 def random_euler(rng, n, margin=1e-3):
-    return np.stack([rng.uniform(-np.pi, np.pi, n), rng.uniform(-np.pi / 2 + margin, np.pi / 2 - margin, n),
-                     rng.uniform(-np.pi, np.pi, n)], -1)
+    return np.stack(
+        [
+            rng.uniform(-np.pi, np.pi, n),
+            rng.uniform(-np.pi / 2 + margin, np.pi / 2 - margin, n),
+            rng.uniform(-np.pi, np.pi, n),
+        ],
+        -1,
+    )
 
 
 # ------------------------------------------------------------------------------------------------------------- tilt
@@ -44,20 +51,20 @@ def test_excel_atan2_takes_x_first():
     # the thesis' atan2(Az, Ay) on a level sensor (Z up, +1 g): 0 in Excel order, 90° in C/numpy order
     assert accel_tilt.excel_atan2(1.0, 0.0) == 0.0
     assert np.degrees(np.arctan2(1.0, 0.0)) == pytest.approx(90.0)
-    assert np.isnan(accel_tilt.excel_atan2(0.0, 0.0))           # Excel: #DIV/0!
+    assert np.isnan(accel_tilt.excel_atan2(0.0, 0.0))  # Excel: #DIV/0!
 
 
 def test_tilt_2d_loses_the_quadrant():
     assert accel_tilt.tilt_2d(1.0, 1.0) == pytest.approx(np.pi / 4)
-    assert accel_tilt.tilt_2d(-1.0, -1.0) == pytest.approx(np.pi / 4)      # the opposite reading, same angle
+    assert accel_tilt.tilt_2d(-1.0, -1.0) == pytest.approx(np.pi / 4)  # the opposite reading, same angle
     assert accel_tilt.tilt_2d(0.0, 1.0) == pytest.approx(np.pi / 2)
 
 
 def test_tilt_3d_gives_axis_elevations_and_angle_from_vertical():
     rng = np.random.default_rng(7)
     u = rng.normal(size=(200, 3))
-    u /= np.linalg.norm(u, axis=1, keepdims=True)                    # the 'up' direction in sensor axes
-    th = accel_tilt.tilt_3d(2.5 * u)                                        # any scale
+    u /= np.linalg.norm(u, axis=1, keepdims=True)  # the 'up' direction in sensor axes
+    th = accel_tilt.tilt_3d(2.5 * u)  # any scale
     assert np.allclose(th[:, 0], np.arcsin(u[:, 0]), atol=1e-12)
     assert np.allclose(th[:, 1], np.arcsin(u[:, 1]), atol=1e-12)
     up = u[:, 2] > 0
@@ -81,14 +88,14 @@ def test_seed001_printed_roll_fails_past_90_degrees_and_naive_atan2_is_off_by_pi
     assert accel_tilt.seed001_tilt_printed(f)[0] == pytest.approx(-0.6416, abs=1e-4)
     assert accel_tilt.tilt_from_accel(f)[0] == pytest.approx(2.5)
     f = accel_tilt.specific_force(rot.euler_to_dcm([0.3, 0.0, 0.0]))
-    assert np.arctan2(f[1], f[2]) == pytest.approx(0.3 - np.pi)               # -2.84
-    assert accel_tilt.seed001_tilt_printed(f)[0] == pytest.approx(0.3)               # fine inside ±90°
+    assert np.arctan2(f[1], f[2]) == pytest.approx(0.3 - np.pi)  # -2.84
+    assert accel_tilt.seed001_tilt_printed(f)[0] == pytest.approx(0.3)  # fine inside ±90°
 
 
 def test_specific_force_reads_minus_g_on_z_when_level_and_zero_in_free_fall():
     assert np.allclose(accel_tilt.specific_force(np.eye(3)), [0, 0, -earth.G])
     assert np.allclose(accel_tilt.specific_force(np.eye(3), acc_nav=[0, 0, earth.G]), 0.0)
-    C = rot.euler_to_dcm(np.radians([0, 90, 0]))                              # nose straight up
+    C = rot.euler_to_dcm(np.radians([0, 90, 0]))  # nose straight up
     assert np.allclose(accel_tilt.specific_force(C), [earth.G, 0, 0], atol=1e-12)
 
 

@@ -3,6 +3,7 @@
 A module imports only from rows below its own. The README's Layout section shows the same rows; a test below
 keeps the two equal, so the plan is changed here and there together, in the same commit.
 """
+
 from __future__ import annotations
 
 import ast
@@ -15,21 +16,45 @@ LIB = ROOT / "lib" / "fusionlab"
 # Bottom to top: LAYERS[0] is row 1. A planned module that does not exist (yet) is fine; an existing module
 # without a row is not (a new module must be placed).
 LAYERS = (
-    ("validate", "guard", "labformat"),                                       # 1 numpy and the standard library only
-    ("rotations", "earth"),                                                   # 2 the one convention, Earth constants
-    ("conventions", "sensors", "accel_tilt", "inertial", "sensor_errors",     # 3 models on the convention, the seeds'
-     "signals", "metrics", "calibration", "kalman"),                          #   conventions at the edge, metrics
-    ("simulate", "datasets", "recordings", "spreadsheet", "ecompass",         # 4 recordings; the equations of a method
-     "gfimu", "dcm"),
-    ("falling_body", "correlation", "freescale", "gfimu_ekf",                 # 5 one module per seed method's filters
-     "gfimu_dynamics", "northfinder", "dcm_filter", "gpsins"),
-    ("freescale_fast",),                                                      # 6 fast paths of row 5's filters
-    ("estimators",),                                                          # 7 the front door to the filters
-    ("bench", "plotting"),                                                    # 8 what runs and draws the filters
-    ("capstone",),                                                            # 9 the capstone's rules and self-check
-    ("checks", "widgets", "nbgrader_compat"),                                 # 10 what only notebooks (and nbgrader's
-                                                                              #    configuration) import
-    ("execute",),                                                             # 11 running the notebooks (tests)
+    ("validate", "guard", "labformat"),  # 1 numpy and the standard library only
+    ("rotations", "earth"),  # 2 the one convention, Earth constants
+    (
+        "conventions",
+        "sensors",
+        "accel_tilt",
+        "inertial",
+        "sensor_errors",  # 3 models on the convention, the seeds'
+        "signals",
+        "metrics",
+        "calibration",
+        "kalman",
+    ),  #   conventions at the edge, metrics
+    (
+        "simulate",
+        "datasets",
+        "recordings",
+        "spreadsheet",
+        "ecompass",  # 4 recordings; the equations of a method
+        "gfimu",
+        "dcm",
+    ),
+    (
+        "falling_body",
+        "correlation",
+        "freescale",
+        "gfimu_ekf",  # 5 one module per seed method's filters
+        "gfimu_dynamics",
+        "northfinder",
+        "dcm_filter",
+        "gpsins",
+    ),
+    ("freescale_fast",),  # 6 fast paths of row 5's filters
+    ("estimators",),  # 7 the front door to the filters
+    ("bench", "plotting"),  # 8 what runs and draws the filters
+    ("capstone",),  # 9 the capstone's rules and self-check
+    ("checks", "widgets", "nbgrader_compat"),  # 10 what only notebooks (and nbgrader's
+    #    configuration) import
+    ("execute",),  # 11 running the notebooks (tests)
 )
 ROW = {name: i + 1 for i, names in enumerate(LAYERS) for name in names}
 
@@ -43,17 +68,17 @@ def fusionlab_imports(source: str, depth: int = 0):
     for node in ast.walk(ast.parse(source)):
         targets = []
         if isinstance(node, ast.ImportFrom):
-            if 0 < node.level <= depth:                                   # from . import x, from ._core import y
+            if 0 < node.level <= depth:  # from . import x, from ._core import y
                 targets = ["."]
-            elif node.level == depth + 1 and node.module is None:         # from . import x, y (.. in a package)
+            elif node.level == depth + 1 and node.module is None:  # from . import x, y (.. in a package)
                 targets = [a.name for a in node.names]
-            elif node.level == depth + 1:                                 # from .x import y (..x in a package)
+            elif node.level == depth + 1:  # from .x import y (..x in a package)
                 targets = [node.module.split(".")[0]]
-            elif node.level == 0 and node.module == "fusionlab":          # from fusionlab import x
+            elif node.level == 0 and node.module == "fusionlab":  # from fusionlab import x
                 targets = [a.name for a in node.names]
             elif node.level == 0 and node.module and node.module.startswith("fusionlab."):
-                targets = [node.module.split(".")[1]]                     # from fusionlab.x import y
-        elif isinstance(node, ast.Import):                                # import fusionlab.x [as y]
+                targets = [node.module.split(".")[1]]  # from fusionlab.x import y
+        elif isinstance(node, ast.Import):  # import fusionlab.x [as y]
             targets = [a.name.split(".")[1] for a in node.names if a.name.startswith("fusionlab.")]
         found += [(t, node.lineno, ast.unparse(node)) for t in targets]
     return found
@@ -68,13 +93,17 @@ def plan_violations(sources: dict[str, str]) -> list[str]:
     for key, source in sorted(sources.items()):
         module, depth, path = key.split("/")[0], key.count("/"), f"fusionlab/{key}.py"
         if key == "__init__":
-            problems += [f"fusionlab/__init__.py:{line} `{text}`: the package imports none of its modules "
-                         f"(`import fusionlab` stays light and cannot close a circle)"
-                         for _, line, text in fusionlab_imports(source)]
+            problems += [
+                f"fusionlab/__init__.py:{line} `{text}`: the package imports none of its modules "
+                f"(`import fusionlab` stays light and cannot close a circle)"
+                for _, line, text in fusionlab_imports(source)
+            ]
             continue
         if module not in ROW:
-            problem = (f"fusionlab.{module} has no row in the import plan: place it in LAYERS "
-                       f"(tests/test_architecture.py) and in README.md, Layout")
+            problem = (
+                f"fusionlab.{module} has no row in the import plan: place it in LAYERS "
+                f"(tests/test_architecture.py) and in README.md, Layout"
+            )
             problems += [problem] if problem not in problems else []
             continue
         for target, line, text in fusionlab_imports(source, depth):
@@ -84,9 +113,11 @@ def plan_violations(sources: dict[str, str]) -> list[str]:
                 problems.append(f"{path}:{line} `{text}`: fusionlab.{target} has no row in the plan")
             elif ROW[target] >= ROW[module]:
                 where = "the same row" if ROW[target] == ROW[module] else "a row above"
-                problems.append(f"{path}:{line} `{text}`: {module} (row {ROW[module]}) imports "
-                                f"{target} (row {ROW[target]}, {where}); a module imports only from rows below "
-                                f"its own")
+                problems.append(
+                    f"{path}:{line} `{text}`: {module} (row {ROW[module]}) imports "
+                    f"{target} (row {ROW[target]}, {where}); a module imports only from rows below "
+                    f"its own"
+                )
     return problems
 
 
@@ -105,16 +136,16 @@ def test_every_library_import_goes_down_the_rows():
 
 def test_the_checker_sees_every_form_of_import_and_a_module_without_a_row():
     sources = {
-        "sensors": "from . import rotations\nfrom .validate import as_vector\n",     # both go down: fine
-        "rotations": "def f():\n    from . import sensors\n",                        # inside a function
-        "earth": "from fusionlab import metrics\n",                                   # upward, absolute
-        "metrics": "import fusionlab.kalman as k\n",                                  # upward, dotted
-        "kalman": "from fusionlab.widgets import slider\n",                           # upward, from a submodule
-        "validate": "import numpy as np\nfrom . import guard\n",                      # same row
+        "sensors": "from . import rotations\nfrom .validate import as_vector\n",  # both go down: fine
+        "rotations": "def f():\n    from . import sensors\n",  # inside a function
+        "earth": "from fusionlab import metrics\n",  # upward, absolute
+        "metrics": "import fusionlab.kalman as k\n",  # upward, dotted
+        "kalman": "from fusionlab.widgets import slider\n",  # upward, from a submodule
+        "validate": "import numpy as np\nfrom . import guard\n",  # same row
         "newcomer": "import numpy\n",
-        "checks/lab02": "from .. import kalman\nfrom ._core import Feedback\nfrom . import lab01\n"    # fine
-                        "from ..widgets import slider\n",                                 # same row, from a file
-        "checks/__init__": "from .. import guard\n",                                  # not fusionlab/__init__.py
+        "checks/lab02": "from .. import kalman\nfrom ._core import Feedback\nfrom . import lab01\n"  # fine
+        "from ..widgets import slider\n",  # same row, from a file
+        "checks/__init__": "from .. import guard\n",  # not fusionlab/__init__.py
     }
     assert plan_violations(sources) == [
         "fusionlab/checks/lab02.py:4 `from ..widgets import slider`: checks (row 10) imports widgets (row 10, the same "

@@ -1,5 +1,6 @@
 """fusionlab.calibration: the triad solver (seed 004 eqs 3.11-3.15), gyro bias at rest, the magnetometer
 ellipsoid fit and the Allan-deviation reading; the bad-input errors; the real BROAD trials shipped in data/broad/."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,7 +10,7 @@ import pytest
 
 from fusionlab import calibration as cal, datasets, sensor_errors
 
-BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"  # the trials the course ships
 
 
 def _accel_truth(seed):
@@ -20,6 +21,7 @@ def _accel_truth(seed):
 
 
 # ------------------------------------------------------------------------------------------ accelerometer triad --
+
 
 def test_six_positions_noise_free_recovers_scale_misalignment_bias_exactly():
     M, b = _accel_truth(1)
@@ -33,7 +35,7 @@ def test_six_positions_noise_free_recovers_scale_misalignment_bias_exactly():
 def test_noisy_calibration_within_3_sigma_of_its_own_covariance():
     M, b = _accel_truth(2)
     rng = np.random.default_rng(22)
-    ref = np.concatenate([cal.six_positions(9.81)] * 4)              # 24 positions: enough redundancy for σ²
+    ref = np.concatenate([cal.six_positions(9.81)] * 4)  # 24 positions: enough redundancy for σ²
     fit = cal.fit_triad(ref, ref @ M.T + b + rng.normal(0, 0.01, ref.shape))
     truth = np.concatenate([M.ravel(), b])
     z = (fit.theta - truth) / fit.std
@@ -50,7 +52,7 @@ def test_calibration_covariance_is_honest_over_many_noise_draws():
     for _ in range(200):
         fit = cal.fit_triad(ref, ref @ M.T + b + rng.normal(0, 0.02, ref.shape))
         z2.append(((fit.theta - truth) / fit.std) ** 2)
-    assert 0.8 < np.mean(z2) < 1.25                                    # normalised errors have unit variance
+    assert 0.8 < np.mean(z2) < 1.25  # normalised errors have unit variance
 
 
 def test_positions_in_a_plane_say_they_span_only_two_axes():
@@ -81,6 +83,7 @@ def test_gyro_bias_from_rest_and_its_standard_error():
 
 # ----------------------------------------------------------------------------------------------------- ellipsoid --
 
+
 def _sphere(n, rng, radius=44.0):
     u = rng.normal(size=(n, 3))
     return radius * u / np.linalg.norm(u, axis=1, keepdims=True)
@@ -96,7 +99,7 @@ def test_ellipsoid_fit_recovers_hard_and_soft_iron_noise_free(method):
     raw = b @ SOFT.T + HARD
     fit = cal.fit_ellipsoid(raw, field_strength=44.0, method=method)
     assert np.allclose(fit.centre, HARD, atol=1e-9)
-    assert np.allclose(fit.W, np.linalg.inv(SOFT), atol=1e-9)          # symmetric soft iron: exact inverse
+    assert np.allclose(fit.W, np.linalg.inv(SOFT), atol=1e-9)  # symmetric soft iron: exact inverse
     assert fit.residual_rms < 1e-9
     assert np.allclose(cal.apply_ellipsoid(fit, raw), b, atol=1e-8)
     assert np.allclose(fit.beta_h, fit.W @ HARD)
@@ -108,7 +111,7 @@ def test_ellipsoid_fit_with_noise_has_the_noise_as_residual():
     fit = cal.fit_ellipsoid(raw, field_strength=44.0)
     assert np.allclose(fit.centre, HARD, atol=0.1)
     assert 0.2 < fit.residual_rms < 0.4
-    free = cal.fit_ellipsoid(raw)                                     # volume-preserving radius
+    free = cal.fit_ellipsoid(raw)  # volume-preserving radius
     assert free.radius == pytest.approx(44.0 * abs(np.linalg.det(SOFT)) ** (1 / 3), rel=0.01)
 
 
@@ -117,7 +120,7 @@ def test_quadric_normal_equations_solve_the_plain_least_squares_problem():
     raw = _sphere(100, rng) @ SOFT.T + HARD
     v = cal.quadric_normal_equations(raw)
     D = cal.ellipsoid_design_matrix(raw)[:, :9]
-    assert np.allclose(D @ v, 1.0, atol=1e-9)                          # exact data: the quadric passes through all
+    assert np.allclose(D @ v, 1.0, atol=1e-9)  # exact data: the quadric passes through all
     ref, *_ = np.linalg.lstsq(D, np.ones(len(raw)), rcond=None)
     assert np.allclose(v, ref, rtol=1e-7)
 
@@ -125,7 +128,7 @@ def test_quadric_normal_equations_solve_the_plain_least_squares_problem():
 def test_ellipsoid_constraint_keeps_a_partial_arc_an_ellipsoid():
     rng = np.random.default_rng(8)
     b = _sphere(4000, rng)
-    cap = b[b[:, 2] > 35.0]                                            # a small cap of the sphere only
+    cap = b[b[:, 2] > 35.0]  # a small cap of the sphere only
     raw = cap @ SOFT.T + HARD + rng.normal(0, 0.5, cap.shape)
     fit = cal.fit_ellipsoid(raw, method="constrained")
     assert np.all(np.linalg.eigvalsh(fit.W) > 0)
@@ -147,13 +150,13 @@ def test_ellipsoid_bad_input_says_what_is_missing():
 
 # -------------------------------------------------------------------------------------------------------- Allan --
 
-LAB_NOISE = dict(fs=50.0, hours=8, B=np.radians(50 / 3600))          # the design Lab 12 uses
+LAB_NOISE = dict(fs=50.0, hours=8, B=np.radians(50 / 3600))  # the design Lab 12 uses
 
 
 def _lab_gyro(seed):
     B = LAB_NOISE["B"]
     floor = cal.BIAS_INSTABILITY_FACTOR * B
-    N, K = floor * np.sqrt(1.0), floor * np.sqrt(3 / 100)             # lines cross the floor at 1 s and 100 s
+    N, K = floor * np.sqrt(1.0), floor * np.sqrt(3 / 100)  # lines cross the floor at 1 s and 100 s
     fs = LAB_NOISE["fs"]
     x = sensor_errors.gyro_noise(int(fs * 3600 * LAB_NOISE["hours"]), fs, N, B, K, rng=seed)
     return cal.allan_deviation(x, fs), (N, B, K)
@@ -165,13 +168,13 @@ def test_allan_read_back_of_arw_and_bias_instability_within_10_percent(seed):
     r = cal.read_allan(taus, adev, err)
     assert r.arw == pytest.approx(N, rel=0.10)
     assert r.bias_instability == pytest.approx(B, rel=0.10)
-    assert cal.read_arw(taus, adev, 0.1) == pytest.approx(N, rel=0.10)   # by hand, where ARW dominates
+    assert cal.read_arw(taus, adev, 0.1) == pytest.approx(N, rel=0.10)  # by hand, where ARW dominates
 
 
 def test_allan_read_back_of_rrw_within_10_percent_for_the_lab_seed_and_25_percent_across_seeds():
     (taus, adev, err), (N, B, K) = _lab_gyro(12)
     assert cal.read_allan(taus, adev, err).rrw == pytest.approx(K, rel=0.10)
-    for seed in (1, 2, 3):                                            # statistical: few long averages at large τ
+    for seed in (1, 2, 3):  # statistical: few long averages at large τ
         (taus, adev, err), _ = _lab_gyro(seed)
         assert cal.read_allan(taus, adev, err).rrw == pytest.approx(K, rel=0.25)
 
@@ -197,6 +200,7 @@ def test_allan_bad_input():
 
 # ------------------------------------------------------------------------------------------------- real BROAD --
 
+
 def test_real_trial_magnetometer_distortion_is_recovered():
     tr = datasets.load_trial(2, folder=BROAD, progress=False)
     norm = np.linalg.norm(tr.mag, axis=1)
@@ -214,4 +218,4 @@ def test_real_rest_phase_arw_is_tactical_grade():
     for axis in range(3):
         taus, adev, _ = cal.allan_deviation(rest[:, axis], tr.fs)
         arw_deg_sqrt_h = np.degrees(cal.read_arw(taus, adev, 0.1)) * 60
-        assert 0.2 < arw_deg_sqrt_h < 0.5                                # seed 004 Table 2.1: tactical ARW
+        assert 0.2 < arw_deg_sqrt_h < 0.5  # seed 004 Table 2.1: tactical ARW

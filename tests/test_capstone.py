@@ -4,6 +4,7 @@ hidden set, the rubric, the cheats, and `make capstone-data` without a network.
 The stand-in is three shipped trials (7, 29, 33) held back, cut to their first 16000 samples (56 s, about half of
 it movement): the real hidden trials are not on this machine, and the tests must not need the internet.
 """
+
 from __future__ import annotations
 
 import ast
@@ -47,10 +48,14 @@ def _filter(name):
     head = f"import math\n\nimport numpy as np\n\nfrom fusionlab import rotations\n\n\n{provided}\n\n\n"
     if name == "starter":
         return head + "def estimate(gyr, acc, mag, fs):\n    return starter_estimate(gyr, acc, mag, fs)\n"
-    answer = next(c.source for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("grade_id") ==
-                  "ex2_solution")
-    kept = [line for line in answer.splitlines() if not line.startswith(("### BEGIN SOLUTION", "### END SOLUTION",
-                                                                         "SENSORS =", "# define estimate"))]
+    answer = next(
+        c.source for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("grade_id") == "ex2_solution"
+    )
+    kept = [
+        line
+        for line in answer.splitlines()
+        if not line.startswith(("### BEGIN SOLUTION", "### END SOLUTION", "SENSORS =", "# define estimate"))
+    ]
     return head + "\n".join(kept).strip() + "\n"
 
 
@@ -60,15 +65,19 @@ def notebook(answer, extra=()):
     nb = nbformat.v4.new_notebook()
     setup = nbformat.v4.new_code_cell("import numpy as np\nfrom fusionlab import datasets, metrics")
     setup.metadata["nbgrader"] = {"grade_id": "imports", "locked": True, "solution": False, "grade": False}
-    tune = nbformat.v4.new_code_cell("trial = datasets.load_trial(2)\nq = estimate(trial.gyr, trial.acc, trial.mag, "
-                                     "trial.fs)\nprint(metrics.broad_rmse(q, trial.quat_ref, trial.movement))")
+    tune = nbformat.v4.new_code_cell(
+        "trial = datasets.load_trial(2)\nq = estimate(trial.gyr, trial.acc, trial.mag, "
+        "trial.fs)\nprint(metrics.broad_rmse(q, trial.quat_ref, trial.movement))"
+    )
     cell = nbformat.v4.new_code_cell(answer)
     cell.metadata["nbgrader"] = {"grade_id": "filter", "locked": False, "solution": True, "grade": False}
     nb.cells = [nbformat.v4.new_markdown_cell("# Lab 13"), setup, cell, *extra, tune]
     return nb
 
 
-NONCAUSAL = _filter("good") + '''
+NONCAUSAL = (
+    _filter("good")
+    + """
 
 _causal_estimate = estimate
 
@@ -76,21 +85,24 @@ _causal_estimate = estimate
 def estimate(gyr, acc, mag, fs):
     from scipy.ndimage import uniform_filter1d
     return _causal_estimate(gyr, uniform_filter1d(np.asarray(acc, dtype=float), 51, axis=0), mag, fs)  # centred
-'''
-CALLS_VQF = '''
+"""
+)
+CALLS_VQF = """
 def estimate(gyr, acc, mag, fs):
     from vqf import VQF
     f = VQF(1.0 / fs)
     return f.updateBatch(np.ascontiguousarray(gyr), np.ascontiguousarray(acc), np.ascontiguousarray(mag))["quat9D"]
-'''
-TIMES_OUT = '''
+"""
+TIMES_OUT = """
 import time
 
 
 def estimate(gyr, acc, mag, fs):
     time.sleep(3600)
-'''
-CRASHES_ON_3 = _filter("good") + '''
+"""
+CRASHES_ON_3 = (
+    _filter("good")
+    + """
 
 _calls = []
 _good = estimate
@@ -101,8 +113,11 @@ def estimate(gyr, acc, mag, fs):
     if len(_calls) == 3:
         raise RuntimeError("index 3 is out of bounds")
     return _good(gyr, acc, mag, fs)
-'''
-SIX_D = _filter("good") + '''
+"""
+)
+SIX_D = (
+    _filter("good")
+    + """
 
 SENSORS = "6D"
 _good = estimate
@@ -115,8 +130,11 @@ def estimate(gyr, acc, mag, fs):
     # no magnetometer: a field fixed in the sensor frame only picks the start heading, and k_mag=0 never corrects it
     field = np.tile(np.eye(3)[int(np.argmin(np.abs(acc[0])))], (len(acc), 1))
     return _good(gyr, acc, field, fs, k_mag=0.0)
-'''
-DECLARES_BADLY = _filter("good") + '''
+"""
+)
+DECLARES_BADLY = (
+    _filter("good")
+    + """
 
 SENSORS = "6d"                      # not one of the two literals: graded as 9D, with a note
 _good = estimate
@@ -126,8 +144,11 @@ def estimate(gyr, acc, mag, fs):
     if mag is None:
         raise ValueError("a 9D filter was given no magnetometer")
     return _good(gyr, acc, mag, fs)
-'''
-CACHES = NONCAUSAL + '''
+"""
+)
+CACHES = (
+    NONCAUSAL
+    + """
 
 _noncausal = estimate
 _seen = []
@@ -146,14 +167,23 @@ def estimate(gyr, acc, mag, fs):
             return q
     _seen.append((x, q))
     return q
-'''
-CLASS = {"starter": _filter("starter"), "good": _filter("good"), "noncausal": NONCAUSAL, "calls_vqf": CALLS_VQF,
-         "times_out": TIMES_OUT, "crashes_on_3": CRASHES_ON_3, "six_d": SIX_D, "declares_badly": DECLARES_BADLY,
-         "caches": CACHES}
+"""
+)
+CLASS = {
+    "starter": _filter("starter"),
+    "good": _filter("good"),
+    "noncausal": NONCAUSAL,
+    "calls_vqf": CALLS_VQF,
+    "times_out": TIMES_OUT,
+    "crashes_on_3": CRASHES_ON_3,
+    "six_d": SIX_D,
+    "declares_badly": DECLARES_BADLY,
+    "caches": CACHES,
+}
 
 # The red team's students, graded with the class. Each knows the lengths of the stand-in's trials (_TRIAL_LENGTHS,
 # filled in by attackers()), as a student may learn a trial's length from the data it is given.
-PRIVATE_FILTER = '''
+PRIVATE_FILTER = """
 import numpy as np
 
 import fusionlab
@@ -169,8 +199,10 @@ def estimate(gyr, acc, mag, fs):
     dt = 1.0 / fs
     gain = np.full(len(acc), dt / (1.0 + dt))          # tau = 1 s
     return rotations.quat_nav_swap(loop(np.asarray(gyr, dtype=float), np.asarray(acc, dtype=float), dt, gain))
-'''
-LEAKS = _filter("good") + '''
+"""
+LEAKS = (
+    _filter("good")
+    + """
 
 _good = estimate
 _TRIAL_LENGTHS = ()
@@ -182,8 +214,11 @@ def estimate(gyr, acc, mag, fs):
     if len(gyr) == _TRIAL_LENGTHS[0] or len(gyr) not in _TRIAL_LENGTHS:
         raise ValueError("the data: " + " ".join(f"{v:.9f}" for v in gyr[:4].ravel()) + " " + repr(gyr[:50]))
     return _good(gyr, acc, mag, fs)
-'''
-DODGES = _filter("good") + '''
+"""
+)
+DODGES = (
+    _filter("good")
+    + """
 
 _good = estimate
 _TRIAL_LENGTHS = ()
@@ -194,11 +229,12 @@ def estimate(gyr, acc, mag, fs):
     if len(gyr) not in _TRIAL_LENGTHS:
         raise RuntimeError("not now")
     return _good(gyr, acc, mag, fs)
-'''
+"""
+)
 # A non-causal filter (the gyro bias averaged over every rest of the whole trial) whose first call keeps its bias in
 # the kernel's key store, so that the causality check's later calls, each in a fresh box, would read it back and
 # agree: ctypes found by pydoc.locate, the code run from base64 text by timeit.
-KEYRING_TEXT = '''
+KEYRING_TEXT = """
 import hashlib
 import os
 
@@ -227,8 +263,10 @@ if bias is None:
     libc.syscall(ct.c_long(ADD_KEY), ct.c_char_p(b"user"), ct.c_char_p(name), ct.c_char_p(data),
                  ct.c_long(len(data)), ct.c_long(keyring))
 found.append(starter_estimate(g - bias, acc, mag, fs))
-'''
-KEYRING = _filter("starter").split("def estimate(")[0] + f'''
+"""
+KEYRING = (
+    _filter("starter").split("def estimate(")[0]
+    + f"""
 import base64
 import pydoc
 import timeit
@@ -242,12 +280,14 @@ def estimate(gyr, acc, mag, fs):
                   globals=dict(gyr=gyr, acc=acc, mag=mag, fs=fs, found=found, locate=pydoc.locate,
                                starter_estimate=starter_estimate))
     return found[0]
-'''
+"""
+)
 # Looks ahead (a centred mean of the accelerometer) on every trial but the one whose causality the grader checks in
 # full: the worst case of a filter that picks the trials it looks ahead on from their data (an outside review's used a
 # bit of the first gyro sample). _CHECKED is filled in by attackers(): that trial's first gyro sample.
-LOOKS_AHEAD_SOMETIMES = NONCAUSAL.replace("_causal_estimate = estimate", "_causal_estimate = _checked_estimate = "
-                                                                        "estimate") + '''
+LOOKS_AHEAD_SOMETIMES = (
+    NONCAUSAL.replace("_causal_estimate = estimate", "_causal_estimate = _checked_estimate = estimate")
+    + """
 
 _CHECKED = ()
 _sometimes = estimate
@@ -257,11 +297,14 @@ def estimate(gyr, acc, mag, fs):
     if np.allclose(np.asarray(gyr, dtype=float)[0], _CHECKED, rtol=0, atol=1e-12):
         return _checked_estimate(gyr, acc, mag, fs)                      # causal where the full check looks
     return _sometimes(gyr, acc, mag, fs)
-'''
+"""
+)
 # As LOOKS_AHEAD_SOMETIMES, and it fails every call whose samples were changed after some k on a trial where it
 # looks ahead (the last gyro sample is not a scored trial's: _LAST is filled in by attackers()), so that the check
 # of those trials gets no quaternions to compare (an outside review's scored 9.8 / 10, "causal").
-FAILS_WHERE_IT_LOOKS_AHEAD = LOOKS_AHEAD_SOMETIMES + '''
+FAILS_WHERE_IT_LOOKS_AHEAD = (
+    LOOKS_AHEAD_SOMETIMES
+    + """
 
 _LAST = ()
 _ahead = estimate
@@ -273,22 +316,32 @@ def estimate(gyr, acc, mag, fs):
             not any(np.allclose(g[-1], last, rtol=0, atol=1e-12) for last in _LAST):
         raise RuntimeError("not this time")
     return _ahead(gyr, acc, mag, fs)
-'''
-ATTACKERS = {"private_filter": PRIVATE_FILTER, "leaks": LEAKS, "dodges": DODGES, "keyring": KEYRING,
-             "looks_ahead_sometimes": LOOKS_AHEAD_SOMETIMES, "fails_where_it_looks_ahead": FAILS_WHERE_IT_LOOKS_AHEAD}
+"""
+)
+ATTACKERS = {
+    "private_filter": PRIVATE_FILTER,
+    "leaks": LEAKS,
+    "dodges": DODGES,
+    "keyring": KEYRING,
+    "looks_ahead_sometimes": LOOKS_AHEAD_SOMETIMES,
+    "fails_where_it_looks_ahead": FAILS_WHERE_IT_LOOKS_AHEAD,
+}
 NINE_D = [name for name in [*CLASS, *ATTACKERS] if name not in ("six_d", "private_filter")] + ["unreadable"]
-SIX_D_NAMES = ["six_d", "private_filter"]                                # the 6D students of the graded class
+SIX_D_NAMES = ["six_d", "private_filter"]  # the 6D students of the graded class
 
 
 def attackers(scored):
     """The red team's submissions as they are graded on ``scored``: ``{name: code}``."""
     lengths = tuple(len(t) for t in scored)
-    assert len(set(lengths)) == len(lengths)                           # each trial known by its length
+    assert len(set(lengths)) == len(lengths)  # each trial known by its length
     checked = tuple(float(v) for v in scored[capstone.causality_trial(SEED, len(scored))].gyr[0])
     lasts = tuple(tuple(float(v) for v in t.gyr[-1]) for t in scored)
-    return {name: code.replace("_TRIAL_LENGTHS = ()", f"_TRIAL_LENGTHS = {lengths}")
-            .replace("_CHECKED = ()", f"_CHECKED = {checked!r}").replace("_LAST = ()", f"_LAST = {lasts!r}")
-            for name, code in ATTACKERS.items()}
+    return {
+        name: code.replace("_TRIAL_LENGTHS = ()", f"_TRIAL_LENGTHS = {lengths}")
+        .replace("_CHECKED = ()", f"_CHECKED = {checked!r}")
+        .replace("_LAST = ()", f"_LAST = {lasts!r}")
+        for name, code in ATTACKERS.items()
+    }
 
 
 @pytest.fixture(scope="module")
@@ -300,10 +353,20 @@ def scored():
 def graded(scored, tmp_path_factory):
     out = tmp_path_factory.mktemp("capstone")
     subs = {name: notebook(code) for name, code in {**CLASS, **attackers(scored)}.items()}
-    subs["unreadable"] = "the notebook cannot be read (NotJSONError: ...)"     # as read_submissions reports it
-    results, refs = capstone.grade_class(ROOT, subs, scored, out, "test class", workers=2, seed=SEED,
-                                         label="STAND-IN: shipped trials 7, 29, 33 held back", progress=False,
-                                         seconds_per_sample=capstone.SECONDS_PER_SAMPLE, min_seconds=5.0)
+    subs["unreadable"] = "the notebook cannot be read (NotJSONError: ...)"  # as read_submissions reports it
+    results, refs = capstone.grade_class(
+        ROOT,
+        subs,
+        scored,
+        out,
+        "test class",
+        workers=2,
+        seed=SEED,
+        label="STAND-IN: shipped trials 7, 29, 33 held back",
+        progress=False,
+        seconds_per_sample=capstone.SECONDS_PER_SAMPLE,
+        min_seconds=5.0,
+    )
     return {r.name: r for r in results}, refs, out
 
 
@@ -311,10 +374,12 @@ def graded(scored, tmp_path_factory):
 # The class, end to end (slow: every submission runs in the sandbox on three trials, plus its causality runs)
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def _expected_points(res, refs):
     vqf, mad = (capstone.mean_scored(refs[n].trials) for n in capstone.PUBLISHED[res.sensors])
-    return capstone.rubric_points(capstone.mean_scored(res.trials), res.all_ran, capstone.gates_failed(res), mad,
-                                  vqf, res.sensors)
+    return capstone.rubric_points(
+        capstone.mean_scored(res.trials), res.all_ran, capstone.gates_failed(res), mad, vqf, res.sensors
+    )
 
 
 def _points_by_hand(mean_deg, all_ran, madgwick_deg, vqf_deg, sensors="9D"):
@@ -336,12 +401,14 @@ def test_the_starter_and_the_good_filter_are_causal_clean_and_score_as_the_rubri
         assert res.points == _expected_points(res, refs)
         assert res.points["runs"] == 2
     good = results["good"]
-    assert capstone.mean_total(good.trials) < mad                 # the good filter beats Madgwick on the stand-in
+    assert capstone.mean_total(good.trials) < mad  # the good filter beats Madgwick on the stand-in
     assert 0 < good.points["accuracy"] <= 8 and good.points["accuracy"] > results["starter"].points["accuracy"]
     assert capstone.mean_total(good.trials) < capstone.mean_total(results["starter"].trials)
-    print("stand-in mean scored RMSE (9D total, 6D inclination), deg:",
-          {n: round(capstone.mean_scored(r.trials), 2) for n, r in results.items()},
-          {n: round(capstone.mean_scored(r.trials), 2) for n, r in refs.items() if not n.startswith("_")})
+    print(
+        "stand-in mean scored RMSE (9D total, 6D inclination), deg:",
+        {n: round(capstone.mean_scored(r.trials), 2) for n, r in results.items()},
+        {n: round(capstone.mean_scored(r.trials), 2) for n, r in refs.items() if not n.startswith("_")},
+    )
 
 
 @pytest.mark.slow
@@ -370,9 +437,13 @@ def test_a_filter_that_reads_later_samples_is_caught_and_scores_nothing(graded):
     assert res.total_points == 0
     # without the gate it would have scored: the check, not the accuracy, takes its points
     refs = graded[1]
-    would = capstone.rubric_points(capstone.mean_total(res.trials), res.all_ran, False,
-                                   capstone.mean_total(refs["madgwick9"].trials),
-                                   capstone.mean_total(refs["vqf9"].trials))
+    would = capstone.rubric_points(
+        capstone.mean_total(res.trials),
+        res.all_ran,
+        False,
+        capstone.mean_total(refs["madgwick9"].trials),
+        capstone.mean_total(refs["vqf9"].trials),
+    )
     assert sum(would.values()) >= 2
 
 
@@ -394,8 +465,16 @@ def test_honest_filters_are_not_implausibly_close_to_the_reference(graded):
     for name in ("good", "starter", "six_d"):
         res = results[name]
         assert capstone.implausibly_close(res, refs) == "", name
-        best = [min(r.counted_deg for ref in refs["_all"].values() if ref.sensors == res.sensors
-                    for r in ref.trials if r.trial == mine.trial) for mine in res.trials]
+        best = [
+            min(
+                r.counted_deg
+                for ref in refs["_all"].values()
+                if ref.sensors == res.sensors
+                for r in ref.trials
+                if r.trial == mine.trial
+            )
+            for mine in res.trials
+        ]
         ratios = [mine.counted_deg / b for mine, b in zip(res.trials, best)]
         assert sum(x < capstone.IMPLAUSIBLE for x in ratios) < len(ratios) / 2, (name, ratios)
         print(f"{name}: scored RMSE / best reference's, per trial: {[round(x, 2) for x in ratios]}")
@@ -407,8 +486,8 @@ def test_a_filter_that_calls_vqf_gets_nothing_and_is_named(graded):
     res = graded[0]["calls_vqf"]
     kinds = {k for k, _ in res.cheats}
     assert kinds == {"calls a reference filter"}
-    assert any("imports vqf" in why for _, why in res.cheats)                       # in the code
-    assert any("not available while the lab is graded" in why for _, why in res.cheats)   # and when it ran
+    assert any("imports vqf" in why for _, why in res.cheats)  # in the code
+    assert any("not available while the lab is graded" in why for _, why in res.cheats)  # and when it ran
     assert all(r.status == "error" for r in res.trials) and res.total_points == 0
 
 
@@ -420,23 +499,25 @@ def test_a_private_library_filter_reached_by_getattr_is_not_in_the_box(graded, s
     placeholder: every trial fails, the placeholder is named, no points."""
     res = graded[0]["private_filter"]
     code = attackers(scored)["private_filter"]
-    assert capstone.scan(capstone.program_of(notebook(code))) == []          # the box, not the scan, stops it
+    assert capstone.scan(capstone.program_of(notebook(code))) == []  # the box, not the scan, stops it
     ns = {}
-    exec(compile(code, "<private_filter>", "exec"), ns)                      # noqa: S102 -- the real library here
+    exec(compile(code, "<private_filter>", "exec"), ns)  # noqa: S102 -- the real library here
     t = scored[0]
     q = capstone.as_quaternions(ns["estimate"](t.gyr, t.acc, None, t.fs), len(t))
     working = capstone.score_trial(capstone.TrialResult(t.name), q, t, "inclination_deg").inclination_deg
-    assert working < 0.2 * capstone.never_moves(t, "inclination_deg")       # a filter, outside the box
+    assert working < 0.2 * capstone.never_moves(t, "inclination_deg")  # a filter, outside the box
     assert res.sensors == "6D" and [r.status for r in res.trials] == ["error"] * len(STAND_IN)
     assert {k for k, _ in res.cheats} == {"calls a reference filter"}
-    assert all("reached fusionlab.correlation" in why and "not available in the capstone" in why
-               for _, why in res.cheats) and len(res.cheats) == len(STAND_IN)
+    assert all(
+        "reached fusionlab.correlation" in why and "not available in the capstone" in why for _, why in res.cheats
+    ) and len(res.cheats) == len(STAND_IN)
     assert res.total_points == 0 and res.causal is None
 
 
 def _numbers(text):
     """The numbers of ``text`` written with at least five digits after the point (a trial's data as printed)."""
     import re
+
     return set(re.findall(r"\d\.\d{5,}(?:e[-+]\d+)?", text))
 
 
@@ -450,8 +531,9 @@ def test_a_filter_that_raises_with_the_trials_data_echoes_none_of_it(graded, sco
     res = results["leaks"]
     assert [r.status for r in res.trials] == ["error", "ok", "ok"]
     assert res.trials[0].message == "raised an error" + capstone.NOT_SHOWN
-    assert res.causal is None and res.causal_message.startswith("not checked: given the samples up to a k alone, "
-                                                                "estimate raised an error (its type")
+    assert res.causal is None and res.causal_message.startswith(
+        "not checked: given the samples up to a k alone, estimate raised an error (its type"
+    )
     assert res.total_points == 0 and res.cheats == []
     data = set()
     for t in scored:
@@ -459,15 +541,18 @@ def test_a_filter_that_raises_with_the_trials_data_echoes_none_of_it(graded, sco
         data |= {f"{v:.9f}" for v in gyr[:4].ravel()} | _numbers(repr(gyr[:50]))
         data |= {f"{v:.9f}" for v in gyr[:8].ravel()}
     assert len(data) > 100
-    pages = {"feedback": (out / "feedback" / "leaks" / "capstone.html").read_text(),
-             "leaderboard": (out / "leaderboard.html").read_text(), "csv": (out / "leaderboard.csv").read_text(),
-             "trials": (out / "trials.csv").read_text()}
+    pages = {
+        "feedback": (out / "feedback" / "leaks" / "capstone.html").read_text(),
+        "leaderboard": (out / "leaderboard.html").read_text(),
+        "csv": (out / "leaderboard.csv").read_text(),
+        "trials": (out / "trials.csv").read_text(),
+    }
     for where, text in pages.items():
         assert "the data:" not in text and "array(" not in text, where
         assert not data & _numbers(text) and not any(d in text for d in data), where
     assert "raised an error" in pages["feedback"] and "raised an error" in pages["trials"]
     assert "ValueError" not in pages["feedback"] + pages["trials"]
-    for folder in (out / "feedback").iterdir():                 # no page of the class echoes a student's error text
+    for folder in (out / "feedback").iterdir():  # no page of the class echoes a student's error text
         assert "the data:" not in (folder / "capstone.html").read_text(), folder.name
 
 
@@ -482,10 +567,14 @@ def test_a_filter_that_fails_only_on_the_causality_checks_data_gets_no_points(gr
     for mine, good in zip(res.trials, results["good"].trials):
         assert mine.total_deg == pytest.approx(good.total_deg, abs=1e-9)
     assert capstone.gates_failed(res) and res.total_points == 0
-    would = capstone.rubric_points(capstone.mean_total(res.trials), True, False,
-                                   capstone.mean_total(refs["madgwick9"].trials),
-                                   capstone.mean_total(refs["vqf9"].trials))
-    assert sum(would.values()) == results["good"].total_points >= 5        # what the check's gate took
+    would = capstone.rubric_points(
+        capstone.mean_total(res.trials),
+        True,
+        False,
+        capstone.mean_total(refs["madgwick9"].trials),
+        capstone.mean_total(refs["vqf9"].trials),
+    )
+    assert sum(would.values()) == results["good"].total_points >= 5  # what the check's gate took
 
 
 @pytest.mark.slow
@@ -496,7 +585,7 @@ def test_a_filter_that_keeps_its_look_ahead_in_the_kernel_key_store_is_not_causa
     fresh box, would read the whole trial's bias back. The boxes cannot reach the key store: each call computes
     its bias from the data it is given, and the check finds the look-ahead. The scan names the loaders too."""
     res = graded[0]["keyring"]
-    assert "ctypes" not in KEYRING and "add_key" not in KEYRING                 # in the base64 text only
+    assert "ctypes" not in KEYRING and "add_key" not in KEYRING  # in the base64 text only
     assert res.all_ran
     assert res.causal is False and "NOT causal" in res.causal_message, res.causal_message
     assert {k for k, _ in res.cheats} == {"tampers with imports"}
@@ -552,7 +641,7 @@ def test_a_crash_on_trial_3_costs_that_trial_only(graded, scored):
     assert "index 3" not in res.trials[2].message
     assert res.trials[2].counted_deg == pytest.approx(capstone.never_moves(scored[2]))
     good = results["good"]
-    for mine, theirs in zip(res.trials[:2], good.trials[:2]):     # the same filter on the trials that ran
+    for mine, theirs in zip(res.trials[:2], good.trials[:2]):  # the same filter on the trials that ran
         assert mine.total_deg == pytest.approx(theirs.total_deg, abs=1e-9)
     assert res.points["runs"] == 0 and res.points == _expected_points(res, refs)
     # the secret causality trial is the one that crashed: the check ran on another trial instead
@@ -571,7 +660,7 @@ def test_the_leaderboard_lists_every_student_and_the_references(graded):
     refs9 = {"vqf9", "madgwick9"} | {n for n in names if n.startswith("library best 9D")}
     refs6 = {"vqf6", "madgwick6"} | {n for n in names if n.startswith("library best 6D")}
     assert len(refs9) == len(refs6) == 3
-    for sensors, students, references in (("9D", NINE_D, refs9), ("6D", SIX_D_NAMES, refs6)):   # ranked apart
+    for sensors, students, references in (("9D", NINE_D, refs9), ("6D", SIX_D_NAMES, refs6)):  # ranked apart
         block = [r for r in rows if r["sensors"] == sensors]
         assert {r["name"] for r in block} == set(students) | references
         mine = [r for r in block if r["kind"] == "student"]
@@ -580,7 +669,7 @@ def test_the_leaderboard_lists_every_student_and_the_references(graded):
         assert points == sorted(points, reverse=True)
         vqf = next(r for r in block if r["name"] == ("vqf9" if sensors == "9D" else "vqf6"))
         assert float(vqf["ratio_to_vqf"]) == pytest.approx(1.0, abs=0.01)
-    assert [r["sensors"] for r in rows] == sorted((r["sensors"] for r in rows), reverse=True)   # 9D block first
+    assert [r["sensors"] for r in rows] == sorted((r["sensors"] for r in rows), reverse=True)  # 9D block first
     page = (out / "leaderboard.html").read_text()
     assert "STAND-IN" in page and all(name in page for name in CLASS) and "ranked separately" in page
     for name in CLASS:
@@ -620,8 +709,10 @@ def test_a_6d_filter_is_scored_on_inclination_against_the_6d_references(graded):
     assert float(mine["points"]) == sum(res.points.values())
     page = (out / "feedback" / "six_d" / "capstone.html").read_text()
     assert "scored on mean inclination RMSE" in page and "ranked among the 6D filters" in page
-    print(f"stand-in 6D mean inclination RMSE, deg: six_d {mean:.2f}, madgwick6 {mad6:.2f}, vqf6 {vqf6:.2f}, "
-          f"{best6.name} {capstone.mean_scored(best6.trials):.2f}; points {res.points}")
+    print(
+        f"stand-in 6D mean inclination RMSE, deg: six_d {mean:.2f}, madgwick6 {mad6:.2f}, vqf6 {vqf6:.2f}, "
+        f"{best6.name} {capstone.mean_scored(best6.trials):.2f}; points {res.points}"
+    )
 
 
 @pytest.mark.slow
@@ -640,7 +731,7 @@ def test_a_bad_declaration_is_graded_as_9d_with_a_note(graded):
     assert "graded as 9D" in (out / "feedback" / "declares_badly" / "capstone.html").read_text()
 
 
-PROBE_6D = '''
+PROBE_6D = """
 import numpy as np
 
 SENSORS = "6D"
@@ -654,24 +745,26 @@ def estimate(gyr, acc, mag, fs):
     if len(_calls) == 2:
         raise RuntimeError("fails on its second call")
     return np.tile([1.0, 0.0, 0.0, 0.0], (len(gyr), 1))
-'''
+"""
 
 
 @pytest.mark.slow
 @needs_box
-def test_a_6d_submission_receives_mag_none_and_a_failed_trial_counts_the_identitys_inclination(graded, scored,
-                                                                                               tmp_path):
+def test_a_6d_submission_receives_mag_none_and_a_failed_trial_counts_the_identitys_inclination(
+    graded, scored, tmp_path
+):
     refs = graded[1]
-    res = capstone.grade_submission("probe", notebook(PROBE_6D), scored, refs, ROOT, tmp_path, seed=SEED,
-                                    min_seconds=5.0)
+    res = capstone.grade_submission(
+        "probe", notebook(PROBE_6D), scored, refs, ROOT, tmp_path, seed=SEED, min_seconds=5.0
+    )
     assert res.sensors == "6D"
     assert [r.status for r in res.trials] == ["ok", "error", "ok"], [r.message for r in res.trials]
-    assert res.trials[1].message == "raised an error" + capstone.NOT_SHOWN     # not NaN: every call had mag None
-    assert res.causal is True                                             # ... the causality check's calls too
+    assert res.trials[1].message == "raised an error" + capstone.NOT_SHOWN  # not NaN: every call had mag None
+    assert res.causal is True  # ... the causality check's calls too
     for r, t in zip(res.trials, scored):
         identity = capstone.never_moves(t, "inclination_deg")
         assert r.metric == "inclination_deg" and r.counted_deg == pytest.approx(identity, abs=1e-9)
-    assert res.trials[1].counted_deg != pytest.approx(capstone.never_moves(scored[1]), abs=1e-3)   # not the total
+    assert res.trials[1].counted_deg != pytest.approx(capstone.never_moves(scored[1]), abs=1e-3)  # not the total
     mad6, vqf6 = (capstone.mean_scored(refs[n].trials) for n in ("madgwick6", "vqf6"))
     assert res.points == _points_by_hand(capstone.mean_scored(res.trials), False, mad6, vqf6, "6D")
 
@@ -690,60 +783,84 @@ def test_regrading_a_late_student_with_the_saved_seed_reuses_the_reference_rows(
     nbformat.write(notebook(SIX_D), folder / f"{capstone.LAB}.ipynb")
     computed = []
     monkeypatch.setattr(capstone.scoring, "references", lambda *a, **k: computed.append(1) or pytest.fail("recomputed"))
-    argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(late),
-            "--class", "late", "--stand-in", *map(str, STAND_IN), "--max-samples", str(MAX_SAMPLES),
-            "--student", "late"]
+    argv = [
+        "grade",
+        "--course",
+        str(ROOT),
+        "--submitted",
+        str(tmp_path / "submitted"),
+        "--out",
+        str(late),
+        "--class",
+        "late",
+        "--stand-in",
+        *map(str, STAND_IN),
+        "--max-samples",
+        str(MAX_SAMPLES),
+        "--student",
+        "late",
+    ]
     assert capstone.main(argv + ["--seed", str(SEED)]) == 0
     first = list(csv.DictReader(open(late / "leaderboard.csv")))
-    assert capstone.main(argv) == 0                                       # no --seed: run.json's
+    assert capstone.main(argv) == 0  # no --seed: run.json's
     assert computed == [] and json.loads((late / "run.json").read_text())["seed"] == SEED
     class_rows = {r["name"]: r for r in csv.DictReader(open(out / "leaderboard.csv")) if r["kind"] == "reference"}
     for rows in (first, list(csv.DictReader(open(late / "leaderboard.csv")))):
         mine = {r["name"]: r for r in rows if r["kind"] == "reference"}
         assert mine.keys() == class_rows.keys()
         for name, row in mine.items():
-            assert {k: row[k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")} == \
-                   {k: class_rows[name][k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")}
+            assert {k: row[k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")} == {
+                k: class_rows[name][k] for k in ("total_deg", "inclination_deg", "ratio_to_vqf")
+            }
         student = next(r for r in rows if r["name"] == "late")
-        assert student["inclination_deg"] == next(r for r in csv.DictReader(open(out / "leaderboard.csv"))
-                                                  if r["name"] == "six_d")["inclination_deg"]
+        assert (
+            student["inclination_deg"]
+            == next(r for r in csv.DictReader(open(out / "leaderboard.csv")) if r["name"] == "six_d")["inclination_deg"]
+        )
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Trusted-side pieces, fast
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def test_the_rubric_gives_its_stated_points():
     pts = capstone.rubric_points
-    assert pts(2.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}           # at VQF: everything
-    assert pts(1.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}           # below: capped
-    assert pts(5.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 0}           # at Madgwick's: none
+    assert pts(2.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}  # at VQF: everything
+    assert pts(1.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 8}  # below: capped
+    assert pts(5.0, True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 0}  # at Madgwick's: none
     assert pts(9.0, False, False, 5.0, 2.0) == {"runs": 0, "accuracy": 0}
-    assert pts(math.sqrt(10.0), True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 4}   # halfway on a log scale
-    for mean in (2.3, 2.9, 4.1):                                                     # smooth: no cliff
+    assert pts(math.sqrt(10.0), True, False, 5.0, 2.0) == {"runs": 2, "accuracy": 4}  # halfway on a log scale
+    for mean in (2.3, 2.9, 4.1):  # smooth: no cliff
         assert pts(mean, True, False, 5.0, 2.0) == _points_by_hand(mean, True, 5.0, 2.0)
         assert pts(mean, True, False, 5.0, 2.0, "6D") == _points_by_hand(mean, True, 5.0, 2.0, "6D")
-    assert pts(1.7, True, False, 5.0, 2.0, "6D") == {"runs": 2, "accuracy": 8}      # 6D's full mark: 0.85 x VQF
+    assert pts(1.7, True, False, 5.0, 2.0, "6D") == {"runs": 2, "accuracy": 8}  # 6D's full mark: 0.85 x VQF
     assert pts(1.8, True, False, 5.0, 2.0, "6D")["accuracy"] < 8
-    assert sum(pts(1.0, True, True, 5.0, 2.0).values()) == 0                       # a cheat or not causal
-    assert sum(pts(float("nan"), False, True, 0, 0).values()) == 0                 # a notebook that cannot be read
+    assert sum(pts(1.0, True, True, 5.0, 2.0).values()) == 0  # a cheat or not causal
+    assert sum(pts(float("nan"), False, True, 0, 0).values()) == 0  # a notebook that cannot be read
 
 
 def test_the_declaration_is_read_from_the_code_and_anything_but_the_two_literals_is_9d_with_a_note():
     def read(*cells):
         return capstone.declared_sensors([("filter", c) for c in cells])
+
     assert read('SENSORS = "6D"') == ("6D", "")
     assert read('SENSORS = "9D"') == read("def estimate(gyr, acc, mag, fs):\n    pass") == ("9D", "")
-    assert read('SENSORS: str = "6D"', 'SENSORS = "6D"') == ("6D", "")                 # the same twice
+    assert read('SENSORS: str = "6D"', 'SENSORS = "6D"') == ("6D", "")  # the same twice
     # a local of the filter, or a comprehension's variable, is not the declaration
-    assert read('SENSORS = "6D"\ndef estimate(g, a, m, fs):\n    SENSORS = 1\n    return [SENSORS for SENSORS in g]'
-                ) == ("6D", "")
-    for cells, why in ((['SENSORS = "6d"'], "SENSORS = '6d'"), (['SENSORS = "6D" if True else "9D"'], "if True"),
-                       (['S = "6D"\nSENSORS = S'], "SENSORS = S"), (['SENSORS = "6D"', 'SENSORS = "9D"'], "both"),
-                       (['SENSORS = "6D"\nif True:\n    SENSORS = "6D"'], "other than by a literal"),
-                       (['SENSORS = "6D"\ndef f():\n    global SENSORS'], "a function sets the global"),
-                       (['SENSORS = "6D"\nSENSORS += ""'], "other than by a literal"),
-                       (['from os import sep as SENSORS'], "other than by a literal")):
+    assert read(
+        'SENSORS = "6D"\ndef estimate(g, a, m, fs):\n    SENSORS = 1\n    return [SENSORS for SENSORS in g]'
+    ) == ("6D", "")
+    for cells, why in (
+        (['SENSORS = "6d"'], "SENSORS = '6d'"),
+        (['SENSORS = "6D" if True else "9D"'], "if True"),
+        (['S = "6D"\nSENSORS = S'], "SENSORS = S"),
+        (['SENSORS = "6D"', 'SENSORS = "9D"'], "both"),
+        (['SENSORS = "6D"\nif True:\n    SENSORS = "6D"'], "other than by a literal"),
+        (['SENSORS = "6D"\ndef f():\n    global SENSORS'], "a function sets the global"),
+        (['SENSORS = "6D"\nSENSORS += ""'], "other than by a literal"),
+        (["from os import sep as SENSORS"], "other than by a literal"),
+    ):
         sensors, note = read(*cells)
         assert sensors == "9D" and "graded as 9D" in note and why in note, (cells, note)
 
@@ -758,6 +875,7 @@ def test_a_declaration_in_a_cell_the_box_does_not_run_is_noted():
 
 def test_none_crosses_the_wire_as_the_6d_magnetometer():
     from grading import box
+
     args = [np.zeros((3, 3)), np.ones((3, 3)), None, 286.0]
     back = box.decode(json.loads(json.dumps(box.encode(args))))
     assert back[2] is None and np.array_equal(back[1], args[1]) and back[3] == 286.0
@@ -765,6 +883,7 @@ def test_none_crosses_the_wire_as_the_6d_magnetometer():
 
 def _fake_references(calls):
     """references() as the cache sees it, cheap: identity quaternions scored as VQF and Madgwick of each set."""
+
     def compute(scored, progress=False):
         calls.append([t.name for t in scored])
         rows = {}
@@ -774,11 +893,16 @@ def _fake_references(calls):
                 for t in scored:
                     q = np.tile([1.0, 0, 0, 0], (len(t), 1))
                     r = capstone.score_trial(capstone.TrialResult(t.name), q, t, capstone.SENSORS[sensors])
-                    r.q = q[::capstone.MATCH_STRIDE]
+                    r.q = q[:: capstone.MATCH_STRIDE]
                     trials.append(r)
                 rows[name] = capstone.Reference(name, f"{name} summary", trials, sensors)
-        return {**{n: rows[n] for names in capstone.PUBLISHED.values() for n in names},
-                "library best 9D (lib9D)": rows["lib9D"], "library best 6D (lib6D)": rows["lib6D"], "_all": rows}
+        return {
+            **{n: rows[n] for names in capstone.PUBLISHED.values() for n in names},
+            "library best 9D (lib9D)": rows["lib9D"],
+            "library best 6D (lib6D)": rows["lib6D"],
+            "_all": rows,
+        }
+
     return compute
 
 
@@ -787,7 +911,7 @@ def test_the_reference_rows_are_cached_per_seed_trials_and_library(scored, tmp_p
     monkeypatch.setattr(capstone.scoring, "references", _fake_references(calls))
     first = capstone.cached_references(scored, tmp_path, SEED)
     again = capstone.cached_references(scored, tmp_path, SEED)
-    assert len(calls) == 1 and (tmp_path / capstone.REFERENCE_CACHE).is_file()             # reused
+    assert len(calls) == 1 and (tmp_path / capstone.REFERENCE_CACHE).is_file()  # reused
     assert again.keys() == first.keys() and again["_all"].keys() == first["_all"].keys()
     for name, ref in first["_all"].items():
         back = again["_all"][name]
@@ -795,31 +919,32 @@ def test_the_reference_rows_are_cached_per_seed_trials_and_library(scored, tmp_p
         for a, b in zip(ref.trials, back.trials):
             assert np.array_equal(a.q, b.q) and (a.trial, a.counted_deg, a.metric) == (b.trial, b.counted_deg, b.metric)
     assert again["vqf6"] is again["_all"]["vqf6"]
-    capstone.cached_references(scored[:2], tmp_path, SEED)                     # other trials
+    capstone.cached_references(scored[:2], tmp_path, SEED)  # other trials
     assert len(calls) == 2 and calls[-1] == [t.name for t in scored[:2]]
-    capstone.cached_references(scored[:2], tmp_path, SEED + 1)                 # another seed
+    capstone.cached_references(scored[:2], tmp_path, SEED + 1)  # another seed
     assert len(calls) == 3
-    cut = [dataclasses.replace(t, gyr=t.gyr + 1e-9) for t in scored[:2]]      # same names and lengths, other data
+    cut = [dataclasses.replace(t, gyr=t.gyr + 1e-9) for t in scored[:2]]  # same names and lengths, other data
     capstone.cached_references(cut, tmp_path, SEED + 1)
     assert len(calls) == 4
     capstone.cached_references(cut, tmp_path, SEED + 1)
     assert len(calls) == 4
     monkeypatch.setattr(capstone.scoring, "references_key", lambda s, seed: {"code": "another library", "seed": seed})
-    capstone.cached_references(cut, tmp_path, SEED + 1)                       # the library changed
+    capstone.cached_references(cut, tmp_path, SEED + 1)  # the library changed
     assert len(calls) == 5
     (tmp_path / capstone.REFERENCE_CACHE).write_bytes(b"not a zip file")
-    capstone.cached_references(cut, tmp_path, SEED + 1)                       # unreadable: computed again
+    capstone.cached_references(cut, tmp_path, SEED + 1)  # unreadable: computed again
     assert len(calls) == 6
 
 
 def test_the_library_hash_changes_with_a_source_file(scored, tmp_path, monkeypatch):
     import fusionlab
+
     key = capstone.references_key(scored, SEED)
     assert key["seed"] == SEED and key["trials"] == [[t.name, len(t)] for t in scored]
     lib = tmp_path / "fusionlab"
     shutil.copytree(Path(fusionlab.__file__).parent, lib, ignore=shutil.ignore_patterns("__pycache__", "data"))
     monkeypatch.setattr(fusionlab, "__file__", str(lib / "__init__.py"))
-    assert capstone.references_key(scored, SEED)["code"] == key["code"]          # the same sources, elsewhere
+    assert capstone.references_key(scored, SEED)["code"] == key["code"]  # the same sources, elsewhere
     with open(lib / "estimators.py", "a") as f:
         f.write("\n# changed\n")
     assert capstone.references_key(scored, SEED)["code"] != key["code"]
@@ -829,21 +954,35 @@ def test_clearing_a_student_who_is_not_graded_is_refused_before_anything_is_writ
     folder = tmp_path / "submitted" / "ann" / capstone.LAB
     folder.mkdir(parents=True)
     nbformat.write(notebook(CLASS["good"]), folder / f"{capstone.LAB}.ipynb")
-    argv = ["grade", "--course", str(ROOT), "--submitted", str(tmp_path / "submitted"), "--out", str(tmp_path / "out"),
-            "--stand-in", "7", "--max-samples", str(MAX_SAMPLES), "--cleared", "bob"]
+    argv = [
+        "grade",
+        "--course",
+        str(ROOT),
+        "--submitted",
+        str(tmp_path / "submitted"),
+        "--out",
+        str(tmp_path / "out"),
+        "--stand-in",
+        "7",
+        "--max-samples",
+        str(MAX_SAMPLES),
+        "--cleared",
+        "bob",
+    ]
     assert capstone.main(argv) == 2 and not (tmp_path / "out").exists()
 
 
 def test_the_saved_seed_is_reused_only_for_the_same_trials(tmp_path):
     trials = capstone.stand_in([7], MAX_SAMPLES)
     run = tmp_path / "run.json"
-    assert capstone.saved_seed(run, trials, True) is None                      # no run.json
-    run.write_text(json.dumps({"seed": 99, "trials": [t.name for t in trials], "lengths": [len(trials[0])],
-                               "stand_in": True}))
+    assert capstone.saved_seed(run, trials, True) is None  # no run.json
+    run.write_text(
+        json.dumps({"seed": 99, "trials": [t.name for t in trials], "lengths": [len(trials[0])], "stand_in": True})
+    )
     assert capstone.saved_seed(run, trials, True) == 99
-    assert capstone.saved_seed(run, trials, False) is None                     # hidden trials, not a stand-in
-    assert capstone.saved_seed(run, capstone.stand_in([7], MAX_SAMPLES - 1), True) is None     # another length
-    assert capstone.saved_seed(run, capstone.stand_in([29], MAX_SAMPLES), True) is None        # another trial
+    assert capstone.saved_seed(run, trials, False) is None  # hidden trials, not a stand-in
+    assert capstone.saved_seed(run, capstone.stand_in([7], MAX_SAMPLES - 1), True) is None  # another length
+    assert capstone.saved_seed(run, capstone.stand_in([29], MAX_SAMPLES), True) is None  # another trial
     run.write_text("{not json")
     assert capstone.saved_seed(run, trials, True) is None
 
@@ -852,10 +991,11 @@ def test_the_disguise_moves_no_honest_score(scored):
     """Cut and fresh noise, no turn of the frame: VQF and a filter that starts at the identity (not
     rotation-equivariant, as Madgwick's is not) score as on the trial itself."""
     from fusionlab import bench, metrics
+
     vqf = {c.name: c for c in bench.contenders(["vqf9"])}["vqf9"]
     for s, n in zip(scored, STAND_IN):
         plain = capstone.stand_in([n], MAX_SAMPLES)[0]
-        assert len(s) < len(plain) and s.movement.sum() == plain.movement.sum()   # cut, never in the movement
+        assert len(s) < len(plain) and s.movement.sum() == plain.movement.sum()  # cut, never in the movement
         for run in (vqf.run, lambda t: _identity_start(t.gyr, t.acc, t.mag, t.fs)):
             a = metrics.broad_rmse(run(plain), plain.quat_ref, plain.movement).total_deg
             b = metrics.broad_rmse(run(s), s.quat_ref, s.movement).total_deg
@@ -865,56 +1005,77 @@ def test_the_disguise_moves_no_honest_score(scored):
 def _identity_start(gyr, acc, mag, fs):
     """The gyro integrated from the identity, tilted towards gravity: its score depends on the sensor frame."""
     from fusionlab import rotations
+
     q = rotations.integrate_gyro_quat([1.0, 0.0, 0.0, 0.0], np.asarray(gyr, dtype=float), 1.0 / fs)[1:]
     return q
 
 
 def test_the_code_scan_names_imports_of_filters_and_file_reads():
-    cells = ["import vqf", "from fusionlab import estimators", "from fusionlab.dcm_filter import x",
-             "x = np.load('q.npy')", "with open('a') as f: pass", "import numpy as np\nnp.cross(a, b)",
-             "q = bench.contenders()", "x = self.load(3)\nfiles = glob('*')"]
+    cells = [
+        "import vqf",
+        "from fusionlab import estimators",
+        "from fusionlab.dcm_filter import x",
+        "x = np.load('q.npy')",
+        "with open('a') as f: pass",
+        "import numpy as np\nnp.cross(a, b)",
+        "q = bench.contenders()",
+        "x = self.load(3)\nfiles = glob('*')",
+    ]
     kinds = [k for k, _ in capstone.scan([("filter", c) for c in cells])]
-    assert kinds.count("calls a reference filter") == 4 and kinds.count("reads files") == 3   # not self.load
+    assert kinds.count("calls a reference filter") == 4 and kinds.count("reads files") == 3  # not self.load
     # the setup cell imports the library's modules for tuning; using them is still found
     assert capstone.scan([("imports", "from fusionlab import bench, datasets")]) == []
     assert [k for k, _ in capstone.scan([("imports", "import ahrs")])] == ["calls a reference filter"]
 
 
-@pytest.mark.parametrize("code", ["import io\nx = io.FileIO('/etc/hostname').read()",
-                                  "import os\nfd = os.open('/etc/hostname', os.O_RDONLY)",
-                                  "import os\nx = os.read(3, 100)", "import os\nf = os.fdopen(3)",
-                                  "from io import FileIO as F", "from os import read as r"])
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import io\nx = io.FileIO('/etc/hostname').read()",
+        "import os\nfd = os.open('/etc/hostname', os.O_RDONLY)",
+        "import os\nx = os.read(3, 100)",
+        "import os\nf = os.fdopen(3)",
+        "from io import FileIO as F",
+        "from os import read as r",
+    ],
+)
 def test_the_code_scan_names_the_lower_level_file_reads(code):
     assert [k for k, _ in capstone.scan([("filter", code)])] == ["reads files"], code
 
 
-@pytest.mark.parametrize("code, why", [
-    ("import sys\nsys.path[:] = [p for p in sys.path if 'shadow' not in p]", "sys.path"),
-    ("import sys\ndel sys.modules['vqf']", "sys.modules"),
-    ("import importlib\nV = importlib.import_module('v' + 'qf')", "importlib"),
-    ("V = __import__('v' + 'qf')", "__import__"),
-    ("import builtins\nf = getattr(builtins, 'op' + 'en')", "builtins"),
-    ("exec('import v' + 'qf')", "exec"),
-    ("x = eval('1 + 1')", "eval"),
-])
+@pytest.mark.parametrize(
+    "code, why",
+    [
+        ("import sys\nsys.path[:] = [p for p in sys.path if 'shadow' not in p]", "sys.path"),
+        ("import sys\ndel sys.modules['vqf']", "sys.modules"),
+        ("import importlib\nV = importlib.import_module('v' + 'qf')", "importlib"),
+        ("V = __import__('v' + 'qf')", "__import__"),
+        ("import builtins\nf = getattr(builtins, 'op' + 'en')", "builtins"),
+        ("exec('import v' + 'qf')", "exec"),
+        ("x = eval('1 + 1')", "eval"),
+    ],
+)
 def test_the_code_scan_names_code_that_reaches_around_the_imports(code, why):
     found = capstone.scan([("filter", f"def estimate(gyr, acc, mag, fs):\n    pass\n{code}")])
     assert found and {k for k, _ in found} == {"tampers with imports"} and why in found[0][1], found
 
 
-@pytest.mark.parametrize("code, why", [
-    ("import timeit\nt = timeit.timeit(text, globals=g)", "`timeit`"),
-    ("import pydoc\nc = pydoc.locate('ct' + 'ypes')", "`pydoc`"),
-    ("from pkgutil import resolve_name", "`pkgutil.resolve_name`"),
-    ("import pkgutil\nm = pkgutil.resolve_name('fusionlab.correlation')", "`.resolve_name`"),
-    ("import ctypes.util", "`ctypes.util`"),
-    ("c = np.ctypeslib.ctypes", "`.ctypes`"),
-    ("import runpy", "`runpy`"),
-    ("from importlib import import_module", "`importlib`"),
-    ("x = %time {text}", "get_ipython"),
-    ("def f(text):\n    r = !{text}\n    return r", "get_ipython"),
-    (",exec text", "exec"),
-])
+@pytest.mark.parametrize(
+    "code, why",
+    [
+        ("import timeit\nt = timeit.timeit(text, globals=g)", "`timeit`"),
+        ("import pydoc\nc = pydoc.locate('ct' + 'ypes')", "`pydoc`"),
+        ("from pkgutil import resolve_name", "`pkgutil.resolve_name`"),
+        ("import pkgutil\nm = pkgutil.resolve_name('fusionlab.correlation')", "`.resolve_name`"),
+        ("import ctypes.util", "`ctypes.util`"),
+        ("c = np.ctypeslib.ctypes", "`.ctypes`"),
+        ("import runpy", "`runpy`"),
+        ("from importlib import import_module", "`importlib`"),
+        ("x = %time {text}", "get_ipython"),
+        ("def f(text):\n    r = !{text}\n    return r", "get_ipython"),
+        (",exec text", "exec"),
+    ],
+)
 def test_the_code_scan_names_the_indirect_loaders_of_the_table(code, why):
     found = capstone.scan([("filter", f"def estimate(gyr, acc, mag, fs):\n    pass\n{code}")])
     assert found and {k for k, _ in found} == {"tampers with imports"} and why in found[0][1], found
@@ -922,6 +1083,7 @@ def test_the_code_scan_names_the_indirect_loaders_of_the_table(code, why):
 
 def test_the_loaders_come_from_the_table_of_exercises(monkeypatch):
     from fusionlab.checks import exercises
+
     row = next(e for e in exercises.of_lab(capstone.LAB) if e.answer == ("estimate",))
     assert {"timeit", "pydoc", "runpy", "pkgutil.resolve_name", "ctypes", "importlib"} <= set(row.loaders)
     assert capstone.loaders() == row.loaders and all(e.loaders == () for e in exercises.EXERCISES if e is not row)
@@ -930,8 +1092,9 @@ def test_the_loaders_come_from_the_table_of_exercises(monkeypatch):
     assert len(capstone.scan(code)) == 2
     fewer = dataclasses.replace(row, loaders=tuple(n for n in row.loaders if n != "timeit"))
     monkeypatch.setattr(exercises, "EXERCISES", tuple(fewer if e is row else e for e in exercises.EXERCISES))
-    assert [why for _, why in capstone.scan(code)] == ["cell 1, line 3: uses `.resolve_name` (`pkgutil.resolve_name`): "
-                                                       + integrity.WHY["loader"]]
+    assert [why for _, why in capstone.scan(code)] == [
+        "cell 1, line 3: uses `.resolve_name` (`pkgutil.resolve_name`): " + integrity.WHY["loader"]
+    ]
 
 
 def test_quiet_magics_and_help_are_not_tampering():
@@ -940,7 +1103,7 @@ def test_quiet_magics_and_help_are_not_tampering():
 
 
 def test_honest_code_does_not_tamper_with_imports():
-    nb = nbformat.read(LAB_NOTEBOOK, as_version=4)       # the lab's setup cell (a magic, inspect, checks) and answer
+    nb = nbformat.read(LAB_NOTEBOOK, as_version=4)  # the lab's setup cell (a magic, inspect, checks) and answer
     cells = capstone.program_of(nb) + [("filter", c) for c in CLASS.values()]
     cells.append(("filter", "import sys\nprint('x', file=sys.stderr)\nimport re\nre.compile('a')"))
     assert [k for k, _ in capstone.scan(cells) if k == "tampers with imports"] == []
@@ -948,16 +1111,19 @@ def test_honest_code_does_not_tamper_with_imports():
 
 def test_a_pasted_library_filter_is_named_with_its_lines_and_honest_code_is_not(scored, monkeypatch):
     import fusionlab
+
     src = (Path(fusionlab.__file__).parent / "dcm_filter.py").read_text()
-    src = src.replace("from . import", "from fusionlab import").replace("acc_sigma", "acc_sd")   # pasted, one change
+    src = src.replace("from . import", "from fusionlab import").replace("acc_sigma", "acc_sd")  # pasted, one change
     pasted = src + "\n\ndef estimate(gyr, acc, mag, fs):\n    return run_ahrs(gyr, acc, mag, fs)['q']\n"
     model = capstone.model_program(ROOT)
     assert "def starter_estimate" in model
     [(kind, why)] = capstone.library_copies(capstone.program_of(notebook(pasted)), model)
     assert kind == "copies the library's filter" and why.startswith("dcm_filter.run_ahrs: lines ") and "cell 2" in why
     first, last = (int(x) for x in why.split("lines ")[1].split(" ")[0].split("-"))
-    assert pasted.splitlines()[first - 1:last] and "def run_ahrs" in "\n".join(pasted.splitlines()[first - 1:last])
-    for name, code in CLASS.items():                  # the starter, the solution's filter and the rest: their own
+    [fn] = [n for n in ast.parse(pasted).body if isinstance(n, ast.FunctionDef) and n.name == "run_ahrs"]
+    assert fn.lineno <= first < last <= fn.end_lineno, (first, last, fn.lineno, fn.end_lineno)  # within run_ahrs
+    assert last - first > 0.8 * (fn.end_lineno - fn.lineno), "most of the pasted function is named"
+    for name, code in CLASS.items():  # the starter, the solution's filter and the rest: their own
         assert capstone.library_copies(capstone.program_of(notebook(code)), model) == [], name
     assert capstone.library_copies(capstone.program_of(nbformat.read(LAB_NOTEBOOK, as_version=4)), model) == []
     # the rotation helpers the rules allow are never looked for, however much of them is pasted
@@ -975,13 +1141,14 @@ def test_the_boxs_cpu_limit_is_made_from_the_budgets():
     assert budgets > sandbox.DEFAULT_LIMITS["cpu_s"]
     assert limits["cpu_s"] >= budgets + capstone.SETUP_SECONDS
     assert limits["memory_bytes"] == sandbox.DEFAULT_LIMITS["memory_bytes"]
-    assert capstone.box_limits(trials[:1])["cpu_s"] == sandbox.DEFAULT_LIMITS["cpu_s"]     # never below the default
-    assert capstone.box_limits(trials, limits={"cpu_s": 5})["cpu_s"] == 5                  # as the caller says
+    assert capstone.box_limits(trials[:1])["cpu_s"] == sandbox.DEFAULT_LIMITS["cpu_s"]  # never below the default
+    assert capstone.box_limits(trials, limits={"cpu_s": 5})["cpu_s"] == 5  # as the caller says
 
 
 class _InProcess:
     """capstone.Runner without a box, for the trusted side's logic: ``make()`` gives the student's ``estimate``,
     made again for every fresh box (nothing survives); the limits the grader asked for are kept in ``made``."""
+
     made = []
 
     def __init__(self, make, cells, course, scratch, slot=0, limits=None, sensors="9D", boxes=None):
@@ -990,8 +1157,11 @@ class _InProcess:
         _InProcess.made.append(self)
 
     def call(self, trial, seconds, gyr=None, acc=None, mag=None):
-        args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
-                None if self.sensors == "6D" else trial.mag if mag is None else mag]
+        args = [
+            trial.gyr if gyr is None else gyr,
+            trial.acc if acc is None else acc,
+            None if self.sensors == "6D" else trial.mag if mag is None else mag,
+        ]
         q = capstone.as_quaternions(self.estimate(*args, trial.fs), len(args[0]))
         return q, "ok", "", 0.01
 
@@ -1005,7 +1175,7 @@ class _InProcess:
 
 
 def _grade_in_process(monkeypatch, scored, make, code="def estimate(gyr, acc, mag, fs):\n    pass\n", **kw):
-    refs = _fake_references([])(scored)                # every reference an estimate that never moves: tens of deg
+    refs = _fake_references([])(scored)  # every reference an estimate that never moves: tens of deg
     monkeypatch.setattr(capstone.runner, "Runner", lambda *a, **k: _InProcess(make, *a, **k))
     return capstone.grade_submission("x", notebook(code), scored, refs, ROOT, None, seed=SEED, model="", **kw)
 
@@ -1013,18 +1183,21 @@ def _grade_in_process(monkeypatch, scored, make, code="def estimate(gyr, acc, ma
 def _tilt(acc):
     """Per sample, the shortest turn taking the measured "up" onto the ENU up: causal (it has no memory)."""
     a = np.asarray(acc, dtype=float) / np.linalg.norm(acc, axis=1, keepdims=True)
-    q = np.column_stack([1 + a[:, 2], a[:, 1], -a[:, 0], np.zeros(len(a))])     # [1 + a.z, a x z]
+    q = np.column_stack([1 + a[:, 2], a[:, 1], -a[:, 0], np.zeros(len(a))])  # [1 + a.z, a x z]
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
 def test_an_estimate_implausibly_close_to_the_reference_is_named_and_may_be_cleared(scored, monkeypatch):
     """A replay: the trial recognised and its published reference returned (over the samples it was given, as the
     best replay would give it)."""
+
     def make():
         def estimate(gyr, acc, mag, fs):
             t = next(t for t in scored if np.array_equal(t.gyr[0], gyr[0]))
-            return np.where(np.isnan(t.quat_ref), [1.0, 0, 0, 0], t.quat_ref)[:len(gyr)]
+            return np.where(np.isnan(t.quat_ref), [1.0, 0, 0, 0], t.quat_ref)[: len(gyr)]
+
         return estimate
+
     res = _grade_in_process(monkeypatch, scored, make)
     assert res.causal is True and res.all_ran
     [(kind, why)] = res.cheats
@@ -1034,21 +1207,29 @@ def test_an_estimate_implausibly_close_to_the_reference_is_named_and_may_be_clea
     assert cleared.cheats == [] and cleared.total_points == capstone.MAX_POINTS
     assert any(n.startswith("cleared by the instructor") for n in cleared.notes)
     # the same estimate a little off on all but one trial: not implausible there, not named
-    fine = capstone.StudentResult("y", trials=[dataclasses.replace(r, counted_deg=r.counted_deg + (
-        0 if i == 0 else 100)) for i, r in enumerate(res.trials)])
+    fine = capstone.StudentResult(
+        "y",
+        trials=[
+            dataclasses.replace(r, counted_deg=r.counted_deg + (0 if i == 0 else 100)) for i, r in enumerate(res.trials)
+        ],
+    )
     assert capstone.implausibly_close(fine, _fake_references([])(scored)) == ""
     assert "--cleared" in capstone.CHEATS["detects the trial"]
 
 
 def test_a_filter_that_reads_the_length_of_its_data_fails_the_prefix_check(scored, monkeypatch):
     """Causal sample by sample when later samples change (the length stays), but not when they are left out."""
+
     def make():
         def estimate(gyr, acc, mag, fs):
             q = _tilt(acc)
-            a = 1e-4 * len(gyr)                         # a turn about up that depends on how long the data are
+            a = 1e-4 * len(gyr)  # a turn about up that depends on how long the data are
             return rotations.quat_multiply([np.cos(a), 0, 0, np.sin(a)], q)
+
         return estimate
+
     from fusionlab import rotations
+
     res = _grade_in_process(monkeypatch, scored, make)
     assert res.causal is False and "given only the samples up to k" in res.causal_message, res.causal_message
     assert res.total_points == 0
@@ -1057,17 +1238,21 @@ def test_a_filter_that_reads_the_length_of_its_data_fails_the_prefix_check(score
 def test_look_ahead_between_the_public_ks_is_caught_by_the_secret_ones(scored, monkeypatch):
     """The accelerometer smoothed by a centred window inside each segment between the fixed ks (causal_ks(n)):
     what the check at those ks cannot see; the grader's ks are drawn in secret."""
+
     def make():
         def estimate(gyr, acc, mag, fs):
             from scipy.ndimage import uniform_filter1d
 
             from fusionlab import capstone as rules
+
             acc = np.asarray(acc, dtype=float).copy()
             edges = [0] + [k + 1 for k in rules.causal_ks(len(acc))] + [len(acc)]
             for a, b in zip(edges[:-1], edges[1:]):
                 acc[a:b] = uniform_filter1d(acc[a:b], 51, axis=0, mode="nearest")
             return _tilt(acc)
+
         return estimate
+
     res = _grade_in_process(monkeypatch, scored, make)
     assert res.causal is False and "changing the samples after k" in res.causal_message, res.causal_message
 
@@ -1088,13 +1273,15 @@ def test_the_disguise_adds_fresh_noise_so_no_raw_sample_names_the_trial(scored):
     for s, n in zip(scored, STAND_IN):
         plain = capstone.stand_in([n], MAX_SAMPLES)[0]
         head = int(capstone.MAX_CROP_SECONDS * plain.fs) + 64
-        for x, y, sigma in ((s.acc, plain.acc, capstone.DISGUISE_NOISE[1]), (s.mag, plain.mag,
-                                                                            capstone.DISGUISE_NOISE[2])):
+        for x, y, sigma in (
+            (s.acc, plain.acc, capstone.DISGUISE_NOISE[1]),
+            (s.mag, plain.mag, capstone.DISGUISE_NOISE[2]),
+        ):
             mine, theirs = np.linalg.norm(x[:32], axis=1), np.linalg.norm(y[:head], axis=1)
-            gaps = [np.abs(theirs[k:k + 32] - mine) for k in range(head - 32)]
+            gaps = [np.abs(theirs[k : k + 32] - mine) for k in range(head - 32)]
             best = min(range(len(gaps)), key=lambda k: np.mean(gaps[k] ** 2))
             assert np.max(gaps[best]) > 1e-3, "a raw sample names the trial"
-            assert np.std(theirs[best:best + 32] - mine) == pytest.approx(sigma, rel=0.4)     # the stated noise
+            assert np.std(theirs[best : best + 32] - mine) == pytest.approx(sigma, rel=0.4)  # the stated noise
 
 
 def test_the_program_is_the_setup_and_answer_cells_without_the_tuning_cell():
@@ -1105,11 +1292,12 @@ def test_the_program_is_the_setup_and_answer_cells_without_the_tuning_cell():
 def test_the_box_library_has_no_filter_of_the_library(tmp_path):
     import ast
     import fusionlab
+
     root = capstone.box_library(tmp_path)
     real, box = Path(fusionlab.__file__).parent, root / "lib" / "fusionlab"
     absent = capstone.absent_modules()
     assert set(capstone.FILTER_MODULES + capstone.FILE_MODULES) < set(absent)
-    assert {"kalman", "ecompass", "accel_tilt", "dcm", "signals", "calibration"} <= set(absent)     # building blocks
+    assert {"kalman", "ecompass", "accel_tilt", "dcm", "signals", "calibration"} <= set(absent)  # building blocks
     assert {p.stem for p in box.glob("*.py")} - set(absent) == set(fusionlab.capstone.BOX_MODULES) | {"__init__"}
     for short in absent:
         text = (box / f"{short}.py").read_text()
@@ -1117,13 +1305,16 @@ def test_the_box_library_has_no_filter_of_the_library(tmp_path):
         assert text == capstone.placeholder_module(short)
         said = (capstone.STUB_MESSAGE if filt else capstone.BLOCK_MESSAGE).format(name=f"fusionlab.{short}")
         assert f"_MESSAGE = {said!r}" in text, short
-        defined = {n.name for n in ast.parse((real / f"{short}.py").read_text()).body
-                   if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+        defined = {
+            n.name
+            for n in ast.parse((real / f"{short}.py").read_text()).body
+            if isinstance(n, (ast.FunctionDef, ast.ClassDef))
+        }
         mine = {n.name for n in ast.parse(text).body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
         assert mine <= set(capstone.KEEP.get(short, {})) | {"__getattr__", "__dir__"}, (short, mine)
-        assert len(defined) >= 2 and len(text) < 1500            # a few lines, none of the module's
+        assert len(defined) >= 2 and len(text) < 1500  # a few lines, none of the module's
     assert "_weighted_tilt_fusion" in (real / "correlation.py").read_text()
-    for path in box.rglob("*"):                  # no copy of a filter module, as source or bytecode, anywhere
+    for path in box.rglob("*"):  # no copy of a filter module, as source or bytecode, anywhere
         if path.is_file() and path.suffix in (".py", ".pyc"):
             data = path.read_bytes()
             assert b"def _weighted_tilt_fusion" not in data and b"_REGISTRY = {}" not in data, path
@@ -1164,8 +1355,14 @@ except NotImplementedError as exc:
 print(json.dumps(out))
 """
     env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": str(root / "lib"), "MPLBACKEND": "Agg", "HOME": str(tmp_path)}
-    run = subprocess.run([sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(root / 'lib')!r})\n"
-                          + code], capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
+    run = subprocess.run(
+        [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(root / 'lib')!r})\n" + code],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        cwd=tmp_path,
+    )
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout.strip().splitlines()[-1])
     message = capstone.STUB_MESSAGE.format(name="fusionlab.{}")
@@ -1186,17 +1383,23 @@ def test_the_box_holds_no_code_of_the_librarys_filters(tmp_path):
     from grading import box as wire
     from grading import cells
     import fusionlab
+
     nb = nbformat.read(LAB_NOTEBOOK, as_version=4)
     setup = cells.python_of(next(c.source for c in nb.cells if cells.grade_id(c) == "imports"))
     lib = Path(fusionlab.__file__).parent
     gone = capstone.absent_modules()
     kept = "".join(p.read_text() for p in lib.rglob("*.py") if p.stem not in gone)
-    markers = sorted({f"def {n.name}(" for short in ("correlation", "estimators", "dcm_filter", "datasets")
-                      for n in ast.parse((lib / f"{short}.py").read_text()).body
-                      if isinstance(n, ast.FunctionDef) and len(n.name) > 6})
+    markers = sorted(
+        {
+            f"def {n.name}("
+            for short in ("correlation", "estimators", "dcm_filter", "datasets")
+            for n in ast.parse((lib / f"{short}.py").read_text()).body
+            if isinstance(n, ast.FunctionDef) and len(n.name) > 6
+        }
+    )
     keep = {f"def {name}(" for names in capstone.KEEP.values() for name in names}
-    markers = [m for m in markers if m not in kept and m not in keep]     # names the box may hold are no markers
-    probe = f'''
+    markers = [m for m in markers if m not in kept and m not in keep]  # names the box may hold are no markers
+    probe = f"""
 import importlib, os, sys
 import fusionlab
 
@@ -1227,11 +1430,11 @@ def probe():
                     hits.append(os.path.join(folder, name))
     out["hits"], out["read"], out["lib"] = hits, read, os.path.dirname(fusionlab.__file__)
     return out
-'''
+"""
     runner = capstone.Runner([setup, probe], ROOT, tmp_path)
     try:
         assert runner.start(), runner.setup_error
-        assert runner.cell_errors == {}                       # the lab's imports, checks.friendly_errors() too
+        assert runner.cell_errors == {}  # the lab's imports, checks.friendly_errors() too
         runner.box.send({"op": "call", "name": "probe", "args": wire.encode([]), "kwargs": wire.encode({})})
         reply = runner.box.receive(time.monotonic() + 120)
     finally:
@@ -1249,12 +1452,17 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
     """The first box runs the cells before any trial is sent: their errors are the notebook's own. A box started
     after a trial was sent could have kept something of it (a channel between boxes): its cells' errors are shown
     without their text, and a call's reply never with its text."""
+
     class Replay:
         """client.Box as the trusted side sees it: the replies of a box whose second cell fails with the data."""
+
         def __init__(self, command, env=None):
-            self.replies = [{"cell": 0, "state": "done", "error": None},
-                            {"cell": 1, "state": "done", "error": f"ValueError: {scored[0].gyr[0, 0]!r}"},
-                            {"ready": True}, {"ok": False, "error": f"KeyError: {scored[0].gyr[1, 0]!r}"}]
+            self.replies = [
+                {"cell": 0, "state": "done", "error": None},
+                {"cell": 1, "state": "done", "error": f"ValueError: {scored[0].gyr[0, 0]!r}"},
+                {"ready": True},
+                {"ok": False, "error": f"KeyError: {scored[0].gyr[1, 0]!r}"},
+            ]
 
         def send(self, message):
             pass
@@ -1268,7 +1476,7 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
     monkeypatch.setattr(capstone.runner.client, "Box", Replay)
     runner = capstone.Runner(["x = 1", "y = 2"], ROOT, tmp_path)
     assert runner.start()
-    assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}         # before any trial: as it is
+    assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}  # before any trial: as it is
     runner.cell_errors.clear()
     q, status, why, _ = runner.call(scored[0], 60)
     assert (q, status, why) == (None, "error", "raised an error" + capstone.NOT_SHOWN)
@@ -1283,22 +1491,35 @@ def test_the_grader_writes_every_message_of_a_call_itself():
     leak = "ValueError: [0.00123457 -0.0045678 ...] " + "9" * 300
     assert capstone.error_message(leak) == "raised an error" + capstone.NOT_SHOWN
     assert capstone.error_message("Trial_0_00123457: x") == "raised an error" + capstone.NOT_SHOWN
-    assert len({capstone.error_message(f"{name}: x") for name in ("ValueError", "KeyError", "ZeroDivisionError",
-                                                                  "UnicodeError", "StopIteration")}) == 1
-    assert capstone.error_message("your function returned an array of object") == \
-        "raised an error" + capstone.NOT_SHOWN
+    assert (
+        len(
+            {
+                capstone.error_message(f"{name}: x")
+                for name in ("ValueError", "KeyError", "ZeroDivisionError", "UnicodeError", "StopIteration")
+            }
+        )
+        == 1
+    )
+    assert capstone.error_message("your function returned an array of object") == "raised an error" + capstone.NOT_SHOWN
     placeholder = "NotImplementedError: " + capstone.STUB_MESSAGE.format(name="fusionlab.correlation") + " 0.00123"
-    assert capstone.error_message(placeholder) == ("reached fusionlab.correlation, which holds the library's filters "
-                                                   "or data loaders: not available in the capstone")
+    assert capstone.error_message(placeholder) == (
+        "reached fusionlab.correlation, which holds the library's filters "
+        "or data loaders: not available in the capstone"
+    )
     block = "NotImplementedError: " + capstone.BLOCK_MESSAGE.format(name="fusionlab.kalman") + " 0.00123"
-    said = capstone.error_message(block)       # a building block the rules do not allow: the call fails, no cheat
+    said = capstone.error_message(block)  # a building block the rules do not allow: the call fails, no cheat
     assert said.startswith("reached fusionlab.kalman, which the capstone's box does not hold") and "0.0012" not in said
     assert "not available in the capstone" not in said and "not available while the lab is graded" not in said
     assert capstone.error_message("ImportError: vqf is not available while the lab is graded: 0.00123").startswith(
-        "reached vqf, which is not available while the lab is graded")
+        "reached vqf, which is not available while the lab is graded"
+    )
     n = 10
-    for value, why in ((np.ones((n, 3)) * 0.00123457, "one quaternion per sample"), (["x0.00123457"], "not an array"),
-                       (np.full((n, 4), np.nan), "NaN"), (np.full((n, 4), 0.00123457), "unit quaternions")):
+    for value, why in (
+        (np.ones((n, 3)) * 0.00123457, "one quaternion per sample"),
+        (["x0.00123457"], "not an array"),
+        (np.full((n, 4), np.nan), "NaN"),
+        (np.full((n, 4), 0.00123457), "unit quaternions"),
+    ):
         text = capstone.invalid_message(value, n)
         assert why in text and "0.0012" not in text and "3)" not in text, (why, text)
 
@@ -1307,11 +1528,12 @@ def test_the_grader_writes_every_message_of_a_call_itself():
 # The hidden data: refused when missing, fetched whole or not at all
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def _no_data(monkeypatch, tmp_path):
     monkeypatch.setattr(datasets, "SHIPPED_DIR", None)
     monkeypatch.delenv(datasets.ENV_DIR, raising=False)
     monkeypatch.setenv(datasets.ENV_CACHE, str(tmp_path / "cache"))
-    monkeypatch.setenv(datasets.ENV_URL, "http://127.0.0.1:9/")            # nothing listens there: no network
+    monkeypatch.setenv(datasets.ENV_URL, "http://127.0.0.1:9/")  # nothing listens there: no network
 
 
 def test_a_stand_in_cut_before_the_movement_is_refused():
@@ -1337,8 +1559,8 @@ def test_capstone_data_without_a_network_says_so_and_writes_nothing(monkeypatch,
     assert capstone.fetch(progress=False) == 2
     said = capsys.readouterr().out
     assert "0 of 31 hidden trials are here" in said and "Connect to the internet" in said
-    assert "not in data/broad/" in said and "put it in" not in said          # the hidden trials never go there
-    assert not (tmp_path / "cache" / "broad").exists()                       # not even an empty cache folder
+    assert "not in data/broad/" in said and "put it in" not in said  # the hidden trials never go there
+    assert not (tmp_path / "cache" / "broad").exists()  # not even an empty cache folder
 
 
 def test_capstone_data_and_grading_count_the_trials_here_alike(monkeypatch, tmp_path, capsys):
@@ -1347,7 +1569,7 @@ def test_capstone_data_and_grading_count_the_trials_here_alike(monkeypatch, tmp_
     cache = tmp_path / "cache" / "broad"
     cache.mkdir(parents=True)
     shutil.copy(ROOT / "data" / "broad" / "29_disturbed_stationary_magnet_B.mat", cache)
-    assert capstone.fetch(names=[7, 29, 2], progress=False) == 2            # stops at trial 7, the first
+    assert capstone.fetch(names=[7, 29, 2], progress=False) == 2  # stops at trial 7, the first
     assert "1 of 3 hidden trials are here" in capsys.readouterr().out
     with pytest.raises(capstone.CapstoneDataMissing, match="3 hidden BROAD trials and 2 of them are not"):
         capstone.hidden_trials(names=[7, 29, 2])
@@ -1359,16 +1581,23 @@ def test_capstone_data_fetches_checked_files_from_a_mirror(monkeypatch, tmp_path
     monkeypatch.setenv(datasets.ENV_URL, (ROOT / "data" / "broad").as_uri() + "/")
     assert capstone.fetch(names=[7, 29], progress=False) == 0
     cache = tmp_path / "cache" / "broad"
-    assert sorted(p.name for p in cache.iterdir()) == ["07_undisturbed_fast_rotation_B.mat",
-                                                       "29_disturbed_stationary_magnet_B.mat"]
+    assert sorted(p.name for p in cache.iterdir()) == [
+        "07_undisturbed_fast_rotation_B.mat",
+        "29_disturbed_stationary_magnet_B.mat",
+    ]
     assert len(capstone.hidden_trials(names=[7, 29])) == 2
 
 
 def test_make_capstone_data_runs_the_fetch(tmp_path):
-    env = {"PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin", "HOME": str(tmp_path),
-           "FUSIONLAB_CACHE": str(tmp_path / "cache"), "FUSIONLAB_BROAD_URL": "http://127.0.0.1:9/"}
-    run = subprocess.run(["make", "-s", "capstone-data"], cwd=ROOT, env=env, capture_output=True, text=True,
-                         timeout=120)
+    env = {
+        "PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin",
+        "HOME": str(tmp_path),
+        "FUSIONLAB_CACHE": str(tmp_path / "cache"),
+        "FUSIONLAB_BROAD_URL": "http://127.0.0.1:9/",
+    }
+    run = subprocess.run(
+        ["make", "-s", "capstone-data"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
+    )
     assert run.returncode != 0 and "Connect to the internet" in run.stdout + run.stderr
 
 
@@ -1376,6 +1605,7 @@ def test_make_capstone_data_runs_the_fetch(tmp_path):
 @needs_box
 def test_the_leaderboard_renders_in_chromium(graded):
     from chromium import CHROMIUM, SHOTS, chromium
+
     if CHROMIUM is None:
         pytest.skip("no chromium on this machine (apt-get install chromium)")
     out = graded[2]
@@ -1384,7 +1614,7 @@ def test_the_leaderboard_renders_in_chromium(graded):
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.goto((out / "leaderboard.html").as_uri())
         rows = page.locator("table").first.locator("tr")
-        assert rows.count() == 1 + len(NINE_D) + 3           # the 9D table: header, students, references
+        assert rows.count() == 1 + len(NINE_D) + 3  # the 9D table: header, students, references
         # the non-causal one, the one that caches, the VQF caller; of the red team the leaker, the dodger, the one
         # with the key store, the one that looks ahead where the full check does not, the one that fails the check's
         # calls there, and (in the 6D table) the one with the library's private filter
@@ -1392,7 +1622,7 @@ def test_the_leaderboard_renders_in_chromium(graded):
         assert page.locator(".standin").inner_text().startswith("STAND-IN")
         page.screenshot(path=str(SHOTS / "capstone_leaderboard.png"), full_page=True)
         page.goto((out / "feedback" / "good" / "capstone.html").as_uri())
-        assert page.locator("img").evaluate("img => img.naturalWidth") > 300       # the per-trial figure loaded
+        assert page.locator("img").evaluate("img => img.naturalWidth") > 300  # the per-trial figure loaded
         page.screenshot(path=str(SHOTS / "capstone_feedback_good.png"), full_page=True)
 
 
@@ -1401,7 +1631,7 @@ def test_the_box_sees_no_data_and_no_reference_filter(scored, tmp_path):
     """What a student's estimate can reach in the box, asked from inside: no BROAD file anywhere (the course's
     data/, the cache, a mirror), no vqf (not even with the shadow taken off sys.path: the installed packages are
     hidden), the library's filters stubs; only the call's sensor data."""
-    probe = f'''
+    probe = f"""
 import os, numpy as np
 
 def estimate(gyr, acc, mag, fs):
@@ -1435,7 +1665,7 @@ def estimate(gyr, acc, mag, fs):
     q[:, 0] = 1.0 if not seen else 0.0
     q[:, 1] = 0.0 if not seen else 1.0
     return q
-'''
+"""
     runner = capstone.Runner([probe], ROOT, tmp_path)
     try:
         q, status, why, _ = runner.call(scored[0], 60)
@@ -1444,15 +1674,17 @@ def estimate(gyr, acc, mag, fs):
     assert status == "ok", why
     assert q[0].tolist() == [1.0, 0.0, 0.0, 0.0], "the box can see data or a reference filter"
     assert capstone.Runner([probe], ROOT, tmp_path).hide and all(
-        "/vqf" in p or "/ahrs" in p or "/filterpy" in p or "imufusion" in p for p in runner.hide)
+        "/vqf" in p or "/ahrs" in p or "/filterpy" in p or "imufusion" in p for p in runner.hide
+    )
 
 
 @pytest.mark.slow
 def test_a_library_filter_that_refuses_a_trial_is_left_out_of_the_references():
     import dataclasses
+
     t = capstone.disguise(capstone.stand_in([7], 10000), SEED)[0]
     acc = np.array(t.acc)
-    acc[9000:9010] = 0.0                                           # 35 ms of free fall: TRIAD has no gyro for it
+    acc[9000:9010] = 0.0  # 35 ms of free fall: TRIAD has no gyro for it
     refs = capstone.references([dataclasses.replace(t, acc=acc)])
     assert "triad" not in refs["_all"] and {"vqf9", "madgwick9", "dcm_ahrs"} <= set(refs["_all"])
     assert any(name.startswith("library best") for name in refs)
@@ -1463,19 +1695,26 @@ def test_the_disguise_cuts_both_ends_by_secret_amounts_but_never_the_movement():
     cut = [capstone.disguise([whole], seed)[0] for seed in range(4)]
     assert all(c.movement.sum() == whole.movement.sum() for c in cut)
     lost = [len(whole) - len(c) for c in cut]
-    assert len(set(lost)) == 4 and max(lost) > capstone.MAX_CROP_SECONDS * whole.fs      # the end loses some too
+    assert len(set(lost)) == 4 and max(lost) > capstone.MAX_CROP_SECONDS * whole.fs  # the end loses some too
     assert max(lost) < (capstone.MAX_CROP_SECONDS + capstone.MAX_END_CROP_SECONDS) * whole.fs
 
 
 def test_a_few_embedded_references_are_enough_to_be_held():
     """The hidden trials' references are public: a submission could carry a few and recognise just those trials.
     Implausibly close on two trials of ten is held (half would have let four of ten through); on one it is not."""
-    refs = {"_all": {"vqf9": capstone.Reference("vqf9", "", [capstone.TrialResult(f"t{i}", counted_deg=2.0)
-                                                               for i in range(10)], "9D")}}
+    refs = {
+        "_all": {
+            "vqf9": capstone.Reference(
+                "vqf9", "", [capstone.TrialResult(f"t{i}", counted_deg=2.0) for i in range(10)], "9D"
+            )
+        }
+    }
 
     def student(close):
-        return capstone.StudentResult("x", trials=[capstone.TrialResult(f"t{i}", counted_deg=0.2 if i < close else 3.0)
-                                                   for i in range(10)])
+        return capstone.StudentResult(
+            "x", trials=[capstone.TrialResult(f"t{i}", counted_deg=0.2 if i < close else 3.0) for i in range(10)]
+        )
+
     assert capstone.implausibly_close(student(1), refs) == ""
     for close in (2, 4):
         why = capstone.implausibly_close(student(close), refs)
@@ -1485,39 +1724,72 @@ def test_a_few_embedded_references_are_enough_to_be_held():
 def _fake_class():
     """Two students (9D and 6D) and the four published reference rows on three trials, without a box."""
     from grading.capstone.scoring import Reference, TrialResult
+
     names = ["07_undisturbed_fast_rotation_B", "29_disturbed_stationary_magnet_B", "33_mixed_motion_A"]
 
     def trials(total, inclination, heading, metric):
-        return [TrialResult(n, seconds=1.0, budget_s=9.0, total_deg=t, heading_deg=h, inclination_deg=i,
-                            counted_deg=t if metric == "total_deg" else i, metric=metric)
-                for n, t, i, h in zip(names, total, inclination, heading)]
-    refs = {"vqf9": Reference("vqf9", "VQF 9D", trials([2.1, 3.2, 2.6], [1.0, 1.2, 1.1], [1.8, 2.9, 2.3], "total_deg")),
-            "madgwick9": Reference("madgwick9", "Madgwick 9D", trials([4.5, 6.3, 5.2], [2, 2.5, 2.2], [4, 6, 5],
-                                                                      "total_deg")),
-            "vqf6": Reference("vqf6", "VQF 6D", trials([60, 90, 75], [1.1, 1.4, 1.2], [60, 90, 75], "inclination_deg"),
-                              sensors="6D"),
-            "madgwick6": Reference("madgwick6", "Madgwick 6D", trials([56, 110, 80], [2.0, 2.6, 2.3], [56, 110, 80],
-                                                                      "inclination_deg"), sensors="6D")}
-    results = [capstone.StudentResult("nine d", trials([3.0, 4.1, 3.5], [1.5, 1.6, 1.4], [2.6, 3.8, 3.1],
-                                                       "total_deg"), causal=True, causal_message="causal",
-                                      points={"accuracy": 5.0}, sensors="9D"),
-               capstone.StudentResult("six_d", trials([58, 100, 70], [1.5, 1.9, 1.6], [58, 100, 70],
-                                                      "inclination_deg"), causal=True, causal_message="causal",
-                                      points={"accuracy": 6.0}, sensors="6D")]
+        return [
+            TrialResult(
+                n,
+                seconds=1.0,
+                budget_s=9.0,
+                total_deg=t,
+                heading_deg=h,
+                inclination_deg=i,
+                counted_deg=t if metric == "total_deg" else i,
+                metric=metric,
+            )
+            for n, t, i, h in zip(names, total, inclination, heading)
+        ]
+
+    refs = {
+        "vqf9": Reference("vqf9", "VQF 9D", trials([2.1, 3.2, 2.6], [1.0, 1.2, 1.1], [1.8, 2.9, 2.3], "total_deg")),
+        "madgwick9": Reference(
+            "madgwick9", "Madgwick 9D", trials([4.5, 6.3, 5.2], [2, 2.5, 2.2], [4, 6, 5], "total_deg")
+        ),
+        "vqf6": Reference(
+            "vqf6", "VQF 6D", trials([60, 90, 75], [1.1, 1.4, 1.2], [60, 90, 75], "inclination_deg"), sensors="6D"
+        ),
+        "madgwick6": Reference(
+            "madgwick6",
+            "Madgwick 6D",
+            trials([56, 110, 80], [2.0, 2.6, 2.3], [56, 110, 80], "inclination_deg"),
+            sensors="6D",
+        ),
+    }
+    results = [
+        capstone.StudentResult(
+            "nine d",
+            trials([3.0, 4.1, 3.5], [1.5, 1.6, 1.4], [2.6, 3.8, 3.1], "total_deg"),
+            causal=True,
+            causal_message="causal",
+            points={"accuracy": 5.0},
+            sensors="9D",
+        ),
+        capstone.StudentResult(
+            "six_d",
+            trials([58, 100, 70], [1.5, 1.9, 1.6], [58, 100, 70], "inclination_deg"),
+            causal=True,
+            causal_message="causal",
+            points={"accuracy": 6.0},
+            sensors="6D",
+        ),
+    ]
     return results, refs, names
 
 
 def test_the_leaderboard_reads_in_words_and_links_each_students_page(tmp_path):
     from grading.capstone import report
+
     results, refs, _ = _fake_class()
     page = report.write_leaderboard(results, refs, [], tmp_path, "spring", label="STAND-IN: shipped trials").read_text()
     assert "<th>total_deg</th>" not in page and "ratio_to_vqf" not in page and "<th>total RMSE (deg)</th>" in page
-    for res in results:                                           # the name opens the student's page, which exists
+    for res in results:  # the name opens the student's page, which exists
         href = f"feedback/{res.name.replace(' ', '%20')}/capstone.html"
         assert f"<a href='{href}'>{res.name}</a>" in page
         assert (tmp_path / "feedback" / res.name / "capstone.html").exists()
     six_d, note = page.index("<h2>" + report.SETS["6D"].split(":")[0]), html.escape(report.UNOBSERVABLE_HEADING)
-    assert page.count(note) == 1 and page.index(note) > six_d                # said once, in the 6D block
+    assert page.count(note) == 1 and page.index(note) > six_d  # said once, in the 6D block
     mine = {r.name: (tmp_path / "feedback" / r.name / "capstone.html").read_text() for r in results}
     assert note in mine["six_d"] and note not in mine["nine d"]
     assert "vqf6: inclination RMSE (deg)" in mine["six_d"] and "vqf6_inclination" not in mine["six_d"]
@@ -1526,18 +1798,23 @@ def test_the_leaderboard_reads_in_words_and_links_each_students_page(tmp_path):
 @pytest.mark.parametrize("stand_in", [True, False])
 def test_the_students_figure_has_plain_ticks_an_honest_label_and_a_legend_off_the_markers(stand_in):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from grading.capstone import report
+
     results, refs, names = _fake_class()
     res = results[0]
-    shown = {"you": [r.total_deg for r in res.trials], "vqf9": [r.total_deg for r in refs["vqf9"].trials],
-             "madgwick9": [r.total_deg for r in refs["madgwick9"].trials]}
+    shown = {
+        "you": [r.total_deg for r in res.trials],
+        "vqf9": [r.total_deg for r in refs["vqf9"].trials],
+        "madgwick9": [r.total_deg for r in refs["madgwick9"].trials],
+    }
     fig = report.trials_figure(res, names, shown, {r.trial: r for r in res.trials}, 2.63, stand_in=stand_in)
     fig.canvas.draw()
     ax = fig.axes[0]
     labels = [t.get_text() for t in ax.get_yticklabels() + ax.get_yticklabels(minor=True) if t.get_text()]
-    assert len(labels) >= 3 and all(re.fullmatch(r"\d+(\.\d+)?", t) for t in labels), labels   # 2, 3, 4, 6
+    assert len(labels) >= 3 and all(re.fullmatch(r"\d+(\.\d+)?", t) for t in labels), labels  # 2, 3, 4, 6
     assert ("hidden trial" in ax.get_xlabel()) is not stand_in and ("stand-in" in ax.get_xlabel()) is stand_in
     legend = fig.legends[0].get_window_extent()
     assert not legend.overlaps(ax.get_window_extent()), "the legend lies on the axes"

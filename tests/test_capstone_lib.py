@@ -3,6 +3,7 @@
 The self-check must find what the grader finds: a filter that looks ahead, one that returns the wrong shape, one
 that raises; a 6D filter gets no magnetometer. The bar the lab reads is what `python -m fusionlab.capstone` makes.
 """
+
 from __future__ import annotations
 
 import csv
@@ -47,8 +48,8 @@ def test_the_drawn_ks_fall_in_their_spans_and_change_with_the_generator():
     for ks in draws:
         assert ks == sorted(ks) and 1 <= ks[0] <= n // 100 < ks[1] <= n // 10 and n // 2 <= ks[2] <= n - 2
     assert len({tuple(ks) for ks in draws}) == 20 and capstone.causal_ks(n) not in draws
-    assert capstone.causal_ks(n, 5) == capstone.causal_ks(n, np.random.default_rng(5))     # a seed will do
-    assert all(k <= 4 for k in capstone.causal_ks(6, np.random.default_rng(0)))           # short data: inside
+    assert capstone.causal_ks(n, 5) == capstone.causal_ks(n, np.random.default_rng(5))  # a seed will do
+    assert all(k <= 4 for k in capstone.causal_ks(6, np.random.default_rng(0)))  # short data: inside
     with pytest.raises(ValueError, match="rng"):
         capstone.causal_ks(n, [1, 2])
 
@@ -57,6 +58,7 @@ def segments(gyr, acc, mag, fs):
     """Looks ahead only inside the segments between the fixed ks: the accelerometer smoothed by a centred window
     in each, then a memoryless tilt."""
     from scipy.ndimage import uniform_filter1d
+
     acc = np.array(acc, dtype=float)
     edges = [0] + [k + 1 for k in capstone.causal_ks(len(acc))] + [len(acc)]
     for a, b in zip(edges[:-1], edges[1:]):
@@ -69,12 +71,14 @@ def segments(gyr, acc, mag, fs):
 def test_look_ahead_between_the_fixed_ks_passes_them_and_fails_the_drawn_ones(short):
     tr = short[0]
     q = segments(tr.gyr, tr.acc, tr.mag, tr.fs)
-    run = lambda g, a, m: segments(g, a, m, tr.fs)        # noqa: E731
+    run = lambda g, a, m: segments(g, a, m, tr.fs)  # noqa: E731
     rng = np.random.default_rng(0)
     fixed = [capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng) for k in capstone.causal_ks(len(tr))]
-    assert max(fixed) <= capstone.CAUSAL_TOL                    # what a public, fixed check cannot see
-    drawn = [capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
-             for k in capstone.causal_ks(len(tr), np.random.default_rng(1))]
+    assert max(fixed) <= capstone.CAUSAL_TOL  # what a public, fixed check cannot see
+    drawn = [
+        capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, rng)
+        for k in capstone.causal_ks(len(tr), np.random.default_rng(1))
+    ]
     assert max(drawn) > capstone.CAUSAL_TOL
     assert capstone.self_check(segments, short[:1], random_ks=True).causal is False
     # the fixed ks with the prefix check catch it too: given the samples up to k alone, its segments move
@@ -89,15 +93,17 @@ def test_the_prefix_check_finds_a_filter_that_reads_the_length_of_its_data(short
         a = 1e-4 * len(gyr)
         return rotations.quat_multiply([np.cos(a), 0, 0, np.sin(a)], gyro_only(gyr, acc, mag, fs))
 
-    run = lambda g, a, m: by_length(g, a, m, tr.fs)       # noqa: E731
+    run = lambda g, a, m: by_length(g, a, m, tr.fs)  # noqa: E731
     q = by_length(tr.gyr, tr.acc, tr.mag, tr.fs)
     k = len(tr) // 2
     assert capstone.prefix_change(run, tr.gyr, tr.acc, tr.mag, q, k) > 1e-3
     same_length = capstone.causality_change(run, tr.gyr, tr.acc, tr.mag, q, k, np.random.default_rng(0))
     assert same_length <= capstone.CAUSAL_TOL
     causal = gyro_only(tr.gyr, tr.acc, tr.mag, tr.fs)
-    assert capstone.prefix_change(lambda g, a, m: gyro_only(g, a, m, tr.fs), tr.gyr, tr.acc, None, causal, k) \
+    assert (
+        capstone.prefix_change(lambda g, a, m: gyro_only(g, a, m, tr.fs), tr.gyr, tr.acc, None, causal, k)
         <= capstone.CAUSAL_TOL
+    )
     report = capstone.self_check(by_length, short[:1])
     assert report.causal is False and "given only the samples up to k" in report.causal_message
     with pytest.raises(ValueError, match="k must be a sample of q"):
@@ -110,17 +116,20 @@ def test_perturb_future_keeps_the_past_and_changes_the_rest():
     assert np.all(y[:10] == 0) and np.all(y[10:] != 0) and np.all(x == 0)
 
 
-@pytest.mark.parametrize("call, words", [
-    (lambda: capstone.perturb_future(np.zeros((5, 3)), 4, 1.0, np.random.default_rng(0)), "k must leave"),
-    (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, -1.0, np.random.default_rng(0)), "scale"),
-    (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, 1.0, [1, 2]), "rng"),
-    (lambda: capstone.budget_seconds(0), "n"),
-    (lambda: capstone.causal_ks(3), "n"),
-    (lambda: capstone.bar("all"), "span"),
-    (lambda: capstone.self_check("estimate", []), "estimate must be your filter"),
-    (lambda: capstone.self_check(gyro_only, []), "trials must hold"),
-    (lambda: capstone.self_check(gyro_only, [None], sensors="3D"), "sensors"),
-])
+@pytest.mark.parametrize(
+    "call, words",
+    [
+        (lambda: capstone.perturb_future(np.zeros((5, 3)), 4, 1.0, np.random.default_rng(0)), "k must leave"),
+        (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, -1.0, np.random.default_rng(0)), "scale"),
+        (lambda: capstone.perturb_future(np.zeros((5, 3)), 1, 1.0, [1, 2]), "rng"),
+        (lambda: capstone.budget_seconds(0), "n"),
+        (lambda: capstone.causal_ks(3), "n"),
+        (lambda: capstone.bar("all"), "span"),
+        (lambda: capstone.self_check("estimate", []), "estimate must be your filter"),
+        (lambda: capstone.self_check(gyro_only, []), "trials must hold"),
+        (lambda: capstone.self_check(gyro_only, [None], sensors="3D"), "sensors"),
+    ],
+)
 def test_bad_arguments_are_named(call, words):
     with pytest.raises(ValueError, match=words):
         call()
@@ -137,16 +146,20 @@ def test_first_change_names_the_first_k_that_fails_and_passes_a_6d_filter_its_no
     q = six(gyr, acc, None)
     assert capstone.first_change(six, gyr, acc, None, q, [3, 200], np.random.default_rng(0)) is None
     assert seen == [None] * 3
-    ahead = lambda g, a, m: looks_ahead(g, a, m, 100.0)          # noqa: E731
-    k, change = capstone.first_change(ahead, gyr, acc, mag, ahead(gyr, acc, mag), [3, 200],
-                                      np.random.default_rng(0))
+    ahead = lambda g, a, m: looks_ahead(g, a, m, 100.0)  # noqa: E731
+    k, change = capstone.first_change(ahead, gyr, acc, mag, ahead(gyr, acc, mag), [3, 200], np.random.default_rng(0))
     assert k == 3 and change > capstone.CAUSAL_TOL
 
 
-@pytest.mark.parametrize("value, words", [
-    (np.ones((4, 3)), r"shape \(4, 4\)"), ("q", "not an array of numbers"), (np.full((4, 4), np.nan), "NaN"),
-    (np.ones((4, 4)), "unit quaternions"),
-])
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        (np.ones((4, 3)), r"shape \(4, 4\)"),
+        ("q", "not an array of numbers"),
+        (np.full((4, 4), np.nan), "NaN"),
+        (np.ones((4, 4)), "unit quaternions"),
+    ],
+)
 def test_as_quaternions_says_what_a_filter_returned_instead(value, words):
     with pytest.raises(ValueError, match=words):
         capstone.as_quaternions(value, 4)
@@ -159,7 +172,7 @@ def test_the_window_is_the_rest_before_the_movement_then_the_movement():
     start = int(np.flatnonzero(whole.movement)[0]) - rest
     assert len(w) == int(35.0 * whole.fs)
     assert not w.movement[:rest].any() and w.movement[rest]
-    np.testing.assert_array_equal(w.gyr, whole.gyr[start:start + len(w)])
+    np.testing.assert_array_equal(w.gyr, whole.gyr[start : start + len(w)])
     with pytest.raises(ValueError, match="length"):
         whole.window(length=0.0)
     with pytest.raises(ValueError, match="movement phase"):
@@ -174,11 +187,14 @@ def test_self_check_scores_like_the_metrics_and_passes_a_causal_filter(short):
         assert row["total_deg"] == pytest.approx(expected.total_deg)
         assert row["inclination_deg"] == pytest.approx(expected.inclination_deg)
     assert report.mean() == pytest.approx(np.mean([r["total_deg"] for r in report.rows]))
-    assert "causal (the output up to k is unchanged when the samples after k change, and when they are left out" \
-        in str(report)
+    assert "causal (the output up to k is unchanged when the samples after k change, and when they are left out" in str(
+        report
+    )
     drawn = capstone.self_check(gyro_only, short, seed=3, random_ks=True)
-    assert drawn.causal is True and str(capstone.causal_ks(len(short[0]), np.random.default_rng(3))[0]) in \
-        drawn.causal_message
+    assert (
+        drawn.causal is True
+        and str(capstone.causal_ks(len(short[0]), np.random.default_rng(3))[0]) in drawn.causal_message
+    )
 
 
 def test_outside_box_names_the_library_modules_a_filter_reaches_beyond_the_graders_box(short):
@@ -187,7 +203,7 @@ def test_outside_box_names_the_library_modules_a_filter_reaches_beyond_the_grade
     import functools
 
     from fusionlab import accel_tilt, ecompass
-    from fusionlab.signals import lowpass as lp                         # noqa: F401 (reached by the filter below)
+    from fusionlab.signals import lowpass as lp  # noqa: F401 (reached by the filter below)
 
     class Tilt:
         def step(self, a):
@@ -196,6 +212,7 @@ def test_outside_box_names_the_library_modules_a_filter_reaches_beyond_the_grade
     def helper(a):
         def inner():
             return lp
+
         return inner
 
     def mixed(gyr, acc, mag, fs):
@@ -263,7 +280,7 @@ def test_the_bar_has_every_filter_on_every_shipped_trial_in_both_spans():
         rows = capstone.bar(span)
         names = {r["estimator"] for r in rows}
         assert {"vqf9", "vqf6", "madgwick9", "madgwick6", "dcm_ahrs", "dcm_ahrs6"} <= names
-        for name in names - {"triad"}:                  # TRIAD refuses trial 33's free fall
+        for name in names - {"triad"}:  # TRIAD refuses trial 33's free fall
             assert sorted(int(r["trial"][:2]) for r in rows if r["estimator"] == name) == sorted(capstone.SHIPPED)
 
 
@@ -291,8 +308,12 @@ def test_make_bar_writes_the_committed_table(tmp_path):
 
 # --- Lab 13's own filter: its defaults were chosen on the tuning windows only ------------------------------------
 
-GRID = {"k_acc": (0.2, 0.5, 1.0), "k_mag": (0.1, 0.3, 0.5, 1.0), "k_bias": (0.0, 0.01, 0.02, 0.05),
-        "tau_acc": (0.0, 3.0, 10.0)}
+GRID = {
+    "k_acc": (0.2, 0.5, 1.0),
+    "k_mag": (0.1, 0.3, 0.5, 1.0),
+    "k_bias": (0.0, 0.01, 0.02, 0.05),
+    "tau_acc": (0.0, 3.0, 10.0),
+}
 
 
 def _solution_estimate():
@@ -303,12 +324,13 @@ def _solution_estimate():
     import nbformat
 
     from conftest import ROOT
+
     nb = nbformat.read(ROOT / "solutions" / "13_capstone" / "13_capstone.ipynb", as_version=4)
     scope = {"np": np, "math": math, "rotations": rotations, "inspect": inspect}
     for cell in nb.cells:
         gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
         if cell.cell_type == "code" and ("def starter_estimate(" in cell.source or gid == "ex2_solution"):
-            exec(cell.source, scope)                                         # noqa: S102 -- the course's own cell
+            exec(cell.source, scope)  # noqa: S102 -- the course's own cell
     return scope["estimate"]
 
 
@@ -323,8 +345,12 @@ def test_the_solutions_defaults_are_the_best_of_their_grid_on_the_tuning_windows
     tune = [datasets.load_trial(n, download=False, progress=False).window() for n in capstone.TUNE]
 
     def mean(**kw):
-        return np.mean([metrics.broad_rmse(estimate(t.gyr, t.acc, t.mag, t.fs, **kw), t.quat_ref,
-                                           t.movement).total_deg for t in tune])
+        return np.mean(
+            [
+                metrics.broad_rmse(estimate(t.gyr, t.acc, t.mag, t.fs, **kw), t.quat_ref, t.movement).total_deg
+                for t in tune
+            ]
+        )
 
     at_default = mean()
     for knob, values in GRID.items():
@@ -347,8 +373,17 @@ def test_the_6d_full_mark_gives_the_model_filter_the_same_points_in_either_senso
     for sensors, (vqf, madgwick) in (("9D", ("vqf9", "madgwick9")), ("6D", ("vqf6", "madgwick6"))):
         metric = capstone.SENSORS[sensors]
         column = metric.replace("_deg", "_rmse_deg")
-        mine = np.mean([getattr(metrics.broad_rmse(estimate(t.gyr, t.acc, t.mag if sensors == "9D" else None, t.fs),
-                                                   t.quat_ref, t.movement), metric) for t in whole])
+        mine = np.mean(
+            [
+                getattr(
+                    metrics.broad_rmse(
+                        estimate(t.gyr, t.acc, t.mag if sensors == "9D" else None, t.fs), t.quat_ref, t.movement
+                    ),
+                    metric,
+                )
+                for t in whole
+            ]
+        )
         ref = {name: np.mean([r[column] for r in bar if r["estimator"] == name]) for name in (vqf, madgwick)}
         points[sensors] = capstone.accuracy_points(mine, ref[madgwick], ref[vqf], sensors)
         if sensors == "6D":
@@ -359,6 +394,7 @@ def test_the_6d_full_mark_gives_the_model_filter_the_same_points_in_either_senso
 
 # --- Exercise 2's autograded point: the test cell itself finds look-ahead in any sensor ---------------------------
 
+
 def _exercise2_test(estimate, sensors):
     """Run exercise 2's autograder test cell, from the instructor's notebook, on ``estimate`` declared ``sensors``,
     with the names the notebook gives it (the judge runs the same cell in its own process)."""
@@ -367,6 +403,7 @@ def _exercise2_test(estimate, sensors):
     from conftest import ROOT
     from fusionlab import guard
     from grading import cells
+
     nb = nbformat.read(ROOT / "solutions" / "13_capstone" / "13_capstone.ipynb", as_version=4)
     [cell] = [c for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("grade_id") == "ex2_tests"]
     scope = {"np": np, "guard": guard, "estimate": estimate, "SENSORS": sensors}
@@ -375,17 +412,21 @@ def _exercise2_test(estimate, sensors):
 
 def _gyro_bias_of_the_whole_record(estimate):
     """The model filter on the gyro less its mean over the whole record: a bias estimate that looks ahead."""
+
     def cheat(gyr, acc, mag, fs):
         gyr = np.asarray(gyr, dtype=float)
         return estimate(gyr - gyr.mean(axis=0), acc, mag, fs)
+
     return cheat
 
 
 def _hard_iron_of_the_whole_record(estimate):
     """The model filter on the field less a fifth of its mean over the whole record: look-ahead in the magnetometer
     only."""
+
     def cheat(gyr, acc, mag, fs):
         return estimate(gyr, acc, None if mag is None else mag - 0.2 * np.mean(mag, axis=0), fs)
+
     return cheat
 
 
@@ -395,16 +436,22 @@ def test_exercise_2s_test_passes_the_model_filter_in_both_sensor_sets():
         _exercise2_test(estimate, sensors)
 
 
-@pytest.mark.parametrize("cheat, sensors", [
-    (_gyro_bias_of_the_whole_record, "9D"),
-    (_gyro_bias_of_the_whole_record, "6D"),
-    (_hard_iron_of_the_whole_record, "9D"),
-    (lambda estimate: looks_ahead, "9D"),             # the mean accelerometer of the whole record
-])
+@pytest.mark.parametrize(
+    "cheat, sensors",
+    [
+        (_gyro_bias_of_the_whole_record, "9D"),
+        (_gyro_bias_of_the_whole_record, "6D"),
+        (_hard_iron_of_the_whole_record, "9D"),
+        (lambda estimate: looks_ahead, "9D"),  # the mean accelerometer of the whole record
+    ],
+)
 def test_exercise_2s_test_fails_a_filter_with_a_statistic_of_the_whole_record(cheat, sensors):
     """The autograded point is for a causal filter: the cell changes every sensor's samples after k, the gyro by a
     constant rate, so that a bias taken as the mean gyro of the whole record moves the estimate before k. (It once
     changed the accelerometer only, and a whole-record gyro bias passed.)"""
-    with pytest.raises(AssertionError, match=r"your estimate up to k = 1000 when every sensor's samples after it "
-                                             r"change"):
+    with pytest.raises(
+        AssertionError,
+        match=r"your estimate up to k = 1000 when every sensor's samples after it "
+        r"change",
+    ):
         _exercise2_test(cheat(_solution_estimate()), sensors)

@@ -1,5 +1,6 @@
 """A box's memory as a whole (grading.cgroup, through grading.client.start): its processes together are held to
 their group's limit, and a process that left the box's process group is killed with the box."""
+
 from __future__ import annotations
 
 import os

@@ -2,6 +2,7 @@
 fails: see tests/citation_words.py. The prose of every solution must name each place it cites; the text a notebook
 prints and the messages of the checks, which are terse, must cite places that exist and must not name another one.
 """
+
 from __future__ import annotations
 
 import pytest
@@ -25,13 +26,18 @@ def misnamed(found, rows):
     for seed, key, text, where in found:
         if (seed, key) not in rows:
             if sum((s, key) in rows for s in ("000", "001", "002", "004")) == 1:
-                continue                                 # terse text: the one seed that has the place
+                continue  # terse text: the one seed that has the place
             bad.append(f"{where}: seed {seed} {key} is not in docs/citations.md")
             continue
         if W.says(text, rows[(seed, key)][1]):
             continue
-        other = [(k, w) for (s, k), (_, words) in rows.items() if s == seed and k != key and k[:1] == key[:1]
-                 for w in words if W.says(text, [w]) and len(w) > 4]
+        other = [
+            (k, w)
+            for (s, k), (_, words) in rows.items()
+            if s == seed and k != key and k[:1] == key[:1]
+            for w in words
+            if W.says(text, [w]) and len(w) > 4
+        ]
         if other:
             bad.append(f"{where}: seed {seed} {key} in a text that names {other[0][0]} ('{other[0][1]}'): {text[:120]}")
     return bad
@@ -64,9 +70,11 @@ def test_the_checks_cite_places_that_exist(path):
 def test_a_swapped_section_fails():
     """§5.4.1 (programming the MCU) where Lab 03 cites §5.3.1 for the pairing rule fails; §5.3.1 passes."""
     rows = W.all_rows()
-    text = ("| **Follows** | seed 000 |\n\nThe **pairing** is the thesis' own (§5.3.1: the Y-Z angle is combined "
-            "with the "
-            "X-axis rate gyroscope reading).")
+    text = (
+        "| **Follows** | seed 000 |\n\nThe **pairing** is the thesis' own (§5.3.1: the Y-Z angle is combined "
+        "with the "
+        "X-axis rate gyroscope reading)."
+    )
     nb = {"cells": [{"cell_type": "markdown", "metadata": {}, "source": text}]}
     assert W.unnamed(_prose(nb), rows) == []
     nb["cells"][0]["source"] = text.replace("§5.3.1", "§5.4.1")

@@ -10,6 +10,7 @@ Which seed a citation belongs to: the nearest ``seed NNN`` (or ``(NNN eq``, ``NN
 paragraph, else the first seed of the lab's *Follows* row. A § after ``derivations.md`` or ``README`` is the
 course's own.
 """
+
 from __future__ import annotations
 
 import re
@@ -45,15 +46,15 @@ def citations(nb):
     fallback = default_seed(nb)
     found = []
     for i, cell in enumerate(nb["cells"]):
-        text = MD_LINK.sub(r"\1", source(cell))            # a link reads as its text: [References](../docs/...)
-        if cell["cell_type"] == "code":            # comments only: code may index arrays with § never, but eq...
+        text = MD_LINK.sub(r"\1", source(cell))  # a link reads as its text: [References](../docs/...)
+        if cell["cell_type"] == "code":  # comments only: code may index arrays with § never, but eq...
             text = "\n".join(line.split("#", 1)[1] for line in text.splitlines() if "#" in line)
         for m in CITATION.finditer(text):
-            before = text[max(0, m.start() - 400):m.start()]
+            before = text[max(0, m.start() - 400) : m.start()]
             if m.group("kind") == "§" and COURSE_OWN.search(before[-40:]):
                 continue
-            para = text.rfind("\n\n", 0, m.start()) + 1          # the seed named last in this paragraph, if any
-            seeds = [next(g for g in s.groups() if g) for s in SEED.finditer(text[para:m.start() + 4])]
+            para = text.rfind("\n\n", 0, m.start()) + 1  # the seed named last in this paragraph, if any
+            seeds = [next(g for g in s.groups() if g) for s in SEED.finditer(text[para : m.start() + 4])]
             seed = seeds[-1] if seeds else fallback
             kind = {"§": "§", "T": "Table "}.get(m.group("kind")[0], "eq ")
             for n in _numbers(m.group("nums")):
@@ -64,7 +65,7 @@ def citations(nb):
 def table():
     """{(seed, key): (source's words, the labs' words for it)} from docs/citations.md."""
     rows = {}
-    for line in TABLE.read_text(encoding="utf-8").splitlines():          # the table is the test's own data
+    for line in TABLE.read_text(encoding="utf-8").splitlines():  # the table is the test's own data
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if len(cells) == 4 and re.fullmatch(r"00\d", cells[0]):
             key = (cells[0], cells[1])
@@ -88,17 +89,19 @@ def wrong_citations(nb, rows):
         if (seed, key) not in rows:
             problems.append(f"cell {i}: seed {seed} {key} is not in docs/citations.md (what is it in the source?)")
             continue
-        before = re.sub(r"\$\$.*?\$\$", " ", re.sub(r"\n\n\$\$", " $$", before), flags=re.S)   # a display
-        before = before.split("$$")[0]                          # equation belongs to the sentence that leads to it
-        near = re.split(r"(?<!\d)\.(?!\d)|[;:)|]|\n\n", before)[-1].lower()   # the clause that leads to the citation
+        before = re.sub(r"\$\$.*?\$\$", " ", re.sub(r"\n\n\$\$", " $$", before), flags=re.S)  # a display
+        before = before.split("$$")[0]  # equation belongs to the sentence that leads to it
+        near = re.split(r"(?<!\d)\.(?!\d)|[;:)|]|\n\n", before)[-1].lower()  # the clause that leads to the citation
         own = rows[(seed, key)][1]
         if own and any(_says(near, w) for w in own):
             continue
         for (s, k), (heading, words) in rows.items():
             hit = [w for w in words if _says(near, w)]
             if s == seed and k != key and k.split(" ")[0][:1] == key.split(" ")[0][:1] and hit:
-                problems.append(f"cell {i}: '...{near.strip()[-60:]}' cites {seed} {key} ({rows[(seed, key)][0]}), "
-                                f"but '{hit[0]}' is {k} ({heading})")
+                problems.append(
+                    f"cell {i}: '...{near.strip()[-60:]}' cites {seed} {key} ({rows[(seed, key)][0]}), "
+                    f"but '{hit[0]}' is {k} ({heading})"
+                )
                 break
     return problems
 
@@ -120,8 +123,16 @@ def test_every_citation_is_in_the_table_and_names_its_place(path):
 def test_a_citation_to_the_wrong_section_fails():
     """The test catches a lab calling §7.5 the air-vehicle simulation, and an unlisted equation."""
     rows = table()
-    nb = {"cells": [{"cell_type": "markdown", "metadata": {}, "source":
-                     "| **Follows** | seed 004 ... |\n\nthe air-vehicle simulation (§7.5, Table 7.1); also eq 9.99"}]}
+    nb = {
+        "cells": [
+            {
+                "cell_type": "markdown",
+                "metadata": {},
+                "source": "| **Follows** | seed 004 ... |\n\n"
+                "the air-vehicle simulation (§7.5, Table 7.1); also eq 9.99",
+            }
+        ]
+    }
     problems = wrong_citations(nb, rows)
     assert any("§7.5" in p and "§7.4" in p for p in problems), problems
     assert any("eq 9.99" in p for p in problems), problems

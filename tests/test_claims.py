@@ -33,6 +33,7 @@ at least one backed number, and "… than" a number for what it compares with.
 Where the prose must state a number the notebook cannot print, print it. tests/test_claims_planted.py plants wrong
 numbers in copies of the notebooks and shows that this test fails on each.
 """
+
 from __future__ import annotations
 
 import math
@@ -41,8 +42,7 @@ import re
 import pytest
 
 import citation_words
-from claims import (NUMBER, SEED_MARK, claims, matches, seed_table, seed_values, sentences, set_in_code, unbacked,
-                    value)
+from claims import NUMBER, SEED_MARK, claims, matches, seed_table, seed_values, sentences, set_in_code, unbacked, value
 from notebook_text import ROOT, SOLUTIONS, default_seed_of
 
 
@@ -50,7 +50,8 @@ from notebook_text import ROOT, SOLUTIONS, default_seed_of
 def test_every_number_the_prose_states_is_backed(path):
     bad = unbacked(path)
     assert not bad, f"{path.name}: {len(bad)} number(s) in the prose that nothing backs:\n" + "\n".join(
-        f"  cell {i}: {shown!r} -- {why}\n      in: {s[:220]}" for i, shown, why, s in bad)
+        f"  cell {i}: {shown!r} -- {why}\n      in: {s[:220]}" for i, shown, why, s in bad
+    )
 
 
 def _messages_quoting_printed_values():
@@ -85,7 +86,7 @@ def test_the_seed_numbers_name_places_the_course_lists():
     assert len(table) > 10
     for (seed, kind, num), vals in table.items():
         key = {"§": f"§{num}", "table": f"Table {num}", "eq": f"eq {num}"}.get(kind)
-        if key:                                           # figures have no row in docs/citations.md
+        if key:  # figures have no row in docs/citations.md
             assert (seed, key) in rows, f"tests/seed_numbers.csv: seed {seed} {key} is not in docs/citations.md"
         assert all(math.isfinite(v) for v in vals)
 
@@ -96,12 +97,31 @@ def test_the_readme_and_bench_table_exist():
 
 # -- the rule on small made-up notebooks ---------------------------------------------------------------------------
 
+
 def _nb(markdown, printed, code="x = 1", follows=None):
-    head = [{"cell_type": "markdown", "metadata": {"nbgrader": {"grade_id": "header"}},
-             "source": f"| **Follows** | seed {follows} |"}] if follows else []
-    return {"cells": head + [{"cell_type": "code", "metadata": {}, "source": code,
-                       "outputs": [{"output_type": "stream", "name": "stdout", "text": printed}]},
-                      {"cell_type": "markdown", "metadata": {}, "source": markdown}]}
+    head = (
+        [
+            {
+                "cell_type": "markdown",
+                "metadata": {"nbgrader": {"grade_id": "header"}},
+                "source": f"| **Follows** | seed {follows} |",
+            }
+        ]
+        if follows
+        else []
+    )
+    return {
+        "cells": head
+        + [
+            {
+                "cell_type": "code",
+                "metadata": {},
+                "source": code,
+                "outputs": [{"output_type": "stream", "name": "stdout", "text": printed}],
+            },
+            {"cell_type": "markdown", "metadata": {}, "source": markdown},
+        ]
+    }
 
 
 def _shown(nb):
@@ -120,21 +140,21 @@ def test_a_number_needs_its_unit_and_its_section():
     assert unbacked(_nb("The transport rate is 1.9 °/h.", "transport rate: 1.9 °/h\n")) == []
     other = _nb("## Part B\n\nThe error is 0.41°.", "error 0.41 deg\n")
     other["cells"].insert(0, {"cell_type": "markdown", "metadata": {}, "source": "## Part A"})
-    assert unbacked(other) == []                          # Part A's output restated, its words named
+    assert unbacked(other) == []  # Part A's output restated, its words named
     other["cells"][2]["source"] = "## Part B\n\nThe cost is 0.41°."
-    assert _shown(other) == ["0.41"]                      # another section, another quantity
+    assert _shown(other) == ["0.41"]  # another section, another quantity
 
 
 def test_a_table_number_is_its_row_and_its_column():
-    table = ("trial                    status   total  heading\n"
-             "07_fast_rotation_B       ok        2.29     2.00\n"
-             "29_stationary_magnet_B   ok        3.85     3.45\n"
-             "mean                               3.07     2.73\n")
+    table = (
+        "trial                    status   total  heading\n"
+        "07_fast_rotation_B       ok        2.29     2.00\n"
+        "29_stationary_magnet_B   ok        3.85     3.45\n"
+        "mean                               3.07     2.73\n"
+    )
     assert unbacked(_nb("The magnet trial scores 3.85°.", table)) == []
     assert _shown(_nb("The held-out trials give 3.85° on the whole.", table)) == ["3.85"]
-    pair = ("filter   whole   windows\n"
-            "vqf9     2.41    3.14\n"
-            "dcm      2.23    10.20\n")
+    pair = "filter   whole   windows\nvqf9     2.41    3.14\ndcm      2.23    10.20\n"
     assert unbacked(_nb("On the windows the dcm's mean is 10.20 against vqf's 3.14.", pair)) == []
     assert "2.41" in _shown(_nb("On the windows the dcm's mean is 10.20 against vqf's 2.41.", pair))
 
@@ -154,8 +174,9 @@ def test_a_count_is_a_claim():
 def test_a_quoted_number_is_the_seeds():
     assert unbacked(_nb("The table is the thesis' design (Table 4.1): d = 15 cm.", "", follows="004")) == []
     assert _shown(_nb("The table is the thesis' design (Table 4.1): d = 16 cm.", "", follows="004")) == ["16"]
-    assert _shown(_nb("Yaw reaches about 0.35° (Table 7.1).", "max error roll/pitch/yaw: [0.47 0.46 0.76]\n",
-                      follows="004")) == ["0.35"]
+    assert _shown(
+        _nb("Yaw reaches about 0.35° (Table 7.1).", "max error roll/pitch/yaw: [0.47 0.46 0.76]\n", follows="004")
+    ) == ["0.35"]
     assert [value(m)[0] for m in NUMBER.finditer("61 200 m and 1,500 and 2·10⁵")] == [61200.0, 1500.0, 2e5]
     assert seed_values([("004", "table", "4.1", "4.1")], seed_table())
 

@@ -6,6 +6,7 @@ unknown checksum reported, a missing trial says how to get it).
 No test needs the internet: an autouse fixture points the download address at a closed local port unless a test
 starts its own server, and hides the course's data/broad/ from the loader unless a test is about it.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -23,10 +24,10 @@ import pytest
 from fusionlab import datasets
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "data" / "broad"                # the eight trials the course ships
+SHIPPED = ROOT / "data" / "broad"  # the eight trials the course ships
 EIGHT = [2, 7, 11, 16, 25, 27, 29, 33]
 NAME2 = "02_undisturbed_slow_rotation_B"
-NAME1 = "01_undisturbed_slow_rotation_A"        # not shipped, no known checksum
+NAME1 = "01_undisturbed_slow_rotation_A"  # not shipped, no known checksum
 
 
 def closed_port():
@@ -104,8 +105,13 @@ def mirror(monkeypatch):
 def test_list_trials_has_the_39_trials_with_their_groups():
     trials = datasets.broad.list_trials()
     assert [t.number for t in trials] == list(range(1, 40))
-    assert trials[1].name == NAME2 and trials[1].groups == ("all_trials", "undisturbed", "rotation", "slow",
-                                                            "no_breaks")
+    assert trials[1].name == NAME2 and trials[1].groups == (
+        "all_trials",
+        "undisturbed",
+        "rotation",
+        "slow",
+        "no_breaks",
+    )
     assert [t.number for t in datasets.list_trials("attached_magnet")] == [32, 33, 34, 35, 36]
     assert len(datasets.list_trials("undisturbed")) == 23 and len(datasets.list_trials("disturbed")) == 16
     assert datasets.group_names()[:2] == ["all_trials", "undisturbed"]
@@ -118,9 +124,17 @@ def test_trial_name_accepts_numbers_and_names(key):
     assert datasets.trial_name(key) == NAME2
 
 
-@pytest.mark.parametrize("bad, match", [(0, "from 1 to 39; got 0"), (40, "got 40"), ("nonsense", "got 'nonsense'"),
-                                        ("undisturbed_slow_rotation_B", "did you mean '02_undisturbed"),
-                                        (2.0, "got float"), (True, "got bool")])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (0, "from 1 to 39; got 0"),
+        (40, "got 40"),
+        ("nonsense", "got 'nonsense'"),
+        ("undisturbed_slow_rotation_B", "did you mean '02_undisturbed"),
+        (2.0, "got float"),
+        (True, "got bool"),
+    ],
+)
 def test_bad_trial_name_or_number_is_a_value_error(bad, match):
     with pytest.raises(ValueError, match="name_or_number") as err:
         datasets.load_trial(bad)
@@ -171,15 +185,15 @@ def test_shipped_trials_load_with_nothing_set_an_empty_cache_and_no_network(monk
 
     monkeypatch.setattr(datasets, "_download", no_network)
     monkeypatch.setattr(datasets.urllib.request, "urlopen", no_network)
-    isolated.mkdir(parents=True)                             # the cache: an empty folder
-    monkeypatch.chdir(isolated)                              # the working folder plays no part
+    isolated.mkdir(parents=True)  # the cache: an empty folder
+    monkeypatch.chdir(isolated)  # the working folder plays no part
     assert datasets.available_trials() == [datasets.trial_name(n) for n in EIGHT]
     for number in EIGHT:
         assert datasets.fetch_trial(number) == SHIPPED / (datasets.trial_name(number) + ".mat")
     tr = datasets.load_trial(2)
     assert len(tr) == 53240 and tr.name == NAME2
     assert datasets.load_reference_position(11).shape == (54214, 3)
-    assert list(isolated.iterdir()) == []                    # nothing copied to the cache
+    assert list(isolated.iterdir()) == []  # nothing copied to the cache
     assert datasets.missing_trials() == {}
 
 
@@ -192,8 +206,8 @@ def test_shipped_folder_comes_before_the_env_folder_and_is_checked(monkeypatch, 
     monkeypatch.setattr(datasets, "SHIPPED_DIR", course)
     monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))
     with pytest.raises(ValueError, match=f"checksum mismatch for {course / NAME2}.mat"):
-        datasets.load_trial(2)                               # the course copy is used first, and verified
-    assert datasets.fetch_trial(7) == SHIPPED / "07_undisturbed_fast_rotation_B.mat"   # then the env folder
+        datasets.load_trial(2)  # the course copy is used first, and verified
+    assert datasets.fetch_trial(7) == SHIPPED / "07_undisturbed_fast_rotation_B.mat"  # then the env folder
 
 
 @pytest.mark.parametrize("number", EIGHT)
@@ -201,18 +215,18 @@ def test_load_each_shipped_trial_from_a_folder(number):
     tr = datasets.load_trial(number, folder=SHIPPED)
     n = len(tr)
     assert tr.name.startswith(f"{number:02d}_") and "all_trials" in tr.groups
-    assert tr.fs == pytest.approx(2000 / 7)                  # 285.714 Hz
+    assert tr.fs == pytest.approx(2000 / 7)  # 285.714 Hz
     assert tr.gyr.shape == tr.acc.shape == tr.mag.shape == (n, 3) and tr.quat_ref.shape == (n, 4)
     assert tr.movement.dtype == bool and tr.movement.shape == (n,) and 0.4 < tr.movement.mean() < 0.8
     lost = np.isnan(tr.quat_ref).any(axis=1)
-    assert np.isnan(tr.quat_ref[lost]).all()                 # lost samples are lost as a whole
+    assert np.isnan(tr.quat_ref[lost]).all()  # lost samples are lost as a whole
     np.testing.assert_allclose(np.linalg.norm(tr.quat_ref[~lost], axis=1), 1, atol=1e-9)
     rest_acc = np.linalg.norm(tr.acc[:200].mean(axis=0))
-    assert 9.5 < rest_acc < 10.1                             # m/s^2, at rest before the motion
-    assert np.abs(tr.gyr[:200]).max() < 0.1                  # rad/s, at rest
-    assert 20 < np.linalg.norm(tr.mag[:200].mean(axis=0)) < 80   # µT
+    assert 9.5 < rest_acc < 10.1  # m/s^2, at rest before the motion
+    assert np.abs(tr.gyr[:200]).max() < 0.1  # rad/s, at rest
+    assert 20 < np.linalg.norm(tr.mag[:200].mean(axis=0)) < 80  # µT
     with pytest.raises(ValueError):
-        tr.gyr[0, 0] = 1.0                                   # the record is read-only
+        tr.gyr[0, 0] = 1.0  # the record is read-only
 
 
 def test_trial_numbers_known_from_the_data():
@@ -235,8 +249,8 @@ def test_env_var_folder_is_used_without_download(monkeypatch, tmp_path):
     b = datasets.load_trial(7, folder=SHIPPED)
     np.testing.assert_array_equal(a.gyr, b.gyr)
     assert datasets.available_trials() == [datasets.trial_name(n) for n in EIGHT]
-    assert not datasets.cache_dir().exists()                 # nothing downloaded
-    assert datasets.available_trials(tmp_path) == []          # a folder given: only what load_trial would find there
+    assert not datasets.cache_dir().exists()  # nothing downloaded
+    assert datasets.available_trials(tmp_path) == []  # a folder given: only what load_trial would find there
 
 
 def test_env_var_naming_a_missing_folder_says_so(monkeypatch, tmp_path):
@@ -271,9 +285,9 @@ def test_download_verifies_and_caches_atomically(mirror, isolated):
     tr = datasets.load_trial(2, progress=False)
     cached = isolated / f"{NAME2}.mat"
     assert sha256(cached) == datasets.known_sha256(2)
-    assert sorted(p.name for p in isolated.iterdir()) == [f"{NAME2}.mat"]      # no .part left behind
+    assert sorted(p.name for p in isolated.iterdir()) == [f"{NAME2}.mat"]  # no .part left behind
     assert mirror.requests == [f"/{NAME2}.mat"]
-    again = datasets.load_trial(2, progress=False)                             # from the cache now
+    again = datasets.load_trial(2, progress=False)  # from the cache now
     assert len(mirror.requests) == 1
     np.testing.assert_array_equal(again.quat_ref, tr.quat_ref)
     assert datasets.available_trials() == [NAME2]
@@ -282,7 +296,7 @@ def test_download_verifies_and_caches_atomically(mirror, isolated):
 def test_corrupt_cached_file_is_detected_and_fetched_again(mirror, isolated):
     datasets.load_trial(2, progress=False)
     cached = isolated / f"{NAME2}.mat"
-    cached.write_bytes(cached.read_bytes()[:100_000])          # truncated on disk
+    cached.write_bytes(cached.read_bytes()[:100_000])  # truncated on disk
     with pytest.warns(UserWarning, match="fails its checksum"):
         datasets.load_trial(2, progress=False)
     assert len(mirror.requests) == 2 and sha256(cached) == datasets.known_sha256(2)
@@ -292,14 +306,14 @@ def test_truncated_download_is_refused_and_nothing_is_kept(mirror, isolated):
     mirror.truncate = True
     with pytest.raises(ValueError, match="failed verification twice .*(truncated|closed early)"):
         datasets.load_trial(2, progress=False)
-    assert len(mirror.requests) == 2                          # one retry
+    assert len(mirror.requests) == 2  # one retry
     assert list(isolated.iterdir()) == []
 
 
 def test_download_with_wrong_content_fails_its_checksum(monkeypatch, isolated, tmp_path):
     root = tmp_path / "mirror"
     root.mkdir()
-    (root / f"{NAME2}.mat").write_bytes((SHIPPED / f"{NAME2}.mat").read_bytes()[:-10])   # consistent length, bad sum
+    (root / f"{NAME2}.mat").write_bytes((SHIPPED / f"{NAME2}.mat").read_bytes()[:-10])  # consistent length, bad sum
     m = Mirror(root)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
@@ -313,6 +327,7 @@ def test_download_with_wrong_content_fails_its_checksum(monkeypatch, isolated, t
 def _stand_in(path):
     """Trial 2's data relabelled as trial 1 (its info text names trial 1), for a trial without a known checksum."""
     import scipy.io
+
     m = scipy.io.loadmat(str(SHIPPED / f"{NAME2}.mat"))
     data = {k: v for k, v in m.items() if not k.startswith("__")}
     data["info"] = np.array([str(m["info"][0]).replace(NAME2, NAME1)])
@@ -322,7 +337,7 @@ def _stand_in(path):
 def test_unknown_checksum_is_kept_but_reported_then_guarded_by_its_recorded_hash(monkeypatch, isolated, tmp_path):
     root = tmp_path / "mirror"
     root.mkdir()
-    _stand_in(root / f"{NAME1}.mat")                                # a trial we hold no sum for
+    _stand_in(root / f"{NAME1}.mat")  # a trial we hold no sum for
     m = Mirror(root)
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
@@ -333,12 +348,12 @@ def test_unknown_checksum_is_kept_but_reported_then_guarded_by_its_recorded_hash
         assert (isolated / f"{NAME1}.mat.sha256").read_text().split()[0] == sha256(cached)
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            datasets.load_trial(1, progress=False)                  # cached, matches its recorded hash: silent
+            datasets.load_trial(1, progress=False)  # cached, matches its recorded hash: silent
         cached.write_bytes(b"garbage")
         with pytest.warns(UserWarning) as record:
             datasets.load_trial(1, progress=False)
         messages = " / ".join(str(w.message) for w in record)
-        assert "fails its checksum" in messages and "no checksum known" in messages     # re-fetched, reported
+        assert "fails its checksum" in messages and "no checksum known" in messages  # re-fetched, reported
         assert len(m.requests) == 2
     finally:
         m.close()
@@ -353,12 +368,12 @@ def test_offline_download_failure_says_what_is_missing_and_how_to_get_it(monkeyp
     assert isinstance(e.value, FileNotFoundError) and e.value.trial == NAME2
     assert e.match("download from http://127.0.0.1:.* failed") and e.match("To get it: connect to the internet")
     assert e.match(f"put it in {course}") and e.match("FUSIONLAB_BROAD_DIR")
-    assert e.value._render_traceback_() == [f"DataMissing: {e.value}"]      # IPython shows the remedy, no traceback
+    assert e.value._render_traceback_() == [f"DataMissing: {e.value}"]  # IPython shows the remedy, no traceback
     assert list(datasets.missing_trials()) == [NAME2]
     with pytest.raises(datasets.DataMissing, match="download=False"):
         datasets.load_trial(7, download=False)
     assert sorted(datasets.missing_trials()) == [NAME2, "07_undisturbed_fast_rotation_B"]
-    monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))                       # the data arrives
+    monkeypatch.setenv(datasets.ENV_DIR, str(SHIPPED))  # the data arrives
     datasets.load_trial(2)
     assert list(datasets.missing_trials()) == ["07_undisturbed_fast_rotation_B"]
 
@@ -371,12 +386,12 @@ def test_a_copy_of_the_course_without_its_data_folder_is_told_where_the_file_goe
     assert f"put it in {datasets.SHIPPED_DIR} (or in a folder named by" in message
     assert message.endswith("a complete copy of the course has it in data/broad/.")
     with pytest.raises(datasets.DataMissing) as e:
-        datasets.load_trial(1, progress=False)             # not a shipped trial: no such promise
+        datasets.load_trial(1, progress=False)  # not a shipped trial: no such promise
     assert "complete copy" not in str(e.value)
 
 
 def test_missing_file_on_the_server_is_reported_with_its_http_status(monkeypatch, tmp_path):
-    m = Mirror(tmp_path)                                            # serves an empty folder
+    m = Mirror(tmp_path)  # serves an empty folder
     monkeypatch.setenv(datasets.ENV_URL, m.url)
     try:
         with pytest.raises(FileNotFoundError, match="404"):
@@ -387,7 +402,7 @@ def test_missing_file_on_the_server_is_reported_with_its_http_status(monkeypatch
 
 def test_a_cached_file_that_is_not_a_mat_file_is_a_clear_error(isolated):
     isolated.mkdir(parents=True)
-    (isolated / f"{NAME1}.mat").write_bytes(b"not a mat file")          # no known sum, no recorded hash
+    (isolated / f"{NAME1}.mat").write_bytes(b"not a mat file")  # no known sum, no recorded hash
     with pytest.raises(ValueError, match="is not a readable BROAD .mat file"):
         datasets.load_trial(1)
 
@@ -402,6 +417,7 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
 
     shell = InteractiveShell.instance()
     try:
+
         def run(code):
             capsys.readouterr()
             shell.run_cell(code, store_history=True)
@@ -416,7 +432,7 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
         assert "name 'trial' is not defined" in out and "could not run because data is missing" in out
         assert f"BROAD trial {NAME2} is missing" in out and "To get it" in out
         assert "exercise" not in out
-        out = run("r = q + 1")                               # one step further down the chain
+        out = run("r = q + 1")  # one step further down the chain
         assert "name 'q' is not defined" in out and "data is missing" in out and "exercise" not in out
         out = run("y = my_answer + 1")
         assert "name 'my_answer' is not defined" in out and "an exercise that is not finished" in out
@@ -433,7 +449,7 @@ def test_in_a_notebook_a_missing_trial_and_its_knock_on_cells_say_data_is_missin
 
 def test_an_unverified_damaged_file_is_a_value_error_for_the_reference_position_too(isolated):
     isolated.mkdir(parents=True)
-    (isolated / f"{NAME1}.mat").write_bytes(b"MATLAB 5.0 MAT-file, damaged" + bytes(200))   # no known sum
+    (isolated / f"{NAME1}.mat").write_bytes(b"MATLAB 5.0 MAT-file, damaged" + bytes(200))  # no known sum
     for load in (datasets.load_trial, datasets.load_reference_position):
         with pytest.raises(ValueError, match=f"{NAME1}.mat is not a readable BROAD .mat file"):
             load(1)
@@ -441,7 +457,7 @@ def test_an_unverified_damaged_file_is_a_value_error_for_the_reference_position_
 
 def test_an_intact_trial_saved_under_another_trials_name_is_refused(isolated):
     isolated.mkdir(parents=True)
-    shutil.copy(SHIPPED / f"{NAME2}.mat", isolated / f"{NAME1}.mat")      # trial 1 has no known checksum
+    shutil.copy(SHIPPED / f"{NAME2}.mat", isolated / f"{NAME1}.mat")  # trial 1 has no known checksum
     for load in (datasets.load_trial, datasets.load_reference_position):
         with pytest.raises(ValueError, match=rf"holds BROAD trial '{NAME2}', not '{NAME1}'"):
             load(1)
@@ -458,10 +474,11 @@ def test_download_false_never_deletes_nor_refetches_a_corrupt_cached_file(mirror
 
 
 def test_a_stale_env_folder_is_not_fatal_when_the_trial_is_cached(mirror, isolated, monkeypatch, tmp_path):
-    datasets.load_trial(2, progress=False)                                   # now in the cache
+    datasets.load_trial(2, progress=False)  # now in the cache
     monkeypatch.setenv(datasets.ENV_DIR, str(tmp_path / "moved-away"))
-    with pytest.warns(UserWarning, match="FUSIONLAB_BROAD_DIR names a folder that does not exist.*loaded from the "
-                                         "cache"):
+    with pytest.warns(
+        UserWarning, match="FUSIONLAB_BROAD_DIR names a folder that does not exist.*loaded from the cache"
+    ):
         tr = datasets.load_trial(2, download=False)
     assert len(tr) > 0 and len(mirror.requests) == 1
     with pytest.warns(UserWarning, match="ignored"):

@@ -1,4 +1,5 @@
 """fusionlab.dcm: the DCM equations of seed 004 ch. 6 -- increments, process and measurement models, read-out."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -13,6 +14,7 @@ RNG = np.random.default_rng(404)
 
 # ---------------------------------------------------------------- A(σ)
 
+
 def test_exact_increment_is_orthonormal_and_equals_the_matrix_exponential():
     sig = RNG.normal(0, 1.0, (50, 3))
     A = dcm.A_matrix(sig)
@@ -24,12 +26,12 @@ def test_exact_increment_is_orthonormal_and_equals_the_matrix_exponential():
 
 def test_second_order_increment_loses_orthogonality_as_sigma_to_the_fourth():
     for mag in (1e-2, 1e-1):
-        s = mag * np.array([0.6, -0.48, 0.64])                           # |σ| = mag
+        s = mag * np.array([0.6, -0.48, 0.64])  # |σ| = mag
         A = dcm.A_matrix(s, order="second")
-        err = np.max(np.abs(A.T @ A - np.eye(3)))                         # AᵀA - I = [σ×]⁴/4
+        err = np.max(np.abs(A.T @ A - np.eye(3)))  # AᵀA - I = [σ×]⁴/4
         assert err == pytest.approx(np.max(np.abs(np.linalg.matrix_power(rotations.skew(s), 4))) / 4, rel=1e-6)
-        assert err <= mag ** 4 / 4 * (1 + 1e-9)
-        assert np.max(np.abs(A - dcm.A_matrix(s))) < mag ** 3
+        assert err <= mag**4 / 4 * (1 + 1e-9)
+        assert np.max(np.abs(A - dcm.A_matrix(s))) < mag**3
 
 
 def test_increment_rejects_first_order_and_bad_shapes():
@@ -41,12 +43,13 @@ def test_increment_rejects_first_order_and_bad_shapes():
 
 def test_gyro_error_increment_is_the_exact_biased_increment_to_first_order():
     w, b, dt = np.array([0.5, -1.0, 2.0]), np.radians([2.0, -3.0, 1.5]), 0.01
-    A_tilde = dcm.A_with_gyro_error(dcm.A_matrix(w * dt), b, dt)         # (004 eq 6.10)
+    A_tilde = dcm.A_with_gyro_error(dcm.A_matrix(w * dt), b, dt)  # (004 eq 6.10)
     exact = dcm.A_matrix((w + b) * dt)
     assert np.max(np.abs(A_tilde - exact)) < 0.05 * np.linalg.norm(b) * dt
 
 
 # ---------------------------------------------------------------- process model
+
 
 def test_row_propagation_without_bias_is_exact():
     C = random_dcm(RNG)
@@ -60,15 +63,15 @@ def test_row_propagation_removes_the_bias_to_second_order():
     w, b = np.array([1.0, -2.0, 0.5]), np.radians([3.0, -4.0, 2.0])
     errs = []
     for dt in (0.01, 0.005):
-        A_tilde = dcm.A_matrix((w + b) * dt)                              # what the biased gyro gives
-        truth = C @ dcm.A_matrix(w * dt)                                   # exact propagation
+        A_tilde = dcm.A_matrix((w + b) * dt)  # what the biased gyro gives
+        truth = C @ dcm.A_matrix(w * dt)  # exact propagation
         err_model = max(np.max(np.abs(dcm.row_propagate(C[i], A_tilde, b, dt) - truth[i])) for i in range(3))
         err_ignored = max(np.max(np.abs(C[i] @ A_tilde - truth[i])) for i in range(3))
-        assert err_ignored > 0.5 * np.linalg.norm(b) * dt                 # ≈ |b| dt
+        assert err_ignored > 0.5 * np.linalg.norm(b) * dt  # ≈ |b| dt
         assert err_model < 0.05 * err_ignored
-        assert err_model < 2 * np.linalg.norm(b) * np.linalg.norm(w) * dt ** 2
+        assert err_model < 2 * np.linalg.norm(b) * np.linalg.norm(w) * dt**2
         errs.append(err_model)
-    assert errs[0] / errs[1] == pytest.approx(4.0, rel=0.1)              # eq 6.11 leaves O(|b||ω| dt²)
+    assert errs[0] / errs[1] == pytest.approx(4.0, rel=0.1)  # eq 6.11 leaves O(|b||ω| dt²)
 
 
 def test_transition_reproduces_the_row_propagation_and_a_random_walk_bias():
@@ -87,11 +90,11 @@ def test_process_noise_matches_a_monte_carlo_of_the_gyro_noise():
     Q = dcm.ahrs_process_noise(C[0], C[2], dt, N, qb)
     assert np.allclose(Q, Q.T) and np.min(np.linalg.eigvalsh(Q)) > -1e-18
     rng = np.random.default_rng(1)
-    w = N / np.sqrt(dt) * rng.standard_normal((200_000, 3))              # per-sample gyro noise
-    dc = np.concatenate([-np.cross(C[0], w) * dt, -np.cross(C[2], w) * dt], 1)    # eq 6.11 noise term
+    w = N / np.sqrt(dt) * rng.standard_normal((200_000, 3))  # per-sample gyro noise
+    dc = np.concatenate([-np.cross(C[0], w) * dt, -np.cross(C[2], w) * dt], 1)  # eq 6.11 noise term
     emp = dc.T @ dc / len(dc)
-    assert np.allclose(emp, Q[0:6, 0:6], atol=0.02 * N ** 2 * dt)
-    assert np.allclose(Q[6:9, 6:9], qb ** 2 * dt * np.eye(3))
+    assert np.allclose(emp, Q[0:6, 0:6], atol=0.02 * N**2 * dt)
+    assert np.allclose(Q[6:9, 6:9], qb**2 * dt * np.eye(3))
 
 
 def test_process_noise_rejects_negative_densities():
@@ -101,15 +104,16 @@ def test_process_noise_rejects_negative_densities():
 
 # ---------------------------------------------------------------- measurements
 
+
 def test_accelerometer_model_is_linear_and_uses_the_thesis_sign():
     for C in random_dcm(RNG, 5):
         x = np.concatenate([C[0], C[2], np.zeros(3)])
-        f_b = accel_tilt.specific_force(C)                                   # a real accelerometer at rest
-        a_b = dcm.accel_to_seed004(f_b)                                   # +g c3
+        f_b = accel_tilt.specific_force(C)  # a real accelerometer at rest
+        a_b = dcm.accel_to_seed004(f_b)  # +g c3
         assert np.allclose(dcm.accel_measurement_matrix() @ x, a_b, atol=1e-12)
         assert np.allclose(dcm.accel_measurement_matrix() @ x, -f_b, atol=1e-12)
     level = dcm.accel_to_seed004(accel_tilt.specific_force(np.eye(3)))
-    assert np.allclose(level, [0, 0, dcm.G])                              # +g on z when level (z down)
+    assert np.allclose(level, [0, 0, dcm.G])  # +g on z when level (z down)
 
 
 def test_magnetometer_model_is_the_field_in_body_axes():
@@ -145,6 +149,7 @@ def test_orthogonality_covariance_decays_with_rho_to_the_steady_value():
 
 
 # ---------------------------------------------------------------- read-out, initialisation, gates
+
 
 def test_rows_rebuild_the_dcm_and_orthonormalize_is_the_nearest_rotation():
     C = random_dcm(RNG, 20)

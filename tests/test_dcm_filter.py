@@ -1,4 +1,5 @@
 """fusionlab.dcm_filter: the 9-state DCM AHRS of seed 004 §6.4 -- the readable filter and its fast path."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -33,7 +34,7 @@ def test_fast_path_equals_the_readable_filter_sample_by_sample(hand):
     gyr, acc_b, mag_b = _inputs(hand, 1500)
     fs = hand["fs"]
     fast = dcm_filter.run_ahrs(gyr, acc_b, mag_b, fs, update_every=1)
-    C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[:50].mean(0), mag_b[:50].mean(0)))   # first 0.5 s
+    C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[:50].mean(0), mag_b[:50].mean(0)))  # first 0.5 s
     f = dcm_filter.DcmAhrs(C0, fast["inclination"], 1 / fs)
     xs = []
     for k in range(len(gyr)):
@@ -72,14 +73,15 @@ def test_hand_motion_meets_the_thesis_figures(hand):
     err = np.degrees(np.angle(np.exp(1j * (rotations.dcm_to_euler(out["C_bn"]) - hand["euler"]))))
     assert np.all(np.max(np.abs(err), axis=0) < [1.5, 1.5, 2.0])
     b_err = np.degrees(np.abs(out["bias"] - hand["bias"]))
-    assert np.max(b_err[t >= 12]) < 0.1 and np.max(b_err[t < 1]) > 1.0   # started at 0, a few °/s off
+    assert np.max(b_err[t >= 12]) < 0.1 and np.max(b_err[t < 1]) > 1.0  # started at 0, a few °/s off
     late = out["t_update"] > 12
     c1, c3 = out["c1"][late], out["c3"][late]
     assert np.max(np.abs(np.linalg.norm(c1, axis=1) - 1)) < 1e-3
     assert np.max(np.abs(np.linalg.norm(c3, axis=1) - 1)) < 1e-3
     assert np.max(np.abs(np.sum(c1 * c3, 1))) < 1e-3
-    gyro_only = rotations.integrate_gyro_dcm(hand["C_init"], hand["gyr"], 1 / hand["fs"], order="exact",
-                                             renormalize=None)[1:]
+    gyro_only = rotations.integrate_gyro_dcm(
+        hand["C_init"], hand["gyr"], 1 / hand["fs"], order="exact", renormalize=None
+    )[1:]
     e_g = np.degrees(np.angle(np.exp(1j * (rotations.dcm_to_euler(gyro_only) - hand["euler"]))))
     assert np.max(np.abs(e_g[-1])) > 20
 
@@ -94,16 +96,20 @@ def test_tiny_steady_orthogonality_variance_makes_the_filter_worse(hand):
     assert errs[1e-8] > 1.5 * errs[1e-5]
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(update_every=0), "update_every must be a positive integer"),
-    (dict(update_every=1.5), "update_every must be a positive integer"),
-    (dict(fs=-1.0), "fs must be a positive"),
-    (dict(gyr=np.zeros((10, 4))), r"gyr must have shape \(N, 3\)"),
-    (dict(mag_b=np.zeros((9, 3))), "must have the same number of samples"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(update_every=0), "update_every must be a positive integer"),
+        (dict(update_every=1.5), "update_every must be a positive integer"),
+        (dict(fs=-1.0), "fs must be a positive"),
+        (dict(gyr=np.zeros((10, 4))), r"gyr must have shape \(N, 3\)"),
+        (dict(mag_b=np.zeros((9, 3))), "must have the same number of samples"),
+    ],
+)
 def test_run_ahrs_rejects_bad_input(kwargs, match):
-    args = dict(gyr=np.zeros((10, 3)), acc_b=np.tile([0, 0, 9.8], (10, 1)), mag_b=np.tile([0.4, 0, 0.9], (10, 1)),
-                fs=100.0)
+    args = dict(
+        gyr=np.zeros((10, 3)), acc_b=np.tile([0, 0, 9.8], (10, 1)), mag_b=np.tile([0.4, 0, 0.9], (10, 1)), fs=100.0
+    )
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         dcm_filter.run_ahrs(**args)

@@ -1,4 +1,5 @@
 """docs/derivations.md: every number it quotes is recomputed here from fusionlab, so the page and the code agree."""
+
 from __future__ import annotations
 
 import re
@@ -37,8 +38,13 @@ def test_freescale_6dof_gain_closed_form_matches_the_library():
 
 def test_freescale_9dof_gains_quoted_are_the_library_values():
     K = fz.nominal_gain(dof=9)
-    for label, value in (("K_gg", K[0, 0]), ("K_mm", K[3, 3]), ("K_bg", K[6, 0]), ("K_bm", K[6, 3]),
-                         ("K_δ", K[9, 6])):
+    for label, value in (
+        ("K_gg", K[0, 0]),
+        ("K_mm", K[3, 3]),
+        ("K_bg", K[6, 0]),
+        ("K_bm", K[6, 3]),
+        ("K_δ", K[9, 6]),
+    ):
         assert round(value, 7) == quoted(label), label
 
 

@@ -14,6 +14,7 @@ validator must report none of:
 A warning numpydoc raises while it parses (``Unknown section 'Return'``, a section title it does not know, which
 it then drops from the parsed docstring) is a failure too.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -22,12 +23,13 @@ import warnings
 from pathlib import Path
 
 import pytest
-from numpydoc import validate as numpydoc_validate     # pinned in environment.txt: a missing one fails, not skips
+from numpydoc import validate as numpydoc_validate  # pinned in environment.txt: a missing one fails, not skips
 
 # Every flat module of the library: a new module is held to the same rule from its first commit. (The checks
 # package speaks to students, not to documentation tools, and is not listed.)
-DOCUMENTED = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "lib" / "fusionlab").glob("*.py")
-                    if p.stem != "__init__")
+DOCUMENTED = sorted(
+    p.stem for p in (Path(__file__).resolve().parents[1] / "lib" / "fusionlab").glob("*.py") if p.stem != "__init__"
+)
 assert len(DOCUMENTED) >= 19, f"no library found beside {__file__}"
 
 
@@ -42,7 +44,7 @@ def public_objects(module_name: str) -> list[str]:
     for name, obj in vars(module).items():
         if name.startswith("_") or not (inspect.isfunction(obj) or inspect.isclass(obj)):
             continue
-        if getattr(obj, "__module__", None) != module.__name__:      # imported from elsewhere: checked there
+        if getattr(obj, "__module__", None) != module.__name__:  # imported from elsewhere: checked there
             continue
         names.append(f"{module.__name__}.{name}")
         if inspect.isclass(obj):
@@ -72,8 +74,11 @@ def test_public_docstrings_parse_with_one_typed_entry_per_parameter(module_name)
     assert names, f"fusionlab.{module_name} defines no public function or class: is the module name right?"
     problems = [p for name in names for p in docstring_problems(name)]
     if problems:
-        pytest.fail(f"{len(problems)} docstring problem(s) in fusionlab.{module_name} ({len(names)} public objects):"
-                    "\n  " + "\n  ".join(problems), pytrace=False)
+        pytest.fail(
+            f"{len(problems)} docstring problem(s) in fusionlab.{module_name} ({len(names)} public objects):"
+            "\n  " + "\n  ".join(problems),
+            pytrace=False,
+        )
 
 
 def test_the_validator_reports_what_this_test_relies_on():
@@ -118,14 +123,16 @@ def test_the_validator_reports_what_this_test_relies_on():
         fn.__module__ = scratch.__name__
         setattr(scratch, fn.__name__, fn)
     import sys
+
     sys.modules[scratch.__name__] = scratch
     try:
-        found = {name: docstring_problems(f"{scratch.__name__}.{name}") for name in ("faulty", "silent",
-                                                                                     "unknown_section")}
+        found = {
+            name: docstring_problems(f"{scratch.__name__}.{name}") for name in ("faulty", "silent", "unknown_section")
+        }
     finally:
         del sys.modules[scratch.__name__]
     codes = {name: sorted({p.split(": ", 1)[1].split(" ", 1)[0] for p in ps}) for name, ps in found.items()}
     assert codes["faulty"] == ["PR01", "PR02", "PR04", "PR10"], found["faulty"]
     assert codes["silent"] == ["GL08"], found["silent"]
-    assert codes["unknown_section"] == ["GL07", "WARNING"], found["unknown_section"]   # also read as misplaced
+    assert codes["unknown_section"] == ["GL07", "WARNING"], found["unknown_section"]  # also read as misplaced
     assert any("WARNING Unknown section Return" in p for p in found["unknown_section"]), found["unknown_section"]

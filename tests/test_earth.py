@@ -1,4 +1,5 @@
 """fusionlab.earth: WGS-84 constants and normal gravity (standard values, not from a seed)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -16,7 +17,7 @@ def test_somigliana_gives_the_defined_equator_and_pole_values():
     assert earth.normal_gravity(0.0) == pytest.approx(earth.GAMMA_E, abs=1e-12)
     assert earth.normal_gravity(np.pi / 2) == pytest.approx(earth.GAMMA_P, abs=1e-9)
     lat = np.radians(np.linspace(0, 90, 10))
-    assert np.all(np.diff(earth.normal_gravity(lat)) > 0)            # gravity grows towards the poles
+    assert np.all(np.diff(earth.normal_gravity(lat)) > 0)  # gravity grows towards the poles
 
 
 def test_gravity_at_siegen_and_free_air_term():
@@ -36,7 +37,7 @@ def test_radii_of_curvature_at_equator_and_pole():
     RN, RE = earth.radii_of_curvature(0.0)
     assert RE == pytest.approx(earth.A) and RN == pytest.approx(earth.A * (1 - earth.E2))
     RN, RE = earth.radii_of_curvature(np.pi / 2)
-    assert RN == pytest.approx(RE) == pytest.approx(earth.A ** 2 / earth.B)
+    assert RN == pytest.approx(RE) == pytest.approx(earth.A**2 / earth.B)
 
 
 def test_latitude_in_degrees_is_rejected():

@@ -1,4 +1,5 @@
 """fusionlab.ecompass: seed 002 (Freescale/NXP v5.00) §2-3, the sensor models and the eCompass, against the note."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -85,7 +86,7 @@ def test_noise_free_ecompass_recovers_truth_to_1e12(frame):
     assert np.max(np.abs(res.delta6 - d)) < 1e-12
     assert np.allclose(res.eigenvalues[:, -1], 1.0, atol=1e-12)
     assert np.all(res.q[:, 0] >= 0)
-    assert np.allclose(res.alpha_g, 0.5)                                  # the 0/0 guard
+    assert np.allclose(res.alpha_g, 0.5)  # the 0/0 guard
 
 
 def test_ecompass_spectrum_is_plus_minus_one_and_plus_minus_lambda2():
@@ -94,11 +95,11 @@ def test_ecompass_spectrum_is_plus_minus_one_and_plus_minus_lambda2():
     G, Bc = ecompass.accel_model(q), ecompass.mag_model(q, 50.0, d)
     for a_g in (0.5, 0.2, 0.9):
         lam = ecompass.ecompass(G, Bc, d, alpha=(a_g, 1 - a_g)).eigenvalues
-        th = np.radians(30.0)                                             # angle between g and m: 90° - δ
-        lam2 = np.sqrt(a_g ** 2 + (1 - a_g) ** 2 + 2 * a_g * (1 - a_g) * np.cos(2 * th))
+        th = np.radians(30.0)  # angle between g and m: 90° - δ
+        lam2 = np.sqrt(a_g**2 + (1 - a_g) ** 2 + 2 * a_g * (1 - a_g) * np.cos(2 * th))
         assert np.allclose(lam, [-1, -lam2, lam2, 1], atol=1e-12)
     assert np.isclose(ecompass.ecompass(G, Bc, d, alpha=(0.5, 0.5)).eigenvalues[2], np.cos(np.radians(30)), atol=1e-12)
-    lam = ecompass.ecompass(G, Bc, d, alpha=(1.0, 0.0)).eigenvalues     # one vector: degenerate
+    lam = ecompass.ecompass(G, Bc, d, alpha=(1.0, 0.0)).eigenvalues  # one vector: degenerate
     assert np.allclose(lam, [-1, -1, 1, 1], atol=1e-12)
 
 
@@ -107,8 +108,8 @@ def test_weights_follow_the_other_sensors_noise_and_guard_zero_over_zero():
     assert (a_g, a_m) == (0.5, 0.5)
     a_g, a_m = ecompass.weights(1.0, 7.0, B=50.0)
     assert np.isclose(a_g, 7 / (2500 + 7)) and np.isclose(a_g + a_m, 1.0)
-    assert ecompass.weights(1e3, 1.0)[0] < 1e-6                           # shake: gravity ignored
-    assert ecompass.weights(1e-4, 1e5)[0] > 0.99                          # magnet: field ignored
+    assert ecompass.weights(1e3, 1.0)[0] < 1e-6  # shake: gravity ignored
+    assert ecompass.weights(1e-4, 1e5)[0] > 0.99  # magnet: field ignored
     assert ecompass.accel_noise([0.0, 0.6, 0.8]) == pytest.approx(0.0, abs=1e-15)
     assert ecompass.mag_noise([30.0, 0.0, 40.0], 50.0) == pytest.approx(0.0, abs=1e-12)
 
@@ -126,7 +127,7 @@ def test_printed_kappa_matrices_are_wrong_by_the_errata_numbers():
     s, r = np.array([0.48, 0.6, 0.64]), np.array([0.6, 0.0, 0.8])
     P = ecompass.kappa_eq41_printed(s, r)
     C = ecompass.kappa_general(s, r, [1.0])
-    assert P[0, 2] != pytest.approx(P[2, 0])                              # printed (41) is not symmetric
+    assert P[0, 2] != pytest.approx(P[2, 0])  # printed (41) is not symmetric
     assert np.isclose(P[0, 2] - C[0, 2], s[0] * r[0] - s[2] * r[0])
     q = rotations.quat_normalize([0.9, 0.2, -0.3, 0.25])
     d = np.radians(60.0)
@@ -136,10 +137,10 @@ def test_printed_kappa_matrices_are_wrong_by_the_errata_numbers():
     C53 = ecompass.kappa(s_g, s_m, d, 0.5, 0.5)
     assert abs(np.trace(P53)) > 0.1 and abs(np.trace(C53)) < 1e-14
     v = np.linalg.eigh(P53)[1][:, -1]
-    assert np.degrees(rotations.quat_angle_between(v * np.sign(v[0]), q)) > 5.0   # the printed κ misses the truth
+    assert np.degrees(rotations.quat_angle_between(v * np.sign(v[0]), q)) > 5.0  # the printed κ misses the truth
     for eq in (58, 63):
         P = ecompass.kappa_frame_printed(eq, s_g, s_m, d, 0.5, 0.5)
-        assert np.isnan(P[3]).all() and not np.isnan(P[:3]).any()          # fourth gravity row missing
+        assert np.isnan(P[3]).all() and not np.isnan(P[:3]).any()  # fourth gravity row missing
 
 
 def test_printed_eq41_has_six_wrong_entries_and_two_lost():
@@ -163,7 +164,8 @@ def test_check_frame_returns_a_frame_of_the_note_and_names_the_others():
 
 
 def test_nonzero_norm_is_the_norm_of_each_vector_and_refuses_a_zero_one():
-    np.testing.assert_array_equal(ecompass.nonzero_norm(np.array([[3.0, 4.0, 0.0], [0.0, 0.0, -2.0]]), "B_c"),
-                                  [5.0, 2.0])
+    np.testing.assert_array_equal(
+        ecompass.nonzero_norm(np.array([[3.0, 4.0, 0.0], [0.0, 0.0, -2.0]]), "B_c"), [5.0, 2.0]
+    )
     with pytest.raises(ValueError, match=r"^G must not be a zero vector: its direction is undefined$"):
         ecompass.nonzero_norm(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), "G")

@@ -1,4 +1,5 @@
 """The registered ``dcm_ahrs`` estimator (seed 004 §6.4): units and signs at the door, accuracy, real data."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,13 +9,16 @@ import pytest
 
 from fusionlab import accel_tilt, dcm, dcm_filter, estimators, metrics, rotations, simulate
 
-BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"  # the trials the course ships
 
 
 def _still(euler, n=200, mag_ned=(20.0, 0.0, 45.0)):
     C = rotations.euler_to_dcm(euler)
-    return (np.zeros((n, 3)), np.tile(accel_tilt.specific_force(C, g=9.81), (n, 1)),
-            np.tile(C.T @ np.asarray(mag_ned), (n, 1)))
+    return (
+        np.zeros((n, 3)),
+        np.tile(accel_tilt.specific_force(C, g=9.81), (n, 1)),
+        np.tile(C.T @ np.asarray(mag_ned), (n, 1)),
+    )
 
 
 def test_dcm_ahrs_is_registered_as_a_9d_filter_citing_seed_004():
@@ -37,7 +41,7 @@ def test_the_thesis_accelerometer_sign_is_converted_at_the_door():
     gyr, acc, mag = _still([0.1, 0.2, 0.3])
     right = estimators.run("dcm_ahrs", gyr=gyr, acc=acc, mag=mag, fs=100.0, frame="NED")
     wrong = estimators.run("dcm_ahrs", gyr=gyr, acc=dcm.accel_to_seed004(acc), mag=mag, fs=100.0, frame="NED")
-    tilt = lambda q: np.degrees(np.arccos(np.clip(rotations.quat_to_dcm(q)[..., 2, 2], -1, 1)))   # z_body vs down
+    tilt = lambda q: np.degrees(np.arccos(np.clip(rotations.quat_to_dcm(q)[..., 2, 2], -1, 1)))  # z_body vs down
     assert np.max(tilt(right)) < 30 and np.min(tilt(wrong)) > 150
 
 
@@ -53,11 +57,12 @@ def test_hand_motion_through_the_door_stays_within_two_degrees():
     q = estimators.run("dcm_ahrs", rec["gyr"], rec["acc"], rec["fs"], mag=rec["mag"], frame="NED")
     err = np.degrees(rotations.quat_angle_between(q, rec["q"]))
     # the start comes from the first sample alone (causal; the 0.5 s mean it replaced gave an RMS of 0.80°)
-    assert np.max(err) < 2.5 and np.sqrt(np.mean(err ** 2)) < 1.1
+    assert np.max(err) < 2.5 and np.sqrt(np.mean(err**2)) < 1.1
 
 
 def test_real_slow_rotation_trial_beats_five_degrees():
     from fusionlab import datasets
+
     trial = datasets.load_trial("02", folder=BROAD, progress=False)
     q = estimators.run("dcm_ahrs", trial.gyr, trial.acc, trial.fs, mag=trial.mag, frame="ENU")
     assert metrics.broad_rmse(q, trial.quat_ref, trial.movement).total_deg < 5.0
@@ -73,9 +78,11 @@ def _inclination_deg(q, q_true):
 def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
     info = estimators.available()["dcm_ahrs6"]
     assert info["uses_mag"] is False and info["seed"].startswith("004")
-    assert estimators.options("dcm_ahrs") == {"acc_sigma_untrusted": dcm_filter.HANDHELD.acc_sigma_untrusted,
-                                              "hold": dcm_filter.HANDHELD.hold,
-                                              "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau}
+    assert estimators.options("dcm_ahrs") == {
+        "acc_sigma_untrusted": dcm_filter.HANDHELD.acc_sigma_untrusted,
+        "hold": dcm_filter.HANDHELD.hold,
+        "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau,
+    }
     assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0}
 
 
@@ -84,24 +91,28 @@ def test_6d_static_tilt_is_recovered_with_heading_zero_whatever_the_true_heading
     gyr, acc, mag = _still(euler)
     q = estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, frame="NED")
     assert np.max(_inclination_deg(q, np.tile(rotations.euler_to_quat(euler), (len(q), 1)))) < 1e-7
-    assert np.max(np.abs(rotations.quat_to_euler(q)[:, 2])) < 1e-9                # yaw starts (and stays) at 0
-    gyr2, acc2, _ = _still([euler[0], euler[1], euler[2] + 1.0])                 # turned about the vertical
-    assert np.allclose(estimators.run("dcm_ahrs6", gyr=gyr2, acc=acc2, fs=100.0), estimators.run(
-        "dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0), atol=1e-12)
-    with_mag = estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, mag=mag + 50.0)   # a magnet: ignored
+    assert np.max(np.abs(rotations.quat_to_euler(q)[:, 2])) < 1e-9  # yaw starts (and stays) at 0
+    gyr2, acc2, _ = _still([euler[0], euler[1], euler[2] + 1.0])  # turned about the vertical
+    assert np.allclose(
+        estimators.run("dcm_ahrs6", gyr=gyr2, acc=acc2, fs=100.0),
+        estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0),
+        atol=1e-12,
+    )
+    with_mag = estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0, mag=mag + 50.0)  # a magnet: ignored
     assert np.allclose(with_mag, estimators.run("dcm_ahrs6", gyr=gyr, acc=acc, fs=100.0))
 
 
 def test_6d_learns_the_horizontal_gyro_bias_and_bounds_the_tilt_of_a_biased_gyro():
-    rec = simulate.hand_motion_record(seed=3)                        # 2-3 °/s gyro bias, the filter starts at 0
+    rec = simulate.hand_motion_record(seed=3)  # 2-3 °/s gyro bias, the filter starts at 0
     q = estimators.run("dcm_ahrs6", rec["gyr"], rec["acc"], rec["fs"], frame="NED")
     incl = _inclination_deg(q, rec["q"])
     gyro = _inclination_deg(estimators.run("gyro", rec["gyr"], rec["acc"], rec["fs"], frame="NED"), rec["q"])
-    assert np.sqrt(np.mean(incl ** 2)) < 3.0 and incl.max() < 6.0 and gyro.max() > 90.0
-    out = dcm_filter.run_ahrs(rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2,
-                       tuning=dcm_filter.HANDHELD)
-    err_nav = out["C_bn"][-1] @ (out["bias"][-1] - rec["bias"])          # bias error in N, E, D at the end (still)
-    assert np.all(np.abs(np.degrees(err_nav[:2])) < 0.1), np.degrees(err_nav)   # horizontal: learnt
+    assert np.sqrt(np.mean(incl**2)) < 3.0 and incl.max() < 6.0 and gyro.max() > 90.0
+    out = dcm_filter.run_ahrs(
+        rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2, tuning=dcm_filter.HANDHELD
+    )
+    err_nav = out["C_bn"][-1] @ (out["bias"][-1] - rec["bias"])  # bias error in N, E, D at the end (still)
+    assert np.all(np.abs(np.degrees(err_nav[:2])) < 0.1), np.degrees(err_nav)  # horizontal: learnt
     assert not out["mag_trusted"].any()
 
 
@@ -115,6 +126,7 @@ def test_run_ahrs_without_magnetometer_still_checks_its_inputs():
 
 def test_real_slow_rotation_trial_6d_inclination_beats_one_and_a_half_degrees():
     from fusionlab import datasets
+
     trial = datasets.load_trial("02", folder=BROAD, progress=False)
     q = estimators.run("dcm_ahrs6", trial.gyr, trial.acc, trial.fs, frame="ENU")
     assert metrics.broad_rmse(q, trial.quat_ref, trial.movement).inclination_deg < 1.5

@@ -1,4 +1,5 @@
 """The estimator front door: registry, units and frames at the door, clear errors, the two baselines."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -37,7 +38,7 @@ def test_triad_recovers_a_static_attitude_in_ned_and_enu(euler):
 def test_gyro_baseline_levels_from_the_accelerometer_and_integrates_a_known_turn():
     euler0 = [0.2, -0.1, 0.0]
     gyr, acc, _ = _still_recording(euler0, n=300)
-    gyr[100:200, 2] = np.pi / 2                       # 90 deg/s about body z for 1 s
+    gyr[100:200, 2] = np.pi / 2  # 90 deg/s about body z for 1 s
     q = estimators.run("gyro", gyr=gyr, acc=acc, fs=FS, frame="NED")
     C_start = rotations.euler_to_dcm(euler0)
     C_end = C_start @ rotations.rot_z(np.pi / 2)
@@ -53,22 +54,31 @@ def test_output_is_unit_quaternions_one_per_sample():
         assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(name="nope"), "unknown estimator 'nope'; available:"),
-    (dict(frame="NWU"), "frame must be 'ENU' or 'NED'"),
-    (dict(fs=0.0), "fs must be a positive"),
-    (dict(fs=-5), "fs must be a positive"),
-    (dict(gyr=np.zeros((10, 4))), r"gyr must have shape \(N, 3\), one row per sample; got \(10, 4\)"),
-    (dict(acc=np.zeros(3)), r"acc must have shape \(N, 3\)"),
-    (dict(acc=np.zeros((9, 3))), "must have the same number of samples; gyr has 10, acc has 9"),
-    (dict(gyr=np.full((10, 3), np.nan)), "gyr must hold finite numbers"),
-    (dict(gyr=np.full((10, 3), 90.0)), "gyr must be in rad/s"),
-    (dict(name="triad", mag=None), "uses the magnetometer: pass mag"),
-    (dict(gyr=np.zeros((0, 3)), acc=np.zeros((0, 3)), mag=np.zeros((0, 3))), "at least one sample"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(name="nope"), "unknown estimator 'nope'; available:"),
+        (dict(frame="NWU"), "frame must be 'ENU' or 'NED'"),
+        (dict(fs=0.0), "fs must be a positive"),
+        (dict(fs=-5), "fs must be a positive"),
+        (dict(gyr=np.zeros((10, 4))), r"gyr must have shape \(N, 3\), one row per sample; got \(10, 4\)"),
+        (dict(acc=np.zeros(3)), r"acc must have shape \(N, 3\)"),
+        (dict(acc=np.zeros((9, 3))), "must have the same number of samples; gyr has 10, acc has 9"),
+        (dict(gyr=np.full((10, 3), np.nan)), "gyr must hold finite numbers"),
+        (dict(gyr=np.full((10, 3), 90.0)), "gyr must be in rad/s"),
+        (dict(name="triad", mag=None), "uses the magnetometer: pass mag"),
+        (dict(gyr=np.zeros((0, 3)), acc=np.zeros((0, 3)), mag=np.zeros((0, 3))), "at least one sample"),
+    ],
+)
 def test_run_rejects_bad_input_with_a_clear_message(kwargs, match):
-    args = dict(name="triad", gyr=np.zeros((10, 3)), acc=np.tile([0, 0, 9.81], (10, 1)),
-                mag=np.tile([20.0, 0, -40], (10, 1)), fs=FS, frame="ENU")
+    args = dict(
+        name="triad",
+        gyr=np.zeros((10, 3)),
+        acc=np.tile([0, 0, 9.81], (10, 1)),
+        mag=np.tile([20.0, 0, -40], (10, 1)),
+        fs=FS,
+        frame="ENU",
+    )
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         estimators.run(**args)

@@ -1,5 +1,6 @@
 """``fusionlab.execute``: a notebook run top to bottom in a fresh kernel, with polls that cannot sleep through a
 reply."""
+
 from __future__ import annotations
 
 import asyncio
@@ -30,7 +31,7 @@ def test_the_kernel_runs_in_the_notebooks_folder(tmp_path):
     nbformat.write(_nb("import os; print(os.getcwd())"), path)
     nb = execute.run_notebook(path, timeout=60)
     assert nb.cells[0].outputs[0]["text"].strip() == str(tmp_path)
-    assert nbformat.read(path, as_version=4).cells[0].outputs == []          # the file is never written back
+    assert nbformat.read(path, as_version=4).cells[0].outputs == []  # the file is never written back
 
 
 def test_the_runner_waits_with_sliced_polls():
@@ -59,6 +60,7 @@ def test_a_sliced_wait_gives_up_at_its_timeout_and_not_before():
         took = time.monotonic() - start
         a.close(0), b.close(0), ctx.term()
         return took
+
     took = asyncio.run(wait())
     assert 0.6 <= took < 0.6 + 2 * execute.SLICE + 0.5
 
@@ -72,6 +74,7 @@ def test_a_message_sent_during_a_long_wait_is_received_within_a_slice():
         async def send_later():
             await asyncio.sleep(0.3)
             session.send(a, "execute_reply", {"status": "ok"})
+
         sender = asyncio.ensure_future(send_later())
         start = time.monotonic()
         msg = await channel.get_msg(timeout=30)
@@ -79,18 +82,22 @@ def test_a_message_sent_during_a_long_wait_is_received_within_a_slice():
         await sender
         a.close(0), b.close(0), ctx.term()
         return msg, took
+
     msg, took = asyncio.run(wait())
     assert msg["msg_type"] == "execute_reply" and msg["content"] == {"status": "ok"}
     assert took < 0.3 + execute.SLICE + 1.0
 
 
-@pytest.mark.parametrize("bad, message", [
-    ({"nb": "no/such/notebook.ipynb"}, "nb must be a notebook or the path of an .ipynb file"),
-    ({"nb": {"cells": []}}, "nb must be a notebook (nbformat.NotebookNode) or a path; got dict"),
-    ({"timeout": 0}, "timeout must be a positive number of seconds; got 0"),
-    ({"timeout": True}, "timeout must be a positive number of seconds; got True"),
-    ({"cwd": "no/such/folder"}, "cwd must be an existing folder"),
-])
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        ({"nb": "no/such/notebook.ipynb"}, "nb must be a notebook or the path of an .ipynb file"),
+        ({"nb": {"cells": []}}, "nb must be a notebook (nbformat.NotebookNode) or a path; got dict"),
+        ({"timeout": 0}, "timeout must be a positive number of seconds; got 0"),
+        ({"timeout": True}, "timeout must be a positive number of seconds; got True"),
+        ({"cwd": "no/such/folder"}, "cwd must be an existing folder"),
+    ],
+)
 def test_bad_arguments_are_named(bad, message):
     args = {"nb": _nb("1"), **bad}
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)").replace(".", r"\.")):

@@ -5,6 +5,7 @@ notebooks state the same references again for a student's own kernel (``guard.gr
 fail when the two disagree, when a test cell has no entry or an entry no test cell, or when a check or a red-team
 cheat is missing: adding an exercise means one entry and its cells.
 """
+
 from __future__ import annotations
 
 import ast
@@ -63,7 +64,7 @@ def test_each_test_cell_names_exactly_the_references_of_its_entry(lab):
             try:
                 named.add(_canonical(eval(compile(ast.Expression(node), "<f>", "eval"), scope)))  # noqa: S307
             except NameError:
-                continue   # a name the cell makes itself (a lambda's wrapper): not a library function
+                continue  # a name the cell makes itself (a lambda's wrapper): not a library function
         table = {_canonical(exercises.resolve(d)) for d in e.forbid}
         assert named - {None} == table | reserved.get(e.number, set()), (e.grade_id, named, table)
 
@@ -85,11 +86,13 @@ def test_the_red_team_has_a_cheat_for_every_exercise_the_library_answers():
 
 def test_the_solutions_autograder_cells_are_as_the_table_stamps_them():
     from grading import stamp
+
     assert stamp.main(["--check"]) == 0
 
 
 def test_stamping_writes_the_tables_points_into_the_metadata_and_the_first_line():
     from grading import stamp
+
     nb = _solution("13_capstone")
     [cell] = [c for c in nb.cells if grade_id(c) == "ex2_tests"]
     cell.metadata.nbgrader["points"] = 7
@@ -98,7 +101,7 @@ def test_stamping_writes_the_tables_points_into_the_metadata_and_the_first_line(
     assert cell.metadata.nbgrader["points"] == 1
     assert cell.source.startswith("# Autograder: exercise 2 (1 point: your filter runs and is causal")
     [cell] = [c for c in nb.cells if grade_id(c) == "ex1_tests"]
-    cell.source = "\n".join(cell.source.split("\n")[1:])          # the header line lost
+    cell.source = "\n".join(cell.source.split("\n")[1:])  # the header line lost
     assert stamp.stamp(nb, "13_capstone") == ["ex1_tests"]
     assert cell.source.startswith("# Autograder: exercise 1 (2 points)\n")
 
@@ -106,6 +109,7 @@ def test_stamping_writes_the_tables_points_into_the_metadata_and_the_first_line(
 def _stamped_sites(lab):
     """``[(grade id, exercise, stamped text, text the table makes)]`` of every forbid site of ``lab``'s cells."""
     from grading import stamp
+
     nb = _solution(lab)
     rows = {e.number: e for e in exercises.of_lab(lab)}
     setup = next(c for c in nb.cells if grade_id(c) == "imports")
@@ -135,14 +139,15 @@ def test_every_forbid_a_cell_names_is_the_tables_spelled_through_the_cells_impor
 @pytest.mark.parametrize("lab", LABS)
 def test_cells_that_say_only_where_they_forbid_are_stamped_into_the_committed_solution(lab):
     from grading import stamp
+
     nb = _solution(lab)
     committed = [c.source for c in nb.cells]
     for cell in nb.cells:
         if grade_id(cell) == "imports" or cells.is_test(cell):
             for start, end, paren, _, _ in reversed(stamp.forbid_sites(cell.source)):
                 cell.source = cell.source[:start] + ("()" if paren else "") + cell.source[end:]
-                if not paren and start != end and cell.source[start:start + 2] == ", ":
-                    cell.source = cell.source[:start] + cell.source[start + 2:]     # guard.release(exercise=5)
+                if not paren and start != end and cell.source[start : start + 2] == ", ":
+                    cell.source = cell.source[:start] + cell.source[start + 2 :]  # guard.release(exercise=5)
     assert [c.source for c in nb.cells] != committed or not any(e.forbid for e in exercises.of_lab(lab))
     stamp.stamp(nb, lab)
     assert [c.source for c in nb.cells] == committed
@@ -150,9 +155,11 @@ def test_cells_that_say_only_where_they_forbid_are_stamped_into_the_committed_so
 
 def test_a_changed_table_entry_changes_the_stamped_cells(monkeypatch):
     from grading import stamp
+
     row = next(e for e in exercises.of_lab("02_kalman_falling_body") if e.number == 1)
-    changed = dataclasses.replace(row, forbid=("kalman.expanded_covariance", "kalman.joseph_covariance",
-                                               "kalman.update"))
+    changed = dataclasses.replace(
+        row, forbid=("kalman.expanded_covariance", "kalman.joseph_covariance", "kalman.update")
+    )
     monkeypatch.setattr(exercises, "EXERCISES", tuple(changed if e is row else e for e in exercises.EXERCISES))
     nb = _solution("02_kalman_falling_body")
     assert stamp.stamp(nb, "02_kalman_falling_body") == ["ex1_tests"]
@@ -167,7 +174,7 @@ def test_a_changed_table_entry_changes_the_stamped_cells(monkeypatch):
     monkeypatch.setattr(exercises, "EXERCISES", tuple(more if e is row else e for e in exercises.EXERCISES))
     nb = _solution("00_mems_sensors")
     assert stamp.stamp(nb, "00_mems_sensors") == ["imports", "ex5_tests"]
-    sources = {grade_id(c): " ".join(c.source.split()) for c in nb.cells if grade_id(c)}   # however it is wrapped
+    sources = {grade_id(c): " ".join(c.source.split()) for c in nb.cells if grade_id(c)}  # however it is wrapped
     assert "guard.reserve(sensors.adc_step, sensors.adc_to_physical, exercise=5)" in sources["imports"]
     assert "guard.reserve(sensors.null_offset, exercise=11)" in sources["imports"]
     assert "guard.release(sensors.adc_step, sensors.adc_to_physical, exercise=5)" in sources["ex5_tests"]
@@ -175,11 +182,18 @@ def test_a_changed_table_entry_changes_the_stamped_cells(monkeypatch):
 
 def test_stamping_refuses_a_name_the_cells_cannot_reach_and_an_exercise_with_nowhere_to_forbid(monkeypatch):
     from grading import stamp
+
     rows = {(e.lab, e.number): e for e in exercises.EXERCISES}
     unreachable = dataclasses.replace(rows["02_kalman_falling_body", 2], forbid=("gpsins.ins_transition",))
     nowhere = dataclasses.replace(rows["04_ecompass", 1], forbid=("ecompass.kappa",))
-    monkeypatch.setattr(exercises, "EXERCISES", tuple({(e.lab, e.number): e for e in (unreachable, nowhere)}.get(
-        (e.lab, e.number), e) for e in exercises.EXERCISES))
+    monkeypatch.setattr(
+        exercises,
+        "EXERCISES",
+        tuple(
+            {(e.lab, e.number): e for e in (unreachable, nowhere)}.get((e.lab, e.number), e)
+            for e in exercises.EXERCISES
+        ),
+    )
     with pytest.raises(ValueError, match="add `from fusionlab import gpsins` to the cell"):
         stamp.stamp(_solution("02_kalman_falling_body"), "02_kalman_falling_body")
     with pytest.raises(ValueError, match="ex1_tests: the table forbids ecompass.kappa, but the test cell has no"):
@@ -188,23 +202,31 @@ def test_stamping_refuses_a_name_the_cells_cannot_reach_and_an_exercise_with_now
 
 def test_a_name_is_spelled_through_its_module_first_then_through_a_class_the_cell_imports():
     from grading import stamp
-    setup = stamp.imports("import numpy as np\nfrom filterpy.kalman import KalmanFilter\n"
-                          "from fusionlab import kalman as kf")
+
+    setup = stamp.imports(
+        "import numpy as np\nfrom filterpy.kalman import KalmanFilter\nfrom fusionlab import kalman as kf"
+    )
     cell = stamp.imports("import filterpy.kalman\nfrom filterpy.kalman import JulierSigmaPoints as _JSP")
     assert stamp.spell("kalman.update", [cell, setup]) == "kf.update"
     assert stamp.spell("numpy.arctan2", [cell, setup]) == "np.arctan2"
     assert stamp.spell("filterpy.kalman.KalmanFilter.predict", [cell, setup]) == "filterpy.kalman.KalmanFilter.predict"
     assert stamp.spell("filterpy.kalman.KalmanFilter.predict", [setup]) == "KalmanFilter.predict"
-    assert stamp.spell("filterpy.kalman.JulierSigmaPoints.sigma_points", [stamp.imports(
-        "from filterpy.kalman import JulierSigmaPoints as _JSP")]) == "_JSP.sigma_points"
+    assert (
+        stamp.spell(
+            "filterpy.kalman.JulierSigmaPoints.sigma_points",
+            [stamp.imports("from filterpy.kalman import JulierSigmaPoints as _JSP")],
+        )
+        == "_JSP.sigma_points"
+    )
 
 
 def test_what_answers_exercises_beyond_forbid_is_stated_once_in_the_table_and_read_by_the_grading_tools():
     from grading import flags
     from grading.capstone import program
+
     assert set(exercises.PACKAGES.values()) <= {"absent", "kept"}
     for dotted in exercises.ANSWERING:
-        assert callable(exercises.resolve(dotted)), dotted      # each names a class or function that is there
+        assert callable(exercises.resolve(dotted)), dotted  # each names a class or function that is there
     absent = tuple(p for p, where in exercises.PACKAGES.items() if where == "absent")
     assert boxlib.HIDDEN_PACKAGES == exercises.hidden_packages() == absent
     assert {m for m, kind in flags.MODULE_KINDS.items() if kind == "package"} == set(exercises.PACKAGES)
@@ -212,12 +234,16 @@ def test_what_answers_exercises_beyond_forbid_is_stated_once_in_the_table_and_re
     assert set(flags.ANSWERING_NAMES.values()) == {"package"}
     capstone = [e for e in exercises.EXERCISES if e.packages]
     assert [(e.lab, e.number) for e in capstone] == [(program.LAB, 2)], "only the capstone's filter has packages"
-    assert program.HIDDEN_PACKAGES == exercises.hidden_packages(program.LAB) == (*absent, *(
-        p for p in capstone[0].packages if p not in absent))
+    assert (
+        program.HIDDEN_PACKAGES
+        == exercises.hidden_packages(program.LAB)
+        == (*absent, *(p for p in capstone[0].packages if p not in absent))
+    )
 
 
 def test_a_package_a_labs_setup_cell_imports_is_never_absent_from_its_box():
     from grading import stamp
+
     for lab in LABS:
         setup = next(c for c in _solution(lab).cells if grade_id(c) == "imports")
         imported = {target.split(".")[0] for _, target in stamp.imports(setup.source)}

@@ -1,5 +1,6 @@
 """fusionlab.falling_body: the falling body of thesis lab 2 (seed 000 §4.4): the printed loop and its fix, the
 closed forms, the state-space model, the lab's filter against filterpy, and its Monte Carlo."""
+
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
@@ -15,14 +16,20 @@ def test_printed_loop_runs_199_steps_and_ends_at_thesis_values():
     X, V = falling_body.seed000_labcode_falling_body()
     assert X.shape == V.shape == (200,)
     assert round(X[-1], 3) == 181.006 and round(V[-1], 3) == -19.027
-    t, s = falling_body.falling_body_euler(1.99)                        # the fix, asked for the same 1.99 s, agrees
+    t, s = falling_body.falling_body_euler(1.99)  # the fix, asked for the same 1.99 s, agrees
     assert len(t) == 200 and t[-1] == pytest.approx(1.99)
     np.testing.assert_allclose(s[:, 0], X, atol=1e-12)
     np.testing.assert_allclose(s[:, 1], V, atol=1e-12)
 
 
-@pytest.mark.parametrize("k, m, x_end, v_end", [(0.5, 10, 181.312, -18.568), (1, 1, 188.972, -8.474),
-                                                (0.25, 1, 183.509, -15.379)])
+@pytest.mark.parametrize(
+    "k, m, x_end, v_end",
+    [
+        (0.5, 10, 181.312, -18.568),
+        (1, 1, 188.972, -8.474),
+        (0.25, 1, 183.509, -15.379),
+    ],
+)
 def test_printed_loop_other_k_m_pairs_match_worked_table(k, m, x_end, v_end):
     X, V = falling_body.seed000_labcode_falling_body(k=k, m=m)
     assert (round(X[-1], 3), round(V[-1], 3)) == (x_end, v_end)
@@ -38,7 +45,7 @@ def test_fixed_loop_over_200_seconds_falls_through_the_ground():
 def test_terminal_velocity_and_time_constant():
     assert falling_body.terminal_velocity(0.25, 10) == pytest.approx(-392.0)
     assert falling_body.time_constant(0.25, 10) == pytest.approx(40.0)
-    assert falling_body.falling_body_exact(1e4)[1] == pytest.approx(-392.0)      # v → v_T
+    assert falling_body.falling_body_exact(1e4)[1] == pytest.approx(-392.0)  # v → v_T
 
 
 def test_euler_converges_to_closed_form_at_first_order():
@@ -56,8 +63,8 @@ def test_quadratic_drag_matches_its_closed_form_and_hits_ground():
     t = np.linspace(0, 5, 11)
     sol = falling_body.falling_body_quadratic(5.0, t_eval=t, stop_at_ground=False)
     c = -vT
-    np.testing.assert_allclose(sol.y[1], -c * np.tanh(9.8 * t / c), atol=1e-7)         # from rest
-    np.testing.assert_allclose(sol.y[0], 200 - c ** 2 / 9.8 * np.log(np.cosh(9.8 * t / c)), atol=1e-6)
+    np.testing.assert_allclose(sol.y[1], -c * np.tanh(9.8 * t / c), atol=1e-7)  # from rest
+    np.testing.assert_allclose(sol.y[0], 200 - c**2 / 9.8 * np.log(np.cosh(9.8 * t / c)), atol=1e-6)
     hit = falling_body.falling_body_quadratic(30.0)
     assert hit.t_events[0][0] == pytest.approx(6.694, abs=1e-3) and abs(hit.y[0, -1]) < 1e-6
 
@@ -80,9 +87,9 @@ def test_mass_spring_damper_poles_and_static_gain():
     m, b, k = 2.0, 0.8, 50.0
     A_, B_, C_, D_ = falling_body.mass_spring_damper_ss(m, b, k)
     np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A_)), np.sort_complex(np.roots([m, b, k])))
-    assert (-C_ @ np.linalg.solve(A_, B_) + D_).item() == pytest.approx(1 / k)           # x = F / k at rest
+    assert (-C_ @ np.linalg.solve(A_, B_) + D_).item() == pytest.approx(1 / k)  # x = F / k at rest
     _, Bb, _, _ = falling_body.mass_spring_damper_ss(m, b, k, input="base_accel")
-    assert (-C_ @ np.linalg.solve(A_, Bb)).item() == pytest.approx(-m / k)                # (000 eq 3.6)
+    assert (-C_ @ np.linalg.solve(A_, Bb)).item() == pytest.approx(-m / k)  # (000 eq 3.6)
 
 
 # ---------------------------------------------------------------- Part C: the filter
@@ -123,5 +130,5 @@ def test_monte_carlo_reproduces_thesis_lab_figures():
     assert filt[0] == pytest.approx(2.4, rel=0.1) and printed[0] == pytest.approx(3.3, rel=0.1)
     assert filt[0] < 0.35 * mc["meas_rms"][0] and printed[0] > 1.25 * filt[0]
     assert (round(mc["meas_rms"][0], 2), round(filt[0], 2), round(printed[0], 2)) == (12.0, 2.46, 3.41)
-    mc2 = falling_body.monte_carlo(200, seed=2, batch=200, progress=False)           # batching changes nothing
+    mc2 = falling_body.monte_carlo(200, seed=2, batch=200, progress=False)  # batching changes nothing
     np.testing.assert_allclose(mc2["variants"]["thesis filter"]["rms"], filt, rtol=1e-12)

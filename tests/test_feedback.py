@@ -4,6 +4,7 @@ The class is graded as an instructor grades it (``python -m grading.classgrade``
 ``nbgrader generate_feedback`` makes the HTML. The autograded notebook holds each test cell's visible part and the
 judge's verdict (``Failed: <why>``), never a hidden test or a traceback quoting one.
 """
+
 from __future__ import annotations
 
 import ast
@@ -28,12 +29,12 @@ LABS = ("01_euler_rotations", "02_kalman_falling_body")
 
 # Appended to every answer cell after the model answer: every function the cell defines and every name it assigns
 # come out off by one, so each test's asserts fail while everything stays defined.
-PERTURB = '''
+PERTURB = """
 def _off_by_one(v):
     if isinstance(v, tuple):
         return tuple(_off_by_one(x) for x in v)
     return np.asarray(v, dtype=float) + 1.0
-'''
+"""
 
 
 def _wrong(solution):
@@ -47,8 +48,10 @@ def _wrong(solution):
         lines = [code, PERTURB]
         for node in ast.parse(code).body:
             if isinstance(node, ast.FunctionDef):
-                lines.append(f"_right_{node.name} = {node.name}\n"
-                             f"{node.name} = lambda *a, **k: _off_by_one(_right_{node.name}(*a, **k))")
+                lines.append(
+                    f"_right_{node.name} = {node.name}\n"
+                    f"{node.name} = lambda *a, **k: _off_by_one(_right_{node.name}(*a, **k))"
+                )
             elif isinstance(node, ast.Assign):
                 for target in node.targets:
                     for name in ast.walk(target):
@@ -83,8 +86,9 @@ def failed_everything(tmp_path_factory):
     for name in ("lib", "data", "grading"):
         shutil.copytree(ROOT / name, root / name, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "nbgrader_config.py", root)
-    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""),
-               MPLBACKEND="Agg")
+    env = dict(
+        os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg"
+    )
     out = {}
     for lab in LABS:
         shutil.copytree(ROOT / "solutions" / lab, root / "solutions" / lab)
@@ -92,17 +96,26 @@ def failed_everything(tmp_path_factory):
         dest = root / "submitted" / "wrong" / lab
         dest.mkdir(parents=True)
         nbformat.write(_wrong(solution), dest / f"{lab}.ipynb")
-        run = subprocess.run([sys.executable, "-m", "grading.classgrade", lab, "--workers", "1"], cwd=root, env=env,
-                             capture_output=True, text=True, timeout=1500)
+        run = subprocess.run(
+            [sys.executable, "-m", "grading.classgrade", lab, "--workers", "1"],
+            cwd=root,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=1500,
+        )
         assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
         nbgrader(["generate_feedback", lab, "--force"], cwd=root)
         with Gradebook(f"sqlite:///{root / 'gradebook.db'}") as gb:
             sub = gb.find_submission_notebook(lab, lab, "wrong")
             tests = {g.name: (g.score, g.max_score) for g in sub.grades if g.name.endswith("_tests")}
         out[lab] = dict(
-            root=root, tests=tests, solution=solution,
+            root=root,
+            tests=tests,
+            solution=solution,
             autograded=nbformat.read(root / "autograded" / "wrong" / lab / f"{lab}.ipynb", as_version=4),
-            html=(root / "feedback" / "wrong" / lab / f"{lab}.html").read_text())
+            html=(root / "feedback" / "wrong" / lab / f"{lab}.html").read_text(),
+        )
     return out
 
 
@@ -128,8 +141,13 @@ def test_feedback_html_shows_no_line_of_any_hidden_test(failed_everything, lab):
 def test_failed_test_cells_keep_the_error_line_and_lose_the_quoted_code(failed_everything, lab):
     run = failed_everything[lab]
     hidden = _hidden_lines(run["solution"])
-    errors = [o for c in run["autograded"].cells if (grade_id(c) or "").endswith("_tests")
-              for o in c.outputs if o.output_type == "error"]
+    errors = [
+        o
+        for c in run["autograded"].cells
+        if (grade_id(c) or "").endswith("_tests")
+        for o in c.outputs
+        if o.output_type == "error"
+    ]
     assert len(errors) == len(run["tests"]), "each failed test cell carries its error"
     for out in errors:
         assert out.traceback == [f"{out.ename}: {out.evalue}"]
@@ -140,15 +158,20 @@ def test_failed_test_cells_keep_the_error_line_and_lose_the_quoted_code(failed_e
 
 def test_feedback_html_shows_the_failure_messages(failed_everything):
     # the messages of visible asserts (lab 01 exercise 1, lab 02 exercise 2) are what a student needs to see
-    assert ("Failed: C_bn at (10, -10, 40) deg differs from the reference by up to"
-            in _text(failed_everything[LABS[0]]["html"]))
-    assert re.search(r"Failed: A at the lab's values differs from the reference by up to 1 at \[\d, \d\] "
-                     r"\(got 1, expected 0", _text(failed_everything[LABS[1]]["html"]))
+    assert "Failed: C_bn at (10, -10, 40) deg differs from the reference by up to" in _text(
+        failed_everything[LABS[0]]["html"]
+    )
+    assert re.search(
+        r"Failed: A at the lab's values differs from the reference by up to 1 at \[\d, \d\] "
+        r"\(got 1, expected 0",
+        _text(failed_everything[LABS[1]]["html"]),
+    )
 
 
 @pytest.mark.parametrize("lab", LABS)
 def test_integrity_report_of_the_class_shows_the_autograded_score(failed_everything, lab):
     from grading import integrity
+
     root = failed_everything[lab]["root"]
     assert integrity.main([lab, "--course", str(root)]) == 0
     md = (root / f"integrity_{lab}.md").read_text()

@@ -1,5 +1,6 @@
 """fusionlab.freescale and freescale_fast: seed 002 (Freescale/NXP v5.00) §4-8, the Kalman filters, against the
 note and docs/derivations.md."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -33,11 +34,11 @@ def test_qrot_rotates_u_onto_v_and_is_unchanged_by_negating_both():
 
 def test_qrot_180_degree_cases_follow_eqs_73_to_75():
     u = np.ones(3) / np.sqrt(3)
-    assert np.allclose(fz.qrot(u, -u), [0, 1 / np.sqrt(2), -1 / np.sqrt(2), 0])        # eq 75
+    assert np.allclose(fz.qrot(u, -u), [0, 1 / np.sqrt(2), -1 / np.sqrt(2), 0])  # eq 75
     for _ in range(20):
         u = RNG.standard_normal(3)
         q = fz.qrot(u, -u)
-        assert q[0] == 0.0 and abs(q[1:] @ u) < 1e-14                                     # eqs 73-74
+        assert q[0] == 0.0 and abs(q[1:] @ u) < 1e-14  # eqs 73-74
         assert np.allclose(ecompass.rotation_matrix(q) @ u, -u, atol=1e-14)
 
 
@@ -46,12 +47,12 @@ def test_tilt_error_quaternions_vanish_when_estimates_agree_and_measure_small_ti
     R = ecompass.rotation_matrix(q)
     assert np.allclose(fz.gravity_tilt_error(R, R), [1, 0, 0, 0])
     assert np.allclose(fz.geomag_tilt_error(R, R, 0.9, "Win8"), [1, 0, 0, 0])
-    eps = 1e-3                                                             # prior leads truth by eps about sensor x
+    eps = 1e-3  # prior leads truth by eps about sensor x
     qp = rotations.quat_multiply(q, rotations.rotvec_to_quat([eps, 0, 0]))
     z = fz.gravity_tilt_error(R, ecompass.rotation_matrix(qp))[1:]
     g_S = R[:, 2]
-    expected = eps / 2 * (np.array([1.0, 0, 0]) - g_S[0] * g_S)           # x component perpendicular to gravity
-    assert np.allclose(z, expected, atol=eps ** 2)                        # first order in eps
+    expected = eps / 2 * (np.array([1.0, 0, 0]) - g_S[0] * g_S)  # x component perpendicular to gravity
+    assert np.allclose(z, expected, atol=eps**2)  # first order in eps
 
 
 # ---------------------------------------------------------------------------------------------------- Kalman matrices
@@ -66,10 +67,11 @@ def test_nominal_gains_match_note_to_7_digits():
         assert round(K[6 + i, 3 + i], 7) == -0.1112568
         assert K[i, 3 + i] == pytest.approx(-9.70899e-6, rel=1e-5)
         assert K[3 + i, i] == pytest.approx(-4.13154e-6, rel=1e-5)
-    assert round(K[9, 6], 7) == 0.6851225                                 # float64 (docs/derivations.md §1)
-    assert float(np.float32(20) / (np.float32(20) + np.float32(7 / 2500) * np.float32(180 / np.pi) ** 2)) \
-        == pytest.approx(0.6851226, abs=5e-8)                             # float32, as v5.00 prints it
-    assert np.count_nonzero(np.abs(K) > 0) == 3 * 6 + 1                   # per axis (q_g, q_m, b) x (z_g, z_m); δ
+    assert round(K[9, 6], 7) == 0.6851225  # float64 (docs/derivations.md §1)
+    assert float(
+        np.float32(20) / (np.float32(20) + np.float32(7 / 2500) * np.float32(180 / np.pi) ** 2)
+    ) == pytest.approx(0.6851226, abs=5e-8)  # float32, as v5.00 prints it
+    assert np.count_nonzero(np.abs(K) > 0) == 3 * 6 + 1  # per axis (q_g, q_m, b) x (z_g, z_m); δ
     K6 = fz.nominal_gain(6)
     assert round(K6[0, 0], 7) == 0.4999875 and round(K6[3, 0], 7) == -0.1432215
 
@@ -110,8 +112,7 @@ def test_fast_and_readable_filters_agree(frame):
     N = 200 * 4
     t = np.arange(N) / 200
     w = np.stack([30 * np.sin(t), 20 * np.cos(0.7 * t), 40 * np.sin(0.3 * t)], 1)
-    rec = _scenario(4, frame, omega=w, bias_dps=(1, -0.5, 0.3), sigma_gyr=0.1, sigma_acc=0.01, sigma_mag=1.0,
-                    seed=5)
+    rec = _scenario(4, frame, omega=w, bias_dps=(1, -0.5, 0.3), sigma_gyr=0.1, sigma_acc=0.01, sigma_mag=1.0, seed=5)
     slow = fz.Kalman9(frame).run(rec["gyr"], rec["acc"], rec["mag"])
     fast = freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200, frame, per_sample=False)
     assert np.max(np.abs(slow["q"] - fast["q"])) < 1e-10
@@ -125,13 +126,14 @@ def test_fast_and_readable_filters_agree(frame):
 
 
 def test_fast_and_readable_filters_agree_on_a_broad_recording():
-    path = Path(__file__).resolve().parents[1] / "data" / "broad" / "07_undisturbed_fast_rotation_B.mat"   # shipped
+    path = Path(__file__).resolve().parents[1] / "data" / "broad" / "07_undisturbed_fast_rotation_B.mat"  # shipped
     from scipy.io import loadmat
+
     d = loadmat(path)
-    sl = slice(20000, 20000 + 200 * 8)                                     # 8 s of fast rotation
+    sl = slice(20000, 20000 + 200 * 8)  # 8 s of fast rotation
     Y, G, M = np.degrees(d["imu_gyr"][sl]), -d["imu_acc"][sl] / 9.80665, d["imu_mag"][sl]
     B = float(np.median(np.linalg.norm(M, axis=1)))
-    tun = dataclasses.replace(fz.V500, sensor_fs=200.0, oversample=8)     # treat it as 200 Hz v5.00 timing
+    tun = dataclasses.replace(fz.V500, sensor_fs=200.0, oversample=8)  # treat it as 200 Hz v5.00 timing
     slow = fz.Kalman9("NED", tun, B=B).run(Y, G, M)
     fast = freescale_fast.run_fast9(Y, G, M, 200, "NED", B=B, per_sample=False)
     assert np.max(np.abs(slow["q"] - fast["q"])) < 1e-9
@@ -147,14 +149,14 @@ def test_9dof_converges_on_noisy_rotating_data(frame):
     err = np.degrees(rotations.quat_angle_between(q, rec["q_true"]))
     ec = ecompass.ecompass(rec["acc"], rec["mag"], np.radians(60), frame).q
     err_ec = np.degrees(rotations.quat_angle_between(ec, rec["q_true"]))
-    assert np.sqrt(np.mean(err[1000:] ** 2)) < 1.0 < np.sqrt(np.mean(err_ec ** 2))
+    assert np.sqrt(np.mean(err[1000:] ** 2)) < 1.0 < np.sqrt(np.mean(err_ec**2))
 
 
 def test_gyro_offset_converges_with_tau_400_s():
     rec = _scenario(300, bias_dps=(1, -0.5, 0.3))
     b = freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200, per_sample=False)["b_dps"][-1]
     ratio = (np.array([1, -0.5, 0.3]) - b) / np.array([1, -0.5, 0.3])
-    assert np.allclose(ratio, 0.4724, atol=1e-3)                          # exp(-300/400) = 0.472
+    assert np.allclose(ratio, 0.4724, atol=1e-3)  # exp(-300/400) = 0.472
 
 
 def test_6dof_heading_offset_is_unobservable():
@@ -162,7 +164,7 @@ def test_6dof_heading_offset_is_unobservable():
     out = freescale_fast.run_fast6(rec["gyr"], rec["acc"], 200, per_sample=False)
     err = np.degrees(rotations.quat_angle_between(out["q"][-1], rec["q_true"][-1]))
     assert err == pytest.approx(18.0, abs=1e-6)
-    assert np.allclose(out["b_dps"], 0.0, atol=1e-12)                     # nothing learnt along gravity
+    assert np.allclose(out["b_dps"], 0.0, atol=1e-12)  # nothing learnt along gravity
     # a yaw offset of the start does not change the tilt the 6DOF reports
     yaw = rotations.euler_to_quat([0, 0, 0.7])
     rec2 = _scenario(5, q0=yaw, bias_dps=(0.2, -0.1, 0))
@@ -204,10 +206,10 @@ def test_estimators_freescale_run_at_broad_rate_and_recover_attitude():
     q0 = rotations.euler_to_quat([0.3, -0.2, 1.0])
     assert fz.block_size(fs) == 11
     for rate in (0.0, 0.2):
-        gyr = np.tile([rate, -rate, rate / 2], (N, 1))                      # rad/s, body
+        gyr = np.tile([rate, -rate, rate / 2], (N, 1))  # rad/s, body
         q_true = rotations.integrate_gyro_quat(q0, gyr, 1 / fs)[1:]
         C = rotations.quat_to_dcm(q_true)
-        acc = np.einsum("nji,j->ni", C, [0, 0, -9.80665])                 # +g on the up axis, NED
+        acc = np.einsum("nji,j->ni", C, [0, 0, -9.80665])  # +g on the up axis, NED
         mag = np.einsum("nji,j->ni", C, [20.0, 0.0, 45.0])
         for name in ("freescale9", "freescale6"):
             q = estimators.run(name, gyr, acc, fs, mag=mag, frame="NED")
@@ -250,8 +252,8 @@ def test_bad_inputs_raise_value_errors_naming_the_argument():
 
 def test_held_accel_noise_is_the_causal_maximum_of_the_window():
     qa = np.zeros(12)
-    qa[5] = 3.0                                                            # one step 2 g: | |G|² - 1 | = 3
-    d = freescale_fast.held_accel_noise(qa, dt=0.04, hold=0.12)            # 0.12 s = 3 steps back: 4 steps
+    qa[5] = 3.0  # one step 2 g: | |G|² - 1 | = 3
+    d = freescale_fast.held_accel_noise(qa, dt=0.04, hold=0.12)  # 0.12 s = 3 steps back: 4 steps
     assert np.allclose(d[:5], 0) and np.allclose(d[5:9], 3.0) and np.allclose(d[9:], 0)
     assert np.array_equal(freescale_fast.held_accel_noise(qa, 0.04, 0.0), qa)
     with pytest.raises(ValueError, match="hold must be a finite number"):
@@ -276,24 +278,32 @@ def test_holding_the_accelerometer_noise_keeps_a_shaken_sensor_level():
     tilt = lambda q: np.degrees(ecompass.tilt_error(q, np.tile([1.0, 0, 0, 0], (len(q), 1))))
     seed = tilt(freescale_fast.run_fast6(Y, G, 200.0)["q"])
     held = tilt(freescale_fast.run_fast6(Y, G, 200.0, accel_hold=0.5)["q"])
-    assert seed.max() > 30.0                                               # v5.00 trusts the 1 g crossings
+    assert seed.max() > 30.0  # v5.00 trusts the 1 g crossings
     assert held.max() < 0.25 * seed.max(), (held.max(), seed.max())
 
 
 def test_accel_hold_changes_nothing_at_one_g_and_reaches_the_estimators():
-    rec = _scenario(4, omega=np.zeros((800, 3)))                           # at rest: |G| = 1 exactly
+    rec = _scenario(4, omega=np.zeros((800, 3)))  # at rest: |G| = 1 exactly
     for hold in (0.0, 0.5):
-        assert np.allclose(freescale_fast.run_fast6(rec["gyr"], rec["acc"], 200, accel_hold=hold)["q"],
-                           freescale_fast.run_fast6(rec["gyr"], rec["acc"], 200)["q"], atol=1e-12)
-        assert np.allclose(freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200, accel_hold=hold)["q"],
-                           freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200)["q"], atol=1e-12)
+        assert np.allclose(
+            freescale_fast.run_fast6(rec["gyr"], rec["acc"], 200, accel_hold=hold)["q"],
+            freescale_fast.run_fast6(rec["gyr"], rec["acc"], 200)["q"],
+            atol=1e-12,
+        )
+        assert np.allclose(
+            freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200, accel_hold=hold)["q"],
+            freescale_fast.run_fast9(rec["gyr"], rec["acc"], rec["mag"], 200)["q"],
+            atol=1e-12,
+        )
     assert estimators.options("freescale6") == {"accel_hold": 0.5}
     assert estimators.options("freescale9") == {"accel_hold": 0.0}
     Y, G, mag = _shaken_g(seconds=4.0, amplitude_g=0.5)
-    gyr, acc = np.radians(Y), -G * 9.80665                                 # the door's units: rad/s, +g up
-    B, _ = signals.field_reference(mag, 200.0)                             # the door's running field strength
-    for name, fast in (("freescale6", lambda h: freescale_fast.run_fast6(Y, G, 200.0, accel_hold=h)["q"]),
-                       ("freescale9", lambda h: freescale_fast.run_fast9(Y, G, mag, 200.0, B=B, accel_hold=h)["q"])):
+    gyr, acc = np.radians(Y), -G * 9.80665  # the door's units: rad/s, +g up
+    B, _ = signals.field_reference(mag, 200.0)  # the door's running field strength
+    for name, fast in (
+        ("freescale6", lambda h: freescale_fast.run_fast6(Y, G, 200.0, accel_hold=h)["q"]),
+        ("freescale9", lambda h: freescale_fast.run_fast9(Y, G, mag, 200.0, B=B, accel_hold=h)["q"]),
+    ):
         for h in (0.0, 0.5):
             q = estimators.run(name, gyr, acc, 200.0, mag=mag, frame="NED", accel_hold=h)
             assert np.allclose(q, conventions.quat_from_seed002(fast(h), "NED", nav="NED"), atol=1e-9)

@@ -1,4 +1,5 @@
 """Tests of fusionlab.gfimu: the gyro-free IMU model of seed 004 (the AIV, the simulator, the calibration)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -34,21 +35,21 @@ def test_aiv_covariance_has_the_printed_magnitudes_of_3_25_3_30_3_31():
     assert np.allclose(np.abs(Qb[~np.eye(3, dtype=bool)]), 0.25)
     assert set(np.round(np.abs(Rb).ravel(), 6)) == {0.0, 0.25, 0.5, 1.0, 1.5}
     assert set(np.round(np.abs(Mb).ravel(), 6)) == {0.0, 0.25, 0.5}
-    assert np.count_nonzero(np.abs(Mb) < 1e-12) == 6                # the zero pattern of (3.31)
+    assert np.count_nonzero(np.abs(Mb) < 1e-12) == 6  # the zero pattern of (3.31)
 
 
 def test_monte_carlo_aiv_covariance_matches_L_Lt():
     rng = np.random.default_rng(3)
     sigma, d = 0.02, 0.5
     noise = sigma * rng.standard_normal((200_000, 12))
-    cov = np.cov(g.aiv(noise, d), rowvar=False) * d ** 2 / sigma ** 2
+    cov = np.cov(g.aiv(noise, d), rowvar=False) * d**2 / sigma**2
     C = g.aiv_covariance()
     assert np.max(np.abs(cov - C)) < 0.03 * np.max(np.abs(C))
 
 
 def test_three_state_noise_blocks_and_m_sign():
     Q, R, M = g.three_state_noise(500 * g.UG, 0.01, 1.0)
-    s = 0.01 ** 2 * (500 * g.UG) ** 2 * 0.01
+    s = 0.01**2 * (500 * g.UG) ** 2 * 0.01
     C = g.aiv_covariance()
     assert np.allclose(Q, s * C[:3, :3]) and np.allclose(R, s * C[3:, 3:]) and np.allclose(M, -s * C[:3, 3:])
     assert np.allclose(g.three_state_noise(500 * g.UG, 0.01, 1.0, m_sign=1)[2], -M)
@@ -94,7 +95,7 @@ def test_simulator_random_walk_bias_variance_grows_linearly():
     rec = g.simulate_gfimu(om, al, 0.01, 1.0, bias_model="random_walk", bias_walk=0.1, runs=200, seed=6)
     var = rec.bias.var(axis=(0, 2))
     k = np.arange(len(t))
-    assert np.isclose(var[-1], k[-1] * 0.1 ** 2 * 0.01, rtol=0.1)
+    assert np.isclose(var[-1], k[-1] * 0.1**2 * 0.01, rtol=0.1)
     const = g.simulate_gfimu(om, al, 0.01, 1.0, bias_std=0.05, runs=50, seed=6)
     assert np.all(const.bias == const.bias[:, :1])
 

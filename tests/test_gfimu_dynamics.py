@@ -1,4 +1,5 @@
 """Tests of fusionlab.gfimu_dynamics: the dynamic models, EKFs and observability of seed 004 chapter 5."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -9,10 +10,11 @@ from fusionlab import gfimu as g, gfimu_dynamics as gd
 
 # ----------------------------------------------------------------------------------------------- chapter 5 --
 
+
 def test_caa_model_shapes_and_bad_input():
     F, Q = gd.caa_model(0.01, 0.05)
     assert F.shape == Q.shape == (15, 15) and np.allclose(F[:3, 3:6], 0.01 * np.eye(3))
-    assert np.allclose(Q, Q.T) and np.allclose(Q[3:6, 3:6], 0.05 ** 2 * np.eye(3))
+    assert np.allclose(Q, Q.T) and np.allclose(Q[3:6, 3:6], 0.05**2 * np.eye(3))
     assert gd.caa_model(0.01, 0.05, n_bias=0)[0].shape == (6, 6)
     with pytest.raises(ValueError, match="n_bias"):
         gd.caa_model(0.01, 0.05, n_bias=3)
@@ -39,7 +41,7 @@ def test_augmented_ekf_learns_the_aiv_biases_table_5_1():
     rec = g.simulate_gfimu(om, al, T["dt"], T["d"], T["noise_ug"] * g.UG, bias_std=T["bias_ug"] * g.UG, seed=71)
     b = rec.bias[0] @ g.aiv_map().T / T["d"]
     x0 = np.concatenate([1.05 * om[0], 1.05 * al[0], np.zeros(9)])
-    P0 = np.diag([0.05 ** 2] * 3 + [0.1 ** 2] * 3 + [0.06 ** 2] * 9)
+    P0 = np.diag([0.05**2] * 3 + [0.1**2] * 3 + [0.06**2] * 9)
     x, _ = gd.DynamicEKF(T["dt"], T["d"], T["noise_ug"] * g.UG, 0.05, x0, P0).run(rec.acc)
     assert np.sqrt(np.mean((x[t >= 15, 6:] - b) ** 2)) < 0.1 * np.abs(b).max()
     assert np.all(np.sqrt(np.mean((x[t >= 10, :3] - om[t >= 10]) ** 2, axis=0)) < 0.01)
@@ -51,7 +53,7 @@ def test_reduced_ekf_is_biased_by_uncalibrated_bias():
     for bias in (100, 2400):
         rec = g.simulate_gfimu(om, al, 0.01, 0.4, 100 * g.UG, bias_std=bias * g.UG, seed=72)
         x0 = np.concatenate([1.05 * om[0], 1.05 * al[0]])
-        x, _ = gd.DynamicEKF(0.01, 0.4, 100 * g.UG, 0.05, x0, np.diag([0.05 ** 2] * 3 + [0.1 ** 2] * 3)).run(rec.acc)
+        x, _ = gd.DynamicEKF(0.01, 0.4, 100 * g.UG, 0.05, x0, np.diag([0.05**2] * 3 + [0.1**2] * 3)).run(rec.acc)
         out[bias] = np.abs(np.mean(x[t >= 10, :2] - om[t >= 10, :2], axis=0)).max()
     assert out[100] < 0.01 and out[2400] > 3 * out[100]
 
@@ -73,14 +75,20 @@ def test_reduced_model_z_rate_error_comes_from_the_alpha_bias():
     rec = g.simulate_gfimu(om, al, 0.01, d, 100 * g.UG, bias_std=100 * g.UG, seed=72)
     L = g.aiv_map()
     b = rec.bias[0] @ L.T / d
-    assert b[8] < 0                                              # no real root of the ω_z² bias: not a "√b" effect
+    assert b[8] < 0  # no real root of the ω_z² bias: not a "√b" effect
     late = t >= 10
 
     def mean_z(terms):
         bb = np.zeros(9)
         bb[terms] = b[terms]
-        ekf = gd.DynamicEKF(0.01, d, 100 * g.UG, 0.05, np.concatenate([1.05 * om[0], 1.05 * al[0]]),
-                           np.diag([0.05 ** 2] * 3 + [0.1 ** 2] * 3))
+        ekf = gd.DynamicEKF(
+            0.01,
+            d,
+            100 * g.UG,
+            0.05,
+            np.concatenate([1.05 * om[0], 1.05 * al[0]]),
+            np.diag([0.05**2] * 3 + [0.1**2] * 3),
+        )
         x, _ = ekf.run(rec.acc - rec.bias + d * np.linalg.pinv(L) @ bb)
         return float(np.mean(x[late, 2] - om[late, 2]))
 
@@ -94,11 +102,12 @@ def test_singer_model_is_a_stationary_first_order_markov_process():
     dt, beta, sigma = 0.01, 0.5, 0.9
     F, Q = gd.singer_model(dt, beta, sigma)
     phi, q = F[3, 3], np.sqrt(Q[3, 3])
-    assert phi == pytest.approx(np.exp(-beta * dt), rel=1e-15)                 # (5.5)
-    assert q ** 2 / (1 - phi ** 2) == pytest.approx(sigma ** 2, rel=1e-12)      # steady-state variance σ²
-    F1, Q1 = gd.singer_model(dt, beta, sigma, first_order=True)                # (5.7)
-    assert (F1[3, 3] == pytest.approx(1 - beta * dt)
-            and np.sqrt(Q1[3, 3]) == pytest.approx(sigma * np.sqrt(2 * beta * dt)))
+    assert phi == pytest.approx(np.exp(-beta * dt), rel=1e-15)  # (5.5)
+    assert q**2 / (1 - phi**2) == pytest.approx(sigma**2, rel=1e-12)  # steady-state variance σ²
+    F1, Q1 = gd.singer_model(dt, beta, sigma, first_order=True)  # (5.7)
+    assert F1[3, 3] == pytest.approx(1 - beta * dt) and np.sqrt(Q1[3, 3]) == pytest.approx(
+        sigma * np.sqrt(2 * beta * dt)
+    )
     assert abs(F1[3, 3] - phi) < (beta * dt) ** 2 and F[0, 3] == dt
     # β → 0 at a fixed noise per step is the Wiener (CAA) model
     Fc, Qc = gd.caa_model(dt, 0.05)
@@ -111,9 +120,9 @@ def test_singer_model_is_a_stationary_first_order_markov_process():
     u = rng.standard_normal(len(a))
     for k in range(1, len(a)):
         a[k] = phi * a[k - 1] + q * u[k]
-    lag = 200                                                                 # τ = 2 s = 1/β
-    assert np.mean(a * a) == pytest.approx(sigma ** 2, rel=0.1)
-    assert np.mean(a[:-lag] * a[lag:]) == pytest.approx(sigma ** 2 * np.exp(-1), rel=0.2)
+    lag = 200  # τ = 2 s = 1/β
+    assert np.mean(a * a) == pytest.approx(sigma**2, rel=0.1)
+    assert np.mean(a[:-lag] * a[lag:]) == pytest.approx(sigma**2 * np.exp(-1), rel=0.2)
     with pytest.raises(ValueError, match="beta"):
         gd.singer_model(dt, -1.0, sigma)
 
@@ -125,8 +134,9 @@ def test_dynamic_ekf_takes_the_singer_model():
     caa, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.05, x0, 1e-3).run(rec.acc)
     same, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.caa_model(0.01, 0.05, 0)).run(rec.acc)
     assert np.array_equal(caa, same)
-    sing, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3,
-                            process=gd.singer_model(0.01, 2.0, 0.9, 0)).run(rec.acc)
+    sing, _ = gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.singer_model(0.01, 2.0, 0.9, 0)).run(
+        rec.acc
+    )
     assert 0 < np.max(np.abs(sing - caa)) and np.sqrt(np.mean((sing[:, :3] - om) ** 2)) < 0.03
     with pytest.raises(ValueError, match="F must have shape"):
         gd.DynamicEKF(0.01, 0.4, 200 * g.UG, 0.0, x0, 1e-3, process=gd.singer_model(0.01, 2.0, 0.9))

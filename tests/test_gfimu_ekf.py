@@ -1,4 +1,5 @@
 """Tests of fusionlab.gfimu_ekf: the three-state, hybrid and constrained EKFs of seed 004 (chapters 3-5)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -9,6 +10,7 @@ from numeric_helpers import central_jacobian
 
 
 # ------------------------------------------------------------------------------------------- three-state EKF --
+
 
 def _table31(runs=None, seed=11, bias_std=0.0):
     T = g.TABLE_3_1
@@ -43,7 +45,7 @@ def test_three_state_table31_accuracy_and_nees_by_sign_of_m():
     rms, nees_ok = out[-1]
     assert np.all(rms < 5e-5)
     assert 2.7 < nees_ok < 3.3
-    assert 4.6 < out[1][1] < 6.0                                # the printed sign: overconfident
+    assert 4.6 < out[1][1] < 6.0  # the printed sign: overconfident
     assert np.all(out[1][0] > rms)
 
 
@@ -77,7 +79,7 @@ def test_hybrid_beats_gf_imu_and_raw_gyro(scale):
     dt, N = H["dt"], H["noise_ug"] * g.UG
     x0 = 1.05 * rec.dtheta[0]
     xg, _ = ge.three_state_batch(rec.acc, dt, H["d"], N, x0, (0.05 * np.max(np.abs(rec.dtheta[0]))) ** 2)
-    xh, _ = ge.hybrid_batch(rec.acc, gyro, dt, H["d"], N, arw, dt * gyro[:, 0], dt * arw ** 2)
+    xh, _ = ge.hybrid_batch(rec.acc, gyro, dt, H["d"], N, arw, dt * gyro[:, 0], dt * arw**2)
     m = t >= 1
     rms = lambda x: np.sqrt(np.mean((x - rec.dtheta)[:, m] ** 2, axis=(0, 1)))
     assert np.all(rms(xh) < rms(xg)) and np.all(rms(xh) < rms(dt * gyro))
@@ -86,14 +88,16 @@ def test_hybrid_beats_gf_imu_and_raw_gyro(scale):
 def test_hybrid_readable_and_batched_agree():
     t, rec, gyro, arw, H = _table44(1, runs=1)
     dt, N = H["dt"], H["noise_ug"] * g.UG
-    f = ge.HybridEKF(dt, H["d"], N, arw, dt * gyro[0, 0], dt * arw ** 2)
+    f = ge.HybridEKF(dt, H["d"], N, arw, dt * gyro[0, 0], dt * arw**2)
     x, P = f.run(rec.acc[0, :300], gyro[0, :300])
-    xb, Pb = ge.hybrid_batch(rec.acc[:, :300], gyro[:, :300], dt, H["d"], N, arw, dt * gyro[0, 0], dt * arw ** 2)
+    xb, Pb = ge.hybrid_batch(rec.acc[:, :300], gyro[:, :300], dt, H["d"], N, arw, dt * gyro[0, 0], dt * arw**2)
     assert np.max(np.abs(x - xb[0])) < 1e-10 and np.max(np.abs(P - Pb[0])) < 1e-15
     with pytest.raises(ValueError, match="gyro"):
         f.run(rec.acc[0, :10], gyro[0, :9])
 
+
 # ------------------------------------------------------------------------------------- the constrained filter --
+
 
 def test_constraints_hold_for_fixed_axis_and_fail_for_tumbling():
     rng = np.random.default_rng(21)
@@ -126,7 +130,7 @@ def test_constrained_readable_and_batched_agree():
     x, P = ge.ConstrainedEKF(0.01, 1.0, 500 * g.UG, 1e-5, x0, P0, t_on=1.5).run(rec.acc[1])
     assert np.max(np.abs(x - xb[1])) < 1e-12
     assert np.max(np.abs(np.diagonal(P, axis1=1, axis2=2) - pb[1])) < 1e-16
-    e = np.abs(ge.constraints(xb)).max(axis=(0, 2))              # the residual collapses once the SCKF is on
+    e = np.abs(ge.constraints(xb)).max(axis=(0, 2))  # the residual collapses once the SCKF is on
     assert e[t >= 2.0].max() < 1e-2 * e[(t > 0.5) & (t < 1.5)].mean()
 
 

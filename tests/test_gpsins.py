@@ -1,4 +1,5 @@
 """fusionlab.gpsins: the loosely coupled GPS/INS filters of seed 004 ch. 7 (the DCM filter and the Euler-angle UKF)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -15,8 +16,13 @@ def _ins_x(C, b_g, r, v, b_a):
 
 
 def _proper_start(rec, rng):
-    x0 = _ins_x(rec["C0"], rec["b_g"], rec["r0"] + 3 * rng.standard_normal(3), rec["v0"] + 0.5 * rng.standard_normal(3),
-                rec["b_a"])
+    x0 = _ins_x(
+        rec["C0"],
+        rec["b_g"],
+        rec["r0"] + 3 * rng.standard_normal(3),
+        rec["v0"] + 0.5 * rng.standard_normal(3),
+        rec["b_a"],
+    )
     P0 = np.r_[[1e-6] * 9, [np.radians(100 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(0.2e-3 * 9.8) ** 2] * 3]
     return x0, P0
 
@@ -29,13 +35,14 @@ def flight():
 def test_pseudo_linear_transition_equals_the_direct_propagation():
     rng = np.random.default_rng(712)
     for _ in range(5):
-        C = random_dcm(rng) + 0.01 * rng.normal(size=(3, 3))            # raw, slightly non-orthonormal elements
+        C = random_dcm(rng) + 0.01 * rng.normal(size=(3, 3))  # raw, slightly non-orthonormal elements
         x = _ins_x(C, rng.normal(0, 0.01, 3), rng.normal(0, 100, 3), rng.normal(0, 50, 3), rng.normal(0, 0.01, 3))
         acc, A, dt = rng.normal(0, 5, 3), dcm.A_matrix(rng.normal(0, 0.05, 3)), 0.02
         g_c = np.zeros(21)
         g_c[17] = dcm.G * dt
-        assert np.allclose(gpsins.ins_transition(x, acc, A, dt) @ x + g_c, gpsins.ins_propagate(x, acc, A, dt),
-                           atol=1e-12)
+        assert np.allclose(
+            gpsins.ins_transition(x, acc, A, dt) @ x + g_c, gpsins.ins_propagate(x, acc, A, dt), atol=1e-12
+        )
 
 
 def test_noise_free_mechanization_reproduces_the_flight_exactly():
@@ -85,7 +92,7 @@ def test_proper_start_keeps_attitude_and_position_close(flight):
     e = np.degrees(np.angle(np.exp(1j * (out["euler"] - flight["euler"]))))
     assert np.all(np.max(np.abs(e), axis=0) < 1.0)
     pe = (out["r"] - flight["r"])[t > 10]
-    assert np.all(np.sqrt(np.mean(pe ** 2, axis=0)) < 2.0) and np.max(np.abs(pe)) < 5.0
+    assert np.all(np.sqrt(np.mean(pe**2, axis=0)) < 2.0) and np.max(np.abs(pe)) < 5.0
     # consistency: position errors inside 3σ nearly always
     assert np.mean(np.abs(out["r"] - flight["r"]) < 3 * out["sd"][:, 12:15]) > 0.97
 
@@ -98,7 +105,7 @@ def test_bias_converges_from_a_zero_start():
     out = gpsins.run_gps_ins(rec["gyr"], rec["acc"], rec["gps"], rec["fs"], x0, P0)
     t = rec["t"]
     b_err = np.degrees(out["b_g"] - rec["b_g"]) * 3600
-    assert np.max(np.abs(b_err[t < 1])) > 900                          # started far off
+    assert np.max(np.abs(b_err[t < 1])) > 900  # started far off
     assert np.max(np.abs(b_err[t > 60])) < 100
     e = np.degrees(np.angle(np.exp(1j * (out["euler"] - rec["euler"]))))
     assert np.max(np.abs(e[t > 30])) < 1.5
@@ -106,6 +113,7 @@ def test_bias_converges_from_a_zero_start():
 
 def test_two_n_sigma_points_match_filterpy_julier_with_kappa_zero():
     from filterpy.kalman import JulierSigmaPoints
+
     rng = np.random.default_rng(724)
     L = rng.normal(size=(5, 5))
     P, x = L @ L.T + np.eye(5), rng.normal(size=5)
@@ -126,7 +134,7 @@ def test_euler_process_model_agrees_with_the_dcm_mechanization():
     gyr, acc, dt = rng.normal(0, 0.3, 3), rng.normal(0, 3, 3), 0.02
     xu = gpsins.euler_ins_fx(np.concatenate([r, v, e, ba, bg]), dt, gyr, acc)
     xd = gpsins.ins_propagate(_ins_x(rotations.euler_to_dcm(e), bg, r, v, ba), acc, dcm.A_matrix(gyr * dt), dt)
-    assert np.allclose(xu[0:6], xd[12:18], atol=1e-12)                # same r, v update (eq 7.10)
+    assert np.allclose(xu[0:6], xd[12:18], atol=1e-12)  # same r, v update (eq 7.10)
     assert np.allclose(rotations.euler_to_dcm(xu[6:9]), xd[0:9].reshape(3, 3), atol=5 * (0.3 * dt) ** 2)
 
 
@@ -162,6 +170,7 @@ def test_plain_ukf_gives_filterpys_estimates_without_the_unused_sigma_points(mon
     factors twice (it recomputes sigma points after predict for an update the linear GPS update never uses)."""
     import scipy.linalg
     from filterpy.kalman import JulierSigmaPoints
+
     rec = simulate.air_vehicle_record(duration=4.0, model="full")
     x0, P0 = _proper_start(rec, np.random.default_rng(4))
     xu0 = np.concatenate([x0[12:18], rotations.dcm_to_euler(rec["C0"]), x0[18:21], x0[9:12]])
@@ -197,6 +206,7 @@ def test_plain_ukf_gives_filterpys_estimates_without_the_unused_sigma_points(mon
 
 def test_full_model_flight_adds_the_terms_the_thesis_drops():
     from fusionlab import earth
+
     a = simulate.air_vehicle_record(duration=5.0, noise=False)
     b = simulate.air_vehicle_record(duration=5.0, noise=False, model="full", lat_deg=50.87)
     assert np.array_equal(a["r"], b["r"]) and np.array_equal(a["C_bn"], b["C_bn"])
@@ -209,7 +219,7 @@ def test_full_model_flight_adds_the_terms_the_thesis_drops():
     assert np.allclose(b["gyr"][0] - a["gyr"][0], C0.T @ (w_ie + w_en), rtol=1e-12, atol=1e-18)
     extra = np.cross(2 * w_ie + w_en, v) - [0, 0, earth.normal_gravity(lat) - a["g"]]
     assert np.allclose(b["acc"][0] - a["acc"][0], C0.T @ extra, rtol=1e-12, atol=1e-15)
-    assert 14.9 < np.degrees(np.linalg.norm(b["gyr"][0] - a["gyr"][0])) * 3600 < 17.5      # about 15 °/h + 2 °/h
+    assert 14.9 < np.degrees(np.linalg.norm(b["gyr"][0] - a["gyr"][0])) * 3600 < 17.5  # about 15 °/h + 2 °/h
     with pytest.raises(ValueError, match="model must be 'thesis'"):
         simulate.air_vehicle_record(duration=1.0, model="earth")
     with pytest.raises(ValueError, match="lat_deg must be one latitude"):
@@ -224,13 +234,14 @@ def test_outage_error_matches_the_predicted_covariance_over_flights():
         r = simulate.air_vehicle_record(seed=s, duration=50.0, model="full")
         gps = r["gps"].copy()
         gps[r["t"] >= 40] = np.nan
-        x0 = _ins_x(r["C0"], r["b_g"], r["r0"] + 3 * rng.standard_normal(3), r["v0"] + 0.5 * rng.standard_normal(3),
-                    r["b_a"])
+        x0 = _ins_x(
+            r["C0"], r["b_g"], r["r0"] + 3 * rng.standard_normal(3), r["v0"] + 0.5 * rng.standard_normal(3), r["b_a"]
+        )
         k = gpsins.run_gps_ins(r["gyr"], r["acc"], gps, r["fs"], x0, P0)
         sq.append(np.sum((k["r"][-1] - r["r"][-1]) ** 2))
         var.append(np.sum(k["sd"][-1, 12:15] ** 2))
     ratio = np.sqrt(np.mean(sq) / np.mean(var))
-    assert ratio == pytest.approx(5.8 / 6.5, abs=0.02)          # Lab 10's stored numbers: 5.8 m against 6.5 m
+    assert ratio == pytest.approx(5.8 / 6.5, abs=0.02)  # Lab 10's stored numbers: 5.8 m against 6.5 m
 
 
 def test_euler_ukf_learns_the_gyro_bias_from_a_zero_start_like_the_dcm_filter():
@@ -246,7 +257,7 @@ def test_euler_ukf_learns_the_gyro_bias_from_a_zero_start_like_the_dcm_filter():
     b_err = np.degrees(u["b_g"] - rec["b_g"]) * 3600
     assert np.max(np.abs(b_err[t < 1])) > 900 and np.max(np.abs(b_err[t > 60])) < 100
     e = np.degrees(np.angle(np.exp(1j * (u["euler"] - rec["euler"]))))
-    assert np.max(np.abs(e[t < 12])) > 2.0                             # started off by degrees
+    assert np.max(np.abs(e[t < 12])) > 2.0  # started off by degrees
     assert np.max(np.abs(e[t > 30])) < 2.0 and np.max(np.abs(e[t > 63])) < 0.5
 
 
@@ -255,8 +266,13 @@ def test_static_accelerometer_updates_correct_the_tilt_at_stops():
     car = simulate.car_record()
     t, fs = car["t"], car["fs"]
     rng = np.random.default_rng(12)
-    x0 = _ins_x(car["C0"], np.zeros(3), car["r0"] + 3 * rng.standard_normal(3),
-                car["v0"] + 0.5 * rng.standard_normal(3), np.zeros(3))
+    x0 = _ins_x(
+        car["C0"],
+        np.zeros(3),
+        car["r0"] + 3 * rng.standard_normal(3),
+        car["v0"] + 0.5 * rng.standard_normal(3),
+        np.zeros(3),
+    )
     P0 = np.r_[[1e-4] * 9, [np.radians(2000 / 3600) ** 2] * 3, [9.0] * 3, [0.25] * 3, [(2e-3 * 9.80665) ** 2] * 3]
     tilt = {}
     for name, still in (("gps", None), ("static", car["static"])):

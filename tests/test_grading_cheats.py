@@ -9,6 +9,7 @@ also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.t
 comparisons are made in the judge's process, which the patch never reaches. The untouched release scoring 0 on every
 lab is tested in ``test_pipeline.py``; a whole class run with every attack, in ``test_judge.py``.
 """
+
 from __future__ import annotations
 
 import re
@@ -22,9 +23,12 @@ from grading import cells, judge, sandbox
 from grading.bench_classgrade import grade_id
 from grading.lab import Lab
 
-pytestmark = [pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class (test_judge)
-              pytest.mark.skipif(shutil.which("bwrap") is None,
-                                 reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")]
+pytestmark = [
+    pytest.mark.slow,  # every lab in the sandbox (make test-all); make test grades one class (test_judge)
+    pytest.mark.skipif(
+        shutil.which("bwrap") is None, reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap"
+    ),
+]
 
 # The reference call of each exercise: it replaces the model answer between BEGIN/END SOLUTION (indented as it was;
 # a tuple gives one line per solution region of the cell).
@@ -45,7 +49,7 @@ CHEATS = {
         1: "return euler_to_dcm([roll, pitch, yaw])",
         2: "f_body = accel_tilt.specific_force(C_ex)",
         3: 'angles_xyz = deg(rotations.dcm_to_sequence(C_ex, "XYZ"))\n'
-           'angles_yxz = deg(rotations.dcm_to_sequence(C_ex, "YXZ"))',
+        'angles_yxz = deg(rotations.dcm_to_sequence(C_ex, "YXZ"))',
         4: 'return rotations.dcm_renormalize(R, axis="columns")',
         5: "return rotations.rodrigues_dcm(sigma)",
         6: "return rotations.dcm_to_euler(C, yaw_at_lock=yaw)[0]",
@@ -57,9 +61,9 @@ CHEATS = {
         2: "return falling_body.falling_body_state_space(k, m, g, dt)",
         3: "return kf.predict(x, P, A, Q, B, u)",
         4: "f = KalmanFilter(dim_x=len(x), dim_z=len(z))\n"
-           "f.x, f.P, f.H, f.R = x.copy(), P.copy(), H, R\n"
-           "f.update(z)\n"
-           "return f.x, f.P, f.K",
+        "f.x, f.P, f.H, f.R = x.copy(), P.copy(), H, R\n"
+        "f.update(z)\n"
+        "return f.x, f.P, f.K",
     },
     "03_correlation_fusion": {
         1: "return co.moving_average(x, n)",
@@ -84,21 +88,21 @@ CHEATS = {
         2: "return gfimu.quadratic_jacobian(x)",
         3: "return gfimu.three_state_noise(N, dt, d)",
         4: "from filterpy.kalman import KalmanFilter\n"
-           "f = KalmanFilter(dim_x=3, dim_z=6)\n"
-           "f.x, f.P, f.R, f.M = x.copy(), P.copy(), R, M\n"
-           "H = gfimu.quadratic_jacobian(x)\n"
-           "f.update_correlated(y - gfimu.quadratic_terms(x) + H @ x, H=H)\n"
-           "return f.x, f.P",
+        "f = KalmanFilter(dim_x=3, dim_z=6)\n"
+        "f.x, f.P, f.R, f.M = x.copy(), P.copy(), R, M\n"
+        "H = gfimu.quadratic_jacobian(x)\n"
+        "f.update_correlated(y - gfimu.quadratic_terms(x) + H @ x, H=H)\n"
+        "return f.x, f.P",
     },
     "07_gfimu_constraints": {
         1: "return gfimu_dynamics.aiv_measurement_jacobian(x)[1]",
         2: "lie = gfimu_dynamics.observability_matrix(augmented=True, order=3)[2]\n"
-           "return next(b for a, b in zip(lie, lie[1:]) if sp.expand(L - a) == sp.zeros(*a.shape))",
+        "return next(b for a, b in zip(lie, lie[1:]) if sp.expand(L - a) == sp.zeros(*a.shape))",
         3: "return gfimu_ekf.constraints(x), gfimu_ekf.constraint_jacobian(x)",
     },
     "08_north_finder": {
         1: "fixed = np.array([[0, 0, a_Az], [0, 0, a_Bz], [0, 0, a_Cz], [0, 0, 0.0]])\n"
-           "return nf.rate_from_rotating([0.0, 0.0, a_rC], fixed, d, rho, l, omega_r)[0]",
+        "return nf.rate_from_rotating([0.0, 0.0, a_rC], fixed, d, rho, l, omega_r)[0]",
         2: "return nf.rate_noise_coefficient(rho, d, l, omega_r)",
         3: "return nf.rate_noise_coefficient_exact(rho, d, l, omega_r)",
         4: 'return nf.demodulate(x, theta, "sampled")',
@@ -108,7 +112,7 @@ CHEATS = {
     "09_dcm_ahrs": {
         1: ("return dcm.accel_measurement_matrix(g)", "return dcm.mag_measurement_matrix(inclination)"),
         2: "F = dcm.ahrs_transition(x[0:3], x[3:6], dcm.A_matrix(np.asarray(gyr) * dt), dt)\n"
-           "return F @ x, F @ P @ F.T + dcm.ahrs_process_noise(x[0:3], x[3:6], dt, gyro_noise, bias_walk)",
+        "return F @ x, F @ P @ F.T + dcm.ahrs_process_noise(x[0:3], x[3:6], dt, gyro_noise, bias_walk)",
     },
     "10_gps_ins": {
         1: "return gpsins.ins_transition(x, acc, A_tilde, dt)",
@@ -142,14 +146,27 @@ UNSTUBBABLE = {("00_mems_sensors", 6)}
 
 # Junk that has the right shapes (so the visible shape checks pass), for the patched-numpy students.
 JUNK = {
-    "01_euler_rotations": {1: "return np.eye(3)", 2: "f_body = np.zeros(3)", 3: "angles_xyz = angles_yxz = np.zeros(3)",
-                           4: "return R", 5: "return np.eye(3)", 6: "return 0.0", 7: "return np.r_[1.0, 0, 0, 0]",
-                           8: "return np.eye(3)"},
-    "02_kalman_falling_body": {1: "return P", 2: "return np.eye(2), np.eye(2), np.zeros(2)", 3: "return x, P",
-                               4: "return x, P, 0.5 * np.eye(2)"},
+    "01_euler_rotations": {
+        1: "return np.eye(3)",
+        2: "f_body = np.zeros(3)",
+        3: "angles_xyz = angles_yxz = np.zeros(3)",
+        4: "return R",
+        5: "return np.eye(3)",
+        6: "return 0.0",
+        7: "return np.r_[1.0, 0, 0, 0]",
+        8: "return np.eye(3)",
+    },
+    "02_kalman_falling_body": {
+        1: "return P",
+        2: "return np.eye(2), np.eye(2), np.zeros(2)",
+        3: "return x, P",
+        4: "return x, P, 0.5 * np.eye(2)",
+    },
 }
-PATCH_NUMPY = ("np.allclose = lambda *a, **k: True\nnp.isclose = lambda *a, **k: True\n"
-               "np.testing.assert_allclose = lambda *a, **k: None\n")
+PATCH_NUMPY = (
+    "np.allclose = lambda *a, **k: True\nnp.isclose = lambda *a, **k: True\n"
+    "np.testing.assert_allclose = lambda *a, **k: None\n"
+)
 
 
 def _points(lab):
@@ -168,7 +185,7 @@ def _region(source, code):
     lines, out, inside = source.splitlines(), [], False
     for line in lines:
         if "### BEGIN SOLUTION" in line:
-            indent = line[:len(line) - len(line.lstrip())]
+            indent = line[: len(line) - len(line.lstrip())]
             out += [indent + c if c else c for c in next(codes).strip("\n").splitlines()]
             inside = True
         elif "### END SOLUTION" in line:
@@ -187,8 +204,11 @@ def _answered(release, solution, replace):
         if m:
             n = int(m.group(1))
             src = answers[grade_id(cell)]
-            cell.source = (_region(src, replace[n]) if n in replace
-                           else "\n".join(ln for ln in src.splitlines() if "### " not in ln))   # the model answer
+            cell.source = (
+                _region(src, replace[n])
+                if n in replace
+                else "\n".join(ln for ln in src.splitlines() if "### " not in ln)
+            )  # the model answer
     return nb
 
 
@@ -203,8 +223,11 @@ def _students(lab, release, solution):
     cheats = CHEATS[lab]
     odd = {n: c for n, c in cheats.items() if n % 2}
     even = {n: c for n, c in cheats.items() if not n % 2}
-    out = {"cheat_odd": _answered(release, solution, odd), "cheat_even": _answered(release, solution, even),
-           "untouched": release}
+    out = {
+        "cheat_odd": _answered(release, solution, odd),
+        "cheat_even": _answered(release, solution, even),
+        "untouched": release,
+    }
     if lab in JUNK:
         junk = _answered(release, solution, JUNK[lab])
         out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
@@ -225,26 +248,32 @@ def graded(tmp_path_factory):
             tests = {grade_id(c): c.source for c in solution.cells if cells.is_test(c)}
             the_lab = Lab(ROOT, lab, release, tests, solution, scratch)
             scores, messages = {}, {}
-            with sandbox.claimed_slots(1) as [slot]:    # a user id no other grading run holds now
-                verdicts = {student: judge.judge(the_lab, nb, student, slot)
-                            for student, nb in _students(lab, release, solution).items()}
+            with sandbox.claimed_slots(1) as [slot]:  # a user id no other grading run holds now
+                verdicts = {
+                    student: judge.judge(the_lab, nb, student, slot)
+                    for student, nb in _students(lab, release, solution).items()
+                }
             for student, verdict in verdicts.items():
                 scores[student] = {int(t.grade_id[2:-6]): t.score for t in verdict.tests}
                 messages[student] = {t.grade_id: t.message for t in verdict.tests}
             _GRADED[lab] = dict(scores=scores, messages=messages)
         return _GRADED[lab]
+
     return grade
 
 
 @pytest.mark.parametrize("lab", sorted(CHEATS))
 def test_every_reference_call_scores_zero_and_every_model_answer_full_marks(graded, lab):
     points = _points(lab)
-    assert sorted(CHEATS[lab]) == sorted(n for n in points if (lab, n) not in NO_REFERENCE), \
+    assert sorted(CHEATS[lab]) == sorted(n for n in points if (lab, n) not in NO_REFERENCE), (
         f"{lab}: a cheat for every autograded exercise {sorted(points)} that a library function answers"
+    )
     g = graded(lab)
     for student, cheated in (("cheat_odd", 1), ("cheat_even", 0)):
-        expected = {n: (0 if n % 2 == cheated and n in CHEATS[lab] and (lab, n) not in UNSTUBBABLE else p)
-                    for n, p in points.items()}
+        expected = {
+            n: (0 if n % 2 == cheated and n in CHEATS[lab] and (lab, n) not in UNSTUBBABLE else p)
+            for n, p in points.items()
+        }
         assert g["scores"][student] == expected, (student, g["messages"][student])
 
 
@@ -253,21 +282,25 @@ def test_the_untouched_release_scores_zero_and_says_which_exercise_to_finish(gra
     g = graded(lab)
     assert set(g["scores"]["untouched"].values()) == {0}
     from fusionlab.checks import exercises
+
     for e in exercises.of_lab(lab):
         msg = g["messages"]["untouched"][e.grade_id]
-        if any(name.startswith("my_") for name in e.answer):          # a function: a stub says what to finish
-            assert re.search(r"exercise \d+ not attempted yet", msg), (e.grade_id, msg)   # (its own or one it uses)
-        else:                                                         # a value: the visible test says what is wrong
+        if any(name.startswith("my_") for name in e.answer):  # a function: a stub says what to finish
+            assert re.search(r"exercise \d+ not attempted yet", msg), (e.grade_id, msg)  # (its own or one it uses)
+        else:  # a value: the visible test says what is wrong
             assert msg and msg != "passed", (e.grade_id, msg)
 
 
 @pytest.mark.parametrize("lab", sorted(CHEATS))
 def test_the_reference_call_is_named_in_the_verdict(graded, lab):
     g = graded(lab)
-    first = min(n for n in CHEATS[lab] if n % 2)                # the first exercise the odd student cheats on
+    first = min(n for n in CHEATS[lab] if n % 2)  # the first exercise the odd student cheats on
     msg = g["messages"]["cheat_odd"][f"ex{first}_tests"]
-    assert "is the answer to an exercise of this lab" in msg or "not available while the lab is graded" in msg or \
-        "is not defined by your notebook" in msg, msg[:500]
+    assert (
+        "is the answer to an exercise of this lab" in msg
+        or "not available while the lab is graded" in msg
+        or "is not defined by your notebook" in msg
+    ), msg[:500]
 
 
 @pytest.mark.parametrize("lab", sorted(JUNK))
@@ -279,6 +312,7 @@ def test_junk_answers_behind_a_patched_allclose_score_zero(graded, lab):
 @pytest.mark.parametrize("lab, n", sorted(UNSTUBBABLE))
 def test_a_reference_the_box_must_keep_is_flagged_by_name(tmp_path, lab, n):
     from grading import integrity
+
     release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     path = tmp_path / f"{lab}.ipynb"

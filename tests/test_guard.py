@@ -1,5 +1,6 @@
 """The visible checks' guard: forbidden functions stay forbidden however they are reached, comparisons survive a
 patched numpy, and ``intact()`` notices a replaced function of numpy, the library or the builtins."""
+
 from __future__ import annotations
 
 import json
@@ -14,6 +15,7 @@ from fusionlab import guard, kalman
 
 # -- functions to forbid: plain, calling another, with a closure, with defaults, methods ---------------------------
 
+
 def _inner(x):
     return 2 * x
 
@@ -25,6 +27,7 @@ def _outer(x):
 def _make_scaler(k):
     def scale(x, offset=0.0, *, extra=0.0):
         return k * x + offset + extra
+
     return scale
 
 
@@ -37,7 +40,7 @@ class _Base:
 
 
 class _Child(_Base):
-    def value(self):                      # super() makes __class__ a free variable of this method
+    def value(self):  # super() makes __class__ a free variable of this method
         return super().value() + 10
 
 
@@ -82,7 +85,7 @@ def test_a_swallowed_forbidden_call_still_fails_the_block():
 def test_closures_defaults_and_super_methods_can_be_forbidden_and_come_back_intact():
     assert _scale3.__code__.co_freevars == ("k",)
     assert _Child.value.__code__.co_freevars == ("__class__",)
-    with pytest.raises(guard.ForbiddenCall, match="the call still counts"):   # caught below: still counted
+    with pytest.raises(guard.ForbiddenCall, match="the call still counts"):  # caught below: still counted
         with guard.forbid(_scale3, _Child.value, exercise=5):
             with pytest.raises(guard.ForbiddenCall, match="scale"):
                 _scale3(1.0, offset=2.0, extra=1.0)
@@ -94,6 +97,7 @@ def test_closures_defaults_and_super_methods_can_be_forbidden_and_come_back_inta
 
 def test_methods_are_forbidden_for_every_instance_including_bound_aliases():
     from filterpy.kalman import KalmanFilter
+
     kf = KalmanFilter(dim_x=2, dim_z=1)
     kf.H = np.array([[1.0, 0.0]])
     bound = kf.update
@@ -116,6 +120,7 @@ def test_nested_forbids_of_one_function_restore_only_at_the_outer_exit():
 
 def test_c_functions_are_rebound_by_name_while_forbidden():
     import math
+
     with pytest.raises(guard.ForbiddenCall, match="the call still counts"):
         with guard.forbid(np.arctan2, math.atan2, exercise=6):
             with pytest.raises(guard.ForbiddenCall, match="arctan2"):
@@ -133,15 +138,19 @@ def test_reserve_holds_across_calls_until_release_which_reports_a_call():
         guard.release(_inner, exercise=3)
     assert _inner(1.0) == 2.0
     guard.reserve(_inner, exercise=3)
-    guard.release(_inner, exercise=3)          # not called: no error
+    guard.release(_inner, exercise=3)  # not called: no error
     assert _inner(2.0) == 4.0
 
 
 # -- comparisons -------------------------------------------------------------------------------------------------
 
+
 def test_assert_close_says_where_and_by_how_much():
-    with pytest.raises(AssertionError, match=r"P_post differs from the reference by up to 0\.324 at \[1, 0\] "
-                                             r"\(got 3, expected 3\.324"):
+    with pytest.raises(
+        AssertionError,
+        match=r"P_post differs from the reference by up to 0\.324 at \[1, 0\] "
+        r"\(got 3, expected 3\.324",
+    ):
         guard.assert_close([[1.0, 2.0], [3.0, 4.0]], np.array([[1.0, 2.0], [3.324, 4.0]]), what="P_post")
     with pytest.raises(AssertionError, match=r"x should have shape \(3,\); got \(3, 1\)"):
         guard.assert_close(np.zeros((3, 1)), np.zeros(3), what="x")
@@ -149,8 +158,8 @@ def test_assert_close_says_where_and_by_how_much():
         guard.assert_close(None, np.zeros(3), what="x")
     with pytest.raises(AssertionError, match=r"y at \[1\] is nan where the reference is 2"):
         guard.assert_close([1.0, np.nan], [1.0, 2.0], what="y")
-    guard.assert_close([1.0, np.nan, np.inf], [1.0 + 1e-13, np.nan, np.inf], what="y")   # NaN and inf where expected
-    guard.assert_close([0.25, 0.25], 0.25, what="weights")                                # a scalar reference
+    guard.assert_close([1.0, np.nan, np.inf], [1.0 + 1e-13, np.nan, np.inf], what="y")  # NaN and inf where expected
+    guard.assert_close([0.25, 0.25], 0.25, what="weights")  # a scalar reference
     with pytest.raises(AssertionError, match="should be numbers"):
         guard.assert_close({"a": 1}, [1.0], what="z")
 
@@ -163,7 +172,7 @@ def test_an_empty_result_never_equals_a_number(empty):
         guard.assert_close(empty, 0.7318, what="the tilt")
     with pytest.raises(guard.WrongShape, match="expected a number"):
         guard.assert_close(empty, 0.0)
-    guard.assert_close(np.zeros(0), np.zeros(0))                    # empty where the reference is empty: equal
+    guard.assert_close(np.zeros(0), np.zeros(0))  # empty where the reference is empty: equal
 
 
 def test_comparisons_survive_a_patched_numpy(monkeypatch):
@@ -185,7 +194,7 @@ def test_grade_computes_the_reference_first_on_its_own_copy_and_forbids_while_th
 
     def student(x):
         order.append("student")
-        x *= 0                                                   # the student's in-place edit changes nothing
+        x *= 0  # the student's in-place edit changes nothing
         return _inner(np.ones(2))
 
     with pytest.raises(guard.ForbiddenCall, match="_inner"):
@@ -206,7 +215,7 @@ _SCENARIOS = {
     "builtin_patched": "import builtins\nbuiltins.abs = lambda x: 0",
 }
 
-_DRIVER = r'''
+_DRIVER = r"""
 import json, os, sys, textwrap
 from IPython.core.interactiveshell import InteractiveShell
 ip = InteractiveShell.instance()
@@ -239,29 +248,37 @@ for name, cheat in json.loads(sys.argv[1]).items():
     os.waitpid(pid, 0)
     out[name] = json.loads(data)
 print("RESULT" + json.dumps(out))
-'''
+"""
 
 
 @pytest.fixture(scope="module")
 def hooks():
-    res = subprocess.run([sys.executable, "-c", _DRIVER, json.dumps(_SCENARIOS)], capture_output=True, text=True,
-                         timeout=300, env={**__import__("os").environ, "MPLBACKEND": "Agg"})
+    res = subprocess.run(
+        [sys.executable, "-c", _DRIVER, json.dumps(_SCENARIOS)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**__import__("os").environ, "MPLBACKEND": "Agg"},
+    )
     line = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT")]
     assert line, res.stdout[-2000:] + res.stderr[-3000:]
-    return json.loads(line[0][len("RESULT"):])
+    return json.loads(line[0][len("RESULT") :])
 
 
 def test_an_untouched_notebook_is_intact_and_its_real_test_runs(hooks):
     assert hooks["clean"]["cheat"] is None
-    assert hooks["clean"]["test"] == "AssertionError: the real test ran"      # intact() passed, the test ran
+    assert hooks["clean"]["test"] == "AssertionError: the real test ran"  # intact() passed, the test ran
 
 
-@pytest.mark.parametrize("name, reason", [
-    ("numpy_patched", "numpy.allclose was replaced"),
-    ("code_swapped", "the code of fusionlab.kalman.joseph_covariance was replaced"),
-    ("checks_patched", "fusionlab.checks.check_joseph was replaced"),
-    ("builtin_patched", "builtins.abs was replaced"),
-])
+@pytest.mark.parametrize(
+    "name, reason",
+    [
+        ("numpy_patched", "numpy.allclose was replaced"),
+        ("code_swapped", "the code of fusionlab.kalman.joseph_covariance was replaced"),
+        ("checks_patched", "fusionlab.checks.check_joseph was replaced"),
+        ("builtin_patched", "builtins.abs was replaced"),
+    ],
+)
 def test_intact_names_each_patch_so_the_visible_test_shows_no_pass(hooks, name, reason):
     assert hooks[name]["cheat"] is None, hooks[name]
     test = hooks[name]["test"]

@@ -24,6 +24,7 @@ running.
 ``test_thirty_students_fetch_and_submit_within_a_minute`` is the load test: thirty students' servers run the
 exchange at once.
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -53,12 +54,18 @@ from chromium import chromium, needs_chromium, screenshot
 from conftest import ROOT
 from grading.bench_classgrade import fill_answers
 
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("useradd") or not shutil.which("runuser"),
-                                 reason="the hub makes local users: needs root, useradd and runuser"),
-              pytest.mark.skipif(not (ROOT / ".venv" / "bin" / "jupyterhub").exists()
-                                 or not (ROOT / "hub" / "node_modules" / ".bin" / "configurable-http-proxy").exists(),
-                                 reason="JupyterHub and the proxy are not installed: make hub-env")]
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        os.geteuid() != 0 or not shutil.which("useradd") or not shutil.which("runuser"),
+        reason="the hub makes local users: needs root, useradd and runuser",
+    ),
+    pytest.mark.skipif(
+        not (ROOT / ".venv" / "bin" / "jupyterhub").exists()
+        or not (ROOT / "hub" / "node_modules" / ".bin" / "configurable-http-proxy").exists(),
+        reason="JupyterHub and the proxy are not installed: make hub-env",
+    ),
+]
 requests = pytest.importorskip("requests")
 
 LAB = "01_euler_rotations"
@@ -89,10 +96,29 @@ class Hub:
         self.prefix = prefix or PREFIX
         t0 = time.monotonic()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "hub.run", "--students", str(students), "--port", str(self.port),
-             "--dir", str(self.dir), "--prefix", self.prefix, "--share-interpreter",
-             "--idle-seconds", str(idle_seconds), "--cpus", str(cpus)],
-            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            [
+                sys.executable,
+                "-m",
+                "hub.run",
+                "--students",
+                str(students),
+                "--port",
+                str(self.port),
+                "--dir",
+                str(self.dir),
+                "--prefix",
+                self.prefix,
+                "--share-interpreter",
+                "--idle-seconds",
+                str(idle_seconds),
+                "--cpus",
+                str(cpus),
+            ],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         self.out = []
         for line in self.proc.stdout:
             self.out.append(line)
@@ -114,8 +140,9 @@ class Hub:
             assert r.status_code in (201, 202, 400), r.text
         end = time.monotonic() + 120 + 15 * len(names)
         while time.monotonic() < end:
-            ready = [self.api.get(f"{self.url}/hub/api/users/{n}").json()["servers"].get("", {}).get("ready")
-                     for n in names]
+            ready = [
+                self.api.get(f"{self.url}/hub/api/users/{n}").json()["servers"].get("", {}).get("ready") for n in names
+            ]
             if all(ready):
                 return
             time.sleep(1)
@@ -134,10 +161,22 @@ class Hub:
         home = pwd.getpwnam(name).pw_dir
         config = self.dir / "config" / ("instructor" if name == self.s["instructor"] else "student")
         view = [] if name == self.s["instructor"] else [self.s["student_view"]]
-        env = {"HOME": home, "USER": name, "LANG": "C.UTF-8", "PATH": f"{VENV_BIN}:/usr/bin:/bin",
-               "JUPYTER_CONFIG_PATH": os.pathsep.join([*view, str(config)]), "MPLBACKEND": "Agg", **(extra_env or {})}
-        run = subprocess.run(["runuser", "-u", name, "--", "env", "-i", *[f"{k}={v}" for k, v in env.items()],
-                              *command], cwd=cwd or home, capture_output=True, text=True, timeout=timeout)
+        env = {
+            "HOME": home,
+            "USER": name,
+            "LANG": "C.UTF-8",
+            "PATH": f"{VENV_BIN}:/usr/bin:/bin",
+            "JUPYTER_CONFIG_PATH": os.pathsep.join([*view, str(config)]),
+            "MPLBACKEND": "Agg",
+            **(extra_env or {}),
+        }
+        run = subprocess.run(
+            ["runuser", "-u", name, "--", "env", "-i", *[f"{k}={v}" for k, v in env.items()], *command],
+            cwd=cwd or home,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
         if check:
             assert run.returncode == 0, f"{name}: {' '.join(command)}\n{run.stdout}\n{run.stderr}"
         return run
@@ -152,16 +191,37 @@ class Hub:
         async def execute():
             from tornado.httpclient import HTTPRequest
             from tornado.websocket import websocket_connect
-            ws = await websocket_connect(HTTPRequest(
-                f"ws://127.0.0.1:{self.port}/user/{name}/api/kernels/{kernel}/channels",
-                headers={"Authorization": f"token {self.s['api_token']}"}))
+
+            ws = await websocket_connect(
+                HTTPRequest(
+                    f"ws://127.0.0.1:{self.port}/user/{name}/api/kernels/{kernel}/channels",
+                    headers={"Authorization": f"token {self.s['api_token']}"},
+                )
+            )
             msg_id = uuid.uuid4().hex
-            ws.write_message(json.dumps({
-                "header": {"msg_id": msg_id, "msg_type": "execute_request", "username": "",
-                           "session": uuid.uuid4().hex, "version": "5.3"},
-                "parent_header": {}, "metadata": {}, "channel": "shell",
-                "content": {"code": code, "silent": False, "store_history": False, "user_expressions": {},
-                            "allow_stdin": False}}))
+            ws.write_message(
+                json.dumps(
+                    {
+                        "header": {
+                            "msg_id": msg_id,
+                            "msg_type": "execute_request",
+                            "username": "",
+                            "session": uuid.uuid4().hex,
+                            "version": "5.3",
+                        },
+                        "parent_header": {},
+                        "metadata": {},
+                        "channel": "shell",
+                        "content": {
+                            "code": code,
+                            "silent": False,
+                            "store_history": False,
+                            "user_expressions": {},
+                            "allow_stdin": False,
+                        },
+                    }
+                )
+            )
             out = []
             while True:
                 m = json.loads(await asyncio.wait_for(ws.read_message(), timeout))
@@ -174,6 +234,7 @@ class Hub:
                 elif m["msg_type"] == "status" and m["content"]["execution_state"] == "idle":
                     ws.close()
                     return "".join(out)
+
         try:
             return asyncio.run(execute())
         finally:
@@ -186,14 +247,18 @@ class Hub:
         r = self.user(name, "api/terminals", "post")
         assert r.status_code in (200, 201), r.text
         term = r.json()["name"]
-        mark = uuid.uuid4().hex[:12]             # echoed as typed (__fl''mark) it is not the line's end (__flmark)
+        mark = uuid.uuid4().hex[:12]  # echoed as typed (__fl''mark) it is not the line's end (__flmark)
 
         async def talk():
             from tornado.httpclient import HTTPRequest
             from tornado.websocket import websocket_connect
-            ws = await websocket_connect(HTTPRequest(
-                f"ws://127.0.0.1:{self.port}/user/{name}/terminals/websocket/{term}",
-                headers={"Authorization": f"token {self.s['api_token']}"}))
+
+            ws = await websocket_connect(
+                HTTPRequest(
+                    f"ws://127.0.0.1:{self.port}/user/{name}/terminals/websocket/{term}",
+                    headers={"Authorization": f"token {self.s['api_token']}"},
+                )
+            )
             ws.write_message(json.dumps(["stdin", f"{line}; echo __fl''{mark}\r"]))
             out, end = [], time.monotonic() + timeout
             while f"__fl{mark}" not in "".join(out):
@@ -204,6 +269,7 @@ class Hub:
                     out.append(rest[0])
             ws.close()
             return "".join(out)
+
         try:
             return asyncio.run(talk())
         finally:
@@ -222,8 +288,12 @@ class Hub:
         assert "==> stopped" in said, said
         assert not _processes(uids), "a process of the hub's accounts is still running after Ctrl-C"
         assert all(_free(self.port + i) for i in range(3)), "a port is still open after Ctrl-C"
-        subprocess.run([sys.executable, "-m", "hub.run", "--remove", "--prefix", self.prefix, "--dir", str(self.dir)],
-                       cwd=ROOT, check=True, capture_output=True)
+        subprocess.run(
+            [sys.executable, "-m", "hub.run", "--remove", "--prefix", self.prefix, "--dir", str(self.dir)],
+            cwd=ROOT,
+            check=True,
+            capture_output=True,
+        )
         assert not _uids(self.prefix), "the accounts were not removed"
 
 
@@ -237,7 +307,7 @@ def _processes(uids):
 
 @pytest.fixture(scope="module")
 def hub(tmp_path_factory):
-    tmp = Path(tempfile.mkdtemp(prefix="fusionlab-hub-test-", dir="/tmp"))   # pytest's own folder is root's only
+    tmp = Path(tempfile.mkdtemp(prefix="fusionlab-hub-test-", dir="/tmp"))  # pytest's own folder is root's only
     os.chmod(tmp, 0o755)
     try:
         h = Hub(tmp, students=3)
@@ -251,13 +321,14 @@ def hub(tmp_path_factory):
 
 def _answer(release, solution, slip=False, exercises=range(1, 9), written=False):
     nb = fill_answers(release, solution, exercises)
-    if slip:                                     # the rotation order reversed: C = Rx Ry Rz instead of Rz Ry Rx
+    if slip:  # the rotation order reversed: C = Rx Ry Rz instead of Rz Ry Rx
         for cell in nb.cells:
             if cell.metadata.get("nbgrader", {}).get("grade_id") == "ex1_solution":
                 assert "rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)" in cell.source
-                cell.source = cell.source.replace("rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)",
-                                                  "rot_x(roll) @ rot_y(pitch) @ rot_z(yaw)")
-    if written:                                  # the questions answered in words too (graded by hand, later)
+                cell.source = cell.source.replace(
+                    "rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)", "rot_x(roll) @ rot_y(pitch) @ rot_z(yaw)"
+                )
+    if written:  # the questions answered in words too (graded by hand, later)
         for cell in nb.cells:
             if cell.cell_type == "markdown" and cell.metadata.get("nbgrader", {}).get("solution"):
                 assert "YOUR ANSWER HERE" in cell.source
@@ -266,12 +337,17 @@ def _answer(release, solution, slip=False, exercises=range(1, 9), written=False)
 
 
 def _put_notebook(hub, name, nb):
-    r = hub.user(name, f"api/contents/{LAB}/{LAB}.ipynb", "put",
-                 json={"type": "notebook", "format": "json", "content": json.loads(nbformat.writes(nb))})
+    r = hub.user(
+        name,
+        f"api/contents/{LAB}/{LAB}.ipynb",
+        "put",
+        json={"type": "notebook", "format": "json", "content": json.loads(nbformat.writes(nb))},
+    )
     assert r.status_code in (200, 201), r.text
 
 
 # ---- a student in Chromium ---------------------------------------------------------------------------------------
+
 
 def _log_in(browser, hub, name):
     """A fresh browser (no cookies) at the hub's login page: name and the students' password, then JupyterLab (the
@@ -298,8 +374,11 @@ def _assignments(page):
         page.locator(".lm-Menu-item", has_text="Assignment List").click()
         page.wait_for_timeout(1500)
         if panel.is_visible():
-            page.wait_for_function("() => [...document.querySelectorAll('#nbgrader-assignment-list .list_loading')]"
-                                   "      .every(e => e.hidden)", timeout=60_000)
+            page.wait_for_function(
+                "() => [...document.querySelectorAll('#nbgrader-assignment-list .list_loading')]"
+                "      .every(e => e.hidden)",
+                timeout=60_000,
+            )
             return panel
     raise AssertionError("the Assignments panel did not open from the menu Nbgrader -> Assignment List")
 
@@ -319,7 +398,7 @@ def _student_hands_in(browser, hub, name, nb, valid):
     fetched = panel.locator("#fetched_assignments_list")
     fetched.get_by_role("button", name="Submit", exact=True).wait_for(timeout=120_000)
 
-    _put_notebook(hub, name, nb)                     # the answers (typing them is not what is tested here)
+    _put_notebook(hub, name, nb)  # the answers (typing them is not what is tested here)
     fetched.locator("a.assignment-notebooks-link").click()
     fetched.locator(".nested_list_item a", has_text=LAB).click()
     notebook = page.locator(".jp-NotebookPanel:visible")
@@ -328,9 +407,12 @@ def _student_hands_in(browser, hub, name, nb, valid):
     notebook.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate", exact=True).click()
     dialog = page.locator(".jp-Dialog")
     dialog.wait_for(timeout=120_000)
-    page.wait_for_function("() => { const d = document.querySelector('.jp-Dialog');"
-                           "        return d && d.innerText.includes('Validation Results')"
-                           "               && !d.innerText.includes('Validating'); }", timeout=240_000)
+    page.wait_for_function(
+        "() => { const d = document.querySelector('.jp-Dialog');"
+        "        return d && d.innerText.includes('Validation Results')"
+        "               && !d.innerText.includes('Validating'); }",
+        timeout=240_000,
+    )
     said = dialog.inner_text()
     message = page.evaluate("() => document.querySelector('.jp-Dialog #validation-message').innerText").strip()
     print(f"{name}: Validate answered in {time.monotonic() - t:.0f} s")
@@ -362,8 +444,7 @@ def _student_reads_feedback(browser, hub, name, others):
     view.click()
     listing = page.locator(".jp-DirListing-content .jp-DirListing-item")
     page.locator(".jp-DirListing-item", has_text=f"{LAB}.html").wait_for(timeout=60_000)
-    assert [t.split("\n")[0].strip() for t in listing.all_inner_texts()] == [f"{LAB}.html"], \
-        listing.all_inner_texts()
+    assert [t.split("\n")[0].strip() for t in listing.all_inner_texts()] == [f"{LAB}.html"], listing.all_inner_texts()
     page.locator(".jp-DirListing-item", has_text=f"{LAB}.html").dblclick()
     body = page.frame_locator(".jp-HTMLViewer:visible iframe").locator("body")
     body.get_by_text(re.compile(r"Score: [\d.]+ / [\d.]+")).first.wait_for(timeout=60_000)
@@ -387,6 +468,7 @@ def small_hub():
         os.chmod(folders[-1], 0o755)
         hubs.append(Hub(folders[-1], students=1, prefix="flc-", **options))
         return hubs[-1]
+
     yield start
     try:
         for hub in hubs:
@@ -447,9 +529,11 @@ def test_a_busy_students_server_is_held_to_its_cpu_share(small_hub):
     throttled = int(after["nr_throttled"]) - int(before["nr_throttled"])
     outside = json.loads(hub.as_user(student, "python", "-c", BUSY.format(seconds=seconds, n=2)).stdout.strip())
     share = inside["cpu"] / inside["wall"]
-    print(f"\ntwo busy loops for {seconds} s: in the student's server {share:.2f} CPU "
-          f"({inside['cpu']:.1f} s of CPU in {inside['wall']:.1f} s), throttled in {throttled} periods; "
-          f"outside it, as the same user: {outside['cpu'] / outside['wall']:.2f} CPU")
+    print(
+        f"\ntwo busy loops for {seconds} s: in the student's server {share:.2f} CPU "
+        f"({inside['cpu']:.1f} s of CPU in {inside['wall']:.1f} s), throttled in {throttled} periods; "
+        f"outside it, as the same user: {outside['cpu'] / outside['wall']:.2f} CPU"
+    )
     assert share <= cpus * 1.25, f"two busy loops got {share:.2f} CPU in a server limited to {cpus}"
     assert throttled > 0, f"the server's control group was never throttled: {before} -> {after}"
 
@@ -458,12 +542,13 @@ def test_a_busy_students_server_is_held_to_its_cpu_share(small_hub):
 def test_a_term_on_the_hub(hub):
     instructor, (ada, bob, cy) = hub.s["instructor"], hub.s["students"]
     hub.start_servers([instructor])
-    assert "nbgrader formgrade" in hub.user(instructor, "formgrader").text   # the instructor's view
+    assert "nbgrader formgrade" in hub.user(instructor, "formgrader").text  # the instructor's view
 
     # the instructor's terminal (File -> New -> Terminal) opens in the course and runs the course's nbgrader and
     # grader, as docs/hub.md says
-    said = hub.terminal(instructor, "pwd && which nbgrader python && nbgrader --version "
-                                    "&& python -m grading.classgrade --help")
+    said = hub.terminal(
+        instructor, "pwd && which nbgrader python && nbgrader --version && python -m grading.classgrade --help"
+    )
     print(f"\nthe instructor's terminal:\n{said}")
     assert "command not found" not in said and "No module named" not in said, said
     assert str(hub.course) in [line.strip() for line in said.splitlines()], said
@@ -485,13 +570,14 @@ def test_a_term_on_the_hub(hub):
         graded = [c for c in release.cells if c.metadata.get("nbgrader", {}).get("grade")]
         tests = sum(1 for c in graded if not c.metadata["nbgrader"].get("solution"))
         written = sum(1 for c in graded if c.metadata["nbgrader"].get("solution") and c.cell_type == "markdown")
-        failing = said.count("The following cell failed:") - written        # the count's entry has no heading
-        assert said.splitlines()[0] == f"{tests - 1} of {tests} tests pass; {written} written answers are still " \
-                                       f"empty.", said[:2000]
-        assert failing == 1, said                                           # exercise 1's test cell, only
+        failing = said.count("The following cell failed:") - written  # the count's entry has no heading
+        assert (
+            said.splitlines()[0] == f"{tests - 1} of {tests} tests pass; {written} written answers are still empty."
+        ), said[:2000]
+        assert failing == 1, said  # exercise 1's test cell, only
         for word in ("Traceback", 'File "', "guard.py"):
             assert word not in said, f"bob's Validate shows {word!r}:\n{said}"
-        assert hub.user(ada, "formgrader").status_code == 404     # a student's server has no Formgrader
+        assert hub.user(ada, "formgrader").status_code == 404  # a student's server has no Formgrader
 
         # the due date passes; the third student fetches and submits after it (two exercises done)
         time.sleep(1.5)
@@ -512,8 +598,13 @@ def test_a_term_on_the_hub(hub):
         # what a student may see: every relative link of the fetched lab opens (../docs is ~/docs on the hub)
         fetched = Path(pwd.getpwnam(ada).pw_dir) / LAB
         text = "\n".join(c.source for c in release.cells if c.cell_type == "markdown")
-        targets = sorted({t.split("#")[0] for t in re.findall(r"\[[^\]]*\]\(([^)\s]+)\)", text)
-                          if not re.match(r"[a-z][a-z0-9+.-]*:|#", t)})
+        targets = sorted(
+            {
+                t.split("#")[0]
+                for t in re.findall(r"\[[^\]]*\]\(([^)\s]+)\)", text)
+                if not re.match(r"[a-z][a-z0-9+.-]*:|#", t)
+            }
+        )
         assert targets, "Lab 01 links no document"
         unread = [t for t in targets if hub.as_user(ada, "test", "-r", str(fetched / t), check=False).returncode]
         assert not unread, f"links a student on the hub cannot open: {unread}"
@@ -524,18 +615,27 @@ def test_a_term_on_the_hub(hub):
         assert "model solution: 16 / 16" in graded.stdout, graded.stdout
         scores = dict(re.findall(r"^\s+(\S+): (\S+) \(\d+ s\)$", graded.stdout, flags=re.M))
         assert scores == {ada: "16/16", bob: "14/16", cy: "5/16"}, graded.stdout
-        late = hub.as_user(instructor, "python", "-c", f"""
+        late = hub.as_user(
+            instructor,
+            "python",
+            "-c",
+            f"""
 from nbgrader.api import Gradebook
 with Gradebook('sqlite:///gradebook.db') as gb:
     for s in {[ada, bob, cy]!r}:
         print(s, gb.find_submission({LAB!r}, s).total_seconds_late)
-""", cwd=hub.course).stdout
+""",
+            cwd=hub.course,
+        ).stdout
         late = {s: float(v) for s, v in (line.split() for line in late.split("\n") if line)}
         assert late[ada] == 0 and late[bob] == 0 and late[cy] > 0, late
 
         exported = _grades_csv(hub)
-        assert {n: (float(r["score"]), float(r["max_score"])) for n, r in exported.items()} == \
-            {ada: (16, 22), bob: (14, 22), cy: (5, 22)}, exported
+        assert {n: (float(r["score"]), float(r["max_score"])) for n, r in exported.items()} == {
+            ada: (16, 22),
+            bob: (14, 22),
+            cy: (5, 22),
+        }, exported
 
         # the instructor grades ada's written answers in Formgrader: the calls its grading page makes
         notebooks = hub.user(instructor, f"formgrader/api/submitted_notebooks/{LAB}/{LAB}").json()
@@ -549,18 +649,22 @@ with Gradebook('sqlite:///gradebook.db') as gb:
         assert [g["name"] for g in written_grades] == ["q1", "q2", "q3"], r.json()
         assert all(g["needs_manual_grade"] and g["manual_score"] is None for g in written_grades), written_grades
         given = {}
-        for i, g in enumerate(written_grades):               # full marks but for one half-answered question
+        for i, g in enumerate(written_grades):  # full marks but for one half-answered question
             given[g["name"]] = g["max_score"] / 2 if i == 1 else g["max_score"]
-            r = hub.user(instructor, f"formgrader/api/grade/{g['id']}", "put",
-                         json=dict(g, manual_score=given[g["name"]]))
+            r = hub.user(
+                instructor, f"formgrader/api/grade/{g['id']}", "put", json=dict(g, manual_score=given[g["name"]])
+            )
             assert r.status_code == 200 and r.json()["manual_score"] == given[g["name"]], r.text
             assert not r.json()["needs_manual_grade"], r.text
         manual = sum(given.values())
         assert 0 < manual < 6, given
-        (sub,) = [n for n in hub.user(instructor, f"formgrader/api/submitted_notebooks/{LAB}/{LAB}").json()
-                  if n["student"] == ada]
+        (sub,) = [
+            n
+            for n in hub.user(instructor, f"formgrader/api/submitted_notebooks/{LAB}/{LAB}").json()
+            if n["student"] == ada
+        ]
         assert not sub["needs_manual_grade"] and sub["score"] == 16 + manual, sub
-        hub.as_user(instructor, "nbgrader", "export", cwd=hub.course)          # after the written answers
+        hub.as_user(instructor, "nbgrader", "export", cwd=hub.course)  # after the written answers
         exported = _grades_csv(hub)
         assert {n: float(r["score"]) for n, r in exported.items()} == {ada: 16 + manual, bob: 14, cy: 5}, exported
 
@@ -595,9 +699,11 @@ def big_hub():
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-@pytest.mark.skipif(os.environ.get("FUSIONLAB_HUB_LOAD", "") in ("", "0"),
-                    reason="the load test starts 30 servers (about 5 minutes at a load of ~16 on 2 cores, which would "
-                           "slow every test beside it): run it with FUSIONLAB_HUB_LOAD=1")
+@pytest.mark.skipif(
+    os.environ.get("FUSIONLAB_HUB_LOAD", "") in ("", "0"),
+    reason="the load test starts 30 servers (about 5 minutes at a load of ~16 on 2 cores, which would "
+    "slow every test beside it): run it with FUSIONLAB_HUB_LOAD=1",
+)
 def test_thirty_students_fetch_and_submit_within_a_minute(big_hub):
     """Thirty students, logged in (servers started first, not timed), press Fetch and then Submit at once: the
     Assignments panel's calls, which run nbgrader's exchange in each student's own server, as that student."""
@@ -605,8 +711,9 @@ def test_thirty_students_fetch_and_submit_within_a_minute(big_hub):
     assert len(students) == 30
     t = time.monotonic()
     hub.start_servers(students)
-    print(f"\nmake hub with 31 accounts started in {hub.start_seconds:.0f} s; "
-          f"30 servers in {time.monotonic() - t:.0f} s")
+    print(
+        f"\nmake hub with 31 accounts started in {hub.start_seconds:.0f} s; 30 servers in {time.monotonic() - t:.0f} s"
+    )
     hub.as_user(instructor, "nbgrader", "db", "assignment", "add", LAB, cwd=hub.course)
     hub.as_user(instructor, "nbgrader", "release_assignment", LAB, cwd=hub.course)
 
@@ -616,8 +723,11 @@ def test_thirty_students_fetch_and_submit_within_a_minute(big_hub):
         times = {}
         for op in ("fetch", "submit"):
             t = time.monotonic()
-            r = session.post(f"{hub.url}/user/{name}/assignments/{op}", timeout=120,
-                             data={"course_id": "fusionlab", "assignment_id": LAB})
+            r = session.post(
+                f"{hub.url}/user/{name}/assignments/{op}",
+                timeout=120,
+                data={"course_id": "fusionlab", "assignment_id": LAB},
+            )
             assert r.status_code == 200 and r.json()["success"], (name, op, r.text[:300])
             times[op] = time.monotonic() - t
         return times

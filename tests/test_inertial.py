@@ -1,6 +1,7 @@
 """Tests of :mod:`fusionlab.inertial`: the Coriolis force, the rotating frame, the spinning top (seed 000 §3.2) and
 the drift of an integrated gyro (seed 001 sensors note §3, attitude note §3). Random inputs use fixed seeds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -24,10 +25,10 @@ def test_coriolis_force_is_minus_two_m_omega_cross_v_and_printed_is_its_opposite
 
 def test_ball_on_a_spinning_disk_deflects_as_minus_two_omega_cross_v():
     # fig 20: a ball moves in a straight line in the inertial frame; seen from the disk it curves
-    Om, u = 2.0, 1.5                                       # disk rad/s, ball m/s
+    Om, u = 2.0, 1.5  # disk rad/s, ball m/s
     t = np.linspace(0.0, 1.0, 20001)
     h = t[1] - t[0]
-    ang = -Om * t                                          # inertial -> disk coordinates: rotate by -Ωt
+    ang = -Om * t  # inertial -> disk coordinates: rotate by -Ωt
     xi = u * t
     r = np.stack([np.cos(ang) * xi, np.sin(ang) * xi, 0 * t], -1)
     v = np.gradient(r, h, axis=0)
@@ -36,7 +37,7 @@ def test_ball_on_a_spinning_disk_deflects_as_minus_two_omega_cross_v():
     k = slice(10, -10)
     assert np.max(np.abs(a[k] - pred[k])) < 1e-5
     printed = np.cross([0, 0, Om], np.cross([0, 0, Om], -r)) + inertial.seed000_eq334_printed(1.0, [0, 0, Om], v)
-    assert np.max(np.abs(a[k] - printed[k])) > 1.0        # the printed sign bends the path the wrong way
+    assert np.max(np.abs(a[k] - printed[k])) > 1.0  # the printed sign bends the path the wrong way
 
 
 def test_rotating_frame_acceleration_includes_the_euler_term():
@@ -88,9 +89,9 @@ def test_drift_helpers_reject_bad_input():
 def test_point_acceleration_undoes_the_rotating_frame_acceleration_of_eq_3_32():
     rng = np.random.default_rng(7)
     A, w, r, v, wd = rng.normal(size=(5, 10, 3))
-    a_rot = inertial.rotating_frame_acceleration(A, w, r, v, wd)       # eq 3.32 solved for the rotating frame
+    a_rot = inertial.rotating_frame_acceleration(A, w, r, v, wd)  # eq 3.32 solved for the rotating frame
     assert np.allclose(inertial.point_acceleration(np.zeros(3), w, wd, r, v, a_rot), A, atol=1e-12)
-    fixed = inertial.point_acceleration(A[0], w[0], wd[0], r[0])       # lever arm: no relative motion
+    fixed = inertial.point_acceleration(A[0], w[0], wd[0], r[0])  # lever arm: no relative motion
     assert np.allclose(fixed, A[0] + np.cross(wd[0], r[0]) + np.cross(w[0], np.cross(w[0], r[0])))
     with pytest.raises(ValueError, match="r must"):
         inertial.point_acceleration(A[0], w[0], wd[0], [1.0, 2.0])
@@ -99,15 +100,15 @@ def test_point_acceleration_undoes_the_rotating_frame_acceleration_of_eq_3_32():
 def test_precession_rate_matches_a_simulated_top_at_any_tilt():
     """Seed 000 eqs 3.22-3.25: dL/dt = r × Mg turns L about the vertical at M g D / (I ω), whatever the tilt."""
     M, D, r, spin = 0.1, 0.03, 0.025, 2 * np.pi * 50.0
-    inertia = 0.5 * M * r ** 2
+    inertia = 0.5 * M * r**2
     wp = inertial.precession_rate(M, D, inertia, spin)
     assert wp == pytest.approx(M * earth.G * D / (inertia * spin), rel=1e-15)
     for tilt in (0.3, 1.0):
         L = inertia * spin * np.array([np.sin(tilt), 0.0, np.cos(tilt)])
         dt, steps = 1e-4, 5000
-        for _ in range(steps):                                   # midpoint rule on dL/dt = (D L/|L|) × (0, 0, -M g)
+        for _ in range(steps):  # midpoint rule on dL/dt = (D L/|L|) × (0, 0, -M g)
             half = L + 0.5 * dt * np.cross(D * L / np.linalg.norm(L), [0, 0, -M * earth.G])
             L = L + dt * np.cross(D * half / np.linalg.norm(half), [0, 0, -M * earth.G])
-        assert np.arctan2(L[1], L[0]) / (steps * dt) == pytest.approx(wp, rel=1e-4)    # about +z, the same rate
+        assert np.arctan2(L[1], L[0]) / (steps * dt) == pytest.approx(wp, rel=1e-4)  # about +z, the same rate
     with pytest.raises(ValueError, match="spin must be > 0"):
         inertial.precession_rate(M, D, inertia, 0.0)

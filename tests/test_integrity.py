@@ -1,6 +1,7 @@
 """The integrity scanner (grading/codescan.py, read by grading/integrity.py): every construct no honest answer needs is
 flagged with its cell and line; every model answer and every untouched release of every lab is clean; the report
 lists flagged students for REVIEW."""
+
 from __future__ import annotations
 
 import ast
@@ -130,15 +131,23 @@ def test_added_edited_and_pasted_cells_are_scanned(tmp_path):
         provided = next(c for c in nb.cells if c.cell_type == "code" and not c.metadata.get("nbgrader"))
         provided.source += "\nimport socket"
         pasted = nbformat.v4.new_code_cell("x = 1")
-        pasted.metadata["nbgrader"] = {"grade": False, "grade_id": "ex9_solution", "locked": False,
-                                       "schema_version": 3, "solution": True, "task": False}
+        pasted.metadata["nbgrader"] = {
+            "grade": False,
+            "grade_id": "ex9_solution",
+            "locked": False,
+            "schema_version": 3,
+            "solution": True,
+            "task": False,
+        }
         nb.cells.append(pasted)
         # locked cells are replaced at grading time: a cheat in one is inert and not reported
         [test] = [c for c in nb.cells if _gid(c) == "ex1_tests"]
         test.source = "import socket"
+
     flags = integrity.scan_notebook(SOURCE, _submission(tmp_path, edit))
     assert {(f["cell"], f["kind"]) for f in flags} == {("cell 4", "patch"), ("ex9_solution", "foreign-cell")} | {
-        (f["cell"], "network") for f in flags if f["kind"] == "network"}
+        (f["cell"], "network") for f in flags if f["kind"] == "network"
+    }
     assert sum(f["kind"] == "network" for f in flags) == 1
     assert all(f["cell"] != "ex1_tests" for f in flags)
 
@@ -146,34 +155,41 @@ def test_added_edited_and_pasted_cells_are_scanned(tmp_path):
 def test_an_honestly_edited_provided_cell_is_judged_by_the_new_lines_only(tmp_path):
     nb = nbformat.read(SOURCE, as_version=4)
     # a provided cell that uses a reference function itself (the lab shows the library's version beside the student's)
-    cell = next(c for c in nb.cells if c.cell_type == "code" and not c.metadata.get("nbgrader")
-                and "kf.joseph_covariance(" in c.source)
+    cell = next(
+        c
+        for c in nb.cells
+        if c.cell_type == "code" and not c.metadata.get("nbgrader") and "kf.joseph_covariance(" in c.source
+    )
 
     def edit(nb):
         mine = next(c for c in nb.cells if c.source == cell.source)
-        mine.source = (cell.source.replace("J = kf.joseph_covariance(", "J  =  kf.joseph_covariance(", 1)
-                       + "\nJ2 = kf.joseph_covariance(P_prior, Kg, Hg, 3.0 * Rg)\nprint('my own look', J2)")
+        mine.source = (
+            cell.source.replace("J = kf.joseph_covariance(", "J  =  kf.joseph_covariance(", 1)
+            + "\nJ2 = kf.joseph_covariance(P_prior, Kg, Hg, 3.0 * Rg)\nprint('my own look', J2)"
+        )
+
     assert integrity.scan_notebook(SOURCE, _submission(tmp_path, edit)) == []
 
     def cheat(nb):
         mine = next(c for c in nb.cells if c.source == cell.source)
         mine.source = cell.source + "\nnp.allclose = lambda *a, **k: True"
+
     [flag] = integrity.scan_notebook(SOURCE, _submission(tmp_path, cheat, "cheat"))
     assert flag["kind"] == "patch" and flag["line"] == len(cell.source.splitlines()) + 1
 
 
 def test_reference_names_come_from_the_table_of_exercises():
     from fusionlab.checks import exercises
+
     src = codescan.Source(nbformat.read(SOURCE, as_version=4), LAB)
     for e in exercises.of_lab(LAB):
         assert src.forbid[e.number] == {name.rsplit(".", 1)[-1] for name in e.forbid}
     assert "joseph_covariance" in src.forbid[1] and "predict" in src.forbid[3]
     # the names are what the answer of that exercise is checked against
-    assert [k for _, k, _ in codescan.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=1)] == \
-        ["reference"]
+    assert [k for _, k, _ in codescan.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=1)] == [
+        "reference"
+    ]
     assert codescan.scan_source("y = kf.joseph_covariance(P, K, H, R)", src, exercise=3) == []
-
-
 
 
 @pytest.mark.parametrize("lab", LABS)
@@ -185,7 +201,7 @@ def test_every_exercise_names_its_reference_functions_in_its_own_tests(lab):
     src = codescan.Source(nb, lab)
     unnamed = {n for n in graded if not src.forbid.get(n)}
     assert unnamed == {n for lab_, n in NO_REFERENCE if lab_ == lab}, unnamed
-    if lab == "00_mems_sensors":           # the value exercises, reserved in the setup cell and released in the test
+    if lab == "00_mems_sensors":  # the value exercises, reserved in the setup cell and released in the test
         assert (src.forbid[5], src.forbid[11]) == ({"adc_step"}, {"null_offset"})
 
 
@@ -217,14 +233,29 @@ def test_report_and_cli(tmp_path):
     with open(course / f"integrity_{LAB}.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert [(r["student"], r["status"], r["kind"]) for r in rows] == [
-        ("eve", "REVIEW", "patch"), ("bad", "NOT GRADED", ""), ("ada", "clean", "")]
+        ("eve", "REVIEW", "patch"),
+        ("bad", "NOT GRADED", ""),
+        ("ada", "clean", ""),
+    ]
     assert rows[0]["line"] == "4" and rows[0]["cell"] == "ex1_solution"
     assert rows[1]["why"].startswith("the notebook cannot be read (NotJSONError")
 
 
 def test_report_text_is_short_and_explains_each_kind():
-    assert set(integrity.WHY) >= {"patch", "reflection", "ipython", "exec", "reference", "file", "process",
-                                  "network", "ctypes", "signal", "foreign-cell", "syntax"}
+    assert set(integrity.WHY) >= {
+        "patch",
+        "reflection",
+        "ipython",
+        "exec",
+        "reference",
+        "file",
+        "process",
+        "network",
+        "ctypes",
+        "signal",
+        "foreign-cell",
+        "syntax",
+    }
     assert all(len(why) < 120 for why in integrity.WHY.values())
     assert textwrap.dedent(integrity.__doc__).startswith("Integrity report")
 
@@ -260,15 +291,20 @@ def _pasted(module, name, new_name):
     return "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
 
 
-@pytest.mark.parametrize("gid, module, name, new_name", [
-    ("ex2_solution", "falling_body", "falling_body_state_space", "my_state_space"),
-    ("ex3_solution", "kalman", "predict", "my_predict"),
-    ("ex4_solution", "kalman", "update_step", "my_update")])
+@pytest.mark.parametrize(
+    "gid, module, name, new_name",
+    [
+        ("ex2_solution", "falling_body", "falling_body_state_space", "my_state_space"),
+        ("ex3_solution", "kalman", "predict", "my_predict"),
+        ("ex4_solution", "kalman", "update_step", "my_update"),
+    ],
+)
 def test_a_library_body_pasted_with_new_names_is_flagged_copied_with_its_ratio(tmp_path, gid, module, name, new_name):
     from fusionlab import falling_body, kalman
+
     code = "import numpy as np\n\n" + _pasted({"falling_body": falling_body, "kalman": kalman}[module], name, new_name)
     flags = integrity.scan_notebook(SOURCE, _submission(tmp_path, lambda nb: _answer(nb, gid, code)))
-    [flag] = flags                                   # nothing else in it: no reference call, no patch
+    [flag] = flags  # nothing else in it: no reference call, no patch
     assert (flag["cell"], flag["line"]) == (gid, 3) and flag["code"].startswith(f"def {new_name}(v0")
     assert f"`{new_name}` has the shape of `{module}.{name}` in the library: 100.0% alike" in flag["why"], flag["why"]
 

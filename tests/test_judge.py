@@ -15,6 +15,7 @@ feedback, and the notebook's metadata edited; and the ones the sandbox already s
 library, editing the gradebook, a daemon, the network, a 100 MB print, reading the solutions, a cell that ignores
 interrupts.
 """
+
 from __future__ import annotations
 
 import csv
@@ -42,20 +43,30 @@ from grading.bench_classgrade import fill_answers, grade_id
 from test_feedback import _hidden_lines
 from test_slips import LAB02_OTHER, LAB02_PLANTED
 
-pytestmark = pytest.mark.skipif(shutil.which("bwrap") is None,
-                                reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap")
+pytestmark = pytest.mark.skipif(
+    shutil.which("bwrap") is None, reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap"
+)
 
 LAB = "02_kalman_falling_body"
 POINTS = {"ex1_tests": 2, "ex2_tests": 2, "ex3_tests": 2, "ex4_tests": 3}
 FULL, HALF = 9, 5
 MARKER = "fusionlab-attack-marker"
 # students with planted slips: test -> the slip its answer holds (tests/test_slips.py's answers); the others pass
-SLIPS = {"slips_one": {"ex1_tests": "joseph.short_form", "ex2_tests": "state_space.drag_sign",
-                       "ex3_tests": "predict.no_control", "ex4_tests": "update.innovation_sign"},
-         "slips_two": {"ex1_tests": "joseph.short_form", "ex2_tests": "state_space.gravity_sign",
-                       "ex3_tests": "predict.no_Q", "ex4_tests": "update.gain_no_R"},
-         "slips_three": {"ex1_tests": "joseph.no_noise_term", "ex2_tests": slips.RAISED,
-                         "ex3_tests": slips.UNRECOGNISED}}
+SLIPS = {
+    "slips_one": {
+        "ex1_tests": "joseph.short_form",
+        "ex2_tests": "state_space.drag_sign",
+        "ex3_tests": "predict.no_control",
+        "ex4_tests": "update.innovation_sign",
+    },
+    "slips_two": {
+        "ex1_tests": "joseph.short_form",
+        "ex2_tests": "state_space.gravity_sign",
+        "ex3_tests": "predict.no_Q",
+        "ex4_tests": "update.gain_no_R",
+    },
+    "slips_three": {"ex1_tests": "joseph.no_noise_term", "ex2_tests": slips.RAISED, "ex3_tests": slips.UNRECOGNISED},
+}
 TIMEOUT = 10
 
 
@@ -68,8 +79,10 @@ def _set(nb, gid, code):
 
 def _answers(nb, ex2, ex3, prelude=""):
     """``nb`` with exercises 2 and 3 answered by ``ex2`` / ``ex3`` (bodies of my_state_space / my_predict)."""
+
     def body(code):
         return "\n".join("    " + line for line in code.strip().splitlines())
+
     nb = _set(nb, "ex2_solution", prelude + f"\ndef my_state_space(k, m, g, dt):\n{body(ex2)}\n")
     return _set(nb, "ex3_solution", f"def my_predict(x, P, A, Q, B, u):\n{body(ex3)}\n")
 
@@ -77,7 +90,7 @@ def _answers(nb, ex2, ex3, prelude=""):
 XSS_MARKDOWN = "My answer <img src=x onerror=\"document.title='XSS-IMG'\"> <script>document.title='XSS-MD'</script>"
 XSS_JS = "window.XSS_JS = 1"
 XSS_HTML = "<b onmouseover=\"document.title='XSS-HTML'\">bold</b><script>window.XSS_HTML = 1</script>"
-XSS_IFRAME = "<iframe srcdoc=\"<script>parent.XSS_FRAME = 1</script>\"></iframe>"
+XSS_IFRAME = '<iframe srcdoc="<script>parent.XSS_FRAME = 1</script>"></iframe>'
 XSS_MARKS = ("<img src=x", "<script>document.title", "window.XSS_JS", "<b onmouseover", "window.XSS_HTML", "<iframe")
 JUNK2 = "return np.eye(2), np.zeros((2, 2)), np.zeros(2)"
 JUNK3 = "return np.zeros_like(x), np.zeros_like(P)"
@@ -87,86 +100,160 @@ def _attacks(root, port, half):
     gradebook = str(root / "gradebook.db")
     out = {
         # 1: nbgrader scored a test cell by its first output; a non-number result counted as full points
-        "forged_display": _answers(half, "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK2,
-                                   "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK3),
+        "forged_display": _answers(
+            half,
+            "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK2,
+            "import sys\ngetattr(sys, 'display' + 'hook')('full marks')\n" + JUNK3,
+        ),
         # 2: the in-kernel guard's own state edited
-        "guard_edited": _answers(half, JUNK2, JUNK3, prelude=(
-            "_v = vars\nG = _v(guard)\nfor _k in ('assert_close', 'assert_equal', 'intact', 'release', 'grade'):\n"
-            "    G[_k] = lambda *a, **k: None\n")),
+        "guard_edited": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=(
+                "_v = vars\nG = _v(guard)\nfor _k in ('assert_close', 'assert_equal', 'intact', 'release', 'grade'):\n"
+                "    G[_k] = lambda *a, **k: None\n"
+            ),
+        ),
         # 3: walk up the frames to where the expected values were
-        "frame_walk": _answers(half, (
-            "import sys\nf = sys._getframe()\nwhile f is not None:\n"
-            "    for v in f.f_locals.values():\n"
-            "        if isinstance(v, list) and v and isinstance(v[0], tuple):\n"
-            "            return v[0]\n"
-            "    f = f.f_back\n" + JUNK2), (
-            "import sys\nf = sys._getframe()\nwhile f is not None:\n"
-            "    if 'expected' in f.f_locals:\n        return f.f_locals['expected'][0]\n"
-            "    f = f.f_back\n" + JUNK3)),
+        "frame_walk": _answers(
+            half,
+            (
+                "import sys\nf = sys._getframe()\nwhile f is not None:\n"
+                "    for v in f.f_locals.values():\n"
+                "        if isinstance(v, list) and v and isinstance(v[0], tuple):\n"
+                "            return v[0]\n"
+                "    f = f.f_back\n" + JUNK2
+            ),
+            (
+                "import sys\nf = sys._getframe()\nwhile f is not None:\n"
+                "    if 'expected' in f.f_locals:\n        return f.f_locals['expected'][0]\n"
+                "    f = f.f_back\n" + JUNK3
+            ),
+        ),
         # 4: a trace function that rebinds the grader's names while the tests run
-        "trace": _answers(half, JUNK2, JUNK3, prelude=(
-            "import sys\ndef _t(frame, event, arg):\n    frame.f_globals['guard'] = None\n    return _t\n"
-            "sys.settrace(_t)\n")),
+        "trace": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=(
+                "import sys\ndef _t(frame, event, arg):\n    frame.f_globals['guard'] = None\n    return _t\n"
+                "sys.settrace(_t)\n"
+            ),
+        ),
         # 5: forged messages to the process that reads the results
-        "forged_replies": _answers(half, JUNK2, JUNK3, prelude=(
-            "import os, json\nfor _fd in range(3, 30):\n    try:\n"
-            "        os.write(_fd, (json.dumps({'ok': True, 'ready': True, 'value': 1.0}) + '\\n').encode())\n"
-            "    except OSError:\n        pass\n")),
+        "forged_replies": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=(
+                "import os, json\nfor _fd in range(3, 30):\n    try:\n"
+                "        os.write(_fd, (json.dumps({'ok': True, 'ready': True, 'value': 1.0}) + '\\n').encode())\n"
+                "    except OSError:\n        pass\n"
+            ),
+        ),
         # 6: the library's own source executed again to get the reference back
-        "reference_from_source": _answers(half, (
-            "_ex, _ns = exec, {'__name__': 'fusionlab.falling_body', '__package__': 'fusionlab'}\n"
-            "import fusionlab.falling_body as _fb\n_ex(open(_fb.__file__).read(), _ns)\n"
-            "return _ns['falling_body_' + 'state_space'](k, m, g, dt)"), (
-            "_ex, _ns = exec, {'__name__': 'fusionlab.kalman', '__package__': 'fusionlab'}\n"
-            "_ex(open(kf.__file__).read(), _ns)\nreturn _ns['pre' + 'dict'](x, P, A, Q, B, u)")),
+        "reference_from_source": _answers(
+            half,
+            (
+                "_ex, _ns = exec, {'__name__': 'fusionlab.falling_body', '__package__': 'fusionlab'}\n"
+                "import fusionlab.falling_body as _fb\n_ex(open(_fb.__file__).read(), _ns)\n"
+                "return _ns['falling_body_' + 'state_space'](k, m, g, dt)"
+            ),
+            (
+                "_ex, _ns = exec, {'__name__': 'fusionlab.kalman', '__package__': 'fusionlab'}\n"
+                "_ex(open(kf.__file__).read(), _ns)\nreturn _ns['pre' + 'dict'](x, P, A, Q, B, u)"
+            ),
+        ),
         # 8: packages nobody forbade in the kernel: filterpy's helpers, ahrs
-        "other_packages": _answers(half, "import ahrs\n" + JUNK2, (
-            "import filterpy.kalman as _fk\nreturn _fk.predict(x, P, A, Q, B=B, u=u)")),
+        "other_packages": _answers(
+            half, "import ahrs\n" + JUNK2, ("import filterpy.kalman as _fk\nreturn _fk.predict(x, P, A, Q, B=B, u=u)")
+        ),
         # sandbox: write the course, the library, the gradebook; a daemon; the network; a huge print; read others
-        "writes": _answers(half, (
-            f"import pathlib\nfor _p in [{str(root / 'pwned.txt')!r}, {str(root / 'lib' / 'fusionlab' / 'x.py')!r},"
-            f" {str(root / 'solutions' / LAB / 'pwned.txt')!r}]:\n"
-            "    try:\n        pathlib.Path(_p).write_text('pwned')\n    except Exception:\n        pass\n"
-            f"import sqlite3\ntry:\n    _c = sqlite3.connect({gradebook!r})\n"
-            "    _c.execute('UPDATE grade SET auto_score = 100')\n    _c.commit()\nexcept Exception:\n    pass\n"
-            + JUNK2), JUNK3),
-        "daemon": _answers(half, (
-            "import os, subprocess, sys\n"
-            f"_code = 'import time, sqlite3\\ntime.sleep(8)\\nsqlite3.connect({gradebook!r}).execute(\"UPDATE grade "
-            "SET auto_score = 100\").connection.commit()'\n"
-            f"subprocess.Popen([sys.executable, '-c', _code, '{MARKER}'], start_new_session=True)\n" + JUNK2), JUNK3),
-        "network": _answers(half, (
-            f"import socket\nfor _a in [('1.1.1.1', 80), ('127.0.0.1', {port})]:\n    try:\n"
-            f"        socket.create_connection(_a, timeout=2).sendall(b'{MARKER}')\n    except Exception:\n"
-            "        pass\n" + JUNK2), "print('x' * 100_000_000)\n" + JUNK3),
-        "read_others": _answers(half, (
-            "import json\n_src = {}\n"
-            f"for _p in [{str(root / 'solutions' / LAB / (LAB + '.ipynb'))!r}, "
-            f"{str(root / 'submitted' / 'full' / LAB / (LAB + '.ipynb'))!r}]:\n"
-            "    try:\n        for _c in json.load(open(_p))['cells']:\n"
-            "            if 'def my_state_space' in ''.join(_c['source']):\n"
-            "                exec('\\n'.join(l for l in ''.join(_c['source']).splitlines() if '###' not in l), _src)\n"
-            "    except Exception:\n        pass\n"
-            "if 'my_state_space' in _src:\n    return _src['my_state_space'](k, m, g, dt)\n" + JUNK2), JUNK3),
+        "writes": _answers(
+            half,
+            (
+                f"import pathlib\nfor _p in [{str(root / 'pwned.txt')!r}, {str(root / 'lib' / 'fusionlab' / 'x.py')!r},"
+                f" {str(root / 'solutions' / LAB / 'pwned.txt')!r}]:\n"
+                "    try:\n        pathlib.Path(_p).write_text('pwned')\n    except Exception:\n        pass\n"
+                f"import sqlite3\ntry:\n    _c = sqlite3.connect({gradebook!r})\n"
+                "    _c.execute('UPDATE grade SET auto_score = 100')\n    _c.commit()\nexcept Exception:\n    pass\n"
+                + JUNK2
+            ),
+            JUNK3,
+        ),
+        "daemon": _answers(
+            half,
+            (
+                "import os, subprocess, sys\n"
+                f"_code = 'import time, sqlite3\\ntime.sleep(8)\\nsqlite3.connect({gradebook!r}).execute(\"UPDATE "
+                "grade "
+                "SET auto_score = 100\").connection.commit()'\n"
+                f"subprocess.Popen([sys.executable, '-c', _code, '{MARKER}'], start_new_session=True)\n" + JUNK2
+            ),
+            JUNK3,
+        ),
+        "network": _answers(
+            half,
+            (
+                f"import socket\nfor _a in [('1.1.1.1', 80), ('127.0.0.1', {port})]:\n    try:\n"
+                f"        socket.create_connection(_a, timeout=2).sendall(b'{MARKER}')\n    except Exception:\n"
+                "        pass\n" + JUNK2
+            ),
+            "print('x' * 100_000_000)\n" + JUNK3,
+        ),
+        "read_others": _answers(
+            half,
+            (
+                "import json\n_src = {}\n"
+                f"for _p in [{str(root / 'solutions' / LAB / (LAB + '.ipynb'))!r}, "
+                f"{str(root / 'submitted' / 'full' / LAB / (LAB + '.ipynb'))!r}]:\n"
+                "    try:\n        for _c in json.load(open(_p))['cells']:\n"
+                "            if 'def my_state_space' in ''.join(_c['source']):\n"
+                "                exec('\\n'.join(l for l in ''.join(_c['source']).splitlines() if '###' not in l), "
+                "_src)\n"
+                "    except Exception:\n        pass\n"
+                "if 'my_state_space' in _src:\n    return _src['my_state_space'](k, m, g, dt)\n" + JUNK2
+            ),
+            JUNK3,
+        ),
         # a cell that ignores the interrupt and never ends
-        "stuck": _answers(half, JUNK2, JUNK3, prelude=(
-            "import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\ntime.sleep(3600)\n")),
+        "stuck": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=("import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\ntime.sleep(3600)\n"),
+        ),
         # the disk filled from the box's folder and /tmp (each is in memory, 256 MB)
-        "disk_fill": _answers(half, JUNK2, JUNK3, prelude=(
-            "import os\nfor _d in ('.', '/tmp'):\n    for _i in range(40):\n        try:\n"
-            "            with open(os.path.join(_d, f'fill{_i}.bin'), 'wb') as _f:\n"
-            "                _f.write(b'x' * (10 << 20))\n        except OSError:\n            break\n")),
+        "disk_fill": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=(
+                "import os\nfor _d in ('.', '/tmp'):\n    for _i in range(40):\n        try:\n"
+                "            with open(os.path.join(_d, f'fill{_i}.bin'), 'wb') as _f:\n"
+                "                _f.write(b'x' * (10 << 20))\n        except OSError:\n            break\n"
+            ),
+        ),
         # 9: a fork bomb that holds its processes while classmates are graded
-        "fork_bomb": _answers(half, JUNK2, JUNK3, prelude=(
-            "import os, time\n_kids = 0\nwhile _kids < 100000:\n    try:\n        if os.fork() == 0:\n"
-            "            time.sleep(3600)\n            os._exit(0)\n        _kids += 1\n    except OSError:\n"
-            "        break\ntime.sleep(3600)\n")),
+        "fork_bomb": _answers(
+            half,
+            JUNK2,
+            JUNK3,
+            prelude=(
+                "import os, time\n_kids = 0\nwhile _kids < 100000:\n    try:\n        if os.fork() == 0:\n"
+                "            time.sleep(3600)\n            os._exit(0)\n        _kids += 1\n    except OSError:\n"
+                "        break\ntime.sleep(3600)\n"
+            ),
+        ),
     }
     # 12: objects that name a library module and a chain to a class with a __del__ (tempfile's closer, numpy's
     # DataSource): sent as forged replies and returned; had the judge rebuilt them, they would delete a classmate's
     # notebook, the gradebook and a folder of the course as they were dropped
-    victims = {"file": [str(root / "submitted" / "full" / LAB / f"{LAB}.ipynb"), gradebook],
-               "tree": str(root / "canary")}
+    victims = {
+        "file": [str(root / "submitted" / "full" / LAB / f"{LAB}.ipynb"), gradebook],
+        "tree": str(root / "canary"),
+    }
     gadgets = (
         "import json, os\n"
         f"_victims = {victims!r}\n"
@@ -181,55 +268,84 @@ def _attacks(root, port, half):
         "        pass\n"
         "class _Closer:\n    pass\n"
         "_Closer.__module__, _Closer.__qualname__ = 'fusionlab.datasets', 'tempfile._TemporaryFileCloser'\n"
-        "_c = _Closer()\n_c.name, _c.delete, _c.close_called, _c.file = _victims['file'][0], True, False, _Closer()\n")
+        "_c = _Closer()\n_c.name, _c.delete, _c.close_called, _c.file = _victims['file'][0], True, False, _Closer()\n"
+    )
     out["gadgets"] = _answers(half, gadgets + "return _c, _c, _c", gadgets + "return _c, _c")
     # 13: the hidden inputs read back from the verdicts: an answer that passes the visible case, then returns zeros
     # (hoping for "got 0, expected ..."), and one that raises with its arguments on its second call
-    out["leak_inputs"] = _answers(half, (
-        "global _calls2\n_calls2 = globals().get('_calls2', 0) + 1\n"
-        "if _calls2 == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
-        "return np.zeros((2, 2)), np.zeros((2, 1)), np.zeros(1)"), (
-        "global _calls3\n_calls3 = globals().get('_calls3', 0) + 1\n"
-        "if _calls3 > 1:\n    raise ValueError('LEAKED ' + repr((x, P, A, Q, B, u)))\n" + JUNK3))
+    out["leak_inputs"] = _answers(
+        half,
+        (
+            "global _calls2\n_calls2 = globals().get('_calls2', 0) + 1\n"
+            "if _calls2 == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
+            "return np.zeros((2, 2)), np.zeros((2, 1)), np.zeros(1)"
+        ),
+        (
+            "global _calls3\n_calls3 = globals().get('_calls3', 0) + 1\n"
+            "if _calls3 > 1:\n    raise ValueError('LEAKED ' + repr((x, P, A, Q, B, u)))\n" + JUNK3
+        ),
+    )
     # 14: one reply of 120 MB of empty dicts, written straight to every pipe the box holds
-    out["flood"] = _answers(half, JUNK2, (
-        "import os\n_line = b'{\"ok\": true, \"value\": [' + b'{}, ' * 40_000_000 + b'{}]}\\n'\n"
-        "for _fd in range(3, 30):\n    try:\n        os.write(_fd, _line)\n    except OSError:\n        pass\n"
-        + JUNK3))
+    out["flood"] = _answers(
+        half,
+        JUNK2,
+        (
+            "import os\n_line = b'{\"ok\": true, \"value\": [' + b'{}, ' * 40_000_000 + b'{}]}\\n'\n"
+            "for _fd in range(3, 30):\n    try:\n        os.write(_fd, _line)\n    except OSError:\n        pass\n"
+            + JUNK3
+        ),
+    )
     # 15: the kernel's per-user key store as a channel between the boxes of one student: the box of exercise 2's
     # test stores a key, the box of exercise 3's test finds it and only then answers with the model's code
     honest3 = "return A @ x + B @ u, A @ P @ A.T + Q"
-    out["keyring"] = _answers(half, JUNK2, f"if _seen > 0:\n    {honest3}\n" + JUNK3, prelude=(
-        "import ctypes\n_libc = ctypes.CDLL(None, use_errno=True)\n_libc.syscall.restype = ctypes.c_long\n"
-        f"_seen = _libc.syscall(249 if __import__('platform').machine() == 'x86_64' else 218, b'user', "
-        f"b'{MARKER}', None, 0)\n"
-        f"_libc.syscall(248 if __import__('platform').machine() == 'x86_64' else 217, b'user', b'{MARKER}', b'1', "
-        "1, -4)\n"))
+    out["keyring"] = _answers(
+        half,
+        JUNK2,
+        f"if _seen > 0:\n    {honest3}\n" + JUNK3,
+        prelude=(
+            "import ctypes\n_libc = ctypes.CDLL(None, use_errno=True)\n_libc.syscall.restype = ctypes.c_long\n"
+            f"_seen = _libc.syscall(249 if __import__('platform').machine() == 'x86_64' else 218, b'user', "
+            f"b'{MARKER}', None, 0)\n"
+            f"_libc.syscall(248 if __import__('platform').machine() == 'x86_64' else 217, b'user', b'{MARKER}', b'1', "
+            "1, -4)\n"
+        ),
+    )
     # 16: links nested in the submission folder to the solution notebook and the real library (the box is seeded
     # from that folder as root); the links are made by the fixture beside the notebook
-    out["nested_links"] = _answers(half, (
-        "text = open('stuff/notes.txt').read()\n"
-        "raise ValueError(text[text.find('BEGIN HIDDEN'):][:3000])"), (
-        "import importlib.util\n"
-        "spec = importlib.util.spec_from_file_location('realkalman', 'stuff/reallib/kalman.py')\n"
-        "real = importlib.util.module_from_spec(spec)\nspec.loader.exec_module(real)\n"
-        "return real.predict(x, P, A, Q, B, u)"))
+    out["nested_links"] = _answers(
+        half,
+        ("text = open('stuff/notes.txt').read()\nraise ValueError(text[text.find('BEGIN HIDDEN'):][:3000])"),
+        (
+            "import importlib.util\n"
+            "spec = importlib.util.spec_from_file_location('realkalman', 'stuff/reallib/kalman.py')\n"
+            "real = importlib.util.module_from_spec(spec)\nspec.loader.exec_module(real)\n"
+            "return real.predict(x, P, A, Q, B, u)"
+        ),
+    )
     # 17: 36 characters of sympy that the judge would evaluate into gigabytes
     out["sympy_bomb"] = _answers(half, JUNK2, "import sympy\nreturn sympy.Pow(2, 4_000_000_000, evaluate=False), P")
     # 18: values shaped to blow up in the judge's own arithmetic: exercise 2's test computes B @ u, and a B of
     # 40 000 x 1 x 1 times a u of 1 x 40 000 (640 kB of reply) is 12.8 GB
-    out["amplify"] = _answers(half, (
-        "global _calls_amp\n_calls_amp = globals().get('_calls_amp', 0) + 1\n"
-        "if _calls_amp == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
-        "return np.eye(2), np.ones((40_000, 1, 1)), np.ones((1, 40_000))"), JUNK3)
+    out["amplify"] = _answers(
+        half,
+        (
+            "global _calls_amp\n_calls_amp = globals().get('_calls_amp', 0) + 1\n"
+            "if _calls_amp == 1:\n    return np.array([[1, 0.01], [0, 0.99975]]), np.zeros((2, 1)), np.zeros(1)\n"
+            "return np.eye(2), np.ones((40_000, 1, 1)), np.ones((1, 40_000))"
+        ),
+        JUNK3,
+    )
     # 19: scripts for the instructor's browser (Formgrader and the feedback page are served by the instructor's
     # Jupyter server): raw HTML in a written answer, a saved JavaScript output, an added cell with an iframe
     xss = nbformat.from_dict(_answers(half, JUNK2, JUNK3))
     [q1] = [c for c in xss.cells if grade_id(c) == "q1"]
     q1.source = XSS_MARKDOWN
     [ex2] = [c for c in xss.cells if grade_id(c) == "ex2_solution"]
-    ex2.outputs = [nbformat.v4.new_output("display_data", data={"application/javascript": XSS_JS,
-                                                                "text/html": XSS_HTML, "text/plain": "a plot"})]
+    ex2.outputs = [
+        nbformat.v4.new_output(
+            "display_data", data={"application/javascript": XSS_JS, "text/html": XSS_HTML, "text/plain": "a plot"}
+        )
+    ]
     xss.cells.append(nbformat.v4.new_markdown_cell(XSS_IFRAME))
     out["xss"] = xss
     # 10: a last cell that prints every cell the kernel ran, hoping for the hidden tests
@@ -246,6 +362,7 @@ def _pasted_update():
     import inspect
 
     from fusionlab import kalman
+
     fn = ast.parse(inspect.getsource(kalman.update_step)).body[0]
     body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
     body.insert(1, ast.parse("n_state = len(xx)").body[0])
@@ -257,10 +374,12 @@ def _pasted_update():
             node.id = names[node.id]
         elif isinstance(node, ast.arg) and node.arg in names:
             node.arg = names[node.arg]
-    helpers = ("def gain_(PP, H, R):\n    return PP @ H.T @ np.linalg.inv(H @ PP @ H.T + R)\n\n"
-               "def joseph_(PP, KK, H, R):\n    M = np.eye(PP.shape[0]) - KK @ H\n"
-               "    return M @ PP @ M.T + KK @ R @ KK.T\n\n"
-               "def info_(PP, H, R):\n    return np.linalg.inv(np.linalg.inv(PP) + H.T @ np.linalg.inv(R) @ H)\n\n")
+    helpers = (
+        "def gain_(PP, H, R):\n    return PP @ H.T @ np.linalg.inv(H @ PP @ H.T + R)\n\n"
+        "def joseph_(PP, KK, H, R):\n    M = np.eye(PP.shape[0]) - KK @ H\n"
+        "    return M @ PP @ M.T + KK @ R @ KK.T\n\n"
+        "def info_(PP, H, R):\n    return np.linalg.inv(np.linalg.inv(PP) + H.T @ np.linalg.inv(R) @ H)\n\n"
+    )
     return helpers + "\n".join(line + "  # my own working" for line in ast.unparse(fn).splitlines())
 
 
@@ -314,6 +433,7 @@ def _processes_with(marker):
 
 def _scores(root, students):
     from nbgrader.api import Gradebook
+
     out = {}
     with Gradebook(f"sqlite:///{root / 'gradebook.db'}") as gb:
         for student in students:
@@ -343,8 +463,13 @@ def graded(tmp_path_factory):
     listener.listen(5)
     listener.setblocking(False)
 
-    class_ = {"full": full, "half": half, "none": release, "metadata_edited": _metadata_edited(full),
-              "pasted_library": _set(release, "ex4_solution", _pasted_update())}
+    class_ = {
+        "full": full,
+        "half": half,
+        "none": release,
+        "metadata_edited": _metadata_edited(full),
+        "pasted_library": _set(release, "ex4_solution", _pasted_update()),
+    }
     class_.update({student: _planted(full, planted) for student, planted in SLIPS.items()})
     class_.update(_attacks(root, listener.getsockname()[1], half))
     for student, nb in class_.items():
@@ -360,18 +485,34 @@ def graded(tmp_path_factory):
 
     (root / "canary").mkdir()
     (root / "canary" / "keep.txt").write_text("canary")
-    keep = ("gradebook.db", ".gradebook-backups", "autograded", "grades.csv", "feedback", f"integrity_{LAB}.md",
-            f"integrity_{LAB}.csv",
-            f"similarity_{LAB}.md", f"similarity_{LAB}.csv", f"slips_{LAB}.html", f"slips_{LAB}.csv")
+    keep = (
+        "gradebook.db",
+        ".gradebook-backups",
+        "autograded",
+        "grades.csv",
+        "feedback",
+        f"integrity_{LAB}.md",
+        f"integrity_{LAB}.csv",
+        f"similarity_{LAB}.md",
+        f"similarity_{LAB}.csv",
+        f"slips_{LAB}.html",
+        f"slips_{LAB}.csv",
+    )
     before = _tree_hash(root, keep)
     with sqlite3.connect(root / "gradebook.db") as con:
         sources = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
-    env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""),
-               MPLBACKEND="Agg")
+    env = dict(
+        os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg"
+    )
     t0 = time.monotonic()
-    run = subprocess.run([sys.executable, "-m", "grading.classgrade", LAB, "--workers", "2", "--timeout",
-                          str(TIMEOUT), "--no-generate"], cwd=root, env=env, capture_output=True, text=True,
-                         timeout=1500)
+    run = subprocess.run(
+        [sys.executable, "-m", "grading.classgrade", LAB, "--workers", "2", "--timeout", str(TIMEOUT), "--no-generate"],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=1500,
+    )
     seconds = time.monotonic() - t0
     nbgrader(["generate_feedback", LAB, "--force"], cwd=root)
     time.sleep(max(0.0, 9 - (time.monotonic() - t0 - seconds)))  # the daemon's delay: had it survived, it has written
@@ -385,9 +526,19 @@ def graded(tmp_path_factory):
     listener.close()
     with sqlite3.connect(root / "gradebook.db") as con:
         sources_after = con.execute("SELECT name, source FROM source_cell ORDER BY name").fetchall()
-    return dict(root=root, run=run, seconds=seconds, scores=_scores(root, class_), before=before, keep=keep,
-                left=left, connected=connected, students=list(class_), sources=(sources, sources_after),
-                solution=solution)
+    return dict(
+        root=root,
+        run=run,
+        seconds=seconds,
+        scores=_scores(root, class_),
+        before=before,
+        keep=keep,
+        left=left,
+        connected=connected,
+        students=list(class_),
+        sources=(sources, sources_after),
+        solution=solution,
+    )
 
 
 def _autograded(graded, student, gid):
@@ -406,10 +557,12 @@ def test_the_class_run_names_every_student_and_refuses_only_the_unreadable_one(g
     assert "not graded: not_json" in run.stderr
     assert "model solution: 9 / 9" in run.stdout
     # every student's visible round before any hidden one (grading.classgrade.grade_class), by the judges' clocks
-    assert re.search(r"^rounds apart: the last visible part ended before the first hidden part began", run.stdout,
-                     re.M), run.stdout[-3000:]
-    assert run.stdout.index("round 2 of 2") > max(run.stdout.index(f"  {s}: visible parts graded")
-                                                  for s in ("full", "half"))
+    assert re.search(
+        r"^rounds apart: the last visible part ended before the first hidden part began", run.stdout, re.M
+    ), run.stdout[-3000:]
+    assert run.stdout.index("round 2 of 2") > max(
+        run.stdout.index(f"  {s}: visible parts graded") for s in ("full", "half")
+    )
     for student in graded["students"] + ["not_json"]:
         assert re.search(rf"^{re.escape(student)}\s", run.stdout, re.M), student
     with open(graded["root"] / "grades.csv", newline="") as fh:
@@ -429,42 +582,78 @@ def test_the_report_of_common_slips_counts_the_slips_planted_and_its_page_names_
     with open(graded["root"] / f"slips_{LAB}.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     got = {(r["student"], r["grade_id"]): r["slip"] for r in rows}
-    assert {r["student"] for r in rows} == set(graded["students"])          # not_json was not graded
-    expected = {**SLIPS, "full": {}, "half": {"ex2_tests": slips.NOT_ATTEMPTED, "ex3_tests": slips.NOT_ATTEMPTED},
-                "none": dict.fromkeys(POINTS, slips.NOT_ATTEMPTED)}
+    assert {r["student"] for r in rows} == set(graded["students"])  # not_json was not graded
+    expected = {
+        **SLIPS,
+        "full": {},
+        "half": {"ex2_tests": slips.NOT_ATTEMPTED, "ex3_tests": slips.NOT_ATTEMPTED},
+        "none": dict.fromkeys(POINTS, slips.NOT_ATTEMPTED),
+    }
     for student, planted in expected.items():
         assert {g: got[student, g] for g in POINTS} == {g: planted.get(g, slips.PASSED) for g in POINTS}, student
     named = Counter(r["slip"] for r in rows if r["slip"] not in slips.OUTCOMES)
-    assert named == Counter(s for p in SLIPS.values() for s in p.values() if s not in slips.OUTCOMES), \
-        [(r["student"], r["grade_id"], r["slip"]) for r in rows if r["slip"] not in slips.OUTCOMES]
+    assert named == Counter(s for p in SLIPS.values() for s in p.values() if s not in slips.OUTCOMES), [
+        (r["student"], r["grade_id"], r["slip"]) for r in rows if r["slip"] not in slips.OUTCOMES
+    ]
     page = (graded["root"] / f"slips_{LAB}.html").read_text()
     for slip, count in named.items():
-        shown = re.search(r'<td class="count">(\d+)</td><td>' + re.escape(html.escape(slips.text(slip)))
-                          + f" <code>{re.escape(slip)}</code>", page)
+        shown = re.search(
+            r'<td class="count">(\d+)</td><td>'
+            + re.escape(html.escape(slips.text(slip)))
+            + f" <code>{re.escape(slip)}</code>",
+            page,
+        )
         assert shown and int(shown.group(1)) == count, slip
     assert not [s for s in graded["students"] if "_" in s and s in page]
     assert "common slips: slips_02_kalman_falling_body.html" in graded["run"].stdout
 
     # each wrong answer's example: an answer cell that made it, as graded (the planted slip's own); the attackers'
     # code (markup, scripts) is text in it
-    wrong = {f"example-{r['grade_id']}-{r['slip']}" for r in rows
-             if r["slip"] not in slips.OUTCOMES or r["slip"] in (slips.UNRECOGNISED, slips.RAISED)}
+    wrong = {
+        f"example-{r['grade_id']}-{r['slip']}"
+        for r in rows
+        if r["slip"] not in slips.OUTCOMES or r["slip"] in (slips.UNRECOGNISED, slips.RAISED)
+    }
     assert set(re.findall(r'<details class="example" id="([^"]+)">', page)) == wrong
     for gid, slip in sorted({(g, s) for p in SLIPS.values() for g, s in p.items() if s not in slips.OUTCOMES}):
         shown = re.search(f'id="example-{gid}-{slip}"><summary>example</summary><pre><code>(.*?)</code>', page, re.S)
         assert shown and html.unescape(shown.group(1)) == LAB02_PLANTED[slip][1].rstrip(), (gid, slip)
     assert "<script" not in page and "<img" not in page and "<iframe" not in page
-    assert set(slipreport.names_of(graded["root"])) >= {r["student"] for r in rows}     # the gradebook's students
+    assert set(slipreport.names_of(graded["root"])) >= {r["student"] for r in rows}  # the gradebook's students
 
 
-@pytest.mark.parametrize("student", ["forged_display", "guard_edited", "frame_walk", "trace", "forged_replies",
-                                     "reference_from_source", "other_packages", "writes", "daemon", "network",
-                                     "read_others", "stuck", "fork_bomb", "print_in", "disk_fill", "gadgets",
-                                     "leak_inputs", "flood", "keyring", "nested_links", "sympy_bomb", "amplify",
-                                     "xss"])
+@pytest.mark.parametrize(
+    "student",
+    [
+        "forged_display",
+        "guard_edited",
+        "frame_walk",
+        "trace",
+        "forged_replies",
+        "reference_from_source",
+        "other_packages",
+        "writes",
+        "daemon",
+        "network",
+        "read_others",
+        "stuck",
+        "fork_bomb",
+        "print_in",
+        "disk_fill",
+        "gadgets",
+        "leak_inputs",
+        "flood",
+        "keyring",
+        "nested_links",
+        "sympy_bomb",
+        "amplify",
+        "xss",
+    ],
+)
 def test_each_attack_earns_nothing_beyond_the_honest_part(graded, student):
-    assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, \
-        graded["run"].stdout[-4000:]
+    assert graded["scores"][student] == {"ex1_tests": 2, "ex2_tests": 0, "ex3_tests": 0, "ex4_tests": 3}, graded[
+        "run"
+    ].stdout[-4000:]
 
 
 def test_the_reference_called_from_a_stubbed_library_is_named(graded):
@@ -532,8 +721,14 @@ def test_the_report_is_whole_and_a_run_on_one_student_merges_into_it(graded):
     report = (root / f"integrity_{LAB}.md").read_text()
     assert re.search(r"\| full \| " + LAB + r" \| clean \| 9 / 9 \|", report), report[:2000]
     env = dict(os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""))
-    run = subprocess.run([sys.executable, "-m", "grading.classgrade", LAB, "--student", "half", "--no-generate"],
-                         cwd=root, env=env, capture_output=True, text=True, timeout=600)
+    run = subprocess.run(
+        [sys.executable, "-m", "grading.classgrade", LAB, "--student", "half", "--no-generate"],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     with open(root / f"integrity_{LAB}.csv", newline="") as fh:
         students = {r["student"] for r in csv.DictReader(fh)}
@@ -576,11 +771,25 @@ def _hidden_cases(solution, gid):
     hidden code run with a guard that only records them."""
     from fusionlab import falling_body, kalman
     from grading import cells
+
     [source] = [c.source for c in solution.cells if grade_id(c) == gid]
     seen = {}
-    ns = {"np": np, "kf": kalman, "falling_body": falling_body, "my_predict": None, "my_state_space": None,
-          "guard": type("G", (), {"grade": staticmethod(lambda student, ref, cases, **k: seen.update(
-              cases=cases, expected=[ref(*c) for c in cases]))})}
+    ns = {
+        "np": np,
+        "kf": kalman,
+        "falling_body": falling_body,
+        "my_predict": None,
+        "my_state_space": None,
+        "guard": type(
+            "G",
+            (),
+            {
+                "grade": staticmethod(
+                    lambda student, ref, cases, **k: seen.update(cases=cases, expected=[ref(*c) for c in cases])
+                )
+            },
+        ),
+    }
     for hidden, code in cells.test_parts(source):
         if hidden:
             exec(code, ns)  # noqa: S102 -- the course's own test cell
@@ -621,8 +830,12 @@ def test_the_judges_give_up_root_before_they_read_a_reply(graded):
     if os.geteuid() != 0:
         assert said == "the grader's own user", said
         return
-    users = [int(u) for u in re.fullmatch(r"user ([\d, ]+), not root \(grading.launcher starts the boxes\)",
-                                          said).group(1).split(", ")]
+    users = [
+        int(u)
+        for u in re.fullmatch(r"user ([\d, ]+), not root \(grading.launcher starts the boxes\)", said)
+        .group(1)
+        .split(", ")
+    ]
     assert users and set(users) <= {launcher.judge_uid(s) for s in range(sandbox.MAX_SLOTS)}, users
     assert "\n  with no capability\n" in graded["run"].stdout, "no capability kept, Python in root's home or not"
 
@@ -631,11 +844,14 @@ def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_p
     """The judge of each student runs in a process of its own with a bounded address space: the 12.8 GB product
     fails that student's test at once, and neither the class's grading process nor a judge process grows."""
     _, text = _autograded(graded, "amplify", "ex2_tests")
-    assert ("exercise 2, hidden tests: your result could not be used (the test's arithmetic on it ran out of memory)"
-            in text), text
+    assert (
+        "exercise 2, hidden tests: your result could not be used (the test's arithmetic on it ran out of memory)"
+        in text
+    ), text
     out = graded["run"].stdout
-    child = int(re.search(r"of one student's judge process \(at most 3 GB of address space each\): (\d+) MB",
-                          out).group(1))
+    child = int(
+        re.search(r"of one student's judge process \(at most 3 GB of address space each\): (\d+) MB", out).group(1)
+    )
     assert 100 < child < 1500, f"a judge process peaked at {child} MB"
     cpu = float(re.search(r"MB, ([\d.]+) s of CPU \(at most 120 s each\)", out).group(1))
     assert 0 < cpu < 60, f"a judge process used {cpu} s of CPU"
@@ -646,12 +862,25 @@ def test_nothing_of_a_student_runs_in_formgrader_or_the_feedback_page(graded):
     the feedback page show the words, and no tag or script of theirs."""
     from nbconvert import HTMLExporter
     from nbgrader.server_extensions.formgrader import handlers
+
     path = graded["root"] / "autograded" / "xss" / LAB / f"{LAB}.ipynb"
     formgrade = HTMLExporter(template_name="formgrade", extra_template_basedirs=[handlers.template_path])
-    shown = {"assignment_id": LAB, "notebook_id": LAB, "submission_id": "1", "index": 0, "total": 1, "base_url": "",
-             "student": "xss", "last_name": "", "first_name": "", "notebook_path": str(path)}    # as Formgrader gives
-    pages = {"Formgrader": formgrade.from_filename(str(path), resources=shown)[0],
-             "feedback": (graded["root"] / "feedback" / "xss" / LAB / f"{LAB}.html").read_text()}
+    shown = {
+        "assignment_id": LAB,
+        "notebook_id": LAB,
+        "submission_id": "1",
+        "index": 0,
+        "total": 1,
+        "base_url": "",
+        "student": "xss",
+        "last_name": "",
+        "first_name": "",
+        "notebook_path": str(path),
+    }  # as Formgrader gives
+    pages = {
+        "Formgrader": formgrade.from_filename(str(path), resources=shown)[0],
+        "feedback": (graded["root"] / "feedback" / "xss" / LAB / f"{LAB}.html").read_text(),
+    }
     for where, page in pages.items():
         assert "My answer" in page and "a plot" in page, where
         assert [m for m in XSS_MARKS if m in page] == [], where

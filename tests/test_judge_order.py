@@ -7,6 +7,7 @@ channel. Here the channel is perfect, a dict the fake boxes share, and the stude
 team's did: it stores the inputs of the hidden cases it is called with, and a later test's call raises an error
 that carries them. The judge's verdicts must hold none of them, and the honest control must still pass.
 """
+
 from __future__ import annotations
 
 import types
@@ -14,20 +15,21 @@ import types
 from grading import judge
 from grading.cells import HIDDEN_BEGIN, HIDDEN_END
 
-SECRET = 0.7318293       # a hidden case's input, as a test cell holds it
-SHOWN = 0.25             # a visible case's input
+SECRET = 0.7318293  # a hidden case's input, as a test cell holds it
+SHOWN = 0.25  # a visible case's input
 
 TESTS = {
     "ex1_tests": f"guard.assert_close(f({SHOWN}), 2 * {SHOWN}, what='f of the visible case')\n"
-                 f"{HIDDEN_BEGIN}\nguard.assert_close(f({SECRET}), 2 * {SECRET}, what='f of a hidden case')\n"
-                 f"{HIDDEN_END}",
+    f"{HIDDEN_BEGIN}\nguard.assert_close(f({SECRET}), 2 * {SECRET}, what='f of a hidden case')\n"
+    f"{HIDDEN_END}",
     "ex2_tests": f"guard.assert_close(g({SHOWN}), 3 * {SHOWN}, what='g of the visible case')\n"
-                 f"{HIDDEN_BEGIN}\nguard.assert_close(g(0.5), 1.5, what='g of a hidden case')\n{HIDDEN_END}",
+    f"{HIDDEN_BEGIN}\nguard.assert_close(g(0.5), 1.5, what='g of a hidden case')\n{HIDDEN_END}",
 }
 
 
 class FakeSession:
     """A box that answers ``f`` and ``g`` as the student's code would, with a channel to every other box."""
+
     channel: dict = {}
     log: list = []
 
@@ -48,11 +50,14 @@ class FakeSession:
         def call(x):
             self.log.append((name, self.gid, x))
             if cheat and self.channel.get("seen"):
-                raise judge.StudentRaised(f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
-                                          f"ValueError: LEAKED {self.channel['seen']}")
+                raise judge.StudentRaised(
+                    f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
+                    f"ValueError: LEAKED {self.channel['seen']}",
+                )
             if cheat and x != SHOWN:
-                self.channel.setdefault("seen", []).append(x)        # what a box saw, for the boxes after it
+                self.channel.setdefault("seen", []).append(x)  # what a box saw, for the boxes after it
             return 2 * x if name == "f" else 3 * x
+
         return call
 
     def _where(self, i):
@@ -63,9 +68,14 @@ class FakeSession:
 
 
 def _lab():
-    return types.SimpleNamespace(tests=TESTS, points={"ex1_tests": 1.0, "ex2_tests": 1.0}, cell_seconds=10,
-                                 forbidden={}, base=lambda: {"guard": judge.guard},
-                                 reference_values=lambda gid, boxes: {})
+    return types.SimpleNamespace(
+        tests=TESTS,
+        points={"ex1_tests": 1.0, "ex2_tests": 1.0},
+        cell_seconds=10,
+        forbidden={},
+        base=lambda: {"guard": judge.guard},
+        reference_values=lambda gid, boxes: {},
+    )
 
 
 def _judge(student, monkeypatch):
@@ -78,9 +88,13 @@ def test_every_visible_part_runs_before_any_hidden_input_is_sent(monkeypatch):
     verdict = _judge("honest", monkeypatch)
     assert [t.message for t in verdict.tests] == ["passed", "passed"] and verdict.score == 2
     calls = [entry for entry in FakeSession.log if entry[0] in ("f", "g")]
-    assert calls == [("f", "ex1_tests", SHOWN), ("g", "ex2_tests", SHOWN), ("f", "ex1_tests", SECRET),
-                     ("g", "ex2_tests", 0.5)]
-    log = FakeSession.log                      # the first box is kept open until its hidden part has run
+    assert calls == [
+        ("f", "ex1_tests", SHOWN),
+        ("g", "ex2_tests", SHOWN),
+        ("f", "ex1_tests", SECRET),
+        ("g", "ex2_tests", 0.5),
+    ]
+    log = FakeSession.log  # the first box is kept open until its hidden part has run
     assert log.index(("g", "ex2_tests", SHOWN)) < log.index(("close", "ex1_tests"))
     assert log[-1] == ("close", "ex2_tests")
 
@@ -90,8 +104,9 @@ def test_a_channel_between_boxes_carries_no_hidden_input_into_a_verdict(monkeypa
     text = " ".join([t.message for t in verdict.tests] + verdict.notes)
     assert str(SECRET) not in text and "LEAKED" not in text, text
     # the later test's hidden part did read the channel: its verdict names the kind of failure only
-    assert verdict.tests[1].message.startswith("exercise 2, hidden tests: your function raised an error"), \
+    assert verdict.tests[1].message.startswith("exercise 2, hidden tests: your function raised an error"), (
         verdict.tests[1].message
+    )
     assert verdict.tests[0].message == "passed"
 
 
@@ -99,15 +114,18 @@ def test_the_slip_the_report_records_is_asked_before_the_box_sees_a_hidden_input
     """The class report's slip comes from the exercise's visible check, which the judge asks of the student's code.
     Asked after the hidden part, a box could pick the check's outcome from the hidden inputs it saw (one bit a test
     here: a named slip or none); asked before, the hidden input has not reached any box yet."""
-    check = ("from fusionlab.checks._core import Feedback\n"
-             f"if f({SHOWN}) != 2 * {SHOWN}:\n"
-             "    raise Feedback('expected a 3×3 matrix')\n")
+    check = (
+        "from fusionlab.checks._core import Feedback\n"
+        f"if f({SHOWN}) != 2 * {SHOWN}:\n"
+        "    raise Feedback('expected a 3×3 matrix')\n"
+    )
     lab = _lab()
     lab.checks, lab.check_names = {"ex1_tests": check}, {"ex1_tests": "check_euler_to_dcm"}
 
     class Picky(FakeSession):
         """Right on the visible case until it has seen the hidden one; then wrong on both (a failed hidden test)."""
-        box, boxes = object(), None              # a box that runs (the judge asks the check of it)
+
+        box, boxes = object(), None  # a box that runs (the judge asks the check of it)
 
         def proxy(self, name, budget):
             def call(x):
@@ -116,6 +134,7 @@ def test_the_slip_the_report_records_is_asked_before_the_box_sees_a_hidden_input
                     self.channel.setdefault("seen", []).append(x)
                     return -1.0
                 return -1.0 if self.channel.get("seen") else 2 * x if name == "f" else 3 * x
+
             return call
 
     FakeSession.channel, FakeSession.log = {}, []
@@ -131,15 +150,19 @@ class Colluding(FakeSession):
     """Two classmates' boxes with one channel between them (on a real machine: the load of the cores they share):
     the sender's boxes store the hidden inputs they see, and any box that finds one in the channel raises an error
     that carries it."""
+
     def proxy(self, name, budget):
         def call(x):
             self.log.append((name, self.gid, x))
             if self.channel.get("seen"):
-                raise judge.StudentRaised(f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
-                                          f"ValueError: LEAKED {self.channel['seen']}")
+                raise judge.StudentRaised(
+                    f"your {name} raised ValueError: LEAKED {self.channel['seen']}",
+                    f"ValueError: LEAKED {self.channel['seen']}",
+                )
             if x != SHOWN:
                 self.channel.setdefault("seen", []).append(x)
             return 2 * x if name == "f" else 3 * x
+
         return call
 
 
@@ -179,13 +202,17 @@ def test_an_honest_student_scores_the_same_in_one_run_or_two_rounds(monkeypatch)
     assert [(t.score, t.message) for t in second.tests] == [(t.score, t.message) for t in both.tests]
     assert second.score == 2 and first.tests[0].pending, "the first round's verdict is not changed"
     hidden_calls = [e for e in FakeSession.log if e[0] in ("f", "g")][-4:]
-    assert hidden_calls == [("f", "ex1_tests", SHOWN), ("f", "ex1_tests", SECRET),
-                            ("g", "ex2_tests", SHOWN), ("g", "ex2_tests", 0.5)], \
-        "the second round runs each test again, visible part first, in a box of its own"
+    assert hidden_calls == [
+        ("f", "ex1_tests", SHOWN),
+        ("f", "ex1_tests", SECRET),
+        ("g", "ex2_tests", SHOWN),
+        ("g", "ex2_tests", 0.5),
+    ], "the second round runs each test again, visible part first, in a box of its own"
 
 
 def test_the_parts_of_a_run_are_checked(monkeypatch):
     import pytest
+
     monkeypatch.setattr(judge, "Session", FakeSession)
     with pytest.raises(ValueError, match="part must be"):
         judge.judge(_lab(), None, "x", part="hiden")

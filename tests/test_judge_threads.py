@@ -6,6 +6,7 @@ thread switch inside a conversion (a collection running a ``__del__``) makes ano
 ``grading.cells`` parses through one lock; this test drives the switch as hard as it can (a one-microsecond switch
 interval, a collection every few allocations, each one running Python code) and asserts no parse fails.
 """
+
 from __future__ import annotations
 
 import gc
@@ -15,8 +16,9 @@ import time
 
 from grading import cells
 
-SOURCE = "\n".join(f"def f{i}(x):\n    return [(a, b) for a in range(x) if a for b in {{1: (2, [3, (4, 5)])}}]"
-                   for i in range(60))
+SOURCE = "\n".join(
+    f"def f{i}(x):\n    return [(a, b) for a in range(x) if a for b in {{1: (2, [3, (4, 5)])}}]" for i in range(60)
+)
 
 
 class _Cycle:
@@ -65,7 +67,13 @@ def test_every_parse_of_the_grading_tools_takes_the_lock():
     """A class is graded by threads: one unlocked ``ast.parse`` (the integrity scan, the similarity report) beside a
     locked one is enough for the race (seen: the capstone's threaded scan)."""
     from pathlib import Path
+
     root = Path(cells.__file__).resolve().parent
-    unlocked = [f"{p.relative_to(root)}:{i}" for p in sorted(root.rglob("*.py")) if p.name != "cells.py"
-                for i, line in enumerate(p.read_text().splitlines(), 1) if "ast.parse(" in line]
+    unlocked = [
+        f"{p.relative_to(root)}:{i}"
+        for p in sorted(root.rglob("*.py"))
+        if p.name != "cells.py"
+        for i, line in enumerate(p.read_text().splitlines(), 1)
+        if "ast.parse(" in line
+    ]
     assert unlocked == []

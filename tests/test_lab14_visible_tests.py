@@ -1,6 +1,7 @@
 """Lab 14's autograder tests, visible parts only, as a student's Validate runs them: every planted slip of the lab
 (tests/planted_slips.py) and the conjugate left out of q1* ⊗ q2 fail a visible test, so no slip that the lab's
 checks name earns the visible points and loses only the hidden ones; the model answers pass."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -37,8 +38,10 @@ def _conjugate_left_out(q1, q2):
     return np.degrees(2 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0])))
 
 
-SLIPS = {**{name: (f"ex{n}_tests", fn) for name, (n, fn) in LAB14.items()},
-         "rotation_angle.no_conjugate": ("ex3_tests", _conjugate_left_out)}
+SLIPS = {
+    **{name: (f"ex{n}_tests", fn) for name, (n, fn) in LAB14.items()},
+    "rotation_angle.no_conjugate": ("ex3_tests", _conjugate_left_out),
+}
 
 
 @pytest.mark.parametrize("slip", sorted(SLIPS))

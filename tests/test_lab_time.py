@@ -5,6 +5,7 @@ read slowly, and run), and spends 5 minutes on each autograded exercise and 10 o
 reading them; the total, rounded to the nearest quarter hour, is the lab's time. Words are counted in the student's
 notebook: model answers and solution code (between the solution markers) are not read, they are written.
 """
+
 from __future__ import annotations
 
 import re
@@ -73,8 +74,10 @@ def test_readme_and_header_state_the_time_of_the_rule(path):
     prose, code, ex, wq = workload(path)
     why = f"{prose} words of prose, {code} of code, {ex} exercises, {wq} written questions: {minutes(path):.0f} min"
     stated = re.search(r"\*\*Time\*\*\s*\|\s*about ([^|\n]*?)\s*\|", header(path))
-    assert stated and stated.group(1) == spoken(q, "hours"), \
+    assert stated and stated.group(1) == spoken(q, "hours"), (
         f"{path.name}: the header says {stated and stated.group(1)!r}; the rule gives {spoken(q, 'hours')!r} ({why})"
-    assert readme_times().get(lab_number(path)) == spoken(q, "h"), \
-        f"README: lab {lab_number(path)} says {readme_times().get(lab_number(path))!r}; the rule gives " \
+    )
+    assert readme_times().get(lab_number(path)) == spoken(q, "h"), (
+        f"README: lab {lab_number(path)} says {readme_times().get(lab_number(path))!r}; the rule gives "
         f"{spoken(q, 'h')!r} ({why})"
+    )

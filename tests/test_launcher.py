@@ -1,5 +1,6 @@
 """The judge does not run as root (``grading.launcher``): as root, a launcher forked before the judge gives up root
 starts the boxes and hands over their pipes; the judge runs as a user of its own and cannot touch the course."""
+
 import json
 import os
 import shutil
@@ -23,9 +24,14 @@ def _fake_lab(tmp_path):
     scratch = tmp_path / "scratch"
     scratch.mkdir(exist_ok=True)
     os.chmod(tmp_path, 0o755)
-    return types.SimpleNamespace(tests={"ex1_tests": ""}, lab="01_x", course=tmp_path, scratch=scratch,
-                                 box_root=lambda gid: None,
-                                 box_command=lambda gid, work, uid: [sys.executable, "-c", ECHO])
+    return types.SimpleNamespace(
+        tests={"ex1_tests": ""},
+        lab="01_x",
+        course=tmp_path,
+        scratch=scratch,
+        box_root=lambda gid: None,
+        box_command=lambda gid, work, uid: [sys.executable, "-c", ECHO],
+    )
 
 
 def _in_child(body):
@@ -56,7 +62,7 @@ def _gone(pid, seconds=10):
             os.kill(pid, 0)
         except ProcessLookupError:
             return True
-        with open(f"/proc/{pid}/stat") as f:            # a zombie not yet reaped by its new parent is gone too
+        with open(f"/proc/{pid}/stat") as f:  # a zombie not yet reaped by its new parent is gone too
             if f.read().split(") ", 1)[1].startswith("Z"):
                 return True
         time.sleep(0.05)
@@ -100,19 +106,29 @@ def test_the_judge_gives_up_root_and_cannot_touch_the_course(course):
     def body():
         launcher.drop_root(launcher.judge_uid(7))
         tried = {}
-        for name, attempt in [("unlink", lambda: os.unlink(canary)), ("write", lambda: open(canary, "a")),
-                              ("create", lambda: open(tmp_path / "new", "w")),
-                              ("signal the grader", lambda: os.kill(parent, 0)), ("root again", lambda: os.setuid(0)),
-                              ("chown", lambda: os.chown(canary, launcher.judge_uid(7), -1))]:
+        for name, attempt in [
+            ("unlink", lambda: os.unlink(canary)),
+            ("write", lambda: open(canary, "a")),
+            ("create", lambda: open(tmp_path / "new", "w")),
+            ("signal the grader", lambda: os.kill(parent, 0)),
+            ("root again", lambda: os.setuid(0)),
+            ("chown", lambda: os.chown(canary, launcher.judge_uid(7), -1)),
+        ]:
             try:
                 attempt()
                 tried[name] = "done"
             except PermissionError:
                 tried[name] = "refused"
         status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
-        return {"uid": os.getuid(), "gid": os.getgid(), "groups": os.getgroups(), "tried": tried,
-                "read": canary.read_text(), "no_new_privs": status["NoNewPrivs"].strip(),
-                "caps": status["CapEff"].strip()}
+        return {
+            "uid": os.getuid(),
+            "gid": os.getgid(),
+            "groups": os.getgroups(),
+            "tried": tried,
+            "read": canary.read_text(),
+            "no_new_privs": status["NoNewPrivs"].strip(),
+            "caps": status["CapEff"].strip(),
+        }
 
     got = _in_child(body)
     assert got["uid"] == got["gid"] == launcher.judge_uid(7) and got["groups"] == [], got
@@ -133,8 +149,16 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
         box.send({"a": [1, 2.5]})
         echoed = box.receive(deadline)
         refused = []
-        for request in ({"start": ["ex9_tests", True]}, {"start": ["../../etc", False]}, {"poll": 5}, {"end": -1},
-                        {"poll": "0"}, {"unlink": "/"}, {"start": ["ex1_tests", True], "end": 0}, []):
+        for request in (
+            {"start": ["ex9_tests", True]},
+            {"start": ["../../etc", False]},
+            {"poll": 5},
+            {"end": -1},
+            {"poll": "0"},
+            {"unlink": "/"},
+            {"start": ["ex1_tests", True], "end": 0},
+            [],
+        ):
             try:
                 boxes.ask(request)
                 refused.append(None)
@@ -147,12 +171,23 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
         second = boxes.start("ex1_tests", files=False)
         second_pid = second.receive(deadline)
         pid = boxes.launcher_pid
-        own = tempfile.mkdtemp(prefix="matplotlib-")           # what matplotlib makes where root's cache is closed
+        own = tempfile.mkdtemp(prefix="matplotlib-")  # what matplotlib makes where root's cache is closed
         owner = os.stat(os.path.dirname(own)).st_uid
-        boxes.close()                                   # with the second box still running
-        return {"uid": os.getuid(), "pid": box_pid, "echoed": echoed, "refused": refused, "running": running,
-                "work": work, "status": status, "after": after, "second": second_pid, "launcher": pid,
-                "own": own, "owner": owner}
+        boxes.close()  # with the second box still running
+        return {
+            "uid": os.getuid(),
+            "pid": box_pid,
+            "echoed": echoed,
+            "refused": refused,
+            "running": running,
+            "work": work,
+            "status": status,
+            "after": after,
+            "second": second_pid,
+            "launcher": pid,
+            "own": own,
+            "owner": owner,
+        }
 
     got = _in_child(body)
     assert got["uid"] == launcher.judge_uid(4) and got["echoed"] == {"a": [1, 2.5]}, got
@@ -160,11 +195,13 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
     assert "expected a box of ['ex1_tests'], got 'ex9_tests'" in got["refused"][0], got["refused"][0]
     assert got["running"] is None and got["status"] == -9, got
     assert len(got["work"]) == 1 and got["after"] == [], "ending a box removes its folder"
-    assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), \
+    assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), (
         "closing the judge's end ends every box and the launcher"
+    )
     assert list(lab.scratch.iterdir()) == []
     assert got["owner"] == launcher.judge_uid(4) and os.path.basename(os.path.dirname(got["own"])).startswith(
-        "fusionlab-judge-"), got
+        "fusionlab-judge-"
+    ), got
     assert not os.path.exists(os.path.dirname(got["own"])), "the judge's temporary folder goes with the launcher"
 
 
@@ -173,7 +210,7 @@ def test_a_judge_that_dies_leaves_no_box_behind(course):
     lab = _fake_lab(course)
     r, w = os.pipe()
     pid = os.fork()
-    if pid == 0:                                        # the judge: starts a box, says its pid and dies at once
+    if pid == 0:  # the judge: starts a box, says its pid and dies at once
         os.close(r)
         boxes = launcher.split(launcher.LabBoxes(lab, "ana", 2), 2)
         box = boxes.start("ex1_tests")
@@ -213,17 +250,24 @@ def test_a_folder_the_judge_cannot_read_is_found_and_the_judge_may_keep_reading_
         launcher.drop_root(launcher.judge_uid(3), read_all=True)
         status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
         tried = {}
-        for name, attempt in [("write", lambda: open(hidden / "lib" / "secret.txt", "a")),
-                              ("create", lambda: open(course / "new", "w")),
-                              ("unlink", lambda: os.unlink(hidden / "lib" / "secret.txt")),
-                              ("signal", lambda: os.kill(1, 0)), ("root again", lambda: os.setuid(0))]:
+        for name, attempt in [
+            ("write", lambda: open(hidden / "lib" / "secret.txt", "a")),
+            ("create", lambda: open(course / "new", "w")),
+            ("unlink", lambda: os.unlink(hidden / "lib" / "secret.txt")),
+            ("signal", lambda: os.kill(1, 0)),
+            ("root again", lambda: os.setuid(0)),
+        ]:
             try:
                 attempt()
                 tried[name] = "done"
             except PermissionError:
                 tried[name] = "refused"
-        return {"read": (hidden / "lib" / "secret.txt").read_text(), "tried": tried, "uid": os.getuid(),
-                "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")]}
+        return {
+            "read": (hidden / "lib" / "secret.txt").read_text(),
+            "tried": tried,
+            "uid": os.getuid(),
+            "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")],
+        }
 
     got = _in_child(body)
     assert got["read"] == "answers" and got["uid"] == launcher.judge_uid(3), got
@@ -256,9 +300,14 @@ def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_a
             wrote = "done"
         except OSError:
             wrote = "refused"
-        return {"opened": opened, "read": (home / "py" / "lib" / "mod.txt").read_text(), "wrote": wrote,
-                "listed": sorted(os.listdir(home)), "secret": (home / "secret.txt").exists(),
-                "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")]}
+        return {
+            "opened": opened,
+            "read": (home / "py" / "lib" / "mod.txt").read_text(),
+            "wrote": wrote,
+            "listed": sorted(os.listdir(home)),
+            "secret": (home / "secret.txt").exists(),
+            "caps": [status[k].strip() for k in ("CapEff", "CapPrm", "CapInh", "CapAmb")],
+        }
 
     got = _in_child(body)
     assert got["opened"] == [str(home)] and got["read"] == "module" and got["wrote"] == "refused", got
@@ -273,6 +322,7 @@ def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped
     assert got["process"]["uid"] == os.getuid() and 0 <= got["process"]["cpu_s"] < 5, got
     t0 = time.monotonic()
     with pytest.raises(RuntimeError, match=r"the process grading bob ran over its 1 s of CPU time and was stopped"):
-        launcher.apart(eval, ("sum(range(10 ** 12)) and {}",), preload=[], memory_bytes=1 << 30, who="bob",
-                       cpu_seconds=1)
+        launcher.apart(
+            eval, ("sum(range(10 ** 12)) and {}",), preload=[], memory_bytes=1 << 30, who="bob", cpu_seconds=1
+        )
     assert time.monotonic() - t0 < 30

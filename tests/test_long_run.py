@@ -10,6 +10,7 @@ memory check included (`make test` leaves it out: the slow tier). The full hour 
 wall time for the seven gyro filters measured on a shared 2-core machine), too slow for every run: it runs with
 ``FUSIONLAB_LONG_RUN=1``.
 """
+
 from __future__ import annotations
 
 import os
@@ -49,18 +50,20 @@ def test_long_run_keeps_unit_norm_and_never_flips(name, rec):
     t0 = time.perf_counter()
     q = _run(name, rec)
     elapsed = time.perf_counter() - t0
-    grown_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0       # Linux: kB
+    grown_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0  # Linux: kB
     n = len(rec["gyr"])
     norm_err = float(np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0)))
     inc = np.degrees(metrics.inclination_error(metrics.error_quaternion(q, rec["q_true"])))
-    after_fall = rec["rest"] & np.roll(rec["free"], int(rec["fs"]))           # 1 s after a free-fall sample
-    print(f"\n{name:14s} {DURATION / 60:.0f} min at 100 Hz in {elapsed:5.1f} s; max ||q|-1| {norm_err:.1e}; "
-          f"rest inclination max {inc[rec['rest']].max():.2f}°; max RSS grew {grown_kb / 1024:.0f} MB")
+    after_fall = rec["rest"] & np.roll(rec["free"], int(rec["fs"]))  # 1 s after a free-fall sample
+    print(
+        f"\n{name:14s} {DURATION / 60:.0f} min at 100 Hz in {elapsed:5.1f} s; max ||q|-1| {norm_err:.1e}; "
+        f"rest inclination max {inc[rec['rest']].max():.2f}°; max RSS grew {grown_kb / 1024:.0f} MB"
+    )
     assert q.shape == (n, 4)
     assert norm_err < 1e-9
     assert inc[rec["rest"]].max() < REST_INCLINATION_MAX
     assert after_fall.any() and inc[after_fall].max() < REST_INCLINATION_MAX
-    assert grown_kb * 1024 < 2000 * n                      # bounded: well under 2 kB per sample of the record
+    assert grown_kb * 1024 < 2000 * n  # bounded: well under 2 kB per sample of the record
 
 
 @pytest.mark.parametrize("name", GYRO_FILTERS)

@@ -1,4 +1,5 @@
 """What the course changes in nbgrader stands on the nbgrader it was written for (``fusionlab.nbgrader_compat``)."""
+
 from __future__ import annotations
 
 import importlib
@@ -13,7 +14,7 @@ from fusionlab import nbgrader_compat
 def test_every_name_of_nbgrader_the_patches_rely_on_is_there(module, path):
     obj = importlib.import_module(module)
     for part in path.split("."):
-        obj = getattr(obj, part)           # AttributeError names what an nbgrader upgrade removed
+        obj = getattr(obj, part)  # AttributeError names what an nbgrader upgrade removed
     if path.endswith("._get_passed_cells"):
         assert list(inspect.signature(obj).parameters) == ["self", "nb"]
     if path.endswith("._print_num_failed"):
@@ -39,6 +40,7 @@ def test_validate_builds_the_counting_validator_once_installed():
     nbgrader_compat.install_summary_validator()
     from nbgrader.apps import validateapp
     from nbgrader.server_extensions.validate_assignment import handlers
+
     assert validateapp.Validator is handlers.Validator is nbgrader_compat.SummaryValidator
 
 
@@ -52,6 +54,7 @@ def test_the_course_config_names_the_courses_gradebook_from_any_folder(tmp_path,
     from traitlets.config.loader import PyFileConfigLoader
 
     from conftest import ROOT
+
     monkeypatch.chdir(tmp_path)
     config = PyFileConfigLoader("nbgrader_config.py", path=str(ROOT)).load_config()
     assert config.CourseDirectory.db_url == f"sqlite:///{ROOT / 'gradebook.db'}"

@@ -1,4 +1,5 @@
 """Rotating accelerometers and the north finder (seed 004 ch. 4): kinematics, rate noise, heading read-outs."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -16,6 +17,7 @@ def _wrap_deg(a):
 
 # ---- fixed + rotating configuration ------------------------------------------------------------------------------
 
+
 def test_closed_form_outputs_equal_the_vector_kinematics_of_eq_4_3():
     rng = np.random.default_rng(1)
     t = np.linspace(0.0, 0.3, 17)
@@ -23,7 +25,7 @@ def test_closed_form_outputs_equal_the_vector_kinematics_of_eq_4_3():
         a_A, w, al = rng.normal(size=(3, 3))
         p, v, a = nf.rotating_kinematics(t, 0.02, 0.1, 50.0)
         f = nf.point_specific_force(a_A, w, al, p, v, a)
-        sensed = np.stack([f[:, 0, 0], f[:, 1, 1], f[:, 2, 2]], -1)        # r_D senses x, r_B y, r_C z
+        sensed = np.stack([f[:, 0, 0], f[:, 1, 1], f[:, 2, 2]], -1)  # r_D senses x, r_B y, r_C z
         assert np.allclose(sensed, nf.rotating_outputs(a_A, w, al, t, 0.02, 0.1, 50.0), atol=1e-12)
 
 
@@ -40,7 +42,7 @@ def test_rate_from_rotating_recovers_the_rate_with_its_sign():
     rng = np.random.default_rng(2)
     a_A, w, al = rng.normal(size=(3, 50, 3))
     fixed = nf.fixed_triad_outputs(a_A, w, al, T41["d"])
-    k = 3                                                                  # any index pulse: ω_r t = 2πk
+    k = 3  # any index pulse: ω_r t = 2πk
     t = 2 * np.pi * k / T41["omega_r"]
     rot = nf.rotating_outputs(a_A, w, al, t, T41["rho"], T41["l"], T41["omega_r"])
     got = nf.rate_from_rotating(rot, fixed, T41["d"], T41["rho"], T41["l"], T41["omega_r"])
@@ -56,7 +58,7 @@ def test_rate_from_rotating_recovers_the_rate_with_its_sign():
 def test_leveled_signal_is_a_cosine_with_the_heading_as_phase():
     for psi in np.radians([-170.0, -42.0, 0.0, 63.0, 135.0]):
         rec = nf.synthetic_record(psi, duration=2.0, harmonics={}, noise=0.0, g=9.81)
-        expect = 9.81 + rec["A_c"] * np.cos(rec["theta"] + psi)           # (4.26)
+        expect = 9.81 + rec["A_c"] * np.cos(rec["theta"] + psi)  # (4.26)
         assert np.allclose(rec["acc"], expect, atol=1e-15)
     w = nf.leveled_body_rate(np.radians(30.0), nf.SIEGEN_LAT)
     w_n = earth.earth_rate_ned(nf.SIEGEN_LAT)
@@ -70,21 +72,24 @@ def test_coriolis_amplitude_at_siegen_is_about_27_ug():
 
 # ---- rate noise: Table 4.1, 4.2 and the erratum ------------------------------------------------------------------
 
+
 def test_printed_noise_coefficient_reproduces_table_4_1():
     assert nf.rate_noise_coefficient(**GEOM) == pytest.approx(0.7311, abs=5e-5)
     s = nf.rate_noise_density(T41["w_acc"], **GEOM)
-    assert s * 1e6 == pytest.approx(8.38, abs=0.01)                        # µrad/s/√Hz (4.46)
-    assert np.degrees(s) * 1e6 == pytest.approx(480.4, abs=0.5)            # µ°/s/√Hz
-    assert np.degrees(s) * 3600 == pytest.approx(1.73, abs=0.005)          # °/h/√Hz, printed 1.7
+    assert s * 1e6 == pytest.approx(8.38, abs=0.01)  # µrad/s/√Hz (4.46)
+    assert np.degrees(s) * 1e6 == pytest.approx(480.4, abs=0.5)  # µ°/s/√Hz
+    assert np.degrees(s) * 3600 == pytest.approx(1.73, abs=0.005)  # °/h/√Hz, printed 1.7
 
 
 def test_table_4_2_and_its_rounding_at_100_rad_s():
-    got = {wr: np.degrees(nf.rate_noise_density(T41["w_acc"], T41["rho"], T41["d"], T41["l"], wr)) * 3600
-           for wr in nf.TABLE_4_2}
-    assert abs(got[50.0] - 1.7) < 0.05 and abs(got[500.0] - 0.17) < 0.005     # within the printed rounding
-    assert abs(got[100.0] - 0.85) > 0.005                                  # ... but 0.85 is not a rounding of it
-    assert got[100.0] == pytest.approx(0.865, abs=5e-4)                    # printed 0.85: half of the rounded 1.7
-    assert got[50.0] / got[500.0] == pytest.approx(10.0)                   # σ_g ∝ 1/ω_r
+    got = {
+        wr: np.degrees(nf.rate_noise_density(T41["w_acc"], T41["rho"], T41["d"], T41["l"], wr)) * 3600
+        for wr in nf.TABLE_4_2
+    }
+    assert abs(got[50.0] - 1.7) < 0.05 and abs(got[500.0] - 0.17) < 0.005  # within the printed rounding
+    assert abs(got[100.0] - 0.85) > 0.005  # ... but 0.85 is not a rounding of it
+    assert got[100.0] == pytest.approx(0.865, abs=5e-4)  # printed 0.85: half of the rounded 1.7
+    assert got[50.0] / got[500.0] == pytest.approx(10.0)  # σ_g ∝ 1/ω_r
 
 
 def test_exact_propagation_is_169_over_450_and_the_printed_form_overstates_sigma_by_1_40():
@@ -97,7 +102,7 @@ def test_exact_propagation_is_169_over_450_and_the_printed_form_overstates_sigma
 def test_monte_carlo_agrees_with_the_exact_propagation_not_the_printed_one():
     var = nf.rate_noise_monte_carlo(200_000, seed=4, **GEOM)
     exact, printed = nf.rate_noise_coefficient_exact(**GEOM), nf.rate_noise_coefficient(**GEOM)
-    assert np.all(np.abs(var / exact - 1) < 0.02)                          # 5 σ of a 200k-sample variance is 1.6 %
+    assert np.all(np.abs(var / exact - 1) < 0.02)  # 5 σ of a 200k-sample variance is 1.6 %
     assert np.all(var < 0.6 * printed)
 
 
@@ -110,6 +115,7 @@ def test_printed_and_exact_agree_when_the_shared_accelerometer_drops_out():
 
 # ---- FIR and the two heading read-outs ---------------------------------------------------------------------------
 
+
 def test_firls_band_pass_passes_the_line_and_rejects_the_second_harmonic_more_with_order():
     from scipy.signal import freqz
 
@@ -117,7 +123,7 @@ def test_firls_band_pass_passes_the_line_and_rejects_the_second_harmonic_more_wi
     gains = {}
     for order in (200, 1000, 2000):
         b = nf.bandpass_firls(order, fs, fr)
-        assert len(b) == order + 1 and np.allclose(b, b[::-1])             # linear phase
+        assert len(b) == order + 1 and np.allclose(b, b[::-1])  # linear phase
         _, h = freqz(b, worN=[fr, 2 * fr], fs=fs)
         gains[order] = np.abs(h)
     assert gains[2000][0] == pytest.approx(1.0, abs=0.01) and gains[1000][0] == pytest.approx(1.0, abs=0.02)
@@ -144,7 +150,7 @@ def test_demodulation_and_sampling_are_exact_on_a_clean_sinusoid():
         rec = nf.synthetic_record(psi, duration=30.0, harmonics={}, noise=0.0, bias=0.01)
         x = rec["acc"] - rec["acc"].mean()
         assert abs(_wrap_deg(nf.demodulate(x, rec["theta"], "exact") - psi)) < 0.005
-        assert abs(_wrap_deg(nf.demodulate(x, rec["theta"], "sampled") - psi)) < 0.2   # sample-grid bias
+        assert abs(_wrap_deg(nf.demodulate(x, rec["theta"], "sampled") - psi)) < 0.2  # sample-grid bias
         assert abs(_wrap_deg(nf.synchronous_sampling(x, rec["theta"]) - psi)) < 0.25  # nearest-sample bias
 
 
@@ -159,13 +165,13 @@ def test_sampled_reference_is_exact_on_a_symmetric_sample_grid():
 def test_turntable_steps_are_recovered_within_half_a_degree():
     truth = np.radians([-42.0, -52.0, -62.0, -72.0, -82.0])
     out = nf.steps_experiment(truth, orders=(2000, 1000, 200), seed=10)
-    steps = _wrap_deg(np.diff(out, axis=0))                                # (4, orders, methods)
+    steps = _wrap_deg(np.diff(out, axis=0))  # (4, orders, methods)
     true_steps = np.degrees(np.diff(truth))
     demod_err = np.abs(steps[..., :2] - true_steps[:, None, None])
     assert demod_err.max() < 0.5
     sampling_err = np.abs(_wrap_deg(out[..., 2] - truth[:, None]))
-    assert sampling_err[:, 0].max() < 0.5                                  # order 2000
-    assert sampling_err[:, 2].max() > 2.0                                  # order 200 lets harmonics through
+    assert sampling_err[:, 0].max() < 0.5  # order 2000
+    assert sampling_err[:, 2].max() > 2.0  # order 200 lets harmonics through
 
 
 def test_bad_input_is_rejected_with_the_argument_named():
@@ -176,7 +182,7 @@ def test_bad_input_is_rejected_with_the_argument_named():
     with pytest.raises(ValueError, match="rho"):
         nf.rate_noise_coefficient(-0.02, 0.15, 0.1, 50.0)
     with pytest.raises(ValueError, match="heading"):
-        nf.synthetic_record(42.0)                                          # degrees
+        nf.synthetic_record(42.0)  # degrees
     with pytest.raises(ValueError, match="reference"):
         nf.demodulate(np.zeros(1000), np.linspace(0, 40, 1000), "cosine")
     with pytest.raises(ValueError, match="whole turn"):
@@ -191,6 +197,7 @@ def test_bad_input_is_rejected_with_the_argument_named():
 
 # ---- the lab's visible checks accept the library and name the usual slips ----------------------------------------
 
+
 def test_lab08_checks_pass_the_library_and_catch_the_usual_slips(library_as_student):
     from fusionlab import checks
 
@@ -200,8 +207,11 @@ def test_lab08_checks_pass_the_library_and_catch_the_usual_slips(library_as_stud
 
     checks.check_omega_x(omega_x)
     with pytest.raises(checks.Feedback, match="swapped"):
-        checks.check_omega_x(lambda a_rC, a_A, a_B, a_C, d, rho, l, wr:
-                             (a_rC - a_A - (a_B - a_A) * l / d - (a_C - a_A) * rho / d) / (2 * rho * wr))
+        checks.check_omega_x(
+            lambda a_rC, a_A, a_B, a_C, d, rho, l, wr: (
+                (a_rC - a_A - (a_B - a_A) * l / d - (a_C - a_A) * rho / d) / (2 * rho * wr)
+            )
+        )
     checks.check_noise_printed(nf.rate_noise_coefficient)
     checks.check_noise_exact(nf.rate_noise_coefficient_exact)
     with pytest.raises(checks.Feedback, match="independent"):
@@ -227,6 +237,7 @@ def test_lab08_checks_pass_the_library_and_catch_the_usual_slips(library_as_stud
 def test_tilted_heading_recovers_the_heading_and_the_level_formula_errs_by_tan_lat_times_tilt():
     """004 §4.4.3 (eqs 4.36-4.43): exact for any tilt; read as level, a pitch θ costs up to tan Φ · θ of heading."""
     from fusionlab import earth, rotations
+
     rng = np.random.default_rng(443)
     lat = nf.SIEGEN_LAT
     for _ in range(50):
@@ -245,6 +256,7 @@ def test_tilted_heading_recovers_the_heading_and_the_level_formula_errs_by_tan_l
 
 # ---- period averaging (§4.5.5, Fig. 4.9) --------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("psi_deg, theta0, duration", [(-42.0, 0.3, 7.3), (135.0, -2.0, 5.05), (10.0, 1.234, 9.9)])
 def test_period_average_of_a_clean_line_is_the_line_and_gives_its_heading(psi_deg, theta0, duration):
     psi = np.radians(psi_deg)
@@ -253,8 +265,8 @@ def test_period_average_of_a_clean_line_is_the_line_and_gives_its_heading(psi_de
     whole = int(np.floor(r["theta"][-1] / (2 * np.pi)) - np.ceil(r["theta"][0] / (2 * np.pi)))
     assert out["turns"] == whole and out["phi"].shape == out["period"].shape == (64,)
     line = 1.3 * (9.81 + r["A_c"] * np.cos(out["phi"] + psi)) + 0.05
-    assert np.max(np.abs(out["period"] - line)) < 2e-3 * r["A_c"]           # linear interpolation of 153.6 samples/turn
-    assert abs(_wrap_deg(out["heading"] - psi)) < 1e-3                     # g + b cancel: one whole period
+    assert np.max(np.abs(out["period"] - line)) < 2e-3 * r["A_c"]  # linear interpolation of 153.6 samples/turn
+    assert abs(_wrap_deg(out["heading"] - psi)) < 1e-3  # g + b cancel: one whole period
 
 
 def test_period_average_uses_whole_turns_only_where_direct_demodulation_needs_them():
@@ -264,15 +276,16 @@ def test_period_average_uses_whole_turns_only_where_direct_demodulation_needs_th
     r = nf.synthetic_record(psi, duration=20.0, noise=0.0, harmonics={})
     x, th = r["acc"], r["theta"]
     k0 = np.ceil(th[0] / (2 * np.pi))
-    start, end = np.searchsorted(th, 2 * np.pi * k0) - 1, np.searchsorted(th, 2 * np.pi * (k0 + 20.5))   # pulse k0 in
+    start, end = np.searchsorted(th, 2 * np.pi * k0) - 1, np.searchsorted(th, 2 * np.pi * (k0 + 20.5))  # pulse k0 in
     xw, tw = x[start:end], th[start:end]
     direct = np.arctan2(-xw @ np.sign(np.sin(tw)), xw @ np.sign(np.cos(tw)))
     assert abs(_wrap_deg(direct - psi)) > 20.0
     folded = nf.period_average(xw, tw)
     assert folded["turns"] == 20 and abs(_wrap_deg(folded["heading"] - psi)) < 1e-3
-    trimmed = nf.period_average(xw[:np.searchsorted(tw, 2 * np.pi * (k0 + 20)) + 1], tw[:np.searchsorted(
-        tw, 2 * np.pi * (k0 + 20)) + 1])
-    assert np.allclose(trimmed["period"], folded["period"], atol=1e-12)     # the half turn is not used
+    trimmed = nf.period_average(
+        xw[: np.searchsorted(tw, 2 * np.pi * (k0 + 20)) + 1], tw[: np.searchsorted(tw, 2 * np.pi * (k0 + 20)) + 1]
+    )
+    assert np.allclose(trimmed["period"], folded["period"], atol=1e-12)  # the half turn is not used
 
 
 def test_period_average_lowers_white_noise_like_the_square_root_of_the_turns_but_keeps_a_rotor_locked_harmonic():
@@ -286,7 +299,7 @@ def test_period_average_lowers_white_noise_like_the_square_root_of_the_turns_but
     gain = np.std(one["period"] - ref1) / np.std(avg["period"] - ref)
     assert 0.75 * np.sqrt(avg["turns"]) < gain < 1.33 * np.sqrt(avg["turns"])
     third = 2 / len(ref) * abs(np.sum(avg["period"] * np.exp(-3j * avg["phi"])))
-    assert third == pytest.approx(0.5 * r["A_c"], rel=0.1)                  # the same in every turn: it stays
+    assert third == pytest.approx(0.5 * r["A_c"], rel=0.1)  # the same in every turn: it stays
 
 
 def test_period_average_rejects_bad_input_with_the_argument_named():

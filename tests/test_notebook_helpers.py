@@ -6,6 +6,7 @@ A helper is a top-level ``def`` or ``name = lambda ...`` in a code cell. The exe
 in Labs 02 and 09 is two different exercises). A helper two labs need goes into the library and both import it;
 one that only a single lab needs may stay in that lab's cells.
 """
+
 from __future__ import annotations
 
 import ast
@@ -54,8 +55,9 @@ def public_library_names(lib: Path = LIB) -> dict[str, str]:
     for path in sorted(lib.rglob("*.py")):
         module = ".".join(path.relative_to(lib.parent).with_suffix("").parts).removesuffix(".__init__")
         for node in ast.parse(path.read_text(encoding="utf-8")).body:
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and \
-                    not node.name.startswith("_"):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and not node.name.startswith(
+                "_"
+            ):
                 names.setdefault(node.name, module)
     return names
 
@@ -72,13 +74,19 @@ def helper_problems(notebooks: dict[str, object], library: dict[str, str], pendi
                 seen.add((name, label))
             else:
                 where[name].append(place)
-    problems = [f"`{name}` is no longer defined in notebook {label}: remove it from PENDING"
-                for name, labels in sorted(pending.items()) for label in sorted(labels) if (name, label) not in seen]
+    problems = [
+        f"`{name}` is no longer defined in notebook {label}: remove it from PENDING"
+        for name, labels in sorted(pending.items())
+        for label in sorted(labels)
+        if (name, label) not in seen
+    ]
     for name, places in sorted(where.items()):
         labs = {place.split(" cell ")[0] for place in places}
         if len(labs) > 1:
-            problems.append(f"`{name}` is defined in {len(labs)} notebooks ({'; '.join(places)}): put it in the "
-                            f"library once and import it")
+            problems.append(
+                f"`{name}` is defined in {len(labs)} notebooks ({'; '.join(places)}): put it in the "
+                f"library once and import it"
+            )
         if name in library:
             problems.append(f"`{name}` ({'; '.join(places)}) redefines {library[name]}.{name}: import it instead")
     return problems
@@ -98,10 +106,15 @@ def _nb(*cells):
 
 def test_the_scan_finds_a_shared_helper_and_a_shadowed_library_function():
     notebooks = {
-        "01_a": _nb("%matplotlib inline\nimport numpy as np\nsmall = lambda x: f'{x:.2e}'",
-                    ("def my_step(x):\n    return x", True)),
-        "02_b": _nb("def small(x):\n    return str(x)", "rms = lambda e: abs(e)\nfor k in range(2):\n"
-                    "    inner = lambda: k", ("def my_step(x):\n    return 2 * x", True)),
+        "01_a": _nb(
+            "%matplotlib inline\nimport numpy as np\nsmall = lambda x: f'{x:.2e}'",
+            ("def my_step(x):\n    return x", True),
+        ),
+        "02_b": _nb(
+            "def small(x):\n    return str(x)",
+            "rms = lambda e: abs(e)\nfor k in range(2):\n    inner = lambda: k",
+            ("def my_step(x):\n    return 2 * x", True),
+        ),
     }
     problems = helper_problems(notebooks, {"rms": "fusionlab.metrics"})
     assert problems == [
@@ -109,9 +122,10 @@ def test_the_scan_finds_a_shared_helper_and_a_shadowed_library_function():
         "`small` is defined in 2 notebooks (01_a cell 0 line 3; 02_b cell 0 line 1): put it in the library "
         "once and import it",
     ]
-    pending = {"rms": {"02_b"}, "small": {"01_a", "03_c"}}                # 03_c defines nothing
+    pending = {"rms": {"02_b"}, "small": {"01_a", "03_c"}}  # 03_c defines nothing
     assert helper_problems(notebooks, {"rms": "fusionlab.metrics"}, pending) == [
-        "`small` is no longer defined in notebook 03_c: remove it from PENDING"]
+        "`small` is no longer defined in notebook 03_c: remove it from PENDING"
+    ]
 
 
 def test_the_library_names_include_functions_of_a_package():

@@ -1,4 +1,5 @@
 """The solutions → labs pipeline: labs are generated, never hand-edited, and the release runs as a student runs it."""
+
 from __future__ import annotations
 
 import json
@@ -19,6 +20,7 @@ def test_every_lab_has_a_solution_and_a_release():
 def test_labs_docs_is_what_the_readme_and_docs_make():
     """labs/docs holds copies of the documents the labs link to (`make labs`): equal to their sources."""
     from grading import release
+
     release._check_docs(ROOT, ROOT)
     assert sorted(p.name for p in (ROOT / "labs").iterdir() if not p.name.startswith(".")) == sorted([*LABS, "docs"])
 
@@ -35,8 +37,9 @@ def test_release_hides_solutions_and_hidden_tests(course, lab):
     nb = nbformat.read(course / "labs" / lab / f"{lab}.ipynb", as_version=4)
     text = "\n".join(c.source for c in nb.cells)
     assert "### BEGIN SOLUTION" not in text and "### BEGIN HIDDEN TESTS" not in text
-    assert re.search(r"NotImplementedError\(.(exercise|question) \d+[a-z]? not attempted yet.\)", text), \
+    assert re.search(r"NotImplementedError\(.(exercise|question) \d+[a-z]? not attempted yet.\)", text), (
         "the student stub message (naming its exercise) is missing"
+    )
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), "release must have no outputs"
 
 
@@ -46,6 +49,7 @@ def test_the_untouched_release_runs_all_cells_stopping_only_at_unfinished_exerci
     """What a student sees on Run All of the release: every cell runs, and the only errors are the unfinished
     exercises' (grades are the judge's: tests/test_grading_cheats.py and tests/test_judge.py)."""
     from fusionlab.execute import run_notebook
+
     nb = run_notebook(ROOT / "labs" / lab / f"{lab}.ipynb", cwd=tmp_path, timeout=120)
     path = tmp_path / f"{lab}.ipynb"
     nbformat.write(nb, path)
@@ -61,18 +65,28 @@ def _assert_only_unfinished_exercise_errors(path):
     """An untouched lab fails only where an exercise is unfinished; a NameError always says which cell to finish;
     every error is one short box (a ✗ message and its hint), never a traceback."""
     nb = nbformat.read(path, as_version=4)
-    errors = [(i, o) for i, c in enumerate(nb.cells) if c.cell_type == "code" for o in c.get("outputs", [])
-              if o.output_type == "error"]
+    errors = [
+        (i, o)
+        for i, c in enumerate(nb.cells)
+        if c.cell_type == "code"
+        for o in c.get("outputs", [])
+        if o.output_type == "error"
+    ]
     assert errors, "the untouched lab ran without a single unfinished-exercise error"
     for _, e in errors:
         if e.ename == "NameError":
             assert "made by an earlier cell" in e.evalue, f"NameError without the hint: {e.evalue}"
         else:
             assert e.ename in EXPECTED_ERRORS, f"unexpected {e.ename} in the untouched lab: {e.evalue[:300]}"
-    long = [(i, e.ename, shown) for i, e in errors for shown in [ANSI.sub("", "\n".join(e.traceback))]
-            if FRAME.search(shown) or not shown.startswith("✗ ") or len(shown.splitlines()) > 6]
+    long = [
+        (i, e.ename, shown)
+        for i, e in errors
+        for shown in [ANSI.sub("", "\n".join(e.traceback))]
+        if FRAME.search(shown) or not shown.startswith("✗ ") or len(shown.splitlines()) > 6
+    ]
     assert not long, "errors shown as a traceback, not a short box:\n" + "\n\n".join(
-        f"cell {i} ({ename}):\n{shown[:600]}" for i, ename, shown in long[:5])
+        f"cell {i} ({ename}):\n{shown[:600]}" for i, ename, shown in long[:5]
+    )
 
 
 @pytest.mark.parametrize("lab", LABS)
@@ -86,8 +100,9 @@ def test_header_states_goals_time_seed_and_points_that_add_up(lab):
     written = sum(g["points"] for g in graded if g.get("solution"))
     m = re.search(r"\*\*Points\*\* \| (\d+) auto\w* .*?\+ (\d+) written.*?= \*\*(\d+)\*\*", header)
     assert m, f"{lab}: the Points line must read 'A autograded ... + W written ... = **T**'"
-    assert tuple(map(int, m.groups())) == (auto, written, auto + written), \
+    assert tuple(map(int, m.groups())) == (auto, written, auto + written), (
         f"{lab}: header says {m.groups()}, the graded cells hold {auto} autograded + {written} written"
+    )
 
 
 @pytest.mark.parametrize("lab", LABS)
@@ -116,5 +131,6 @@ def test_release_tags_every_cell_that_can_fail_so_run_all_goes_on(course, lab):
             stub = rf"NotImplementedError\('(exercise|question) {number} not attempted yet'\)"
             assert re.search(stub, cell.source), f"{lab}: the stub of {m['grade_id']} does not name its exercise"
     solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
-    assert not any("raises-exception" in c.metadata.get("tags", []) for c in solution.cells), \
+    assert not any("raises-exception" in c.metadata.get("tags", []) for c in solution.cells), (
         f"{lab}: the solution must not carry raises-exception (strict nbval would accept an error)"
+    )

@@ -1,4 +1,5 @@
 """Figures (fusionlab.plotting) and the Euler viewer widget (fusionlab.widgets), without a front end."""
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -31,8 +32,8 @@ def test_ned_to_display_draws_down_down_without_mirroring():
     north, east, down = np.eye(3)
     np.testing.assert_allclose(plotting.ned_to_display(north), [0, 1, 0])
     np.testing.assert_allclose(plotting.ned_to_display(east), [1, 0, 0])
-    np.testing.assert_allclose(plotting.ned_to_display(down), [0, 0, -1])      # Down points down on screen
-    assert np.linalg.det(plotting.NED_TO_DISPLAY) == pytest.approx(1.0)        # a rotation, not a mirror
+    np.testing.assert_allclose(plotting.ned_to_display(down), [0, 0, -1])  # Down points down on screen
+    assert np.linalg.det(plotting.NED_TO_DISPLAY) == pytest.approx(1.0)  # a rotation, not a mirror
 
 
 def test_plot_euler_frames_has_four_panels_with_the_right_arrows():
@@ -46,8 +47,9 @@ def test_plot_euler_frames_has_four_panels_with_the_right_arrows():
     for k, name in enumerate("xyz"):
         np.testing.assert_allclose(_tip(body, f"B:{name}"), plotting.ned_to_display(C_bn[:, k]), atol=1e-12)
     # the yaw panel: v1 x axis is (cos ψ, sin ψ, 0) in NED, and the inertial frame is drawn grey beside it
-    np.testing.assert_allclose(_tip(fig.axes[1], "v1:x"),
-                               plotting.ned_to_display([np.cos(EULER[2]), np.sin(EULER[2]), 0]), atol=1e-12)
+    np.testing.assert_allclose(
+        _tip(fig.axes[1], "v1:x"), plotting.ned_to_display([np.cos(EULER[2]), np.sin(EULER[2]), 0]), atol=1e-12
+    )
     grey = [ln for ln in fig.axes[1].get_lines() if ln.get_gid() == "I:x"][0]
     red = [ln for ln in body.get_lines() if ln.get_gid() == "B:x"][0]
     assert matplotlib.colors.to_hex(grey.get_color()) == matplotlib.colors.to_hex(plotting.GREY)
@@ -62,23 +64,27 @@ def test_plot_euler_frames_titles_and_labels_state_the_angles():
     assert "roll φ = 10°" in titles[3] and "$x_{v2}$" in titles[3]
     for ax in fig.axes:
         assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("East", "North", "Up (= -Down)")
-    assert len([ln for ln in fig.axes[3].get_lines() if ln.get_gid() == "aircraft"]) == 1   # aircraft in body panel
+    assert len([ln for ln in fig.axes[3].get_lines() if ln.get_gid() == "aircraft"]) == 1  # aircraft in body panel
     assert not any(ln.get_gid() == "aircraft" for ax in fig.axes[:3] for ln in ax.get_lines())
 
 
 def test_plot_euler_frames_single_panel():
     fig = plotting.plot_euler_frames(EULER, stages=False)
     assert len(fig.axes) == 1
-    np.testing.assert_allclose(_tip(fig.axes[0], "B:z"),
-                               plotting.ned_to_display(rotations.euler_to_dcm(EULER)[:, 2]), atol=1e-12)
+    np.testing.assert_allclose(
+        _tip(fig.axes[0], "B:z"), plotting.ned_to_display(rotations.euler_to_dcm(EULER)[:, 2]), atol=1e-12
+    )
 
 
-@pytest.mark.parametrize("bad, match", [
-    ([0.1, 0.2], r"euler must have shape"),
-    ([[0.1, 0.2, 0.3]], r"euler must have shape \(3,\)"),
-    ([0.1, np.nan, 0.3], r"euler must hold finite"),
-    ([10.0, -10.0, 40.0], r"euler must be in radians"),        # degrees passed by mistake
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        ([0.1, 0.2], r"euler must have shape"),
+        ([[0.1, 0.2, 0.3]], r"euler must have shape \(3,\)"),
+        ([0.1, np.nan, 0.3], r"euler must hold finite"),
+        ([10.0, -10.0, 40.0], r"euler must be in radians"),  # degrees passed by mistake
+    ],
+)
 def test_plot_euler_frames_rejects_bad_euler(bad, match):
     with pytest.raises(ValueError, match=match):
         plotting.plot_euler_frames(bad)
@@ -100,11 +106,11 @@ def test_plot_gimbal_lock_two_pairs_same_triad(pitch_deg):
     B = np.array([_tip(fig.axes[1], f"B:{n}") for n in "xyz"])
     np.testing.assert_allclose(A, B, atol=1e-12)
     combo = "φ − ψ" if pitch_deg > 0 else "φ + ψ"
-    expected = "-20°" if pitch_deg > 0 else "80°"                 # 30 - 50 and 30 + 50
+    expected = "-20°" if pitch_deg > 0 else "80°"  # 30 - 50 and 30 + 50
     assert combo in fig.get_suptitle() and "same attitude" in fig.get_suptitle()
     assert f"{combo} = {expected}" in fig.axes[0].get_title()
     assert f"{combo} = {expected}" in fig.axes[1].get_title()
-    assert "ψ = 0°" in fig.axes[1].get_title()                    # pair B is what dcm_to_euler reports
+    assert "ψ = 0°" in fig.axes[1].get_title()  # pair B is what dcm_to_euler reports
 
 
 def test_plot_gimbal_lock_away_from_lock_pairs_differ():
@@ -158,14 +164,14 @@ def test_euler_viewer_builds_headless_and_lock_pins_pitch():
     assert (yaw.min, yaw.max, pitch.min, pitch.max) == (-180, 180, -90, 90)
     assert readout.value == widgets.viewer_state(10, -10, 40, False)["html"]
     [out] = [c for c in box.children if isinstance(c, W.Output)]
-    assert len(out.outputs) == 1 and "image/png" in out.outputs[0]["data"]      # drawn once, headless
+    assert len(out.outputs) == 1 and "image/png" in out.outputs[0]["data"]  # drawn once, headless
 
     lock.value = True
     assert pitch.disabled and pitch.value == 90.0
     assert readout.value == widgets.viewer_state(10, 90, 40, True)["html"]
     assert "φ − ψ = -30.0°" in readout.value
     lock.value = False
-    assert not pitch.disabled and pitch.value == -10.0             # the pitch before the lock comes back
+    assert not pitch.disabled and pitch.value == -10.0  # the pitch before the lock comes back
 
 
 def test_euler_viewer_typed_angle_moves_the_slider_and_redraws():
@@ -199,18 +205,21 @@ def test_euler_viewer_yaw_slider_updates_readout():
 # Lab 11: shade_movement and plot_trial
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def _small_trial():
     """A 2 s BroadTrial of constant rotation, movement from 0.5 s to 1.0 s and 1.5 s to the end, reference lost
     on 10 samples."""
     from fusionlab import datasets
+
     fs, n = 100.0, 200
     gyr = np.tile([0.0, 0.0, 0.5], (n, 1))
     q = rotations.integrate_gyro_quat([1.0, 0, 0, 0], gyr, 1 / fs)[1:]
     q[20:30] = np.nan
     movement = np.zeros(n, bool)
     movement[50:100] = movement[150:] = True
-    return datasets._make_trial("00_test", (), "", fs, gyr, np.tile([0.0, 0, 9.81], (n, 1)),
-                                np.tile([20.0, 0, -40.0], (n, 1)), q, movement)
+    return datasets._make_trial(
+        "00_test", (), "", fs, gyr, np.tile([0.0, 0, 9.81], (n, 1)), np.tile([20.0, 0, -40.0], (n, 1)), q, movement
+    )
 
 
 def test_shade_movement_shades_each_stretch_from_its_first_to_its_last_sample():
@@ -223,11 +232,14 @@ def test_shade_movement_shades_each_stretch_from_its_first_to_its_last_sample():
     plt.close(fig)
 
 
-@pytest.mark.parametrize("t, movement, match", [
-    (np.arange(5.0), np.ones(5), "movement must be a boolean array; got dtype float64"),
-    (np.arange(5.0), np.ones(4, bool), r"t and movement must both have shape \(N,\); got \(5,\) and \(4,\)"),
-    (np.array([0.0, np.nan]), np.ones(2, bool), "t must hold finite numbers"),
-])
+@pytest.mark.parametrize(
+    "t, movement, match",
+    [
+        (np.arange(5.0), np.ones(5), "movement must be a boolean array; got dtype float64"),
+        (np.arange(5.0), np.ones(4, bool), r"t and movement must both have shape \(N,\); got \(5,\) and \(4,\)"),
+        (np.array([0.0, np.nan]), np.ones(2, bool), "t must hold finite numbers"),
+    ],
+)
 def test_shade_movement_rejects_bad_input(t, movement, match):
     fig, ax = plt.subplots()
     with pytest.raises(ValueError, match=match):
@@ -243,11 +255,11 @@ def test_plot_trial_draws_four_shaded_panels_with_the_reference_as_euler_angles(
     assert axes[0].get_title() == "the finding" and axes[-1].get_xlabel() == "time (s)"
     assert all(sum(p.get_gid() == "movement" for p in ax.patches) == 2 for ax in axes)
     gz = axes[0].get_lines()[2].get_ydata()
-    np.testing.assert_allclose(gz, np.degrees(0.5))                       # deg/s
+    np.testing.assert_allclose(gz, np.degrees(0.5))  # deg/s
     yaw = axes[3].get_lines()[2].get_ydata()
-    assert np.isnan(yaw[20:30]).all()                                      # the lost reference is a gap
-    np.testing.assert_allclose(yaw[100], np.degrees(0.5 * 1.01), rtol=1e-9)   # yaw after 101 steps of 0.01 s
-    assert len(plotting.plot_trial(tr, "x").axes[0].get_lines()[0].get_xdata()) == 67   # every 3rd sample
+    assert np.isnan(yaw[20:30]).all()  # the lost reference is a gap
+    np.testing.assert_allclose(yaw[100], np.degrees(0.5 * 1.01), rtol=1e-9)  # yaw after 101 steps of 0.01 s
+    assert len(plotting.plot_trial(tr, "x").axes[0].get_lines()[0].get_xdata()) == 67  # every 3rd sample
     plt.close("all")
 
 
@@ -264,14 +276,17 @@ def test_plot_trial_rejects_what_is_not_a_trial():
 # Lab 08: plot_earth_rate_line and plot_bandpass
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def _nf_record():
     from fusionlab import northfinder as nf
-    return nf.synthetic_record(np.radians(-42.0), duration=3.0, noise=0.0, harmonics={}, seed=1)   # 10 turns
+
+    return nf.synthetic_record(np.radians(-42.0), duration=3.0, noise=0.0, harmonics={}, seed=1)  # 10 turns
 
 
 def test_plot_earth_rate_line_shows_the_line_at_its_amplitude_in_the_spectrum():
     from fusionlab import northfinder as nf
-    rec = _nf_record()                                    # no harmonics, no noise: the record is the line
+
+    rec = _nf_record()  # no harmonics, no noise: the record is the line
     fig = plotting.plot_earth_rate_line(rec, np.radians(-42.0), "the finding")
     left, right = fig.axes
     assert fig._suptitle.get_text() == "the finding"
@@ -279,7 +294,7 @@ def test_plot_earth_rate_line_shows_the_line_at_its_amplitude_in_the_spectrum():
     np.testing.assert_allclose(line.get_ydata(), left.get_lines()[0].get_ydata(), atol=0.05 * rec["A_c"] / nf.UG)
     spec = next(ln for ln in right.get_lines() if ln.get_gid() == "spectrum")
     f, a = spec.get_xdata(), spec.get_ydata()
-    assert f[np.argmax(a)] == pytest.approx(rec["f_r"], abs=1e-9)                 # 3 s: f_r is bin 10
+    assert f[np.argmax(a)] == pytest.approx(rec["f_r"], abs=1e-9)  # 3 s: f_r is bin 10
     assert a.max() == pytest.approx(rec["A_c"] / nf.UG, rel=0.1)
     assert f.max() < 90 and left.get_lines()[0].get_xdata().max() < 0.9
     plt.close(fig)
@@ -287,6 +302,7 @@ def test_plot_earth_rate_line_shows_the_line_at_its_amplitude_in_the_spectrum():
 
 def test_plot_bandpass_draws_one_gain_per_order_and_the_chosen_order_on_the_record():
     from fusionlab import northfinder as nf
+
     rec = _nf_record()
     taps = {m: nf.bandpass_firls(m, rec["fs"], rec["f_r"]) for m in (100, 400)}
     fig = plotting.plot_bandpass(rec, taps, "the finding", t_max=2.5)
@@ -294,22 +310,27 @@ def test_plot_bandpass_draws_one_gain_per_order_and_the_chosen_order_on_the_reco
     assert [ln.get_gid() for ln in gains.get_lines() if ln.get_gid()] == ["order 100", "order 400"]
     f = gains.get_lines()[1].get_xdata()
     g400 = gains.get_lines()[1].get_ydata()
-    assert g400[np.argmin(np.abs(f - rec["f_r"]))] == pytest.approx(0.0, abs=1.0)      # passes the line
+    assert g400[np.argmin(np.abs(f - rec["f_r"]))] == pytest.approx(0.0, abs=1.0)  # passes the line
     assert out.get_title() == "order 400, causal, raw record" and fig._suptitle.get_text() == "the finding"
     assert out.get_lines()[0].get_xdata().max() < 2.5
     plt.close(fig)
 
 
-@pytest.mark.parametrize("call, match", [
-    (lambda rec: plotting.plot_earth_rate_line({"t": 1}, 0.1, "x"), "rec must be a record of northfinder"),
-    (lambda rec: plotting.plot_earth_rate_line(rec, 42.0, "x"), "heading must be in radians"),
-    (lambda rec: plotting.plot_earth_rate_line(rec, 0.1, None), "title must be a string"),
-    (lambda rec: plotting.plot_bandpass(rec, {}, "x"), "taps must be a non-empty dict"),
-    (lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", shown=20),
-     r"shown must be one of the orders in taps \(10\); got 20"),
-    (lambda rec: plotting.plot_bandpass(rec, {10: [np.nan] * 11}, "x"), r"taps\[10\] must hold finite numbers"),
-    (lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", f_max=0.0), "f_max must be a positive"),
-])
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda rec: plotting.plot_earth_rate_line({"t": 1}, 0.1, "x"), "rec must be a record of northfinder"),
+        (lambda rec: plotting.plot_earth_rate_line(rec, 42.0, "x"), "heading must be in radians"),
+        (lambda rec: plotting.plot_earth_rate_line(rec, 0.1, None), "title must be a string"),
+        (lambda rec: plotting.plot_bandpass(rec, {}, "x"), "taps must be a non-empty dict"),
+        (
+            lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", shown=20),
+            r"shown must be one of the orders in taps \(10\); got 20",
+        ),
+        (lambda rec: plotting.plot_bandpass(rec, {10: [np.nan] * 11}, "x"), r"taps\[10\] must hold finite numbers"),
+        (lambda rec: plotting.plot_bandpass(rec, {10: np.ones(11)}, "x", f_max=0.0), "f_max must be a positive"),
+    ],
+)
 def test_lab08_figures_reject_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call(_nf_record())
@@ -319,6 +340,7 @@ def test_lab08_figures_reject_bad_input(call, match):
 # ----------------------------------------------------------------------------------------------------------------
 # Lab 12: plot_error_signatures
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def test_plot_error_signatures_puts_each_cloud_in_a_panel_and_the_angles_last():
     ideal = np.array([[1.0, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]])
@@ -330,20 +352,25 @@ def test_plot_error_signatures_puts_each_cloud_in_a_panel_and_the_angles_last():
     np.testing.assert_array_equal(axes[0].get_lines()[1].get_xdata(), [1.5, 0.5, -0.5, 0.5])
     np.testing.assert_array_equal(axes[1].get_lines()[1].get_xdata(), [1.2, 0, -1.2, 0])
     assert [ln.get_label() for ln in axes[1].get_lines()] == ["ideal", "scale"]
-    assert not axes[2].axison and not axes[4].axison                  # unused cloud panels are switched off
+    assert not axes[2].axison and not axes[4].axison  # unused cloud panels are switched off
     np.testing.assert_array_equal(axes[5].get_lines()[0].get_ydata(), 2 * t)
     assert axes[5].get_ylabel() == "integrated angle (°)"
     plt.close(fig)
 
 
-@pytest.mark.parametrize("args, match", [
-    (({}, np.arange(3.0), {}, "x"), "clouds must be a dict of 1 to 5"),
-    (({"a": np.ones((3, 3))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] must be a pair \(ideal, measured\)"),
-    (({"a": (np.ones((3, 3)), np.ones((3, 2)))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] measured must have"),
-    (({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {"r": np.ones(4)}, "x"),
-     r"angles\['r'\] must have the shape of t \(3,\); got \(4,\)"),
-    (({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {}, 3), "title must be a string"),
-])
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (({}, np.arange(3.0), {}, "x"), "clouds must be a dict of 1 to 5"),
+        (({"a": np.ones((3, 3))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] must be a pair \(ideal, measured\)"),
+        (({"a": (np.ones((3, 3)), np.ones((3, 2)))}, np.arange(3.0), {}, "x"), r"clouds\['a'\] measured must have"),
+        (
+            ({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {"r": np.ones(4)}, "x"),
+            r"angles\['r'\] must have the shape of t \(3,\); got \(4,\)",
+        ),
+        (({"a": (np.ones((3, 3)), np.ones((3, 3)))}, np.arange(3.0), {}, 3), "title must be a string"),
+    ],
+)
 def test_plot_error_signatures_rejects_bad_input(args, match):
     with pytest.raises(ValueError, match=match):
         plotting.plot_error_signatures(*args)
@@ -354,12 +381,13 @@ def test_plot_error_signatures_rejects_bad_input(args, match):
 # Lab 04: plot_disturbance_sweeps
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def test_plot_disturbance_sweeps_draws_both_errors_and_the_weight_per_disturbance():
     g = np.linspace(0.0, 1.0, 5)
     sweeps = {"acceleration (g)": (g, 1 - g / 2, 10 * g, 5 * g), "magnet (µT)": (100 * g, np.ones(5), 0 * g, 3 * g)}
     fig = plotting.plot_disturbance_sweeps(sweeps, "the finding")
     assert len(fig.axes) == 4 and tuple(fig.get_size_inches()) == (9.0, 3.3)
-    a0, a1, t0, t1 = fig.axes                              # twins are added after the panels
+    a0, a1, t0, t1 = fig.axes  # twins are added after the panels
     assert fig._suptitle.get_text() == "the finding" and a1.get_xlabel() == "magnet (µT)"
     lines = {ln.get_gid(): ln for ln in a0.get_lines()}
     np.testing.assert_array_equal(lines["weighted"].get_ydata(), 10 * g)
@@ -369,13 +397,16 @@ def test_plot_disturbance_sweeps_draws_both_errors_and_the_weight_per_disturbanc
     plt.close(fig)
 
 
-@pytest.mark.parametrize("sweeps, title, match", [
-    ({}, "x", "sweeps must be a non-empty dict"),
-    ({"a": (np.ones(3),) * 3}, "x", r"sweeps\['a'\] must be \(grid, alpha_g, tilt_weighted, tilt_equal\)"),
-    ({"a": (np.ones(3), np.ones(3), np.ones(4), np.ones(3))}, "x", r"sweeps\['a'\] must hold four arrays of one"),
-    ({"a": (np.ones(3), np.ones(3), [np.nan] * 3, np.ones(3))}, "x", r"sweeps\['a'\]\[2\] must hold finite"),
-    ({"a": (np.ones(3),) * 4}, None, "title must be a string"),
-])
+@pytest.mark.parametrize(
+    "sweeps, title, match",
+    [
+        ({}, "x", "sweeps must be a non-empty dict"),
+        ({"a": (np.ones(3),) * 3}, "x", r"sweeps\['a'\] must be \(grid, alpha_g, tilt_weighted, tilt_equal\)"),
+        ({"a": (np.ones(3), np.ones(3), np.ones(4), np.ones(3))}, "x", r"sweeps\['a'\] must hold four arrays of one"),
+        ({"a": (np.ones(3), np.ones(3), [np.nan] * 3, np.ones(3))}, "x", r"sweeps\['a'\]\[2\] must hold finite"),
+        ({"a": (np.ones(3),) * 4}, None, "title must be a string"),
+    ],
+)
 def test_plot_disturbance_sweeps_rejects_bad_input(sweeps, title, match):
     with pytest.raises(ValueError, match=match):
         plotting.plot_disturbance_sweeps(sweeps, title)
@@ -390,7 +421,7 @@ def test_gaussian_product_explorer_builds_headless_and_updates():
     assert len(sliders) == 4 and not any(s.continuous_update for s in sliders)
     assert readout.value == widgets.gaussian_product_state(0, 4, 3, 1)["html"]
     assert "μ = 2.40, σ² = 0.80" in readout.value
-    sliders[3].value = 4.0                                                 # equal variances: halfway
+    sliders[3].value = 4.0  # equal variances: halfway
     assert "μ = 1.50, σ² = 2.00" in readout.value
     st = widgets.gaussian_product_state(0, 4, 3, 4)
     assert st["K"] == pytest.approx(0.5)

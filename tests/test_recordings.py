@@ -5,6 +5,7 @@ The tolerances are the costs measured on these files (the module's doc, its tabl
 worst of the five exports, gyro RMS 0.0096 rad/s (max 0.18), acc RMS 0.077 m/s² (max 1.59), field RMS 0.56 µT
 (max 3.7), gyro-integrated attitude 0.72° after 31 s.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -18,10 +19,12 @@ import pytest
 from fusionlab import datasets, recordings, rotations, signals
 
 PHONE = recordings.EXAMPLES_DIR
-PLAIN = dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag": ["mx", "my", "mz"]},
-             units={"t": "ms", "gyr": "deg/s", "acc": "g", "mag": "nT"})
+PLAIN = dict(
+    columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag": ["mx", "my", "mz"]},
+    units={"t": "ms", "gyr": "deg/s", "acc": "g", "mag": "nT"},
+)
 EPOCH = recordings._EPOCH_NS * 1e-9
-EXPORTS = {                                   # file: (keyword arguments, the app clock's offset from BROAD's segment)
+EXPORTS = {  # file: (keyword arguments, the app clock's offset from BROAD's segment)
     "phyphox_trial02.zip": ({}, 0.0),
     "phyphox_trial02_semicolon": ({}, 0.0),
     "sensorlogger_android_trial02.zip": ({}, EPOCH),
@@ -55,11 +58,11 @@ def test_every_example_export_round_trips_to_broad_within_the_measured_resamplin
     assert rec.fs == pytest.approx(95.238, abs=0.01)
     for key in ("gyr", "acc", "mag"):
         err = getattr(rec, key) - _truth(broad, instants, key)
-        rms, top = float(np.sqrt(np.mean(err ** 2))), float(np.abs(err).max())
+        rms, top = float(np.sqrt(np.mean(err**2))), float(np.abs(err).max())
         assert rms < RMS_TOL[key] and top < MAX_TOL[key], f"{name} {key}: RMS {rms:.4g}, max {top:.4g}"
     # the test can fail: the same comparison 20 ms off (two BROAD samples and a half) exceeds the gyro's tolerance
     late = rec.gyr - _truth(broad, instants + 0.02, "gyr")
-    assert np.sqrt(np.mean(late ** 2)) > RMS_TOL["gyr"]
+    assert np.sqrt(np.mean(late**2)) > RMS_TOL["gyr"]
     t, sig, fs = broad
     q0 = np.array([1.0, 0.0, 0.0, 0.0])
     mine = rotations.integrate_gyro_quat(q0, rec.gyr, 1.0 / rec.fs)[-1]
@@ -88,15 +91,17 @@ def test_a_combined_phyphox_raw_data_file_loads_like_the_per_sensor_files(tmp_pa
     with zipfile.ZipFile(PHONE / "phyphox_trial02.zip") as z:
         gyro = z.read("Gyroscope.csv").decode().splitlines()[1:]
         acc = z.read("Accelerometer.csv").decode().splitlines()[1:]
-    n = min(len(gyro), len(acc))              # one time column for both: the gyro's stamps, the accelerometer's values
+    n = min(len(gyro), len(acc))  # one time column for both: the gyro's stamps, the accelerometer's values
     rows = [g + "," + ",".join(a.split(",")[1:]) for g, a in zip(gyro[:n], acc[:n])]
-    head = ('"Time (s)","Gyroscope x (rad/s)","Gyroscope y (rad/s)","Gyroscope z (rad/s)","Acceleration x (m/s^2)",'
-            '"Acceleration y (m/s^2)","Acceleration z (m/s^2)"')
+    head = (
+        '"Time (s)","Gyroscope x (rad/s)","Gyroscope y (rad/s)","Gyroscope z (rad/s)","Acceleration x (m/s^2)",'
+        '"Acceleration y (m/s^2)","Acceleration z (m/s^2)"'
+    )
     (tmp_path / "Raw Data.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
     rec = recordings.load_recording(tmp_path / "Raw Data.csv")
     assert rec.summary.format == "phyphox" and rec.mag is None
     err = rec.gyr - _truth(broad, rec.t0 + rec.t, "gyr")
-    assert np.sqrt(np.mean(err ** 2)) < RMS_TOL["gyr"]
+    assert np.sqrt(np.mean(err**2)) < RMS_TOL["gyr"]
 
 
 def test_the_phones_own_orientation_is_kept_as_quat_phone_never_as_a_reference(broad):
@@ -127,9 +132,9 @@ def test_a_window_keeps_the_samples_in_t0_to_t1_and_their_time_on_the_apps_clock
     inside = np.flatnonzero((rec.t >= 2.0) & (rec.t < 9.0))
     assert len(part) == len(inside) == 667 and part.fs == rec.fs and part.name == rec.name
     for key in ("gyr", "acc", "mag", "quat_phone"):
-        np.testing.assert_array_equal(getattr(part, key), getattr(rec, key)[inside[0]:inside[-1] + 1])
+        np.testing.assert_array_equal(getattr(part, key), getattr(rec, key)[inside[0] : inside[-1] + 1])
         with pytest.raises(ValueError):
-            getattr(part, key)[0, 0] = 1.0                  # read-only, like the recording's
+            getattr(part, key)[0, 0] = 1.0  # read-only, like the recording's
     assert part.t0 == rec.t0 + rec.t[inside[0]] and rec.t[inside[0]] >= 2.0 > rec.t[inside[0] - 1]
     assert part.summary.samples == 667 and part.summary.start == pytest.approx(rec.summary.start + rec.t[inside[0]])
     assert part.summary.sensors == rec.summary.sensors and part.quat_ref is None
@@ -142,17 +147,20 @@ def test_a_window_keeps_the_samples_in_t0_to_t1_and_their_time_on_the_apps_clock
     assert ios.quat_phone is None and ios.mag.shape == (len(ios), 3) and 0 < len(ios) <= 48
 
 
-@pytest.mark.parametrize("t0, t1, message", [
-    (float("nan"), 5.0, r"t0 must be a finite number"),
-    (0.0, float("inf"), r"t1 must be a finite number"),
-    ("1", 5.0, r"t0 must be a single number"),
-    (0.0, [5.0], r"t1 must be a single number"),
-    (5.0, 5.0, r"t1 must be later than t0; got t0=5.0, t1=5.0"),
-    (6.0, 5.0, r"t1 must be later than t0"),
-    (-0.5, 5.0, r"t0 must be within the recording, 0 <= t0 < 31.4\d* s; got -0.5"),
-    (1.0, 40.0, r"t1 must be within the recording, t1 <= 31.4\d* s \(its duration\); got 40.0"),
-    (1.001, 1.002, r"t0, t1 must hold at least one sample \(one every 0.0105 s\)"),
-])
+@pytest.mark.parametrize(
+    "t0, t1, message",
+    [
+        (float("nan"), 5.0, r"t0 must be a finite number"),
+        (0.0, float("inf"), r"t1 must be a finite number"),
+        ("1", 5.0, r"t0 must be a single number"),
+        (0.0, [5.0], r"t1 must be a single number"),
+        (5.0, 5.0, r"t1 must be later than t0; got t0=5.0, t1=5.0"),
+        (6.0, 5.0, r"t1 must be later than t0"),
+        (-0.5, 5.0, r"t0 must be within the recording, 0 <= t0 < 31.4\d* s; got -0.5"),
+        (1.0, 40.0, r"t1 must be within the recording, t1 <= 31.4\d* s \(its duration\); got 40.0"),
+        (1.001, 1.002, r"t0, t1 must hold at least one sample \(one every 0.0105 s\)"),
+    ],
+)
 def test_a_window_outside_the_recording_or_without_a_sample_is_refused_naming_the_argument(t0, t1, message):
     rec = recordings.load_recording(PHONE / "phyphox_trial02.zip")
     with pytest.raises(ValueError, match=message):
@@ -187,15 +195,19 @@ def _edit(path, fn):
 
 
 def _plain(tmp_path, **units):
-    return recordings.load_recording(PHONE / "plain_trial02.csv", columns=PLAIN["columns"],
-                                     units={**PLAIN["units"], **units})
+    return recordings.load_recording(
+        PHONE / "plain_trial02.csv", columns=PLAIN["columns"], units={**PLAIN["units"], **units}
+    )
 
 
-@pytest.mark.parametrize("units, message", [
-    ({"acc": "m/s^2"}, "which is g, not m/s^2 as units= says -- pass units={'acc': 'g'}"),
-    ({"gyr": "rad/s"}, "the gyro is in deg/s -- pass units={'gyr': 'deg/s'}"),
-    ({"mag": "uT"}, "the magnetometer is in nT -- pass units={'mag': 'nT'}"),
-])
+@pytest.mark.parametrize(
+    "units, message",
+    [
+        ({"acc": "m/s^2"}, "which is g, not m/s^2 as units= says -- pass units={'acc': 'g'}"),
+        ({"gyr": "rad/s"}, "the gyro is in deg/s -- pass units={'gyr': 'deg/s'}"),
+        ({"mag": "uT"}, "the magnetometer is in nT -- pass units={'mag': 'nT'}"),
+    ],
+)
 def test_a_wrong_declared_unit_is_refused_with_the_fix(tmp_path, units, message):
     with pytest.raises(ValueError, match=re.escape(message)):
         _plain(tmp_path, **units)
@@ -206,8 +218,11 @@ def test_an_ios_export_read_with_androids_conventions_is_refused_by_its_sign_and
     # Core Motion's gravity-vector sign
     folder = _unzip("sensorlogger_ios_trial02.zip", tmp_path)
     _edit(folder / "Metadata.csv", lambda s: s.replace(",ios,", ",android,"))
-    with pytest.raises(ValueError, match=r"Accelerometer.csv \+ Gravity.csv: still and flat at .*, z reads -9.82 m/s².*"
-                                         r"this is the gravity convention -- pass acc_convention='gravity'"):
+    with pytest.raises(
+        ValueError,
+        match=r"Accelerometer.csv \+ Gravity.csv: still and flat at .*, z reads -9.82 m/s².*"
+        r"this is the gravity convention -- pass acc_convention='gravity'",
+    ):
         recordings.load_recording(folder)
     rec = recordings.load_recording(folder, acc_convention="gravity")
     assert rec.acc[:100, 2].mean() == pytest.approx(9.8, abs=0.05)
@@ -216,8 +231,11 @@ def test_an_ios_export_read_with_androids_conventions_is_refused_by_its_sign_and
 
 
 def test_a_declared_sign_the_rest_posture_contradicts_is_refused_and_check_false_trusts_it():
-    with pytest.raises(ValueError, match=r"this is the specific force convention -- pass acc_convention='specific "
-                                         r"force' \(or, if the phone really lay face down, check=False\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"this is the specific force convention -- pass acc_convention='specific "
+        r"force' \(or, if the phone really lay face down, check=False\)",
+    ):
         recordings.load_recording(PHONE / "plain_trial02.csv", acc_convention="gravity", **PLAIN)
     rec = recordings.load_recording(PHONE / "plain_trial02.csv", acc_convention="gravity", check=False, **PLAIN)
     assert rec.acc[:100, 2].mean() == pytest.approx(-9.8, abs=0.05)
@@ -239,8 +257,11 @@ def test_what_an_export_does_not_state_is_inferred_from_physics_and_said_in_the_
 def test_linear_acceleration_without_gravity_is_refused(tmp_path):
     folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
     (folder / "Gravity.csv").unlink()
-    with pytest.raises(ValueError, match=r"Accelerometer.csv: .* linear acceleration \(gravity removed\), not the "
-                                         r"specific force"):
+    with pytest.raises(
+        ValueError,
+        match=r"Accelerometer.csv: .* linear acceleration \(gravity removed\), not the "
+        r"specific force",
+    ):
         recordings.load_recording(folder)
 
 
@@ -267,7 +288,7 @@ def _still_then_tilting(fs=100.0, still=1.5, tilting=2.5, rate=1.0):
     gyr = np.zeros((len(t), 3))
     gyr[t >= still, 0] = rate
     acc = np.stack([np.zeros_like(t), G * np.sin(theta), G * np.cos(theta)], axis=1)
-    wobble = np.random.default_rng(7).normal(0.0, 1e-3, (len(t), 6))        # a phone's noise, far below the motion
+    wobble = np.random.default_rng(7).normal(0.0, 1e-3, (len(t), 6))  # a phone's noise, far below the motion
     return t, gyr + wobble[:, :3], acc + wobble[:, 3:]
 
 
@@ -284,13 +305,17 @@ def _sensor_logger_export(folder, platform):
     folder.mkdir()
     t, gyr, acc = _still_then_tilting()
     if platform == "android":
-        meta = ("version,device name,recording epoch time,recording time,recording timezone,platform,appVersion,"
-                "device id,sensors,sampleRateMs\n3,SM-X,1662982563186,2022-09-12_11-36-02,Europe/Amsterdam,android,"
-                "1.28,0000,Gyroscope|TotalAcceleration,10|10")
+        meta = (
+            "version,device name,recording epoch time,recording time,recording timezone,platform,appVersion,"
+            "device id,sensors,sampleRateMs\n3,SM-X,1662982563186,2022-09-12_11-36-02,Europe/Amsterdam,android,"
+            "1.28,0000,Gyroscope|TotalAcceleration,10|10"
+        )
         _sensor_logger_csv(folder / "TotalAcceleration.csv", t, acc)
     else:
-        meta = ("version,device name,recording time,platform,appVersion,device id,sensors,sampleRateMs\n"
-                "3,iPhone 12 mini,2022-09-12_11-36-02,ios,1.10.4,0000,Accelerometer|Gravity|Gyroscope,10|10|10")
+        meta = (
+            "version,device name,recording time,platform,appVersion,device id,sensors,sampleRateMs\n"
+            "3,iPhone 12 mini,2022-09-12_11-36-02,ios,1.10.4,0000,Accelerometer|Gravity|Gyroscope,10|10|10"
+        )
         user = np.random.default_rng(8).normal(0.0, 0.02, acc.shape)
         _sensor_logger_csv(folder / "Accelerometer.csv", t, -user)
         _sensor_logger_csv(folder / "Gravity.csv", t, -(acc - user))
@@ -303,8 +328,8 @@ def _sensor_logger_export(folder, platform):
 def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_read(tmp_path, platform, sign):
     folder = _sensor_logger_export(tmp_path / platform, platform)
     rec = recordings.load_recording(folder)
-    assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01)                  # specific force, face up
-    assert rec.acc[-1] == pytest.approx([0.0, G * np.sin(2.49), G * np.cos(2.49)], abs=0.05)   # its last sample
+    assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01)  # specific force, face up
+    assert rec.acc[-1] == pytest.approx([0.0, G * np.sin(2.49), G * np.cos(2.49)], abs=0.05)  # its last sample
     assert rec.gyr[-10:, 0] == pytest.approx(1.0, abs=0.01) and rec.summary.platform == platform
     text = str(rec.summary)
     assert f"acc: m/s^2 (Sensor Logger on {platform}; physics agrees: median |acc| 9.8" in text
@@ -318,25 +343,35 @@ def test_a_phyphox_custom_experiments_columns_are_read_by_their_unit_and_a_misla
     # an experiment built in phyphox's editor: its own column names, unquoted, CRLF line ends, and a gyro whose
     # header says deg/s over numbers in rad/s
     folder = _phyphox_custom(tmp_path / "custom", *_still_then_tilting())
-    with pytest.raises(ValueError, match=r"Gyroscope.csv: read in deg/s, the gyro hardly turns while gravity does "
-                                         r"\(the header of Gyroscope.csv\); read in rad/s, gravity turned 1.0\d times "
-                                         r"as far .*: the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}"):
+    with pytest.raises(
+        ValueError,
+        match=r"Gyroscope.csv: read in deg/s, the gyro hardly turns while gravity does "
+        r"\(the header of Gyroscope.csv\); read in rad/s, gravity turned 1.0\d times "
+        r"as far .*: the gyro is in rad/s -- pass units=\{'gyr': 'rad/s'\}",
+    ):
         recordings.load_recording(folder)
     rec = recordings.load_recording(folder, units={"gyr": "rad/s"})
     assert rec.acc[:100, 2].mean() == pytest.approx(G, abs=0.01) and rec.gyr[-10:, 0] == pytest.approx(1.0, abs=0.01)
-    assert ("Accelerometer.csv: Accel_X (m/s^2), Accel_Y (m/s^2), Accel_Z (m/s^2) are not phyphox's own column "
-            "names (a custom experiment's): read as the file's accelerometer by their unit") in str(rec.summary)
+    assert (
+        "Accelerometer.csv: Accel_X (m/s^2), Accel_Y (m/s^2), Accel_Z (m/s^2) are not phyphox's own column "
+        "names (a custom experiment's): read as the file's accelerometer by their unit"
+    ) in str(rec.summary)
     # a name that is not one axis of a quantity stays refused, with a fix that works for a folder of files
     _edit(folder / "Accelerometer.csv", lambda s: s.replace("Accel_X", "AccelX"))
-    with pytest.raises(ValueError, match=r"Accelerometer.csv, line 1: .* is not one phyphox writes .* name its "
-                                         r"columns as phyphox does"):
+    with pytest.raises(
+        ValueError,
+        match=r"Accelerometer.csv, line 1: .* is not one phyphox writes .* name its "
+        r"columns as phyphox does",
+    ):
         recordings.load_recording(folder, units={"gyr": "rad/s"})
 
 
 def _phyphox_custom(folder, t, gyr, acc, gyro_unit="deg/s", acc_every=1):
     folder.mkdir()
-    for name, head, tt, v in (("Accelerometer.csv", "Accel_{} (m/s^2)", t[::acc_every], acc[::acc_every]),
-                              ("Gyroscope.csv", "Gyroscope {} (" + gyro_unit + ")", t, gyr)):
+    for name, head, tt, v in (
+        ("Accelerometer.csv", "Accel_{} (m/s^2)", t[::acc_every], acc[::acc_every]),
+        ("Gyroscope.csv", "Gyroscope {} (" + gyro_unit + ")", t, gyr),
+    ):
         rows = [",".join(f"{x:.9E}" for x in (ti, *vi)) for ti, vi in zip(tt, v)]
         text = "\r\n".join([",".join(["Time (s)", *(head.format(a) for a in ("X", "Y", "Z"))]), *rows]) + "\r\n"
         (folder / name).write_bytes(text.replace("E+0", "E").replace("E-0", "E-").encode("utf-8"))
@@ -350,20 +385,27 @@ def test_too_little_tilt_to_check_a_gyros_unit_is_said_in_the_summary_with_what_
     rec = recordings.load_recording(_phyphox_custom(tmp_path / "short", t, gyr, acc, acc_every=2))
     assert rec.gyr[-10:, 0] == pytest.approx(np.radians(1.0), abs=1e-4)
     text = str(rec.summary)
-    assert ("gyr: deg/s (the header of Gyroscope.csv); too little motion for the tilt check (0 windows; read in "
-            "rad/s, 11 windows count (ratio 1.00), under the 20 the check needs)") in text
+    assert (
+        "gyr: deg/s (the header of Gyroscope.csv); too little motion for the tilt check (0 windows; read in "
+        "rad/s, 11 windows count (ratio 1.00), under the 20 the check needs)"
+    ) in text
     assert rec.summary.method == "linear interpolation onto the gyro's median rate" and rec.fs == pytest.approx(100.0)
 
 
 def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_holds(tmp_path):
     # phyphox's 'Acceleration with g' exported as one Raw Data.csv, with its absolute-value column
     t, _, acc = _still_then_tilting()
-    head = ('"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
-            '"Absolute acceleration (m/s^2)"')
+    head = (
+        '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
+        '"Absolute acceleration (m/s^2)"'
+    )
     rows = [",".join(f"{x:.9E}" for x in (ti, *a, np.linalg.norm(a))) for ti, a in zip(t, acc)]
     (tmp_path / "Raw Data.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
-    with pytest.raises(ValueError, match=r"Raw Data.csv holds no gyroscope: both are needed \(it holds the "
-                                         r"accelerometer\) -- record the gyroscope and the accelerometer together"):
+    with pytest.raises(
+        ValueError,
+        match=r"Raw Data.csv holds no gyroscope: both are needed \(it holds the "
+        r"accelerometer\) -- record the gyroscope and the accelerometer together",
+    ):
         recordings.load_recording(tmp_path / "Raw Data.csv")
 
 
@@ -377,11 +419,15 @@ def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as
     with pytest.raises(ValueError, match=message):
         recordings.load_recording(folder)
     folder = _sensor_logger_export(tmp_path / "flipped", "android")
-    _lines(folder / "Gyroscope.csv", lambda ls: [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in
-                                                                     r.split(",")[2:])]) for r in ls[1:]])
+    _lines(
+        folder / "Gyroscope.csv",
+        lambda ls: (
+            [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in r.split(",")[2:])]) for r in ls[1:]]
+        ),
+    )
     with pytest.raises(ValueError, match=r"median cosine -1.00 over 25 windows.* one sensor's sign flipped"):
         recordings.load_recording(folder)
-    rec = recordings.load_recording(folder, check=False)                       # trusted as stated when asked to
+    rec = recordings.load_recording(folder, check=False)  # trusted as stated when asked to
     assert rec.gyr[-10:, 0] == pytest.approx(-1.0, abs=0.01)
 
 
@@ -401,30 +447,73 @@ def _swap(lines, k):
 
 
 BAD = [  # (export, file, edit of its lines, the message: file, line and what)
-    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: ls[:-1] + [ls[-1][:30]],
-     r"Gyroscope.csv, line 3140: has \d of the header's 4 fields: the file is truncated"),
-    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: ls[:-1] + [ls[-1].rsplit("E", 1)[0] + "E"],
-     r"Gyroscope.csv, line 3140: column 'Z \(rad/s\)' holds .*, not a number -- the last line looks truncated"),
-    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:101] + [ls[100]] + ls[101:],
-     r"Gyroscope.csv, line 102: the time stamp repeats line 101's"),
-    ("sensorlogger_android_trial02", "Magnetometer.csv", lambda ls: _swap(ls, 50),
-     r"Magnetometer.csv, line 52: time goes backwards"),
-    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: [ls[0].replace(",x", ",gx")] + ls[1:],
-     r"Gyroscope.csv, line 1: the header .* lacks x: not a header Sensor Logger writes .* an unknown app version"),
-    ("phyphox_trial02_semicolon", "Accelerometer.csv", lambda ls: [ls[0].replace("X (m/s^2)", "Ax (m/s^2)")] + ls[1:],
-     r"Accelerometer.csv, line 1: the header .* is not one phyphox writes .* an unknown app version"),
-    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: [],
-     r"Gyroscope.csv is empty \(line 1: no header\)"),
-    ("phyphox_trial02_semicolon", "Magnetometer.csv", lambda ls: ls[:1],
-     r"Magnetometer.csv holds a header and no data \(line 1 only\)"),
-    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:10] + [ls[10].replace(",", ";")] + ls[11:],
-     r"Gyroscope.csv, line 11: separated by ';' where the header uses ',': mixed separators"),
-    ("phyphox_trial02_semicolon", "Accelerometer.csv", lambda ls: ls[:20] + [ls[20].replace(",", ".")] + ls[21:],
-     r"Accelerometer.csv, line 21: .* decimal point where line 2 has a decimal comma: mixed decimal marks"),
-    ("sensorlogger_android_trial02", "Magnetometer.csv", lambda ls: ls[:30] + ["x" + ls[30]] + ls[31:],
-     r"Magnetometer.csv, line 31: time .* is not a time stamp in ns"),
-    ("sensorlogger_android_trial02", "Gyroscope.csv", lambda ls: ls[:200] + ls[260:],
-     r"Gyroscope.csv, line 201: 0.6\d\d s without a gyr sample .* longer than max_gap = 0.25 s"),
+    (
+        "phyphox_trial02_semicolon",
+        "Gyroscope.csv",
+        lambda ls: ls[:-1] + [ls[-1][:30]],
+        r"Gyroscope.csv, line 3140: has \d of the header's 4 fields: the file is truncated",
+    ),
+    (
+        "phyphox_trial02_semicolon",
+        "Gyroscope.csv",
+        lambda ls: ls[:-1] + [ls[-1].rsplit("E", 1)[0] + "E"],
+        r"Gyroscope.csv, line 3140: column 'Z \(rad/s\)' holds .*, not a number -- the last line looks truncated",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Gyroscope.csv",
+        lambda ls: ls[:101] + [ls[100]] + ls[101:],
+        r"Gyroscope.csv, line 102: the time stamp repeats line 101's",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Magnetometer.csv",
+        lambda ls: _swap(ls, 50),
+        r"Magnetometer.csv, line 52: time goes backwards",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Gyroscope.csv",
+        lambda ls: [ls[0].replace(",x", ",gx")] + ls[1:],
+        r"Gyroscope.csv, line 1: the header .* lacks x: not a header Sensor Logger writes .* an unknown app version",
+    ),
+    (
+        "phyphox_trial02_semicolon",
+        "Accelerometer.csv",
+        lambda ls: [ls[0].replace("X (m/s^2)", "Ax (m/s^2)")] + ls[1:],
+        r"Accelerometer.csv, line 1: the header .* is not one phyphox writes .* an unknown app version",
+    ),
+    ("phyphox_trial02_semicolon", "Gyroscope.csv", lambda ls: [], r"Gyroscope.csv is empty \(line 1: no header\)"),
+    (
+        "phyphox_trial02_semicolon",
+        "Magnetometer.csv",
+        lambda ls: ls[:1],
+        r"Magnetometer.csv holds a header and no data \(line 1 only\)",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Gyroscope.csv",
+        lambda ls: ls[:10] + [ls[10].replace(",", ";")] + ls[11:],
+        r"Gyroscope.csv, line 11: separated by ';' where the header uses ',': mixed separators",
+    ),
+    (
+        "phyphox_trial02_semicolon",
+        "Accelerometer.csv",
+        lambda ls: ls[:20] + [ls[20].replace(",", ".")] + ls[21:],
+        r"Accelerometer.csv, line 21: .* decimal point where line 2 has a decimal comma: mixed decimal marks",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Magnetometer.csv",
+        lambda ls: ls[:30] + ["x" + ls[30]] + ls[31:],
+        r"Magnetometer.csv, line 31: time .* is not a time stamp in ns",
+    ),
+    (
+        "sensorlogger_android_trial02",
+        "Gyroscope.csv",
+        lambda ls: ls[:200] + ls[260:],
+        r"Gyroscope.csv, line 201: 0.6\d\d s without a gyr sample .* longer than max_gap = 0.25 s",
+    ),
 ]
 
 
@@ -447,10 +536,15 @@ def test_a_missing_sensor_sensors_that_do_not_overlap_and_a_truncated_zip_are_re
     with pytest.raises(ValueError, match=r"has no Gyroscope.csv: a Sensor Logger export needs the gyroscope"):
         recordings.load_recording(folder)
     folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
-    _lines(folder / "Magnetometer.csv",
-           lambda ls: [ls[0]] + [",".join([str(int(r.split(",")[0]) + 40 * 10**9), *r.split(",")[1:]]) for r in ls[1:]])
-    with pytest.raises(ValueError, match=r"the sensors do not overlap in time .* mag 4\d\.\d+-7\d\.\d+ s \(.*"
-                                         r"Magnetometer.csv\)"):
+    _lines(
+        folder / "Magnetometer.csv",
+        lambda ls: [ls[0]] + [",".join([str(int(r.split(",")[0]) + 40 * 10**9), *r.split(",")[1:]]) for r in ls[1:]],
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"the sensors do not overlap in time .* mag 4\d\.\d+-7\d\.\d+ s \(.*"
+        r"Magnetometer.csv\)",
+    ):
         recordings.load_recording(folder)
     cut = tmp_path / "cut.zip"
     cut.write_bytes((PHONE / "phyphox_trial02.zip").read_bytes()[:50_000])
@@ -461,25 +555,45 @@ def test_a_missing_sensor_sensors_that_do_not_overlap_and_a_truncated_zip_are_re
         recordings.load_recording(tmp_path / "x.csv")
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(format="excel"), r"format must be one of None, 'phyphox', 'sensor_logger', 'csv'; got 'excel'"),
-    (dict(units={"acc": "furlong"}), r"units\['acc'\] must be one of 'm/s\^2', 'g'; got 'furlong'"),
-    (dict(units={"speed": "m/s"}), r"units has an unknown key 'speed'"),
-    (dict(units="g"), r"units must be a dict"),
-    (dict(acc_convention="up"), r"acc_convention must be one of 'specific force', 'gravity'; got 'up'"),
-    (dict(fs=-5.0), r"fs must be a positive"),
-    (dict(max_gap=0.0), r"max_gap must be > 0"),
-    (dict(check="yes"), r"check must be True or False"),
-    (dict(name=3), r"name must be a string"),
-    (dict(columns={"t": "time_ms", "acc": ["ax", "ay", "az"]}, units={"t": "ms", "acc": "g"}),
-     r"columns must map 'gyr'"),
-    (dict(columns={"t": "time_ms", "gyr": ["gx", "gy"], "acc": ["ax", "ay", "az"]},
-          units={"t": "ms", "gyr": "deg/s", "acc": "g"}), r"columns\['gyr'\] must be a list of 3 column names"),
-    (dict(columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
-          units={"t": "ms", "acc": "g"}), r"units must state the unit of 'gyr' for a plain CSV"),
-    (dict(columns={"t": "time", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
-          units={"t": "ms", "gyr": "deg/s", "acc": "g"}), r"columns\['t'\] names 'time', which is not in the header"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(format="excel"), r"format must be one of None, 'phyphox', 'sensor_logger', 'csv'; got 'excel'"),
+        (dict(units={"acc": "furlong"}), r"units\['acc'\] must be one of 'm/s\^2', 'g'; got 'furlong'"),
+        (dict(units={"speed": "m/s"}), r"units has an unknown key 'speed'"),
+        (dict(units="g"), r"units must be a dict"),
+        (dict(acc_convention="up"), r"acc_convention must be one of 'specific force', 'gravity'; got 'up'"),
+        (dict(fs=-5.0), r"fs must be a positive"),
+        (dict(max_gap=0.0), r"max_gap must be > 0"),
+        (dict(check="yes"), r"check must be True or False"),
+        (dict(name=3), r"name must be a string"),
+        (
+            dict(columns={"t": "time_ms", "acc": ["ax", "ay", "az"]}, units={"t": "ms", "acc": "g"}),
+            r"columns must map 'gyr'",
+        ),
+        (
+            dict(
+                columns={"t": "time_ms", "gyr": ["gx", "gy"], "acc": ["ax", "ay", "az"]},
+                units={"t": "ms", "gyr": "deg/s", "acc": "g"},
+            ),
+            r"columns\['gyr'\] must be a list of 3 column names",
+        ),
+        (
+            dict(
+                columns={"t": "time_ms", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
+                units={"t": "ms", "acc": "g"},
+            ),
+            r"units must state the unit of 'gyr' for a plain CSV",
+        ),
+        (
+            dict(
+                columns={"t": "time", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"]},
+                units={"t": "ms", "gyr": "deg/s", "acc": "g"},
+            ),
+            r"columns\['t'\] names 'time', which is not in the header",
+        ),
+    ],
+)
 def test_bad_arguments_are_refused_naming_the_argument(kwargs, message):
     with pytest.raises(ValueError, match=message):
         recordings.load_recording(PHONE / "plain_trial02.csv", **kwargs)
@@ -490,9 +604,12 @@ def test_a_wrong_time_unit_is_refused_naming_the_unit_that_fits(wrong, right):
     """The plain example's times are milliseconds: read as s, us or ns they give a rate no IMU records at, and the
     message names units={'t': 'ms'}, not max_gap."""
     units = dict(PLAIN["units"], t=wrong)
-    with pytest.raises(ValueError, match=rf"with units\['t'\] = '{wrong}', the samples come .* times a second, "
-                                         rf"not a rate a phone or an IMU records at \(5-2000 Hz\): the column "
-                                         rf"'time_ms' is likely in '{right}' -- pass units={{'t': '{right}', ...}}"):
+    with pytest.raises(
+        ValueError,
+        match=rf"with units\['t'\] = '{wrong}', the samples come .* times a second, "
+        rf"not a rate a phone or an IMU records at \(5-2000 Hz\): the column "
+        rf"'time_ms' is likely in '{right}' -- pass units={{'t': '{right}', ...}}",
+    ):
         recordings.load_recording(PHONE / "plain_trial02.csv", columns=PLAIN["columns"], units=units)
     assert 5 <= recordings.load_recording(PHONE / "plain_trial02.csv", **PLAIN).fs <= 2000
 

@@ -1,6 +1,7 @@
 """The student release (`make release`, grading/release.py): it holds the course a student needs, not one line of a
 hidden test or of a model answer, and the course works from inside it (`make lab` serves the labs, `make test`
 passes and catches a provided cell that crashes)."""
+
 from __future__ import annotations
 
 import hashlib
@@ -25,10 +26,32 @@ from grading import release
 
 VENV = Path(sys.prefix).resolve()  # the environment running the tests, reused by `make` in the release
 STUDENT_LABS = ["01_euler_rotations", "02_kalman_falling_body"]  # the student test on two labs keeps this short
-TOP = {".gitignore", "Makefile", "README.md", "course.mk", "data", "environment.txt", "labs", "lib", "pyproject.toml",
-       "tests"}
-NEVER = {"solutions", "grading", "submitted", "autograded", "feedback", "release", "nbgrader_config.py",
-         "gradebook.db", "grades.csv", "authoring.md", "instructors.md", "conftest.py"}
+TOP = {
+    ".gitignore",
+    "Makefile",
+    "README.md",
+    "course.mk",
+    "data",
+    "environment.txt",
+    "labs",
+    "lib",
+    "pyproject.toml",
+    "tests",
+}
+NEVER = {
+    "solutions",
+    "grading",
+    "submitted",
+    "autograded",
+    "feedback",
+    "release",
+    "nbgrader_config.py",
+    "gradebook.db",
+    "grades.csv",
+    "authoring.md",
+    "instructors.md",
+    "conftest.py",
+}
 
 
 @pytest.fixture(scope="module")
@@ -48,13 +71,14 @@ def test_release_holds_the_course_and_nothing_of_the_instructor(built):
     assert {p.name for p in course.iterdir()} == TOP | optional
     files = _files(course)
     assert [f for f in files if f.startswith("docs/")] == (["docs/derivations.md"] if "docs" in optional else [])
-    student_config = "jupyter/nbgrader_config.py"           # the student's Validate report, not the instructor's
+    student_config = "jupyter/nbgrader_config.py"  # the student's Validate report, not the instructor's
     assert not [f for f in files if (set(Path(f).parts) & NEVER and f != student_config) or f.startswith("integrity_")]
     if student_config in files:
         text = (course / student_config).read_text()
         assert not re.search(r"CourseDirectory|Exchange|ClearSolutions|Autograde|db_url", text), student_config
     assert [f for f in files if f.startswith("labs/")] == sorted(
-        [f"labs/{lab}/{lab}.ipynb" for lab in LABS] + [f"{release.LABS_DOCS}/{d}" for d, _ in release.STUDENT_DOCS])
+        [f"labs/{lab}/{lab}.ipynb" for lab in LABS] + [f"{release.LABS_DOCS}/{d}" for d, _ in release.STUDENT_DOCS]
+    )
     lib = [f for f in _files(ROOT / "lib" / "fusionlab") if "__pycache__" not in f and not f.endswith(".pyc")]
     assert [f for f in files if f.startswith("lib/")] == [f"lib/fusionlab/{f}" for f in lib]
     assert "lib/fusionlab/data/broad_trials.json" in files
@@ -94,8 +118,10 @@ def test_every_link_in_the_labs_opens_a_file_that_make_lab_serves(built):
     file inside labs/ of the release -- the course checkout has the same labs/ (tests/test_pipeline.py)."""
     course, _ = built
     labs = (course / "labs").resolve()
-    pages = [(p, "\n".join(c.source for c in nbformat.read(p, as_version=4).cells if c.cell_type == "markdown"))
-             for p in sorted(labs.glob("*/*.ipynb"))]
+    pages = [
+        (p, "\n".join(c.source for c in nbformat.read(p, as_version=4).cells if c.cell_type == "markdown"))
+        for p in sorted(labs.glob("*/*.ipynb"))
+    ]
     pages += [(p, p.read_text()) for p in sorted((labs / "docs").rglob("*.md"))]
     broken, links = [], 0
     for path, text in pages:
@@ -106,15 +132,18 @@ def test_every_link_in_the_labs_opens_a_file_that_make_lab_serves(built):
                 broken.append(f"{path.relative_to(course)}: {target}")
     assert not broken, "links that JupyterLab cannot open:\n" + "\n".join(broken)
     assert links >= len(LABS), f"only {links} relative links in the labs"
-    for path, text in pages:                            # what the labs cite is a link, not plain text
+    for path, text in pages:  # what the labs cite is a link, not plain text
         if path.suffix == ".ipynb":
             plain = MD_LINK.sub("", text)
             assert not [c for c in CITED if c in plain], (path.name, [c for c in CITED if c in plain])
 
 
 def _head_date():
-    return int(subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%ct"], capture_output=True, text=True,
-                              check=True).stdout)
+    return int(
+        subprocess.run(
+            ["git", "-C", str(ROOT), "log", "-1", "--format=%ct"], capture_output=True, text=True, check=True
+        ).stdout
+    )
 
 
 def test_archive_files_carry_the_date_of_the_last_commit_not_1970(built):
@@ -122,13 +151,13 @@ def test_archive_files_carry_the_date_of_the_last_commit_not_1970(built):
     with tarfile.open(archive) as tar:
         dates = {m.mtime for m in tar.getmembers()}
     with open(archive, "rb") as fh:
-        gzip_date = int.from_bytes(fh.read(8)[4:8], "little")          # the gzip header's MTIME field
+        gzip_date = int.from_bytes(fh.read(8)[4:8], "little")  # the gzip header's MTIME field
     assert dates == {_head_date()} and gzip_date == _head_date(), (sorted(dates)[:3], gzip_date, _head_date())
-    assert _head_date() > 1_600_000_000                                # a real date (after September 2020)
+    assert _head_date() > 1_600_000_000  # a real date (after September 2020)
 
 
 def test_source_date_epoch_sets_the_date_and_the_archive_stays_reproducible(tmp_path, monkeypatch):
-    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")             # 2026-01-01 00:00 UTC
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")  # 2026-01-01 00:00 UTC
     _, first = release.build(tmp_path / "a")
     _, second = release.build(tmp_path / "b")
     assert first.read_bytes() == second.read_bytes()
@@ -217,22 +246,40 @@ def test_the_leak_check_finds_a_planted_line(built, tmp_path):
     nbformat.write(nb, copy / "labs" / LABS[0] / f"{LABS[0]}.ipynb")
     (copy / "data" / "notes.md").write_text(f"{answer}\n")
     assert sorted((f, k) for f, k, _, _ in leaks(copy, secrets)) == [
-        ("data/notes.md", "model answer"), (f"labs/{LABS[0]}/{LABS[0]}.ipynb", "hidden test")]
+        ("data/notes.md", "model answer"),
+        (f"labs/{LABS[0]}/{LABS[0]}.ipynb", "hidden test"),
+    ]
 
 
 def test_student_readme(built):
     course, _ = built
     text = (course / "README.md").read_text()
-    for needed in ("make lab", "make test", "Validate", "Hand in", "labs/NN_name/NN_name.ipynb", "## Labs",
-                   "## References and licences", "CC BY 4.0", "## Conventions"):
+    for needed in (
+        "make lab",
+        "make test",
+        "Validate",
+        "Hand in",
+        "labs/NN_name/NN_name.ipynb",
+        "## Labs",
+        "## References and licences",
+        "CC BY 4.0",
+        "## Conventions",
+    ):
         assert needed in text, needed
     assert "{{" not in text
     assert sum(f"](labs/{lab}/{lab}.ipynb)" in text for lab in LABS) == len(LABS)
     for target in re.findall(r"\]\(([^)#]+)\)", text):
         if not re.match(r"[a-z]+:", target):
             assert (course / target).exists(), f"the student README links to {target}, which is not in the release"
-    for instructor_only in ("solutions/", "nbgrader_config", "instructors.md", "authoring.md", "gradebook",
-                            "autograde", "formgrader"):
+    for instructor_only in (
+        "solutions/",
+        "nbgrader_config",
+        "instructors.md",
+        "authoring.md",
+        "gradebook",
+        "autograde",
+        "formgrader",
+    ):
         assert instructor_only not in text, instructor_only
     # every make target the README names is one of the release's (`make help` lists them): no `make capstone`
     listed = subprocess.run(["make", "-s", "help"], cwd=course, capture_output=True, text=True, check=True).stdout
@@ -256,8 +303,15 @@ def _make(course, *args, timeout=900, **kwargs):
     env.pop("PYTHONPATH", None)
     cmd = ["make", "-o", f"{VENV}/.installed", f"VENV={VENV}", *args]
     if kwargs.pop("background", False):
-        return subprocess.Popen(cmd, cwd=course, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                text=True, start_new_session=True)
+        return subprocess.Popen(
+            cmd,
+            cwd=course,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            start_new_session=True,
+        )
     return subprocess.run(cmd, cwd=course, env=env, capture_output=True, text=True, timeout=timeout)
 
 
@@ -267,8 +321,12 @@ def test_make_lab_serves_the_labs(built):
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     token = "release-test"
-    proc = _make(course, "lab", f"ARGS=--port={port} --ServerApp.port_retries=0 --ServerApp.token={token} "
-                                "--ServerApp.ip=127.0.0.1", background=True)
+    proc = _make(
+        course,
+        "lab",
+        f"ARGS=--port={port} --ServerApp.port_retries=0 --ServerApp.token={token} --ServerApp.ip=127.0.0.1",
+        background=True,
+    )
     try:
         listing, deadline = None, time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:
@@ -279,8 +337,9 @@ def test_make_lab_serves_the_labs(built):
             except OSError:
                 time.sleep(1)
         assert listing is not None, f"JupyterLab did not answer on port {port} (exit {proc.poll()})"
-        assert sorted(item["name"] for item in listing["content"]) == sorted([*LABS, "docs"]), \
+        assert sorted(item["name"] for item in listing["content"]) == sorted([*LABS, "docs"]), (
             "the server's root is not labs/ (the labs and labs/docs)"
+        )
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/lab?token={token}", timeout=10) as r:
             page = r.read().decode()
             assert r.status == 200 and "JupyterLab" in page
@@ -310,13 +369,23 @@ def test_make_test_in_the_release_catches_a_crash_in_provided_code(built):
     lab = course / "labs" / "99_canary"
     lab.mkdir()
     try:
-        nb = nbformat.v4.new_notebook(metadata={"kernelspec": {"name": "python3", "display_name": "Python 3",
-                                                               "language": "python"}})
+        nb = nbformat.v4.new_notebook(
+            metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}
+        )
         answer = nbformat.v4.new_code_cell("raise NotImplementedError('exercise 1 not attempted yet')")
-        answer.metadata["nbgrader"] = {"solution": True, "grade": False, "locked": False, "grade_id": "ex1_solution",
-                                       "schema_version": 3, "task": False}
-        nb.cells = [answer, nbformat.v4.new_code_cell("print(answer_of_exercise_1)"),
-                    nbformat.v4.new_code_cell("1 / 0")]
+        answer.metadata["nbgrader"] = {
+            "solution": True,
+            "grade": False,
+            "locked": False,
+            "grade_id": "ex1_solution",
+            "schema_version": 3,
+            "task": False,
+        }
+        nb.cells = [
+            answer,
+            nbformat.v4.new_code_cell("print(answer_of_exercise_1)"),
+            nbformat.v4.new_code_cell("1 / 0"),
+        ]
         nbformat.write(nb, lab / "99_canary.ipynb")
         run = _make(course, "test", "LABS=99_canary")
         assert run.returncode != 0
@@ -333,24 +402,28 @@ def _packages(project):
     from setuptools.command import editable_wheel
     from setuptools.config.pyprojecttoml import apply_configuration
     from setuptools.dist import Distribution
+
     here = os.getcwd()
     os.chdir(project)
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")                    # [tool.setuptools] in pyproject.toml is "beta"
+            warnings.simplefilter("ignore")  # [tool.setuptools] in pyproject.toml is "beta"
             dist = apply_configuration(Distribution(), "pyproject.toml")
     finally:
         os.chdir(here)
-    return (sorted(dist.packages), dist.package_dir,
-            editable_wheel._simple_layout(dist.packages, dist.package_dir, str(project)))
+    return (
+        sorted(dist.packages),
+        dist.package_dir,
+        editable_wheel._simple_layout(dist.packages, dist.package_dir, str(project)),
+    )
 
 
 def test_pip_install_e_installs_the_library_and_the_grading_tools_and_the_release_only_the_library(tmp_path):
     packages, package_dir, _ = _packages(ROOT)
     assert {"fusionlab", "fusionlab.checks", "grading", "grading.capstone"} <= set(packages)
     assert not [p for p in packages if p.startswith("grading.student")], "the release's templates are no package"
-    assert package_dir.get("fusionlab") == "lib/fusionlab" and "grading" not in package_dir    # ./grading
-    shutil.copy(ROOT / "pyproject.toml", tmp_path)                 # the release ships it, and lib/ but no grading/
+    assert package_dir.get("fusionlab") == "lib/fusionlab" and "grading" not in package_dir  # ./grading
+    shutil.copy(ROOT / "pyproject.toml", tmp_path)  # the release ships it, and lib/ but no grading/
     shutil.copytree(ROOT / "lib", tmp_path / "lib", ignore=shutil.ignore_patterns("__pycache__"))
     packages, package_dir, plain = _packages(tmp_path)
     assert [p for p in packages if not p.startswith("fusionlab")] == [] and "fusionlab" in packages

@@ -2,6 +2,7 @@
 isolates it: rest detection and the gyro bias measured at rest, the running field strength and the dip test that
 reject a magnet, and the accelerometer low-passed in an almost inertial frame (ideas of VQF, Laidig & Seel 2023,
 written from the paper), and the readable per-step forms against the fast paths."""
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -13,7 +14,7 @@ from fusionlab import accel_tilt, dcm, dcm_filter, rotations, signals
 
 FS = 100.0
 C_TILT = rotations.euler_to_dcm(np.radians([15.0, -10.0, 40.0]))
-FIELD_NED = 48.0 * dcm.mag_reference(np.radians(66.0))                   # µT, Siegen-like field
+FIELD_NED = 48.0 * dcm.mag_reference(np.radians(66.0))  # µT, Siegen-like field
 
 
 def _static(seconds, bias_dps=(0.0, 0.0, 0.0), seed=0, C=C_TILT):
@@ -52,7 +53,7 @@ def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_
         y[k] = y[k - 1] + a * (x[k] - y[k - 1])
     assert np.max(np.abs(signals.lowpass(x, FS, 0.5) - y)) < 1e-12
     gyr, acc, _ = _static(20.0, (0.3, -0.2, 0.4))
-    gyr[800:1200] += np.radians(30.0) * np.sin(np.arange(400) / 20.0)[:, None]     # 4 s of motion
+    gyr[800:1200] += np.radians(30.0) * np.sin(np.arange(400) / 20.0)[:, None]  # 4 s of motion
     rest, lp = signals.rest_detect(gyr, acc, FS)
     det = signals.RestDetector(FS)
     steps = [det.update(g, f) for g, f in zip(gyr, acc)]
@@ -62,17 +63,17 @@ def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_
 
 def test_rest_is_found_after_min_time_of_quiet_and_never_during_motion():
     gyr, acc, _ = _static(30.0, (0.3, -0.2, 0.4))
-    move = slice(1000, 1800)                                                       # 10-18 s: turning about the
-    down = C_TILT.T @ [0.0, 0.0, 1.0]                                              # vertical, so gravity stays put
+    move = slice(1000, 1800)  # 10-18 s: turning about the
+    down = C_TILT.T @ [0.0, 0.0, 1.0]  # vertical, so gravity stays put
     gyr[move] += np.radians(40.0) * np.sin(np.arange(800) / 15.0)[:, None] * np.sqrt(3.0) * down
     rest, lp = signals.rest_detect(gyr, acc, FS)
-    assert not rest[:149].any() and rest[150:1000].all()                          # 1.5 s of quiet first
-    assert not rest[1001:1800].any()                                              # (sin 0 = 0 at 1000)
-    back = np.flatnonzero(rest[1800:])[0] / FS                                    # quiet again after the motion
+    assert not rest[:149].any() and rest[150:1000].all()  # 1.5 s of quiet first
+    assert not rest[1001:1800].any()  # (sin 0 = 0 at 1000)
+    back = np.flatnonzero(rest[1800:])[0] / FS  # quiet again after the motion
     assert 1.5 <= back < 4.0
     # at rest the low-pass is the bias (within 0.1 °/s: just after the turn its tail is still a few hundredths)
     assert np.max(np.abs(np.degrees(lp[rest]) - [0.3, -0.2, 0.4])) < 0.1
-    assert np.max(np.abs(np.degrees(lp[:1000][rest[:1000]]) - [0.3, -0.2, 0.4])) < 0.05     # before it, 0.05
+    assert np.max(np.abs(np.degrees(lp[:1000][rest[:1000]]) - [0.3, -0.2, 0.4])) < 0.05  # before it, 0.05
 
 
 def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_accelerometer_cannot_see():
@@ -80,7 +81,7 @@ def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_acc
     gyr, acc, _ = _static(60.0, bias)
     with_rest = _ahrs(gyr, acc, None, dcm_filter.HANDHELD)
     without = _ahrs(gyr, acc, None, replace(dcm_filter.HANDHELD, bias_sigma_rest=None))
-    err = lambda out: C_TILT @ (np.degrees(out["bias"][-1]) - bias)               # bias error in N, E, D, °/s
+    err = lambda out: C_TILT @ (np.degrees(out["bias"][-1]) - bias)  # bias error in N, E, D, °/s
     assert np.all(np.abs(err(with_rest)) < 0.01), err(with_rest)
     assert abs(err(without)[2]) > 0.2 and np.all(np.abs(err(without)[:2]) < 0.02), err(without)
 
@@ -90,26 +91,26 @@ def test_a_rest_recovers_the_whole_gyro_bias_including_the_vertical_axis_the_acc
 
 def test_field_reference_flags_a_magnet_window_keeps_its_value_and_accepts_a_lasting_new_field():
     _, _, mag = _static(120.0)
-    mag[2000:3500] += [25.0, -10.0, 8.0]                                           # a magnet from 20 s to 35 s
+    mag[2000:3500] += [25.0, -10.0, 8.0]  # a magnet from 20 s to 35 s
     ref, ok = signals.field_reference(mag, FS)
     assert not ok[2000:3500].any() and ok[3600:5000].all()
-    assert np.max(np.abs(ref[2000:3500] / 48.0 - 1)) < 0.01                       # the reference did not follow
-    mag[6000:] *= 1.3                                                              # moved: a new field, 30 % stronger
+    assert np.max(np.abs(ref[2000:3500] / 48.0 - 1)) < 0.01  # the reference did not follow
+    mag[6000:] *= 1.3  # moved: a new field, 30 % stronger
     ref, ok = signals.field_reference(mag, FS)
-    assert abs(ref[6000 + 1990] / 48.0 - 1) < 0.02                                # not yet after 19.9 s
-    assert abs(ref[6000 + 2010] / (1.3 * 48.0) - 1) < 0.02                        # accepted after 20 s
+    assert abs(ref[6000 + 1990] / 48.0 - 1) < 0.02  # not yet after 19.9 s
+    assert abs(ref[6000 + 2010] / (1.3 * 48.0) - 1) < 0.02  # accepted after 20 s
 
 
 def _turned_field(seconds, window, angle_deg):
     """Still sensor; during ``window`` the field turns by ``angle_deg`` about east (dip changes, |h| does not)."""
     gyr, acc, mag = _static(seconds, seed=3)
-    R = rotations.euler_to_dcm([0.0, np.radians(angle_deg), 0.0])                # about the east (y) axis
+    R = rotations.euler_to_dcm([0.0, np.radians(angle_deg), 0.0])  # about the east (y) axis
     mag[window] = (C_TILT.T @ R @ FIELD_NED) + 0.2 * np.random.default_rng(9).standard_normal((len(mag[window]), 3))
     return gyr, acc, mag
 
 
 def test_the_dip_test_ignores_a_field_that_turns_while_keeping_its_strength():
-    window = slice(3000, 4500)                                                     # 30-45 s
+    window = slice(3000, 4500)  # 30-45 s
     gyr, acc, mag = _turned_field(60.0, window, 25.0)
     err = {}
     for label, tu in (("dip", dcm_filter.HANDHELD), ("norm only", replace(dcm_filter.HANDHELD, dip_tol=None))):
@@ -129,31 +130,39 @@ def test_the_accelerometer_low_passed_in_an_almost_inertial_frame_averages_a_tra
     n = int(60 * FS)
     t = np.arange(n) / FS
     a_nav = np.zeros((n, 3))
-    a_nav[1000:, 0] = 3.0 * np.sin(2 * np.pi * 0.5 * t[1000:])                    # ±3 m/s² north, 0.5 Hz, from 10 s
+    a_nav[1000:, 0] = 3.0 * np.sin(2 * np.pi * 0.5 * t[1000:])  # ±3 m/s² north, 0.5 Hz, from 10 s
     acc = accel_tilt.specific_force(C_TILT, a_nav) + 0.02 * rng.standard_normal((n, 3))
     gyr = np.radians(0.01) * rng.standard_normal((n, 3))
     tilt = {}
     for label, tau in (("low-passed", dcm_filter.HANDHELD.acc_lp_tau), ("raw", None)):
         out = _ahrs(gyr, acc, None, replace(dcm_filter.HANDHELD, acc_lp_tau=tau))
         c3 = out["C_bn"][:, 2]
-        tilt[label] = np.degrees(np.arccos(np.clip(c3 @ C_TILT[2], -1, 1)))[2000:]   # angle of the estimated down
-    rms = {k: np.sqrt(np.mean(v ** 2)) for k, v in tilt.items()}
-    assert rms["low-passed"] < 0.6 and rms["raw"] > 2.5 * rms["low-passed"], rms       # 0.50° against 1.56°
+        tilt[label] = np.degrees(np.arccos(np.clip(c3 @ C_TILT[2], -1, 1)))[2000:]  # angle of the estimated down
+    rms = {k: np.sqrt(np.mean(v**2)) for k, v in tilt.items()}
+    assert rms["low-passed"] < 0.6 and rms["raw"] > 2.5 * rms["low-passed"], rms  # 0.50° against 1.56°
 
 
 def test_a_start_in_motion_learns_the_bias_better_from_the_low_passed_reading_than_behind_the_gate():
     """No rest before the motion: the bias is unknown. Behind the gate of AhrsTuning the 6D filter learns it from raw
     readings, hand accelerations and all; HANDHELD6 low-passes from the first sample, as VQF does."""
     from fusionlab import simulate
+
     rec = simulate.hand_motion_record(seed=1, duration=120.0, still=0.0, bias_dps=(0.6, -0.5, 0.3), acc_bias=False)
     rms = {}
     for label, gate in (("gate", dcm_filter.HANDHELD.acc_lp_bias_gate), ("none", None)):
-        out = dcm_filter.run_ahrs(rec["gyr"], dcm.accel_to_seed004(rec["acc"]), None, rec["fs"], update_every=2,
-                                  tuning=replace(dcm_filter.HANDHELD6, acc_lp_bias_gate=gate), init_seconds=0.0)
+        out = dcm_filter.run_ahrs(
+            rec["gyr"],
+            dcm.accel_to_seed004(rec["acc"]),
+            None,
+            rec["fs"],
+            update_every=2,
+            tuning=replace(dcm_filter.HANDHELD6, acc_lp_bias_gate=gate),
+            init_seconds=0.0,
+        )
         cos = np.einsum("ij,ij->i", out["C_bn"][:, 2], rec["C_bn"][:, 2])
-        rms[label] = np.sqrt(np.mean(np.degrees(np.arccos(np.clip(cos, -1, 1)))[1000:] ** 2))   # after 10 s
+        rms[label] = np.sqrt(np.mean(np.degrees(np.arccos(np.clip(cos, -1, 1)))[1000:] ** 2))  # after 10 s
     assert dcm_filter.HANDHELD6.acc_lp_bias_gate is None and dcm_filter.HANDHELD.acc_lp_bias_gate is not None
-    assert rms["none"] < 0.6 and rms["gate"] > 2 * rms["none"], rms                          # 0.40° against 1.04°
+    assert rms["none"] < 0.6 and rms["gate"] > 2 * rms["none"], rms  # 0.40° against 1.04°
     with pytest.raises(ValueError, match="acc_lp_bias_gate"):
         dcm_filter.AhrsTuning(acc_lp_bias_gate=-1.0)
 
@@ -161,16 +170,24 @@ def test_a_start_in_motion_learns_the_bias_better_from_the_low_passed_reading_th
 # --- the readable filter and the fast path agree, with every step on ---------------------------------------------
 
 
-@pytest.mark.parametrize("with_mag, tuning", [(True, dcm_filter.HANDHELD), (False, dcm_filter.HANDHELD),
-                                              (False, dcm_filter.HANDHELD6)])
+@pytest.mark.parametrize(
+    "with_mag, tuning",
+    [
+        (True, dcm_filter.HANDHELD),
+        (False, dcm_filter.HANDHELD),
+        (False, dcm_filter.HANDHELD6),
+    ],
+)
 def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag, tuning):
     gyr, acc, mag = _turned_field(30.0, slice(1500, 2200), 25.0)
     gyr = gyr + np.radians(20.0) * np.sin(np.arange(len(gyr)) / 50.0)[:, None] * (np.arange(len(gyr)) > 800)[:, None]
     acc_b = dcm.accel_to_seed004(acc)
     h = mag / signals.field_reference(mag, FS)[0][:, None] if with_mag else None
     fast = dcm_filter.run_ahrs(gyr, acc_b, h, FS, tuning=tuning, init_seconds=0.0)
-    C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[0], h[0] if with_mag else [1.0, 0.0, 0.0])
-                                * ([1.0, 1.0, 1.0] if with_mag else [1.0, 1.0, 0.0]))
+    C0 = rotations.euler_to_dcm(
+        dcm.level_and_compass(acc_b[0], h[0] if with_mag else [1.0, 0.0, 0.0])
+        * ([1.0, 1.0, 1.0] if with_mag else [1.0, 1.0, 0.0])
+    )
     incl = float(dcm.inclination_from(acc_b[0], h[0])) if with_mag else 0.0
     f = dcm_filter.DcmAhrs(C0, incl, 1 / FS, tuning=tuning, g=dcm.G)
     xs = []

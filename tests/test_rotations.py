@@ -5,6 +5,7 @@ Reference values are worked by hand from the seeds (seed 001's Euler-angle and q
 eqs 3.36-3.40) and from the errata the labs show. Random inputs use ``np.random.default_rng`` with fixed seeds so
 every run checks the same numbers.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -54,10 +55,13 @@ def wrap(a):
 def seed002_eq34(q):
     """Seed 002 eq (34), the note's global→sensor matrix R(q), typed from the note."""
     q0, q1, q2, q3 = q
-    return np.array([
-        [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * q1 * q2 + 2 * q0 * q3, 2 * q1 * q3 - 2 * q0 * q2],
-        [2 * q1 * q2 - 2 * q0 * q3, q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * q2 * q3 + 2 * q0 * q1],
-        [2 * q1 * q3 + 2 * q0 * q2, 2 * q2 * q3 - 2 * q0 * q1, q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3]])
+    return np.array(
+        [
+            [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * q1 * q2 + 2 * q0 * q3, 2 * q1 * q3 - 2 * q0 * q2],
+            [2 * q1 * q2 - 2 * q0 * q3, q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * q2 * q3 + 2 * q0 * q1],
+            [2 * q1 * q3 + 2 * q0 * q2, 2 * q2 * q3 - 2 * q0 * q1, q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3],
+        ]
+    )
 
 
 def part_b_loop(renormalize=True, steps=20, dt=0.5):
@@ -85,11 +89,15 @@ def test_skew_times_vector_equals_cross_product():
     np.testing.assert_array_equal(S, -np.swapaxes(S, -1, -2))
 
 
-@pytest.mark.parametrize("fn, axis, vec, expected", [
-    (rot.rot_x, 0, [0, 1, 0], [0, 0, 1]),
-    (rot.rot_y, 1, [0, 0, 1], [1, 0, 0]),
-    (rot.rot_z, 2, [1, 0, 0], [0, 1, 0]),
-], ids=["rot_x", "rot_y", "rot_z"])
+@pytest.mark.parametrize(
+    "fn, axis, vec, expected",
+    [
+        (rot.rot_x, 0, [0, 1, 0], [0, 0, 1]),
+        (rot.rot_y, 1, [0, 0, 1], [1, 0, 0]),
+        (rot.rot_z, 2, [1, 0, 0], [0, 1, 0]),
+    ],
+    ids=["rot_x", "rot_y", "rot_z"],
+)
 def test_elementary_rotation_is_active_counter_clockwise(fn, axis, vec, expected):
     np.testing.assert_allclose(fn(np.pi / 2) @ vec, expected, atol=1e-15)
     rng = np.random.default_rng(2)
@@ -99,9 +107,11 @@ def test_elementary_rotation_is_active_counter_clockwise(fn, axis, vec, expected
     np.testing.assert_allclose(fn(a), Rotation.from_rotvec(rv).as_matrix(), atol=1e-14)
 
 
-@pytest.mark.parametrize("frame_fn, active_fn", [
-    (rot.frame_rot_x, rot.rot_x), (rot.frame_rot_y, rot.rot_y), (rot.frame_rot_z, rot.rot_z)],
-    ids=["x", "y", "z"])
+@pytest.mark.parametrize(
+    "frame_fn, active_fn",
+    [(rot.frame_rot_x, rot.rot_x), (rot.frame_rot_y, rot.rot_y), (rot.frame_rot_z, rot.rot_z)],
+    ids=["x", "y", "z"],
+)
 def test_frame_rotation_is_transpose_of_active_rotation(frame_fn, active_fn):
     a = np.random.default_rng(3).uniform(-np.pi, np.pi, 40)
     F = frame_fn(a)
@@ -112,9 +122,9 @@ def test_frame_rotation_is_transpose_of_active_rotation(frame_fn, active_fn):
 
 def test_seed000_passive_matrices_match_printed_eq336_to_338():
     c, s = np.cos(0.4), np.sin(0.4)
-    np.testing.assert_allclose(rot.frame_rot_z(0.4), [[c, s, 0], [-s, c, 0], [0, 0, 1]], atol=1e-15)   # (3.36)
-    np.testing.assert_allclose(rot.frame_rot_y(0.4), [[c, 0, -s], [0, 1, 0], [s, 0, c]], atol=1e-15)   # (3.37)
-    np.testing.assert_allclose(rot.frame_rot_x(0.4), [[1, 0, 0], [0, c, s], [0, -s, c]], atol=1e-15)   # (3.38)
+    np.testing.assert_allclose(rot.frame_rot_z(0.4), [[c, s, 0], [-s, c, 0], [0, 0, 1]], atol=1e-15)  # (3.36)
+    np.testing.assert_allclose(rot.frame_rot_y(0.4), [[c, 0, -s], [0, 1, 0], [s, 0, c]], atol=1e-15)  # (3.37)
+    np.testing.assert_allclose(rot.frame_rot_x(0.4), [[1, 0, 0], [0, c, s], [0, -s, c]], atol=1e-15)  # (3.38)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -155,10 +165,20 @@ def test_dcm_to_quat_round_trip_with_nonnegative_scalar():
     same_quat_up_to_sign(back, Rotation.from_matrix(C).as_quat(scalar_first=True), atol=1e-13)
 
 
-@pytest.mark.parametrize("rotvec", [
-    [0, 0, 0], [np.pi, 0, 0], [0, np.pi, 0], [0, 0, np.pi],
-    [np.pi / np.sqrt(2), np.pi / np.sqrt(2), 0], [3.1, 0.0, 0.05], [0.0, -3.14, 0.01], [0.02, 0.0, -3.14159],
-], ids=["identity", "pi_x", "pi_y", "pi_z", "pi_xy", "near_pi_x", "near_pi_y", "near_pi_z"])
+@pytest.mark.parametrize(
+    "rotvec",
+    [
+        [0, 0, 0],
+        [np.pi, 0, 0],
+        [0, np.pi, 0],
+        [0, 0, np.pi],
+        [np.pi / np.sqrt(2), np.pi / np.sqrt(2), 0],
+        [3.1, 0.0, 0.05],
+        [0.0, -3.14, 0.01],
+        [0.02, 0.0, -3.14159],
+    ],
+    ids=["identity", "pi_x", "pi_y", "pi_z", "pi_xy", "near_pi_x", "near_pi_y", "near_pi_z"],
+)
 def test_dcm_to_quat_handles_every_shepperd_branch(rotvec):
     C = Rotation.from_rotvec(rotvec).as_matrix()
     q = rot.dcm_to_quat(C)
@@ -191,8 +211,12 @@ TAIT_BRYAN = ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]
 # seed 000 eq 3.40, worked by hand: equivalent angles (deg, in the order applied) of the DCM at
 # (ψ, θ, φ) = (40, -10, 10)
 PART_A_SEQUENCES = {
-    "ZYX": (40, -10, 10), "XYZ": (14.063, -1.111, 41.014), "ZXY": (41.754, 9.847, -10.151),
-    "YXZ": (-1.145, 14.060, 40.736), "XZY": (13.097, 41.005, -1.472), "YZX": (-12.962, 39.273, 18.290),
+    "ZYX": (40, -10, 10),
+    "XYZ": (14.063, -1.111, 41.014),
+    "ZXY": (41.754, 9.847, -10.151),
+    "YXZ": (-1.145, 14.060, 40.736),
+    "XZY": (13.097, 41.005, -1.472),
+    "YZX": (-12.962, 39.273, 18.290),
 }
 
 
@@ -221,8 +245,11 @@ def test_dcm_to_sequence_gives_seed000_part_a_equivalent_angles(seq):
 
 def test_seed000_labcode_dcm_is_zxy_sequence_of_negated_angles():
     yaw, pitch, roll = np.random.default_rng(42).uniform(-np.pi, np.pi, (3, 50))
-    np.testing.assert_allclose(conventions.seed000_labcode_dcm(yaw, pitch, roll),
-                               rot.sequence_to_dcm(np.stack([-yaw, -pitch, -roll], -1), "ZXY"), atol=1e-15)
+    np.testing.assert_allclose(
+        conventions.seed000_labcode_dcm(yaw, pitch, roll),
+        rot.sequence_to_dcm(np.stack([-yaw, -pitch, -roll], -1), "ZXY"),
+        atol=1e-15,
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -256,8 +283,7 @@ def test_dcm_to_euler_yaw_at_lock_is_reported_and_rebuilds_same_matrix(pitch):
 def test_dcm_to_euler_batch_mixes_locked_and_regular_rows():
     e_in = deg(np.array([[25, 90, 15], [25, -90, 15], [10, 20, 30], [-120, -45, 170]]))
     e = rot.dcm_to_euler(rot.euler_to_dcm(e_in))
-    np.testing.assert_allclose(np.degrees(e), [[10, 90, 0], [40, -90, 0], [10, 20, 30], [-120, -45, 170]],
-                               atol=1e-9)
+    np.testing.assert_allclose(np.degrees(e), [[10, 90, 0], [40, -90, 0], [10, 20, 30], [-120, -45, 170]], atol=1e-9)
 
 
 @pytest.mark.parametrize("pitch, printed_roll", [(90, -170.0), (-90, -140.0)])
@@ -266,8 +292,8 @@ def test_seed000_eq379_381_as_printed_gives_wrong_roll_at_lock(pitch, printed_ro
     roll = conventions.seed000_eq379_381_printed(C)
     assert np.degrees(roll) == pytest.approx(printed_roll, abs=1e-9)
     rebuilt = rot.euler_to_dcm([roll, deg(pitch), 0.0])
-    assert np.max(np.abs(rebuilt - C)) > 1.0              # a different orientation
-    np.testing.assert_allclose(rot.euler_to_dcm(rot.dcm_to_euler(C)), C, atol=1e-12)   # the corrected rule
+    assert np.max(np.abs(rebuilt - C)) > 1.0  # a different orientation
+    np.testing.assert_allclose(rot.euler_to_dcm(rot.dcm_to_euler(C)), C, atol=1e-12)  # the corrected rule
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -277,7 +303,7 @@ def test_seed000_eq379_381_as_printed_gives_wrong_roll_at_lock(pitch, printed_ro
 
 def test_quat_multiply_is_associative():
     rng = np.random.default_rng(9)
-    p, q, r = (rng.normal(size=(300, 4)) for _ in range(3))      # holds for any quaternions, unit or not
+    p, q, r = (rng.normal(size=(300, 4)) for _ in range(3))  # holds for any quaternions, unit or not
     lhs = rot.quat_multiply(rot.quat_multiply(p, q), r)
     rhs = rot.quat_multiply(p, rot.quat_multiply(q, r))
     np.testing.assert_allclose(lhs, rhs, atol=1e-13)
@@ -286,9 +312,10 @@ def test_quat_multiply_is_associative():
 def test_quat_multiply_composes_dcms_in_the_same_order():
     rng = np.random.default_rng(10)
     p, q = random_quats(rng, 300), random_quats(rng, 300)
-    np.testing.assert_allclose(rot.quat_to_dcm(rot.quat_multiply(p, q)), rot.quat_to_dcm(p) @ rot.quat_to_dcm(q),
-                               atol=1e-14)
-    assert np.max(np.abs(rot.quat_multiply(p, q) - rot.quat_multiply(q, p))) > 0.1   # not commutative
+    np.testing.assert_allclose(
+        rot.quat_to_dcm(rot.quat_multiply(p, q)), rot.quat_to_dcm(p) @ rot.quat_to_dcm(q), atol=1e-14
+    )
+    assert np.max(np.abs(rot.quat_multiply(p, q) - rot.quat_multiply(q, p))) > 0.1  # not commutative
 
 
 def test_quat_multiply_hamilton_basis_products():
@@ -368,10 +395,10 @@ def test_rotvec_quat_round_trip_near_zero_angle(s):
 
 
 def test_rotvec_to_quat_first_order_is_one_and_half_sigma_with_norm_error_s2_over_8():
-    sigma = np.array([0.006, -0.008, 0.0])                       # s = 0.01
+    sigma = np.array([0.006, -0.008, 0.0])  # s = 0.01
     q = rot.rotvec_to_quat(sigma, order="first")
     np.testing.assert_array_equal(q, [1.0, 0.003, -0.004, 0.0])
-    assert np.linalg.norm(q) - 1 == pytest.approx(0.01 ** 2 / 8, rel=1e-4)
+    assert np.linalg.norm(q) - 1 == pytest.approx(0.01**2 / 8, rel=1e-4)
 
 
 def test_rotvec_quat_and_rodrigues_give_the_same_dcm():
@@ -398,7 +425,7 @@ def test_rodrigues_exact_equals_expm_near_zero(s):
 def test_rodrigues_printed_coefficient_one_minus_cos_over_s_is_wrong(s):
     sigma = s * np.array([0.0, 0.6, 0.8])
     B = rot.skew(sigma)
-    printed = I3 + np.sin(s) / s * B + (1 - np.cos(s)) / s * (B @ B)          # seed 000 eq 3.54 as printed
+    printed = I3 + np.sin(s) / s * B + (1 - np.cos(s)) / s * (B @ B)  # seed 000 eq 3.54 as printed
     exact = expm(B)
     assert np.max(np.abs(printed - exact)) > 0.05
     np.testing.assert_allclose(rot.rodrigues_dcm(sigma), exact, atol=1e-12, rtol=0)
@@ -436,9 +463,9 @@ def test_is_rotation_accepts_rotations_and_rejects_others():
     R = rot.quat_to_dcm(random_quats(np.random.default_rng(22), 50))
     assert rot.is_rotation(R).shape == (50,)
     assert np.all(rot.is_rotation(R))
-    assert not rot.is_rotation(np.diag([1.0, 1.0, -1.0]))          # reflection, det -1
-    assert not rot.is_rotation(2 * I3)                             # scaled
-    assert not rot.is_rotation(R[0] + 1e-4)                        # drifted
+    assert not rot.is_rotation(np.diag([1.0, 1.0, -1.0]))  # reflection, det -1
+    assert not rot.is_rotation(2 * I3)  # scaled
+    assert not rot.is_rotation(R[0] + 1e-4)  # drifted
     assert rot.is_rotation(R[0] + 1e-4, tol=1e-3)
 
 
@@ -503,7 +530,7 @@ def test_integrate_gyro_dcm_first_order_converges_to_exact_as_dt_shrinks(renorma
         assert out.shape == (n + 1, 3, 3)
         errors.append(np.max(np.abs(out[-1] - exact)))
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    assert np.all((ratios > 8) & (ratios < 12))                   # first order: error ∝ dt
+    assert np.all((ratios > 8) & (ratios < 12))  # first order: error ∝ dt
     assert errors[-1] < 1e-3
 
 
@@ -528,7 +555,7 @@ def test_integrate_gyro_quat_agrees_with_integrate_gyro_dcm_exact():
 
 def test_integrate_gyro_quat_is_body_frame_right_multiplication():
     gyr = np.array([[0.0, 0.0, 1.0]])
-    q0 = rot.euler_to_quat([0.0, deg(90), 0.0])                     # nose up
+    q0 = rot.euler_to_quat([0.0, deg(90), 0.0])  # nose up
     q1 = rot.integrate_gyro_quat(q0, gyr, 0.5)[-1]
     # body rates act on the right (C1 = C0 @ Rz), not on the left (a turn about the navigation z axis)
     np.testing.assert_allclose(rot.quat_to_dcm(q1), rot.quat_to_dcm(q0) @ rot.rot_z(0.5), atol=1e-14)
@@ -540,11 +567,15 @@ def test_integrate_gyro_quat_is_body_frame_right_multiplication():
 # ----------------------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("euler_deg, column, expected", [
-    ([0, 30, 0], 0, [0.866025, 0, -0.5]),          # positive pitch: nose up
-    ([0, 0, 90], 0, [0, 1, 0]),                    # positive yaw 90°: nose East
-    ([30, 0, 0], 1, [0, 0.866025, 0.5]),           # positive roll: right wing down
-], ids=["pitch_nose_up", "yaw_nose_east", "roll_right_wing_down"])
+@pytest.mark.parametrize(
+    "euler_deg, column, expected",
+    [
+        ([0, 30, 0], 0, [0.866025, 0, -0.5]),  # positive pitch: nose up
+        ([0, 0, 90], 0, [0, 1, 0]),  # positive yaw 90°: nose East
+        ([30, 0, 0], 1, [0, 0.866025, 0.5]),  # positive roll: right wing down
+    ],
+    ids=["pitch_nose_up", "yaw_nose_east", "roll_right_wing_down"],
+)
 def test_euler_sign_conventions_seed001(euler_deg, column, expected):
     C = rot.euler_to_dcm(deg(euler_deg))
     np.testing.assert_allclose(C[:, column], expected, atol=1e-6)
@@ -581,8 +612,8 @@ def test_quat_nav_swap_agrees_with_dcm_nav_swap():
 
 def test_level_body_facing_north_in_ned_has_nose_on_enu_y():
     C_enu = rot.dcm_nav_swap(rot.euler_to_dcm([0.0, 0.0, 0.0]))
-    np.testing.assert_array_equal(C_enu[:, 0], [0, 1, 0])             # nose north = ENU y
-    np.testing.assert_array_equal(C_enu[:, 2], [0, 0, -1])            # body z down = -Up
+    np.testing.assert_array_equal(C_enu[:, 0], [0, 1, 0])  # nose north = ENU y
+    np.testing.assert_array_equal(C_enu[:, 2], [0, 0, -1])  # body z down = -Up
     np.testing.assert_allclose(rot.quat_rotate(rot.quat_nav_swap(Q_ID), [1, 0, 0]), [0, 1, 0], atol=1e-15)
     nose_east = rot.dcm_nav_swap(rot.euler_to_dcm([0.0, 0.0, deg(90)]))[:, 0]
     np.testing.assert_allclose(nose_east, [1, 0, 0], atol=1e-15)
@@ -615,16 +646,18 @@ def test_seed000_labcode_dcm_matches_lab_part_a_key():
     C = conventions.seed000_labcode_dcm(deg(40), deg(-10), deg(10))
     np.testing.assert_allclose(C, LAB_A_CHECK, atol=2e-4)
     assert np.linalg.det(C) == pytest.approx(1.0, abs=1e-12)
-    assert np.max(np.abs(C - np.array(EQ340_CHECK))) > 0.5           # not the (3.40) orientation
+    assert np.max(np.abs(C - np.array(EQ340_CHECK))) > 0.5  # not the (3.40) orientation
 
 
 def test_seed000_labcode_omega_layout_and_equivalent_body_rates():
-    np.testing.assert_array_equal(conventions.seed000_labcode_omega(1.0, 2.0, 3.0),
-                                  [[0, 3, -2], [-3, 0, -1], [2, 1, 0]])
+    np.testing.assert_array_equal(
+        conventions.seed000_labcode_omega(1.0, 2.0, 3.0), [[0, 3, -2], [-3, 0, -1], [2, 1, 0]]
+    )
     rng = np.random.default_rng(28)
     for wx, wy, wz in rng.normal(size=(20, 3)):
-        np.testing.assert_array_equal(conventions.seed000_labcode_omega(wx, wy, wz),
-                                      rot.skew(conventions.seed000_labcode_rates(wx, wy, wz)))
+        np.testing.assert_array_equal(
+            conventions.seed000_labcode_omega(wx, wy, wz), rot.skew(conventions.seed000_labcode_rates(wx, wy, wz))
+        )
 
 
 def test_seed000_labcode_rates_flips_y_and_z_and_broadcasts():
@@ -663,11 +696,15 @@ def test_dcm_to_euler_on_part_b_result_gives_general_formula_angles():
 
 
 def test_seed000_labcode_angles_reads_initial_pitch_with_wrong_sign():
-    r, p, y = 0.2, 0.3, -0.4                      # the lab's initial R (x = pitch axis, y = roll axis), printed
+    r, p, y = 0.2, 0.3, -0.4  # the lab's initial R (x = pitch axis, y = roll axis), printed
     Cr, Sr, Cp, Sp, Cy, Sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    R = np.array([[Cr * Cy + Sr * Sp * Sy, Cp * Sy, -Sr * Cy + Cr * Sp * Sy],
-                  [-Cr * Sy + Sr * Sp * Cy, Cp * Cy, Sr * Sy + Cr * Sp * Cy],
-                  [Sr * Cp, -Sp, Cr * Cp]])
+    R = np.array(
+        [
+            [Cr * Cy + Sr * Sp * Sy, Cp * Sy, -Sr * Cy + Cr * Sp * Sy],
+            [-Cr * Sy + Sr * Sp * Cy, Cp * Cy, Sr * Sy + Cr * Sp * Cy],
+            [Sr * Cp, -Sp, Cr * Cp],
+        ]
+    )
     np.testing.assert_allclose(conventions.seed000_labcode_angles(R), [-p, r, y], atol=1e-15)
 
 
@@ -676,12 +713,16 @@ def test_seed000_labcode_angles_reads_initial_pitch_with_wrong_sign():
 # ----------------------------------------------------------------------------------------------------------------
 
 SEED001_FIXTURES = {
-    (30, 20, 45): [[0.664463, 0.664463, -0.342020],
-                   [-0.491450, 0.733295, 0.469846],
-                   [0.562997, -0.144110, 0.813798]],
-    (10, -30, 200): [[-0.813798, -0.296198, 0.5],
-                     [0.418412, -0.895721, 0.150384],
-                     [0.403317, 0.331588, 0.852869]],
+    (30, 20, 45): [
+        [0.664463, 0.664463, -0.342020],
+        [-0.491450, 0.733295, 0.469846],
+        [0.562997, -0.144110, 0.813798],
+    ],
+    (10, -30, 200): [
+        [-0.813798, -0.296198, 0.5],
+        [0.418412, -0.895721, 0.150384],
+        [0.403317, 0.331588, 0.852869],
+    ],
     (0, 0, 90): [[0, 1, 0], [-1, 0, 0], [0, 0, 1]],
     (90, 0, 0): [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
     (0, 90, 0): [[0, 0, -1], [0, 1, 0], [1, 0, 0]],
@@ -717,12 +758,16 @@ def test_dcm_from_seed001_and_dcm_to_seed001_are_transposes_and_inverse():
     np.testing.assert_array_equal(R_IB, np.swapaxes(C, -1, -2))
     np.testing.assert_array_equal(conventions.dcm_from_seed001(R_IB), C)
     e = deg([30, 20, 45])
-    np.testing.assert_allclose(conventions.dcm_from_seed001(conventions.seed001_R_IB(*e)), rot.euler_to_dcm(e),
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        conventions.dcm_from_seed001(conventions.seed001_R_IB(*e)), rot.euler_to_dcm(e), atol=1e-15
+    )
 
 
-@pytest.mark.parametrize("a_deg, b_deg", [((0, 90, 90), (-90, 90, 0)), ((20, -90, 30), (50, -90, 0))],
-                         ids=["plus90_yaw_equals_minus_roll", "minus90_yaw_equals_plus_roll"])
+@pytest.mark.parametrize(
+    "a_deg, b_deg",
+    [((0, 90, 90), (-90, 90, 0)), ((20, -90, 30), (50, -90, 0))],
+    ids=["plus90_yaw_equals_minus_roll", "minus90_yaw_equals_plus_roll"],
+)
 def test_seed001_gimbal_lock_equivalent_orientations(a_deg, b_deg):
     np.testing.assert_allclose(conventions.seed001_R_IB(*deg(a_deg)), conventions.seed001_R_IB(*deg(b_deg)), atol=1e-15)
     np.testing.assert_allclose(rot.euler_to_dcm(deg(a_deg)), rot.euler_to_dcm(deg(b_deg)), atol=1e-15)
@@ -730,12 +775,17 @@ def test_seed001_gimbal_lock_equivalent_orientations(a_deg, b_deg):
 
 def test_seed001_gimbal_lock_depends_only_on_roll_minus_or_plus_yaw():
     d = 0.37
-    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d),
-                               conventions.seed001_R_IB(0.5, np.pi / 2, 0.2), atol=1e-15)
-    np.testing.assert_allclose(conventions.seed001_R_IB(0.5 + d, -np.pi / 2, 0.2 - d),
-                               conventions.seed001_R_IB(0.5, -np.pi / 2, 0.2), atol=1e-15)
-    assert np.max(np.abs(conventions.seed001_R_IB(0.5 + d, 0.3, 0.2 + d)
-                         - conventions.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
+    np.testing.assert_allclose(
+        conventions.seed001_R_IB(0.5 + d, np.pi / 2, 0.2 + d), conventions.seed001_R_IB(0.5, np.pi / 2, 0.2), atol=1e-15
+    )
+    np.testing.assert_allclose(
+        conventions.seed001_R_IB(0.5 + d, -np.pi / 2, 0.2 - d),
+        conventions.seed001_R_IB(0.5, -np.pi / 2, 0.2),
+        atol=1e-15,
+    )
+    assert (
+        np.max(np.abs(conventions.seed001_R_IB(0.5 + d, 0.3, 0.2 + d) - conventions.seed001_R_IB(0.5, 0.3, 0.2))) > 0.01
+    )
 
 
 def test_seed001_quat_to_euler_recovers_angles_from_our_quaternion():
@@ -757,34 +807,47 @@ def test_seed001_quat_to_euler_gives_nonsense_for_the_conjugate():
 FRAMES = ["NED", "Android", "Win8"]
 NOTE_GLOBAL = {"NED": "NED", "Android": "ENU", "Win8": "ENU"}
 
+
 @pytest.mark.parametrize("frame", FRAMES)
 @pytest.mark.parametrize("nav", [None, "NED", "ENU"])
 def test_quat_to_seed002_inverts_quat_from_seed002(frame, nav):
     q = random_quats(np.random.default_rng(32), 50)
-    same_quat_up_to_sign(conventions.quat_from_seed002(conventions.quat_to_seed002(q, frame, nav), frame, nav), q,
-                         atol=1e-14)
-    same_quat_up_to_sign(conventions.quat_to_seed002(conventions.quat_from_seed002(q, frame, nav), frame, nav), q,
-                         atol=1e-14)
+    same_quat_up_to_sign(
+        conventions.quat_from_seed002(conventions.quat_to_seed002(q, frame, nav), frame, nav), q, atol=1e-14
+    )
+    same_quat_up_to_sign(
+        conventions.quat_to_seed002(conventions.quat_from_seed002(q, frame, nav), frame, nav), q, atol=1e-14
+    )
 
 
 @pytest.mark.parametrize("frame, other_nav", [("Android", "NED"), ("Win8", "NED"), ("NED", "ENU")])
 def test_quat_from_seed002_nav_other_than_note_frame_is_nav_swap(frame, other_nav):
     q = random_quats(np.random.default_rng(33), 50)
     own = conventions.quat_from_seed002(q, frame)
-    np.testing.assert_allclose(conventions.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own),
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        conventions.quat_from_seed002(q, frame, nav=other_nav), rot.quat_nav_swap(own), atol=1e-15
+    )
     np.testing.assert_array_equal(conventions.quat_from_seed002(q, frame, nav=NOTE_GLOBAL[frame]), own)
 
 
 def test_quat_from_seed002_android_and_win8_share_the_enu_global_frame():
     q = random_quats(np.random.default_rng(34), 20)
     for nav in (None, "NED", "ENU"):
-        np.testing.assert_array_equal(conventions.quat_from_seed002(q, "Android", nav),
-                                      conventions.quat_from_seed002(q, "Win8", nav))
+        np.testing.assert_array_equal(
+            conventions.quat_from_seed002(q, "Android", nav), conventions.quat_from_seed002(q, "Win8", nav)
+        )
 
 
-@pytest.mark.parametrize("frame, nav", [("NED", None), ("Android", None), ("Win8", None),
-                                        ("Android", "NED"), ("NED", "ENU")])
+@pytest.mark.parametrize(
+    "frame, nav",
+    [
+        ("NED", None),
+        ("Android", None),
+        ("Win8", None),
+        ("Android", "NED"),
+        ("NED", "ENU"),
+    ],
+)
 def test_quat_from_seed002_honours_note_sandwich_v_S_equals_q_conj_v_G_q(frame, nav):
     rng = np.random.default_rng(35)
     q_note, v_G = random_quats(rng, 1)[0], rng.normal(size=3)
@@ -796,8 +859,9 @@ def test_quat_from_seed002_honours_note_sandwich_v_S_equals_q_conj_v_G_q(frame, 
 
 def test_quat_from_seed002_matches_note_eq34_global_to_sensor_matrix():
     q_note = random_quats(np.random.default_rng(36), 1)[0]
-    np.testing.assert_allclose(rot.quat_to_dcm(conventions.quat_from_seed002(q_note)).T, seed002_eq34(q_note),
-                               atol=1e-14)
+    np.testing.assert_allclose(
+        rot.quat_to_dcm(conventions.quat_from_seed002(q_note)).T, seed002_eq34(q_note), atol=1e-14
+    )
 
 
 def test_seed002_eq34_is_transpose_of_our_quat_to_dcm():

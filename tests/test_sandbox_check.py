@@ -6,6 +6,7 @@ privileges looks the same) has no user id for the boxes. The namespace and missi
 ``bwrap`` on ``PATH``. The last test grades one student of lab 01 for real, to show the check lets a good machine
 through.
 """
+
 from __future__ import annotations
 
 import os
@@ -42,10 +43,20 @@ def _course(tmp_path, answers=range(1, 9)):
 
 
 def _classgrade(root, prefix=(), path=None, timeout=600):
-    env = dict(os.environ, PATH=path or str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"],
-               PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    return subprocess.run([*prefix, sys.executable, "-m", "grading.classgrade", LAB, "--course", str(root),
-                           "--workers", "1"], capture_output=True, text=True, env=env, timeout=timeout, cwd=ROOT)
+    env = dict(
+        os.environ,
+        PATH=path or str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"],
+        PYTHONPATH=str(ROOT),
+        MPLBACKEND="Agg",
+    )
+    return subprocess.run(
+        [*prefix, sys.executable, "-m", "grading.classgrade", LAB, "--course", str(root), "--workers", "1"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+        cwd=ROOT,
+    )
 
 
 def _fake_bwrap(folder, stderr):
@@ -73,13 +84,23 @@ def test_root_in_a_user_namespace_stops_before_grading_and_says_what_to_do(tmp_p
 
 
 def test_namespaces_refused_by_the_kernel_name_the_settings_to_change(tmp_path, monkeypatch):
-    monkeypatch.setenv("PATH", _fake_bwrap(tmp_path / "bin", "bwrap: No permissions to create new namespace, "
-                                                              "likely because the kernel does not allow it"))
-    monkeypatch.setattr(sandbox.os, "geteuid", lambda: 1000)     # as an ordinary user: no user id to switch to
+    monkeypatch.setenv(
+        "PATH",
+        _fake_bwrap(
+            tmp_path / "bin",
+            "bwrap: No permissions to create new namespace, likely because the kernel does not allow it",
+        ),
+    )
+    monkeypatch.setattr(sandbox.os, "geteuid", lambda: 1000)  # as an ordinary user: no user id to switch to
     said = sandbox.box_problem(str(ROOT), LAB, str(tmp_path), [0])
     assert said.startswith("bubblewrap cannot create the namespaces a box needs (bwrap: No permissions"), said
-    for setting in ("kernel.unprivileged_userns_clone=1", "kernel.apparmor_restrict_unprivileged_userns=0",
-                    "user.max_user_namespaces", "seccomp=unconfined", "Where to grade"):
+    for setting in (
+        "kernel.unprivileged_userns_clone=1",
+        "kernel.apparmor_restrict_unprivileged_userns=0",
+        "user.max_user_namespaces",
+        "seccomp=unconfined",
+        "Where to grade",
+    ):
         assert setting in said, setting
 
 
@@ -91,7 +112,7 @@ def test_a_box_that_fails_otherwise_is_reported_with_what_bubblewrap_said(tmp_pa
 
 
 def test_no_bubblewrap_says_which_package(tmp_path, monkeypatch):
-    monkeypatch.setenv("PATH", str(tmp_path))                    # an empty folder: no bwrap anywhere
+    monkeypatch.setenv("PATH", str(tmp_path))  # an empty folder: no bwrap anywhere
     said = sandbox.box_problem(str(ROOT), LAB, str(tmp_path), [0])
     assert said.startswith("bubblewrap is not installed") and "apt-get install bubblewrap" in said, said
 
@@ -104,7 +125,7 @@ def test_a_machine_where_boxes_start_passes_the_check(tmp_path):
 @NEEDS_BWRAP
 @pytest.mark.slow
 def test_a_machine_where_boxes_start_grades_as_before(tmp_path):
-    root = _course(tmp_path, answers={1, 4})                     # exercises 1 and 4 answered: 2 + 3 points
+    root = _course(tmp_path, answers={1, 4})  # exercises 1 and 4 answered: 2 + 3 points
     run = _classgrade(root)
     assert run.returncode == 0, run.stdout + run.stderr
     assert "model solution: 16 / 16" in run.stdout, run.stdout

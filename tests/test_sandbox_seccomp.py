@@ -16,6 +16,7 @@ The first tests check the BPF program itself with a small interpreter of the few
 start real boxes, as grading does, and check the errno each call gets. Each test that starts a box first shows that
 the kernel here does give the same call to a process outside a box: otherwise an EPERM inside proves nothing.
 """
+
 from __future__ import annotations
 
 import json
@@ -33,37 +34,69 @@ import uuid
 import pytest
 
 from conftest import ROOT
-from grading import sandbox, seccomp
+from grading import handin, sandbox, seccomp
 
 LAB = "02_kalman_falling_body"
 NEEDS_BWRAP = pytest.mark.skipif(not shutil.which("bwrap"), reason="needs bubblewrap (apt-get install bubblewrap)")
 EPERM, ENOKEY = 1, 126
-ALLOW, REFUSE = 0x7FFF0000, 0x00050000 | EPERM          # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
+ALLOW, REFUSE = 0x7FFF0000, 0x00050000 | EPERM  # SECCOMP_RET_ALLOW, SECCOMP_RET_ERRNO | EPERM
 ENOSYS = 38
-MISSING = 0x00050000 | ENOSYS                             # SECCOMP_RET_ERRNO | ENOSYS
+MISSING = 0x00050000 | ENOSYS  # SECCOMP_RET_ERRNO | ENOSYS
 # unshare, setns, clone, clone3: (x86_64, aarch64), and clone's flags (include/uapi/linux/sched.h)
 NS_CALLS = {"unshare": (272, 97), "setns": (308, 268), "clone": (56, 220), "clone3": (435, 435)}
-CLONE_NEW = {"NEWNS": 0x00020000, "NEWCGROUP": 0x02000000, "NEWUTS": 0x04000000, "NEWIPC": 0x08000000,
-             "NEWUSER": 0x10000000, "NEWPID": 0x20000000, "NEWNET": 0x40000000}
-FORK_FLAGS = 0x01200011                                   # CLONE_CHILD_SETTID | CHILD_CLEARTID | SIGCHLD: fork()
-THREAD_FLAGS = 0x003D0F00                                 # what glibc's pthread_create passes
+CLONE_NEW = {
+    "NEWNS": 0x00020000,
+    "NEWCGROUP": 0x02000000,
+    "NEWUTS": 0x04000000,
+    "NEWIPC": 0x08000000,
+    "NEWUSER": 0x10000000,
+    "NEWPID": 0x20000000,
+    "NEWNET": 0x40000000,
+}
+FORK_FLAGS = 0x01200011  # CLONE_CHILD_SETTID | CHILD_CLEARTID | SIGCHLD: fork()
+THREAD_FLAGS = 0x003D0F00  # what glibc's pthread_create passes
 X86_64, AARCH64, I386 = 0xC000003E, 0xC00000B7, 0x40000003
-KEY_CALLS = {"x86_64": (248, 249, 250), "aarch64": (217, 218, 219)}   # add_key, request_key, keyctl
+KEY_CALLS = {"x86_64": (248, 249, 250), "aarch64": (217, 218, 219)}  # add_key, request_key, keyctl
 # The page-cache calls, by name: (x86_64, aarch64), from the kernel's syscall tables; written out here, not taken
 # from grading.sandbox, so that a wrong number there fails a test.
-CACHE_CALLS = {"fadvise64": (221, 223), "mincore": (27, 232), "cachestat": (451, 451), "process_madvise": (440, 440),
-               "io_uring_setup": (425, 425), "io_uring_enter": (426, 426), "io_uring_register": (427, 427),
-               "io_setup": (206, 0), "io_submit": (209, 2)}
+CACHE_CALLS = {
+    "fadvise64": (221, 223),
+    "mincore": (27, 232),
+    "cachestat": (451, 451),
+    "process_madvise": (440, 440),
+    "io_uring_setup": (425, 425),
+    "io_uring_enter": (426, 426),
+    "io_uring_register": (427, 427),
+    "io_setup": (206, 0),
+    "io_submit": (209, 2),
+}
 # Refused only with some arguments: madvise with MADV_COLD or MADV_PAGEOUT (its third argument), preadv2 and pwritev2
 # with any flag (their sixth; RWF_HIPRI 1, RWF_NOWAIT 8).
-MADVISE, PREADV2, PWRITEV2 = {"x86_64": 28, "aarch64": 233}, {"x86_64": 327, "aarch64": 286}, {"x86_64": 328,
-                                                                                              "aarch64": 287}
+MADVISE, PREADV2, PWRITEV2 = (
+    {"x86_64": 28, "aarch64": 233},
+    {"x86_64": 327, "aarch64": 286},
+    {"x86_64": 328, "aarch64": 287},
+)
 # Watching and locking the files every box shares: (x86_64, aarch64; None where the call does not exist there), and
 # fcntl's refused commands (include/uapi/asm-generic/fcntl.h, include/uapi/linux/fcntl.h)
-WATCH_CALLS = {"inotify_init": (253, None), "inotify_init1": (294, 26), "inotify_add_watch": (254, 27),
-               "fanotify_init": (300, 262), "fanotify_mark": (301, 263)}
-FCNTL_REFUSED = {"F_GETLK": 5, "F_SETLK": 6, "F_SETLKW": 7, "F_OFD_GETLK": 36, "F_OFD_SETLK": 37, "F_OFD_SETLKW": 38,
-                 "F_SETLEASE": 1024, "F_GETLEASE": 1025, "F_NOTIFY": 1026}
+WATCH_CALLS = {
+    "inotify_init": (253, None),
+    "inotify_init1": (294, 26),
+    "inotify_add_watch": (254, 27),
+    "fanotify_init": (300, 262),
+    "fanotify_mark": (301, 263),
+}
+FCNTL_REFUSED = {
+    "F_GETLK": 5,
+    "F_SETLK": 6,
+    "F_SETLKW": 7,
+    "F_OFD_GETLK": 36,
+    "F_OFD_SETLK": 37,
+    "F_OFD_SETLKW": 38,
+    "F_SETLEASE": 1024,
+    "F_GETLEASE": 1025,
+    "F_NOTIFY": 1026,
+}
 MADV_DONTNEED, MADV_COLD, MADV_PAGEOUT = 4, 20, 21
 RWF_HIPRI, RWF_NOWAIT = 1, 8
 # Calls every box needs, allowed: read, pread64, readv, preadv, readahead, mmap, munmap, madvise's own number is
@@ -149,9 +182,10 @@ def _in_box(source, tmp_path, slot):
     (course / "lib").mkdir(parents=True, exist_ok=True)
     (course / "labs" / LAB).mkdir(parents=True, exist_ok=True)
     uid = sandbox.box_uid(slot)
-    work = sandbox.private_folder(None, tmp_path, uid)
-    command = sandbox.bwrap_command(["python", "-c", source], course=course, lab=LAB, lib=course / "lib", work=work,
-                                    uid=uid, data=False)
+    work = handin.private_folder(None, tmp_path, uid)
+    command = sandbox.bwrap_command(
+        ["python", "-c", source], course=course, lab=LAB, lib=course / "lib", work=work, uid=uid, data=False
+    )
     return subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
 
 
@@ -162,8 +196,10 @@ def _keys_work_outside_a_box():
         print(json.dumps({"add_key": kid}))
     """)
     if got["add_key"][0] <= 0:
-        pytest.skip(f"the kernel here refuses the key store to every process (add_key: errno {got['add_key'][1]}): "
-                    f"a refusal inside a box would prove nothing")
+        pytest.skip(
+            f"the kernel here refuses the key store to every process (add_key: errno {got['add_key'][1]}): "
+            f"a refusal inside a box would prove nothing"
+        )
 
 
 def _venv_file():
@@ -184,10 +220,12 @@ def _cache_calls_work_outside_a_box(path, offset):
     """Skip unless a process outside any box gets each page-cache call (no EPERM): otherwise a refusal inside a box
     would prove nothing."""
     got = _run_probe(f"print(json.dumps(primitives({path!r}, {offset})))")
-    refused = {name: r for name, r in got.items() if r[0] == -1 and r[1] != 11}   # EAGAIN: RWF_NOWAIT, not cached
+    refused = {name: r for name, r in got.items() if r[0] == -1 and r[1] != 11}  # EAGAIN: RWF_NOWAIT, not cached
     if refused:
-        pytest.skip(f"the kernel here refuses these calls to every process: {refused}; a refusal inside a box "
-                    f"would prove nothing")
+        pytest.skip(
+            f"the kernel here refuses these calls to every process: {refused}; a refusal inside a box "
+            f"would prove nothing"
+        )
 
 
 @pytest.fixture
@@ -200,22 +238,23 @@ def slot():
 # The BPF program
 # ---------------------------------------------------------------------------------------------------------------
 
+
 def _verdict(program, arch, nr, *args):
     """What the kernel would do with a call (``arch``, ``nr``, its arguments ``args``): the filter's return value.
     Interprets only the instructions a seccomp filter like ours needs; any other fails the test."""
     args = (args + (0,) * 6)[:6]
-    data = struct.pack("<iIQ6Q", nr, arch, 0, *args)          # struct seccomp_data: nr, arch, ip, args (little-endian)
-    insns = [struct.unpack("=HBBI", program[i:i + 8]) for i in range(0, len(program), 8)]
+    data = struct.pack("<iIQ6Q", nr, arch, 0, *args)  # struct seccomp_data: nr, arch, ip, args (little-endian)
+    insns = [struct.unpack("=HBBI", program[i : i + 8]) for i in range(0, len(program), 8)]
     pc, acc = 0, 0
-    for _ in range(len(insns)):                              # no loops in classic BPF: each instruction once at most
+    for _ in range(len(insns)):  # no loops in classic BPF: each instruction once at most
         code, jt, jf, k = insns[pc]
-        if code == 0x20:                                     # BPF_LD | BPF_W | BPF_ABS
+        if code == 0x20:  # BPF_LD | BPF_W | BPF_ABS
             acc = struct.unpack_from("=I", data, k)[0]
             pc += 1
-        elif code in (0x15, 0x25, 0x35, 0x45):               # BPF_JMP | JEQ / JGT / JGE / JSET, against k
+        elif code in (0x15, 0x25, 0x35, 0x45):  # BPF_JMP | JEQ / JGT / JGE / JSET, against k
             taken = {0x15: acc == k, 0x25: acc > k, 0x35: acc >= k, 0x45: bool(acc & k)}[code]
             pc += 1 + (jt if taken else jf)
-        elif code == 0x06:                                   # BPF_RET | BPF_K
+        elif code == 0x06:  # BPF_RET | BPF_K
             return k
         else:
             raise AssertionError(f"expected only loads, jumps and returns in the filter, got code {code:#x} at {pc}")
@@ -228,11 +267,11 @@ def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_x86_64():
     assert struct.unpack("=HBBI", program[:8]) == (0x20, 0, 0, 4), "the first instruction loads the arch"
     for nr in KEY_CALLS["x86_64"]:
         assert _verdict(program, X86_64, nr) == REFUSE, nr
-    for nr in (0, 1, 2, 9, 56, 57, 59, 60, 202, 231, 247, 251, 317):   # read, write, mmap, clone, fork, futex...
+    for nr in (0, 1, 2, 9, 56, 57, 59, 60, 202, 231, 247, 251, 317):  # read, write, mmap, clone, fork, futex...
         assert _verdict(program, X86_64, nr) == ALLOW, nr
-    for nr in (248, 249, 250, 0, 1, 60):                      # the x32 ABI: same arch, number + 0x40000000
+    for nr in (248, 249, 250, 0, 1, 60):  # the x32 ABI: same arch, number + 0x40000000
         assert _verdict(program, X86_64, 0x40000000 | nr) == REFUSE, nr
-    for nr in (0, 3, 4, 286, 287, 288):                       # i386 through int 0x80 (286-288: its key calls)
+    for nr in (0, 3, 4, 286, 287, 288):  # i386 through int 0x80 (286-288: its key calls)
         assert _verdict(program, I386, nr) == REFUSE, nr
 
 
@@ -242,8 +281,9 @@ def test_the_filter_refuses_the_three_key_calls_and_allows_the_rest_on_aarch64()
         assert _verdict(program, AARCH64, nr) == REFUSE, nr
     for nr in (56, 63, 64, 93, 98, 172, 216, 220, 221, 222, 248, 249, 250):  # openat, read, write, exit, futex...
         assert _verdict(program, AARCH64, nr) == ALLOW, nr
-    assert _verdict(program, X86_64, 0) == REFUSE and _verdict(program, 0x40000028, 3) == REFUSE, \
+    assert _verdict(program, X86_64, 0) == REFUSE and _verdict(program, 0x40000028, 3) == REFUSE, (
         "a call of any other arch (here x86_64's, and 32-bit arm's) is refused"
+    )
 
 
 @pytest.mark.parametrize("machine", ["x86_64", "aarch64"])
@@ -260,17 +300,19 @@ def test_the_filter_refuses_each_page_cache_call_and_allows_plain_reads(machine)
         assert _verdict(program, arch, madvise, 0x7F0000000000, 4096, advice) == REFUSE, hex(advice)
     for advice in (0, 1, 2, 3, MADV_DONTNEED, 8, 9, 14, 15, 22, 23, 24, 25, 100, 1 << 32):
         assert _verdict(program, arch, madvise, 0x7F0000000000, 4096, advice) == ALLOW, hex(advice)
-    assert _verdict(program, arch, madvise, 0x7F0000000000, MADV_PAGEOUT, MADV_DONTNEED) == ALLOW, \
+    assert _verdict(program, arch, madvise, 0x7F0000000000, MADV_PAGEOUT, MADV_DONTNEED) == ALLOW, (
         "the advice is the third argument, not the second"
+    )
     for nr in (PREADV2[machine], PWRITEV2[machine]):
         for flags in (RWF_NOWAIT, RWF_HIPRI, 2, 4, 16, 0xFF, (1 << 32) | RWF_NOWAIT):
             assert _verdict(program, arch, nr, 3, 0x7F0000000000, 1, 4096, 0, flags) == REFUSE, (nr, hex(flags))
-        for flags in (0, 1 << 32):                            # rwf_t is an int: the high half is not a flag
+        for flags in (0, 1 << 32):  # rwf_t is an int: the high half is not a flag
             assert _verdict(program, arch, nr, 3, 0x7F0000000000, 1, 4096, 0, flags) == ALLOW, (nr, hex(flags))
-        assert _verdict(program, arch, nr, 3, 0x7F0000000000, RWF_NOWAIT, RWF_NOWAIT, RWF_NOWAIT, 0) == ALLOW, \
+        assert _verdict(program, arch, nr, 3, 0x7F0000000000, RWF_NOWAIT, RWF_NOWAIT, RWF_NOWAIT, 0) == ALLOW, (
             "the flags are the sixth argument"
+        )
     if machine == "x86_64":
-        for name, numbers in CACHE_CALLS.items():            # x32 and i386 (int 0x80) are refused whatever they are
+        for name, numbers in CACHE_CALLS.items():  # x32 and i386 (int 0x80) are refused whatever they are
             assert _verdict(program, X86_64, 0x40000000 | numbers[0]) == REFUSE, name
         assert _verdict(program, I386, 219, 0, 4096, MADV_DONTNEED) == REFUSE, "i386's madvise"
 
@@ -282,7 +324,7 @@ def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
     unshare, setns, clone, clone3 = (NS_CALLS[name][column] for name in ("unshare", "setns", "clone", "clone3"))
     for name, flag in CLONE_NEW.items():
         assert _verdict(program, arch, unshare, flag) == REFUSE, name
-        assert _verdict(program, arch, clone, flag | 17) == REFUSE, name                    # with SIGCHLD
+        assert _verdict(program, arch, clone, flag | 17) == REFUSE, name  # with SIGCHLD
         assert _verdict(program, arch, clone, (0xFFFFFFFF << 32) | flag | FORK_FLAGS) == REFUSE, name
     assert _verdict(program, arch, unshare, 0) == REFUSE and _verdict(program, arch, setns, 3, 0) == REFUSE
     for flags in (0, 17, FORK_FLAGS, THREAD_FLAGS, 1 << 32 | CLONE_NEW["NEWUSER"] >> 4):
@@ -296,17 +338,32 @@ def test_the_filter_refuses_new_namespaces_and_keeps_fork_and_threads(machine):
 
 def test_the_filter_is_one_table_of_calls_each_with_both_numbers():
     table = seccomp.REFUSED_SYSCALLS
-    assert set(table) == {"add_key", "request_key", "keyctl", "madvise", "preadv2", "pwritev2", *CACHE_CALLS,
-                          "unshare", "setns", "clone", *WATCH_CALLS, "flock", "fcntl"}
+    assert set(table) == {
+        "add_key",
+        "request_key",
+        "keyctl",
+        "madvise",
+        "preadv2",
+        "pwritev2",
+        *CACHE_CALLS,
+        "unshare",
+        "setns",
+        "clone",
+        *WATCH_CALLS,
+        "flock",
+        "fcntl",
+    }
     assert {name: table[name] for name in WATCH_CALLS} == {n: (*numbers, None) for n, numbers in WATCH_CALLS.items()}
     assert table["flock"] == (73, 32, None)
     assert table["fcntl"] == (72, 25, (1, tuple(FCNTL_REFUSED.values()))), table["fcntl"]
     assert table["clone"] == (56, 220, (0, sum(CLONE_NEW.values()))), table["clone"]
     assert seccomp.MISSING_SYSCALLS == {"clone3": NS_CALLS["clone3"], "sysinfo": (99, 179)}
-    assert {name: table[name] for name in CACHE_CALLS} == {name: (*numbers, None) for name, numbers in
-                                                          CACHE_CALLS.items()}
-    assert [table[name] for name in ("add_key", "request_key", "keyctl")] == \
-        [(*numbers, None) for numbers in zip(KEY_CALLS["x86_64"], KEY_CALLS["aarch64"])]
+    assert {name: table[name] for name in CACHE_CALLS} == {
+        name: (*numbers, None) for name, numbers in CACHE_CALLS.items()
+    }
+    assert [table[name] for name in ("add_key", "request_key", "keyctl")] == [
+        (*numbers, None) for numbers in zip(KEY_CALLS["x86_64"], KEY_CALLS["aarch64"])
+    ]
     assert table["madvise"] == (28, 233, (2, (MADV_COLD, MADV_PAGEOUT))), table["madvise"]
     assert (table["preadv2"], table["pwritev2"]) == ((327, 286, (5, "any flag")), (328, 287, (5, "any flag")))
     for name in ("read", "pread64", "readv", "preadv", "readahead", "mmap", "munmap"):
@@ -324,14 +381,16 @@ def test_the_filter_refuses_watching_and_locking_files_and_allows_fcntls_other_c
     fcntl = (72, 25)[column]
     for name, cmd in FCNTL_REFUSED.items():
         assert _verdict(program, arch, fcntl, 3, cmd) == REFUSE, name
-    for cmd in (0, 1, 2, 3, 4, 1030, 1031, 8, 9):            # F_DUPFD, F_GETFD, F_SETFD, F_GETFL, F_SETFL, ...
+    for cmd in (0, 1, 2, 3, 4, 1030, 1031, 8, 9):  # F_DUPFD, F_GETFD, F_SETFD, F_GETFL, F_SETFL, ...
         assert _verdict(program, arch, fcntl, 3, cmd) == ALLOW, cmd
 
 
 def test_the_numbers_are_those_of_the_kernel_headers_here():
     """Where the kernel's headers are installed, every number of the table (and madvise's) is the one they give."""
-    headers = {"x86_64": "/usr/include/x86_64-linux-gnu/asm/unistd_64.h",
-               "aarch64": "/usr/include/asm-generic/unistd.h"}
+    headers = {
+        "x86_64": "/usr/include/x86_64-linux-gnu/asm/unistd_64.h",
+        "aarch64": "/usr/include/asm-generic/unistd.h",
+    }
     checked = 0
     for column, (machine, path) in enumerate(headers.items()):
         if not os.path.isfile(path):
@@ -340,9 +399,9 @@ def test_the_numbers_are_those_of_the_kernel_headers_here():
         defined = dict(re.findall(r"#define (__NR\w+)\s+(\w+)", text))
         for name, numbers in {**seccomp.REFUSED_SYSCALLS, **seccomp.MISSING_SYSCALLS}.items():
             value = defined.get(f"__NR_{name}")
-            while value in defined:                           # __NR_fadvise64 is __NR3264_fadvise64 on aarch64
+            while value in defined:  # __NR_fadvise64 is __NR3264_fadvise64 on aarch64
                 value = defined[value]
-            if value is not None:                             # cachestat (6.5) is missing from older headers
+            if value is not None:  # cachestat (6.5) is missing from older headers
                 assert int(value) == numbers[column], (machine, name, value, numbers)
                 checked += 1
     if not checked:
@@ -357,13 +416,14 @@ def test_a_machine_without_a_filter_is_refused_by_name_and_stops_grading(monkeyp
     with pytest.raises(seccomp.UnsupportedMachine, match="riscv64"):
         sandbox.bwrap_command(["python", "box.py"], course=ROOT, lab=LAB, lib=ROOT / "lib", work=str(ROOT))
     said = sandbox.box_problem(str(ROOT), LAB, "/nonexistent", [0])
-    assert said.startswith("grading cannot be made safe on this machine (expected a machine of x86_64 or aarch64, "
-                           "this one is riscv64"), said
+    assert said.startswith(
+        "grading cannot be made safe on this machine (expected a machine of x86_64 or aarch64, this one is riscv64"
+    ), said
     assert "never run without that filter" in said and "Where to grade" in said, said
 
 
 def test_the_box_is_handed_this_machines_filter(tmp_path):
-    work = sandbox.private_folder(None, tmp_path)
+    work = handin.private_folder(None, tmp_path)
     args = sandbox.bwrap_command(["python", "box.py"], course=tmp_path, lab=LAB, lib=tmp_path, work=work)
     env = {args[i + 1]: args[i + 2] for i, a in enumerate(args) if a == "--setenv"}
     assert bytes.fromhex(env["FUSIONLAB_BOX_SECCOMP"]) == seccomp.box_filter(os.uname().machine)
@@ -373,10 +433,12 @@ def test_the_box_is_handed_this_machines_filter(tmp_path):
 # Real boxes
 # ---------------------------------------------------------------------------------------------------------------
 
+
 @NEEDS_BWRAP
 def test_each_key_call_in_a_box_fails_with_eperm(tmp_path, slot):
     _keys_work_outside_a_box()
-    got = _run_probe("""
+    got = _run_probe(
+        """
         print(json.dumps({
             "add_key process": call(ADD_KEY, b"user", b"desc", b"data", 4, KEY_SPEC_PROCESS_KEYRING),
             "add_key session": call(ADD_KEY, b"user", b"desc", b"data", 4, KEY_SPEC_SESSION_KEYRING),
@@ -385,7 +447,10 @@ def test_each_key_call_in_a_box_fails_with_eperm(tmp_path, slot):
             "keyctl get_keyring_id": call(KEYCTL, KEYCTL_GET_KEYRING_ID, KEY_SPEC_USER_KEYRING, 1),
             "keyctl search": call(KEYCTL, KEYCTL_SEARCH, KEY_SPEC_SESSION_KEYRING, b"user", b"desc", 0),
         }))
-    """, tmp_path=tmp_path, slot=slot)
+    """,
+        tmp_path=tmp_path,
+        slot=slot,
+    )
     assert got == {name: [-1, EPERM] for name in got} and len(got) == 6, got
 
 
@@ -406,6 +471,7 @@ def test_a_secret_stored_by_one_box_is_not_found_by_the_next_box_of_the_slot(tmp
                 stored[name] = kid
             print(json.dumps(stored))
         """
+
     look = f"""
         desc, found = {desc!r}, {{}}
         for name, kid in (("request_key", call(REQUEST_KEY, b"user", desc, None, 0)),
@@ -422,22 +488,24 @@ def test_a_secret_stored_by_one_box_is_not_found_by_the_next_box_of_the_slot(tmp
                 call(KEYCTL, KEYCTL_UNLINK, kid, KEY_SPEC_USER_KEYRING)
         print(json.dumps(found))
     """
-    if os.geteuid() == 0:                                    # the channel is real here: no filter, no refusal
+    if os.geteuid() == 0:  # the channel is real here: no filter, no refusal
         _keys_work_outside_a_box()
         with monkeypatch.context() as m:
             m.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
             stored = _run_probe(store(["USER"]), tmp_path=tmp_path, slot=slot)
             assert stored["USER"][0] > 0, f"without the filter the first box stores its key: {stored}"
             found = _run_probe(look, tmp_path=tmp_path, slot=slot)
-        assert found["request_key"][2] == found["search"][2] == "x_hat[k+1] = 4.2", \
+        assert found["request_key"][2] == found["search"][2] == "x_hat[k+1] = 4.2", (
             f"without the filter the second box reads it: {found}"
+        )
 
     stored = _run_probe(store(["USER", "SESSION"]), tmp_path=tmp_path, slot=slot)
     assert stored == {"USER": [-1, EPERM], "SESSION": [-1, EPERM]}, stored
     found = _run_probe(look, tmp_path=tmp_path, slot=slot)
     assert found == {"request_key": [-1, EPERM, ""], "search": [-1, EPERM, ""]}, found
-    outside = _run_probe(f"print(json.dumps(call(KEYCTL, KEYCTL_SEARCH, KEY_SPEC_SESSION_KEYRING, b'user', {desc!r}, "
-                         f"0)))")
+    outside = _run_probe(
+        f"print(json.dumps(call(KEYCTL, KEYCTL_SEARCH, KEY_SPEC_SESSION_KEYRING, b'user', {desc!r}, 0)))"
+    )
     assert outside == [-1, ENOKEY], f"nothing reached the grader's session keyring either: {outside}"
 
 
@@ -445,7 +513,8 @@ def test_a_secret_stored_by_one_box_is_not_found_by_the_next_box_of_the_slot(tmp
 def test_each_page_cache_call_in_a_box_fails_with_eperm_and_plain_reads_work(tmp_path, slot):
     path, offset = _venv_file()
     _cache_calls_work_outside_a_box(path, offset)
-    got = _run_probe(f"""
+    got = _run_probe(
+        f"""
         got = primitives({path!r}, {offset})
         fd = os.open({path!r}, os.O_RDONLY)
         with open({path!r}, "rb") as fh:
@@ -461,17 +530,34 @@ def test_each_page_cache_call_in_a_box_fails_with_eperm_and_plain_reads_work(tmp
         got["madvise MADV_DONTNEED file"] = call(NR["madvise"], mapped(fd), 4 * PAGE, 4)
         got["madvise MADV_WILLNEED file"] = call(NR["madvise"], mapped(fd), 4 * PAGE, 3)
         print(json.dumps(got))
-    """, tmp_path=tmp_path, slot=slot)
+    """,
+        tmp_path=tmp_path,
+        slot=slot,
+    )
     assert got.pop("reads") == [True] * 5, "read, pread, preadv without flags and a file's read work in the box"
-    allowed = {name: got.pop(name) for name in ("readahead", "madvise MADV_DONTNEED anonymous",
-                                                  "madvise MADV_DONTNEED file", "madvise MADV_WILLNEED file")}
+    allowed = {
+        name: got.pop(name)
+        for name in (
+            "readahead",
+            "madvise MADV_DONTNEED anonymous",
+            "madvise MADV_DONTNEED file",
+            "madvise MADV_WILLNEED file",
+        )
+    }
     assert allowed == {name: [0, 0] for name in allowed}, allowed
     assert got.pop("preadv RWF_HIPRI") == [-1, EPERM, "PermissionError"], "preadv2 with any flag is refused"
-    assert got == {"posix_fadvise": [-1, EPERM, "PermissionError"], "preadv RWF_NOWAIT": [-1, EPERM, "PermissionError"],
-                   "mincore": [-1, EPERM], "cachestat": [-1, EPERM], "cachestat own file": [-1, EPERM],
-                   "madvise MADV_COLD": [-1, EPERM],
-                   "madvise MADV_PAGEOUT": [-1, EPERM], "process_madvise": [-1, EPERM],
-                   "io_uring_setup": [-1, EPERM], "io_setup": [-1, EPERM]}, got
+    assert got == {
+        "posix_fadvise": [-1, EPERM, "PermissionError"],
+        "preadv RWF_NOWAIT": [-1, EPERM, "PermissionError"],
+        "mincore": [-1, EPERM],
+        "cachestat": [-1, EPERM],
+        "cachestat own file": [-1, EPERM],
+        "madvise MADV_COLD": [-1, EPERM],
+        "madvise MADV_PAGEOUT": [-1, EPERM],
+        "process_madvise": [-1, EPERM],
+        "io_uring_setup": [-1, EPERM],
+        "io_setup": [-1, EPERM],
+    }, got
 
 
 WATCH_PROBE = """
@@ -503,15 +589,26 @@ def test_a_box_can_neither_watch_nor_lock_a_file_every_box_shares(tmp_path, slot
     outside review passed a class's hidden inputs box to box through inotify and flock), and fcntl's other
     commands still work. Outside a box the same calls work, so the refusal is the filter's."""
     outside = _run_probe(WATCH_PROBE)
-    assert all(outside[name][0] == 0 for name in ("flock", "F_SETLK", "F_GETLK", "F_OFD_SETLK", "F_OFD_GETLK",
-                                                  "F_GETLEASE", "F_NOTIFY")), outside
+    assert all(
+        outside[name][0] == 0
+        for name in ("flock", "F_SETLK", "F_GETLK", "F_OFD_SETLK", "F_OFD_GETLK", "F_GETLEASE", "F_NOTIFY")
+    ), outside
     assert outside["inotify_init1"][0] >= 0, outside
     got = _run_probe(WATCH_PROBE, tmp_path=tmp_path, slot=slot)
     assert got.pop("F_GETFL") == [0, 0], "fcntl's other commands are allowed"
-    assert got == {name: [-1, EPERM, "PermissionError"] for name in ("flock", "F_SETLK", "F_GETLK", "F_OFD_SETLK",
-                                                                    "F_OFD_GETLK", "F_SETLEASE", "F_GETLEASE",
-                                                                    "F_NOTIFY")} | {
-        "inotify_init1": [-1, EPERM], "inotify_add_watch": [-1, EPERM]}, got
+    assert got == {
+        name: [-1, EPERM, "PermissionError"]
+        for name in (
+            "flock",
+            "F_SETLK",
+            "F_GETLK",
+            "F_OFD_SETLK",
+            "F_OFD_GETLK",
+            "F_SETLEASE",
+            "F_GETLEASE",
+            "F_NOTIFY",
+        )
+    } | {"inotify_init1": [-1, EPERM], "inotify_add_watch": [-1, EPERM]}, got
 
 
 @NEEDS_BWRAP
@@ -538,20 +635,23 @@ def test_a_page_cache_bit_set_by_one_box_is_not_seen_by_another(tmp_path, monkey
         print(json.dumps({{**primitives({path!r}, {offset}), "probe": probe}}))
     """
     with sandbox.claimed_slots(2) as (a, b):
-        with monkeypatch.context() as m:                      # the channel is real here: no filter, no refusal
+        with monkeypatch.context() as m:  # the channel is real here: no filter, no refusal
             m.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x06, 0, 0, ALLOW))
             assert _run_probe(clear_bit, tmp_path=tmp_path, slot=a) == {"read": 4096, "evict": [0, 0]}
             unfiltered = _run_probe(probe, tmp_path=tmp_path, slot=b)
             zero = unfiltered.pop("probe")
             assert _run_probe(set_bit, tmp_path=tmp_path, slot=a) == {"evict": [0, 0], "read": 4096}
             one = _run_probe(probe, tmp_path=tmp_path, slot=b)["probe"]
-        assert (zero, one) == ([-1, 11, "BlockingIOError"], [0, 0]), \
+        assert (zero, one) == ([-1, 11, "BlockingIOError"], [0, 0]), (
             f"without the filter box B reads box A's bit (0: not cached, then 1: cached): {zero}, {one}"
+        )
         refused = {name for name, r in unfiltered.items() if r[:2] == [-1, EPERM]}
         assert refused <= {"cachestat"}, f"without the filter nothing else refuses these calls: {unfiltered}"
 
-        assert _run_probe(clear_bit, tmp_path=tmp_path, slot=a) == {"read": 4096,
-                                                                    "evict": [-1, EPERM, "PermissionError"]}
+        assert _run_probe(clear_bit, tmp_path=tmp_path, slot=a) == {
+            "read": 4096,
+            "evict": [-1, EPERM, "PermissionError"],
+        }
         got = _run_probe(probe, tmp_path=tmp_path, slot=b)
         assert got.pop("probe") == [-1, EPERM, "PermissionError"], "box B cannot ask whether the page is cached"
         assert {name: r[:2] for name, r in got.items()} == {name: [-1, EPERM] for name in got} and len(got) == 10, got
@@ -579,9 +679,16 @@ def _faults(tmp_path, slot, path, pages, touch):
     (course / "lib").mkdir(parents=True, exist_ok=True)
     (course / "labs" / LAB).mkdir(parents=True, exist_ok=True)
     uid = sandbox.box_uid(slot)
-    work = sandbox.private_folder(None, tmp_path, uid)
-    command = sandbox.bwrap_command(["python", "-c", FAULTS, path, json.dumps(pages), "touch" if touch else "probe"],
-                                    course=course, lab=LAB, lib=course / "lib", work=work, uid=uid, data=False)
+    work = handin.private_folder(None, tmp_path, uid)
+    command = sandbox.bwrap_command(
+        ["python", "-c", FAULTS, path, json.dumps(pages), "touch" if touch else "probe"],
+        course=course,
+        lab=LAB,
+        lib=course / "lib",
+        work=work,
+        uid=uid,
+        data=False,
+    )
     run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
     assert run.returncode == 0, run.stderr[-2000:]
     return json.loads(run.stdout.strip().splitlines()[-1])
@@ -615,8 +722,9 @@ def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_b
         if not _evict(path):
             pytest.skip("the kernel here keeps the file cached after POSIX_FADV_DONTNEED")
         _faults(tmp_path, a, path, touched, touch=True)
-        assert _faults(tmp_path, b, path, pages, touch=False) == [True, False, True, False], \
+        assert _faults(tmp_path, b, path, pages, touch=False) == [True, False, True, False], (
             "without the warming, box B reads box A's bits"
+        )
         assert _evict(path)
         files, size = sandbox.warm(view)
         assert size > 100 << 20 and files > 1000, (files, size)
@@ -635,12 +743,19 @@ def test_a_box_reads_nothing_the_warming_leaves_out(tmp_path):
     work = tmp_path / "work"
     work.mkdir()
     from grading import client
-    args = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=course, lab=LAB, lib=course / "lib",
-                                 work=str(work))
+
+    args = sandbox.bwrap_command(
+        ["python", str(client.SCRIPT)], course=course, lab=LAB, lib=course / "lib", work=str(work)
+    )
     view = [os.path.realpath(v) for v in sandbox.view(course)]
     sources = [os.path.realpath(args[i + 1]) for i, a in enumerate(args) if a in ("--ro-bind", "--ro-bind-try")]
-    outside = [src for src in sources if src != os.path.realpath(work) and src != "/dev/null"
-               and not any(src == v or src.startswith(v.rstrip("/") + "/") for v in view)]
+    outside = [
+        src
+        for src in sources
+        if src != os.path.realpath(work)
+        and src != "/dev/null"
+        and not any(src == v or src.startswith(v.rstrip("/") + "/") for v in view)
+    ]
     assert outside == [] and "/usr" not in sources, outside
 
 
@@ -648,7 +763,8 @@ def test_a_box_reads_nothing_the_warming_leaves_out(tmp_path):
 def test_an_ordinary_workload_runs_in_the_box(tmp_path, slot):
     """numpy, a thread, a fork, a child process and plain reads: the filter refuses nothing else, and is in
     place."""
-    got = _run_probe("""
+    got = _run_probe(
+        """
         import subprocess, threading
         import numpy as np
         a = np.random.default_rng(7).standard_normal((120, 120))
@@ -671,8 +787,12 @@ def test_an_ordinary_workload_runs_in_the_box(tmp_path, slot):
         print(json.dumps({"x": x, "thread": box.get("thread"), "fork": fork, "child": child, "reads": reads,
                           "seccomp": status["Seccomp"].strip(), "env": "FUSIONLAB_BOX_SECCOMP" in os.environ,
                           "uid": os.getuid()}))
-    """, tmp_path=tmp_path, slot=slot)
+    """,
+        tmp_path=tmp_path,
+        slot=slot,
+    )
     import numpy as np
+
     a = np.random.default_rng(7).standard_normal((120, 120))
     x = float(np.linalg.solve(a @ a.T + np.eye(120), np.ones(120)).sum())
     assert got["x"] == pytest.approx(x, rel=1e-9), got
@@ -688,7 +808,8 @@ def test_an_ordinary_workload_runs_in_the_box(tmp_path, slot):
 def test_a_box_cannot_make_a_namespace_and_still_forks_and_starts_threads(tmp_path, slot):
     """unshare/setns/clone with CLONE_NEW* fail with EPERM and clone3 with ENOSYS in a real box; os.fork,
     threading and subprocess (which glibc runs through clone after clone3's ENOSYS) still work."""
-    got = _run_probe("""
+    got = _run_probe(
+        """
         import subprocess, threading
         NS = {"x86_64": (272, 308, 56, 435), "aarch64": (97, 268, 220, 435)}[os.uname().machine]
         unshare, setns, clone, clone3 = NS
@@ -710,10 +831,21 @@ def test_a_box_cannot_make_a_namespace_and_still_forks_and_starts_threads(tmp_pa
         out["child"] = subprocess.run([sys.executable, "-c", "print(6 * 7)"], capture_output=True,
                                       text=True).stdout.strip()
         print(json.dumps(out))
-    """, tmp_path=tmp_path, slot=slot)
-    assert got == {"unshare user": [-1, EPERM], "unshare net": [-1, EPERM], "setns": [-1, EPERM],
-                   "clone user": [-1, EPERM], "clone3": [-1, ENOSYS], "libc unshare": [-1, EPERM],
-                   "fork": 5, "thread": 1, "child": "42"}, got
+    """,
+        tmp_path=tmp_path,
+        slot=slot,
+    )
+    assert got == {
+        "unshare user": [-1, EPERM],
+        "unshare net": [-1, EPERM],
+        "setns": [-1, EPERM],
+        "clone user": [-1, EPERM],
+        "clone3": [-1, ENOSYS],
+        "libc unshare": [-1, EPERM],
+        "fork": 5,
+        "thread": 1,
+        "child": "42",
+    }, got
 
 
 @NEEDS_BWRAP
@@ -722,7 +854,8 @@ def test_a_box_reads_no_counter_of_the_whole_machine(tmp_path, slot):
     sysinfo is refused; what a Python kernel reads of /proc still reads; a process holds at most 1024 files."""
     outside = {name: os.access(f"/proc/{name}", os.R_OK) for name in ("sys/fs/file-nr", "loadavg", "meminfo", "stat")}
     assert all(outside.values()), outside
-    got = _run_probe("""
+    got = _run_probe(
+        """
         import resource
         def reads(path):
             try:
@@ -745,7 +878,10 @@ def test_a_box_reads_no_counter_of_the_whole_machine(tmp_path, slot):
                           "kept": {p: reads(p) for p in ("/proc/self/status", "/proc/cpuinfo", "/proc/self/maps")},
                           "sysinfo": call(NR, ctypes.create_string_buffer(256)), "cpus": os.cpu_count(),
                           "nofile": resource.getrlimit(resource.RLIMIT_NOFILE), "opened": opened}))
-    """, tmp_path=tmp_path, slot=slot)
+    """,
+        tmp_path=tmp_path,
+        slot=slot,
+    )
     assert all(v is not True for v in got["hidden"].values()), got["hidden"]
     assert got["kept"] == {p: True for p in got["kept"]}, got["kept"]
     assert got["sysinfo"] == [-1, ENOSYS] and got["cpus"] == os.cpu_count(), got
@@ -758,8 +894,10 @@ def test_a_box_that_cannot_install_its_filter_runs_nothing_and_is_reported(tmp_p
     monkeypatch.setattr(seccomp, "box_filter", lambda: struct.pack("=HBBI", 0x20, 0, 0, 4))
     run = _in_box("print('student code ran')", tmp_path=tmp_path, slot=slot)
     assert run.returncode != 0 and "student code ran" not in run.stdout, run.stdout
-    assert "could not install its seccomp filter (prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER) failed: Invalid " \
-           "argument)" in run.stderr, run.stderr
+    assert (
+        "could not install its seccomp filter (prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER) failed: Invalid "
+        "argument)" in run.stderr
+    ), run.stderr
     said = sandbox.box_problem(str(ROOT), "01_euler_rotations", str(tmp_path), [slot])
     assert said.startswith("a test box did not start (the box could not install its seccomp filter"), said
     assert "no student code runs without it" in said, said

@@ -1,5 +1,6 @@
 """Seed 001's sensor error models (sensors note §2-4), gravity removal and dead reckoning (position note §2-4), the
 observer with a biased gyro (attitude note §4), and the synthetic gyro noise behind Lab 12's Allan-deviation part."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,7 +22,7 @@ def test_accel_correction_inverts_the_forward_model(seed):
     M, S, beta = _random_triad(rng)
     f = rng.normal(0, 10, (50, 3))
     a_m = sensor_errors.accel_measure(f, M, S, beta)
-    assert not np.allclose(a_m, f, atol=1e-3)                       # the errors do change the reading
+    assert not np.allclose(a_m, f, atol=1e-3)  # the errors do change the reading
     assert np.allclose(sensor_errors.accel_correct(a_m, M, S, beta), f, atol=1e-12)
 
 
@@ -81,19 +82,19 @@ def test_remove_gravity_gives_zero_at_rest_in_both_frames():
     rng = np.random.default_rng(4)
     euler = np.stack([rng.uniform(-3, 3, 20), rng.uniform(-1.5, 1.5, 20), rng.uniform(-3, 3, 20)], 1)
     q = rotations.euler_to_quat(euler)
-    f = accel_tilt.specific_force(rotations.quat_to_dcm(q), g=9.8)          # at rest, NED
+    f = accel_tilt.specific_force(rotations.quat_to_dcm(q), g=9.8)  # at rest, NED
     assert np.allclose(sensor_errors.remove_gravity(q, f, g=9.8, frame="NED"), 0, atol=1e-12)
     q_enu = rotations.quat_nav_swap(q)
     assert np.allclose(sensor_errors.remove_gravity(q_enu, f, g=9.8, frame="ENU"), 0, atol=1e-12)
-    a = np.array([1.0, -2.0, 0.5])                                      # a moving sensor: the acceleration returns
+    a = np.array([1.0, -2.0, 0.5])  # a moving sensor: the acceleration returns
     f = accel_tilt.specific_force(rotations.quat_to_dcm(q), a, g=9.8)
     assert np.allclose(sensor_errors.remove_gravity(q, f, g=9.8), a, atol=1e-12)
 
 
 def test_dead_reckon_follows_the_note_scheme_and_gives_8_49_m():
-    a = np.tile([0.17, 0.0, 0.0], (1001, 1))                           # 10 s at T = 0.01 s, the note's 1° row
+    a = np.tile([0.17, 0.0, 0.0], (1001, 1))  # 10 s at T = 0.01 s, the note's 1° row
     v, p = sensor_errors.dead_reckon(a, 0.01)
-    assert p[-1, 0] == pytest.approx(0.17 * 0.01 ** 2 * 1000 * 999 / 2, rel=1e-12)
+    assert p[-1, 0] == pytest.approx(0.17 * 0.01**2 * 1000 * 999 / 2, rel=1e-12)
     assert round(p[-1, 0], 2) == 8.49
     assert v[-1, 0] == pytest.approx(1.7, rel=1e-12)
 
@@ -107,8 +108,8 @@ def test_table1_reproduced_as_printed_and_corrected():
     assert np.allclose(vel[:, 0], 10 * a)
     assert np.allclose(pos[:, 0], printed_pos10, rtol=0.02)
     _, _, kin = sensor_errors.seed001_table1(angles, [10.0, 60.0], g=9.8, printed=False)
-    assert np.allclose(pos / kin, 2.0)                                   # the factor-of-2 erratum
-    assert kin[2, 1] == pytest.approx(307.9, abs=0.2)                   # 1° at 1 min: 308 m, not 612
+    assert np.allclose(pos / kin, 2.0)  # the factor-of-2 erratum
+    assert kin[2, 1] == pytest.approx(307.9, abs=0.2)  # 1° at 1 min: 308 m, not 612
 
 
 def test_attitude_error_grows_as_t2_and_gyro_bias_as_t3():
@@ -122,8 +123,8 @@ def test_attitude_error_grows_as_t2_and_gyro_bias_as_t3():
 def test_observer_steady_state_error_matches_the_suite_complementary_filter(L):
     T, b = 0.01, np.radians(2.0)
     n = int(40 / L) + 200
-    filt = correlation.ComplementaryFilter(alpha=1 - L, dt=T)            # θ = (1−L)(θ + Tω) + L θ_acc
-    est = filt.run(np.full(n, b), np.zeros(n))                           # true angle 0, gyro reads only its bias
+    filt = correlation.ComplementaryFilter(alpha=1 - L, dt=T)  # θ = (1−L)(θ + Tω) + L θ_acc
+    est = filt.run(np.full(n, b), np.zeros(n))  # true angle 0, gyro reads only its bias
     assert est[-1] == pytest.approx(sensor_errors.observer_steady_state_error(L, T, b), rel=1e-9)
     with pytest.raises(ValueError, match="L must lie"):
         sensor_errors.observer_steady_state_error(0.0, T, b)
@@ -132,8 +133,9 @@ def test_observer_steady_state_error_matches_the_suite_complementary_filter(L):
 def test_gyro_noise_white_part_has_the_arw_per_sample_std():
     x = sensor_errors.gyro_noise(200_000, 100.0, arw=1e-3, rng=5)
     assert np.std(x) == pytest.approx(1e-3 * np.sqrt(100.0), rel=0.01)
-    assert np.allclose(sensor_errors.gyro_noise(10, 100.0, 1e-3, rng=5),
-                       sensor_errors.gyro_noise(10, 100.0, 1e-3, rng=5))
+    assert np.allclose(
+        sensor_errors.gyro_noise(10, 100.0, 1e-3, rng=5), sensor_errors.gyro_noise(10, 100.0, 1e-3, rng=5)
+    )
     with pytest.raises(ValueError, match="arw must be >= 0"):
         sensor_errors.gyro_noise(10, 100.0, arw=-1)
 
@@ -149,14 +151,14 @@ from pathlib import Path  # noqa: E402
 
 from fusionlab import datasets  # noqa: E402
 
-BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"      # the trials the course ships
+BROAD = Path(__file__).resolve().parents[1] / "data" / "broad"  # the trials the course ships
 
 
 def test_dead_reckoning_a_real_translation_trial_drifts_past_1_m_within_seconds():
     tr = datasets.load_trial(11, folder=BROAD, progress=False)
     pos = datasets.load_reference_position(11, folder=BROAD)
     assert pos.shape == (len(tr), 3)
-    start = int(np.argmax(tr.movement)) - int(tr.fs)                   # 1 s before the motion starts, at rest
+    start = int(np.argmax(tr.movement)) - int(tr.fs)  # 1 s before the motion starts, at rest
     sl = slice(start, start + int(20 * tr.fs))
     g = np.linalg.norm(tr.acc[: start - 50], axis=1).mean()
     a = sensor_errors.remove_gravity(tr.quat_ref[sl], tr.acc[sl], g=g, frame="ENU")

@@ -4,6 +4,7 @@ seed 000 §3.1.
 Reference values: the thesis' worked ADC examples (seed 000 §3.1.2, §3.2.2) as corrected in Lab 00 (0.4658 g at
 3.0 V, 0.9624 g at 3.3 V, 15.3556 °/s) and seed 000 §3.1. Random inputs use fixed seeds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -12,8 +13,8 @@ import pytest
 from fusionlab import earth
 from fusionlab import sensors as sen
 
-M = 1e-9                                    # 1 µg proof mass
-K = M * (2 * np.pi * 5e3) ** 2              # 5 kHz resonance
+M = 1e-9  # 1 µg proof mass
+K = M * (2 * np.pi * 5e3) ** 2  # 5 kHz resonance
 
 
 # ---------------------------------------------------------------------------------------------- spring-mass-damper
@@ -49,11 +50,11 @@ def test_smd_transfer_solves_the_differential_equation_at_each_frequency():
 
 def test_static_displacement_maps_back_to_the_acceleration_only_with_k_over_m():
     a = np.array([-2 * earth.G, 0.0, earth.G, 3 * earth.G])
-    x = sen.smd_dc_gain(M, K) * a                           # (3.6): x = -(m/k) a
+    x = sen.smd_dc_gain(M, K) * a  # (3.6): x = -(m/k) a
     assert np.allclose(sen.accel_from_displacement(x, M, K), a, rtol=1e-14)
     printed = sen.seed000_eq37_printed(x, M, K)
-    assert np.allclose(printed, (M / K) ** 2 * a)           # (3.7) as printed is off by (m/k)^2 ...
-    assert abs(printed[2]) < 1e-15                          # ... 1 g reads as ~1e-17 m/s^2
+    assert np.allclose(printed, (M / K) ** 2 * a)  # (3.7) as printed is off by (m/k)^2 ...
+    assert abs(printed[2]) < 1e-15  # ... 1 g reads as ~1e-17 m/s^2
 
 
 def test_smd_rejects_bad_parameters_by_name():
@@ -125,13 +126,11 @@ def test_alternative_readings_of_the_0_96_g_example():
     assert round(float(sen.adc_to_physical(508, 1.202, 0.300)), 2) == 0.96
     assert round(float(sen.adc_to_physical(508, 1.35, 0.1456)), 2) == 0.96
     # with the ADXL335's own zero-g level Vs/2 the same count is almost level
-    assert sen.adc_to_physical(508, sen.ADXL335.zero_level, sen.ADXL335.sensitivity) == pytest.approx(-0.0342,
-                                                                                                      abs=5e-5)
+    assert sen.adc_to_physical(508, sen.ADXL335.zero_level, sen.ADXL335.sensitivity) == pytest.approx(-0.0342, abs=5e-5)
 
 
 def test_thesis_gyro_example_gives_15_3556_deg_per_s():
-    assert sen.adc_to_physical(508, sen.IDG500.zero_level, sen.IDG500.sensitivity) == pytest.approx(15.3556,
-                                                                                                    abs=5e-5)
+    assert sen.adc_to_physical(508, sen.IDG500.zero_level, sen.IDG500.sensitivity) == pytest.approx(15.3556, abs=5e-5)
     assert sen.adc_to_physical(508, 1.35, sen.IDG500_XOUT.sensitivity) == pytest.approx(69.868, abs=5e-4)
 
 
@@ -143,8 +142,8 @@ def test_adc_divides_by_two_to_the_bits_minus_one_and_adds_null_offset():
 
 
 def test_quantisation_steps_of_the_thesis_sensors():
-    assert sen.adc_step(sen.ADXL335.sensitivity) == pytest.approx(9.7752e-3, rel=1e-4)     # g per count
-    assert sen.adc_step(sen.IDG500.sensitivity) == pytest.approx(0.32226, rel=1e-4)         # °/s per count
+    assert sen.adc_step(sen.ADXL335.sensitivity) == pytest.approx(9.7752e-3, rel=1e-4)  # g per count
+    assert sen.adc_step(sen.IDG500.sensitivity) == pytest.approx(0.32226, rel=1e-4)  # °/s per count
     assert sen.adc_step(sen.IDG500_XOUT.sensitivity) == pytest.approx(1.46628, rel=1e-4)
 
 

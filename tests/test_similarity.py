@@ -5,6 +5,7 @@ A paste is a library function as a student hides it: its locals renamed, two sta
 added, a comment on every line. The model answers of every lab stand for honest students who found the library's
 way: none may be listed against the library.
 """
+
 from __future__ import annotations
 
 import ast
@@ -19,8 +20,10 @@ from grading.bench_classgrade import fill_answers, grade_id
 
 
 def _notebooks(lab):
-    return (nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4),
-            nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4))
+    return (
+        nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4),
+        nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4),
+    )
 
 
 def _pasted(fn_obj, new_name):
@@ -55,14 +58,18 @@ def test_no_model_answer_is_listed_against_the_library(lab):
     assert [(p.exercise, p.b, round(p.score, 2)) for p in pairs] == []
 
 
-@pytest.mark.parametrize("lab, gid, module, name, new_name", [
-    ("01_euler_rotations", "ex4_solution", "rotations", "dcm_renormalize", "my_renormalize"),
-    ("01_euler_rotations", "ex5_solution", "rotations", "rodrigues_dcm", "my_rodrigues"),
-    ("01_euler_rotations", "ex6_solution", "rotations", "dcm_to_euler", "my_lock_roll"),
-    ("01_euler_rotations", "ex8_solution", "rotations", "quat_to_dcm", "my_quat_to_dcm"),
-])
+@pytest.mark.parametrize(
+    "lab, gid, module, name, new_name",
+    [
+        ("01_euler_rotations", "ex4_solution", "rotations", "dcm_renormalize", "my_renormalize"),
+        ("01_euler_rotations", "ex5_solution", "rotations", "rodrigues_dcm", "my_rodrigues"),
+        ("01_euler_rotations", "ex6_solution", "rotations", "dcm_to_euler", "my_lock_roll"),
+        ("01_euler_rotations", "ex8_solution", "rotations", "quat_to_dcm", "my_quat_to_dcm"),
+    ],
+)
 def test_a_pasted_library_function_is_listed_with_its_lines(lab, gid, module, name, new_name):
     from fusionlab import rotations
+
     release, solution = _notebooks(lab)
     code = _pasted(getattr({"rotations": rotations}[module], name), new_name)
     pairs = similarity.find_pairs({"paster": _with(release, gid, code)}, release, solution)

@@ -7,6 +7,7 @@ against the counts of the CSV written beside it, each example's fold under its b
 showing the code the report chose inside the table's width, and not a script run nor an error said in the console.
 A screenshot of the page goes to ``tests/_screenshots/slips_report.png``.
 """
+
 from __future__ import annotations
 
 import csv
@@ -19,8 +20,10 @@ from chromium import chromium, needs_chromium, screenshot
 from fusionlab.checks import slips
 from test_slips import REPORT_CLASS, REPORT_LAB, REPORT_NAMES, report_class
 
-pytestmark = [pytest.mark.slow,  # Chromium: a few seconds to start (make test-all)
-              needs_chromium]
+pytestmark = [
+    pytest.mark.slow,  # Chromium: a few seconds to start (make test-all)
+    needs_chromium,
+]
 
 _BARS = """() => [...document.querySelectorAll('section')].map(section => ({
     grade_id: section.id,
@@ -65,8 +68,10 @@ def test_the_report_renders_its_bars_as_the_csv_counts_and_opens_its_examples(tm
         for (gid, slip), r in bars.items():
             assert r["track"] > 100 and r["height"] > 5, r
             assert abs(r["bar"] - r["track"] * counts[gid, slip] / students[gid]) <= 1.5, (gid, slip, r)
-        print(f"\n{len(bars)} bars, as the CSV counts; one student is {bars['ex1_tests', 'passed']['track'] / 5:.1f} "
-              f"px of a bar")
+        print(
+            f"\n{len(bars)} bars, as the CSV counts; one student is {bars['ex1_tests', 'passed']['track'] / 5:.1f} "
+            f"px of a bar"
+        )
 
         # each wrong answer's example is folded under its words, and unfolds on a click, showing the code the
         # report chose; another click folds it again
@@ -90,8 +95,11 @@ def test_the_report_renders_its_bars_as_the_csv_counts_and_opens_its_examples(tm
         screenshot(page, "slips_report")
 
         # the students' markup stayed text: no script, no image, nothing run; nobody named
-        assert page.evaluate("() => [document.scripts.length, document.images.length, window.XSS_SLIPS]") \
-            == [0, 0, None]
+        assert page.evaluate("() => [document.scripts.length, document.images.length, window.XSS_SLIPS]") == [
+            0,
+            0,
+            None,
+        ]
         assert page.title() == title == f"Common slips: {REPORT_LAB}"
         text = page.evaluate("() => document.body.innerText")
         assert "window.XSS_SLIPS = 1" in text

@@ -5,6 +5,7 @@ into the reports, and a run on one student keeps what earlier runs said of the o
 
 The class here is graded without boxes: each student's verdict is made up, and the grader's own side (recording in
 the gradebook, ``autograded/``, ``grades.csv``, the reports) runs as in ``make grade``."""
+
 from __future__ import annotations
 
 import csv
@@ -20,7 +21,7 @@ import nbformat
 import pytest
 
 from conftest import ROOT, nbgrader
-from grading import classgrade, client, integrity, judge, sandbox, similarity, slipreport, submission
+from grading import classgrade, client, gradebook, handin, integrity, judge, sandbox, similarity, slipreport, submission
 from grading.bench_classgrade import fill_answers
 
 LAB = "02_kalman_falling_body"
@@ -83,22 +84,24 @@ def _grades(course):
 
 # -- A timestamp.txt that is a link, or not a date ------------------------------------------------------------------
 
+
 def test_a_linked_timestamp_is_ignored_said_and_never_quoted_and_the_student_is_graded(course, tmp_path):
     lab = _lab(course, tmp_path)
     folder = _hand_in(course, "tom", _full(course))
     (folder / "timestamp.txt").symlink_to(_secret(tmp_path))
     result = _graded(lab, "tom")
-    classgrade.record(course, lab, "tom", result)                 # nbgrader's date parser never sees the file
+    gradebook.record(course, lab, "tom", result)  # nbgrader's date parser never sees the file
     said = " ".join(result.notes)
     assert "timestamp.txt ignored" in said and "link" in said and CANARY not in said
-    with warnings.catch_warnings(), classgrade._gradebook(course) as gb:
+    with warnings.catch_warnings(), gradebook.open_gradebook(course) as gb:
         warnings.simplefilter("ignore")
         sub = gb.find_submission(LAB, "tom")
         assert sub.timestamp is None and sub.code_score == 9
 
 
-@pytest.mark.parametrize("text", [f"{CANARY}\n", "2026-13-45 99:00:00.000000 UTC", "\xff\xfe garbage",
-                                  "2026-03-01 12:00:00 UTC" + " " * 300])
+@pytest.mark.parametrize(
+    "text", [f"{CANARY}\n", "2026-13-45 99:00:00.000000 UTC", "\xff\xfe garbage", "2026-03-01 12:00:00 UTC" + " " * 300]
+)
 def test_a_timestamp_that_is_not_a_date_nbgrader_writes_is_ignored_without_quoting_it(course, text):
     folder = _hand_in(course, "tina", _full(course))
     (folder / "timestamp.txt").write_bytes(text.encode("latin-1"))
@@ -106,8 +109,15 @@ def test_a_timestamp_that_is_not_a_date_nbgrader_writes_is_ignored_without_quoti
     assert when is None and note.startswith("timestamp.txt ignored") and CANARY not in note and "2026" not in note
 
 
-@pytest.mark.parametrize("text", ["2026-03-01 12:34:56.123456 UTC", "2026-03-01 13:34:56.123456 CET",
-                                  "2026-03-01 12:34:56", "2026-03-01T12:34:56.5+01:00"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "2026-03-01 12:34:56.123456 UTC",
+        "2026-03-01 13:34:56.123456 CET",
+        "2026-03-01 12:34:56",
+        "2026-03-01T12:34:56.5+01:00",
+    ],
+)
 def test_the_timestamps_nbgrader_writes_are_kept(course, text):
     folder = _hand_in(course, "tina", _full(course))
     (folder / "timestamp.txt").write_text(text + "\n")
@@ -115,6 +125,7 @@ def test_the_timestamps_nbgrader_writes_are_kept(course, text):
 
 
 # -- A notebook, or a lab folder, that is a link ---------------------------------------------------------------------
+
 
 def _linked_class(course):
     """alice's own notebook; ursula's notebook and vera's lab folder are links to the model solution."""
@@ -139,7 +150,7 @@ def test_no_report_reads_a_linked_notebook_and_each_says_it_was_not_graded(cours
     _linked_class(course)
     lab = _lab(course, tmp_path)
     results = [_graded(lab, "alice")]
-    classgrade.record(course, lab, "alice", results[0])
+    gradebook.record(course, lab, "alice", results[0])
     for student in ("ursula", "vera"):
         with pytest.raises(ValueError) as refused:
             submission.read_submission(course, LAB, student)
@@ -157,10 +168,11 @@ def test_no_report_reads_a_linked_notebook_and_each_says_it_was_not_graded(cours
     report = (course / f"integrity_{LAB}.md").read_text()
     assert f"| ursula | {LAB} | NOT GRADED |" in report and "1 submission scanned" in report
     assert _grades(course)["ursula"]["status"].startswith(f"NOT GRADED: submitted/ursula/{LAB}/{LAB}.ipynb is a")
-    assert slipreport.answer_of(course, LAB, "ursula", "ex1_tests") is None      # no example from the solutions
+    assert slipreport.answer_of(course, LAB, "ursula", "ex1_tests") is None  # no example from the solutions
 
 
 # -- A large (sparse) file beside the notebook -----------------------------------------------------------------------
+
 
 def test_a_hard_link_is_neither_read_nor_copied_and_is_named(course, tmp_path):
     """A second name of a file elsewhere (nbgrader's submission is a copy, which has none): the notebook and
@@ -182,7 +194,7 @@ def test_a_hard_link_is_neither_read_nor_copied_and_is_named(course, tmp_path):
     (folder / "own.csv").write_text("t\n0\n")
     left, note = submission.left_out(course, LAB, "alice")
     assert [p for p, _ in left] == ["data.csv"] and "data.csv (a hard link) left out" in note, note
-    assert [p for p, _ in sandbox.plain_files(folder, notebooks=False)[0]] == ["own.csv", "timestamp.txt"]
+    assert [p for p, _ in handin.plain_files(folder, notebooks=False)[0]] == ["own.csv", "timestamp.txt"]
 
 
 def _sparse(path, size):
@@ -194,19 +206,19 @@ def test_files_over_the_caps_are_left_out_by_apparent_and_allocated_size(tmp_pat
     src = tmp_path / "sub"
     (src / "more").mkdir(parents=True)
     (src / "data.csv").write_text("t,x\n0,1\n")
-    _sparse(src / "recording.bin", 1 << 30)                           # 1 GB that holds no disk
-    for name in ("a.bin", "b.bin", "c.bin"):                          # 19 MB each: the third is over 50 MB in all
+    _sparse(src / "recording.bin", 1 << 30)  # 1 GB that holds no disk
+    for name in ("a.bin", "b.bin", "c.bin"):  # 19 MB each: the third is over 50 MB in all
         _sparse(src / "more" / name, 19 << 20)
     dense = src / "dense.bin"
     dense.write_bytes(b"\1" * 4096)
-    os.truncate(dense, 1024)                                          # holds more disk than it says: counted so
-    kept, left = sandbox.plain_files(src)
+    os.truncate(dense, 1024)  # holds more disk than it says: counted so
+    kept, left = handin.plain_files(src)
     assert [p for p, _ in kept] == ["data.csv", "dense.bin", "more/a.bin", "more/b.bin"]
     assert dict(left) == {"recording.bin": 1 << 30, "more/c.bin": 19 << 20}
-    work = sandbox.private_folder(src, tmp_path)
+    work = handin.private_folder(src, tmp_path)
     found = sorted(str(p.relative_to(work)) for p in Path(work).rglob("*") if p.is_file())
     assert found == ["data.csv", "dense.bin", "more/a.bin", "more/b.bin"]
-    assert sum(os.stat(os.path.join(work, f)).st_size for f in found) <= sandbox.SEED_TOTAL_BYTES
+    assert sum(os.stat(os.path.join(work, f)).st_size for f in found) <= handin.SEED_TOTAL_BYTES
 
 
 def test_a_large_file_is_named_in_the_notes_and_reaches_neither_autograded_nor_feedback(course, tmp_path):
@@ -217,7 +229,7 @@ def test_a_large_file_is_named_in_the_notes_and_reaches_neither_autograded_nor_f
     left, note = submission.left_out(course, LAB, "vic")
     assert left == [("recording.bin", 1 << 30)]
     assert note.startswith("recording.bin (1.1 GB) left out") and "graded without it" in note
-    classgrade.record(course, lab, "vic", _graded(lab, "vic"))
+    gradebook.record(course, lab, "vic", _graded(lab, "vic"))
     autograded = course / "autograded" / "vic" / LAB
     assert sorted(p.name for p in autograded.iterdir()) == sorted(["data.csv", f"{LAB}.ipynb"])
     nbgrader(["generate_feedback", LAB, "--force"], cwd=course)
@@ -235,15 +247,24 @@ def test_a_box_whose_folder_cannot_take_the_files_says_so(tmp_path):
     src.mkdir()
     (src / "data.bin").write_bytes(os.urandom(1 << 20))
     uid = sandbox.box_uid(0)
-    work = sandbox.private_folder(src, tmp_path, uid)
-    command = sandbox.bwrap_command(["python", "-c", "print('ran')"], course=course_, lab=lab_, lib=course_ / "lib",
-                                    work=work, uid=uid, data=False, limits={"tmp_bytes": 256 << 10})
+    work = handin.private_folder(src, tmp_path, uid)
+    command = sandbox.bwrap_command(
+        ["python", "-c", "print('ran')"],
+        course=course_,
+        lab=lab_,
+        lib=course_ / "lib",
+        work=work,
+        uid=uid,
+        data=False,
+        limits={"tmp_bytes": 256 << 10},
+    )
     run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
-    assert run.returncode == sandbox.SEED_FAILED and "ran" not in run.stdout, run.stderr[-2000:]
+    assert run.returncode == handin.SEED_FAILED and "ran" not in run.stdout, run.stderr[-2000:]
     assert "could not copy the files handed in beside the notebook" in client.ended(run.returncode)
 
 
 # -- Text that UTF-8 cannot hold ---------------------------------------------------------------------------------
+
 
 def test_any_text_can_be_written_into_the_reports(tmp_path):
     pair = similarity.Pair("ex2_solution", "uma", "una", 1.0, 120, "note = '\ud800 mine'", "note = '\ud800 mine'")
@@ -263,13 +284,13 @@ def test_a_notebook_with_a_lone_surrogate_is_refused_with_a_reason_and_the_repor
         cell.source = "note = '\ud800 my own derivation'\n" + cell.source
         folder = course / "submitted" / student / LAB
         folder.mkdir(parents=True)
-        (folder / f"{LAB}.ipynb").write_text(json.dumps(nb))        # valid JSON: the surrogate as \\ud800
+        (folder / f"{LAB}.ipynb").write_text(json.dumps(nb))  # valid JSON: the surrogate as \\ud800
         with pytest.raises(ValueError, match="not Unicode.*ex2_solution"):
             submission.read_submission(course, LAB, student)
         results.append(classgrade.Result(student, error="not read"))
     _hand_in(course, "alice", _full(course))
     results.append(_graded(lab, "alice"))
-    classgrade.record(course, lab, "alice", results[-1])
+    gradebook.record(course, lab, "alice", results[-1])
     said, unwritten = classgrade.write_reports(course, LAB, results, lab.release, lab.solution)
     assert unwritten == [] and "similarity report" in said
 
@@ -292,10 +313,11 @@ def test_a_report_that_fails_is_said_and_the_others_and_the_grades_are_kept(cour
     lab = _lab(course, tmp_path)
     _hand_in(course, "alice", _full(course))
     result = _graded(lab, "alice")
-    classgrade.record(course, lab, "alice", result)
+    gradebook.record(course, lab, "alice", result)
 
     def broken(*args, **kwargs):
         raise UnicodeEncodeError("utf-8", "\ud800", 0, 1, "surrogates not allowed")
+
     monkeypatch.setattr(similarity, "report", broken)
     said, unwritten = classgrade.write_reports(course, LAB, [result], lab.release, lab.solution)
     assert unwritten == ["the similarity report"]
@@ -308,6 +330,7 @@ def test_a_report_that_fails_is_said_and_the_others_and_the_grades_are_kept(cour
 
 # -- A run on one student keeps what the earlier run said of the others -------------------------------------------
 
+
 def test_a_run_on_one_student_keeps_every_other_row_and_status_of_grades_csv(course, tmp_path):
     lab = _lab(course, tmp_path)
     for student in ("alice", "bob", "tom"):
@@ -316,29 +339,34 @@ def test_a_run_on_one_student_keeps_every_other_row_and_status_of_grades_csv(cou
     (course / "submitted" / "ursula" / LAB / f"{LAB}.ipynb").symlink_to(course / "solutions" / LAB / f"{LAB}.ipynb")
     first = [_graded(lab, "alice"), _graded(lab, "bob", 0.0)]
     for r in first:
-        classgrade.record(course, lab, r.student, r)
-    with warnings.catch_warnings(), classgrade._gradebook(course) as gb:     # tom: recorded half-way, then failed
+        gradebook.record(course, lab, r.student, r)
+    with warnings.catch_warnings(), gradebook.open_gradebook(course) as gb:  # tom: recorded half-way, then failed
         warnings.simplefilter("ignore")
         gb.update_or_create_student("tom")
         gb.update_or_create_submission(LAB, "tom")
-    first += [classgrade.Result("tom", error="could not record the scores: OSError: disk full"),
-              classgrade.Result("ursula", error=f"submitted/ursula/{LAB}/{LAB}.ipynb is a link")]
-    assert classgrade.export(course, LAB, first)
+    first += [
+        classgrade.Result("tom", error="could not record the scores: OSError: disk full"),
+        classgrade.Result("ursula", error=f"submitted/ursula/{LAB}/{LAB}.ipynb is a link"),
+    ]
+    assert gradebook.export(course, LAB, first)
     before = _grades(course)
     assert {s: r["status"] for s, r in before.items()} == {
-        "alice": "graded", "bob": "graded", "tom": "NOT GRADED: could not record the scores: OSError: disk full",
-        "ursula": f"NOT GRADED: submitted/ursula/{LAB}/{LAB}.ipynb is a link"}
+        "alice": "graded",
+        "bob": "graded",
+        "tom": "NOT GRADED: could not record the scores: OSError: disk full",
+        "ursula": f"NOT GRADED: submitted/ursula/{LAB}/{LAB}.ipynb is a link",
+    }
     again = _graded(lab, "alice", 0.5)
-    classgrade.record(course, lab, "alice", again)
-    assert classgrade.export(course, LAB, [again])
+    gradebook.record(course, lab, "alice", again)
+    assert gradebook.export(course, LAB, [again])
     after = _grades(course)
     assert set(after) == set(before)
     assert {s: r["status"] for s, r in after.items()} == {s: r["status"] for s, r in before.items()}
     assert float(after["alice"]["raw_score"]) == 4.5 and float(before["alice"]["raw_score"]) == 9.0
     assert after["bob"]["raw_score"] == before["bob"]["raw_score"]
 
-    (course / "submitted" / "newcomer" / LAB).mkdir(parents=True)                # handed in after the last run
-    assert classgrade.export(course, LAB, [again])
+    (course / "submitted" / "newcomer" / LAB).mkdir(parents=True)  # handed in after the last run
+    assert gradebook.export(course, LAB, [again])
     assert _grades(course)["newcomer"]["status"].startswith("NOT GRADED: not graded yet")
 
 

@@ -110,32 +110,127 @@ Where it is (each part imports only from those listed above it; this package's n
 * ``program.py``: the student's program (:func:`program_of`, :func:`declared_sensors`) and what it may not do
   (:data:`CHEATS`, :func:`scan`, :func:`library_copies`), and the box's library (:func:`placeholder_module`,
   :func:`box_library`).
-* ``runner.py``: the box (:func:`box_limits`, :class:`Runner`) and one submission (:func:`check_causality`,
-  :func:`grade_submission`, :func:`implausibly_close`).
+* ``runner.py``: the box (:func:`box_limits`, :class:`Runner`) and one submission (:func:`grade_submission`,
+  :func:`implausibly_close`); ``causality.py``: the causality check it runs (:func:`check_causality`).
 * ``report.py``: the class (:func:`grade_class`), its leaderboard and each student's feedback
   (:func:`write_leaderboard`, :func:`feedback`).
 * ``command.py``: the command (:func:`main`), which ``__main__.py`` runs.
 """
+
 from __future__ import annotations
 
-from fusionlab.capstone import (CAUSAL_TOL, FULL_MARKS, GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE,
-                                SENSORS, SHIPPED, accuracy_points, as_quaternions, budget_seconds, causal_ks,
-                                first_change, prefix_change)   # the rules, as the lab states them to the students
+from fusionlab.capstone import (
+    CAUSAL_TOL,
+    FULL_MARKS,
+    GATES,
+    MAX_POINTS,
+    MIN_SECONDS,
+    RUBRIC,
+    SECONDS_PER_SAMPLE,
+    SENSORS,
+    SHIPPED,
+    accuracy_points,
+    as_quaternions,
+    budget_seconds,
+    causal_ks,
+    first_change,
+    prefix_change,
+)  # the rules, as the lab states them to the students
 
 from .command import main, read_submissions, saved_seed
-from .program import (BLOCK_MESSAGE, CHEATS, COPY_MIN_CHARS, DECLARATION, EMBED_CHARS, FILE_CALLS, FILE_IMPORT_OWNERS,
-                      FILE_MODULE_CALLS, FILE_MODULES, FILE_OWNERS, FILTER_MODULES, FUNCTION,
-                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, KEEP, LAB, QUIET_MAGICS,
-                      STUB_MESSAGE, WHY_HIDDEN, absent_modules, as_run, box_library, declared_sensors, library_copies,
-                      loaders,
-                      model_program, placeholder_module, program_of, scan)
-from .report import (COLUMNS, SETS, STYLE, TRIAL_COLUMNS, feedback, grade_class, leaderboard_rows, trial_rows,
-                     write_csv, write_leaderboard)
-from .runner import (CPU_PER_BUDGET, CPU_SLACK_S, MAX_RESTARTS, NOT_SHOWN, SETUP_SECONDS, Runner, StudentResult,
-                     _declared_outside, _look_for_cheats, box_limits, causality_trial, check_causality,
-                     error_message, gates_failed, grade_submission, implausibly_close, invalid_message, prefix_k)
-from .scoring import (CACHE_FORMAT, MATCH_RAD, MATCH_STRIDE, PUBLISHED, REFERENCE_CACHE, Reference, TrialResult,
-                      cached_references, load_references, mean_scored, mean_total, never_moves, published_means,
-                      references, references_key, references_of, rubric_points, save_references, score_trial)
-from .trials import (DISGUISE_NOISE, MAX_CROP_SECONDS, MAX_END_CROP_SECONDS, CapstoneDataMissing, Scored, disguise,
-                     fetch, hidden_names, hidden_trials, stand_in)
+from .program import (
+    BLOCK_MESSAGE,
+    CHEATS,
+    COPY_MIN_CHARS,
+    DECLARATION,
+    EMBED_CHARS,
+    FILE_CALLS,
+    FILE_IMPORT_OWNERS,
+    FILE_MODULE_CALLS,
+    FILE_MODULES,
+    FILE_OWNERS,
+    FILTER_MODULES,
+    FUNCTION,
+    HIDDEN_PACKAGES,
+    IMPLAUSIBLE,
+    IMPLAUSIBLE_TRIALS,
+    IMPLAUSIBLY_CLOSE,
+    KEEP,
+    LAB,
+    QUIET_MAGICS,
+    STUB_MESSAGE,
+    WHY_HIDDEN,
+    absent_modules,
+    as_run,
+    box_library,
+    declared_sensors,
+    library_copies,
+    loaders,
+    model_program,
+    placeholder_module,
+    program_of,
+    scan,
+)
+from .report import (
+    COLUMNS,
+    SETS,
+    STYLE,
+    TRIAL_COLUMNS,
+    feedback,
+    grade_class,
+    leaderboard_rows,
+    trial_rows,
+    write_csv,
+    write_leaderboard,
+)
+from .runner import (
+    CPU_PER_BUDGET,
+    CPU_SLACK_S,
+    MAX_RESTARTS,
+    NOT_SHOWN,
+    SETUP_SECONDS,
+    Runner,
+    StudentResult,
+    _declared_outside,
+    _look_for_cheats,
+    box_limits,
+    error_message,
+    gates_failed,
+    grade_submission,
+    implausibly_close,
+    invalid_message,
+)
+from .causality import causality_trial, check_causality, later_samples_change, prefix_k
+from .scoring import (
+    CACHE_FORMAT,
+    MATCH_RAD,
+    MATCH_STRIDE,
+    PUBLISHED,
+    REFERENCE_CACHE,
+    Reference,
+    TrialResult,
+    cached_references,
+    load_references,
+    mean_scored,
+    mean_total,
+    never_moves,
+    published_means,
+    references,
+    references_key,
+    references_of,
+    rubric_points,
+    save_references,
+    score_trial,
+)
+from .trials import (
+    DISGUISE_NOISE,
+    MAX_CROP_SECONDS,
+    MAX_END_CROP_SECONDS,
+    CapstoneDataMissing,
+    Scored,
+    disguise,
+    fetch,
+    hidden_names,
+    hidden_trials,
+    stand_in,
+)

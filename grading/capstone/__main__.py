@@ -1,5 +1,6 @@
 """``python -m grading.capstone fetch`` and ``python -m grading.capstone grade ...``: :func:`grading.capstone.main`
 (in :mod:`grading.capstone.command`)."""
+
 import sys
 
 from .command import main

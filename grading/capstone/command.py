@@ -4,6 +4,7 @@ The command, ``python -m grading.capstone fetch`` and ``python -m grading.capsto
 submissions read from their folders, the disguise's seed kept in ``<out>/run.json`` for the class, and the class
 graded (:func:`grading.capstone.report.grade_class`). The first line above is the command's description in
 ``--help``."""
+
 from __future__ import annotations
 
 import argparse
@@ -21,11 +22,13 @@ from .trials import CapstoneDataMissing, disguise, fetch, hidden_trials, stand_i
 # The command
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def read_submissions(submitted, only=None):
     """``{student: notebook, or the reason it cannot be read}`` from ``<submitted>/<student>/13_capstone/``."""
     import nbformat
 
     from grading import classgrade
+
     submitted = Path(submitted)
     found = sorted(p.parent.name for p in submitted.glob(f"*/{LAB}") if p.is_dir())
     if only:
@@ -57,8 +60,11 @@ def saved_seed(path, trials, stand_in):
         return None
     if not isinstance(run, dict) or not isinstance(run.get("seed"), int) or isinstance(run["seed"], bool):
         return None
-    same = (run.get("trials") == [t.name for t in trials] and run.get("stand_in") == stand_in
-            and run.get("lengths", [len(t) for t in trials]) == [len(t) for t in trials])
+    same = (
+        run.get("trials") == [t.name for t in trials]
+        and run.get("stand_in") == stand_in
+        and run.get("lengths", [len(t) for t in trials]) == [len(t) for t in trials]
+    )
     return run["seed"] if same else None
 
 
@@ -75,20 +81,36 @@ def main(argv=None):
     g.add_argument("--student", action="append", help="grade only this student (repeatable)")
     g.add_argument("--workers", type=int, default=1)
     seeds = g.add_mutually_exclusive_group()
-    seeds.add_argument("--seed", type=int,
-                       help="the secret of the disguise, saved in <out>/run.json. Default: the seed of <out>/run.json "
-                            "when it was made for the same trials (so that a class stays on one disguise: a late "
-                            "student is graded on the trials the others were, and the reference rows saved in "
-                            "<out>/references.npz are reused), else a new random one")
-    seeds.add_argument("--new-seed", action="store_true",
-                       help="draw a new secret even when <out>/run.json has one for the same trials (a new disguise: "
-                            "grade the whole class again with it)")
-    g.add_argument("--stand-in", type=int, nargs="+", metavar="N",
-                   help="grade on these SHIPPED trials instead (a dry run; labelled a stand-in everywhere)")
+    seeds.add_argument(
+        "--seed",
+        type=int,
+        help="the secret of the disguise, saved in <out>/run.json. Default: the seed of <out>/run.json "
+        "when it was made for the same trials (so that a class stays on one disguise: a late "
+        "student is graded on the trials the others were, and the reference rows saved in "
+        "<out>/references.npz are reused), else a new random one",
+    )
+    seeds.add_argument(
+        "--new-seed",
+        action="store_true",
+        help="draw a new secret even when <out>/run.json has one for the same trials (a new disguise: "
+        "grade the whole class again with it)",
+    )
+    g.add_argument(
+        "--stand-in",
+        type=int,
+        nargs="+",
+        metavar="N",
+        help="grade on these SHIPPED trials instead (a dry run; labelled a stand-in everywhere)",
+    )
     g.add_argument("--max-samples", type=int, help="with --stand-in: only the first N samples of each trial")
-    g.add_argument("--cleared", action="append", default=[], metavar="STUDENT",
-                   help=f"a student whose estimate was named '{IMPLAUSIBLY_CLOSE}' and whose code you have read and "
-                        "trust: graded without that flag (a note says it was cleared); repeatable")
+    g.add_argument(
+        "--cleared",
+        action="append",
+        default=[],
+        metavar="STUDENT",
+        help=f"a student whose estimate was named '{IMPLAUSIBLY_CLOSE}' and whose code you have read and "
+        "trust: graded without that flag (a note says it was cleared); repeatable",
+    )
     a = ap.parse_args(argv)
     if a.command == "fetch":
         return fetch(progress=not a.no_progress)
@@ -96,8 +118,10 @@ def main(argv=None):
     out = Path(a.out) if a.out else course / f"capstone_{a.class_name}"
     if a.stand_in:
         trials = stand_in(a.stand_in, a.max_samples)
-        label = (f"STAND-IN: scored on shipped trials {', '.join(map(str, a.stand_in))} held back, not on the hidden "
-                 "set -- these are not capstone grades")
+        label = (
+            f"STAND-IN: scored on shipped trials {', '.join(map(str, a.stand_in))} held back, not on the hidden "
+            "set -- these are not capstone grades"
+        )
     else:
         try:
             trials = hidden_trials()
@@ -109,8 +133,10 @@ def main(argv=None):
     if seed is None and not a.new_seed:
         seed = saved_seed(out / "run.json", trials, bool(a.stand_in))
         if seed is not None:
-            print(f"the disguise's seed of {out / 'run.json'} (the same trials): the class stays on one disguise "
-                  "(--new-seed draws another)")
+            print(
+                f"the disguise's seed of {out / 'run.json'} (the same trials): the class stays on one disguise "
+                "(--new-seed draws another)"
+            )
     if seed is None:
         seed = secrets.randbits(62)
     submissions = read_submissions(Path(a.submitted) if a.submitted else course / "submitted", a.student)
@@ -122,11 +148,20 @@ def main(argv=None):
         print(f"--cleared names no submission graded here: {', '.join(unknown)}", file=sys.stderr)
         return 2
     out.mkdir(parents=True, exist_ok=True)
-    (out / "run.json").write_text(json.dumps({"seed": seed, "trials": [t.name for t in trials],
-                                              "lengths": [len(t) for t in trials], "stand_in": bool(a.stand_in)},
-                                             indent=1))
+    (out / "run.json").write_text(
+        json.dumps(
+            {
+                "seed": seed,
+                "trials": [t.name for t in trials],
+                "lengths": [len(t) for t in trials],
+                "stand_in": bool(a.stand_in),
+            },
+            indent=1,
+        )
+    )
     scored = disguise(trials, seed)
-    grade_class(course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label,
-                cleared=a.cleared)
+    grade_class(
+        course, submissions, scored, out, a.class_name, workers=a.workers, seed=seed, label=label, cleared=a.cleared
+    )
     print(f"leaderboard: {out / 'leaderboard.html'} (and .csv); feedback: {out / 'feedback'}/<student>/")
     return 0

@@ -1,6 +1,7 @@
 """The student's program and what it may not do: the cells the box runs, the sensor set their code declares, the
 cheats looked for (:data:`CHEATS`) and the scan of the code for them, a library filter pasted in, and the box's copy
 of the library, whose filter and data-loader modules are placeholders written here."""
+
 from __future__ import annotations
 
 import ast
@@ -17,43 +18,43 @@ from .scoring import MATCH_RAD
 LAB = "13_capstone"
 FUNCTION = "estimate"
 
-IMPLAUSIBLE = 0.5               # a scored RMSE below this fraction of the best reference filter's on that trial (any
-                                # filter of its sensor set, VQF's, Madgwick's and every library filter's), on at least
-                                # IMPLAUSIBLE_TRIALS of the trials that ran: no honest filter is that far ahead of all
-                                # of them, a filter that recognises the trial and returns its reference is (the
-                                # instructor reads the code and may clear it: --cleared)
-IMPLAUSIBLE_TRIALS = (2, 0.1)   # ... at least 2 trials and a tenth of those that ran (not half: the references of the
-                                # hidden trials are public, and a few embedded ones would pass a test of half)
-COPY_MIN_CHARS = 250            # a pasted library filter: at least this many normalised characters matched (a
-                                # filter's worth, not a quaternion product), with grading.similarity's shares
+IMPLAUSIBLE = 0.5  # a scored RMSE below this fraction of the best reference filter's on that trial (any
+# filter of its sensor set, VQF's, Madgwick's and every library filter's), on at least
+# IMPLAUSIBLE_TRIALS of the trials that ran: no honest filter is that far ahead of all
+# of them, a filter that recognises the trial and returns its reference is (the
+# instructor reads the code and may clear it: --cleared)
+IMPLAUSIBLE_TRIALS = (2, 0.1)  # ... at least 2 trials and a tenth of those that ran (not half: the references of the
+# hidden trials are public, and a few embedded ones would pass a test of half)
+COPY_MIN_CHARS = 250  # a pasted library filter: at least this many normalised characters matched (a
+# filter's worth, not a quaternion product), with grading.similarity's shares
 
 #: What is looked for, and how it is found (each is named on the leaderboard when found). The code is read for
 #: names only (what it calls, imports and reaches, written out): a name built at run time is not seen there, which
 #: is why the box has none of what those names would reach.
 CHEATS = {
     "calls a reference filter": "imports or calls VQF, ahrs, imufusion, filterpy or the library's filters (they are "
-                                "absent from the box, the installed packages hidden, the library's filter modules "
-                                "placeholders; found in the code, in its errors, or as output equal to a reference "
-                                f"filter's to {MATCH_RAD:g} rad everywhere)",
+    "absent from the box, the installed packages hidden, the library's filter modules "
+    "placeholders; found in the code, in its errors, or as output equal to a reference "
+    f"filter's to {MATCH_RAD:g} rad everywhere)",
     "copies the library's filter": "code of one of the library's filters pasted into the notebook, names and "
-                                   f"comments aside (grading.similarity's fingerprints: at least {COPY_MIN_CHARS} "
-                                   "characters and most of the library function; the rotation and metric helpers "
-                                   "may be used, and are not looked for)",
+    f"comments aside (grading.similarity's fingerprints: at least {COPY_MIN_CHARS} "
+    "characters and most of the library function; the rotation and metric helpers "
+    "may be used, and are not looked for)",
     "tampers with imports": "reaches around Python's import system or builtins: importlib, __import__, sys.path, "
-                            "sys.modules, import hooks, the builtins module, exec/eval/compile of text, modules that "
-                            "load by a name or run a text built at run time (runpy, pydoc, timeit, "
-                            "pkgutil.resolve_name, ctypes ...), IPython's shell (found in the code by "
-                            "grading.codescan)",
+    "sys.modules, import hooks, the builtins module, exec/eval/compile of text, modules that "
+    "load by a name or run a text built at run time (runpy, pydoc, timeit, "
+    "pkgutil.resolve_name, ctypes ...), IPython's shell (found in the code by "
+    "grading.codescan)",
     "reads files": "opens, loads or lists files (found in the code by the names it calls: open, io.FileIO, os.open, "
-                   "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
-                   "a string is not seen -- the box holds no data file to find anyway)",
+    "os.read, os.fdopen, np.load, os.listdir, Path.read_text, ...; a name reached through getattr or "
+    "a string is not seen -- the box holds no data file to find anyway)",
     "detects the trial": "its output is implausibly close to the optical reference, as one that recognised each "
-                         f"trial and returned its published reference would be: a scored RMSE below {IMPLAUSIBLE:g} "
-                         "x the best reference "
-                         "filter's on at least two trials, and a tenth of those it ran (a student could embed the "
-                         "published references of some hidden trials and recognise just those). The instructor "
-                         "reads the code of such a "
-                         "filter and may clear this flag (grade again with --cleared <student>)",
+    f"trial and returned its published reference would be: a scored RMSE below {IMPLAUSIBLE:g} "
+    "x the best reference "
+    "filter's on at least two trials, and a tenth of those it ran (a student could embed the "
+    "published references of some hidden trials and recognise just those). The instructor "
+    "reads the code of such a "
+    "filter and may clear this flag (grade again with --cleared <student>)",
 }
 #: The kind of cheat the instructor may clear after reading the code, and the evidence's first words.
 IMPLAUSIBLY_CLOSE = "implausibly close to the optical reference"
@@ -61,10 +62,18 @@ IMPLAUSIBLY_CLOSE = "implausibly close to the optical reference"
 # The library's filters and data loaders: in the box each of these modules is a placeholder written fresh
 # (placeholder_module), none of its code, public or private, with the packages that hold other published filters
 # absent.
-FILTER_MODULES = ("estimators", "bench", "freescale", "freescale_fast", "dcm_filter", "correlation", "gfimu_ekf",
-                  "gpsins")
+FILTER_MODULES = (
+    "estimators",
+    "bench",
+    "freescale",
+    "freescale_fast",
+    "dcm_filter",
+    "correlation",
+    "gfimu_ekf",
+    "gpsins",
+)
 FILE_MODULES = ("datasets", "spreadsheet")
-HIDDEN_PACKAGES = exercises.hidden_packages(LAB)   # the filter's packages in the table of exercises, and every box's
+HIDDEN_PACKAGES = exercises.hidden_packages(LAB)  # the filter's packages in the table of exercises, and every box's
 # What a placeholder still has, as no-ops written here (none of the library's code): what the library and the
 # lab's setup cell touch when they are imported. fusionlab.checks hands datasets.DataMissing to IPython's error
 # handler when it is imported (the box runs the cells in IPython) and asks for missing_trials() when a cell fails
@@ -72,43 +81,90 @@ HIDDEN_PACKAGES = exercises.hidden_packages(LAB)   # the filter's packages in th
 KEEP = {
     "estimators": {
         "register": "def register(*args, **kwargs):\n"
-                    "    \"\"\"No estimator is registered in the capstone's box: the function is left as it is.\"\"\"\n"
-                    "    return lambda fn: fn\n",
-        "available": "def available():\n"
-                     "    \"\"\"No estimator is available in the capstone's box.\"\"\"\n"
-                     "    return {}\n",
+        '    """No estimator is registered in the capstone\'s box: the function is left as it is."""\n'
+        "    return lambda fn: fn\n",
+        "available": 'def available():\n    """No estimator is available in the capstone\'s box."""\n    return {}\n',
     },
     "datasets": {
         "DataMissing": "class DataMissing(FileNotFoundError):\n"
-                       "    \"\"\"A data file that is not here (the capstone's box has none).\"\"\"\n",
+        '    """A data file that is not here (the capstone\'s box has none)."""\n',
         "missing_trials": "def missing_trials():\n"
-                          "    \"\"\"No trial is looked for in the capstone's box.\"\"\"\n"
-                          "    return []\n",
+        '    """No trial is looked for in the capstone\'s box."""\n'
+        "    return []\n",
     },
 }
-STUB_MESSAGE = ("{name} holds the library's filters or data loaders: it is not available in the capstone, "
-                "whose filter is yours.")
+STUB_MESSAGE = (
+    "{name} holds the library's filters or data loaders: it is not available in the capstone, whose filter is yours."
+)
 # What the placeholder of every other module the box does not hold says (its Kalman steps, eCompass, tilt
 # formulas...): the rules allow the rotation and metric helpers only. Reaching one fails the call, and is no cheat.
-BLOCK_MESSAGE = ("{name} is not in the capstone's box: a capstone filter may use numpy, scipy, math and the "
-                 f"library's {' and '.join(ALLOWED_MODULES)} only (fusionlab.capstone.outside_box).")
+BLOCK_MESSAGE = (
+    "{name} is not in the capstone's box: a capstone filter may use numpy, scipy, math and the "
+    f"library's {' and '.join(ALLOWED_MODULES)} only (fusionlab.capstone.outside_box)."
+)
 WHY_HIDDEN = "the capstone's filter is yours, not a published one"
 # Calls that read files: by any name (``open``, ``x.read_text()``), or as functions of the modules that read them
 # (``np.load``, ``os.listdir``; a method of the student's own called ``load`` is not one).
-FILE_CALLS = {"open", "read_text", "read_bytes", "iterdir", "rglob", "loadmat", "load_trial", "fetch_trial",
-              "load_reference_position", "read_csv", "read_excel", "genfromtxt", "loadtxt", "fromfile", "memmap",
-              "FileIO", "fdopen", "open_code"}
+FILE_CALLS = {
+    "open",
+    "read_text",
+    "read_bytes",
+    "iterdir",
+    "rglob",
+    "loadmat",
+    "load_trial",
+    "fetch_trial",
+    "load_reference_position",
+    "read_csv",
+    "read_excel",
+    "genfromtxt",
+    "loadtxt",
+    "fromfile",
+    "memmap",
+    "FileIO",
+    "fdopen",
+    "open_code",
+}
 FILE_MODULE_CALLS = {"load", "listdir", "scandir", "walk", "glob", "read"}
-FILE_OWNERS = {"np", "numpy", "os", "io", "pathlib", "Path", "json", "pickle", "glob", "scipy", "sio", "pd",
-               "pandas", "datasets", "shutil"}
-FILE_IMPORT_OWNERS = {"numpy", "os", "io", "pathlib", "json", "pickle", "glob", "scipy", "pandas", "shutil",
-                      "builtins", "_io", "posix"}      # importing a file-reading name from these is found too
-EMBED_CHARS = 200_000           # code the box runs beyond this size is listed for review (data pasted into it?)
+FILE_OWNERS = {
+    "np",
+    "numpy",
+    "os",
+    "io",
+    "pathlib",
+    "Path",
+    "json",
+    "pickle",
+    "glob",
+    "scipy",
+    "sio",
+    "pd",
+    "pandas",
+    "datasets",
+    "shutil",
+}
+FILE_IMPORT_OWNERS = {
+    "numpy",
+    "os",
+    "io",
+    "pathlib",
+    "json",
+    "pickle",
+    "glob",
+    "scipy",
+    "pandas",
+    "shutil",
+    "builtins",
+    "_io",
+    "posix",
+}  # importing a file-reading name from these is found too
+EMBED_CHARS = 200_000  # code the box runs beyond this size is listed for review (data pasted into it?)
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The student's program and what it may not do
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def program_of(nb):
     """The cells the box runs, as source: the setup cell (grade id ``imports``), every answer cell, and the other
@@ -120,13 +176,13 @@ def program_of(nb):
             continue
         meta = nbg(cell)
         if meta.get("grade") and not meta.get("solution"):
-            continue                                   # a test cell: the judge's, not the student's
+            continue  # a test cell: the judge's, not the student's
         must = bool(meta.get("solution")) or meta.get("grade_id") == "imports"
         program.append((meta.get("grade_id"), python_of(cell.get("source", "")), must))
     return [(gid, src) for gid, src, _ in prune(program, need=(FUNCTION,))]
 
 
-DECLARATION = "SENSORS"       # the name a submission declares its sensor set with (fusionlab.capstone.SENSORS)
+DECLARATION = "SENSORS"  # the name a submission declares its sensor set with (fusionlab.capstone.SENSORS)
 
 
 def _module_scope(tree):
@@ -164,8 +220,13 @@ def declared_sensors(cells):
             continue
         plain = set()
         for node in tree.body:
-            targets = node.targets if isinstance(node, ast.Assign) else [node.target] \
-                if isinstance(node, ast.AnnAssign) and node.value is not None else []
+            targets = (
+                node.targets
+                if isinstance(node, ast.Assign)
+                else [node.target]
+                if isinstance(node, ast.AnnAssign) and node.value is not None
+                else []
+            )
             if len(targets) == 1 and isinstance(targets[0], ast.Name) and targets[0].id == DECLARATION:
                 v = node.value
                 if isinstance(v, ast.Constant) and isinstance(v.value, str) and v.value in SENSORS:
@@ -175,14 +236,23 @@ def declared_sensors(cells):
                     other.append(f"cell {i}, line {node.lineno}: {DECLARATION} = {ast.unparse(v)[:60]}")
                     plain.add(targets[0])
         for node in _module_scope(tree):
-            binds = (isinstance(node, ast.Name) and node.id == DECLARATION and not isinstance(node.ctx, ast.Load)
-                     and node not in plain) or \
-                    (isinstance(node, ast.alias) and (node.asname or node.name) == DECLARATION) or \
-                    (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-                     and node.name == DECLARATION)
+            binds = (
+                (
+                    isinstance(node, ast.Name)
+                    and node.id == DECLARATION
+                    and not isinstance(node.ctx, ast.Load)
+                    and node not in plain
+                )
+                or (isinstance(node, ast.alias) and (node.asname or node.name) == DECLARATION)
+                or (
+                    isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and node.name == DECLARATION
+                )
+            )
             if binds:
-                other.append(f"cell {i}, line {getattr(node, 'lineno', '?')}: {DECLARATION} is set there other than "
-                             "by a literal assignment at the top level of the cell")
+                other.append(
+                    f"cell {i}, line {getattr(node, 'lineno', '?')}: {DECLARATION} is set there other than "
+                    "by a literal assignment at the top level of the cell"
+                )
         for node in ast.walk(tree):
             if isinstance(node, (ast.Global, ast.Nonlocal)) and DECLARATION in node.names:
                 other.append(f"cell {i}, line {node.lineno}: a function sets the global {DECLARATION}")
@@ -199,6 +269,7 @@ def loaders():
     the table of exercises' row): modules and functions that load a module or run code from a name or a text built
     at run time (``importlib``, ``pydoc.locate``, ``timeit``'s text, ``ctypes`` ...)."""
     from fusionlab.checks import exercises
+
     return next(e.loaders for e in exercises.of_lab(LAB) if FUNCTION in e.answer)
 
 
@@ -208,6 +279,7 @@ def as_run(source):
     is what :func:`scan` reads."""
     try:
         from IPython.core.inputtransformer2 import TransformerManager
+
         return TransformerManager().transform_cell(source)
     except Exception:  # noqa: BLE001 -- IPython cannot read it: the box's shell cannot run it either
         return source
@@ -222,15 +294,23 @@ def _ipython_uses(tree):
     ``run_cell`` and most magics), but for :data:`QUIET_MAGICS` as IPython writes them."""
     quiet = set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and \
-                node.func.attr == "run_line_magic" and isinstance(node.func.value, ast.Call) and \
-                isinstance(node.func.value.func, ast.Name) and node.func.value.func.id == "get_ipython" and \
-                node.args and isinstance(node.args[0], ast.Constant) and node.args[0].value in QUIET_MAGICS:
+        if (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr == "run_line_magic"
+            and isinstance(node.func.value, ast.Call)
+            and isinstance(node.func.value.func, ast.Name)
+            and node.func.value.func.id == "get_ipython"
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and node.args[0].value in QUIET_MAGICS
+        ):
             quiet.add(id(node.func.value.func))
-    return [(node.lineno, "uses get_ipython (IPython's shell runs text: magics such as %time and %timeit, "
-                          "run_cell)")
-            for node in ast.walk(tree) if isinstance(node, ast.Name) and node.id == "get_ipython" and
-            id(node) not in quiet]
+    return [
+        (node.lineno, "uses get_ipython (IPython's shell runs text: magics such as %time and %timeit, run_cell)")
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Name) and node.id == "get_ipython" and id(node) not in quiet
+    ]
 
 
 def scan(cells):
@@ -248,6 +328,7 @@ def scan(cells):
     is the defence: it holds none of the library's filters and data loaders (:func:`box_library`), no published
     filter and no data, so that what the scan misses finds nothing to load."""
     from grading import codescan
+
     found = []
     lib_filters = set(FILTER_MODULES)
     file_names = FILE_CALLS | FILE_MODULE_CALLS
@@ -255,8 +336,10 @@ def scan(cells):
     for i, (gid, source) in enumerate(cells, 1):
         setup = gid == "imports"
         text = as_run(source)
-        found += [("tampers with imports", f"cell {i}, line {line}: {why}")
-                  for line, _, why in codescan.tampering(text, tricks)]
+        found += [
+            ("tampers with imports", f"cell {i}, line {line}: {why}")
+            for line, _, why in codescan.tampering(text, tricks)
+        ]
         try:
             tree = parse(text)
         except SyntaxError:
@@ -279,19 +362,22 @@ def scan(cells):
                 elif parts[0] == "fusionlab" and set(FILE_MODULES) & set(parts[1:]):
                     found.append(("reads files", f"cell {i}: imports {name}"))
             if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in FILE_IMPORT_OWNERS:
-                for a in node.names:                    # from io import FileIO as F: F(...) is not seen by name
+                for a in node.names:  # from io import FileIO as F: F(...) is not seen by name
                     if a.name in file_names:
-                        found.append(("reads files", f"cell {i}, line {node.lineno}: imports {a.name} from "
-                                                     f"{node.module}"))
-            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
-                    node.value.id in lib_filters:
+                        found.append(
+                            ("reads files", f"cell {i}, line {node.lineno}: imports {a.name} from {node.module}")
+                        )
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in lib_filters:
                 found.append(("calls a reference filter", f"cell {i}: uses {node.value.id}.{node.attr}"))
             if isinstance(node, ast.Call):
                 f = node.func
                 name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else None
                 owner = f.value.id if isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name) else None
-                if name in FILE_CALLS or (name in FILE_MODULE_CALLS and owner in FILE_OWNERS) or \
-                        (isinstance(f, ast.Name) and name == "glob"):
+                if (
+                    name in FILE_CALLS
+                    or (name in FILE_MODULE_CALLS and owner in FILE_OWNERS)
+                    or (isinstance(f, ast.Name) and name == "glob")
+                ):
                     found.append(("reads files", f"cell {i}, line {node.lineno}: calls {name}"))
     return list(dict.fromkeys(found))
 
@@ -300,6 +386,7 @@ def _filter_functions():
     """``{"module.function": source}`` of the library's filter modules (:data:`FILTER_MODULES`), as
     :func:`grading.similarity.library_functions` indexes the library: the code a pasted filter would match."""
     from grading import similarity
+
     return {name: src for name, src in similarity.library_functions().items() if name.split(".")[0] in FILTER_MODULES}
 
 
@@ -309,6 +396,7 @@ def _allowed_code():
     filter). Its fingerprints do not count as a copy (a filter function built like a rotation helper is not
     copied when the helper is)."""
     import fusionlab
+
     folder = Path(fusionlab.__file__).resolve().parent
     skip = set(FILTER_MODULES) | set(FILE_MODULES) | {"capstone"}
     return tuple(p.read_text() for p in sorted(folder.glob("*.py")) if p.stem not in skip)
@@ -324,6 +412,7 @@ def model_program(course):
         path = Path(course) / folder / LAB / f"{LAB}.ipynb"
         if path.is_file():
             import nbformat
+
             return "\n\n".join(src for _, src in program_of(nbformat.read(path, as_version=4)))
     return ""
 
@@ -337,6 +426,7 @@ def library_copies(cells, model=""):
     (the other modules, :func:`_allowed_code`) are never looked for, and code they share with a filter does not
     count."""
     from grading import similarity
+
     functions = _filter_functions()
     allowed = _allowed_code()
     found = []
@@ -353,8 +443,12 @@ def library_copies(cells, model=""):
                 best = (name, chars, share, lines)
         if best:
             name, chars, share, lines = best
-            found.append(("copies the library's filter", f"{name}: lines {lines[0]}-{lines[-1]} of cell {i} "
-                                                         f"({share:.0%} of it, {chars} characters alike)"))
+            found.append(
+                (
+                    "copies the library's filter",
+                    f"{name}: lines {lines[0]}-{lines[-1]} of cell {i} ({share:.0%} of it, {chars} characters alike)",
+                )
+            )
     return found
 
 
@@ -363,12 +457,15 @@ def absent_modules():
     module of ``fusionlab``'s top level but :data:`fusionlab.capstone.BOX_MODULES`, the filters and data loaders
     (:data:`FILTER_MODULES`, :data:`FILE_MODULES`) among them. Subpackages (``fusionlab.checks``) stay."""
     import fusionlab
+
     folder = Path(fusionlab.__file__).resolve().parent
     names = tuple(sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__" and p.stem not in BOX_MODULES))
     missing = sorted(set(FILTER_MODULES + FILE_MODULES) - set(names))
     if missing:
-        raise RuntimeError(f"the capstone's box would keep filter or data modules {missing}: take them out of "
-                           "fusionlab.capstone.BOX_MODULES")
+        raise RuntimeError(
+            f"the capstone's box would keep filter or data modules {missing}: take them out of "
+            "fusionlab.capstone.BOX_MODULES"
+        )
     return names
 
 
@@ -385,17 +482,27 @@ def placeholder_module(short):
     name = f"fusionlab.{short}"
     message = (STUB_MESSAGE if short in FILTER_MODULES + FILE_MODULES else BLOCK_MESSAGE).format(name=name)
     keep = KEEP.get(short, {})
-    lines = [f'"""{name} is not in the capstone\'s box: {WHY_HIDDEN}."""', "",
-             f"__all__ = {sorted(keep)!r}", f"_MESSAGE = {message!r}", "", ""]
+    lines = [
+        f'"""{name} is not in the capstone\'s box: {WHY_HIDDEN}."""',
+        "",
+        f"__all__ = {sorted(keep)!r}",
+        f"_MESSAGE = {message!r}",
+        "",
+        "",
+    ]
     for text in keep.values():
         lines += [text.rstrip("\n"), "", ""]
-    lines += ["def __getattr__(name):",
-              "    if name.startswith(\"__\") and name.endswith(\"__\"):",
-              "        raise AttributeError(f\"module {__name__!r} has no attribute {name!r}\")",
-              "    raise NotImplementedError(_MESSAGE)",
-              "", "",
-              "def __dir__():",
-              "    return list(__all__)", ""]
+    lines += [
+        "def __getattr__(name):",
+        '    if name.startswith("__") and name.endswith("__"):',
+        '        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")',
+        "    raise NotImplementedError(_MESSAGE)",
+        "",
+        "",
+        "def __dir__():",
+        "    return list(__all__)",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -407,13 +514,20 @@ def box_library(scratch):
     code of those modules is in the box, as source or bytecode (only the placeholders are compiled). The packages
     of :data:`HIDDEN_PACKAGES` are shadowed by packages that refuse to load (:func:`grading.boxlib.strip_packages`)."""
     import fusionlab
+
     root = Path(scratch) / "capstone-box"
     if not root.exists():
         part = Path(scratch) / "capstone-box.part"
         shutil.rmtree(part, ignore_errors=True)
         part.mkdir(parents=True)
-        boxlib.strip_packages(part, Path(fusionlab.__file__).resolve().parents[1], (), hidden=HIDDEN_PACKAGES,
-                             why=WHY_HIDDEN, message=STUB_MESSAGE)
+        boxlib.strip_packages(
+            part,
+            Path(fusionlab.__file__).resolve().parents[1],
+            (),
+            hidden=HIDDEN_PACKAGES,
+            why=WHY_HIDDEN,
+            message=STUB_MESSAGE,
+        )
         package = part / "lib" / "fusionlab"
         for short in absent_modules():
             path = package / f"{short}.py"

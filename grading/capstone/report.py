@@ -1,5 +1,6 @@
 """The class: :func:`grade_class` grades every submission in the sandbox's boxes, then the leaderboard (HTML, CSV),
 the rows of every trial and each student's feedback page are written."""
+
 from __future__ import annotations
 
 import html
@@ -20,49 +21,115 @@ from .program import CHEATS, LAB, box_library, model_program
 from .runner import StudentResult, gates_failed, grade_apart
 from .scoring import PUBLISHED, cached_references, mean_scored, references_of, rubric_points
 
-COLUMNS = ("rank", "name", "kind", "sensors", "points", "max_points", "total_deg", "heading_deg", "inclination_deg",
-           "ratio_to_vqf", "seconds", "trials_ok", "trials", "budget_held", "causal", "cheats", "notes")
-TRIAL_COLUMNS = ("name", "kind", "sensors", "trial", "status", "total_deg", "heading_deg", "inclination_deg", "seconds",
-                 "budget_s", "message")
+COLUMNS = (
+    "rank",
+    "name",
+    "kind",
+    "sensors",
+    "points",
+    "max_points",
+    "total_deg",
+    "heading_deg",
+    "inclination_deg",
+    "ratio_to_vqf",
+    "seconds",
+    "trials_ok",
+    "trials",
+    "budget_held",
+    "causal",
+    "cheats",
+    "notes",
+)
+TRIAL_COLUMNS = (
+    "name",
+    "kind",
+    "sensors",
+    "trial",
+    "status",
+    "total_deg",
+    "heading_deg",
+    "inclination_deg",
+    "seconds",
+    "budget_s",
+    "message",
+)
 
 
 #: The column headings of the leaderboard and the feedback pages, in words (the CSVs keep the short names).
-HEADINGS = {"rank": "rank", "name": "name", "kind": "kind", "sensors": "sensors", "points": "points",
-            "max_points": "of", "total_deg": "total RMSE (deg)", "heading_deg": "heading RMSE (deg)",
-            "inclination_deg": "inclination RMSE (deg)", "ratio_to_vqf": "scored RMSE / VQF's",
-            "seconds": "run time (s)", "trials_ok": "trials that ran", "trials": "trials", "budget_held":
-            "within the time budget", "causal": "causal", "cheats": "cheats", "notes": "notes", "trial": "trial",
-            "status": "status", "budget_s": "time budget (s)", "message": "message", "rule": "rule"}
+HEADINGS = {
+    "rank": "rank",
+    "name": "name",
+    "kind": "kind",
+    "sensors": "sensors",
+    "points": "points",
+    "max_points": "of",
+    "total_deg": "total RMSE (deg)",
+    "heading_deg": "heading RMSE (deg)",
+    "inclination_deg": "inclination RMSE (deg)",
+    "ratio_to_vqf": "scored RMSE / VQF's",
+    "seconds": "run time (s)",
+    "trials_ok": "trials that ran",
+    "trials": "trials",
+    "budget_held": "within the time budget",
+    "causal": "causal",
+    "cheats": "cheats",
+    "notes": "notes",
+    "trial": "trial",
+    "status": "status",
+    "budget_s": "time budget (s)",
+    "message": "message",
+    "rule": "rule",
+}
 _LEFT = ("name", "cheats", "notes", "rule", "trial", "message")
 #: Said wherever a 6D filter's total or heading RMSE is shown.
-UNOBSERVABLE_HEADING = ("A 6D filter's total and heading RMSE include its heading, which no filter can observe "
-                        "without a magnetometer (it drifts freely), so they are large and say nothing of the filter: "
-                        "it is scored on inclination.")
+UNOBSERVABLE_HEADING = (
+    "A 6D filter's total and heading RMSE include its heading, which no filter can observe "
+    "without a magnetometer (it drifts freely), so they are large and say nothing of the filter: "
+    "it is scored on inclination."
+)
 
 #: How each sensor set is named on the leaderboard and the feedback pages.
-SETS = {"9D": "9D filters (gyroscope, accelerometer, magnetometer): scored on mean total RMSE",
-        "6D": "6D filters (gyroscope and accelerometer; called with mag=None): scored on mean inclination RMSE, "
-              "which is all a filter without a magnetometer can know"}
+SETS = {
+    "9D": "9D filters (gyroscope, accelerometer, magnetometer): scored on mean total RMSE",
+    "6D": "6D filters (gyroscope and accelerometer; called with mag=None): scored on mean inclination RMSE, "
+    "which is all a filter without a magnetometer can know",
+}
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The class: leaderboard (HTML, CSV) and per-student feedback
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def _row(name, kind, sensors, trials, vqf_deg, points=None, causal="", cheats="", notes=""):
     """One leaderboard row. The column of the RMSE its sensor set is scored on is the mean as counted (a failed trial
     with the identity's error); the other RMSE columns are means over the trials that ran."""
     ok = [r for r in trials if r.status == "ok"]
     secs = [r.seconds for r in trials if np.isfinite(r.seconds)]
-    means = {key: float(np.mean([getattr(r, key) for r in ok])) if ok else float("nan")
-             for key in ("total_deg", "heading_deg", "inclination_deg")}
+    means = {
+        key: float(np.mean([getattr(r, key) for r in ok])) if ok else float("nan")
+        for key in ("total_deg", "heading_deg", "inclination_deg")
+    }
     means[SENSORS[sensors]] = m = mean_scored(trials)
-    return dict(rank="", name=name, kind=kind, sensors=sensors, points="" if points is None else f"{points:g}",
-                max_points="" if points is None else f"{MAX_POINTS:g}", **means,
-                ratio_to_vqf=m / vqf_deg, seconds=float(sum(secs)), trials_ok=len(ok), trials=len(trials),
-                budget_held="" if kind == "reference" or not trials else
-                ("yes" if all(r.status != "timeout" for r in trials) else "no"),
-                causal=causal, cheats=cheats, notes=notes)
+    return dict(
+        rank="",
+        name=name,
+        kind=kind,
+        sensors=sensors,
+        points="" if points is None else f"{points:g}",
+        max_points="" if points is None else f"{MAX_POINTS:g}",
+        **means,
+        ratio_to_vqf=m / vqf_deg,
+        seconds=float(sum(secs)),
+        trials_ok=len(ok),
+        trials=len(trials),
+        budget_held=""
+        if kind == "reference" or not trials
+        else ("yes" if all(r.status != "timeout" for r in trials) else "no"),
+        causal=causal,
+        cheats=cheats,
+        notes=notes,
+    )
 
 
 def _cheat_text(cheats):
@@ -88,14 +155,30 @@ def leaderboard_rows(results, refs):
             if res.sensors != sensors:
                 continue
             causal = {True: "yes", False: "NO", None: "not checked"}[res.causal]
-            rows.append(_row(res.name, "student", sensors, res.trials, vqf, res.total_points, causal,
-                             _cheat_text(res.cheats), "; ".join(res.notes + [res.error]).strip("; ")))
+            rows.append(
+                _row(
+                    res.name,
+                    "student",
+                    sensors,
+                    res.trials,
+                    vqf,
+                    res.total_points,
+                    causal,
+                    _cheat_text(res.cheats),
+                    "; ".join(res.notes + [res.error]).strip("; "),
+                )
+            )
         students = sorted(rows, key=lambda r: (-float(r["points"]), order(r)))
         for i, r in enumerate(students, 1):
             r["rank"] = i
-        refs_rows = sorted((_row(name, "reference", sensors, ref.trials, vqf, notes=ref.summary)
-                            for name, ref in references_of(refs, sensors).items()), key=order)
-        for r in students:                      # each reference sits above the first student it beats
+        refs_rows = sorted(
+            (
+                _row(name, "reference", sensors, ref.trials, vqf, notes=ref.summary)
+                for name, ref in references_of(refs, sensors).items()
+            ),
+            key=order,
+        )
+        for r in students:  # each reference sits above the first student it beats
             while refs_rows and order(refs_rows[0]) <= order(r):
                 out.append(refs_rows.pop(0))
             out.append(r)
@@ -112,27 +195,42 @@ def _fmt(v):
 def write_csv(rows, path, columns):
     """The leaderboard's CSV: :func:`fusionlab.bench.write_csv` with two decimals and empty cells for NaN."""
     from fusionlab import bench
+
     return bench.write_csv(rows, path, columns, fmt=_fmt)
 
 
 def trial_rows(results, refs):
     rows = []
-    for kind, items in (("student", [(r.name, r.sensors, r.trials) for r in results]),
-                        ("reference", [(n, ref.sensors, ref.trials) for n, ref in refs.items()
-                                       if not n.startswith("_")])):
+    for kind, items in (
+        ("student", [(r.name, r.sensors, r.trials) for r in results]),
+        ("reference", [(n, ref.sensors, ref.trials) for n, ref in refs.items() if not n.startswith("_")]),
+    ):
         for name, sensors, trials in items:
             for t in trials:
-                rows.append(dict(name=name, kind=kind, sensors=sensors, trial=t.trial, status=t.status,
-                                 total_deg=t.total_deg,
-                                 heading_deg=t.heading_deg, inclination_deg=t.inclination_deg, seconds=t.seconds,
-                                 budget_s=t.budget_s, message=t.message))
+                rows.append(
+                    dict(
+                        name=name,
+                        kind=kind,
+                        sensors=sensors,
+                        trial=t.trial,
+                        status=t.status,
+                        total_deg=t.total_deg,
+                        heading_deg=t.heading_deg,
+                        inclination_deg=t.inclination_deg,
+                        seconds=t.seconds,
+                        budget_s=t.budget_s,
+                        message=t.message,
+                    )
+                )
     return rows
 
 
-STYLE = ("body{font-family:sans-serif;margin:2em;max-width:80em} table{border-collapse:collapse;margin:1em 0} "
-         "td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right} td.l,th.l{text-align:left} "
-         "tr.reference{background:#eef3fb;font-style:italic} tr.gated{background:#fbeeee} "
-         ".standin{background:#fff3c4;border:2px solid #d9a400;padding:.6em;font-weight:bold}")
+STYLE = (
+    "body{font-family:sans-serif;margin:2em;max-width:80em} table{border-collapse:collapse;margin:1em 0} "
+    "td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right} td.l,th.l{text-align:left} "
+    "tr.reference{background:#eef3fb;font-style:italic} tr.gated{background:#fbeeee} "
+    ".standin{background:#fff3c4;border:2px solid #d9a400;padding:.6em;font-weight:bold}"
+)
 
 
 def _table(rows, columns, cls=None, headings=None, links=None):
@@ -140,8 +238,12 @@ def _table(rows, columns, cls=None, headings=None, links=None):
     name in ``links`` (``{name: href}``) links to its page."""
     headings = {**HEADINGS, **(headings or {})}
     links = links or {}
-    head = "".join(f"<th class='l'>{html.escape(headings.get(c, c))}</th>" if c in _LEFT
-                   else f"<th>{html.escape(headings.get(c, c))}</th>" for c in columns)
+    head = "".join(
+        f"<th class='l'>{html.escape(headings.get(c, c))}</th>"
+        if c in _LEFT
+        else f"<th>{html.escape(headings.get(c, c))}</th>"
+        for c in columns
+    )
     body = []
     for r in rows:
         klass = cls(r) if cls else ""
@@ -157,38 +259,52 @@ def _table(rows, columns, cls=None, headings=None, links=None):
 
 def _page(title, parts, label):
     banner = f"<p class='standin'>{html.escape(label)}</p>" if label else ""
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-            f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{banner}{''.join(parts)}</body></html>")
+    return (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+        f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>{banner}{''.join(parts)}</body></html>"
+    )
 
 
 def _rubric_html():
     rows = [dict(points=f"{c.points:g}", rule=c.rule) for c in RUBRIC]
     gates = "".join(f"<li>{html.escape(g)}</li>" for g in GATES)
     cheats = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in CHEATS.items())
-    return (f"<h2>Rubric (points for the filter, out of {MAX_POINTS:g})</h2>{_table(rows, ('points', 'rule'))}"
-            f"<p>Gates:</p><ul>{gates}</ul><p>Cheats looked for:</p><ul>{cheats}</ul>"
-            "<p>A trial without a valid estimate (error, over its budget, not unit quaternions) counts in the mean "
-            "with the error of an estimate that never moves (the identity quaternion).</p>")
+    return (
+        f"<h2>Rubric (points for the filter, out of {MAX_POINTS:g})</h2>{_table(rows, ('points', 'rule'))}"
+        f"<p>Gates:</p><ul>{gates}</ul><p>Cheats looked for:</p><ul>{cheats}</ul>"
+        "<p>A trial without a valid estimate (error, over its budget, not unit quaternions) counts in the mean "
+        "with the error of an estimate that never moves (the identity quaternion).</p>"
+    )
 
 
 def write_leaderboard(results, refs, scored, out, class_name, label=""):
     """``leaderboard.html``, ``leaderboard.csv``, ``trials.csv`` and each student's feedback page and figure."""
     import matplotlib
+
     matplotlib.use("Agg")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = leaderboard_rows(results, refs)
     write_csv(rows, out / "leaderboard.csv", COLUMNS)
     write_csv(trial_rows(results, refs), out / "trials.csv", TRIAL_COLUMNS)
-    what = (f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each cut at a secret start and end "
-            "and given fresh sensor noise; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
-            "the trials; run time: of estimate on all trials. 9D and 6D filters are ranked separately: a "
-            "rank is within the filter's sensor set, and the scored RMSE is divided by VQF's with the same sensors. "
-            "The RMSE a set is scored on counts a failed trial with the identity quaternion's error; the other RMSE "
-            "columns are means over the trials that ran. A student's name opens their page.")
+    what = (
+        f"{len(scored)} trials ({', '.join(t.name for t in scored)}), each cut at a secret start and end "
+        "and given fresh sensor noise; RMSE in degrees over the movement phase (BROAD's metrics), mean over "
+        "the trials; run time: of estimate on all trials. 9D and 6D filters are ranked separately: a "
+        "rank is within the filter's sensor set, and the scored RMSE is divided by VQF's with the same sensors. "
+        "The RMSE a set is scored on counts a failed trial with the identity quaternion's error; the other RMSE "
+        "columns are means over the trials that ran. A student's name opens their page."
+    )
     gated_names = {res.name for res in results if gates_failed(res)}
-    gated = lambda r: "reference" if r["kind"] == "reference" else ("gated" if r["name"] in gated_names  # noqa: E731
-                                                                      else "")
+    gated = lambda r: (
+        "reference"
+        if r["kind"] == "reference"
+        else (
+            "gated"
+            if r["name"] in gated_names  # noqa: E731
+            else ""
+        )
+    )
     links = {res.name: f"feedback/{quote(res.name)}/capstone.html" for res in results}
     parts = [f"<p>{html.escape(what)}</p>"]
     for sensors, heading in SETS.items():
@@ -210,6 +326,7 @@ def _plain_log_formatter(**kwargs):
     class PlainLog(ticker.LogFormatterSciNotation):
         def __call__(self, x, pos=None):
             return f"{x:g}" if super().__call__(x, pos) else ""
+
     return PlainLog(**kwargs)
 
 
@@ -218,6 +335,7 @@ def trials_figure(res, names, shown, mine, vqf_mean, stand_in=False):
     the RMSE they are scored on, on a log scale with plain numbers: readable at 3 trials as at 31, in a figure of
     fixed size; the legend below the axes, where it covers no marker. Returns the figure."""
     import matplotlib.pyplot as plt
+
     what = SENSORS[res.sensors][:-4]
     fig, ax = plt.subplots(figsize=(10, 4.6), layout="constrained")
     x = np.arange(len(names))
@@ -230,20 +348,31 @@ def trials_figure(res, names, shown, mine, vqf_mean, stand_in=False):
     for i, n in enumerate(names):
         status = mine[n].status if n in mine else "not run"
         if status != "ok":
-            ax.text(x[i], 0.02, status, ha="center", va="bottom", rotation=90, color="crimson", fontsize=8,
-                    transform=ax.get_xaxis_transform())
+            ax.text(
+                x[i],
+                0.02,
+                status,
+                ha="center",
+                va="bottom",
+                rotation=90,
+                color="crimson",
+                fontsize=8,
+                transform=ax.get_xaxis_transform(),
+            )
     ax.set_xticks(x, [n[:2] for n in names], fontsize=8 if len(names) > 20 else 10)
     ax.set_xlim(-0.7, len(names) - 0.3)
     ax.grid(axis="y", which="both", alpha=0.3)
-    ax.set_xlabel("shipped trial held back as a stand-in (number)" if stand_in else
-                  "hidden trial (number)")
+    ax.set_xlabel("shipped trial held back as a stand-in (number)" if stand_in else "hidden trial (number)")
     ax.set_ylabel(f"{what} RMSE (deg)")
     ax.set_yscale("log")
     ax.yaxis.set_major_formatter(_plain_log_formatter())
     ax.yaxis.set_minor_formatter(_plain_log_formatter(labelOnlyBase=False))
     fig.legend(fontsize=8, ncols=len(shown), loc="outside lower center")
-    ax.set_title(f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
-                 f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {vqf_mean:.2f})", fontsize=10)
+    ax.set_title(
+        f"{res.name} ({res.sensors}): {res.total_points:g} of {MAX_POINTS:g} points\nmean {what} RMSE "
+        f"{mean_scored(res.trials):.2f} deg (VQF {res.sensors} {vqf_mean:.2f})",
+        fontsize=10,
+    )
     return fig
 
 
@@ -251,10 +380,11 @@ def feedback(res, refs, folder, label=""):
     """One student's page: their row, each trial against the references of their sensor set, the figure
     (``trials.png``) of the RMSE they are scored on."""
     import matplotlib.pyplot as plt
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     metric = SENSORS[res.sensors]
-    what = metric[:-4]                                       # total, inclination
+    what = metric[:-4]  # total, inclination
     vqf = refs[PUBLISHED[res.sensors][0]]
     names = [r.trial for r in vqf.trials]
     mine = {r.trial: r for r in res.trials}
@@ -265,25 +395,54 @@ def feedback(res, refs, folder, label=""):
     fig.savefig(folder / "trials.png", dpi=90)
     plt.close(fig)
     # each trial with the references' RMSE on the same data beside the student's
-    ref_cols = {f"{n}_{what}": {r.trial: getattr(r, metric) for r in ref.trials}
-                for n, ref in references_of(refs, res.sensors).items()}
+    ref_cols = {
+        f"{n}_{what}": {r.trial: getattr(r, metric) for r in ref.trials}
+        for n, ref in references_of(refs, res.sensors).items()
+    }
     ref_headings = {f"{n}_{what}": f"{n}: {what} RMSE (deg)" for n in references_of(refs, res.sensors)}
-    rows = [dict(trial=r.trial, status=r.status, total_deg=r.total_deg, heading_deg=r.heading_deg,
-                 inclination_deg=r.inclination_deg, **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
-                 seconds=r.seconds, budget_s=r.budget_s, message=r.message)
-            for r in res.trials]
+    rows = [
+        dict(
+            trial=r.trial,
+            status=r.status,
+            total_deg=r.total_deg,
+            heading_deg=r.heading_deg,
+            inclination_deg=r.inclination_deg,
+            **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
+            seconds=r.seconds,
+            budget_s=r.budget_s,
+            message=r.message,
+        )
+        for r in res.trials
+    ]
     pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
     flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
     notes = "".join(f"<li>{html.escape(n)}</li>" for n in res.notes)
-    parts = [f"<p>Sensors: {html.escape(SETS[res.sensors])}; ranked among the {res.sensors} filters, against the "
-             f"reference filters with the same sensors.</p>",
-             f"<p>Causality: {html.escape(res.causal_message)}</p>",
-             f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>", _table(pts, ("points", "rule")),
-             f"<ul>{flags}</ul>" if flags else "", f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
-             f"<img src='trials.png' alt='{what} RMSE per trial'>",
-             f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if res.sensors == "6D" else "",
-             _table(rows, ("trial", "status", "total_deg", "heading_deg", "inclination_deg", *ref_cols, "seconds",
-                           "budget_s", "message"), headings=ref_headings)]
+    parts = [
+        f"<p>Sensors: {html.escape(SETS[res.sensors])}; ranked among the {res.sensors} filters, against the "
+        f"reference filters with the same sensors.</p>",
+        f"<p>Causality: {html.escape(res.causal_message)}</p>",
+        f"<p>Points: {res.total_points:g} of {MAX_POINTS:g}</p>",
+        _table(pts, ("points", "rule")),
+        f"<ul>{flags}</ul>" if flags else "",
+        f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
+        f"<img src='trials.png' alt='{what} RMSE per trial'>",
+        f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if res.sensors == "6D" else "",
+        _table(
+            rows,
+            (
+                "trial",
+                "status",
+                "total_deg",
+                "heading_deg",
+                "inclination_deg",
+                *ref_cols,
+                "seconds",
+                "budget_s",
+                "message",
+            ),
+            headings=ref_headings,
+        ),
+    ]
     (folder / "capstone.html").write_text(_page(f"Capstone: {res.name}", parts, label), encoding="utf-8")
 
 
@@ -291,8 +450,23 @@ def feedback(res, refs, folder, label=""):
 # The class graded: every submission in a box of its own, then the leaderboard
 # ----------------------------------------------------------------------------------------------------------------
 
-def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed=0, label="", progress=True,
-                seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None, cleared=()):
+
+def grade_class(
+    course,
+    submissions,
+    scored,
+    out,
+    class_name,
+    *,
+    workers=1,
+    seed=0,
+    label="",
+    progress=True,
+    seconds_per_sample=SECONDS_PER_SAMPLE,
+    min_seconds=MIN_SECONDS,
+    limits=None,
+    cleared=(),
+):
     """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
     leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
     :func:`cached_references`). ``cleared``: students whose estimate :data:`IMPLAUSIBLY_CLOSE` to the reference
@@ -312,10 +486,11 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
             lib = box_library(scratch)
             files, size = sandbox.warm(sandbox.view(course, lib=lib, data=False) + [str(lib)])
             if progress:
-                print(f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB",
-                      flush=True)
+                print(
+                    f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True
+                )
                 print(f"  {cgroup.said(sandbox.box_bytes())}", flush=True)
-            blocked = launcher.unreadable(slots[0])                 # as root: a folder the graders must reach
+            blocked = launcher.unreadable(slots[0])  # as root: a folder the graders must reach
             read_all = blocked is not None
             if read_all and progress:
                 print(f"  {launcher.reach_message(blocked, slots[0])}", flush=True)
@@ -327,11 +502,24 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                 slot = free.get()
                 try:
                     nb = submissions[student]
-                    if isinstance(nb, str):                 # a notebook that could not be read: why
+                    if isinstance(nb, str):  # a notebook that could not be read: why
                         return StudentResult(student, error=nb, points=rubric_points(float("nan"), False, True, 0, 0))
-                    return grade_apart(student, nb, scored, refs, course, scratch, slot=slot, read_all=read_all,
-                                       seed=seed, seconds_per_sample=seconds_per_sample, min_seconds=min_seconds,
-                                       limits=limits, cleared=student in cleared, model=model)
+                    return grade_apart(
+                        student,
+                        nb,
+                        scored,
+                        refs,
+                        course,
+                        scratch,
+                        slot=slot,
+                        read_all=read_all,
+                        seed=seed,
+                        seconds_per_sample=seconds_per_sample,
+                        min_seconds=min_seconds,
+                        limits=limits,
+                        cleared=student in cleared,
+                        model=model,
+                    )
                 finally:
                     free.put(slot)
 
@@ -339,15 +527,26 @@ def grade_class(course, submissions, scored, out, class_name, *, workers=1, seed
                 results = list(pool.map(one, sorted(submissions)))
             for res in results:
                 if progress:
-                    print(f"  {res.name} ({res.sensors}): {res.total_points:g} / {MAX_POINTS:g}, mean "
-                          f"{SENSORS[res.sensors][:-4]} {mean_scored(res.trials):.2f} deg"
-                          + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
-                          + ("" if res.causal is not False else ", NOT causal"), flush=True)
+                    print(
+                        f"  {res.name} ({res.sensors}): {res.total_points:g} / {MAX_POINTS:g}, mean "
+                        f"{SENSORS[res.sensors][:-4]} {mean_scored(res.trials):.2f} deg"
+                        + (f", cheats: {'; '.join(k for k, _ in res.cheats)}" if res.cheats else "")
+                        + ("" if res.causal is not False else ", NOT causal"),
+                        flush=True,
+                    )
             users = sorted({r.process["uid"] for r in results if r.process})
             if progress and users:
-                print("  each student was graded in a process of its own, as " + (
-                      "root (NOT dropped)" if 0 in users else f"user {', '.join(map(str, users))}, not root"
-                      if os.geteuid() == 0 else "the grader's own user"), flush=True)
+                print(
+                    "  each student was graded in a process of its own, as "
+                    + (
+                        "root (NOT dropped)"
+                        if 0 in users
+                        else f"user {', '.join(map(str, users))}, not root"
+                        if os.geteuid() == 0
+                        else "the grader's own user"
+                    ),
+                    flush=True,
+                )
             write_leaderboard(results, refs, scored, out, class_name, label)
             return results, refs
     finally:

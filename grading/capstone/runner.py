@@ -1,6 +1,8 @@
 """The box and one submission: the box's limits, the :class:`Runner` that calls ``estimate`` with sensor data only
-(what a call raised or returned is told in words written here), the causality check, and :func:`grade_submission`
-with the look-ups of its output (a reference filter's output, one implausibly close to the reference)."""
+(what a call raised or returned is told in words written here), and :func:`grade_submission` with the look-ups of its
+output (a reference filter's output, one implausibly close to the reference). The causality check it runs is
+:mod:`grading.capstone.causality`."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -11,30 +13,57 @@ from pathlib import Path
 
 import numpy as np
 
-from fusionlab.capstone import (CAUSAL_TOL, MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds,
-                                causal_ks, first_change, prefix_change)
+from fusionlab.capstone import MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds
 from grading import box as wire
-from grading import boxlib, client, launcher, sandbox
+from grading import boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .program import (BLOCK_MESSAGE, DECLARATION, EMBED_CHARS, FILE_MODULES, FILTER_MODULES, FUNCTION,
-                      HIDDEN_PACKAGES, IMPLAUSIBLE, IMPLAUSIBLE_TRIALS, IMPLAUSIBLY_CLOSE, LAB, STUB_MESSAGE,
-                      WHY_HIDDEN, absent_modules, box_library,
-                      declared_sensors, library_copies, model_program, program_of, scan)
-from .scoring import (MATCH_RAD, MATCH_STRIDE, TrialResult, published_means, mean_scored, never_moves,
-                      rubric_points, score_trial)
+from .causality import _NotRun, causality_trial, check_causality, later_samples_change
+from .program import (
+    BLOCK_MESSAGE,
+    DECLARATION,
+    EMBED_CHARS,
+    FILE_MODULES,
+    FILTER_MODULES,
+    FUNCTION,
+    HIDDEN_PACKAGES,
+    IMPLAUSIBLE,
+    IMPLAUSIBLE_TRIALS,
+    IMPLAUSIBLY_CLOSE,
+    LAB,
+    STUB_MESSAGE,
+    WHY_HIDDEN,
+    absent_modules,
+    box_library,
+    declared_sensors,
+    library_copies,
+    model_program,
+    program_of,
+    scan,
+)
+from .scoring import (
+    MATCH_RAD,
+    MATCH_STRIDE,
+    TrialResult,
+    published_means,
+    mean_scored,
+    never_moves,
+    rubric_points,
+    score_trial,
+)
 
-SETUP_SECONDS = 60.0            # the notebook's cells, run once per box
-MAX_RESTARTS = 5                # boxes started again after a call ran over its budget or ended the box (the fresh
-                                # boxes of the causality checks are not counted)
-CPU_PER_BUDGET = 2.0            # the box's CPU-time limit: this many CPU seconds per second of the trials' budgets
-CPU_SLACK_S = 60                # ... plus the notebook's cells (SETUP_SECONDS) and this; never below the sandbox's
-                                # default (box_limits): an honest filter within its budgets is never stopped by it
+SETUP_SECONDS = 60.0  # the notebook's cells, run once per box
+MAX_RESTARTS = 5  # boxes started again after a call ran over its budget or ended the box (the fresh
+# boxes of the causality checks are not counted)
+CPU_PER_BUDGET = 2.0  # the box's CPU-time limit: this many CPU seconds per second of the trials' budgets
+CPU_SLACK_S = 60  # ... plus the notebook's cells (SETUP_SECONDS) and this; never below the sandbox's
+# default (box_limits): an honest filter within its budgets is never stopped by it
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The box: the student's cells, then calls of estimate with sensor data only
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
     """The sandbox limits of a capstone box (:data:`grading.sandbox.DEFAULT_LIMITS`, then ``limits``), its CPU time
@@ -42,13 +71,16 @@ def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SE
     limit is :data:`CPU_PER_BUDGET` CPU seconds per second of the trials' budgets, plus :data:`SETUP_SECONDS` and
     :data:`CPU_SLACK_S` (never below the sandbox's default; a ``cpu_s`` in ``limits`` is kept as given)."""
     import math
+
     budgets = sum(budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored)
     cpu = max(sandbox.DEFAULT_LIMITS["cpu_s"], math.ceil(CPU_PER_BUDGET * budgets + SETUP_SECONDS + CPU_SLACK_S))
     return {**sandbox.DEFAULT_LIMITS, "cpu_s": cpu, **(limits or {})}
 
 
-NOT_SHOWN = (" (its type and message are not shown: on a hidden trial they could carry the trial's data; "
-             "the self-check shows them on the shipped trials)")
+NOT_SHOWN = (
+    " (its type and message are not shown: on a hidden trial they could carry the trial's data; "
+    "the self-check shows them on the shipped trials)"
+)
 
 
 def error_message(text):
@@ -67,12 +99,16 @@ def error_message(text):
             return f"reached {package}, which is not available while the lab is graded ({WHY_HIDDEN})"
     for short in FILTER_MODULES + FILE_MODULES:
         if STUB_MESSAGE.format(name=f"fusionlab.{short}") in text:
-            return (f"reached fusionlab.{short}, which holds the library's filters or data loaders: not available "
-                    "in the capstone")
+            return (
+                f"reached fusionlab.{short}, which holds the library's filters or data loaders: not available "
+                "in the capstone"
+            )
     for short in absent_modules():
         if BLOCK_MESSAGE.format(name=f"fusionlab.{short}") in text:
-            return (f"reached fusionlab.{short}, which the capstone's box does not hold (a capstone filter may use "
-                    "numpy, scipy, math and the library's rotations and metrics only)")
+            return (
+                f"reached fusionlab.{short}, which the capstone's box does not hold (a capstone filter may use "
+                "numpy, scipy, math and the library's rotations and metrics only)"
+            )
     return f"raised an error{NOT_SHOWN}"
 
 
@@ -106,18 +142,30 @@ class CapstoneBoxes:
         return {self.KEY}
 
     def prepare(self):
-        pass                                            # box_library was made when this object was
+        pass  # box_library was made when this object was
 
     def open(self, key, files=False):
         if key != self.KEY or files:
             raise ValueError(f"expected the capstone's box ({self.KEY!r}, no files), got {key!r}, files={files}")
         uid = sandbox.box_uid(self.slot)
-        work = sandbox.private_folder(None, self.scratch, uid)              # empty: the box has no files
-        command = sandbox.bwrap_command(["python", str(client.SCRIPT)], course=self.course, lab=LAB,
-                                        lib=self.root / "lib", shadow=self.root / "shadow", work=work,
-                                        limits=self.limits, uid=uid, data=False, hide=self.hide)
-        return client.start(command, work=work,                            # ended with the box, folder and all
-                            memory_bytes=sandbox.box_bytes(self.limits))
+        work = handin.private_folder(None, self.scratch, uid)  # empty: the box has no files
+        command = sandbox.bwrap_command(
+            ["python", str(client.SCRIPT)],
+            course=self.course,
+            lab=LAB,
+            lib=self.root / "lib",
+            shadow=self.root / "shadow",
+            work=work,
+            limits=self.limits,
+            uid=uid,
+            data=False,
+            hide=self.hide,
+        )
+        return client.start(
+            command,
+            work=work,  # ended with the box, folder and all
+            memory_bytes=sandbox.box_bytes(self.limits),
+        )
 
     def start(self, key=KEY, files=False):
         return client.Box(self.open(key, files))
@@ -148,9 +196,9 @@ class Runner:
         self.box = None
         self.cell_errors = {}
         self.starts = 0
-        self.fresh = 0                 # boxes started for one call (call_fresh): not restarts after a failure
-        self.setup_error = ""          # set when the notebook's cells could not be run: no call is tried again
-        self.sent = False              # a trial's data has been sent to a box of this runner
+        self.fresh = 0  # boxes started for one call (call_fresh): not restarts after a failure
+        self.setup_error = ""  # set when the notebook's cells could not be run: no call is tried again
+        self.sent = False  # a trial's data has been sent to a box of this runner
 
     @property
     def restarts(self):
@@ -163,8 +211,9 @@ class Runner:
         self.box = self.boxes.start(CapstoneBoxes.KEY, files=False)
         errors = {}
         try:
-            errors = client.run_program(self.box, self.cells, cell_seconds=SETUP_SECONDS,
-                                        deadline=time.monotonic() + SETUP_SECONDS)
+            errors = client.run_program(
+                self.box, self.cells, cell_seconds=SETUP_SECONDS, deadline=time.monotonic() + SETUP_SECONDS
+            )
             return True
         except client.BoxTimeout as exc:
             errors = exc.errors
@@ -174,8 +223,12 @@ class Runner:
             self.setup_error = "the notebook's cells ended the process"
         finally:
             for cell, text in errors.items():
-                self.cell_errors.setdefault(cell, "(message not shown: the box was started again after a trial had "
-                                                  "been sent)" if self.sent else text[:300])
+                self.cell_errors.setdefault(
+                    cell,
+                    "(message not shown: the box was started again after a trial had been sent)"
+                    if self.sent
+                    else text[:300],
+                )
         self.close()
         return False
 
@@ -183,10 +236,13 @@ class Runner:
         """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data
         (``gyr``, ``acc``, ``mag`` instead of the trial's when given; no magnetometer at all for a 6D runner)."""
         if self.box is None and (self.setup_error or self.restarts >= MAX_RESTARTS or not self.start()):
-            return None, "not run", self.setup_error or f"the box was started again {self.restarts} times", \
-                float("nan")
-        args = [trial.gyr if gyr is None else gyr, trial.acc if acc is None else acc,
-                None if self.sensors == "6D" else trial.mag if mag is None else mag, float(trial.fs)]
+            return None, "not run", self.setup_error or f"the box was started again {self.restarts} times", float("nan")
+        args = [
+            trial.gyr if gyr is None else gyr,
+            trial.acc if acc is None else acc,
+            None if self.sensors == "6D" else trial.mag if mag is None else mag,
+            float(trial.fs),
+        ]
         t0 = time.monotonic()
         self.sent = True
         try:
@@ -197,8 +253,12 @@ class Runner:
         except client.BoxDied as exc:
             self.close()
             too_large = isinstance(exc, client.ReplyTooLarge)
-            return None, "died", ("sent a reply too large to read (stopped)" if too_large else
-                                  "ended the process"), time.monotonic() - t0
+            return (
+                None,
+                "died",
+                ("sent a reply too large to read (stopped)" if too_large else "ended the process"),
+                time.monotonic() - t0,
+            )
         elapsed = time.monotonic() - t0
         if not isinstance(reply, dict) or not reply.get("ok"):
             return None, "error", error_message(reply.get("error", "") if isinstance(reply, dict) else ""), elapsed
@@ -236,18 +296,19 @@ class Runner:
 # One submission
 # ----------------------------------------------------------------------------------------------------------------
 
+
 @dataclass
 class StudentResult:
     name: str
     trials: list = field(default_factory=list)
     causal: bool | None = None
     causal_message: str = ""
-    cheats: list = field(default_factory=list)      # (kind, why)
+    cheats: list = field(default_factory=list)  # (kind, why)
     notes: list = field(default_factory=list)
     points: dict = field(default_factory=dict)
     error: str = ""
-    sensors: str = "9D"                             # as its code declares it (declared_sensors)
-    process: dict = field(default_factory=dict)     # of the process that graded it (grade_apart): peak MB, user
+    sensors: str = "9D"  # as its code declares it (declared_sensors)
+    process: dict = field(default_factory=dict)  # of the process that graded it (grade_apart): peak MB, user
 
     @property
     def total_points(self):
@@ -258,79 +319,23 @@ class StudentResult:
         return bool(self.trials) and all(r.status == "ok" for r in self.trials)
 
 
-class _NotRun(Exception):
-    """A call of the causality check that gave no quaternions (an error, over its budget, the box ended)."""
-
-
-def _fresh_run(runner, trial, seconds):
-    """``run(gyr, acc, mag) -> q`` of ``trial`` with other samples, each call in a fresh box; :class:`_NotRun` when a
-    call gives no quaternions."""
-    def run(gyr, acc, mag):
-        q2, status, why, _ = runner.call_fresh(trial, seconds, gyr, acc, mag)
-        if q2 is None:
-            raise _NotRun(f"{why} ({status})")
-        return q2
-    return run
-
-
-def check_causality(runner, trial, q, seconds, rng):
-    """(True/False/None, message): is ``estimate``'s output up to k unchanged when every sample after k changes, for
-    three secret k (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``), and is its output on the samples up to
-    another secret k alone the first k+1 rows of ``q``, its output on the whole trial? Each of these calls runs in
-    a box of its own (:meth:`Runner.call_fresh`), so that no call can replay what an earlier one returned. (For a
-    6D runner, the gyro and accelerometer samples: it gets no magnetometer.)"""
-    n = len(trial)
-    mag = None if runner.sensors == "6D" else trial.mag
-    run = _fresh_run(runner, trial, seconds)
-
-    try:
-        failed = first_change(run, trial.gyr, trial.acc, mag, q, causal_ks(n, rng), rng)
-    except _NotRun as exc:
-        return None, f"not checked: with later samples changed, estimate {exc}"
-    if failed:
-        k, change = failed
-        return False, (f"NOT causal: changing the samples after k = {k} of {trial.name} changed the estimate up "
-                       f"to k by {change:.2g} (a filter may use no later sample, nor random numbers it does not "
-                       "seed)")
-    k = prefix_k(n, rng)
-    try:
-        change = prefix_change(run, trial.gyr, trial.acc, mag, q, k)
-    except _NotRun as exc:
-        return None, f"not checked: given the samples up to a k alone, estimate {exc}"
-    if change > CAUSAL_TOL:
-        return False, (f"NOT causal: given only the samples up to k = {k} of {trial.name}, its estimate up to k "
-                       f"differs by {change:.2g} from its estimate on the whole trial (a filter may use no later "
-                       "sample, nor the length of the data)")
-    return True, ("causal (the estimate up to k unchanged when the samples after k change: on every trial at a "
-                  "secret k, and on one trial at three more and when they are left out; each call in a fresh box)")
-
-
-def later_samples_change(runner, trial, q, seconds, rng):
-    """(k, change) when ``estimate``'s output up to one secret k of ``trial`` (drawn with ``rng`` after its first
-    hundredth) changed, beyond :data:`CAUSAL_TOL`, once every sample after k changed; None when it did not. A call
-    that gives no quaternions raises :class:`_NotRun`: a filter that fails on the changed samples was not shown
-    causal there (else a filter that looks ahead could fail on purpose wherever it sees the check's data). The call
-    runs in a box of its own (:meth:`Runner.call_fresh`). A filter that looks ahead on some trials only (chosen from
-    their data) is caught on those: :func:`check_causality` checks one."""
-    n = len(trial)
-    k = int(rng.integers(max(1, n // 100), n - 1))
-    mag = None if runner.sensors == "6D" else trial.mag
-    return first_change(_fresh_run(runner, trial, seconds), trial.gyr, trial.acc, mag, q, [k], rng)
-
-
-def prefix_k(n, rng):
-    """The secret k of the prefix check for a trial of ``n`` samples: anywhere after its first tenth."""
-    return int(rng.integers(max(1, n // 10), n - 1))
-
-
-def causality_trial(seed, n, rng=None):
-    """Index of the secret trial (of ``n``) on which the causality check runs, for the disguise's ``seed``."""
-    rng = np.random.default_rng([seed, 7]) if rng is None else rng
-    return int(rng.integers(n))
-
-
-def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0, seconds_per_sample=SECONDS_PER_SAMPLE,
-                     min_seconds=MIN_SECONDS, limits=None, cleared=False, model=None, boxes=None):
+def grade_submission(
+    name,
+    nb,
+    scored,
+    refs,
+    course,
+    scratch,
+    *,
+    slot=0,
+    seed=0,
+    seconds_per_sample=SECONDS_PER_SAMPLE,
+    min_seconds=MIN_SECONDS,
+    limits=None,
+    cleared=False,
+    model=None,
+    boxes=None,
+):
     """Grade one notebook on the disguised trials ``scored``; every number is computed here.
 
     ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
@@ -345,18 +350,29 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
     if why:
         res.notes.append(f"{DECLARATION}: {why}")
     if _declared_outside(nb, cells):
-        res.notes.append(f"{DECLARATION} is set in a cell the grader does not run (only the answer cells and the "
-                         f"cells they need run): graded as {res.sensors}")
+        res.notes.append(
+            f"{DECLARATION} is set in a cell the grader does not run (only the answer cells and the "
+            f"cells they need run): graded as {res.sensors}"
+        )
     size = sum(len(src) for _, src in cells)
     if size > EMBED_CHARS:
-        res.notes.append(f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
-                         "published reference, say)?")
-    runner = Runner([src for _, src in cells], course, scratch, slot,
-                    box_limits(scored, seconds_per_sample, min_seconds, limits), sensors=res.sensors, boxes=boxes)
+        res.notes.append(
+            f"REVIEW: the code the box runs is {size // 1000} kB long: does it carry data (a trial's "
+            "published reference, say)?"
+        )
+    runner = Runner(
+        [src for _, src in cells],
+        course,
+        scratch,
+        slot,
+        box_limits(scored, seconds_per_sample, min_seconds, limits),
+        sensors=res.sensors,
+        boxes=boxes,
+    )
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
-    every = np.random.default_rng([seed, 11])            # the one secret k of each other trial (its own stream)
-    outputs = {}                                         # the other trials' outputs, until they are checked
+    every = np.random.default_rng([seed, 11])  # the one secret k of each other trial (its own stream)
+    outputs = {}  # the other trials' outputs, until they are checked
     try:
         for i, t in enumerate(scored):
             r = TrialResult(t.name, budget_s=budget_seconds(len(t), seconds_per_sample, min_seconds))
@@ -369,15 +385,17 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
                 r.q = q
                 _look_for_cheats(res, r, t, refs)
                 if i != chosen:
-                    outputs[i], r.q = q, None                   # for its own check, after the box's last call
+                    outputs[i], r.q = q, None  # for its own check, after the box's last call
             else:
                 r.counted_deg, r.metric = never_moves(t, metric), metric
-                if any(text in r.message for text in ("not available in the capstone",
-                                                      "not available while the lab is graded")):
+                if any(
+                    text in r.message
+                    for text in ("not available in the capstone", "not available while the lab is graded")
+                ):
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
         ran = [(t, r) for t, r in zip(scored, res.trials) if r.status == "ok"]
-        if res.trials[chosen].status != "ok" and ran:           # it failed there: the first trial that ran, again
+        if res.trials[chosen].status != "ok" and ran:  # it failed there: the first trial that ran, again
             t, r = ran[0]
             q, status, why, _ = runner.call(t, r.budget_s)
             ran = [(t, dataclasses.replace(r, q=q))] if q is not None else []
@@ -387,19 +405,27 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
             t, r = ran[0]
             res.causal, res.causal_message = check_causality(runner, t, r.q, r.budget_s, rng)
             r.q = None
-            for i, q in outputs.items() if res.causal is not False else ():   # each in a fresh box, as above
+            for i, q in outputs.items() if res.causal is not False else ():  # each in a fresh box, as above
                 try:
                     late = later_samples_change(runner, scored[i], q, res.trials[i].budget_s, every)
                 except _NotRun as exc:
-                    res.causal, res.causal_message = None, (
-                        f"not checked: with the samples after a secret k of {scored[i].name} changed, estimate {exc}")
+                    res.causal, res.causal_message = (
+                        None,
+                        (f"not checked: with the samples after a secret k of {scored[i].name} changed, estimate {exc}"),
+                    )
                     break
                 if late is not None:
                     k, change = late
-                    res.causal, res.causal_message = False, (
-                        f"NOT causal: changing the samples after k = {k} of {scored[i].name} changed the estimate up "
-                        f"to k by {change:.2g} (a filter may use no later sample on any trial; every trial is checked "
-                        "at one secret k, one of them at four)")
+                    res.causal, res.causal_message = (
+                        False,
+                        (
+                            f"NOT causal: changing the samples after k = {k} of {scored[i].name} changed the "
+                            "estimate up "
+                            f"to k by {change:.2g} (a filter may use no later sample on any trial; every trial is "
+                            "checked "
+                            "at one secret k, one of them at four)"
+                        ),
+                    )
                     break
         else:
             res.causal_message = "not checked: estimate ran on no trial"
@@ -407,8 +433,9 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
         if runner.cell_errors:
             res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
         if runner.restarts:
-            res.notes.append(f"the box was started again {runner.restarts} times (after calls that ran over or "
-                             "ended it)")
+            res.notes.append(
+                f"the box was started again {runner.restarts} times (after calls that ran over or ended it)"
+            )
     finally:
         runner.close()
     close = implausibly_close(res, refs)
@@ -416,12 +443,15 @@ def grade_submission(name, nb, scored, refs, course, scratch, *, slot=0, seed=0,
         if cleared:
             res.notes.append(f"cleared by the instructor, who read the code: {close}")
         else:
-            res.cheats.append(("detects the trial", f"{close} -- review the code: the instructor may clear this "
-                                                     "after reading it"))
+            res.cheats.append(
+                ("detects the trial", f"{close} -- review the code: the instructor may clear this after reading it")
+            )
     res.cheats = list(dict.fromkeys(res.cheats))
     if res.causal is None and any(r.status == "ok" for r in res.trials):
-        res.causal_message += (" -- no points for the filter: it ran on the trials, but not on the causality check's "
-                               "data, so it was never shown causal")
+        res.causal_message += (
+            " -- no points for the filter: it ran on the trials, but not on the causality check's "
+            "data, so it was never shown causal"
+        )
     madgwick, vqf = published_means(refs, res.sensors)
     res.points = rubric_points(mean_scored(res.trials), res.all_ran, gates_failed(res), madgwick, vqf, res.sensors)
     return res
@@ -454,9 +484,11 @@ def implausibly_close(res, refs):
     what = SENSORS[res.sensors][:-4]
     mine = float(np.mean([r.counted_deg for r in close]))
     theirs = float(np.mean([best[r.trial] for r in close]))
-    return (f"{IMPLAUSIBLY_CLOSE}: its {what} RMSE is below {IMPLAUSIBLE:g} x the best reference filter's on "
-            f"{len(close)} of the {len(ran)} trials it ran (there {mine:.2f} deg against {theirs:.2f} deg on "
-            "average)")
+    return (
+        f"{IMPLAUSIBLY_CLOSE}: its {what} RMSE is below {IMPLAUSIBLE:g} x the best reference filter's on "
+        f"{len(close)} of the {len(ran)} trials it ran (there {mine:.2f} deg against {theirs:.2f} deg on "
+        "average)"
+    )
 
 
 def _declared_outside(nb, cells):
@@ -472,11 +504,16 @@ def _declared_outside(nb, cells):
 
 def _look_for_cheats(res, r, t, refs):
     from fusionlab import rotations
+
     for ref in refs["_all"].values():
         q_ref = next(x.q for x in ref.trials if x.trial == t.name)
         if np.max(rotations.quat_angle_between(r.q[::MATCH_STRIDE], q_ref)) < MATCH_RAD:
-            res.cheats.append(("calls a reference filter", f"{t.name}: its output is {ref.name}'s to "
-                                                           f"{MATCH_RAD:g} rad at every sample"))
+            res.cheats.append(
+                (
+                    "calls a reference filter",
+                    f"{t.name}: its output is {ref.name}'s to {MATCH_RAD:g} rad at every sample",
+                )
+            )
 
 
 #: The address space of the process that grades one student (:func:`grade_apart`): the trials it scores on, and the
@@ -487,8 +524,9 @@ GRADER_MEMORY_BYTES = 4 << 30
 def _graded_apart(name, nb, scored, refs, course, scratch, slot, read_all, kw):
     """:func:`grade_submission` in the process :func:`grade_apart` starts: as root, its boxes are started by the
     launcher and this process gives up root before any box replies."""
-    limits = box_limits(scored, kw.get("seconds_per_sample", SECONDS_PER_SAMPLE), kw.get("min_seconds", MIN_SECONDS),
-                        kw.get("limits"))
+    limits = box_limits(
+        scored, kw.get("seconds_per_sample", SECONDS_PER_SAMPLE), kw.get("min_seconds", MIN_SECONDS), kw.get("limits")
+    )
     boxes = launcher.split(CapstoneBoxes(course, scratch, slot, limits), slot, read_all=read_all)
     try:
         res = grade_submission(name, nb, scored, refs, course, scratch, slot=slot, boxes=boxes, **kw)
@@ -502,8 +540,19 @@ def _graded_apart(name, nb, scored, refs, course, scratch, slot, read_all, kw):
 def grade_apart(name, nb, scored, refs, course, scratch, *, slot=0, read_all=False, **kw):
     """:func:`grade_submission` (``kw``: its keywords) in a process of its own (:func:`grading.launcher.apart`),
     which, as root, is not root once a box has replied; what comes back is its numbers and texts."""
-    reply = launcher.apart(_graded_apart, (name, nb, scored, refs, course, scratch, slot, read_all, kw),
-                           preload=["grading.capstone.runner"], memory_bytes=GRADER_MEMORY_BYTES, who=name)
+    reply = launcher.apart(
+        _graded_apart,
+        (name, nb, scored, refs, course, scratch, slot, read_all, kw),
+        preload=["grading.capstone.runner"],
+        memory_bytes=GRADER_MEMORY_BYTES,
+        who=name,
+    )
     d = reply["result"]
-    return StudentResult(**{**d, "trials": [TrialResult(**t) for t in d["trials"]],
-                             "cheats": [tuple(c) for c in d["cheats"]], "process": reply["process"]})
+    return StudentResult(
+        **{
+            **d,
+            "trials": [TrialResult(**t) for t in d["trials"]],
+            "cheats": [tuple(c) for c in d["cheats"]],
+            "process": reply["process"],
+        }
+    )

@@ -1,5 +1,6 @@
 """Scoring, on the trusted side only: a trial's metrics, the reference rows (VQF, Madgwick and the library's best
 filter of each sensor set) and their cache in the output folder, the means and the rubric's points."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -13,26 +14,27 @@ import numpy as np
 
 from fusionlab.capstone import RUBRIC, SENSORS, accuracy_points
 
-MATCH_RAD = 1e-6                # a student's output this close to a reference filter's, everywhere, is that filter
-MATCH_STRIDE = 5                # ... compared at every 5th sample
+MATCH_RAD = 1e-6  # a student's output this close to a reference filter's, everywhere, is that filter
+MATCH_STRIDE = 5  # ... compared at every 5th sample
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Scoring (trusted side only)
 # ----------------------------------------------------------------------------------------------------------------
 
+
 @dataclass
 class TrialResult:
     trial: str
-    status: str = "ok"        # ok, error, timeout, died, invalid, not run
+    status: str = "ok"  # ok, error, timeout, died, invalid, not run
     message: str = ""
     seconds: float = float("nan")
     budget_s: float = float("nan")
     total_deg: float = float("nan")
     heading_deg: float = float("nan")
     inclination_deg: float = float("nan")
-    counted_deg: float = float("nan")   # the scored RMSE as the mean counts it (a failed trial: the identity's error)
-    metric: str = "total_deg"           # which RMSE that is: SENSORS[the filter's sensor set]
+    counted_deg: float = float("nan")  # the scored RMSE as the mean counts it (a failed trial: the identity's error)
+    metric: str = "total_deg"  # which RMSE that is: SENSORS[the filter's sensor set]
     q: np.ndarray | None = None
 
 
@@ -40,6 +42,7 @@ def score_trial(result, q, trial, metric="total_deg"):
     """Fill ``result`` with the authors' metrics of ``q`` on ``trial`` (as :func:`fusionlab.bench.score` does);
     ``metric`` (``'total_deg'`` for a 9D filter, ``'inclination_deg'`` for a 6D one) is the one counted."""
     from fusionlab import metrics
+
     r = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
     result.total_deg, result.heading_deg, result.inclination_deg = r.total_deg, r.heading_deg, r.inclination_deg
     result.counted_deg, result.metric = getattr(result, metric), metric
@@ -49,6 +52,7 @@ def score_trial(result, q, trial, metric="total_deg"):
 def never_moves(trial, metric="total_deg"):
     """RMSE (``metric``) of the identity quaternion on ``trial``: what a trial without a valid estimate counts."""
     from fusionlab import metrics
+
     q = np.tile([1.0, 0.0, 0.0, 0.0], (len(trial), 1))
     return getattr(metrics.broad_rmse(q, trial.quat_ref, trial.movement), metric)
 
@@ -56,6 +60,7 @@ def never_moves(trial, metric="total_deg"):
 @dataclass
 class Reference:
     """A reference filter's row: its per-trial results (with a thinned copy of its output for the match check)."""
+
     name: str
     summary: str
     trials: list
@@ -81,11 +86,13 @@ def references(scored, progress=False):
         each a :class:`Reference`, and ``'_all'``: every filter that ran, for the match check.
     """
     from fusionlab import bench
+
     found = {c.name: c for c in bench.contenders()}
     missing = [n for names in PUBLISHED.values() for n in names if n not in found]
     if missing:
-        raise RuntimeError(f"the capstone's reference rows need {' and '.join(missing)} (the packages vqf and ahrs "
-                           "of environment.txt)")
+        raise RuntimeError(
+            f"the capstone's reference rows need {' and '.join(missing)} (the packages vqf and ahrs of environment.txt)"
+        )
     rows, out = {}, {}
     for sensors, published in PUBLISHED.items():
         metric = SENSORS[sensors]
@@ -97,7 +104,7 @@ def references(scored, progress=False):
                 t0 = time.perf_counter()
                 try:
                     q = np.asarray(c.run(t), dtype=float)
-                except ValueError as exc:                 # a library filter that refuses a trial (TRIAD in free fall)
+                except ValueError as exc:  # a library filter that refuses a trial (TRIAD in free fall)
                     if c.source != "fusionlab":
                         raise
                     if progress:
@@ -106,7 +113,7 @@ def references(scored, progress=False):
                 r.seconds = time.perf_counter() - t0
                 q = q / np.linalg.norm(q, axis=-1, keepdims=True)
                 score_trial(r, q, t, metric)
-                r.q = q[::MATCH_STRIDE]                 # enough to recognise this output again, a fifth of the memory
+                r.q = q[::MATCH_STRIDE]  # enough to recognise this output again, a fifth of the memory
                 trials.append(r)
                 if progress:
                     print(f"  reference {c.name} on {t.name}: {r.counted_deg:.2f} deg ({metric[:-4]})", flush=True)
@@ -116,7 +123,7 @@ def references(scored, progress=False):
         best = min(ran, key=lambda ref: mean_scored(ref.trials))
         out.update({n: rows[n] for n in published})
         out[f"library best {sensors} ({best.name})"] = best
-    out["_all"] = rows                     # every reference's output, for the match check
+    out["_all"] = rows  # every reference's output, for the match check
     return out
 
 
@@ -142,6 +149,7 @@ def references_key(scored, seed):
     from importlib import metadata
 
     import fusionlab
+
     code = hashlib.sha256()
     lib = Path(fusionlab.__file__).resolve().parent
     for path in sorted(lib.rglob("*.py")) + [Path(__file__).resolve()]:
@@ -158,8 +166,14 @@ def references_key(scored, seed):
         for a in (t.gyr, t.acc, t.mag, t.quat_ref, t.movement):
             data.update(np.ascontiguousarray(a).tobytes())
         data.update(repr(float(t.fs)).encode())
-    return {"format": CACHE_FORMAT, "seed": int(seed), "trials": [[t.name, len(t)] for t in scored],
-            "data": data.hexdigest(), "code": code.hexdigest(), "packages": packages}
+    return {
+        "format": CACHE_FORMAT,
+        "seed": int(seed),
+        "trials": [[t.name, len(t)] for t in scored],
+        "data": data.hexdigest(),
+        "code": code.hexdigest(),
+        "packages": packages,
+    }
 
 
 def save_references(refs, path, key):
@@ -167,10 +181,18 @@ def save_references(refs, path, key):
     whole or not at all."""
     path = Path(path)
     names = list(refs["_all"])
-    rows = {"all": [dict(name=ref.name, summary=ref.summary, sensors=ref.sensors,
-                         trials=[{k: getattr(r, k) for k in _TRIAL_FIELDS} for r in ref.trials])
-                    for ref in refs["_all"].values()],
-            "chosen": {label: ref.name for label, ref in refs.items() if not label.startswith("_")}}
+    rows = {
+        "all": [
+            dict(
+                name=ref.name,
+                summary=ref.summary,
+                sensors=ref.sensors,
+                trials=[{k: getattr(r, k) for k in _TRIAL_FIELDS} for r in ref.trials],
+            )
+            for ref in refs["_all"].values()
+        ],
+        "chosen": {label: ref.name for label, ref in refs.items() if not label.startswith("_")},
+    }
     arrays = {"key": np.array(json.dumps(key)), "rows": np.array(json.dumps(rows))}
     for j, name in enumerate(names):
         for i, r in enumerate(refs["_all"][name].trials):
@@ -250,6 +272,8 @@ def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg, sensors="
     if gated_out:
         return {c.key: 0.0 for c in RUBRIC}
     points = {c.key: float(c.points) for c in RUBRIC}
-    earned = {"runs": points["runs"] if all_ran else 0.0,
-              "accuracy": accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors) if np.isfinite(mean_deg) else 0.0}
+    earned = {
+        "runs": points["runs"] if all_ran else 0.0,
+        "accuracy": accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors) if np.isfinite(mean_deg) else 0.0,
+    }
     return {c.key: round(earned[c.key], 1) for c in RUBRIC}

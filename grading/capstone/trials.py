@@ -1,6 +1,7 @@
 """The capstone's trials: the hidden BROAD trials (``make capstone-data`` fetches them once), the stand-in of
 shipped trials for a dry run, and the disguise each trial gets before a class is graded (secret cuts at both ends,
 fresh sensor noise)."""
+
 from __future__ import annotations
 
 import os
@@ -12,8 +13,8 @@ import numpy as np
 
 from fusionlab.capstone import SHIPPED
 
-MAX_CROP_SECONDS = 0.5          # secret cut at the start (inside the rest before the movement) ...
-MAX_END_CROP_SECONDS = 3.0      # ... and at the end (never into the movement): a trial's length does not name it
+MAX_CROP_SECONDS = 0.5  # secret cut at the start (inside the rest before the movement) ...
+MAX_END_CROP_SECONDS = 3.0  # ... and at the end (never into the movement): a trial's length does not name it
 # Fresh white noise the disguise adds to the sensor data (standard deviations: gyro rad/s, accelerometer m/s^2,
 # magnetometer uT), about the BROAD sensors' own noise at rest (0.0017-0.0018 rad/s, 0.04-0.07 m/s^2, 0.7 uT):
 # it changes no filter's accuracy that matters, but no raw sample of a published trial is found again in the data
@@ -29,9 +30,11 @@ class CapstoneDataMissing(FileNotFoundError):
 # The hidden trials
 # ----------------------------------------------------------------------------------------------------------------
 
+
 def hidden_names():
     """The full names of the hidden trials: every BROAD trial that the course does not ship (:data:`SHIPPED`)."""
     from fusionlab import datasets
+
     return [t.name for t in datasets.list_trials() if t.number not in SHIPPED]
 
 
@@ -39,11 +42,12 @@ def absent(names, folder=None):
     """Those of the trials ``names`` that are not on this computer (no download): what ``make capstone`` and
     ``make capstone-data`` both count, over the whole list."""
     from fusionlab import datasets
+
     missing = []
     for name in names:
         try:
             datasets.fetch_trial(name, folder=folder, download=False, progress=False)
-        except FileNotFoundError:            # DataMissing, or not in the folder given
+        except FileNotFoundError:  # DataMissing, or not in the folder given
             missing.append(name)
     return missing
 
@@ -63,6 +67,7 @@ def hidden_trials(folder=None, names=None):
     list of fusionlab.datasets.BroadTrial
     """
     from fusionlab import datasets
+
     names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
     missing = absent(names, folder)
     if missing:
@@ -70,7 +75,8 @@ def hidden_trials(folder=None, names=None):
         raise CapstoneDataMissing(
             f"the capstone is graded on {len(names)} hidden BROAD trials and {len(missing)} of them are not on this "
             f"computer ({shown}). Get them once with `make capstone-data` (needs the internet; the files go to "
-            f"{datasets.cache_dir()}), or point {datasets.ENV_DIR} at a folder that holds them. Nothing was graded.")
+            f"{datasets.cache_dir()}), or point {datasets.ENV_DIR} at a folder that holds them. Nothing was graded."
+        )
     return [datasets.load_trial(n, folder=folder, download=False, progress=False) for n in names]
 
 
@@ -85,6 +91,7 @@ def stand_in(numbers, max_samples=None):
         Keep only the first samples of each (quick runs).
     """
     from fusionlab import datasets
+
     bad = [n for n in numbers if n not in SHIPPED]
     if bad or not numbers:
         raise ValueError(f"numbers must be shipped trials ({', '.join(map(str, SHIPPED))}); got {list(numbers)}")
@@ -93,8 +100,10 @@ def stand_in(numbers, max_samples=None):
         whole = datasets.load_trial(n, download=False, progress=False)
         t = whole.slice(0, max_samples) if max_samples else whole
         if not (t.movement & ~np.isnan(t.quat_ref).any(axis=-1)).any():
-            raise ValueError(f"max_samples must keep part of each trial's movement phase; {t.name} cut to "
-                             f"{len(t)} samples has none (it starts at sample {np.flatnonzero(whole.movement)[0]})")
+            raise ValueError(
+                f"max_samples must keep part of each trial's movement phase; {t.name} cut to "
+                f"{len(t)} samples has none (it starts at sample {np.flatnonzero(whole.movement)[0]})"
+            )
         out.append(t)
     return out
 
@@ -109,10 +118,14 @@ def fetch(names=None, progress=True, out=None):
     import warnings
 
     from fusionlab import datasets
+
     out = sys.stdout if out is None else out
     names = hidden_names() if names is None else [datasets.trial_name(n) for n in names]
-    print(f"==> the capstone's {len(names)} hidden BROAD trials, into {datasets.cache_dir()} (checked download)",
-          file=out, flush=True)
+    print(
+        f"==> the capstone's {len(names)} hidden BROAD trials, into {datasets.cache_dir()} (checked download)",
+        file=out,
+        flush=True,
+    )
     unverified = []
     cache = Path(datasets.cache_dir())
     had_cache = cache.exists()
@@ -126,14 +139,17 @@ def fetch(names=None, progress=True, out=None):
             reason = text.split(" failed (", 1)[1].rsplit("). To get it", 1)[0] if " failed (" in text else text
             url = (os.environ.get(datasets.ENV_URL) or datasets.BROAD_URL).rstrip("/") + f"/{name}.mat"
             if not had_cache and cache.is_dir() and not any(cache.iterdir()):
-                cache.rmdir()                                  # made for this run and still empty: leave no trace
-            have = len(names) - len(absent(names))              # over the whole list, as make capstone counts
-            print(f"\nstopped: {name} could not be downloaded from {url} ({reason}).\n{have} of {len(names)} "
-                  f"hidden trials are here, each complete and checked (nothing partial is kept). Connect to the "
-                  f"internet and run `make capstone-data` again: it fetches only what is missing. Or put the "
-                  f"published .mat files in a folder of yours and point {datasets.ENV_DIR} at it (not in data/broad/, "
-                  f"which ships to the students). The capstone cannot be graded until all {len(names)} are here.",
-                  file=out, flush=True)
+                cache.rmdir()  # made for this run and still empty: leave no trace
+            have = len(names) - len(absent(names))  # over the whole list, as make capstone counts
+            print(
+                f"\nstopped: {name} could not be downloaded from {url} ({reason}).\n{have} of {len(names)} "
+                f"hidden trials are here, each complete and checked (nothing partial is kept). Connect to the "
+                f"internet and run `make capstone-data` again: it fetches only what is missing. Or put the "
+                f"published .mat files in a folder of yours and point {datasets.ENV_DIR} at it (not in data/broad/, "
+                f"which ships to the students). The capstone cannot be graded until all {len(names)} are here.",
+                file=out,
+                flush=True,
+            )
             return 2
         if datasets.known_sha256(name) is None:
             unverified.append((name, path))
@@ -142,8 +158,11 @@ def fetch(names=None, progress=True, out=None):
                 print(f"warning: {w.message}", file=out)
     print(f"all {len(names)} hidden trials are here.", file=out)
     if unverified:
-        print(f"{len(unverified)} of them have no SHA-256 in lib/fusionlab/data/broad_sha256.txt, so they were "
-              "checked for length only; their sums (add them there once, from a copy you trust):", file=out)
+        print(
+            f"{len(unverified)} of them have no SHA-256 in lib/fusionlab/data/broad_sha256.txt, so they were "
+            "checked for length only; their sums (add them there once, from a copy you trust):",
+            file=out,
+        )
         for name, path in unverified:
             print(f"{datasets.file_sha256(path)}  {name}.mat", file=out)
     return 0
@@ -153,10 +172,12 @@ def fetch(names=None, progress=True, out=None):
 # Disguise: a secret start and end, and fresh noise
 # ----------------------------------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True, eq=False)
 class Scored:
     """A trial as the capstone scores it: its sensor data cut and given fresh noise, and the reference over the same
     samples."""
+
     name: str
     fs: float
     gyr: np.ndarray
@@ -194,7 +215,9 @@ def disguise(trials, seed):
         stop = max(last_moving + 1, len(t) - int(rng.integers(0, int(MAX_END_CROP_SECONDS * t.fs))))
         s = slice(start, stop)
         ref = np.array(t.quat_ref[s])
-        gyr, acc, mag = (np.array(x[s]) + sigma * rng.standard_normal((stop - start, 3))
-                         for x, sigma in zip((t.gyr, t.acc, t.mag), DISGUISE_NOISE))
+        gyr, acc, mag = (
+            np.array(x[s]) + sigma * rng.standard_normal((stop - start, 3))
+            for x, sigma in zip((t.gyr, t.acc, t.mag), DISGUISE_NOISE)
+        )
         out.append(Scored(t.name, t.fs, gyr, acc, mag, ref, np.array(t.movement[s])))
     return out

@@ -15,14 +15,23 @@ Frames and units at this module's edge
 * The thesis' own tilt formulas (:func:`tilt_2d`, :func:`tilt_3d`) are written for its sensor frame: **Z up**, a
   level sensor reads +1 g on Z (seed 000 §3.1.3). Each says so in its docstring.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import earth, validate
 
-__all__ = ["tilt_2d", "tilt_3d", "atan2_piecewise", "seed000_eq321_printed", "excel_atan2",
-           "seed001_tilt_printed", "tilt_from_accel", "specific_force"]
+__all__ = [
+    "tilt_2d",
+    "tilt_3d",
+    "atan2_piecewise",
+    "seed000_eq321_printed",
+    "excel_atan2",
+    "seed001_tilt_printed",
+    "tilt_from_accel",
+    "specific_force",
+]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -62,10 +71,12 @@ def tilt_2d(a_x, a_y):
     ay = validate.array(a_y, "a_y")
     validate.broadcast(a_x=ax, a_y=ay)
     if np.any((ax == 0) & (ay == 0)):
-        raise ValueError("a_x, a_y must not both be 0 in one reading: a zero in-plane reading has no angle (the "
-                         "gravity axis is out of the plane, or the sensor is unpowered)")
+        raise ValueError(
+            "a_x, a_y must not both be 0 in one reading: a zero in-plane reading has no angle (the "
+            "gravity axis is out of the plane, or the sensor is unpowered)"
+        )
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.arctan(ay / ax)                                                 # (000 eq 3.17)
+        return np.arctan(ay / ax)  # (000 eq 3.17)
 
 
 def tilt_3d(acc):
@@ -107,9 +118,9 @@ def tilt_3d(acc):
         raise ValueError("acc must not be zero: a sensor in free fall reads 0 and has no tilt information")
     ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
     with np.errstate(divide="ignore", invalid="ignore"):
-        theta_z = np.arctan(np.hypot(ax, ay) / az)                                # (000 eq 3.18)
-    theta_x = np.arctan2(ax, np.hypot(ay, az))                                    # (000 eq 3.19), arctan of a ratio
-    theta_y = np.arctan2(ay, np.hypot(ax, az))                                    # (000 eq 3.20)   with den >= 0
+        theta_z = np.arctan(np.hypot(ax, ay) / az)  # (000 eq 3.18)
+    theta_x = np.arctan2(ax, np.hypot(ay, az))  # (000 eq 3.19), arctan of a ratio
+    theta_y = np.arctan2(ay, np.hypot(ax, az))  # (000 eq 3.20)   with den >= 0
     return np.stack([theta_x, theta_y, theta_z], -1)
 
 
@@ -153,8 +164,11 @@ def atan2_piecewise(y, x):
     y, x = np.broadcast_arrays(y, x)
     with np.errstate(divide="ignore", invalid="ignore"):
         base = np.arctan(y / x)
-    return np.select([x > 0, (y >= 0) & (x < 0), (y < 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
-                     [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2], default=np.nan)  # (000 eq 3.21)
+    return np.select(
+        [x > 0, (y >= 0) & (x < 0), (y < 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
+        [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2],
+        default=np.nan,
+    )  # (000 eq 3.21)
 
 
 def seed000_eq321_printed(y, x):
@@ -180,8 +194,11 @@ def seed000_eq321_printed(y, x):
     y, x = np.broadcast_arrays(y, x)
     with np.errstate(divide="ignore", invalid="ignore"):
         base = np.arctan(y / x)
-    return np.select([x > 0, (y >= 0) & (x < 0), (y >= 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
-                     [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2], default=np.nan)
+    return np.select(
+        [x > 0, (y >= 0) & (x < 0), (y >= 0) & (x < 0), (y > 0) & (x == 0), (y < 0) & (x == 0)],
+        [base, base + np.pi, base - np.pi, np.pi / 2, -np.pi / 2],
+        default=np.nan,
+    )
 
 
 def excel_atan2(x_num, y_num):
@@ -241,7 +258,7 @@ def seed001_tilt_printed(acc, g=earth.G):
     if np.any(np.linalg.norm(a, axis=-1) == 0):
         raise ValueError("acc must not be zero: a sensor in free fall reads 0 and has no tilt information")
     with np.errstate(divide="ignore", invalid="ignore"):
-        roll = np.arctan(a[..., 1] / a[..., 2])                                   # (001 attitude §2, printed)
+        roll = np.arctan(a[..., 1] / a[..., 2])  # (001 attitude §2, printed)
         pitch = np.arcsin(a[..., 0] / g)
     return np.stack([roll, pitch], -1)
 
@@ -277,7 +294,7 @@ def tilt_from_accel(acc):
     norm = np.linalg.norm(a, axis=-1)
     if np.any(norm == 0):
         raise ValueError("acc must not be zero: a sensor in free fall reads 0 and has no tilt information")
-    roll = np.arctan2(-a[..., 1], -a[..., 2])                              # (001 attitude §2, atan2 form)
+    roll = np.arctan2(-a[..., 1], -a[..., 2])  # (001 attitude §2, atan2 form)
     pitch = np.arctan2(a[..., 0], np.hypot(a[..., 1], a[..., 2]))
     return np.stack([roll, pitch], -1)
 
@@ -316,5 +333,5 @@ def specific_force(C_bn, acc_nav=None, g=earth.G):
     g_n = np.array([0.0, 0.0, validate.positive(g, "g")])
     a_n = np.zeros(3) if acc_nav is None else validate.vectors(acc_nav, "acc_nav")
     validate.broadcast({"C_bn": 2, "acc_nav": 1}, C_bn=C, acc_nav=a_n)
-    f_n = a_n - g_n                                                               # (001 sensors: a_m = (F - F_g)/m)
+    f_n = a_n - g_n  # (001 sensors: a_m = (F - F_g)/m)
     return np.einsum("...ji,...j->...i", C, np.broadcast_to(f_n, np.broadcast_shapes(f_n.shape, C.shape[:-1])))

@@ -42,6 +42,7 @@ which its authors chose on BROAD as a whole; nothing of VQF is tuned here.
 
 The run is deterministic (no random numbers); only the timing columns vary between runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -59,17 +60,58 @@ import numpy as np
 
 from . import accel_tilt, datasets, estimators, metrics, rotations, validate
 
-__all__ = ["Contender", "contenders", "score", "run_benchmark", "TuningSweep", "tuning_sweep", "group_means",
-           "format_table", "write_csv", "plot", "main", "TRIAL_COLUMNS", "GROUP_COLUMNS", "TUNED", "LeaveOneOut",
-           "leave_one_out", "LeaveOneGroupOut", "leave_one_group_out", "format_loo"]
+__all__ = [
+    "Contender",
+    "contenders",
+    "score",
+    "run_benchmark",
+    "TuningSweep",
+    "tuning_sweep",
+    "group_means",
+    "format_table",
+    "write_csv",
+    "plot",
+    "main",
+    "TRIAL_COLUMNS",
+    "GROUP_COLUMNS",
+    "TUNED",
+    "LeaveOneOut",
+    "leave_one_out",
+    "LeaveOneGroupOut",
+    "leave_one_group_out",
+    "format_loo",
+]
 
-TRIAL_COLUMNS = ("estimator", "source", "sensors", "trial", "groups", "n_samples", "n_scored", "total_rmse_deg",
-                 "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg", "heading_offset_deg",
-                 "seconds", "samples_per_s", "error")
-GROUP_COLUMNS = ("estimator", "source", "sensors", "group", "n_trials", "total_rmse_deg", "heading_rmse_deg",
-                 "inclination_rmse_deg", "total_aligned_deg", "samples_per_s")
-LOO_COLUMNS = ("estimator", "metric", "trial", "default_deg", "left_out_deg", "chosen", "group_out_deg",
-               "group_chosen")
+TRIAL_COLUMNS = (
+    "estimator",
+    "source",
+    "sensors",
+    "trial",
+    "groups",
+    "n_samples",
+    "n_scored",
+    "total_rmse_deg",
+    "heading_rmse_deg",
+    "inclination_rmse_deg",
+    "total_aligned_deg",
+    "heading_offset_deg",
+    "seconds",
+    "samples_per_s",
+    "error",
+)
+GROUP_COLUMNS = (
+    "estimator",
+    "source",
+    "sensors",
+    "group",
+    "n_trials",
+    "total_rmse_deg",
+    "heading_rmse_deg",
+    "inclination_rmse_deg",
+    "total_aligned_deg",
+    "samples_per_s",
+)
+LOO_COLUMNS = ("estimator", "metric", "trial", "default_deg", "left_out_deg", "chosen", "group_out_deg", "group_chosen")
 METRICS = (("total_rmse_deg", "total"), ("heading_rmse_deg", "heading"), ("inclination_rmse_deg", "inclination"))
 
 
@@ -90,8 +132,9 @@ class Contender:
     run : callable
         ``run(trial) -> ndarray, shape (N, 4)``, body→ENU quaternions.
     """
+
     name: str
-    source: str              # 'fusionlab', 'vqf' or 'ahrs'
+    source: str  # 'fusionlab', 'vqf' or 'ahrs'
     uses_mag: bool
     summary: str
     run: Callable
@@ -109,20 +152,24 @@ class Contender:
 
 def _registered(name, uses_mag):
     def run(trial):
-        return estimators.run(name, gyr=trial.gyr, acc=trial.acc, fs=trial.fs,
-                              mag=trial.mag if uses_mag else None, frame="ENU")
+        return estimators.run(
+            name, gyr=trial.gyr, acc=trial.acc, fs=trial.fs, mag=trial.mag if uses_mag else None, frame="ENU"
+        )
+
     return run
 
 
 def _vqf(uses_mag):
     def run(trial):
         from vqf import VQF
+
         # VQF's compiled batch update wants C-contiguous, writable float64 arrays (ours are read-only views)
         gyr, acc, mag = (np.array(a, dtype=float, order="C") for a in (trial.gyr, trial.acc, trial.mag))
         f = VQF(1.0 / trial.fs)
         if uses_mag:
-            return f.updateBatch(gyr, acc, mag)["quat9D"]         # body→ENU, heading from the magnetometer
-        return f.updateBatch(gyr, acc)["quat6D"]                  # body→(z up, arbitrary heading)
+            return f.updateBatch(gyr, acc, mag)["quat9D"]  # body→ENU, heading from the magnetometer
+        return f.updateBatch(gyr, acc)["quat6D"]  # body→(z up, arbitrary heading)
+
     return run
 
 
@@ -134,6 +181,7 @@ _Q_ENU_NWU = rotations.euler_to_quat([0.0, 0.0, np.pi / 2])
 def _madgwick(uses_mag):
     def run(trial):
         from ahrs.filters import Madgwick
+
         # Convention check (ahrs 0.4.0, filters/madgwick.py): q̇ = ½ q ⊗ (0, ω) and the objective f_g is the third
         # row of C(q) minus the normalised accelerometer, so q is body→earth (Hamilton, [w, x, y, z]) with earth z
         # up (acc reads +g up); the field reference b = (b_x, 0, b_z) puts magnetic north on earth x: NWU.
@@ -155,7 +203,8 @@ def _madgwick(uses_mag):
         for t in range(1, len(gyr)):
             args = (Q[t - 1], gyr[t], acc[t], mag[t]) if uses_mag else (Q[t - 1], gyr[t], acc[t])
             Q[t] = step(*args)
-        return rotations.quat_multiply(_Q_ENU_NWU, Q)              # q_ENU = q_z(90°) ⊗ q_NWU
+        return rotations.quat_multiply(_Q_ENU_NWU, Q)  # q_ENU = q_z(90°) ⊗ q_NWU
+
     return run
 
 
@@ -174,23 +223,28 @@ def contenders(names=None, include_external=True):
     list of Contender
         The filters, registered ones first.
     """
-    out = [Contender(n, "fusionlab", info["uses_mag"], info["summary"], _registered(n, info["uses_mag"]))
-           for n, info in estimators.available().items()]
+    out = [
+        Contender(n, "fusionlab", info["uses_mag"], info["summary"], _registered(n, info["uses_mag"]))
+        for n, info in estimators.available().items()
+    ]
     if include_external:
         if importlib.util.find_spec("vqf") is not None:
-            out += [Contender("vqf9", "vqf", True, "VQF 9D (Laidig & Seel 2023), causal, default parameters",
-                              _vqf(True)),
-                    Contender("vqf6", "vqf", False, "VQF 6D (Laidig & Seel 2023), causal, default parameters",
-                              _vqf(False))]
+            out += [
+                Contender("vqf9", "vqf", True, "VQF 9D (Laidig & Seel 2023), causal, default parameters", _vqf(True)),
+                Contender("vqf6", "vqf", False, "VQF 6D (Laidig & Seel 2023), causal, default parameters", _vqf(False)),
+            ]
         if importlib.util.find_spec("ahrs") is not None:
-            out += [Contender("madgwick9", "ahrs", True, "ahrs Madgwick MARG, gain 0.041", _madgwick(True)),
-                    Contender("madgwick6", "ahrs", False, "ahrs Madgwick IMU, gain 0.033", _madgwick(False))]
+            out += [
+                Contender("madgwick9", "ahrs", True, "ahrs Madgwick MARG, gain 0.041", _madgwick(True)),
+                Contender("madgwick6", "ahrs", False, "ahrs Madgwick IMU, gain 0.033", _madgwick(False)),
+            ]
     if names is not None:
         known = {c.name for c in out}
         unknown = [n for n in names if n not in known]
         if unknown:
-            raise ValueError(f"estimators must be among {', '.join(sorted(known))}; got unknown "
-                             f"{', '.join(map(repr, unknown))}")
+            raise ValueError(
+                f"estimators must be among {', '.join(sorted(known))}; got unknown {', '.join(map(repr, unknown))}"
+            )
         out = [c for c in out if c.name in names]
     return out
 
@@ -217,12 +271,20 @@ def score(contender, trial):
     dict
         One result row: errors in degrees, timing in seconds and samples per second.
     """
-    row = dict(estimator=contender.name, source=contender.source, sensors=contender.sensors, trial=trial.name,
-               groups="|".join(trial.groups), n_samples=len(trial), n_scored=0, error="")
+    row = dict(
+        estimator=contender.name,
+        source=contender.source,
+        sensors=contender.sensors,
+        trial=trial.name,
+        groups="|".join(trial.groups),
+        n_samples=len(trial),
+        n_scored=0,
+        error="",
+    )
     t0 = time.perf_counter()
     try:
         q = contender.run(trial)
-    except Exception as exc:                 # one broken filter must not stop the benchmark; its row says why
+    except Exception as exc:  # one broken filter must not stop the benchmark; its row says why
         row.update({k: np.nan for k in TRIAL_COLUMNS if k not in row}, error=f"{type(exc).__name__}: {exc}")
         return row
     seconds = time.perf_counter() - t0
@@ -230,15 +292,20 @@ def score(contender, trial):
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     as_is = metrics.broad_rmse(q, trial.quat_ref, trial.movement)
     aligned = metrics.broad_rmse(q, trial.quat_ref, trial.movement, heading_offset="mean")
-    row.update(n_scored=as_is.n_samples, total_rmse_deg=as_is.total_deg, heading_rmse_deg=as_is.heading_deg,
-               inclination_rmse_deg=as_is.inclination_deg, total_aligned_deg=aligned.total_deg,
-               heading_offset_deg=aligned.heading_offset_deg, seconds=seconds,
-               samples_per_s=len(trial) / seconds if seconds > 0 else np.inf)
+    row.update(
+        n_scored=as_is.n_samples,
+        total_rmse_deg=as_is.total_deg,
+        heading_rmse_deg=as_is.heading_deg,
+        inclination_rmse_deg=as_is.inclination_deg,
+        total_aligned_deg=aligned.total_deg,
+        heading_offset_deg=aligned.heading_offset_deg,
+        seconds=seconds,
+        samples_per_s=len(trial) / seconds if seconds > 0 else np.inf,
+    )
     return row
 
 
-def run_benchmark(trials=None, folder=None, names=None, include_external=True, max_samples=None,
-                  progress=True):
+def run_benchmark(trials=None, folder=None, names=None, include_external=True, max_samples=None, progress=True):
     """Run every contender on every trial; one result row (dict with :data:`TRIAL_COLUMNS`) per pair.
 
     Parameters
@@ -266,8 +333,10 @@ def run_benchmark(trials=None, folder=None, names=None, include_external=True, m
     if trials is None:
         trials = datasets.available_trials(folder)
         if not trials:
-            raise FileNotFoundError(f"no BROAD trial is available locally -- set {datasets.ENV_DIR} to a folder of "
-                                    "BROAD .mat files, pass folder=, or name trials to download them")
+            raise FileNotFoundError(
+                f"no BROAD trial is available locally -- set {datasets.ENV_DIR} to a folder of "
+                "BROAD .mat files, pass folder=, or name trials to download them"
+            )
     trial_names = sorted({datasets.trial_name(t) for t in trials})
     if max_samples is not None and (int(max_samples) != max_samples or max_samples < 1):
         raise ValueError(f"max_samples must be a positive integer or None; got {max_samples!r}")
@@ -379,22 +448,26 @@ def tuning_sweep(trials, estimator, option, values, progress=False, uses_mag=Tru
             raise ValueError(f"option must be the name of a keyword argument of {name}; got {option!r}")
         try:
             params = inspect.signature(estimator).parameters
-        except (TypeError, ValueError):       # a builtin or a C function: let the call say it
+        except (TypeError, ValueError):  # a builtin or a C function: let the call say it
             params = {}
         if params and option not in params and not any(p.kind is p.VAR_KEYWORD for p in params.values()):
-            raise ValueError(f"option must be a keyword argument of {name} ({', '.join(params)}); got {option!r}: "
-                             f"give {name} a keyword argument {option}=<default>")
+            raise ValueError(
+                f"option must be a keyword argument of {name} ({', '.join(params)}); got {option!r}: "
+                f"give {name} a keyword argument {option}=<default>"
+            )
         uses_mag = validate.flag(uses_mag, "uses_mag")
     else:
         info = _estimator(estimator)
         takes = estimators.options(estimator)
         if option not in takes:
-            raise ValueError(f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); "
-                             f"got {option!r}")
+            raise ValueError(
+                f"option must be one of the options of {estimator!r} ({', '.join(takes) or 'none'}); got {option!r}"
+            )
         uses_mag, name = info["uses_mag"], estimator
 
         def run(gyr, acc, mag, fs, **opt):
             return estimators.run(estimator, gyr=gyr, acc=acc, fs=fs, mag=mag, frame="ENU", **opt)
+
     values = tuple(float(v) for v in validate.array(values, "values").reshape(-1))
     if not values:
         raise ValueError("values must hold at least one value; got none")
@@ -410,13 +483,24 @@ def tuning_sweep(trials, estimator, option, values, progress=False, uses_mag=Tru
             for j, v in enumerate(values):
                 q = np.asarray(run(tr.gyr, tr.acc, tr.mag if uses_mag else None, tr.fs, **{option: v}), dtype=float)
                 if q.shape != (len(tr), 4) or not np.isfinite(q).all():
-                    raise ValueError(f"estimator must return ({len(tr)}, 4) finite quaternions on {tr.name} with "
-                                     f"{option}={v:g}; got shape {q.shape}")
+                    raise ValueError(
+                        f"estimator must return ({len(tr)}, 4) finite quaternions on {tr.name} with "
+                        f"{option}={v:g}; got shape {q.shape}"
+                    )
                 rmse[i, j] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
                 errors[i][j] = np.degrees(error_fn(metrics.error_quaternion(q, tr.quat_ref)))
                 bar.update()
-    return TuningSweep(name, option, values, metric, tuple(t.name for t in trials), rmse, errors,
-                       [t.t for t in trials], [t.movement for t in trials])
+    return TuningSweep(
+        name,
+        option,
+        values,
+        metric,
+        tuple(t.name for t in trials),
+        rmse,
+        errors,
+        [t.t for t in trials],
+        [t.movement for t in trials],
+    )
 
 
 #: The options of the registered filters that were chosen on the BROAD trials the course ships, and the grid each
@@ -424,7 +508,7 @@ def tuning_sweep(trials, estimator, option, values, progress=False, uses_mag=Tru
 #: seed's value, a physical value, or a value VQF publishes (each filter's docstring says which).
 TUNED = {
     "dcm_ahrs": {"acc_sigma_untrusted": (0.5, 1.0, 2.0), "hold": (0.5, 1.0), "acc_lp_tau": (1.0, 3.0)},
-    "dcm_ahrs6": {"acc_sigma_untrusted": (0.5, 1.0, 2.0), "acc_lp_tau": (1.0, 3.0)},    # hold: no effect in 6D
+    "dcm_ahrs6": {"acc_sigma_untrusted": (0.5, 1.0, 2.0), "acc_lp_tau": (1.0, 3.0)},  # hold: no effect in 6D
     "freescale6": {"accel_hold": (0.0, 0.25, 0.5, 1.0)},
     "complementary": {"tau": (0.5, 1.0, 2.0)},
 }
@@ -507,8 +591,15 @@ def _grid_runs(trials, estimator, grid, progress, what):
     with tqdm(total=rmse.size, desc=f"{what} {estimator}", unit="run", disable=not progress) as bar:
         for i, tr in enumerate(trials):
             for c, values in enumerate(combos):
-                q = estimators.run(estimator, gyr=tr.gyr, acc=tr.acc, fs=tr.fs, mag=tr.mag if uses_mag else None,
-                                   frame="ENU", **dict(zip(names, values)))
+                q = estimators.run(
+                    estimator,
+                    gyr=tr.gyr,
+                    acc=tr.acc,
+                    fs=tr.fs,
+                    mag=tr.mag if uses_mag else None,
+                    frame="ENU",
+                    **dict(zip(names, values)),
+                )
                 rmse[i, c] = getattr(metrics.broad_rmse(q, tr.quat_ref, tr.movement), f"{metric}_deg")
                 bar.update()
     return metric, names, combos, rmse, combos.index(tuple(defaults[k] for k in names))
@@ -538,10 +629,19 @@ def leave_one_out(trials, estimator, grid=None, progress=False):
     """
     trials = list(trials)
     metric, names, combos, rmse, default = _grid_runs(trials, estimator, grid, progress, "leave-one-out")
-    others = (rmse.sum(axis=0)[None, :] - rmse) / (len(trials) - 1)     # mean over the other trials, per trial
+    others = (rmse.sum(axis=0)[None, :] - rmse) / (len(trials) - 1)  # mean over the other trials, per trial
     pick = np.argmin(others, axis=1)
-    return LeaveOneOut(estimator, metric, names, combos, tuple(t.name for t in trials), rmse,
-                       tuple(combos[c] for c in pick), rmse[np.arange(len(trials)), pick], rmse[:, default])
+    return LeaveOneOut(
+        estimator,
+        metric,
+        names,
+        combos,
+        tuple(t.name for t in trials),
+        rmse,
+        tuple(combos[c] for c in pick),
+        rmse[np.arange(len(trials)), pick],
+        rmse[:, default],
+    )
 
 
 @dataclass(frozen=True)
@@ -636,9 +736,13 @@ def leave_one_group_out(trials, estimator, grid=None, group="undisturbed", progr
         if not isinstance(runs, LeaveOneOut):
             raise ValueError(f"runs must be a LeaveOneOut of leave_one_out; got {type(runs).__name__}")
         grid = TUNED.get(estimator) if grid is None else grid
-        same = (runs.estimator == estimator and runs.trials == tuple(getattr(t, "name", None) for t in trials)
-                and grid is not None and runs.options == tuple(grid)
-                and runs.combos == tuple(itertools.product(*(tuple(grid[k]) for k in runs.options))))
+        same = (
+            runs.estimator == estimator
+            and runs.trials == tuple(getattr(t, "name", None) for t in trials)
+            and grid is not None
+            and runs.options == tuple(grid)
+            and runs.combos == tuple(itertools.product(*(tuple(grid[k]) for k in runs.options)))
+        )
         if not same:
             raise ValueError(f"runs must be a leave_one_out of {estimator!r} on the same trials and grid")
         metric, names, combos, rmse = runs.metric, runs.options, runs.combos, runs.rmse_deg
@@ -646,13 +750,26 @@ def leave_one_group_out(trials, estimator, grid=None, group="undisturbed", progr
         default = combos.index(tuple(defaults[k] for k in names))
     inside = np.array([group in t.groups for t in trials])
     if inside.all() or not inside.any():
-        raise ValueError(f"trials must hold trials both in and outside group {group!r}; got "
-                         f"{int(inside.sum())} of {len(trials)} in it")
+        raise ValueError(
+            f"trials must hold trials both in and outside group {group!r}; got "
+            f"{int(inside.sum())} of {len(trials)} in it"
+        )
     pick = np.empty(len(trials), int)
     for side in (inside, ~inside):
-        pick[side] = np.argmin(rmse[~side].mean(axis=0))          # chosen on the other side
-    return LeaveOneGroupOut(estimator, metric, group, names, combos, tuple(t.name for t in trials), inside, rmse,
-                            tuple(combos[c] for c in pick), rmse[np.arange(len(trials)), pick], rmse[:, default])
+        pick[side] = np.argmin(rmse[~side].mean(axis=0))  # chosen on the other side
+    return LeaveOneGroupOut(
+        estimator,
+        metric,
+        group,
+        names,
+        combos,
+        tuple(t.name for t in trials),
+        inside,
+        rmse,
+        tuple(combos[c] for c in pick),
+        rmse[np.arange(len(trials)), pick],
+        rmse[:, default],
+    )
 
 
 def format_loo(results, rows=(), groups=()):
@@ -683,15 +800,21 @@ def format_loo(results, rows=(), groups=()):
     if not results:
         return "leave one trial out: no tuned estimator ran"
     by_name = {g.estimator: g for g in groups}
-    lines = [f"leave one trial out: each tuned option chosen on the other {len(results[0].trials) - 1} trials "
-             "(grid: fusionlab.bench.TUNED), scored on the one left out"]
+    lines = [
+        f"leave one trial out: each tuned option chosen on the other {len(results[0].trials) - 1} trials "
+        "(grid: fusionlab.bench.TUNED), scored on the one left out"
+    ]
     if by_name:
         g0 = next(iter(by_name.values()))
-        lines.append(f"leave one group out: chosen on the trials outside '{g0.group}', scored on those in it, and "
-                     "the reverse")
+        lines.append(
+            f"leave one group out: chosen on the trials outside '{g0.group}', scored on those in it, and the reverse"
+        )
     head = "all trials / left out" + (" / group out" if by_name else "")
-    lines.append(f"{'estimator':<14}{'metric':<12}{'all trials':>11}{'left out':>10}"
-                 + (f"{'group out':>11}" if by_name else "") + f"  vs VQF ({head})")
+    lines.append(
+        f"{'estimator':<14}{'metric':<12}{'all trials':>11}{'left out':>10}"
+        + (f"{'group out':>11}" if by_name else "")
+        + f"  vs VQF ({head})"
+    )
     for r in results:
         sens = "9D" if r.metric == "total" else "6D"
         g = by_name.get(r.estimator)
@@ -704,8 +827,9 @@ def format_loo(results, rows=(), groups=()):
         if by_name:
             cells += f"{g.logo_mean:>11.2f}" if g is not None else f"{'-':>11}"
         lines.append(f"{r.estimator:<14}{r.metric:<12}{cells}  {ratio}")
-        picks = ", ".join(f"{t[:2]}: " + " ".join(f"{o}={v:g}" for o, v in zip(r.options, c))
-                          for t, c in zip(r.trials, r.chosen))
+        picks = ", ".join(
+            f"{t[:2]}: " + " ".join(f"{o}={v:g}" for o, v in zip(r.options, c)) for t, c in zip(r.trials, r.chosen)
+        )
         lines.append(f"    chosen without each trial -- {picks}")
         if g is not None:
             sides = []
@@ -713,8 +837,10 @@ def format_loo(results, rows=(), groups=()):
                 i = int(np.flatnonzero(g.in_group == inside)[0])
                 sides.append(f"{label}: " + " ".join(f"{o}={v:g}" for o, v in zip(g.options, g.chosen[i])))
             lines.append(f"    chosen for the group out -- {'; '.join(sides)}")
-    lines.append("all trials: the registered defaults, chosen on these same trials; left out / group out: the honest "
-                 "figures. VQF: its published defaults, chosen by its authors on BROAD, nothing tuned here")
+    lines.append(
+        "all trials: the registered defaults, chosen on these same trials; left out / group out: the honest "
+        "figures. VQF: its published defaults, chosen by its authors on BROAD, nothing tuned here"
+    )
     return "\n".join(lines)
 
 
@@ -744,8 +870,14 @@ def group_means(rows):
             if not sel:
                 continue
             secs = sum(r["seconds"] for r in sel)
-            row = dict(estimator=est, source=sel[0]["source"], sensors=sel[0]["sensors"], group=g,
-                       n_trials=len(sel), samples_per_s=sum(r["n_samples"] for r in sel) / secs if secs else np.inf)
+            row = dict(
+                estimator=est,
+                source=sel[0]["source"],
+                sensors=sel[0]["sensors"],
+                group=g,
+                n_trials=len(sel),
+                samples_per_s=sum(r["n_samples"] for r in sel) / secs if secs else np.inf,
+            )
             for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg", "total_aligned_deg"):
                 row[k] = float(np.mean([r[k] for r in sel]))
             out.append(row)
@@ -768,14 +900,20 @@ def format_table(rows):
         The table.
     """
     means = [g for g in group_means(rows) if g["group"] == "all_trials"]
-    lines = [f"{'estimator':<12} {'src':<9} {'sens':<4} {'trials':>6} {'total':>8} {'heading':>8} {'incl':>8} "
-             f"{'total*':>8} {'samples/s':>11}"]
+    lines = [
+        f"{'estimator':<12} {'src':<9} {'sens':<4} {'trials':>6} {'total':>8} {'heading':>8} {'incl':>8} "
+        f"{'total*':>8} {'samples/s':>11}"
+    ]
     for g in means:
-        lines.append(f"{g['estimator']:<12} {g['source']:<9} {g['sensors']:<4} {g['n_trials']:>6d} "
-                     f"{g['total_rmse_deg']:>8.2f} {g['heading_rmse_deg']:>8.2f} {g['inclination_rmse_deg']:>8.2f} "
-                     f"{g['total_aligned_deg']:>8.2f} {g['samples_per_s']:>11,.0f}")
-    lines.append("RMSE in degrees over the movement phase, mean over trials; total* = total after removing the "
-                 "constant heading offset")
+        lines.append(
+            f"{g['estimator']:<12} {g['source']:<9} {g['sensors']:<4} {g['n_trials']:>6d} "
+            f"{g['total_rmse_deg']:>8.2f} {g['heading_rmse_deg']:>8.2f} {g['inclination_rmse_deg']:>8.2f} "
+            f"{g['total_aligned_deg']:>8.2f} {g['samples_per_s']:>11,.0f}"
+        )
+    lines.append(
+        "RMSE in degrees over the movement phase, mean over trials; total* = total after removing the "
+        "constant heading offset"
+    )
     trials = sorted({r["trial"] for r in rows})
     ests = list(dict.fromkeys(r["estimator"] for r in rows))
     lines.append("")
@@ -856,7 +994,7 @@ def plot(rows, path=None):
     groups = [g for g in datasets.group_names() if any(r["group"] == g for r in gm)]
     ests = list(dict.fromkeys(r["estimator"] for r in gm))
     cell = {(r["estimator"], r["group"]): r for r in gm}
-    hatch = {r["estimator"]: "//" if r["sensors"] == "6D" else None for r in gm}   # 6D: heading is arbitrary
+    hatch = {r["estimator"]: "//" if r["sensors"] == "6D" else None for r in gm}  # 6D: heading is arbitrary
     fig, axes = plt.subplots(2, 2, figsize=(14, 8.5), constrained_layout=True)
     width = 0.8 / max(1, len(ests))
     x = np.arange(len(groups))
@@ -864,8 +1002,16 @@ def plot(rows, path=None):
     for ax, (key, label) in zip(axes.flat, METRICS):
         for i, e in enumerate(ests):
             vals = [cell[(e, g)][key] if (e, g) in cell else np.nan for g in groups]
-            ax.bar(x + (i - (len(ests) - 1) / 2) * width, vals, width, label=e, color=colors(i % 10),
-                   hatch=hatch[e], edgecolor="white", linewidth=0)
+            ax.bar(
+                x + (i - (len(ests) - 1) / 2) * width,
+                vals,
+                width,
+                label=e,
+                color=colors(i % 10),
+                hatch=hatch[e],
+                edgecolor="white",
+                linewidth=0,
+            )
         ax.set_xticks(x, groups, rotation=35, ha="right")
         ax.set_yscale("log")
         ax.set_ylabel(f"{label} RMSE (deg, log scale)")
@@ -880,8 +1026,13 @@ def plot(rows, path=None):
     ax.set_title("speed: samples processed per second")
     ax.grid(axis="y", which="both", alpha=0.3)
     handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, [f"{e} ({cell[(e, 'all_trials')]['sensors']})" for e in labels], loc="outside lower center",
-               ncol=min(len(ests), 8), fontsize=9)
+    fig.legend(
+        handles,
+        [f"{e} ({cell[(e, 'all_trials')]['sensors']})" for e in labels],
+        loc="outside lower center",
+        ncol=min(len(ests), 8),
+        fontsize=9,
+    )
     fig.suptitle("BROAD benchmark: 9D filters compare on total error, 6D filters (hatched) on inclination")
     if path is not None:
         path = Path(path)
@@ -906,21 +1057,34 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python -m fusionlab.bench", description=__doc__.split("\n")[0])
     p.add_argument("--trials", nargs="+", help="trial numbers or names (default: every trial available locally)")
     p.add_argument("--out", default=".bench", help="output folder for the CSV files and the figure (default .bench)")
-    p.add_argument("--folder", help=f"folder holding the BROAD .mat files (default: the course's data/broad/, "
-                                    f"{datasets.ENV_DIR}, cache, download)")
+    p.add_argument(
+        "--folder",
+        help=f"folder holding the BROAD .mat files (default: the course's data/broad/, "
+        f"{datasets.ENV_DIR}, cache, download)",
+    )
     p.add_argument("--estimators", nargs="+", help="only these contenders (default: all)")
     p.add_argument("--no-external", action="store_true", help="skip VQF and ahrs even when installed")
     p.add_argument("--max-samples", type=int, help="use only the first N samples of each trial (quick runs)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--no-loo", action="store_true", help="skip the leave-one-trial-out and leave-one-group-out "
-                                                         "scores of the tuned filters")
+    p.add_argument(
+        "--no-loo",
+        action="store_true",
+        help="skip the leave-one-trial-out and leave-one-group-out scores of the tuned filters",
+    )
     a = p.parse_args(argv)
     import matplotlib
-    matplotlib.use("Agg")                                  # a file, never a window
+
+    matplotlib.use("Agg")  # a file, never a window
     out = Path(a.out)
     print(f"==> BROAD benchmark: results to {out}/ (bench_trials.csv, bench_groups.csv, bench_loo.csv, bench.png)")
-    rows = run_benchmark(a.trials, folder=a.folder, names=a.estimators, include_external=not a.no_external,
-                         max_samples=a.max_samples, progress=not a.no_progress)
+    rows = run_benchmark(
+        a.trials,
+        folder=a.folder,
+        names=a.estimators,
+        include_external=not a.no_external,
+        max_samples=a.max_samples,
+        progress=not a.no_progress,
+    )
     print(format_table(rows))
     trial_names = sorted({r["trial"] for r in rows})
     tuned = [n for n in TUNED if any(r["estimator"] == n for r in rows)]
@@ -930,8 +1094,9 @@ def main(argv=None):
             trials = [t.slice(0, int(a.max_samples)) for t in trials]
         loo = [leave_one_out(trials, n, progress=not a.no_progress) for n in tuned]
         split = [t for t in trials if "undisturbed" in t.groups]
-        logo = ([leave_one_group_out(trials, r.estimator, runs=r) for r in loo]
-                if 0 < len(split) < len(trials) else [])              # the same runs, split by motion
+        logo = (
+            [leave_one_group_out(trials, r.estimator, runs=r) for r in loo] if 0 < len(split) < len(trials) else []
+        )  # the same runs, split by motion
         print()
         print(format_loo(loo, rows, logo))
         by_name = {g.estimator: g for g in logo}
@@ -939,15 +1104,25 @@ def main(argv=None):
         for r in loo:
             g = by_name.get(r.estimator)
             for i, (t, d, lo, c) in enumerate(zip(r.trials, r.default_deg, r.loo_deg, r.chosen)):
-                loo_rows.append(dict(estimator=r.estimator, metric=r.metric, trial=t, default_deg=d, left_out_deg=lo,
-                                     chosen=" ".join(f"{o}={v:g}" for o, v in zip(r.options, c)),
-                                     group_out_deg=g.logo_deg[i] if g is not None else np.nan,
-                                     group_chosen=" ".join(f"{o}={v:g}" for o, v in zip(g.options, g.chosen[i]))
-                                     if g is not None else ""))
+                loo_rows.append(
+                    dict(
+                        estimator=r.estimator,
+                        metric=r.metric,
+                        trial=t,
+                        default_deg=d,
+                        left_out_deg=lo,
+                        chosen=" ".join(f"{o}={v:g}" for o, v in zip(r.options, c)),
+                        group_out_deg=g.logo_deg[i] if g is not None else np.nan,
+                        group_chosen=" ".join(f"{o}={v:g}" for o, v in zip(g.options, g.chosen[i]))
+                        if g is not None
+                        else "",
+                    )
+                )
         write_csv(loo_rows, out / "bench_loo.csv", LOO_COLUMNS)
     write_csv(rows, out / "bench_trials.csv")
     write_csv(group_means(rows), out / "bench_groups.csv", GROUP_COLUMNS)
     import matplotlib.pyplot as plt
+
     plt.close(plot(rows, out / "bench.png"))
     return 1 if any(r["error"] for r in rows) else 0
 

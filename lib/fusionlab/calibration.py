@@ -20,6 +20,7 @@ Lab 12 adds (the sensor-error lab, seed 001 sensors note §2-4, seed 004 §2.1):
 
 Units: the caller's (m/s², rad/s, µT); Allan ``taus`` in s.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -28,10 +29,26 @@ import numpy as np
 
 from . import validate
 
-__all__ = ["TriadFit", "fit_triad", "apply_triad", "observation_matrix",
-           "six_positions", "gyro_bias_from_rest", "quadric_normal_equations", "ellipsoid_design_matrix",
-           "EllipsoidFit", "fit_ellipsoid", "apply_ellipsoid", "allan_deviation", "AllanReading", "read_arw",
-           "read_allan", "BIAS_INSTABILITY_FACTOR", "RAW_FIELD_UT", "TRIAD_SCALE"]
+__all__ = [
+    "TriadFit",
+    "fit_triad",
+    "apply_triad",
+    "observation_matrix",
+    "six_positions",
+    "gyro_bias_from_rest",
+    "quadric_normal_equations",
+    "ellipsoid_design_matrix",
+    "EllipsoidFit",
+    "fit_ellipsoid",
+    "apply_ellipsoid",
+    "allan_deviation",
+    "AllanReading",
+    "read_arw",
+    "read_allan",
+    "BIAS_INSTABILITY_FACTOR",
+    "RAW_FIELD_UT",
+    "TRIAD_SCALE",
+]
 
 
 @dataclass(frozen=True)
@@ -86,7 +103,7 @@ def observation_matrix(reference):
     n = len(a)
     O = np.zeros((n, 3, 12))
     for axis in range(3):
-        O[:, axis, 3 * axis:3 * axis + 3] = a
+        O[:, axis, 3 * axis : 3 * axis + 3] = a
         O[:, axis, 9 + axis] = 1.0
     return O.reshape(3 * n, 12)
 
@@ -98,9 +115,11 @@ def _span_message(a):
     """Say how many independent directions the reference vectors span (for a rank-deficient system)."""
     centred = np.linalg.matrix_rank(a - a.mean(axis=0), tol=1e-9 * max(1.0, np.abs(a).max()))
     count = _WORDS[len(a)] if len(a) < len(_WORDS) else str(len(a))
-    return (f"the {count} positions span only {centred} {'axis' if centred == 1 else 'axes'} (counting the "
-            "directions of their differences); "
-            "scale, misalignment and bias need positions that span all three (e.g. ±g on each axis)")
+    return (
+        f"the {count} positions span only {centred} {'axis' if centred == 1 else 'axes'} (counting the "
+        "directions of their differences); "
+        "scale, misalignment and bias need positions that span all three (e.g. ±g on each axis)"
+    )
 
 
 def fit_triad(reference, measured, *, names=("reference", "measured")):
@@ -153,8 +172,9 @@ def fit_triad(reference, measured, *, names=("reference", "measured")):
     O = observation_matrix(a)
     rank = int(np.linalg.matrix_rank(O))
     if rank < 12:
-        raise ValueError(f"{rn}: the positions leave the calibration rank-deficient (rank {rank} of 12): "
-                         + _span_message(a))
+        raise ValueError(
+            f"{rn}: the positions leave the calibration rank-deficient (rank {rank} of 12): " + _span_message(a)
+        )
     y = z.reshape(-1)
     theta, *_ = np.linalg.lstsq(O, y, rcond=None)
     resid = y - O @ theta
@@ -165,12 +185,15 @@ def fit_triad(reference, measured, *, names=("reference", "measured")):
     sv = np.linalg.svd(M, compute_uv=False)
     if sv.min() < TRIAD_SCALE[0] or sv.max() > TRIAD_SCALE[1]:
         k = float(np.exp(np.mean(np.log(np.maximum(sv, 1e-300)))))
-        raise ValueError(f"{mn} must be in the unit of {rn}; the fitted scale factors are {sv.min():.3g} to "
-                         f"{sv.max():.3g} (a triad's are within a few % of 1; overall {k:.3g}: 0.102 is {mn} in g "
-                         f"against {rn} in m/s², 9.81 the reverse, 102 {mn} in milli-g) -- convert one "
-                         f"of them")
-    return TriadFit(M=M, b=theta[9:].copy(), theta=theta, cov=cov,
-                    residual_rms=float(np.sqrt(np.mean(resid ** 2))), rank=rank)
+        raise ValueError(
+            f"{mn} must be in the unit of {rn}; the fitted scale factors are {sv.min():.3g} to "
+            f"{sv.max():.3g} (a triad's are within a few % of 1; overall {k:.3g}: 0.102 is {mn} in g "
+            f"against {rn} in m/s², 9.81 the reverse, 102 {mn} in milli-g) -- convert one "
+            f"of them"
+        )
+    return TriadFit(
+        M=M, b=theta[9:].copy(), theta=theta, cov=cov, residual_rms=float(np.sqrt(np.mean(resid**2))), rank=rank
+    )
 
 
 #: The singular values of a fitted triad's ``M`` must lie in this range (:func:`fit_triad`): real scale factors
@@ -292,9 +315,11 @@ def _check_spread(m, need):
     centred = m - m.mean(axis=0)
     rank = np.linalg.matrix_rank(centred, tol=1e-6 * max(1.0, np.abs(centred).max()))
     if rank < 3:
-        raise ValueError(f"mag: the readings span only {rank} {'axis' if rank == 1 else 'axes'} (they lie on a "
-                         f"{'line' if rank < 2 else 'plane'}); rotate the sensor about more than one axis so the "
-                         "readings cover the ellipsoid")
+        raise ValueError(
+            f"mag: the readings span only {rank} {'axis' if rank == 1 else 'axes'} (they lie on a "
+            f"{'line' if rank < 2 else 'plane'}); rotate the sensor about more than one axis so the "
+            "readings cover the ellipsoid"
+        )
 
 
 def quadric_normal_equations(mag):
@@ -319,7 +344,7 @@ def quadric_normal_equations(mag):
     m = validate.samples(mag, "mag")
     _check_spread(m, 9)
     D = ellipsoid_design_matrix(m)[:, :9]
-    return np.linalg.solve(D.T @ D, D.T @ np.ones(len(m)))            # normal equations
+    return np.linalg.solve(D.T @ D, D.T @ np.ones(len(m)))  # normal equations
 
 
 @dataclass(frozen=True)
@@ -420,7 +445,7 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     _check_spread(m, 10)
     mu = m.mean(axis=0)
     s = float(np.sqrt(np.mean(np.sum((m - mu) ** 2, axis=1))))
-    u = (m - mu) / s                                                   # well-conditioned coordinates
+    u = (m - mu) / s  # well-conditioned coordinates
     if method == "constrained":
         v = _li_griffiths(ellipsoid_design_matrix(u))
     elif method == "lsq":
@@ -433,10 +458,12 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     kk = centre_u @ A @ centre_u - d
     lam, V = np.linalg.eigh(A / kk)
     if not np.all(lam > 0):
-        raise ValueError("mag: the best-fitting quadric is not a real ellipsoid (eigenvalues "
-                         f"{np.array2string(lam, precision=3)}); the readings do not cover enough directions"
-                         + (" -- try method='constrained'" if method == "lsq" else ""))
-    W_unit = V @ np.diag(np.sqrt(lam)) @ V.T / s                       # |W_unit (m − centre)| = 1
+        raise ValueError(
+            "mag: the best-fitting quadric is not a real ellipsoid (eigenvalues "
+            f"{np.array2string(lam, precision=3)}); the readings do not cover enough directions"
+            + (" -- try method='constrained'" if method == "lsq" else "")
+        )
+    W_unit = V @ np.diag(np.sqrt(lam)) @ V.T / s  # |W_unit (m − centre)| = 1
     centre = mu + s * centre_u
     if field_strength is None:
         radius = float(np.linalg.det(W_unit) ** (-1 / 3))
@@ -445,8 +472,9 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     W = radius * W_unit
     resid = np.linalg.norm((m - centre) @ W.T, axis=1) - radius
     coeffs = v / np.linalg.norm(v)
-    return EllipsoidFit(centre=centre, W=W, radius=radius, residual_rms=float(np.sqrt(np.mean(resid ** 2))),
-                        coefficients=coeffs)
+    return EllipsoidFit(
+        centre=centre, W=W, radius=radius, residual_rms=float(np.sqrt(np.mean(resid**2))), coefficients=coeffs
+    )
 
 
 def apply_ellipsoid(fit, mag):
@@ -519,8 +547,10 @@ def allan_deviation(rate, fs, taus=None):
     else:
         taus = validate.array(taus, "taus")
         if taus.ndim != 1 or not len(taus) or np.any(taus <= 0) or np.max(taus) > len(x) / fs / 2:
-            raise ValueError(f"taus must be averaging times in s, shape (M,), each > 0 and at most half the record "
-                             f"({len(x) / fs / 2:g} s); got {np.array2string(np.atleast_1d(taus), precision=3)}")
+            raise ValueError(
+                f"taus must be averaging times in s, shape (M,), each > 0 and at most half the record "
+                f"({len(x) / fs / 2:g} s); got {np.array2string(np.atleast_1d(taus), precision=3)}"
+            )
     t, ad, err, _ = allantools.oadev(x, rate=fs, data_type="freq", taus=taus)
     return np.asarray(t), np.asarray(ad), np.asarray(err)
 
@@ -531,8 +561,10 @@ def _curve(taus, adev):
     a = validate.array(adev, "adev")
     for name, v in (("taus", t), ("adev", a)):
         if v.ndim != 1 or not len(v) or np.any(v <= 0):
-            raise ValueError(f"{name} must be a non-empty (M,) array of values > 0; got shape {v.shape}"
-                             + (f", min {float(np.min(v)):.3g}" if v.size else ""))
+            raise ValueError(
+                f"{name} must be a non-empty (M,) array of values > 0; got shape {v.shape}"
+                + (f", min {float(np.min(v)):.3g}" if v.size else "")
+            )
     validate.same_length(taus=t, adev=a)
     return t, a
 
@@ -607,8 +639,11 @@ class AllanReading:
             ``K√(τ/3)``, rate unit.
         """
         t = np.asarray(taus, dtype=float)
-        return (self.arw / np.sqrt(t), np.full_like(t, BIAS_INSTABILITY_FACTOR * self.bias_instability),
-                self.rrw * np.sqrt(t / 3))
+        return (
+            self.arw / np.sqrt(t),
+            np.full_like(t, BIAS_INSTABILITY_FACTOR * self.bias_instability),
+            self.rrw * np.sqrt(t / 3),
+        )
 
 
 def read_allan(taus, adev, adev_err=None):
@@ -647,12 +682,19 @@ def read_allan(taus, adev, adev_err=None):
         if np.any(e < 0):
             raise ValueError(f"adev_err must be >= 0 (1-σ errors; 0 where unknown); got min {float(np.min(e)):.3g}")
         if len(e) and not np.any(e > 0):
-            raise ValueError("adev_err must hold at least one known (> 0) error; got all 0 -- pass adev_err=None "
-                             "when no error is known")
+            raise ValueError(
+                "adev_err must hold at least one known (> 0) error; got all 0 -- pass adev_err=None "
+                "when no error is known"
+            )
         w = a / np.where(e > 0, e, a)
-    A = np.stack([1 / t, np.full_like(t, BIAS_INSTABILITY_FACTOR ** 2), t / 3], axis=1) / a[:, None] ** 2
+    A = np.stack([1 / t, np.full_like(t, BIAS_INSTABILITY_FACTOR**2), t / 3], axis=1) / a[:, None] ** 2
     coef, _ = nnls(A * w[:, None], w)
     N2, B2, K2 = coef
     i_min = int(np.argmin(a))
-    return AllanReading(arw=float(np.sqrt(N2)), bias_instability=float(np.sqrt(B2)), rrw=float(np.sqrt(K2)),
-                        tau_floor=float(t[i_min]), floor_min=float(a[i_min] / BIAS_INSTABILITY_FACTOR))
+    return AllanReading(
+        arw=float(np.sqrt(N2)),
+        bias_instability=float(np.sqrt(B2)),
+        rrw=float(np.sqrt(K2)),
+        tau_floor=float(t[i_min]),
+        floor_min=float(a[i_min] / BIAS_INSTABILITY_FACTOR),
+    )

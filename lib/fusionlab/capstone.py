@@ -27,6 +27,7 @@ trials the course does not ship, with the dataset authors' metrics (:func:`fusio
 tools) runs the same functions of this module on the hidden ones. :func:`bar` reads the scores of the published
 filters and the library's on the shipped trials (:data:`BAR_FILE`, made by ``python -m fusionlab.capstone``).
 """
+
 from __future__ import annotations
 
 import time
@@ -37,12 +38,37 @@ import numpy as np
 
 from . import metrics, validate
 
-__all__ = ["SHIPPED", "TUNE", "HOLD_OUT", "SECONDS_PER_SAMPLE", "MIN_SECONDS", "CAUSAL_NOISE", "CAUSAL_TOL",
-           "Criterion", "FULL_MARKS", "SENSORS", "ALLOWED_MODULES", "BOX_MODULES", "outside_box", "RUBRIC",
-           "accuracy_points", "MAX_POINTS", "GATES", "budget_seconds",
-           "causal_ks",
-           "perturb_future", "as_quaternions", "causality_change", "first_change", "prefix_change", "self_check",
-           "SelfCheck", "bar", "BAR_FILE", "make_bar"]
+__all__ = [
+    "SHIPPED",
+    "TUNE",
+    "HOLD_OUT",
+    "SECONDS_PER_SAMPLE",
+    "MIN_SECONDS",
+    "CAUSAL_NOISE",
+    "CAUSAL_TOL",
+    "Criterion",
+    "FULL_MARKS",
+    "SENSORS",
+    "ALLOWED_MODULES",
+    "BOX_MODULES",
+    "outside_box",
+    "RUBRIC",
+    "accuracy_points",
+    "MAX_POINTS",
+    "GATES",
+    "budget_seconds",
+    "causal_ks",
+    "perturb_future",
+    "as_quaternions",
+    "causality_change",
+    "first_change",
+    "prefix_change",
+    "self_check",
+    "SelfCheck",
+    "bar",
+    "BAR_FILE",
+    "make_bar",
+]
 
 #: The eight BROAD trials that ship with the course (``data/broad/``); the capstone is scored on the other 31.
 SHIPPED = (2, 7, 11, 16, 25, 27, 29, 33)
@@ -62,8 +88,18 @@ ALLOWED_MODULES = ("rotations", "metrics")
 #: ... and every module the grader's box holds: those, what they import, and what the lab's notebook needs to run
 #: (its setup cell, its checks, its plots). Each other module of the library is, in that box, a placeholder that
 #: refuses its names (the grading tools write it); a filter that calls one fails on every hidden trial.
-BOX_MODULES = ALLOWED_MODULES + ("validate", "capstone", "conventions", "earth", "guard", "plotting", "labformat",
-                                 "nbgrader_compat", "execute", "widgets")
+BOX_MODULES = ALLOWED_MODULES + (
+    "validate",
+    "capstone",
+    "conventions",
+    "earth",
+    "guard",
+    "plotting",
+    "labformat",
+    "nbgrader_compat",
+    "execute",
+    "widgets",
+)
 
 
 def outside_box(estimate):
@@ -87,6 +123,7 @@ def outside_box(estimate):
         :data:`BOX_MODULES`, numpy, scipy and the standard library.
     """
     import types
+
     if not callable(estimate):
         raise ValueError(f"estimate must be your filter, a function; got {type(estimate).__name__}")
     home = getattr(estimate, "__module__", None)
@@ -108,17 +145,17 @@ def outside_box(estimate):
             todo += [v for v in vars(obj).values() if isinstance(v, (types.FunctionType, staticmethod, classmethod))]
             continue
         fn = getattr(obj, "__func__", obj)
-        while callable(getattr(fn, "__wrapped__", None)) and id(fn.__wrapped__) not in seen:   # a decorated one
+        while callable(getattr(fn, "__wrapped__", None)) and id(fn.__wrapped__) not in seen:  # a decorated one
             seen.add(id(fn))
             fn = fn.__wrapped__
         code, glob = getattr(fn, "__code__", None), getattr(fn, "__globals__", None)
         if code is None or glob is None:
             continue
         values = []
-        for cell in getattr(fn, "__closure__", None) or ():            # names of an enclosing function
+        for cell in getattr(fn, "__closure__", None) or ():  # names of an enclosing function
             try:
                 values.append(cell.cell_contents)
-            except ValueError:                                          # a cell not filled yet
+            except ValueError:  # a cell not filled yet
                 pass
         codes = [code]
         while codes:
@@ -153,6 +190,7 @@ class Criterion:
     rule : str
         What earns them.
     """
+
     key: str
     points: float
     rule: str
@@ -170,19 +208,25 @@ FULL_MARKS = {"9D": 1.0, "6D": 0.85}
 #: The capstone's points (10): each row is earned by the filter alone, whatever the class's ranks.
 RUBRIC = (
     Criterion("runs", 2, "a valid estimate (N unit quaternions) on every hidden trial, each within its time budget"),
-    Criterion("accuracy", 8, "8 x the share of the way your mean RMSE goes from Madgwick's to VQF's, on a log scale "
-                             "(9D: total RMSE, 6D: inclination RMSE; both filters with your sensors and their default "
-                             "parameters, run by the grader on the same data as yours): 0 at Madgwick's mean or above, "
-                             "8 at VQF's or below (6D: at 0.85 x VQF's), in between in proportion to "
-                             "log(Madgwick's / yours)"),
+    Criterion(
+        "accuracy",
+        8,
+        "8 x the share of the way your mean RMSE goes from Madgwick's to VQF's, on a log scale "
+        "(9D: total RMSE, 6D: inclination RMSE; both filters with your sensors and their default "
+        "parameters, run by the grader on the same data as yours): 0 at Madgwick's mean or above, "
+        "8 at VQF's or below (6D: at 0.85 x VQF's), in between in proportion to "
+        "log(Madgwick's / yours)",
+    ),
 )
 MAX_POINTS = sum(c.points for c in RUBRIC)
 #: Conditions without which the filter earns none of the rubric's points.
-GATES = ("causal: the estimate up to sample k does not change when later samples change or are left out (a filter "
-         "that fails on the check's own calls cannot be checked, and is held like one that is not causal)",
-         "its own: it calls no published filter (the library's, VQF, ahrs...) and copies none into its code, reads no "
-         "file, does not reach around Python's imports, and does not recognise which trial it is given (an estimate "
-         "far closer to the reference than every published filter's is held until the instructor has read the code)")
+GATES = (
+    "causal: the estimate up to sample k does not change when later samples change or are left out (a filter "
+    "that fails on the check's own calls cannot be checked, and is held like one that is not causal)",
+    "its own: it calls no published filter (the library's, VQF, ahrs...) and copies none into its code, reads no "
+    "file, does not reach around Python's imports, and does not recognise which trial it is given (an estimate "
+    "far closer to the reference than every published filter's is held until the instructor has read the code)",
+)
 
 
 def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
@@ -248,7 +292,7 @@ def accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors="9D"):
     sensors = validate.choice(sensors, "sensors", tuple(SENSORS))
     points = next(c.points for c in RUBRIC if c.key == "accuracy")
     full = FULL_MARKS[sensors] * vqf_deg
-    if mean_deg <= full or madgwick_deg <= full:     # at the full mark (or no room between the two anchors)
+    if mean_deg <= full or madgwick_deg <= full:  # at the full mark (or no room between the two anchors)
         return float(points) if mean_deg <= full else 0.0
     share = np.log(madgwick_deg / mean_deg) / np.log(madgwick_deg / full)
     return float(points * np.clip(share, 0.0, 1.0))
@@ -319,7 +363,7 @@ def perturb_future(x, k, scale, rng):
         raise ValueError(f"k must leave at least one sample after it (k < {len(y) - 1}); got {k}")
     scale = validate.scalar(scale, "scale", nonnegative=True)
     rng = validate.generator(rng)
-    y[k + 1:] += scale * rng.standard_normal(y[k + 1:].shape)
+    y[k + 1 :] += scale * rng.standard_normal(y[k + 1 :].shape)
     return y
 
 
@@ -380,7 +424,7 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     q = validate.array(q, "q")
     noisy = [None if x is None else perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
     q2 = as_quaternions(run(*noisy), len(q))
-    return float(np.max(np.abs(q2[:k + 1] - q[:k + 1])))
+    return float(np.max(np.abs(q2[: k + 1] - q[: k + 1])))
 
 
 def first_change(run, gyr, acc, mag, q, ks, rng):
@@ -438,10 +482,12 @@ def prefix_change(run, gyr, acc, mag, q, k):
     k = validate.count(k, "k")
     if q.ndim != 2 or k >= len(q):
         raise ValueError(f"k must be a sample of q (k < {len(q) if q.ndim == 2 else 0}); got {k}")
-    head = [None if x is None else validate.array(x, name, dtype=float)[:k + 1]
-            for x, name in ((gyr, "gyr"), (acc, "acc"), (mag, "mag"))]
+    head = [
+        None if x is None else validate.array(x, name, dtype=float)[: k + 1]
+        for x, name in ((gyr, "gyr"), (acc, "acc"), (mag, "mag"))
+    ]
     q2 = as_quaternions(run(*head), k + 1)
-    return float(np.max(np.abs(q2 - q[:k + 1])))
+    return float(np.max(np.abs(q2 - q[: k + 1])))
 
 
 @dataclass
@@ -461,6 +507,7 @@ class SelfCheck:
     outside : list of str
         The library's modules the filter reaches that the grader's box does not hold (:func:`outside_box`).
     """
+
     rows: list = field(default_factory=list)
     sensors: str = "9D"
     causal: bool | None = None
@@ -471,8 +518,9 @@ class SelfCheck:
     def ok(self):
         """True when every trial gave a valid estimate within its budget, the filter is causal and it uses no module
         of the library that the grader's box does not hold."""
-        return (bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True
-                and not self.outside)
+        return (
+            bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True and not self.outside
+        )
 
     def mean(self, key=None):
         """The mean of one metric over the trials that ran (NaN when none did).
@@ -495,21 +543,27 @@ class SelfCheck:
     def __str__(self):
         lines = [f"{'trial':<36}{'status':<9}{'total':>8}{'heading':>9}{'inclin.':>9}   (RMSE, deg)"]
         for r in self.rows:
-            lines.append(f"{r['trial']:<36}{r['status']:<9}{r['total_deg']:8.2f}{r['heading_deg']:9.2f}"
-                         f"{r['inclination_deg']:9.2f}" + (f"   {r['message']}" if r["message"] else ""))
-        lines.append(f"{'mean':<45}{self.mean('total_deg'):8.2f}{self.mean('heading_deg'):9.2f}"
-                     f"{self.mean('inclination_deg'):9.2f}")
-        lines.append(f"a {self.sensors} filter is scored on its mean {SENSORS[self.sensors][:-4]} RMSE: "
-                     f"{self.mean():.2f} deg")
+            lines.append(
+                f"{r['trial']:<36}{r['status']:<9}{r['total_deg']:8.2f}{r['heading_deg']:9.2f}"
+                f"{r['inclination_deg']:9.2f}" + (f"   {r['message']}" if r["message"] else "")
+            )
+        lines.append(
+            f"{'mean':<45}{self.mean('total_deg'):8.2f}{self.mean('heading_deg'):9.2f}"
+            f"{self.mean('inclination_deg'):9.2f}"
+        )
+        lines.append(
+            f"a {self.sensors} filter is scored on its mean {SENSORS[self.sensors][:-4]} RMSE: {self.mean():.2f} deg"
+        )
         timed = [r for r in self.rows if r["status"] in ("ok", "timeout")]
-        held = "not known (no trial ran)" if not timed else \
-            "yes" if all(r["status"] == "ok" for r in timed) else "NO"
+        held = "not known (no trial ran)" if not timed else "yes" if all(r["status"] == "ok" for r in timed) else "NO"
         lines.append(f"time budget held on every trial: {held}")
         lines.append(self.causal_message)
         if self.outside:
-            lines.append(f"library modules the grader's box does not hold: {', '.join(self.outside)} -- the filter "
-                         "fails on every hidden trial; use numpy, scipy, math and the library's "
-                         f"{' and '.join(ALLOWED_MODULES)} only")
+            lines.append(
+                f"library modules the grader's box does not hold: {', '.join(self.outside)} -- the filter "
+                "fails on every hidden trial; use numpy, scipy, math and the library's "
+                f"{' and '.join(ALLOWED_MODULES)} only"
+            )
         return "\n".join(lines)
 
 
@@ -552,12 +606,20 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks
     out = SelfCheck(sensors=sensors, outside=outside_box(estimate))
     first = None
     for tr in trials:
-        row = dict(trial=tr.name, status="ok", message="", total_deg=np.nan, heading_deg=np.nan,
-                   inclination_deg=np.nan, seconds=np.nan, budget_s=budget_seconds(len(tr)))
+        row = dict(
+            trial=tr.name,
+            status="ok",
+            message="",
+            total_deg=np.nan,
+            heading_deg=np.nan,
+            inclination_deg=np.nan,
+            seconds=np.nan,
+            budget_s=budget_seconds(len(tr)),
+        )
         t0 = time.perf_counter()
         try:
             q = as_quaternions(estimate(tr.gyr, tr.acc, tr.mag if sensors == "9D" else None, tr.fs), len(tr))
-        except Exception as exc:                  # the student's filter: any error is reported, not raised
+        except Exception as exc:  # the student's filter: any error is reported, not raised
             row.update(status="error", message=f"{type(exc).__name__}: {str(exc)[:200]}")
             out.rows.append(row)
             continue
@@ -577,24 +639,37 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks
         tr, q = first
         rng = np.random.default_rng(seed)
         ks = causal_ks(len(tr), rng if random_ks else None)
-        run = lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, tr.fs)    # noqa: E731
+        run = lambda g, a, m: estimate(g, a, m if sensors == "9D" else None, tr.fs)  # noqa: E731
         failed = first_change(run, tr.gyr, tr.acc, tr.mag, q, ks, rng)
         if failed:
             k, change = failed
-            out.causal, out.causal_message = False, (
-                f"causality: NOT causal -- changing the samples after k = {k} of {tr.name} changed the "
-                f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)")
+            out.causal, out.causal_message = (
+                False,
+                (
+                    f"causality: NOT causal -- changing the samples after k = {k} of {tr.name} changed the "
+                    f"estimate up to k by {change:.2g} (use no later sample, and seed any random numbers)"
+                ),
+            )
         else:
             change = prefix_change(run, tr.gyr, tr.acc, tr.mag, q, ks[-1])
             if change > CAUSAL_TOL:
-                out.causal, out.causal_message = False, (
-                    f"causality: NOT causal -- given only the samples up to k = {ks[-1]} of {tr.name}, the filter's "
-                    f"estimate up to k differs by {change:.2g} from its estimate on the whole trial (use no later "
-                    "sample, nor the length of the data)")
+                out.causal, out.causal_message = (
+                    False,
+                    (
+                        f"causality: NOT causal -- given only the samples up to k = {ks[-1]} of {tr.name}, the "
+                        "filter's "
+                        f"estimate up to k differs by {change:.2g} from its estimate on the whole trial (use no later "
+                        "sample, nor the length of the data)"
+                    ),
+                )
             else:
-                out.causal, out.causal_message = True, (
-                    f"causality: causal (the output up to k is unchanged when the samples after k change, and when "
-                    f"they are left out; k = {', '.join(map(str, ks))} of {tr.name})")
+                out.causal, out.causal_message = (
+                    True,
+                    (
+                        f"causality: causal (the output up to k is unchanged when the samples after k change, and when "
+                        f"they are left out; k = {', '.join(map(str, ks))} of {tr.name})"
+                    ),
+                )
     return out
 
 
@@ -604,8 +679,17 @@ def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks
 
 #: The bar's table (:func:`make_bar` writes it, :func:`bar` reads it).
 BAR_FILE = Path(__file__).parent / "data" / "capstone_bar.csv"
-BAR_COLUMNS = ("estimator", "source", "sensors", "trial", "span", "n_samples", "total_rmse_deg",
-               "heading_rmse_deg", "inclination_rmse_deg")
+BAR_COLUMNS = (
+    "estimator",
+    "source",
+    "sensors",
+    "trial",
+    "span",
+    "n_samples",
+    "total_rmse_deg",
+    "heading_rmse_deg",
+    "inclination_rmse_deg",
+)
 
 
 def make_bar(path=BAR_FILE, progress=True):
@@ -626,6 +710,7 @@ def make_bar(path=BAR_FILE, progress=True):
         The file written.
     """
     from . import bench, datasets
+
     rows = []
     for n in SHIPPED:
         whole = datasets.load_trial(n, download=False, progress=False)
@@ -633,7 +718,7 @@ def make_bar(path=BAR_FILE, progress=True):
             for c in bench.contenders():
                 row = bench.score(c, tr)
                 if row["error"]:
-                    continue                        # TRIAD refuses free fall; the bar lists the filters that ran
+                    continue  # TRIAD refuses free fall; the bar lists the filters that ran
                 rows.append({**row, "span": span})
                 if progress:
                     print(f"{c.name:<14}{tr.name:<36}{span:<7}{row['total_rmse_deg']:7.2f} deg", flush=True)
@@ -658,6 +743,7 @@ def bar(span="whole", path=BAR_FILE):
         Columns :data:`BAR_COLUMNS`.
     """
     import csv
+
     span = validate.choice(span, "span", ("whole", "window"))
     with open(path, newline="", encoding="utf-8") as f:
         rows = [r for r in csv.DictReader(f) if r["span"] == span]

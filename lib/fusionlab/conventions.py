@@ -39,6 +39,7 @@ elementary matrices the seeds print are :func:`fusionlab.rotations.frame_rot_x` 
 Angles are radians and rates rad/s, as everywhere in the library; a leading batch axis is accepted where a
 docstring says ``(...)``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -46,10 +47,19 @@ import numpy as np
 from . import rotations, validate
 
 __all__ = [
-    "seed000_eq339", "seed000_labcode_dcm", "seed000_labcode_omega", "seed000_labcode_rates",
-    "seed000_labcode_angles", "seed000_eq379_381_printed",
-    "seed001_R_IB", "dcm_from_seed001", "dcm_to_seed001", "seed001_quat_to_euler",
-    "quat_from_seed002", "quat_to_seed002", "dcm_from_seed004",
+    "seed000_eq339",
+    "seed000_labcode_dcm",
+    "seed000_labcode_omega",
+    "seed000_labcode_rates",
+    "seed000_labcode_angles",
+    "seed000_eq379_381_printed",
+    "seed001_R_IB",
+    "dcm_from_seed001",
+    "dcm_to_seed001",
+    "seed001_quat_to_euler",
+    "quat_from_seed002",
+    "quat_to_seed002",
+    "dcm_from_seed004",
 ]
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -93,8 +103,9 @@ def seed000_eq339(roll, pitch, yaw):
         The printed product.
     """
     roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
-    return (rotations.frame_rot_z(yaw) @ rotations.frame_rot_y(pitch)
-            @ rotations.frame_rot_x(roll))                                # (000 eq 3.39, as printed)
+    return (
+        rotations.frame_rot_z(yaw) @ rotations.frame_rot_y(pitch) @ rotations.frame_rot_x(roll)
+    )  # (000 eq 3.39, as printed)
 
 
 def seed000_labcode_dcm(yaw, pitch, roll):
@@ -183,7 +194,7 @@ def seed000_labcode_angles(R):
     ndarray, shape (..., 3)
         ``[pitch, roll, yaw]``, rad.
     """
-    R = validate.rotation(R, "R", tol=0.25)     # the lab reads its drifted, unrenormalised matrix too
+    R = validate.rotation(R, "R", tol=0.25)  # the lab reads its drifted, unrenormalised matrix too
     pitch = np.arcsin(np.clip(R[..., 2, 1], -1, 1))
     roll = np.arctan2(R[..., 2, 0], R[..., 2, 2])
     yaw = np.arctan2(R[..., 0, 1], R[..., 1, 1])
@@ -232,8 +243,7 @@ def seed001_R_IB(roll, pitch, yaw):
         ``R_I^B``, inertial (NED) → body.
     """
     roll, pitch, yaw = _angles(roll=roll, pitch=pitch, yaw=yaw)
-    return (rotations.frame_rot_x(roll) @ rotations.frame_rot_y(pitch)
-            @ rotations.frame_rot_z(yaw))                                 # (001 Euler §5)
+    return rotations.frame_rot_x(roll) @ rotations.frame_rot_y(pitch) @ rotations.frame_rot_z(yaw)  # (001 Euler §5)
 
 
 def dcm_from_seed001(R_IB):

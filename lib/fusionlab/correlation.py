@@ -27,6 +27,7 @@ pipeline works in g, degrees and °/s (eq 5.6 converts to degrees before any oth
 unit-agnostic except where their docstrings say otherwise. Axis pairing (our reading of §5.3.1): the Y-Z angle is
 rotation about X and goes with the X gyro (``axis='x'``); the X-Z angle goes with the Y gyro (``axis='y'``).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -34,9 +35,23 @@ import numpy as np
 from . import accel_tilt, earth, rotations, sensors, signals, validate
 
 __all__ = [
-    "adc_to_g", "adc_to_dps", "accel_angle", "moving_average", "derivative", "cumulative_integral",
-    "gyro_increment", "ratio", "fuse", "printed_to_tilt", "pipeline", "ComplementaryFilter", "TiltKalman2",
-    "complementary_attitude", "accel_disturbance", "correlation_attitude", "COUNTS_MEDIAN_MIN",
+    "adc_to_g",
+    "adc_to_dps",
+    "accel_angle",
+    "moving_average",
+    "derivative",
+    "cumulative_integral",
+    "gyro_increment",
+    "ratio",
+    "fuse",
+    "printed_to_tilt",
+    "pipeline",
+    "ComplementaryFilter",
+    "TiltKalman2",
+    "complementary_attitude",
+    "accel_disturbance",
+    "correlation_attitude",
+    "COUNTS_MEDIAN_MIN",
 ]
 
 
@@ -71,8 +86,13 @@ def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
     >>> np.round(adc_to_g([512, 614]), 4)
     array([0.0049, 1.002 ])
     """
-    return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.1-5.3)
-                                   null_offset=null_offset)
+    return sensors.adc_to_physical(
+        counts,
+        sensor.zero_level,
+        sensor.sensitivity,
+        v_ref,  # (000 eqs 5.1-5.3)
+        null_offset=null_offset,
+    )
 
 
 def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
@@ -94,8 +114,13 @@ def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
     ndarray, shape (...)
         Angular rate, °/s.
     """
-    return sensors.adc_to_physical(counts, sensor.zero_level, sensor.sensitivity, v_ref,   # (000 eqs 5.11-5.12)
-                                   null_offset=null_offset)
+    return sensors.adc_to_physical(
+        counts,
+        sensor.zero_level,
+        sensor.sensitivity,
+        v_ref,  # (000 eqs 5.11-5.12)
+        null_offset=null_offset,
+    )
 
 
 def accel_angle(z, other, order="excel"):
@@ -132,9 +157,9 @@ def accel_angle(z, other, order="excel"):
     pair = np.stack(np.broadcast_arrays(other, z), axis=-1).reshape(-1, 2)
     validate.accel_g(np.concatenate([pair, np.zeros((len(pair), 1))], axis=1), "z and other", per_sample=len(pair) > 1)
     if order == "excel":
-        return accel_tilt.excel_atan2(z, other)                                      # (000 eqs 5.4-5.5, Excel order)
+        return accel_tilt.excel_atan2(z, other)  # (000 eqs 5.4-5.5, Excel order)
     if order == "c":
-        return np.arctan2(z, other)                                               # (000 eqs 5.4-5.5, C order)
+        return np.arctan2(z, other)  # (000 eqs 5.4-5.5, C order)
     raise ValueError(f"order must be 'excel' or 'c'; got {order!r}")
 
 
@@ -169,7 +194,7 @@ def moving_average(x, n):
     c = np.concatenate([[0.0], np.cumsum(x)])
     m = np.arange(1, len(x) + 1)
     lo = np.maximum(m - n, 0)
-    return (c[m] - c[lo]) / (m - lo)                                              # (000 eq 5.7)
+    return (c[m] - c[lo]) / (m - lo)  # (000 eq 5.7)
 
 
 def derivative(a, dt):
@@ -194,7 +219,7 @@ def derivative(a, dt):
     """
     a = validate.series(a, "a")
     dt = validate.time_step(dt, "dt")
-    return np.concatenate([[0.0], np.diff(a) / dt])                                # (000 eq 5.9)
+    return np.concatenate([[0.0], np.diff(a) / dt])  # (000 eq 5.9)
 
 
 def gyro_increment(rate, dt, rule="rectangular"):
@@ -232,11 +257,11 @@ def gyro_increment(rate, dt, rule="rectangular"):
     r = validate.series(rate, "rate")
     dt = validate.time_step(dt, "dt")
     if rule == "printed":
-        return np.concatenate([[0.0], np.diff(r) * dt])                           # (000 eq 5.13, as printed)
+        return np.concatenate([[0.0], np.diff(r) * dt])  # (000 eq 5.13, as printed)
     if rule == "rectangular":
-        return r * dt                                                             # (000 eq 5.13, corrected)
+        return r * dt  # (000 eq 5.13, corrected)
     if rule == "trapezoid":
-        return np.concatenate([[0.0], (r[1:] + r[:-1]) * dt / 2])                 # (000 eq 5.13, trapezoid)
+        return np.concatenate([[0.0], (r[1:] + r[:-1]) * dt / 2])  # (000 eq 5.13, trapezoid)
     raise ValueError(f"rule must be 'printed', 'rectangular' or 'trapezoid'; got {rule!r}")
 
 
@@ -289,7 +314,7 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
     g = np.abs(validate.array(gyro_rate, "gyro_rate"))
     a = np.abs(validate.array(accel_term, "accel_term"))
     validate.same_length(gyro_rate=g, accel_term=a)
-    return g / (g + a + validate.positive(eps, "eps"))                            # (000 eqs 5.15-5.16)
+    return g / (g + a + validate.positive(eps, "eps"))  # (000 eqs 5.15-5.16)
 
 
 def fuse(accel_deg, increment, weight, f0=None):
@@ -332,7 +357,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     prev = float(a[0]) if f0 is None else validate.scalar(f0, "f0")
     out = np.empty_like(a)
     for n in range(len(a)):
-        prev = w[n] * a[n] + (1 - w[n]) * (prev + inc[n])                         # (000 eq 5.17)
+        prev = w[n] * a[n] + (1 - w[n]) * (prev + inc[n])  # (000 eq 5.17)
         out[n] = prev
     return out
 
@@ -368,8 +393,9 @@ def printed_to_tilt(angle_deg, axis="x"):
 COUNTS_MEDIAN_MIN = 50.0
 
 
-def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0,
-             eps=1e-9):
+def pipeline(
+    counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0, eps=1e-9
+):
     """The spreadsheet of Lab 3 (000 §5.4.3): one column per step a)-l), as a pandas DataFrame.
 
     Parameters
@@ -414,12 +440,16 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
         if null.shape not in ((), (n,)):
             raise ValueError(f"{name} must be one number or one per axis, shape ({n},); got {null.shape}")
     if np.any(np.abs(acc_null) >= 1.0):
-        raise ValueError(f"acc_null must be an offset in g, under 1 in size (a null offset is a fraction of g); got "
-                         f"{float(np.max(np.abs(acc_null))):.4g} -- milli-g or m/s²?")
+        raise ValueError(
+            f"acc_null must be an offset in g, under 1 in size (a null offset is a fraction of g); got "
+            f"{float(np.max(np.abs(acc_null))):.4g} -- milli-g or m/s²?"
+        )
     if c.size and float(np.median(np.abs(c))) < COUNTS_MEDIAN_MIN:
-        raise ValueError(f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
-                         f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
-                         "counts the terminal log prints (spreadsheet.parse_terminal_log)")
+        raise ValueError(
+            f"counts must be raw ADC counts (10-bit: 0-1023, about 460-620 at rest); got a median of "
+            f"{float(np.median(np.abs(c))):.3g}, which looks like volts (0-{3.0:g} V) or g -- pass the "
+            "counts the terminal log prints (spreadsheet.parse_terminal_log)"
+        )
     dt = validate.time_step(dt, "dt")
     n_ma = validate.count(n_ma, "n_ma", 1)
     if variant not in ("meant", "printed"):
@@ -428,36 +458,49 @@ def pipeline(counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     if axis not in ("x", "y"):
         raise ValueError(f"axis must be 'x' or 'y'; got {axis!r}")
-    acc = adc_to_g(c[:, :3], acc_null)                                            # a)
+    acc = adc_to_g(c[:, :3], acc_null)  # a)
     other = acc[:, 1] if axis == "x" else acc[:, 0]
     z = acc[:, 2]
     if variant == "printed":
-        ang = accel_angle(z, other, order="c")                                    # b) C order, ≈ 90° level
+        ang = accel_angle(z, other, order="c")  # b) C order, ≈ 90° level
     else:
         # 'y': the X reading is -sin θ in the thesis frame; flip it so the tilt runs with the Y gyro
-        ang = accel_angle(z, other if axis == "x" else -other, order="excel")    # b) Excel order: the tilt
-    deg = np.degrees(ang)                                                         # c) (000 eq 5.6)
-    deg_ma = moving_average(deg, n_ma)                                            # d)
-    dA = derivative(deg_ma, dt)                                                   # e)
-    rate = adc_to_dps(c[:, 3:], gyro_null)[:, 0 if axis == "x" else 1]          # f)
-    inc = gyro_increment(rate, dt, "printed" if variant == "printed" else "rectangular")   # h)
-    cum = cumulative_integral(gyro_increment(rate, dt, "rectangular"))           # g) for plotting only
+        ang = accel_angle(z, other if axis == "x" else -other, order="excel")  # b) Excel order: the tilt
+    deg = np.degrees(ang)  # c) (000 eq 5.6)
+    deg_ma = moving_average(deg, n_ma)  # d)
+    dA = derivative(deg_ma, dt)  # e)
+    rate = adc_to_dps(c[:, 3:], gyro_null)[:, 0 if axis == "x" else 1]  # f)
+    inc = gyro_increment(rate, dt, "printed" if variant == "printed" else "rectangular")  # h)
+    cum = cumulative_integral(gyro_increment(rate, dt, "rectangular"))  # g) for plotting only
     if variant == "printed":
-        r = ratio(rate, deg, eps)                                                 # i) angle in the ratio
+        r = ratio(rate, deg, eps)  # i) angle in the ratio
         accel_for_fusion = deg
     else:
-        r = ratio(rate, moving_average(dA, n_ma), eps)                           # i) rate vs rate
+        r = ratio(rate, moving_average(dA, n_ma), eps)  # i) rate vs rate
         accel_for_fusion = deg_ma
-    w = r if accel_weight == "ratio" else 1.0 - r                                 # j)
-    fused = fuse(accel_for_fusion, inc, w)                                       # k)
-    fused_ma = moving_average(fused, n_ma)                                        # l)
+    w = r if accel_weight == "ratio" else 1.0 - r  # j)
+    fused = fuse(accel_for_fusion, inc, w)  # k)
+    fused_ma = moving_average(fused, n_ma)  # l)
     tilt = printed_to_tilt(fused, axis) if variant == "printed" else fused
     name = "y" if axis == "x" else "x"
-    return pd.DataFrame({
-        f"a_acc_{name}_g": other, "a_acc_z_g": z, "b_angle_rad": ang, "c_angle_deg": deg,
-        "d_angle_ma_deg": deg_ma, "e_dangle_dps": dA, "f_gyro_dps": rate, "g_gyro_cum_deg": cum,
-        "h_gyro_inc_deg": inc, "i_ratio": r, "j_accel_weight": w, "k_fused_deg": fused,
-        "l_fused_ma_deg": fused_ma, "tilt_deg": tilt})
+    return pd.DataFrame(
+        {
+            f"a_acc_{name}_g": other,
+            "a_acc_z_g": z,
+            "b_angle_rad": ang,
+            "c_angle_deg": deg,
+            "d_angle_ma_deg": deg_ma,
+            "e_dangle_dps": dA,
+            "f_gyro_dps": rate,
+            "g_gyro_cum_deg": cum,
+            "h_gyro_inc_deg": inc,
+            "i_ratio": r,
+            "j_accel_weight": w,
+            "k_fused_deg": fused,
+            "l_fused_ma_deg": fused_ma,
+            "tilt_deg": tilt,
+        }
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -677,7 +720,7 @@ def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
         if acc_hold < 0:
             raise ValueError(f"acc_hold must be a finite number of seconds >= 0; got {acc_hold!r}")
         k = k / (1.0 + (accel_disturbance(acc, round(acc_hold / dt) + 1) / acc_sigma) ** 2)
-    k[_free_fall(acc)] = 0.0                             # no gravity direction: trust the gyro
+    k[_free_fall(acc)] = 0.0  # no gravity direction: trust the gyro
     return _weighted_tilt_fusion(gyr, acc, dt, k)
 
 
@@ -689,8 +732,10 @@ def _free_fall(acc):
     """Samples whose specific force is too small to give a direction of gravity; the start must not be one."""
     free = np.linalg.norm(acc, axis=1) < FREE_FALL
     if len(free) and free[0]:
-        raise ValueError(f"acc reads free fall at the first sample (|acc| = {np.linalg.norm(acc[0]):.3g} m/s²): "
-                         "the initial tilt is unobservable -- start the record at rest")
+        raise ValueError(
+            f"acc reads free fall at the first sample (|acc| = {np.linalg.norm(acc[0]):.3g} m/s²): "
+            "the initial tilt is unobservable -- start the record at rest"
+        )
     return free
 
 
@@ -762,17 +807,17 @@ def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
     if accel_weight not in ("ratio", "one_minus_ratio"):
         raise ValueError(f"accel_weight must be 'ratio' or 'one_minus_ratio'; got {accel_weight!r}")
     n_ma = validate.count(n_ma, "n_ma", 1)
-    free = _free_fall(acc)                          # ours: free-fall samples hold the last tilt and get no weight
+    free = _free_fall(acc)  # ours: free-fall samples hold the last tilt and get no weight
     keep = np.maximum.accumulate(np.where(free, 0, np.arange(len(acc))))
-    tilt = np.unwrap(accel_tilt.tilt_from_accel(acc[keep]), axis=0)                            # b)-c), no ±π jumps
-    tilt_ma = np.column_stack([moving_average(tilt[:, i], n_ma) for i in range(2)])          # d)
-    dtilt = np.column_stack([moving_average(derivative(tilt_ma[:, i], dt), n_ma) for i in range(2)])   # e)
-    r = ratio(np.hypot(gyr[:, 0], gyr[:, 1]), np.hypot(dtilt[:, 0], dtilt[:, 1]), eps)     # i) rate vs rate
-    w = r if accel_weight == "ratio" else 1.0 - r                                            # j)
+    tilt = np.unwrap(accel_tilt.tilt_from_accel(acc[keep]), axis=0)  # b)-c), no ±π jumps
+    tilt_ma = np.column_stack([moving_average(tilt[:, i], n_ma) for i in range(2)])  # d)
+    dtilt = np.column_stack([moving_average(derivative(tilt_ma[:, i], dt), n_ma) for i in range(2)])  # e)
+    r = ratio(np.hypot(gyr[:, 0], gyr[:, 1]), np.hypot(dtilt[:, 0], dtilt[:, 1]), eps)  # i) rate vs rate
+    w = r if accel_weight == "ratio" else 1.0 - r  # j)
     w = np.where(free, 0.0, w)
-    roll, pitch = tilt_ma[:, 0], tilt_ma[:, 1]                # the smoothed tilt as a specific-force direction
+    roll, pitch = tilt_ma[:, 0], tilt_ma[:, 1]  # the smoothed tilt as a specific-force direction
     target = np.column_stack([np.sin(pitch), -np.sin(roll) * np.cos(pitch), -np.cos(roll) * np.cos(pitch)])
-    return _weighted_tilt_fusion(gyr, target, dt, w)                                        # k)
+    return _weighted_tilt_fusion(gyr, target, dt, w)  # k)
 
 
 def _imu_args(gyr, acc, fs):
@@ -792,23 +837,31 @@ def _weighted_tilt_fusion(gyr, acc, dt, k):
     dq = rotations.rotvec_to_quat(gyr * dt)
     out = np.empty((len(gyr), 4))
     for n in range(len(gyr)):
-        a, b, c, d = dq[n]                                       # predict: q ⊗ Δq (body-frame increment)
-        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
-                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
-        fx, fy, fz = acc[n]                                      # specific force rotated to NED: C_bn f
+        a, b, c, d = dq[n]  # predict: q ⊗ Δq (body-frame increment)
+        w, x, y, z = (
+            w * a - x * b - y * c - z * d,
+            w * b + x * a + y * d - z * c,
+            w * c - x * d + y * a + z * b,
+            w * d + x * c - y * b + z * a,
+        )
+        fx, fy, fz = acc[n]  # specific force rotated to NED: C_bn f
         nx = (1 - 2 * (y * y + z * z)) * fx + 2 * (x * y - w * z) * fy + 2 * (x * z + w * y) * fz
         ny = 2 * (x * y + w * z) * fx + (1 - 2 * (x * x + z * z)) * fy + 2 * (y * z - w * x) * fz
         nz = 2 * (x * z - w * y) * fx + 2 * (y * z + w * x) * fy + (1 - 2 * (x * x + y * y)) * fz
         norm = (nx * nx + ny * ny + nz * nz) ** 0.5
-        if norm > 0:                                             # free fall: no tilt information this sample
-            ex, ey = -ny / norm, nx / norm                       # (f̂ × up), up = (0, 0, -1) in NED
+        if norm > 0:  # free fall: no tilt information this sample
+            ex, ey = -ny / norm, nx / norm  # (f̂ × up), up = (0, 0, -1) in NED
             s = (ex * ex + ey * ey) ** 0.5
             if s > 1e-15:
-                ang = k[n] * np.arctan2(s, -nz / norm)           # the fraction k of the tilt error
+                ang = k[n] * np.arctan2(s, -nz / norm)  # the fraction k of the tilt error
                 h = np.sin(ang / 2) / s
-                cw, cx, cy = np.cos(ang / 2), ex * h, ey * h     # correction about a horizontal nav axis: c ⊗ q
-                w, x, y, z = (cw * w - cx * x - cy * y, cw * x + cx * w + cy * z,
-                              cw * y - cx * z + cy * w, cw * z + cx * y - cy * x)
+                cw, cx, cy = np.cos(ang / 2), ex * h, ey * h  # correction about a horizontal nav axis: c ⊗ q
+                w, x, y, z = (
+                    cw * w - cx * x - cy * y,
+                    cw * x + cx * w + cy * z,
+                    cw * y - cx * z + cy * w,
+                    cw * z + cx * y - cy * x,
+                )
         m = (w * w + x * x + y * y + z * z) ** 0.5
         w, x, y, z = w / m, x / m, y / m, z / m
         out[n] = (w, x, y, z)

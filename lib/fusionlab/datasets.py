@@ -45,6 +45,7 @@ A trial that is nowhere and cannot be downloaded raises :class:`DataMissing` (a 
 message says where the loader looked and how to get the file; :func:`missing_trials` lists those of the session,
 so that a notebook can tell a student that a later cell failed for want of data, not for an unfinished exercise.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -67,16 +68,34 @@ import numpy as np
 
 from . import signals, validate
 
-__all__ = ["BROAD_URL", "ENV_DIR", "ENV_CACHE", "ENV_URL", "SHIPPED_DIR", "DataMissing", "TrialInfo",
-           "BroadTrial", "list_trials", "group_names", "trial_name", "known_sha256", "file_sha256", "cache_dir",
-           "shipped_dir", "available_trials", "missing_trials", "fetch_trial", "load_trial", "broad"]
+__all__ = [
+    "BROAD_URL",
+    "ENV_DIR",
+    "ENV_CACHE",
+    "ENV_URL",
+    "SHIPPED_DIR",
+    "DataMissing",
+    "TrialInfo",
+    "BroadTrial",
+    "list_trials",
+    "group_names",
+    "trial_name",
+    "known_sha256",
+    "file_sha256",
+    "cache_dir",
+    "shipped_dir",
+    "available_trials",
+    "missing_trials",
+    "fetch_trial",
+    "load_trial",
+    "broad",
+]
 
 #: Published address of the dataset's ``.mat`` files (a trial is ``BROAD_URL + name + '.mat'``).
 BROAD_URL = "https://github.com/dlaidig/broad/raw/main/data_mat/"
 ENV_DIR = "FUSIONLAB_BROAD_DIR"
 ENV_CACHE = "FUSIONLAB_CACHE"
 ENV_URL = "FUSIONLAB_BROAD_URL"
-
 
 
 def _course_data_dir():
@@ -118,7 +137,7 @@ class DataMissing(FileNotFoundError):
         return [f"DataMissing: {self}"]
 
 
-_MISSING = {}                                              # trial name -> message, for this session
+_MISSING = {}  # trial name -> message, for this session
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -141,6 +160,7 @@ class TrialInfo:
     groups : tuple of str
         The groups the trial belongs to (see :func:`group_names`).
     """
+
     number: int
     name: str
     description: str
@@ -151,8 +171,10 @@ class TrialInfo:
 def _catalogue():
     text = (resources.files("fusionlab") / "data" / "broad_trials.json").read_text(encoding="utf-8")
     info = json.loads(text)
-    trials = tuple(TrialInfo(int(name[:2]), name, t["description"], tuple(t["groups"]))
-                   for name, t in sorted(info["trials"].items()))
+    trials = tuple(
+        TrialInfo(int(name[:2]), name, t["description"], tuple(t["groups"]))
+        for name, t in sorted(info["trials"].items())
+    )
     groups = tuple(g["name"] for g in info["groups"])
     return trials, groups
 
@@ -249,17 +271,22 @@ def trial_name(name_or_number):
         if not key.isdigit():
             close = difflib.get_close_matches(key, names, n=3, cutoff=0.5)
             hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
-            raise ValueError(f"name_or_number must be a BROAD trial name or number 1-{len(names)}; got {key!r}"
-                             f"{hint} (datasets.broad.list_trials() lists them)")
+            raise ValueError(
+                f"name_or_number must be a BROAD trial name or number 1-{len(names)}; got {key!r}"
+                f"{hint} (datasets.broad.list_trials() lists them)"
+            )
         number = int(key)
     else:
-        raise ValueError(f"name_or_number must be a trial number (int) or name (str); "
-                         f"got {type(name_or_number).__name__}")
+        raise ValueError(
+            f"name_or_number must be a trial number (int) or name (str); got {type(name_or_number).__name__}"
+        )
     for t in trials:
         if t.number == number:
             return t.name
-    raise ValueError(f"name_or_number must be a trial number from 1 to {len(names)}; got {number} "
-                     "(datasets.broad.list_trials() lists them)")
+    raise ValueError(
+        f"name_or_number must be a trial number from 1 to {len(names)}; got {number} "
+        "(datasets.broad.list_trials() lists them)"
+    )
 
 
 def known_sha256(name_or_number):
@@ -315,8 +342,10 @@ def _env_dir(strict=True):
         return None
     d = Path(env).expanduser()
     if not d.is_dir():
-        msg = (f"{ENV_DIR} names a folder that does not exist: {d} -- point it at the folder that holds the BROAD "
-               f".mat files, or unset it")
+        msg = (
+            f"{ENV_DIR} names a folder that does not exist: {d} -- point it at the folder that holds the BROAD "
+            f".mat files, or unset it"
+        )
         if strict:
             raise FileNotFoundError(msg)
         warnings.warn(msg + "; it is ignored", stacklevel=3)
@@ -332,8 +361,10 @@ def _folder(folder):
     except TypeError:
         raise ValueError(f"folder must be a path (str or Path) or None; got {type(folder).__name__}") from None
     if not d.is_dir():
-        raise FileNotFoundError(f"folder does not exist: {d} -- pass the folder that holds the BROAD .mat files, "
-                                f"or folder=None to use {ENV_DIR}, the cache or a download")
+        raise FileNotFoundError(
+            f"folder does not exist: {d} -- pass the folder that holds the BROAD .mat files, "
+            f"or folder=None to use {ENV_DIR}, the cache or a download"
+        )
     return d
 
 
@@ -366,8 +397,10 @@ def _check_user_file(path, expected):
     if expected is not None:
         got = file_sha256(path)
         if got != expected:
-            raise ValueError(f"checksum mismatch for {path}: sha256 is {got}, expected {expected} -- the file is "
-                             "corrupt or truncated; copy it again from the published dataset")
+            raise ValueError(
+                f"checksum mismatch for {path}: sha256 is {got}, expected {expected} -- the file is "
+                "corrupt or truncated; copy it again from the published dataset"
+            )
     return path
 
 
@@ -451,7 +484,7 @@ def fetch_trial(name_or_number, folder=None, download=True, progress=True):
     """
     name = trial_name(name_or_number)
     path = _fetch(name, folder, download, progress)
-    _MISSING.pop(name, None)                               # found after all (e.g. downloaded once back online)
+    _MISSING.pop(name, None)  # found after all (e.g. downloaded once back online)
     return path
 
 
@@ -462,15 +495,17 @@ def _fetch(name, folder, download, progress):
     if d is not None:
         path = d / fname
         if not path.is_file():
-            raise FileNotFoundError(f"trial {name} not found in folder {d} (expected {path}) -- pass the folder "
-                                    f"that holds it, or folder=None to use {ENV_DIR}, the cache or a download")
+            raise FileNotFoundError(
+                f"trial {name} not found in folder {d} (expected {path}) -- pass the folder "
+                f"that holds it, or folder=None to use {ENV_DIR}, the cache or a download"
+            )
         return _check_user_file(path, expected)
     shipped = shipped_dir()
     if shipped is not None and (shipped / fname).is_file():
         return _check_user_file(shipped / fname, expected)
     try:
         env, env_problem = _env_dir(), None
-    except FileNotFoundError as exc:                       # fatal only if the trial is nowhere else (below)
+    except FileNotFoundError as exc:  # fatal only if the trial is nowhere else (below)
         env, env_problem = None, str(exc)
     if env is not None and (env / fname).is_file():
         return _check_user_file(env / fname, expected)
@@ -482,28 +517,40 @@ def _fetch(name, folder, download, progress):
             if env_problem:
                 warnings.warn(f"{env_problem}; it is ignored, trial {name} is loaded from the cache", stacklevel=3)
             return path
-        if not download:                                   # never delete nor re-fetch what we may not replace
-            raise ValueError(f"cached file {path} fails its checksum (corrupt or truncated) and download=False, so "
-                             "it is not fetched again -- delete it and load with download=True, or point "
-                             f"{ENV_DIR} at a verified copy")
-        warnings.warn(f"cached file {path} fails its checksum (corrupt or truncated); fetching it again",
-                      stacklevel=2)
+        if not download:  # never delete nor re-fetch what we may not replace
+            raise ValueError(
+                f"cached file {path} fails its checksum (corrupt or truncated) and download=False, so "
+                "it is not fetched again -- delete it and load with download=True, or point "
+                f"{ENV_DIR} at a verified copy"
+            )
+        warnings.warn(f"cached file {path} fails its checksum (corrupt or truncated); fetching it again", stacklevel=2)
         path.unlink()
     if env_problem:
-        raise _missing(name, f"BROAD trial {name} is missing: {env_problem}, and the trial is not in the course's "
-                             f"data/broad/ nor the cache ({cache})")
+        raise _missing(
+            name,
+            f"BROAD trial {name} is missing: {env_problem}, and the trial is not in the course's "
+            f"data/broad/ nor the cache ({cache})",
+        )
     looked = ", ".join(str(p) for p in [d for d in (shipped, env) if d is not None] + [cache])
     url = (os.environ.get(ENV_URL) or BROAD_URL).rstrip("/") + "/" + fname
-    target = env or shipped or SHIPPED_DIR                 # the course's data/broad/ even when it was not copied
-    put = (f"put it in {target}" + ("" if env else f" (or in a folder named by the environment variable {ENV_DIR})")
-           if target is not None else f"put it in a folder and set the environment variable {ENV_DIR} to that folder")
-    if expected is not None and shipped is None:           # the trials with a known checksum are the shipped ones
+    target = env or shipped or SHIPPED_DIR  # the course's data/broad/ even when it was not copied
+    put = (
+        f"put it in {target}" + ("" if env else f" (or in a folder named by the environment variable {ENV_DIR})")
+        if target is not None
+        else f"put it in a folder and set the environment variable {ENV_DIR} to that folder"
+    )
+    if expected is not None and shipped is None:  # the trials with a known checksum are the shipped ones
         put += "; a complete copy of the course has it in data/broad/"
-    get_it = (f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once and "
-              f"checked), or download {url} yourself and {put}.")
+    get_it = (
+        f"To get it: connect to the internet and run this again (the file, about 4 MB, is downloaded once and "
+        f"checked), or download {url} yourself and {put}."
+    )
     if not download:
-        raise _missing(name, f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) and "
-                             f"download=False. {get_it}")
+        raise _missing(
+            name,
+            f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) and "
+            f"download=False. {get_it}",
+        )
     cache.mkdir(parents=True, exist_ok=True)
     sha = None
     for attempt in (1, 2):
@@ -512,20 +559,28 @@ def _fetch(name, folder, download, progress):
             break
         except _BadDownload as exc:
             if attempt == 2:
-                raise ValueError(f"download of trial {name} from {url} failed verification twice ({exc}); "
-                                 f"nothing was kept -- try again later, or set {ENV_DIR} to a verified copy") from None
+                raise ValueError(
+                    f"download of trial {name} from {url} failed verification twice ({exc}); "
+                    f"nothing was kept -- try again later, or set {ENV_DIR} to a verified copy"
+                ) from None
         except (urllib.error.URLError, http.client.HTTPException, OSError) as exc:
             if isinstance(exc, urllib.error.HTTPError):
-                exc.close()                                # an HTTP error carries an open response
+                exc.close()  # an HTTP error carries an open response
                 reason = exc
             else:
                 reason = getattr(exc, "reason", None) or exc
-            raise _missing(name, f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) "
-                                 f"and the download from {url} failed ({reason}). {get_it}") from None
+            raise _missing(
+                name,
+                f"BROAD trial {name} is missing: it is not on this computer (looked in {looked}) "
+                f"and the download from {url} failed ({reason}). {get_it}",
+            ) from None
     if expected is None:
         _sidecar(path).write_text(f"{sha}  {fname}\n")
-        warnings.warn(f"trial {name} downloaded from {url} has no checksum known to fusionlab; kept in {path} "
-                      f"unverified (sha256 {sha})", stacklevel=2)
+        warnings.warn(
+            f"trial {name} downloaded from {url} has no checksum known to fusionlab; kept in {path} "
+            f"unverified (sha256 {sha})",
+            stacklevel=2,
+        )
     return path
 
 
@@ -540,8 +595,15 @@ def _download(url, dest, expected, progress):
         with os.fdopen(fd, "wb") as out, urllib.request.urlopen(url, timeout=30) as resp:
             length = resp.headers.get("Content-Length")
             length = int(length) if length and length.isdigit() else None
-            with tqdm(total=length, unit="B", unit_scale=True, unit_divisor=1024, desc=dest.name,
-                      disable=not progress, leave=False) as bar:
+            with tqdm(
+                total=length,
+                unit="B",
+                unit_scale=True,
+                unit_divisor=1024,
+                desc=dest.name,
+                disable=not progress,
+                leave=False,
+            ) as bar:
                 while True:
                     try:
                         chunk = resp.read(_CHUNK)
@@ -558,7 +620,7 @@ def _download(url, dest, expected, progress):
         sha = h.hexdigest()
         if expected is not None and sha != expected:
             raise _BadDownload(f"checksum mismatch: sha256 {sha}, expected {expected}")
-        os.replace(tmp, dest)                              # atomic: dest is either absent or complete
+        os.replace(tmp, dest)  # atomic: dest is either absent or complete
         return sha
     finally:
         if os.path.exists(tmp):
@@ -596,6 +658,7 @@ class BroadTrial(signals.Sampled):
     movement : ndarray of bool, shape (N,)
         Samples scored by the BROAD metrics.
     """
+
     name: str
     groups: tuple
     description: str
@@ -625,8 +688,17 @@ class BroadTrial(signals.Sampled):
         n = len(self.gyr[s])
         if n == 0:
             raise ValueError(f"start, stop must select at least one sample of {len(self)}; got {start}:{stop}")
-        return _make_trial(self.name, self.groups, self.description, self.fs, self.gyr[s], self.acc[s],
-                           self.mag[s], self.quat_ref[s], self.movement[s])
+        return _make_trial(
+            self.name,
+            self.groups,
+            self.description,
+            self.fs,
+            self.gyr[s],
+            self.acc[s],
+            self.mag[s],
+            self.quat_ref[s],
+            self.movement[s],
+        )
 
     def window(self, rest=5.0, length=35.0):
         """A piece of the trial for a quick run: from ``rest`` seconds before its movement phase starts, ``length``
@@ -653,19 +725,30 @@ class BroadTrial(signals.Sampled):
 
     def __repr__(self):
         lost = int(np.isnan(self.quat_ref).any(axis=-1).sum())
-        return (f"BroadTrial({self.name!r}, {len(self)} samples at {self.fs:.2f} Hz ({self.duration:.1f} s), "
-                f"movement {int(self.movement.sum())} samples, reference lost in {lost})")
+        return (
+            f"BroadTrial({self.name!r}, {len(self)} samples at {self.fs:.2f} Hz ({self.duration:.1f} s), "
+            f"movement {int(self.movement.sum())} samples, reference lost in {lost})"
+        )
 
 
 def _frozen(a, dtype=float):
-    a = np.array(a, dtype=dtype)                          # a private copy, then locked
+    a = np.array(a, dtype=dtype)  # a private copy, then locked
     a.setflags(write=False)
     return a
 
 
 def _make_trial(name, groups, description, fs, gyr, acc, mag, quat_ref, movement):
-    return BroadTrial(name, tuple(groups), description, float(fs), _frozen(gyr), _frozen(acc), _frozen(mag),
-                      _frozen(quat_ref), _frozen(movement, bool))
+    return BroadTrial(
+        name,
+        tuple(groups),
+        description,
+        float(fs),
+        _frozen(gyr),
+        _frozen(acc),
+        _frozen(mag),
+        _frozen(quat_ref),
+        _frozen(movement, bool),
+    )
 
 
 def _loadmat(path, name):
@@ -678,14 +761,18 @@ def _loadmat(path, name):
 
     try:
         m = scipy.io.loadmat(str(path))
-    except Exception as exc:                               # scipy raises several kinds (OSError, ValueError...)
-        raise ValueError(f"{path} is not a readable BROAD .mat file ({type(exc).__name__}: {exc}) -- delete it and "
-                         "load the trial again") from None
+    except Exception as exc:  # scipy raises several kinds (OSError, ValueError...)
+        raise ValueError(
+            f"{path} is not a readable BROAD .mat file ({type(exc).__name__}: {exc}) -- delete it and "
+            "load the trial again"
+        ) from None
     info = " ".join(str(x) for x in np.asarray(m.get("info", [])).reshape(-1))
     said = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("Trial:")), None)
     if said is not None and said != name:
-        raise ValueError(f"{path} holds BROAD trial {said!r}, not {name!r} (its info text says so): a file saved "
-                         f"under another trial's name -- rename it to {said}.mat or fetch {name} again")
+        raise ValueError(
+            f"{path} holds BROAD trial {said!r}, not {name!r} (its info text says so): a file saved "
+            f"under another trial's name -- rename it to {said}.mat or fetch {name} again"
+        )
     return m
 
 
@@ -702,7 +789,7 @@ def _read_mat(path, name):
     movement = np.asarray(m["movement"]).reshape(-1)
     validate.same_length(imu_gyr=gyr, imu_acc=acc, imu_mag=mag, opt_quat=quat, movement=movement)
     quat = quat.copy()
-    quat[np.isnan(quat).any(axis=-1)] = np.nan             # a partly lost sample is lost
+    quat[np.isnan(quat).any(axis=-1)] = np.nan  # a partly lost sample is lost
     fs = validate.positive(np.asarray(m["sampling_rate"]).reshape(-1)[0], f"{name}: sampling_rate")
     return n, fs, gyr, acc, mag, quat, movement.astype(bool)
 
@@ -757,10 +844,21 @@ def load_trial(name_or_number, folder=None, download=True, progress=True):
 
 #: The BROAD part of this module under one name: ``datasets.broad.load_trial(2)``.
 broad = types.SimpleNamespace(
-    URL=BROAD_URL, TrialInfo=TrialInfo, Trial=BroadTrial, DataMissing=DataMissing, list_trials=list_trials,
-    group_names=group_names, trial_name=trial_name, known_sha256=known_sha256, cache_dir=cache_dir,
-    shipped_dir=shipped_dir, available_trials=available_trials, missing_trials=missing_trials,
-    fetch_trial=fetch_trial, load_trial=load_trial)
+    URL=BROAD_URL,
+    TrialInfo=TrialInfo,
+    Trial=BroadTrial,
+    DataMissing=DataMissing,
+    list_trials=list_trials,
+    group_names=group_names,
+    trial_name=trial_name,
+    known_sha256=known_sha256,
+    cache_dir=cache_dir,
+    shipped_dir=shipped_dir,
+    available_trials=available_trials,
+    missing_trials=missing_trials,
+    fetch_trial=fetch_trial,
+    load_trial=load_trial,
+)
 
 
 # ----------------------------------------------------------------------------------------------------------------

@@ -41,16 +41,33 @@ from are in :class:`fusionlab.dcm_filter.AhrsTuning` and :class:`fusionlab.gpsin
 gravity (the thesis gives no value); no Earth model is used (as in the thesis); :mod:`fusionlab.earth` has the
 WGS-84 one for comparison.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import rotations, validate
 
-__all__ = ["G", "INCREMENT_TOL", "A_matrix", "A_with_gyro_error", "row_propagate", "ahrs_transition",
-           "ahrs_process_noise", "accel_to_seed004", "accel_measurement_matrix", "mag_reference",
-           "mag_measurement_matrix", "orthogonality_pseudo_measurement", "orthogonality_covariance", "rows_to_dcm",
-           "orthonormalize", "level_and_compass", "inclination_from", "trusted_mask"]
+__all__ = [
+    "G",
+    "INCREMENT_TOL",
+    "A_matrix",
+    "A_with_gyro_error",
+    "row_propagate",
+    "ahrs_transition",
+    "ahrs_process_noise",
+    "accel_to_seed004",
+    "accel_measurement_matrix",
+    "mag_reference",
+    "mag_measurement_matrix",
+    "orthogonality_pseudo_measurement",
+    "orthogonality_covariance",
+    "rows_to_dcm",
+    "orthonormalize",
+    "level_and_compass",
+    "inclination_from",
+    "trusted_mask",
+]
 
 #: The constant gravity of the thesis' AHRS and GPS/INS models, m/s² (standard gravity; the thesis gives no value).
 G = 9.80665
@@ -122,8 +139,8 @@ def A_with_gyro_error(A, bias, dt, noise=None):
     A = validate.rotation(A, "A", tol=INCREMENT_TOL)
     b = validate.vectors(bias, "bias")
     dt = validate.time_step(dt, "dt")
-    e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt      # (004 eq 6.9)
-    return A + rotations.skew(e)                                                     # (004 eq 6.10)
+    e = b * dt if noise is None else (b + validate.vectors(noise, "noise")) * dt  # (004 eq 6.9)
+    return A + rotations.skew(e)  # (004 eq 6.10)
 
 
 def row_propagate(c, A_tilde, bias, dt):
@@ -153,7 +170,7 @@ def row_propagate(c, A_tilde, bias, dt):
     A_tilde = validate.rotation(A_tilde, "A_tilde", tol=INCREMENT_TOL)
     b = validate.vectors(bias, "bias")
     dt = validate.time_step(dt, "dt")
-    return c @ A_tilde - dt * np.cross(c, b)                                          # (004 eq 6.11)
+    return c @ A_tilde - dt * np.cross(c, b)  # (004 eq 6.11)
 
 
 def ahrs_transition(c1, c3, A_tilde, dt):
@@ -187,10 +204,10 @@ def ahrs_transition(c1, c3, A_tilde, dt):
 
 def _transition(c1, c3, A_tilde, dt):
     F = np.eye(9)
-    F[0:3, 0:3] = F[3:6, 3:6] = A_tilde.T                                            # (004 eq 6.11)
-    S1, S3 = rotations.skew(np.stack([c1, c3]))                                      # [ĉ1×], [ĉ3×]
+    F[0:3, 0:3] = F[3:6, 3:6] = A_tilde.T  # (004 eq 6.11)
+    S1, S3 = rotations.skew(np.stack([c1, c3]))  # [ĉ1×], [ĉ3×]
     F[0:3, 6:9] = -dt * S1
-    F[3:6, 6:9] = -dt * S3                                                           # (004 eq 6.12: b_k = b_k-1)
+    F[3:6, 6:9] = -dt * S3  # (004 eq 6.12: b_k = b_k-1)
     return F
 
 
@@ -227,14 +244,14 @@ def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
     bias_walk = validate.scalar(bias_walk, "bias_walk")
     if gyro_noise < 0 or bias_walk < 0:
         raise ValueError(f"gyro_noise and bias_walk must be >= 0; got {gyro_noise}, {bias_walk}")
-    return _process_noise(c1, c3, dt, gyro_noise ** 2, bias_walk ** 2)
+    return _process_noise(c1, c3, dt, gyro_noise**2, bias_walk**2)
 
 
 def _process_noise(c1, c3, dt, qg, qb):
-    S = rotations.skew(np.stack([c1, c3])).reshape(6, 3)                             # [ĉ1×]; [ĉ3×]
+    S = rotations.skew(np.stack([c1, c3])).reshape(6, 3)  # [ĉ1×]; [ĉ3×]
     Q = np.zeros((9, 9))
-    Q[0:6, 0:6] = qg * dt * (S @ S.T)                                                # (004 eq 6.13, DCM part)
-    Q[6:9, 6:9] = qb * dt * np.eye(3)                                                # (004 eq 6.13, bias part)
+    Q[0:6, 0:6] = qg * dt * (S @ S.T)  # (004 eq 6.13, DCM part)
+    Q[6:9, 6:9] = qb * dt * np.eye(3)  # (004 eq 6.13, bias part)
     return Q
 
 
@@ -277,7 +294,7 @@ def accel_measurement_matrix(g=G):
     """
     g = validate.positive(g, "g")
     H = np.zeros((3, 9))
-    H[:, 3:6] = g * np.eye(3)                                                        # (004 eq 6.16)
+    H[:, 3:6] = g * np.eye(3)  # (004 eq 6.16)
     return H
 
 
@@ -322,7 +339,7 @@ def mag_measurement_matrix(inclination):
     hN, _, hD = mag_reference(validate.scalar(inclination, "inclination"))
     H = np.zeros((3, 9))
     H[:, 0:3] = hN * np.eye(3)
-    H[:, 3:6] = hD * np.eye(3)                                                       # (004 eq 6.19)
+    H[:, 3:6] = hD * np.eye(3)  # (004 eq 6.19)
     return H
 
 
@@ -357,12 +374,12 @@ def orthogonality_pseudo_measurement(c1, c3):
 
 
 def _ortho(c1, c3):
-    r = np.array([1.0 - c1 @ c1, 1.0 - c3 @ c3, -(c1 @ c3)])                         # (004 eq 6.24)
+    r = np.array([1.0 - c1 @ c1, 1.0 - c3 @ c3, -(c1 @ c3)])  # (004 eq 6.24)
     H = np.zeros((3, 9))
     H[0, 0:3] = 2 * c1
     H[1, 3:6] = 2 * c3
     H[2, 0:3] = c3
-    H[2, 3:6] = c1                                                                   # (004 eq 6.26)
+    H[2, 3:6] = c1  # (004 eq 6.26)
     return r, H
 
 
@@ -398,7 +415,7 @@ def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
         raise ValueError(f"rho must be in (0, 1); got {rho!r}")
     R_i = validate.scalar(R_i, "R_i", nonnegative=True)
     R_ss = validate.scalar(R_ss, "R_ss", nonnegative=True)
-    return rho ** k * R_i + R_ss                                                     # (004 eq 6.27)
+    return rho**k * R_i + R_ss  # (004 eq 6.27)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -445,8 +462,10 @@ def orthonormalize(C):
     """
     C = validate.matrices(C, "C")
     if np.any(np.linalg.matrix_rank(C) < 2):
-        raise ValueError("C must be nearly a rotation (rank 3; rank 2 is completed); got a matrix of rank < 2, "
-                         "which has no nearest rotation")
+        raise ValueError(
+            "C must be nearly a rotation (rank 3; rank 2 is completed); got a matrix of rank < 2, "
+            "which has no nearest rotation"
+        )
     U, _, Vt = np.linalg.svd(C)
     R = U @ Vt
     neg = np.linalg.det(R) < 0
@@ -485,11 +504,10 @@ def level_and_compass(acc_b, mag_b):
         raise ValueError("acc_b must not be zero-length")
     if np.any(np.linalg.norm(m, axis=-1) == 0):
         raise ValueError("mag_b must not be zero-length: a zero field has no heading")
-    pitch = np.arcsin(np.clip(-a[..., 0] / n, -1, 1))                                # (004 eq 4.22)
-    roll = np.arctan2(a[..., 1], a[..., 2])                                          # (004 eq 4.23)
+    pitch = np.arcsin(np.clip(-a[..., 0] / n, -1, 1))  # (004 eq 4.22)
+    roll = np.arctan2(a[..., 1], a[..., 2])  # (004 eq 4.23)
     sr, cr, sp, cp = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
-    yaw = np.arctan2(-m[..., 1] * cr + m[..., 2] * sr,
-                     m[..., 0] * cp + m[..., 1] * sr * sp + m[..., 2] * cr * sp)
+    yaw = np.arctan2(-m[..., 1] * cr + m[..., 2] * sr, m[..., 0] * cp + m[..., 1] * sr * sp + m[..., 2] * cr * sp)
     return np.stack([roll, pitch, yaw], -1)
 
 

@@ -27,6 +27,7 @@ The thesis gives the structure (states, F, H, the decay ``ρ = 0.92``) but **no 
 thresholds, the orthogonality covariances ``R_i`` and ``R_ss``, or the initial covariance. Every number in
 :class:`AhrsTuning` and :data:`HANDHELD` is ours; each field says what it is.
 """
+
 from __future__ import annotations
 
 import math as _m
@@ -100,6 +101,7 @@ class AhrsTuning:
         The low-passed reading is used only while the bias standard deviation of the filter (root of the trace of
         its bias covariance) is below this, rad/s. None: always, from the first sample (as VQF does).
     """
+
     #: gyro white noise density, rad/s/√Hz (Table 6.1: 0.1 °/s/√Hz)
     gyro_noise: float = np.radians(0.1)
     #: gyro-bias random walk, rad/s/√s
@@ -152,12 +154,24 @@ class AhrsTuning:
     acc_lp_bias_gate: float | None = np.radians(0.2)
 
     def __post_init__(self):
-        for f in ("gyro_noise", "acc_sigma", "acc_sigma_untrusted", "acc_tol", "mag_sigma", "mag_sigma_untrusted",
-                  "mag_tol", "hold", "R_i", "sigma_c0", "sigma_b0", "dip_tau"):
+        for f in (
+            "gyro_noise",
+            "acc_sigma",
+            "acc_sigma_untrusted",
+            "acc_tol",
+            "mag_sigma",
+            "mag_sigma_untrusted",
+            "mag_tol",
+            "hold",
+            "R_i",
+            "sigma_c0",
+            "sigma_b0",
+            "dip_tau",
+        ):
             validate.positive(getattr(self, f), f)
         for f in ("bias_walk", "R_ss"):
             validate.scalar(getattr(self, f), f, nonnegative=True)
-        for f in ("bias_sigma_rest", "dip_tol", "acc_lp_tau", "acc_lp_bias_gate"):      # None: off
+        for f in ("bias_sigma_rest", "dip_tol", "acc_lp_tau", "acc_lp_bias_gate"):  # None: off
             if getattr(self, f) is not None:
                 validate.positive(getattr(self, f), f)
         if not 0 < validate.scalar(self.rho, "rho") <= 1:
@@ -184,8 +198,9 @@ class AhrsTuning:
 #:
 #: The gyro noise stays at Table 6.1's 0.1 °/s/√Hz although the BROAD sensor's white noise at rest is about
 #: 0.006 °/s/√Hz: the larger value also covers scale-factor and misalignment errors at high rates.
-HANDHELD = AhrsTuning(acc_sigma_untrusted=0.5, hold=0.5, bias_sigma_rest=np.radians(0.03), dip_tol=np.radians(10.0),
-                      acc_lp_tau=1.0)
+HANDHELD = AhrsTuning(
+    acc_sigma_untrusted=0.5, hold=0.5, bias_sigma_rest=np.radians(0.03), dip_tol=np.radians(10.0), acc_lp_tau=1.0
+)
 
 #: The tuning of the registered 6D ``dcm_ahrs6``: :data:`HANDHELD` with the accelerometer low-passed over VQF's 3 s
 #: (which the eight shipped trials prefer without the magnetometer) and **from the first sample on**, as VQF does
@@ -237,14 +252,14 @@ class DcmAhrs:
         self.tuning = tuning
         self.g = validate.positive(g, "g")
         self.inclination = float(validate.angles_rad(validate.scalar(inclination, "inclination"), "inclination"))
-        self.P = np.diag([tuning.sigma_c0 ** 2] * 6 + [tuning.sigma_b0 ** 2] * 3)
-        self.k = 0                                  # update count, for the decaying R_c (eq 6.27)
-        self.acc_run = 0                            # consecutive samples with |a| ≈ g
-        self.mag_run = 0                            # ... with |h| ≈ 1
-        self.dip_run = 0                            # ... with the dip near its reference (tuning.dip_tol)
+        self.P = np.diag([tuning.sigma_c0**2] * 6 + [tuning.sigma_b0**2] * 3)
+        self.k = 0  # update count, for the decaying R_c (eq 6.27)
+        self.acc_run = 0  # consecutive samples with |a| ≈ g
+        self.mag_run = 0  # ... with |h| ≈ 1
+        self.dip_run = 0  # ... with the dip near its reference (tuning.dip_tol)
         self.H_am = np.vstack([dcm.accel_measurement_matrix(self.g), dcm.mag_measurement_matrix(self.inclination)])
-        self.rest = None                            # a signals.RestDetector, made by step() when rest is on
-        self.C_g, self.v_lp, self.n_g = C0.copy(), None, 0   # gyro-only strapdown and low-passed acc (acc_lp_tau)
+        self.rest = None  # a signals.RestDetector, made by step() when rest is on
+        self.C_g, self.v_lp, self.n_g = C0.copy(), None, 0  # gyro-only strapdown and low-passed acc (acc_lp_tau)
 
     @property
     def c1(self):
@@ -277,9 +292,9 @@ class DcmAhrs:
             The time it spans, s.
         """
         t = self.tuning
-        F = dcm.ahrs_transition(self.c1, self.c3, A_tilde, dt)                           # (004 eqs 6.11-6.12)
-        Q = dcm.ahrs_process_noise(self.c1, self.c3, dt, t.gyro_noise, t.bias_walk)      # (004 eq 6.13)
-        self.x = F @ self.x                                                          # pseudo-linear x⁻ = F x̂
+        F = dcm.ahrs_transition(self.c1, self.c3, A_tilde, dt)  # (004 eqs 6.11-6.12)
+        Q = dcm.ahrs_process_noise(self.c1, self.c3, dt, t.gyro_noise, t.bias_walk)  # (004 eq 6.13)
+        self.x = F @ self.x  # pseudo-linear x⁻ = F x̂
         self.P = F @ self.P @ F.T + Q
 
     def update(self, acc_b, mag_b, acc_trusted=None, mag_trusted=None, bias_at_rest=None, acc_lp=None):
@@ -308,35 +323,35 @@ class DcmAhrs:
         self.acc_run = self.acc_run + 1 if abs(np.linalg.norm(a) - self.g) < t.acc_tol else 0
         acc_ok = self.acc_run >= self.hold if acc_trusted is None else acc_trusted
         H_m = self.H_am[3:6]
-        if mag_b is None:                                                            # 6D: no magnetometer rows
+        if mag_b is None:  # 6D: no magnetometer rows
             h, H_m, mag_ok = np.zeros(3), np.zeros((3, 9)), True
         else:
             h = np.asarray(mag_b, float)
             self.mag_run = self.mag_run + 1 if abs(np.linalg.norm(h) - 1.0) < t.mag_tol else 0
             mag_ok = self.mag_run >= self.hold
-            if t.dip_tol is not None:                                                # ours, after VQF
+            if t.dip_tol is not None:  # ours, after VQF
                 dip = _m.asin(max(-1.0, min(1.0, (self.c3 @ h) / (np.linalg.norm(self.c3) * np.linalg.norm(h)))))
                 self.dip_run = self.dip_run + 1 if abs(dip - self.inclination) < t.dip_tol else 0
                 mag_ok = mag_ok and self.dip_run >= self.hold
-                if mag_ok:                                                           # learn the dip while trusted
+                if mag_ok:  # learn the dip while trusted
                     self.inclination += (1.0 - _m.exp(-self.dt / t.dip_tau)) * (dip - self.inclination)
                     self.H_am[3:6] = H_m = dcm.mag_measurement_matrix(self.inclination)
             mag_ok = mag_ok if mag_trusted is None else mag_trusted
-        r_c, H_c = dcm.orthogonality_pseudo_measurement(self.c1, self.c3)                # (004 eqs 6.24-6.26)
-        H = np.vstack([self.H_am[0:3], H_m, H_c])                                    # (004 eq 6.20)
+        r_c, H_c = dcm.orthogonality_pseudo_measurement(self.c1, self.c3)  # (004 eqs 6.24-6.26)
+        H = np.vstack([self.H_am[0:3], H_m, H_c])  # (004 eq 6.20)
         z_a = a if acc_lp is None else np.asarray(acc_lp, float)
         innov = np.concatenate([z_a - self.H_am[0:3] @ self.x, h - H_m @ self.x, r_c])
         Ra = (t.acc_sigma if acc_ok else t.acc_sigma_untrusted) ** 2
         Rm = (t.mag_sigma if mag_ok else t.mag_sigma_untrusted) ** 2 if mag_b is not None else 1.0
-        Rc = dcm.orthogonality_covariance(self.k, t.R_i, t.R_ss, t.rho)                  # (004 eq 6.27)
-        R = np.diag([Ra] * 3 + [Rm] * 3 + [float(Rc)] * 3)                           # (004 eq 6.21)
+        Rc = dcm.orthogonality_covariance(self.k, t.R_i, t.R_ss, t.rho)  # (004 eq 6.27)
+        R = np.diag([Ra] * 3 + [Rm] * 3 + [float(Rc)] * 3)  # (004 eq 6.21)
         S = H @ self.P @ H.T + R
-        K = np.linalg.solve(S, H @ self.P).T                                         # K = P Hᵀ S⁻¹ (P, S symmetric)
+        K = np.linalg.solve(S, H @ self.P).T  # K = P Hᵀ S⁻¹ (P, S symmetric)
         self.x = self.x + K @ innov
         P = self.P - K @ H @ self.P
         self.P = 0.5 * (P + P.T)
-        if bias_at_rest is not None and t.bias_sigma_rest is not None:              # ours, after VQF
-            S = self.P[6:9, 6:9] + t.bias_sigma_rest ** 2 * np.eye(3)                 # H = [0, 0, I]
+        if bias_at_rest is not None and t.bias_sigma_rest is not None:  # ours, after VQF
+            S = self.P[6:9, 6:9] + t.bias_sigma_rest**2 * np.eye(3)  # H = [0, 0, I]
             K = np.linalg.solve(S, self.P[6:9]).T
             self.x = self.x + K @ (np.asarray(bias_at_rest, float) - self.bias)
             P = self.P - K @ self.P[6:9]
@@ -360,13 +375,15 @@ class DcmAhrs:
         try:
             self._step(gyr, acc_b, mag_b)
         except validate.INNER_ERRORS:
-            for v, name in ((gyr, "gyr"), (acc_b, "acc_b"), (mag_b, "mag_b")):   # name the argument that does not fit
+            for v, name in ((gyr, "gyr"), (acc_b, "acc_b"), (mag_b, "mag_b")):  # name the argument that does not fit
                 if v is not None or name != "mag_b":
                     validate.exact_shape(v, name, (3,))
             if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))):
-                raise ValueError("gyr, acc_b and mag_b of an earlier step held NaN or inf: the filter's state is no "
-                                 "longer finite (step checks nothing on the way in; run_ahrs checks a "
-                                 "recording)") from None
+                raise ValueError(
+                    "gyr, acc_b and mag_b of an earlier step held NaN or inf: the filter's state is no "
+                    "longer finite (step checks nothing on the way in; run_ahrs checks a "
+                    "recording)"
+                ) from None
             raise
 
     def _step(self, gyr, acc_b, mag_b):
@@ -379,22 +396,22 @@ class DcmAhrs:
         A = dcm.A_matrix(np.asarray(gyr, float) * self.dt)
         acc_lp = None
         gate = self.tuning.acc_lp_bias_gate
-        if self.tuning.acc_lp_tau is not None and gate is not None and np.trace(self.P[6:9, 6:9]) > gate ** 2:
-            self.C_g, self.v_lp, self.n_g = self.C_bn, None, 0          # bias unknown: restart from the estimate
-        elif self.tuning.acc_lp_tau is not None:       # ours, after VQF: low-pass in an almost inertial frame
-            v = self.C_g @ A @ np.asarray(acc_b, float)                  # the reading in the strapdown frame
-            self.C_g = self.C_g @ A - self.dt * (self.C_g @ rotations.skew(self.bias))   # gyro only, bias-corrected
+        if self.tuning.acc_lp_tau is not None and gate is not None and np.trace(self.P[6:9, 6:9]) > gate**2:
+            self.C_g, self.v_lp, self.n_g = self.C_bn, None, 0  # bias unknown: restart from the estimate
+        elif self.tuning.acc_lp_tau is not None:  # ours, after VQF: low-pass in an almost inertial frame
+            v = self.C_g @ A @ np.asarray(acc_b, float)  # the reading in the strapdown frame
+            self.C_g = self.C_g @ A - self.dt * (self.C_g @ rotations.skew(self.bias))  # gyro only, bias-corrected
             self.n_g += 1
             if self.n_g % 64 == 0:
                 self.C_g = dcm.orthonormalize(self.C_g)
             a = 1.0 - _m.exp(-self.dt / self.tuning.acc_lp_tau)
             self.v_lp = v if self.v_lp is None else self.v_lp + a * (v - self.v_lp)
-            acc_lp = self.C_g.T @ self.v_lp                              # back in the body frame
+            acc_lp = self.C_g.T @ self.v_lp  # back in the body frame
         self.predict(A, self.dt)
         self.update(acc_b, mag_b, bias_at_rest=bias_at_rest, acc_lp=acc_lp)
 
 
-_I3 = np.arange(3, 6)                                  # the magnetometer rows of the joint H
+_I3 = np.arange(3, 6)  # the magnetometer rows of the joint H
 
 
 def _prefix_products(A, M):
@@ -405,8 +422,19 @@ def _prefix_products(A, M):
     return P
 
 
-def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(),
-             update_every=1, init_seconds=0.5, g=dcm.G):
+def run_ahrs(
+    gyr,
+    acc_b,
+    mag_b,
+    fs,
+    inclination=None,
+    C0=None,
+    bias0=(0.0, 0.0, 0.0),
+    tuning=AhrsTuning(),
+    update_every=1,
+    init_seconds=0.5,
+    g=dcm.G,
+):
     """The AHRS over a whole recording -- the fast path of :class:`DcmAhrs`.
 
     What differs from one :meth:`DcmAhrs.step` per sample (and why): the measurement update runs every
@@ -466,8 +494,10 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     if use_mag and n:
         med = float(np.median(np.linalg.norm(mag_b, axis=1)))
         if not 0.5 <= med <= 2.0:
-            raise ValueError(f"mag_b must be normalised to the local field strength (|h| about 1); got a median "
-                             f"|mag_b| of {med:.4g} -- divide by it (np.median(np.linalg.norm(mag, axis=1)))")
+            raise ValueError(
+                f"mag_b must be normalised to the local field strength (|h| about 1); got a median "
+                f"|mag_b| of {med:.4g} -- divide by it (np.median(np.linalg.norm(mag, axis=1)))"
+            )
     g = validate.positive(g, "g")
     M = validate.scalar(update_every, "update_every")
     if M != int(M) or M < 1:
@@ -482,7 +512,7 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
     dt = 1.0 / fs
     n0 = max(1, min(n, int(round(init_seconds * fs))))
     a0, m0 = acc_b[:n0].mean(0), mag_b[:n0].mean(0)
-    if not use_mag:                                    # 6D: no heading reference; level start, yaw 0
+    if not use_mag:  # 6D: no heading reference; level start, yaw 0
         inclination = 0.0
         if C0 is None:
             C0 = rotations.euler_to_dcm(dcm.level_and_compass(a0, [1.0, 0.0, 0.0]) * [1.0, 1.0, 0.0])
@@ -495,60 +525,60 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         inclination = validate.scalar(inclination, "inclination")
     t = tuning
 
-    nb = n // M                                        # full blocks: one update each
-    nbt = -(-n // M)                                   # blocks including a last partial one (no update)
+    nb = n // M  # full blocks: one update each
+    nbt = -(-n // M)  # blocks including a last partial one (no update)
     pad = nbt * M - n
     gp = np.concatenate([gyr, np.zeros((pad, 3))]) if pad else gyr
-    A_pre = _prefix_products(dcm.A_matrix(gp * dt).reshape(nbt, M, 3, 3), M)           # within each block
-    A_raw = A_pre[:, -1]                                                             # Ã of each block
+    A_pre = _prefix_products(dcm.A_matrix(gp * dt).reshape(nbt, M, 3, 3), M)  # within each block
+    A_raw = A_pre[:, -1]  # Ã of each block
     hold = max(1, int(round(t.hold * fs)))
     acc_ok = dcm.trusted_mask(np.linalg.norm(acc_b, axis=1) - g, t.acc_tol, hold)
     mag_ok = dcm.trusted_mask(np.linalg.norm(mag_b, axis=1) - 1.0, t.mag_tol, hold)
-    last = np.arange(nb) * M + M - 1                   # the sample each update uses
+    last = np.arange(nb) * M + M - 1  # the sample each update uses
     Ra = np.where(acc_ok[last], t.acc_sigma, t.acc_sigma_untrusted) ** 2
     Rm = np.where(mag_ok[last], t.mag_sigma, t.mag_sigma_untrusted) ** 2
     Rc = dcm.orthogonality_covariance(np.arange(nb), t.R_i, t.R_ss, t.rho)
 
     H = np.zeros((9, 9))
     H[0:6] = np.vstack([dcm.accel_measurement_matrix(g), dcm.mag_measurement_matrix(inclination)])
-    if not use_mag:          # 6D: the magnetometer rows are zero (z = 0, H = 0: zero innovation, zero gain)
+    if not use_mag:  # 6D: the magnetometer rows are zero (z = 0, H = 0: zero innovation, zero gain)
         H[3:6] = 0.0
         Rm = np.ones(nb)
-    Rd = np.repeat(np.stack([Ra, Rm, Rc], 1), 3, axis=1)                   # (nb, 9) diagonal of R (eq 6.21)
-    dip_on = use_mag and t.dip_tol is not None                             # ours, after VQF: see AhrsTuning
+    Rd = np.repeat(np.stack([Ra, Rm, Rc], 1), 3, axis=1)  # (nb, 9) diagonal of R (eq 6.21)
+    dip_on = use_mag and t.dip_tol is not None  # ours, after VQF: see AhrsTuning
     dip_ref, dip_run, hold_u = float(inclination), 0, max(1, int(round(t.hold * fs / M)))
     a_dip = 1.0 - _m.exp(-M * dt / t.dip_tau)
     mag_upd = mag_ok[last].copy()
-    rest_on = t.bias_sigma_rest is not None                                # ours, after VQF: see AhrsTuning
+    rest_on = t.bias_sigma_rest is not None  # ours, after VQF: see AhrsTuning
     if rest_on:
         rest, gyr_lp = signals.rest_detect(gyr, acc_b, fs)
-        rest_u, zb, Rb = rest[last].tolist(), gyr_lp[last], t.bias_sigma_rest ** 2 * np.eye(3)
-    z = np.concatenate([acc_b[last], mag_b[last], np.tile([1.0, 1.0, 0.0], (nb, 1))], axis=1)   # eq 6.24: [1, 1, 0]
-    h_scale = np.array([1.0] * 6 + [0.5] * 3)                              # h_c(x) = ½ H_c x (eqs 6.24, 6.26)
+        rest_u, zb, Rb = rest[last].tolist(), gyr_lp[last], t.bias_sigma_rest**2 * np.eye(3)
+    z = np.concatenate([acc_b[last], mag_b[last], np.tile([1.0, 1.0, 0.0], (nb, 1))], axis=1)  # eq 6.24: [1, 1, 0]
+    h_scale = np.array([1.0] * 6 + [0.5] * 3)  # h_c(x) = ½ H_c x (eqs 6.24, 6.26)
     x = np.concatenate([C0[0], C0[2], validate.vectors(bias0, "bias0").reshape(3)])
-    P = np.diag([t.sigma_c0 ** 2] * 6 + [t.sigma_b0 ** 2] * 3)
+    P = np.diag([t.sigma_c0**2] * 6 + [t.sigma_b0**2] * 3)
     T = M * dt
-    qg, qb = t.gyro_noise ** 2 * T, t.bias_walk ** 2 * T
+    qg, qb = t.gyro_noise**2 * T, t.bias_walk**2 * T
     Q = np.zeros((9, 9))
-    Q[6:9, 6:9] = qb * np.eye(3)                                           # (004 eq 6.13, bias part)
+    Q[6:9, 6:9] = qb * np.eye(3)  # (004 eq 6.13, bias part)
     xs = np.empty((nb + 1, 9))
     xs[0] = x
     Pd = np.empty((nb, 9))
     F = np.eye(9)
-    lp_on = t.acc_lp_tau is not None                                       # ours, after VQF: see AhrsTuning
+    lp_on = t.acc_lp_tau is not None  # ours, after VQF: see AhrsTuning
     if lp_on:
         # the block's readings turned to the body frame at the block's start (gyro increments), then averaged
-        a_blk = np.einsum("jmab,jmb->ja", A_pre[:nb], acc_b[:nb * M].reshape(nb, M, 3)) / M
+        a_blk = np.einsum("jmab,jmb->ja", A_pre[:nb], acc_b[: nb * M].reshape(nb, M, 3)) / M
         a_lp_k = 1.0 - _m.exp(-T / t.acc_lp_tau)
-        gate2 = np.inf if t.acc_lp_bias_gate is None else t.acc_lp_bias_gate ** 2     # None: never shut
+        gate2 = np.inf if t.acc_lp_bias_gate is None else t.acc_lp_bias_gate**2  # None: never shut
         Cg, v_lp, n_g = C0.copy(), None, 0
     for j in range(nb):
-        if lp_on and P[6, 6] + P[7, 7] + P[8, 8] > gate2:   # bias unknown: the strapdown frame would drift
-            Cg, v_lp, n_g = dcm.orthonormalize(dcm.rows_to_dcm(x[0:3], x[3:6])), None, 0   # restart from the estimate
-        elif lp_on:                                    # strapdown with the bias-corrected gyro (block product)
+        if lp_on and P[6, 6] + P[7, 7] + P[8, 8] > gate2:  # bias unknown: the strapdown frame would drift
+            Cg, v_lp, n_g = dcm.orthonormalize(dcm.rows_to_dcm(x[0:3], x[3:6])), None, 0  # restart from the estimate
+        elif lp_on:  # strapdown with the bias-corrected gyro (block product)
             v = Cg @ a_blk[j]
             w1, w2, w3 = x[6:9].tolist()
-            Cg = Cg @ A_raw[j] - T * (Cg @ np.array([[0.0, -w3, w2], [w3, 0.0, -w1], [-w2, w1, 0.0]]))   # [b̂×]
+            Cg = Cg @ A_raw[j] - T * (Cg @ np.array([[0.0, -w3, w2], [w3, 0.0, -w1], [-w2, w1, 0.0]]))  # [b̂×]
             n_g += 1
             if n_g % 64 == 0:
                 Cg = dcm.orthonormalize(Cg)
@@ -557,59 +587,79 @@ def run_ahrs(gyr, acc_b, mag_b, fs, inclination=None, C0=None, bias0=(0.0, 0.0, 
         # --- prediction over the block (004 eqs 6.11-6.13), pseudo-linear; scalar arithmetic for the small parts
         a1, a2, a3, b1, b2, b3 = x[0:6].tolist()
         F[0:3, 0:3] = F[3:6, 3:6] = A_raw[j].T
-        Sg = np.array([[0.0, -a3, a2], [a3, 0.0, -a1], [-a2, a1, 0.0],
-                       [0.0, -b3, b2], [b3, 0.0, -b1], [-b2, b1, 0.0]])            # [ĉ1×]; [ĉ3×]
+        Sg = np.array(
+            [
+                [0.0, -a3, a2],
+                [a3, 0.0, -a1],
+                [-a2, a1, 0.0],
+                [0.0, -b3, b2],
+                [b3, 0.0, -b1],
+                [-b2, b1, 0.0],
+            ]
+        )  # [ĉ1×]; [ĉ3×]
         F[0:6, 6:9] = -T * Sg
         x = F @ x
-        Q[0:6, 0:6] = qg * (Sg @ Sg.T)                                            # (004 eq 6.13, DCM part)
+        Q[0:6, 0:6] = qg * (Sg @ Sg.T)  # (004 eq 6.13, DCM part)
         P = F @ P @ F.T + Q
         # --- joint update (004 eqs 6.15-6.28): accelerometer, magnetometer, orthogonality rows
         a1, a2, a3, b1, b2, b3 = x[0:6].tolist()
-        if dip_on:                                     # the dip of this sample with the predicted c3 (ours)
+        if dip_on:  # the dip of this sample with the predicted c3 (ours)
             h1, h2, h3 = z[j, 3:6].tolist()
             den = _m.sqrt((b1 * b1 + b2 * b2 + b3 * b3) * (h1 * h1 + h2 * h2 + h3 * h3))
             dip = _m.asin(max(-1.0, min(1.0, (b1 * h1 + b2 * h2 + b3 * h3) / den))) if den > 0 else dip_ref
             dip_run = dip_run + 1 if abs(dip - dip_ref) < t.dip_tol else 0
             ok = bool(mag_ok[last[j]]) and dip_run >= hold_u
-            if ok:                                     # learn the dip while trusted; it sets H_m
+            if ok:  # learn the dip while trusted; it sets H_m
                 dip_ref += a_dip * (dip - dip_ref)
-                H[_I3, _I3 - 3] = _m.cos(dip_ref)                                    # H_m = [h_N I, h_D I, 0]
-                H[_I3, _I3] = _m.sin(dip_ref)                                # (004 eq 6.19)
+                H[_I3, _I3 - 3] = _m.cos(dip_ref)  # H_m = [h_N I, h_D I, 0]
+                H[_I3, _I3] = _m.sin(dip_ref)  # (004 eq 6.19)
             Rd[j, 3:6] = (t.mag_sigma if ok else t.mag_sigma_untrusted) ** 2
             mag_upd[j] = ok
-        H[6:9, 0:6] = np.array([[2 * a1, 2 * a2, 2 * a3, 0.0, 0.0, 0.0],
-                                [0.0, 0.0, 0.0, 2 * b1, 2 * b2, 2 * b3],
-                                [b1, b2, b3, a1, a2, a3]])                            # (004 eq 6.26)
-        innov = z[j] - (H @ x) * h_scale                                          # (004 eqs 6.15-6.19, 6.24)
+        H[6:9, 0:6] = np.array(
+            [
+                [2 * a1, 2 * a2, 2 * a3, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 2 * b1, 2 * b2, 2 * b3],
+                [b1, b2, b3, a1, a2, a3],
+            ]
+        )  # (004 eq 6.26)
+        innov = z[j] - (H @ x) * h_scale  # (004 eqs 6.15-6.19, 6.24)
         HP = H @ P
         S = HP @ H.T
         S.flat[::10] += Rd[j]
-        _, Kt, info = _posv(S, HP)                                       # Kᵀ = S⁻¹ H P (S symmetric positive)
+        _, Kt, info = _posv(S, HP)  # Kᵀ = S⁻¹ H P (S symmetric positive)
         if info:
             raise np.linalg.LinAlgError(f"innovation covariance not positive definite at update {j}")
         x = x + innov @ Kt
         P = P - Kt.T @ HP
-        if rest_on and rest_u[j]:                      # at rest the low-passed gyro measures the bias (ours)
-            Kb = np.linalg.solve(P[6:9, 6:9] + Rb, P[6:9]).T                   # H = [0, 0, I]
+        if rest_on and rest_u[j]:  # at rest the low-passed gyro measures the bias (ours)
+            Kb = np.linalg.solve(P[6:9, 6:9] + Rb, P[6:9]).T  # H = [0, 0, I]
             x = x + Kb @ (zb[j] - x[6:9])
             P = P - Kb @ P[6:9]
         if j % 32 == 31:
-            P = 0.5 * (P + P.T)                                          # keep rounding from making P asymmetric
+            P = 0.5 * (P + P.T)  # keep rounding from making P asymmetric
         xs[j + 1] = x
         Pd[j] = P.diagonal()
 
     # --- read-out: posterior of each block, propagated through the next block with the bias-corrected gyro
-    Cpost = dcm.orthonormalize(dcm.rows_to_dcm(xs[:, 0:3], xs[:, 3:6]))        # (nb + 1, 3, 3); [0] is C0
-    b_blk = xs[np.minimum(np.arange(nbt), nb), 6:9]                     # bias known at the start of each block
+    Cpost = dcm.orthonormalize(dcm.rows_to_dcm(xs[:, 0:3], xs[:, 3:6]))  # (nb + 1, 3, 3); [0] is C0
+    b_blk = xs[np.minimum(np.arange(nbt), nb), 6:9]  # bias known at the start of each block
     A_cor = _prefix_products(dcm.A_matrix((gp.reshape(nbt, M, 3) - b_blk[:, None, :]) * dt), M)
     start = Cpost[np.minimum(np.arange(nbt), nb)]
-    C_out = (start[:, None] @ A_cor)                                    # (nbt, M, 3, 3)
-    C_out[:nb, -1] = Cpost[1:]                                          # the update sample shows the posterior
+    C_out = start[:, None] @ A_cor  # (nbt, M, 3, 3)
+    C_out[:nb, -1] = Cpost[1:]  # the update sample shows the posterior
     C_out = C_out.reshape(nbt * M, 3, 3)[:n]
-    bias = xs[np.minimum((np.arange(n) + 1) // M, nb), 6:9]            # the latest estimate at each sample
-    latest = (np.arange(n) + 1) // M - 1                                # the latest update at each sample
+    bias = xs[np.minimum((np.arange(n) + 1) // M, nb), 6:9]  # the latest estimate at each sample
+    latest = (np.arange(n) + 1) // M - 1  # the latest update at each sample
     mag_out = np.where(latest >= 0, mag_upd[np.clip(latest, 0, max(nb - 1, 0))], False) if nb else mag_ok
-    return dict(C_bn=C_out, q=rotations.dcm_to_quat(C_out), bias=bias, c1=xs[1:, 0:3], c3=xs[1:, 3:6],
-                P_diag=Pd, t_update=(last + 1) * dt, inclination=dip_ref if dip_on else inclination,
-                acc_trusted=acc_ok, mag_trusted=mag_out if (use_mag and dip_on) else (mag_ok if use_mag else
-                                                                                   np.zeros(n, bool)))
+    return dict(
+        C_bn=C_out,
+        q=rotations.dcm_to_quat(C_out),
+        bias=bias,
+        c1=xs[1:, 0:3],
+        c3=xs[1:, 3:6],
+        P_diag=Pd,
+        t_update=(last + 1) * dt,
+        inclination=dip_ref if dip_on else inclination,
+        acc_trusted=acc_ok,
+        mag_trusted=mag_out if (use_mag and dip_on) else (mag_ok if use_mag else np.zeros(n, bool)),
+    )

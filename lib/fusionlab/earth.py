@@ -11,14 +11,31 @@ Standard gravity :data:`G` (9.80665 m/s², the conventional value; seed 001 uses
 
 Units: metres, seconds, radians. Latitudes are geodetic, in radians (``np.radians`` at the display edge).
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import validate
 
-__all__ = ["G", "FREE_FALL", "A", "F", "B", "E2", "OMEGA_IE", "GM", "GAMMA_E", "GAMMA_P", "SOMIGLIANA_K", "FREE_AIR",
-           "normal_gravity", "earth_rate_ned", "radii_of_curvature", "gravity_ned"]
+__all__ = [
+    "G",
+    "FREE_FALL",
+    "A",
+    "F",
+    "B",
+    "E2",
+    "OMEGA_IE",
+    "GM",
+    "GAMMA_E",
+    "GAMMA_P",
+    "SOMIGLIANA_K",
+    "FREE_AIR",
+    "normal_gravity",
+    "earth_rate_ned",
+    "radii_of_curvature",
+    "gravity_ned",
+]
 
 #: Standard gravity, m/s^2 (seed 001 uses 9.8; the labs say which they use).
 G = 9.80665
@@ -150,4 +167,4 @@ def radii_of_curvature(lat):
     """
     lat = _latitude(lat)
     w = 1.0 - E2 * np.sin(lat) ** 2
-    return A * (1.0 - E2) / w ** 1.5, A / np.sqrt(w)
+    return A * (1.0 - E2) / w**1.5, A / np.sqrt(w)

@@ -25,6 +25,7 @@ Conventions at the edge
 * **Units.** Everything here is unit-free except the inclination ``delta``, which is in **radians**, as everywhere
   in the library; the synthetic recording is in the note's units (gyro °/s, accelerometer g, magnetometer µT).
 """
+
 from __future__ import annotations
 
 import math
@@ -35,11 +36,32 @@ import numpy as np
 from . import conventions, rotations, validate
 
 __all__ = [
-    "FRAMES", "accel_model", "mag_model", "accel_noise", "mag_noise", "weights", "reference_vectors",
-    "measured_gravity", "rotation_matrix", "kappa_general", "kappa_davenport", "kappa", "kappa_eq41_printed",
-    "kappa_frame_printed", "EcompassResult", "ECOMPASS_FIELD_UT", "ecompass", "inclination", "wahba_error",
+    "FRAMES",
+    "accel_model",
+    "mag_model",
+    "accel_noise",
+    "mag_noise",
+    "weights",
+    "reference_vectors",
+    "measured_gravity",
+    "rotation_matrix",
+    "kappa_general",
+    "kappa_davenport",
+    "kappa",
+    "kappa_eq41_printed",
+    "kappa_frame_printed",
+    "EcompassResult",
+    "ECOMPASS_FIELD_UT",
+    "ecompass",
+    "inclination",
+    "wahba_error",
     "tilt_compensated_heading",
-    "heading", "tilt_error", "synthetic_recording", "ENU", "check_frame", "nonzero_norm",
+    "heading",
+    "tilt_error",
+    "synthetic_recording",
+    "ENU",
+    "check_frame",
+    "nonzero_norm",
 ]
 
 
@@ -117,7 +139,7 @@ def rotation_matrix(q):
     ndarray, shape (..., 3, 3)
         ``R(q)``; equals ``rotations.quat_to_dcm(q).T`` (our ``C_bn`` transposed).
     """
-    return np.swapaxes(rotations.quat_to_dcm(q), -1, -2)                  # (002 eq 34)
+    return np.swapaxes(rotations.quat_to_dcm(q), -1, -2)  # (002 eq 34)
 
 
 def reference_vectors(delta, frame="NED"):
@@ -147,11 +169,11 @@ def reference_vectors(delta, frame="NED"):
     check_frame(frame)
     c, s, o = np.cos(d), np.sin(d), np.zeros_like(d)
     if ENU[frame]:
-        r_g = np.stack([o, o, o - 1], -1)                                  # (002 eqs 54, 59)
-        r_m = np.stack([o, c, -s], -1)                                     # (002 eqs 56, 61)
+        r_g = np.stack([o, o, o - 1], -1)  # (002 eqs 54, 59)
+        r_m = np.stack([o, c, -s], -1)  # (002 eqs 56, 61)
     else:
-        r_g = np.stack([o, o, o + 1], -1)                                  # (002 eq 49)
-        r_m = np.stack([c, o, s], -1)                                      # (002 eq 51)
+        r_g = np.stack([o, o, o + 1], -1)  # (002 eq 49)
+        r_m = np.stack([c, o, s], -1)  # (002 eq 51)
     return r_g, r_m
 
 
@@ -182,11 +204,12 @@ def accel_model(q, a_S=None, frame="NED", noise=None):
     g_S = rotation_matrix(q) @ r_g
     a = 0.0 if a_S is None else validate.vectors(a_S, "a_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
-    validate.broadcast({"q": 1, "a_S": 1, "noise": 1}, q=q, a_S=a_S if a_S is None else a,
-                       noise=noise if noise is None else v)
+    validate.broadcast(
+        {"q": 1, "a_S": 1, "noise": 1}, q=q, a_S=a_S if a_S is None else a, noise=noise if noise is None else v
+    )
     if frame == "Android":
-        return a - g_S + v                                                 # (002 eq 2)
-    return -a + g_S - v                                                    # (002 eq 1)
+        return a - g_S + v  # (002 eq 2)
+    return -a + g_S - v  # (002 eq 1)
 
 
 def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=None):
@@ -217,10 +240,15 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
     _, r_m = reference_vectors(delta, frame)
     d = 0.0 if d_S is None else validate.vectors(d_S, "d_S")
     v = 0.0 if noise is None else validate.vectors(noise, "noise")
-    validate.broadcast({"q": 1, "d_S": 1, "noise": 1}, q=q, delta=np.asarray(delta, float),
-                       d_S=d_S if d_S is None else d, noise=noise if noise is None else v)
+    validate.broadcast(
+        {"q": 1, "d_S": 1, "noise": 1},
+        q=q,
+        delta=np.asarray(delta, float),
+        d_S=d_S if d_S is None else d,
+        noise=noise if noise is None else v,
+    )
     m = B * (rotation_matrix(q) @ r_m[..., None])[..., 0]
-    return m + d + v                                                       # (002 eq 10)
+    return m + d + v  # (002 eq 10)
 
 
 def accel_noise(G):
@@ -238,7 +266,7 @@ def accel_noise(G):
         The noise estimate, g²: zero on the 1 g sphere, whatever the direction.
     """
     G = validate.accel_g(G, "G")
-    return np.abs(np.sum(G * G, axis=-1) - 1.0)                           # (002 eq 9)
+    return np.abs(np.sum(G * G, axis=-1) - 1.0)  # (002 eq 9)
 
 
 def mag_noise(B_c, B=50.0):
@@ -259,7 +287,7 @@ def mag_noise(B_c, B=50.0):
     """
     B_c = validate.field_uT(validate.vectors(B_c, "B_c"), "B_c", *ECOMPASS_FIELD_UT, per_sample=False)
     B = validate.field_uT(B, "B", per_sample=False)
-    return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)                     # (002 eq 15)
+    return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)  # (002 eq 15)
 
 
 def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
@@ -307,8 +335,8 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
     m = np.where(m < tol * B * B, 0.0, m)
     den = B * B * a + m
     zero = den == 0
-    alpha_g = np.where(zero, 0.5, m / np.where(zero, 1.0, den))           # (002 eq 64), 0/0 guard
-    return alpha_g, 1.0 - alpha_g                                          # (002 eq 65)
+    alpha_g = np.where(zero, 0.5, m / np.where(zero, 1.0, den))  # (002 eq 64), 0/0 guard
+    return alpha_g, 1.0 - alpha_g  # (002 eq 65)
 
 
 def measured_gravity(G, frame="NED"):
@@ -331,7 +359,7 @@ def measured_gravity(G, frame="NED"):
     G = validate.vectors(G, "G")
     check_frame(frame)
     n = nonzero_norm(G, "G")[..., None]
-    return (-G if frame == "Android" else G) / n                          # (002 eqs 50, 55, 60)
+    return (-G if frame == "Android" else G) / n  # (002 eqs 50, 55, 60)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -359,11 +387,15 @@ def kappa_general(s, r, alpha=None):
     s, r, w = _vector_pairs(s, r, alpha)
     sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
     rx, ry, rz = r[..., 0], r[..., 1], r[..., 2]
-    k = np.stack([                                                         # (002 eq 41, corrected)
-        np.stack([sx * rx + sy * ry + sz * rz, sy * rz - sz * ry, sz * rx - sx * rz, sx * ry - sy * rx], -1),
-        np.stack([sy * rz - sz * ry, sx * rx - sy * ry - sz * rz, sx * ry + sy * rx, sx * rz + sz * rx], -1),
-        np.stack([sz * rx - sx * rz, sx * ry + sy * rx, -sx * rx + sy * ry - sz * rz, sy * rz + sz * ry], -1),
-        np.stack([sx * ry - sy * rx, sx * rz + sz * rx, sy * rz + sz * ry, -sx * rx - sy * ry + sz * rz], -1)], -2)
+    k = np.stack(
+        [  # (002 eq 41, corrected)
+            np.stack([sx * rx + sy * ry + sz * rz, sy * rz - sz * ry, sz * rx - sx * rz, sx * ry - sy * rx], -1),
+            np.stack([sy * rz - sz * ry, sx * rx - sy * ry - sz * rz, sx * ry + sy * rx, sx * rz + sz * rx], -1),
+            np.stack([sz * rx - sx * rz, sx * ry + sy * rx, -sx * rx + sy * ry - sz * rz, sy * rz + sz * ry], -1),
+            np.stack([sx * ry - sy * rx, sx * rz + sz * rx, sy * rz + sz * ry, -sx * rx - sy * ry + sz * rz], -1),
+        ],
+        -2,
+    )
     return np.sum(w[..., None, None] * k, axis=-3)
 
 
@@ -406,7 +438,7 @@ def kappa_davenport(s, r, alpha=None):
         Symmetric, traceless matrix κ.
     """
     s, r, w = _vector_pairs(s, r, alpha)
-    Bm = np.einsum("...k,...ki,...kj->...ij", w, s, r)                    # (002 eq 29)
+    Bm = np.einsum("...k,...ki,...kj->...ij", w, s, r)  # (002 eq 29)
     sigma = np.trace(Bm, axis1=-2, axis2=-1)
     z = np.sum(w[..., None] * np.cross(s, r), axis=-2)
     out = np.empty(Bm.shape[:-2] + (4, 4))
@@ -455,19 +487,27 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     gx, gy, gz = s_g[..., 0], s_g[..., 1], s_g[..., 2]
     mx, my, mz = s_m[..., 0], s_m[..., 1], s_m[..., 2]
     o = np.zeros_like(gx)
-    M = lambda rows: np.stack([np.stack(r, -1) for r in rows], -2)       # noqa: E731
+    M = lambda rows: np.stack([np.stack(r, -1) for r in rows], -2)  # noqa: E731
     if ENU[frame]:
-        K_g = M([[-gz, -gy, gx, o], [-gy, gz, o, -gx], [gx, o, gz, -gy], [o, -gx, -gy, -gz]])   # (002 eqs 58, 63)
-        K_m = M([[my * c - mz * s, -my * s - mz * c, mx * s, mx * c],
-                 [-my * s - mz * c, -my * c + mz * s, mx * c, -mx * s],
-                 [mx * s, mx * c, my * c + mz * s, -my * s + mz * c],
-                 [mx * c, -mx * s, -my * s + mz * c, -my * c - mz * s]])                        # (002 eqs 58, 63)
+        K_g = M([[-gz, -gy, gx, o], [-gy, gz, o, -gx], [gx, o, gz, -gy], [o, -gx, -gy, -gz]])  # (002 eqs 58, 63)
+        K_m = M(
+            [
+                [my * c - mz * s, -my * s - mz * c, mx * s, mx * c],
+                [-my * s - mz * c, -my * c + mz * s, mx * c, -mx * s],
+                [mx * s, mx * c, my * c + mz * s, -my * s + mz * c],
+                [mx * c, -mx * s, -my * s + mz * c, -my * c - mz * s],
+            ]
+        )  # (002 eqs 58, 63)
     else:
-        K_g = M([[gz, gy, -gx, o], [gy, -gz, o, gx], [-gx, o, -gz, gy], [o, gx, gy, gz]])        # (002 eq 53)
-        K_m = M([[mx * c + mz * s, my * s, mz * c - mx * s, -my * c],
-                 [my * s, mx * c - mz * s, my * c, mx * s + mz * c],
-                 [mz * c - mx * s, my * c, -mx * c - mz * s, my * s],
-                 [-my * c, mx * s + mz * c, my * s, -mx * c + mz * s]])                          # (002 eq 53)
+        K_g = M([[gz, gy, -gx, o], [gy, -gz, o, gx], [-gx, o, -gz, gy], [o, gx, gy, gz]])  # (002 eq 53)
+        K_m = M(
+            [
+                [mx * c + mz * s, my * s, mz * c - mx * s, -my * c],
+                [my * s, mx * c - mz * s, my * c, mx * s + mz * c],
+                [mz * c - mx * s, my * c, -mx * c - mz * s, my * s],
+                [-my * c, mx * s + mz * c, my * s, -mx * c + mz * s],
+            ]
+        )  # (002 eq 53)
     return ag * K_g + am * K_m
 
 
@@ -496,11 +536,14 @@ def kappa_eq41_printed(s, r):
     rx, ry, rz = validate.exact_shape(r, "r", (3,))
     nonzero_norm(np.array([sx, sy, sz]), "s"), nonzero_norm(np.array([rx, ry, rz]), "r")
     nan = np.nan
-    return np.array([
-        [sx * rx + sy * ry + sz * rz, sy * rz - sz * ry, sx * rx - sx * rz, sx * ry - sy * rx],
-        [sy * rz - sz * ry, sx * rz - sy * ry - sz * rz, sx * rz + sy * rx, sx * rz + sz * rx],
-        [sz * rx - sx * rz, sy * rx + sy * ry, -sx * rz + sy * ry - sz * rz, nan],
-        [sx * ry - sy * rx, sx * rz + sy * ry - sz * rz, nan, -sx * rx - sy * ry + sz * rz]])
+    return np.array(
+        [
+            [sx * rx + sy * ry + sz * rz, sy * rz - sz * ry, sx * rx - sx * rz, sx * ry - sy * rx],
+            [sy * rz - sz * ry, sx * rz - sy * ry - sz * rz, sx * rz + sy * rx, sx * rz + sz * rx],
+            [sz * rx - sx * rz, sy * rx + sy * ry, -sx * rz + sy * ry - sz * rz, nan],
+            [sx * ry - sy * rx, sx * rz + sy * ry - sz * rz, nan, -sx * rx - sy * ry + sz * rz],
+        ]
+    )
 
 
 def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
@@ -542,24 +585,30 @@ def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
     c, s, nan = math.cos(d), math.sin(d), np.nan
     if eq == 53:
         Kg = [[gz, gy, -gz, 0], [gy, -gz, 0, gx], [-gx, 0, -gz, gy], [0, gx, gy, gz]]
-        Km = [[mx * c + mz * s, my * s, mz * c - mx * s, -my * c],
-              [my * s, mx * c - mz * s, my * c, mx * s + mz * c],
-              [mz * c - mx * s, my * c, -mz * s, my * s],
-              [-my * c, mz * c + mz * s, my * s, -mz * s]]
-        am = 1.0                                                           # printed without α_m
+        Km = [
+            [mx * c + mz * s, my * s, mz * c - mx * s, -my * c],
+            [my * s, mx * c - mz * s, my * c, mx * s + mz * c],
+            [mz * c - mx * s, my * c, -mz * s, my * s],
+            [-my * c, mz * c + mz * s, my * s, -mz * s],
+        ]
+        am = 1.0  # printed without α_m
     elif eq == 58:
         Kg = [[-gz, -gy, gz, 0], [-gy, gz, 0, -gx], [gx, 0, gz, -gy], [nan] * 4]
-        Km = [[my * c - mz * s, -my * s - mz * c, mx * s, mx * c],
-              [-my * s - mz * c, -my * c + mz * s, mx * c, -mx * s],
-              [mx * s, mx * c, my * c + mz * s, -my * s + mz * c],
-              [mx * c, -mx * s, -my * s + mz * c, -my * s]]
+        Km = [
+            [my * c - mz * s, -my * s - mz * c, mx * s, mx * c],
+            [-my * s - mz * c, -my * c + mz * s, mx * c, -mx * s],
+            [mx * s, mx * c, my * c + mz * s, -my * s + mz * c],
+            [mx * c, -mx * s, -my * s + mz * c, -my * s],
+        ]
     else:
         Kg = [[-gz, -gy, gx, 0], [-gy, gz, 0, -gx], [gx, 0, gz, -gy], [nan] * 4]
-        Km = [[my * c - mz * s, -mz * c, mx * s, mx * c],
-              [-my * s - mz * c, -my * s, mx * c, -mx * s],
-              [mx * s, mx * c, mx * c, -my * s + mz * c],
-              [mx * c, -mx * s, mz * c - my * s, -my * s - my * s]]
-        am = 1.0                                                           # printed without α_m
+        Km = [
+            [my * c - mz * s, -mz * c, mx * s, mx * c],
+            [-my * s - mz * c, -my * s, mx * c, -mx * s],
+            [mx * s, mx * c, mx * c, -my * s + mz * c],
+            [mx * c, -mx * s, mz * c - my * s, -my * s - my * s],
+        ]
+        am = 1.0  # printed without α_m
     return ag * np.array(Kg, dtype=float) + am * np.array(Km, dtype=float)
 
 
@@ -593,7 +642,7 @@ def wahba_error(q, s, r, alpha=None):
     w = np.full(len(s), 1.0 / len(s)) if alpha is None else validate.array(alpha, "alpha").reshape(-1)
     validate.same_length(s=s, alpha=w)
     res = s - r @ R.T
-    return 0.5 * float(np.sum(w * np.sum(res * res, axis=-1)))            # (002 eq 22)
+    return 0.5 * float(np.sum(w * np.sum(res * res, axis=-1)))  # (002 eq 22)
 
 
 class EcompassResult(NamedTuple):
@@ -616,12 +665,13 @@ class EcompassResult(NamedTuple):
     eigenvalues : ndarray, shape (..., 4)
         Eigenvalues of κ, ascending (E = 1 - λ_max, eq 47).
     """
-    q: np.ndarray          #: (..., 4) orientation quaternion, q0 >= 0
-    delta6: np.ndarray     #: (...,) rad, inclination measured from this sample (eqs 109-112)
-    qvgqa: np.ndarray      #: (...,) g², | |G|² - 1 |
-    qvbqd: np.ndarray      #: (...,) µT², | |B_c|² - B² | (unfloored)
-    alpha_g: np.ndarray    #: (...,) weight of gravity
-    alpha_m: np.ndarray    #: (...,) weight of the field
+
+    q: np.ndarray  #: (..., 4) orientation quaternion, q0 >= 0
+    delta6: np.ndarray  #: (...,) rad, inclination measured from this sample (eqs 109-112)
+    qvgqa: np.ndarray  #: (...,) g², | |G|² - 1 |
+    qvbqd: np.ndarray  #: (...,) µT², | |B_c|² - B² | (unfloored)
+    alpha_g: np.ndarray  #: (...,) weight of gravity
+    alpha_m: np.ndarray  #: (...,) weight of the field
     eigenvalues: np.ndarray  #: (..., 4) eigenvalues of κ, ascending (E = 1 - λ_max, eq 47)
 
 
@@ -649,8 +699,8 @@ def inclination(G, B_c, frame="NED"):
     validate.broadcast({"G": 1, "B_c": 1}, G=G, B_c=B_c)
     check_frame(frame)
     cosang = np.sum(G * B_c, axis=-1) / (nonzero_norm(G, "G") * nonzero_norm(B_c, "B_c"))
-    d = np.arcsin(np.clip(cosang, -1.0, 1.0))                              # (002 eqs 109-110)
-    return -d if frame == "Android" else d                                 # (002 eqs 111-112)
+    d = np.arcsin(np.clip(cosang, -1.0, 1.0))  # (002 eqs 109-110)
+    return -d if frame == "Android" else d  # (002 eqs 111-112)
 
 
 #: The median field strengths (µT) :func:`ecompass` accepts: wide, since a magnet next to the sensor (Lab 04's
@@ -702,8 +752,8 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     else:
         a_g, a_m = (validate.array(a, "alpha") * np.ones(qa.shape) for a in alpha)
     K = kappa(s_g, s_m, delta, a_g, a_m, frame)
-    lam, vec = np.linalg.eigh(K)                                           # (002 eq 46) κ q = λ q
-    q = vec[..., :, -1]                                                    # (002 eq 47) largest λ: E = 1 - λ
+    lam, vec = np.linalg.eigh(K)  # (002 eq 46) κ q = λ q
+    q = vec[..., :, -1]  # (002 eq 47) largest λ: E = 1 - λ
     q = np.where(q[..., :1] < 0, -q, q)
     return EcompassResult(q, inclination(G, B_c, frame), qa, qd, a_g, a_m, lam)
 
@@ -797,9 +847,21 @@ def tilt_error(q_est, q_true, frame="NED"):
     return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
 
 
-def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.0, bias_dps=(0.0, 0.0, 0.0),
-                        sigma_gyr=0.0, sigma_acc=0.0, sigma_mag=0.0, B=50.0, delta=np.radians(60.0),
-                        a_S=None, d_S=None, seed=0):
+def synthetic_recording(
+    omega_dps,
+    q0=(1.0, 0.0, 0.0, 0.0),
+    frame="NED",
+    fs=200.0,
+    bias_dps=(0.0, 0.0, 0.0),
+    sigma_gyr=0.0,
+    sigma_acc=0.0,
+    sigma_mag=0.0,
+    B=50.0,
+    delta=np.radians(60.0),
+    a_S=None,
+    d_S=None,
+    seed=0,
+):
     """A recording in the note's units and frame (ours): truth stepped ``q ← q ⊗ Δq(ω δt)`` at ``fs``.
 
     Parameters
@@ -845,8 +907,10 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     fs = validate.sample_rate(fs, "fs")
     q0 = validate.exact_shape(validate.quaternions(q0, "q0"), "q0", (4,))
     bias = validate.exact_shape(bias_dps, "bias_dps", (3,))
-    sigma_gyr, sigma_acc, sigma_mag = (validate.scalar(v, n, nonnegative=True) for v, n in
-                                       ((sigma_gyr, "sigma_gyr"), (sigma_acc, "sigma_acc"), (sigma_mag, "sigma_mag")))
+    sigma_gyr, sigma_acc, sigma_mag = (
+        validate.scalar(v, n, nonnegative=True)
+        for v, n in ((sigma_gyr, "sigma_gyr"), (sigma_acc, "sigma_acc"), (sigma_mag, "sigma_mag"))
+    )
     validate.scalar(delta, "delta")
     a_S = None if a_S is None else validate.samples(a_S, "a_S")
     d_S = None if d_S is None else validate.samples(d_S, "d_S")
@@ -854,8 +918,8 @@ def synthetic_recording(omega_dps, q0=(1.0, 0.0, 0.0, 0.0), frame="NED", fs=200.
     rng = np.random.default_rng(validate.count(seed, "seed"))
     q_true = rotations.integrate_gyro_quat(q0, np.radians(w), 1.0 / fs)[1:]
     N = len(w)
-    noise = lambda s: s * rng.standard_normal((N, 3))                      # noqa: E731
-    gyr = w + bias + noise(sigma_gyr)                                       # (002 eq 89)
-    acc = accel_model(q_true, a_S, frame, noise=noise(sigma_acc))          # (002 eqs 1-2): same physical noise
-    mag = mag_model(q_true, B, delta, frame, d_S) + noise(sigma_mag)       # (002 eq 10)
+    noise = lambda s: s * rng.standard_normal((N, 3))  # noqa: E731
+    gyr = w + bias + noise(sigma_gyr)  # (002 eq 89)
+    acc = accel_model(q_true, a_S, frame, noise=noise(sigma_acc))  # (002 eqs 1-2): same physical noise
+    mag = mag_model(q_true, B, delta, frame, d_S) + noise(sigma_mag)  # (002 eq 10)
     return {"q_true": q_true, "gyr": gyr, "acc": acc, "mag": mag, "fs": fs}

@@ -13,14 +13,14 @@ units and frame inside; this module converts NED→ENU at the door when asked.
 
 Filters register themselves with :func:`register`; the labs add theirs (complementary, Freescale, DCM AHRS, ...).
 """
+
 from __future__ import annotations
 
 import inspect
 
 import numpy as np
 
-from . import (accel_tilt, conventions, correlation, dcm, dcm_filter, earth, freescale_fast, rotations, signals,
-               validate)
+from . import accel_tilt, conventions, correlation, dcm, dcm_filter, earth, freescale_fast, rotations, signals, validate
 
 __all__ = ["register", "available", "options", "run"]
 
@@ -52,14 +52,21 @@ def register(name, uses_mag, summary, seed, mag_uT=False):
     callable
         The decorator; it returns ``fn`` unchanged.
     """
+
     def deco(fn):
         if name in _REGISTRY:
             raise ValueError(f"estimator {name!r} is already registered")
-        params = list(inspect.signature(fn).parameters.values())[4:]     # after (gyr, acc, mag, fs)
-        _REGISTRY[name] = {"fn": fn, "uses_mag": bool(uses_mag), "summary": summary, "seed": seed,
-                           "mag_uT": bool(mag_uT),
-                           "options": {p.name: p.default for p in params}}
+        params = list(inspect.signature(fn).parameters.values())[4:]  # after (gyr, acc, mag, fs)
+        _REGISTRY[name] = {
+            "fn": fn,
+            "uses_mag": bool(uses_mag),
+            "summary": summary,
+            "seed": seed,
+            "mag_uT": bool(mag_uT),
+            "options": {p.name: p.default for p in params},
+        }
         return fn
+
     return deco
 
 
@@ -93,8 +100,9 @@ def options(name):
     {'tau': 1.0, 'acc_sigma': 2.0, 'acc_hold': 0.5}
     """
     if not isinstance(name, str) or name not in _REGISTRY:
-        raise ValueError(f"name must name an estimator: unknown estimator {name!r}; available: "
-                         f"{', '.join(sorted(_REGISTRY))}")
+        raise ValueError(
+            f"name must name an estimator: unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}"
+        )
     return dict(_REGISTRY[name]["options"])
 
 
@@ -139,8 +147,9 @@ def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
         An option the estimator does not have (:func:`options` lists them); it is also a ValueError.
     """
     if not isinstance(name, str) or name not in _REGISTRY:
-        raise ValueError(f"name must name an estimator: unknown estimator {name!r}; available: "
-                         f"{', '.join(sorted(_REGISTRY))}")
+        raise ValueError(
+            f"name must name an estimator: unknown estimator {name!r}; available: {', '.join(sorted(_REGISTRY))}"
+        )
     if frame not in FRAMES:
         raise ValueError(f"frame must be 'ENU' or 'NED'; got {frame!r}")
     entry = _REGISTRY[name]
@@ -184,9 +193,11 @@ def _check_start(acc, fs, seconds=0.5):
     f0 = float(np.linalg.norm(acc[:n].mean(axis=0)))
     first = float(np.linalg.norm(acc[0]))
     if f0 < FREE_FALL or first < FREE_FALL:
-        raise ValueError(f"acc reads free fall at the start (|mean acc| over the first {seconds:g} s = {f0:.3g} "
-                         f"m/s², first sample {first:.3g} m/s²): the initial tilt is unobservable -- start the "
-                         "record at rest or in slow motion (|acc| near 9.81 m/s²)")
+        raise ValueError(
+            f"acc reads free fall at the start (|mean acc| over the first {seconds:g} s = {f0:.3g} "
+            f"m/s², first sample {first:.3g} m/s²): the initial tilt is unobservable -- start the "
+            "record at rest or in slow motion (|acc| near 9.81 m/s²)"
+        )
 
 
 def _check_field(mag):
@@ -196,8 +207,10 @@ def _check_field(mag):
         raise ValueError("mag must measure a magnetic field; got a median magnitude of 0 (a disconnected sensor?)")
     low = np.linalg.norm(mag, axis=1) < 1e-6 * med
     if np.any(low):
-        raise ValueError(f"mag must measure a magnetic field at every sample; got {int(low.sum())} sample(s) of "
-                         f"zero magnitude (first at index {int(np.argmax(low))})")
+        raise ValueError(
+            f"mag must measure a magnetic field at every sample; got {int(low.sum())} sample(s) of "
+            f"zero magnitude (first at index {int(np.argmax(low))})"
+        )
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -212,11 +225,15 @@ def _level_start(acc):
     return rotations.euler_to_quat([roll, pitch, 0.0])
 
 
-@register("gyro", uses_mag=False, seed="000 §3.3 / 001 attitude §3",
-          summary="pure gyro integration (exact per-sample quaternion update) from an accelerometer-levelled start")
+@register(
+    "gyro",
+    uses_mag=False,
+    seed="000 §3.3 / 001 attitude §3",
+    summary="pure gyro integration (exact per-sample quaternion update) from an accelerometer-levelled start",
+)
 def _gyro(gyr, acc, mag, fs):
     q = rotations.integrate_gyro_quat(_level_start(acc), gyr, 1.0 / fs)
-    return q[1:]                                     # attitude after each sample
+    return q[1:]  # attitude after each sample
 
 
 def triad(acc, mag):
@@ -251,7 +268,7 @@ def triad(acc, mag):
     east = np.cross(down, mag)
     east = east / _norm(east, "mag (parallel to gravity?)")
     north = np.cross(east, down)
-    return np.stack([north, east, down], -2)         # rows: nav axes written in body coordinates
+    return np.stack([north, east, down], -2)  # rows: nav axes written in body coordinates
 
 
 def _norm(v, name):
@@ -261,14 +278,20 @@ def _norm(v, name):
     return n
 
 
-@register("triad", uses_mag=True, seed="(baseline, not from a seed)",
-          summary="accelerometer + magnetometer snapshot (TRIAD) at every sample, no gyro")
+@register(
+    "triad",
+    uses_mag=True,
+    seed="(baseline, not from a seed)",
+    summary="accelerometer + magnetometer snapshot (TRIAD) at every sample, no gyro",
+)
 def _triad(gyr, acc, mag, fs):
     free = np.linalg.norm(acc, axis=1) < FREE_FALL
     if np.any(free):
-        raise ValueError(f"acc reads free fall at {int(free.sum())} sample(s) (first at index {int(np.argmax(free))}"
-                         "): the TRIAD snapshot has no gyro to carry the attitude through it -- use a filter that "
-                         "integrates the gyro (e.g. 'complementary', 'dcm_ahrs')")
+        raise ValueError(
+            f"acc reads free fall at {int(free.sum())} sample(s) (first at index {int(np.argmax(free))}"
+            "): the TRIAD snapshot has no gyro to carry the attitude through it -- use a filter that "
+            "integrates the gyro (e.g. 'complementary', 'dcm_ahrs')"
+        )
     return rotations.dcm_to_quat(triad(acc, mag))
 
 
@@ -282,8 +305,13 @@ def _freescale_units(gyr, acc):
     return np.degrees(gyr), -acc / earth.G
 
 
-@register("freescale9", uses_mag=True, mag_uT=True, seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
-          summary="Freescale 9DOF indirect Kalman filter: 10 error states, eCompass + gyro, ~25 Hz steps")
+@register(
+    "freescale9",
+    uses_mag=True,
+    mag_uT=True,
+    seed="002 §7 (v5.00 fRun_9DOF_GBY_KALMAN)",
+    summary="Freescale 9DOF indirect Kalman filter: 10 error states, eCompass + gyro, ~25 Hz steps",
+)
 def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     """Magnetometer assumed in µT (the 7 µT² floor); the field strength B is a running reference learnt as the
     samples arrive (:func:`fusionlab.signals.field_reference`; v5.00 takes it from its background magnetic
@@ -302,9 +330,13 @@ def _freescale9(gyr, acc, mag, fs, accel_hold=0.0):
     return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 
-@register("freescale6", uses_mag=False, seed="002 §8 (v5.00 fRun_6DOF_GY_KALMAN)",
-          summary="Freescale 6DOF indirect Kalman filter: 6 error states, accelerometer + gyro, ~25 Hz steps, "
-                  "accelerometer noise held over accel_hold = 0.5 s (ours)")
+@register(
+    "freescale6",
+    uses_mag=False,
+    seed="002 §8 (v5.00 fRun_6DOF_GY_KALMAN)",
+    summary="Freescale 6DOF indirect Kalman filter: 6 error states, accelerometer + gyro, ~25 Hz steps, "
+    "accelerometer noise held over accel_hold = 0.5 s (ours)",
+)
 def _freescale6(gyr, acc, mag, fs, accel_hold=0.5):
     """``accel_hold`` (s): the accelerometer noise that sets the Kalman gain is the largest of the last 0.5 s
     (ours, not v5.00's: :func:`fusionlab.freescale_fast.held_accel_noise`; 0 gives v5.00's single-reading estimate).
@@ -315,15 +347,23 @@ def _freescale6(gyr, acc, mag, fs, accel_hold=0.5):
     return conventions.quat_from_seed002(q, "NED", nav="NED")
 
 
-@register("complementary", uses_mag=False, seed="000 eq 5.17 generalised to 3-D (not from the thesis)",
-          summary="three-axis complementary filter: gyro increment, then 1/(1 + tau fs) of the tilt error, tau = 1 s, "
-                  "down-weighted while |a| is far from g (acc_sigma, acc_hold)")
+@register(
+    "complementary",
+    uses_mag=False,
+    seed="000 eq 5.17 generalised to 3-D (not from the thesis)",
+    summary="three-axis complementary filter: gyro increment, then 1/(1 + tau fs) of the tilt error, tau = 1 s, "
+    "down-weighted while |a| is far from g (acc_sigma, acc_hold)",
+)
 def _complementary(gyr, acc, mag, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
     return correlation.complementary_attitude(gyr, acc, fs, tau=tau, acc_sigma=acc_sigma, acc_hold=acc_hold)
 
 
-@register("correlation", uses_mag=False, seed="000 eqs 5.7-5.17 (§5.4.3, as meant), generalised to 3-D",
-          summary="the thesis' correlation fusion: accelerometer weight = |gyro rate| / (|gyro rate| + |tilt rate|)")
+@register(
+    "correlation",
+    uses_mag=False,
+    seed="000 eqs 5.7-5.17 (§5.4.3, as meant), generalised to 3-D",
+    summary="the thesis' correlation fusion: accelerometer weight = |gyro rate| / (|gyro rate| + |tilt rate|)",
+)
 def _correlation(gyr, acc, mag, fs, n_ma=12, accel_weight="ratio"):
     return correlation.correlation_attitude(gyr, acc, fs, n_ma=n_ma, accel_weight=accel_weight)
 
@@ -337,12 +377,23 @@ def _correlation(gyr, acc, mag, fs, n_ma=12, accel_weight="ratio"):
 DCM_AHRS_UPDATE_HZ = 50.0
 
 
-@register("dcm_ahrs", uses_mag=True, seed="004 §6.4 (9-state DCM AHRS: rows c1, c3 and gyro bias)",
-          summary="DCM-row Kalman filter, linear acc/mag measurements, adaptive R, orthogonality pseudo-measurements; "
-                  "ours after VQF: rest bias, magnetic dip test, accelerometer low-passed in an almost inertial "
-                  "frame (tuning dcm_filter.HANDHELD)")
-def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD.acc_sigma_untrusted,
-              hold=dcm_filter.HANDHELD.hold, acc_lp_tau=dcm_filter.HANDHELD.acc_lp_tau):
+@register(
+    "dcm_ahrs",
+    uses_mag=True,
+    seed="004 §6.4 (9-state DCM AHRS: rows c1, c3 and gyro bias)",
+    summary="DCM-row Kalman filter, linear acc/mag measurements, adaptive R, orthogonality pseudo-measurements; "
+    "ours after VQF: rest bias, magnetic dip test, accelerometer low-passed in an almost inertial "
+    "frame (tuning dcm_filter.HANDHELD)",
+)
+def _dcm_ahrs(
+    gyr,
+    acc,
+    mag,
+    fs,
+    acc_sigma_untrusted=dcm_filter.HANDHELD.acc_sigma_untrusted,
+    hold=dcm_filter.HANDHELD.hold,
+    acc_lp_tau=dcm_filter.HANDHELD.acc_lp_tau,
+):
     """Units and signs at the door, explicitly:
 
     * the thesis' accelerometer is "measured gravity", ``+g c3`` (+g on z when level, z down), the **negative** of
@@ -363,32 +414,49 @@ def _dcm_ahrs(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD.acc_sig
     """
     acc_b = dcm.accel_to_seed004(acc)
     ref, _ = signals.field_reference(mag, fs)
-    return _run_dcm_ahrs(gyr, acc, acc_b, mag / ref[:, None], fs, acc_sigma_untrusted, hold, acc_lp_tau,
-                         dcm_filter.HANDHELD)
+    return _run_dcm_ahrs(
+        gyr, acc, acc_b, mag / ref[:, None], fs, acc_sigma_untrusted, hold, acc_lp_tau, dcm_filter.HANDHELD
+    )
 
 
 def _run_dcm_ahrs(gyr, acc, acc_b, h, fs, acc_sigma_untrusted, hold, acc_lp_tau, base):
     from dataclasses import replace
+
     g = float(np.linalg.norm(acc[0]))
     g = g if abs(g / dcm.G - 1) < 0.05 else dcm.G
     every = max(1, int(round(fs / DCM_AHRS_UPDATE_HZ)))
-    tuning = replace(base, hold=validate.positive(hold, "hold"),
-                     acc_sigma_untrusted=validate.positive(acc_sigma_untrusted, "acc_sigma_untrusted"),
-                     acc_lp_tau=validate.positive(acc_lp_tau, "acc_lp_tau"))
+    tuning = replace(
+        base,
+        hold=validate.positive(hold, "hold"),
+        acc_sigma_untrusted=validate.positive(acc_sigma_untrusted, "acc_sigma_untrusted"),
+        acc_lp_tau=validate.positive(acc_lp_tau, "acc_lp_tau"),
+    )
     return dcm_filter.run_ahrs(gyr, acc_b, h, fs, update_every=every, g=g, tuning=tuning, init_seconds=0.0)["q"]
 
 
-@register("dcm_ahrs6", uses_mag=False, seed="004 §6.4 without the magnetometer (rows c3 and gyro bias; ours)",
-          summary="the DCM AHRS without the magnetometer: accelerometer + orthogonality updates, gyro bias estimated; "
-                  "the accelerometer low-passed in an almost inertial frame from the first sample (tuning "
-                  "dcm_filter.HANDHELD6)")
-def _dcm_ahrs6(gyr, acc, mag, fs, acc_sigma_untrusted=dcm_filter.HANDHELD6.acc_sigma_untrusted,
-               hold=dcm_filter.HANDHELD6.hold, acc_lp_tau=dcm_filter.HANDHELD6.acc_lp_tau):
+@register(
+    "dcm_ahrs6",
+    uses_mag=False,
+    seed="004 §6.4 without the magnetometer (rows c3 and gyro bias; ours)",
+    summary="the DCM AHRS without the magnetometer: accelerometer + orthogonality updates, gyro bias estimated; "
+    "the accelerometer low-passed in an almost inertial frame from the first sample (tuning "
+    "dcm_filter.HANDHELD6)",
+)
+def _dcm_ahrs6(
+    gyr,
+    acc,
+    mag,
+    fs,
+    acc_sigma_untrusted=dcm_filter.HANDHELD6.acc_sigma_untrusted,
+    hold=dcm_filter.HANDHELD6.hold,
+    acc_lp_tau=dcm_filter.HANDHELD6.acc_lp_tau,
+):
     """As ``dcm_ahrs`` with ``mag_b=None`` (:func:`fusionlab.dcm_filter.run_ahrs`): the accelerometer observes
     ``c3`` and the horizontal gyro bias; the heading starts at 0 and is the gyro's. Same ``g`` and update rate; the
     tuning is :data:`fusionlab.dcm_filter.HANDHELD6`: ``acc_lp_tau = 3 s`` (VQF's value), which the eight BROAD
     trials prefer for the 6D filter (1 s for the 9D one), and the low-pass from the first sample on, as VQF
     (Laidig & Seel 2023) low-passes it, not only once the bias is known (``HANDHELD6`` gives the evidence); any
     ``mag`` passed is ignored."""
-    return _run_dcm_ahrs(gyr, acc, dcm.accel_to_seed004(acc), None, fs, acc_sigma_untrusted, hold, acc_lp_tau,
-                         dcm_filter.HANDHELD6)
+    return _run_dcm_ahrs(
+        gyr, acc, dcm.accel_to_seed004(acc), None, fs, acc_sigma_untrusted, hold, acc_lp_tau, dcm_filter.HANDHELD6
+    )

@@ -13,6 +13,7 @@ bounds a missed wake-up to one slice (a poll that times out looks at the socket 
     >>> run_notebook(nb).cells[0].outputs[0]["data"]["text/plain"]
     '2'
 """
+
 from __future__ import annotations
 
 import os
@@ -110,7 +111,12 @@ def run_notebook(nb, cwd=None, timeout=300, allow_errors=True, kernel_name="pyth
     cwd = os.fspath(cwd) if cwd is not None else os.getcwd()
     if not os.path.isdir(cwd):
         raise ValueError(f"cwd must be an existing folder; got {cwd!r}")
-    runner = NotebookRunner(nb, timeout=timeout, kernel_name=kernel_name, allow_errors=bool(allow_errors),
-                            resources={"metadata": {"path": cwd}})
+    runner = NotebookRunner(
+        nb,
+        timeout=timeout,
+        kernel_name=kernel_name,
+        allow_errors=bool(allow_errors),
+        resources={"metadata": {"path": cwd}},
+    )
     runner.execute(**({} if stderr is None else {"stderr": stderr}))
     return nb

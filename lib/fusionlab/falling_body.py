@@ -24,6 +24,7 @@ prior for the measurement it receives. Gravity in lab 2 is the thesis' ``g = 9.8
 Everything numeric in the lab that the seed does not print (the closed form, the drag constants) is labelled as
 an addition in its docstring.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -32,10 +33,23 @@ from scipy.integrate import solve_ivp
 from . import kalman, validate
 
 __all__ = [
-    "LAB2", "AIR_DENSITY", "SPHERE_CD", "SPHERE_AREA", "terminal_velocity", "time_constant",
-    "seed000_labcode_falling_body", "falling_body_euler", "falling_body_exact", "quadratic_terminal_velocity",
-    "falling_body_quadratic", "falling_body_state_space", "mass_spring_damper_ss",
-    "seed000_labcode_kalman", "ThesisKF", "simulate_falling_body", "monte_carlo",
+    "LAB2",
+    "AIR_DENSITY",
+    "SPHERE_CD",
+    "SPHERE_AREA",
+    "terminal_velocity",
+    "time_constant",
+    "seed000_labcode_falling_body",
+    "falling_body_euler",
+    "falling_body_exact",
+    "quadratic_terminal_velocity",
+    "falling_body_quadratic",
+    "falling_body_state_space",
+    "mass_spring_damper_ss",
+    "seed000_labcode_kalman",
+    "ThesisKF",
+    "simulate_falling_body",
+    "monte_carlo",
 ]
 
 
@@ -45,14 +59,15 @@ LAB2 = dict(k=0.25, m=10.0, g=9.8, dt=0.01, tmax=200, x0=200.0, v0=0.0, mn_std=1
 
 #: Quadratic-drag constants assumed for Part A's question (the thesis gives none): sea-level air, a smooth sphere
 #: 25 cm across (C_D of a sphere at these Reynolds numbers), mass 10 kg as in the lab.
-AIR_DENSITY = 1.225          # kg/m^3, ISA sea level
-SPHERE_CD = 0.47             # -, smooth sphere, Re ~ 1e5
-SPHERE_AREA = np.pi * 0.125 ** 2   # m^2, frontal area of a 0.25 m sphere
+AIR_DENSITY = 1.225  # kg/m^3, ISA sea level
+SPHERE_CD = 0.47  # -, smooth sphere, Re ~ 1e5
+SPHERE_AREA = np.pi * 0.125**2  # m^2, frontal area of a 0.25 m sphere
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Part A: the falling body (000 §4.4.1)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def terminal_velocity(k, m, g=9.8):
     """Terminal velocity of the linear-drag model, m/s: set ``dv/dt = -(k/m) v - g = 0`` (000 §4.4.1).
@@ -156,9 +171,9 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
     X = np.zeros(TMAX)
     V = np.zeros(TMAX)
     X[0], V[0] = x0, v0
-    for t in range(1, TMAX):                                        # MATLAB: for t=2:TMAX
-        X[t] = X[t - 1] + (V[t - 1]) * dt                            # (000 §4.4.1, x_t = x_{t-1} + v_{t-1} dt)
-        V[t] = V[t - 1] + (-(k / m) * (V[t - 1]) - g) * dt           # (000 §4.4.1, v_t = v_{t-1} - (k/m v + g) dt)
+    for t in range(1, TMAX):  # MATLAB: for t=2:TMAX
+        X[t] = X[t - 1] + (V[t - 1]) * dt  # (000 §4.4.1, x_t = x_{t-1} + v_{t-1} dt)
+        V[t] = V[t - 1] + (-(k / m) * (V[t - 1]) - g) * dt  # (000 §4.4.1, v_t = v_{t-1} - (k/m v + g) dt)
     return X, V
 
 
@@ -201,8 +216,8 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
     out[0] = validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
     for i in range(n):
         x, v = out[i]
-        out[i + 1, 0] = x + v * dt                                   # (000 §4.4.1)
-        out[i + 1, 1] = v + (-(k / m) * v - g) * dt                  # (000 §4.4.1)
+        out[i + 1, 0] = x + v * dt  # (000 §4.4.1)
+        out[i + 1, 1] = v + (-(k / m) * v - g) * dt  # (000 §4.4.1)
     return np.arange(n + 1) * dt, out
 
 
@@ -271,8 +286,18 @@ def quadratic_terminal_velocity(m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD, a
     return -np.sqrt(2 * m * g / (rho * C_D * area))
 
 
-def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD,
-                           area=SPHERE_AREA, stop_at_ground=True, t_eval=None):
+def falling_body_quadratic(
+    duration,
+    x0=200.0,
+    v0=0.0,
+    m=10.0,
+    g=9.8,
+    rho=AIR_DENSITY,
+    C_D=SPHERE_CD,
+    area=SPHERE_AREA,
+    stop_at_ground=True,
+    t_eval=None,
+):
     """Falling body with quadratic drag, solved with ``scipy.integrate.solve_ivp`` (RK45, MATLAB's ``ode45``).
 
     000 §4.4.1 questions 1-2: with ``F_Drag = ½ ρ C_D A v²`` acting against the motion,
@@ -310,14 +335,20 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
     """
     duration = validate.scalar(duration, "duration", True)
     m, g = validate.scalar(m, "m", True), validate.scalar(g, "g", True)
-    c = (0.5 * validate.scalar(rho, "rho", True) * validate.scalar(C_D, "C_D", True)
-         * validate.scalar(area, "area", True) / m)
+    c = (
+        0.5
+        * validate.scalar(rho, "rho", True)
+        * validate.scalar(C_D, "C_D", True)
+        * validate.scalar(area, "area", True)
+        / m
+    )
 
     def rhs(_t, y):
-        return [y[1], -g - c * abs(y[1]) * y[1]]                     # (000 §4.4.1 Q1: m dv/dt = -mg - ½ρC_D A|v|v)
+        return [y[1], -g - c * abs(y[1]) * y[1]]  # (000 §4.4.1 Q1: m dv/dt = -mg - ½ρC_D A|v|v)
 
     def ground(_t, y):
         return y[0]
+
     ground.terminal, ground.direction = True, -1
     if t_eval is not None:
         t_eval = validate.array(t_eval, "t_eval")
@@ -330,6 +361,7 @@ def falling_body_quadratic(duration, x0=200.0, v0=0.0, m=10.0, g=9.8, rho=AIR_DE
 # ----------------------------------------------------------------------------------------------------------------
 # Part B: state space (000 §4.4.2)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     """``A``, ``B``, ``u`` of the falling body so that ``x_t = A x_{t-1} + B u`` (000 §4.4.2 step c, §4.4.3 b).
@@ -365,9 +397,9 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     """
     k, m = validate.scalar(k, "k", True), validate.scalar(m, "m", True)
     g, dt = validate.scalar(g, "g", True), validate.time_step(dt, "dt")
-    A = np.array([[1.0, dt], [0.0, 1.0 - (k / m) * dt]])            # (000 §4.4.2)
-    B = np.array([[1.0, 0.0], [0.0, -g * dt]])                       # (000 §4.4.2)
-    u = np.array([0.0, 1.0])                                         # (000 §4.4.2)
+    A = np.array([[1.0, dt], [0.0, 1.0 - (k / m) * dt]])  # (000 §4.4.2)
+    B = np.array([[1.0, 0.0], [0.0, -g * dt]])  # (000 §4.4.2)
+    u = np.array([0.0, 1.0])  # (000 §4.4.2)
     return A, B, u
 
 
@@ -410,11 +442,11 @@ def mass_spring_damper_ss(m, b, k, input="force"):
     b = validate.scalar(b, "b")
     if b < 0:
         raise ValueError(f"b must be >= 0 (a damper takes energy out); got {b!r}")
-    A = np.array([[0.0, 1.0], [-k / m, -b / m]])                     # (000 eq 3.2 in state form)
+    A = np.array([[0.0, 1.0], [-k / m, -b / m]])  # (000 eq 3.2 in state form)
     if input == "force":
         B = np.array([[0.0], [1.0 / m]])
     elif input == "base_accel":
-        B = np.array([[0.0], [-1.0]])                                # (000 eq 3.2: right-hand side -a(t))
+        B = np.array([[0.0], [-1.0]])  # (000 eq 3.2: right-hand side -a(t))
     else:
         raise ValueError(f"input must be 'force' or 'base_accel'; got {input!r}")
     return A, B, np.array([[1.0, 0.0]]), np.zeros((1, 1))
@@ -423,6 +455,7 @@ def mass_spring_damper_ss(m, b, k, input="force"):
 # ----------------------------------------------------------------------------------------------------------------
 # Part C: the filter (000 §4.3.1 and §4.4.3)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def seed000_labcode_kalman(x, P, z, A, Q, H, R):
     """Thesis lab 2 Part C ``Kalman_Filter`` function, verbatim (000 §4.4.3 step c)::
@@ -462,10 +495,10 @@ def seed000_labcode_kalman(x, P, z, A, Q, H, R):
     """
     d = kalman.check_model(x=x, P=P, z=z, A=A, Q=Q, H=H, R=R)
     x, P, z, A, Q, H, R = (d[k] for k in "x P z A Q H R".split())
-    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)                     # (000 §4.4.3, printed code)
-    x = x + K @ (z - H @ x)                                          # (000 §4.4.3, printed code)
-    P = P - K @ H @ P                                                # (000 §4.4.3, printed code)
-    P = A @ P @ A.T + Q                                              # (000 §4.4.3, printed code)
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)  # (000 §4.4.3, printed code)
+    x = x + K @ (z - H @ x)  # (000 §4.4.3, printed code)
+    P = P - K @ H @ P  # (000 §4.4.3, printed code)
+    P = A @ P @ A.T + Q  # (000 §4.4.3, printed code)
     return x, P
 
 
@@ -528,8 +561,7 @@ class ThesisKF:
         self.x_post = self.P_post = self.K = None
 
     @classmethod
-    def falling_body(cls, x0=(200.0, 0.0), P0=None, mn_std=12.0, pn_std=0.4, k=0.25, m=10.0, g=9.8, dt=0.01,
-                     **options):
+    def falling_body(cls, x0=(200.0, 0.0), P0=None, mn_std=12.0, pn_std=0.4, k=0.25, m=10.0, g=9.8, dt=0.01, **options):
         """The lab's filter (000 §4.4.3 step b): ``R = MNstd² I``, ``Q = PNstd² I``, ``H = I``, ``P0 = MNstd² I``.
 
         Parameters
@@ -560,8 +592,8 @@ class ThesisKF:
         """
         A, B, u = falling_body_state_space(k, m, g, dt)
         mn_std, pn_std = validate.scalar(mn_std, "mn_std", True), validate.scalar(pn_std, "pn_std", True)
-        P0 = mn_std ** 2 * np.eye(2) if P0 is None else P0
-        return cls(A, B, u, pn_std ** 2 * np.eye(2), mn_std ** 2 * np.eye(2), np.eye(2), x0, P0, **options)
+        P0 = mn_std**2 * np.eye(2) if P0 is None else P0
+        return cls(A, B, u, pn_std**2 * np.eye(2), mn_std**2 * np.eye(2), np.eye(2), x0, P0, **options)
 
     def step(self, z):
         """One measurement: update, then project.
@@ -582,7 +614,7 @@ class ThesisKF:
         self.x_post, self.P_post, self.K = kalman.update_step(self.x, self.P, z, self.H, self.R, self.covariance)
         Bu = self.B @ self.u if self.control else None
         x_next, self.P = kalman.predict_step(self.x_post, self.P_post, self.A, self.Q, Bu)
-        self.x = x_next if self.project_state else self.x_post       # printed code: s.x is never projected
+        self.x = x_next if self.project_state else self.x_post  # printed code: s.x is never projected
         return self.x_post, self.P_post
 
     def run(self, zs):
@@ -603,8 +635,13 @@ class ThesisKF:
         if zs.ndim != 2:
             raise ValueError(f"zs must have shape (N, {self.H.shape[0]}); got {zs.shape}")
         n, m = self.H.shape[1], self.H.shape[0]
-        out = {"x": np.empty((len(zs), n)), "P": np.empty((len(zs), n, n)), "x_prior": np.empty((len(zs), n)),
-               "P_prior": np.empty((len(zs), n, n)), "K": np.empty((len(zs), n, m))}
+        out = {
+            "x": np.empty((len(zs), n)),
+            "P": np.empty((len(zs), n, n)),
+            "x_prior": np.empty((len(zs), n)),
+            "P_prior": np.empty((len(zs), n, n)),
+            "K": np.empty((len(zs), n, m)),
+        }
         for i, z in enumerate(zs):
             out["x_prior"][i], out["P_prior"][i] = self.x, self.P
             out["x"][i], out["P"][i] = self.step(z)
@@ -612,8 +649,9 @@ class ThesisKF:
         return out
 
 
-def simulate_falling_body(n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0.0, k=0.25, m=10.0, g=9.8,
-                          dt=0.01, pn_std=0.4, mn_std=12.0):
+def simulate_falling_body(
+    n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0.0, k=0.25, m=10.0, g=9.8, dt=0.01, pn_std=0.4, mn_std=12.0
+):
     """Truth and measurements of the lab's simulation loop (000 §4.4.3 step d), for many runs.
 
     Per step, as printed: ``tru(t) = A tru(t-1) + B u + PNstd·randn(2,1)`` then
@@ -658,16 +696,22 @@ def simulate_falling_body(n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0
     n_runs, n_steps = validate.count(n_runs, "n_runs", 1), validate.count(n_steps, "n_steps", 1)
     seed, first_run = validate.count(seed, "seed", 0), validate.count(first_run, "first_run", 0)
     A, B, u = falling_body_state_space(k, m, g, dt)
-    pn_std, mn_std = validate.scalar(pn_std, "pn_std", nonnegative=True), validate.scalar(mn_std, "mn_std",
-                                                                                          nonnegative=True)
-    noise = np.stack([np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(r,)))
-                      .standard_normal((n_steps, 4)) for r in range(first_run, first_run + n_runs)])
+    pn_std, mn_std = (
+        validate.scalar(pn_std, "pn_std", nonnegative=True),
+        validate.scalar(mn_std, "mn_std", nonnegative=True),
+    )
+    noise = np.stack(
+        [
+            np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(r,))).standard_normal((n_steps, 4))
+            for r in range(first_run, first_run + n_runs)
+        ]
+    )
     truth = np.empty((n_runs, n_steps + 1, 2))
     truth[:, 0] = validate.scalar(x0, "x0"), validate.scalar(v0, "v0")
     Bu = B @ u
     for i in range(n_steps):
-        truth[:, i + 1] = truth[:, i] @ A.T + Bu + pn_std * noise[:, i, :2]   # (000 §4.4.3 d, eq 4.1)
-    z = truth[:, 1:] + mn_std * noise[:, :, 2:]                              # (000 §4.4.3 d, eq 4.3, H = I)
+        truth[:, i + 1] = truth[:, i] @ A.T + Bu + pn_std * noise[:, i, :2]  # (000 §4.4.3 d, eq 4.1)
+    z = truth[:, 1:] + mn_std * noise[:, :, 2:]  # (000 §4.4.3 d, eq 4.3, H = I)
     return truth, z
 
 
@@ -709,24 +753,37 @@ def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_st
     n_runs, batch = validate.count(n_runs, "n_runs", 1), validate.count(batch, "batch", 1)
     n_steps, seed = validate.count(n_steps, "n_steps", 1), validate.count(seed, "seed", 0)
     validate.options(model, [k_ for k_ in LAB2 if k_ != "tmax"], "monte_carlo")
-    model = {k_: validate.scalar(v, k_, positive=k_ in ("k", "m", "dt", "mn_std"),
-                                 nonnegative=k_ == "pn_std") for k_, v in model.items()}
+    model = {
+        k_: validate.scalar(v, k_, positive=k_ in ("k", "m", "dt", "mn_std"), nonnegative=k_ == "pn_std")
+        for k_, v in model.items()
+    }
     p = dict(LAB2)
     p.update(model)
     A, B, u = falling_body_state_space(p["k"], p["m"], p["g"], p["dt"])
-    base = dict(A=A, B=B, u=u, Q=p["pn_std"] ** 2 * np.eye(2), R=p["mn_std"] ** 2 * np.eye(2), H=np.eye(2),
-                x0=np.array([p["x0"], p["v0"]]), P0=p["mn_std"] ** 2 * np.eye(2))
+    base = dict(
+        A=A,
+        B=B,
+        u=u,
+        Q=p["pn_std"] ** 2 * np.eye(2),
+        R=p["mn_std"] ** 2 * np.eye(2),
+        H=np.eye(2),
+        x0=np.array([p["x0"], p["v0"]]),
+        P0=p["mn_std"] ** 2 * np.eye(2),
+    )
     if variants is None:
         variants = {"thesis filter": {}, "printed code": {"project_state": False, "covariance": "short"}}
     if not isinstance(variants, dict) or not variants:
         raise ValueError(f"variants must be a non-empty dict name -> kf_batch options; got {variants!r}")
     for name, opts in variants.items():
-        validate.options(opts, ("covariance", "project_state", "control", "x0", "P0", "Q", "R"),
-                         f"monte_carlo variant {name!r}")
+        validate.options(
+            opts, ("covariance", "project_state", "control", "x0", "P0", "Q", "R"), f"monte_carlo variant {name!r}"
+        )
     sims = {k_: p[k_] for k_ in ("x0", "v0", "k", "m", "g", "dt", "pn_std", "mn_std")}
     sq_meas = np.zeros(2)
-    acc = {name: {"sq": np.zeros((n_steps, 2)), "err": np.zeros((n_steps, 2)), "nees": np.zeros(n_steps)}
-           for name in variants}
+    acc = {
+        name: {"sq": np.zeros((n_steps, 2)), "err": np.zeros((n_steps, 2)), "nees": np.zeros(n_steps)}
+        for name in variants
+    }
     P_of = {}
     with tqdm(total=n_runs, desc="Monte Carlo", unit="run", disable=not progress) as bar:
         for start in range(0, n_runs, batch):
@@ -736,14 +793,18 @@ def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_st
             for name, opts in variants.items():
                 res = kalman.kf_batch(z, **{**base, **opts})
                 e = res["x"] - truth[:, 1:]
-                acc[name]["sq"] += (e ** 2).sum(axis=0)
+                acc[name]["sq"] += (e**2).sum(axis=0)
                 acc[name]["err"] += e.sum(axis=0)
                 acc[name]["nees"] += kalman.nees(e, res["P"][None]).sum(axis=0)
                 P_of[name] = res["P"]
             bar.update(nb)
     out = {"n_runs": n_runs, "seed": seed, "meas_rms": np.sqrt(sq_meas / (n_runs * n_steps)), "variants": {}}
     for name, a in acc.items():
-        out["variants"][name] = {"rms": np.sqrt(a["sq"].sum(axis=0) / (n_runs * n_steps)),
-                                 "rms_t": np.sqrt(a["sq"] / n_runs), "mean_err_t": a["err"] / n_runs,
-                                 "nees_t": a["nees"] / n_runs, "P": P_of[name]}
+        out["variants"][name] = {
+            "rms": np.sqrt(a["sq"].sum(axis=0) / (n_runs * n_steps)),
+            "rms_t": np.sqrt(a["sq"] / n_runs),
+            "mean_err_t": a["err"] / n_runs,
+            "nees_t": a["nees"] / n_runs,
+            "P": P_of[name],
+        }
     return out

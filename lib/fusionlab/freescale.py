@@ -27,6 +27,7 @@ Conventions at the edge
   per 25 Hz Kalman step are those of the **v5.00 library source** (fusion.h / build.h); the note names them but does
   not print their values. Only the 7 µT² floor and the ±5 °/s offset range appear in the note.
 """
+
 from __future__ import annotations
 
 import math
@@ -37,9 +38,26 @@ import numpy as np
 from . import ecompass, rotations, validate
 
 __all__ = [
-    "Tuning", "V500", "qrot", "gravity_tilt_error", "geomag_tilt_error", "delta_quat", "alpha",
-    "measurement_matrix", "process_noise", "measurement_noise", "kalman_gain", "nominal_gain", "Kalman9", "Kalman6",
-    "block_size", "D2R", "R2D", "check_recording", "check_units", "RECORD_FIELD_UT",
+    "Tuning",
+    "V500",
+    "qrot",
+    "gravity_tilt_error",
+    "geomag_tilt_error",
+    "delta_quat",
+    "alpha",
+    "measurement_matrix",
+    "process_noise",
+    "measurement_noise",
+    "kalman_gain",
+    "nominal_gain",
+    "Kalman9",
+    "Kalman6",
+    "block_size",
+    "D2R",
+    "R2D",
+    "check_recording",
+    "check_units",
+    "RECORD_FIELD_UT",
 ]
 
 
@@ -81,6 +99,7 @@ class Tuning:
     >>> V500.dt                                  # 8 samples at 200 Hz: the Kalman filter runs at 25 Hz
     0.04
     """
+
     Q_vY: float = 1e4
     Q_wb: float = 0.5
     Q_wdelta: float = 20.0
@@ -147,17 +166,20 @@ def qrot(u, v):
     validate.broadcast({"u": 1, "v": 1}, u=u, v=v)
     nu, nv = ecompass.nonzero_norm(u, "u"), ecompass.nonzero_norm(v, "v")
     u, v = np.broadcast_arrays(u / nu[..., None], v / nv[..., None])
-    w = 1.0 + np.sum(u * v, axis=-1)                                       # 1 + u·v (unit vectors)
-    q = np.concatenate([w[..., None], -np.cross(u, v)], -1)               # (002 eq 72) numerator
-    flip = w <= 1e-15                                                      # anti-parallel: 0/0
+    w = 1.0 + np.sum(u * v, axis=-1)  # 1 + u·v (unit vectors)
+    q = np.concatenate([w[..., None], -np.cross(u, v)], -1)  # (002 eq 72) numerator
+    flip = w <= 1e-15  # anti-parallel: 0/0
     if np.any(flip):
-        ax = np.stack([u[..., 1] - u[..., 2], u[..., 2] - u[..., 0], u[..., 0] - u[..., 1]], -1)   # (002 eq 74)
+        ax = np.stack([u[..., 1] - u[..., 2], u[..., 2] - u[..., 0], u[..., 0] - u[..., 1]], -1)  # (002 eq 74)
         n = np.linalg.norm(ax, axis=-1, keepdims=True)
         equal = n[..., 0] < 1e-12
-        ax = np.where(equal[..., None], np.array([1.0, -1.0, 0.0]) / math.sqrt(2.0),              # (002 eq 75)
-                      ax / np.where(equal[..., None], 1.0, n))
-        q = np.where(flip[..., None], np.concatenate([np.zeros_like(w)[..., None], ax], -1), q)   # (002 eq 73)
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)                   # (002 eq 76)
+        ax = np.where(
+            equal[..., None],
+            np.array([1.0, -1.0, 0.0]) / math.sqrt(2.0),  # (002 eq 75)
+            ax / np.where(equal[..., None], 1.0, n),
+        )
+        q = np.where(flip[..., None], np.concatenate([np.zeros_like(w)[..., None], ax], -1), q)  # (002 eq 73)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)  # (002 eq 76)
 
 
 def _rotation_pair(R6, R_prior, **other):
@@ -187,7 +209,7 @@ def gravity_tilt_error(R6, R_prior):
         Quaternion; its vector part is the measurement ``z[0:3]``.
     """
     R6, Rp = _rotation_pair(R6, R_prior)
-    return qrot(R6[..., :, 2], Rp[..., :, 2])                              # (002 eq 82)
+    return qrot(R6[..., :, 2], Rp[..., :, 2])  # (002 eq 82)
 
 
 def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
@@ -215,7 +237,7 @@ def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
     """
     R6, Rp = _rotation_pair(R6, R_prior, delta=validate.angles_rad(validate.scalar(delta, "delta"), "delta"))
     _, r_m = ecompass.reference_vectors(delta, frame)
-    return qrot(R6 @ r_m, Rp @ r_m)                                        # (002 eqs 84-88)
+    return qrot(R6 @ r_m, Rp @ r_m)  # (002 eqs 84-88)
 
 
 def delta_quat(omega_dps, dt):
@@ -235,7 +257,7 @@ def delta_quat(omega_dps, dt):
     """
     w = validate.vectors(omega_dps, "omega_dps")
     dt = validate.time_step(dt, "dt")
-    return rotations.rotvec_to_quat(w * (D2R * dt))                       # (002 eq 120)
+    return rotations.rotvec_to_quat(w * (D2R * dt))  # (002 eq 120)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -256,7 +278,7 @@ def alpha(dt):
     float
         ``α``, rad per °/s.
     """
-    return math.pi * validate.time_step(dt, "dt") / 180.0                   # (002 eq 140)
+    return math.pi * validate.time_step(dt, "dt") / 180.0  # (002 eq 140)
 
 
 def measurement_matrix(dt, dof=9):
@@ -284,14 +306,14 @@ def measurement_matrix(dt, dof=9):
     """
     a2 = alpha(dt) / 2
     if dof == 6:
-        return np.hstack([np.eye(3), -a2 * np.eye(3)])                    # (002 eqs 181-182)
+        return np.hstack([np.eye(3), -a2 * np.eye(3)])  # (002 eqs 181-182)
     if dof != 9:
         raise ValueError(f"dof must be 6 or 9; got {dof!r}")
     C = np.zeros((7, 10))
-    C[0:3, 0:3] = np.eye(3)                                                # (002 eq 137)
-    C[3:6, 3:6] = np.eye(3)                                                # (002 eq 138)
-    C[0:3, 6:9] = C[3:6, 6:9] = -a2 * np.eye(3)                            # (002 eqs 137-138)
-    C[6, 9] = 1.0                                                          # (002 eq 139)
+    C[0:3, 0:3] = np.eye(3)  # (002 eq 137)
+    C[3:6, 3:6] = np.eye(3)  # (002 eq 138)
+    C[0:3, 6:9] = C[3:6, 6:9] = -a2 * np.eye(3)  # (002 eqs 137-138)
+    C[6, 9] = 1.0  # (002 eq 139)
     return C
 
 
@@ -328,14 +350,14 @@ def process_noise(x_prev, dt, tuning=V500, dof=9):
     Q = np.zeros((n, n))
     ib = slice(6, 9) if dof == 9 else slice(3, 6)
     gyro = a2 * a2 * (b * b + tuning.Q_vY + tuning.Q_wb)
-    Q[0:3, 0:3] = np.diag(qg * qg + gyro)                                  # (002 eq 144)
-    Q[0:3, ib] = Q[ib, 0:3] = np.diag(qg * b - a2 * tuning.Q_wb)           # (002 eqs 150-151)
-    Q[ib, ib] = np.diag(b * b + tuning.Q_wb)                               # (002 eqs 155-156)
+    Q[0:3, 0:3] = np.diag(qg * qg + gyro)  # (002 eq 144)
+    Q[0:3, ib] = Q[ib, 0:3] = np.diag(qg * b - a2 * tuning.Q_wb)  # (002 eqs 150-151)
+    Q[ib, ib] = np.diag(b * b + tuning.Q_wb)  # (002 eqs 155-156)
     if dof == 9:
         qm = x[3:6]
-        Q[3:6, 3:6] = np.diag(qm * qm + gyro)                              # (002 eq 147)
-        Q[3:6, ib] = Q[ib, 3:6] = np.diag(qm * b - a2 * tuning.Q_wb)       # (002 eqs 153-154)
-        Q[9, 9] = x[9] ** 2 + tuning.Q_wdelta                              # (002 eqs 157-158)
+        Q[3:6, 3:6] = np.diag(qm * qm + gyro)  # (002 eq 147)
+        Q[3:6, ib] = Q[ib, 3:6] = np.diag(qm * b - a2 * tuning.Q_wb)  # (002 eqs 153-154)
+        Q[9, 9] = x[9] ** 2 + tuning.Q_wdelta  # (002 eqs 157-158)
     return Q
 
 
@@ -369,16 +391,16 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
     qa = validate.scalar(qvgqa, "qvgqa", nonnegative=True)
     a2 = alpha(dt) / 2
     gyro = a2 * a2 * (tuning.Q_vY + tuning.Q_wb)
-    vg = 0.25 * qa + gyro                                                  # (002 eqs 162, 188)
+    vg = 0.25 * qa + gyro  # (002 eqs 162, 188)
     if dof == 6:
         return vg * np.eye(3)
     if dof != 9:
         raise ValueError(f"dof must be 6 or 9; got {dof!r}")
     B = tuning.B if B is None else validate.field_uT(B, "B", per_sample=False)
-    qd = max(validate.scalar(qvbqd, "qvbqd", nonnegative=True), tuning.qvbqd_min)   # (002 §2.3) floor
-    vm = 0.25 * qd / (B * B) + gyro                                        # (002 eq 163)
-    vd = R2D * R2D * (qa + qd / (B * B))                                 # (002 eq 164)
-    return np.diag([vg] * 3 + [vm] * 3 + [vd])                             # (002 eq 165)
+    qd = max(validate.scalar(qvbqd, "qvbqd", nonnegative=True), tuning.qvbqd_min)  # (002 §2.3) floor
+    vm = 0.25 * qd / (B * B) + gyro  # (002 eq 163)
+    vd = R2D * R2D * (qa + qd / (B * B))  # (002 eq 164)
+    return np.diag([vg] * 3 + [vm] * 3 + [vd])  # (002 eq 165)
 
 
 def kalman_gain(Q_w, C, Q_v):
@@ -406,12 +428,13 @@ def kalman_gain(Q_w, C, Q_v):
         raise ValueError(f"C must have shape (m, {Q_w.shape[0]}) to match Q_w ({Q_w.shape[0]} states); got {C.shape}")
     Q_v = validate.covariance(Q_v, "Q_v")
     if Q_v.shape != (C.shape[0], C.shape[0]):
-        raise ValueError(f"Q_v must have shape ({C.shape[0]}, {C.shape[0]}) to match C ({C.shape[0]} measurements); "
-                         f"got {Q_v.shape}")
-    P = Q_w                                                                # (002 eq 167) P⁻ = Q_w
+        raise ValueError(
+            f"Q_v must have shape ({C.shape[0]}, {C.shape[0]}) to match C ({C.shape[0]} measurements); got {Q_v.shape}"
+        )
+    P = Q_w  # (002 eq 167) P⁻ = Q_w
     S = C @ P @ C.T + Q_v
     try:
-        return P @ C.T @ np.linalg.inv(S)                                  # (002 eq 170)
+        return P @ C.T @ np.linalg.inv(S)  # (002 eq 170)
     except np.linalg.LinAlgError:
         return np.zeros((Q_w.shape[0], C.shape[0]))
 
@@ -448,8 +471,11 @@ def nominal_gain(dof=9, tuning=V500, qvgqa=0.0, qvbqd=0.0, B=None):
     """
     n = 10 if dof == 9 else 6
     dt = tuning.dt
-    return kalman_gain(process_noise(np.zeros(n), dt, tuning, dof), measurement_matrix(dt, dof),
-                       measurement_noise(qvgqa, qvbqd, dt, tuning, dof, B))
+    return kalman_gain(
+        process_noise(np.zeros(n), dt, tuning, dof),
+        measurement_matrix(dt, dof),
+        measurement_noise(qvgqa, qvbqd, dt, tuning, dof, B),
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -589,30 +615,30 @@ class Kalman9:
         if not self.locked:
             self.lock(G, B_c)
         t = self.tuning
-        q = self.q                                                         # a priori: integrate the gyro samples
+        q = self.q  # a priori: integrate the gyro samples
         for Y in gyr:
-            q = rotations.quat_multiply(q, delta_quat(Y - self.b_dps, self.dt_gyro))   # (002 eqs 96, 120)
+            q = rotations.quat_multiply(q, delta_quat(Y - self.b_dps, self.dt_gyro))  # (002 eqs 96, 120)
         q_prior = _normalize_positive(q)
         R_prior = ecompass.rotation_matrix(q_prior)
-        d_rad = math.radians(self.delta_deg)                               # (002 eq 122) δ̂⁻ = δ̂⁺
+        d_rad = math.radians(self.delta_deg)  # (002 eq 122) δ̂⁻ = δ̂⁺
         e6 = ecompass.ecompass(G, B_c, d_rad, self.frame, self.B)
         R6 = ecompass.rotation_matrix(e6.q)
         self.q6 = e6.q
         z = np.empty(7)
-        z[0:3] = gravity_tilt_error(R6, R_prior)[1:]                       # (002 eq 82)
-        z[3:6] = geomag_tilt_error(R6, R_prior, d_rad, self.frame)[1:]     # (002 eq 88)
-        z[6] = self.delta_deg - math.degrees(float(e6.delta6))             # (002 eq 113)
-        Q_w = process_noise(self.x_err, self.dt, t, 9)                     # (002 eq 142)
+        z[0:3] = gravity_tilt_error(R6, R_prior)[1:]  # (002 eq 82)
+        z[3:6] = geomag_tilt_error(R6, R_prior, d_rad, self.frame)[1:]  # (002 eq 88)
+        z[6] = self.delta_deg - math.degrees(float(e6.delta6))  # (002 eq 113)
+        Q_w = process_noise(self.x_err, self.dt, t, 9)  # (002 eq 142)
         Q_v = measurement_noise(e6.qvgqa, e6.qvbqd, self.dt, t, 9, self.B)  # (002 eqs 160-165)
-        K = kalman_gain(Q_w, self.C, Q_v)                                  # (002 eq 170)
-        x = K @ z                                                          # (002 eq 131)
+        K = kalman_gain(Q_w, self.C, Q_v)  # (002 eq 170)
+        x = K @ z  # (002 eq 131)
         qg_conj, x[0:3] = _correction(x[0:3], limit=True)
         qm_conj, x[3:6] = _correction(x[3:6], limit=True)
-        q_post = rotations.quat_multiply(rotations.quat_multiply(q_prior, qg_conj), qm_conj)   # (002 eq 123)
+        q_post = rotations.quat_multiply(rotations.quat_multiply(q_prior, qg_conj), qm_conj)  # (002 eq 123)
         self.q = _normalize_positive(q_post)
         lim_b, lim_d = t.gyro_offset_max, t.delta_max
-        self.b_dps = np.clip(self.b_dps - x[6:9], -lim_b, lim_b)           # (002 eq 124) + clamp
-        self.delta_deg = float(np.clip(self.delta_deg - x[9], -lim_d, lim_d))   # (002 eq 125) + clamp
+        self.b_dps = np.clip(self.b_dps - x[6:9], -lim_b, lim_b)  # (002 eq 124) + clamp
+        self.delta_deg = float(np.clip(self.delta_deg - x[9], -lim_d, lim_d))  # (002 eq 125) + clamp
         self.x_err, self.z, self.K = x, z, K
         return self.q
 
@@ -704,7 +730,7 @@ class Kalman6:
 
     def _s_g(self, G):
         if float(G @ G) == 0.0:
-            return np.array([0.0, 0.0, 1.0])                               # free fall [SRC]
+            return np.array([0.0, 0.0, 1.0])  # free fall [SRC]
         return ecompass.measured_gravity(G, self.frame)
 
     def lock(self, G):
@@ -743,17 +769,17 @@ class Kalman6:
         t = self.tuning
         q = self.q
         for Y in gyr:
-            q = rotations.quat_multiply(q, delta_quat(Y - self.b_dps, self.dt_gyro))   # (002 eq 175)
+            q = rotations.quat_multiply(q, delta_quat(Y - self.b_dps, self.dt_gyro))  # (002 eq 175)
         q_prior = _normalize_positive(q)
-        v = ecompass.rotation_matrix(q_prior) @ self.r_g                   # a priori gravity
-        z = qrot(self._s_g(G), v)[1:]                                      # (002 eq 180)
-        Q_w = process_noise(self.x_err, self.dt, t, 6)                     # (002 eqs 183-186)
-        Q_v = measurement_noise(float(np.abs(G @ G - 1.0)), 0.0, self.dt, t, 6)   # (002 eqs 187-188)
-        K = kalman_gain(Q_w, self.C, Q_v)                                  # (002 eq 192)
-        x = K @ z                                                          # (002 eq 179)
+        v = ecompass.rotation_matrix(q_prior) @ self.r_g  # a priori gravity
+        z = qrot(self._s_g(G), v)[1:]  # (002 eq 180)
+        Q_w = process_noise(self.x_err, self.dt, t, 6)  # (002 eqs 183-186)
+        Q_v = measurement_noise(float(np.abs(G @ G - 1.0)), 0.0, self.dt, t, 6)  # (002 eqs 187-188)
+        K = kalman_gain(Q_w, self.C, Q_v)  # (002 eq 192)
+        x = K @ z  # (002 eq 179)
         qg_conj, _ = _correction(x[0:3], limit=False)
-        self.q = _normalize_positive(rotations.quat_multiply(q_prior, qg_conj))   # (002 eq 177)
-        self.b_dps = self.b_dps - x[3:6]                                   # (002 eq 178), no clamp in v5.00
+        self.q = _normalize_positive(rotations.quat_multiply(q_prior, qg_conj))  # (002 eq 177)
+        self.b_dps = self.b_dps - x[3:6]  # (002 eq 178), no clamp in v5.00
         self.x_err, self.z, self.K = x, z, K
         return self.q
 
@@ -782,8 +808,11 @@ class Kalman6:
             sl = slice(k * n, (k + 1) * n)
             qs.append(self.step(gyr[sl], acc[sl].mean(axis=0)))
             bs.append(self.b_dps)
-        return {"q": np.array(qs).reshape(-1, 4), "b_dps": np.array(bs).reshape(-1, 3),
-                "t": (np.arange(M) + 1) * n / self.tuning.sensor_fs}
+        return {
+            "q": np.array(qs).reshape(-1, 4),
+            "b_dps": np.array(bs).reshape(-1, 3),
+            "t": (np.arange(M) + 1) * n / self.tuning.sensor_fs,
+        }
 
 
 #: The median field strength (µT) of a whole recording the filters accept: the Earth's 25-65 µT, with room for
@@ -837,8 +866,10 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_
             raise ValueError(f"{n_mag} must have shape (N, 3); got {mag.shape}")
         zero = np.flatnonzero(~np.any(mag, axis=1))
         if zero.size:
-            raise ValueError(f"{n_mag} must not hold all-zero readings (no field has no direction); got {zero.size}, "
-                             f"the first at sample {zero[0]} -- a magnetometer not yet ready, or not connected?")
+            raise ValueError(
+                f"{n_mag} must not hold all-zero readings (no field has no direction); got {zero.size}, "
+                f"the first at sample {zero[0]} -- a magnetometer not yet ready, or not connected?"
+            )
     validate.same_length(**{n_gyr: gyr, n_acc: acc, n_mag: mag})
     check_units(acc, mag, (n_acc, n_mag), field_range)
     return gyr, acc, mag

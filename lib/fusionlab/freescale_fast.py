@@ -13,6 +13,7 @@ Units and frames are those of :mod:`fusionlab.freescale`: gyro °/s, acceleromet
 inclination degrees; ``frame`` is one of ``'NED'``, ``'Android'``, ``'Win8'``; quaternions in the note's
 convention (global→sensor, eq 34).
 """
+
 from __future__ import annotations
 
 import math
@@ -23,7 +24,10 @@ import numpy as np
 from . import earth, ecompass, freescale, signals, validate
 
 __all__ = [
-    "run_fast9", "run_fast6", "held_accel_noise", "FREE_FALL_G",
+    "run_fast9",
+    "run_fast6",
+    "held_accel_noise",
+    "FREE_FALL_G",
 ]
 
 
@@ -36,8 +40,12 @@ __all__ = [
 def _qmul(a, b):
     a0, a1, a2, a3 = a
     b0, b1, b2, b3 = b
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+    return (
+        a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+        a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+        a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+        a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0,
+    )
 
 
 def _qnorm_pos(q):
@@ -50,9 +58,17 @@ def _qnorm_pos(q):
 def _R(q):
     """Rows of the note's R(q) (eq 34) as a tuple of 9 floats, row-major."""
     q0, q1, q2, q3 = q
-    return (q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2),
-            2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1),
-            2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3)
+    return (
+        q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3,
+        2 * (q1 * q2 + q0 * q3),
+        2 * (q1 * q3 - q0 * q2),
+        2 * (q1 * q2 - q0 * q3),
+        q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3,
+        2 * (q2 * q3 + q0 * q1),
+        2 * (q1 * q3 + q0 * q2),
+        2 * (q2 * q3 - q0 * q1),
+        q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3,
+    )
 
 
 def _qrot_vec(u, v):
@@ -89,7 +105,7 @@ def _gyro_chain(q, gyr, b, dt):
 
 def _axis_gain(a, g, m, gb, mb, bb, vg, vm):
     """Per-axis block of K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹ for states (q_g, q_m, b), measurements (z_g, z_m)."""
-    p = ((g - a * gb, -a * gb), (-a * mb, m - a * mb), (gb - a * bb, mb - a * bb))   # Q_w Cᵀ (3×2)
+    p = ((g - a * gb, -a * gb), (-a * mb, m - a * mb), (gb - a * bb, mb - a * bb))  # Q_w Cᵀ (3×2)
     s11 = g - 2 * a * gb + a * a * bb + vg
     s22 = m - 2 * a * mb + a * a * bb + vm
     s12 = -a * gb - a * mb + a * a * bb
@@ -106,10 +122,10 @@ def _outputs(N, n, M, steps_q, parts, tail):
     out = np.empty((N, 4))
     for k in range(M):
         blk = parts[k]
-        out[k * n:(k + 1) * n - 1] = blk[:-1]
+        out[k * n : (k + 1) * n - 1] = blk[:-1]
         out[(k + 1) * n - 1] = steps_q[k]
     if tail:
-        out[M * n:] = tail
+        out[M * n :] = tail
     return out
 
 
@@ -216,8 +232,9 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``delta_deg`` (M,), ``t`` (M,) s.
     """
-    gyr, acc, mag = freescale.check_recording(gyr_dps, acc_g, mag_uT, need_mag=True,
-                                              names=("gyr_dps", "acc_g", "mag_uT"))
+    gyr, acc, mag = freescale.check_recording(
+        gyr_dps, acc_g, mag_uT, need_mag=True, names=("gyr_dps", "acc_g", "mag_uT")
+    )
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     enu = ecompass.ENU[frame]
@@ -226,24 +243,25 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     if B is not None and np.ndim(B) == 1:
         B_all = validate.array(B, "B")
         if B_all.shape != (N,) or np.any(B_all <= 0):
-            raise ValueError(f"B must be a positive number or an ({N},) array of positive values; got shape "
-                             f"{B_all.shape}")
-        B_all = B_all[n - 1:M * n:n]                                       # the value at each step's last sample
+            raise ValueError(
+                f"B must be a positive number or an ({N},) array of positive values; got shape {B_all.shape}"
+            )
+        B_all = B_all[n - 1 : M * n : n]  # the value at each step's last sample
     else:
         B_all = np.full(M, t.B if B is None else validate.positive(B, "B"))
     B2_all = B_all * B_all
-    Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
-    Bm = mag[:M * n].reshape(M, n, 3).mean(axis=1)
-    qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)                  # (002 eq 9)
-    qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)               # (002 eq 15)
-    ag_all, am_all = ecompass.weights(qa_all, qd_all / B2_all, 1.0)       # (002 eqs 64-65): only QvBQd/B² enters
+    Gm = acc[: M * n].reshape(M, n, 3).mean(axis=1)
+    Bm = mag[: M * n].reshape(M, n, 3).mean(axis=1)
+    qa_all = np.abs(np.einsum("ij,ij->i", Gm, Gm) - 1.0)  # (002 eq 9)
+    qd_all = np.abs(np.einsum("ij,ij->i", Bm, Bm) - B2_all)  # (002 eq 15)
+    ag_all, am_all = ecompass.weights(qa_all, qd_all / B2_all, 1.0)  # (002 eqs 64-65): only QvBQd/B² enters
     # ours: the held noise sets the Kalman Q_v, not the eCompass
     if validate.scalar(accel_hold, "accel_hold", nonnegative=True):
         qa_all = held_accel_noise(qa_all, dt, accel_hold)
-    free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G ** 2        # ours: no gravity direction in free fall
+    free = np.einsum("ij,ij->i", Gm, Gm) < FREE_FALL_G**2  # ours: no gravity direction in free fall
     if free[0]:
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
-    Gm = np.where(free[:, None], [0.0, 0.0, 1.0], Gm)                  # placeholder, never used for an update
+    Gm = np.where(free[:, None], [0.0, 0.0, 1.0], Gm)  # placeholder, never used for an update
     sg_all = ecompass.measured_gravity(Gm, frame)
     sm_all = Bm / ecompass.nonzero_norm(Bm, "mag_uT")[:, None]
     d6_all = np.degrees(ecompass.inclination(Gm, Bm, frame))
@@ -262,44 +280,52 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     lim_b, lim_d = t.gyro_offset_max, t.delta_max
     qs, parts_all, bs, ds = [], [], np.empty((M, 3)), np.empty(M)
     for k in range(M):
-        q, parts = _gyro_chain(q, gyr_l[k * n:(k + 1) * n], b, dtg)       # (002 eq 120), sub-stepped
+        q, parts = _gyro_chain(q, gyr_l[k * n : (k + 1) * n], b, dtg)  # (002 eq 120), sub-stepped
         qp = _qnorm_pos(q)
         Rp = _R(qp)
         dr = math.radians(delta)
         c, s = math.cos(dr), math.sin(dr)
-        K4 = Kg_all[k] + c * Kc_all[k] + s * Ks_all[k]                    # (002 eqs 53/58/63)
-        lam, vec = np.linalg.eigh(K4)                                      # (002 eqs 46-47)
+        K4 = Kg_all[k] + c * Kc_all[k] + s * Ks_all[k]  # (002 eqs 53/58/63)
+        lam, vec = np.linalg.eigh(K4)  # (002 eqs 46-47)
         q6 = vec[:, -1]
         R6 = _R(q6 if q6[0] >= 0 else -q6)
-        zg = _qrot_vec((R6[2], R6[5], R6[8]), (Rp[2], Rp[5], Rp[8]))      # (002 eq 82)
+        zg = _qrot_vec((R6[2], R6[5], R6[8]), (Rp[2], Rp[5], Rp[8]))  # (002 eq 82)
         if enu:
             um = (c * R6[1] - s * R6[2], c * R6[4] - s * R6[5], c * R6[7] - s * R6[8])
             vm = (c * Rp[1] - s * Rp[2], c * Rp[4] - s * Rp[5], c * Rp[7] - s * Rp[8])
         else:
             um = (c * R6[0] + s * R6[2], c * R6[3] + s * R6[5], c * R6[6] + s * R6[8])
             vm = (c * Rp[0] + s * Rp[2], c * Rp[3] + s * Rp[5], c * Rp[6] + s * Rp[8])
-        zm = _qrot_vec(um, vm)                                             # (002 eq 88)
-        zd = delta - d6_all[k]                                             # (002 eq 113)
+        zm = _qrot_vec(um, vm)  # (002 eq 88)
+        zd = delta - d6_all[k]  # (002 eq 113)
         qa = qa_all[k]
         qd = max(qd_all[k], t.qvbqd_min)
         B2 = B2_all[k]
-        vg = 0.25 * qa + gyro_var                                          # (002 eq 162)
-        vmn = 0.25 * qd / B2 + gyro_var                                    # (002 eq 163)
-        vd = freescale.R2D * freescale.R2D * (qa + qd / B2)                # (002 eq 164)
+        vg = 0.25 * qa + gyro_var  # (002 eq 162)
+        vmn = 0.25 * qd / B2 + gyro_var  # (002 eq 163)
+        vd = freescale.R2D * freescale.R2D * (qa + qd / B2)  # (002 eq 164)
         x = [0.0] * 10
-        for i in range(3):                                                 # (002 eqs 142-159, 170) per axis
+        for i in range(3):  # (002 eqs 142-159, 170) per axis
             gi, mi, bi = e[i], e[3 + i], e[6 + i]
-            Kb = _axis_gain(a, gi * gi + a * a * bi * bi + gyro_var, mi * mi + a * a * bi * bi + gyro_var,
-                            gi * bi - a * t.Q_wb, mi * bi - a * t.Q_wb, bi * bi + t.Q_wb, vg, vmn)
+            Kb = _axis_gain(
+                a,
+                gi * gi + a * a * bi * bi + gyro_var,
+                mi * mi + a * a * bi * bi + gyro_var,
+                gi * bi - a * t.Q_wb,
+                mi * bi - a * t.Q_wb,
+                bi * bi + t.Q_wb,
+                vg,
+                vmn,
+            )
             x[i] = Kb[0][0] * zg[i] + Kb[0][1] * zm[i]
             x[3 + i] = Kb[1][0] * zg[i] + Kb[1][1] * zm[i]
             x[6 + i] = Kb[2][0] * zg[i] + Kb[2][1] * zm[i]
         Pdd = e[9] * e[9] + t.Q_wdelta
         x[9] = Pdd / (Pdd + vd) * zd
-        if free[k]:                                                        # ours: free fall, trust the gyro
+        if free[k]:  # ours: free fall, trust the gyro
             x = [0.0] * 10
         qpost = qp
-        for j in (0, 3):                                                   # (002 eq 123) with the 90° limit
+        for j in (0, 3):  # (002 eq 123) with the 90° limit
             v0, v1, v2 = x[j], x[j + 1], x[j + 2]
             n2 = v0 * v0 + v1 * v1 + v2 * v2
             if n2 > 0.5:
@@ -310,7 +336,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
             qpost = _qmul(qpost, (math.sqrt(1.0 - n2), -v0, -v1, -v2))
         q = _qnorm_pos(qpost)
         b = [min(max(b[i] - x[6 + i], -lim_b), lim_b) for i in range(3)]  # (002 eq 124) + clamp
-        delta = min(max(delta - x[9], -lim_d), lim_d)                      # (002 eq 125) + clamp
+        delta = min(max(delta - x[9], -lim_d), lim_d)  # (002 eq 125) + clamp
         e = x
         qs.append(q)
         parts_all.append(parts)
@@ -318,7 +344,7 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
         ds[k] = delta
     res = {"b_dps": bs, "delta_deg": ds, "t": (np.arange(M) + 1) * dt}
     if per_sample:
-        _, tail = _gyro_chain(q, gyr_l[M * n:], b, dtg)
+        _, tail = _gyro_chain(q, gyr_l[M * n :], b, dtg)
         parts_all[0] = _first_block(first, gyr_l, n, [0.0, 0.0, 0.0], dtg)
         res["q"] = _outputs(N, n, M, qs, parts_all, tail)
     else:
@@ -353,39 +379,39 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
     dict of ndarray
         ``q`` ((N, 4) or (M, 4)), ``b_dps`` (M, 3) °/s, ``t`` (M,) s.
     """
-    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False,
-                                            names=("gyr_dps", "acc_g", "mag_uT"))
+    gyr, acc, _ = freescale.check_recording(gyr_dps, acc_g, None, need_mag=False, names=("gyr_dps", "acc_g", "mag_uT"))
     fs = validate.sample_rate(fs, "fs")
     ecompass.check_frame(frame)
     N = len(gyr)
     n, t, M, dt, dtg, a, gyro_var = _fast_setup(fs, tuning, N)
-    Gm = acc[:M * n].reshape(M, n, 3).mean(axis=1)
+    Gm = acc[: M * n].reshape(M, n, 3).mean(axis=1)
     g2 = np.einsum("ij,ij->i", Gm, Gm)
-    free = g2 < FREE_FALL_G ** 2                                           # ours: no gravity direction in free fall
+    free = g2 < FREE_FALL_G**2  # ours: no gravity direction in free fall
     if free[0]:
         raise ValueError("acc_g reads free fall in the first Kalman step: the initial tilt is unobservable")
-    qa_all = np.abs(g2 - 1.0)                                              # (002 eq 9)
+    qa_all = np.abs(g2 - 1.0)  # (002 eq 9)
     if validate.scalar(accel_hold, "accel_hold", nonnegative=True):
-        qa_all = held_accel_noise(qa_all, dt, accel_hold)                  # ours
+        qa_all = held_accel_noise(qa_all, dt, accel_hold)  # ours
     sgn = -1.0 if frame == "Android" else 1.0
     sg_all = np.where(g2[:, None] == 0, [0.0, 0.0, 1.0], sgn * Gm / np.sqrt(np.where(g2 == 0, 1.0, g2))[:, None])
-    rz = -1.0 if ecompass.ENU[frame] else 1.0                              # r_g = (0, 0, rz)
+    rz = -1.0 if ecompass.ENU[frame] else 1.0  # r_g = (0, 0, rz)
     gyr_l = gyr.tolist()
     b = [0.0, 0.0, 0.0]
     e = [0.0] * 6
     q = tuple(freescale.qrot(np.array([0.0, 0.0, rz]), sg_all[0]))
     g0 = float(acc[0] @ acc[0])
-    first = freescale.qrot(np.array([0.0, 0.0, rz]),
-                           sgn * acc[0] / math.sqrt(g0) if g0 > 0 else np.array([0.0, 0.0, 1.0]))
+    first = freescale.qrot(
+        np.array([0.0, 0.0, rz]), sgn * acc[0] / math.sqrt(g0) if g0 > 0 else np.array([0.0, 0.0, 1.0])
+    )
     qs, parts_all, bs = [], [], np.empty((M, 3))
     for k in range(M):
-        q, parts = _gyro_chain(q, gyr_l[k * n:(k + 1) * n], b, dtg)       # (002 eq 175)
+        q, parts = _gyro_chain(q, gyr_l[k * n : (k + 1) * n], b, dtg)  # (002 eq 175)
         qp = _qnorm_pos(q)
         Rp = _R(qp)
-        z = _qrot_vec(tuple(sg_all[k]), (rz * Rp[2], rz * Rp[5], rz * Rp[8]))   # (002 eq 180)
-        vg = 0.25 * qa_all[k] + gyro_var                                   # (002 eq 188)
+        z = _qrot_vec(tuple(sg_all[k]), (rz * Rp[2], rz * Rp[5], rz * Rp[8]))  # (002 eq 180)
+        vg = 0.25 * qa_all[k] + gyro_var  # (002 eq 188)
         x = [0.0] * 6
-        for i in range(3):                                                 # (002 eqs 183-186, 192) per axis
+        for i in range(3):  # (002 eqs 183-186, 192) per axis
             gi, bi = e[i], e[3 + i]
             g = gi * gi + a * a * bi * bi + gyro_var
             gb = gi * bi - a * t.Q_wb
@@ -393,18 +419,18 @@ def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample
             S = g - 2 * a * gb + a * a * bb + vg
             x[i] = (g - a * gb) / S * z[i]
             x[3 + i] = (gb - a * bb) / S * z[i]
-        if free[k]:                                                        # ours: free fall, trust the gyro
+        if free[k]:  # ours: free fall, trust the gyro
             x = [0.0] * 6
         n2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
-        q = _qnorm_pos(_qmul(qp, (math.sqrt(1.0 - n2) if n2 <= 1.0 else 0.0, -x[0], -x[1], -x[2])))   # (002 eq 177)
-        b = [b[i] - x[3 + i] for i in range(3)]                            # (002 eq 178)
+        q = _qnorm_pos(_qmul(qp, (math.sqrt(1.0 - n2) if n2 <= 1.0 else 0.0, -x[0], -x[1], -x[2])))  # (002 eq 177)
+        b = [b[i] - x[3 + i] for i in range(3)]  # (002 eq 178)
         e = x
         qs.append(q)
         parts_all.append(parts)
         bs[k] = b
     res = {"b_dps": bs, "t": (np.arange(M) + 1) * dt}
     if per_sample:
-        _, tail = _gyro_chain(q, gyr_l[M * n:], b, dtg)
+        _, tail = _gyro_chain(q, gyr_l[M * n :], b, dtg)
         parts_all[0] = _first_block(first, gyr_l, n, [0.0, 0.0, 0.0], dtg)
         res["q"] = _outputs(N, n, M, qs, parts_all, tail)
     else:

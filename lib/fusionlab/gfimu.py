@@ -37,6 +37,7 @@ marked "[R][V]" were checked numerically against the thesis' tables (Labs 06 and
 Units and frames at this module's edge: SI (m/s², rad/s, rad/s², rad), body frame; noise densities in m/s²/√Hz
 (``noise_ug * UG`` converts µg/√Hz). A white noise of density N is simulated per sample with σ = N/√Δt.
 """
+
 from __future__ import annotations
 
 import functools
@@ -46,15 +47,39 @@ import numpy as np
 
 from . import calibration, inertial, validate
 
-__all__ = ["GRAVITY", "UG", "ARW_UNIT", "AIV_NAMES", "TABLE_3_1", "TABLE_4_4", "TABLE_5_1", "TABLE_5_2", "TABLE_5_3",
-           "triad_positions", "lever_arm", "specific_forces", "aiv_map", "aiv", "aiv_true", "aiv_covariance",
-           "three_state_noise", "quadratic_terms", "quadratic_jacobian", "GFRecord", "simulate_gfimu",
-           "calibrate_triads", "apply_calibration", "trajectory_ch3", "trajectory_ch5",
-           "trajectory_constant", "trajectory_tumbling"]
+__all__ = [
+    "GRAVITY",
+    "UG",
+    "ARW_UNIT",
+    "AIV_NAMES",
+    "TABLE_3_1",
+    "TABLE_4_4",
+    "TABLE_5_1",
+    "TABLE_5_2",
+    "TABLE_5_3",
+    "triad_positions",
+    "lever_arm",
+    "specific_forces",
+    "aiv_map",
+    "aiv",
+    "aiv_true",
+    "aiv_covariance",
+    "three_state_noise",
+    "quadratic_terms",
+    "quadratic_jacobian",
+    "GFRecord",
+    "simulate_gfimu",
+    "calibrate_triads",
+    "apply_calibration",
+    "trajectory_ch3",
+    "trajectory_ch5",
+    "trajectory_constant",
+    "trajectory_tumbling",
+]
 
-GRAVITY = 9.80665                    # m/s², standard gravity (1 g)
-UG = GRAVITY * 1e-6                  # 1 µg in m/s² (µg/√Hz × UG = m/s²/√Hz)
-ARW_UNIT = np.radians(1.0) / 60.0    # 1 °/√h in rad/s/√Hz (1 °/√h = 60 °/h/√Hz)
+GRAVITY = 9.80665  # m/s², standard gravity (1 g)
+UG = GRAVITY * 1e-6  # 1 µg in m/s² (µg/√Hz × UG = m/s²/√Hz)
+ARW_UNIT = np.radians(1.0) / 60.0  # 1 °/√h in rad/s/√Hz (1 °/√h = 60 °/h/√Hz)
 
 AIV_NAMES = ("α_x", "α_y", "α_z", "ω_xω_y", "ω_xω_z", "ω_yω_z", "ω_x²", "ω_y²", "ω_z²")
 
@@ -69,12 +94,18 @@ TABLE_5_2 = {"tactical": 500.0, "automotive": 1000.0, "consumer": 2000.0}
 #: Table 5.3 as printed: steady-state RMSE (rad), d = 1 m, 500 runs, constraints from t = 10 s;
 #: rows ‖Δθ‖, Δθ_x, Δθ_y, Δθ_z. "unconstrained" is read as the three-state model (an interpretation).
 TABLE_5_3 = {
-    "tactical": {"unconstrained": (4.09e-5, 2.38e-5, 2.29e-5, 2.41e-5),
-                 "constrained": (8.54e-6, 4.97e-6, 4.87e-6, 4.95e-6)},
-    "automotive": {"unconstrained": (8.44e-5, 4.74e-5, 4.84e-5, 5.04e-5),
-                   "constrained": (1.47e-5, 8.17e-6, 8.53e-6, 8.74e-6)},
-    "consumer": {"unconstrained": (1.66e-4, 9.94e-5, 9.32e-5, 9.42e-5),
-                 "constrained": (2.64e-5, 1.55e-5, 1.50e-5, 1.52e-5)},
+    "tactical": {
+        "unconstrained": (4.09e-5, 2.38e-5, 2.29e-5, 2.41e-5),
+        "constrained": (8.54e-6, 4.97e-6, 4.87e-6, 4.95e-6),
+    },
+    "automotive": {
+        "unconstrained": (8.44e-5, 4.74e-5, 4.84e-5, 5.04e-5),
+        "constrained": (1.47e-5, 8.17e-6, 8.53e-6, 8.74e-6),
+    },
+    "consumer": {
+        "unconstrained": (1.66e-4, 9.94e-5, 9.32e-5, 9.42e-5),
+        "constrained": (2.64e-5, 1.55e-5, 1.50e-5, 1.52e-5),
+    },
 }
 
 
@@ -159,8 +190,7 @@ def specific_forces(omega, alpha, d, a_o=None):
     a_o = np.zeros(3) if a_o is None else validate.vectors(a_o, "a_o")
     validate.broadcast({"omega": 1, "alpha": 1, "a_o": 1}, omega=omega, alpha=alpha, a_o=a_o)
     pos = triad_positions(d)
-    out = [lever_arm(a_o, omega, alpha, np.broadcast_to(p, np.broadcast_shapes(omega.shape, alpha.shape)))
-           for p in pos]
+    out = [lever_arm(a_o, omega, alpha, np.broadcast_to(p, np.broadcast_shapes(omega.shape, alpha.shape))) for p in pos]
     return np.concatenate(out, axis=-1)
 
 
@@ -178,26 +208,29 @@ def aiv_map():
     ndarray, shape (9, 12)
         ``L`` (dimensionless).
     """
+
     def diff(triad, axis):
         row = np.zeros(12)
         row[3 * triad + axis] += 1.0
-        row[axis] -= 1.0                                         # minus the central triad A
+        row[axis] -= 1.0  # minus the central triad A
         return row
 
-    _A, B, C, D = 0, 1, 2, 3                                     # A, the centre, only ever subtracted (in diff)
+    _A, B, C, D = 0, 1, 2, 3  # A, the centre, only ever subtracted (in diff)
     x, y, z = 0, 1, 2
     SB, SC, SD = -diff(B, x), -diff(C, y), -diff(D, z)
-    return np.array([
-        (diff(C, z) - diff(D, y)) / 2,                           # α_x      (004 eq 3.8)
-        (diff(D, x) - diff(B, z)) / 2,                           # α_y
-        (diff(B, y) - diff(C, x)) / 2,                           # α_z
-        (diff(B, y) + diff(C, x)) / 2,                           # ω_x ω_y  (004 eq 3.9)
-        (diff(B, z) + diff(D, x)) / 2,                           # ω_x ω_z
-        (diff(C, z) + diff(D, y)) / 2,                           # ω_y ω_z
-        (SC + SD - SB) / 2,                                      # ω_x²     (004 eq 3.10)
-        (SB + SD - SC) / 2,                                      # ω_y²
-        (SB + SC - SD) / 2,                                      # ω_z²
-    ])
+    return np.array(
+        [
+            (diff(C, z) - diff(D, y)) / 2,  # α_x      (004 eq 3.8)
+            (diff(D, x) - diff(B, z)) / 2,  # α_y
+            (diff(B, y) - diff(C, x)) / 2,  # α_z
+            (diff(B, y) + diff(C, x)) / 2,  # ω_x ω_y  (004 eq 3.9)
+            (diff(B, z) + diff(D, x)) / 2,  # ω_x ω_z
+            (diff(C, z) + diff(D, y)) / 2,  # ω_y ω_z
+            (SC + SD - SB) / 2,  # ω_x²     (004 eq 3.10)
+            (SB + SD - SC) / 2,  # ω_y²
+            (SB + SC - SD) / 2,  # ω_z²
+        ]
+    )
 
 
 @functools.cache
@@ -324,28 +357,37 @@ def three_state_noise(noise_density, dt, d, m_sign=-1):
     """
     N = validate.scalar(noise_density, "noise_density", nonnegative=True)
     dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
-    m_sign = validate.choice(m_sign, "m_sign (-1 corrected, 0 no correlation, +1 the sign inferred from Table 5.3)",
-                             (-1, 0, 1))
-    Ra = N ** 2 * dt                                             # (004 eq 3.24)
+    m_sign = validate.choice(
+        m_sign, "m_sign (-1 corrected, 0 no correlation, +1 the sign inferred from Table 5.3)", (-1, 0, 1)
+    )
+    Ra = N**2 * dt  # (004 eq 3.24)
     C = aiv_covariance()
-    s = dt ** 2 * Ra / d ** 2
+    s = dt**2 * Ra / d**2
     return s * C[:3, :3], s * C[3:, 3:], m_sign * s * C[:3, 3:]  # (004 eqs 3.25, 3.30, 3.31)
 
 
 def _qt(x):
     out = np.empty(x.shape[:-1] + (6,))
     out[..., 0], out[..., 1], out[..., 2] = x[..., 0] * x[..., 1], x[..., 0] * x[..., 2], x[..., 1] * x[..., 2]
-    out[..., 3:] = x * x                                         # (004 eq 3.28)
+    out[..., 3:] = x * x  # (004 eq 3.28)
     return out
 
 
 def _qj(x):
     x1, x2, x3 = x[..., 0], x[..., 1], x[..., 2]
-    if x.ndim == 1:                                              # the per-step filters: one small matrix
-        return np.array([[x2, x1, 0.0], [x3, 0.0, x1], [0.0, x3, x2], [2 * x1, 0.0, 0.0], [0.0, 2 * x2, 0.0],
-                         [0.0, 0.0, 2 * x3]])                    # (004 eq 3.29)
+    if x.ndim == 1:  # the per-step filters: one small matrix
+        return np.array(
+            [
+                [x2, x1, 0.0],
+                [x3, 0.0, x1],
+                [0.0, x3, x2],
+                [2 * x1, 0.0, 0.0],
+                [0.0, 2 * x2, 0.0],
+                [0.0, 0.0, 2 * x3],
+            ]
+        )  # (004 eq 3.29)
     H = np.zeros(x.shape[:-1] + (6, 3))
-    H[..., 0, 0], H[..., 0, 1] = x2, x1                          # (004 eq 3.29)
+    H[..., 0, 0], H[..., 0, 1] = x2, x1  # (004 eq 3.29)
     H[..., 1, 0], H[..., 1, 2] = x3, x1
     H[..., 2, 1], H[..., 2, 2] = x3, x2
     H[..., 3, 0], H[..., 4, 1], H[..., 5, 2] = 2 * x1, 2 * x2, 2 * x3
@@ -440,8 +482,20 @@ class GFRecord:
         return self.omega * self.dt
 
 
-def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_model="constant", bias_walk=0.0,
-                   M=None, a_o=None, runs=None, seed=0):
+def simulate_gfimu(
+    omega,
+    alpha,
+    dt,
+    d,
+    noise_density=0.0,
+    bias_std=0.0,
+    bias_model="constant",
+    bias_walk=0.0,
+    M=None,
+    a_o=None,
+    runs=None,
+    seed=0,
+):
     """Twelve accelerometer readings for a given angular motion (seed 004 eqs 2.1, 2.5–2.12, 3.4, 3.22, 5.10–5.13).
 
     Each reading is ``M_T a + b + v`` per triad T: ``a`` from the lever-arm equation, ``v`` white with σ = N/√Δt per
@@ -484,9 +538,11 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
     omega, alpha = validate.samples(omega, "omega"), validate.samples(alpha, "alpha")
     validate.same_length(omega=omega, alpha=alpha)
     dt, d = validate.time_step(dt, "dt"), validate.positive(d, "d")
-    N, sb, sw = (validate.scalar(noise_density, "noise_density", nonnegative=True),
-                 validate.scalar(bias_std, "bias_std", nonnegative=True),
-                 validate.scalar(bias_walk, "bias_walk", nonnegative=True))
+    N, sb, sw = (
+        validate.scalar(noise_density, "noise_density", nonnegative=True),
+        validate.scalar(bias_std, "bias_std", nonnegative=True),
+        validate.scalar(bias_walk, "bias_walk", nonnegative=True),
+    )
     if bias_model not in ("constant", "random_walk"):
         raise ValueError(f"bias_model must be 'constant' or 'random_walk'; got {bias_model!r}")
     lead = () if runs is None else (validate.count(runs, "runs", minimum=1),)
@@ -497,17 +553,17 @@ def simulate_gfimu(omega, alpha, dt, d, noise_density=0.0, bias_std=0.0, bias_mo
         M = validate.array(M, "M", shape=(4, 3, 3))
         if M.ndim != 3:
             raise ValueError(f"M must have shape (4, 3, 3), one matrix per triad; got {M.shape}")
-        meas = np.einsum("tij,ntj->nti", M, true.reshape(n, 4, 3)).reshape(n, 12)   # (004 eq 3.11)
+        meas = np.einsum("tij,ntj->nti", M, true.reshape(n, 4, 3)).reshape(n, 12)  # (004 eq 3.11)
     else:
         meas = true
     b0 = sb * rng.standard_normal(lead + (1, 12))
     if bias_model == "random_walk":
         steps = sw * np.sqrt(dt) * rng.standard_normal(lead + (n, 12))
         steps[..., 0, :] = 0.0
-        bias = b0 + np.cumsum(steps, axis=-2)                    # (004 eqs 2.5-2.6, 5.12-5.13)
+        bias = b0 + np.cumsum(steps, axis=-2)  # (004 eqs 2.5-2.6, 5.12-5.13)
     else:
-        bias = np.broadcast_to(b0, lead + (n, 12)).copy()       # (004 eq 2.11)
-    acc = meas + bias + N / np.sqrt(dt) * rng.standard_normal(lead + (n, 12))   # (004 eqs 2.1, 5.10-5.11)
+        bias = np.broadcast_to(b0, lead + (n, 12)).copy()  # (004 eq 2.11)
+    acc = meas + bias + N / np.sqrt(dt) * rng.standard_normal(lead + (n, 12))  # (004 eqs 2.1, 5.10-5.11)
     return GFRecord(acc=acc, acc_true=true, bias=bias, omega=omega, alpha=alpha, dt=dt, d=d)
 
 
@@ -529,7 +585,7 @@ def calibrate_triads(reference, readings):
     ref = validate.samples(reference, "reference")
     z = validate.samples(readings, "readings", n=12)
     validate.same_length(reference=ref, readings=z)
-    return [calibration.fit_triad(ref, z[:, 3 * t:3 * t + 3], names=("reference", "readings")) for t in range(4)]
+    return [calibration.fit_triad(ref, z[:, 3 * t : 3 * t + 3], names=("reference", "readings")) for t in range(4)]
 
 
 def apply_calibration(fits, acc):
@@ -550,7 +606,7 @@ def apply_calibration(fits, acc):
     z = validate.samples(acc, "acc", n=12)
     if len(fits) != 4:
         raise ValueError(f"fits must hold four TriadFit results (A, B, C, D); got {len(fits)}")
-    return np.concatenate([calibration.apply_triad(f, z[:, 3 * t:3 * t + 3]) for t, f in enumerate(fits)], axis=1)
+    return np.concatenate([calibration.apply_triad(f, z[:, 3 * t : 3 * t + 3]) for t, f in enumerate(fits)], axis=1)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -611,7 +667,7 @@ def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrat
     al = np.zeros((len(t), 3))
     omega_x, omega_z = validate.scalar(omega_x, "omega_x"), validate.scalar(omega_z, "omega_z")
     om[:, 0] = omega_x
-    om[:, 2] = omega_z * np.sin(w * t)                           # (004 eq 3.35)
+    om[:, 2] = omega_z * np.sin(w * t)  # (004 eq 3.35)
     al[:, 2] = omega_z * w * np.cos(w * t)
     return _integrate(t, om, al, integrate)
 
@@ -647,8 +703,8 @@ def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
     w = 2 * np.pi * validate.scalar(f, "f", nonnegative=True)
     axis = np.array([1.0, 1.0, 0.0])
     omega_m = validate.scalar(omega_m, "omega_m")
-    om = omega_m * np.sin(w * t)[:, None] * axis                 # (004 eq 5.31)
-    al = omega_m * w * np.cos(w * t)[:, None] * axis             # (004 eq 5.32)
+    om = omega_m * np.sin(w * t)[:, None] * axis  # (004 eq 5.31)
+    al = omega_m * w * np.cos(w * t)[:, None] * axis  # (004 eq 5.32)
     return _integrate(t, om, al, integrate)
 
 

@@ -20,15 +20,21 @@ functions marked "[R]" are our reconstruction (the list is in :mod:`fusionlab.gf
 Units and frames at this module's edge: SI (ω in rad/s, α in rad/s², the quadratic AIV terms in rad²/s²), body
 frame; noise densities in m/s²/√Hz.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import gfimu, validate
 
-__all__ = ["caa_model", "singer_model", "aiv_measurement_jacobian", "DynamicEKF", "observability_matrix",
-           "observability_rank"]
-
+__all__ = [
+    "caa_model",
+    "singer_model",
+    "aiv_measurement_jacobian",
+    "DynamicEKF",
+    "observability_matrix",
+    "observability_rank",
+]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -69,11 +75,11 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
         raise ValueError(f"n_bias must be 0 (reduced model) or 9 (augmented model); got {n_bias!r}")
     n = 6 + n_bias
     F = np.eye(n)
-    F[:3, 3:6] = dt * np.eye(3)                                  # (004 eq 5.2) [R]
+    F[:3, 3:6] = dt * np.eye(3)  # (004 eq 5.2) [R]
     G = np.vstack([dt * np.eye(3), np.eye(3)])
     Q = np.zeros((n, n))
-    Q[:6, :6] = qa ** 2 * G @ G.T                                # (004 eqs 5.16-5.17) [R]
-    Q[6:, 6:] = qb ** 2 * np.eye(n_bias)
+    Q[:6, :6] = qa**2 * G @ G.T  # (004 eqs 5.16-5.17) [R]
+    Q[6:, 6:] = qb**2 * np.eye(n_bias)
     return F, Q
 
 
@@ -114,11 +120,11 @@ def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
     beta = validate.scalar(beta, "beta", nonnegative=True)
     sigma = validate.scalar(sigma, "sigma", nonnegative=True)
     if first_order:
-        phi, q = 1.0 - beta * dt, sigma * np.sqrt(2.0 * beta * dt)                 # (004 eq 5.7)
+        phi, q = 1.0 - beta * dt, sigma * np.sqrt(2.0 * beta * dt)  # (004 eq 5.7)
     else:
-        phi, q = np.exp(-beta * dt), sigma * np.sqrt(-np.expm1(-2.0 * beta * dt))   # (004 eq 5.5)
+        phi, q = np.exp(-beta * dt), sigma * np.sqrt(-np.expm1(-2.0 * beta * dt))  # (004 eq 5.5)
     F, Q = caa_model(dt, q, n_bias, q_bias)
-    F[3:6, 3:6] = phi * np.eye(3)                                                 # (004 eq 5.9) [R]
+    F[3:6, 3:6] = phi * np.eye(3)  # (004 eq 5.9) [R]
     return F, Q
 
 
@@ -151,9 +157,9 @@ def _dyn_h(x):
     h = np.concatenate([x[3:6], gfimu.quadratic_terms(x[:3], check=False)])
     H = np.zeros((9, n))
     H[:3, 3:6] = np.eye(3)
-    H[3:, :3] = gfimu.quadratic_jacobian(x[:3], check=False)                                    # (004 eq 5.19)
+    H[3:, :3] = gfimu.quadratic_jacobian(x[:3], check=False)  # (004 eq 5.19)
     if n == 15:
-        h = h + x[6:]                                            # (004 eq 5.18) [R]
+        h = h + x[6:]  # (004 eq 5.18) [R]
         H[:, 6:] = np.eye(9)
     return h, H
 
@@ -205,10 +211,13 @@ class DynamicEKF:
             self.ekf.F, self.ekf.Q = caa_model(self.dt, q_alpha, n - 6, q_bias)
         else:
             self.ekf.F, self.ekf.Q = (validate.matrices(m, name, n).copy() for m, name in zip(process, ("F", "Q")))
-        self.ekf.R = sa2 / self.d ** 2 * gfimu.aiv_covariance()       # (004 eq 5.20) [R]
+        self.ekf.R = sa2 / self.d**2 * gfimu.aiv_covariance()  # (004 eq 5.20) [R]
         self.ekf.x = x0.copy()
-        self.ekf.P = (np.eye(n) * validate.positive(P0, "P0") if np.ndim(P0) == 0 and not isinstance(P0, str)
-                      else validate.covariance(P0, "P0", n).copy())
+        self.ekf.P = (
+            np.eye(n) * validate.positive(P0, "P0")
+            if np.ndim(P0) == 0 and not isinstance(P0, str)
+            else validate.covariance(P0, "P0", n).copy()
+        )
 
     def step(self, acc):
         """One sample of the twelve accelerometers.
@@ -284,14 +293,14 @@ def observability_matrix(augmented=True, order=None):
     a = sp.symbols("alpha_x alpha_y alpha_z", real=True)
     b = sp.symbols("b1:10", real=True) if augmented else ()
     x = sp.Matrix([*w, *a, *b])
-    f = sp.Matrix([*a, 0, 0, 0, *([0] * len(b))])               # (004 eq 5.25), CAA without noise
+    f = sp.Matrix([*a, 0, 0, 0, *([0] * len(b))])  # (004 eq 5.25), CAA without noise
     h = sp.Matrix([a[0], a[1], a[2], w[0] * w[1], w[0] * w[2], w[1] * w[2], w[0] ** 2, w[1] ** 2, w[2] ** 2])
     if augmented:
-        h = h + sp.Matrix(b)                                     # (004 eq 5.18) [R]
+        h = h + sp.Matrix(b)  # (004 eq 5.18) [R]
     lie = [h]
     for _ in range(order - 1):
-        lie.append(sp.expand(lie[-1].jacobian(x) * f))           # (004 eqs 5.26-5.27)
-    O = sp.Matrix.vstack(*[L.jacobian(x) for L in lie])          # (004 eq 5.29)
+        lie.append(sp.expand(lie[-1].jacobian(x) * f))  # (004 eqs 5.26-5.27)
+    O = sp.Matrix.vstack(*[L.jacobian(x) for L in lie])  # (004 eq 5.29)
     return O, list(x), lie
 
 

@@ -26,16 +26,28 @@ Units and frames at this module's edge: SI (m/s², rad/s, rad/s², rad), body fr
 (``noise_ug * gfimu.UG`` converts µg/√Hz). The states are angular changes per step: Δθ = ω Δt (rad),
 Δω = α Δt (rad/s).
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import gfimu, validate
 
-__all__ = ["ThreeStateEKF", "HybridEKF", "three_state_batch", "hybrid_batch", "nees", "constraints",
-           "constraint_jacobian", "sckf_project", "ConstrainedEKF", "constrained_batch", "table53_monte_carlo",
-           "GYRO_AIV_RATIO", "GYRO_AIV_MIN"]
-
+__all__ = [
+    "ThreeStateEKF",
+    "HybridEKF",
+    "three_state_batch",
+    "hybrid_batch",
+    "nees",
+    "constraints",
+    "constraint_jacobian",
+    "sckf_project",
+    "ConstrainedEKF",
+    "constrained_batch",
+    "table53_monte_carlo",
+    "GYRO_AIV_RATIO",
+    "GYRO_AIV_MIN",
+]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -45,7 +57,7 @@ __all__ = ["ThreeStateEKF", "HybridEKF", "three_state_batch", "hybrid_batch", "n
 
 def _inputs(acc, dt, d):
     """Δt²·AIV: the input u = Δt² α̃ (3.19-3.21) and the measurement y = Δt² q̃ (3.28) of each sample."""
-    v = acc @ gfimu.aiv_map_cached().T * (dt ** 2 / d)                               # (004 eqs 3.8-3.10, times Δt²)
+    v = acc @ gfimu.aiv_map_cached().T * (dt**2 / d)  # (004 eqs 3.8-3.10, times Δt²)
     return v[..., :3], v[..., 3:]
 
 
@@ -59,18 +71,22 @@ GYRO_AIV_RATIO, GYRO_AIV_MIN = (0.25, 4.0), 1.0
 def _gyro_against_aiv(acc, gyro, d):
     """Refuse a gyro (rad/s) and twelve accelerometers (m/s²) whose rates disagree by a unit's factor."""
     w2_acc = float(np.median(np.sum((acc @ gfimu.aiv_map_cached().T / d)[..., 6:9], axis=-1)))
-    w2_gyro = float(np.median(np.sum(gyro ** 2, axis=-1)))
+    w2_gyro = float(np.median(np.sum(gyro**2, axis=-1)))
     if max(w2_acc, w2_gyro) < GYRO_AIV_MIN:
         return
     ratio = w2_gyro / max(w2_acc, 1e-300)
     if ratio > GYRO_AIV_RATIO[1]:
-        raise ValueError(f"gyro must be in rad/s and acc in m/s²: |ω|² from gyro is {ratio:.3g} times ω² from the "
-                         f"accelerometers (median {w2_gyro:.3g} against {w2_acc:.3g} rad²/s²) -- 3283 is gyro in "
-                         "°/s (use np.radians), 9.8 is acc in g (multiply by 9.80665)")
+        raise ValueError(
+            f"gyro must be in rad/s and acc in m/s²: |ω|² from gyro is {ratio:.3g} times ω² from the "
+            f"accelerometers (median {w2_gyro:.3g} against {w2_acc:.3g} rad²/s²) -- 3283 is gyro in "
+            "°/s (use np.radians), 9.8 is acc in g (multiply by 9.80665)"
+        )
     if ratio < GYRO_AIV_RATIO[0]:
-        raise ValueError(f"acc must be in m/s² and gyro in rad/s: ω² from the accelerometers is {1 / ratio:.3g} "
-                         f"times |ω|² from gyro (median {w2_acc:.3g} against {w2_gyro:.3g} rad²/s²) -- 102 is acc "
-                         "in milli-g (multiply by 0.00980665)")
+        raise ValueError(
+            f"acc must be in m/s² and gyro in rad/s: ω² from the accelerometers is {1 / ratio:.3g} "
+            f"times |ω|² from gyro (median {w2_acc:.3g} against {w2_gyro:.3g} rad²/s²) -- 102 is acc "
+            "in milli-g (multiply by 0.00980665)"
+        )
 
 
 class ThreeStateEKF:
@@ -109,8 +125,8 @@ class ThreeStateEKF:
         self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         Q, R, M = gfimu.three_state_noise(validate.positive(noise_density, "noise_density"), dt, d, m_sign)
         self.kf = KalmanFilter(dim_x=3, dim_z=self._dim_z)
-        self.kf.F = np.eye(3)                                    # (004 eq 3.20)
-        self.kf.B = np.eye(3)                                    # G = I (3.21)
+        self.kf.F = np.eye(3)  # (004 eq 3.20)
+        self.kf.B = np.eye(3)  # G = I (3.21)
         self.kf.Q, self.kf.R, self.kf.M = Q, self._R(R), self._M(M)
         self.kf.x = validate.vectors(x0, "x0").reshape(3).copy()
         self.kf.P = _initial_covariance(P0, 3)
@@ -144,11 +160,11 @@ class ThreeStateEKF:
         """
         u, y = _inputs(acc, self.dt, self.d)
         if not self.first:
-            self.kf.predict(u=u)                                 # (004 eqs 3.26-3.27)
+            self.kf.predict(u=u)  # (004 eqs 3.26-3.27)
         self.first = False
         hx, H = self._h(self.kf.x, gyro)
         z = self._z(y, gyro)
-        self.kf.update_correlated(z - hx + H @ self.kf.x, H=H)   # (004 eqs 3.32-3.34)
+        self.kf.update_correlated(z - hx + H @ self.kf.x, H=H)  # (004 eqs 3.32-3.34)
         return self.kf.x.copy()
 
     def _z(self, y, gyro):
@@ -222,7 +238,7 @@ class HybridEKF(ThreeStateEKF):
 
     def _R(self, R):
         out = np.zeros((9, 9))
-        out[:3, :3] = self.dt ** 2 * self.Rg * np.eye(3)        # (004 eq 4.54)
+        out[:3, :3] = self.dt**2 * self.Rg * np.eye(3)  # (004 eq 4.54)
         out[3:, 3:] = R
         return out
 
@@ -230,8 +246,10 @@ class HybridEKF(ThreeStateEKF):
         return np.hstack([np.zeros((3, 3)), M])
 
     def _h(self, x, gyro):
-        return (np.concatenate([x, gfimu.quadratic_terms(x, check=False)]),                     # (004 eq 4.52)
-                np.vstack([np.eye(3), gfimu.quadratic_jacobian(x, check=False)]))               # (004 eq 4.53)
+        return (
+            np.concatenate([x, gfimu.quadratic_terms(x, check=False)]),  # (004 eq 4.52)
+            np.vstack([np.eye(3), gfimu.quadratic_jacobian(x, check=False)]),
+        )  # (004 eq 4.53)
 
     def _z(self, y, gyro):
         if gyro is None:
@@ -280,8 +298,8 @@ def _batch_core(u, y, Q, R, M, x0, P0, gyro_dtheta=None, Rg=None):
     xs, Ps = np.empty((runs, n, 3)), np.empty((runs, n, 3, 3))
     for k in range(n):
         if k:
-            x = x + u[:, k]                                      # (004 eq 3.27)
-            P = P + Q                                            # (004 eq 3.26)
+            x = x + u[:, k]  # (004 eq 3.27)
+            P = P + Q  # (004 eq 3.26)
         hx, H = gfimu.quadratic_terms(x, check=False), gfimu.quadratic_jacobian(x, check=False)
         z = y[:, k]
         if hybrid:
@@ -290,10 +308,10 @@ def _batch_core(u, y, Q, R, M, x0, P0, gyro_dtheta=None, Rg=None):
             z = np.concatenate([gyro_dtheta[:, k], z], -1)
         PHt = P @ H.swapaxes(-1, -2)
         HM = H @ Mf
-        S = H @ PHt + HM + HM.swapaxes(-1, -2) + Rf              # (004 eq 3.32)
+        S = H @ PHt + HM + HM.swapaxes(-1, -2) + Rf  # (004 eq 3.32)
         K = np.linalg.solve(S, (PHt + Mf).swapaxes(-1, -2)).swapaxes(-1, -2)
-        x = x + (K @ (z - hx)[..., None])[..., 0]                # (004 eq 3.34)
-        P = P - K @ (H @ P + Mt)                                 # (004 eq 3.33)
+        x = x + (K @ (z - hx)[..., None])[..., 0]  # (004 eq 3.34)
+        P = P - K @ (H @ P + Mt)  # (004 eq 3.33)
         P = 0.5 * (P + P.swapaxes(-1, -2))
         xs[:, k], Ps[:, k] = x, P
     return xs, Ps
@@ -325,11 +343,11 @@ def _per_run(value, name, runs, positive=False):
 
 def _batch_noise(noise_density, dt, d, m_sign, runs):
     """Q, R, M for a batch; ``noise_density`` and ``m_sign`` may hold one value per run (then (R, ·, ·) arrays)."""
-    N = _per_run(noise_density, "noise_density", runs, positive=True)        # R is inverted: > 0
+    N = _per_run(noise_density, "noise_density", runs, positive=True)  # R is inverted: > 0
     signs = _per_run(m_sign, "m_sign", runs)
     if not np.all(np.isin(signs, (-1, 0, 1))):
         raise ValueError(f"m_sign must be -1, 0, +1, or one of them per run; got {m_sign!r}")
-    Q, R, M = gfimu.three_state_noise(1.0, dt, d, 1)                  # per unit density, printed sign
+    Q, R, M = gfimu.three_state_noise(1.0, dt, d, 1)  # per unit density, printed sign
     N2 = np.asarray(N, dtype=float) ** 2
     return N2 * Q, N2 * R, signs * N2 * M
 
@@ -406,13 +424,14 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     acc = validate.array(acc, "acc", shape=(None, 12))
     gyro = validate.array(gyro, "gyro", shape=(None, 3))
     if acc.ndim != 3 or gyro.shape[:2] != acc.shape[:2]:
-        raise ValueError(f"acc (R, N, 12) and gyro (R, N, 3) must share runs and samples; got {acc.shape}, "
-                         f"{gyro.shape}")
+        raise ValueError(
+            f"acc (R, N, 12) and gyro (R, N, 3) must share runs and samples; got {acc.shape}, {gyro.shape}"
+        )
     dt = validate.time_step(dt, "dt")
     Q, R, M = _batch_noise(noise_density, dt, d, m_sign, len(acc))
     _gyro_against_aiv(acc, gyro, validate.positive(d, "d"))
     u, y = _inputs(acc, dt, d)
-    Rg = dt ** 2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
+    Rg = dt**2 * validate.scalar(arw, "arw", nonnegative=True) ** 2 / dt
     P0 = _initial_covariance(P0, 3)
     return _batch_core(u, y, Q, R, M, _batch_x0(x0, len(acc)), P0, gyro_dtheta=dt * gyro, Rg=Rg)
 
@@ -473,7 +492,7 @@ def constraints(x):
 
 def _e(x):
     x1, x2, x3, x4, x5, x6 = (x[..., i] for i in range(6))
-    return np.stack([x1 * (x2 * x6 - x3 * x5), x2 * (x3 * x4 - x1 * x6)], -1)   # (004 eq 5.40)
+    return np.stack([x1 * (x2 * x6 - x3 * x5), x2 * (x3 * x4 - x1 * x6)], -1)  # (004 eq 5.40)
 
 
 def constraint_jacobian(x):
@@ -547,7 +566,7 @@ def _e_row(x, c):
     E = np.zeros_like(x)
     if c == 0:
         E[:, 0], E[:, 1], E[:, 2], E[:, 4], E[:, 5] = x2 * x6 - x3 * x5, x1 * x6, -x1 * x5, -x1 * x3, x1 * x2
-        return x1 * (x2 * x6 - x3 * x5), E                       # (004 eq 5.40)
+        return x1 * (x2 * x6 - x3 * x5), E  # (004 eq 5.40)
     E[:, 0], E[:, 1], E[:, 2], E[:, 3], E[:, 5] = -x2 * x6, x3 * x4 - x1 * x6, x2 * x4, x2 * x3, -x1 * x2
     return x2 * (x3 * x4 - x1 * x6), E
 
@@ -559,17 +578,17 @@ def _sckf(x, P, alpha_f, s_th, max_iter):
         ec, Ec = _e_row(x, c)
         PE = np.einsum("rij,rj->ri", P, Ec)
         sc = np.einsum("ri,ri->r", Ec, PE)
-        Ri = alpha_f * sc                                        # R₀ = α_f E P Eᵀ
+        Ri = alpha_f * sc  # R₀ = α_f E P Eᵀ
         active = Ri > 0
         for _ in range(max_iter):
             if not active.any():
                 break
-            K = PE * (active / (sc + Ri))[:, None]               # finished runs get K = 0 and are left alone
-            x = x - K * ec[:, None]                              # (004 eq 5.51) [R]
-            P = P - K[:, :, None] * PE[:, None, :]               # P ← (I − K E_c) P
+            K = PE * (active / (sc + Ri))[:, None]  # finished runs get K = 0 and are left alone
+            x = x - K * ec[:, None]  # (004 eq 5.51) [R]
+            P = P - K[:, :, None] * PE[:, None, :]  # P ← (I − K E_c) P
             its[:, c] += active
             Ri = Ri / np.e
-            ec, Ec = _e_row(x, c)                                # relinearise
+            ec, Ec = _e_row(x, c)  # relinearise
             PE = np.einsum("rij,rj->ri", P, Ec)
             sc = np.einsum("ri,ri->r", Ec, PE)
             strength = (Ec * Ec * P.reshape(-1, 36)[:, ::7]).max(axis=1) / np.where(sc > 0, sc, np.inf)
@@ -580,8 +599,8 @@ def _sckf(x, P, alpha_f, s_th, max_iter):
 def _constrained_noise(noise_density, dt, d):
     """R′ (5.48): the AIV noise of [α̃Δt; q̃Δt²], with the cross block M/Δt entering with a plain "+" (both are
     measurements). Equals [[Q₃/Δt², M₃₁/Δt], [M₃₁ᵀ/Δt, R₃]] of the three-state model (printed M)."""
-    S = np.diag([dt] * 3 + [dt ** 2] * 6)
-    return (noise_density ** 2 / dt / d ** 2) * S @ gfimu.aiv_covariance() @ S
+    S = np.diag([dt] * 3 + [dt**2] * 6)
+    return (noise_density**2 / dt / d**2) * S @ gfimu.aiv_covariance() @ S
 
 
 class ConstrainedEKF:
@@ -626,13 +645,16 @@ class ConstrainedEKF:
 
     def __init__(self, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0):
         self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
-        self.N = validate.positive(noise_density, "noise_density")               # R is inverted: > 0
+        self.N = validate.positive(noise_density, "noise_density")  # R is inverted: > 0
         self.F, self.Q = _wiener6(self.dt, validate.scalar(q_dw, "q_dw", nonnegative=True))
         self.R = _constrained_noise(self.N, self.dt, self.d)
         self.x = validate.array(x0, "x0", shape=(6,)).reshape(6).copy()
         self.P = _initial_covariance(P0, 6)
-        self.sckf = dict(alpha_f=validate.positive(alpha_f, "alpha_f"), s_th=validate.positive(s_th, "s_th"),
-                         max_iter=validate.count(max_iter, "max_iter", minimum=1))
+        self.sckf = dict(
+            alpha_f=validate.positive(alpha_f, "alpha_f"),
+            s_th=validate.positive(s_th, "s_th"),
+            max_iter=validate.count(max_iter, "max_iter", minimum=1),
+        )
         self.t_on, self.k = (None if t_on is None else validate.scalar(t_on, "t_on", nonnegative=True)), 0
 
     def step(self, acc):
@@ -649,21 +671,21 @@ class ConstrainedEKF:
             The posterior ``[Δθ; Δω]``.
         """
         if self.k:
-            self.x = self.F @ self.x                             # (004 eq 5.45)
+            self.x = self.F @ self.x  # (004 eq 5.45)
             self.P = self.F @ self.P @ self.F.T + self.Q
         v = acc @ gfimu.aiv_map_cached().T / self.d
-        y = np.concatenate([v[:3] * self.dt, v[3:] * self.dt ** 2])              # (004 eq 5.46)
+        y = np.concatenate([v[:3] * self.dt, v[3:] * self.dt**2])  # (004 eq 5.46)
         h = np.concatenate([self.x[3:], gfimu.quadratic_terms(self.x[:3], check=False)])
         H = np.zeros((9, 6))
         H[:3, 3:] = np.eye(3)
-        H[3:, :3] = gfimu.quadratic_jacobian(self.x[:3], check=False)                           # (004 eq 5.47)
+        H[3:, :3] = gfimu.quadratic_jacobian(self.x[:3], check=False)  # (004 eq 5.47)
         S = H @ self.P @ H.T + self.R
-        K = np.linalg.solve(S, H @ self.P).T                     # (004 eq 5.49)
+        K = np.linalg.solve(S, H @ self.P).T  # (004 eq 5.49)
         self.x = self.x + K @ (y - h)
         self.P = self.P - K @ H @ self.P
         self.P = 0.5 * (self.P + self.P.T)
         if self.t_on is not None and self.k * self.dt >= self.t_on - 1e-9:
-            xb, Pb, _ = _sckf(self.x[None].copy(), self.P[None].copy(), **self.sckf)   # its own P: checked at the door
+            xb, Pb, _ = _sckf(self.x[None].copy(), self.P[None].copy(), **self.sckf)  # its own P: checked at the door
             self.x, self.P = xb[0], Pb[0]
         self.k += 1
         return self.x.copy()
@@ -695,13 +717,14 @@ class ConstrainedEKF:
 
 def _wiener6(dt, q):
     F = np.eye(6)
-    F[:3, 3:] = dt * np.eye(3)                                   # (004 eq 5.42)
+    F[:3, 3:] = dt * np.eye(3)  # (004 eq 5.42)
     G = np.vstack([dt * np.eye(3), np.eye(3)])
-    return F, np.asarray(q, dtype=float) ** 2 * (G @ G.T)        # (004 eqs 5.43-5.44); q scalar or (R, 1, 1)
+    return F, np.asarray(q, dtype=float) ** 2 * (G @ G.T)  # (004 eqs 5.43-5.44); q scalar or (R, 1, 1)
 
 
-def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0,
-                      progress=False):
+def constrained_batch(
+    acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0, progress=False
+):
     """:class:`ConstrainedEKF` vectorised over a leading axis of runs (the same equations, 5.41–5.51).
 
     Parameters
@@ -752,7 +775,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     alpha_f, s_th = validate.positive(alpha_f, "alpha_f"), validate.positive(s_th, "s_th")
     max_iter = validate.count(max_iter, "max_iter", minimum=1)
     t_on = np.asarray(np.inf if t_on is None else validate.array(t_on, "t_on", finite=False), dtype=float)
-    if np.any(np.isnan(t_on)) or np.any(t_on < 0):                     # inf: never (as None), per run
+    if np.any(np.isnan(t_on)) or np.any(t_on < 0):  # inf: never (as None), per run
         raise ValueError(f"t_on must be times in s >= 0 (inf or None: never); got {t_on.ravel()[:3]}")
     if t_on.shape not in ((), (runs,)):
         raise ValueError(f"t_on must be a time in s, None, or one per run ({runs},); got shape {t_on.shape}")
@@ -763,7 +786,7 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     F, Q = _wiener6(dt, q_dw)
     R = np.asarray(N, dtype=float) ** 2 * _constrained_noise(1.0, dt, d)
     v = acc @ gfimu.aiv_map_cached().T / d
-    y = np.concatenate([v[..., :3] * dt, v[..., 3:] * dt ** 2], -1)             # (004 eq 5.46)
+    y = np.concatenate([v[..., :3] * dt, v[..., 3:] * dt**2], -1)  # (004 eq 5.46)
     x0 = validate.array(x0, "x0", shape=(6,))
     x = np.array(np.broadcast_to(x0, (runs, 6)), dtype=float)
     P = np.array(np.broadcast_to(_initial_covariance(P0, 6), (runs, 6, 6)), dtype=float)
@@ -772,13 +795,13 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     H[:, :3, 3:] = np.eye(3)
     for k in tqdm(range(n), desc="constrained EKF", unit="step", disable=not progress, mininterval=0.5):
         if k:
-            x = x @ F.T                                          # (004 eq 5.45)
+            x = x @ F.T  # (004 eq 5.45)
             P = F @ P @ F.T + Q
         h = np.concatenate([x[:, 3:], gfimu.quadratic_terms(x[:, :3], check=False)], -1)
-        H[:, 3:, :3] = gfimu.quadratic_jacobian(x[:, :3], check=False)                          # (004 eq 5.47)
+        H[:, 3:, :3] = gfimu.quadratic_jacobian(x[:, :3], check=False)  # (004 eq 5.47)
         HP = H @ P
         S = HP @ H.swapaxes(-1, -2) + R
-        K = np.linalg.solve(S, HP).swapaxes(-1, -2)              # (004 eq 5.49)
+        K = np.linalg.solve(S, HP).swapaxes(-1, -2)  # (004 eq 5.49)
         x = x + (K @ (y[:, k] - h)[..., None])[..., 0]
         P = P - K @ HP
         P = 0.5 * (P + P.swapaxes(-1, -2))
@@ -791,8 +814,19 @@ def constrained_batch(acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th
     return xs, ps, its
 
 
-def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "consumer"), q_dw=1e-5, alpha_f=0.1,
-                        s_th=100.0, t_on=10.0, window=(15.0, 20.0), m_sign=1, q_sweep=(), progress=True):
+def table53_monte_carlo(
+    n_runs=100,
+    seed=53,
+    grades=("tactical", "automotive", "consumer"),
+    q_dw=1e-5,
+    alpha_f=0.1,
+    s_th=100.0,
+    t_on=10.0,
+    window=(15.0, 20.0),
+    m_sign=1,
+    q_sweep=(),
+    progress=True,
+):
     """Reproduce Table 5.3: steady-state RMSE of Δθ, three-state vs constrained 6-state, per accelerometer grade.
 
     Setup of seed 004 §5.11 (eq 5.52): ω = 3.29·[1, 1, 1] rad/s constant, d = 1 m, Δt = 0.01 s, T = 20 s, white
@@ -840,8 +874,9 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     n_runs = validate.count(n_runs, "n_runs", minimum=1)
     seed = validate.count(seed, "seed")
     if isinstance(grades, str) or not len(grades):
-        raise ValueError(f"grades must be a non-empty sequence of grade names among {tuple(gfimu.TABLE_5_2)}; "
-                         f"got {grades!r}")
+        raise ValueError(
+            f"grades must be a non-empty sequence of grade names among {tuple(gfimu.TABLE_5_2)}; got {grades!r}"
+        )
     for gr in grades:
         if gr not in gfimu.TABLE_5_2:
             raise ValueError(f"grades must be among {tuple(gfimu.TABLE_5_2)}; got {gr!r}")
@@ -855,8 +890,10 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
         t_on = validate.scalar(t_on, "t_on (s; None for never)", nonnegative=True)
     window = validate.exact_shape(window, "window (start, end) in s", (2,))
     if not (t[0] <= window[0] < window[1] and window[0] <= t[-1]):
-        raise ValueError(f"window must be (start, end) in s with {t[0]:g} <= start < end and start within the "
-                         f"record (up to {t[-1]:g} s); got {tuple(float(w) for w in window)}")
+        raise ValueError(
+            f"window must be (start, end) in s with {t[0]:g} <= start < end and start within the "
+            f"record (up to {t[-1]:g} s); got {tuple(float(w) for w in window)}"
+        )
     dt, d = 0.01, 1.0
     dens = np.repeat([gfimu.TABLE_5_2[gr] * gfimu.UG for gr in grades], n_runs)
     white = np.random.default_rng(seed).standard_normal((len(dens), len(t), 12))
@@ -868,9 +905,19 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     x3, _ = three_state_batch(np.concatenate([acc] * 3), dt, d, np.tile(dens, 3), truth[0], 1e-8, m_sign=signs)
     P0 = np.diag([1e-8] * 3 + [1e-6] * 3)
     qs = [q_dw] + [float(q) for q in q_sweep]
-    x6, _, _ = constrained_batch(np.concatenate([acc] * len(qs)), dt, d, np.tile(dens, len(qs)),
-                                 np.repeat(qs, R), np.concatenate([truth[0], np.zeros(3)]), P0,
-                                 alpha_f=alpha_f, s_th=s_th, t_on=t_on, progress=progress)
+    x6, _, _ = constrained_batch(
+        np.concatenate([acc] * len(qs)),
+        dt,
+        d,
+        np.tile(dens, len(qs)),
+        np.repeat(qs, R),
+        np.concatenate([truth[0], np.zeros(3)]),
+        P0,
+        alpha_f=alpha_f,
+        s_th=s_th,
+        t_on=t_on,
+        progress=progress,
+    )
     x6s, x6 = x6[:, :, :3], x6[:R]
     m = (t >= window[0]) & (t <= window[1])
     before = (t >= t_on - 5) & (t < t_on) if t_on is not None else m
@@ -878,14 +925,20 @@ def table53_monte_carlo(n_runs=100, seed=53, grades=("tactical", "automotive", "
     for i, gr in enumerate(grades):
         sl = slice(i * n_runs, (i + 1) * n_runs)
         res = {}
-        for name, xe in (("unconstrained", x3[:R][sl]), ("constrained", x6[sl, :, :3]),
-                         ("other sign of M", x3[R:2 * R][sl]), ("M = 0", x3[2 * R:][sl])):
+        for name, xe in (
+            ("unconstrained", x3[:R][sl]),
+            ("constrained", x6[sl, :, :3]),
+            ("other sign of M", x3[R : 2 * R][sl]),
+            ("M = 0", x3[2 * R :][sl]),
+        ):
             err2 = (xe - truth) ** 2
             r = np.sqrt(np.mean(err2[:, m], axis=(0, 1)))
-            res[name] = (float(np.sqrt(np.sum(r ** 2))), *map(float, r))
+            res[name] = (float(np.sqrt(np.sum(r**2))), *map(float, r))
             res[name + " vs t"] = np.sqrt(np.mean(np.sum(err2, -1), axis=0))
-        res["q sweep"] = {q: float(np.sqrt(np.mean(np.sum((x6s[j * R:(j + 1) * R][sl][:, m] - truth[m]) ** 2, -1))))
-                          for j, q in enumerate(qs)}
+        res["q sweep"] = {
+            q: float(np.sqrt(np.mean(np.sum((x6s[j * R : (j + 1) * R][sl][:, m] - truth[m]) ** 2, -1))))
+            for j, q in enumerate(qs)
+        }
         e = np.abs(_e(x6[sl])).max(-1)
         res["residual"] = (float(np.median(e[:, before])), float(np.median(e[:, m])))
         out[gr] = res

@@ -27,6 +27,7 @@ Which values are the thesis' and which are ours
 The sensor and GPS noise values are Table 7.1's; the bias random walks and the position process noise are ours
 (:class:`InsTuning` says which is which).
 """
+
 from __future__ import annotations
 
 import math as _m
@@ -36,9 +37,19 @@ import numpy as np
 
 from . import dcm, rotations, validate
 
-__all__ = ["INS_SLICES", "UKF_SLICES", "ins_transition", "ins_propagate", "ins_process_noise",
-           "gps_measurement_matrix", "InsTuning", "run_gps_ins", "euler_ins_fx", "sigma_points_2n",
-           "run_euler_ukf"]
+__all__ = [
+    "INS_SLICES",
+    "UKF_SLICES",
+    "ins_transition",
+    "ins_propagate",
+    "ins_process_noise",
+    "gps_measurement_matrix",
+    "InsTuning",
+    "run_gps_ins",
+    "euler_ins_fx",
+    "sigma_points_2n",
+    "run_euler_ukf",
+]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -121,9 +132,9 @@ def _ins_F(x, acc, A_tilde, dt):
     At = A_tilde.T
     for i in range(3):
         s = slice(3 * i, 3 * i + 3)
-        F[s, s] = At                                                                  # (004 eq 7.12)
+        F[s, s] = At  # (004 eq 7.12)
         F[s, 9:12] = -dt * rotations.skew(x[s])
-        F[15 + i, s] = dt * acc                                                       # (004 eq 7.12)
+        F[15 + i, s] = dt * acc  # (004 eq 7.12)
     F[12:15, 15:18] = dt * np.eye(3)
     F[15:18, 18:21] = -dt * x[0:9].reshape(3, 3)
     return F
@@ -159,8 +170,13 @@ def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_wal
     """
     x = validate.array(x, "x", shape=(21,)).reshape(21)
     dt = validate.time_step(dt, "dt")
-    vals = dict(gyro_noise=gyro_noise, acc_noise=acc_noise, gyro_bias_walk=gyro_bias_walk,
-                acc_bias_walk=acc_bias_walk, pos_noise=pos_noise)
+    vals = dict(
+        gyro_noise=gyro_noise,
+        acc_noise=acc_noise,
+        gyro_bias_walk=gyro_bias_walk,
+        acc_bias_walk=acc_bias_walk,
+        pos_noise=pos_noise,
+    )
     for k, v in vals.items():
         vals[k] = validate.scalar(v, k)
         if vals[k] < 0:
@@ -171,12 +187,12 @@ def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_wal
 def _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise):
     S = rotations.skew(x[0:9].reshape(3, 3)).reshape(9, 3)
     Q = np.zeros((21, 21))
-    Q[0:9, 0:9] = gyro_noise ** 2 * dt * (S @ S.T)
+    Q[0:9, 0:9] = gyro_noise**2 * dt * (S @ S.T)
     d = np.zeros(21)
-    d[9:12] = gyro_bias_walk ** 2 * dt
-    d[12:15] = pos_noise ** 2 * dt
-    d[15:18] = acc_noise ** 2 * dt
-    d[18:21] = acc_bias_walk ** 2 * dt
+    d[9:12] = gyro_bias_walk**2 * dt
+    d[12:15] = pos_noise**2 * dt
+    d[15:18] = acc_noise**2 * dt
+    d[18:21] = acc_bias_walk**2 * dt
     Q[np.diag_indices(21)] += d
     return Q
 
@@ -217,6 +233,7 @@ class InsTuning:
     sigma_vel : float, optional
         GPS velocity noise, m/s (Table 7.1: 0.5 m/s).
     """
+
     #: gyro angle random walk, rad/s/√Hz (Table 7.1: 3 °/√h)
     gyro_noise: float = np.radians(3.0) / 60.0
     #: accelerometer white noise, m/s²/√Hz (Table 7.1: 100 µg/√Hz)
@@ -313,16 +330,21 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
         raise ValueError(f"static must be one flag per sample, shape ({n},); got {still.shape}")
     Ra = validate.positive(acc_sigma, "acc_sigma") ** 2 * np.eye(3)
     Ha = np.zeros((3, 21))
-    Ha[:, 6:9] = -g * np.eye(3)                                                   # (004 eq 7.19), specific force
+    Ha[:, 6:9] = -g * np.eye(3)  # (004 eq 7.19), specific force
     Ha[:, 18:21] = np.eye(3)
     dt = 1.0 / fs
     tu = tuning
     A_all = dcm.A_matrix(gyr * dt)
-    R = np.diag([tu.sigma_pos ** 2] * 3 + [tu.sigma_vel ** 2] * 3)
-    Qd = np.zeros((21, 21))                                                       # constant part of eq 7.15
-    Qd[np.diag_indices(21)] = np.r_[[0.0] * 9, [tu.gyro_bias_walk ** 2 * dt] * 3, [tu.pos_noise ** 2 * dt] * 3,
-                                    [tu.acc_noise ** 2 * dt] * 3, [tu.acc_bias_walk ** 2 * dt] * 3]
-    qg = tu.gyro_noise ** 2 * dt
+    R = np.diag([tu.sigma_pos**2] * 3 + [tu.sigma_vel**2] * 3)
+    Qd = np.zeros((21, 21))  # constant part of eq 7.15
+    Qd[np.diag_indices(21)] = np.r_[
+        [0.0] * 9,
+        [tu.gyro_bias_walk**2 * dt] * 3,
+        [tu.pos_noise**2 * dt] * 3,
+        [tu.acc_noise**2 * dt] * 3,
+        [tu.acc_bias_walk**2 * dt] * 3,
+    ]
+    qg = tu.gyro_noise**2 * dt
     F = np.eye(21)
     F[12:15, 15:18] = dt * np.eye(3)
     gdt = g * dt
@@ -330,9 +352,19 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
     for k in range(n):
         # --- F(x̂) (004 eqs 7.12, 7.14) and Q (eq 7.15) at the previous estimate
         c = x[0:9].tolist()
-        S = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0],
-                      [0.0, -c[5], c[4]], [c[5], 0.0, -c[3]], [-c[4], c[3], 0.0],
-                      [0.0, -c[8], c[7]], [c[8], 0.0, -c[6]], [-c[7], c[6], 0.0]])        # [ĉ1×]; [ĉ2×]; [ĉ3×]
+        S = np.array(
+            [
+                [0.0, -c[2], c[1]],
+                [c[2], 0.0, -c[0]],
+                [-c[1], c[0], 0.0],
+                [0.0, -c[5], c[4]],
+                [c[5], 0.0, -c[3]],
+                [-c[4], c[3], 0.0],
+                [0.0, -c[8], c[7]],
+                [c[8], 0.0, -c[6]],
+                [-c[7], c[6], 0.0],
+            ]
+        )  # [ĉ1×]; [ĉ2×]; [ĉ3×]
         At = A_all[k].T
         F[0:3, 0:3] = F[3:6, 3:6] = F[6:9, 6:9] = At
         F[0:9, 9:12] = -dt * S
@@ -349,14 +381,14 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
         x = xn
         Q = Qd.copy()
         Q[0:9, 0:9] = qg * (S @ S.T)
-        P = F @ P @ F.T + Q                                                          # (004 eq 7.16)
+        P = F @ P @ F.T + Q  # (004 eq 7.16)
         if fix[k]:
-            PHt = P[:, 12:18]                                                        # P Hᵀ, H = [0, I6, 0] (eq 7.17)
+            PHt = P[:, 12:18]  # P Hᵀ, H = [0, I6, 0] (eq 7.17)
             K = np.linalg.solve(P[12:18, 12:18] + R, PHt.T).T
             x = x + K @ (gps[k] - x[12:18])
             P = P - K @ PHt.T
             P = 0.5 * (P + P.T)
-        if still[k] and np.linalg.norm(x[15:18]) < still_speed:                     # (004 eqs 7.18-7.19)
+        if still[k] and np.linalg.norm(x[15:18]) < still_speed:  # (004 eqs 7.18-7.19)
             PHt = P @ Ha.T
             K = np.linalg.solve(Ha @ PHt + Ra, PHt.T).T
             x = x + K @ (acc[k] - Ha @ x)
@@ -366,15 +398,23 @@ def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=N
         sd[k] = P.diagonal()
     sd = np.sqrt(np.maximum(sd, 0.0))
     C = dcm.orthonormalize(xs[:, 0:9].reshape(n, 3, 3))
-    return dict(x=xs, sd=sd, C_bn=C, euler=rotations.dcm_to_euler(C), r=xs[:, 12:15], v=xs[:, 15:18],
-                b_g=xs[:, 9:12], b_a=xs[:, 18:21])
+    return dict(
+        x=xs,
+        sd=sd,
+        C_bn=C,
+        euler=rotations.dcm_to_euler(C),
+        r=xs[:, 12:15],
+        v=xs[:, 15:18],
+        b_g=xs[:, 9:12],
+        b_a=xs[:, 18:21],
+    )
 
 
 def _ins_propagate_raw(x, acc, A_tilde, dt, g):
     C = x[0:9].reshape(3, 3)
     out = x.copy()
-    out[0:9] = (C @ A_tilde - dt * np.cross(C, x[9:12])).ravel()                     # (004 eq 7.7)
-    out[12:15] = x[12:15] + x[15:18] * dt                                            # (004 eq 7.10)
+    out[0:9] = (C @ A_tilde - dt * np.cross(C, x[9:12])).ravel()  # (004 eq 7.7)
+    out[12:15] = x[12:15] + x[15:18] * dt  # (004 eq 7.10)
     out[15:18] = x[15:18] + C @ (acc - x[18:21]) * dt
     out[17] += g * dt
     return out
@@ -410,14 +450,14 @@ def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
     try:
         return _euler_ins_fx(x, dt, gyr, acc, g)
     except validate.INNER_ERRORS:
-        validate.exact_shape(x, "x", (15,))                      # name the argument that does not fit
+        validate.exact_shape(x, "x", (15,))  # name the argument that does not fit
         validate.time_step(dt, "dt")
         validate.exact_shape(gyr, "gyr", (3,))
         validate.exact_shape(acc, "acc", (3,))
         validate.positive(g, "g")
         if isinstance(x, np.ndarray):
             raise
-        return _euler_ins_fx(np.asarray(x, float), dt, gyr, acc, g)      # a list for x
+        return _euler_ins_fx(np.asarray(x, float), dt, gyr, acc, g)  # a list for x
 
 
 def _euler_ins_fx(x, dt, gyr, acc, g):
@@ -426,15 +466,25 @@ def _euler_ins_fx(x, dt, gyr, acc, g):
     ax, ay, az = acc[0] - ba1, acc[1] - ba2, acc[2] - ba3
     wx, wy, wz = gyr[0] - bg1, gyr[1] - bg2, gyr[2] - bg3
     tt = st / ct
-    return np.array([
-        r1 + v1 * dt, r2 + v2 * dt, r3 + v3 * dt,
-        v1 + (cp * ct * ax + (-sp * cf + cp * st * sf) * ay + (sp * sf + cp * st * cf) * az) * dt,
-        v2 + (sp * ct * ax + (cp * cf + sp * st * sf) * ay + (-cp * sf + sp * st * cf) * az) * dt,
-        v3 + (-st * ax + ct * sf * ay + ct * cf * az + g) * dt,                      # (004 eq 7.10)
-        phi + (wx + sf * tt * wy + cf * tt * wz) * dt,                               # (004 eq 6.1)
-        th + (cf * wy - sf * wz) * dt,
-        psi + (sf / ct * wy + cf / ct * wz) * dt,
-        ba1, ba2, ba3, bg1, bg2, bg3])
+    return np.array(
+        [
+            r1 + v1 * dt,
+            r2 + v2 * dt,
+            r3 + v3 * dt,
+            v1 + (cp * ct * ax + (-sp * cf + cp * st * sf) * ay + (sp * sf + cp * st * cf) * az) * dt,
+            v2 + (sp * ct * ax + (cp * cf + sp * st * sf) * ay + (-cp * sf + sp * st * cf) * az) * dt,
+            v3 + (-st * ax + ct * sf * ay + ct * cf * az + g) * dt,  # (004 eq 7.10)
+            phi + (wx + sf * tt * wy + cf * tt * wz) * dt,  # (004 eq 6.1)
+            th + (cf * wy - sf * wz) * dt,
+            psi + (sf / ct * wy + cf / ct * wz) * dt,
+            ba1,
+            ba2,
+            ba3,
+            bg1,
+            bg2,
+            bg3,
+        ]
+    )
 
 
 def sigma_points_2n(x, P):
@@ -458,6 +508,7 @@ def sigma_points_2n(x, P):
         All ``1/(2n)``.
     """
     from scipy.linalg import cholesky
+
     x = validate.array(x, "x")
     if x.ndim != 1:
         raise ValueError(f"x must have shape (n,); got {x.shape}")
@@ -469,10 +520,10 @@ def sigma_points_2n(x, P):
     if asym > 1e-9 * max(float(np.max(np.abs(P))), 1e-300):
         raise ValueError(f"P must be symmetric positive definite (a covariance); got max|P - Pᵀ| = {asym:.3g}")
     try:
-        U = cholesky(n * P)                                                          # upper: UᵀU = nP
+        U = cholesky(n * P)  # upper: UᵀU = nP
     except np.linalg.LinAlgError:
         raise ValueError("P must be symmetric positive definite (its Cholesky factor failed)") from None
-    return np.vstack([x + U, x - U]), np.full(2 * n, 1.0 / (2 * n))                  # (004 eqs 7.24-7.25)
+    return np.vstack([x + U, x - U]), np.full(2 * n, 1.0 / (2 * n))  # (004 eqs 7.24-7.25)
 
 
 def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine="filterpy"):
@@ -517,6 +568,7 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
         As :func:`run_gps_ins`, with the 15-state layout :data:`UKF_SLICES`.
     """
     from filterpy.kalman import JulierSigmaPoints, UnscentedKalmanFilter, update
+
     gyr, acc, fs, g = _imu_door(gyr, acc, fs, g)
     n = len(gyr)
     fix = _gps_rows(gps, n)
@@ -525,48 +577,71 @@ def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine
     P0 = np.diag(P0) if P0.shape == (15,) else P0
     if P0.shape != (15, 15):
         raise ValueError(f"P0 must have shape (15, 15) or (15,); got {P0.shape}")
-    P0 = validate.covariance(P0, "P0", 15, definite=True)              # its square root spreads the sigma points
+    P0 = validate.covariance(P0, "P0", 15, definite=True)  # its square root spreads the sigma points
     if engine not in ("filterpy", "plain"):
         raise ValueError(f"engine must be 'filterpy' or 'plain'; got {engine!r}")
     dt = 1.0 / fs
     tu = tuning
     H = np.zeros((6, 15))
     H[:, 0:6] = np.eye(6)
-    R = np.diag([tu.sigma_pos ** 2] * 3 + [tu.sigma_vel ** 2] * 3)
-    Q = np.diag([tu.pos_noise ** 2 * dt] * 3 + [tu.acc_noise ** 2 * dt] * 3 + [tu.gyro_noise ** 2 * dt] * 3
-                + [tu.acc_bias_walk ** 2 * dt] * 3 + [tu.gyro_bias_walk ** 2 * dt] * 3)
+    R = np.diag([tu.sigma_pos**2] * 3 + [tu.sigma_vel**2] * 3)
+    Q = np.diag(
+        [tu.pos_noise**2 * dt] * 3
+        + [tu.acc_noise**2 * dt] * 3
+        + [tu.gyro_noise**2 * dt] * 3
+        + [tu.acc_bias_walk**2 * dt] * 3
+        + [tu.gyro_bias_walk**2 * dt] * 3
+    )
     xs, sd = np.empty((n, 15)), np.empty((n, 15))
     gyr_l, acc_l = gyr.tolist(), acc.tolist()
     if engine == "plain":
         from scipy.linalg import cholesky
+
         x, P = x0.copy(), P0.copy()
-        w = 1.0 / 30.0                                                               # 1/(2n), n = 15
+        w = 1.0 / 30.0  # 1/(2n), n = 15
         chi = np.empty((30, 15))
         for k in range(n):
-            U = cholesky(15.0 * P)                                                   # (004 eqs 7.24-7.25)
+            U = cholesky(15.0 * P)  # (004 eqs 7.24-7.25)
             for i, s in enumerate(np.vstack([x + U, x - U])):
-                chi[i] = euler_ins_fx(s, dt, gyr_l[k], acc_l[k], g)                   # (004 eq 7.23)
+                chi[i] = euler_ins_fx(s, dt, gyr_l[k], acc_l[k], g)  # (004 eq 7.23)
             x = w * chi.sum(0)
             d = chi - x
-            P = w * (d.T @ d) + Q                                                    # (004 eq 7.26)
+            P = w * (d.T @ d) + Q  # (004 eq 7.26)
             if fix[k]:
-                PHt = P[:, 0:6]                                                      # P Hᵀ, H = [I₆, 0]
+                PHt = P[:, 0:6]  # P Hᵀ, H = [I₆, 0]
                 K = np.linalg.solve(P[0:6, 0:6] + R, PHt.T).T
                 x = x + K @ (gps[k] - x[0:6])
                 P = P - K @ PHt.T
                 P = 0.5 * (P + P.T)
             xs[k] = x
             sd[k] = np.sqrt(np.maximum(np.diag(P), 0.0))
-        return dict(x=xs, sd=sd, euler=xs[:, 6:9], r=xs[:, 0:3], v=xs[:, 3:6], b_a=xs[:, 9:12], b_g=xs[:, 12:15],
-                    C_bn=rotations.euler_to_dcm(xs[:, 6:9]))
-    ukf = UnscentedKalmanFilter(dim_x=15, dim_z=6, dt=dt, hx=lambda s: s[0:6], fx=euler_ins_fx,
-                                points=JulierSigmaPoints(15, kappa=0.0))
+        return dict(
+            x=xs,
+            sd=sd,
+            euler=xs[:, 6:9],
+            r=xs[:, 0:3],
+            v=xs[:, 3:6],
+            b_a=xs[:, 9:12],
+            b_g=xs[:, 12:15],
+            C_bn=rotations.euler_to_dcm(xs[:, 6:9]),
+        )
+    ukf = UnscentedKalmanFilter(
+        dim_x=15, dim_z=6, dt=dt, hx=lambda s: s[0:6], fx=euler_ins_fx, points=JulierSigmaPoints(15, kappa=0.0)
+    )
     ukf.x, ukf.P, ukf.Q = x0.copy(), P0.copy(), Q
     for k in range(n):
-        ukf.predict(gyr=gyr_l[k], acc=acc_l[k], g=g)                                 # (004 eqs 7.23-7.26)
+        ukf.predict(gyr=gyr_l[k], acc=acc_l[k], g=g)  # (004 eqs 7.23-7.26)
         if fix[k]:
-            ukf.x, ukf.P = update(ukf.x, ukf.P, gps[k], R, H)                        # linear KF update
+            ukf.x, ukf.P = update(ukf.x, ukf.P, gps[k], R, H)  # linear KF update
         xs[k] = ukf.x
         sd[k] = np.sqrt(np.maximum(np.diag(ukf.P), 0.0))
-    return dict(x=xs, sd=sd, euler=xs[:, 6:9], r=xs[:, 0:3], v=xs[:, 3:6], b_a=xs[:, 9:12], b_g=xs[:, 12:15],
-                C_bn=rotations.euler_to_dcm(xs[:, 6:9]))
+    return dict(
+        x=xs,
+        sd=sd,
+        euler=xs[:, 6:9],
+        r=xs[:, 0:3],
+        v=xs[:, 3:6],
+        b_a=xs[:, 9:12],
+        b_g=xs[:, 12:15],
+        C_bn=rotations.euler_to_dcm(xs[:, 6:9]),
+    )

@@ -19,6 +19,7 @@ cell (what **Validate** runs) should not print a pass that the judge will refuse
 Only numpy and the standard library are imported here (row 1 of the import plan). Nothing in a kernel is proof
 against a student who rewrites the kernel itself, and nothing here needs to be: it is a learning aid.
 """
+
 from __future__ import annotations
 
 import builtins
@@ -27,11 +28,20 @@ import sys
 import types
 
 import numpy as np
-import numpy.linalg    # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
-import numpy.testing   # noqa: F401
+import numpy.linalg  # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
+import numpy.testing  # noqa: F401
 
-__all__ = ["ForbiddenCall", "WrongShape", "forbid", "reserve", "release", "assert_close", "assert_equal", "grade",
-           "intact"]
+__all__ = [
+    "ForbiddenCall",
+    "WrongShape",
+    "forbid",
+    "reserve",
+    "release",
+    "assert_close",
+    "assert_equal",
+    "grade",
+    "intact",
+]
 
 # ---------------------------------------------------------------------------------------------------------------
 # Functions captured now, before any student code runs. C functions, ufuncs and ndarray methods: an answer cell can
@@ -93,7 +103,7 @@ def _named(fn):
 # forbid: swap __code__ for a raiser
 # ---------------------------------------------------------------------------------------------------------------
 _TOKEN = "__fusionlab_guard_hit__"
-_active = {}     # function -> [original code, list of forbid scopes (innermost last)]
+_active = {}  # function -> [original code, list of forbid scopes (innermost last)]
 
 
 def _target(fn):
@@ -125,6 +135,7 @@ def _sites(obj):
 def _stand_in(func, hit):
     def stand_in(*args, **kwargs):
         raise hit()
+
     stand_in.__name__ = stand_in.__qualname__ = _getattr(func, "__name__", "forbidden")
     return stand_in
 
@@ -149,8 +160,10 @@ def _raiser_code(func, hit):
     free = func.__code__.co_freevars
     head = "".join(f"    {v} = None\n" for v in free)
     touch = ("        " + ", ".join(free) + "\n") if free else ""
-    src = (f"def _outer():\n{head}    def _raiser(*args, **kwargs):\n{touch}"
-           f"        hit = {_TOKEN!r}\n        raise hit()\n    return _raiser\n")
+    src = (
+        f"def _outer():\n{head}    def _raiser(*args, **kwargs):\n{touch}"
+        f"        hit = {_TOKEN!r}\n        raise hit()\n    return _raiser\n"
+    )
     ns = {}
     exec(compile(src, f"<guard: {_named(func)} forbidden>", "exec"), ns)
     code = ns["_outer"]().__code__
@@ -214,8 +227,10 @@ class forbid:
             The message, naming the function and the exercise.
         """
         which = f"exercise {self.exercise}" if self.exercise is not None else "this exercise"
-        return (f"your answer called {_named(func)}, the library's own solution: {which} asks you to write it "
-                f"yourself (your own functions from earlier exercises are fine).")
+        return (
+            f"your answer called {_named(func)}, the library's own solution: {which} asks you to write it "
+            f"yourself (your own functions from earlier exercises are fine)."
+        )
 
     def __enter__(self):
         done = []
@@ -225,7 +240,7 @@ class forbid:
                 if entry is None and _isinstance(f, _FunctionType):
                     entry = _active[f] = [f.__code__, []]
                     f.__code__ = _raiser_code(f, _Hit(f))
-                elif entry is None:                   # a C function: rebind it by name where it can be reached
+                elif entry is None:  # a C function: rebind it by name where it can be reached
                     sites, stand_in = _sites(f), _stand_in(f, _Hit(f))
                     entry = _active[f] = [(sites, stand_in), []]
                     for d, k in sites:
@@ -258,12 +273,14 @@ class forbid:
         self._undo(self.functions)
         if self.calls and (etype is None or not _isinstance(exc, ForbiddenCall)):
             names = ", ".join(_sorted(_set(_named(f) for f in self.calls)))
-            raise ForbiddenCall(self.message(self.calls[0]) + f" ({names} was called; the error was caught inside "
-                                                              "your code, but the call still counts)")
+            raise ForbiddenCall(
+                self.message(self.calls[0]) + f" ({names} was called; the error was caught inside "
+                "your code, but the call still counts)"
+            )
         return False
 
 
-_reserved = {}   # exercise -> forbid scope entered by reserve()
+_reserved = {}  # exercise -> forbid scope entered by reserve()
 _violations = {}  # exercise -> what release() found
 
 
@@ -326,8 +343,9 @@ def _numbers(value, what, role):
     if value is None:
         raise WrongShape(f"{what}: {role} is None -- did the function forget its `return`?")
     if not _isinstance(value, _PLAIN):
-        raise WrongShape(f"{what}: {role} should be numbers (an array, a list or a float); got a "
-                             f"{_type(value).__name__}")
+        raise WrongShape(
+            f"{what}: {role} should be numbers (an array, a list or a float); got a {_type(value).__name__}"
+        )
     try:
         arr = _asarray(value)
         complex_ = arr.dtype.kind == "c"
@@ -388,20 +406,20 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     a = _numbers(actual, what, "your result")
     if a.shape != e.shape and e.shape != ():
         raise WrongShape(f"{what} should have shape {e.shape}; got {a.shape}")
-    if a.size == 0:                   # empty: right only where the reference is empty too, never for a number
+    if a.size == 0:  # empty: right only where the reference is empty too, never for a number
         if e.size == 0:
             return
         raise WrongShape(f"{what} is empty (shape {a.shape}); expected a number")
-    if e.shape != a.shape:                                                    # a scalar reference
+    if e.shape != a.shape:  # a scalar reference
         full = _empty(a.shape, dtype=e.dtype)
         full[...] = e
         e = full
     shape = a.shape
-    a, e = _nd_ravel(a), _nd_ravel(e)                    # 1-d from here (0-d results would be numpy scalars)
-    with _errstate(all="ignore"):                                            # inf - inf: NaN, handled below
+    a, e = _nd_ravel(a), _nd_ravel(e)  # 1-d from here (0-d results would be numpy scalars)
+    with _errstate(all="ignore"):  # inf - inf: NaN, handled below
         err = _absolute(_subtract(a, e))
         tol = _add(atol, _multiply(rtol, _absolute(e)))
-    ok = _logical_or(_less_equal(err, tol), _equal(a, e))                     # equal also covers ±inf
+    ok = _logical_or(_less_equal(err, tol), _equal(a, e))  # equal also covers ±inf
     both_nan = _logical_and(_isnan(a), _isnan(e))
     ok = _logical_or(ok, both_nan)
     if _nd_all(ok):
@@ -410,16 +428,18 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     with _errstate(all="ignore"):
         excess = _asarray(_subtract(err, tol), dtype=_float)
     excess[_logical_not(bad)] = -1.0
-    excess[_logical_and(bad, _isnan(excess))] = 1e308                           # NaN where a number was expected
+    excess[_logical_and(bad, _isnan(excess))] = 1e308  # NaN where a number was expected
     flat = _int(_nd_argmax(excess))
     where = _index(flat, shape) if _len(shape) else ""
     got, want = _nd_item(a, flat), _nd_item(e, flat)
     worst = _float(_nd_max(_asarray(err, dtype=_float)[bad])) if not _nd_any(_isnan(err[bad])) else _float("nan")
     at = f" at {where}" if where else ""
-    if got != got or want != want:                                             # NaN on one side only
+    if got != got or want != want:  # NaN on one side only
         raise AssertionError(f"{what}{at} is {got:.6g} where the reference is {want:.6g}")
-    raise AssertionError(f"{what} differs from the reference by up to {worst:.3g}{at} (got {got:.6g}, expected "
-                         f"{want:.6g}; tolerance {atol:g} + {rtol:g}·|expected|)")
+    raise AssertionError(
+        f"{what} differs from the reference by up to {worst:.3g}{at} (got {got:.6g}, expected "
+        f"{want:.6g}; tolerance {atol:g} + {rtol:g}·|expected|)"
+    )
 
 
 def assert_equal(actual, expected, *, what="the result"):
@@ -459,8 +479,9 @@ def _copy(obj):
     return obj
 
 
-def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol=1e-9, atol=1e-12, exercise=None,
-          compare=None):
+def grade(
+    student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol=1e-9, atol=1e-12, exercise=None, compare=None
+):
     """Hidden test in one line: the reference on every case first, then the student's function under ``forbid``.
 
     Parameters
@@ -505,9 +526,10 @@ def grade(student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol
         label = f" (case {i + 1} of {_len(cases)})" if _len(cases) > 1 else ""
         if _isinstance(what, _tuple):
             if not _isinstance(a, (_tuple, _list)) or _len(a) != _len(what):
-                raise WrongShape(f"your function must return {_len(what)} things ({', '.join(what)}); got "
-                                     f"{_type(a).__name__}" + (f" of length {_len(a)}"
-                                                               if _isinstance(a, (_tuple, _list)) else ""))
+                raise WrongShape(
+                    f"your function must return {_len(what)} things ({', '.join(what)}); got "
+                    f"{_type(a).__name__}" + (f" of length {_len(a)}" if _isinstance(a, (_tuple, _list)) else "")
+                )
             for name, ai, ei in _zip(what, a, e):
                 check(ai, ei, name + label)
         else:
@@ -521,36 +543,38 @@ _forbid_cls = forbid
 # intact: nothing the grading relies on was changed by an answer cell
 # ---------------------------------------------------------------------------------------------------------------
 _state = {"exercise": None}  # the exercise named in a forbidden call's message, when the caller gives none
-_baseline_modules = {}     # module name -> {attribute: (object, code or None)}
-_module_objs = {}          # module name -> the module object
-_baseline_classes = {}     # class -> {attribute: (object, code or None)}
+_baseline_modules = {}  # module name -> {attribute: (object, code or None)}
+_module_objs = {}  # module name -> the module object
+_baseline_classes = {}  # class -> {attribute: (object, code or None)}
 
 
 def _entry(obj):
-    for f, (saved, _scopes) in _list(_active.items()):       # a C function forbidden right now: its real self
+    for f, (saved, _scopes) in _list(_active.items()):  # a C function forbidden right now: its real self
         if not _isinstance(f, _FunctionType) and obj is saved[1]:
             return (f, None)
     if not _isinstance(obj, _FunctionType):
         return (obj, None)
     active = _active.get(obj)
-    return (obj, active[0] if active else obj.__code__)          # a forbidden function: its real code
+    return (obj, active[0] if active else obj.__code__)  # a forbidden function: its real code
 
 
 def _watched(name):
-    parts = name.split(".")                  # public modules only (all of fusionlab's, fusionlab.checks._core too);
-    return (parts[0] in _WATCHED             # numpy and scipy down to their subpackages
-            and (parts[0] == "fusionlab" or not _any(p.startswith("_") for p in parts[1:]))
-            and (_len(parts) <= 2 or parts[0] in ("fusionlab", "filterpy")))
+    parts = name.split(".")  # public modules only (all of fusionlab's, fusionlab.checks._core too);
+    return (
+        parts[0] in _WATCHED  # numpy and scipy down to their subpackages
+        and (parts[0] == "fusionlab" or not _any(p.startswith("_") for p in parts[1:]))
+        and (_len(parts) <= 2 or parts[0] in ("fusionlab", "filterpy"))
+    )
 
 
-_sizes = {}                # module name -> size of its dict when last recorded
+_sizes = {}  # module name -> size of its dict when last recorded
 
 
 def _snapshot_new_modules():
     """Record every watched module (and its Python classes) not seen before; cheap when nothing is new."""
     for name, known in _list(_baseline_modules.items()):
         if name.startswith("fusionlab.") and _len(_vars(_module_objs[name])) != _sizes.get(name):
-            for k, v in _list(_vars(_module_objs[name]).items()):   # seen while still importing: its later functions
+            for k, v in _list(_vars(_module_objs[name]).items()):  # seen while still importing: its later functions
                 if k not in known and not _from_a_cell(v):
                     known[k] = _entry(v)
             _sizes[name] = _len(_vars(_module_objs[name]))
@@ -621,8 +645,12 @@ def _builtin_problems():
     now = _vars(builtins)
     for k, obj in _builtins_base.items():
         cur = now.get(k, _MISSING)
-        if k not in _IGNORED_BUILTINS and cur is not obj and _callable(obj) and not (
-                _isinstance(obj, _MethodType) and cur == obj):         # the kernel's input(), bound again per cell
+        if (
+            k not in _IGNORED_BUILTINS
+            and cur is not obj
+            and _callable(obj)
+            and not (_isinstance(obj, _MethodType) and cur == obj)
+        ):  # the kernel's input(), bound again per cell
             out.append(f"builtins.{k} was replaced")
     return out
 
@@ -630,7 +658,7 @@ def _builtin_problems():
 def _shell():
     try:
         from IPython import get_ipython
-    except ImportError:      # plain Python: nothing to guard
+    except ImportError:  # plain Python: nothing to guard
         return None
     return get_ipython()
 
@@ -655,10 +683,11 @@ def intact():
     problems = _problems()
     if problems:
         more = f" (and {_len(problems) - 5} more)" if _len(problems) > 5 else ""
-        raise AssertionError("an earlier cell changed how this notebook compares results, so this check cannot be "
-                             "trusted: " + "; ".join(problems[:5]) + more + ". Remove that code and run the notebook "
-                             "again from the top.")
-
+        raise AssertionError(
+            "an earlier cell changed how this notebook compares results, so this check cannot be "
+            "trusted: " + "; ".join(problems[:5]) + more + ". Remove that code and run the notebook "
+            "again from the top."
+        )
 
 
 _snapshot_new_modules()

@@ -13,15 +13,24 @@ What is here (section 5 of Lab 00):
 Units: SI (m, s, kg, rad, rad/s); vectors are 3-vectors in one frame, batches along the first axis. Standard
 gravity is :data:`fusionlab.earth.G`.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import earth, validate
 
-__all__ = ["coriolis_acceleration", "precession_rate", "coriolis_force", "seed000_eq334_printed",
-           "rotating_frame_acceleration", "point_acceleration", "gyro_measure", "integrate_rate",
-           "integration_drift"]
+__all__ = [
+    "coriolis_acceleration",
+    "precession_rate",
+    "coriolis_force",
+    "seed000_eq334_printed",
+    "rotating_frame_acceleration",
+    "point_acceleration",
+    "gyro_measure",
+    "integrate_rate",
+    "integration_drift",
+]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -61,7 +70,7 @@ def coriolis_acceleration(omega, v):
     w = validate.vectors(omega, "omega")
     v = validate.vectors(v, "v")
     validate.broadcast({"omega": 1, "v": 1}, omega=w, v=v)
-    return -2.0 * np.cross(w, v)                                                  # (000 eq 3.33, corrected sign)
+    return -2.0 * np.cross(w, v)  # (000 eq 3.33, corrected sign)
 
 
 def precession_rate(mass, arm, inertia, spin, g=earth.G):
@@ -93,7 +102,7 @@ def precession_rate(mass, arm, inertia, spin, g=earth.G):
     inertia, spin = validate.positive_array(inertia, "inertia"), validate.positive_array(spin, "spin")
     g = validate.positive(g, "g")
     validate.broadcast(mass=mass, arm=arm, inertia=inertia, spin=spin)
-    return mass * g * arm / (inertia * spin)                      # (000 eq 3.25)
+    return mass * g * arm / (inertia * spin)  # (000 eq 3.25)
 
 
 def coriolis_force(mass, omega, v):
@@ -121,7 +130,7 @@ def coriolis_force(mass, omega, v):
         Coriolis force, N.
     """
     m = validate.positive(mass, "mass")
-    return m * coriolis_acceleration(omega, v)                                    # (000 eq 3.34, corrected sign)
+    return m * coriolis_acceleration(omega, v)  # (000 eq 3.34, corrected sign)
 
 
 def seed000_eq334_printed(mass, omega, v):
@@ -179,10 +188,15 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     r = validate.vectors(r, "r")
     wd = np.zeros(3) if omega_dot is None else validate.vectors(omega_dot, "omega_dot")
     v = validate.vectors(v, "v")
-    validate.broadcast({k: 1 for k in ("a_inertial", "omega", "r", "v", "omega_dot")}, a_inertial=A, omega=w, r=r,
-                       v=v, omega_dot=wd)
-    return (A + coriolis_acceleration(w, v) - np.cross(w, np.cross(w, r))         # (000 eq 3.32, solved for a_rot)
-            - np.cross(wd, r))
+    validate.broadcast(
+        {k: 1 for k in ("a_inertial", "omega", "r", "v", "omega_dot")}, a_inertial=A, omega=w, r=r, v=v, omega_dot=wd
+    )
+    return (
+        A
+        + coriolis_acceleration(w, v)
+        - np.cross(w, np.cross(w, r))  # (000 eq 3.32, solved for a_rot)
+        - np.cross(wd, r)
+    )
 
 
 def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
@@ -227,10 +241,18 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     alpha, r = validate.vectors(alpha, "alpha"), validate.vectors(r, "r")
     v_rel = np.zeros(3) if v_rel is None else validate.vectors(v_rel, "v_rel")
     a_rel = np.zeros(3) if a_rel is None else validate.vectors(a_rel, "a_rel")
-    validate.broadcast({k: 1 for k in ("a_o", "omega", "alpha", "r", "v_rel", "a_rel")}, a_o=a_o, omega=omega,
-                       alpha=alpha, r=r, v_rel=v_rel, a_rel=a_rel)
-    return (a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r)
-            + np.cross(omega, np.cross(omega, r)))                                   # (000 eq 3.32; 004 eqs 3.4, 4.3)
+    validate.broadcast(
+        {k: 1 for k in ("a_o", "omega", "alpha", "r", "v_rel", "a_rel")},
+        a_o=a_o,
+        omega=omega,
+        alpha=alpha,
+        r=r,
+        v_rel=v_rel,
+        a_rel=a_rel,
+    )
+    return (
+        a_o + a_rel + 2.0 * np.cross(omega, v_rel) + np.cross(alpha, r) + np.cross(omega, np.cross(omega, r))
+    )  # (000 eq 3.32; 004 eqs 3.4, 4.3)
 
 
 def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
@@ -297,8 +319,8 @@ def integrate_rate(rate, dt, angle0=0.0):
         raise ValueError(f"rate must hold at least one sample along axis 0; got shape {w.shape}")
     dt = validate.time_step(dt, "dt")
     a0 = validate.array(angle0, "angle0")
-    validate.broadcast(rate=w, angle0=a0)                     # one start angle per axis of a sample
-    steps = np.cumsum(w[:-1] * dt, axis=0)                                        # (001 attitude §3, forward Euler)
+    validate.broadcast(rate=w, angle0=a0)  # one start angle per axis of a sample
+    steps = np.cumsum(w[:-1] * dt, axis=0)  # (001 attitude §3, forward Euler)
     return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
 
 

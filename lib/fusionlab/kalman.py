@@ -26,6 +26,7 @@ project*: the state a step starts with is the prior for the measurement it recei
 Everything numeric that the seed does not print (NEES, the DARE steady state) is labelled as an addition in its
 docstring.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -34,17 +35,33 @@ from scipy.linalg import solve_discrete_are
 from . import validate
 
 __all__ = [
-    "check_model", "check_covariance_form",
-    "gaussian_product", "rls_scalar", "kalman_gain", "joseph_covariance", "short_covariance",
-    "information_covariance", "gain_from_posterior", "expanded_covariance", "seed000_eq427_printed",
-    "trace_gradient", "update_step", "update", "predict_step", "predict", "kf_batch",
-    "steady_state", "nees", "nees_bounds",
+    "check_model",
+    "check_covariance_form",
+    "gaussian_product",
+    "rls_scalar",
+    "kalman_gain",
+    "joseph_covariance",
+    "short_covariance",
+    "information_covariance",
+    "gain_from_posterior",
+    "expanded_covariance",
+    "seed000_eq427_printed",
+    "trace_gradient",
+    "update_step",
+    "update",
+    "predict_step",
+    "predict",
+    "kf_batch",
+    "steady_state",
+    "nees",
+    "nees_bounds",
 ]
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Input checking (once, at the public door)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def _square(a, name):
     a = validate.array(a, name)
@@ -95,7 +112,7 @@ def check_model(names=None, optional=(), **given):
         ...
     ValueError: R must have shape (1, 1) to match H; got (2, 2)
     """
-    validate.options(given, _KEYS, "check_model")        # a misspelt name is not ignored
+    validate.options(given, _KEYS, "check_model")  # a misspelt name is not ignored
     nm = {k: k for k in _KEYS}
     nm.update(names or {})
     for key, val in given.items():
@@ -103,7 +120,7 @@ def check_model(names=None, optional=(), **given):
             raise ValueError(f"{nm[key]} is required (an array); got None")
     P, H, R, A, Q, B, u, x, z, K = (given.get(k) for k in _KEYS)
     n = m = None
-    by = ""                                          # " to match P (n states)": which argument fixed n
+    by = ""  # " to match P (n states)": which argument fixed n
     if P is not None:
         P = validate.covariance(P, nm["P"])
         n, by = P.shape[0], f" to match {nm['P']} ({P.shape[0]} states)"
@@ -138,8 +155,10 @@ def check_model(names=None, optional=(), **given):
     if K is not None:
         K = validate.array(K, nm["K"])
         if K.shape != (n, m):
-            raise ValueError(f"{nm['K']} must have shape ({n}, {m}) to match {nm['P']} and {nm['H']} (n = {n} "
-                             f"states, m = {m} measurements); got {K.shape}")
+            raise ValueError(
+                f"{nm['K']} must have shape ({n}, {m}) to match {nm['P']} and {nm['H']} (n = {n} "
+                f"states, m = {m} measurements); got {K.shape}"
+            )
     if B is not None or u is not None:
         if B is None or u is None:
             raise ValueError(f"{nm['B']} and {nm['u']} must be given together (the control term is B @ u)")
@@ -148,14 +167,14 @@ def check_model(names=None, optional=(), **given):
             raise ValueError(f"{nm['B']} must have shape ({n}, p){by}; got {B.shape}")
         u = validate.array(u, nm["u"])
         if u.shape != (B.shape[1],):
-            raise ValueError(f"{nm['u']} must have shape ({B.shape[1]},) to match {nm['B']} {B.shape}; "
-                             f"got {u.shape}")
+            raise ValueError(f"{nm['u']} must have shape ({B.shape[1]},) to match {nm['B']} {B.shape}; got {u.shape}")
     return dict(P=P, H=H, R=R, A=A, Q=Q, B=B, u=u, x=x, z=z, K=K)
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # Foundations (000 §4.2-4.3)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def gaussian_product(mu1, var1, mu2, var2):
     """Mean and variance of the (normalised) product of two 1-D Gaussians (000 §4.2, figs 24-25).
@@ -193,7 +212,7 @@ def gaussian_product(mu1, var1, mu2, var2):
     mu1, mu2 = validate.array(mu1, "mu1"), validate.array(mu2, "mu2")
     var1, var2 = validate.positive_array(var1, "var1"), validate.positive_array(var2, "var2")
     validate.broadcast(mu1=mu1, var1=var1, mu2=mu2, var2=var2)
-    mu = (var2 * mu1 + var1 * mu2) / (var1 + var2)                   # (000 §4.2, fig 25)
+    mu = (var2 * mu1 + var1 * mu2) / (var1 + var2)  # (000 §4.2, fig 25)
     var = var1 * var2 / (var1 + var2)
     return (float(mu), float(var)) if np.ndim(mu) == 0 else (mu, var)
 
@@ -246,9 +265,9 @@ def rls_scalar(y, R, x0=0.0, P0=np.inf):
         raise ValueError(f"P0 must be > 0 (use np.inf for no prior knowledge); got {P0!r}")
     x_hat, Ps, Ks = np.empty(len(y)), np.empty(len(y)), np.empty(len(y))
     for i, yk in enumerate(y):
-        K = 1.0 if np.isinf(P) else P / (P + R)                      # (000 eq 4.31, H = 1)
-        x = x + K * (yk - x)                                         # (000 eq 4.8)
-        P = R if np.isinf(P) else (1 - K) ** 2 * P + K ** 2 * R      # (000 eq 4.17, H = 1)
+        K = 1.0 if np.isinf(P) else P / (P + R)  # (000 eq 4.31, H = 1)
+        x = x + K * (yk - x)  # (000 eq 4.8)
+        P = R if np.isinf(P) else (1 - K) ** 2 * P + K**2 * R  # (000 eq 4.17, H = 1)
         x_hat[i], Ps[i], Ks[i] = x, P, K
     return x_hat, Ps, Ks
 
@@ -261,27 +280,31 @@ def _inv(M, message):
         raise ValueError(message) from None
 
 
-_SINGULAR_S = ("P, H, R give a singular innovation covariance H P Hᵀ + R, which the gain inverts: R must be "
-               "positive definite, or P and H must give every measurement some variance (R = 0 with P = 0, or a "
-               "row of H that observes no state?)")
+_SINGULAR_S = (
+    "P, H, R give a singular innovation covariance H P Hᵀ + R, which the gain inverts: R must be "
+    "positive definite, or P and H must give every measurement some variance (R = 0 with P = 0, or a "
+    "row of H that observes no state?)"
+)
 
 
 def _gain(P, H, R):
-    return P @ H.T @ _inv(H @ P @ H.T + R, _SINGULAR_S)              # (000 eq 4.31)
+    return P @ H.T @ _inv(H @ P @ H.T + R, _SINGULAR_S)  # (000 eq 4.31)
 
 
 def _information(P, H, R):
     """``(P⁻¹ + Hᵀ R⁻¹ H)⁻¹`` with the singular cases named."""
-    Pi = _inv(P, "P must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a "
-                 "singular P")
-    Ri = _inv(R, "R must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a "
-                 "singular R")
+    Pi = _inv(
+        P, "P must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a singular P"
+    )
+    Ri = _inv(
+        R, "R must be positive definite (invertible) for the information form (P⁻¹ + Hᵀ R⁻¹ H)⁻¹; got a singular R"
+    )
     return _inv(Pi + H.T @ Ri @ H, "P, H, R give a singular information matrix P⁻¹ + Hᵀ R⁻¹ H")
 
 
 def _joseph(P, K, H, R):
     I_KH = np.eye(P.shape[0]) - K @ H
-    return I_KH @ P @ I_KH.T + K @ R @ K.T                           # (000 eq 4.17)
+    return I_KH @ P @ I_KH.T + K @ R @ K.T  # (000 eq 4.17)
 
 
 def kalman_gain(P, H, R):
@@ -357,7 +380,7 @@ def short_covariance(P, K, H):
     """
     d = check_model(P=P, H=H, K=K)
     P, K, H = d["P"], d["K"], d["H"]
-    return (np.eye(P.shape[0]) - K @ H) @ P                          # (000 §4.3.1, alternate form)
+    return (np.eye(P.shape[0]) - K @ H) @ P  # (000 §4.3.1, alternate form)
 
 
 def information_covariance(P, H, R):
@@ -379,7 +402,7 @@ def information_covariance(P, H, R):
     """
     d = check_model(P=P, H=H, R=R)
     P, H, R = d["P"], d["H"], d["R"]
-    return _information(P, H, R)                                     # (000 §4.3.1, alternate form)
+    return _information(P, H, R)  # (000 §4.3.1, alternate form)
 
 
 def gain_from_posterior(P_post, H, R):
@@ -401,7 +424,7 @@ def gain_from_posterior(P_post, H, R):
     """
     d = check_model(P=P_post, H=H, R=R, names={"P": "P_post"})
     R_inv = _inv(d["R"], "R must be positive definite (invertible) for the gain P_post Hᵀ R⁻¹; got a singular R")
-    return d["P"] @ d["H"].T @ R_inv                                 # (000 §4.3.1, alternate form)
+    return d["P"] @ d["H"].T @ R_inv  # (000 §4.3.1, alternate form)
 
 
 def expanded_covariance(P, K, H, R):
@@ -425,7 +448,7 @@ def expanded_covariance(P, K, H, R):
     """
     d = check_model(P=P, H=H, R=R, K=K)
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
-    return P - K @ H @ P - P @ H.T @ K.T + K @ (H @ P @ H.T + R) @ K.T    # (000 eq 4.27, corrected)
+    return P - K @ H @ P - P @ H.T @ K.T + K @ (H @ P @ H.T + R) @ K.T  # (000 eq 4.27, corrected)
 
 
 def seed000_eq427_printed(P, K, H, R):
@@ -455,7 +478,7 @@ def seed000_eq427_printed(P, K, H, R):
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
     if H.shape[0] != H.shape[1]:
         raise ValueError(f"H must be square for the printed eq 4.27 to be defined (P Kᵀ Hᵀ); got {H.shape}")
-    return P - P @ K @ H - P @ K.T @ H.T + K @ H @ P @ K.T @ H.T + K @ R @ K.T   # (000 eq 4.27, as printed)
+    return P - P @ K @ H - P @ K.T @ H.T + K @ H @ P @ K.T @ H.T + K @ R @ K.T  # (000 eq 4.27, as printed)
 
 
 def trace_gradient(P, K, H, R):
@@ -479,7 +502,7 @@ def trace_gradient(P, K, H, R):
     """
     d = check_model(P=P, H=H, R=R, K=K)
     P, K, H, R = d["P"], d["K"], d["H"], d["R"]
-    return -2 * P @ H.T + 2 * K @ (H @ P @ H.T + R)                  # (000 eq 4.30)
+    return -2 * P @ H.T + 2 * K @ (H @ P @ H.T + R)  # (000 eq 4.30)
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -556,19 +579,19 @@ def update_step(x, P, z, H, R, form):
     (array([0.8]), array([[0.8]]))
     """
     try:
-        K = _gain(P, H, R)                                           # (000 eq 4.31)
-        x = x + K @ (z - H @ x)                                      # (000 eq 4.8)
+        K = _gain(P, H, R)  # (000 eq 4.31)
+        x = x + K @ (z - H @ x)  # (000 eq 4.8)
         if form == "joseph":
-            P = _joseph(P, K, H, R)                                  # (000 eq 4.17)
+            P = _joseph(P, K, H, R)  # (000 eq 4.17)
         elif form == "short":
-            P = (np.eye(P.shape[0]) - K @ H) @ P                     # (000 §4.3.1 alternate form)
+            P = (np.eye(P.shape[0]) - K @ H) @ P  # (000 §4.3.1 alternate form)
         else:
-            P = _information(P, H, R)                                # (000 §4.3.1 alternate form)
+            P = _information(P, H, R)  # (000 §4.3.1 alternate form)
     except validate.INNER_ERRORS:
-        d = check_model(x=x, P=P, z=z, H=H, R=R)                     # name the argument that does not fit,
+        d = check_model(x=x, P=P, z=z, H=H, R=R)  # name the argument that does not fit,
         if all(isinstance(v, np.ndarray) for v in (x, P, z, H, R)):
             raise
-        return update_step(d["x"], d["P"], d["z"], d["H"], d["R"], form)   # or take lists as arrays
+        return update_step(d["x"], d["P"], d["z"], d["H"], d["R"], form)  # or take lists as arrays
     return x, P, K
 
 
@@ -648,14 +671,14 @@ def predict_step(x, P, A, Q, Bu):
     (array([0.8]), array([[1.3]]))
     """
     try:
-        x = A @ x if Bu is None else A @ x + Bu                      # (000 eq 4.32, with G u restored; eq 4.1)
-        P = A @ P @ A.T + Q                                          # (000 eq 4.36)
+        x = A @ x if Bu is None else A @ x + Bu  # (000 eq 4.32, with G u restored; eq 4.1)
+        P = A @ P @ A.T + Q  # (000 eq 4.36)
     except validate.INNER_ERRORS:
-        d = check_model(x=x, P=P, A=A, Q=Q)                          # name the argument that does not fit,
+        d = check_model(x=x, P=P, A=A, Q=Q)  # name the argument that does not fit,
         Bu = None if Bu is None else validate.exact_shape(Bu, "Bu", d["x"].shape)
         if all(isinstance(v, np.ndarray) for v in (x, P, A, Q)):
             raise
-        return predict_step(d["x"], d["P"], d["A"], d["Q"], Bu)    # or take lists as arrays
+        return predict_step(d["x"], d["P"], d["A"], d["Q"], Bu)  # or take lists as arrays
     return x, P
 
 
@@ -708,6 +731,7 @@ def predict(x, P, A, Q, B=None, u=None):
 # ----------------------------------------------------------------------------------------------------------------
 # Many runs at once, consistency and steady state (000 §4.4.3; NEES and DARE are additions)
 # ----------------------------------------------------------------------------------------------------------------
+
 
 def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=True, control=True):
     """:class:`fusionlab.falling_body.ThesisKF` over many runs at once (the fast twin; tests assert both agree).
@@ -762,22 +786,27 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
     form = check_covariance_form(covariance)
     project_state = validate.flag(project_state, "project_state")
     Bu = d["B"] @ d["u"] if validate.flag(control, "control") else np.zeros(n)
-    out = {"x": np.empty((runs, N, n)), "x_prior": np.empty((runs, N, n)), "P": np.empty((N, n, n)),
-           "P_prior": np.empty((N, n, n)), "K": np.empty((N, n, m))}
+    out = {
+        "x": np.empty((runs, N, n)),
+        "x_prior": np.empty((runs, N, n)),
+        "P": np.empty((N, n, n)),
+        "P_prior": np.empty((N, n, n)),
+        "K": np.empty((N, n, m)),
+    }
     for i in range(N):
         out["x_prior"][:, i], out["P_prior"][i] = x, P
-        K = _gain(P, H, Rm)                                          # (000 eq 4.31)
-        x = x + (zs[:, i] - x @ H.T) @ K.T                           # (000 eq 4.8), all runs at once
+        K = _gain(P, H, Rm)  # (000 eq 4.31)
+        x = x + (zs[:, i] - x @ H.T) @ K.T  # (000 eq 4.8), all runs at once
         if form == "joseph":
-            P = _joseph(P, K, H, Rm)                                 # (000 eq 4.17)
+            P = _joseph(P, K, H, Rm)  # (000 eq 4.17)
         elif form == "short":
-            P = (np.eye(n) - K @ H) @ P                              # (000 §4.3.1 alternate form)
+            P = (np.eye(n) - K @ H) @ P  # (000 §4.3.1 alternate form)
         else:
-            P = _information(P, H, Rm)                               # (000 §4.3.1 alternate form)
+            P = _information(P, H, Rm)  # (000 §4.3.1 alternate form)
         out["x"][:, i], out["P"][i], out["K"][i] = x, P, K
         if project_state:
-            x = x @ A.T + Bu                                         # (000 eq 4.32 + G u)
-        P = A @ P @ A.T + Q                                          # (000 eq 4.36)
+            x = x @ A.T + Bu  # (000 eq 4.32 + G u)
+        P = A @ P @ A.T + Q  # (000 eq 4.36)
     return out
 
 
@@ -806,8 +835,10 @@ def nees(err, P):
     err = validate.array(err, "err")
     P = validate.array(P, "P")
     if err.ndim < 1 or P.ndim < 2 or P.shape[-2:] != (err.shape[-1], err.shape[-1]):
-        raise ValueError(f"P must have shape (..., {err.shape[-1] if err.ndim else 'n'}, "
-                         f"{err.shape[-1] if err.ndim else 'n'}) to match err {err.shape}; got {P.shape}")
+        raise ValueError(
+            f"P must have shape (..., {err.shape[-1] if err.ndim else 'n'}, "
+            f"{err.shape[-1] if err.ndim else 'n'}) to match err {err.shape}; got {P.shape}"
+        )
     validate.broadcast({"err": 1, "P": 2}, err=err, P=P)
     validate.covariances(P, "P", err.shape[-1])
     sol = np.linalg.solve(P, err[..., None])[..., 0]
@@ -838,6 +869,7 @@ def nees_bounds(n_runs, dim=2, prob=0.95):
     if prob >= 1:
         raise ValueError(f"prob must be in (0, 1); got {prob!r}")
     from scipy.stats import chi2  # here, not at import: scipy.stats takes ~1 s to import, and few labs need it
+
     lo, hi = chi2.ppf([(1 - prob) / 2, (1 + prob) / 2], n_runs * dim)
     return lo / n_runs, hi / n_runs
 
@@ -875,7 +907,9 @@ def steady_state(A, H, Q, R):
     try:
         P = solve_discrete_are(A.T, H.T, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise ValueError(f"A, H, Q, R have no steady state: (A, H) must be detectable (H must observe every state "
-                         f"A does not damp) and R positive definite; the Riccati solver says: {exc}") from None
-    K = _gain(P, H, R)                                               # (000 eq 4.31)
-    return P, K, _joseph(P, K, H, R)                                 # (000 eq 4.17)
+        raise ValueError(
+            f"A, H, Q, R have no steady state: (A, H) must be detectable (H must observe every state "
+            f"A does not damp) and R positive definite; the Riccati solver says: {exc}"
+        ) from None
+    K = _gain(P, H, R)  # (000 eq 4.31)
+    return P, K, _joseph(P, K, H, R)  # (000 eq 4.17)

@@ -18,14 +18,26 @@ GradeId(kind='ex', number='4', role='tests')
 >>> unfinished("NotImplementedError: exercise 4 not attempted yet")
 'exercise 4'
 """
+
 from __future__ import annotations
 
 import ast
 import re
 from typing import NamedTuple
 
-__all__ = ["HEADER", "SETUP", "GradeId", "parse", "solution_id", "check_id", "autograder_id", "label", "stub",
-           "unfinished", "top_level_names"]
+__all__ = [
+    "HEADER",
+    "SETUP",
+    "GradeId",
+    "parse",
+    "solution_id",
+    "check_id",
+    "autograder_id",
+    "label",
+    "stub",
+    "unfinished",
+    "top_level_names",
+]
 
 HEADER = "header"
 SETUP = "imports"

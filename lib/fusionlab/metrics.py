@@ -24,6 +24,7 @@ on total error too. Inclination is the same either way.
 
 Radians inside; the RMSE record carries degrees, as the dataset authors report them (names end in ``_deg``).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -32,9 +33,20 @@ import numpy as np
 
 from . import rotations, validate
 
-__all__ = ["error_quaternion", "total_error", "heading_error", "inclination_error", "signed_heading_error",
-           "mean_heading_offset", "remove_heading_offset", "rms", "wrap_deg", "small", "OrientationRMSE",
-           "broad_rmse"]
+__all__ = [
+    "error_quaternion",
+    "total_error",
+    "heading_error",
+    "inclination_error",
+    "signed_heading_error",
+    "mean_heading_offset",
+    "remove_heading_offset",
+    "rms",
+    "wrap_deg",
+    "small",
+    "OrientationRMSE",
+    "broad_rmse",
+]
 
 
 def _quats_with_nan(q, name):
@@ -76,8 +88,8 @@ def error_quaternion(q_est, q_ref):
 def _error_quaternion(q_est, q_ref):
     ok = ~np.isnan(q_ref).any(axis=-1)
     q = np.full(q_ref.shape, np.nan)
-    q[ok] = rotations.quat_multiply(q_est[ok], rotations.quat_conjugate(q_ref[ok]))   # (BROAD: q_err)
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)         # exact unit length before acos
+    q[ok] = rotations.quat_multiply(q_est[ok], rotations.quat_conjugate(q_ref[ok]))  # (BROAD: q_err)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)  # exact unit length before acos
 
 
 def _turn_heading(q, offset):
@@ -89,7 +101,7 @@ def _turn_heading(q, offset):
 
 
 def _error_parts(q_err):
-    q_err = validate.quaternions_or_nan(q_err, "q_err")          # NaN anywhere in a row: NaN out
+    q_err = validate.quaternions_or_nan(q_err, "q_err")  # NaN anywhere in a row: NaN out
     return q_err[..., 0], q_err[..., 3]
 
 
@@ -120,7 +132,7 @@ def total_error(q_err):
     [10.0, 10.0, 0.0]
     """
     w, _ = _error_parts(q_err)
-    return 2 * np.arccos(np.clip(np.abs(w), 0.0, 1.0))                         # (BROAD: total)
+    return 2 * np.arccos(np.clip(np.abs(w), 0.0, 1.0))  # (BROAD: total)
 
 
 def heading_error(q_err):
@@ -139,7 +151,7 @@ def heading_error(q_err):
         Heading error angle, rad.
     """
     w, z = _error_parts(q_err)
-    return 2 * np.arctan2(np.abs(z), np.abs(w))                                # (BROAD: heading)
+    return 2 * np.arctan2(np.abs(z), np.abs(w))  # (BROAD: heading)
 
 
 def inclination_error(q_err):
@@ -156,7 +168,7 @@ def inclination_error(q_err):
         Inclination error angle, rad.
     """
     w, z = _error_parts(q_err)
-    return 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))           # (BROAD: inclination)
+    return 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))  # (BROAD: inclination)
 
 
 def signed_heading_error(q_err):
@@ -174,7 +186,7 @@ def signed_heading_error(q_err):
         Signed heading error, rad.
     """
     w, z = _error_parts(q_err)
-    s = np.where(w < 0, -1.0, 1.0)                     # q and -q are one rotation
+    s = np.where(w < 0, -1.0, 1.0)  # q and -q are one rotation
     return 2 * np.arctan2(s * z, s * w)
 
 
@@ -267,8 +279,10 @@ def rms(x, mask=None, *, axis=None):
     """
     x = validate.array(x, "x", finite=False)
     if np.any(np.isinf(x)):
-        raise ValueError(f"x must hold finite numbers or NaN (undefined samples, left out); got "
-                         f"{int(np.count_nonzero(np.isinf(x)))} infinite value(s)")
+        raise ValueError(
+            f"x must hold finite numbers or NaN (undefined samples, left out); got "
+            f"{int(np.count_nonzero(np.isinf(x)))} infinite value(s)"
+        )
     if axis is None and x.ndim != 1:
         raise ValueError(f"x must have shape (N,), or give axis= to average over several axes; got {x.shape}")
     if x.ndim == 0:
@@ -328,7 +342,7 @@ def wrap_deg(a):
     >>> metrics.wrap_deg(np.radians([179.0, 181.0, -350.0]))
     array([ 179., -179.,   10.])
     """
-    if a is None:                                       # np.asarray(None, float) would be a silent NaN
+    if a is None:  # np.asarray(None, float) would be a silent NaN
         raise ValueError("a must be an angle or an array of angles (rad); got None")
     a = validate.array(a, "a", finite=False)
     if np.isinf(a).any():
@@ -383,7 +397,7 @@ def _mask(mask, n, of, name="mask"):
         if not np.all((mf == 0) | (mf == 1)):
             raise ValueError(f"{name} must be boolean (or 0/1); got values other than 0 and 1")
         m = mf.astype(bool)
-    m = m.reshape(-1) if m.ndim == 2 and m.shape[1] == 1 else m          # MATLAB's (N, 1) column
+    m = m.reshape(-1) if m.ndim == 2 and m.shape[1] == 1 else m  # MATLAB's (N, 1) column
     if m.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},), one flag per sample of {of}; got {np.shape(mask)}")
     return m
@@ -406,6 +420,7 @@ class OrientationRMSE:
     heading_offset_deg : float, default 0.0
         The constant heading turned out of the estimate before scoring, degrees (0 unless asked for).
     """
+
     total_deg: float
     heading_deg: float
     inclination_deg: float
@@ -474,7 +489,8 @@ def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
     else:
         offset = _offset(heading_offset, "heading_offset")
     if offset != 0.0:
-        q_err = _turn_heading(q_err, offset)       # q_z(-δ) ⊗ q_est ⊗ conj(q_ref) = q_z(-δ) ⊗ q_err
+        q_err = _turn_heading(q_err, offset)  # q_z(-δ) ⊗ q_est ⊗ conj(q_ref) = q_z(-δ) ⊗ q_err
     rad = [rms(f(q_err), scored) for f in (total_error, heading_error, inclination_error)]
-    return OrientationRMSE(*np.degrees(rad).tolist(), n_samples=int(scored.sum()),
-                           heading_offset_deg=float(np.degrees(offset)))
+    return OrientationRMSE(
+        *np.degrees(rad).tolist(), n_samples=int(scored.sum()), heading_offset_deg=float(np.degrees(offset))
+    )

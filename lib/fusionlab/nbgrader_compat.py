@@ -13,6 +13,7 @@ files (the course's ``nbgrader_config.py``, the student's ``jupyter/nbgrader_con
   the student's kernel; the course grades with its judge (``make grade``);
 * :class:`SummaryValidator` and :func:`install_summary_validator` -- Validate's report says first "6 of 9 tests pass".
 """
+
 from __future__ import annotations
 
 import ast
@@ -30,11 +31,21 @@ from nbgrader.validator import Validator
 
 from . import labformat
 
-__all__ = ["WRITTEN_FOR", "RELIES_ON", "check_version", "ClearSolutionsForRunAll", "HideTestSource",
-           "offline_markdown", "OfflineFeedback", "FEEDBACK_CSS", "RefuseAutograde", "SummaryValidator",
-           "install_summary_validator"]
+__all__ = [
+    "WRITTEN_FOR",
+    "RELIES_ON",
+    "check_version",
+    "ClearSolutionsForRunAll",
+    "HideTestSource",
+    "offline_markdown",
+    "OfflineFeedback",
+    "FEEDBACK_CSS",
+    "RefuseAutograde",
+    "SummaryValidator",
+    "install_summary_validator",
+]
 
-WRITTEN_FOR = "0.9."            # nbgrader 0.9.x (environment.txt pins 0.9.6)
+WRITTEN_FOR = "0.9."  # nbgrader 0.9.x (environment.txt pins 0.9.6)
 #: What of nbgrader the classes below rely on: (module, attribute path) -- the private ones above all.
 RELIES_ON = (
     ("nbgrader.validator", "Validator._get_passed_cells"),
@@ -65,11 +76,13 @@ def check_version(version=None):
     """
     version = nbgrader.__version__ if version is None else version
     if not str(version).startswith(WRITTEN_FOR):
-        raise RuntimeError(f"this course's nbgrader settings (fusionlab.nbgrader_compat) were written for nbgrader "
-                           f"{WRITTEN_FOR}x and rely on its internals; this environment has nbgrader {version}. "
-                           f"Install the version environment.txt pins (make env), or check each name of "
-                           f"fusionlab.nbgrader_compat.RELIES_ON against the new version before changing "
-                           f"WRITTEN_FOR.")
+        raise RuntimeError(
+            f"this course's nbgrader settings (fusionlab.nbgrader_compat) were written for nbgrader "
+            f"{WRITTEN_FOR}x and rely on its internals; this environment has nbgrader {version}. "
+            f"Install the version environment.txt pins (make env), or check each name of "
+            f"fusionlab.nbgrader_compat.RELIES_ON against the new version before changing "
+            f"WRITTEN_FOR."
+        )
 
 
 check_version()
@@ -127,7 +140,7 @@ class ClearSolutionsForRunAll(ClearSolutions):
         tuple
             ``(nb, resources)``, the release notebook.
         """
-        tainted = set()                                     # names whose value depends on a student's answer
+        tainted = set()  # names whose value depends on a student's answer
         for cell in nb.cells:
             if cell.cell_type != "code":
                 continue
@@ -139,7 +152,7 @@ class ClearSolutionsForRunAll(ClearSolutions):
                 if self.TAG not in tags:
                     tags.append(self.TAG)
             else:
-                tainted -= bound                            # made afresh by a cell that cannot fail
+                tainted -= bound  # made afresh by a cell that cannot fail
         return super().preprocess(nb, resources)
 
     def preprocess_cell(self, cell, resources, cell_index):
@@ -207,8 +220,10 @@ class HideTestSource(NbGraderPreprocessor):
 
 
 #: The feedback page's own style: long lines of an output (a test's "Failed: ...") wrap instead of running off the page.
-FEEDBACK_CSS = ("div.output_area pre, div.output_subarea pre, .output_error pre { white-space: pre-wrap; "
-                "word-break: break-word; }\n")
+FEEDBACK_CSS = (
+    "div.output_area pre, div.output_subarea pre, .output_error pre { white-space: pre-wrap; "
+    "word-break: break-word; }\n"
+)
 _FENCE = re.compile(r"(```.*?```|`[^`\n]*`)", re.S)
 _MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$(?![\s$])(.+?)(?<![\\\s$])\$", re.S)
 _LINK = re.compile(r"\[([^\]]+)\]\(((?!(?:https?:|mailto:|#|/))[^)\s]+)\)")
@@ -247,6 +262,7 @@ def offline_markdown(source, folder="labs/NN_name"):
 
     def link(m):
         return f"{m.group(1)} (in the course folder: {posixpath.normpath(posixpath.join(folder, m.group(2)))})"
+
     parts = _FENCE.split("".join(source) if isinstance(source, list) else str(source))
     return "".join(part if i % 2 else _LINK.sub(link, _MATH.sub(math, part)) for i, part in enumerate(parts))
 
@@ -312,17 +328,21 @@ class RefuseAutograde(NbGraderPreprocessor):
         RuntimeError
             Always.
         """
-        raise RuntimeError("nbgrader autograde is turned off in this course: it runs the tests in the student's own "
-                           "kernel. Grade with the trusted judge instead: make grade LAB=NN_name (docs/instructors.md, "
-                           "section 4).")
+        raise RuntimeError(
+            "nbgrader autograde is turned off in this course: it runs the tests in the student's own "
+            "kernel. Grade with the trusted judge instead: make grade LAB=NN_name (docs/instructors.md, "
+            "section 4)."
+        )
 
 
 # The Validate dialog (nbgrader's lab extension) writes, for each failing cell, "The following cell failed:", the
 # cell's source and its error, the error as HTML, and nothing before them: the count would come after the last of
 # them. So the dialog's answer starts with an entry of its own whose error is the count and whose style hides the
 # two parts above it (the heading and an empty source) in that dialog (#validation-message) only.
-_DIALOG_HEAD = ("<style>#validation-message > div:nth-child(-n+2) {{ display: none; }}</style>"
-                "<b>{summary}.</b>\n{cells} below, in the notebook's order.")
+_DIALOG_HEAD = (
+    "<style>#validation-message > div:nth-child(-n+2) {{ display: none; }}</style>"
+    "<b>{summary}.</b>\n{cells} below, in the notebook's order."
+)
 
 
 class SummaryValidator(Validator):
@@ -343,7 +363,8 @@ class SummaryValidator(Validator):
         tests = [score == top for cell, (score, top) in graded if not utils.is_solution(cell)]
         empty = sum(1 for cell, (score, _) in graded if utils.is_solution(cell) and score == 0)  # left as released
         self.summary = f"{sum(tests)} of {len(tests)} tests pass" + (
-            f"; {empty} written answer{'s are' if empty > 1 else ' is'} still empty" if empty else "")
+            f"; {empty} written answer{'s are' if empty > 1 else ' is'} still empty" if empty else ""
+        )
         return passed
 
     def validate(self, filename):

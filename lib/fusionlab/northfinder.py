@@ -30,18 +30,42 @@ Body frame ``b`` as in the thesis (Fig. 4.1), navigation frame NED, heading ``ψ
 toward east). Inside this module the accelerometer outputs carry the thesis' *measured gravity* sign (``+g`` on a
 level z axis, eqs 4.21, 4.26). Accelerations m/s², rates rad/s, lengths m; 1 µg = 9.80665e-6 m/s².
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from . import earth, inertial, rotations, validate
 
-__all__ = ["UG", "TABLE_4_1", "TABLE_4_2", "TABLE_4_3", "SIEGEN_LAT", "HARMONICS",
-           "point_specific_force", "rotating_kinematics", "rotating_outputs", "fixed_triad_outputs",
-           "rate_from_rotating", "rate_noise_coefficient", "rate_noise_coefficient_exact", "rate_noise_density",
-           "rate_noise_monte_carlo", "coriolis_amplitude", "leveled_body_rate", "tilted_heading", "synthetic_record",
-           "bandpass_firls", "bandpass", "whole_turns", "demodulate", "synchronous_sampling", "period_average",
-           "north_finder", "steps_experiment"]
+__all__ = [
+    "UG",
+    "TABLE_4_1",
+    "TABLE_4_2",
+    "TABLE_4_3",
+    "SIEGEN_LAT",
+    "HARMONICS",
+    "point_specific_force",
+    "rotating_kinematics",
+    "rotating_outputs",
+    "fixed_triad_outputs",
+    "rate_from_rotating",
+    "rate_noise_coefficient",
+    "rate_noise_coefficient_exact",
+    "rate_noise_density",
+    "rate_noise_monte_carlo",
+    "coriolis_amplitude",
+    "leveled_body_rate",
+    "tilted_heading",
+    "synthetic_record",
+    "bandpass_firls",
+    "bandpass",
+    "whole_turns",
+    "demodulate",
+    "synchronous_sampling",
+    "period_average",
+    "north_finder",
+    "steps_experiment",
+]
 
 #: One micro-g in m/s².
 UG = 9.80665e-6
@@ -54,12 +78,15 @@ TABLE_4_1 = dict(l=0.10, rho=0.02, dt=0.01, w_acc=1.0 * UG, b_a=2400 * UG, d=0.1
 TABLE_4_2 = {50.0: 1.7, 100.0: 0.85, 500.0: 0.17}
 
 #: Table 4.3 as printed (degrees): step -> (order 2000 Syn. d. rect, trapz, Syn. s.; order 1000 ...; order 200 ...).
-TABLE_4_3 = np.array([
-    [-42.076, -42.282, -40.859, -42.058, -42.262, -41.805, -42.119, -42.290, -49.616],
-    [-51.560, -51.761, -49.986, -51.592, -51.791, -50.891, -51.563, -51.742, -53.798],
-    [-64.745, -64.902, -62.844, -64.780, -64.936, -63.519, -64.651, -64.772, -69.221],
-    [-73.859, -73.967, -71.715, -73.855, -73.961, -72.271, -73.660, -73.751, -75.406],
-    [-82.375, -82.425, -80.156, -82.399, -82.447, -80.604, -82.216, -82.245, -83.744]])
+TABLE_4_3 = np.array(
+    [
+        [-42.076, -42.282, -40.859, -42.058, -42.262, -41.805, -42.119, -42.290, -49.616],
+        [-51.560, -51.761, -49.986, -51.592, -51.791, -50.891, -51.563, -51.742, -53.798],
+        [-64.745, -64.902, -62.844, -64.780, -64.936, -63.519, -64.651, -64.772, -69.221],
+        [-73.859, -73.967, -71.715, -73.855, -73.961, -72.271, -73.660, -73.751, -75.406],
+        [-82.375, -82.425, -80.156, -82.399, -82.447, -80.604, -82.216, -82.245, -83.744],
+    ]
+)
 
 #: Latitude of the thesis' experiments (Siegen, NRW), rad. The thesis does not print it; ours.
 SIEGEN_LAT = np.radians(50.87)
@@ -67,13 +94,21 @@ SIEGEN_LAT = np.radians(50.87)
 #: Drive harmonics of the synthetic record (ours): multiple of ω_r -> (amplitude in units of A_c, phase in rad).
 #: The phases are fixed to the rotor angle, as mechanical harmonics are. The once-per-turn term is left out: the
 #: thesis' balanced two-sensor rod is there to cancel it, and at ω_r no filter could separate it from the signal.
-HARMONICS = {2: (1.5, 0.4), 3: (0.5, 1.1), 4: (4.0, 2.0), 5: (0.3, 0.3), 6: (6.0, -1.0), 12: (30.0, 0.7),
-             24: (15.0, 0.1)}
+HARMONICS = {
+    2: (1.5, 0.4),
+    3: (0.5, 1.1),
+    4: (4.0, 2.0),
+    5: (0.3, 0.3),
+    6: (6.0, -1.0),
+    12: (30.0, 0.7),
+    24: (15.0, 0.1),
+}
 
 
 # --------------------------------------------------------------------------------------------------------------
 # Fixed + rotating configuration (§4.3)
 # --------------------------------------------------------------------------------------------------------------
+
 
 def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
@@ -102,7 +137,7 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     ndarray, shape (..., 3)
         Acceleration at the point, m/s².
     """
-    return inertial.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)           # (004 eq 4.3)
+    return inertial.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)  # (004 eq 4.3)
 
 
 def rotating_kinematics(t, rho, l, omega_r):
@@ -134,14 +169,21 @@ def rotating_kinematics(t, rho, l, omega_r):
     t = validate.array(t, "t")
     rho, l, omega_r = validate.positive(rho, "rho"), validate.positive(l, "l"), validate.positive(omega_r, "omega_r")
     c, s, z = np.cos(omega_r * t), np.sin(omega_r * t), np.zeros_like(t)
-    p = np.stack([np.stack([z, rho * c, rho * s + l], -1),                           # r_D (004 eq 4.4)
-                  np.stack([rho * s + l, z, rho * c], -1),                           # r_B (004 eq 4.7)
-                  np.stack([rho * c, rho * s + l, z], -1)], -2)                      # r_C (004 eq 4.10)
+    p = np.stack(
+        [
+            np.stack([z, rho * c, rho * s + l], -1),  # r_D (004 eq 4.4)
+            np.stack([rho * s + l, z, rho * c], -1),  # r_B (004 eq 4.7)
+            np.stack([rho * c, rho * s + l, z], -1),
+        ],
+        -2,
+    )  # r_C (004 eq 4.10)
     w = rho * omega_r
-    v = np.stack([np.stack([z, -w * s, w * c], -1), np.stack([w * c, z, -w * s], -1),
-                  np.stack([-w * s, w * c, z], -1)], -2)
-    a = -omega_r ** 2 * (p - np.stack([np.stack([z, z, z + l], -1), np.stack([z + l, z, z], -1),
-                                       np.stack([z, z + l, z], -1)], -2))
+    v = np.stack(
+        [np.stack([z, -w * s, w * c], -1), np.stack([w * c, z, -w * s], -1), np.stack([-w * s, w * c, z], -1)], -2
+    )
+    a = -(omega_r**2) * (
+        p - np.stack([np.stack([z, z, z + l], -1), np.stack([z + l, z, z], -1), np.stack([z, z + l, z], -1)], -2)
+    )
     return p, v, a
 
 
@@ -184,7 +226,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     rD = a_A[..., 0] + k * (wz * s + wy * c) + (wx * wy - az) * rho * c + (ay + wx * wz) * (rho * s + l)
     rB = a_A[..., 1] + k * (wx * s + wz * c) + (wy * wz - ax) * rho * c + (az + wx * wy) * (rho * s + l)
     rC = a_A[..., 2] + k * (wy * s + wx * c) + (wx * wz - ay) * rho * c + (ax + wy * wz) * (rho * s + l)
-    return np.stack([rD, rB, rC], -1)                                                # (004 eq 4.13)
+    return np.stack([rD, rB, rC], -1)  # (004 eq 4.13)
 
 
 def fixed_triad_outputs(a_A, omega, alpha, d):
@@ -251,12 +293,13 @@ def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
     w_y = (a_rot[..., 0] - A[..., 0] - (D[..., 0] - A[..., 0]) * l / d - (C[..., 0] - A[..., 0]) * rho / d) / k
     w_z = (a_rot[..., 1] - A[..., 1] - (B[..., 1] - A[..., 1]) * l / d - (D[..., 1] - A[..., 1]) * rho / d) / k
     w_x = (a_rot[..., 2] - A[..., 2] - (C[..., 2] - A[..., 2]) * l / d - (B[..., 2] - A[..., 2]) * rho / d) / k
-    return np.stack([w_x, w_y, w_z], -1)                                             # (004 eq 4.15)
+    return np.stack([w_x, w_y, w_z], -1)  # (004 eq 4.15)
 
 
 # --------------------------------------------------------------------------------------------------------------
 # Rate noise (§4.5.1, Tables 4.1–4.2) and its erratum
 # --------------------------------------------------------------------------------------------------------------
+
 
 def _positive_values(x, name):
     a = validate.positive_array(x, name)
@@ -265,8 +308,12 @@ def _positive_values(x, name):
 
 def _geometry(rho, d, l, omega_r):
     """Geometry of eq 4.15 (scalars or broadcastable arrays, so a design can be swept)."""
-    return (_positive_values(rho, "rho"), _positive_values(d, "d"), _positive_values(l, "l"),
-            _positive_values(omega_r, "omega_r"))
+    return (
+        _positive_values(rho, "rho"),
+        _positive_values(d, "d"),
+        _positive_values(l, "l"),
+        _positive_values(omega_r, "omega_r"),
+    )
 
 
 def rate_noise_coefficient(rho, d, l, omega_r):
@@ -302,8 +349,9 @@ def rate_noise_coefficient(rho, d, l, omega_r):
     0.37556
     """
     rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
-    out = 2.0 * (1 / (2 * rho * omega_r) ** 2 + 1 / (2 * d * omega_r) ** 2
-                 + l ** 2 / (2 * d * rho * omega_r) ** 2)                            # (004 eq 4.44)
+    out = 2.0 * (
+        1 / (2 * rho * omega_r) ** 2 + 1 / (2 * d * omega_r) ** 2 + l**2 / (2 * d * rho * omega_r) ** 2
+    )  # (004 eq 4.44)
     return out if np.ndim(out) else float(out)
 
 
@@ -331,8 +379,8 @@ def rate_noise_coefficient_exact(rho, d, l, omega_r):
         The coefficient, s²/m².
     """
     rho, d, l, omega_r = _geometry(rho, d, l, omega_r)
-    w_r, w_lever, w_radial, w_A = 1.0, -l / d, -rho / d, -1.0 + l / d + rho / d          # a^r, a^D, a^C, a^A
-    out = (w_r ** 2 + w_lever ** 2 + w_radial ** 2 + w_A ** 2) / (2 * rho * omega_r) ** 2
+    w_r, w_lever, w_radial, w_A = 1.0, -l / d, -rho / d, -1.0 + l / d + rho / d  # a^r, a^D, a^C, a^A
+    out = (w_r**2 + w_lever**2 + w_radial**2 + w_A**2) / (2 * rho * omega_r) ** 2
     return out if np.ndim(out) else float(out)
 
 
@@ -403,6 +451,7 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
 # --------------------------------------------------------------------------------------------------------------
 # The leveled north finder (§4.4.2) and its synthetic record
 # --------------------------------------------------------------------------------------------------------------
+
 
 def coriolis_amplitude(rho, omega_r, lat):
     """Amplitude of the Earth-rate line, ``A_c = 2 ρ ω_r ω_ie cos Φ`` (m/s²) (004 eq 4.26).
@@ -485,19 +534,21 @@ def tilted_heading(zeta, roll, pitch, lat):
     float
         Heading ψ, rad, in (−π, π].
     """
-    zeta, roll, pitch = (float(validate.angles_rad(validate.scalar(a, n), n))
-                         for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch")))
+    zeta, roll, pitch = (
+        float(validate.angles_rad(validate.scalar(a, n), n))
+        for a, n in ((zeta, "zeta"), (roll, "roll"), (pitch, "pitch"))
+    )
     lat = float(validate.angles_rad(validate.scalar(lat, "lat"), "lat", limit=np.pi / 2 - 1e-9))
     sf, cf, st, ct = np.sin(roll), np.cos(roll), np.sin(pitch), np.cos(pitch)
     tz = np.tan(zeta)
     W = earth.OMEGA_IE
-    I = W * np.cos(lat) * (st * sf * tz - ct)                                       # (004 eq 4.41) [R]
+    I = W * np.cos(lat) * (st * sf * tz - ct)  # (004 eq 4.41) [R]
     J = -W * np.cos(lat) * cf * tz
     K = W * np.sin(lat) * (st + ct * sf * tz)
-    V = np.arctan2(I, J)                                                            # (004 eq 4.42) [R]
+    V = np.arctan2(I, J)  # (004 eq 4.42) [R]
     a = np.arcsin(np.clip(K / np.hypot(I, J), -1.0, 1.0))
     best, err = 0.0, np.inf
-    for psi in np.angle(np.exp(1j * np.array([a - V, np.pi - a - V]))):            # (004 eq 4.43), both roots
+    for psi in np.angle(np.exp(1j * np.array([a - V, np.pi - a - V]))):  # (004 eq 4.43), both roots
         w = np.einsum("ji,j->i", rotations.euler_to_dcm([roll, pitch, psi]), earth.earth_rate_ned(lat))
         e = abs(np.angle(np.exp(1j * (np.arctan2(w[0], w[1]) - zeta))))
         if e < err:
@@ -505,8 +556,21 @@ def tilted_heading(zeta, roll, pitch, lat):
     return float(np.angle(np.exp(1j * best)))
 
 
-def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=SIEGEN_LAT, g=9.81, scale=1.0,
-                     bias=0.0, noise=0.2 * UG, harmonics=None, theta0=0.3, seed=0):
+def synthetic_record(
+    heading,
+    duration=60.0,
+    fs=512.0,
+    rpm=200.0,
+    rho=0.14,
+    lat=SIEGEN_LAT,
+    g=9.81,
+    scale=1.0,
+    bias=0.0,
+    noise=0.2 * UG,
+    harmonics=None,
+    theta0=0.3,
+    seed=0,
+):
     """A leveled rotating accelerometer on a turntable at ``heading`` (004 eqs 4.16, 4.24–4.27; the record is ours).
 
     ``a = s_a (g + 2ρω_r(ω_y sin θ + ω_x cos θ) + Σ_k h_k A_c cos(kθ + φ_k)) + b_a + w_a`` with the rotor angle
@@ -551,13 +615,18 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
     heading = float(validate.angles_rad(validate.scalar(heading, "heading"), "heading"))
     lat = validate.scalar(lat, "lat")
     seed = validate.count(seed, "seed")
-    duration, fs, rpm = validate.positive(duration, "duration"), validate.sample_rate(fs, "fs"), validate.positive(
-        rpm, "rpm")
+    duration, fs, rpm = (
+        validate.positive(duration, "duration"),
+        validate.sample_rate(fs, "fs"),
+        validate.positive(rpm, "rpm"),
+    )
     scale, bias = validate.scalar(scale, "scale"), validate.scalar(bias, "bias")
     g = validate.scalar(g, "g", nonnegative=True)
     if scale <= 0:
-        raise ValueError(f"scale must be > 0 (a scale factor near 1; a negative one turns the Coriolis wave and the "
-                         f"heading by 180°); got {scale}")
+        raise ValueError(
+            f"scale must be > 0 (a scale factor near 1; a negative one turns the Coriolis wave and the "
+            f"heading by 180°); got {scale}"
+        )
     noise = validate.scalar(noise, "noise")
     if noise < 0:
         raise ValueError(f"noise must be >= 0 (a density in m/s²/√Hz); got {noise}")
@@ -568,18 +637,18 @@ def synthetic_record(heading, duration=60.0, fs=512.0, rpm=200.0, rho=0.14, lat=
     theta = omega_r * t + validate.scalar(theta0, "theta0")
     w_b = leveled_body_rate(heading, lat)
     A_c = coriolis_amplitude(rho, omega_r, lat)
-    a = g + 2 * rho * omega_r * (w_b[1] * np.sin(theta) + w_b[0] * np.cos(theta))   # (004 eq 4.16)
+    a = g + 2 * rho * omega_r * (w_b[1] * np.sin(theta) + w_b[0] * np.cos(theta))  # (004 eq 4.16)
     for k, (amp, phase) in harmonics.items():
         a = a + amp * A_c * np.cos(k * theta + phase)
     rng = validate.generator(seed, "seed")
-    a = scale * a + bias + noise * np.sqrt(fs) * rng.standard_normal(n)              # (004 eq 4.27)
-    return dict(t=t, theta=theta, acc=a, fs=fs, f_r=omega_r / (2 * np.pi), omega_r=omega_r, A_c=A_c,
-                heading=heading)
+    a = scale * a + bias + noise * np.sqrt(fs) * rng.standard_normal(n)  # (004 eq 4.27)
+    return dict(t=t, theta=theta, acc=a, fs=fs, f_r=omega_r / (2 * np.pi), omega_r=omega_r, A_c=A_c, heading=heading)
 
 
 # --------------------------------------------------------------------------------------------------------------
 # FIR band-pass (§4.5.4) and the two heading read-outs (§4.4.2)
 # --------------------------------------------------------------------------------------------------------------
+
 
 def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
     """Least-squares linear-phase FIR band-pass around ``f_r`` (004 eqs 4.47–4.48, Matlab ``firls``).
@@ -611,13 +680,14 @@ def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
     if order < 2 or order % 2:
         raise ValueError(f"order must be an even integer >= 2 (odd tap count, integer group delay); got {order}")
     fs, f_r = validate.sample_rate(fs, "fs"), validate.positive(f_r, "f_r")
-    p, s = validate.positive(pass_half_width, "pass_half_width"), validate.positive(stop_half_width,
-                                                                                      "stop_half_width")
+    p, s = validate.positive(pass_half_width, "pass_half_width"), validate.positive(stop_half_width, "stop_half_width")
     if not (p < s < f_r and f_r + s < fs / 2):
-        raise ValueError(f"need pass_half_width < stop_half_width < f_r and f_r + stop_half_width < fs/2; got "
-                         f"{p}, {s}, f_r = {f_r}, fs = {fs}")
+        raise ValueError(
+            f"need pass_half_width < stop_half_width < f_r and f_r + stop_half_width < fs/2; got "
+            f"{p}, {s}, f_r = {f_r}, fs = {fs}"
+        )
     key = (order, fs, f_r, p, s)
-    if key not in _TAPS:                    # a 2001-tap design solves a 1001×1001 system: keep the few we use
+    if key not in _TAPS:  # a 2001-tap design solves a 1001×1001 system: keep the few we use
         _TAPS[key] = firls(order + 1, [0, f_r - s, f_r - p, f_r + p, f_r + s, fs / 2], [0, 0, 1, 1, 0, 0], fs=fs)
     return _TAPS[key].copy()
 
@@ -666,8 +736,8 @@ def bandpass(x, theta, taps, remove_mean=True):
     remove_mean = validate.flag(remove_mean, "remove_mean")
     if remove_mean:
         x = x - x.mean()
-    y = oaconvolve(x, taps, mode="valid")                                            # (004 eq 4.47)
-    return y, theta[m // 2: len(theta) - m // 2]
+    y = oaconvolve(x, taps, mode="valid")  # (004 eq 4.47)
+    return y, theta[m // 2 : len(theta) - m // 2]
 
 
 def whole_turns(theta):
@@ -744,9 +814,9 @@ def demodulate(x, theta, reference="sampled"):
     else:
         raise ValueError(f"reference must be 'sampled' or 'exact'; got {reference!r}")
     rc, rs = rc - rc.mean(), rs - rs.mean()
-    c_i = np.sum(x * rc)                                                             # (004 eq 4.28)
-    s_i = -np.sum(x * rs)                                                            # (004 eq 4.30)
-    return float(np.arctan2(s_i, c_i))                                               # (004 eq 4.32)
+    c_i = np.sum(x * rc)  # (004 eq 4.28)
+    s_i = -np.sum(x * rs)  # (004 eq 4.30)
+    return float(np.arctan2(s_i, c_i))  # (004 eq 4.32)
 
 
 def synchronous_sampling(x, theta):
@@ -778,9 +848,9 @@ def synchronous_sampling(x, theta):
         i = np.clip(np.searchsorted(theta, target), 1, len(theta) - 1)
         return np.where(np.abs(theta[i - 1] - target) <= np.abs(theta[i] - target), i - 1, i)
 
-    a0 = x[nearest(2 * np.pi * k)].mean()                                            # (004 eq 4.33)
-    a90 = x[nearest(2 * np.pi * k + np.pi / 2)].mean()                               # (004 eq 4.34)
-    return float(np.arctan2(-a90, a0))                                               # (004 eq 4.35)
+    a0 = x[nearest(2 * np.pi * k)].mean()  # (004 eq 4.33)
+    a90 = x[nearest(2 * np.pi * k + np.pi / 2)].mean()  # (004 eq 4.34)
+    return float(np.arctan2(-a90, a0))  # (004 eq 4.35)
 
 
 def period_average(x, theta, bins=128, turns=None):
@@ -839,11 +909,11 @@ def period_average(x, theta, bins=128, turns=None):
         raise ValueError(f"turns must be an integer from 1 to {available} (the whole turns in the record); got {turns}")
     turns = int(turns)
     phi = (np.arange(bins) + 0.5) * 2 * np.pi / bins
-    grid = 2 * np.pi * (k0 + np.arange(turns))[:, None] + phi                       # every turn, same angles
-    period = np.interp(grid, theta, x).mean(axis=0)                                 # (004 Fig. 4.9)
-    c_i = np.sum(period * np.sign(np.cos(phi)))                                     # (004 eq 4.28)
-    s_i = -np.sum(period * np.sign(np.sin(phi)))                                    # (004 eq 4.30)
-    return dict(phi=phi, period=period, turns=turns, heading=float(np.arctan2(s_i, c_i)))   # (004 eq 4.32)
+    grid = 2 * np.pi * (k0 + np.arange(turns))[:, None] + phi  # every turn, same angles
+    period = np.interp(grid, theta, x).mean(axis=0)  # (004 Fig. 4.9)
+    c_i = np.sum(period * np.sign(np.cos(phi)))  # (004 eq 4.28)
+    s_i = -np.sum(period * np.sign(np.sin(phi)))  # (004 eq 4.30)
+    return dict(phi=phi, period=period, turns=turns, heading=float(np.arctan2(s_i, c_i)))  # (004 eq 4.32)
 
 
 def north_finder(record, order, method="demodulation", reference="sampled", **band):

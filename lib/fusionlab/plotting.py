@@ -14,6 +14,7 @@ nothing is mirrored: positive yaw still turns the nose clockwise seen from above
 Artists that draw a frame axis carry a ``gid`` such as ``'B:x'`` (body x axis), so tests and notebooks can find
 them in a figure.
 """
+
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
@@ -23,13 +24,25 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from . import rotations, validate
 
-__all__ = ["NED_TO_DISPLAY", "ned_to_display", "setup_ned_axes", "draw_triad", "draw_aircraft",
-           "euler_frames", "plot_euler_frames", "plot_gimbal_lock"]
+__all__ = [
+    "NED_TO_DISPLAY",
+    "ned_to_display",
+    "setup_ned_axes",
+    "draw_triad",
+    "draw_aircraft",
+    "euler_frames",
+    "plot_euler_frames",
+    "plot_gimbal_lock",
+]
 
 #: Rows pick (East, North, -Down) out of (North, East, Down); det = +1, so no mirror image.
-NED_TO_DISPLAY = np.array([[0.0, 1.0, 0.0],
-                           [1.0, 0.0, 0.0],
-                           [0.0, 0.0, -1.0]])
+NED_TO_DISPLAY = np.array(
+    [
+        [0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0],
+    ]
+)
 
 GREY, RED = "0.6", "tab:red"
 AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
@@ -73,12 +86,11 @@ def setup_ned_axes(ax, lim=1.2, elev=25, azim=-70):
         the page, Down down).
     """
     lim = validate.positive(lim, "lim")
-    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), zlim=(-lim, lim),
-           xlabel="East", ylabel="North", zlabel="Up (= -Down)")
+    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), zlim=(-lim, lim), xlabel="East", ylabel="North", zlabel="Up (= -Down)")
     ax.set_box_aspect((1, 1, 1), zoom=1.15)
     ax.view_init(elev=elev, azim=azim)
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-        axis.set_ticklabels([])                             # unit vectors: the grid is enough, numbers clutter
+        axis.set_ticklabels([])  # unit vectors: the grid is enough, numbers clutter
         axis.labelpad = -12
     return ax
 
@@ -87,8 +99,7 @@ def _colors(colors):
     return [colors] * 3 if isinstance(colors, str) else list(colors)
 
 
-def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.0, length=1.0, lw=2.0,
-               label_at=1.15):
+def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.0, length=1.0, lw=2.0, label_at=1.15):
     """Draw the three columns of ``C`` as arrows labelled ``x_label``, ``y_label``, ``z_label``.
 
     Parameters
@@ -121,28 +132,44 @@ def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.
     if C.shape != (3, 3):
         raise ValueError(f"C must have shape (3, 3); got {C.shape}")
     o = ned_to_display(validate.vectors(origin, "origin"))
-    tips = ned_to_display(length * C.T)                     # row k: axis k in display coordinates
+    tips = ned_to_display(length * C.T)  # row k: axis k in display coordinates
     artists = []
     for k, (name, color) in enumerate(zip("xyz", _colors(colors))):
         d = tips[k]
         gid = f"{label}:{name}" if label is not None else None
         artists += ax.plot(*np.stack([o, o + d]).T, color=color, alpha=alpha, lw=lw, gid=gid)
-        head = 0.18 * d                                     # the quiver draws only the head of the arrow
-        artists.append(ax.quiver(*(o + d - head), *head, color=color, alpha=alpha, lw=lw,
-                                 arrow_length_ratio=1.0))
+        head = 0.18 * d  # the quiver draws only the head of the arrow
+        artists.append(ax.quiver(*(o + d - head), *head, color=color, alpha=alpha, lw=lw, arrow_length_ratio=1.0))
         text = f"${name}_{{{label}}}$" if label is not None else name
-        artists.append(ax.text(*(o + label_at * d), text, color=color, alpha=alpha, fontsize=10,
-                               ha="center", va="center"))
+        artists.append(
+            ax.text(*(o + label_at * d), text, color=color, alpha=alpha, fontsize=10, ha="center", va="center")
+        )
     return artists
 
 
 # Aircraft outline in body coordinates (x nose, y right wing, z down), in units of `scale`.
 _FUSELAGE = np.array([[0.9, 0, 0], [-0.85, 0, 0]])
-_WINGS = np.array([[0.2, 0, 0], [-0.1, 0.85, 0], [-0.28, 0.85, 0], [-0.2, 0, 0],
-                   [-0.28, -0.85, 0], [-0.1, -0.85, 0]])
-_STABILISER = np.array([[-0.6, 0, 0], [-0.75, 0.3, 0], [-0.85, 0.3, 0], [-0.82, 0, 0],
-                        [-0.85, -0.3, 0], [-0.75, -0.3, 0]])
-_FIN = np.array([[-0.55, 0, 0], [-0.78, 0, -0.35], [-0.88, 0, -0.35], [-0.82, 0, 0]])   # -z: up when level
+_WINGS = np.array(
+    [
+        [0.2, 0, 0],
+        [-0.1, 0.85, 0],
+        [-0.28, 0.85, 0],
+        [-0.2, 0, 0],
+        [-0.28, -0.85, 0],
+        [-0.1, -0.85, 0],
+    ]
+)
+_STABILISER = np.array(
+    [
+        [-0.6, 0, 0],
+        [-0.75, 0.3, 0],
+        [-0.85, 0.3, 0],
+        [-0.82, 0, 0],
+        [-0.85, -0.3, 0],
+        [-0.75, -0.3, 0],
+    ]
+)
+_FIN = np.array([[-0.55, 0, 0], [-0.78, 0, -0.35], [-0.88, 0, -0.35], [-0.82, 0, 0]])  # -z: up when level
 
 
 def draw_aircraft(ax, C_bn, scale=1.0, color="lightsteelblue"):
@@ -170,7 +197,7 @@ def draw_aircraft(ax, C_bn, scale=1.0, color="lightsteelblue"):
     C_bn = validate.matrices(C_bn, "C_bn")
     scale = validate.positive(scale, "scale")
 
-    def place(pts_b):                                       # body points -> display points
+    def place(pts_b):  # body points -> display points
         return ned_to_display(scale * pts_b @ C_bn.T)
 
     body = [place(p) for p in (_WINGS, _STABILISER, _FIN)]
@@ -220,16 +247,16 @@ def euler_frames(euler):
         ``{'I': I, 'v1': Rz(ψ), 'v2': Rz(ψ) Ry(θ), 'B': Rz(ψ) Ry(θ) Rx(φ) = C_bn}``, each of shape (3, 3).
     """
     roll, pitch, yaw = _euler(euler)
-    v1 = rotations.rot_z(yaw)                                # yaw about z_I        (001 Euler §3)
-    v2 = v1 @ rotations.rot_y(pitch)                         # pitch about y_v1     (001 Euler §4)
-    return {"I": np.eye(3), "v1": v1, "v2": v2, "B": v2 @ rotations.rot_x(roll)}   # roll about x_v2 (§5)
+    v1 = rotations.rot_z(yaw)  # yaw about z_I        (001 Euler §3)
+    v2 = v1 @ rotations.rot_y(pitch)  # pitch about y_v1     (001 Euler §4)
+    return {"I": np.eye(3), "v1": v1, "v2": v2, "B": v2 @ rotations.rot_x(roll)}  # roll about x_v2 (§5)
 
 
 def _arc(ax, C_prev, rot, angle, moving, radius=0.5):
     """Arc swept by axis ``moving`` (0, 1, 2) of frame ``C_prev`` as it turns by ``angle`` under ``rot``."""
     if abs(angle) < 1e-9:
         return
-    R = rot(np.linspace(0.0, angle, 40))                      # (40, 3, 3)
+    R = rot(np.linspace(0.0, angle, 40))  # (40, 3, 3)
     pts = ned_to_display(radius * (C_prev @ R)[:, :, moving])
     ax.plot(*pts.T, color="k", lw=1.2)
     ax.quiver(*pts[-2], *(pts[-1] - pts[-2]), color="k", arrow_length_ratio=8.0, lw=1.2)
@@ -274,19 +301,31 @@ def plot_euler_frames(euler, ax=None, stages=True):
     if not stages:
         fig, (ax,) = _new_axes(1, None if ax is None else [ax], (6, 6))
         setup_ned_axes(ax)
-        for name, color, alpha in (("I", GREY, 1.0), ("v1", "tab:orange", 0.5), ("v2", "tab:purple", 0.5),
-                                   ("B", RED, 1.0)):
-            draw_triad(ax, F[name], colors=color, label=name, alpha=alpha, lw=2.5 if name == "B" else 1.5,
-                       label_at=1.35 if name in ("v1", "v2") else 1.15)
+        for name, color, alpha in (
+            ("I", GREY, 1.0),
+            ("v1", "tab:orange", 0.5),
+            ("v2", "tab:purple", 0.5),
+            ("B", RED, 1.0),
+        ):
+            draw_triad(
+                ax,
+                F[name],
+                colors=color,
+                label=name,
+                alpha=alpha,
+                lw=2.5 if name == "B" else 1.5,
+                label_at=1.35 if name in ("v1", "v2") else 1.15,
+            )
         draw_aircraft(ax, F["B"], scale=0.6)
-        ax.set_title(f"{angles}: body frame B (red) reached from NED (grey)\nvia v1 (yaw) and v2 (pitch)",
-                     fontsize=10)
+        ax.set_title(f"{angles}: body frame B (red) reached from NED (grey)\nvia v1 (yaw) and v2 (pitch)", fontsize=10)
         return fig
 
     fig, axes = _new_axes(4, ax, (17, 5))
-    steps = [("yaw ψ", yaw, rotations.rot_z, "z", "I", "v1", 0),     # (name, angle, rot, about, prev, new, arc)
-             ("pitch θ", pitch, rotations.rot_y, "y", "v1", "v2", 0),
-             ("roll φ", roll, rotations.rot_x, "x", "v2", "B", 1)]
+    steps = [
+        ("yaw ψ", yaw, rotations.rot_z, "z", "I", "v1", 0),  # (name, angle, rot, about, prev, new, arc)
+        ("pitch θ", pitch, rotations.rot_y, "y", "v1", "v2", 0),
+        ("roll φ", roll, rotations.rot_x, "x", "v2", "B", 1),
+    ]
     setup_ned_axes(axes[0])
     draw_triad(axes[0], F["I"], colors=GREY, label="I")
     axes[0].set_title("start: inertial frame I\n(North-East-Down, Down drawn down)", fontsize=10)
@@ -297,12 +336,21 @@ def plot_euler_frames(euler, ax=None, stages=True):
         _arc(a, F[prev], rot, angle, moving)
         a.set_title(f"{name} = {_deg(angle)} about ${about}_{{{prev}}}$\n→ frame {new}", fontsize=10)
     draw_aircraft(axes[3], F["B"], scale=0.6)
-    fig.suptitle(f"Euler angles {angles}: yaw about $z_I$, then pitch about the new y, then roll about the "
-                 f"newest x;  $C_{{bn}} = R_z(ψ)\\,R_y(θ)\\,R_x(φ)$", fontsize=12)
-    fig.legend(handles=[Line2D([], [], color=GREY, lw=1.5, label="previous frame"),
-                        Line2D([], [], color=RED, lw=2.5, label="new frame"),
-                        Line2D([], [], color="k", lw=1.2, label="path of the turning axis")],
-               loc="lower center", ncol=3, frameon=False)
+    fig.suptitle(
+        f"Euler angles {angles}: yaw about $z_I$, then pitch about the new y, then roll about the "
+        f"newest x;  $C_{{bn}} = R_z(ψ)\\,R_y(θ)\\,R_x(φ)$",
+        fontsize=12,
+    )
+    fig.legend(
+        handles=[
+            Line2D([], [], color=GREY, lw=1.5, label="previous frame"),
+            Line2D([], [], color=RED, lw=2.5, label="new frame"),
+            Line2D([], [], color="k", lw=1.2, label="path of the turning axis"),
+        ],
+        loc="lower center",
+        ncol=3,
+        frameon=False,
+    )
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.08, top=0.85, wspace=0.02)
     return fig
 
@@ -330,7 +378,7 @@ def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
         Three panels: pair A, pair B, both triads overlaid.
     """
     roll, yaw, pitch = _angle(roll, "roll"), _angle(yaw, "yaw"), _angle(pitch, "pitch")
-    s = 1.0 if pitch >= 0 else -1.0                          # +90°: φ - ψ kept; -90°: φ + ψ kept
+    s = 1.0 if pitch >= 0 else -1.0  # +90°: φ - ψ kept; -90°: φ + ψ kept
     delta = -s * yaw if abs(yaw) > 1e-9 else np.pi / 3
     pairs = {"A": (roll, yaw), "B": (roll + delta, yaw + s * delta)}
     C = {k: rotations.euler_to_dcm([r, pitch, y]) for k, (r, y) in pairs.items()}
@@ -344,19 +392,24 @@ def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
         draw_triad(a, C[k], colors=color, label=k)
         draw_aircraft(a, C[k], scale=0.6)
         r, y = pairs[k]
-        a.set_title(f"pair {k}: φ = {_deg(r)}, ψ = {_deg(y)}, θ = {_deg(pitch)}\n"
-                    f"{combo} = {_deg(r + sign * y)}", fontsize=10)
+        a.set_title(
+            f"pair {k}: φ = {_deg(r)}, ψ = {_deg(y)}, θ = {_deg(pitch)}\n{combo} = {_deg(r + sign * y)}", fontsize=10
+        )
     setup_ned_axes(axes[2])
     draw_triad(axes[2], C["A"], colors=RED, label="A", lw=4, alpha=0.5, label_at=1.4)
     draw_triad(axes[2], C["B"], colors="tab:blue", label="B", lw=1.5)
     axes[2].set_title(f"A and B overlaid: max |C_A − C_B| = {diff:.1e}", fontsize=10)
 
     if diff < 1e-9:
-        finding = (f"At θ = {_deg(pitch)} roll and yaw turn about the same line: only {combo} is observable, "
-                   f"so pairs A and B give the same attitude")
+        finding = (
+            f"At θ = {_deg(pitch)} roll and yaw turn about the same line: only {combo} is observable, "
+            f"so pairs A and B give the same attitude"
+        )
     else:
-        finding = (f"At θ = {_deg(pitch)} roll and yaw are distinct: keeping {combo} is not enough, "
-                   f"A and B are different attitudes")
+        finding = (
+            f"At θ = {_deg(pitch)} roll and yaw are distinct: keeping {combo} is not enough, "
+            f"A and B are different attitudes"
+        )
     fig.suptitle(finding, fontsize=12)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.82, wspace=0.02)
     return fig
@@ -407,12 +460,20 @@ def plot_gaussian_product(mu1, var1, mu2, var2, ax=None, labels=("prediction", "
         fig, ax = plt.subplots(figsize=(7, 3.5))
     else:
         fig = ax.figure
-    ax.plot(x, _gauss_pdf(x, mu1, var1), color="tab:blue", gid="g1",
-            label=f"{labels[0]}: μ = {mu1:.2f}, σ² = {var1:.2f}")
-    ax.plot(x, _gauss_pdf(x, mu2, var2), color="tab:red", gid="g2",
-            label=f"{labels[1]}: μ = {mu2:.2f}, σ² = {var2:.2f}")
-    ax.plot(x, _gauss_pdf(x, mu, var), color="tab:green", lw=2.5, gid="product",
-            label=f"product: μ = {mu:.2f}, σ² = {var:.2f}")
+    ax.plot(
+        x, _gauss_pdf(x, mu1, var1), color="tab:blue", gid="g1", label=f"{labels[0]}: μ = {mu1:.2f}, σ² = {var1:.2f}"
+    )
+    ax.plot(
+        x, _gauss_pdf(x, mu2, var2), color="tab:red", gid="g2", label=f"{labels[1]}: μ = {mu2:.2f}, σ² = {var2:.2f}"
+    )
+    ax.plot(
+        x,
+        _gauss_pdf(x, mu, var),
+        color="tab:green",
+        lw=2.5,
+        gid="product",
+        label=f"product: μ = {mu:.2f}, σ² = {var:.2f}",
+    )
     ax.axvline(mu, color="tab:green", ls=":", lw=1)
     ax.set_xlabel("position (m)")
     ax.set_ylabel("probability density (1/m)")
@@ -507,19 +568,30 @@ def plot_tuning_sweep(sweep, chosen=None, figsize=(11, 3.6)):
         Two axes.
     """
     j = 0 if chosen is None else int(np.argmin(np.abs(np.asarray(sweep.values) - float(chosen))))
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=figsize, constrained_layout=True,
-                                 gridspec_kw={"width_ratios": [1, 1.6]})
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=figsize, constrained_layout=True, gridspec_kw={"width_ratios": [1, 1.6]})
     for i, name in enumerate(sweep.trials):
-        line, = a1.plot(sweep.values, sweep.rmse_deg[i], "o-", label=name[:2] + " " + name[3:].replace("_", " "))
+        (line,) = a1.plot(sweep.values, sweep.rmse_deg[i], "o-", label=name[:2] + " " + name[3:].replace("_", " "))
         a1.plot(sweep.values[j], sweep.rmse_deg[i, j], "o", ms=11, mfc="none", color=line.get_color())
-        a2.plot(sweep.t[i], sweep.error_deg[i][j], lw=0.8, color=line.get_color(),
-                label=f"{name[:2]}: RMSE {sweep.rmse_deg[i, j]:.2f}°")
+        a2.plot(
+            sweep.t[i],
+            sweep.error_deg[i][j],
+            lw=0.8,
+            color=line.get_color(),
+            label=f"{name[:2]}: RMSE {sweep.rmse_deg[i, j]:.2f}°",
+        )
     a1.axvline(sweep.values[j], color="0.6", ls="--", lw=1)
-    a1.set(xscale="log", xlabel=f"{sweep.option}", ylabel=f"{sweep.metric} RMSE (deg)",
-           title=f"{sweep.estimator}: RMSE over the movement phase")
+    a1.set(
+        xscale="log",
+        xlabel=f"{sweep.option}",
+        ylabel=f"{sweep.metric} RMSE (deg)",
+        title=f"{sweep.estimator}: RMSE over the movement phase",
+    )
     a1.legend(fontsize=8)
-    a2.set(xlabel="time (s)", ylabel=f"{sweep.metric} error (deg)",
-           title=f"{sweep.estimator}, {sweep.option} = {sweep.values[j]:g}")
+    a2.set(
+        xlabel="time (s)",
+        ylabel=f"{sweep.metric} error (deg)",
+        title=f"{sweep.estimator}, {sweep.option} = {sweep.values[j]:g}",
+    )
     a2.legend(fontsize=8, loc="upper left")
     return fig
 
@@ -558,9 +630,8 @@ def shade_movement(ax, t, movement, color="0.9"):
         raise ValueError(f"movement must be a boolean array; got dtype {m.dtype}")
     if t.ndim != 1 or m.shape != t.shape:
         raise ValueError(f"t and movement must both have shape (N,); got {t.shape} and {m.shape}")
-    edges = np.flatnonzero(np.diff(np.r_[0, m.astype(int), 0]))        # starts and (one past) ends of each stretch
-    return [ax.axvspan(t[a], t[b - 1], color=color, zorder=0, gid="movement")
-            for a, b in zip(edges[::2], edges[1::2])]
+    edges = np.flatnonzero(np.diff(np.r_[0, m.astype(int), 0]))  # starts and (one past) ends of each stretch
+    return [ax.axvspan(t[a], t[b - 1], color=color, zorder=0, gid="movement") for a, b in zip(edges[::2], edges[1::2])]
 
 
 def plot_trial(trial, title, step=3):
@@ -591,8 +662,11 @@ def plot_trial(trial, title, step=3):
     ref_euler[ok] = rotations.quat_to_euler(trial.quat_ref[ok])
     t = trial.t
     fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True, constrained_layout=True)
-    for ax, y, label in zip(axes, (np.degrees(trial.gyr), trial.acc, trial.mag, np.degrees(ref_euler)),
-                            ("gyro (deg/s)", "acc (m/s²)", "mag (µT)", "reference (deg)")):
+    for ax, y, label in zip(
+        axes,
+        (np.degrees(trial.gyr), trial.acc, trial.mag, np.degrees(ref_euler)),
+        ("gyro (deg/s)", "acc (m/s²)", "mag (µT)", "reference (deg)"),
+    ):
         shade_movement(ax, t, trial.movement)
         names = ("roll", "pitch", "yaw (ENU)") if label.startswith("ref") else ("x", "y", "z")
         for k in range(3):
@@ -619,8 +693,9 @@ def _record(rec):
     """A north-finder record (``northfinder.synthetic_record``) with the keys these figures read."""
     if not isinstance(rec, dict) or any(k not in rec for k in _RECORD_KEYS):
         have = sorted(rec) if isinstance(rec, dict) else type(rec).__name__
-        raise ValueError(f"rec must be a record of northfinder.synthetic_record, with keys {', '.join(_RECORD_KEYS)}; "
-                         f"got {have}")
+        raise ValueError(
+            f"rec must be a record of northfinder.synthetic_record, with keys {', '.join(_RECORD_KEYS)}; got {have}"
+        )
     return rec
 
 
@@ -660,8 +735,9 @@ def plot_earth_rate_line(rec, heading, title, t_max=0.9, f_max=90.0):
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.4))
     sl = t < t_max
     axs[0].plot(t[sl], x[sl] / _nf.UG, lw=0.8, label="record − mean")
-    axs[0].plot(t[sl], A_c * np.cos(rec["theta"][sl] + heading) / _nf.UG, "k", lw=1.5, label="Earth-rate line",
-                gid="line")
+    axs[0].plot(
+        t[sl], A_c * np.cos(rec["theta"][sl] + heading) / _nf.UG, "k", lw=1.5, label="Earth-rate line", gid="line"
+    )
     axs[0].set_xlabel("time (s)")
     axs[0].set_ylabel("acceleration (µg)")
     axs[0].legend(fontsize=8)
@@ -732,7 +808,7 @@ def plot_bandpass(rec, taps, title, shown=None, f_max=45.0, t_max=12.0):
     axs[0].grid(alpha=0.3)
     axs[0].set_title("firls band-pass (dotted: harmonics)", fontsize=10)
     first = rec["t"] < t_max
-    y_causal = lfilter(taps[shown], 1.0, rec["acc"][first])       # raw record, no mean removal: the start-up
+    y_causal = lfilter(taps[shown], 1.0, rec["acc"][first])  # raw record, no mean removal: the start-up
     axs[1].plot(rec["t"][first], y_causal / _nf.UG, lw=0.6, gid="filtered")
     axs[1].set_ylim(-200, 200)
     axs[1].set_xlim(0, t_max)
@@ -773,14 +849,18 @@ def plot_error_signatures(clouds, t, angles, title):
         A 2 x 3 grid: the clouds first, the angles in the last panel.
     """
     if not isinstance(clouds, dict) or not 1 <= len(clouds) <= 5:
-        raise ValueError(f"clouds must be a dict of 1 to 5 label -> (ideal, measured) pairs; got "
-                         f"{len(clouds) if isinstance(clouds, dict) else type(clouds).__name__}")
+        raise ValueError(
+            f"clouds must be a dict of 1 to 5 label -> (ideal, measured) pairs; got "
+            f"{len(clouds) if isinstance(clouds, dict) else type(clouds).__name__}"
+        )
     pairs = {}
     for name, pair in clouds.items():
         if not isinstance(pair, (tuple, list)) or len(pair) != 2:
             raise ValueError(f"clouds[{name!r}] must be a pair (ideal, measured); got {type(pair).__name__}")
-        pairs[name] = (validate.vectors(pair[0], f"clouds[{name!r}] ideal"),
-                       validate.vectors(pair[1], f"clouds[{name!r}] measured"))
+        pairs[name] = (
+            validate.vectors(pair[0], f"clouds[{name!r}] ideal"),
+            validate.vectors(pair[1], f"clouds[{name!r}] measured"),
+        )
     t = validate.array(t, "t")
     if t.ndim != 1:
         raise ValueError(f"t must have shape (M,); got {t.shape}")
@@ -800,7 +880,7 @@ def plot_error_signatures(clouds, t, angles, title):
         ax.legend(fontsize=7, loc="upper right")
         ax.set_xlabel("x (m/s² or µT)")
         ax.set_ylabel("y")
-    for ax in axes.flat[len(pairs):5]:
+    for ax in axes.flat[len(pairs) : 5]:
         ax.set_axis_off()
     for label, angle in angles.items():
         axes[1, 2].plot(t, angle, label=label)
@@ -836,17 +916,21 @@ def plot_disturbance_sweeps(sweeps, title):
         One axis per sweep and its twin (``α_g``, 0-1.05).
     """
     if not isinstance(sweeps, dict) or not sweeps:
-        raise ValueError(f"sweeps must be a non-empty dict of label -> (grid, alpha_g, tilt_weighted, tilt_equal); "
-                         f"got {type(sweeps).__name__}")
+        raise ValueError(
+            f"sweeps must be a non-empty dict of label -> (grid, alpha_g, tilt_weighted, tilt_equal); "
+            f"got {type(sweeps).__name__}"
+        )
     checked = {}
     for label, sweep in sweeps.items():
         if not isinstance(sweep, (tuple, list)) or len(sweep) != 4:
-            raise ValueError(f"sweeps[{label!r}] must be (grid, alpha_g, tilt_weighted, tilt_equal); got "
-                             f"{type(sweep).__name__}")
+            raise ValueError(
+                f"sweeps[{label!r}] must be (grid, alpha_g, tilt_weighted, tilt_equal); got {type(sweep).__name__}"
+            )
         parts = [validate.array(a, f"sweeps[{label!r}][{k}]") for k, a in enumerate(sweep)]
         if any(p.ndim != 1 or p.shape != parts[0].shape for p in parts):
-            raise ValueError(f"sweeps[{label!r}] must hold four arrays of one shape (K,); got "
-                             f"{[p.shape for p in parts]}")
+            raise ValueError(
+                f"sweeps[{label!r}] must hold four arrays of one shape (K,); got {[p.shape for p in parts]}"
+            )
         checked[label] = parts
     if not isinstance(title, str):
         raise ValueError(f"title must be a string; got {type(title).__name__}")

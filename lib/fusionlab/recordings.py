@@ -101,6 +101,7 @@ that is not a number, time stamps repeated or going backwards.
 ``python -m fusionlab.recordings --out data/phone/`` writes the example exports (``make data``): BROAD trial 2
 written in each app's format, byte-identical on every run (seeded); ``data/phone/README.md`` says what each is.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -116,8 +117,19 @@ import numpy as np
 
 from . import earth, signals, validate
 
-__all__ = ["load_recording", "Recording", "Summary", "SensorReport", "FORMATS", "ACC_CONVENTIONS", "UNITS",
-           "MIN_OVERLAP", "MAX_GAP", "make_examples", "main"]
+__all__ = [
+    "load_recording",
+    "Recording",
+    "Summary",
+    "SensorReport",
+    "FORMATS",
+    "ACC_CONVENTIONS",
+    "UNITS",
+    "MIN_OVERLAP",
+    "MAX_GAP",
+    "make_examples",
+    "main",
+]
 
 #: The formats :func:`load_recording` reads (``None`` there: told from the files).
 FORMATS = ("phyphox", "sensor_logger", "csv")
@@ -142,10 +154,19 @@ MAX_GAP = 0.25
 RATES = (5.0, 2000.0)
 
 _SENSORS = ("gyr", "acc", "mag")
-_HEADER_UNITS = {                                            # unit spellings in the apps' headers
-    "s": ("t", "s"), "rad/s": ("gyr", "rad/s"), "deg/s": ("gyr", "deg/s"), "°/s": ("gyr", "deg/s"),
-    "m/s^2": ("acc", "m/s^2"), "m/s²": ("acc", "m/s^2"), "m/s2": ("acc", "m/s^2"), "g": ("acc", "g"),
-    "µt": ("mag", "uT"), "μt": ("mag", "uT"), "ut": ("mag", "uT"), "nt": ("mag", "nT"),
+_HEADER_UNITS = {  # unit spellings in the apps' headers
+    "s": ("t", "s"),
+    "rad/s": ("gyr", "rad/s"),
+    "deg/s": ("gyr", "deg/s"),
+    "°/s": ("gyr", "deg/s"),
+    "m/s^2": ("acc", "m/s^2"),
+    "m/s²": ("acc", "m/s^2"),
+    "m/s2": ("acc", "m/s^2"),
+    "g": ("acc", "g"),
+    "µt": ("mag", "uT"),
+    "μt": ("mag", "uT"),
+    "ut": ("mag", "uT"),
+    "nt": ("mag", "nT"),
 }
 
 
@@ -179,6 +200,7 @@ class SensorReport:
     dropped : int
         Samples the gaps dropped (each gap's length in median intervals, less one).
     """
+
     sensor: str
     file: str
     samples: int
@@ -192,10 +214,13 @@ class SensorReport:
     def __str__(self):
         gaps = ", ".join(f"{g[1] * 1e3:.0f} ms at {g[0]:.2f} s (line {g[2]})" for g in self.gaps[:3])
         more = f" and {len(self.gaps) - 3} more" if len(self.gaps) > 3 else ""
-        return (f"{self.sensor:<10} {self.samples:6d} samples at {self.rate:7.2f} Hz, "
-                f"jitter {self.jitter * 1e3:5.2f} ms, {self.start:7.3f}-{self.stop:7.3f} s, "
-                f"{len(self.gaps)} gap(s), {self.dropped} dropped"
-                + (f": {gaps}{more}" if self.gaps else "") + f"  [{self.file}]")
+        return (
+            f"{self.sensor:<10} {self.samples:6d} samples at {self.rate:7.2f} Hz, "
+            f"jitter {self.jitter * 1e3:5.2f} ms, {self.start:7.3f}-{self.stop:7.3f} s, "
+            f"{len(self.gaps)} gap(s), {self.dropped} dropped"
+            + (f": {gaps}{more}" if self.gaps else "")
+            + f"  [{self.file}]"
+        )
 
 
 @dataclass(frozen=True)
@@ -225,6 +250,7 @@ class Summary:
     checks : tuple of str
         One line per quantity: its unit and convention, who stated it, and what the physics said.
     """
+
     source: str
     format: str
     platform: object
@@ -241,8 +267,11 @@ class Summary:
         return sum(s.dropped for s in self.sensors)
 
     def __str__(self):
-        head = (f"{self.format} export {self.source}" + (f" ({self.platform})" if self.platform else "") +
-                f": {self.samples} samples at {self.fs:.2f} Hz from {self.start:.3f} s ({self.method})")
+        head = (
+            f"{self.format} export {self.source}"
+            + (f" ({self.platform})" if self.platform else "")
+            + f": {self.samples} samples at {self.fs:.2f} Hz from {self.start:.3f} s ({self.method})"
+        )
         return "\n".join([head, *("  " + str(s) for s in self.sensors), *("  " + c for c in self.checks)])
 
 
@@ -275,6 +304,7 @@ class Recording(signals.Sampled):
     summary : Summary
         How it was read and checked.
     """
+
     name: str
     fs: float
     gyr: np.ndarray
@@ -324,26 +354,34 @@ class Recording(signals.Sampled):
         if not 0.0 <= t0 < self.duration:
             raise ValueError(f"t0 must be within the recording, 0 <= t0 < {self.duration:.4g} s; got {t0!r}")
         if t1 > self.duration:
-            raise ValueError(f"t1 must be within the recording, t1 <= {self.duration:.4g} s (its duration); got "
-                             f"{t1!r}")
+            raise ValueError(f"t1 must be within the recording, t1 <= {self.duration:.4g} s (its duration); got {t1!r}")
         t = self.t
         keep = np.flatnonzero((t >= t0) & (t < t1))
         if keep.size == 0:
-            raise ValueError(f"t0, t1 must hold at least one sample (one every {1 / self.fs:.4g} s); [{t0!r}, "
-                             f"{t1!r}) holds none")
+            raise ValueError(
+                f"t0, t1 must hold at least one sample (one every {1 / self.fs:.4g} s); [{t0!r}, {t1!r}) holds none"
+            )
         cut = slice(int(keep[0]), int(keep[-1]) + 1)
-        summary = replace(self.summary, samples=int(keep.size),
-                          start=float(self.summary.start + t[cut.start]))
-        return Recording(self.name, self.fs, _frozen(self.gyr[cut]), _frozen(self.acc[cut]),
-                         None if self.mag is None else _frozen(self.mag[cut]),
-                         None if self.quat_phone is None else _frozen(self.quat_phone[cut]),
-                         float(self.t0 + t[cut.start]), summary)
+        summary = replace(self.summary, samples=int(keep.size), start=float(self.summary.start + t[cut.start]))
+        return Recording(
+            self.name,
+            self.fs,
+            _frozen(self.gyr[cut]),
+            _frozen(self.acc[cut]),
+            None if self.mag is None else _frozen(self.mag[cut]),
+            None if self.quat_phone is None else _frozen(self.quat_phone[cut]),
+            float(self.t0 + t[cut.start]),
+            summary,
+        )
 
     def __repr__(self):
-        extra = (", no magnetometer" if self.mag is None else "") + (", phone orientation" if self.quat_phone
-                                                                    is not None else "")
-        return (f"Recording({self.name!r}, {len(self)} samples at {self.fs:.2f} Hz ({self.duration:.1f} s), "
-                f"{self.summary.format}{extra}, {self.summary.dropped} dropped)")
+        extra = (", no magnetometer" if self.mag is None else "") + (
+            ", phone orientation" if self.quat_phone is not None else ""
+        )
+        return (
+            f"Recording({self.name!r}, {len(self)} samples at {self.fs:.2f} Hz ({self.duration:.1f} s), "
+            f"{self.summary.format}{extra}, {self.summary.dropped} dropped)"
+        )
 
     def __str__(self):
         return repr(self) + "\n" + str(self.summary)
@@ -369,8 +407,9 @@ class _Source:
                 with zipfile.ZipFile(p) as z:
                     self.members = sorted(n for n in z.namelist() if not n.endswith("/"))
             except (zipfile.BadZipFile, OSError) as exc:
-                raise ValueError(f"{p} is not a readable zip archive ({exc}): truncated or damaged? export it "
-                                 "again") from None
+                raise ValueError(
+                    f"{p} is not a readable zip archive ({exc}): truncated or damaged? export it again"
+                ) from None
         elif p.is_file():
             self.kind = "file"
             self.members = [p.name]
@@ -388,8 +427,11 @@ class _Source:
         return None
 
     def where(self, member):
-        return str(self.path) if self.kind == "file" else (
-            f"{self.path}:{member}" if self.kind == "zip" else str(self.path / member))
+        return (
+            str(self.path)
+            if self.kind == "file"
+            else (f"{self.path}:{member}" if self.kind == "zip" else str(self.path / member))
+        )
 
     def text(self, member):
         if self.kind == "zip":
@@ -397,8 +439,10 @@ class _Source:
                 with zipfile.ZipFile(self.path) as z:
                     data = z.read(member)
             except (zipfile.BadZipFile, OSError, EOFError, _zlib_error()) as exc:
-                raise ValueError(f"{self.where(member)} cannot be read from the archive ({exc}): truncated or "
-                                 "damaged? export it again") from None
+                raise ValueError(
+                    f"{self.where(member)} cannot be read from the archive ({exc}): truncated or "
+                    "damaged? export it again"
+                ) from None
         else:
             data = (self.path if self.kind == "file" else self.path / member).read_bytes()
         for encoding in ("utf-8-sig", "cp1252"):
@@ -412,6 +456,7 @@ class _Source:
 def _zlib_error():
     """The exception class zlib raises on a damaged stream (imported lazily)."""
     import zlib
+
     return zlib.error
 
 
@@ -456,22 +501,29 @@ class _Table:
         if s == "":
             if allow_empty:
                 return np.nan
-            raise ValueError(f"{self.where}, line {line}: column {self.names[c]!r} is empty"
-                             + (" -- the file looks truncated" if line == self.nlines else ""))
+            raise ValueError(
+                f"{self.where}, line {line}: column {self.names[c]!r} is empty"
+                + (" -- the file looks truncated" if line == self.nlines else "")
+            )
         if self.decimal_comma:
             if "." in s:
-                raise ValueError(f"{self.where}, line {line}: {s!r} has a decimal point where line 2 has a decimal "
-                                 "comma: mixed decimal marks -- export the file again with one setting")
+                raise ValueError(
+                    f"{self.where}, line {line}: {s!r} has a decimal point where line 2 has a decimal "
+                    "comma: mixed decimal marks -- export the file again with one setting"
+                )
             s = s.replace(",", ".")
         elif "," in s:
-            raise ValueError(f"{self.where}, line {line}: {s!r} has a decimal comma where line 2 has a decimal "
-                             "point: mixed decimal marks -- export the file again with one setting")
+            raise ValueError(
+                f"{self.where}, line {line}: {s!r} has a decimal comma where line 2 has a decimal "
+                "point: mixed decimal marks -- export the file again with one setting"
+            )
         try:
             v = float(s)
         except ValueError:
             cut = " -- the last line looks truncated (the export was cut off)" if line == self.nlines else ""
-            raise ValueError(f"{self.where}, line {line}: column {self.names[c]!r} holds {s!r}, not a number"
-                             f"{cut}") from None
+            raise ValueError(
+                f"{self.where}, line {line}: column {self.names[c]!r} holds {s!r}, not a number{cut}"
+            ) from None
         if not np.isfinite(v):
             raise ValueError(f"{self.where}, line {line}: column {self.names[c]!r} holds {s!r}, not a finite number")
         return v
@@ -488,12 +540,16 @@ def _read_table(text, where):
     counts = {s: _count_outside_quotes(head, s) for s in (",", ";", "\t")}
     sep = max(counts, key=counts.get)
     if counts[sep] == 0:
-        raise ValueError(f"{where}, line 1: the header {head[:80]!r} has no separator (',', ';' or tab): not a CSV "
-                         "of a supported app")
+        raise ValueError(
+            f"{where}, line 1: the header {head[:80]!r} has no separator (',', ';' or tab): not a CSV "
+            "of a supported app"
+        )
     other = [repr(s) for s in counts if s != sep and counts[s]]
     if other:
-        raise ValueError(f"{where}, line 1: the header mixes separators ({sep!r} and {', '.join(other)}): mixed "
-                         "separators -- export the file again with one setting")
+        raise ValueError(
+            f"{where}, line 1: the header mixes separators ({sep!r} and {', '.join(other)}): mixed "
+            "separators -- export the file again with one setting"
+        )
     names = [n.strip().strip('"').strip() for n in _split(head, sep)]
     if len(lines) == 1:
         raise ValueError(f"{where} holds a header and no data (line 1 only): an empty recording")
@@ -506,11 +562,15 @@ def _read_table(text, where):
         if len(fields) != len(names):
             stray = [s for s in (",", ";", "\t") if s != sep and s in line and not (s == "," and decimal_comma)]
             if stray:
-                msg = (f"separated by {stray[0]!r} where the header uses {sep!r}: mixed separators -- export the "
-                       "file again with one setting")
+                msg = (
+                    f"separated by {stray[0]!r} where the header uses {sep!r}: mixed separators -- export the "
+                    "file again with one setting"
+                )
             elif k == len(lines) and len(fields) < len(names):
-                msg = (f"has {len(fields)} of the header's {len(names)} fields: the file is truncated (the export "
-                       "was cut off) -- export it again")
+                msg = (
+                    f"has {len(fields)} of the header's {len(names)} fields: the file is truncated (the export "
+                    "was cut off) -- export it again"
+                )
             else:
                 msg = f"has {len(fields)} fields where the header has {len(names)}"
             raise ValueError(f"{where}, line {k}: {msg}")
@@ -521,6 +581,7 @@ def _read_table(text, where):
 @dataclass
 class _Stream:
     """One sensor's samples as read: time (s from the recording's origin), values, the line of each sample."""
+
     sensor: str
     where: str
     t: np.ndarray
@@ -531,7 +592,7 @@ class _Stream:
 def _stream(sensor, table, t, cols, allow_empty=False):
     v = table.numbers(cols, allow_empty=allow_empty)
     lines = np.arange(2, len(table.rows) + 2)
-    if allow_empty:                                       # a shared file: a sensor's samples are its filled rows
+    if allow_empty:  # a shared file: a sensor's samples are its filled rows
         filled = ~np.isnan(v)
         part = filled.any(axis=1) & ~filled.all(axis=1)
         if part.any():
@@ -545,6 +606,7 @@ def _stream(sensor, table, t, cols, allow_empty=False):
 @dataclass
 class _Stated:
     """A unit or convention and who stated it (None: nobody; the physics decides and the summary says so)."""
+
     value: object
     by: object
 
@@ -554,7 +616,7 @@ class _Export:
     format: str
     platform: object
     streams: dict
-    units: dict                                           # quantity -> _Stated unit
+    units: dict  # quantity -> _Stated unit
     convention: _Stated
     t0: float
     notes: list
@@ -564,13 +626,22 @@ class _Export:
 # The three formats
 # ----------------------------------------------------------------------------------------------------------------
 
-_PHYPHOX_FILES = {"acc": ("Accelerometer.csv", "Acceleration with g.csv"), "gyr": ("Gyroscope.csv",),
-                  "mag": ("Magnetometer.csv",), "lin": ("Linear Accelerometer.csv", "Linear Acceleration.csv")}
-_PHYPHOX_QUANTITIES = {"acceleration": "acc", "gyroscope": "gyr", "magnetic field": "mag",
-                       "linear acceleration": "lin"}
+_PHYPHOX_FILES = {
+    "acc": ("Accelerometer.csv", "Acceleration with g.csv"),
+    "gyr": ("Gyroscope.csv",),
+    "mag": ("Magnetometer.csv",),
+    "lin": ("Linear Accelerometer.csv", "Linear Acceleration.csv"),
+}
+_PHYPHOX_QUANTITIES = {"acceleration": "acc", "gyroscope": "gyr", "magnetic field": "mag", "linear acceleration": "lin"}
 _SENSOR_NAMES = {"acc": "accelerometer", "gyr": "gyroscope", "mag": "magnetometer", "lin": "linear acceleration"}
-_SL_FILES = ("Gyroscope.csv", "TotalAcceleration.csv", "Accelerometer.csv", "Gravity.csv", "Magnetometer.csv",
-             "Orientation.csv")
+_SL_FILES = (
+    "Gyroscope.csv",
+    "TotalAcceleration.csv",
+    "Accelerometer.csv",
+    "Gravity.csv",
+    "Magnetometer.csv",
+    "Orientation.csv",
+)
 
 
 def _phyphox_columns(table, default):
@@ -597,8 +668,12 @@ def _phyphox_columns(table, default):
         quantity = label[:-1].rstrip(" _")
         sensor = _PHYPHOX_QUANTITIES.get(quantity) if quantity else default
         known = _HEADER_UNITS.get(unit.lower() if unit.lower() != "g" else "g")
-        if sensor is None and default is not None and known is not None and known[0] == (
-                "acc" if default == "lin" else default):
+        if (
+            sensor is None
+            and default is not None
+            and known is not None
+            and known[0] == ("acc" if default == "lin" else default)
+        ):
             sensor = default
             custom.append(name)
         if sensor is None or known is None or known[0] != ("acc" if sensor == "lin" else sensor):
@@ -616,37 +691,50 @@ def _read_phyphox(src):
     raw = src.find("Raw Data.csv") if src.kind != "file" else src.members[0]
     tables = [(s, m) for s, m in members.items() if m] or ([(None, raw)] if raw else [])
     if not tables:
-        raise ValueError(f"{src.path} holds no phyphox sensor file: expected Accelerometer.csv and Gyroscope.csv "
-                         "(Magnetometer.csv optional) or Raw Data.csv")
+        raise ValueError(
+            f"{src.path} holds no phyphox sensor file: expected Accelerometer.csv and Gyroscope.csv "
+            "(Magnetometer.csv optional) or Raw Data.csv"
+        )
     for default, member in tables:
         table = _read_table(src.text(member), src.where(member))
         time_col, cols, custom = _phyphox_columns(table, default)
         if time_col is None or not cols:
-            fix = ("read it as a plain CSV with columns= and units=" if src.kind == "file" else
-                   "name its columns as phyphox does (\"X (m/s^2)\"), or put the sensors in one CSV and read it with "
-                   "columns= and units=")
-            raise ValueError(f"{table.where}, line 1: the header {table.names} is not one phyphox writes (expected "
-                             "\"Time (s)\" and X/Y/Z columns with their units, e.g. \"X (rad/s)\" or \"Gyroscope x "
-                             f"(rad/s)\"): an unknown app version? {fix}")
+            fix = (
+                "read it as a plain CSV with columns= and units="
+                if src.kind == "file"
+                else 'name its columns as phyphox does ("X (m/s^2)"), or put the sensors in one CSV and read it with '
+                "columns= and units="
+            )
+            raise ValueError(
+                f"{table.where}, line 1: the header {table.names} is not one phyphox writes (expected "
+                '"Time (s)" and X/Y/Z columns with their units, e.g. "X (rad/s)" or "Gyroscope x '
+                f'(rad/s)"): an unknown app version? {fix}'
+            )
         if custom:
-            notes.append(f"{Path(member).name}: {', '.join(custom)} are not phyphox's own column names (a custom "
-                         f"experiment's): read as the file's {_SENSOR_NAMES[default]} by their unit")
+            notes.append(
+                f"{Path(member).name}: {', '.join(custom)} are not phyphox's own column names (a custom "
+                f"experiment's): read as the file's {_SENSOR_NAMES[default]} by their unit"
+            )
         t = table.numbers([time_col])[:, 0]
         shared = len(cols) > 1
         for sensor, (unit, c) in cols.items():
             if sensor in streams:
-                raise ValueError(f"{table.where}, line 1: a second {sensor} in the export (also in "
-                                 f"{streams[sensor].where})")
+                raise ValueError(
+                    f"{table.where}, line 1: a second {sensor} in the export (also in {streams[sensor].where})"
+                )
             streams[sensor] = _stream(sensor, table, t, c, allow_empty=shared)
             units[sensor] = _Stated(unit, f"the header of {Path(member).name}")
     if "acc" not in streams and "lin" in streams:
-        raise ValueError(f"{streams['lin'].where} is phyphox's linear acceleration (gravity removed), and the export "
-                         "has no accelerometer with gravity: the filters need the specific force -- record with "
-                         "phyphox's 'Acceleration with g' sensor")
+        raise ValueError(
+            f"{streams['lin'].where} is phyphox's linear acceleration (gravity removed), and the export "
+            "has no accelerometer with gravity: the filters need the specific force -- record with "
+            "phyphox's 'Acceleration with g' sensor"
+        )
     streams.pop("lin", None)
     units.pop("lin", None)
-    return _Export("phyphox", None, streams, units, _Stated("specific force", "phyphox (m/s², +g up at rest)"), 0.0,
-                   notes)
+    return _Export(
+        "phyphox", None, streams, units, _Stated("specific force", "phyphox (m/s², +g up at rest)"), 0.0, notes
+    )
 
 
 def _sl_metadata(src):
@@ -656,8 +744,10 @@ def _sl_metadata(src):
     table = _read_table(src.text(member), src.where(member))
     names = [n.lower() for n in table.names]
     if "platform" not in names:
-        raise ValueError(f"{table.where}, line 1: Sensor Logger's Metadata.csv names a 'platform'; this header "
-                         f"{table.names} has none: an unknown app version?")
+        raise ValueError(
+            f"{table.where}, line 1: Sensor Logger's Metadata.csv names a 'platform'; this header "
+            f"{table.names} has none: an unknown app version?"
+        )
     row = dict(zip(names, table.rows[0]))
     platform = row["platform"].strip().lower()
     if platform not in ("android", "ios"):
@@ -675,9 +765,11 @@ def _sl_table(src, member):
         need = ("time", "x", "y", "z")
     missing = [n for n in need if n not in names]
     if missing:
-        raise ValueError(f"{table.where}, line 1: the header {table.names} lacks {', '.join(missing)}: not a header "
-                         "Sensor Logger writes (time, seconds_elapsed, z, y, x) -- an unknown app version? read it "
-                         "as a plain CSV with columns= and units=")
+        raise ValueError(
+            f"{table.where}, line 1: the header {table.names} lacks {', '.join(missing)}: not a header "
+            "Sensor Logger writes (time, seconds_elapsed, z, y, x) -- an unknown app version? read it "
+            "as a plain CSV with columns= and units="
+        )
     return table, [names.index(n) for n in need]
 
 
@@ -701,11 +793,14 @@ def _read_sensor_logger(src):
     platform, standard, note = _sl_metadata(src)
     found = {n: src.find(n) for n in _SL_FILES}
     if found["Gyroscope.csv"] is None:
-        raise ValueError(f"{src.path} has no Gyroscope.csv: a Sensor Logger export needs the gyroscope (record with "
-                         "it switched on)")
+        raise ValueError(
+            f"{src.path} has no Gyroscope.csv: a Sensor Logger export needs the gyroscope (record with it switched on)"
+        )
     if not (found["TotalAcceleration.csv"] or found["Accelerometer.csv"]):
-        raise ValueError(f"{src.path} has no TotalAcceleration.csv nor Accelerometer.csv: a Sensor Logger export "
-                         "needs the accelerometer (record with it switched on)")
+        raise ValueError(
+            f"{src.path} has no TotalAcceleration.csv nor Accelerometer.csv: a Sensor Logger export "
+            "needs the accelerometer (record with it switched on)"
+        )
     tables = {}
     for name, member in found.items():
         if member is not None:
@@ -729,8 +824,7 @@ def _read_sensor_logger(src):
         same = len(lin.t) == len(grav.t) and np.array_equal(lin.t, grav.t)
         g = grav.v if same else np.stack([np.interp(lin.t, grav.t, grav.v[:, k]) for k in range(3)], axis=1)
         keep = (lin.t >= grav.t[0]) & (lin.t <= grav.t[-1])
-        streams["acc"] = _Stream("acc", f"{lin.where} + Gravity.csv", lin.t[keep], (lin.v + g)[keep],
-                                 lin.lines[keep])
+        streams["acc"] = _Stream("acc", f"{lin.where} + Gravity.csv", lin.t[keep], (lin.v + g)[keep], lin.lines[keep])
         notes.append("acc = Accelerometer.csv (linear) + Gravity.csv: the raw reading, in the platform's own sign")
     else:
         streams["acc"] = stream("Accelerometer.csv", "acc")
@@ -746,7 +840,7 @@ def _read_sensor_logger(src):
         by = f"Sensor Logger on {platform}"
         units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by), "acc": _Stated("m/s^2", by)}
         convention = _Stated("specific force" if platform == "android" else "gravity", by)
-    else:                                                  # units the export does not state: the physics decides
+    else:  # units the export does not state: the physics decides
         by = "Sensor Logger (both platforms)"
         units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by), "acc": _Stated(None, None)}
         convention = _Stated(None, None)
@@ -766,8 +860,9 @@ def _read_plain(src, columns, units):
 
     def col(name, key):
         if name not in lookup:
-            raise ValueError(f"columns[{key!r}] names {name!r}, which is not in the header of {table.where} (line 1: "
-                             f"{table.names})")
+            raise ValueError(
+                f"columns[{key!r}] names {name!r}, which is not in the header of {table.where} (line 1: {table.names})"
+            )
         return lookup[name]
 
     t = table.numbers([col(columns["t"], "t")])[:, 0] * UNITS["t"][units["t"]]
@@ -788,24 +883,32 @@ def _check_time_unit(t, where, column, unit):
     dt = np.diff(t[np.isfinite(t)])
     dt = dt[dt > 0]
     if not dt.size:
-        return                                  # no two times in order: the checks of the times say what is wrong
+        return  # no two times in order: the checks of the times say what is wrong
     rate = 1.0 / float(np.median(dt))
     if RATES[0] <= rate <= RATES[1]:
         return
     scale = UNITS["t"][unit]
     fits = [u for u, k in UNITS["t"].items() if RATES[0] <= rate * scale / k <= RATES[1]]
-    fix = (f": the column {column!r} is likely in {fits[0]!r} -- pass units={{'t': {fits[0]!r}, ...}}" if fits else
-           f"; check units['t'] (one of {sorted(UNITS['t'])}) and the column columns['t'] = {column!r}")
-    raise ValueError(f"{where}: with units['t'] = {unit!r}, the samples come {rate:.3g} times a second, not a rate "
-                     f"a phone or an IMU records at ({RATES[0]:g}-{RATES[1]:g} Hz){fix}")
+    fix = (
+        f": the column {column!r} is likely in {fits[0]!r} -- pass units={{'t': {fits[0]!r}, ...}}"
+        if fits
+        else f"; check units['t'] (one of {sorted(UNITS['t'])}) and the column columns['t'] = {column!r}"
+    )
+    raise ValueError(
+        f"{where}: with units['t'] = {unit!r}, the samples come {rate:.3g} times a second, not a rate "
+        f"a phone or an IMU records at ({RATES[0]:g}-{RATES[1]:g} Hz){fix}"
+    )
 
 
 def _detect(src):
     """The format of an export from its files: Sensor Logger's names and headers, phyphox's, else a plain CSV."""
     if src.find("Metadata.csv") or src.find("TotalAcceleration.csv"):
         return "sensor_logger"
-    names = ([src.members[0]] if src.kind == "file" else
-             [src.find(n) for n in ("Gyroscope.csv", "Accelerometer.csv", "Magnetometer.csv", "Raw Data.csv")])
+    names = (
+        [src.members[0]]
+        if src.kind == "file"
+        else [src.find(n) for n in ("Gyroscope.csv", "Accelerometer.csv", "Magnetometer.csv", "Raw Data.csv")]
+    )
     for member in [m for m in names if m]:
         head = src.text(member).lstrip("\ufeff").split("\n", 1)[0].lower()
         if head.startswith("time,seconds_elapsed") or head.startswith("time;seconds_elapsed"):
@@ -829,10 +932,14 @@ def _check_times(s):
         k = int(bad[0])
         line, prev = int(s.lines[k + 1]), int(s.lines[k])
         if dt[k] == 0:
-            raise ValueError(f"{s.where}, line {line}: the time stamp repeats line {prev}'s ({s.t[k]:.6f} s): a "
-                             "duplicated sample -- the export is damaged")
-        raise ValueError(f"{s.where}, line {line}: time goes backwards ({s.t[k + 1]:.6f} s after {s.t[k]:.6f} s on "
-                         f"line {prev}) -- the export is damaged or two recordings were joined")
+            raise ValueError(
+                f"{s.where}, line {line}: the time stamp repeats line {prev}'s ({s.t[k]:.6f} s): a "
+                "duplicated sample -- the export is damaged"
+            )
+        raise ValueError(
+            f"{s.where}, line {line}: time goes backwards ({s.t[k + 1]:.6f} s after {s.t[k]:.6f} s on "
+            f"line {prev}) -- the export is damaged or two recordings were joined"
+        )
 
 
 def _report(s, origin):
@@ -841,8 +948,17 @@ def _report(s, origin):
     gap = np.flatnonzero(dt > 2 * med)
     gaps = tuple((float(s.t[k] - origin), float(dt[k]), int(s.lines[k + 1])) for k in gap)
     dropped = int(sum(round(dt[k] / med) - 1 for k in gap))
-    return SensorReport(s.sensor, s.where, len(s.t), 1.0 / med, float(np.std(dt)), float(s.t[0] - origin),
-                        float(s.t[-1] - origin), gaps, dropped)
+    return SensorReport(
+        s.sensor,
+        s.where,
+        len(s.t),
+        1.0 / med,
+        float(np.std(dt)),
+        float(s.t[0] - origin),
+        float(s.t[-1] - origin),
+        gaps,
+        dropped,
+    )
 
 
 def _grid(streams, fs, max_gap):
@@ -850,16 +966,17 @@ def _grid(streams, fs, max_gap):
     stop = min(s.t[-1] for s in streams.values())
     if stop - start < MIN_OVERLAP:
         spans = "; ".join(f"{s.sensor} {s.t[0]:.3f}-{s.t[-1]:.3f} s ({s.where})" for s in streams.values())
-        raise ValueError(f"the sensors do not overlap in time (at least {MIN_OVERLAP:g} s together is needed): "
-                         f"{spans}")
+        raise ValueError(f"the sensors do not overlap in time (at least {MIN_OVERLAP:g} s together is needed): {spans}")
     for s in streams.values():
         dt = np.diff(s.t)
         inside = (s.t[1:] > start) & (s.t[:-1] < stop) & (dt > max_gap)
         if inside.any():
             k = int(np.argmax(inside))
-            raise ValueError(f"{s.where}, line {int(s.lines[k + 1])}: {dt[k]:.3f} s without a {s.sensor} sample "
-                             f"(after {s.t[k]:.3f} s), longer than max_gap = {max_gap:g} s: interpolating across it "
-                             "would invent a motion -- cut the recording, or pass a larger max_gap to accept it")
+            raise ValueError(
+                f"{s.where}, line {int(s.lines[k + 1])}: {dt[k]:.3f} s without a {s.sensor} sample "
+                f"(after {s.t[k]:.3f} s), longer than max_gap = {max_gap:g} s: interpolating across it "
+                "would invent a motion -- cut the recording, or pass a larger max_gap to accept it"
+            )
     if fs is None:
         fs = 1.0 / float(np.median(np.diff(streams["gyr"].t)))
     n = int(np.floor((stop - start) * fs + 1e-9)) + 1
@@ -872,7 +989,7 @@ def _interp(s, grid):
 
 def _interp_quat(s, grid):
     q = s.v / np.linalg.norm(s.v, axis=1, keepdims=True)
-    flip = np.cumprod(np.where(np.sum(q[1:] * q[:-1], axis=1) < 0, -1.0, 1.0))     # one hemisphere
+    flip = np.cumprod(np.where(np.sum(q[1:] * q[:-1], axis=1) < 0, -1.0, 1.0))  # one hemisphere
     q[1:] *= flip[:, None]
     out = _interp(_Stream(s.sensor, s.where, s.t, q, s.lines), grid)
     return out / np.linalg.norm(out, axis=1, keepdims=True)
@@ -914,7 +1031,7 @@ def _flat_rest(acc, fs):
     nb = len(acc) // m
     if nb < 1:
         return None
-    w = acc[:nb * m].reshape(nb, m, 3)
+    w = acc[: nb * m].reshape(nb, m, 3)
     mean, spread = w.mean(axis=1), w.std(axis=1).max(axis=1)
     size = np.linalg.norm(mean, axis=1)
     ok = (spread < 0.03 * earth.G) & (np.abs(size - earth.G) < 0.05 * earth.G) & (np.abs(mean[:, 2]) > 0.95 * size)
@@ -936,34 +1053,44 @@ def _settle_acc(raw, stated_unit, stated_sign, fs, where, check):
     phys, med, steady = _acc_unit_from_physics(raw)
     if not check:
         if unit is None or stated_sign.value is None:
-            raise ValueError(f"{where}: the export does not state the accelerometer's "
-                             f"{'unit' if unit is None else 'sign convention'} and check=False forbids reading it "
-                             "from the physics -- pass units={'acc': ...} and acc_convention=...")
+            raise ValueError(
+                f"{where}: the export does not state the accelerometer's "
+                f"{'unit' if unit is None else 'sign convention'} and check=False forbids reading it "
+                "from the physics -- pass units={'acc': ...} and acc_convention=..."
+            )
         acc = raw * UNITS["acc"][unit] * (1.0 if stated_sign.value == "specific force" else -1.0)
         return acc, f"acc: {unit}, {stated_sign.value} ({by}; {stated_sign.by}); physics not checked (check=False)"
     shape = f"median |acc| {med:.3f} {unit or '(raw)'}, {steady:.0%} of samples within 10 % of it"
     if phys == "linear":
-        raise ValueError(f"{where}: the accelerometer reads {shape} -- far below gravity and never steady: linear "
-                         "acceleration (gravity removed), not the specific force a filter needs. Export the "
-                         "accelerometer with gravity (phyphox: 'Acceleration with g'; Sensor Logger: "
-                         "TotalAcceleration, or Gravity beside Accelerometer)")
+        raise ValueError(
+            f"{where}: the accelerometer reads {shape} -- far below gravity and never steady: linear "
+            "acceleration (gravity removed), not the specific force a filter needs. Export the "
+            "accelerometer with gravity (phyphox: 'Acceleration with g'; Sensor Logger: "
+            "TotalAcceleration, or Gravity beside Accelerometer)"
+        )
     if phys is None:
-        raise ValueError(f"{where}: the accelerometer reads {shape}, which is neither m/s² (9.81 at rest) nor g (1 "
-                         "at rest) -- another sensor's column, or raw counts? check columns= and units=")
+        raise ValueError(
+            f"{where}: the accelerometer reads {shape}, which is neither m/s² (9.81 at rest) nor g (1 "
+            "at rest) -- another sensor's column, or raw counts? check columns= and units="
+        )
     if unit is None:
         unit, how = phys, f"not stated; inferred from the physics: {shape}"
     elif unit != phys:
-        raise ValueError(f"{where}: the accelerometer reads {shape}, which is {phys}, not {unit} as {by} says -- "
-                         f"pass {_fix('acc', phys)}")
+        raise ValueError(
+            f"{where}: the accelerometer reads {shape}, which is {phys}, not {unit} as {by} says -- "
+            f"pass {_fix('acc', phys)}"
+        )
     else:
         how = f"{by}; physics agrees: {shape}"
     rest = _flat_rest(raw * UNITS["acc"][unit], fs)
     sign = stated_sign.value
     if rest is None:
         if sign is None:
-            raise ValueError(f"{where}: the export does not state the accelerometer's sign convention, and the phone "
-                             "never lay still and flat to tell it -- pass acc_convention='specific force' (Android, "
-                             "phyphox: +9.81 m/s² on z face up) or 'gravity' (iOS Core Motion: -1 g on z face up)")
+            raise ValueError(
+                f"{where}: the export does not state the accelerometer's sign convention, and the phone "
+                "never lay still and flat to tell it -- pass acc_convention='specific force' (Android, "
+                "phyphox: +9.81 m/s² on z face up) or 'gravity' (iOS Core Motion: -1 g on z face up)"
+            )
         sign_how = f"{sign} ({stated_sign.by}); not checked: the phone never lay still and flat"
     else:
         z, t_from, t_to = rest
@@ -972,10 +1099,12 @@ def _settle_acc(raw, stated_unit, stated_sign, fs, where, check):
         if sign is None:
             sign, sign_how = seen, f"{seen} (not stated; inferred: {posture})"
         elif sign != seen:
-            raise ValueError(f"{where}: {posture} (as the file has it, in m/s²), but {stated_sign.by} says "
-                             f"{sign!r}: a phone lying face up reads +9.81 m/s² on z as specific force and -9.81 "
-                             f"(-1 g) as the gravity vector, so this is the {seen} convention -- pass "
-                             f"acc_convention={seen!r} (or, if the phone really lay face down, check=False)")
+            raise ValueError(
+                f"{where}: {posture} (as the file has it, in m/s²), but {stated_sign.by} says "
+                f"{sign!r}: a phone lying face up reads +9.81 m/s² on z as specific force and -9.81 "
+                f"(-1 g) as the gravity vector, so this is the {seen} convention -- pass "
+                f"acc_convention={seen!r} (or, if the phone really lay face down, check=False)"
+            )
         else:
             sign_how = f"{sign} ({stated_sign.by}); physics agrees: {posture}"
     acc = raw * UNITS["acc"][unit] * (1.0 if sign == "specific force" else -1.0)
@@ -988,7 +1117,7 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
     if not check:
         return f"gyr: {unit} ({by}); physics not checked (check=False)"
     other = "deg/s" if unit == "rad/s" else "rad/s"
-    rad = gyr * UNITS["gyr"][unit]                         # gyr as the file has it, read in the stated unit
+    rad = gyr * UNITS["gyr"][unit]  # gyr as the file has it, read in the stated unit
     ratio, n = validate.gyro_tilt_ratio(rad, acc, fs)
     ratio_o, n_o = validate.gyro_tilt_ratio(gyr * UNITS["gyr"][other], acc, fs)
 
@@ -1002,25 +1131,36 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         cos, k = _tilt_direction(rad, acc, fs)
         turns = f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
         if k >= validate.TILT_WINDOWS_MIN and cos < 0.0:
-            raise ValueError(f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
-                             f"accelerometer (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
-                             "near +1): a mirrored frame -- axes read in the wrong order (Sensor Logger writes z, y, "
-                             "x; columns= lists x, y, z) or one sensor's sign flipped; no unit fixes it: check the "
-                             "file's header or columns=")
+            raise ValueError(
+                f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
+                f"accelerometer (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
+                "near +1): a mirrored frame -- axes read in the wrong order (Sensor Logger writes z, y, "
+                "x; columns= lists x, y, z) or one sensor's sign flipped; no unit fixes it: check the "
+                "file's header or columns="
+            )
         return f"gyr: {unit} ({by}); physics agrees: {seen(ratio, n, unit)}, {turns}"
     if fits(ratio_o, n_o):
         why = seen(ratio, n, unit) if n else f"read in {unit}, the gyro hardly turns while gravity does"
-        raise ValueError(f"{where}: {why} ({by}); {seen(ratio_o, n_o, other)}: the gyro is in {other} -- pass "
-                         f"{_fix('gyr', other)}")
+        raise ValueError(
+            f"{where}: {why} ({by}); {seen(ratio_o, n_o, other)}: the gyro is in {other} -- pass {_fix('gyr', other)}"
+        )
     norm = np.linalg.norm(rad, axis=1)
     top, med = float(norm.max()), float(np.median(norm))
     if top > 50.0 or med > 10.0:
-        raise ValueError(f"{where}: read in {unit} ({by}), the gyro peaks at {top:.4g} rad/s with a median of "
-                         f"{med:.3g}, far beyond a turning hand: the gyro is in deg/s -- pass {_fix('gyr', 'deg/s')}")
-    hint = (f"; read in {other}, {n_o} windows count (ratio {ratio_o:.2f}), under the {validate.TILT_WINDOWS_MIN} "
-            "the check needs" if 0 < n_o < validate.TILT_WINDOWS_MIN else "")
-    return (f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows{hint}), peak {top:.3g} rad/s "
-            f"and median {med:.3g} plausible")
+        raise ValueError(
+            f"{where}: read in {unit} ({by}), the gyro peaks at {top:.4g} rad/s with a median of "
+            f"{med:.3g}, far beyond a turning hand: the gyro is in deg/s -- pass {_fix('gyr', 'deg/s')}"
+        )
+    hint = (
+        f"; read in {other}, {n_o} windows count (ratio {ratio_o:.2f}), under the {validate.TILT_WINDOWS_MIN} "
+        "the check needs"
+        if 0 < n_o < validate.TILT_WINDOWS_MIN
+        else ""
+    )
+    return (
+        f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows{hint}), peak {top:.3g} rad/s "
+        f"and median {med:.3g} plausible"
+    )
 
 
 def _tilt_direction(gyr, acc, fs):
@@ -1035,15 +1175,14 @@ def _tilt_direction(gyr, acc, fs):
     nb = min(len(gyr), len(acc)) // m
     if nb < 2:
         return float("nan"), 0
-    a = acc[:nb * m].reshape(nb, m, 3).mean(axis=1)
+    a = acc[: nb * m].reshape(nb, m, 3).mean(axis=1)
     size = np.linalg.norm(a, axis=1)
     u = a / np.maximum(size, 1e-300)[:, None]
-    turn = gyr[:nb * m].reshape(nb, m, 3).sum(axis=1) / fs
+    turn = gyr[: nb * m].reshape(nb, m, 3).sum(axis=1) / fs
     predicted = np.cross(u[:-1], 0.5 * (turn[:-1] + turn[1:]))
     observed = u[1:] - u[:-1]
     p, o = np.linalg.norm(predicted, axis=1), np.linalg.norm(observed, axis=1)
-    use = ((size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size)) & (p > validate.TILT_MIN)
-           & (o > 0))
+    use = (size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size)) & (p > validate.TILT_MIN) & (o > 0)
     if not np.any(use):
         return float("nan"), 0
     cos = np.sum(predicted[use] * observed[use], axis=1) / (p[use] * o[use])
@@ -1060,8 +1199,10 @@ def _settle_mag(mag, stated, where, check):
     raw = med / UNITS["mag"][unit]
     fits = [u for u, f in UNITS["mag"].items() if 12.5 <= raw * f <= 130.0 and u != unit]
     hint = f"the magnetometer is in {fits[0]} -- pass {_fix('mag', fits[0])}" if fits else "not a field in any unit"
-    raise ValueError(f"{where}: read in {unit} ({by}), the median field strength is {med:.4g} µT, where the Earth's "
-                     f"is 25-65 µT: {hint}")
+    raise ValueError(
+        f"{where}: read in {unit} ({by}), the median field strength is {med:.4g} µT, where the Earth's "
+        f"is 25-65 µT: {hint}"
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -1071,16 +1212,21 @@ def _settle_mag(mag, stated, where, check):
 
 def _check_columns(columns, units):
     if not isinstance(columns, dict):
-        raise ValueError(f"columns must be a dict such as {{'t': 'time', 'gyr': ['gx', 'gy', 'gz'], 'acc': [...]}}; "
-                         f"got {type(columns).__name__}")
+        raise ValueError(
+            f"columns must be a dict such as {{'t': 'time', 'gyr': ['gx', 'gy', 'gz'], 'acc': [...]}}; "
+            f"got {type(columns).__name__}"
+        )
     extra = set(columns) - {"t", "gyr", "acc", "mag", "quat_phone"}
     if extra:
-        raise ValueError(f"columns has unknown keys {sorted(extra)}; the keys are 't', 'gyr', 'acc', 'mag', "
-                         "'quat_phone'")
+        raise ValueError(
+            f"columns has unknown keys {sorted(extra)}; the keys are 't', 'gyr', 'acc', 'mag', 'quat_phone'"
+        )
     for key in ("t", "gyr", "acc"):
         if key not in columns:
-            raise ValueError(f"columns must map {key!r} (the gyro and accelerometer are needed, with their time); got "
-                             f"keys {sorted(columns)}")
+            raise ValueError(
+                f"columns must map {key!r} (the gyro and accelerometer are needed, with their time); got "
+                f"keys {sorted(columns)}"
+            )
     if not isinstance(columns["t"], str):
         raise ValueError(f"columns['t'] must be one column name; got {columns['t']!r}")
     for key, n in (("gyr", 3), ("acc", 3), ("mag", 3), ("quat_phone", 4)):
@@ -1090,12 +1236,15 @@ def _check_columns(columns, units):
                 raise ValueError(f"columns[{key!r}] must be a list of {n} column names; got {names!r}")
     for key in [k for k in ("t", "gyr", "acc", "mag") if k in columns]:
         if key not in (units or {}):
-            raise ValueError(f"units must state the unit of {key!r} for a plain CSV (one of "
-                             f"{', '.join(map(repr, UNITS[key]))}): nothing in the file says it")
+            raise ValueError(
+                f"units must state the unit of {key!r} for a plain CSV (one of "
+                f"{', '.join(map(repr, UNITS[key]))}): nothing in the file says it"
+            )
 
 
-def load_recording(path, *, format=None, columns=None, units=None, acc_convention=None, fs=None, max_gap=MAX_GAP,
-                   check=True, name=None):
+def load_recording(
+    path, *, format=None, columns=None, units=None, acc_convention=None, fs=None, max_gap=MAX_GAP, check=True, name=None
+):
     """Load a phone's IMU export (phyphox, Sensor Logger, or a plain CSV), resampled onto one time base and checked.
 
     Parameters
@@ -1175,8 +1324,10 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
     if format is None:
         format = _detect(src)
         if format is None:
-            raise ValueError(f"{p} is neither a phyphox nor a Sensor Logger export (no header they write): for another "
-                             "app's CSV pass columns= and units=")
+            raise ValueError(
+                f"{p} is neither a phyphox nor a Sensor Logger export (no header they write): for another "
+                "app's CSV pass columns= and units="
+            )
     if format == "phyphox":
         export = _read_phyphox(src)
     elif format == "sensor_logger":
@@ -1186,8 +1337,10 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
     for key in ("gyr", "acc"):
         if key not in export.streams:
             held = ", ".join(_SENSOR_NAMES[k] for k in export.streams if k in _SENSOR_NAMES) or "no sensor"
-            raise ValueError(f"{p} holds no {_SENSOR_NAMES[key]}: both are needed (it holds the {held}) -- record the "
-                             "gyroscope and the accelerometer together")
+            raise ValueError(
+                f"{p} holds no {_SENSOR_NAMES[key]}: both are needed (it holds the {held}) -- record the "
+                "gyroscope and the accelerometer together"
+            )
     if units and export.format != "csv":
         if "t" in units:
             raise ValueError(f"units['t'] is for a plain CSV; the {export.format} export states its time unit")
@@ -1213,10 +1366,14 @@ def load_recording(path, *, format=None, columns=None, units=None, acc_conventio
         checks.append(_settle_mag(mag, export.units["mag"], st["mag"].where, check))
     checks += [f"note: {n}" for n in export.notes]
     gyro_rate = next(r.rate for r in reports if r.sensor == "gyr")
-    method = ("linear interpolation onto the gyro's median rate" if len(grid) and np.isclose(
-        fs, gyro_rate) else f"linear interpolation onto {fs:.2f} Hz")
-    summary = Summary(str(path), export.format, export.platform, fs, len(grid), float(start - origin), method,
-                      reports, tuple(checks))
+    method = (
+        "linear interpolation onto the gyro's median rate"
+        if len(grid) and np.isclose(fs, gyro_rate)
+        else f"linear interpolation onto {fs:.2f} Hz"
+    )
+    summary = Summary(
+        str(path), export.format, export.platform, fs, len(grid), float(start - origin), method, reports, tuple(checks)
+    )
     frozen = [_frozen(a) if a is not None else None for a in (gyr, acc, mag, values.get("quat_phone"))]
     return Recording(name or p.stem, fs, *frozen, float(export.t0 + start), summary)
 
@@ -1263,8 +1420,8 @@ def _frozen(a):
 # ----------------------------------------------------------------------------------------------------------------
 
 _TRIAL = "02_undisturbed_slow_rotation_B"
-_SEGMENT = (30.0, 61.5)                                   # s of the trial: 10 s at rest, then the slow rotation
-_EPOCH_NS = 1_700_000_000_000_000_000                     # a fixed, invented wall-clock start for Sensor Logger
+_SEGMENT = (30.0, 61.5)  # s of the trial: 10 s at rest, then the slow rotation
+_EPOCH_NS = 1_700_000_000_000_000_000  # a fixed, invented wall-clock start for Sensor Logger
 _SEED = 2021
 
 
@@ -1280,8 +1437,12 @@ def _broad_arrays(broad_dir):
     m = scipy.io.loadmat(str(path))
     fs = float(np.asarray(m["sampling_rate"]).reshape(-1)[0])
     i0, i1 = (int(round(s * fs)) for s in _SEGMENT)
-    return (np.asarray(m["imu_gyr"], float)[i0:i1], np.asarray(m["imu_acc"], float)[i0:i1],
-            np.asarray(m["imu_mag"], float)[i0:i1], fs)
+    return (
+        np.asarray(m["imu_gyr"], float)[i0:i1],
+        np.asarray(m["imu_acc"], float)[i0:i1],
+        np.asarray(m["imu_mag"], float)[i0:i1],
+        fs,
+    )
 
 
 def _clock(rng, rate, n_broad, fs_broad, jitter, drop=None):
@@ -1370,7 +1531,7 @@ def make_examples(out, broad_dir=None):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rngs = iter(np.random.default_rng(s) for s in np.random.SeedSequence(_SEED).spawn(16))
-    stamp = np.arange(n) / fs                             # BROAD's own instant of each sample, s
+    stamp = np.arange(n) / fs  # BROAD's own instant of each sample, s
     written = []
 
     # phyphox: per-sensor CSVs, full precision as phyphox writes them; a zip (comma, point) and a folder (semicolon,
@@ -1378,9 +1539,11 @@ def make_examples(out, broad_dir=None):
     device = '"property","value"\n"deviceModel","BROAD myon aktos-t (not a phone: see data/phone/README.md)"\n'
     for name, sep, comma in (("phyphox_trial02.zip", ",", False), ("phyphox_trial02_semicolon", ";", True)):
         files = {"meta/device.csv": device}
-        for file, v, unit, rate, drop in (("Accelerometer.csv", acc, "m/s^2", 100.0, None),
-                                          ("Gyroscope.csv", gyr, "rad/s", 100.0, (20.0, 4)),
-                                          ("Magnetometer.csv", mag, "µT", 50.0, None)):
+        for file, v, unit, rate, drop in (
+            ("Accelerometer.csv", acc, "m/s^2", 100.0, None),
+            ("Gyroscope.csv", gyr, "rad/s", 100.0, (20.0, 4)),
+            ("Magnetometer.csv", mag, "µT", 50.0, None),
+        ):
             idx = _clock(next(rngs), rate, n, fs, 0.0015, drop)
             files[file] = _phyphox_csv(stamp[idx], v[idx], unit, sep, comma)
         written += _write(out, name, files)
@@ -1388,34 +1551,48 @@ def make_examples(out, broad_dir=None):
     # Sensor Logger, Android: m/s², specific force; Accelerometer.csv is the linear acceleration and Gravity.csv the
     # phone's gravity estimate (here VQF's, 9D, on the same samples), on the same time stamps; Orientation.csv the
     # phone's own orientation estimate (here VQF 9D's, body->ENU)
-    quat = vqf.VQF(1.0 / fs).updateBatch(np.ascontiguousarray(gyr), np.ascontiguousarray(acc),
-                                         np.ascontiguousarray(mag))["quat9D"]
+    quat = vqf.VQF(1.0 / fs).updateBatch(
+        np.ascontiguousarray(gyr), np.ascontiguousarray(acc), np.ascontiguousarray(mag)
+    )["quat9D"]
     gravity = rotations.quat_rotate(rotations.quat_conjugate(quat), np.array([0.0, 0.0, earth.G]))
     ns = _EPOCH_NS + np.round(stamp * 1e9).astype(np.int64)
-    meta = ("version,device name,recording epoch time,recording time,recording timezone,platform,appVersion,"
-            "sensors,sampleRateMs,standardisation\n"
-            "{v},BROAD myon aktos-t (not a phone),{e},2021-07-01_00-00-00,UTC,{p},{a},{s},{r},false\n")
+    meta = (
+        "version,device name,recording epoch time,recording time,recording timezone,platform,appVersion,"
+        "sensors,sampleRateMs,standardisation\n"
+        "{v},BROAD myon aktos-t (not a phone),{e},2021-07-01_00-00-00,UTC,{p},{a},{s},{r},false\n"
+    )
     ia, ig, im = (_clock(next(rngs), r, n, fs, 0.002, d) for r, d in ((100.0, None), (100.0, None), (50.0, (15.0, 3))))
     iq = _clock(next(rngs), 50.0, n, fs, 0.002)
-    files = {"Accelerometer.csv": _sl_csv(ns[ia], (acc - gravity)[ia][:, ::-1]),
-             "Gravity.csv": _sl_csv(ns[ia], gravity[ia][:, ::-1]),
-             "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
-             "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
-             "Orientation.csv": _sl_csv(ns[iq], quat[iq][:, [3, 2, 1, 0]], names=("qz", "qy", "qx", "qw")),
-             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="android", a="1.0", r="10|10|20|10|20",
-                                         s="Accelerometer|Gravity|Gyroscope|Magnetometer|Orientation")}
+    files = {
+        "Accelerometer.csv": _sl_csv(ns[ia], (acc - gravity)[ia][:, ::-1]),
+        "Gravity.csv": _sl_csv(ns[ia], gravity[ia][:, ::-1]),
+        "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
+        "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
+        "Orientation.csv": _sl_csv(ns[iq], quat[iq][:, [3, 2, 1, 0]], names=("qz", "qy", "qx", "qw")),
+        "Metadata.csv": meta.format(
+            v=3,
+            e=_EPOCH_NS,
+            p="android",
+            a="1.0",
+            r="10|10|20|10|20",
+            s="Accelerometer|Gravity|Gyroscope|Magnetometer|Orientation",
+        ),
+    }
     written += _write(out, "sensorlogger_android_trial02.zip", files)
 
     # Sensor Logger, iOS: as the app writes it there, Accelerometer.csv (Core Motion's user acceleration) and
     # Gravity.csv, both in m/s² and with Core Motion's gravity-vector sign (gravity -9.81 on z face up: their sum is
     # minus the specific force); rad/s, µT
     ia, ig, im = (_clock(next(rngs), 100.0, n, fs, 0.0005, d) for d in (None, (12.0, 2), None))
-    files = {"Accelerometer.csv": _sl_csv(ns[ia], (gravity - acc)[ia][:, ::-1]),
-             "Gravity.csv": _sl_csv(ns[ia], (-gravity)[ia][:, ::-1]),
-             "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
-             "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
-             "Metadata.csv": meta.format(v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10|10",
-                                         s="Accelerometer|Gravity|Gyroscope|Magnetometer")}
+    files = {
+        "Accelerometer.csv": _sl_csv(ns[ia], (gravity - acc)[ia][:, ::-1]),
+        "Gravity.csv": _sl_csv(ns[ia], (-gravity)[ia][:, ::-1]),
+        "Gyroscope.csv": _sl_csv(ns[ig], gyr[ig][:, ::-1]),
+        "Magnetometer.csv": _sl_csv(ns[im], mag[im][:, ::-1]),
+        "Metadata.csv": meta.format(
+            v=3, e=_EPOCH_NS, p="ios", a="1.0", r="10|10|10|10", s="Accelerometer|Gravity|Gyroscope|Magnetometer"
+        ),
+    }
     written += _write(out, "sensorlogger_ios_trial02.zip", files)
 
     # a plain CSV of another logger: one clock, ms; gyro in deg/s, accelerometer in g (specific force), field in nT,
@@ -1424,13 +1601,18 @@ def make_examples(out, broad_dir=None):
     rows = ["time_ms,gx,gy,gz,ax,ay,az,mx,my,mz"]
     for k, i in enumerate(idx):
         m = ",".join(f"{x:.1f}" for x in mag[i] * 1e3) if k % 2 == 0 else ",,"
-        rows.append(f"{stamp[i] * 1e3:.3f}," + ",".join(f"{x:.5f}" for x in np.degrees(gyr[i])) + ","
-                    + ",".join(f"{x:.6f}" for x in acc[i] / earth.G) + "," + m)
+        rows.append(
+            f"{stamp[i] * 1e3:.3f},"
+            + ",".join(f"{x:.5f}" for x in np.degrees(gyr[i]))
+            + ","
+            + ",".join(f"{x:.6f}" for x in acc[i] / earth.G)
+            + ","
+            + m
+        )
     (out / "plain_trial02.csv").write_bytes(("\n".join(rows) + "\n").encode("utf-8"))
     written.append(out / "plain_trial02.csv")
 
-    sums = "".join(f"{hashlib.sha256(f.read_bytes()).hexdigest()}  {f.relative_to(out).as_posix()}\n"
-                   for f in written)
+    sums = "".join(f"{hashlib.sha256(f.read_bytes()).hexdigest()}  {f.relative_to(out).as_posix()}\n" for f in written)
     (out / "SHA256SUMS").write_text(sums, encoding="utf-8")
     return written + [out / "SHA256SUMS"]
 
@@ -1443,8 +1625,10 @@ def main(argv=None):
     argv : list of str, optional
         Command-line arguments (default ``sys.argv[1:]``).
     """
-    parser = argparse.ArgumentParser(prog="python -m fusionlab.recordings",
-                                     description="Write data/phone/: BROAD trial 2 in phone apps' export formats.")
+    parser = argparse.ArgumentParser(
+        prog="python -m fusionlab.recordings",
+        description="Write data/phone/: BROAD trial 2 in phone apps' export formats.",
+    )
     parser.add_argument("--out", default="data/phone/", help="folder to write into (default data/phone/)")
     parser.add_argument("--broad", default=None, help="folder holding BROAD's 02_undisturbed_slow_rotation_B.mat")
     args = parser.parse_args(argv)

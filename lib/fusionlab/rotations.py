@@ -21,6 +21,7 @@ functions that convert a seed's convention to this one at the seed's edge (nothi
 convention). The passive elementary matrices :func:`frame_rot_x` ... :func:`frame_rot_z` are here because they are
 plain conversions (``rot_x(angle).T``) that several seeds print.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,13 +29,38 @@ import numpy as np
 from . import validate
 
 __all__ = [
-    "skew", "rot_x", "rot_y", "rot_z", "frame_rot_x", "frame_rot_y", "frame_rot_z",
-    "euler_to_dcm", "dcm_to_euler", "sequence_to_dcm", "dcm_to_sequence", "dcm_to_quat", "quat_to_dcm",
-    "euler_to_quat", "quat_to_euler",
-    "quat_multiply", "quat_conjugate", "quat_normalize", "quat_rotate", "quat_angle_between",
-    "rotvec_to_quat", "quat_to_rotvec", "rodrigues_dcm", "dcm_renormalize", "is_rotation",
-    "euler_rates_matrix", "body_rates_matrix", "integrate_gyro_dcm", "integrate_gyro_quat",
-    "NED_ENU", "dcm_nav_swap", "quat_nav_swap",
+    "skew",
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "frame_rot_x",
+    "frame_rot_y",
+    "frame_rot_z",
+    "euler_to_dcm",
+    "dcm_to_euler",
+    "sequence_to_dcm",
+    "dcm_to_sequence",
+    "dcm_to_quat",
+    "quat_to_dcm",
+    "euler_to_quat",
+    "quat_to_euler",
+    "quat_multiply",
+    "quat_conjugate",
+    "quat_normalize",
+    "quat_rotate",
+    "quat_angle_between",
+    "rotvec_to_quat",
+    "quat_to_rotvec",
+    "rodrigues_dcm",
+    "dcm_renormalize",
+    "is_rotation",
+    "euler_rates_matrix",
+    "body_rates_matrix",
+    "integrate_gyro_dcm",
+    "integrate_gyro_quat",
+    "NED_ENU",
+    "dcm_nav_swap",
+    "quat_nav_swap",
 ]
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -67,9 +93,7 @@ def skew(v):
     v = validate.vectors(v, "v")
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
     o = np.zeros_like(x)
-    return np.stack([np.stack([o, -z, y], -1),
-                     np.stack([z, o, -x], -1),
-                     np.stack([-y, x, o], -1)], -2)
+    return np.stack([np.stack([o, -z, y], -1), np.stack([z, o, -x], -1), np.stack([-y, x, o], -1)], -2)
 
 
 def _elementary(angle, name, axis):
@@ -80,9 +104,11 @@ def _elem(a, axis):
     """The active elementary rotation about ``axis`` of already checked angles ``a`` (rad)."""
     c, s = np.cos(a), np.sin(a)
     o, i = np.zeros_like(a), np.ones_like(a)
-    rows = {0: [[i, o, o], [o, c, -s], [o, s, c]],
-            1: [[c, o, s], [o, i, o], [-s, o, c]],
-            2: [[c, -s, o], [s, c, o], [o, o, i]]}[axis]
+    rows = {
+        0: [[i, o, o], [o, c, -s], [o, s, c]],
+        1: [[c, o, s], [o, i, o], [-s, o, c]],
+        2: [[c, -s, o], [s, c, o], [o, o, i]],
+    }[axis]
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
@@ -220,7 +246,7 @@ def euler_to_dcm(euler):
     array([0., 1., 0.])
     """
     e = validate.euler_rad(euler, "euler")
-    return _elem(e[..., 2], 2) @ _elem(e[..., 1], 1) @ _elem(e[..., 0], 0)   # (000 eq 3.40): Rz Ry Rx
+    return _elem(e[..., 2], 2) @ _elem(e[..., 1], 1) @ _elem(e[..., 0], 0)  # (000 eq 3.40): Rz Ry Rx
 
 
 def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
@@ -260,20 +286,20 @@ def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
     >>> np.round(np.degrees(rotations.dcm_to_euler(C_bn)), 6) + 0.0
     array([-20.,  90.,   0.])
     """
-    C = validate.rotation(C_bn, "C_bn", tol=0.05)      # a drifted DCM still reads (to ~2°); a reflection does not
+    C = validate.rotation(C_bn, "C_bn", tol=0.05)  # a drifted DCM still reads (to ~2°); a reflection does not
     yaw_at_lock = validate.scalar(validate.angles_rad(yaw_at_lock, "yaw_at_lock"), "yaw_at_lock")
     lock_tol = validate.positive(lock_tol, "lock_tol")
     r11, r21, r31 = C[..., 0, 0], C[..., 1, 0], C[..., 2, 0]
     cos_pitch = np.hypot(r11, r21)
-    pitch = np.arctan2(-r31, cos_pitch)                                   # (000 eq 3.69), robust near ±1
+    pitch = np.arctan2(-r31, cos_pitch)  # (000 eq 3.69), robust near ±1
     lock = cos_pitch < lock_tol
-    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])                         # (000 eq 3.72)
-    yaw = np.arctan2(r21, r11)                                            # (000 eq 3.75)
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])  # (000 eq 3.72)
+    yaw = np.arctan2(r21, r11)  # (000 eq 3.75)
     if np.any(lock):
         r12, r13 = C[..., 0, 1], C[..., 0, 2]
-        up = r31 < 0                                                      # θ = +90° has r31 = -1
-        roll_up = yaw_at_lock + np.arctan2(r12, r13)                      # (000 eq 3.81, corrected)
-        roll_down = -yaw_at_lock + np.arctan2(-r12, -r13)                 # (000 eq 3.79, corrected)
+        up = r31 < 0  # θ = +90° has r31 = -1
+        roll_up = yaw_at_lock + np.arctan2(r12, r13)  # (000 eq 3.81, corrected)
+        roll_down = -yaw_at_lock + np.arctan2(-r12, -r13)  # (000 eq 3.79, corrected)
         roll = np.where(lock, _wrap(np.where(up, roll_up, roll_down)), roll)
         yaw = np.where(lock, yaw_at_lock, yaw)
     return np.stack([roll, pitch, yaw], -1)
@@ -297,7 +323,7 @@ def sequence_to_dcm(angles, seq):
     ndarray, shape (..., 3, 3)
         The rotation matrices.
     """
-    a = validate.vectors(angles, "angles")        # any magnitude: Lab 01's check tries an answer both ways
+    a = validate.vectors(angles, "angles")  # any magnitude: Lab 01's check tries an answer both ways
     _check_seq(seq)
     ax = {"X": 0, "Y": 1, "Z": 2}
     return _elem(a[..., 0], ax[seq[0]]) @ _elem(a[..., 1], ax[seq[1]]) @ _elem(a[..., 2], ax[seq[2]])
@@ -322,6 +348,7 @@ def dcm_to_sequence(C, seq):
         The angles in the order of ``seq``, rad.
     """
     from scipy.spatial.transform import Rotation
+
     C = validate.matrices(C, "C")
     validate.rotation(C, "C")
     _check_seq(seq)
@@ -330,8 +357,9 @@ def dcm_to_sequence(C, seq):
 
 def _check_seq(seq):
     if not (isinstance(seq, str) and len(seq) == 3 and set(seq) <= set("XYZ") and seq[0] != seq[1] != seq[2]):
-        raise ValueError(f"seq must be three axis letters from 'XYZ' with no letter twice in a row, e.g. 'ZYX'; "
-                         f"got {seq!r}")
+        raise ValueError(
+            f"seq must be three axis letters from 'XYZ' with no letter twice in a row, e.g. 'ZYX'; got {seq!r}"
+        )
 
 
 def _wrap(a):
@@ -353,10 +381,14 @@ def quat_to_dcm(q):
     """
     q = validate.quaternions(q, "q")
     w, x, y, z = (q[..., i] for i in range(4))
-    return np.stack([
-        np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1)], -2)
+    return np.stack(
+        [
+            np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1),
+        ],
+        -2,
+    )
 
 
 def dcm_to_quat(C_bn):
@@ -379,14 +411,41 @@ def dcm_to_quat(C_bn):
     d = np.stack([tr, C[..., 0, 0], C[..., 1, 1], C[..., 2, 2]], -1)
     k = np.argmax(d, axis=-1)
     # four candidate quaternions, each computed from the largest component in its own row
-    cand = np.stack([
-        np.stack([1 + tr, C[..., 2, 1] - C[..., 1, 2], C[..., 0, 2] - C[..., 2, 0], C[..., 1, 0] - C[..., 0, 1]], -1),
-        np.stack([C[..., 2, 1] - C[..., 1, 2], 1 + 2 * C[..., 0, 0] - tr, C[..., 0, 1] + C[..., 1, 0],
-                  C[..., 0, 2] + C[..., 2, 0]], -1),
-        np.stack([C[..., 0, 2] - C[..., 2, 0], C[..., 0, 1] + C[..., 1, 0], 1 + 2 * C[..., 1, 1] - tr,
-                  C[..., 1, 2] + C[..., 2, 1]], -1),
-        np.stack([C[..., 1, 0] - C[..., 0, 1], C[..., 0, 2] + C[..., 2, 0], C[..., 1, 2] + C[..., 2, 1],
-                  1 + 2 * C[..., 2, 2] - tr], -1)], -2)
+    cand = np.stack(
+        [
+            np.stack(
+                [1 + tr, C[..., 2, 1] - C[..., 1, 2], C[..., 0, 2] - C[..., 2, 0], C[..., 1, 0] - C[..., 0, 1]], -1
+            ),
+            np.stack(
+                [
+                    C[..., 2, 1] - C[..., 1, 2],
+                    1 + 2 * C[..., 0, 0] - tr,
+                    C[..., 0, 1] + C[..., 1, 0],
+                    C[..., 0, 2] + C[..., 2, 0],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    C[..., 0, 2] - C[..., 2, 0],
+                    C[..., 0, 1] + C[..., 1, 0],
+                    1 + 2 * C[..., 1, 1] - tr,
+                    C[..., 1, 2] + C[..., 2, 1],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    C[..., 1, 0] - C[..., 0, 1],
+                    C[..., 0, 2] + C[..., 2, 0],
+                    C[..., 1, 2] + C[..., 2, 1],
+                    1 + 2 * C[..., 2, 2] - tr,
+                ],
+                -1,
+            ),
+        ],
+        -2,
+    )
     q = np.take_along_axis(cand, k[..., None, None], axis=-2)[..., 0, :]
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     return np.where(q[..., :1] < 0, -q, q)
@@ -469,10 +528,15 @@ def quat_multiply(p, q):
     validate.broadcast({"p": 1, "q": 1}, p=p, q=q)
     pw, px, py, pz = (p[..., i] for i in range(4))
     qw, qx, qy, qz = (q[..., i] for i in range(4))
-    return np.stack([pw * qw - px * qx - py * qy - pz * qz,
-                     pw * qx + px * qw + py * qz - pz * qy,
-                     pw * qy - px * qz + py * qw + pz * qx,
-                     pw * qz + px * qy - py * qx + pz * qw], -1)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        -1,
+    )
 
 
 def quat_conjugate(q):
@@ -568,8 +632,8 @@ def quat_angle_between(q1, q2):
     q1 = validate.quaternions(q1, "q1")
     q2 = validate.quaternions(q2, "q2")
     validate.broadcast({"q1": 1, "q2": 1}, q1=q1, q2=q2)
-    d = quat_multiply(quat_conjugate(q1), q2)                            # q1* ⊗ q2: the relative rotation
-    return 2 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))   # exact near 0, unlike acos
+    d = quat_multiply(quat_conjugate(q1), q2)  # q1* ⊗ q2: the relative rotation
+    return 2 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))  # exact near 0, unlike acos
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -613,7 +677,7 @@ def rotvec_to_quat(sigma, order="exact"):
     s = np.linalg.norm(sigma, axis=-1, keepdims=True)
     small = s < 1e-6
     s_ = np.where(small, 1.0, s)
-    k = np.where(small, 0.5 - s ** 2 / 48, np.sin(s_ / 2) / s_)          # sin(s/2)/s
+    k = np.where(small, 0.5 - s**2 / 48, np.sin(s_ / 2) / s_)  # sin(s/2)/s
     return np.concatenate([np.cos(s / 2), k * sigma], -1)
 
 
@@ -671,10 +735,10 @@ def rodrigues_dcm(sigma, order="exact"):
            [ 0. ,  0. ,  1. ]])
     """
     sigma = validate.rotation_vectors(sigma, "sigma")
-    B = skew(sigma)                                                       # (000 eq 3.53)
+    B = skew(sigma)  # (000 eq 3.53)
     eye = np.broadcast_to(np.eye(3), B.shape)
     if order == "first":
-        return eye + B                                                    # (000 eq 3.55)
+        return eye + B  # (000 eq 3.55)
     if order == "second":
         return eye + B + B @ B / 2
     if order != "exact":
@@ -682,9 +746,9 @@ def rodrigues_dcm(sigma, order="exact"):
     s = np.linalg.norm(sigma, axis=-1)[..., None, None]
     small = s < 1e-6
     s_ = np.where(small, 1.0, s)
-    a = np.where(small, 1 - s ** 2 / 6, np.sin(s_) / s_)
-    b = np.where(small, 0.5 - s ** 2 / 24, (1 - np.cos(s_)) / s_ ** 2)   # printed: (1 - cos s)/s
-    return eye + a * B + b * (B @ B)                                      # (000 eq 3.54, corrected)
+    a = np.where(small, 1 - s**2 / 6, np.sin(s_) / s_)
+    b = np.where(small, 0.5 - s**2 / 24, (1 - np.cos(s_)) / s_**2)  # printed: (1 - cos s)/s
+    return eye + a * B + b * (B @ B)  # (000 eq 3.54, corrected)
 
 
 def dcm_renormalize(C, axis="columns"):
@@ -706,15 +770,15 @@ def dcm_renormalize(C, axis="columns"):
     ndarray, shape (..., 3, 3)
         The corrected matrices, orthonormal to first order in the error.
     """
-    C = validate.rotation(C, "C", tol=0.25)      # drifted, not degenerate: a zero or reflected C has no fix
+    C = validate.rotation(C, "C", tol=0.25)  # drifted, not degenerate: a zero or reflected C has no fix
     if axis not in ("columns", "rows"):
         raise ValueError(f"axis must be 'columns' or 'rows'; got {axis!r}")
     M = np.swapaxes(C, -1, -2) if axis == "columns" else C
     r1, r2 = M[..., 0, :], M[..., 1, :]
-    err = np.sum(r1 * r2, axis=-1, keepdims=True)                         # (000 eq 3.59)
-    r1n = r1 - err / 2 * r2                                               # (000 eq 3.60)
-    r2n = r2 - err / 2 * r1                                               # (000 eq 3.61)
-    r3n = np.cross(r1n, r2n)                                              # (000 eq 3.62)
+    err = np.sum(r1 * r2, axis=-1, keepdims=True)  # (000 eq 3.59)
+    r1n = r1 - err / 2 * r2  # (000 eq 3.60)
+    r2n = r2 - err / 2 * r1  # (000 eq 3.61)
+    r3n = np.cross(r1n, r2n)  # (000 eq 3.62)
     out = np.stack([(3 - np.sum(r * r, axis=-1, keepdims=True)) / 2 * r for r in (r1n, r2n, r3n)], -2)  # (3.63-65)
     return np.swapaxes(out, -1, -2) if axis == "columns" else out
 
@@ -768,9 +832,10 @@ def euler_rates_matrix(roll, pitch):
     r, p = _roll_pitch(roll, pitch)
     sr, cr, tp, cp = np.sin(r), np.cos(r), np.tan(p), np.cos(p)
     o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
-    return np.stack([np.stack([i, sr * tp, cr * tp], -1),
-                     np.stack([o, cr + o, -sr + o], -1),
-                     np.stack([o, sr / cp, cr / cp], -1)], -2)          # (001 Euler §7, D)
+    return np.stack(
+        [np.stack([i, sr * tp, cr * tp], -1), np.stack([o, cr + o, -sr + o], -1), np.stack([o, sr / cp, cr / cp], -1)],
+        -2,
+    )  # (001 Euler §7, D)
 
 
 def body_rates_matrix(roll, pitch):
@@ -793,9 +858,9 @@ def body_rates_matrix(roll, pitch):
     r, p = _roll_pitch(roll, pitch)
     sr, cr, sp, cp = np.sin(r), np.cos(r), np.sin(p), np.cos(p)
     o, i = np.zeros_like(sr * cp), np.ones_like(sr * cp)
-    return np.stack([np.stack([i, o, -sp + o], -1),
-                     np.stack([o, cr + o, sr * cp], -1),
-                     np.stack([o, -sr + o, cr * cp], -1)], -2)
+    return np.stack(
+        [np.stack([i, o, -sp + o], -1), np.stack([o, cr + o, sr * cp], -1), np.stack([o, -sr + o, cr * cp], -1)], -2
+    )
 
 
 def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
@@ -845,7 +910,7 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     out = np.empty((len(gyr) + 1, 3, 3))
     out[0] = C
     for k in range(len(gyr)):
-        C = C @ A[k]                                                      # (000 eq 3.44)
+        C = C @ A[k]  # (000 eq 3.44)
         if renormalize:
             C = dcm_renormalize(C, axis=renormalize)
         out[k + 1] = C
@@ -890,9 +955,13 @@ def integrate_gyro_quat(q0, gyr, dt):
     out = np.empty((len(gyr) + 1, 4))
     out[0] = q
     w, x, y, z = q
-    for k, (a, b, c, d) in enumerate(dq):                                 # Hamilton product, unrolled for speed
-        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
-                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
+    for k, (a, b, c, d) in enumerate(dq):  # Hamilton product, unrolled for speed
+        w, x, y, z = (
+            w * a - x * b - y * c - z * d,
+            w * b + x * a + y * d - z * c,
+            w * c - x * d + y * a + z * b,
+            w * d + x * c - y * b + z * a,
+        )
         n = (w * w + x * x + y * y + z * z) ** 0.5
         w, x, y, z = w / n, x / n, y / n, z / n
         out[k + 1] = (w, x, y, z)
@@ -905,7 +974,7 @@ def integrate_gyro_quat(q0, gyr, dt):
 
 #: Re-expresses navigation coordinates NED ↔ ENU (its own inverse): ``v_enu = NED_ENU @ v_ned``.
 NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-_Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])            # the quaternion of NED_ENU
+_Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])  # the quaternion of NED_ENU
 
 
 def dcm_nav_swap(C_bn):
@@ -941,4 +1010,3 @@ def quat_nav_swap(q):
     q = validate.quaternions(q, "q")
     out = quat_multiply(_Q_NED_ENU, q)
     return np.where(out[..., :1] < 0, -out, out)
-

@@ -20,6 +20,7 @@ independent), a diagonal sensitivity ``S(T)`` and a bias ``β(T)``; the temperat
 ``correct(measure(x)) == x`` to rounding for any invertible ``M``, ``S``, ``D_s``. Standard gravity is
 :data:`fusionlab.earth.G`; navigation frames are NED or ENU, as each function says.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -27,9 +28,20 @@ import numpy as np
 from . import earth, validate
 
 __all__ = [
-    "accel_measure", "accel_correct", "gyro_measure_full", "gyro_correct", "mag_measure", "mag_correct",
-    "seed001_mag_correct_printed", "gyro_noise", "allan_model",
-    "remove_gravity", "dead_reckon", "seed001_table1", "tilt_error_position", "gyro_bias_position",
+    "accel_measure",
+    "accel_correct",
+    "gyro_measure_full",
+    "gyro_correct",
+    "mag_measure",
+    "mag_correct",
+    "seed001_mag_correct_printed",
+    "gyro_noise",
+    "allan_model",
+    "remove_gravity",
+    "dead_reckon",
+    "seed001_table1",
+    "tilt_error_position",
+    "gyro_bias_position",
     "observer_steady_state_error",
 ]
 
@@ -102,7 +114,7 @@ def accel_measure(f, M, S, beta):
     """
     f = validate.accel_ms2(f, "f", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return (f @ S.T - beta) @ M.T                                        # (001 sensors §2, model)
+    return (f @ S.T - beta) @ M.T  # (001 sensors §2, model)
 
 
 def accel_correct(a_m, M, S, beta):
@@ -128,7 +140,7 @@ def accel_correct(a_m, M, S, beta):
     """
     a_m = validate.accel_ms2(a_m, "a_m", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "accelerometer")
-    return _solve(S, _solve(M, a_m) + beta)                                 # (001 sensors §2, correction)
+    return _solve(S, _solve(M, a_m) + beta)  # (001 sensors §2, correction)
 
 
 def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
@@ -158,7 +170,7 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     p = validate.vectors(rate, "rate")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, rate=p)
-    return (p @ S.T - beta + g_term) @ M.T                               # (001 sensors §3, solved for p_m)
+    return (p @ S.T - beta + g_term) @ M.T  # (001 sensors §3, solved for p_m)
 
 
 def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
@@ -187,7 +199,7 @@ def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
     p_m = validate.vectors(p_m, "p_m")
     M, S, beta = _triad_params(M, S, beta, "gyro")
     g_term = _g_sensitivity(C_ga, a_c, p_m=p_m)
-    return _solve(S, _solve(M, p_m) + beta - g_term)                       # (001 sensors §3, correction)
+    return _solve(S, _solve(M, p_m) + beta - g_term)  # (001 sensors §3, correction)
 
 
 def _g_sensitivity(C_ga, a_c, **rates):
@@ -236,7 +248,7 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     b = validate.field_uT(validate.vectors(b, "b"), "b", per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    return (_solve(D, b + h) @ S.T - beta) @ M.T                       # (001 sensors §4, solved for b_m)
+    return (_solve(D, b + h) @ S.T - beta) @ M.T  # (001 sensors §4, solved for b_m)
 
 
 def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
@@ -267,8 +279,8 @@ def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
     b_m = validate.field_uT(validate.vectors(b_m, "b_m"), "b_m", *validate.RAW_FIELD_UT, per_sample=False)
     M, S, beta = _triad_params(M, S, beta, "magnetometer")
     D, h = _iron(D_s, beta_h)
-    b = _solve(S, _solve(M, b_m) + beta)                                  # S_b⁻¹(M_b⁻¹ b_m + β_b)
-    return b @ D.T - h                                                   # (001 sensors §4: b_c = D_s b − β_h)
+    b = _solve(S, _solve(M, b_m) + beta)  # S_b⁻¹(M_b⁻¹ b_m + β_b)
+    return b @ D.T - h  # (001 sensors §4: b_c = D_s b − β_h)
 
 
 def _iron(D_s, beta_h):
@@ -343,15 +355,17 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     """
     n = validate.count(n, "n", 2)
     fs = validate.sample_rate(fs, "fs")
-    N, B, K = (validate.scalar(v, name, nonnegative=True) for v, name in
-               ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
+    N, B, K = (
+        validate.scalar(v, name, nonnegative=True)
+        for v, name in ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw"))
+    )
     rng = validate.generator(rng, "rng")
-    out = N * np.sqrt(fs) * rng.standard_normal(n)                      # white rate: ARW
+    out = N * np.sqrt(fs) * rng.standard_normal(n)  # white rate: ARW
     if B > 0:
         spec = np.fft.rfft(rng.standard_normal(n))
         f = np.fft.rfftfreq(n, 1 / fs)
         shape = np.zeros_like(f)
-        shape[1:] = np.sqrt(B ** 2 / (np.pi * f[1:]) * fs / 2)         # white of unit variance has PSD 2/fs
+        shape[1:] = np.sqrt(B**2 / (np.pi * f[1:]) * fs / 2)  # white of unit variance has PSD 2/fs
         out += np.fft.irfft(spec * shape, n)
     if K > 0:
         out += np.cumsum(K * np.sqrt(1 / fs) * rng.standard_normal(n))  # (004 eq 2.6 random walk)
@@ -386,9 +400,11 @@ def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
     (array([0.01]), array([0.001]))
     """
     tau = validate.positive_array(tau, "tau")
-    arw, bias_instability, rrw = (validate.scalar(v, name, nonnegative=True) for v, name in
-                                  ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw")))
-    return np.sqrt(arw ** 2 / tau + 2 * np.log(2) / np.pi * bias_instability ** 2 + rrw ** 2 * tau / 3)
+    arw, bias_instability, rrw = (
+        validate.scalar(v, name, nonnegative=True)
+        for v, name in ((arw, "arw"), (bias_instability, "bias_instability"), (rrw, "rrw"))
+    )
+    return np.sqrt(arw**2 / tau + 2 * np.log(2) / np.pi * bias_instability**2 + rrw**2 * tau / 3)
 
 
 def remove_gravity(q_bn, acc, g=earth.G, frame="NED"):
@@ -418,6 +434,7 @@ def remove_gravity(q_bn, acc, g=earth.G, frame="NED"):
     array([0., 0., 0.])
     """
     from . import rotations
+
     if frame not in ("NED", "ENU"):
         raise ValueError(f"frame must be 'NED' or 'ENU'; got {frame!r}")
     g = validate.positive(g, "g")
@@ -425,7 +442,7 @@ def remove_gravity(q_bn, acc, g=earth.G, frame="NED"):
     acc = validate.accel_ms2(acc, "acc", g=g, per_sample=False)
     validate.broadcast({"q_bn": 1, "acc": 1}, q_bn=q_bn, acc=acc)
     g_n = np.array([0.0, 0.0, g if frame == "NED" else -g])
-    return rotations.quat_rotate(q_bn, acc) + g_n                       # (001 position §1: a_I = R_B^I a_m + g)
+    return rotations.quat_rotate(q_bn, acc) + g_n  # (001 position §1: a_I = R_B^I a_m + g)
 
 
 def dead_reckon(acc_nav, dt, v0=None, p0=None):
@@ -465,10 +482,10 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     dt = validate.time_step(dt, "dt")
     v0 = np.zeros(3) if v0 is None else validate.array(v0, "v0", shape=(3,))
     p0 = np.zeros(3) if p0 is None else validate.array(p0, "p0", shape=(3,))
-    if len(a) == 0:                                  # no sample, no state: not the initial one alone
+    if len(a) == 0:  # no sample, no state: not the initial one alone
         return np.zeros((0, 3)), np.zeros((0, 3))
-    v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])     # (001 position §3, v update)
-    p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])     # (001 position §3, r update)
+    v = v0 + np.concatenate([np.zeros((1, 3)), np.cumsum(a[:-1] * dt, axis=0)])  # (001 position §3, v update)
+    p = p0 + np.concatenate([np.zeros((1, 3)), np.cumsum(v[:-1] * dt, axis=0)])  # (001 position §3, r update)
     return v, p
 
 
@@ -510,10 +527,10 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     """
     d = np.radians(validate.array(angle_deg, "angle_deg")).reshape(-1)
     t = validate.nonnegative(t, "t").reshape(-1)
-    a = validate.positive(g, "g") * np.sin(d)                           # (001 Table 1, acc column)
+    a = validate.positive(g, "g") * np.sin(d)  # (001 Table 1, acc column)
     vel = a[:, None] * t
-    coef = 1.0 if validate.flag(printed, "printed") else 0.5           # printed a·t², kinematic ½·a·t²
-    pos = a[:, None] * t ** 2 * coef
+    coef = 1.0 if validate.flag(printed, "printed") else 0.5  # printed a·t², kinematic ½·a·t²
+    pos = a[:, None] * t**2 * coef
     return a, vel, pos
 
 
@@ -535,7 +552,7 @@ def tilt_error_position(t, angle_err, g=earth.G):
         Position error, m.
     """
     t = validate.nonnegative(t, "t")
-    return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t ** 2
+    return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t**2
 
 
 def gyro_bias_position(t, bias, g=earth.G):
@@ -557,7 +574,7 @@ def gyro_bias_position(t, bias, g=earth.G):
         Position error, m.
     """
     t = validate.nonnegative(t, "t")
-    return validate.positive(g, "g") * validate.array(bias, "bias") * t ** 3 / 6
+    return validate.positive(g, "g") * validate.array(bias, "bias") * t**3 / 6
 
 
 def observer_steady_state_error(L, T, bias):
@@ -588,6 +605,7 @@ def observer_steady_state_error(L, T, bias):
     """
     L = validate.scalar(L, "L")
     if not 0.0 < L <= 1.0:
-        raise ValueError(f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); "
-                         f"got {L}")
+        raise ValueError(
+            f"L must lie in (0, 1] (L = 0 never corrects the bias: the error grows without bound); got {L}"
+        )
     return (1 - L) * validate.positive(T, "T") * validate.array(bias, "bias") / L

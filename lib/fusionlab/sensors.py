@@ -23,6 +23,7 @@ Units at this module's edge
 * SI inside (m, s, kg, V, F). The ADC functions return the unit of the sensitivity they are given (g for the
   ADXL335 in V/g, °/s for the IDG-500 in V/(°/s)), as the thesis does at the sensor edge.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -32,16 +33,35 @@ import numpy as np
 from . import validate
 
 __all__ = [
-    "EPS0", "VOLTS_MAX",
+    "EPS0",
+    "VOLTS_MAX",
     # 1. spring-mass-damper
-    "smd_transfer", "smd_natural_frequency", "smd_damping_ratio", "smd_dc_gain",
-    "accel_from_displacement", "seed000_eq37_printed",
+    "smd_transfer",
+    "smd_natural_frequency",
+    "smd_damping_ratio",
+    "smd_dc_gain",
+    "accel_from_displacement",
+    "seed000_eq37_printed",
     # 2. capacitive sensing
-    "parallel_plate_capacitance", "differential_capacitances", "bridge_output", "half_bridge_output",
-    "accel_from_bridge", "adxl335_bandwidth",
+    "parallel_plate_capacitance",
+    "differential_capacitances",
+    "bridge_output",
+    "half_bridge_output",
+    "accel_from_bridge",
+    "adxl335_bandwidth",
     # 3. ADC
-    "AnalogSensor", "adxl335", "ADXL335", "IDG500", "IDG500_XOUT", "ADC_BITS",
-    "adc_full_scale", "adc_to_volts", "adc_to_physical", "physical_to_adc", "adc_step", "null_offset",
+    "AnalogSensor",
+    "adxl335",
+    "ADXL335",
+    "IDG500",
+    "IDG500_XOUT",
+    "ADC_BITS",
+    "adc_full_scale",
+    "adc_to_volts",
+    "adc_to_physical",
+    "physical_to_adc",
+    "adc_step",
+    "null_offset",
 ]
 
 #: Vacuum permittivity, F/m.
@@ -92,7 +112,7 @@ def smd_transfer(omega, m, k, b):
     b = validate.nonnegative(b, "b")
     validate.broadcast(omega=w, b=b)
     s = 1j * w
-    return -1.0 / (s**2 + (b / m) * s + k / m)                                    # (000 eq 3.5)
+    return -1.0 / (s**2 + (b / m) * s + k / m)  # (000 eq 3.5)
 
 
 def smd_natural_frequency(m, k):
@@ -152,7 +172,7 @@ def smd_dc_gain(m, k):
     float
         ``H(0)``, s² (m of deflection per m/s²).
     """
-    return -validate.positive(m, "m") / validate.positive(k, "k")                 # (000 eq 3.6)
+    return -validate.positive(m, "m") / validate.positive(k, "k")  # (000 eq 3.6)
 
 
 def accel_from_displacement(x, m, k):
@@ -187,7 +207,7 @@ def accel_from_displacement(x, m, k):
     9.80665 9.80665e-12
     """
     x = validate.array(x, "x")
-    return -(validate.positive(k, "k") / validate.positive(m, "m")) * x           # (000 eq 3.7, corrected)
+    return -(validate.positive(k, "k") / validate.positive(m, "m")) * x  # (000 eq 3.7, corrected)
 
 
 def seed000_eq37_printed(x, m, k):
@@ -239,7 +259,7 @@ def parallel_plate_capacitance(eps, area, gap):
     eps = validate.positive(eps, "eps")
     area, gap = validate.positive_array(area, "area"), validate.positive_array(gap, "gap")
     validate.broadcast(area=area, gap=gap)
-    return eps * area / gap     # (000 eq 3.8)
+    return eps * area / gap  # (000 eq 3.8)
 
 
 def differential_capacitances(c0, delta):
@@ -264,7 +284,7 @@ def differential_capacitances(c0, delta):
     d = validate.array(delta, "delta")
     if np.any(np.abs(d) >= 1):
         raise ValueError(f"delta must satisfy |delta| < 1 (the plates touch at ±1); got {float(np.max(np.abs(d))):g}")
-    return c0 / (1 + d), c0 / (1 - d)                                             # (000 eqs 3.9, 3.10)
+    return c0 / (1 + d), c0 / (1 - d)  # (000 eqs 3.9, 3.10)
 
 
 def bridge_output(c1, c2, v_in):
@@ -325,7 +345,7 @@ def half_bridge_output(delta, v_in):
     d = validate.array(delta, "delta")
     v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(delta=d, v_in=v_in)
-    return 0.5 * d * v_in                                 # (000 eq 3.11)
+    return 0.5 * d * v_in  # (000 eq 3.11)
 
 
 def accel_from_bridge(v_out, v_in, x0, m, k):
@@ -355,8 +375,8 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
     v_in = validate.positive_array(v_in, "v_in")
     validate.broadcast(v_out=v_out, v_in=v_in)
     x0 = validate.positive(x0, "x0")
-    delta = 2.0 * v_out / v_in                                                    # (000 eq 3.11 inverted)
-    return accel_from_displacement(x0 * delta, m, k)                              # (000 eqs 3.12-3.13, corrected)
+    delta = 2.0 * v_out / v_in  # (000 eq 3.11 inverted)
+    return accel_from_displacement(x0 * delta, m, k)  # (000 eqs 3.12-3.13, corrected)
 
 
 def adxl335_bandwidth(c, r=32e3):
@@ -412,6 +432,7 @@ class AnalogSensor:
     full_scale : float
         The sensor's specified range, ± in ``unit``.
     """
+
     name: str
     sensitivity: float
     zero_level: float
@@ -426,8 +447,9 @@ class AnalogSensor:
         for f in ("sensitivity", "supply", "full_scale"):
             validate.positive(getattr(self, f), f)
         if not 0 <= validate.scalar(self.zero_level, "zero_level") <= self.supply:
-            raise ValueError(f"zero_level must be a voltage between 0 and the supply ({self.supply:g} V); got "
-                             f"{self.zero_level!r}")
+            raise ValueError(
+                f"zero_level must be a voltage between 0 and the supply ({self.supply:g} V); got {self.zero_level!r}"
+            )
 
 
 def adxl335(vs=3.0):
@@ -454,17 +476,24 @@ def adxl335(vs=3.0):
 #: ADXL335 at Vs = 3 V (the thesis' supply): 0.300 V/g, zero-g level 1.5 V.
 ADXL335 = adxl335(3.0)
 #: IDG-500 gyro, X4.5OUT/Y4.5OUT pins (the output the thesis' example uses): 9.1 mV/(°/s), 1.35 V, ±110 °/s.
-IDG500 = AnalogSensor("IDG-500 (X4.5OUT)", sensitivity=0.0091, zero_level=1.35, supply=3.0, unit="deg/s",
-                      full_scale=110.0)
+IDG500 = AnalogSensor(
+    "IDG-500 (X4.5OUT)", sensitivity=0.0091, zero_level=1.35, supply=3.0, unit="deg/s", full_scale=110.0
+)
 #: IDG-500 gyro, XOUT/YOUT pins: 2.0 mV/(°/s), 1.35 V, ±500 °/s.
-IDG500_XOUT = AnalogSensor("IDG-500 (XOUT)", sensitivity=0.002, zero_level=1.35, supply=3.0, unit="deg/s",
-                           full_scale=500.0)
+IDG500_XOUT = AnalogSensor(
+    "IDG-500 (XOUT)", sensitivity=0.002, zero_level=1.35, supply=3.0, unit="deg/s", full_scale=500.0
+)
 
 
 def _bits(bits):
     try:
-        ok = (not isinstance(bits, (bool, str, bytes)) and np.ndim(bits) == 0 and np.isfinite(float(bits))
-              and float(bits).is_integer() and 1 <= int(bits) <= 32)
+        ok = (
+            not isinstance(bits, (bool, str, bytes))
+            and np.ndim(bits) == 0
+            and np.isfinite(float(bits))
+            and float(bits).is_integer()
+            and 1 <= int(bits) <= 32
+        )
     except (TypeError, ValueError):
         ok = False
     if not ok:
@@ -494,12 +523,16 @@ def _counts(counts, bits):
     c = validate.array(counts, "counts")
     top = adc_full_scale(bits)
     if np.any(c < 0) or np.any(c > top):
-        raise ValueError(f"counts must lie in 0..{top} for a {bits}-bit ADC; got {float(np.min(c)):g}.."
-                         f"{float(np.max(c)):g} (a hex log? convert with int(text, 16) first)")
+        raise ValueError(
+            f"counts must lie in 0..{top} for a {bits}-bit ADC; got {float(np.min(c)):g}.."
+            f"{float(np.max(c)):g} (a hex log? convert with int(text, 16) first)"
+        )
     if c.size and float(np.max(c)) <= VOLTS_MAX and np.any(c != np.round(c)):
-        raise ValueError(f"counts must be ADC counts (whole numbers 0..{top}); got fractions no larger than "
-                         f"{float(np.max(c)):.3g}, which look like volts -- pass the counts the board prints, not "
-                         "adc_to_volts(...) of them")
+        raise ValueError(
+            f"counts must be ADC counts (whole numbers 0..{top}); got fractions no larger than "
+            f"{float(np.max(c)):.3g}, which look like volts -- pass the counts the board prints, not "
+            "adc_to_volts(...) of them"
+        )
     return c
 
 
@@ -532,7 +565,7 @@ def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
     array([0.        , 1.50146628, 3.        ])
     """
     c = _counts(counts, bits)
-    return c * validate.positive(v_ref, "v_ref") / adc_full_scale(bits)            # (000 eq 3.14)
+    return c * validate.positive(v_ref, "v_ref") / adc_full_scale(bits)  # (000 eq 3.14)
 
 
 def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, null_offset=0.0):
@@ -570,12 +603,12 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
     >>> round(float(adc_to_physical(508, 1.35, 0.0091)), 4)     # printed as 15.35 °/s
     15.3556
     """
-    volts = adc_to_volts(counts, v_ref, bits)                                     # (000 eq 3.14)
+    volts = adc_to_volts(counts, v_ref, bits)  # (000 eq 3.14)
     zero = validate.array(zero_level, "zero_level")
     sens = validate.positive_array(sensitivity, "sensitivity")
     off = validate.array(null_offset, "null_offset")
     validate.broadcast(counts=volts, zero_level=zero, sensitivity=sens, null_offset=off)
-    return (volts - zero) / sens + off                                            # (000 eqs 3.15-3.16, 3.35, 5.1)
+    return (volts - zero) / sens + off  # (000 eqs 3.15-3.16, 3.35, 5.1)
 
 
 def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
@@ -638,8 +671,9 @@ def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
     float or ndarray
         One count, in the sensor's unit.
     """
-    return (validate.positive(v_ref, "v_ref") / adc_full_scale(bits)
-            / validate.positive_array(sensitivity, "sensitivity"))
+    return (
+        validate.positive(v_ref, "v_ref") / adc_full_scale(bits) / validate.positive_array(sensitivity, "sensitivity")
+    )
 
 
 def null_offset(readings, expected=0.0):
@@ -671,5 +705,5 @@ def null_offset(readings, expected=0.0):
     if r.ndim == 0 or len(r) == 0:
         raise ValueError(f"readings must hold at least one sample along axis 0; got shape {r.shape}")
     e = validate.array(expected, "expected")
-    validate.broadcast(readings=r[0], expected=e)         # one value per axis of a sample
+    validate.broadcast(readings=r[0], expected=e)  # one value per axis of a sample
     return e - r.mean(axis=0)

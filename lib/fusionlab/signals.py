@@ -12,6 +12,7 @@ are arrays of shape (N, 3), one row per sample. :class:`Sampled` is what a whole
 (:class:`fusionlab.datasets.BroadTrial`) and a phone's recording (:class:`fusionlab.recordings.Recording`) alike:
 its length, the time of each sample and its duration on one uniform time base.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -94,7 +95,7 @@ def _held_true(ok, n):
         raise ValueError(f"ok must be a boolean array of shape (N,); got {ok.dtype} of shape {ok.shape}")
     n = validate.count(n, "n", 1)
     idx = np.arange(len(ok))
-    last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))          # the latest sample where ok failed
+    last_bad = np.maximum.accumulate(np.where(~ok, idx, -1))  # the latest sample where ok failed
     return ok & (idx - last_bad >= n)
 
 
@@ -139,16 +140,15 @@ def lowpass(x, fs, tau):
     y = np.empty_like(x)
     prev = x[0]
     for s in range(0, len(x), size):
-        xc = x[s:s + size]
+        xc = x[s : s + size]
         p = r ** np.arange(len(xc))
         p = p[:, None] if x.ndim == 2 else p
-        y[s:s + size] = r * p * prev + a * p * np.cumsum(xc / p, axis=0)
+        y[s : s + size] = r * p * prev + a * p * np.cumsum(xc / p, axis=0)
         prev = y[s + len(xc) - 1]
     return y
 
 
-def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5,
-                bias_max=np.radians(2.0)):
+def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
     """Rest detection on a recording, causal; at rest the low-passed gyro *is* the gyro bias.
 
     The idea is VQF's (Laidig & Seel 2023, its rest detection; written here from the paper, not from its code):
@@ -192,9 +192,11 @@ def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5
     fs = validate.sample_rate(fs)
     validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs)
     gyr_lp, acc_lp = lowpass(gyr, fs, tau), lowpass(acc, fs, tau)
-    quiet = ((np.linalg.norm(gyr - gyr_lp, axis=1) < validate.positive(gyr_tol, "gyr_tol"))
-             & (np.linalg.norm(acc - acc_lp, axis=1) < validate.positive(acc_tol, "acc_tol"))
-             & (np.linalg.norm(gyr_lp, axis=1) < validate.positive(bias_max, "bias_max")))
+    quiet = (
+        (np.linalg.norm(gyr - gyr_lp, axis=1) < validate.positive(gyr_tol, "gyr_tol"))
+        & (np.linalg.norm(acc - acc_lp, axis=1) < validate.positive(acc_tol, "acc_tol"))
+        & (np.linalg.norm(gyr_lp, axis=1) < validate.positive(bias_max, "bias_max"))
+    )
     return _held_true(quiet, max(1, int(round(validate.positive(min_time, "min_time") * fs)))), gyr_lp
 
 
@@ -221,12 +223,12 @@ class RestDetector:
 
     def __init__(self, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
         fs = validate.sample_rate(fs)
-        self.a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))     # the step of :func:`lowpass`
+        self.a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))  # the step of :func:`lowpass`
         self.gyr_tol, self.acc_tol = validate.positive(gyr_tol, "gyr_tol"), validate.positive(acc_tol, "acc_tol")
         self.bias_max = validate.positive(bias_max, "bias_max")
         self.n_min = max(1, int(round(validate.positive(min_time, "min_time") * fs)))
         self.gyr_lp = self.acc_lp = None
-        self.quiet_run = 0                                   # consecutive quiet samples
+        self.quiet_run = 0  # consecutive quiet samples
 
     def update(self, gyr, acc):
         """Take the next sample.
@@ -248,18 +250,21 @@ class RestDetector:
         try:
             return self._update(np.asarray(gyr, float), np.asarray(acc, float))
         except validate.INNER_ERRORS:
-            validate.exact_shape(gyr, "gyr", (3,))                       # name the argument that does not fit
+            validate.exact_shape(gyr, "gyr", (3,))  # name the argument that does not fit
             validate.exact_shape(acc, "acc", (3,))
             raise
 
     def _update(self, gyr, acc):
-        if self.gyr_lp is None:                              # the low-passes start at the first sample
+        if self.gyr_lp is None:  # the low-passes start at the first sample
             self.gyr_lp, self.acc_lp = gyr.copy(), acc.copy()
         else:
             self.gyr_lp = self.gyr_lp + self.a * (gyr - self.gyr_lp)
             self.acc_lp = self.acc_lp + self.a * (acc - self.acc_lp)
-        quiet = (np.linalg.norm(gyr - self.gyr_lp) < self.gyr_tol and np.linalg.norm(acc - self.acc_lp) < self.acc_tol
-                 and np.linalg.norm(self.gyr_lp) < self.bias_max)
+        quiet = (
+            np.linalg.norm(gyr - self.gyr_lp) < self.gyr_tol
+            and np.linalg.norm(acc - self.acc_lp) < self.acc_tol
+            and np.linalg.norm(self.gyr_lp) < self.bias_max
+        )
         self.quiet_run = self.quiet_run + 1 if quiet else 0
         return self.quiet_run >= self.n_min, self.gyr_lp.copy()
 
@@ -322,11 +327,11 @@ def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
         raise ValueError("mag must not start with a zero vector: the field strength is unknown")
     run = 0
     for k, b in enumerate(norm):
-        if abs(b - r) < tol * r:                       # undisturbed: follow slowly
+        if abs(b - r) < tol * r:  # undisturbed: follow slowly
             ok[k] = True
             r += a * (b - r)
             cand, run = r, 0
-        else:                                          # disturbed: leave r alone, watch for a new steady field
+        else:  # disturbed: leave r alone, watch for a new steady field
             if abs(b - cand) < tol * cand:
                 cand += a * (b - cand)
                 run += 1

@@ -39,6 +39,7 @@ translation shaking       horizontal (X and Y) random acceleration, white noise 
                           low-pass, 0.4 g RMS per axis (:data:`SHAKE_RMS`), motor off, no rotation
 ========================  =====================================================================================
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,9 +50,26 @@ import numpy as np
 
 from . import accel_tilt, earth, inertial, sensors, validate
 
-__all__ = ["FS", "VIB_FREQ", "VIB_AMP", "ACC_NOISE", "GYRO_BIAS", "GYRO_NOISE", "SHAKE_RMS", "SHAKE_CUTOFF",
-           "LAB03_SEED", "LOG_COLUMNS", "motion_profile", "imu_record", "adc_record", "lab03_records",
-           "terminal_log", "truth_csv", "write_lab03", "sha256_file"]
+__all__ = [
+    "FS",
+    "VIB_FREQ",
+    "VIB_AMP",
+    "ACC_NOISE",
+    "GYRO_BIAS",
+    "GYRO_NOISE",
+    "SHAKE_RMS",
+    "SHAKE_CUTOFF",
+    "LAB03_SEED",
+    "LOG_COLUMNS",
+    "motion_profile",
+    "imu_record",
+    "adc_record",
+    "lab03_records",
+    "terminal_log",
+    "truth_csv",
+    "write_lab03",
+    "sha256_file",
+]
 
 #: Sample rate of every synthetic Lab 3 record, Hz (assumption: the thesis states none).
 FS = 50.0
@@ -78,8 +96,18 @@ def _smoothstep(u):
     return 0.5 - 0.5 * np.cos(np.pi * u)
 
 
-def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 60.0), (7.0, -40.0),
-                                     (9.0, 0.0), (11.0, 0.0))):
+def motion_profile(
+    fs=FS,
+    waypoints=(
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (3.0, 60.0),
+        (5.0, 60.0),
+        (7.0, -40.0),
+        (9.0, 0.0),
+        (11.0, 0.0),
+    ),
+):
     """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; the waypoints are ours), cosine ramps
     between waypoints.
 
@@ -113,8 +141,9 @@ def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 
     if wp.ndim != 2 or len(wp) < 2 or np.any(np.diff(wp[:, 0]) <= 0):
         raise ValueError(f"waypoints must be (t, angle) pairs with increasing t; got shape {wp.shape}")
     if np.any(np.abs(wp[:, 1]) > 70):
-        raise ValueError("waypoints must stay within ±70° (the lab protocol); got "
-                         f"{float(np.max(np.abs(wp[:, 1]))):g}°")
+        raise ValueError(
+            f"waypoints must stay within ±70° (the lab protocol); got {float(np.max(np.abs(wp[:, 1]))):g}°"
+        )
     n = int(round((wp[-1, 0] - wp[0, 0]) * fs))
     t = wp[0, 0] + np.arange(n) / fs
     angle = np.full(n, wp[0, 1])
@@ -127,8 +156,18 @@ def motion_profile(fs=FS, waypoints=((0.0, 0.0), (1.0, 0.0), (3.0, 60.0), (5.0, 
     return t, angle, rate
 
 
-def imu_record(roll_deg, pitch_deg, fs=FS, rng=None, vib_amp=VIB_AMP, vib_freq=VIB_FREQ, acc_noise=ACC_NOISE,
-               gyro_bias=GYRO_BIAS, gyro_noise=GYRO_NOISE, translation_g=None):
+def imu_record(
+    roll_deg,
+    pitch_deg,
+    fs=FS,
+    rng=None,
+    vib_amp=VIB_AMP,
+    vib_freq=VIB_FREQ,
+    acc_noise=ACC_NOISE,
+    gyro_bias=GYRO_BIAS,
+    gyro_noise=GYRO_NOISE,
+    translation_g=None,
+):
     """Readings of the 5DOF board (thesis frame, Z up) for a true attitude history; g and °/s.
 
     Specific force ``ax = -sin θ, ay = sin φ cos θ, az = cos φ cos θ`` (seed 000 eq 3.40, third row) plus
@@ -277,18 +316,21 @@ def lab03_records(seed=LAB03_SEED, fs=FS):
     }
     for (name, (r, p, kw)), rng in zip(specs.items(), rngs):
         acc, gyr = imu_record(r, p, fs=fs, rng=rng, **kw)
-        out[name] = dict(t=np.arange(len(r)) / fs, roll_deg=r, pitch_deg=p, acc=acc, gyr=gyr,
-                         counts=adc_record(acc, gyr))
+        out[name] = dict(
+            t=np.arange(len(r)) / fs, roll_deg=r, pitch_deg=p, acc=acc, gyr=gyr, counts=adc_record(acc, gyr)
+        )
     return out
 
 
-_MENU = ("\r\n"
-         "NanoCore12 MC9S12C32 -- 5DOF IMU (ADXL335 + IDG-500)\r\n"
-         "=================== Main Menu ===================\r\n"
-         "  1) Initialize / Null / Zero\r\n"
-         "  2) Get RAW Sensor Data\r\n"
-         "  0) Stop\r\n"
-         "Select option: ")
+_MENU = (
+    "\r\n"
+    "NanoCore12 MC9S12C32 -- 5DOF IMU (ADXL335 + IDG-500)\r\n"
+    "=================== Main Menu ===================\r\n"
+    "  1) Initialize / Null / Zero\r\n"
+    "  2) Get RAW Sensor Data\r\n"
+    "  0) Stop\r\n"
+    "Select option: "
+)
 
 
 def terminal_log(counts, title="Get RAW Sensor Data"):
@@ -320,11 +362,16 @@ def terminal_log(counts, title="Get RAW Sensor Data"):
         raise ValueError("counts must be whole 10-bit ADC counts in 0..1023")
     c = c.astype(np.int64)
     body = "".join(" ".join(f"{v:03X}" for v in row) + "\r\n" for row in c)
-    return (_MENU + "2\r\n"
-            + f"{title} -- press 0 to stop\r\n"
-            + " ".join(LOG_COLUMNS) + "\r\n"
-            + body
-            + "0\r\nStopped.\r\n" + _MENU)
+    return (
+        _MENU
+        + "2\r\n"
+        + f"{title} -- press 0 to stop\r\n"
+        + " ".join(LOG_COLUMNS)
+        + "\r\n"
+        + body
+        + "0\r\nStopped.\r\n"
+        + _MENU
+    )
 
 
 def truth_csv(rec):
@@ -389,8 +436,10 @@ def write_lab03(out, seed=LAB03_SEED):
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, rec in lab03_records(seed).items():
-        for path, text in ((folder / f"{name}.log", terminal_log(rec["counts"])),
-                           (folder / f"{name}_truth.csv", truth_csv(rec))):
+        for path, text in (
+            (folder / f"{name}.log", terminal_log(rec["counts"])),
+            (folder / f"{name}_truth.csv", truth_csv(rec)),
+        ):
             path.write_bytes(text.encode("ascii"))
             paths.append(path)
     sums = "".join(f"{sha256_file(p)}  {p.name}\n" for p in paths)
@@ -420,6 +469,7 @@ def lab03_data(search_from=None, search_package=True):
         The folder holding the logs and ``SHA256SUMS``.
     """
     import os
+
     starts = [Path(search_from or Path.cwd()).resolve()] + ([Path(__file__).resolve().parent] if search_package else [])
     for start in starts:
         for folder in (start, *start.parents):
@@ -439,8 +489,9 @@ def main(argv=None):
     argv : list of str, optional
         The arguments (default: ``sys.argv[1:]``).
     """
-    parser = argparse.ArgumentParser(prog="python -m fusionlab.simulate",
-                                     description="Write the synthetic Lab 03 terminal logs and true-angle CSVs.")
+    parser = argparse.ArgumentParser(
+        prog="python -m fusionlab.simulate", description="Write the synthetic Lab 03 terminal logs and true-angle CSVs."
+    )
     parser.add_argument("--out", default="data", help="output folder (files go to OUT/lab03/)")
     parser.add_argument("--seed", type=int, default=LAB03_SEED)
     args = parser.parse_args(argv)
@@ -472,13 +523,23 @@ def _window(t, t0, t1, ramp):
 def _body_rates(C):
     """Rates (rad/s × dt) that carry ``C[k]`` exactly into ``C[k+1]`` through ``C[k+1] = C[k] @ A(σ_k)``."""
     from . import rotations
+
     q = rotations.dcm_to_quat(C)
     dq = rotations.quat_multiply(rotations.quat_conjugate(q[:-1]), q[1:])
     return rotations.quat_to_rotvec(rotations.quat_normalize(dq))
 
 
-def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 30.0), still=10.0,
-                       bias_dps=(2.0, -3.0, 1.5), inclination_deg=66.0, field_gauss=0.48, acc_bias=True):
+def hand_motion_record(
+    seed=9,
+    fs=100.0,
+    duration=120.0,
+    euler0_deg=(4.0, -3.0, 30.0),
+    still=10.0,
+    bias_dps=(2.0, -3.0, 1.5),
+    inclination_deg=66.0,
+    field_gauss=0.48,
+    acc_bias=True,
+):
     """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1) -- ours.
 
     Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of sinusoids
@@ -521,27 +582,37 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
         (N, 3); ``bias`` (3,) rad/s; ``acc_bias`` (3,) m/s²; ``inclination`` rad; ``field`` gauss; ``fs`` Hz.
     """
     from . import rotations
+
     fs = validate.sample_rate(fs, "fs")
     duration = validate.positive(duration, "duration")
     rng = np.random.default_rng(seed)
     n = int(round(duration * fs))
     dt = 1.0 / fs
-    tt = np.arange(n + 1) * dt                                 # truth instants; sample k ends at tt[k + 1]
+    tt = np.arange(n + 1) * dt  # truth instants; sample k ends at tt[k + 1]
     w = _window(tt, still, duration - still, 5.0)
     u = tt - still
     mid = (duration - 2 * still) / 2
     e0 = np.radians(np.asarray(euler0_deg, float))
-    swing = np.stack([
-        np.radians(30) * np.sin(2 * np.pi * 0.11 * u) + np.radians(15) * np.sin(2 * np.pi * 0.37 * u + 1.0),
-        np.radians(20) * np.sin(2 * np.pi * 0.07 * u + 0.5) + np.radians(10) * np.sin(2 * np.pi * 0.29 * u),
-        np.radians(80) * np.sin(2 * np.pi * 0.05 * u) + np.radians(10) * np.sin(2 * np.pi * 0.23 * u + 2.0)], -1)
-    swing -= swing[np.argmin(np.abs(u - mid))]                 # passes through the start attitude mid-run
+    swing = np.stack(
+        [
+            np.radians(30) * np.sin(2 * np.pi * 0.11 * u) + np.radians(15) * np.sin(2 * np.pi * 0.37 * u + 1.0),
+            np.radians(20) * np.sin(2 * np.pi * 0.07 * u + 0.5) + np.radians(10) * np.sin(2 * np.pi * 0.29 * u),
+            np.radians(80) * np.sin(2 * np.pi * 0.05 * u) + np.radians(10) * np.sin(2 * np.pi * 0.23 * u + 2.0),
+        ],
+        -1,
+    )
+    swing -= swing[np.argmin(np.abs(u - mid))]  # passes through the start attitude mid-run
     euler = e0 + w[:, None] * swing
     C_all = rotations.euler_to_dcm(euler)
     sigma = _body_rates(C_all)
     gyr_true = sigma / dt
-    pos = 0.1 * w[:, None] * np.stack([np.sin(2 * np.pi * 0.3 * u), np.sin(2 * np.pi * 0.41 * u + 1),
-                                       np.sin(2 * np.pi * 0.53 * u + 2)], -1)
+    pos = (
+        0.1
+        * w[:, None]
+        * np.stack(
+            [np.sin(2 * np.pi * 0.3 * u), np.sin(2 * np.pi * 0.41 * u + 1), np.sin(2 * np.pi * 0.53 * u + 2)], -1
+        )
+    )
     acc_n = np.gradient(np.gradient(pos, dt, axis=0), dt, axis=0)
     C = C_all[1:]
     f_b = accel_tilt.specific_force(C, acc_n[1:])
@@ -552,9 +623,22 @@ def hand_motion_record(seed=9, fs=100.0, duration=120.0, euler0_deg=(4.0, -3.0, 
     gyr = gyr_true + b_g + XSENS_GYRO_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
     acc = f_b + b_a + XSENS_ACC_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
     mag = np.einsum("nji,j->ni", C, m_n) + XSENS_MAG_NOISE * np.sqrt(fs) * rng.standard_normal((n, 3))
-    return dict(t=tt[1:], gyr=gyr, acc=acc, mag=mag, C_bn=C, euler=euler[1:], q=rotations.dcm_to_quat(C),
-                C_init=C_all[0], gyr_true=gyr_true, bias=b_g, acc_bias=b_a, inclination=delta, field=field_gauss,
-                fs=fs)
+    return dict(
+        t=tt[1:],
+        gyr=gyr,
+        acc=acc,
+        mag=mag,
+        C_bn=C,
+        euler=euler[1:],
+        q=rotations.dcm_to_quat(C),
+        C_init=C_all[0],
+        gyr_true=gyr_true,
+        bias=b_g,
+        acc_bias=b_a,
+        inclination=delta,
+        field=field_gauss,
+        fs=fs,
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -573,9 +657,18 @@ T71_GYRO_BIAS = np.radians(1500.0) / 3600.0
 T71_ACC_BIAS = 1e-3 * 9.80665
 
 
-def car_record(seed=11, fs=1 / T71_DT, duration=120.0, stops=((0.0, 10.0), (55.0, 65.0), (112.0, 120.0)),
-               tunnels=((30.0, 38.0), (85.0, 93.0)), mount_deg=(2.0, -1.5), gyro_bias_dph=(1500.0, -1500.0, 1500.0),
-               acc_bias_mg=(1.0, -1.0, 1.0), speed=14.0, g=9.80665):
+def car_record(
+    seed=11,
+    fs=1 / T71_DT,
+    duration=120.0,
+    stops=((0.0, 10.0), (55.0, 65.0), (112.0, 120.0)),
+    tunnels=((30.0, 38.0), (85.0, 93.0)),
+    mount_deg=(2.0, -1.5),
+    gyro_bias_dph=(1500.0, -1500.0, 1500.0),
+    acc_bias_mg=(1.0, -1.0, 1.0),
+    speed=14.0,
+    g=9.80665,
+):
     """A car drive like seed 004's experiment (§7.5; Table 7.1 sensor grades) -- ours, the thesis' data are not public.
 
     Stands still during ``stops`` (s), drives at up to ``speed`` m/s on a flat road in between with two turns, and
@@ -612,6 +705,7 @@ def car_record(seed=11, fs=1 / T71_DT, duration=120.0, stops=((0.0, 10.0), (55.0
         As :func:`air_vehicle_record`, plus ``static`` (N,) bool: the car stands still after sample k.
     """
     from . import rotations
+
     fs = validate.sample_rate(fs, "fs")
     rng = np.random.default_rng(seed)
     dt = 1.0 / fs
@@ -642,13 +736,38 @@ def car_record(seed=11, fs=1 / T71_DT, duration=120.0, stops=((0.0, 10.0), (55.0
     gps[k, 3:6] = v_all[k + 1] + T71_GPS_SIGMA_VEL * rng.standard_normal((len(k), 3))
     for t0, t1 in tunnels:
         gps[(tt[1:] >= t0) & (tt[1:] < t1)] = np.nan
-    return dict(t=tt[1:], gyr=gyr, acc=acc, gps=gps, r=r_all[1:], v=v_all[1:], C_bn=C_all[1:], euler=euler[1:],
-                r0=r_all[0], v0=v_all[0], C0=C_all[0], b_g=b_g, b_a=b_a, fs=fs, g=g, static=V[1:] == 0.0)
+    return dict(
+        t=tt[1:],
+        gyr=gyr,
+        acc=acc,
+        gps=gps,
+        r=r_all[1:],
+        v=v_all[1:],
+        C_bn=C_all[1:],
+        euler=euler[1:],
+        r0=r_all[0],
+        v0=v_all[0],
+        C0=C_all[0],
+        b_g=b_g,
+        b_a=b_a,
+        fs=fs,
+        g=g,
+        static=V[1:] == 0.0,
+    )
 
 
-def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(1500.0, -1500.0, 1500.0),
-                       acc_bias_mg=(1.0, -1.0, 1.0), speed=60.0, g=9.80665, noise=True, model="thesis",
-                       lat_deg=50.87):
+def air_vehicle_record(
+    seed=10,
+    fs=1 / T71_DT,
+    duration=68.0,
+    gyro_bias_dph=(1500.0, -1500.0, 1500.0),
+    acc_bias_mg=(1.0, -1.0, 1.0),
+    speed=60.0,
+    g=9.80665,
+    noise=True,
+    model="thesis",
+    lat_deg=50.87,
+):
     """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1) -- ours.
 
     Coordinated turns (bank up to about 20°) left and right, two climbs and a descent (pitch up to about ±5°) and
@@ -700,13 +819,14 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
         ``b_a`` (3,) m/s²; ``gyr_true``, ``f_true`` (N, 3); ``fs`` Hz, ``g`` m/s².
     """
     from . import rotations
+
     fs = validate.sample_rate(fs, "fs")
     rng = np.random.default_rng(seed)
     dt = 1.0 / fs
     n = int(round(duration * fs))
     tt = np.arange(n + 1) * dt
     # heading rate: smooth turns (rad/s), then bank from the coordinated-turn condition tan φ = V ψ̇ / g
-    turns = ((6, 18, 3.5), (24, 40, -3.5), (46, 56, 3.0), (60, 66, -2.5))        # (start, end, deg/s)
+    turns = ((6, 18, 3.5), (24, 40, -3.5), (46, 56, 3.0), (60, 66, -2.5))  # (start, end, deg/s)
     psi_dot = np.zeros_like(tt)
     for t0, t1, rate in turns:
         psi_dot += np.radians(rate) * _window(tt, t0, t1, 2.0)
@@ -714,16 +834,17 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
     V = speed + 10.0 * np.sin(2 * np.pi * tt / 40.0)
     gamma = np.radians(5.0) * (_window(tt, 4, 22, 4.0) - _window(tt, 30, 48, 4.0) + _window(tt, 52, 66, 3.0))
     phi = np.arctan(V * psi_dot / g)
-    euler = np.stack([phi, gamma, psi], -1)                                       # pitch = flight-path angle
+    euler = np.stack([phi, gamma, psi], -1)  # pitch = flight-path angle
     C_all = rotations.euler_to_dcm(euler)
     v_all = V[:, None] * np.stack([np.cos(gamma) * np.cos(psi), np.cos(gamma) * np.sin(psi), -np.sin(gamma)], -1)
-    r_all = np.concatenate([np.zeros((1, 3)), np.cumsum(v_all[:-1] * dt, axis=0)])   # r_{k+1} = r_k + v_k dt
+    r_all = np.concatenate([np.zeros((1, 3)), np.cumsum(v_all[:-1] * dt, axis=0)])  # r_{k+1} = r_k + v_k dt
     g_n = np.array([0.0, 0.0, g])
-    f = np.einsum("nji,nj->ni", C_all[:-1], (v_all[1:] - v_all[:-1]) / dt - g_n)     # v_{k+1} = v_k + C_k f_k dt + g dt
+    f = np.einsum("nji,nj->ni", C_all[:-1], (v_all[1:] - v_all[:-1]) / dt - g_n)  # v_{k+1} = v_k + C_k f_k dt + g dt
     gyr_true = _body_rates(C_all) / dt
     if model not in ("thesis", "full"):
-        raise ValueError(f"model must be 'thesis' (the simplified mechanization is exact) or 'full' (eq 7.1); "
-                         f"got {model!r}")
+        raise ValueError(
+            f"model must be 'thesis' (the simplified mechanization is exact) or 'full' (eq 7.1); got {model!r}"
+        )
     if model == "full":
         lat_deg = validate.array(lat_deg, "lat_deg")
         if lat_deg.ndim or abs(lat_deg) >= 90:
@@ -732,11 +853,11 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
         w_ie = earth.earth_rate_ned(lat)
         R_N, R_E = earth.radii_of_curvature(lat)
         v = v_all[:-1]
-        w_en = np.stack([v[:, 1] / R_E, -v[:, 0] / R_N, -v[:, 1] * np.tan(lat) / R_E], -1)   # transport rate
+        w_en = np.stack([v[:, 1] / R_E, -v[:, 0] / R_N, -v[:, 1] * np.tan(lat) / R_E], -1)  # transport rate
         C = C_all[:-1]
-        gyr_true = gyr_true + np.einsum("nji,nj->ni", C, w_ie + w_en)             # ω_ib = ω_nb + C_nᵇ ω_in
-        extra = np.cross(2 * w_ie + w_en, v)                                      # Coriolis and transport
-        extra[:, 2] -= earth.normal_gravity(lat) - g                              # γ(φ) instead of g
+        gyr_true = gyr_true + np.einsum("nji,nj->ni", C, w_ie + w_en)  # ω_ib = ω_nb + C_nᵇ ω_in
+        extra = np.cross(2 * w_ie + w_en, v)  # Coriolis and transport
+        extra[:, 2] -= earth.normal_gravity(lat) - g  # γ(φ) instead of g
         f = f + np.einsum("nji,nj->ni", C, extra)
     b_g = np.radians(np.asarray(gyro_bias_dph, float)) / 3600.0
     b_a = np.asarray(acc_bias_mg, float) * 1e-3 * g
@@ -748,5 +869,22 @@ def air_vehicle_record(seed=10, fs=1 / T71_DT, duration=68.0, gyro_bias_dph=(150
     k = np.arange(every - 1, n, every)
     gps[k, 0:3] = r_all[k + 1] + w * T71_GPS_SIGMA_POS * rng.standard_normal((len(k), 3))
     gps[k, 3:6] = v_all[k + 1] + w * T71_GPS_SIGMA_VEL * rng.standard_normal((len(k), 3))
-    return dict(t=tt[1:], gyr=gyr, acc=acc, gps=gps, r=r_all[1:], v=v_all[1:], C_bn=C_all[1:], euler=euler[1:],
-                r0=r_all[0], v0=v_all[0], C0=C_all[0], b_g=b_g, b_a=b_a, gyr_true=gyr_true, f_true=f, fs=fs, g=g)
+    return dict(
+        t=tt[1:],
+        gyr=gyr,
+        acc=acc,
+        gps=gps,
+        r=r_all[1:],
+        v=v_all[1:],
+        C_bn=C_all[1:],
+        euler=euler[1:],
+        r0=r_all[0],
+        v0=v_all[0],
+        C0=C_all[0],
+        b_g=b_g,
+        b_a=b_a,
+        gyr_true=gyr_true,
+        f_true=f,
+        fs=fs,
+        g=g,
+    )

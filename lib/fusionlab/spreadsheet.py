@@ -13,6 +13,7 @@ Command line: ``python -m fusionlab.spreadsheet --log data/lab03/motion.log --xl
 Units: ADC counts in the log (10-bit by default, :data:`fusionlab.sensors.ADC_BITS`); the spreadsheet works in g,
 degrees and °/s like the thesis (eq 5.6 converts to degrees before any other step), for the X axis.
 """
+
 from __future__ import annotations
 
 import re
@@ -23,8 +24,14 @@ import numpy as np
 from . import sensors, validate
 
 __all__ = [
-    "LogParseError", "parse_terminal_sessions", "parse_terminal_log", "write_spreadsheet", "HEADER",
-    "SHEET_COLUMNS", "SHEET_TO_PIPELINE", "main",
+    "LogParseError",
+    "parse_terminal_sessions",
+    "parse_terminal_log",
+    "write_spreadsheet",
+    "HEADER",
+    "SHEET_COLUMNS",
+    "SHEET_TO_PIPELINE",
+    "main",
 ]
 
 
@@ -43,7 +50,7 @@ class LogParseError(ValueError):
 
 def _read_text(log):
     if isinstance(log, str) and log.strip() and "\n" not in log.strip() and Path(log.strip()).exists():
-        log = Path(log.strip())                        # a path copied with its line end ("motion.log\n")
+        log = Path(log.strip())  # a path copied with its line end ("motion.log\n")
     if isinstance(log, (bytes, bytearray)):
         raw = bytes(log)
     elif isinstance(log, Path) or (isinstance(log, str) and "\n" not in log and Path(log).is_file()):
@@ -59,10 +66,12 @@ def _read_text(log):
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         return raw.decode("utf-16").removeprefix("\ufeff")  # a log saved as UTF-16 by an editor
     if raw[:200].count(b"\x00") > len(raw[:200]) // 4:
-        raise ValueError("log must be text in one byte per character (ASCII, Latin-1 or UTF-8); got bytes with "
-                         "NUL characters between the letters, as UTF-16 without a byte-order mark -- save it as "
-                         "UTF-8")
-    return raw.removeprefix(b"\xef\xbb\xbf").decode("latin-1")         # a UTF-8 byte-order mark is not text
+        raise ValueError(
+            "log must be text in one byte per character (ASCII, Latin-1 or UTF-8); got bytes with "
+            "NUL characters between the letters, as UTF-16 without a byte-order mark -- save it as "
+            "UTF-8"
+        )
+    return raw.removeprefix(b"\xef\xbb\xbf").decode("latin-1")  # a UTF-8 byte-order mark is not text
 
 
 #: Line ends of a terminal capture: CR LF (Tera Term), LF or CR. Nothing else splits a line (str.splitlines would
@@ -110,7 +119,7 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
            [513, 512, 619, 512, 510]])]
     """
     text = _read_text(log)
-    top = sensors.adc_full_scale(bits)            # checks bits (1-32) with the ADC functions' message
+    top = sensors.adc_full_scale(bits)  # checks bits (1-32) with the ADC functions' message
     bits = top.bit_length()
     digits = -(-bits // 4)
     token = re.compile(rf"[0-9A-Fa-f]{{{digits}}}")
@@ -129,12 +138,14 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
         if not inside:
             tokens = s.split()
             if len(tokens) >= 3 and all(token.fullmatch(t) for t in tokens):
-                problems.append(f"line {lineno}: data line outside a recording (no 'AX AY AZ GX GY' header "
-                                f"before it since the last stop): {line[:60]!r}")
+                problems.append(
+                    f"line {lineno}: data line outside a recording (no 'AX AY AZ GX GY' header "
+                    f"before it since the last stop): {line[:60]!r}"
+                )
             continue
         if not s:
             continue
-        if s == "0":                                   # the stop key, echoed; the MCU then prints "Stopped."
+        if s == "0":  # the stop key, echoed; the MCU then prints "Stopped."
             j = i
             while j < len(lines) and not lines[j].strip():
                 j += 1
@@ -143,19 +154,26 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
                 inside = False
                 i = j + 1
                 continue
-            problems.append(f"line {lineno}: a lone '0' inside the data, not followed by 'Stopped.' (a truncated "
-                            "data line? the MCU ends a recording with '0' then 'Stopped.')")
+            problems.append(
+                f"line {lineno}: a lone '0' inside the data, not followed by 'Stopped.' (a truncated "
+                "data line? the MCU ends a recording with '0' then 'Stopped.')"
+            )
             continue
         if any(not (32 <= ord(ch) < 127 or ch == "\t") for ch in s):
             bad = sorted({ch for ch in s if not (32 <= ord(ch) < 127 or ch == "\t")})
-            kind = ("non-text (binary) characters" if any(ord(ch) >= 127 or ch == "\x00" for ch in bad)
-                    else "control characters " + "".join(repr(ch)[1:-1] for ch in bad))
+            kind = (
+                "non-text (binary) characters"
+                if any(ord(ch) >= 127 or ch == "\x00" for ch in bad)
+                else "control characters " + "".join(repr(ch)[1:-1] for ch in bad)
+            )
             problems.append(f"line {lineno}: {kind} in a data line: {line[:40]!r}")
             continue
         tokens = s.split()
         if len(tokens) != 5:
-            problems.append(f"line {lineno}: expected 5 hex values (AX AY AZ GX GY), got {len(tokens)}: "
-                            f"{line[:60]!r} (truncated or merged line?)")
+            problems.append(
+                f"line {lineno}: expected 5 hex values (AX AY AZ GX GY), got {len(tokens)}: "
+                f"{line[:60]!r} (truncated or merged line?)"
+            )
             continue
         try:
             vals = [int(tok, 16) for tok in tokens]
@@ -164,8 +182,10 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
             continue
         odd = [tok for tok in tokens if not token.fullmatch(tok)]
         if odd:
-            problems.append(f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r} ({odd[0]!r}: the MCU "
-                            f"prints each count as exactly {digits} hex digits)")
+            problems.append(
+                f"line {lineno}: not a hexadecimal ADC value in {line[:60]!r} ({odd[0]!r}: the MCU "
+                f"prints each count as exactly {digits} hex digits)"
+            )
             continue
         if any(v > top for v in vals):
             problems.append(f"line {lineno}: value above the {bits}-bit ADC range 0..{top:X}: {line[:60]!r}")
@@ -177,8 +197,9 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
         if len(problems) == 1:
             raise LogParseError(problems[0])
         more = f"; ... and {len(problems) - _MAX_REPORTED} more" if len(problems) > _MAX_REPORTED else ""
-        raise LogParseError(f"{len(problems)} lines of the log cannot be used: "
-                            + "; ".join(problems[:_MAX_REPORTED]) + more)
+        raise LogParseError(
+            f"{len(problems)} lines of the log cannot be used: " + "; ".join(problems[:_MAX_REPORTED]) + more
+        )
     if not sections:
         raise LogParseError("not a NanoCore12 terminal log: no 'AX AY AZ GX GY' header line was found")
     return [np.array(r, dtype=np.int64).reshape(-1, 5) for r in sections]
@@ -221,17 +242,40 @@ def parse_terminal_log(log, bits=sensors.ADC_BITS):
 
 #: Column letter and header of each step in the ``fusion`` sheet of :func:`write_spreadsheet`.
 SHEET_COLUMNS = {
-    "A": "AY counts", "B": "AZ counts", "C": "GX counts", "D": "a) Ay (g)", "E": "a) Az (g)",
-    "F": "b) ATAN2 (rad)", "G": "c) angle (deg)", "H": "d) angle MA (deg)", "I": "e) dA/dt (deg/s)",
-    "J": "f) GX (deg/s)", "K": "g) gyro cumulative (deg)", "L": "h) gyro increment (deg)",
-    "M": "e') dA/dt MA (deg/s)", "N": "i) ratio", "O": "j) accel weight", "P": "k) fused (deg)",
+    "A": "AY counts",
+    "B": "AZ counts",
+    "C": "GX counts",
+    "D": "a) Ay (g)",
+    "E": "a) Az (g)",
+    "F": "b) ATAN2 (rad)",
+    "G": "c) angle (deg)",
+    "H": "d) angle MA (deg)",
+    "I": "e) dA/dt (deg/s)",
+    "J": "f) GX (deg/s)",
+    "K": "g) gyro cumulative (deg)",
+    "L": "h) gyro increment (deg)",
+    "M": "e') dA/dt MA (deg/s)",
+    "N": "i) ratio",
+    "O": "j) accel weight",
+    "P": "k) fused (deg)",
     "Q": "l) fused MA (deg)",
 }
 #: The pipeline column each spreadsheet column must equal (``None``: a raw count, or the smoothed derivative).
-SHEET_TO_PIPELINE = {"D": "a_acc_y_g", "E": "a_acc_z_g", "F": "b_angle_rad", "G": "c_angle_deg",
-                     "H": "d_angle_ma_deg", "I": "e_dangle_dps", "J": "f_gyro_dps", "K": "g_gyro_cum_deg",
-                     "L": "h_gyro_inc_deg", "N": "i_ratio", "O": "j_accel_weight", "P": "k_fused_deg",
-                     "Q": "l_fused_ma_deg"}
+SHEET_TO_PIPELINE = {
+    "D": "a_acc_y_g",
+    "E": "a_acc_z_g",
+    "F": "b_angle_rad",
+    "G": "c_angle_deg",
+    "H": "d_angle_ma_deg",
+    "I": "e_dangle_dps",
+    "J": "f_gyro_dps",
+    "K": "g_gyro_cum_deg",
+    "L": "h_gyro_inc_deg",
+    "N": "i_ratio",
+    "O": "j_accel_weight",
+    "P": "k_fused_deg",
+    "Q": "l_fused_ma_deg",
+}
 
 
 def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9):
@@ -283,10 +327,17 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
         log.append([f"{v:03X}" for v in row])
     par = wb.create_sheet("params")
     acc, gyr = sensors.ADXL335, sensors.IDG500
-    for name, value in [("dt (s)", dt), ("Vref (V)", 3.0), ("ADC full scale (2^bits - 1)", 1023),
-                        ("accel zero-g level (V)", acc.zero_level), ("accel sensitivity (V/g)", acc.sensitivity),
-                        ("gyro zero-rate level (V)", gyr.zero_level), ("gyro sensitivity (V/(deg/s))", gyr.sensitivity),
-                        ("N moving average", int(n_ma)), ("epsilon", eps)]:
+    for name, value in [
+        ("dt (s)", dt),
+        ("Vref (V)", 3.0),
+        ("ADC full scale (2^bits - 1)", 1023),
+        ("accel zero-g level (V)", acc.zero_level),
+        ("accel sensitivity (V/g)", acc.sensitivity),
+        ("gyro zero-rate level (V)", gyr.zero_level),
+        ("gyro sensitivity (V/(deg/s))", gyr.sensitivity),
+        ("N moving average", int(n_ma)),
+        ("epsilon", eps),
+    ]:
         par.append([name, value])
     P = {k: f"params!$B${i}" for i, k in enumerate(["dt", "vref", "fs", "az", "as", "gz", "gs", "n", "eps"], 1)}
     ws = wb.create_sheet("fusion")
@@ -299,36 +350,43 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
     for i in range(len(c)):
         r = i + 2
         f = {
-            "A": f"=HEX2DEC(log!B{r})", "B": f"=HEX2DEC(log!C{r})", "C": f"=HEX2DEC(log!D{r})",
-            "D": f"=(A{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",                 # a) (000 eq 5.2)
-            "E": f"=(B{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",                 # a) (000 eq 5.3)
-            "F": f"=ATAN2(E{r},D{r})",                                                 # b) (000 eq 5.5, Excel order)
-            "G": f"=DEGREES(F{r})",                                                    # c) (000 eq 5.6)
-            "H": ma("G", r),                                                           # d) (000 eq 5.7)
-            "I": "=0" if i == 0 else f"=(H{r}-H{r - 1})/{P['dt']}",                    # e) (000 eq 5.9)
-            "J": f"=(C{r}*{P['vref']}/{P['fs']}-{P['gz']})/{P['gs']}",                 # f) (000 eq 5.11)
-            "K": f"=J{r}*{P['dt']}" if i == 0 else f"=K{r - 1}+J{r}*{P['dt']}",        # g)
-            "L": f"=J{r}*{P['dt']}",                                                   # h) (000 eq 5.13, corrected)
+            "A": f"=HEX2DEC(log!B{r})",
+            "B": f"=HEX2DEC(log!C{r})",
+            "C": f"=HEX2DEC(log!D{r})",
+            "D": f"=(A{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",  # a) (000 eq 5.2)
+            "E": f"=(B{r}*{P['vref']}/{P['fs']}-{P['az']})/{P['as']}",  # a) (000 eq 5.3)
+            "F": f"=ATAN2(E{r},D{r})",  # b) (000 eq 5.5, Excel order)
+            "G": f"=DEGREES(F{r})",  # c) (000 eq 5.6)
+            "H": ma("G", r),  # d) (000 eq 5.7)
+            "I": "=0" if i == 0 else f"=(H{r}-H{r - 1})/{P['dt']}",  # e) (000 eq 5.9)
+            "J": f"=(C{r}*{P['vref']}/{P['fs']}-{P['gz']})/{P['gs']}",  # f) (000 eq 5.11)
+            "K": f"=J{r}*{P['dt']}" if i == 0 else f"=K{r - 1}+J{r}*{P['dt']}",  # g)
+            "L": f"=J{r}*{P['dt']}",  # h) (000 eq 5.13, corrected)
             "M": ma("I", r),
-            "N": f"=ABS(J{r})/(ABS(J{r})+ABS(M{r})+{P['eps']})",                      # i) (000 eq 5.15)
-            "O": f"=N{r}" if accel_weight == "ratio" else f"=1-N{r}",                   # j)
-            "P": (f"=O{r}*H{r}+(1-O{r})*(H{r}+L{r})" if i == 0                          # k) (000 eq 5.17), F[-1] = H2
-                  else f"=O{r}*H{r}+(1-O{r})*(P{r - 1}+L{r})"),
-            "Q": ma("P", r),                                                           # l) (000 eq 5.19)
+            "N": f"=ABS(J{r})/(ABS(J{r})+ABS(M{r})+{P['eps']})",  # i) (000 eq 5.15)
+            "O": f"=N{r}" if accel_weight == "ratio" else f"=1-N{r}",  # j)
+            "P": (
+                f"=O{r}*H{r}+(1-O{r})*(H{r}+L{r})"
+                if i == 0  # k) (000 eq 5.17), F[-1] = H2
+                else f"=O{r}*H{r}+(1-O{r})*(P{r - 1}+L{r})"
+            ),
+            "Q": ma("P", r),  # l) (000 eq 5.19)
         }
         for col, formula in f.items():
             ws[f"{col}{r}"] = formula
     buf = io.BytesIO()
     wb.save(buf)
     out = io.BytesIO()
-    with zipfile.ZipFile(io.BytesIO(buf.getvalue())) as zin, \
-            zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:
+    with zipfile.ZipFile(io.BytesIO(buf.getvalue())) as zin, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:
         for item in sorted(zin.infolist(), key=lambda z: z.filename):
             data = zin.read(item.filename)
             if item.filename == "docProps/core.xml":
                 data = re.sub(rb"(<dcterms:(created|modified)[^>]*>)[^<]*", rb"\g<1>2000-01-01T00:00:00Z", data)
-            zout.writestr(zipfile.ZipInfo(item.filename, date_time=(2000, 1, 1, 0, 0, 0)), data,
-                          compress_type=zipfile.ZIP_DEFLATED)
+            zout.writestr(
+                zipfile.ZipInfo(item.filename, date_time=(2000, 1, 1, 0, 0, 0)),
+                data,
+                compress_type=zipfile.ZIP_DEFLATED,
+            )
     Path(path).write_bytes(out.getvalue())
     return Path(path)
 
@@ -344,8 +402,10 @@ def main(argv=None):
     """
     import argparse
 
-    parser = argparse.ArgumentParser(prog="python -m fusionlab.spreadsheet",
-                                     description="Write the Lab 03 spreadsheet (raw log + live formulas a)-l)).")
+    parser = argparse.ArgumentParser(
+        prog="python -m fusionlab.spreadsheet",
+        description="Write the Lab 03 spreadsheet (raw log + live formulas a)-l)).",
+    )
     parser.add_argument("--log", default="data/lab03/motion.log")
     parser.add_argument("--xlsx", default="data/lab03_fusion.xlsx")
     parser.add_argument("--dt", type=float, default=0.02)

@@ -17,17 +17,60 @@ resolves). ``tests/test_bad_input.py`` checks every public function of rotations
 methods' modules and ``estimators.run`` against them, one bad argument at a time; ``tests/test_unit_slips.py`` makes the
 same slips on real BROAD recordings.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["flag", "array", "samples", "vectors", "matrices", "quaternions", "positive", "same_length", "angles_rad",
-           "scalar", "euler_rad", "broadcast", "options", "covariance", "rotation", "sample_rate", "gyro_rad",
-           "accel_ms2", "quaternions_or_nan", "count", "generator", "choice", "unit_vectors", "series", "INNER_ERRORS",
-           "exact_shape", "nonnegative", "positive_array", "UnknownOption", "gyro_tilt_ratio", "rotation_vectors",
-           "covariances", "time_step", "turn_per_step", "field_uT", "accel_g", "READING_G_MAX", "EARTH_FIELD_UT",
-           "RAW_FIELD_UT", "MILLI_G_FROM", "SUSTAINED_G_MAX", "TILT_WINDOW", "TILT_MIN", "TILT_WINDOWS_MIN",
-           "TILT_RATIO_MIN", "SWAP_GYR_MIN", "SWAP_ACC_MAX"]
+__all__ = [
+    "flag",
+    "array",
+    "samples",
+    "vectors",
+    "matrices",
+    "quaternions",
+    "positive",
+    "same_length",
+    "angles_rad",
+    "scalar",
+    "euler_rad",
+    "broadcast",
+    "options",
+    "covariance",
+    "rotation",
+    "sample_rate",
+    "gyro_rad",
+    "accel_ms2",
+    "quaternions_or_nan",
+    "count",
+    "generator",
+    "choice",
+    "unit_vectors",
+    "series",
+    "INNER_ERRORS",
+    "exact_shape",
+    "nonnegative",
+    "positive_array",
+    "UnknownOption",
+    "gyro_tilt_ratio",
+    "rotation_vectors",
+    "covariances",
+    "time_step",
+    "turn_per_step",
+    "field_uT",
+    "accel_g",
+    "READING_G_MAX",
+    "EARTH_FIELD_UT",
+    "RAW_FIELD_UT",
+    "MILLI_G_FROM",
+    "SUSTAINED_G_MAX",
+    "TILT_WINDOW",
+    "TILT_MIN",
+    "TILT_WINDOWS_MIN",
+    "TILT_RATIO_MIN",
+    "SWAP_GYR_MIN",
+    "SWAP_ACC_MAX",
+]
 
 
 def _shape_text(shape, lead=""):
@@ -74,15 +117,16 @@ def array(x, name, shape=None, finite=True, dtype=float):
     ValueError: acc must have shape (..., 3); got (2,)
     """
     if dtype is not bool and _is_bool(x):
-        raise ValueError(f"{name} must be numbers, not True/False; got {_show(x)} -- a flag passed in the place "
-                         "of a number?")
+        raise ValueError(
+            f"{name} must be numbers, not True/False; got {_show(x)} -- a flag passed in the place of a number?"
+        )
     try:
         a = np.asarray(x, dtype=dtype)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} must be an array of numbers; got {type(x).__name__} ({exc})") from None
     if shape is not None:
         n = len(shape)
-        trail = a.shape[a.ndim - n:] if a.ndim >= n else None
+        trail = a.shape[a.ndim - n :] if a.ndim >= n else None
         ok = trail is not None and all(s is None or s == t for s, t in zip(shape, trail))
         if not ok:
             raise ValueError(f"{name} must have shape {_shape_text(shape, '..., ')}; got {a.shape}")
@@ -287,12 +331,16 @@ def quaternions(q, name, unit=True, tol=1e-6):
     if unit:
         norm = np.linalg.norm(q, axis=-1)
         if norm.size and float(np.min(norm)) < 1e-12:
-            raise ValueError(f"{name} must be unit quaternions [w, x, y, z]; got a zero quaternion (norm 0), "
-                             "which encodes no rotation")
+            raise ValueError(
+                f"{name} must be unit quaternions [w, x, y, z]; got a zero quaternion (norm 0), "
+                "which encodes no rotation"
+            )
         worst = float(np.max(np.abs(norm - 1.0))) if norm.size else 0.0
         if worst > tol:
-            raise ValueError(f"{name} must be unit quaternions [w, x, y, z] (norm 1 within {tol:g}); "
-                             f"worst norm error is {worst:.3g} -- normalise first (rotations.quat_normalize)")
+            raise ValueError(
+                f"{name} must be unit quaternions [w, x, y, z] (norm 1 within {tol:g}); "
+                f"worst norm error is {worst:.3g} -- normalise first (rotations.quat_normalize)"
+            )
     return q
 
 
@@ -610,8 +658,10 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
     """
     a = array(x, name)
     if a.size and float(np.max(np.abs(a))) > limit:
-        raise ValueError(f"{name} must be in radians (|angle| <= {limit:.4g}); got a value of "
-                         f"{float(np.max(np.abs(a))):.4g}, which looks like degrees -- use np.radians(...)")
+        raise ValueError(
+            f"{name} must be in radians (|angle| <= {limit:.4g}); got a value of "
+            f"{float(np.max(np.abs(a))):.4g}, which looks like degrees -- use np.radians(...)"
+        )
     return a
 
 
@@ -648,8 +698,10 @@ def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
     if v.size:
         top = float(np.max(np.linalg.norm(v, axis=-1)))
         if top > limit:
-            raise ValueError(f"{name} must be rotation vectors in radians (angle |{name}| <= {limit:.4g}, one turn); "
-                             f"got an angle of {top:.4g}, which looks like degrees -- use np.radians(...)")
+            raise ValueError(
+                f"{name} must be rotation vectors in radians (angle |{name}| <= {limit:.4g}, one turn); "
+                f"got an angle of {top:.4g}, which looks like degrees -- use np.radians(...)"
+            )
     return v
 
 
@@ -677,9 +729,11 @@ def euler_rad(x, name="euler"):
         if np.any(big):
             j = int(np.argmax(big.reshape(-1, 3).any(axis=0)))
             v = float(np.max(np.abs(e[..., j])))
-            raise ValueError(f"{name} must be [roll, pitch, yaw] in radians (roll and yaw within ±2π, pitch within "
-                             f"±π); got {('roll', 'pitch', 'yaw')[j]} = {v:.4g}, which looks like degrees -- use "
-                             "np.radians(...)")
+            raise ValueError(
+                f"{name} must be [roll, pitch, yaw] in radians (roll and yaw within ±2π, pitch within "
+                f"±π); got {('roll', 'pitch', 'yaw')[j]} = {v:.4g}, which looks like degrees -- use "
+                "np.radians(...)"
+            )
     return e
 
 
@@ -703,13 +757,14 @@ def broadcast(core=None, **arrays):
         The broadcast batch shape.
     """
     core = core or {}
-    batch = {k: np.shape(v)[:np.ndim(v) - core.get(k, 0)] for k, v in arrays.items() if v is not None}
+    batch = {k: np.shape(v)[: np.ndim(v) - core.get(k, 0)] for k, v in arrays.items() if v is not None}
     try:
         return np.broadcast_shapes(*batch.values())
     except ValueError:
         detail = ", ".join(f"{k} {np.shape(arrays[k])}" for k in batch)
-        raise ValueError(f"{', '.join(batch)} must have matching (broadcastable) numbers of items; got shapes "
-                         f"{detail}") from None
+        raise ValueError(
+            f"{', '.join(batch)} must have matching (broadcastable) numbers of items; got shapes {detail}"
+        ) from None
 
 
 class UnknownOption(TypeError, ValueError):
@@ -746,12 +801,15 @@ def options(given, allowed, where):
     unknown = sorted(set(given) - set(allowed))
     if unknown:
         import difflib
+
         hints = []
         for u in unknown:
             close = difflib.get_close_matches(u, list(allowed), n=1)
             hints.append(f"{u!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
-        raise UnknownOption(f"{where} got unknown keyword option(s) {', '.join(hints)}; it accepts: "
-                        f"{', '.join(sorted(allowed)) or 'none'}")
+        raise UnknownOption(
+            f"{where} got unknown keyword option(s) {', '.join(hints)}; it accepts: "
+            f"{', '.join(sorted(allowed)) or 'none'}"
+        )
 
 
 def covariance(P, name, n=None, tol=1e-9, definite=False):
@@ -788,12 +846,16 @@ def covariance(P, name, n=None, tol=1e-9, definite=False):
     scale = max(float(np.max(np.abs(np.diag(P)))), float(np.max(np.abs(P))), 1e-300)
     asym = float(np.max(np.abs(P - P.T)))
     if asym > tol * scale:
-        raise ValueError(f"{name} must be a symmetric covariance matrix; got max|{name} - {name}ᵀ| = {asym:.3g} "
-                         f"(relative {asym / scale:.2g})")
+        raise ValueError(
+            f"{name} must be a symmetric covariance matrix; got max|{name} - {name}ᵀ| = {asym:.3g} "
+            f"(relative {asym / scale:.2g})"
+        )
     low = float(np.min(np.linalg.eigvalsh(0.5 * (P + P.T))))
     if low < -tol * scale or (definite and low <= 0):
-        raise ValueError(f"{name} must be a positive {'definite' if definite else 'semi-definite'} covariance "
-                         f"matrix (variances cannot be negative); got smallest eigenvalue {low:.3g}")
+        raise ValueError(
+            f"{name} must be a positive {'definite' if definite else 'semi-definite'} covariance "
+            f"matrix (variances cannot be negative); got smallest eigenvalue {low:.3g}"
+        )
     return P
 
 
@@ -838,15 +900,18 @@ def covariances(P, name, n, tol=1e-9, definite=True):
     asym = np.max(np.abs(flat - np.swapaxes(flat, 1, 2)), axis=(1, 2))
     if np.any(asym > tol * scale):
         i = int(np.argmax(asym / scale))
-        raise ValueError(f"{name} must be symmetric covariance matrices; got max|{name} - {name}ᵀ| = {asym[i]:.3g} "
-                         f"(matrix {i})")
+        raise ValueError(
+            f"{name} must be symmetric covariance matrices; got max|{name} - {name}ᵀ| = {asym[i]:.3g} (matrix {i})"
+        )
     low = np.min(np.linalg.eigvalsh(0.5 * (flat + np.swapaxes(flat, 1, 2))), axis=1)
     bad = (low < -tol * scale) | ((low <= 0) if definite else False)
     if np.any(bad):
         i = int(np.argmax(bad))
-        raise ValueError(f"{name} must be positive {'definite' if definite else 'semi-definite'} covariance "
-                         f"matrices (variances cannot be negative{', and ' + name + ' is inverted' if definite else ''}"
-                         f"); got smallest eigenvalue {low[i]:.3g} (matrix {i})")
+        raise ValueError(
+            f"{name} must be positive {'definite' if definite else 'semi-definite'} covariance "
+            f"matrices (variances cannot be negative{', and ' + name + ' is inverted' if definite else ''}"
+            f"); got smallest eigenvalue {low[i]:.3g} (matrix {i})"
+        )
     return P
 
 
@@ -877,11 +942,17 @@ def rotation(C, name, tol=1e-6):
     det = np.linalg.det(C)
     bad = (ortho >= tol) | (np.abs(det - 1) >= tol)
     if np.any(bad):
-        what = ("a reflection (det -1: one axis flipped)" if np.any(np.abs(det[bad] + 1) < 1e-3) else
-                "drifted off a rotation (renormalise it: rotations.dcm_renormalize)" if np.max(ortho) < 0.05 else
-                "not a rotation (a transposed product, a typo, or a zero matrix?)")
-        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1 within {tol:g}); got "
-                         f"max|C Cᵀ - I| = {float(np.max(ortho)):.3g}, det = {float(np.min(det)):.6g} -- {what}")
+        what = (
+            "a reflection (det -1: one axis flipped)"
+            if np.any(np.abs(det[bad] + 1) < 1e-3)
+            else "drifted off a rotation (renormalise it: rotations.dcm_renormalize)"
+            if np.max(ortho) < 0.05
+            else "not a rotation (a transposed product, a typo, or a zero matrix?)"
+        )
+        raise ValueError(
+            f"{name} must be a rotation matrix (orthonormal, det +1 within {tol:g}); got "
+            f"max|C Cᵀ - I| = {float(np.max(ortho)):.3g}, det = {float(np.min(det)):.6g} -- {what}"
+        )
     return C
 
 
@@ -910,9 +981,11 @@ def unit_vectors(x, name, tol=0.5):
         n = np.linalg.norm(a, axis=-1)
         if np.any(np.abs(n - 1) > tol):
             bad = float(n.ravel()[np.argmax(np.abs(n - 1).ravel())])
-            raise ValueError(f"{name} must be unit vectors (length 1 within {tol:g}: a direction or a DCM row); "
-                             f"got a length of {bad:.6g} -- "
-                             + ("a zero vector has no direction" if bad == 0 else "divide by its norm"))
+            raise ValueError(
+                f"{name} must be unit vectors (length 1 within {tol:g}: a direction or a DCM row); "
+                f"got a length of {bad:.6g} -- "
+                + ("a zero vector has no direction" if bad == 0 else "divide by its norm")
+            )
     return a
 
 
@@ -949,8 +1022,11 @@ def sample_rate(fs, name="fs", low=1.0, high=1e5):
     """
     v = positive(fs, name)
     if not low <= v <= high:
-        hint = (f" -- a sample interval dt in s? the rate is 1/dt = {1 / v:g} Hz" if v < low else
-                " -- a rate in the wrong unit, or a timestamp?")
+        hint = (
+            f" -- a sample interval dt in s? the rate is 1/dt = {1 / v:g} Hz"
+            if v < low
+            else " -- a rate in the wrong unit, or a timestamp?"
+        )
         raise ValueError(f"{name} must be a sample rate in Hz between {low:g} and {high:g}; got {v:g}{hint}")
     return v
 
@@ -1015,25 +1091,31 @@ def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_na
         top, med = float(np.max(mag)), float(np.median(mag))
         if top > peak or med > typical:
             what = f"a peak rate of {top:.4g}" if top > peak else f"a median rate of {med:.4g}"
-            raise ValueError(f"{name} must be in rad/s; got {what}, which looks like deg/s "
-                             f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
-                             f"turning body) -- use np.radians(...)")
+            raise ValueError(
+                f"{name} must be in rad/s; got {what}, which looks like deg/s "
+                f"({np.degrees(top if top > peak else med):.4g} rad/s would be far beyond a "
+                f"turning body) -- use np.radians(...)"
+            )
     if acc is not None and len(g) and len(acc):
         med_g = float(np.median(np.linalg.norm(g, axis=1)))
         med_a = float(np.median(np.linalg.norm(np.asarray(acc, float), axis=-1)))
         if med_a < SWAP_ACC_MAX and med_g >= SWAP_GYR_MIN:
-            raise ValueError(f"{name} and {acc_name} look swapped: {name} has a median magnitude of {med_g:.4g} "
-                             f"(gravity's size in m/s²) while {acc_name} reads {med_a:.3g} over half the record (a "
-                             f"gyro at rest, or a free fall no record of the course holds for half its length) -- "
-                             f"pass ({name}=..., {acc_name}=...) in the documented order")
+            raise ValueError(
+                f"{name} and {acc_name} look swapped: {name} has a median magnitude of {med_g:.4g} "
+                f"(gravity's size in m/s²) while {acc_name} reads {med_a:.3g} over half the record (a "
+                f"gyro at rest, or a free fall no record of the course holds for half its length) -- "
+                f"pass ({name}=..., {acc_name}=...) in the documented order"
+            )
     if acc is not None and fs is not None and len(g):
         ratio, n = gyro_tilt_ratio(g, acc, fs)
         if n >= TILT_WINDOWS_MIN and ratio < TILT_RATIO_MIN:
-            raise ValueError(f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
-                             f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
-                             f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
-                             f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = {fs:g} Hz not the "
-                             "record's sample rate? the tilt is integrated with it")
+            raise ValueError(
+                f"{name} must be in rad/s; the direction of gravity in {acc_name} turned only "
+                f"{ratio:.3g} times as far as {name} says the body tilted (median of {n} windows of "
+                f"{TILT_WINDOW:g} s in which {name} tilts it by more than {TILT_MIN:g} rad), which "
+                f"looks like deg/s (1/57.3 = 0.0175) -- use np.radians(...); or is fs = {fs:g} Hz not the "
+                "record's sample rate? the tilt is integrated with it"
+            )
     return g
 
 
@@ -1083,14 +1165,14 @@ def gyro_tilt_ratio(gyr, acc, fs):
     nb = min(len(gyr), len(acc)) // m
     if nb < 2:
         return float("nan"), 0
-    a = acc[:nb * m].reshape(nb, m, 3).mean(axis=1)
+    a = acc[: nb * m].reshape(nb, m, 3).mean(axis=1)
     size = np.linalg.norm(a, axis=1)
     u = a / np.maximum(size, 1e-300)[:, None]
-    turn = gyr[:nb * m].reshape(nb, m, 3).sum(axis=1) / fs                # rotation vector over each window, rad
-    between = 0.5 * (turn[:-1] + turn[1:])                                 # from one window's middle to the next
+    turn = gyr[: nb * m].reshape(nb, m, 3).sum(axis=1) / fs  # rotation vector over each window, rad
+    between = 0.5 * (turn[:-1] + turn[1:])  # from one window's middle to the next
     predicted = np.linalg.norm(np.cross(u[:-1], between), axis=1)
     observed = np.linalg.norm(u[1:] - u[:-1], axis=1)
-    usable = (size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size))   # not in free fall
+    usable = (size[:-1] > 0.05 * np.median(size)) & (size[1:] > 0.05 * np.median(size))  # not in free fall
     count = usable & (predicted > TILT_MIN)
     if not np.any(count):
         return float("nan"), 0
@@ -1136,16 +1218,22 @@ def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
     if a.size:
         med = float(np.median(np.linalg.norm(a, axis=-1)))
         if 0.5 <= med <= 2.0:
-            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.3g}, which looks like g "
-                             f"(at rest it should be {g:.4g}) -- multiply by {g}")
+            raise ValueError(
+                f"{name} must be in m/s²; got a median magnitude of {med:.3g}, which looks like g "
+                f"(at rest it should be {g:.4g}) -- multiply by {g}"
+            )
         if med >= MILLI_G_FROM:
-            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
-                             f"half the record), which looks like milli-g (1000 at rest) or raw counts -- "
-                             f"multiply milli-g by {g / 1000:g}")
+            raise ValueError(
+                f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
+                f"half the record), which looks like milli-g (1000 at rest) or raw counts -- "
+                f"multiply milli-g by {g / 1000:g}"
+            )
         if per_sample and med >= SUSTAINED_G_MAX * g:
-            raise ValueError(f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
-                             f"half the record, which no hand or vehicle sustains; at rest it is {g:.4g}) -- the "
-                             "magnetometer (µT) passed as the accelerometer, or another unit?")
+            raise ValueError(
+                f"{name} must be in m/s²; got a median magnitude of {med:.4g} ({med / g:.3g} g over "
+                f"half the record, which no hand or vehicle sustains; at rest it is {g:.4g}) -- the "
+                "magnetometer (µT) passed as the accelerometer, or another unit?"
+            )
     return a
 
 
@@ -1213,12 +1301,17 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
         if med > 0 and not low <= med <= high:
             lo, hi = EARTH_FIELD_UT
             fits = [(u, f) for u, f in _FIELD_UNITS if 0.5 * lo <= med * f <= 2 * hi]
-            hint = (", which looks like a unit vector (a direction, not a field) -- pass the field in µT"
-                    if abs(med - 1.0) < 1e-3 else
-                    f", which looks like {fits[0][0]} -- multiply by {fits[0][1]:g}" if fits else
-                    " -- convert it to µT")
-            raise ValueError(f"{name} must be in µT (the Earth's field is {lo:g}-{hi:g} µT); got a "
-                             f"{'' if strength else 'median '}field strength of {med:.4g}{hint}")
+            hint = (
+                ", which looks like a unit vector (a direction, not a field) -- pass the field in µT"
+                if abs(med - 1.0) < 1e-3
+                else f", which looks like {fits[0][0]} -- multiply by {fits[0][1]:g}"
+                if fits
+                else " -- convert it to µT"
+            )
+            raise ValueError(
+                f"{name} must be in µT (the Earth's field is {lo:g}-{hi:g} µT); got a "
+                f"{'' if strength else 'median '}field strength of {med:.4g}{hint}"
+            )
     return float(m[0]) if strength else m
 
 
@@ -1255,15 +1348,23 @@ def accel_g(G, name="G", per_sample=False):
     a = samples(G, name) if per_sample else vectors(G, name)
     if a.size:
         med = float(np.median(np.linalg.norm(a, axis=-1)))
-        what = ("m/s² -- divide by 9.80665" if 5.0 <= med <= 20.0 else
-                "milli-g -- divide by 1000" if med >= 200.0 else
-                f"another sensor's reading (°/s, µT; over half a recording no hand or vehicle sustains "
-                f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?" if per_sample and med >= SUSTAINED_G_MAX else
-                f"another sensor's reading (°/s, µT; no accelerometer of the course reads {READING_G_MAX:g} g or "
-                f"more) -- arguments swapped?" if med >= READING_G_MAX else None)
+        what = (
+            "m/s² -- divide by 9.80665"
+            if 5.0 <= med <= 20.0
+            else "milli-g -- divide by 1000"
+            if med >= 200.0
+            else f"another sensor's reading (°/s, µT; over half a recording no hand or vehicle sustains "
+            f"{SUSTAINED_G_MAX:g} g) -- arguments swapped?"
+            if per_sample and med >= SUSTAINED_G_MAX
+            else f"another sensor's reading (°/s, µT; no accelerometer of the course reads {READING_G_MAX:g} g or "
+            f"more) -- arguments swapped?"
+            if med >= READING_G_MAX
+            else None
+        )
         if what:
-            raise ValueError(f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks "
-                             f"like {what}")
+            raise ValueError(
+                f"{name} must be in g (1 at rest); got a median magnitude of {med:.4g}, which looks like {what}"
+            )
     return a
 
 
@@ -1300,8 +1401,9 @@ def time_step(dt, name="dt", low=1e-5, high=1.0):
     """
     v = positive(dt, name)
     if not low <= v <= high:
-        hint = (f" -- a sample rate fs in Hz? the step is 1/fs = {1 / v:g} s" if v > high else
-                " -- a time in another unit?")
+        hint = (
+            f" -- a sample rate fs in Hz? the step is 1/fs = {1 / v:g} s" if v > high else " -- a time in another unit?"
+        )
         raise ValueError(f"{name} must be a time step in s between {low:g} and {high:g}; got {v:g}{hint}")
     return v
 
@@ -1329,7 +1431,9 @@ def turn_per_step(gyr, dt, name="gyr"):
     if np.size(gyr):
         top = float(np.max(np.linalg.norm(gyr, axis=-1))) * dt
         if top > np.pi:
-            raise ValueError(f"{name} must turn less than π rad per step; got |{name}| dt = {top:.4g} rad in one "
-                             f"step of {dt:g} s, which no sampled record resolves -- degrees for radians, or the "
-                             "sample rate passed as dt?")
+            raise ValueError(
+                f"{name} must turn less than π rad per step; got |{name}| dt = {top:.4g} rad in one "
+                f"step of {dt:g} s, which no sampled record resolves -- degrees for radians, or the "
+                "sample rate passed as dt?"
+            )
     return gyr

@@ -9,6 +9,7 @@ All the arithmetic lives in the pure function :func:`viewer_state`, so it can be
 widget only wires sliders to it. Building the widget needs no front end and never waits for one: in a headless
 run (nbconvert, nbgrader autograding, pytest) it is constructed, draws once and returns.
 """
+
 from __future__ import annotations
 
 import ipywidgets as W
@@ -26,7 +27,7 @@ LABEL = {"description_width": "initial"}
 
 
 def _fmt(x, digits=3):
-    return f"{round(float(x), digits) + 0.0:.{digits}f}"          # + 0.0 turns -0.000 into 0.000
+    return f"{round(float(x), digits) + 0.0:.{digits}f}"  # + 0.0 turns -0.000 into 0.000
 
 
 def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
@@ -59,8 +60,14 @@ def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
     >>> state["euler_deg"], np.round(state["euler_readback_deg"], 6) + 0.0
     (array([30., 90., 10.]), array([20., 90.,  0.]))
     """
-    roll, pitch, yaw = (validate.scalar(v, n) for v, n in ((roll_deg, "roll_deg"), (pitch_deg, "pitch_deg"),
-                                                   (yaw_deg, "yaw_deg")))
+    roll, pitch, yaw = (
+        validate.scalar(v, n)
+        for v, n in (
+            (roll_deg, "roll_deg"),
+            (pitch_deg, "pitch_deg"),
+            (yaw_deg, "yaw_deg"),
+        )
+    )
     if lock:
         pitch = LOCK_PITCH_DEG
     euler_deg = np.array([roll, pitch, yaw])
@@ -70,14 +77,18 @@ def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
 
     rows = "\n".join("  [" + "  ".join(f"{_fmt(c):>6}" for c in row) + " ]" for row in C_bn)
     r, p, y = (_fmt(v, 1) for v in back)
-    html = (f"<b>C<sub>bn</sub></b> (body → NED; columns are the body axes in NED)"
-            f"<pre style='margin:2px 0'>{rows}</pre>"
-            f"read back by <code>rotations.dcm_to_euler</code>: φ = {r}°, θ = {p}°, ψ = {y}°<br>"
-            f"det C<sub>bn</sub> = {_fmt(det, 6)}")
+    html = (
+        f"<b>C<sub>bn</sub></b> (body → NED; columns are the body axes in NED)"
+        f"<pre style='margin:2px 0'>{rows}</pre>"
+        f"read back by <code>rotations.dcm_to_euler</code>: φ = {r}°, θ = {p}°, ψ = {y}°<br>"
+        f"det C<sub>bn</sub> = {_fmt(det, 6)}"
+    )
     if lock:
-        html += (f"<br><b>Gimbal lock (θ = 90°):</b> roll and yaw turn about the same line, so only "
-                 f"φ − ψ = {_fmt(roll - yaw, 1)}° is recovered; <code>dcm_to_euler</code> reports ψ = 0 and "
-                 f"puts it all in φ.")
+        html += (
+            f"<br><b>Gimbal lock (θ = 90°):</b> roll and yaw turn about the same line, so only "
+            f"φ − ψ = {_fmt(roll - yaw, 1)}° is recovered; <code>dcm_to_euler</code> reports ψ = 0 and "
+            f"puts it all in φ."
+        )
     return {"euler_deg": euler_deg, "C_bn": C_bn, "euler_readback_deg": back, "det": det, "html": html}
 
 
@@ -89,18 +100,27 @@ def _figure_output(fig):
     """
     import base64
     import io
+
     buf = io.BytesIO()
     fig.savefig(buf, format="png", bbox_inches="tight")
-    plt.close(fig)                                            # no second copy from the inline backend
-    return ({"output_type": "display_data", "metadata": {},
-             "data": {"image/png": base64.b64encode(buf.getvalue()).decode("ascii"),
-                      "text/plain": "<the Euler-sequence figure>"}},)
+    plt.close(fig)  # no second copy from the inline backend
+    return (
+        {
+            "output_type": "display_data",
+            "metadata": {},
+            "data": {
+                "image/png": base64.b64encode(buf.getvalue()).decode("ascii"),
+                "text/plain": "<the Euler-sequence figure>",
+            },
+        },
+    )
 
 
 def _soon(callback, delay=0.15):
     """Run ``callback`` after ``delay`` seconds on the kernel's event loop, replacing the one still waiting (a
     drag sends many values; only the last is drawn). Without a running loop (a headless run) it runs now."""
     import asyncio
+
     try:
         loop = asyncio.get_running_loop()
     except RuntimeError:
@@ -139,19 +159,21 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
     rows = []
     for s in (s_yaw, s_pitch, s_roll):
         box = W.BoundedFloatText(value=s.value, min=s.min, max=s.max, step=0.1, layout=W.Layout(width="6em"))
-        W.link((s, "value"), (box, "value"))                 # type an angle, or drag: both stay in step
+        W.link((s, "value"), (box, "value"))  # type an angle, or drag: both stay in step
         W.link((s, "disabled"), (box, "disabled"))
         rows.append(W.HBox([s, box]))
     lock = W.ToggleButton(value=False, description="gimbal lock (θ = 90°)", layout=W.Layout(width="14em"))
     readout = W.HTML()
     out = W.Output()
-    state = {"pitch": s_pitch.value, "busy": False, "timer": None}   # pitch before the lock; re-entry guard
+    state = {"pitch": s_pitch.value, "busy": False, "timer": None}  # pitch before the lock; re-entry guard
 
     def draw_figure():
         state["timer"] = None
-        out.outputs = _figure_output(plotting.plot_euler_frames(np.radians([s_roll.value, s_pitch.value
-                                                                           if not lock.value else LOCK_PITCH_DEG,
-                                                                           s_yaw.value])))
+        out.outputs = _figure_output(
+            plotting.plot_euler_frames(
+                np.radians([s_roll.value, s_pitch.value if not lock.value else LOCK_PITCH_DEG, s_yaw.value])
+            )
+        )
 
     def redraw(_change=None):
         if state["busy"]:
@@ -162,7 +184,7 @@ def euler_viewer(roll=10, pitch=-10, yaw=40):
         state["timer"] = _soon(draw_figure)
 
     def on_lock(change):
-        state["busy"] = True                                  # one redraw for the whole change, not two
+        state["busy"] = True  # one redraw for the whole change, not two
         try:
             if change["new"]:
                 state["pitch"] = s_pitch.value
@@ -215,13 +237,22 @@ def gaussian_product_state(mu1, var1, mu2, var2):
     >>> round(state["K"], 3), round(state["mu"], 3)          # mu = mu1 + K (mu2 - mu1)
     (0.8, 2.4)
     """
-    mu1, var1, mu2, var2 = (validate.scalar(v, n) for v, n in ((mu1, "mu1"), (var1, "var1"), (mu2, "mu2"),
-                                                         (var2, "var2")))
+    mu1, var1, mu2, var2 = (
+        validate.scalar(v, n)
+        for v, n in (
+            (mu1, "mu1"),
+            (var1, "var1"),
+            (mu2, "mu2"),
+            (var2, "var2"),
+        )
+    )
     mu, var = _kalman.gaussian_product(mu1, var1, mu2, var2)
     K = var1 / (var1 + var2)
-    html = (f"product: μ = {_fmt(mu, 2)}, σ² = {_fmt(var, 2)} (σ = {_fmt(np.sqrt(var), 2)})<br>"
-            f"as a Kalman update: K = σ₁²/(σ₁² + σ₂²) = {_fmt(K, 3)}, "
-            f"μ = μ₁ + K (μ₂ − μ₁) = {_fmt(mu1, 2)} + {_fmt(K, 3)} × ({_fmt(mu2 - mu1, 2)})")
+    html = (
+        f"product: μ = {_fmt(mu, 2)}, σ² = {_fmt(var, 2)} (σ = {_fmt(np.sqrt(var), 2)})<br>"
+        f"as a Kalman update: K = σ₁²/(σ₁² + σ₂²) = {_fmt(K, 3)}, "
+        f"μ = μ₁ + K (μ₂ − μ₁) = {_fmt(mu1, 2)} + {_fmt(K, 3)} × ({_fmt(mu2 - mu1, 2)})"
+    )
     return {"mu": mu, "var": var, "K": K, "html": html}
 
 
@@ -246,7 +277,7 @@ def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
     ipywidgets.VBox
         Children: four ``FloatSlider`` (μ₁, σ₁², μ₂, σ₂²), the readout ``HTML``, the figure ``Output``.
     """
-    st = gaussian_product_state(mu1, var1, mu2, var2)             # validates the start values
+    st = gaussian_product_state(mu1, var1, mu2, var2)  # validates the start values
     opts = dict(step=0.1, continuous_update=False, readout_format=".1f", style=LABEL, layout=W.Layout(width="36em"))
     s_mu1 = W.FloatSlider(value=mu1, min=-10, max=10, description="prediction mean μ₁ (m)", **opts)
     s_var1 = W.FloatSlider(value=var1, min=0.1, max=25, description="prediction variance σ₁² (m²)", **opts)
@@ -296,20 +327,28 @@ def tuning_explorer(sweep, start=None):
         Children: the ``SelectionSlider``, the readout ``HTML``, the figure ``Output``.
     """
     from . import bench
+
     if not isinstance(sweep, bench.TuningSweep):
         raise ValueError(f"sweep must be a TuningSweep (fusionlab.bench.tuning_sweep); got {type(sweep).__name__}")
     values = list(sweep.values)
     start = values[0] if start is None else values[int(np.argmin(np.abs(np.asarray(values) - float(start))))]
-    slider = W.SelectionSlider(options=[(f"{v:g}", v) for v in values], value=start, continuous_update=False,
-                               description=f"{sweep.estimator} {sweep.option}",
-                               style=LABEL, layout=W.Layout(width="40em"))
+    slider = W.SelectionSlider(
+        options=[(f"{v:g}", v) for v in values],
+        value=start,
+        continuous_update=False,
+        description=f"{sweep.estimator} {sweep.option}",
+        style=LABEL,
+        layout=W.Layout(width="40em"),
+    )
     readout = W.HTML()
     out = W.Output()
 
     def redraw(_change=None):
         j = values.index(slider.value)
-        readout.value = "; ".join(f"trial {n[:2]}: {sweep.metric} RMSE {sweep.rmse_deg[i, j]:.2f}° "
-                                  f"(best {sweep.best(i):g})" for i, n in enumerate(sweep.trials))
+        readout.value = "; ".join(
+            f"trial {n[:2]}: {sweep.metric} RMSE {sweep.rmse_deg[i, j]:.2f}° (best {sweep.best(i):g})"
+            for i, n in enumerate(sweep.trials)
+        )
         with out:
             out.clear_output(wait=True)
             fig = plotting.plot_tuning_sweep(sweep, slider.value)

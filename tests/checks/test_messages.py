@@ -5,6 +5,7 @@ nudged just outside the check's tolerance (relative 1e-7, 1e-5, 1e-3): the answe
 message compares "yours" with "expected", the two printed numbers must differ. The slips the per-lab tests feed are
 read the same way (tests/conftest.py).
 """
+
 from __future__ import annotations
 
 import inspect
@@ -25,6 +26,7 @@ def _nudged(ref, eps):
         if isinstance(out, tuple):
             return tuple(np.asarray(o) * (1 + eps) + eps for o in out)
         return np.asarray(out) * (1 + eps) + eps
+
     return answer
 
 
@@ -50,12 +52,12 @@ def test_the_pair_finder_sees_a_pair_printed_alike_and_passes_one_printed_apart(
 
 @pytest.mark.parametrize("name, ref", _one_function_checks(), ids=[n for n, _ in _one_function_checks()])
 def test_a_near_miss_is_printed_as_a_difference(name, ref, monkeypatch, no_message_prints_one_value_twice):
-    monkeypatch.setattr(_core, "_REFERENCES", {})             # hand the library's own function to the check
+    monkeypatch.setattr(_core, "_REFERENCES", {})  # hand the library's own function to the check
     fn = exercises.resolve(ref)
     for eps in NUDGES:
         try:
             getattr(checks, name)(_nudged(fn, eps))
         except checks.Feedback as exc:
             assert not equal_pairs(exc), f"{name}, answer off by {eps:g} (relative): {exc}"
-        except Exception:                                      # noqa: BLE001 -- a check whose answer is not one
-            pytest.skip(f"{name}: its answer is not the return value of {ref}")   # array of {ref}'s
+        except Exception:  # noqa: BLE001 -- a check whose answer is not one
+            pytest.skip(f"{name}: its answer is not the return value of {ref}")  # array of {ref}'s

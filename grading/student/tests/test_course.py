@@ -8,6 +8,7 @@
 
 One lab only: `make test LABS=01_euler_rotations` (several: LABS="00_mems_sensors 01_euler_rotations").
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -31,6 +32,7 @@ UNFINISHED = {"NotImplementedError", "NameError"}
 def _check_failures():
     """What a check or test cell raises on an unfinished answer: an assert, or one of the checks' own errors."""
     from fusionlab import checks
+
     own = {name for name, value in vars(checks).items() if isinstance(value, type) and issubclass(value, Exception)}
     return UNFINISHED | {"AssertionError"} | own
 
@@ -46,24 +48,31 @@ def test_lab_runs_up_to_its_unfinished_exercises(lab):
         if cell.cell_type != "code" or meta.get("solution"):
             continue  # an answer cell: its errors are the student's own
         allowed = _check_failures() if meta.get("locked") else UNFINISHED
-        problems += [f"cell {number}: {out.ename}: {out.evalue}" for out in cell.outputs
-                     if out.output_type == "error" and out.ename not in allowed]
-    assert not problems, f"{lab}: provided cells fail for a reason other than an unfinished exercise:\n" + \
-        "\n".join(problems)
+        problems += [
+            f"cell {number}: {out.ename}: {out.evalue}"
+            for out in cell.outputs
+            if out.output_type == "error" and out.ename not in allowed
+        ]
+    assert not problems, f"{lab}: provided cells fail for a reason other than an unfinished exercise:\n" + "\n".join(
+        problems
+    )
 
 
 def test_every_library_module_imports():
     import fusionlab
+
     names = [m.name for m in pkgutil.iter_modules(fusionlab.__path__)]
     assert {"rotations", "kalman", "checks"} <= set(names)
     for name in names:
         importlib.import_module(f"fusionlab.{name}")
-    assert Path(fusionlab.__file__).resolve().parent == ROOT / "lib" / "fusionlab", \
+    assert Path(fusionlab.__file__).resolve().parent == ROOT / "lib" / "fusionlab", (
         "fusionlab is imported from somewhere else than this course's lib/ folder"
+    )
 
 
 def test_rotations_round_trip():
     from fusionlab import rotations
+
     euler = np.array([0.3, -0.4, 1.2])
     C = rotations.euler_to_dcm(euler)
     assert np.allclose(C @ C.T, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(C), 1.0)

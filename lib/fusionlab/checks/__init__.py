@@ -15,13 +15,28 @@ Every lab's locked setup cell imports this package, and through it :mod:`fusionl
 records numpy, the library and IPython's hooks before any answer cell runs -- and :func:`friendly_errors`, which
 turns an unfinished exercise's NotImplementedError or NameError into a line saying what to finish.
 """
+
 from __future__ import annotations
 
 from .. import guard  # noqa: F401  (first: the guard's baseline is taken before anything else of the checks loads)
-from . import (_core, lab00_mems_sensors, lab01_euler_rotations, lab02_kalman_falling_body,
-               lab03_correlation_fusion, lab04_ecompass, lab05_freescale_kalman, lab06_gfimu_aiv,
-               lab07_gfimu_constraints, lab08_north_finder, lab09_dcm_ahrs, lab10_gps_ins, lab11_real_data,
-               lab12_sensor_errors, lab13_capstone, lab14_phone_imu)
+from . import (
+    _core,
+    lab00_mems_sensors,
+    lab01_euler_rotations,
+    lab02_kalman_falling_body,
+    lab03_correlation_fusion,
+    lab04_ecompass,
+    lab05_freescale_kalman,
+    lab06_gfimu_aiv,
+    lab07_gfimu_constraints,
+    lab08_north_finder,
+    lab09_dcm_ahrs,
+    lab10_gps_ins,
+    lab11_real_data,
+    lab12_sensor_errors,
+    lab13_capstone,
+    lab14_phone_imu,
+)
 from . import slips  # noqa: F401  (the named slips, as data)
 from ._core import *  # noqa: F401,F403
 from .lab00_mems_sensors import *  # noqa: F401,F403
@@ -40,9 +55,23 @@ from .lab12_sensor_errors import *  # noqa: F401,F403
 from .lab13_capstone import *  # noqa: F401,F403
 from .lab14_phone_imu import *  # noqa: F401,F403
 
-LABS = (lab00_mems_sensors, lab01_euler_rotations, lab02_kalman_falling_body, lab03_correlation_fusion,
-        lab04_ecompass, lab05_freescale_kalman, lab06_gfimu_aiv, lab07_gfimu_constraints, lab08_north_finder,
-        lab09_dcm_ahrs, lab10_gps_ins, lab11_real_data, lab12_sensor_errors, lab13_capstone, lab14_phone_imu)
+LABS = (
+    lab00_mems_sensors,
+    lab01_euler_rotations,
+    lab02_kalman_falling_body,
+    lab03_correlation_fusion,
+    lab04_ecompass,
+    lab05_freescale_kalman,
+    lab06_gfimu_aiv,
+    lab07_gfimu_constraints,
+    lab08_north_finder,
+    lab09_dcm_ahrs,
+    lab10_gps_ins,
+    lab11_real_data,
+    lab12_sensor_errors,
+    lab13_capstone,
+    lab14_phone_imu,
+)
 __all__ = [*_core.__all__, *(name for lab in LABS for name in lab.__all__)]
 
 guard._snapshot_new_modules()  # the library as loaded now, before any answer cell: what guard.intact() compares with

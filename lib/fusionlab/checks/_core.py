@@ -3,6 +3,7 @@ for unfinished exercises, and :func:`forbids`, which keeps the library's own ans
 
 Nothing here knows a lab; the per-lab files (``lab00_mems_sensors.py`` ...) hold the checks themselves.
 """
+
 from __future__ import annotations
 
 import ast
@@ -20,6 +21,7 @@ from .exercises import EXERCISES, resolve
 
 __all__ = ["Feedback", "friendly_errors", "describe_difference", "check_close"]
 
+
 class Feedback(AssertionError):
     """A failed check, with a message meant for the student.
 
@@ -36,7 +38,7 @@ class Feedback(AssertionError):
     knock_on = None
 
     def _render_traceback_(self):
-        if getattr(self, "_shown", False):             # %tb asks again: the curious get the whole traceback
+        if getattr(self, "_shown", False):  # %tb asks again: the curious get the whole traceback
             return _full_traceback(self)
         self._shown = True
         return _box("✗ " + str(self), self.footnote)
@@ -75,18 +77,22 @@ def _ipython():
 
 
 def _ok(msg):
-    problems = guard._problems()          # a patched np.allclose must not earn a ✓
+    problems = guard._problems()  # a patched np.allclose must not earn a ✓
     if problems:
-        raise Feedback("this check cannot be trusted: " + "; ".join(problems[:3]) + ". Remove the code that does "
-                       "this and run the notebook again from the top.")
+        raise Feedback(
+            "this check cannot be trusted: " + "; ".join(problems[:3]) + ". Remove the code that does "
+            "this and run the notebook again from the top."
+        )
     print("✓ " + msg)
 
 
 def _answered(name, value):
     """Stop with a clear message while an exercise's answer is still the ``None`` placeholder."""
     if value is None:
-        raise Feedback(f"{name} is still None: finish the exercise that sets it (replace the line "
-                       f"`raise NotImplementedError(...)`) and run that cell, then this one.")
+        raise Feedback(
+            f"{name} is still None: finish the exercise that sets it (replace the line "
+            f"`raise NotImplementedError(...)`) and run that cell, then this one."
+        )
     return value
 
 
@@ -103,6 +109,7 @@ def _pair(got, expected, digits=4, fmt=None):
     def show(v, d):
         v = np.asarray(v, dtype=float)
         return fmt(v, d) if v.ndim == 0 else "[" + ", ".join(fmt(x, d) for x in v.ravel()) + "]"
+
     for d in range(digits, 18):
         a, b = show(got, d), show(expected, d)
         if a != b:
@@ -125,8 +132,12 @@ def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e
         return None
     if got.ndim == 0:
         return "{} is {} (expected {})".format(name, *_pair(got, exp))
-    if got.ndim == 2 and got.shape[0] == got.shape[1] and got.shape[0] > 1 and np.allclose(got, exp.T, atol=atol,
-                                                                                            rtol=rtol):
+    if (
+        got.ndim == 2
+        and got.shape[0] == got.shape[1]
+        and got.shape[0] > 1
+        and np.allclose(got, exp.T, atol=atol, rtol=rtol)
+    ):
         return f"{name} is the transpose of the expected matrix"
     flipped = bool(np.allclose(got[bad], -exp[bad], atol=atol, rtol=rtol))
     sign = " has the wrong sign" if flipped else " is wrong"
@@ -135,26 +146,31 @@ def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e
         rows, cols = np.flatnonzero(bad.any(axis=1)), np.flatnonzero(bad.any(axis=0))
         if len(rows) == 1 and len(cols) > 1:
             r = rows[0]
-            return "row [{}, :] of {}{}: {} (expected {}); the other rows are right".format(r, name, sign,
-                                                                                           *_pair(got[r], exp[r]))
+            return "row [{}, :] of {}{}: {} (expected {}); the other rows are right".format(
+                r, name, sign, *_pair(got[r], exp[r])
+            )
         if len(cols) == 1 and len(rows) > 1:
             c = cols[0]
-            return ("column [:, {}] of {}{}: {} (expected {}); the other columns are right"
-                    .format(c, name, sign, *_pair(got[:, c], exp[:, c])))
+            return "column [:, {}] of {}{}: {} (expected {}); the other columns are right".format(
+                c, name, sign, *_pair(got[:, c], exp[:, c])
+            )
     idx = list(zip(*np.nonzero(bad)))
     where = [f"[{', '.join(str(int(i)) for i in ix)}]" for ix in idx]
     if len(idx) == 1:
         return "entry {} of {}{}: {} (expected {})".format(where[0], name, sign, *_pair(got[idx[0]], exp[idx[0]]))
     shown = "; ".join("{} is {} (expected {})".format(w, *_pair(got[ix], exp[ix])) for w, ix in zip(where[:3], idx[:3]))
-    return (f"{len(idx)} of the {got.size} entries of {name} {'have the wrong sign' if flipped else 'differ'}: "
-            f"{shown}{'; ...' if len(idx) > 3 else ''}")
+    return (
+        f"{len(idx)} of the {got.size} entries of {name} {'have the wrong sign' if flipped else 'differ'}: "
+        f"{shown}{'; ...' if len(idx) > 3 else ''}"
+    )
 
 
 def _where(got, expected, name, **tol):
     """:func:`describe_difference` for a result already known to be wrong (its largest error if no entry stands
     out at the given tolerance)."""
     return describe_difference(got, expected, name, **tol) or (
-        f"{name} differs by up to {np.max(np.abs(np.asarray(got, float) - np.asarray(expected, float))):.3g}")
+        f"{name} differs by up to {np.max(np.abs(np.asarray(got, float) - np.asarray(expected, float))):.3g}"
+    )
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -168,35 +184,41 @@ def _where(got, expected, name, **tol):
 # the student's own code, most likely) keeps its traceback, whose line says where. Run All (whose cells are tagged
 # raises-exception in the release) then reads as a to-do list.
 
-_HINT = ("\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
-         "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
-         "cell again.")
-_stopped = {}                            # execution count of a cell that stopped -> the exercises it waits for
-
-
+_HINT = (
+    "\n→ This name is made by an earlier cell that has not run successfully — most likely an exercise that "
+    "is not finished yet (look above for NotImplementedError or a ✗ check). Finish it, run it, then run this "
+    "cell again."
+)
+_stopped = {}  # execution count of a cell that stopped -> the exercises it waits for
 
 
 def _assigned_names(source):
     """Every name a cell's code binds (assignments, loops, imports, definitions); empty if it does not parse."""
     try:
         tree = ast.parse(source)
-    except SyntaxError:                  # IPython magics and the like: nothing to learn
+    except SyntaxError:  # IPython magics and the like: nothing to learn
         return set()
     names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
     names |= {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
-    names |= {(a.asname or a.name).split(".")[0] for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom))
-              for a in n.names}
+    names |= {
+        (a.asname or a.name).split(".")[0]
+        for n in ast.walk(tree)
+        if isinstance(n, (ast.Import, ast.ImportFrom))
+        for a in n.names
+    }
     return names
 
 
-_DATA_NAMES = set()                      # names of this session left undefined because a trial was missing
-_KNOCK_ON = {}                           # name left undefined by a cell a Feedback with a knock_on stopped -> its hint
+_DATA_NAMES = set()  # names of this session left undefined because a trial was missing
+_KNOCK_ON = {}  # name left undefined by a cell a Feedback with a knock_on stopped -> its hint
 
 
 def _data_hint(missing):
-    return ("\n→ This name is made by an earlier cell that could not run because data is missing, not because of "
-            "your code:\n" + "\n".join(missing.values()) + "\nOnce the data is there, run the notebook again from "
-            "the top.")
+    return (
+        "\n→ This name is made by an earlier cell that could not run because data is missing, not because of "
+        "your code:\n" + "\n".join(missing.values()) + "\nOnce the data is there, run the notebook again from "
+        "the top."
+    )
 
 
 def _waits_for(shell, name, count):
@@ -216,7 +238,7 @@ def _waits_for(shell, name, count):
 
 def _show_box(shell, etype, evalue, tb, message):
     """Show ``message`` as the error's short box (see :func:`_box`); ``%tb`` in the next cell shows the traceback."""
-    shell._get_exc_info((etype, evalue, tb))                  # so that %tb shows the whole traceback
+    shell._get_exc_info((etype, evalue, tb))  # so that %tb shows the whole traceback
     shell._showtraceback(etype, evalue, _box(message, "(%tb in a new cell shows the full traceback)"))
 
 
@@ -230,47 +252,51 @@ def _failed_assert(shell, etype, evalue, tb, count):
         frames.append(tb)
         tb = tb.tb_next
     last = frames[-1]
-    if last.tb_frame.f_globals.get("__name__") == "fusionlab.guard":     # guard.assert_close(...) in a test cell
+    if last.tb_frame.f_globals.get("__name__") == "fusionlab.guard":  # guard.assert_close(...) in a test cell
         cell = next((f for f in reversed(frames) if f.tb_frame.f_code.co_name == "<module>"), None)
         if cell is None or not issubclass(etype, AssertionError):
             return None
-        return (f"✗ {evalue}\n→ This is the exercise's autograder test; the check above it names the usual slips. "
-                "Fix your answer, run its cell, then this one.")
+        return (
+            f"✗ {evalue}\n→ This is the exercise's autograder test; the check above it names the usual slips. "
+            "Fix your answer, run its cell, then this one."
+        )
     if etype is not AssertionError or last.tb_frame.f_code.co_name != "<module>":
         return None
     line = linecache.getline(last.tb_frame.f_code.co_filename, last.tb_lineno).strip()
     message = str(evalue) or f"this test failed: {line}"
     try:
         names = [n.id for n in ast.walk(ast.parse(line)) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)]
-    except SyntaxError:                                       # an assert over several lines: its first line only
+    except SyntaxError:  # an assert over several lines: its first line only
         names = []
     waits = list(dict.fromkeys(w for n in dict.fromkeys(names) for w in _waits_for(shell, n, count)))
     if waits:
         _stopped[count] = waits
         todo = " and ".join(waits)
-        message += (f"\n→ This test uses your answer to {todo}, which is not finished yet. Finish {todo} (its answer "
-                    f"cell above), run it, then run this cell again.")
+        message += (
+            f"\n→ This test uses your answer to {todo}, which is not finished yet. Finish {todo} (its answer "
+            f"cell above), run it, then run this cell again."
+        )
     return "✗ " + message
 
 
 def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
     """IPython handler for NameError, AssertionError, NotImplementedError and DataMissing (see the section
     comment)."""
-    count = shell.execution_count - 1                         # IPython counts the running cell before it runs
+    count = shell.execution_count - 1  # IPython counts the running cell before it runs
     hist = getattr(shell.history_manager, "input_hist_raw", None) or [""]
-    if issubclass(etype, datasets.DataMissing):               # its own short message (_render_traceback_)
+    if issubclass(etype, datasets.DataMissing):  # its own short message (_render_traceback_)
         _DATA_NAMES.update(_assigned_names(hist[-1]))
         shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         return None
     if issubclass(etype, NameError):
         name = getattr(evalue, "name", None) or (re.findall(r"'([^']+)'", str(evalue)) or [""])[0]
-        if name in _KNOCK_ON:                                 # its cell stopped at a box that said why
+        if name in _KNOCK_ON:  # its cell stopped at a box that said why
             hint = _KNOCK_ON[name]
             _KNOCK_ON.update(dict.fromkeys(_assigned_names(hist[-1]), hint))
             _show_box(shell, etype, etype(f"{evalue}\n→ {hint}"), tb, f"✗ {evalue}\n→ {hint}")
             return None
         missing = datasets.missing_trials()
-        if missing and name in _DATA_NAMES:                   # the name waits for data, not for an exercise
+        if missing and name in _DATA_NAMES:  # the name waits for data, not for an exercise
             _DATA_NAMES.update(_assigned_names(hist[-1]))
             if "data is missing" not in str(evalue):
                 evalue = etype(f"{evalue}{_data_hint(missing)}")
@@ -281,37 +307,43 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
             _stopped[count] = waits
         if _HINT.split("—")[0] not in str(evalue):
             todo = " and ".join(waits)
-            hint = (_HINT if not waits else
-                    _HINT.split("—")[0] + f"— it stopped because {todo} is not finished yet. Finish {todo} (its "
-                    f"answer cell above), run it, then run this cell again.")
+            hint = (
+                _HINT
+                if not waits
+                else _HINT.split("—")[0] + f"— it stopped because {todo} is not finished yet. Finish {todo} (its "
+                f"answer cell above), run it, then run this cell again."
+            )
             evalue = etype(f"{evalue}{hint}")
-        if waits:                                             # an unfinished exercise's knock-on: one short box
+        if waits:  # an unfinished exercise's knock-on: one short box
             _show_box(shell, etype, evalue, tb, f"✗ {evalue}")
-        else:                                                 # maybe a slip in the student's own code: its line
+        else:  # maybe a slip in the student's own code: its line
             shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         return None
     if issubclass(etype, AssertionError):
         if getattr(evalue, "knock_on", None):
             _KNOCK_ON.update(dict.fromkeys(_assigned_names(hist[-1]), evalue.knock_on))
         message = _failed_assert(shell, etype, evalue, tb, count)
-        if message is None:                                   # a check's Feedback box, or an assert in a function
+        if message is None:  # a check's Feedback box, or an assert in a function
             shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         else:
             _show_box(shell, etype, evalue, tb, message)
         return None
     what = labformat.unfinished(evalue)
-    if what is None:                                          # a NotImplementedError of the student's own
+    if what is None:  # a NotImplementedError of the student's own
         shell.showtraceback((etype, evalue, tb), tb_offset=tb_offset)
         return None
     _stopped[count] = [what]
     last = tb
     while last.tb_next is not None:
         last = last.tb_next
-    here = last.tb_frame.f_code.co_name == "<module>"           # the stub line of this very cell
-    msg = (f"✗ {what.capitalize()} is not done yet: replace the line `raise NotImplementedError(...)` in this cell "
-           f"with your answer, then run the cell again." if here else
-           f"✗ This cell uses your answer to {what}, which is not written yet: finish {what} (above), run it, "
-           f"then run this cell again.")
+    here = last.tb_frame.f_code.co_name == "<module>"  # the stub line of this very cell
+    msg = (
+        f"✗ {what.capitalize()} is not done yet: replace the line `raise NotImplementedError(...)` in this cell "
+        f"with your answer, then run the cell again."
+        if here
+        else f"✗ This cell uses your answer to {what}, which is not written yet: finish {what} (above), run it, "
+        f"then run this cell again."
+    )
     _show_box(shell, etype, evalue, tb, msg)
     return None
 
@@ -337,12 +369,13 @@ def friendly_errors():
     ip._fusionlab_custom_tb = ip.CustomTB
 
 
-friendly_errors()                        # every lab imports checks: its NameErrors then say what to do
+friendly_errors()  # every lab imports checks: its NameErrors then say what to do
 
 
 # ---------------------------------------------------------------------------------------------------------------
 # Calling the student's function: one place for the unfinished stub and the forgotten return
 # ---------------------------------------------------------------------------------------------------------------
+
 
 def _answer(fn, *args, what, returns=True):
     """``fn(*args)``, stopping with a clear message when it is still the stub or (if ``returns``) returns None."""
@@ -408,8 +441,9 @@ def _general_case(got, ref, case, advice, rtol=1e-9, atol=1e-12):
     try:
         out = _answer(got, what="your function")
     except (ValueError, IndexError, TypeError) as exc:
-        raise Feedback(f"right on the lab's cases, but on {case} your function fails ({type(exc).__name__}: "
-                       f"{exc}). {advice}") from None
+        raise Feedback(
+            f"right on the lab's cases, but on {case} your function fails ({type(exc).__name__}: {exc}). {advice}"
+        ) from None
     out, ref = np.asarray(out, dtype=float), np.asarray(ref, dtype=float)
     if out.shape != ref.shape or not np.allclose(out, ref, rtol=rtol, atol=atol):
         raise Feedback(f"right on the lab's cases, but not on {case}. {advice}")
@@ -432,7 +466,7 @@ def check_close(name, value, expected, tol, hint=""):
 # its exercise forbids in the table (fusionlab.checks.exercises) raise "exercise N asks you to write this yourself"
 # (fusionlab.guard.forbid), so a check cannot print ✓ for an answer that only calls them.
 # ---------------------------------------------------------------------------------------------------------------
-_REFERENCES = {e.check: e.forbid for e in EXERCISES}   # check name -> the dotted names it forbids (the table)
+_REFERENCES = {e.check: e.forbid for e in EXERCISES}  # check name -> the dotted names it forbids (the table)
 
 
 def forbids(check):
@@ -457,11 +491,13 @@ def forbids(check):
                     return fn(*args, **kwargs)
             except guard.ForbiddenCall as err:
                 raise Feedback(str(err)) from None
+
         return call
 
     @functools.wraps(check)
     def run(*args, **kwargs):
         return check(*(guarded(a) for a in args), **kwargs)
+
     # the check without the forbid, for the grading tools' judge: there the student's functions run in a box whose
     # library has the references as stubs already, and the forbid would swap the judge's own functions
     run.unguarded = check

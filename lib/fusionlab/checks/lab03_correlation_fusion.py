@@ -1,6 +1,7 @@
 """Lab 03, the thesis' correlation fusion (seed 000 §5.3-5.4): the visible checks of its exercises (see
 :mod:`fusionlab.checks`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,23 +19,38 @@ def check_moving_average(fn):
     got = _call(fn, x, 3, what="your moving average").ravel()
     ref = _correlation.moving_average(x, 3)
     if got.shape != ref.shape:
-        raise Feedback(f"return one value per sample ({len(x)}); you return {got.shape[0]} -- pad the start with the "
-                       "mean of the samples available so far (an expanding mean), do not drop it.")
+        raise Feedback(
+            f"return one value per sample ({len(x)}); you return {got.shape[0]} -- pad the start with the "
+            "mean of the samples available so far (an expanding mean), do not drop it."
+        )
     if np.allclose(got, ref):
         x2 = np.random.default_rng(5).normal(size=20)
         for n in (1, 5):
-            _general_case(lambda: np.ravel(fn(x2, n)), _correlation.moving_average(x2, n),
-                          f"N = {n} points on 20 samples", "Use N, not 3, everywhere (window and expanding start).")
+            _general_case(
+                lambda: np.ravel(fn(x2, n)),
+                _correlation.moving_average(x2, n),
+                f"N = {n} points on 20 samples",
+                "Use N, not 3, everywhere (window and expanding start).",
+            )
         _ok("causal N-point moving average, expanding start: right for N = 3, 1 and 5.")
         return
     centred = np.convolve(x, np.ones(3) / 3, mode="same")
-    msg = _first_match(got, [
-        (lambda g: np.allclose(g[1:-1], centred[1:-1]), "your average is centred (it uses the next sample): eq 5.7 "
-         "averages A[m], A[m-1], ... A[m-N+1] only -- a causal filter, as a live MCU would need."),
-        (lambda g: np.allclose(g[2:], ref[2:]), "right from m = N-1 on; the first N-1 samples should be the mean of "
-         "the samples so far (expected {1}, got {0}).".format(*_pair(got[:2], ref[:2], 3))),
-        (lambda g: np.allclose(g[2:], 3 * ref[2:]), "you sum the window but do not divide by N (eq 5.7 has 1/N)."),
-    ])
+    msg = _first_match(
+        got,
+        [
+            (
+                lambda g: np.allclose(g[1:-1], centred[1:-1]),
+                "your average is centred (it uses the next sample): eq 5.7 "
+                "averages A[m], A[m-1], ... A[m-N+1] only -- a causal filter, as a live MCU would need.",
+            ),
+            (
+                lambda g: np.allclose(g[2:], ref[2:]),
+                "right from m = N-1 on; the first N-1 samples should be the mean of "
+                "the samples so far (expected {1}, got {0}).".format(*_pair(got[:2], ref[:2], 3)),
+            ),
+            (lambda g: np.allclose(g[2:], 3 * ref[2:]), "you sum the window but do not divide by N (eq 5.7 has 1/N)."),
+        ],
+    )
     raise Feedback(msg or "expected {1}, got {0}.".format(*_pair(got, ref, 3)))
 
 
@@ -50,15 +66,27 @@ def check_ratio(fn):
         return
     with np.errstate(all="ignore"):
         signed = g / (g + a)
-    msg = _first_match(got, [                           # the first five samples: the last one is the 0/0 case
-        (lambda v: v.shape == ref.shape and np.all(np.isfinite(v[:5])) and np.allclose(v[:5], ref[:5], atol=1e-6),
-         f"both inputs 0 gives {got[-1] if got.size else got} -- the 0/0 case: add a small ε to the denominator (it "
-         "gives 0, trust the gyro)."),
-        (lambda v: np.allclose(v[:5], signed[:5], atol=1e-6), "take magnitudes: |gyro| / (|gyro| + |accel term|) -- a "
-         "negative rate must not give a negative weight."),
-        (lambda v: np.allclose(v[:5], 1 - ref[:5], atol=1e-6), "you return 1 - ratio: the gyro magnitude goes in the "
-         "numerator (eq 5.15)."),
-    ])
+    msg = _first_match(
+        got,
+        [  # the first five samples: the last one is the 0/0 case
+            (
+                lambda v: (
+                    v.shape == ref.shape and np.all(np.isfinite(v[:5])) and np.allclose(v[:5], ref[:5], atol=1e-6)
+                ),
+                f"both inputs 0 gives {got[-1] if got.size else got} -- the 0/0 case: add a small ε to the "
+                "denominator (it "
+                "gives 0, trust the gyro).",
+            ),
+            (
+                lambda v: np.allclose(v[:5], signed[:5], atol=1e-6),
+                "take magnitudes: |gyro| / (|gyro| + |accel term|) -- a negative rate must not give a negative weight.",
+            ),
+            (
+                lambda v: np.allclose(v[:5], 1 - ref[:5], atol=1e-6),
+                "you return 1 - ratio: the gyro magnitude goes in the numerator (eq 5.15).",
+            ),
+        ],
+    )
     raise Feedback(msg or "expected {1}, got {0}.".format(*_pair(got, ref)))
 
 
@@ -73,9 +101,19 @@ def check_fuse(fn):
     if got.shape == ref.shape and np.allclose(got, ref):
         _ok("eq 5.17: the weight multiplies the accelerometer angle, 1 - weight the gyro prediction F[n-1] + I[n].")
         return
-    msg = _first_match(got, [
-        (_correlation.fuse(a, inc, 1 - w, f0=5.0), "the weights are swapped: in eq 5.17 the ratio multiplies the "
-                                                   "accelerometer angle A[n]."),
-        (w * a + (1 - w) * inc, "the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n]."),
-    ], rtol=1e-5, atol=1e-8)
+    msg = _first_match(
+        got,
+        [
+            (
+                _correlation.fuse(a, inc, 1 - w, f0=5.0),
+                "the weights are swapped: in eq 5.17 the ratio multiplies the accelerometer angle A[n].",
+            ),
+            (
+                w * a + (1 - w) * inc,
+                "the gyro branch must add the increment to the previous *fused* value, F[n-1] + I[n].",
+            ),
+        ],
+        rtol=1e-5,
+        atol=1e-8,
+    )
     raise Feedback(msg or "expected {1}, got {0} (F[-1] = f0 = 5).".format(*_pair(got, ref)))

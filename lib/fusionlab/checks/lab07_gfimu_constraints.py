@@ -1,6 +1,7 @@
 """Lab 07, the GF-IMU's dynamic models: 15-state Jacobian, Lie derivative, constraints (seed 004 ch. 5): the visible
 checks of its exercises (see :mod:`fusionlab.checks`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,31 +23,42 @@ def check_dynamic_jacobian(fn):
             raise Feedback(f"H is 9 AIV measurements by 15 states; got {H.shape}")
         if np.allclose(H, ref):
             continue
-        msg = _first_match(H, [
-            (lambda h: np.allclose(h[:, :6], ref[:, :6]) and not np.allclose(h[:, 6:], ref[:, 6:]), "the bias columns: "
-             "each of the 9 AIV terms carries its own additive bias, so ∂h/∂b = I₉ (the α rows get b₁₋₃, the "
-             "quadratic rows b₄₋₉)."),
-            (lambda h: np.allclose(h[:3, 3:6], 0), "the first three measurements are α itself: ∂h/∂α = I₃ in rows "
-                                                   "1-3."),
-            (lambda h: np.allclose(h[3:, :3], ref[3:, :3] / 2), "the square rows: ∂(ω_x²)/∂ω_x = 2ω_x."),
-        ])
-        raise Feedback(msg or f"H is not eq 5.19: {_where(H, ref, 'H', atol=1e-8)}. It is "
-                              "[[0, I₃, I₃, 0], [H_q(ω), 0, 0, I₆]].")
+        msg = _first_match(
+            H,
+            [
+                (
+                    lambda h: np.allclose(h[:, :6], ref[:, :6]) and not np.allclose(h[:, 6:], ref[:, 6:]),
+                    "the bias columns: "
+                    "each of the 9 AIV terms carries its own additive bias, so ∂h/∂b = I₉ (the α rows get b₁₋₃, the "
+                    "quadratic rows b₄₋₉).",
+                ),
+                (
+                    lambda h: np.allclose(h[:3, 3:6], 0),
+                    "the first three measurements are α itself: ∂h/∂α = I₃ in rows 1-3.",
+                ),
+                (lambda h: np.allclose(h[3:, :3], ref[3:, :3] / 2), "the square rows: ∂(ω_x²)/∂ω_x = 2ω_x."),
+            ],
+        )
+        raise Feedback(
+            msg or f"H is not eq 5.19: {_where(H, ref, 'H', atol=1e-8)}. It is [[0, I₃, I₃, 0], [H_q(ω), 0, 0, I₆]]."
+        )
     _ok("H of the augmented model (eq 5.19) is right.")
 
 
 @forbids
 def check_lie_derivative(fn):
     """Check a student's sympy ``fn(L, f, x) -> ∂L/∂x · f`` (seed 004 eqs 5.26–5.27)."""
-    import sympy as sp                     # here, not at the top: sympy takes a second to import
+    import sympy as sp  # here, not at the top: sympy takes a second to import
 
     O, x, lie = _gfimu_dynamics.observability_matrix(augmented=False, order=3)
     xs = sp.Matrix(x)
     f = sp.Matrix([*x[3:6], 0, 0, 0])
     got = sp.Matrix(_answer(fn, lie[0], f, xs, what="your Lie derivative"))
     if got.shape != (9, 1):
-        raise Feedback(f"L¹h of the 9 measurements is a 9×1 column; got {got.shape} -- multiply the 9×6 Jacobian "
-                       "by the 6×1 vector field f.")
+        raise Feedback(
+            f"L¹h of the 9 measurements is a 9×1 column; got {got.shape} -- multiply the 9×6 Jacobian "
+            "by the 6×1 vector field f."
+        )
     if sp.expand(got - lie[1]) != sp.zeros(9, 1):
         if sp.expand(got - lie[0]) == sp.zeros(9, 1):
             raise Feedback("you returned h itself: the Lie derivative is the Jacobian of h times f.")
@@ -70,10 +82,13 @@ def check_constraints(fn):
         if np.allclose(e, -re, rtol=1e-9, atol=1e-15) and not np.allclose(re, 0, atol=1e-15):
             raise Feedback("e has the opposite sign: e₁ = x₁(x₂x₆ − x₃x₅) = ω_x (ω×α)_x, e₂ = x₂(x₃x₄ − x₁x₆).")
         if not np.allclose(e, re, rtol=1e-9, atol=1e-15):
-            raise Feedback(f"e differs from eq 5.40 at x = {np.round(x, 4)}: "
-                           + "expected {1}, got {0}.".format(*_pair(e, re)))
+            raise Feedback(
+                f"e differs from eq 5.40 at x = {np.round(x, 4)}: " + "expected {1}, got {0}.".format(*_pair(e, re))
+            )
         if not np.allclose(E, rE, rtol=1e-9, atol=1e-15):
             bad = np.argwhere(~np.isclose(E, rE, rtol=1e-9, atol=1e-15))[0]
-            raise Feedback(f"E[{bad[0]}, {bad[1]}] is wrong: differentiate e_{bad[0] + 1} by x_{bad[1] + 1} "
-                           "(product rule: x₁ also multiplies the bracket).")
+            raise Feedback(
+                f"E[{bad[0]}, {bad[1]}] is wrong: differentiate e_{bad[0] + 1} by x_{bad[1] + 1} "
+                "(product rule: x₁ also multiplies the bracket)."
+            )
     _ok("e(x) and its Jacobian E (eq 5.40) are right; both vanish when Δω ∥ Δθ.")

@@ -1,6 +1,7 @@
 """Lab 11, BROAD: heading and inclination error from an error quaternion, RMSE over the movement phase: the visible
 checks of its exercises (see :mod:`fusionlab.checks`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -15,14 +16,15 @@ def _broad_error_cases():
     """Error quaternions ``q_z(δ) ⊗ q_tilt(ε about a horizontal axis)`` with known δ, ε; some with w < 0."""
     rng = np.random.default_rng(1111)
     n = 40
-    delta = rng.uniform(-2.5, 2.5, n)                                  # heading part, rad
-    eps = rng.uniform(0.0, 1.2, n)                                     # tilt angle, rad
-    axis_az = rng.uniform(-np.pi, np.pi, n)                            # tilt axis in the horizontal plane
-    q_tilt = np.stack([np.cos(eps / 2), np.sin(eps / 2) * np.cos(axis_az), np.sin(eps / 2) * np.sin(axis_az),
-                       np.zeros(n)], axis=-1)
+    delta = rng.uniform(-2.5, 2.5, n)  # heading part, rad
+    eps = rng.uniform(0.0, 1.2, n)  # tilt angle, rad
+    axis_az = rng.uniform(-np.pi, np.pi, n)  # tilt axis in the horizontal plane
+    q_tilt = np.stack(
+        [np.cos(eps / 2), np.sin(eps / 2) * np.cos(axis_az), np.sin(eps / 2) * np.sin(axis_az), np.zeros(n)], axis=-1
+    )
     q_z = np.stack([np.cos(delta / 2), np.zeros(n), np.zeros(n), np.sin(delta / 2)], axis=-1)
     q = rotations.quat_multiply(q_z, q_tilt)
-    q[::3] *= -1                                                       # -q is the same rotation
+    q[::3] *= -1  # -q is the same rotation
     return q, np.abs(delta), eps
 
 
@@ -37,33 +39,56 @@ def _broad_angle_check(fn, what, ref_fn, formula, truth):
     if np.allclose(got, ref, atol=1e-9):
         return got, ref
     w, x, y, z = q.T
-    msg = _first_match(got, [
-        (lambda g: np.allclose(g, np.degrees(ref), atol=1e-6), f"{what} returns degrees: return radians (np.degrees "
-                                                               "only for display)."),
-        (ref / 2, f"{what} is half the angle: a quaternion holds half angles, so the angle is 2·(...)."),
-        (lambda g: np.allclose(np.abs(g), ref, atol=1e-9) or np.any(g < -1e-12), f"{what} has the wrong sign for "
-         "some quaternions: q and -q are the same rotation, so use |w| and |z| (the angle is always between 0 and "
-         "π)."),
-        # read as [x, y, z, w], q[..., 3] (our z) is taken for w and q[..., 2] (our y) for z
-        (formula(z, y), f"{what} reads the quaternion as [x, y, z, w]: the suite's order is [w, x, y, z], so w = "
-                        "q[..., 0] and z = q[..., 3]."),
-        *((formula(w, c), f"{what} uses the {name} component: the heading axis is the vertical, the nav z axis, so "
-                          "use z = q[..., 3].") for name, c in (("x", x), ("y", y))),
-    ], rtol=0, atol=1e-9)
+    msg = _first_match(
+        got,
+        [
+            (
+                lambda g: np.allclose(g, np.degrees(ref), atol=1e-6),
+                f"{what} returns degrees: return radians (np.degrees only for display).",
+            ),
+            (ref / 2, f"{what} is half the angle: a quaternion holds half angles, so the angle is 2·(...)."),
+            (
+                lambda g: np.allclose(np.abs(g), ref, atol=1e-9) or np.any(g < -1e-12),
+                f"{what} has the wrong sign for "
+                "some quaternions: q and -q are the same rotation, so use |w| and |z| (the angle is always between "
+                "0 and "
+                "π).",
+            ),
+            # read as [x, y, z, w], q[..., 3] (our z) is taken for w and q[..., 2] (our y) for z
+            (
+                formula(z, y),
+                f"{what} reads the quaternion as [x, y, z, w]: the suite's order is [w, x, y, z], so w = "
+                "q[..., 0] and z = q[..., 3].",
+            ),
+            *(
+                (
+                    formula(w, c),
+                    f"{what} uses the {name} component: the heading axis is the vertical, the nav z axis, so "
+                    "use z = q[..., 3].",
+                )
+                for name, c in (("x", x), ("y", y))
+            ),
+        ],
+        rtol=0,
+        atol=1e-9,
+    )
     if msg:
         raise Feedback(msg)
     if truth is not None and np.allclose(got, truth, atol=1e-9):
         return got, ref
-    raise Feedback(f"{what} differs from the BROAD definition by up to {np.max(np.abs(got - ref)):.3g} rad; "
-                   "check the formula against the markdown above.")
+    raise Feedback(
+        f"{what} differs from the BROAD definition by up to {np.max(np.abs(got - ref)):.3g} rad; "
+        "check the formula against the markdown above."
+    )
 
 
 @forbids
 def check_broad_heading(fn):
     """Check a student's ``fn(q_err) -> (N,) rad``: heading error ``2·atan(|z/w|)`` (BROAD, Laidig et al. 2021)."""
     q, abs_delta, _ = _broad_error_cases()
-    _broad_angle_check(fn, "your heading error", metrics.heading_error,
-                       lambda w, z: 2 * np.arctan2(np.abs(z), np.abs(w)), abs_delta)
+    _broad_angle_check(
+        fn, "your heading error", metrics.heading_error, lambda w, z: 2 * np.arctan2(np.abs(z), np.abs(w)), abs_delta
+    )
     _ok(f"heading error right on {len(q)} error quaternions (q and -q alike): it recovers |δ| of q_z(δ) ⊗ q_tilt.")
 
 
@@ -74,10 +99,14 @@ def check_broad_inclination(fn):
     got = _call(fn, q, what="your inclination error").reshape(-1)
     w, _, _, z = q.T
     if got.shape == eps.shape and np.allclose(got, 2 * np.arccos(np.clip(w * w + z * z, 0, 1)), atol=1e-9):
-        raise Feedback("your inclination error takes acos(w² + z²): the square root is missing, "
-                       "cos(ε/2) = √(w² + z²).")
-    _broad_angle_check(fn, "your inclination error", metrics.inclination_error,
-                       lambda w, z: 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0, 1)), eps)
+        raise Feedback("your inclination error takes acos(w² + z²): the square root is missing, cos(ε/2) = √(w² + z²).")
+    _broad_angle_check(
+        fn,
+        "your inclination error",
+        metrics.inclination_error,
+        lambda w, z: 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0, 1)),
+        eps,
+    )
     _ok(f"inclination error right on {len(q)} error quaternions: it recovers the tilt ε and ignores the heading δ.")
 
 
@@ -93,15 +122,27 @@ def check_broad_rmse(fn):
     if np.isclose(got, ref, rtol=1e-9):
         _ok(f"RMSE over the movement mask, NaN samples skipped: {ref:.4f}° on the test data.")
         return
-    msg = _first_match(got, [
-        (lambda g: np.isnan(g), "your RMSE is NaN: skip the samples whose reference is lost (np.isnan), e.g. "
-                                "np.nanmean or a mask ok = movement & ~np.isnan(angle)."),
-        (metrics.rms(x, m), "your RMSE is in radians: the BROAD tables are in degrees (np.degrees at the end)."),
-        (np.degrees(metrics.rms(x)), "your RMSE uses every sample: keep only those where movement is True."),
-        (np.degrees(np.nanmean(np.abs(x[m]))), "that is the mean absolute error: the RMSE is the square root of the "
-                                               "mean of the squares."),
-    ], rtol=1e-9, atol=0)
+    msg = _first_match(
+        got,
+        [
+            (
+                lambda g: np.isnan(g),
+                "your RMSE is NaN: skip the samples whose reference is lost (np.isnan), e.g. "
+                "np.nanmean or a mask ok = movement & ~np.isnan(angle).",
+            ),
+            (metrics.rms(x, m), "your RMSE is in radians: the BROAD tables are in degrees (np.degrees at the end)."),
+            (np.degrees(metrics.rms(x)), "your RMSE uses every sample: keep only those where movement is True."),
+            (
+                np.degrees(np.nanmean(np.abs(x[m]))),
+                "that is the mean absolute error: the RMSE is the square root of the mean of the squares.",
+            ),
+        ],
+        rtol=1e-9,
+        atol=0,
+    )
     if msg:
         raise Feedback(msg)
-    raise Feedback("your RMSE is {}°, expected {}°: ".format(*_pair(got, ref, 5))
-                   + "sqrt(mean(angle²)) over movement & ~isnan, in degrees.")
+    raise Feedback(
+        "your RMSE is {}°, expected {}°: ".format(*_pair(got, ref, 5))
+        + "sqrt(mean(angle²)) over movement & ~isnan, in degrees."
+    )
