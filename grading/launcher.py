@@ -310,28 +310,70 @@ def judge_problem(slots):
     return None
 
 
+def import_folders():
+    """The folders the judge imports from: the import path, and the folders holding the course's own packages
+    (``fusionlab`` and ``grading``), which an editable install reaches through an import hook of its own rather than
+    through the import path. A module the judge imports late (after it gave up root) is looked up there."""
+    import fusionlab
+    import grading
+
+    own = [os.path.dirname(os.path.dirname(os.path.abspath(m.__file__))) for m in (fusionlab, grading)]
+    return [p for p in dict.fromkeys([*sys.path, *own]) if p and os.path.isdir(p)]
+
+
+def course_files():
+    """The folders and Python files of the course's own packages (``fusionlab``, ``grading``), which the judge
+    imports from, some of them late (after it gave up root)."""
+    import fusionlab
+    import grading
+
+    out = []
+    for package in (fusionlab, grading):
+        for folder, dirs, files in os.walk(os.path.dirname(os.path.abspath(package.__file__))):
+            dirs[:] = [d for d in dirs if d != "__pycache__"]
+            out += [folder, *(os.path.join(folder, f) for f in sorted(files) if f.endswith(".py"))]
+    return out
+
+
+def closed_within(paths):
+    """The first of ``paths``, or of :func:`course_files`, that other users may not read (a folder they may not
+    list or enter, a file they may not read) even once every folder on its way is open: a checkout made under
+    ``umask 077``, say. None when all are open; then :func:`open_view` is enough for the judge."""
+    for path in [*paths, *course_files()]:
+        try:
+            mode = os.stat(path).st_mode
+        except OSError:
+            continue
+        need = 0o005 if os.path.isdir(path) else 0o004
+        if mode & need != need:
+            return path
+    return None
+
+
+def _first_refused(paths):
+    """As the judge: the first of ``paths`` it cannot list, or of :func:`course_files` it cannot read; ""."""
+    for path in paths:
+        try:
+            os.listdir(path)
+        except PermissionError:
+            return path
+    return next((f for f in course_files() if not os.access(f, os.R_OK)), "")
+
+
 def unreadable(slot, paths=None):
-    """The first folder of ``paths`` (by default the import path, from which the judge imports the library and
-    Python's packages) that the judge of ``slot`` cannot read as its own user, or None (or not root)."""
+    """The first folder of ``paths`` (by default :func:`import_folders`, from which the judge imports the library and
+    Python's packages), or file of :func:`course_files`, that the judge of ``slot`` cannot read as its own user, or
+    None (or not root)."""
     if os.geteuid() != 0:
         return None
-    paths = [p for p in (sys.path if paths is None else paths) if p and os.path.isdir(p)]
-
-    def first_refused():
-        for path in paths:
-            try:
-                os.listdir(path)
-            except PermissionError:
-                return path
-        return ""
-
-    return _in_dropped_child(slot, False, first_refused) or None
+    paths = [p for p in (import_folders() if paths is None else paths) if p and os.path.isdir(p)]
+    return _in_dropped_child(slot, False, lambda: _first_refused(paths)) or None
 
 
 def view_problem(slot, paths=None):
-    """Why the judge of ``slot`` cannot reach ``paths`` (the import path by default) through :func:`open_view` as
-    its own user, with no capability; "" when it can. Tried in a child process."""
-    paths = [p for p in (sys.path if paths is None else paths) if p and os.path.isdir(p)]
+    """Why the judge of ``slot`` cannot reach ``paths`` (:func:`import_folders` by default) through :func:`open_view`
+    as its own user, with no capability; "" when it can. Tried in a child process."""
+    paths = [p for p in (import_folders() if paths is None else paths) if p and os.path.isdir(p)]
 
     def task():
         stage = tempfile.mkdtemp()
@@ -340,12 +382,8 @@ def view_problem(slot, paths=None):
         except OSError as exc:
             return f"no view of its own: {exc}"
         drop_root(judge_uid(slot))
-        for path in paths:
-            try:
-                os.listdir(path)
-            except PermissionError:
-                return f"{path} is still closed in its view"
-        return ""
+        refused = _first_refused(paths)
+        return f"{refused} is still closed in its view" if refused else ""
 
     return _in_dropped_child(slot, None, task)
 
@@ -362,6 +400,21 @@ def reach_message(blocked, slot):
         f"{blocked} is readable by root alone and the judges get no view of their own here ({problem}): they "
         f"keep one capability, reading files (CAP_DAC_READ_SEARCH), to import from it"
     )
+
+
+def become_judge(slot, folders, stage_in, read_all):
+    """Give up root for the judge of ``slot``. ``read_all`` (``folders`` cross a folder only root may enter): first
+    a view of its own in which the folders on their way are open (:func:`open_view`, staged in a new folder of
+    ``stage_in``); where the kernel gives none, or where something within them is closed too
+    (:func:`closed_within`), the judge also keeps ``CAP_DAC_READ_SEARCH``, as a last resort."""
+    keep = False
+    if read_all:
+        keep = closed_within(folders) is not None
+        try:
+            open_view(folders, tempfile.mkdtemp(dir=stage_in))
+        except OSError:
+            keep = True
+    drop_root(judge_uid(slot), read_all=keep)
 
 
 def split(maker, slot, read_all=False):
@@ -390,14 +443,7 @@ def split(maker, slot, read_all=False):
             shutil.rmtree(own, ignore_errors=True)
             os._exit(status)
     theirs.close()
-    keep = False
-    if read_all:
-        try:
-            stage = tempfile.mkdtemp(dir=own)
-            open_view(sys.path, stage)
-        except OSError:
-            keep = True  # no namespace here: the capability, as a last resort
-    drop_root(judge_uid(slot), read_all=keep)
+    become_judge(slot, import_folders(), own, read_all)
     os.environ["TMPDIR"] = os.environ["MPLCONFIGDIR"] = tempfile.tempdir = own
     return RemoteBoxes(ours, pid)
 

@@ -16,6 +16,7 @@ import re
 import shutil
 
 import nbformat
+import numpy as np
 import pytest
 
 from conftest import ROOT
@@ -137,6 +138,46 @@ CHEATS = {
         3: "return np.degrees(rotations.quat_angle_between(q1, q2))",
     },
 }
+# Lab 02's predict and update through filterpy's other ways to the same step (the table's FILTERPY_PREDICT and
+# FILTERPY_UPDATE): each is a student of its own, cheating on exercises 3 and 4 and answering 1 and 2 honestly.
+FILTERPY_CHEATS = {
+    "get_prediction": {
+        3: "from filterpy.kalman import KalmanFilter\n"
+        "f = KalmanFilter(dim_x=len(x), dim_z=1, dim_u=len(u))\n"
+        "f.x, f.P, f.F, f.Q, f.B = np.array(x, float), np.array(P, float), A, Q, B\n"
+        "return f.get_prediction(u)",
+        4: "from filterpy.kalman import KalmanFilter\n"
+        "f = KalmanFilter(dim_x=len(x), dim_z=len(z))\n"
+        "f.x, f.P, f.H, f.R = np.array(x, float), np.array(P, float), H, R\n"
+        "x_post, P_post = f.get_update(z)\n"
+        "return x_post, P_post, P @ H.T @ np.linalg.inv(H @ P @ H.T + R)",
+    },
+    "extended": {
+        3: "from filterpy.kalman import ExtendedKalmanFilter\n"
+        "f = ExtendedKalmanFilter(dim_x=len(x), dim_z=1, dim_u=len(u))\n"
+        "f.x, f.P, f.F, f.Q, f.B = np.array(x, float), np.array(P, float), A, Q, B\n"
+        "f.predict(u)\n"
+        "return f.x, f.P",
+        4: "from filterpy.kalman import ExtendedKalmanFilter\n"
+        "f = ExtendedKalmanFilter(dim_x=len(x), dim_z=len(z))\n"
+        "f.x, f.P, f.R = np.array(x, float), np.array(P, float), R\n"
+        "f.update(np.asarray(z, float), lambda s: H, lambda s: H @ s)\n"
+        "return f.x, f.P, f.K",
+    },
+    "fading_correlated": {
+        3: "from filterpy.kalman import FadingKalmanFilter\n"
+        "f = FadingKalmanFilter(1.0, dim_x=len(x), dim_z=1, dim_u=len(u))\n"
+        "f.x, f.P, f.F, f.Q, f.B = np.array(x, float), np.array(P, float), A, Q, B\n"
+        "f.predict(u)\n"
+        "return f.x, f.P",
+        4: "from filterpy.kalman import KalmanFilter\n"
+        "f = KalmanFilter(dim_x=len(x), dim_z=len(z))\n"
+        "f.x, f.P, f.H, f.R = np.array(x, float), np.array(P, float), H, R\n"
+        "f.M = np.zeros((len(x), len(z)))\n"
+        "f.update_correlated(np.asarray(z, float))\n"
+        "return f.x, f.P, f.K",
+    },
+}
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh,
 # the capstone's filter of the student's own).
 NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3), ("13_capstone", 2)}
@@ -228,6 +269,8 @@ def _students(lab, release, solution):
         "cheat_even": _answered(release, solution, even),
         "untouched": release,
     }
+    if lab == "02_kalman_falling_body":
+        out.update({f"filterpy_{name}": _answered(release, solution, c) for name, c in FILTERPY_CHEATS.items()})
     if lab in JUNK:
         junk = _answered(release, solution, JUNK[lab])
         out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
@@ -301,6 +344,44 @@ def test_the_reference_call_is_named_in_the_verdict(graded, lab):
         or "not available while the lab is graded" in msg
         or "is not defined by your notebook" in msg
     ), msg[:500]
+
+
+@pytest.mark.parametrize("name", sorted(FILTERPY_CHEATS))
+def test_filterpys_other_kalman_steps_score_nothing_on_predict_and_update(graded, name):
+    points = _points("02_kalman_falling_body")
+    got = graded("02_kalman_falling_body")
+    assert got["scores"][f"filterpy_{name}"] == {1: points[1], 2: points[2], 3: 0, 4: 0}, got["messages"][
+        f"filterpy_{name}"
+    ]
+
+
+def _as_function(name, args, body):
+    ns = {"np": np}
+    exec(f"def {name}({args}):\n" + "\n".join("    " + line for line in body.splitlines()), ns)  # noqa: S102
+    return ns[name]
+
+
+@pytest.mark.parametrize("name", sorted(FILTERPY_CHEATS))
+def test_each_filterpy_cheat_is_a_right_answer_where_nothing_is_stubbed(name):
+    """What makes the test above worth its name: outside the box, each cheat computes the step exactly."""
+    from fusionlab import kalman as kf
+
+    rng = np.random.default_rng(7)
+    x, A, B, u = (
+        rng.standard_normal(3),
+        rng.standard_normal((3, 3)),
+        rng.standard_normal((3, 2)),
+        rng.standard_normal(2),
+    )
+    M = rng.standard_normal((3, 3))
+    P, Q, H, R, z = M @ M.T + np.eye(3), 0.3 * np.eye(3), rng.standard_normal((2, 3)), 0.5 * np.eye(2), np.ones(2)
+    predict = _as_function("my_predict", "x, P, A, Q, B, u", FILTERPY_CHEATS[name][3])
+    update = _as_function("my_update", "x, P, z, H, R", FILTERPY_CHEATS[name][4])
+    for mine, ref in (
+        (predict(x, P, A, Q, B, u), kf.predict(x, P, A, Q, B, u)),
+        (update(x, P, z, H, R), kf.update(x, P, z, H, R)),
+    ):
+        assert len(mine) == len(ref) and all(np.allclose(np.ravel(a), np.ravel(b)) for a, b in zip(mine, ref))
 
 
 @pytest.mark.parametrize("lab", sorted(JUNK))

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+import grading
 from grading import client, launcher, sandbox
 
 AS_ROOT = pytest.mark.skipif(os.geteuid() != 0, reason="the launcher splits off only when grading as root")
@@ -314,6 +315,59 @@ def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_a
     assert got["listed"] == ["py"] and not got["secret"], got
     assert got["caps"] == ["0000000000000000"] * 4, got
     assert sorted(os.listdir(home)) == ["py", "secret.txt"] and os.stat(home).st_mode & 0o777 == 0o700
+
+
+@AS_ROOT
+def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_late(course):
+    """A course checked out under ``umask 077`` inside root's home: the view opens root's home, but the checkout's
+    own folder and files stay closed to the judge. Both checks say so, and the judge keeps reading (the capability)
+    so that a module it imports after giving up root is found (the capstone imports its code scan that late)."""
+    home = course / "home"
+    checkout = home / "main"
+    (checkout / "latepkg").mkdir(parents=True)
+    (checkout / "latepkg" / "__init__.py").write_text("")
+    (checkout / "latepkg" / "late.py").write_text("VALUE = 42\n")
+    for path, mode in ((home, 0o700), (checkout, 0o700), (checkout / "latepkg", 0o700)):
+        os.chmod(path, mode)
+    os.chmod(checkout / "latepkg" / "late.py", 0o600)
+    assert launcher.closed_within([str(checkout)]) == str(checkout)
+    assert "still closed" in launcher.view_problem(3, [str(checkout)])
+    os.chmod(checkout, 0o755)
+    assert launcher.closed_within([str(checkout)]) is None, "the package below is not looked into: its folder is"
+    os.chmod(checkout, 0o700)
+
+    def body():
+        sys.path.insert(0, str(checkout))
+        launcher.become_judge(3, [str(checkout)], str(course), read_all=True)
+        import latepkg.late
+
+        return {"value": latepkg.late.VALUE, "uid": os.getuid()}
+
+    def view_alone():
+        sys.path.insert(0, str(checkout))
+        launcher.open_view([str(checkout)], tempfile.mkdtemp(dir=str(course)))
+        launcher.drop_root(launcher.judge_uid(3))
+        try:
+            import latepkg.late  # noqa: F401
+        except ImportError:
+            return "not found"
+        return "imported"
+
+    assert _in_child(view_alone) == "not found", "the case is real: a view alone does not reach a closed checkout"
+    got = _in_child(body)
+    assert got == {"value": 42, "uid": launcher.judge_uid(3)}, got
+
+
+def test_the_folders_of_the_course_packages_are_opened_to_the_judge_even_off_the_import_path():
+    """An editable install may reach fusionlab and grading through an import hook rather than the import path; the
+    judge's view must still hold their folders, or a module it imports after giving up root (grading.codescan, in
+    the capstone's program check) is not found where the course sits in a folder only root may enter."""
+    import fusionlab
+
+    folders = launcher.import_folders()
+    for package in (fusionlab, grading):
+        assert os.path.dirname(os.path.dirname(os.path.abspath(package.__file__))) in folders, package.__name__
+    assert all(os.path.isdir(f) for f in folders) and len(folders) == len(set(folders))
 
 
 def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped_and_named():

@@ -38,6 +38,61 @@ __all__ = [
 ]
 
 
+#: filterpy's ways to one linear Kalman prediction (Lab 02, exercise 3): every filter class of ``filterpy.kalman``
+#: whose step is the linear one, or is exactly it when given a linear model (the extended, unscented and cubature
+#: filters, the fading-memory filter with alpha 1, the square-root and information forms, the fixed-lag smoother).
+FILTERPY_PREDICT = tuple(
+    "filterpy.kalman." + name
+    for name in (
+        "predict",
+        "batch_filter",
+        "KalmanFilter.predict",
+        "KalmanFilter.get_prediction",
+        "KalmanFilter.batch_filter",
+        "ExtendedKalmanFilter.predict",
+        "ExtendedKalmanFilter.predict_x",
+        "ExtendedKalmanFilter.predict_update",
+        "FadingKalmanFilter.predict",
+        "FadingKalmanFilter.get_prediction",
+        "FadingKalmanFilter.batch_filter",
+        "SquareRootKalmanFilter.predict",
+        "InformationFilter.predict",
+        "UnscentedKalmanFilter.predict",
+        "CubatureKalmanFilter.predict",
+        "FixedLagSmoother.smooth",
+        "FixedLagSmoother.smooth_batch",
+    )
+)
+
+#: filterpy's ways to one linear Kalman update (Lab 02, exercise 4), as :data:`FILTERPY_PREDICT` for the prediction:
+#: the Kalman filter's own update and its variants (``get_update`` returns it without storing it, correlated noise
+#: and sequential updates reduce to it), and the update of each filter class that is exactly it for a linear model.
+FILTERPY_UPDATE = tuple(
+    "filterpy.kalman." + name
+    for name in (
+        "update",
+        "update_steadystate",
+        "batch_filter",
+        "KalmanFilter.update",
+        "KalmanFilter.get_update",
+        "KalmanFilter.update_correlated",
+        "KalmanFilter.update_sequential",
+        "KalmanFilter.update_steadystate",
+        "KalmanFilter.batch_filter",
+        "ExtendedKalmanFilter.update",
+        "ExtendedKalmanFilter.predict_update",
+        "FadingKalmanFilter.update",
+        "FadingKalmanFilter.batch_filter",
+        "SquareRootKalmanFilter.update",
+        "InformationFilter.update",
+        "UnscentedKalmanFilter.update",
+        "CubatureKalmanFilter.update",
+        "FixedLagSmoother.smooth",
+        "FixedLagSmoother.smooth_batch",
+    )
+)
+
+
 @dataclass(frozen=True)
 class Exercise:
     """One autograded exercise: its lab, number, points, the names the answer defines, its check, what it forbids.
@@ -202,7 +257,7 @@ EXERCISES = (
         2,
         ("my_predict",),
         "check_predict",
-        ("filterpy.kalman.KalmanFilter.predict", "filterpy.kalman.predict", "kalman.predict", "kalman.predict_step"),
+        (*FILTERPY_PREDICT, "kalman.predict", "kalman.predict_step"),
     ),
     Exercise(
         "02_kalman_falling_body",
@@ -211,8 +266,7 @@ EXERCISES = (
         ("my_update",),
         "check_update",
         (
-            "filterpy.kalman.KalmanFilter.update",
-            "filterpy.kalman.update",
+            *FILTERPY_UPDATE,
             "kalman._gain",
             "kalman.kalman_gain",
             "kalman.update",
@@ -507,18 +561,33 @@ def loaders(lab=None):
 def qualified(dotted):
     """The module and the attribute path a dotted name of the table stands for: ``"kalman.update"`` is
     ``("fusionlab.kalman", "update")``, other packages by their full name (``"filterpy.kalman.KalmanFilter.predict"``
-    is ``("filterpy.kalman", "KalmanFilter.predict")``). Raises ImportError for a name whose module is not there."""
+    is ``("filterpy.kalman", "KalmanFilter.predict")``): the longest module from which the rest is a chain of
+    attributes (``filterpy.kalman.CubatureKalmanFilter`` is both a module and, in ``filterpy.kalman``, the class it
+    holds, so ``"filterpy.kalman.CubatureKalmanFilter.predict"`` is the class's method). Raises ImportError for a name
+    whose module is not there."""
     import importlib
 
     parts = dotted.split(".")
+    found = []
     for i in range(len(parts) - 1, 0, -1):
         for prefix in ("fusionlab.", ""):
             try:
-                importlib.import_module(prefix + ".".join(parts[:i]))
+                obj = importlib.import_module(prefix + ".".join(parts[:i]))
             except ImportError:
                 continue
-            return prefix + ".".join(parts[:i]), ".".join(parts[i:])
+            found.append((prefix + ".".join(parts[:i]), ".".join(parts[i:])))
+            for attr in parts[i:]:
+                obj = getattr(obj, attr, _MISSING)
+                if obj is _MISSING:
+                    break
+            else:
+                return found[-1]
+    if found:
+        return found[0]  # no chain resolves: the longest module, for resolve to name the missing attribute
     raise ImportError(dotted)
+
+
+_MISSING = object()
 
 
 def resolve(dotted):
