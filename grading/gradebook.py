@@ -190,6 +190,9 @@ def record(course: Path, lab: Lab, student: str, result):
         shutil.rmtree(dest)
     src = course / "submitted" / student / lab.lab
     handin.copy_plain(src, dest, notebooks=False)
+    forged = dest / f"{lab.lab}.html"  # the name of the feedback nbgrader writes: never a file the student sent
+    if forged.is_file():
+        forged.unlink()
     nb = outputs.autograded_notebook(lab, read_submission(course, lab.lab, student), result.verdict)
     nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 

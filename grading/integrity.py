@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import argparse
 import csv
+import re
 import sys
 from pathlib import Path
 
 import nbformat
 
-from grading import cells
+from grading import cells, outputs
 from grading.codescan import Source, exercise_of, scan_source
 from grading.flags import WHY
 
@@ -121,7 +122,18 @@ def earlier_rows(path_csv, lab, done=()):
 
 
 def _md_cell(text):
-    return str(text).replace("|", "\\|").replace("\n", " ")
+    """``text`` (a student's: their code, a cell's grade id, a folder name) as the text of one table cell: no tag of
+    it is HTML (:func:`grading.outputs.inert_markdown`), no ``|`` or backtick ends the cell or opens code."""
+    return outputs.inert_markdown(str(text)).replace("|", "\\|").replace("`", "\\`").replace("\n", " ")
+
+
+def _md_code(text):
+    """``text`` (a student's line of code) as a code span in one table cell: fenced by more backticks than it holds
+    in a row, so that nothing in it ends the span (inside it, no tag is HTML)."""
+    text = str(text).replace("\n", " ")
+    fence = "`" * (1 + max((len(run) for run in re.findall("`+", text)), default=0))
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{pad}{text.replace('|', chr(92) + '|')}{pad}{fence}"
 
 
 def write_report(rows, path_md, path_csv, scores=None):
@@ -155,16 +167,18 @@ def write_report(rows, path_md, path_csv, scores=None):
     for student, lab, flags in rows:
         status = _status(flags)
         if status == NOT_GRADED:
-            md.append(f"| {student} | {lab} | {status} | | | {_md_cell(flags[0]['why'])} |")
+            md.append(f"| {_md_cell(student)} | {lab} | {status} | | | {_md_cell(flags[0]['why'])} |")
             continue
         kinds = sorted({f["kind"] for f in flags})
         md.append(
-            f"| {student} | {lab} | {status} | {scores.get((student, lab), '')} | {len(flags)} | {', '.join(kinds)} |"
+            f"| {_md_cell(student)} | {lab} | {status} | {scores.get((student, lab), '')} | {len(flags)} | "
+            f"{', '.join(kinds)} |"
         )
     for student, lab, flags in flagged:
-        md += ["", f"## {student} ({lab})", "", "| cell | line | kind | code | why |", "|---|---|---|---|---|"]
+        md += ["", f"## {_md_cell(student)} ({lab})", ""]
+        md += ["| cell | line | kind | code | why |", "|---|---|---|---|---|"]
         md += [
-            f"| {f['cell']} | {f['line']} | {f['kind']} | `{_md_cell(f['code'])}` | {_md_cell(f['why'])} |"
+            f"| {_md_cell(f['cell'])} | {f['line']} | {f['kind']} | {_md_code(f['code'])} | {_md_cell(f['why'])} |"
             for f in flags
         ]
     Path(path_md).write_text("\n".join(md) + "\n", errors="backslashreplace")

@@ -1153,10 +1153,12 @@ class _InProcess:
 
     def __init__(self, make, cells, course, scratch, slot=0, limits=None, sensors="9D", boxes=None):
         self.make, self.sensors, self.limits = make, sensors, limits
-        self.estimate, self.cell_errors, self.restarts, self.fresh = make(), {}, 0, 0
+        self.estimate, self.cell_errors, self.restarts, self.fresh, self.calls = make(), {}, 0, 0, []
         _InProcess.made.append(self)
 
     def call(self, trial, seconds, gyr=None, acc=None, mag=None):
+        if gyr is None:
+            self.calls.append("whole")
         args = [
             trial.gyr if gyr is None else gyr,
             trial.acc if acc is None else acc,
@@ -1168,7 +1170,12 @@ class _InProcess:
     def call_fresh(self, *args):
         self.fresh += 1
         self.estimate = self.make()
+        self.calls.append("fresh")
         return self.call(*args)
+
+    def forget(self):
+        self.calls.append("forget")
+        return ""
 
     def close(self):
         pass
@@ -1265,6 +1272,43 @@ def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(
     # on the chosen trial three changed futures and one prefix, and one changed future on every other trial
     assert runner.fresh == 4 + len(scored) - 1, runner.fresh
     assert runner.limits == capstone.box_limits(scored, capstone.SECONDS_PER_SAMPLE, 5.0)
+
+
+def test_a_look_ahead_passed_between_boxes_is_caught_as_the_check_comes_first(scored, monkeypatch):
+    """Attack 4 of the red team with a perfect channel between boxes (a dict every box of the student reads and
+    writes; the kernel's key store was one, its file caches another): the filter takes the mean gyro of the *whole*
+    trial as its bias, and passes it on, by the trial's first sample, from a box that saw the real trial to the later
+    boxes of the causality check -- which it tells from the real trials by their noisy ends. With the check's calls
+    made first, on data holding nothing of the future, no box has the real mean to pass on: caught."""
+    channel = {}
+
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            gyr = np.asarray(gyr, dtype=float)
+            key = tuple(np.round(gyr[0], 12))
+            the_check = np.median(np.abs(np.diff(gyr[-len(gyr) // 10 :], axis=0))) > 0.2
+            if key in channel:
+                bias = channel[key]
+            else:
+                bias = gyr.mean(axis=0)  # the look-ahead
+                if not the_check:
+                    channel[key] = bias
+            a = 0.1 * bias[2]
+            return rotations.quat_multiply([np.cos(a), 0, 0, np.sin(a)], _tilt(acc))
+
+        return estimate
+
+    from fusionlab import rotations
+
+    _InProcess.made.clear()
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert len(channel) == len(scored), "the channel carried each trial's real mean from its whole-trial call"
+    assert res.causal is False and "NOT causal" in res.causal_message, res.causal_message
+    assert res.total_points == 0
+    [runner] = _InProcess.made
+    first_whole = runner.calls.index("whole")
+    assert set(runner.calls[:first_whole]) == {"fresh", "forget"} and runner.calls[first_whole - 1] == "forget"
+    assert "fresh" not in runner.calls[first_whole:], runner.calls
 
 
 def test_the_disguise_adds_fresh_noise_so_no_raw_sample_names_the_trial(scored):

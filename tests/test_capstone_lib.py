@@ -110,10 +110,15 @@ def test_the_prefix_check_finds_a_filter_that_reads_the_length_of_its_data(short
         capstone.prefix_change(run, tr.gyr, tr.acc, tr.mag, q, len(q))
 
 
-def test_perturb_future_keeps_the_past_and_changes_the_rest():
+def test_perturb_future_keeps_the_past_and_leaves_nothing_of_the_rest():
     x = np.zeros((50, 3))
     y = capstone.perturb_future(x, 9, 2.0, np.random.default_rng(0))
     assert np.all(y[:10] == 0) and np.all(y[10:] != 0) and np.all(x == 0)
+    # two futures after the same past give the same changed data: not even their mean survives
+    other = x.copy()
+    other[10:] = 100.0 + np.arange(40)[:, None]
+    z = capstone.perturb_future(other, 9, 2.0, np.random.default_rng(0))
+    assert np.array_equal(y, z) and abs(y[10:].mean()) < 1.0
 
 
 @pytest.mark.parametrize(

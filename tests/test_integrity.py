@@ -241,6 +241,25 @@ def test_report_and_cli(tmp_path):
     assert rows[1]["why"].startswith("the notebook cannot be read (NotJSONError")
 
 
+def test_the_report_quotes_a_students_text_and_never_runs_it_as_html(tmp_path):
+    """A foreign cell whose grade id is a tag, code with backticks and a pipe, a folder name with a tag: the report's
+    Markdown shows them as written; none is HTML, none ends its code span or its table cell."""
+    tag = '<img src=x onerror="alert(1)">'
+    nb = nbformat.read(SOURCE, as_version=4)
+    _answer(nb, "ex1_solution", MODEL + "\nnp.allclose = lambda *a, **k: True  # `x` | ```y```")
+    cell = nbformat.v4.new_code_cell("x = 1")
+    cell.metadata["nbgrader"] = {"grade_id": tag, "solution": True, "grade": False, "locked": False}
+    nb.cells.append(cell)
+    flags = integrity.scan_notebook(SOURCE, nb)
+    md_path, csv_path = tmp_path / "r.md", tmp_path / "r.csv"
+    integrity.write_report([(f"eve{tag}", LAB, flags)], md_path, csv_path, scores={})
+    md = md_path.read_text()
+    assert "<img" not in md and md.count("&lt;img") == 3, md  # the summary row, the heading, the foreign cell's row
+    [line] = [x for x in md.splitlines() if "np.allclose" in x]
+    assert "| ```` np.allclose = lambda *a, **k: True  # `x` \\| ```y``` ```` |" in line, line
+    assert line.count(" | ") == 4, "five cells: the pipe in the code is escaped"
+
+
 def test_report_text_is_short_and_explains_each_kind():
     assert set(integrity.WHY) >= {
         "patch",

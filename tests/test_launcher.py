@@ -158,6 +158,7 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
             {"poll": "0"},
             {"unlink": "/"},
             {"start": ["ex1_tests", True], "end": 0},
+            {"forget": "/etc"},
             [],
         ):
             try:
@@ -166,6 +167,12 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
             except RuntimeError as exc:
                 refused.append(str(exc))
         running = boxes.ask({"poll": 0})["status"]
+        forgot = boxes.forget()  # the judge cannot, the launcher (root) can
+        try:
+            open("/proc/sys/vm/drop_caches", "w").write("3\n")
+            judge_forgot = "done"
+        except OSError:
+            judge_forgot = "refused"
         work = [p.name for p in lab.scratch.iterdir()]
         status = box.kill()
         after = [p.name for p in lab.scratch.iterdir()]
@@ -181,6 +188,8 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
             "echoed": echoed,
             "refused": refused,
             "running": running,
+            "forgot": forgot,
+            "judge_forgot": judge_forgot,
             "work": work,
             "status": status,
             "after": after,
@@ -195,6 +204,9 @@ def test_the_launcher_starts_boxes_for_the_judge_and_answers_nothing_else(course
     assert all(r and "the launcher could not do" in r for r in got["refused"]), got["refused"]
     assert "expected a box of ['ex1_tests'], got 'ex9_tests'" in got["refused"][0], got["refused"][0]
     assert got["running"] is None and got["status"] == -9, got
+    can_forget = launcher.forget_caches() == ""  # root here: the kernel may still refuse (a read-only /proc/sys)
+    assert got["forgot"] == ("" if can_forget else got["forgot"]) and isinstance(got["forgot"], str), got
+    assert got["judge_forgot"] == "refused", got
     assert len(got["work"]) == 1 and got["after"] == [], "ending a box removes its folder"
     assert _gone(got["pid"]) and _gone(got["second"]) and _gone(got["launcher"]), (
         "closing the judge's end ends every box and the launcher"
@@ -356,6 +368,11 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
     assert _in_child(view_alone) == "not found", "the case is real: a view alone does not reach a closed checkout"
     got = _in_child(body)
     assert got == {"value": 42, "uid": launcher.judge_uid(3)}, got
+
+
+def test_only_root_makes_the_kernel_forget_its_file_caches(monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)
+    assert launcher.forget_caches() == "not root"
 
 
 def test_the_folders_of_the_course_packages_are_opened_to_the_judge_even_off_the_import_path():

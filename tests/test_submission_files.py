@@ -225,6 +225,7 @@ def test_a_large_file_is_named_in_the_notes_and_reaches_neither_autograded_nor_f
     lab = _lab(course, tmp_path)
     folder = _hand_in(course, "vic", _full(course))
     (folder / "data.csv").write_text("t,x\n0,1\n")
+    (folder / f"{LAB}.html").write_text("<h1>9 / 9: full marks</h1>")  # a feedback page of the student's own
     _sparse(folder / "recording.bin", 1 << 30)
     left, note = submission.left_out(course, LAB, "vic")
     assert left == [("recording.bin", 1 << 30)]
@@ -235,6 +236,7 @@ def test_a_large_file_is_named_in_the_notes_and_reaches_neither_autograded_nor_f
     nbgrader(["generate_feedback", LAB, "--force"], cwd=course)
     assert not (course / "feedback" / "vic" / LAB / "recording.bin").exists()
     assert (course / "feedback" / "vic" / LAB / "data.csv").exists()
+    assert "full marks" not in (course / "feedback" / "vic" / LAB / f"{LAB}.html").read_text()
 
 
 @pytest.mark.skipif(shutil.which("bwrap") is None, reason="bubblewrap (bwrap) is not installed")

@@ -53,13 +53,15 @@ process:
   is scored on one of them, its sensor set's: total RMSE (9D) or inclination RMSE (6D, which cannot know heading).
   A trial without a valid estimate (an error, over its budget, not N unit quaternions) counts with that RMSE of an
   estimate that never moves (the identity quaternion).
-* **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret among those that
-  ran, every sample after k is replaced by noisy samples and ``estimate`` is called again; its output up to k must
+* **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret, every sample
+  after k is replaced (sample k held, with noise) and ``estimate`` is called again; its output up to k must
   not change (1e-10), for three k drawn in secret (:func:`fusionlab.capstone.causal_ks` with the grader's
   generator: in the first hundredth, the first tenth and the second half of the trial). Then ``estimate`` is
   called on the samples up to another secret k alone: its output must be the first k+1 rows of its output on the
   whole trial (a causal filter's output on a prefix is the prefix of its output). Each of these calls runs in a box
-  started for it alone (:meth:`Runner.call_fresh`): nothing of an earlier call survives to be replayed. A filter
+  started for it alone (:meth:`Runner.call_fresh`), and all of them come before any box sees a whole trial, the
+  kernel's file caches forgotten in between (:meth:`Runner.forget`, as root): no box has a future to pass on to a
+  later one (:mod:`grading.capstone.causality`). Every other trial is checked so at one secret k. A filter
   that ran on the trials but not on the check's data (an error, over its budget) was never shown causal and gets no
   points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
@@ -111,7 +113,7 @@ Where it is (each part imports only from those listed above it; this package's n
   (:data:`CHEATS`, :func:`scan`, :func:`library_copies`), and the box's library (:func:`placeholder_module`,
   :func:`box_library`).
 * ``runner.py``: the box (:func:`box_limits`, :class:`Runner`) and one submission (:func:`grade_submission`,
-  :func:`implausibly_close`); ``causality.py``: the causality check it runs (:func:`check_causality`).
+  :func:`implausibly_close`); ``causality.py``: the causality check it runs (:func:`probe`, :func:`verdict`).
 * ``report.py``: the class (:func:`grade_class`), its leaderboard and each student's feedback
   (:func:`write_leaderboard`, :func:`feedback`).
 * ``command.py``: the command (:func:`main`), which ``__main__.py`` runs.
@@ -200,7 +202,7 @@ from .runner import (
     implausibly_close,
     invalid_message,
 )
-from .causality import causality_trial, check_causality, later_samples_change, prefix_k
+from .causality import Probe, causality_trial, prefix_k, probe, verdict
 from .scoring import (
     CACHE_FORMAT,
     MATCH_RAD,

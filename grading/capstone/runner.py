@@ -18,7 +18,7 @@ from grading import box as wire
 from grading import boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .causality import _NotRun, causality_trial, check_causality, later_samples_change
+from .causality import causality_trial, probe, verdict
 from .program import (
     BLOCK_MESSAGE,
     DECLARATION,
@@ -143,6 +143,10 @@ class CapstoneBoxes:
 
     def prepare(self):
         pass  # box_library was made when this object was
+
+    def forget(self):
+        """:func:`grading.launcher.forget_caches` (done only as root: else why not)."""
+        return launcher.forget_caches()
 
     def open(self, key, files=False):
         if key != self.KEY or files:
@@ -286,6 +290,12 @@ class Runner:
         finally:
             self.close()
 
+    def forget(self):
+        """Make the kernel forget what the boxes so far could leave in its file caches ("" when done, else why not):
+        between the causality check's boxes and the first that sees a whole trial."""
+        self.close()
+        return self.boxes.forget()
+
     def close(self):
         if self.box is not None:
             self.box.kill()
@@ -372,10 +382,16 @@ def grade_submission(
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
     every = np.random.default_rng([seed, 11])  # the one secret k of each other trial (its own stream)
-    outputs = {}  # the other trials' outputs, until they are checked
+    budgets = [budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored]
+    outputs = {}  # each trial's output, for the causality check's verdict
     try:
+        # the causality check's calls first, before any box sees a whole trial (grading.capstone.causality)
+        probes = probe(runner, scored, chosen, budgets, rng, every)
+        forgot = runner.forget()
+        if forgot and forgot != "not root":  # not root: the boxes share the grader's user anyway (the run says so)
+            res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
         for i, t in enumerate(scored):
-            r = TrialResult(t.name, budget_s=budget_seconds(len(t), seconds_per_sample, min_seconds))
+            r = TrialResult(t.name, budget_s=budgets[i])
             q, r.status, r.message, r.seconds = runner.call(t, r.budget_s)
             if q is not None and r.seconds > r.budget_s:
                 r.status, q = "timeout", None
@@ -384,8 +400,7 @@ def grade_submission(
                 score_trial(r, q, t, metric)
                 r.q = q
                 _look_for_cheats(res, r, t, refs)
-                if i != chosen:
-                    outputs[i], r.q = q, None  # for its own check, after the box's last call
+                outputs[i], r.q = q, None
             else:
                 r.counted_deg, r.metric = never_moves(t, metric), metric
                 if any(
@@ -394,41 +409,7 @@ def grade_submission(
                 ):
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
-        ran = [(t, r) for t, r in zip(scored, res.trials) if r.status == "ok"]
-        if res.trials[chosen].status != "ok" and ran:  # it failed there: the first trial that ran, again
-            t, r = ran[0]
-            q, status, why, _ = runner.call(t, r.budget_s)
-            ran = [(t, dataclasses.replace(r, q=q))] if q is not None else []
-        else:
-            ran = [(scored[chosen], res.trials[chosen])] if ran else []
-        if ran:
-            t, r = ran[0]
-            res.causal, res.causal_message = check_causality(runner, t, r.q, r.budget_s, rng)
-            r.q = None
-            for i, q in outputs.items() if res.causal is not False else ():  # each in a fresh box, as above
-                try:
-                    late = later_samples_change(runner, scored[i], q, res.trials[i].budget_s, every)
-                except _NotRun as exc:
-                    res.causal, res.causal_message = (
-                        None,
-                        (f"not checked: with the samples after a secret k of {scored[i].name} changed, estimate {exc}"),
-                    )
-                    break
-                if late is not None:
-                    k, change = late
-                    res.causal, res.causal_message = (
-                        False,
-                        (
-                            f"NOT causal: changing the samples after k = {k} of {scored[i].name} changed the "
-                            "estimate up "
-                            f"to k by {change:.2g} (a filter may use no later sample on any trial; every trial is "
-                            "checked "
-                            "at one secret k, one of them at four)"
-                        ),
-                    )
-                    break
-        else:
-            res.causal_message = "not checked: estimate ran on no trial"
+        res.causal, res.causal_message = verdict(probes, scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
             res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]

@@ -6,7 +6,8 @@ magnetometer (uT) readings in the sensor frame, ``(N, 3)`` each, at ``fs`` Hz. T
 trials the course does not ship, with the dataset authors' metrics (:func:`fusionlab.metrics.broad_rmse`):
 
 * **Causal**: the estimate at sample k uses no sample after k. Checked as :func:`causality_change` does it: every
-  sample after k is replaced by noise (:data:`CAUSAL_NOISE`), the filter runs again, and its output up to k must not
+  sample after k is replaced (sample k held, with noise of :data:`CAUSAL_NOISE`: nothing of the real samples after k
+  is left in them), the filter runs again, and its output up to k must not
   change by more than :data:`CAUSAL_TOL`, for each k of :func:`causal_ks` (drawn at random by the grader, with a
   secret); and as :func:`prefix_change` does it: given only the samples up to a k, its output must be the first
   k+1 rows of its output on the whole trial. The grader makes each of these calls in a fresh process, so no call
@@ -61,6 +62,9 @@ __all__ = [
     "perturb_future",
     "as_quaternions",
     "causality_change",
+    "changed_after",
+    "change_up_to",
+    "samples_up_to",
     "first_change",
     "prefix_change",
     "self_check",
@@ -171,7 +175,8 @@ def outside_box(estimate):
     return sorted(found)
 
 
-#: Noise added after k to the gyro (rad/s), accelerometer (m/s^2) and magnetometer (uT) by the causality check.
+#: Noise of the samples that replace those after k in the causality check (:func:`perturb_future`): gyro (rad/s),
+#: accelerometer (m/s^2) and magnetometer (uT).
 CAUSAL_NOISE = (0.5, 3.0, 20.0)
 #: The largest change of the output up to k that the check accepts (any quaternion component).
 CAUSAL_TOL = 1e-10
@@ -334,7 +339,9 @@ def causal_ks(n, rng=None):
 
 
 def perturb_future(x, k, scale, rng):
-    """A copy of ``x`` with Gaussian noise of standard deviation ``scale`` added to every sample after k.
+    """A copy of ``x`` whose samples after k are replaced: sample k held, plus Gaussian noise of standard deviation
+    ``scale``. Nothing of the samples after k is left (not even their mean), so a filter run on it learns nothing
+    of the real future, whatever it keeps or passes on: the causality check's data.
 
     Parameters
     ----------
@@ -363,7 +370,7 @@ def perturb_future(x, k, scale, rng):
         raise ValueError(f"k must leave at least one sample after it (k < {len(y) - 1}); got {k}")
     scale = validate.scalar(scale, "scale", nonnegative=True)
     rng = validate.generator(rng)
-    y[k + 1 :] += scale * rng.standard_normal(y[k + 1 :].shape)
+    y[k + 1 :] = y[k] + scale * rng.standard_normal(y[k + 1 :].shape)
     return y
 
 
@@ -422,8 +429,31 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     if not callable(run):
         raise ValueError(f"run must be a function run(gyr, acc, mag) -> (N, 4); got {type(run).__name__}")
     q = validate.array(q, "q")
-    noisy = [None if x is None else perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
-    q2 = as_quaternions(run(*noisy), len(q))
+    return change_up_to(as_quaternions(run(*changed_after(gyr, acc, mag, k, rng)), len(q)), q, k)
+
+
+def changed_after(gyr, acc, mag, k, rng):
+    """``[gyr, acc, mag]`` as the causality check at k gives them: each through :func:`perturb_future` with its
+    noise of :data:`CAUSAL_NOISE`, drawn for gyr, acc and mag in this order (``mag`` None stays None).
+
+    >>> g, a, m = changed_after(np.zeros((4, 3)), np.ones((4, 3)), None, 2, np.random.default_rng(0))
+    >>> a[:3].tolist() == np.ones((3, 3)).tolist(), m is None
+    (True, True)
+    """
+    return [None if x is None else perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
+
+
+def change_up_to(q2, q, k):
+    """The largest difference of any quaternion component between ``q2`` and ``q`` over samples 0..k: what the
+    causality check compares (a causal filter's is at most :data:`CAUSAL_TOL`).
+
+    >>> change_up_to(np.tile([1.0, 0, 0, 0], (3, 1)), np.array([[1.0, 0, 0, 0]] * 2 + [[0, 1.0, 0, 0]]), 1)
+    0.0
+    """
+    q2, q = validate.array(q2, "q2"), validate.array(q, "q")
+    k = validate.count(k, "k")
+    if q2.ndim != 2 or q.ndim != 2 or min(len(q2), len(q)) <= k:
+        raise ValueError(f"q2 and q must hold samples 0..k = {k} (N, 4); got shapes {q2.shape} and {q.shape}")
     return float(np.max(np.abs(q2[: k + 1] - q[: k + 1])))
 
 
@@ -482,12 +512,20 @@ def prefix_change(run, gyr, acc, mag, q, k):
     k = validate.count(k, "k")
     if q.ndim != 2 or k >= len(q):
         raise ValueError(f"k must be a sample of q (k < {len(q) if q.ndim == 2 else 0}); got {k}")
-    head = [
+    return change_up_to(as_quaternions(run(*samples_up_to(gyr, acc, mag, k)), k + 1), q, k)
+
+
+def samples_up_to(gyr, acc, mag, k):
+    """``[gyr, acc, mag]`` cut after sample k: the data of the prefix check (``mag`` None stays None).
+
+    >>> [x.shape for x in samples_up_to(np.zeros((5, 3)), np.zeros((5, 3)), np.zeros((5, 3)), 1)]
+    [(2, 3), (2, 3), (2, 3)]
+    """
+    k = validate.count(k, "k")
+    return [
         None if x is None else validate.array(x, name, dtype=float)[: k + 1]
         for x, name in ((gyr, "gyr"), (acc, "acc"), (mag, "mag"))
     ]
-    q2 = as_quaternions(run(*head), k + 1)
-    return float(np.max(np.abs(q2 - q[: k + 1])))
 
 
 @dataclass
