@@ -18,6 +18,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
@@ -25,10 +26,15 @@ from fusionlab import labformat
 from grading.cells import grade_id
 from grading.gradebook import nbgrader_env
 
+if TYPE_CHECKING:
+    from collections.abc import Container
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def fill_answers(release, solution, exercises):
+def fill_answers(
+    release: nbformat.NotebookNode, solution: nbformat.NotebookNode, exercises: Container[int]
+) -> nbformat.NotebookNode:
     """A copy of the ``release`` notebook with the code answers of ``exercises`` (numbers) taken from the
     ``solution`` notebook, without its ``### BEGIN/END SOLUTION`` lines: a student who did those exercises."""
     nb = nbformat.from_dict(release)
@@ -40,7 +46,7 @@ def fill_answers(release, solution, exercises):
     return nb
 
 
-def build(course: Path, lab: str, students: int):
+def build(course: Path, lab: str, students: int) -> None:
     for name in ("lib", "data", "grading"):
         shutil.copytree(ROOT / name, course / name, ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "nbgrader_config.py", course)
@@ -61,7 +67,7 @@ def build(course: Path, lab: str, students: int):
     shutil.copy(course / "gradebook.db", course / "gradebook.start.db")
 
 
-def run(course: Path, lab: str, workers: int):
+def run(course: Path, lab: str, workers: int) -> tuple[float, float, str]:
     shutil.copy(course / "gradebook.start.db", course / "gradebook.db")
     shutil.rmtree(course / "autograded", ignore_errors=True)
     t0 = time.monotonic()
@@ -84,7 +90,7 @@ def run(course: Path, lab: str, workers: int):
     return seconds, (int(peak.group(1)) if peak else float("nan")), said
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m grading.bench_classgrade", description=__doc__.split("\n\n")[0])
     ap.add_argument("--lab", default="02_kalman_falling_body")
     ap.add_argument("--students", type=int, default=30)

@@ -32,6 +32,10 @@ import math
 import os
 import re
 import sys
+from typing import BinaryIO, TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 NUMERIC_KINDS = "biufc"  # bool, int, unsigned, float, complex: the only array dtypes that cross the pipe
 MAX_DEPTH = 12
@@ -69,7 +73,7 @@ def _wire_classes():
     return _CLASSES
 
 
-def wire_key(value):
+def wire_key(value: object) -> str | None:
     """The :data:`WIRE_TYPES` key of ``value``'s exact class, or None (a subclass or a look-alike is not one)."""
     module = type(value).__module__ or ""
     if module.split(".")[0] != "fusionlab":
@@ -77,7 +81,7 @@ def wire_key(value):
     return next((key for key, cls in _wire_classes().items() if type(value) is cls), None)
 
 
-def wire_fields(value):
+def wire_fields(value: object) -> dict:
     """``{name: value}`` of the fields a library object of :data:`WIRE_TYPES` travels with."""
     import dataclasses
 
@@ -111,7 +115,7 @@ def _same_kind(name, value, template):
     raise WireError(f"field {name} of a library object cannot cross the pipe")
 
 
-def rebuild(key, state):
+def rebuild(key: str, state: dict) -> object:
     """The library object of :data:`WIRE_TYPES` ``key`` with the fields ``state`` (decoded values), made from a fresh
     instance of its class: the same field names, each of the fresh value's kind. Raises WireError otherwise."""
     import dataclasses
@@ -133,7 +137,7 @@ def rebuild(key, state):
     return fresh
 
 
-def update(obj, fields):
+def update(obj: object, fields: dict) -> None:
     """Set the fields of the library object ``obj`` (a :data:`WIRE_TYPES` instance, not a frozen dataclass)."""
     for name, value in fields.items():
         setattr(obj, name, value)
@@ -150,7 +154,7 @@ def _float(x):
     return {"__float__": "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")}
 
 
-def encode(value, depth=0, objects=True):
+def encode(value: object, depth: int = 0, objects: bool = True):
     """``value`` as JSON-ready plain data; raises :class:`WireError` for anything else.
 
     The library objects of :data:`WIRE_TYPES` travel as their key and fields when ``objects`` is true; sympy
@@ -206,7 +210,7 @@ def encode(value, depth=0, objects=True):
     )
 
 
-def decode(data, *, objects=False, make_sympy=None, depth=0):
+def decode(data: object, *, objects: bool = False, make_sympy: Callable[[str], object] | None = None, depth: int = 0):
     """The value that :func:`encode` encoded, checked strictly (dtype, shape, size); raises :class:`WireError`.
 
     With ``objects`` true, the library objects of :data:`WIRE_TYPES` are rebuilt (:func:`rebuild`); ``make_sympy(text)``
@@ -297,7 +301,7 @@ def _sympy_here(text):
     return eval(text, vars(sympy).copy())  # noqa: S307 -- in the student's own process, on the judge's own inputs
 
 
-def run(requests, replies):
+def run(requests: BinaryIO, replies: BinaryIO) -> None:
     """Run the program read from ``requests``, then answer requests until the pipe closes."""
 
     def send(message):
@@ -370,7 +374,7 @@ def run(requests, replies):
             send({"ok": False, "error": _short(exc)})
 
 
-def main():
+def main() -> None:
     requests = os.fdopen(os.dup(0), "rb")
     replies = os.fdopen(os.dup(1), "wb")
     null = os.open(os.devnull, os.O_RDONLY)

@@ -12,9 +12,13 @@ import inspect
 import os
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fusionlab.checks import exercises
 from grading import cells, sandbox
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 STUB_MESSAGE = (
     "{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
@@ -24,7 +28,7 @@ HIDDEN_PACKAGES = exercises.hidden_packages()  # packages whose functions answer
 WHY_HIDDEN = "its functions answer exercises of the labs"  # what importing a hidden package says
 
 
-def dotted(obj):
+def dotted(obj: object) -> str | None:
     """``module:qualname`` of a function, method or class, or None for what cannot be named so."""
     obj = getattr(obj, "__func__", obj)
     module, qualname = getattr(obj, "__module__", None), getattr(obj, "__qualname__", None)
@@ -62,7 +66,14 @@ def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
     return done
 
 
-def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES, why=WHY_HIDDEN, message=STUB_MESSAGE):
+def strip_packages(
+    dest: Path,
+    lib: Path,
+    forbidden: Iterable[str],
+    hidden: Iterable[str] = HIDDEN_PACKAGES,
+    why: str = WHY_HIDDEN,
+    message: str = STUB_MESSAGE,
+) -> list[str]:
     """Build the box's library (``dest/lib``) and shadow packages (``dest/shadow``) without ``forbidden``.
 
     ``forbidden`` holds ``module:qualname`` names; the packages ``hidden`` are absent (importing one raises
@@ -104,13 +115,13 @@ def strip_packages(dest: Path, lib: Path, forbidden, hidden=HIDDEN_PACKAGES, why
     return left
 
 
-def shadowed(shadow: Path):
+def shadowed(shadow: Path) -> list[str]:
     """The installed copies of the packages that the folder ``shadow`` replaces (:func:`strip_packages`): the box
     hides them (:func:`grading.sandbox.package_paths`), so that taking the shadow off ``sys.path`` reaches nothing."""
     return sandbox.package_paths(sorted(p.name for p in Path(shadow).iterdir() if p.is_dir()))
 
 
-def seal(root: Path):
+def seal(root: Path) -> None:
     """Compile the box library ``root`` once and make it readable by every box's user (boxes mount it read-only)."""
     compileall.compile_dir(root, quiet=1)
     for top, _, files in os.walk(root):

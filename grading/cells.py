@@ -13,11 +13,15 @@ from __future__ import annotations
 
 import ast
 import threading
+from typing import TYPE_CHECKING
 
 import nbformat
 from nbgrader import utils
 
 from fusionlab import labformat
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 _AST_LOCK = threading.Lock()
 
@@ -181,7 +185,7 @@ def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
     return global_reads(tree), bound_names(source), changed
 
 
-def prune(cells: list[tuple[str | None, str, bool]], need=()) -> list[tuple[str | None, str, bool]]:
+def prune(cells: list[tuple[str | None, str, bool]], need: Iterable[str] = ()) -> list[tuple[str | None, str, bool]]:
     """The cells of ``cells`` = [(grade_id, source, must_run)] that must run, in order: every ``must_run`` cell, and
     every other cell that binds or changes a name read by a kept cell (or named in ``need``), to a fixed point. If a
     kept cell does not parse, nothing is left out."""

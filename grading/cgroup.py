@@ -72,7 +72,7 @@ def _base():
     return None, "this machine has no memory controller this process may use (cgroup v1 memory or v2)"
 
 
-def problem():
+def problem() -> str:
     """Why a box's memory cannot be bounded as a whole here, or "" when it can."""
     folder, why = _base()
     if folder is None:
@@ -87,7 +87,7 @@ def problem():
     return ""
 
 
-def said(limit_bytes):
+def said(limit_bytes: int) -> str:
     """What a grading run says of the boxes' memory as a whole."""
     why = problem()
     if not why:
@@ -108,33 +108,33 @@ class Group:
     """One box's memory group: ``path`` (a folder of the cgroup file system) and its ``version`` (1 or 2); in v1,
     ``cpu_path`` is its CPU group (in v2 the one group holds both limits)."""
 
-    def __init__(self, path, version, cpu_path=None):
+    def __init__(self, path: str, version: int, cpu_path: str | None = None) -> None:
         self.path, self.version, self.cpu_path = path, version, cpu_path
 
     def _write(self, name, value, folder=None):
         with open(os.path.join(folder or self.path, name), "w") as f:
             f.write(str(value))
 
-    def join(self):
+    def join(self) -> None:
         """Put the calling process in the group (before it starts the box: ``subprocess.Popen``'s ``preexec_fn``),
         so that every process the box starts is in it from its first instruction."""
         for folder in filter(None, (self.path, self.cpu_path)):
             self._write("cgroup.procs", os.getpid(), folder)
 
-    def pids(self):
+    def pids(self) -> list[int]:
         """The processes in the group now."""
         with contextlib.suppress(FileNotFoundError), open(os.path.join(self.path, "cgroup.procs")) as f:
             return [int(p) for p in f.read().split()]
         return []
 
-    def peak(self):
+    def peak(self) -> int:
         """The most memory the group's processes held together, bytes (0 if the kernel does not say)."""
         name = "memory.max_usage_in_bytes" if self.version == 1 else "memory.peak"
         with contextlib.suppress(OSError, ValueError), open(os.path.join(self.path, name)) as f:
             return int(f.read())
         return 0
 
-    def end(self, seconds=5.0):
+    def end(self, seconds: float = 5.0) -> bool:
         """Kill every process left in the group and remove it; True when it is gone."""
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
@@ -151,7 +151,7 @@ class Group:
         return False
 
 
-def make(name, limit_bytes):
+def make(name: str, limit_bytes: int) -> Group | None:
     """A new group for one box, its processes together held to ``limit_bytes`` of memory (swap included where the
     kernel counts it); None where no group can be made here (:func:`problem`)."""
     if not isinstance(limit_bytes, int) or limit_bytes < (16 << 20):

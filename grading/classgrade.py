@@ -48,12 +48,16 @@ import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
 from grading import cells, cgroup, gradebook, judge, launcher, sandbox, similarity, slipreport, submission
 from grading.lab import CELL_SECONDS, Lab
 from grading.submission import read_submission, students_of  # noqa: F401 -- the one reader, named here too
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 STUDENT_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
@@ -77,7 +81,7 @@ class Result:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> Lab:
+def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args: argparse.Namespace) -> Lab:
     release = nbformat.read(release_dir / lab / f"{lab}.ipynb", as_version=4)
     solution = nbformat.read(course / "solutions" / lab / f"{lab}.ipynb", as_version=4)
     tests = gradebook.recorded_tests(course, lab)
@@ -92,7 +96,7 @@ def load_lab(course: Path, lab: str, release_dir: Path, scratch: Path, args) -> 
 
 
 def grade_one(
-    lab: Lab, course: Path, student: str, slots: queue.Queue, part=judge.BOTH, earlier: Result | None = None
+    lab: Lab, course: Path, student: str, slots: queue.Queue, part: str = judge.BOTH, earlier: Result | None = None
 ) -> Result:
     """Grade one submission (runs in a worker thread, under a user id no other running student has; the judge in a
     process of its own, :func:`grading.judge.judge_apart`): ``part`` as :func:`grading.judge.judge`; with
@@ -124,7 +128,9 @@ def grade_one(
     return result
 
 
-def grade_class(lab: Lab, course: Path, students: list, slots: queue.Queue, workers: int, say=print):
+def grade_class(
+    lab: Lab, course: Path, students: list, slots: queue.Queue, workers: int, say: Callable[..., object] = print
+) -> list[Result]:
     """Grade ``students`` in two rounds, ``workers`` at a time: the visible parts of every student's tests, then the
     hidden parts (:func:`grading.judge.judge`). No student's visible round runs while a box has a hidden input, so
     what one student's boxes learn of the hidden inputs (a channel between boxes on the machine: the load of its
@@ -172,7 +178,7 @@ def grade_class(lab: Lab, course: Path, students: list, slots: queue.Queue, work
     return [again.get(r.student, r) for r in first]
 
 
-def integrity(course: Path, lab: str, results: list[Result]):
+def integrity(course: Path, lab: str, results: list[Result]) -> Path:
     """Write ``integrity_<LAB>.md/.csv``: this run's students scanned (a notebook :func:`read_submission` refuses is
     listed NOT GRADED with the reason, never scanned), earlier rows of the others kept."""
     from grading import integrity as scanner
@@ -201,14 +207,16 @@ def integrity(course: Path, lab: str, results: list[Result]):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def peak_mb():
+def peak_mb() -> float:
     """The most memory (resident, MB) this process has held so far: the judge's, boxes not counted."""
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def write_reports(course: Path, lab: str, results: list[Result], release, model):
+def write_reports(
+    course: Path, lab: str, results: list[Result], release: nbformat.NotebookNode, model: nbformat.NotebookNode
+) -> tuple[str, list[str]]:
     """Write ``grades.csv`` (:func:`export`), the integrity report (:func:`integrity`), the report of common slips and
     the similarity report, each on its own: one that fails is said (what failed and why) and the others are still
     written; the scores already in ``gradebook.db`` are not touched. Returns (the line that says where each report
@@ -276,7 +284,7 @@ def rounds_said(results: list[Result]) -> str:
     )
 
 
-def summary(lab: str, results: list[Result], seconds: float, workers: int, report) -> str:
+def summary(lab: str, results: list[Result], seconds: float, workers: int, report: Path) -> str:
     graded = [r for r in results if r.ok]
     width = max([len(r.student) for r in results] + [7])
     lines = [
@@ -296,7 +304,7 @@ def summary(lab: str, results: list[Result], seconds: float, workers: int, repor
     return "\n".join(lines)
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m grading.classgrade", description=__doc__.split("\n\n")[0])
     ap.add_argument("lab", help="the lab folder name, e.g. 02_kalman_falling_body")
     ap.add_argument("--workers", type=int, default=2, help="submissions graded at once (default 2)")

@@ -19,9 +19,13 @@ import signal
 import subprocess
 import time
 from pathlib import Path
+from typing import IO, TYPE_CHECKING
 
 from grading import box as wire
 from grading import cells, cgroup, handin
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping, Sequence
 
 SCRIPT = Path(wire.__file__).resolve()  # what a box runs: ``python box.py`` (its codec is this module's too)
 
@@ -38,7 +42,7 @@ class BoxDied(RuntimeError):
     """The box ended, or broke the protocol."""
 
 
-def ended(status):
+def ended(status: int) -> str:
     """What a box that ended with ``status`` says: the exit status, or why when the box said why
     (:data:`grading.handin.SEED_FAILED`: the submission's files did not fit in its folder)."""
     if status == handin.SEED_FAILED:
@@ -62,13 +66,13 @@ class Started:
     """A box process this process started itself (``subprocess.Popen``), the private folder it was given and the
     memory group of its processes (:mod:`grading.cgroup`, or None), which :meth:`end` removes with it."""
 
-    def __init__(self, proc, work=None, group=None):
+    def __init__(self, proc: subprocess.Popen, work: str | None = None, group: cgroup.Group | None = None) -> None:
         self.proc, self.work, self.group = proc, work, group
 
-    def poll(self):
+    def poll(self) -> int | None:
         return self.proc.poll()
 
-    def end(self):
+    def end(self) -> int:
         """Kill the box (its whole process group, and every process left in its memory group) if it runs, wait for
         it, remove its folder and its memory group; its exit status."""
         if self.proc.poll() is None:
@@ -82,7 +86,9 @@ class Started:
         return status
 
 
-def start(command, env=None, work=None, memory_bytes=None):
+def start(
+    command: list[str], env: dict[str, str] | None = None, work: str | None = None, memory_bytes: int | None = None
+) -> tuple[Started, IO[bytes], IO[bytes]]:
     """Start ``command`` (a box) with pipes on its standard input and output: (process, its input, its output), as
     :class:`Box` takes them. With ``memory_bytes`` (as root, where the machine allows: :func:`grading.cgroup.make`)
     every process of the box is in a memory group of its own held to that much memory together."""
@@ -112,7 +118,7 @@ class Box:
     and ``end()`` (stop it, remove its folder, return its exit status). ``largest`` is the longest reply read so far
     (bytes; a test holds the honest ones well under the limit)."""
 
-    def __init__(self, started):
+    def __init__(self, started: tuple) -> None:
         self.process, self.stdin, self.stdout = started
         self.returncode = None
         self.chunks, self.size = [], 0  # what has come of the next reply (no newline yet)
@@ -122,14 +128,14 @@ class Box:
         self.sel.register(self.stdout, selectors.EVENT_READ)
         os.set_blocking(self.stdout.fileno(), False)
 
-    def send(self, message):
+    def send(self, message: dict) -> None:
         try:
             self.stdin.write((json.dumps(message, allow_nan=False) + "\n").encode())
             self.stdin.flush()
         except (BrokenPipeError, OSError) as exc:
             raise BoxDied("the box closed its input") from exc
 
-    def receive(self, deadline):
+    def receive(self, deadline: float):
         """The next message, decoded as JSON (not yet as values); raises BoxTimeout, BoxDied or ReplyTooLarge.
 
         A reply is counted while it is read: past :data:`MAX_REPLY_BYTES` the box is stopped and nothing more is
@@ -172,7 +178,7 @@ class Box:
         self.kill()
         raise ReplyTooLarge(f"the box sent {what}")
 
-    def kill(self):
+    def kill(self) -> int:
         """Stop the box and remove its folder (once; again is a no-op); its exit status."""
         if self.returncode is None:
             self.returncode = self.process.end()
@@ -183,7 +189,7 @@ class Box:
         return self.returncode
 
 
-def run_program(box, cells, *, cell_seconds, deadline):
+def run_program(box: Box, cells: Sequence[str], *, cell_seconds: float, deadline: float) -> dict[int, str]:
     """Run the program ``cells`` (sources) in ``box`` until it is ready for calls: each cell within ``cell_seconds``
     of its start, the whole before ``deadline`` (``time.monotonic()``). Returns ``{cell index: error text}`` of the
     cells that raised. Raises BoxTimeout or BoxDied with ``cell`` set to the cell that was running (None if none)
@@ -211,7 +217,7 @@ def run_program(box, cells, *, cell_seconds, deadline):
         raise
 
 
-def call(box, name, args, kwargs, deadline):
+def call(box: Box, name: str, args: Iterable[object], kwargs: Mapping[str, object], deadline: float):
     """The box's reply (JSON) to calling the student's ``name`` with ``args`` and ``kwargs`` (encoded here), by
     ``deadline``. Raises BoxTimeout, BoxDied or ReplyTooLarge, and WireError for arguments that cannot be sent."""
     if deadline - time.monotonic() <= 0:
@@ -253,7 +259,7 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,60}")
 _DECIMAL = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d{1,4})?")
 
 
-def sympy_trusted(text):
+def sympy_trusted(text: str):
     """A sympy expression from its ``srepr`` text, built without eval or sympify: only the classes of
     :data:`SYMPY_CLASSES`, numbers, and strings only where ``srepr`` puts them (a symbol's name, a float's digits),
     so no text the student sent is ever parsed as an expression here. What it may cost is bounded before sympy

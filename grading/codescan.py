@@ -20,6 +20,7 @@ import ast
 import io
 import re
 import tokenize
+from typing import TYPE_CHECKING
 
 from fusionlab import labformat
 from grading import cells, similarity
@@ -40,6 +41,10 @@ from grading.flags import (
     WRITE_METHODS,
 )
 
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+    import nbformat
+
 
 def exercise_of(grade_id: str | None) -> int | None:
     """The exercise number of ``exN_...``, or None."""
@@ -50,7 +55,7 @@ def exercise_of(grade_id: str | None) -> int | None:
 class Source:
     """What the scanner needs from the instructor's notebook of a lab."""
 
-    def __init__(self, nb, lab):
+    def __init__(self, nb: nbformat.NotebookNode, lab: str) -> None:
         self.lab = lab
         self.cells = {cells.nbg(c)["grade_id"]: c for c in nb.cells if cells.nbg(c).get("grade_id")}
         provided = [c.source for c in nb.cells if c.cell_type == "code" and not cells.nbg(c).get("solution")]
@@ -99,7 +104,7 @@ class Source:
         self.protected = self.imported | (bound & read)
 
     @classmethod
-    def plain(cls, lab=""):
+    def plain(cls, lab: str = "") -> Source:
         """The Source of code scanned on its own, without a lab's notebook: no locked cell, no test, no exercise."""
         self = cls.__new__(cls)
         self.lab, self.cells, self.forbid = lab, {}, {}
@@ -109,7 +114,7 @@ class Source:
         return self
 
     @property
-    def all_forbidden(self):
+    def all_forbidden(self) -> set[str]:
         return set().union(*self.forbid.values()) if self.forbid else set()
 
 
@@ -454,7 +459,7 @@ class _Tampering(_Visitor):
         super().visit_Attribute(node)
 
 
-def tampering(source: str, loaders=None) -> list[tuple[int, str, str]]:
+def tampering(source: str, loaders: Iterable[str] | None = None) -> list[tuple[int, str, str]]:
     """Flags ``(line, kind, why)`` of code that reaches around Python's import system or builtins: importlib,
     ``__import__``, ``exec``/``eval``/``compile``, ``runpy``/``marshal``, the ``builtins`` module or
     ``__builtins__``, ``sys.path``, ``sys.modules`` and the import hooks -- the same detection as the report's

@@ -19,6 +19,7 @@ import time
 import types
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
@@ -26,8 +27,13 @@ from grading import handin, outputs, submission
 from grading.lab import Lab
 from grading.submission import read_submission, students_of
 
+if TYPE_CHECKING:
+    from collections.abc import Callable, Collection, Iterable, Iterator
+    from nbgrader.api import Gradebook
+    from grading.classgrade import Result
 
-def nbgrader_env(extra=None):
+
+def nbgrader_env(extra: dict[str, str] | None = None) -> dict[str, str]:
     """This interpreter's bin first on PATH (nbgrader runs ``alembic`` by name)."""
     env = dict(
         os.environ, PATH=str(Path(sys.executable).parent) + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg"
@@ -36,7 +42,7 @@ def nbgrader_env(extra=None):
     return env
 
 
-def generate(course: Path, lab: str, release: Path):
+def generate(course: Path, lab: str, release: Path) -> None:
     """Record ``lab`` (its cells, points, tests) in the course's gradebook; its release notebook goes to
     ``release``."""
     res = subprocess.run(
@@ -59,7 +65,7 @@ def generate(course: Path, lab: str, release: Path):
         raise SystemExit(f"could not record {lab} in gradebook.db:\n{res.stdout}{res.stderr}")
 
 
-def open_gradebook(course: Path):
+def open_gradebook(course: Path) -> Gradebook:
     from nbgrader.api import Gradebook
 
     return Gradebook(f"sqlite:///{course / 'gradebook.db'}")
@@ -69,7 +75,7 @@ BACKUPS = ".gradebook-backups"  # in the course root: the gradebook as it was be
 KEEP_BACKUPS = 20
 
 
-def gradebook_counts(db: Path):
+def gradebook_counts(db: Path) -> dict[str, int]:
     """``{"submissions": n, "auto": n, "manual": n}`` of the gradebook ``db``: submitted assignments, and grades with an
     automatic and with a manual score. Raises sqlite3.DatabaseError if it cannot be read as a gradebook."""
     import sqlite3
@@ -94,7 +100,7 @@ def _sqlite_copy(src: Path, dest: Path):
 
 
 @contextlib.contextmanager
-def gradebook_kept(course: Path, lab: str, say=print):
+def gradebook_kept(course: Path, lab: str, say: Callable[[str], object] = print) -> Iterator[types.SimpleNamespace]:
     """The run inside never loses a grade: ``gradebook.db`` is copied into :data:`BACKUPS` first, and if the run ends
     with a gradebook that cannot be read, or with fewer submissions, automatic or manual scores than it began with,
     the copy is put back (and said). Yields an object whose ``restored`` says so at the end; a run on a course without
@@ -136,7 +142,7 @@ def gradebook_kept(course: Path, lab: str, say=print):
             )
 
 
-def recorded_tests(course: Path, lab: str):
+def recorded_tests(course: Path, lab: str) -> dict[str, str]:
     """The test cells of ``lab`` as the gradebook holds them (hidden tests included): {grade_id: source}.
 
     The gradebook must record the test cells and points of the table of exercises
@@ -165,7 +171,7 @@ def recorded_tests(course: Path, lab: str):
         return {name: sources[name] for name in tests}
 
 
-def record(course: Path, lab: Lab, student: str, result):
+def record(course: Path, lab: Lab, student: str, result: Result) -> None:
     """Write one student's autograded scores into the gradebook and the autograded notebook into the course."""
     from sqlalchemy.exc import SAWarning
 
@@ -197,7 +203,7 @@ def record(course: Path, lab: Lab, student: str, result):
     nbformat.write(nb, dest / f"{lab.lab}.ipynb")
 
 
-def export(course: Path, lab: str, results: list):
+def export(course: Path, lab: str, results: list) -> bool:
     """``grades.csv`` from ``nbgrader export``, with a ``status`` column naming every student of ``submitted/``
     (:func:`with_status`): this run's students as graded now, the others as the ``grades.csv`` before it said (a run
     on some students keeps the others' statuses), else as the gradebook says."""
@@ -233,7 +239,7 @@ def export(course: Path, lab: str, results: list):
     return True
 
 
-def earlier_statuses(path: Path, lab: str):
+def earlier_statuses(path: Path, lab: str) -> dict[str, str]:
     """``{student: status}`` of ``lab`` in the ``grades.csv`` at ``path`` as an earlier run wrote it (empty when there
     is none, or it has no status column: a plain ``nbgrader export``)."""
     if not path.is_file():
@@ -249,7 +255,15 @@ def earlier_statuses(path: Path, lab: str):
         return {}
 
 
-def with_status(rows, fields, lab, this_run, submitted, earlier=None, students=()):
+def with_status(
+    rows: list[dict[str, str]],
+    fields: list[str],
+    lab: str,
+    this_run: dict[str, str],
+    submitted: Collection[tuple[str, str]],
+    earlier: dict[str, str] | None = None,
+    students: Iterable[str] = (),
+) -> list[dict[str, str]]:
     """The rows of ``nbgrader export`` with a ``status`` for ``lab``: ``this_run``'s ({student: "graded" or
     "NOT GRADED: <why>"}), else the ``earlier`` run's for a student not in this run, else ``graded`` where the
     gradebook has the submission (``submitted``: (lab, student) pairs); a row is added for each student of

@@ -25,7 +25,7 @@ def _held(st):
     return max(st.st_size, st.st_blocks * 512)
 
 
-def plain_files(src, notebooks=True):
+def plain_files(src: str | os.PathLike, notebooks: bool = True) -> tuple[list[tuple[str, int]], list[tuple[str, int]]]:
     """``(kept, left_out)`` of the folder ``src``: its plain files at every depth (links and what is not a plain file
     are neither followed nor listed; ``notebooks=False`` leaves ``*.ipynb`` and Jupyter's checkpoints out), each as
     ``(path relative to src, bytes)``, a folder's files before its subfolders', in sorted order. A hard link (a file
@@ -84,7 +84,7 @@ def _copy_file(src, dest, size):
                 left -= len(chunk)
 
 
-def copy_plain(src, dest, notebooks=True):
+def copy_plain(src: str | os.PathLike, dest: str | os.PathLike, notebooks: bool = True) -> list[tuple[str, int]]:
     """Copy the folder ``src`` into ``dest``: its regular files and folders only, at every depth, within the caps of
     :func:`plain_files`; returns the files left out, ``[(path, bytes)]``. A link is neither followed nor kept (a
     submitted link could point at the solutions, the gradebook or the real library, and the copy runs as root), nor
@@ -102,7 +102,7 @@ def copy_plain(src, dest, notebooks=True):
     return left
 
 
-def private_folder(source, scratch, uid=None):
+def private_folder(source: str | os.PathLike | None, scratch: str | os.PathLike, uid: int | None = None) -> str:
     """A fresh writable folder holding what ``source`` holds, notebooks and links left out, owned by ``uid``."""
     work = tempfile.mkdtemp(prefix="box-", dir=scratch)
     if source is not None and os.path.isdir(source) and not os.path.islink(source):

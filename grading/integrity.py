@@ -21,12 +21,17 @@ import csv
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
 from grading import cells, outputs
 from grading.codescan import Source, exercise_of, scan_source
 from grading.flags import WHY
+
+if TYPE_CHECKING:
+    import os
+    from collections.abc import Container, Iterable
 
 
 def _flags_of(src, nb):
@@ -75,7 +80,9 @@ def _flags_of(src, nb):
     return rows
 
 
-def scan_notebook(source_nb_path, submitted):
+def scan_notebook(
+    source_nb_path: str | os.PathLike, submitted: nbformat.NotebookNode | str | os.PathLike
+) -> list[dict]:
     """Flags of one submission: a list of {"cell", "kind", "line", "code", "why"} (empty when nothing is found).
     ``submitted`` is the notebook as :func:`grading.submission.read_submission` read it, or the path of a notebook
     file of the course's own (a solution, a release)."""
@@ -93,7 +100,7 @@ def scan_notebook(source_nb_path, submitted):
 NOT_GRADED = "NOT GRADED"
 
 
-def not_graded(why):
+def not_graded(why: str) -> dict:
     """The one "flag" of a submission grading refused (:func:`grading.submission.read_submission`): it was not
     scanned, and the report says why instead of calling it clean."""
     return dict(cell="-", kind="not-graded", line=0, code="", why=why)
@@ -103,7 +110,7 @@ def _status(flags):
     return NOT_GRADED if any(f["kind"] == "not-graded" for f in flags) else "REVIEW" if flags else "clean"
 
 
-def earlier_rows(path_csv, lab, done=()):
+def earlier_rows(path_csv: str | os.PathLike, lab: str, done: Container[str] = ()) -> dict[str, list[dict]]:
     """``{student: flags}`` of ``lab`` in the report CSV an earlier run wrote, for the students not in ``done``: a
     run on some students keeps the others' rows (clean, REVIEW with its flags, NOT GRADED with its reason)."""
     earlier = {}
@@ -136,7 +143,12 @@ def _md_code(text):
     return f"{fence}{pad}{text.replace('|', chr(92) + '|')}{pad}{fence}"
 
 
-def write_report(rows, path_md, path_csv, scores=None):
+def write_report(
+    rows: Iterable[tuple[str, str, list[dict]]],
+    path_md: str | os.PathLike,
+    path_csv: str | os.PathLike,
+    scores: dict[tuple[str, str], str] | None = None,
+) -> None:
     """Write the Markdown report and the CSV of ``rows`` = [(student, lab, flags), ...].
 
     ``scores`` maps (student, lab) to the autograded score shown beside the status; by default they are read from
@@ -214,7 +226,7 @@ def _scores(course, lab):
     return out
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("lab", help="lab folder name, e.g. 02_kalman_falling_body")
     parser.add_argument("--course", default=".", help="course folder (holds solutions/ and submitted/)")

@@ -87,11 +87,11 @@ class Verdict:
     rounds: dict = field(default_factory=dict)  # part -> [start, end] (time.monotonic: one clock for every process)
 
     @property
-    def score(self):
+    def score(self) -> float:
         return sum(t.score for t in self.tests)
 
     @property
-    def max_score(self):
+    def max_score(self) -> float:
         return sum(t.points for t in self.tests)
 
 
@@ -123,7 +123,7 @@ def judge(
     submitted: dict | None,
     student: str,
     slot: int = 0,
-    boxes=None,
+    boxes: launcher.LabBoxes | launcher.RemoteBoxes | None = None,
     part: str = BOTH,
     earlier: Verdict | None = None,
 ) -> Verdict:

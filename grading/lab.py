@@ -8,11 +8,17 @@ from __future__ import annotations
 import contextlib
 import types
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fusionlab import guard, labformat
 from fusionlab.checks import exercises
 from grading import boxlib, cells, client, sandbox
 from grading.session import Session
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+    import nbformat
+    from grading.launcher import LabBoxes, RemoteBoxes
 
 CELL_SECONDS = 60  # wall time of one cell of the student's program, or of one test cell's calls
 
@@ -52,13 +58,13 @@ class Lab:
         self,
         course: Path,
         lab: str,
-        release,
+        release: nbformat.NotebookNode,
         tests: dict,
-        solution,
+        solution: nbformat.NotebookNode,
         scratch: Path,
-        limits=None,
-        cell_seconds=CELL_SECONDS,
-    ):
+        limits: dict | None = None,
+        cell_seconds: float = CELL_SECONDS,
+    ) -> None:
         self.course, self.lab, self.release, self.tests, self.solution = Path(course), lab, release, tests, solution
         self.scratch, self.limits, self.cell_seconds = Path(scratch), limits or {}, cell_seconds
         self.points = {e.grade_id: float(e.points) for e in exercises.of_lab(lab)}  # the table's, checked against
@@ -101,7 +107,7 @@ class Lab:
     def __getstate__(self):
         return {**self.__dict__, "_base": None}  # the setup's namespace holds modules: run again there
 
-    def box_root(self, gid):
+    def box_root(self, gid: str) -> Path:
         """The box's library and shadow packages for the test ``gid``: its references and forbidden functions are
         stubs (made once per lab and test)."""
         root = self.scratch / f"box-{self.lab}-{gid}"
@@ -116,7 +122,7 @@ class Lab:
         return root
 
     # -- the trusted namespace -------------------------------------------------------------------------------
-    def base(self):
+    def base(self) -> dict:
         """The namespace of the lab's setup cell, run here (the judge's own imports), with the judge's guard."""
         if self._base is None:
             ns = {"__name__": "__judge__"}
@@ -138,7 +144,9 @@ class Lab:
         return out
 
     # -- the student's program ----------------------------------------------------------------------------------
-    def layout(self, submitted):
+    def layout(
+        self, submitted: nbformat.NotebookNode | None
+    ) -> tuple[list[tuple[str, str | None, nbformat.NotebookNode]], list[str]]:
         """The submission's cells in its own order, read against the release: ``(kind, grade_id, cell)`` with kind
         ``"known"`` (a cell of the lab, found by grade id: the first one when a grade id is duplicated, put back at
         its place when deleted) or ``"added"`` (a cell the lab does not have), and notes on what was found."""
@@ -173,7 +181,9 @@ class Lab:
             seen.add(gid)
         return seq, notes
 
-    def program(self, submitted, upto=None, need=()):
+    def program(
+        self, submitted: nbformat.NotebookNode | None, upto: str | None = None, need: Iterable[str] = ()
+    ) -> tuple[list[tuple[str | None, str]], list[str]]:
         """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: the code
         cells above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
 
@@ -207,7 +217,7 @@ class Lab:
                 return c
         raise KeyError(gid)
 
-    def box_command(self, gid, work, uid):
+    def box_command(self, gid: str, work: str, uid: int | None) -> list[str]:
         root = self.box_root(gid)
         return sandbox.bwrap_command(
             ["python", str(client.SCRIPT)],
@@ -222,7 +232,7 @@ class Lab:
         )
 
     # -- values of the provided cells, from the model solution ------------------------------------------------------
-    def reference_values(self, gid, boxes):
+    def reference_values(self, gid: str, boxes: LabBoxes | RemoteBoxes) -> dict:
         """Values that the test ``gid`` reads from provided cells, from a run of the model solution in the same box
         as the student's (started by ``boxes``, with none of the student's files; made once per lab and test). Values
         that only the test's visible check reads come with them where the model run makes them (for :func:`_slip`)."""

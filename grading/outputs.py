@@ -13,12 +13,17 @@ from __future__ import annotations
 import copy
 import json
 import re
+from typing import TYPE_CHECKING
 
 import nbformat
 
 from nbformat.notebooknode import NotebookNode
 
 from grading import cells
+
+if TYPE_CHECKING:
+    from grading.judge import Verdict
+    from grading.lab import Lab
 
 TEXT_BYTES = 100_000  # a stream, a traceback or a text result
 RICH_BYTES = 1_000_000  # an output holding an image or HTML (the largest figure of the labs is 0.45 MB)
@@ -34,7 +39,7 @@ def _text(value):
     return "".join(value) if isinstance(value, list) else value if isinstance(value, str) else json.dumps(value)
 
 
-def output_bytes(out):
+def output_bytes(out: dict) -> int:
     """Bytes an output takes in the notebook (text and every representation of a rich output)."""
     kind = out.get("output_type")
     if kind == "stream":
@@ -57,7 +62,7 @@ def _note(size, limit):
     )
 
 
-def truncate_output(out, limit):
+def truncate_output(out: dict, limit: int) -> nbformat.NotebookNode:
     """``out`` cut down to about ``limit`` bytes, with a visible note saying so (a new output)."""
     size = output_bytes(out)
     keep = max(limit - 300, 0)
@@ -92,15 +97,15 @@ def _dropped_note():
 class Budget:
     """Per-output and per-notebook byte caps applied to outputs as they come."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.used = 0
         self.truncated = 0
         self.dropped = 0
 
-    def limit_for(self, out):
+    def limit_for(self, out: dict) -> int:
         return RICH_BYTES if _is_rich(out) else TEXT_BYTES
 
-    def admit(self, out):
+    def admit(self, out: dict) -> dict | None:
         """The output to keep in place of ``out`` (possibly truncated), or None to drop it."""
         if self.used >= NOTEBOOK_BYTES:
             self.dropped += 1
@@ -122,7 +127,7 @@ class Budget:
 INERT_MIME = ("text/plain", "image/png", "image/jpeg")
 
 
-def inert(out):
+def inert(out: dict) -> dict | None:
     """``out`` with only what cannot run in a browser: streams and errors as they are (rendered as escaped text), rich
     outputs reduced to :data:`INERT_MIME` (None when nothing is left), metadata dropped."""
     kind = out.get("output_type")
@@ -140,7 +145,7 @@ def inert(out):
 _TAG = re.compile(r"<(?=[A-Za-z/!?])")
 
 
-def inert_markdown(source):
+def inert_markdown(source: str | list[str]) -> str:
     """A student's Markdown with every HTML tag turned into text (``<img onerror=...>`` shows as written and does
     nothing): ``<`` before a letter, ``/``, ``!`` or ``?`` becomes ``&lt;``. Math and prose keep their meaning."""
     text = "".join(source) if isinstance(source, list) else str(source)
@@ -152,7 +157,7 @@ def inert_markdown(source):
 # ---------------------------------------------------------------------------------------------------------------
 
 
-def autograded_notebook(lab, submitted, verdict):
+def autograded_notebook(lab: Lab, submitted: nbformat.NotebookNode | None, verdict: Verdict) -> nbformat.NotebookNode:
     """The submission as the instructor and the student see it after grading: its cells in its order, each cell of
     the lab with the release's source and metadata (the student's source in answer cells and in cells students may
     edit), deleted cells put back, cells the lab does not have kept without nbgrader metadata, and the judge's verdict

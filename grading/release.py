@@ -25,6 +25,10 @@ import subprocess
 import sys
 import tarfile
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDENT = Path(__file__).resolve().parent / "student"
@@ -58,7 +62,7 @@ def _section(readme, title):
     return m.group(1).strip() if m else None
 
 
-def student_readme(root=ROOT):
+def student_readme(root: Path = ROOT) -> str:
     """The student README: grading/student/README.md with the lab table, the conventions and the references of the
     repository README filled in."""
     readme = (root / "README.md").read_text()
@@ -78,7 +82,7 @@ def student_readme(root=ROOT):
     return _only_release_targets(text)
 
 
-def release_targets():
+def release_targets() -> set[str]:
     """The make targets of the release: those of its Makefile and of course.mk, which it includes."""
     return {
         m
@@ -119,7 +123,7 @@ STUDENT_DOCS = [
 _LINK = re.compile(r"(\]\()([^)\s#]+)(#[^)\s]*)?(\))")
 
 
-def student_docs(root=ROOT):
+def student_docs(root: Path = ROOT) -> dict[str, str]:
     """{path under labs/docs: text} of the documents the labs cite. Each relative link that points at another of
     them is made to point at its copy; the others stay as they are (tests/test_release.py checks that every link
     resolves)."""
@@ -146,7 +150,7 @@ def student_docs(root=ROOT):
     return {dest: relink(dest, src, text) for dest, (src, text) in texts.items()}
 
 
-def write_student_docs(root=ROOT):
+def write_student_docs(root: Path = ROOT) -> Path:
     """Write :func:`student_docs` into ``root``/labs/docs (what `make labs` runs), replacing what was there."""
     folder = root / LABS_DOCS
     if folder.exists():
@@ -175,7 +179,7 @@ def _check_notebooks(course):
                 raise SystemExit(f"{nb.relative_to(course)} still holds '{marker}': regenerate it with `make labs`")
 
 
-def source_date(root=ROOT, environ=None):
+def source_date(root: Path = ROOT, environ: Mapping[str, str] | None = None) -> int:
     """The date every file of the archive carries, in seconds since 1970: ``SOURCE_DATE_EPOCH`` when it is set (the
     reproducible-builds convention), else the commit date of the repository's HEAD. The same sources give the same
     archive, and a student's file browser shows when the course was last changed rather than 1970."""
@@ -216,7 +220,7 @@ def _archive(course, path, mtime):
         gz.write(buf.getvalue())
 
 
-def build(out=None, root=ROOT):
+def build(out: str | os.PathLike | None = None, root: Path = ROOT) -> tuple[Path, Path]:
     """Build ``out/course`` and ``out/fusionlab-course.tar.gz`` from the repository ``root``; return both paths."""
     out = Path(out or root / "release").resolve()
     course = out / "course"
@@ -247,7 +251,7 @@ def build(out=None, root=ROOT):
     return course, archive
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=str(ROOT / "release"), help="output folder (default: release/)")
     parser.add_argument("--labs-docs", action="store_true", help=f"only write {LABS_DOCS} (what `make labs` runs)")

@@ -37,9 +37,13 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+from typing import TYPE_CHECKING
 
 from grading import seccomp
 from grading.handin import SEED_FAILED, private_folder
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Iterator, Sequence
 
 FIRST_UID = 200_000  # as root, box i runs as user FIRST_UID + i: no two students graded at once share a user
 # (slots are claimed machine-wide: claimed_slots)
@@ -122,7 +126,7 @@ os.execv(sys.executable, [sys.executable, *sys.argv[1:]])
 _SYSTEM_FILES = []
 
 
-def system_files(known=None):
+def system_files(known: Iterable[Sequence[str]] | None = None) -> list[tuple[str, str]]:
     """The files of the system a box needs, as ``[(source, dest)]``: the shared libraries the interpreter and every
     extension module of the Python installation load (as ``ldd`` finds them, the dynamic loader included; ``dest``
     in the real folder of the name ``ldd`` gives, the source the file it points to). Nothing else of ``/usr`` is in
@@ -190,7 +194,7 @@ def _python_binds():
     return args
 
 
-def view(course, lib=None, data=True):
+def view(course: str | os.PathLike, lib: str | os.PathLike | None = None, data: bool = True) -> list[str]:
     """Every file and folder a box of ``course`` can read that is not private to it: the system's
     (:func:`system_files`), the Python installation, the library, the course's data and the BROAD trials (with
     ``data``), the matplotlib cache."""
@@ -205,7 +209,7 @@ def view(course, lib=None, data=True):
     return [p for p in out if p and os.path.exists(p)]
 
 
-def warm(paths, chunk=1 << 20):
+def warm(paths: Iterable[str], chunk: int = 1 << 20) -> tuple[int, int]:
     """Read every regular file under ``paths`` once, so that all of it is in the page cache: returns (files, bytes).
 
     The page cache is the machine's, not a box's: a box that touches a page nothing else has read, and a later box
@@ -294,7 +298,7 @@ def _with_parent_folders(args):
     return args[:at] + head + args[at:]
 
 
-def box_uid(slot):
+def box_uid(slot: int) -> int | None:
     """The user a box runs as when grading as root (one per slot), or None when not root."""
     return FIRST_UID + slot if os.geteuid() == 0 else None
 
@@ -303,7 +307,7 @@ MAX_SLOTS = 1000
 
 
 @contextlib.contextmanager
-def claimed_slots(n):
+def claimed_slots(n: int) -> Iterator[list[int]]:
     """``n`` slot numbers no other grading run on this machine holds, held until the ``with`` ends.
 
     Each slot is a user id as root (:func:`box_uid`), and a user's process limit counts every process of that user:
@@ -337,7 +341,7 @@ def claimed_slots(n):
             os.close(fd)
 
 
-def package_paths(names):
+def package_paths(names: Iterable[str]) -> list[str]:
     """Every copy of the packages ``names`` on the grader's ``sys.path``: each package's folder, or the file of a
     single-file module (``name.py``, an extension module); none is imported. Names not found are left out."""
     from importlib.machinery import all_suffixes
@@ -408,7 +412,7 @@ PROC_HIDDEN_FILES = (
 )
 
 
-def proc_masks(proc="/proc"):
+def proc_masks(proc: str = "/proc") -> list[str]:
     """bwrap's arguments that hide :data:`PROC_HIDDEN_FOLDERS` and :data:`PROC_HIDDEN_FILES` in the box's /proc
     (those this kernel has: a mount needs its target)."""
     args = []
@@ -421,13 +425,25 @@ def proc_masks(proc="/proc"):
     return args
 
 
-def box_bytes(limits=None):
+def box_bytes(limits: dict | None = None) -> int:
     """The memory every process of a box may hold together (``box_bytes`` of :data:`DEFAULT_LIMITS`, then
     ``limits``): what :func:`grading.client.start` gives the box's memory group."""
     return int({**DEFAULT_LIMITS, **(limits or {})}["box_bytes"])
 
 
-def bwrap_command(command, *, course, lab, lib, work, shadow=None, limits=None, uid=None, data=True, hide=()):
+def bwrap_command(
+    command: list[str],
+    *,
+    course: str | os.PathLike,
+    lab: str,
+    lib: str | os.PathLike,
+    work: str,
+    shadow: str | os.PathLike | None = None,
+    limits: dict | None = None,
+    uid: int | None = None,
+    data: bool = True,
+    hide: Iterable[str] = (),
+) -> list[str]:
     """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
 
     ``lib`` is the library folder to mount where the course's ``lib/`` is; ``shadow`` a folder of packages put first
@@ -547,7 +563,7 @@ def _mapped_uids(path="/proc/self/uid_map"):
         return [(0, 1 << 32)]
 
 
-def box_problem(course, lab, scratch, slots):
+def box_problem(course: str | os.PathLike, lab: str, scratch: str | os.PathLike, slots: Sequence[int]) -> str | None:
     """Why a box cannot start on this machine, as a message saying what is missing and what to do; None if it can.
 
     Starts one box exactly as grading does (same mounts, limits and, as root, the user id of each slot), running

@@ -124,7 +124,7 @@ def _native_machine():
     return machine if struct.calcsize("P") == 8 else f"{machine} (a {8 * struct.calcsize('P')}-bit Python)"
 
 
-def box_filter(machine=None):
+def box_filter(machine: str | None = None) -> bytes:
     """A classic BPF program (``struct sock_filter`` entries, native byte order) for ``PR_SET_SECCOMP``: the calls of
     :data:`REFUSED_SYSCALLS` (with the arguments it names) fail with EPERM, those of :data:`MISSING_SYSCALLS`
     with ENOSYS, every other call of the native

@@ -6,10 +6,17 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from typing import TYPE_CHECKING
 
 from grading import box as wire
 from grading import client
 from grading.client import BoxDied, BoxTimeout
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable
+    import nbformat
+    from grading.lab import Lab
+    from grading.launcher import LabBoxes, RemoteBoxes
 
 STUDENT_SECONDS = 900  # wall time of the whole submission
 MAX_RESTARTS = 3  # boxes started again after a cell ran over its time or ended the process
@@ -22,7 +29,7 @@ class StudentError(AssertionError):
 class StudentRaised(StudentError):
     """The student's function raised; ``error`` is the box's text of the error (``Type: message``)."""
 
-    def __init__(self, message, error=""):
+    def __init__(self, message: str, error: str = "") -> None:
         super().__init__(message)
         self.error = error
 
@@ -34,7 +41,16 @@ class NotData(StudentError):
 class Session:
     """The box of one submission: started, run through its program, then asked for calls and values."""
 
-    def __init__(self, lab, submitted, boxes, gid, need=(), stopped=None, files=True):
+    def __init__(
+        self,
+        lab: Lab,
+        submitted: nbformat.NotebookNode | None,
+        boxes: LabBoxes | RemoteBoxes,
+        gid: str,
+        need: Iterable[str] = (),
+        stopped: set[tuple[str | None, str]] | None = None,
+        files: bool = True,
+    ) -> None:
         self.lab, self.submitted, self.boxes, self.gid, self.files = lab, submitted, boxes, gid, files
         self.cells, self.notes = lab.program(submitted, upto=gid, need=need)
         # cells stopped in an earlier box of this student (over time, or ended the process) are left out from the
@@ -53,7 +69,7 @@ class Session:
             self.largest = max(self.largest, self.box.largest)
         self.box = self.boxes.start(self.gid, files=self.files)
 
-    def start(self):
+    def start(self) -> None:
         """Start the box and run the program; a cell that runs over its time, or kills the box, is left out and the
         program run again without it (said in the notes)."""
         while True:
@@ -95,12 +111,12 @@ class Session:
         gid = self.cells[i][0]
         return f"cell {gid}" if gid else f"code cell {i + 1} of the program"
 
-    def request(self, message, seconds):
+    def request(self, message: dict, seconds: float):
         deadline = min(time.monotonic() + seconds, self.deadline)
         self.box.send(message)
         return self.box.receive(deadline)
 
-    def describe(self, names):
+    def describe(self, names: Iterable[str]) -> dict[str, dict]:
         reply = self.request({"op": "describe", "names": list(names)}, self.lab.cell_seconds)
         if not reply.get("ok") or not isinstance(reply.get("names"), dict):
             raise BoxDied("the box did not describe its names")
@@ -122,7 +138,7 @@ class Session:
                 out[name] = {"kind": "unreadable", "error": "not the judge's protocol"}
         return out
 
-    def proxy(self, name, budget):
+    def proxy(self, name: str, budget: dict[str, float]) -> Callable:
         def call(*args, **kwargs):
             objects = {i: a for i, a in enumerate(args) if wire.wire_key(a)}
             try:
@@ -152,7 +168,7 @@ class Session:
         call.__name__ = name
         return call
 
-    def close(self):
+    def close(self) -> None:
         if self.box is not None:
             self.largest = max(self.largest, self.box.largest)
             self.box.kill()

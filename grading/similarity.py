@@ -31,11 +31,16 @@ import io
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
 from fusionlab import labformat
 from grading import cells
+
+if TYPE_CHECKING:
+    import os
+    from collections.abc import Iterable, Sequence
 
 K, WINDOW = 20, 6  # k-gram length and winnowing window (copydetect's scale: normalised characters)
 MIN_TOKENS = 80  # matched normalised characters for a pair of classmates to be listed
@@ -95,7 +100,13 @@ def _lines(code, slices):
     return "\n".join(lines[i] for i in _line_numbers(code, slices) if i < len(lines))
 
 
-def compare(a_code, b_code, boilerplate=(), b_boilerplate=None, numbers=False):
+def compare(
+    a_code: str,
+    b_code: str,
+    boilerplate: Iterable[str] = (),
+    b_boilerplate: Iterable[str] | None = None,
+    numbers: bool = False,
+) -> tuple[float, int, str | list[int], str | list[int], float]:
     """(share of ``a_code`` covered, matched tokens, lines of a, lines of b, share of ``b_code`` covered) for two
     pieces of code; ``boilerplate``
     (code whose fingerprints do not count) applies to both unless ``b_boilerplate`` is given for b. With
@@ -112,7 +123,7 @@ def compare(a_code, b_code, boilerplate=(), b_boilerplate=None, numbers=False):
     return float(share_a), int(tokens), la, lb, float(share_b)
 
 
-def library_functions(folder=LIBRARY):
+def library_functions(folder: str | os.PathLike = LIBRARY) -> dict[str, str]:
     """{"module.function": source} of every function and method of the library (read once per folder and
     process: a class run asks for it once per exercise)."""
     return dict(_library_functions(Path(folder).resolve()))
@@ -144,7 +155,7 @@ def _library_functions(folder):
     return tuple(out)
 
 
-def answers(nb):
+def answers(nb: nbformat.NotebookNode) -> dict[str, str]:
     """{exercise grade id: code} of a notebook's code answer cells (``exN_solution``)."""
     out = {}
     for cell in nb.cells:
@@ -155,7 +166,12 @@ def answers(nb):
     return out
 
 
-def find_pairs(submissions: dict, release, model, library=None):
+def find_pairs(
+    submissions: dict,
+    release: nbformat.NotebookNode,
+    model: nbformat.NotebookNode,
+    library: dict[str, str] | None = None,
+) -> list[Pair]:
     """Pairs worth a look among ``submissions`` ({student: notebook}) and between them and the library; ``model``
     is the instructor's notebook (its answers set how alike with the library an answer may honestly be)."""
     library = library_functions() if library is None else library
@@ -189,7 +205,13 @@ def find_pairs(submissions: dict, release, model, library=None):
     return found
 
 
-def write_report(lab, pairs, path_md, path_csv, refused=None):
+def write_report(
+    lab: str,
+    pairs: Sequence[Pair],
+    path_md: str | os.PathLike,
+    path_csv: str | os.PathLike,
+    refused: dict[str, str] | None = None,
+) -> None:
     """Write the report of ``pairs`` (Markdown and CSV); ``refused`` ({student: why}) lists the submissions that
     grading refuses (:func:`grading.submission.read_submission`), compared with no one. Any text can be written: a
     character UTF-8 cannot hold (a lone surrogate) is written as its escape."""
@@ -231,7 +253,9 @@ def write_report(lab, pairs, path_md, path_csv, refused=None):
             out.writerow([p.exercise, p.a, p.b, f"{p.score:.3f}", p.tokens])
 
 
-def report(course: Path, lab: str, release, model):
+def report(
+    course: Path, lab: str, release: nbformat.NotebookNode, model: nbformat.NotebookNode
+) -> tuple[Path, list[Pair]]:
     """Write ``similarity_<lab>.md/.csv`` for the submissions of ``course``, each read by
     :func:`grading.submission.read_submission` (a notebook it refuses is compared with no one, and the report says
     why); returns (the Markdown's path, the pairs)."""
@@ -249,7 +273,7 @@ def report(course: Path, lab: str, release, model):
     return md, pairs
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m grading.similarity", description=__doc__.split("\n\n")[0])
     ap.add_argument("lab")
     ap.add_argument("--course", default=".")
@@ -297,7 +321,7 @@ def _shape(statements):
 
 
 @functools.lru_cache(maxsize=4)
-def library_shapes(folder=LIBRARY):
+def library_shapes(folder: str | os.PathLike = LIBRARY) -> dict[str, tuple[list[str], list[str]]]:
     """{"module.function": shape} for every function and method defined in the library's modules."""
     out = {}
 
@@ -314,7 +338,9 @@ def library_shapes(folder=LIBRARY):
     return out
 
 
-def copied_from(function, library=None):
+def copied_from(
+    function: ast.FunctionDef, library: dict[str, tuple[list[str], list[str]]] | None = None
+) -> tuple[float, str] | None:
     """(similarity, "module.function") of the library function closest to ``function`` (an ``ast.FunctionDef``), or
     None below ``COPY_RATIO`` or for a function shorter than ``COPY_MIN_NODES``."""
     mine = _shape(function.body)

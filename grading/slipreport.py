@@ -28,11 +28,17 @@ import sqlite3
 import tokenize
 from collections import Counter
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
 from fusionlab import labformat
 from fusionlab.checks import slips
+
+if TYPE_CHECKING:
+    import os
+    from collections.abc import Iterable, Sequence
+    from grading.classgrade import Result
 
 FIELDS = ["student", "lab", "exercise", "grade_id", "points", "score", "slip", "says"]
 #: The outcomes whose bar links to an example answer: every named slip, and these.
@@ -49,7 +55,7 @@ def _says(slip):
         return slip
 
 
-def rows_of(lab, results):
+def rows_of(lab: str, results: Iterable[Result]) -> list[dict[str, str]]:
     """The CSV rows of the graded ``results`` (:class:`grading.classgrade.Result`) of ``lab``."""
     out = []
     for r in results:
@@ -73,7 +79,7 @@ def rows_of(lab, results):
     return out
 
 
-def write(course, lab, results):
+def write(course: str | os.PathLike, lab: str, results: list[Result]) -> tuple[Path, Path]:
     """Write ``slips_<lab>.csv`` and ``slips_<lab>.html`` into ``course``: this run's students, and the earlier rows
     of the others. Returns both paths (HTML, CSV)."""
     if not isinstance(lab, str) or not lab:
@@ -100,7 +106,7 @@ def _number(grade_id):
     return (int(digits) if digits else 0, grade_id)
 
 
-def exercises_of(rows):
+def exercises_of(rows: Iterable[dict[str, str]]) -> list[dict]:
     """Per test (grade id): the students, how many passed and the count of each outcome; ordered by how many
     students the exercise stopped (most first), then by number."""
     tests = {}
@@ -124,7 +130,7 @@ def exercises_of(rows):
 # ---------------------------------------------------------------------------------------------------------------
 
 
-def names_of(course):
+def names_of(course: str | os.PathLike) -> dict[str, list[str]]:
     """``{student id: [first name, last name, email]}`` as the course's gradebook holds them (empty where it has
     none); read only."""
     db = Path(course) / "gradebook.db"
@@ -138,7 +144,7 @@ def names_of(course):
     return {sid: [n for n in rest if isinstance(n, str) and n.strip()] for sid, *rest in found}
 
 
-def answer_of(course, lab, student, grade_id):
+def answer_of(course: str | os.PathLike, lab: str, student: str, grade_id: str) -> str | None:
     """The source of the answer cell of the test ``grade_id`` (``ex3_tests`` -> the cell ``ex3_solution``) in
     ``student``'s notebook as graded: the autograded notebook, else the submitted one; the first such cell, as the
     judge reads a duplicated grade id. None where there is none."""
@@ -189,7 +195,7 @@ def _name_words(names):
 _STRINGS = {tokenize.STRING, getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
-def anonymised(source, student, names=()):
+def anonymised(source: str, student: str, names: Sequence[str] = ()) -> str:
     """An answer cell's ``source`` with no trace of who wrote it: every comment that holds the student's id or a
     name of theirs (``names``: first, last, email) is taken out (the whole line where it is all the line holds), a
     name in a string becomes "student", and then the id becomes "student" wherever it is, any case. Names that are
@@ -251,7 +257,9 @@ def _shortened(source):
     return (text or "# (the cell is empty)") + note
 
 
-def examples_of(course, lab, rows, names=None):
+def examples_of(
+    course: str | os.PathLike, lab: str, rows: Iterable[dict[str, str]], names: dict[str, list[str]] | None = None
+) -> dict[tuple[str, str], str]:
     """``{(grade_id, slip): source}``: for each wrong answer's outcome (a named slip, :data:`EXAMPLED`) of each test,
     the answer cell of the first of its students in sorted order whose notebook has it (:func:`answer_of`),
     :func:`anonymised` and shortened. An outcome none of whose notebooks can be read has no example."""
@@ -300,7 +308,7 @@ def _pct(part, whole):
     return f"{100 * part / whole:.0f} %" if whole else "-"
 
 
-def page(lab, rows, examples=None):
+def page(lab: str, rows: list[dict[str, str]], examples: dict[tuple[str, str], str] | None = None) -> str:
     """The anonymous HTML page of ``rows`` (the CSV's rows of one lab), with the anonymised ``examples``
     (:func:`examples_of`) linked from their bars."""
     esc = html.escape

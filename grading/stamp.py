@@ -25,6 +25,7 @@ import ast
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import nbformat
 
@@ -32,18 +33,21 @@ from fusionlab import labformat
 from fusionlab.checks import exercises
 from grading import cells
 
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = re.compile(r"# Autograder: exercise \S+ \([0-9.]+ points?(?P<rest>:[^)]*)?\)")
 WIDTH = 120  # the line length of the sources (pyproject.toml's ruff line-length)
 
 
-def header(exercise, rest=""):
+def header(exercise: exercises.Exercise, rest: str = "") -> str:
     """The first line of an exercise's autograder cell."""
     points = f"{exercise.points:g} point{'' if exercise.points == 1 else 's'}"
     return f"# Autograder: exercise {exercise.number} ({points}{rest or ''})"
 
 
-def imports(source):
+def imports(source: str) -> list[tuple[str, str]]:
     """``[(expression, dotted target)]`` of what the imports of a cell bind, in order: ``from fusionlab import
     kalman as kf`` gives ``("kf", "fusionlab.kalman")``, ``import filterpy.kalman`` both ``("filterpy", "filterpy")``
     and ``("filterpy.kalman", "filterpy.kalman")``."""
@@ -62,7 +66,7 @@ def imports(source):
     return out
 
 
-def spell(dotted, scopes, where=""):
+def spell(dotted: str, scopes: Iterable[list[tuple[str, str]]], where: str = "") -> str:
     """``dotted`` (a name of the table) as an expression of the cell whose imports are ``scopes`` (lists of
     :func:`imports`, the first searched first): through a name bound to its module if one is (``kf.update``), else
     through the longest name bound to a class or function of that module (``_KF.update_correlated``)."""
@@ -118,7 +122,7 @@ def _render(items, source, start, end, paren):
     return ("(" if paren else "") + ("\n" + indent).join(" ".join(r) for r in rows)
 
 
-def forbid_sites(source):
+def forbid_sites(source: str) -> list[tuple[int, int, bool, str, int | str | None]]:
     """Where a test or setup cell names what an exercise forbids: ``[(start, end, paren, kind, exercise)]``, the
     text to replace (``source[start:end]``), whether it is a whole tuple, ``"forbid"``, ``"release"`` or
     ``"reserve"``, and the exercise a reserve or release names (else None); a call that names nothing yet
@@ -200,7 +204,7 @@ def _stamp_forbids(source, rows, scopes, where, exercise=None):
     return "".join(out) + source[at:]
 
 
-def stamp(nb, lab):
+def stamp(nb: nbformat.NotebookNode, lab: str) -> list[str]:
     """Stamp the autograder cells of ``nb`` (the solution of ``lab``) and its setup cell in place; returns the grade
     ids changed. Raises ValueError for an exercise that forbids something but whose test cell names no place to
     forbid it, or a name the cells do not import a module to reach."""
@@ -237,7 +241,7 @@ def stamp(nb, lab):
     return changed
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m grading.stamp", description=__doc__.split("\n\n")[0])
     ap.add_argument("labs", nargs="*", help="lab folder names (default: every lab of solutions/)")
     ap.add_argument("--check", action="store_true", help="change nothing; exit 1 if a cell is not as stamped")

@@ -19,6 +19,7 @@ Frames and units at this module's edge
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import earth, validate
 
@@ -39,7 +40,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def tilt_2d(a_x, a_y):
+def tilt_2d(a_x: ArrayLike, a_y: ArrayLike) -> np.ndarray:
     """Angle of the in-plane reading, ``θ = arctan(Ay/Ax)`` in rad, as printed (seed 000 eq 3.17).
 
     The angle of the measured vector from the sensor's X axis in the X-Y plane (fig 12). ``arctan`` of a ratio
@@ -79,7 +80,7 @@ def tilt_2d(a_x, a_y):
         return np.arctan(ay / ax)  # (000 eq 3.17)
 
 
-def tilt_3d(acc):
+def tilt_3d(acc: ArrayLike) -> np.ndarray:
     """The three tilt angles of seed 000 eqs 3.18-3.20, with ``arctan`` as printed, in rad.
 
     Thesis sensor frame: **Z up**, a level sensor reads ``(0, 0, +1 g)``. The reading is the up-pointing reaction
@@ -124,7 +125,7 @@ def tilt_3d(acc):
     return np.stack([theta_x, theta_y, theta_z], -1)
 
 
-def atan2_piecewise(y, x):
+def atan2_piecewise(y: ArrayLike, x: ArrayLike) -> np.ndarray:
     """Four-quadrant arctangent built from ``arctan(y/x)`` case by case (seed 000 eq 3.21, corrected), in rad.
 
     ==================  =========================
@@ -171,7 +172,7 @@ def atan2_piecewise(y, x):
     )  # (000 eq 3.21)
 
 
-def seed000_eq321_printed(y, x):
+def seed000_eq321_printed(y: ArrayLike, x: ArrayLike) -> np.ndarray:
     """Seed 000 eq 3.21 **as printed**: the third case repeats "y >= 0, x < 0", so y < 0, x < 0 matches no case.
 
     Returns NaN in the third quadrant (no rule applies); elsewhere it equals :func:`atan2_piecewise`.
@@ -201,7 +202,7 @@ def seed000_eq321_printed(y, x):
     )
 
 
-def excel_atan2(x_num, y_num):
+def excel_atan2(x_num: ArrayLike, y_num: ArrayLike) -> np.ndarray:
     """Excel's and LibreOffice's ``ATAN2(x_num; y_num)``: **x first**, so ``ATAN2(a, b) == np.arctan2(b, a)``, in rad.
 
     The thesis did its analysis in Excel, so its ``atan2(Az, Ay)`` is most probably Excel order: the angle of
@@ -234,7 +235,7 @@ def excel_atan2(x_num, y_num):
     return np.where((x == 0) & (y == 0), np.nan, out)
 
 
-def seed001_tilt_printed(acc, g=earth.G):
+def seed001_tilt_printed(acc: ArrayLike, g: float = earth.G) -> np.ndarray:
     """Seed 001 attitude note §2 **as printed**: ``θ = arcsin(a_x/g)``, ``φ = arctan(a_y/a_z)``, in rad.
 
     Body frame forward-right-down (a level sensor reads ``(0, 0, -g)``). The roll formula is right only for
@@ -263,7 +264,7 @@ def seed001_tilt_printed(acc, g=earth.G):
     return np.stack([roll, pitch], -1)
 
 
-def tilt_from_accel(acc):
+def tilt_from_accel(acc: ArrayLike) -> np.ndarray:
     """Roll and pitch (rad) of a sensor at rest from its accelerometer, full range (seed 001 attitude note §2).
 
     ``φ = atan2(-a_y, -a_z)`` and ``θ = atan2(a_x, √(a_y² + a_z²))`` for a forward-right-down body frame (NED
@@ -299,7 +300,7 @@ def tilt_from_accel(acc):
     return np.stack([roll, pitch], -1)
 
 
-def specific_force(C_bn, acc_nav=None, g=earth.G):
+def specific_force(C_bn: ArrayLike, acc_nav: ArrayLike | None = None, g: float = earth.G) -> np.ndarray:
     """What an ideal accelerometer reads, ``f_b = C_bnᵀ (a_n - g_n)`` with ``g_n = (0, 0, g)`` in NED.
 
     Seed 001 sensors note: ``a_m = (1/m)(F - F_g)`` -- the sum of forces minus gravity. At rest (``a_n = 0``) a

@@ -52,13 +52,17 @@ import inspect
 import itertools
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from . import accel_tilt, datasets, estimators, metrics, rotations, validate
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "Contender",
@@ -140,7 +144,7 @@ class Contender:
     run: Callable
 
     @property
-    def sensors(self):
+    def sensors(self) -> str:
         """``'9D'`` with the magnetometer, ``'6D'`` without."""
         return "9D" if self.uses_mag else "6D"
 
@@ -208,7 +212,7 @@ def _madgwick(uses_mag):
     return run
 
 
-def contenders(names=None, include_external=True):
+def contenders(names: list[str] | None = None, include_external: bool = True) -> list[Contender]:
     """The filters to benchmark: every registered estimator, then VQF and ahrs Madgwick when installed.
 
     Parameters
@@ -254,7 +258,7 @@ def contenders(names=None, include_external=True):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def score(contender, trial):
+def score(contender: Contender, trial: datasets.BroadTrial) -> dict:
     """Run one contender on one trial (a whole trial or a slice) and score it: a row with :data:`TRIAL_COLUMNS`.
 
     A contender that raises gets a row of NaN with the error text, so one broken filter never stops a benchmark.
@@ -305,7 +309,14 @@ def score(contender, trial):
     return row
 
 
-def run_benchmark(trials=None, folder=None, names=None, include_external=True, max_samples=None, progress=True):
+def run_benchmark(
+    trials: list[int | str] | None = None,
+    folder: str | Path | None = None,
+    names: list[str] | None = None,
+    include_external: bool = True,
+    max_samples: int | None = None,
+    progress: bool = True,
+) -> list[dict]:
     """Run every contender on every trial; one result row (dict with :data:`TRIAL_COLUMNS`) per pair.
 
     Parameters
@@ -390,7 +401,7 @@ class TuningSweep:
     t: list
     movement: list
 
-    def best(self, i):
+    def best(self, i: int) -> object:
         """The value with the smallest RMSE on trial ``i``.
 
         Parameters
@@ -415,7 +426,14 @@ def _estimator(name):
     return known[name]
 
 
-def tuning_sweep(trials, estimator, option, values, progress=False, uses_mag=True):
+def tuning_sweep(
+    trials: list[datasets.BroadTrial],
+    estimator: str | Callable[..., np.ndarray],
+    option: str,
+    values: Sequence[float],
+    progress: bool = False,
+    uses_mag: bool = True,
+) -> TuningSweep:
     """Run one estimator over a set of values of one tuning option on each trial, and score every run.
 
     Parameters
@@ -551,12 +569,12 @@ class LeaveOneOut:
     default_deg: np.ndarray
 
     @property
-    def loo_mean(self):
+    def loo_mean(self) -> float:
         """Mean over the trials of the score with options chosen without that trial (the honest figure), deg."""
         return float(np.mean(self.loo_deg))
 
     @property
-    def default_mean(self):
+    def default_mean(self) -> float:
         """Mean over the trials with the registered defaults (chosen on all of them), deg."""
         return float(np.mean(self.default_deg))
 
@@ -605,7 +623,9 @@ def _grid_runs(trials, estimator, grid, progress, what):
     return metric, names, combos, rmse, combos.index(tuple(defaults[k] for k in names))
 
 
-def leave_one_out(trials, estimator, grid=None, progress=False):
+def leave_one_out(
+    trials: list[datasets.BroadTrial], estimator: str, grid: dict | None = None, progress: bool = False
+) -> LeaveOneOut:
     """Leave-one-trial-out score of an estimator whose options were chosen on data.
 
     Runs the estimator once per combination of the grid's values on every trial, then, for each trial ``i``,
@@ -687,17 +707,24 @@ class LeaveOneGroupOut:
     default_deg: np.ndarray
 
     @property
-    def logo_mean(self):
+    def logo_mean(self) -> float:
         """Mean over all the trials of the score with options chosen on the other side of the split, deg."""
         return float(np.mean(self.logo_deg))
 
     @property
-    def default_mean(self):
+    def default_mean(self) -> float:
         """Mean over the trials with the registered defaults, deg."""
         return float(np.mean(self.default_deg))
 
 
-def leave_one_group_out(trials, estimator, grid=None, group="undisturbed", progress=False, runs=None):
+def leave_one_group_out(
+    trials: list[datasets.BroadTrial],
+    estimator: str,
+    grid: dict | None = None,
+    group: str = "undisturbed",
+    progress: bool = False,
+    runs: LeaveOneOut | None = None,
+) -> LeaveOneGroupOut:
     """Leave-one-group-out score: options chosen on one kind of motion, scored on another.
 
     The trials are split by a BROAD group (by default ``'undisturbed'``: trials 02/07/11/16 of the shipped eight
@@ -772,7 +799,7 @@ def leave_one_group_out(trials, estimator, grid=None, group="undisturbed", progr
     )
 
 
-def format_loo(results, rows=(), groups=()):
+def format_loo(results: list[LeaveOneOut], rows: Sequence[dict] = (), groups: Sequence[LeaveOneGroupOut] = ()) -> str:
     """Text: per tuned estimator, the eight-trial score (defaults), the leave-one-out and leave-one-group-out scores.
 
     Also their ratios to VQF (the mean over the same trials in ``rows``, when VQF ran), and the options chosen when
@@ -844,7 +871,7 @@ def format_loo(results, rows=(), groups=()):
     return "\n".join(lines)
 
 
-def group_means(rows):
+def group_means(rows: list[dict]) -> list[dict]:
     """Mean of each metric over the trials of each BROAD group, per estimator (rows with :data:`GROUP_COLUMNS`).
 
     Samples per second is pooled: all samples over all seconds of the group's trials.
@@ -884,7 +911,7 @@ def group_means(rows):
     return out
 
 
-def format_table(rows):
+def format_table(rows: list[dict]) -> str:
     """Text table: per estimator, the mean RMSEs over all benchmarked trials and the samples per second.
 
     Then the total RMSE (9D) or inclination RMSE (6D) per trial.
@@ -940,7 +967,12 @@ def _six_digits(v):
     return f"{v:.6g}" if isinstance(v, float) else v
 
 
-def write_csv(rows, path, columns=TRIAL_COLUMNS, fmt=None):
+def write_csv(
+    rows: list[dict],
+    path: str | Path,
+    columns: Sequence[str] = TRIAL_COLUMNS,
+    fmt: Callable[[object], str] | None = None,
+) -> Path:
     """Write result rows to ``path`` (CSV with a header; by default floats with 6 significant digits).
 
     Parameters
@@ -971,7 +1003,7 @@ def write_csv(rows, path, columns=TRIAL_COLUMNS, fmt=None):
     return path
 
 
-def plot(rows, path=None):
+def plot(rows: list[dict], path: str | Path | None = None) -> Figure:
     """Figure: total, heading and inclination RMSE per trial group, and samples per second per estimator.
 
     Grouped bars, one per estimator.
@@ -1041,7 +1073,7 @@ def plot(rows, path=None):
     return fig
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m fusionlab.bench [--trials ...] [--out DIR] ...``; returns the exit code.
 
     Parameters

@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import validate
 
@@ -79,12 +80,12 @@ class TriadFit:
     rank: int
 
     @property
-    def std(self):
+    def std(self) -> np.ndarray:
         """ndarray, shape (12,): standard error of each of the 12 parameters (``sqrt(diag(cov))``)."""
         return np.sqrt(np.diag(self.cov))
 
 
-def observation_matrix(reference):
+def observation_matrix(reference: ArrayLike) -> np.ndarray:
     """Stacked observation matrix ``O`` of seed 004 eqs (3.13)–(3.14): (3N, 12) for N reference vectors.
 
     Row block ``i`` is ``[[aᵀ, 0, 0, 1, 0, 0], [0, aᵀ, 0, 0, 1, 0], [0, 0, aᵀ, 0, 0, 1]]`` with ``a = reference[i]``.
@@ -122,7 +123,9 @@ def _span_message(a):
     )
 
 
-def fit_triad(reference, measured, *, names=("reference", "measured")):
+def fit_triad(
+    reference: ArrayLike, measured: ArrayLike, *, names: tuple[str, ...] = ("reference", "measured")
+) -> TriadFit:
     """Least-squares calibration of one triad, seed 004 eqs (3.11)–(3.15).
 
     Parameters
@@ -207,7 +210,7 @@ def _fit_of(fit, cls, maker):
         raise ValueError(f"fit must be the {cls.__name__} that {maker}(...) returns; got {type(fit).__name__}")
 
 
-def apply_triad(fit, measured):
+def apply_triad(fit: TriadFit, measured: ArrayLike) -> np.ndarray:
     """Invert the triad model: the corrected input ``a = M⁻¹ (z − b)`` for each reading ``z``.
 
     Parameters
@@ -234,7 +237,7 @@ def apply_triad(fit, measured):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def six_positions(g=9.80665):
+def six_positions(g: float = 9.80665) -> np.ndarray:
     """Reference specific force of the six-position test, (6, 3): ``+g`` then ``−g`` on x, y, z in turn (the
     classic choice; seed 004 §3.7.2 calibrates with six positions P1-P6, figs 3.9-3.10, whose orientations are not
     legible in our copy). The axis that points up reads ``+g``.
@@ -264,7 +267,7 @@ def six_positions(g=9.80665):
     return g * np.concatenate([np.eye(3), -np.eye(3)])[[0, 3, 1, 4, 2, 5]]
 
 
-def gyro_bias_from_rest(gyr):
+def gyro_bias_from_rest(gyr: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Gyro bias from a rest phase: the mean reading, and its standard error ``std/√N``.
 
     The standard error assumes white noise; a drifting bias (bias instability, rate random walk) makes the true
@@ -290,7 +293,7 @@ def gyro_bias_from_rest(gyr):
     return w.mean(axis=0), w.std(axis=0, ddof=1) / np.sqrt(len(w))
 
 
-def ellipsoid_design_matrix(mag):
+def ellipsoid_design_matrix(mag: ArrayLike) -> np.ndarray:
     """Rows ``[x², y², z², 2yz, 2xz, 2xy, 2x, 2y, 2z, 1]`` of the quadric
     ``a x² + b y² + c z² + 2f yz + 2g xz + 2h xy + 2p x + 2q y + 2r z + d = 0`` (Li & Griffiths 2004).
 
@@ -322,7 +325,7 @@ def _check_spread(m, need):
         )
 
 
-def quadric_normal_equations(mag):
+def quadric_normal_equations(mag: ArrayLike) -> np.ndarray:
     """Unconstrained least-squares quadric through the readings: the 9 coefficients
     ``v = [a, b, c, f, g, h, p, q, r]`` of ``a x² + b y² + c z² + 2f yz + 2g xz + 2h xy + 2p x + 2q y + 2r z = 1``,
     solving the normal equations ``(DᵀD) v = Dᵀ 1`` with ``D`` the first 9 columns of
@@ -375,7 +378,7 @@ class EllipsoidFit:
     coefficients: np.ndarray
 
     @property
-    def beta_h(self):
+    def beta_h(self) -> np.ndarray:
         """ndarray, shape (3,): seed 001's hard-iron vector in ``b_c = D_s b − β_h`` (corrected coordinates),
         ``W @ centre``."""
         return self.W @ self.centre
@@ -402,7 +405,7 @@ def _li_griffiths(D, k=4.0):
 RAW_FIELD_UT = validate.RAW_FIELD_UT
 
 
-def fit_ellipsoid(mag, field_strength=None, method="constrained"):
+def fit_ellipsoid(mag: ArrayLike, field_strength: float | None = None, method: str = "constrained") -> EllipsoidFit:
     """Hard- and soft-iron calibration from readings taken while the sensor turns in a constant field.
 
     Parameters
@@ -477,7 +480,7 @@ def fit_ellipsoid(mag, field_strength=None, method="constrained"):
     )
 
 
-def apply_ellipsoid(fit, mag):
+def apply_ellipsoid(fit: EllipsoidFit, mag: ArrayLike) -> np.ndarray:
     """Corrected readings ``W (m − centre)`` (= seed 001's ``D_s b − β_h``).
 
     Parameters
@@ -501,7 +504,9 @@ def apply_ellipsoid(fit, mag):
 BIAS_INSTABILITY_FACTOR = float(np.sqrt(2 * np.log(2) / np.pi))
 
 
-def allan_deviation(rate, fs, taus=None):
+def allan_deviation(
+    rate: ArrayLike, fs: float, taus: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Overlapping Allan deviation of a rate signal, computed by ``allantools.oadev``.
 
     Parameters
@@ -569,7 +574,7 @@ def _curve(taus, adev):
     return t, a
 
 
-def read_arw(taus, adev, tau_max):
+def read_arw(taus: ArrayLike, adev: ArrayLike, tau_max: float) -> float:
     """Angle random walk: fit a line of slope −½ (log-log) to the points with ``τ <= tau_max`` and read it at
     τ = 1 s: ``N = exp(mean(log σ_i + ½ log τ_i))`` -- the geometric mean of ``σ_i √τ_i``.
 
@@ -620,7 +625,7 @@ class AllanReading:
     tau_floor: float
     floor_min: float
 
-    def lines(self, taus):
+    def lines(self, taus: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The three lines at ``taus`` (s): (ARW ``N/√τ``, floor ``0.664 B``, RRW ``K√(τ/3)``), and their sum in
         quadrature is the model :func:`fusionlab.sensor_errors.allan_model`.
 
@@ -646,7 +651,7 @@ class AllanReading:
         )
 
 
-def read_allan(taus, adev, adev_err=None):
+def read_allan(taus: ArrayLike, adev: ArrayLike, adev_err: ArrayLike | None = None) -> AllanReading:
     """Read ARW, bias instability and RRW off an Allan-deviation curve: the three straight lines of the log-log
     plot (slope −½, flat, slope +½) fitted together, so that where they overlap each takes its share.
 

@@ -436,6 +436,22 @@ def changed_after(gyr, acc, mag, k, rng):
     """``[gyr, acc, mag]`` as the causality check at k gives them: each through :func:`perturb_future` with its
     noise of :data:`CAUSAL_NOISE`, drawn for gyr, acc and mag in this order (``mag`` None stays None).
 
+    Parameters
+    ----------
+    gyr, acc : array_like, shape (N, 3)
+        Gyro (rad/s) and accelerometer (m/s^2) samples.
+    mag : array_like, shape (N, 3), or None
+        Magnetometer samples (uT); None for a 6D filter.
+    k : int
+        The last sample kept (at most N - 2).
+    rng : numpy.random.Generator
+        Draws the noise.
+
+    Returns
+    -------
+    list
+        ``[gyr, acc, mag]`` changed after k (numpy arrays; ``mag`` None stays None).
+
     >>> g, a, m = changed_after(np.zeros((4, 3)), np.ones((4, 3)), None, 2, np.random.default_rng(0))
     >>> a[:3].tolist() == np.ones((3, 3)).tolist(), m is None
     (True, True)
@@ -446,6 +462,18 @@ def changed_after(gyr, acc, mag, k, rng):
 def change_up_to(q2, q, k):
     """The largest difference of any quaternion component between ``q2`` and ``q`` over samples 0..k: what the
     causality check compares (a causal filter's is at most :data:`CAUSAL_TOL`).
+
+    Parameters
+    ----------
+    q2, q : array_like, shape (M, 4) and (N, 4)
+        Two outputs of a filter, each holding samples 0..k at least.
+    k : int
+        The last sample compared.
+
+    Returns
+    -------
+    float
+        The largest absolute difference of any component over samples 0..k.
 
     >>> change_up_to(np.tile([1.0, 0, 0, 0], (3, 1)), np.array([[1.0, 0, 0, 0]] * 2 + [[0, 1.0, 0, 0]]), 1)
     0.0
@@ -517,6 +545,20 @@ def prefix_change(run, gyr, acc, mag, q, k):
 
 def samples_up_to(gyr, acc, mag, k):
     """``[gyr, acc, mag]`` cut after sample k: the data of the prefix check (``mag`` None stays None).
+
+    Parameters
+    ----------
+    gyr, acc : array_like, shape (N, 3)
+        Gyro (rad/s) and accelerometer (m/s^2) samples.
+    mag : array_like, shape (N, 3), or None
+        Magnetometer samples (uT); None for a 6D filter.
+    k : int
+        The last sample kept.
+
+    Returns
+    -------
+    list
+        ``[gyr, acc, mag]`` of samples 0..k (numpy arrays; ``mag`` None stays None).
 
     >>> [x.shape for x in samples_up_to(np.zeros((5, 3)), np.zeros((5, 3)), np.zeros((5, 3)), 1)]
     [(2, 3), (2, 3), (2, 3)]

@@ -43,6 +43,7 @@ docstring says ``(...)``.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import rotations, validate
 
@@ -82,7 +83,7 @@ def _angles(scalar=False, rates=False, **named):
     return out
 
 
-def seed000_eq339(roll, pitch, yaw):
+def seed000_eq339(roll: float | ArrayLike, pitch: float | ArrayLike, yaw: float | ArrayLike) -> np.ndarray:
     """Seed 000 eq 3.39 *as printed*: ``R_z(ψ) R_y(θ) R_x(φ)`` of the printed passive matrices (3.36)-(3.38).
 
     Erratum: this is not the thesis' own (3.40), which is our ``C_bn`` and equals ``(R_x R_y R_z)ᵀ`` of the
@@ -108,7 +109,7 @@ def seed000_eq339(roll, pitch, yaw):
     )  # (000 eq 3.39, as printed)
 
 
-def seed000_labcode_dcm(yaw, pitch, roll):
+def seed000_labcode_dcm(yaw: float | ArrayLike, pitch: float | ArrayLike, roll: float | ArrayLike) -> np.ndarray:
     """Seed 000 lab 1 Part A code, verbatim: ``Rz*Rx*Ry`` with "pitch" in the passive ``Rx`` and "roll" in ``Ry``.
 
     The argument order (yaw, pitch, roll) follows the printed call. The matrix is *not* (3.40) at the same angles:
@@ -132,7 +133,7 @@ def seed000_labcode_dcm(yaw, pitch, roll):
     return rotations.frame_rot_z(yaw) @ rotations.frame_rot_x(pitch) @ rotations.frame_rot_y(roll)
 
 
-def seed000_labcode_omega(wx, wy, wz):
+def seed000_labcode_omega(wx: float, wy: float, wz: float) -> np.ndarray:
     """Seed 000 lab 1 Part B ``Omega = [0 Wz -Wy; -Wz 0 -Wx; Wy Wx 0]``, verbatim.
 
     It is skew-symmetric but equals ``skew([Wx, -Wy, -Wz])``: the opposite sign to eq 3.50 on y and z.
@@ -155,7 +156,7 @@ def seed000_labcode_omega(wx, wy, wz):
     return np.array([[0.0, wz, -wy], [-wz, 0.0, -wx], [wy, wx, 0.0]])
 
 
-def seed000_labcode_rates(wx, wy, wz):
+def seed000_labcode_rates(wx: float | ArrayLike, wy: float | ArrayLike, wz: float | ArrayLike) -> np.ndarray:
     """Convert the lab code's gyro inputs to our body rates: its ``R*(I + Omega dt)`` is our
     ``C_bn @ (I + skew(ω) dt)`` with ``ω = (Wx, -Wy, -Wz)``. Shapes broadcast.
 
@@ -177,7 +178,7 @@ def seed000_labcode_rates(wx, wy, wz):
     return np.stack([wx, -wy, -wz], -1)
 
 
-def seed000_labcode_angles(R):
+def seed000_labcode_angles(R: ArrayLike) -> np.ndarray:
     """Seed 000 lab 1 Part B extraction, verbatim: ``Pitch = asin(R(3,2))``, ``Roll = atan2(R(3,1), R(3,3))``,
     ``Yaw = atan2(R(1,2), R(2,2))``. Returns ``(..., 3)`` = ``[pitch, roll, yaw]`` in radians, in the lab's names.
 
@@ -201,7 +202,7 @@ def seed000_labcode_angles(R):
     return np.stack([pitch, roll, yaw], -1)
 
 
-def seed000_eq379_381_printed(C_bn, yaw=0.0):
+def seed000_eq379_381_printed(C_bn: ArrayLike, yaw: float = 0.0) -> float | np.ndarray:
     """Seed 000 eqs 3.79 and 3.81 *as printed* (swapped): θ=-90° → ``φ = ψ + atan2(r12, r13)``,
     θ=+90° → ``φ = -ψ + atan2(-r12, -r13)``.
 
@@ -223,7 +224,7 @@ def seed000_eq379_381_printed(C_bn, yaw=0.0):
     return np.where(r31 > 0, yaw + np.arctan2(r12, r13), -yaw + np.arctan2(-r12, -r13))
 
 
-def seed001_R_IB(roll, pitch, yaw):
+def seed001_R_IB(roll: float | ArrayLike, pitch: float | ArrayLike, yaw: float | ArrayLike) -> np.ndarray:
     """Seed 001 (Euler note §5) inertial→body matrix ``R_I^B = R_{v2}^B(φ) R_{v1}^{v2}(θ) R_I^{v1}(ψ)``, passive.
 
     Equals ``euler_to_dcm([roll, pitch, yaw]).T``; see :func:`dcm_from_seed001`.
@@ -246,7 +247,7 @@ def seed001_R_IB(roll, pitch, yaw):
     return rotations.frame_rot_x(roll) @ rotations.frame_rot_y(pitch) @ rotations.frame_rot_z(yaw)  # (001 Euler §5)
 
 
-def dcm_from_seed001(R_IB):
+def dcm_from_seed001(R_IB: ArrayLike) -> np.ndarray:
     """Our body→nav ``C_bn`` from seed 001's inertial→body ``R_I^B`` (NED): the transpose.
 
     Parameters
@@ -263,7 +264,7 @@ def dcm_from_seed001(R_IB):
     return np.swapaxes(R, -1, -2)
 
 
-def dcm_to_seed001(C_bn):
+def dcm_to_seed001(C_bn: ArrayLike) -> np.ndarray:
     """Seed 001's ``R_I^B`` from our ``C_bn``: the transpose.
 
     Parameters
@@ -280,7 +281,7 @@ def dcm_to_seed001(C_bn):
     return np.swapaxes(C, -1, -2)
 
 
-def seed001_quat_to_euler(q):
+def seed001_quat_to_euler(q: ArrayLike) -> np.ndarray:
     """Seed 001 quaternion note §4 formulas, with atan2 as the note advises; returns ``[roll, pitch, yaw]``.
 
     ``φ = atan2(2(ab + cd), a² - b² - c² + d²)``, ``θ = -asin(2(bd - ac))``,
@@ -309,7 +310,7 @@ def seed001_quat_to_euler(q):
 _SEED002_FRAMES = {"NED": "NED", "Android": "ENU", "Win8": "ENU"}
 
 
-def quat_from_seed002(q, frame="NED", nav=None):
+def quat_from_seed002(q: ArrayLike, frame: str = "NED", nav: str | None = None) -> np.ndarray:
     """Our body→nav quaternion from seed 002's (Freescale) orientation quaternion.
 
     The note describes its ``q`` as a rotation of the *coordinate frame* from global to sensor, ``v_S = q* v_G q``
@@ -336,7 +337,7 @@ def quat_from_seed002(q, frame="NED", nav=None):
     return _seed002_nav(q, frame, nav)
 
 
-def quat_to_seed002(q, frame="NED", nav=None):
+def quat_to_seed002(q: ArrayLike, frame: str = "NED", nav: str | None = None) -> np.ndarray:
     """Inverse of :func:`quat_from_seed002`: seed 002's quaternion from ours.
 
     Parameters
@@ -366,7 +367,7 @@ def _seed002_nav(q, frame, nav):
     return rotations.quat_nav_swap(q) if nav is not None and nav != _SEED002_FRAMES[frame] else q
 
 
-def dcm_from_seed004(C_bn):
+def dcm_from_seed004(C_bn: ArrayLike) -> np.ndarray:
     """Seed 004's ``C_b^n`` (NED, Z-Y-X, eq 2.x in its ch. 2) is our ``C_bn``: checked and returned unchanged.
 
     What differs in seed 004 is the accelerometer sign (+g on z when level), handled where its filters read

@@ -30,9 +30,15 @@ rotation about X and goes with the X gyro (``axis='x'``); the X-Z angle goes wit
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import accel_tilt, earth, rotations, sensors, signals, validate
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "adc_to_g",
@@ -60,7 +66,12 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
+def adc_to_g(
+    counts: ArrayLike,
+    null_offset: float | ArrayLike = 0.0,
+    sensor: sensors.AnalogSensor = sensors.ADXL335,
+    v_ref: float = 3.0,
+) -> np.ndarray:
     """Step a): accelerometer counts to g, ``(ADC·Vscale/Res - ZeroGBias)/Sensitivity + NullOffset`` (000 eqs 5.1-5.3).
 
     Parameters
@@ -95,7 +106,12 @@ def adc_to_g(counts, null_offset=0.0, sensor=sensors.ADXL335, v_ref=3.0):
     )
 
 
-def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
+def adc_to_dps(
+    counts: ArrayLike,
+    null_offset: float | ArrayLike = 0.0,
+    sensor: sensors.AnalogSensor = sensors.IDG500,
+    v_ref: float = 3.0,
+) -> np.ndarray:
     """Step f): gyro counts to °/s, the same form with the IDG-500 numbers (000 eqs 5.11-5.12).
 
     Parameters
@@ -123,7 +139,7 @@ def adc_to_dps(counts, null_offset=0.0, sensor=sensors.IDG500, v_ref=3.0):
     )
 
 
-def accel_angle(z, other, order="excel"):
+def accel_angle(z: ArrayLike, other: ArrayLike, order: str = "excel") -> np.ndarray:
     """Step b): the accelerometer angle ``atan2(z, y)`` / ``atan2(z, x)`` in rad (000 eqs 5.4-5.5).
 
     ``order='c'`` reads the printed ``atan2(z, y)`` in C/numpy order, ``arctan2(z, y)``: ≈ π/2 when level (the
@@ -163,7 +179,7 @@ def accel_angle(z, other, order="excel"):
     raise ValueError(f"order must be 'excel' or 'c'; got {order!r}")
 
 
-def moving_average(x, n):
+def moving_average(x: ArrayLike, n: int) -> np.ndarray:
     """Steps d) and l): causal moving average ``A_AVG[m] = (1/N) Σ_{k=0}^{N-1} A[m-k]`` (000 eqs 5.7-5.8, 5.19-5.20).
 
     The thesis defines it for ``m >= N`` only; here the first ``N-1`` outputs average the samples available so far
@@ -197,7 +213,7 @@ def moving_average(x, n):
     return (c[m] - c[lo]) / (m - lo)  # (000 eq 5.7)
 
 
-def derivative(a, dt):
+def derivative(a: ArrayLike, dt: float) -> np.ndarray:
     """Step e): backward difference ``dA/dt[n] = (A[n] - A[n-1]) / dt`` (000 eqs 5.9-5.10); ``dA/dt[0] = 0``.
 
     Parameters
@@ -222,7 +238,7 @@ def derivative(a, dt):
     return np.concatenate([[0.0], np.diff(a) / dt])  # (000 eq 5.9)
 
 
-def gyro_increment(rate, dt, rule="rectangular"):
+def gyro_increment(rate: ArrayLike, dt: float, rule: str = "rectangular") -> np.ndarray:
     """Step h): the per-step gyro "integral" with no accumulation (000 eqs 5.13-5.14), three readings.
 
     * ``'printed'``: ``I[n] = (R[n] - R[n-1])·Δt`` as printed -- an erratum: a difference of rates times Δt is not an
@@ -265,7 +281,7 @@ def gyro_increment(rate, dt, rule="rectangular"):
     raise ValueError(f"rule must be 'printed', 'rectangular' or 'trapezoid'; got {rule!r}")
 
 
-def cumulative_integral(increment, angle0=0.0):
+def cumulative_integral(increment: ArrayLike, angle0: float = 0.0) -> np.ndarray:
     """Step g): the cumulative gyro integral kept for plotting only, ``Σ_{k<=n} I[k]`` (000 §5.4.3 g)).
 
     With rectangular increments this is gyro-only dead reckoning; the fusion uses only the per-step increment.
@@ -285,7 +301,7 @@ def cumulative_integral(increment, angle0=0.0):
     return validate.scalar(angle0, "angle0") + np.cumsum(validate.array(increment, "increment"))
 
 
-def ratio(gyro_rate, accel_term, eps=1e-9):
+def ratio(gyro_rate: ArrayLike, accel_term: ArrayLike, eps: float = 1e-9) -> np.ndarray:
     """Step i): the weighting ratio ``|R_gyro| / (|R_gyro| + |A| + ε)`` (000 eqs 5.15-5.16).
 
     As printed, ``accel_term`` is the accelerometer **angle** (° against °/s, eqs 5.15-5.16); as meant it is the
@@ -317,7 +333,7 @@ def ratio(gyro_rate, accel_term, eps=1e-9):
     return g / (g + a + validate.positive(eps, "eps"))  # (000 eqs 5.15-5.16)
 
 
-def fuse(accel_deg, increment, weight, f0=None):
+def fuse(accel_deg: ArrayLike, increment: ArrayLike, weight: ArrayLike, f0: float | None = None) -> np.ndarray:
     """Step k): ``F[n] = w[n]·A[n] + (1 - w[n])·(F[n-1] + I[n])`` with ``w`` the accelerometer weight
     (000 eqs 5.17-5.18).
 
@@ -362,7 +378,7 @@ def fuse(accel_deg, increment, weight, f0=None):
     return out
 
 
-def printed_to_tilt(angle_deg, axis="x"):
+def printed_to_tilt(angle_deg: ArrayLike, axis: str = "x") -> np.ndarray:
     """Map a C-order angle (≈ 90° level) to the tilt: ``90 - A`` for the Y-Z angle, ``A - 90`` for the X-Z angle.
 
     With ``atan2(z, y)`` in C order, ``A_YZ = 90° - φ`` runs against the X gyro; ``A_XZ = 90° + θ`` runs with the
@@ -394,8 +410,16 @@ COUNTS_MEDIAN_MIN = 50.0
 
 
 def pipeline(
-    counts, dt, axis="x", variant="meant", n_ma=12, accel_weight="ratio", acc_null=0.0, gyro_null=0.0, eps=1e-9
-):
+    counts: ArrayLike,
+    dt: float,
+    axis: str = "x",
+    variant: str = "meant",
+    n_ma: int = 12,
+    accel_weight: str = "ratio",
+    acc_null: float | ArrayLike = 0.0,
+    gyro_null: float | ArrayLike = 0.0,
+    eps: float = 1e-9,
+) -> pd.DataFrame:
     """The spreadsheet of Lab 3 (000 §5.4.3): one column per step a)-l), as a pandas DataFrame.
 
     Parameters
@@ -534,7 +558,7 @@ class ComplementaryFilter:
     0.9
     """
 
-    def __init__(self, alpha=0.98, dt=0.02, angle0=0.0):
+    def __init__(self, alpha: float = 0.98, dt: float = 0.02, angle0: float = 0.0) -> None:
         alpha = validate.scalar(alpha, "alpha")
         if not 0.0 <= alpha <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1]; got {alpha!r}")
@@ -542,7 +566,7 @@ class ComplementaryFilter:
         self.dt = validate.time_step(dt, "dt")
         self.angle = validate.scalar(angle0, "angle0")
 
-    def step(self, rate, accel_angle):
+    def step(self, rate: float, accel_angle: float) -> float:
         """One sample.
 
         Parameters
@@ -560,7 +584,7 @@ class ComplementaryFilter:
         self.angle = self.alpha * (self.angle + rate * self.dt) + (1 - self.alpha) * accel_angle
         return self.angle
 
-    def run(self, rate, accel_angle):
+    def run(self, rate: ArrayLike, accel_angle: ArrayLike) -> np.ndarray:
         """A whole record, one :meth:`step` per sample.
 
         Parameters
@@ -611,7 +635,16 @@ class TiltKalman2:
         The underlying filter (state ``kf.x``, covariance ``kf.P``).
     """
 
-    def __init__(self, dt=0.02, q_angle=1e-3, q_bias=1e-5, r_angle=100.0, angle0=0.0, bias0=0.0, p0=100.0):
+    def __init__(
+        self,
+        dt: float = 0.02,
+        q_angle: float = 1e-3,
+        q_bias: float = 1e-5,
+        r_angle: float = 100.0,
+        angle0: float = 0.0,
+        bias0: float = 0.0,
+        p0: float = 100.0,
+    ) -> None:
         from filterpy.kalman import KalmanFilter
 
         dt = validate.time_step(dt, "dt")
@@ -625,7 +658,7 @@ class TiltKalman2:
         kf.P = np.eye(2) * validate.positive(p0, "p0")
         self.kf = kf
 
-    def step(self, rate, accel_angle):
+    def step(self, rate: float, accel_angle: float) -> tuple[float, float]:
         """One sample: predict with the gyro rate, update with the accelerometer angle.
 
         Parameters
@@ -646,7 +679,7 @@ class TiltKalman2:
         self.kf.update(np.array([[float(accel_angle)]]))
         return float(self.kf.x[0, 0]), float(self.kf.x[1, 0])
 
-    def run(self, rate, accel_angle):
+    def run(self, rate: ArrayLike, accel_angle: ArrayLike) -> np.ndarray:
         """A whole record, one :meth:`step` per sample.
 
         Parameters
@@ -668,7 +701,9 @@ class TiltKalman2:
         return np.array([self.step(ri, ai) for ri, ai in zip(r, a)])
 
 
-def complementary_attitude(gyr, acc, fs, tau=1.0, acc_sigma=2.0, acc_hold=0.5):
+def complementary_attitude(
+    gyr: ArrayLike, acc: ArrayLike, fs: float, tau: float = 1.0, acc_sigma: float | None = 2.0, acc_hold: float = 0.5
+) -> np.ndarray:
     """Three-axis complementary filter -- **not from the thesis**.
 
     The 3-D generalisation of :class:`ComplementaryFilter` (eq 5.17 with a constant weight), registered in
@@ -739,7 +774,7 @@ def _free_fall(acc):
     return free
 
 
-def accel_disturbance(acc, hold, g=earth.G):
+def accel_disturbance(acc: ArrayLike, hold: int, g: float = earth.G) -> np.ndarray:
     """``max(| |a_j| - g |)`` over the ``hold`` samples ``j = n - hold + 1 … n`` (causal), for every sample n, m/s².
 
     Parameters
@@ -772,7 +807,9 @@ def accel_disturbance(acc, hold, g=earth.G):
     return signals.trailing_max(np.abs(np.linalg.norm(acc, axis=1) - g), hold)
 
 
-def correlation_attitude(gyr, acc, fs, n_ma=12, accel_weight="ratio", eps=1e-9):
+def correlation_attitude(
+    gyr: ArrayLike, acc: ArrayLike, fs: float, n_ma: int = 12, accel_weight: str = "ratio", eps: float = 1e-9
+) -> np.ndarray:
     """The thesis' correlation fusion *as meant*, generalised to three axes (000 eqs 5.7-5.17, §5.4.3 steps d)-k)).
 
     Per sample, as in :func:`pipeline` with ``variant='meant'``: the accelerometer tilt (roll, pitch) is smoothed

@@ -128,7 +128,7 @@ class DataMissing(FileNotFoundError):
         Where the loader looked and how to get the file.
     """
 
-    def __init__(self, trial, message):
+    def __init__(self, trial: str, message: str) -> None:
         super().__init__(message)
         self.trial = trial
 
@@ -191,7 +191,7 @@ def _known_sums():
     return sums
 
 
-def list_trials(group=None):
+def list_trials(group: str | None = None) -> list[TrialInfo]:
     """The 39 trials of BROAD, in order, optionally only those of one ``group`` (see :func:`group_names`).
 
     Parameters
@@ -220,7 +220,7 @@ def list_trials(group=None):
     return [t for t in trials if group in t.groups]
 
 
-def group_names():
+def group_names() -> list[str]:
     """Names of the trial groups, as ``trials.json`` orders them (``all_trials``, ``undisturbed``, ...).
 
     Returns
@@ -231,7 +231,7 @@ def group_names():
     return list(_catalogue()[1])
 
 
-def trial_name(name_or_number):
+def trial_name(name_or_number: int | str) -> str:
     """Full trial name from a number (``2``, ``'2'``, ``'02'``) or a name (with or without ``.mat``).
 
     Parameters
@@ -289,7 +289,7 @@ def trial_name(name_or_number):
     )
 
 
-def known_sha256(name_or_number):
+def known_sha256(name_or_number: int | str) -> str | None:
     """The SHA-256 (hex) fusionlab knows for a trial's ``.mat`` file, or None if it knows none.
 
     Parameters
@@ -310,7 +310,7 @@ def known_sha256(name_or_number):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def cache_dir():
+def cache_dir() -> Path:
     """The folder downloaded trials are kept in (it need not exist yet).
 
     ``$FUSIONLAB_CACHE/broad`` if that variable is set, else the platform's user cache: ``$XDG_CACHE_HOME`` or
@@ -368,7 +368,7 @@ def _folder(folder):
     return d
 
 
-def file_sha256(path):
+def file_sha256(path: str | Path) -> str:
     """The SHA-256 of a file, read in chunks (what ``broad_sha256.txt`` lists).
 
     Parameters
@@ -404,7 +404,7 @@ def _check_user_file(path, expected):
     return path
 
 
-def shipped_dir():
+def shipped_dir() -> Path | None:
     """The course's ``data/broad/`` folder if it exists (see :data:`SHIPPED_DIR`), else None.
 
     Returns
@@ -415,7 +415,7 @@ def shipped_dir():
     return SHIPPED_DIR if SHIPPED_DIR is not None and Path(SHIPPED_DIR).is_dir() else None
 
 
-def missing_trials():
+def missing_trials() -> dict[str, str]:
     """Trials that a load of this session could not find nor download: ``{name: message}`` (a copy).
 
     Returns
@@ -431,7 +431,7 @@ def _missing(name, message):
     return DataMissing(name, message)
 
 
-def available_trials(folder=None):
+def available_trials(folder: str | os.PathLike | None = None) -> list[str]:
     """Names of the trials present without a download: those in ``folder`` when it is given (where
     :func:`load_trial` would then look), else those in the course's ``data/broad/``, ``FUSIONLAB_BROAD_DIR`` or the
     cache.
@@ -453,7 +453,9 @@ def available_trials(folder=None):
     return [t.name for t in list_trials() if any((d / f"{t.name}.mat").is_file() for d in dirs)]
 
 
-def fetch_trial(name_or_number, folder=None, download=True, progress=True):
+def fetch_trial(
+    name_or_number: int | str, folder: str | os.PathLike | None = None, download: bool = True, progress: bool = True
+) -> Path:
     """Path of a verified copy of a trial's ``.mat`` file, downloading it into the cache if needed.
 
     Parameters
@@ -669,7 +671,7 @@ class BroadTrial(signals.Sampled):
     quat_ref: np.ndarray
     movement: np.ndarray
 
-    def slice(self, start=None, stop=None):
+    def slice(self, start: int | None = None, stop: int | None = None) -> BroadTrial:
         """The same trial cut to samples ``start:stop`` (for a quick look or a fast test).
 
         Parameters
@@ -700,7 +702,7 @@ class BroadTrial(signals.Sampled):
             self.movement[s],
         )
 
-    def window(self, rest=5.0, length=35.0):
+    def window(self, rest: float = 5.0, length: float = 35.0) -> BroadTrial:
         """A piece of the trial for a quick run: from ``rest`` seconds before its movement phase starts, ``length``
         seconds long (Labs 11 and 13; BROAD's own scores are over whole trials).
 
@@ -794,7 +796,9 @@ def _read_mat(path, name):
     return n, fs, gyr, acc, mag, quat, movement.astype(bool)
 
 
-def load_trial(name_or_number, folder=None, download=True, progress=True):
+def load_trial(
+    name_or_number: int | str, folder: str | os.PathLike | None = None, download: bool = True, progress: bool = True
+) -> BroadTrial:
     """Load one BROAD trial (from ``folder``, ``data/broad/``, ``FUSIONLAB_BROAD_DIR``, the cache, or a download;
     see the module doc).
 
@@ -866,7 +870,9 @@ broad = types.SimpleNamespace(
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def load_reference_position(name_or_number, folder=None, download=True, progress=True):
+def load_reference_position(
+    name_or_number: int | str, folder: str | os.PathLike | None = None, download: bool = True, progress: bool = True
+) -> np.ndarray:
     """The optical reference position ``opt_pos`` of a BROAD trial, (N, 3) m, NaN rows where the markers were lost.
 
     The same file, search order and checksum as :func:`load_trial` (so the rows match its samples). Frame: the

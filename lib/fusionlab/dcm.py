@@ -45,6 +45,7 @@ WGS-84 one for comparison.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import rotations, validate
 
@@ -83,7 +84,7 @@ INCREMENT_TOL = 0.05
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def A_matrix(sigma, order="exact"):
+def A_matrix(sigma: ArrayLike, order: str = "exact") -> np.ndarray:
     """DCM increment ``A`` of a body rotation vector: ``C_bn,k = C_bn,k-1 @ A_{k-1}`` (004 eqs 6.2-6.7).
 
     ``order='exact'``: ``A = I + (sin σ/σ)[σ×] + ((1 - cos σ)/σ²)[σ×]²``; ``order='second'``:
@@ -117,7 +118,7 @@ def A_matrix(sigma, order="exact"):
     return rotations.rodrigues_dcm(sigma, order=order)
 
 
-def A_with_gyro_error(A, bias, dt, noise=None):
+def A_with_gyro_error(A: ArrayLike, bias: ArrayLike, dt: float, noise: ArrayLike | None = None) -> np.ndarray:
     """The increment computed from a biased, noisy gyro, to first order: ``Ã = A + [(b Δt + w Δt)×]`` (004 eq 6.10).
 
     Parameters
@@ -143,7 +144,7 @@ def A_with_gyro_error(A, bias, dt, noise=None):
     return A + rotations.skew(e)  # (004 eq 6.10)
 
 
-def row_propagate(c, A_tilde, bias, dt):
+def row_propagate(c: ArrayLike, A_tilde: ArrayLike, bias: ArrayLike, dt: float) -> np.ndarray:
     """One DCM row through one step, bias removed pseudo-linearly: ``c_k = Ãᵀ c_{k-1} - Δt [c_{k-1}×] b_g``.
 
     004 eq 6.11; eq 7.7 for every row of the GPS/INS filter. Row ``i`` of ``C_k = C_{k-1} A`` is ``Aᵀ c_i``; the true
@@ -173,7 +174,7 @@ def row_propagate(c, A_tilde, bias, dt):
     return c @ A_tilde - dt * np.cross(c, b)  # (004 eq 6.11)
 
 
-def ahrs_transition(c1, c3, A_tilde, dt):
+def ahrs_transition(c1: ArrayLike, c3: ArrayLike, A_tilde: ArrayLike, dt: float) -> np.ndarray:
     """The 9×9 pseudo-linear transition of the AHRS state ``x = [c1, c3, b_g]`` (004 eqs 6.11-6.12).
 
     ``F = [[Ãᵀ, 0, -Δt[ĉ1×]], [0, Ãᵀ, -Δt[ĉ3×]], [0, 0, I]]``, so that ``x⁻ = F x̂`` reproduces
@@ -211,7 +212,7 @@ def _transition(c1, c3, A_tilde, dt):
     return F
 
 
-def ahrs_process_noise(c1, c3, dt, gyro_noise, bias_walk):
+def ahrs_process_noise(c1: ArrayLike, c3: ArrayLike, dt: float, gyro_noise: float, bias_walk: float) -> np.ndarray:
     """Process noise of the AHRS state (004 eq 6.13: "a DCM part plus a bias part").
 
     The formula is not legible; this is our reconstruction, derived in Lab 09 Part A, and ours in its numbers.
@@ -260,7 +261,7 @@ def _process_noise(c1, c3, dt, qg, qb):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def accel_to_seed004(acc):
+def accel_to_seed004(acc: ArrayLike) -> np.ndarray:
     """A real accelerometer reading (specific force, +g on the up axis at rest) in the thesis' sign: ``a_b = -f_b``.
 
     Seed 004 eqs 4.21 / 6.15 / 7.18 model the accelerometer as "measured gravity" ``C_n^b [0, 0, g]ᵀ`` (+g on z when
@@ -279,7 +280,7 @@ def accel_to_seed004(acc):
     return -validate.vectors(acc, "acc")
 
 
-def accel_measurement_matrix(g=G):
+def accel_measurement_matrix(g: float = G) -> np.ndarray:
     """``H_a = [0₃, g I₃, 0₃]`` (3×9): the thesis' accelerometer ``a_b = g c3 + v`` is linear in c3 (004 eq 6.16).
 
     Parameters
@@ -298,7 +299,7 @@ def accel_measurement_matrix(g=G):
     return H
 
 
-def mag_reference(inclination):
+def mag_reference(inclination: float) -> np.ndarray:
     """Unit geomagnetic field in NED, ``h_n = [cos δ, 0, sin δ]`` (004 eq 6.17; δ the inclination, positive down).
 
     Parameters
@@ -320,7 +321,7 @@ def mag_reference(inclination):
     return np.stack([np.cos(d), np.zeros_like(d), np.sin(d)], -1)
 
 
-def mag_measurement_matrix(inclination):
+def mag_measurement_matrix(inclination: float) -> np.ndarray:
     """``H_m = [h_N I₃, h_D I₃, 0₃]`` (3×9): ``h_b = C_n^b h_n = h_N c1 + h_D c3`` (004 eqs 6.18-6.19).
 
     There is no ``c2`` term because ``h_E = 0``; neither gravity nor the field has an east component, which is why
@@ -343,7 +344,7 @@ def mag_measurement_matrix(inclination):
     return H
 
 
-def orthogonality_pseudo_measurement(c1, c3):
+def orthogonality_pseudo_measurement(c1: ArrayLike, c3: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The constraints ``|c1|² = 1``, ``|c3|² = 1``, ``c1·c3 = 0`` as a measurement (004 eqs 6.24-6.26, reconstructed).
 
     Parameters
@@ -383,7 +384,7 @@ def _ortho(c1, c3):
     return r, H
 
 
-def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
+def orthogonality_covariance(k: int | ArrayLike, R_i: float, R_ss: float, rho: float = 0.92) -> float | np.ndarray:
     """Decaying pseudo-measurement variance ``R_c,k = ρ^k R_i + R_ss`` (004 eq 6.27; ρ = 0.92 is the thesis').
 
     Large at first, so a wrong initial DCM is not forced orthonormal before it has converged; then steady at
@@ -423,7 +424,7 @@ def orthogonality_covariance(k, R_i, R_ss, rho=0.92):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def rows_to_dcm(c1, c3):
+def rows_to_dcm(c1: ArrayLike, c3: ArrayLike) -> np.ndarray:
     """``C = [c1; c3 × c1; c3]`` from the two estimated rows (004 eq 6.25: ``c2 = c3 × c1``).
 
     Parameters
@@ -447,7 +448,7 @@ def rows_to_dcm(c1, c3):
     return np.stack(np.broadcast_arrays(c1, np.cross(c3, c1), c3), -2)
 
 
-def orthonormalize(C):
+def orthonormalize(C: ArrayLike) -> np.ndarray:
     """Nearest rotation matrix (SVD, ``U Vᵀ``) -- for read-out only; the filters keep the raw elements (ours).
 
     Parameters
@@ -476,7 +477,7 @@ def orthonormalize(C):
     return R
 
 
-def level_and_compass(acc_b, mag_b):
+def level_and_compass(acc_b: ArrayLike, mag_b: ArrayLike) -> np.ndarray:
     """Roll, pitch from the thesis' accelerometer and heading from a tilt-compensated compass (rad).
 
     ``θ = asin(-a_x/|a|)`` (004 eq 4.22), ``φ = atan2(a_y, a_z)`` (eq 4.23) in the thesis sign ``a_b = +g c3``
@@ -511,7 +512,7 @@ def level_and_compass(acc_b, mag_b):
     return np.stack([roll, pitch, yaw], -1)
 
 
-def inclination_from(acc_b, mag_b):
+def inclination_from(acc_b: ArrayLike, mag_b: ArrayLike) -> float | np.ndarray:
     """Geomagnetic inclination δ (rad, positive down) from an undisturbed static sample.
 
     ``sin δ = ĥ_b · ĉ3``, ``ĉ3 = a_b/|a_b|`` in the thesis sign (004 §6.4: "transforming an undisturbed
@@ -539,7 +540,7 @@ def inclination_from(acc_b, mag_b):
     return np.arcsin(np.clip(s, -1, 1))
 
 
-def trusted_mask(deviation, tol, hold):
+def trusted_mask(deviation: ArrayLike, tol: float, hold: int) -> np.ndarray:
     """True where ``|deviation| < tol`` has held for at least ``hold`` consecutive samples (the current included).
 
     The thesis trusts the accelerometer when ``|a| ≈ g`` "for a certain amount of time" and the magnetometer when

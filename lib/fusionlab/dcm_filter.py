@@ -34,6 +34,7 @@ import math as _m
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg.lapack import dposv as _posv
 
 from . import dcm, rotations, signals, validate
@@ -244,7 +245,15 @@ class DcmAhrs:
         Its covariance.
     """
 
-    def __init__(self, C0, inclination, dt, bias0=(0.0, 0.0, 0.0), tuning=AhrsTuning(), g=dcm.G):
+    def __init__(
+        self,
+        C0: ArrayLike,
+        inclination: float,
+        dt: float,
+        bias0: ArrayLike = (0.0, 0.0, 0.0),
+        tuning: AhrsTuning = AhrsTuning(),
+        g: float = dcm.G,
+    ) -> None:
         C0 = validate.rotation(validate.exact_shape(C0, "C0", (3, 3)), "C0", tol=1e-3)
         self.dt = validate.time_step(dt, "dt")
         self.hold = max(1, int(round(tuning.hold / self.dt)))
@@ -262,26 +271,26 @@ class DcmAhrs:
         self.C_g, self.v_lp, self.n_g = C0.copy(), None, 0  # gyro-only strapdown and low-passed acc (acc_lp_tau)
 
     @property
-    def c1(self):
+    def c1(self) -> np.ndarray:
         """First row of ``C_bn`` in the state (raw, not orthonormalised), shape (3,)."""
         return self.x[0:3]
 
     @property
-    def c3(self):
+    def c3(self) -> np.ndarray:
         """Third row of ``C_bn`` in the state (raw, not orthonormalised), shape (3,)."""
         return self.x[3:6]
 
     @property
-    def bias(self):
+    def bias(self) -> np.ndarray:
         """Gyro bias estimate, rad/s, shape (3,)."""
         return self.x[6:9]
 
     @property
-    def C_bn(self):
+    def C_bn(self) -> np.ndarray:
         """Orthonormalised read-out of ``[c1; c3 × c1; c3]`` (004 eq 6.25), shape (3, 3)."""
         return dcm.orthonormalize(dcm.rows_to_dcm(self.c1, self.c3))
 
-    def predict(self, A_tilde, dt):
+    def predict(self, A_tilde: ArrayLike, dt: float) -> None:
         """Time update with the increment ``Ã`` computed from the *measured* gyro over ``dt`` (004 eqs 6.11-6.13).
 
         Parameters
@@ -297,7 +306,15 @@ class DcmAhrs:
         self.x = F @ self.x  # pseudo-linear x⁻ = F x̂
         self.P = F @ self.P @ F.T + Q
 
-    def update(self, acc_b, mag_b, acc_trusted=None, mag_trusted=None, bias_at_rest=None, acc_lp=None):
+    def update(
+        self,
+        acc_b: ArrayLike,
+        mag_b: ArrayLike | None,
+        acc_trusted: bool | None = None,
+        mag_trusted: bool | None = None,
+        bias_at_rest: ArrayLike | None = None,
+        acc_lp: ArrayLike | None = None,
+    ) -> None:
         """Joint accelerometer + magnetometer + orthogonality update (004 eqs 6.15-6.28), then, at rest, the bias.
 
         Parameters
@@ -358,7 +375,7 @@ class DcmAhrs:
             self.P = 0.5 * (P + P.T)
         self.k += 1
 
-    def step(self, gyr, acc_b, mag_b):
+    def step(self, gyr: ArrayLike, acc_b: ArrayLike, mag_b: ArrayLike | None) -> None:
         """One sample: predict with ``Ã = A(ω̃ Δt)`` (exact), then update (``Δt`` = ``self.dt``).
 
         With ``tuning.bias_sigma_rest`` set, a :class:`fusionlab.signals.RestDetector` says whether it is at rest.
@@ -423,18 +440,18 @@ def _prefix_products(A, M):
 
 
 def run_ahrs(
-    gyr,
-    acc_b,
-    mag_b,
-    fs,
-    inclination=None,
-    C0=None,
-    bias0=(0.0, 0.0, 0.0),
-    tuning=AhrsTuning(),
-    update_every=1,
-    init_seconds=0.5,
-    g=dcm.G,
-):
+    gyr: ArrayLike,
+    acc_b: ArrayLike,
+    mag_b: ArrayLike | None,
+    fs: float,
+    inclination: float | None = None,
+    C0: ArrayLike | None = None,
+    bias0: ArrayLike = (0.0, 0.0, 0.0),
+    tuning: AhrsTuning = AhrsTuning(),
+    update_every: int = 1,
+    init_seconds: float = 0.5,
+    g: float = dcm.G,
+) -> dict:
     """The AHRS over a whole recording -- the fast path of :class:`DcmAhrs`.
 
     What differs from one :meth:`DcmAhrs.step` per sample (and why): the measurement update runs every

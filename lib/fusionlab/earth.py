@@ -15,6 +15,7 @@ Units: metres, seconds, radians. Latitudes are geodetic, in radians (``np.radian
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import validate
 
@@ -67,7 +68,7 @@ def _latitude(lat):
     return validate.angles_rad(lat, "lat", limit=np.pi / 2 + 1e-12)
 
 
-def normal_gravity(lat, h=0.0):
+def normal_gravity(lat: float | ArrayLike, h: float | ArrayLike = 0.0) -> float | np.ndarray:
     """Magnitude of normal gravity, m/s² (Somigliana's closed formula plus a linear free-air term; not from a seed).
 
     ``γ(φ) = γ_e (1 + k sin²φ) / √(1 - e² sin²φ) - 3.086e-6 h``. The linear height term is good to about 1e-5 m/s²
@@ -102,7 +103,7 @@ def normal_gravity(lat, h=0.0):
     return GAMMA_E * (1.0 + SOMIGLIANA_K * s2) / np.sqrt(1.0 - E2 * s2) - FREE_AIR * h
 
 
-def gravity_ned(lat, h=0.0):
+def gravity_ned(lat: float | ArrayLike, h: float | ArrayLike = 0.0) -> np.ndarray:
     """Normal-gravity vector in NED, ``[0, 0, γ(φ, h)]`` (m/s²); the thesis' ``g_n = [0, 0, g]`` with a model for g.
 
     Parameters
@@ -121,7 +122,7 @@ def gravity_ned(lat, h=0.0):
     return np.stack([np.zeros_like(g), np.zeros_like(g), g], -1)
 
 
-def earth_rate_ned(lat):
+def earth_rate_ned(lat: float | ArrayLike) -> np.ndarray:
     """Earth rate in the NED frame, ``ω_ie^n = ω_ie [cos φ, 0, -sin φ]`` (rad/s; the form seed 004 eq 4.17 uses).
 
     Parameters
@@ -149,7 +150,7 @@ def earth_rate_ned(lat):
     return OMEGA_IE * np.stack([np.cos(lat), np.zeros_like(lat), -np.sin(lat)], -1)
 
 
-def radii_of_curvature(lat):
+def radii_of_curvature(lat: float | ArrayLike) -> tuple[float | np.ndarray, float | np.ndarray]:
     """Meridian and transverse (prime-vertical) radii of curvature, m: ``R_N = a(1-e²)/(1-e² sin²φ)^{3/2}``,
     ``R_E = a/√(1-e² sin²φ)``. One metre north is ``1/(R_N + h)`` rad of latitude.
 

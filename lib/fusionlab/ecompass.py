@@ -32,6 +32,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import conventions, rotations, validate
 
@@ -71,7 +72,7 @@ FRAMES = ("NED", "Android", "Win8")
 ENU = {"NED": False, "Android": True, "Win8": True}
 
 
-def check_frame(frame):
+def check_frame(frame: str) -> str:
     """``frame`` if it is one of :data:`FRAMES`, else ValueError.
 
     Parameters
@@ -94,7 +95,7 @@ def check_frame(frame):
     return frame
 
 
-def nonzero_norm(v, name):
+def nonzero_norm(v: np.ndarray, name: str) -> np.ndarray:
     """Euclidean norm of each vector along the last axis, or ValueError if one is zero.
 
     Parameters
@@ -126,7 +127,7 @@ def nonzero_norm(v, name):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def rotation_matrix(q):
+def rotation_matrix(q: ArrayLike) -> np.ndarray:
     """The note's rotation matrix ``R(q)`` (002 eq 34): global→sensor, ``v_S = R v_G = q* v_G q``.
 
     Parameters
@@ -142,7 +143,7 @@ def rotation_matrix(q):
     return np.swapaxes(rotations.quat_to_dcm(q), -1, -2)  # (002 eq 34)
 
 
-def reference_vectors(delta, frame="NED"):
+def reference_vectors(delta: float | ArrayLike, frame: str = "NED") -> tuple[np.ndarray, np.ndarray]:
     """Global-frame reference directions of gravity and the geomagnetic field (002 eqs 49, 51, 54, 56, 59, 61).
 
     Parameters
@@ -177,7 +178,9 @@ def reference_vectors(delta, frame="NED"):
     return r_g, r_m
 
 
-def accel_model(q, a_S=None, frame="NED", noise=None):
+def accel_model(
+    q: ArrayLike, a_S: ArrayLike | None = None, frame: str = "NED", noise: ArrayLike | None = None
+) -> np.ndarray:
     """Accelerometer reading ``G`` in g (002 eqs 1-2).
 
     NED and Win8 are gravity-positive, ``G = -a + g``; Android is acceleration-positive, ``G = a - g``; ``g = R r_g``
@@ -212,7 +215,14 @@ def accel_model(q, a_S=None, frame="NED", noise=None):
     return -a + g_S - v  # (002 eq 1)
 
 
-def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=None):
+def mag_model(
+    q: ArrayLike,
+    B: float = 50.0,
+    delta: float = np.radians(60.0),
+    frame: str = "NED",
+    d_S: ArrayLike | None = None,
+    noise: ArrayLike | None = None,
+) -> np.ndarray:
     """Calibrated magnetometer reading ``B_c = m + d + v_B`` in µT (002 eq 10), ``m = B R r_m``.
 
     Parameters
@@ -251,7 +261,7 @@ def mag_model(q, B=50.0, delta=np.radians(60.0), frame="NED", d_S=None, noise=No
     return m + d + v  # (002 eq 10)
 
 
-def accel_noise(G):
+def accel_noise(G: ArrayLike) -> np.ndarray:
     """Instantaneous accelerometer noise ``Q_vG + Q_a ≈ | |G|² - 1 |`` in g² (002 eq 9, as v5.00 computes it).
 
     Parameters
@@ -269,7 +279,7 @@ def accel_noise(G):
     return np.abs(np.sum(G * G, axis=-1) - 1.0)  # (002 eq 9)
 
 
-def mag_noise(B_c, B=50.0):
+def mag_noise(B_c: ArrayLike, B: float = 50.0) -> np.ndarray:
     """Instantaneous magnetometer noise ``Q_vB + Q_d ≈ | |B_c|² - B² |`` in µT² (002 eq 15, as v5.00 computes it).
 
     Parameters
@@ -290,7 +300,9 @@ def mag_noise(B_c, B=50.0):
     return np.abs(np.sum(B_c * B_c, axis=-1) - B * B)  # (002 eq 15)
 
 
-def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
+def weights(
+    qvgqa: float | ArrayLike, qvbqd: float | ArrayLike, B: float = 50.0, tol: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray]:
     """Relative weights of gravity and the geomagnetic field in the eCompass fit (002 eqs 64-65).
 
     ``α_g = (QvBQd/B²) / (QvGQa + QvBQd/B²)``, ``α_m = 1 - α_g``: each vector is weighted by the *other* sensor's
@@ -339,7 +351,7 @@ def weights(qvgqa, qvbqd, B=50.0, tol=1e-12):
     return alpha_g, 1.0 - alpha_g  # (002 eq 65)
 
 
-def measured_gravity(G, frame="NED"):
+def measured_gravity(G: ArrayLike, frame: str = "NED") -> np.ndarray:
     """Measured gravity direction ``s_g`` in the sensor frame (002 eqs 50, 55, 60).
 
     ``+G/|G|`` for NED and Win8, ``-G/|G|`` for Android.
@@ -367,7 +379,7 @@ def measured_gravity(G, frame="NED"):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def kappa_general(s, r, alpha=None):
+def kappa_general(s: ArrayLike, r: ArrayLike, alpha: ArrayLike | None = None) -> np.ndarray:
     """``κ = Σ_k α_k κ_k`` written entry by entry (002 eq 41, **corrected**): ``E(q) = 1 - qᵀκq`` (eq 39).
 
     Parameters
@@ -417,7 +429,7 @@ def _vector_pairs(s, r, alpha):
     return s, r, a * np.ones(s.shape[:-1])
 
 
-def kappa_davenport(s, r, alpha=None):
+def kappa_davenport(s: ArrayLike, r: ArrayLike, alpha: ArrayLike | None = None) -> np.ndarray:
     """Davenport's compact form of κ (the cross-check of eq 41).
 
     ``[[σ, zᵀ], [z, S - σ I]]`` with the attitude profile matrix ``B = Σ α_k s_k r_kᵀ`` (002 eq 29), ``σ = tr B``,
@@ -449,7 +461,14 @@ def kappa_davenport(s, r, alpha=None):
     return out
 
 
-def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
+def kappa(
+    s_g: ArrayLike,
+    s_m: ArrayLike,
+    delta: float | ArrayLike,
+    alpha_g: float | ArrayLike,
+    alpha_m: float | ArrayLike,
+    frame: str = "NED",
+) -> np.ndarray:
     """κ for gravity + geomagnetic field in one coordinate system (002 eqs 53, 58, 63, **corrected**).
 
     ``κ = α_g K_g + α_m K_m``; the printed (53) and (63) drop the ``α_m``. Android and Win8 share the ENU matrices
@@ -511,7 +530,7 @@ def kappa(s_g, s_m, delta, alpha_g, alpha_m, frame="NED"):
     return ag * K_g + am * K_m
 
 
-def kappa_eq41_printed(s, r):
+def kappa_eq41_printed(s: ArrayLike, r: ArrayLike) -> np.ndarray:
     """Seed 002 eq 41 **as printed**, for one pair ``(s, r)`` (no α). Entries the extraction lost are NaN.
 
     Printed typos: (0,2) ``s_x r_x - s_x r_z``; (1,1) ``s_x r_z - s_y r_y - s_z r_z``; (1,2) ``s_x r_z + s_y r_x``;
@@ -546,7 +565,9 @@ def kappa_eq41_printed(s, r):
     )
 
 
-def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
+def kappa_frame_printed(
+    eq: int, s_g: ArrayLike, s_m: ArrayLike, delta: float, alpha_g: float, alpha_m: float
+) -> np.ndarray:
     """Seed 002 eqs 53 (NED), 58 (Android) and 63 (Win8) **as printed**; entries the print lacks are NaN.
 
     * (53): gravity (0,2) printed ``-s_gz`` (should be ``-s_gx``); the magnetic matrix lacks ``α_m``; mag (2,2)
@@ -612,7 +633,7 @@ def kappa_frame_printed(eq, s_g, s_m, delta, alpha_g, alpha_m):
     return ag * np.array(Kg, dtype=float) + am * np.array(Km, dtype=float)
 
 
-def wahba_error(q, s, r, alpha=None):
+def wahba_error(q: ArrayLike, s: ArrayLike, r: ArrayLike, alpha: ArrayLike | None = None) -> float:
     """Wahba's loss ``E = ½ Σ α_k |s_k - R(q) r_k|²`` (002 eq 22).
 
     Equals ``1 - qᵀκq`` (eq 39) for unit vectors and weights summing to 1.
@@ -675,7 +696,7 @@ class EcompassResult(NamedTuple):
     eigenvalues: np.ndarray  #: (..., 4) eigenvalues of κ, ascending (E = 1 - λ_max, eq 47)
 
 
-def inclination(G, B_c, frame="NED"):
+def inclination(G: ArrayLike, B_c: ArrayLike, frame: str = "NED") -> np.ndarray:
     """Inclination measured from one accelerometer and magnetometer reading, rad (002 eqs 109-112).
 
     ``δ = asin(Ĝ·B̂_c)`` for NED and Win8 (gravity-positive), ``-asin(Ĝ·B̂_c)`` for Android (acceleration-positive).
@@ -708,7 +729,14 @@ def inclination(G, B_c, frame="NED"):
 ECOMPASS_FIELD_UT = (2.0, 5000.0)
 
 
-def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
+def ecompass(
+    G: ArrayLike,
+    B_c: ArrayLike,
+    delta: float | ArrayLike,
+    frame: str = "NED",
+    B: float = 50.0,
+    alpha: tuple[float, ...] | None = None,
+) -> EcompassResult:
     """Least-squares accelerometer/magnetometer orientation (002 §3; v5.00 ``fLeastSquareseCompass*``).
 
     Weights from the instantaneous noise (eqs 9, 15, 64-65), κ of the coordinate system (eqs 53/58/63, corrected)
@@ -758,7 +786,7 @@ def ecompass(G, B_c, delta, frame="NED", B=50.0, alpha=None):
     return EcompassResult(q, inclination(G, B_c, frame), qa, qd, a_g, a_m, lam)
 
 
-def tilt_compensated_heading(G, B_c):
+def tilt_compensated_heading(G: ArrayLike, B_c: ArrayLike) -> np.ndarray:
     """Classical tilt-compensated compass heading, NED, rad -- for comparison only.
 
     Freescale AN4248; *not* an equation of seed 002. Roll and pitch from the (gravity-positive) accelerometer,
@@ -791,7 +819,7 @@ def tilt_compensated_heading(G, B_c):
     return np.arctan2(bz * sp - by * cp, bx * np.cos(theta) + (by * sp + bz * cp) * np.sin(theta))
 
 
-def heading(q, frame="NED"):
+def heading(q: ArrayLike, frame: str = "NED") -> np.ndarray:
     """Compass heading of the sensor x axis (rad, clockwise from north seen from above) of the note's ``q``.
 
     For NED it is the yaw of ``q`` (our body→NED quaternion); for Android/Win8 ``q`` is first re-expressed in NED
@@ -819,7 +847,7 @@ def heading(q, frame="NED"):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def tilt_error(q_est, q_true, frame="NED"):
+def tilt_error(q_est: ArrayLike, q_true: ArrayLike, frame: str = "NED") -> np.ndarray:
     """Tilt error, rad: the angle between the estimated and true gravity directions in the sensor frame.
 
     ``∠(R̂ r_g, R r_g)`` (heading errors do not count).
@@ -848,20 +876,20 @@ def tilt_error(q_est, q_true, frame="NED"):
 
 
 def synthetic_recording(
-    omega_dps,
-    q0=(1.0, 0.0, 0.0, 0.0),
-    frame="NED",
-    fs=200.0,
-    bias_dps=(0.0, 0.0, 0.0),
-    sigma_gyr=0.0,
-    sigma_acc=0.0,
-    sigma_mag=0.0,
-    B=50.0,
-    delta=np.radians(60.0),
-    a_S=None,
-    d_S=None,
-    seed=0,
-):
+    omega_dps: ArrayLike,
+    q0: ArrayLike = (1.0, 0.0, 0.0, 0.0),
+    frame: str = "NED",
+    fs: float = 200.0,
+    bias_dps: ArrayLike = (0.0, 0.0, 0.0),
+    sigma_gyr: float = 0.0,
+    sigma_acc: float = 0.0,
+    sigma_mag: float = 0.0,
+    B: float = 50.0,
+    delta: float = np.radians(60.0),
+    a_S: ArrayLike | None = None,
+    d_S: ArrayLike | None = None,
+    seed: int = 0,
+) -> dict:
     """A recording in the note's units and frame (ours): truth stepped ``q ← q ⊗ Δq(ω δt)`` at ``fs``.
 
     Parameters

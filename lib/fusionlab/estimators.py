@@ -17,8 +17,10 @@ Filters register themselves with :func:`register`; the labs add theirs (compleme
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import accel_tilt, conventions, correlation, dcm, dcm_filter, earth, freescale_fast, rotations, signals, validate
 
@@ -28,7 +30,9 @@ _REGISTRY = {}
 FRAMES = ("NED", "ENU")
 
 
-def register(name, uses_mag, summary, seed, mag_uT=False):
+def register(
+    name: str, uses_mag: bool, summary: str, seed: str, mag_uT: bool = False
+) -> Callable[[Callable], Callable]:
     """Decorator: register ``fn(gyr, acc, mag, fs, **options) -> (N, 4) body→NED quaternions`` under ``name``.
 
     Keyword parameters after ``fs`` (with their defaults) are the estimator's tuning options (:func:`options`).
@@ -70,7 +74,7 @@ def register(name, uses_mag, summary, seed, mag_uT=False):
     return deco
 
 
-def available():
+def available() -> dict:
     """Every registered estimator and what it is.
 
     Returns
@@ -81,7 +85,7 @@ def available():
     return {k: {f: v[f] for f in ("uses_mag", "summary", "seed")} for k, v in sorted(_REGISTRY.items())}
 
 
-def options(name):
+def options(name: str) -> dict:
     """``{option: default}`` of the tuning values estimator ``name`` accepts in :func:`run`.
 
     Parameters
@@ -106,7 +110,9 @@ def options(name):
     return dict(_REGISTRY[name]["options"])
 
 
-def run(name, gyr, acc, fs, mag=None, frame="ENU", **options):
+def run(
+    name: str, gyr: ArrayLike, acc: ArrayLike, fs: float, mag: ArrayLike | None = None, frame: str = "ENU", **options
+) -> np.ndarray:
     """Run estimator ``name`` on one recording.
 
     Parameters
@@ -236,7 +242,7 @@ def _gyro(gyr, acc, mag, fs):
     return q[1:]  # attitude after each sample
 
 
-def triad(acc, mag):
+def triad(acc: ArrayLike, mag: ArrayLike) -> np.ndarray:
     """Accelerometer + magnetometer snapshot attitude (TRIAD): body→NED DCMs, one per sample.
 
     Down is opposite the specific force; east is down × field; north completes the triad. Heading is magnetic.

@@ -79,7 +79,14 @@ class NotebookRunner(NotebookClient):
         return _SlicedKernelManager
 
 
-def run_notebook(nb, cwd=None, timeout=300, allow_errors=True, kernel_name="python3", stderr=None):
+def run_notebook(
+    nb: nbformat.NotebookNode | str | os.PathLike,
+    cwd: str | os.PathLike | None = None,
+    timeout: float = 300,
+    allow_errors: bool = True,
+    kernel_name: str = "python3",
+    stderr=None,
+) -> nbformat.NotebookNode:
     """Execute every cell of ``nb`` in a fresh kernel (kernel start included); return the notebook with outputs.
 
     Parameters

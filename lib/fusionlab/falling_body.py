@@ -28,6 +28,7 @@ an addition in its docstring.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from . import kalman, validate
@@ -69,7 +70,7 @@ SPHERE_AREA = np.pi * 0.125**2  # m^2, frontal area of a 0.25 m sphere
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def terminal_velocity(k, m, g=9.8):
+def terminal_velocity(k: float, m: float, g: float = 9.8) -> float:
     """Terminal velocity of the linear-drag model, m/s: set ``dv/dt = -(k/m) v - g = 0`` (000 §4.4.1).
 
     Parameters
@@ -95,7 +96,7 @@ def terminal_velocity(k, m, g=9.8):
     return -m * g / k
 
 
-def time_constant(k, m):
+def time_constant(k: float, m: float) -> float:
     """Time constant ``τ = m / k`` (s) of the linear-drag model: v approaches terminal as ``exp(-t/τ)``.
 
     Lab values: 40 s, so the lab's 1.99 s sees only 5 % of the approach.
@@ -120,7 +121,15 @@ def time_constant(k, m):
     return validate.scalar(m, "m", True) / validate.scalar(k, "k", True)
 
 
-def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=200.0, v0=0.0):
+def seed000_labcode_falling_body(
+    k: float = 0.25,
+    m: float = 10.0,
+    g: float = 9.8,
+    dt: float = 0.01,
+    TMAX: int = 200,
+    x0: float = 200.0,
+    v0: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Thesis lab 2 Part A code, verbatim (000 §4.4.1 step c), including its bug.
 
     The printed MATLAB::
@@ -177,7 +186,15 @@ def seed000_labcode_falling_body(k=0.25, m=10.0, g=9.8, dt=0.01, TMAX=200, x0=20
     return X, V
 
 
-def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.0):
+def falling_body_euler(
+    duration: float,
+    k: float = 0.25,
+    m: float = 10.0,
+    g: float = 9.8,
+    dt: float = 0.01,
+    x0: float = 200.0,
+    v0: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """The same Euler recurrence as the lab (000 §4.4.1) on a real time axis: the fix of the 199-step loop.
 
     Runs ``round(duration / dt)`` steps so that the last sample is at ``t = duration`` seconds. No ground: the body
@@ -221,7 +238,9 @@ def falling_body_euler(duration, k=0.25, m=10.0, g=9.8, dt=0.01, x0=200.0, v0=0.
     return np.arange(n + 1) * dt, out
 
 
-def falling_body_exact(t, k=0.25, m=10.0, g=9.8, x0=200.0, v0=0.0):
+def falling_body_exact(
+    t: ArrayLike, k: float = 0.25, m: float = 10.0, g: float = 9.8, x0: float = 200.0, v0: float = 0.0
+) -> np.ndarray:
     """Closed-form solution of ``dv/dt = -(k/m) v - g`` (the lab's continuous model; the closed form is an addition).
 
     ``v(t) = v_T + (v0 - v_T) e^{-t/τ}``, ``x(t) = x0 + v_T t + (v0 - v_T) τ (1 - e^{-t/τ})`` with
@@ -256,7 +275,9 @@ def falling_body_exact(t, k=0.25, m=10.0, g=9.8, x0=200.0, v0=0.0):
     return np.stack([x, v], -1)
 
 
-def quadratic_terminal_velocity(m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD, area=SPHERE_AREA):
+def quadratic_terminal_velocity(
+    m: float = 10.0, g: float = 9.8, rho: float = AIR_DENSITY, C_D: float = SPHERE_CD, area: float = SPHERE_AREA
+) -> float:
     """Terminal velocity with quadratic drag ``D = ½ ρ C_D A v²`` (000 §4.4.1 question 1), m/s, negative (down).
 
     ``m g = ½ ρ C_D A v_T²`` gives ``v_T = -sqrt(2 m g / (ρ C_D A))``. With the module's assumed constants
@@ -287,16 +308,16 @@ def quadratic_terminal_velocity(m=10.0, g=9.8, rho=AIR_DENSITY, C_D=SPHERE_CD, a
 
 
 def falling_body_quadratic(
-    duration,
-    x0=200.0,
-    v0=0.0,
-    m=10.0,
-    g=9.8,
-    rho=AIR_DENSITY,
-    C_D=SPHERE_CD,
-    area=SPHERE_AREA,
-    stop_at_ground=True,
-    t_eval=None,
+    duration: float,
+    x0: float = 200.0,
+    v0: float = 0.0,
+    m: float = 10.0,
+    g: float = 9.8,
+    rho: float = AIR_DENSITY,
+    C_D: float = SPHERE_CD,
+    area: float = SPHERE_AREA,
+    stop_at_ground: bool = True,
+    t_eval: ArrayLike | None = None,
 ):
     """Falling body with quadratic drag, solved with ``scipy.integrate.solve_ivp`` (RK45, MATLAB's ``ode45``).
 
@@ -363,7 +384,9 @@ def falling_body_quadratic(
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
+def falling_body_state_space(
+    k: float = 0.25, m: float = 10.0, g: float = 9.8, dt: float = 0.01
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``A``, ``B``, ``u`` of the falling body so that ``x_t = A x_{t-1} + B u`` (000 §4.4.2 step c, §4.4.3 b).
 
     ``A = [[1, dt], [0, 1 - (k/m) dt]]``, ``B = [[1, 0], [0, -g dt]]``, ``u = [0, 1]``, so ``B u = [0, -g dt]``:
@@ -403,7 +426,9 @@ def falling_body_state_space(k=0.25, m=10.0, g=9.8, dt=0.01):
     return A, B, u
 
 
-def mass_spring_damper_ss(m, b, k, input="force"):
+def mass_spring_damper_ss(
+    m: float, b: float, k: float, input: str = "force"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Continuous state space ``ẋ = A x + B u``, ``y = C x + D u`` of a mass-spring-damper (000 §4.4.2 question 1).
 
     State ``[x, ẋ]`` (displacement m, velocity m/s); output the displacement x. The thesis' figure is missing, so
@@ -457,7 +482,9 @@ def mass_spring_damper_ss(m, b, k, input="force"):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def seed000_labcode_kalman(x, P, z, A, Q, H, R):
+def seed000_labcode_kalman(
+    x: ArrayLike, P: ArrayLike, z: ArrayLike, A: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """Thesis lab 2 Part C ``Kalman_Filter`` function, verbatim (000 §4.4.3 step c)::
 
         K = (s.P)*(s.H)'*inv((s.H)*(s.P)*(s.H)'+(s.R));
@@ -551,7 +578,20 @@ class ThesisKF:
         Gain of the last step.
     """
 
-    def __init__(self, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=True, control=True):
+    def __init__(
+        self,
+        A: ArrayLike,
+        B: ArrayLike,
+        u: ArrayLike,
+        Q: ArrayLike,
+        R: ArrayLike,
+        H: ArrayLike,
+        x0: ArrayLike,
+        P0: ArrayLike,
+        covariance: str = "joseph",
+        project_state: bool = True,
+        control: bool = True,
+    ) -> None:
         d = kalman.check_model(x=x0, P=P0, A=A, Q=Q, H=H, R=R, B=B, u=u, names={"x": "x0", "P": "P0"})
         self.A, self.B, self.u, self.Q, self.R, self.H = (d[k] for k in ("A", "B", "u", "Q", "R", "H"))
         self.x, self.P = d["x"].copy(), d["P"].copy()
@@ -561,7 +601,18 @@ class ThesisKF:
         self.x_post = self.P_post = self.K = None
 
     @classmethod
-    def falling_body(cls, x0=(200.0, 0.0), P0=None, mn_std=12.0, pn_std=0.4, k=0.25, m=10.0, g=9.8, dt=0.01, **options):
+    def falling_body(
+        cls,
+        x0: ArrayLike = (200.0, 0.0),
+        P0: ArrayLike | None = None,
+        mn_std: float = 12.0,
+        pn_std: float = 0.4,
+        k: float = 0.25,
+        m: float = 10.0,
+        g: float = 9.8,
+        dt: float = 0.01,
+        **options,
+    ) -> ThesisKF:
         """The lab's filter (000 §4.4.3 step b): ``R = MNstd² I``, ``Q = PNstd² I``, ``H = I``, ``P0 = MNstd² I``.
 
         Parameters
@@ -595,7 +646,7 @@ class ThesisKF:
         P0 = mn_std**2 * np.eye(2) if P0 is None else P0
         return cls(A, B, u, pn_std**2 * np.eye(2), mn_std**2 * np.eye(2), np.eye(2), x0, P0, **options)
 
-    def step(self, z):
+    def step(self, z: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """One measurement: update, then project.
 
         Parameters
@@ -617,7 +668,7 @@ class ThesisKF:
         self.x = x_next if self.project_state else self.x_post  # printed code: s.x is never projected
         return self.x_post, self.P_post
 
-    def run(self, zs):
+    def run(self, zs: ArrayLike) -> dict[str, np.ndarray]:
         """Filter all measurements, one :meth:`step` each.
 
         Parameters
@@ -650,8 +701,19 @@ class ThesisKF:
 
 
 def simulate_falling_body(
-    n_runs, seed, n_steps=199, first_run=0, x0=200.0, v0=0.0, k=0.25, m=10.0, g=9.8, dt=0.01, pn_std=0.4, mn_std=12.0
-):
+    n_runs: int,
+    seed: int,
+    n_steps: int = 199,
+    first_run: int = 0,
+    x0: float = 200.0,
+    v0: float = 0.0,
+    k: float = 0.25,
+    m: float = 10.0,
+    g: float = 9.8,
+    dt: float = 0.01,
+    pn_std: float = 0.4,
+    mn_std: float = 12.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Truth and measurements of the lab's simulation loop (000 §4.4.3 step d), for many runs.
 
     Per step, as printed: ``tru(t) = A tru(t-1) + B u + PNstd·randn(2,1)`` then
@@ -715,7 +777,15 @@ def simulate_falling_body(
     return truth, z
 
 
-def monte_carlo(n_runs=200, seed=2, batch=50, variants=None, progress=True, n_steps=199, **model):
+def monte_carlo(
+    n_runs: int = 200,
+    seed: int = 2,
+    batch: int = 50,
+    variants: dict | None = None,
+    progress: bool = True,
+    n_steps: int = 199,
+    **model: float,
+) -> dict:
     """Seeded Monte Carlo of the lab's filter variants on the same simulated falling bodies (000 §4.4.3).
 
     Runs are simulated with :func:`simulate_falling_body` in batches of ``batch`` (run r is the same whatever the

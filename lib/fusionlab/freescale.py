@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import ecompass, rotations, validate
 
@@ -118,7 +119,7 @@ class Tuning:
         validate.field_uT(self.B, "B", per_sample=False)
 
     @property
-    def dt(self):
+    def dt(self) -> float:
         """Kalman interval δt = OVERSAMPLE_RATIO / SENSORFS, s (0.04 s: 25 Hz)."""
         return self.oversample / self.sensor_fs
 
@@ -132,7 +133,7 @@ V500 = Tuning()
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def qrot(u, v):
+def qrot(u: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Quaternion ``q`` with ``v = q* u q`` (a frame rotation taking u onto v), q0 >= 0 (002 eqs 66-76).
 
     ``q = (|u||v| + u·v, -u×v) / √(2|u||v|(|u||v| + u·v))`` (eq 72); unchanged when both vectors are negated
@@ -190,7 +191,7 @@ def _rotation_pair(R6, R_prior, **other):
     return R6, Rp
 
 
-def gravity_tilt_error(R6, R_prior):
+def gravity_tilt_error(R6: ArrayLike, R_prior: ArrayLike) -> np.ndarray:
     """Gravity tilt-error quaternion ``q_zgε`` (002 eqs 77-82).
 
     It rotates the 6DOF gravity direction (z column of ``R6``) onto the a priori one (z column of ``R_prior``). The
@@ -212,7 +213,7 @@ def gravity_tilt_error(R6, R_prior):
     return qrot(R6[..., :, 2], Rp[..., :, 2])  # (002 eq 82)
 
 
-def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
+def geomag_tilt_error(R6: ArrayLike, R_prior: ArrayLike, delta: float, frame: str = "NED") -> np.ndarray:
     """Geomagnetic tilt-error quaternion ``q_zmε`` (002 eqs 83-88).
 
     It rotates the 6DOF field direction ``R6 r_m`` onto the a priori one ``R_prior r_m``, both built with the same
@@ -240,7 +241,7 @@ def geomag_tilt_error(R6, R_prior, delta, frame="NED"):
     return qrot(R6 @ r_m, Rp @ r_m)  # (002 eqs 84-88)
 
 
-def delta_quat(omega_dps, dt):
+def delta_quat(omega_dps: ArrayLike, dt: float) -> np.ndarray:
     """Gyro increment ``Δq(ω δt)`` for a rate in °/s over ``dt`` seconds (002 eq 120): ``q ← q ⊗ Δq``.
 
     Parameters
@@ -265,7 +266,7 @@ def delta_quat(omega_dps, dt):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def alpha(dt):
+def alpha(dt: float) -> float:
     """``α = π δt / 180`` (002 eq 140): converts °/s over one Kalman step to radians (6.981317e-4 at 0.04 s).
 
     Parameters
@@ -281,7 +282,7 @@ def alpha(dt):
     return math.pi * validate.time_step(dt, "dt") / 180.0  # (002 eq 140)
 
 
-def measurement_matrix(dt, dof=9):
+def measurement_matrix(dt: float, dof: int = 9) -> np.ndarray:
     """Measurement matrix ``C`` (002 eq 141, reconstructed from eqs 137-139; eqs 181-182 for the 6DOF).
 
     9DOF (7×10): rows (z_g, z_m, z_δ), columns (q_gε, q_mε, b_ε, δ_ε)::
@@ -317,7 +318,7 @@ def measurement_matrix(dt, dof=9):
     return C
 
 
-def process_noise(x_prev, dt, tuning=V500, dof=9):
+def process_noise(x_prev: ArrayLike, dt: float, tuning: Tuning = V500, dof: int = 9) -> np.ndarray:
     """Process-noise covariance ``Q_w`` = ``P⁻`` from the previous a posteriori error estimate (002 eqs 142-159).
 
     6DOF: eqs 183-186. Second moments are approximated by the squares of the single previous estimate, off-diagonal
@@ -361,7 +362,9 @@ def process_noise(x_prev, dt, tuning=V500, dof=9):
     return Q
 
 
-def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
+def measurement_noise(
+    qvgqa: float, qvbqd: float, dt: float, tuning: Tuning = V500, dof: int = 9, B: float | None = None
+) -> np.ndarray:
     """Measurement-noise covariance ``Q_v`` (002 eqs 160-165; 6DOF eqs 187-188), diagonal.
 
     ``Q_v(g) = ¼ QvGQa + (α/2)²(Q_vY + Q_wb)``; ``Q_v(m) = ¼ max(QvBQd, 7)/B² + (α/2)²(Q_vY + Q_wb)``;
@@ -403,7 +406,7 @@ def measurement_noise(qvgqa, qvbqd, dt, tuning=V500, dof=9, B=None):
     return np.diag([vg] * 3 + [vm] * 3 + [vd])  # (002 eq 165)
 
 
-def kalman_gain(Q_w, C, Q_v):
+def kalman_gain(Q_w: ArrayLike, C: ArrayLike, Q_v: ArrayLike) -> np.ndarray:
     """``K = Q_w Cᵀ (C Q_w Cᵀ + Q_v)⁻¹`` (002 eqs 167, 170; 6DOF eq 192).
 
     With A = 0 the a priori covariance is ``Q_w``. Like v5.00, a singular innovation covariance gives ``K = 0``.
@@ -439,7 +442,9 @@ def kalman_gain(Q_w, C, Q_v):
         return np.zeros((Q_w.shape[0], C.shape[0]))
 
 
-def nominal_gain(dof=9, tuning=V500, qvgqa=0.0, qvbqd=0.0, B=None):
+def nominal_gain(
+    dof: int = 9, tuning: Tuning = V500, qvgqa: float = 0.0, qvbqd: float = 0.0, B: float | None = None
+) -> np.ndarray:
     """Gain of the first step (all previous errors zero) for given noise estimates (derived in docs/derivations.md §1).
 
     With the v5.00 defaults: K_gg 0.4999875, K_mm 0.3884274, K_bg -0.1432132, K_bm -0.1112568, K_δ 0.6851226
@@ -499,7 +504,7 @@ def _normalize_positive(q):
     return -q if q[0] < 0 else q
 
 
-def block_size(fs, kalman_hz=25.0):
+def block_size(fs: float, kalman_hz: float = 25.0) -> int:
     """Gyro samples per Kalman step at sample rate ``fs``: ``round(fs / 25)``, at least 1 (8 at 200 Hz).
 
     Parameters
@@ -558,7 +563,7 @@ class Kalman9:
 
     dof = 9
 
-    def __init__(self, frame="NED", tuning=V500, B=None):
+    def __init__(self, frame: str = "NED", tuning: Tuning = V500, B: float | None = None) -> None:
         self.frame = ecompass.check_frame(frame)
         if not isinstance(tuning, Tuning):
             raise ValueError(f"tuning must be a fusionlab.freescale.Tuning; got {type(tuning).__name__}")
@@ -576,7 +581,7 @@ class Kalman9:
         self.K = np.zeros((10, 7))
         self.q6 = self.q.copy()
 
-    def lock(self, G, B_c):
+    def lock(self, G: ArrayLike, B_c: ArrayLike) -> None:
         """First accel/mag lock [SRC]: δ̂ = δ⁶ᴰᴼᶠ, then q̂ = eCompass(G, B_c, δ̂), b̂ = 0, errors 0.
 
         Parameters
@@ -592,7 +597,7 @@ class Kalman9:
         self.x_err = np.zeros(10)
         self.locked = True
 
-    def step(self, gyr_dps, G, B_c):
+    def step(self, gyr_dps: ArrayLike, G: ArrayLike, B_c: ArrayLike) -> np.ndarray:
         """One Kalman step (seed 002 §7.4-7.11, in the order the v5.00 library runs them).
 
         Parameters
@@ -642,7 +647,7 @@ class Kalman9:
         self.x_err, self.z, self.K = x, z, K
         return self.q
 
-    def run(self, gyr_dps, acc_g, mag_uT):
+    def run(self, gyr_dps: ArrayLike, acc_g: ArrayLike, mag_uT: ArrayLike) -> dict[str, np.ndarray]:
         """Run over a recording sampled at ``tuning.sensor_fs``.
 
         Every ``oversample`` samples make one step (gyro integrated sample by sample, accelerometer and magnetometer
@@ -712,7 +717,7 @@ class Kalman6:
 
     dof = 6
 
-    def __init__(self, frame="NED", tuning=V500):
+    def __init__(self, frame: str = "NED", tuning: Tuning = V500) -> None:
         self.frame = ecompass.check_frame(frame)
         if not isinstance(tuning, Tuning):
             raise ValueError(f"tuning must be a fusionlab.freescale.Tuning; got {type(tuning).__name__}")
@@ -733,7 +738,7 @@ class Kalman6:
             return np.array([0.0, 0.0, 1.0])  # free fall [SRC]
         return ecompass.measured_gravity(G, self.frame)
 
-    def lock(self, G):
+    def lock(self, G: ArrayLike) -> None:
         """Initial orientation from the accelerometer tilt: ``R(q) r_g = s_g``.
 
         Parameters
@@ -747,7 +752,7 @@ class Kalman6:
         self.x_err = np.zeros(6)
         self.locked = True
 
-    def step(self, gyr_dps, G):
+    def step(self, gyr_dps: ArrayLike, G: ArrayLike) -> np.ndarray:
         """One Kalman step.
 
         Parameters
@@ -783,7 +788,7 @@ class Kalman6:
         self.x_err, self.z, self.K = x, z, K
         return self.q
 
-    def run(self, gyr_dps, acc_g, mag_uT=None):
+    def run(self, gyr_dps: ArrayLike, acc_g: ArrayLike, mag_uT: ArrayLike | None = None) -> dict[str, np.ndarray]:
         """Like :meth:`Kalman9.run`, without the magnetometer.
 
         Parameters
@@ -822,7 +827,14 @@ class Kalman6:
 RECORD_FIELD_UT = (10.0, 200.0)
 
 
-def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_range=RECORD_FIELD_UT):
+def check_recording(
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    mag: ArrayLike | None,
+    need_mag: bool,
+    names: tuple[str, ...] = ("gyr", "acc", "mag"),
+    field_range: tuple[float, ...] = RECORD_FIELD_UT,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """The arrays of a recording in the note's units, checked: (N, 3) each, the same N, and the units of
     :func:`check_units` (the gyro's °/s cannot be told from rad/s on a slow record, and is not checked).
 
@@ -875,7 +887,12 @@ def check_recording(gyr, acc, mag, need_mag, names=("gyr", "acc", "mag"), field_
     return gyr, acc, mag
 
 
-def check_units(acc_g, mag_uT, names=("acc_g", "mag_uT"), field_range=RECORD_FIELD_UT):
+def check_units(
+    acc_g: ArrayLike,
+    mag_uT: ArrayLike | None,
+    names: tuple[str, ...] = ("acc_g", "mag_uT"),
+    field_range: tuple[float, ...] = RECORD_FIELD_UT,
+) -> None:
     """The note's units at a filter's door: the accelerometer in g (m/s² and milli-g refused,
     :func:`fusionlab.validate.accel_g`), the magnetometer in µT (milligauss, gauss and nT refused,
     :func:`fusionlab.validate.field_uT` over ``field_range``): eq 9 compares ``|G|²`` with 1, eq 15 ``|B_c|²``

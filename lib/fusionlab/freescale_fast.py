@@ -20,6 +20,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import earth, ecompass, freescale, signals, validate
 
@@ -149,7 +150,7 @@ def _fast_setup(fs, tuning, N):
     return n, t, M, dt, 1.0 / fs, a, a * a * (t.Q_vY + t.Q_wb)
 
 
-def held_accel_noise(qvgqa, dt, hold):
+def held_accel_noise(qvgqa: ArrayLike, dt: float, hold: float) -> np.ndarray:
     """v5.00's accelerometer noise held over a window -- **ours, not the seed's**.
 
     For each Kalman step, the largest ``QvGQa = | |G|² - 1 |`` (002 eq 9, g²) of the steps in the last ``hold``
@@ -192,7 +193,17 @@ def held_accel_noise(qvgqa, dt, hold):
 FREE_FALL_G = earth.FREE_FALL / earth.G
 
 
-def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=None, per_sample=True, accel_hold=0.0):
+def run_fast9(
+    gyr_dps: ArrayLike,
+    acc_g: ArrayLike,
+    mag_uT: ArrayLike,
+    fs: float,
+    frame: str = "NED",
+    tuning: freescale.Tuning = freescale.V500,
+    B: float | ArrayLike | None = None,
+    per_sample: bool = True,
+    accel_hold: float = 0.0,
+) -> dict[str, np.ndarray]:
     """The 9DOF filter of :class:`fusionlab.freescale.Kalman9` at any sample rate, in scalar arithmetic (about 10×
     faster).
 
@@ -352,7 +363,15 @@ def run_fast9(gyr_dps, acc_g, mag_uT, fs, frame="NED", tuning=freescale.V500, B=
     return res
 
 
-def run_fast6(gyr_dps, acc_g, fs, frame="NED", tuning=freescale.V500, per_sample=True, accel_hold=0.0):
+def run_fast6(
+    gyr_dps: ArrayLike,
+    acc_g: ArrayLike,
+    fs: float,
+    frame: str = "NED",
+    tuning: freescale.Tuning = freescale.V500,
+    per_sample: bool = True,
+    accel_hold: float = 0.0,
+) -> dict[str, np.ndarray]:
     """The 6DOF filter of :class:`fusionlab.freescale.Kalman6` at any sample rate, in scalar arithmetic (see
     :func:`run_fast9`).
 

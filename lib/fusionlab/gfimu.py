@@ -41,9 +41,11 @@ Units and frames at this module's edge: SI (m/s², rad/s, rad/s², rad), body fr
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import calibration, inertial, validate
 
@@ -114,7 +116,7 @@ TABLE_5_3 = {
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def triad_positions(d):
+def triad_positions(d: float) -> np.ndarray:
     """Lever arms of the four triads, rows A, B, C, D: 0, d·e_x, d·e_y, d·e_z (seed 004 Fig. 3.2, axes [R]).
 
     Parameters
@@ -139,7 +141,7 @@ def triad_positions(d):
     return np.vstack([np.zeros(3), d * np.eye(3)])
 
 
-def lever_arm(a_o, omega, alpha, p):
+def lever_arm(a_o: ArrayLike, omega: ArrayLike, alpha: ArrayLike, p: ArrayLike) -> np.ndarray:
     """Specific force of a triad at lever arm ``p``: ``a_o + α×p + ω×(ω×p)`` (seed 004 eq 3.4).
 
     The gravity gradient over the lever arm is neglected (eq 3.3). One implementation serves this, the rotating
@@ -167,7 +169,7 @@ def lever_arm(a_o, omega, alpha, p):
     return inertial.point_acceleration(vs["a_o"], vs["omega"], vs["alpha"], vs["p"])  # (004 eq 3.4)
 
 
-def specific_forces(omega, alpha, d, a_o=None):
+def specific_forces(omega: ArrayLike, alpha: ArrayLike, d: float, a_o: ArrayLike | None = None) -> np.ndarray:
     """Noise-free readings of the twelve accelerometers, ``[A_x, A_y, A_z, B_x, …, D_z]`` (seed 004 eq 3.4).
 
     Parameters
@@ -194,7 +196,7 @@ def specific_forces(omega, alpha, d, a_o=None):
     return np.concatenate(out, axis=-1)
 
 
-def aiv_map():
+def aiv_map() -> np.ndarray:
     """The 9×12 matrix L with ``AIV = (1/d) L a`` (seed 004 eqs 3.8–3.10 [R][V]; common distance d).
 
     Rows follow :data:`AIV_NAMES`. With ``ΔT_i = a_i^T − a_i^A``:
@@ -234,7 +236,7 @@ def aiv_map():
 
 
 @functools.cache
-def aiv_map_cached():
+def aiv_map_cached() -> np.ndarray:
     """:func:`aiv_map`, made on first use and kept (the filters apply it to every sample).
 
     Made on first use rather than at import, so that the module imports even where :func:`aiv_map` itself is not
@@ -248,7 +250,7 @@ def aiv_map_cached():
     return aiv_map()
 
 
-def aiv(acc, d):
+def aiv(acc: ArrayLike, d: float) -> np.ndarray:
     """The angular information vector from twelve readings: ``(1/d) L a`` (seed 004 eqs 3.8–3.10 [R][V]).
 
     Parameters
@@ -277,7 +279,7 @@ def aiv(acc, d):
     return acc @ aiv_map_cached().T / d
 
 
-def aiv_true(omega, alpha):
+def aiv_true(omega: ArrayLike, alpha: ArrayLike) -> np.ndarray:
     """The exact AIV of an angular motion, ``[α, ω_xω_y, ω_xω_z, ω_yω_z, ω_x², ω_y², ω_z²]`` (seed 004 eq 3.4).
 
     Parameters
@@ -298,7 +300,7 @@ def aiv_true(omega, alpha):
     return np.concatenate([alpha, quadratic_terms(omega)], axis=-1)
 
 
-def aiv_covariance():
+def aiv_covariance() -> np.ndarray:
     """``C = L Lᵀ`` (9×9): ``Cov(AIV) = (σ_a²/d²) C`` for i.i.d. accelerometer noise (seed 004 eqs 3.25, 3.30, 3.31).
 
     ``C[:3, :3]`` is the α–α block of Q (3.25: diagonal 1, off-diagonals −¼), ``C[3:, 3:]`` the quadratic block of R
@@ -321,7 +323,9 @@ def aiv_covariance():
     return L @ L.T
 
 
-def three_state_noise(noise_density, dt, d, m_sign=-1):
+def three_state_noise(
+    noise_density: float, dt: float, d: float, m_sign: int = -1
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Q, R and M of the three-state EKF (seed 004 eqs 3.22–3.25, 3.30, 3.31).
 
     ``R_a = N² Δt`` is the velocity-increment variance (3.24); then
@@ -394,7 +398,7 @@ def _qj(x):
     return H
 
 
-def quadratic_terms(x, check=True):
+def quadratic_terms(x: ArrayLike, check: bool = True) -> np.ndarray:
     """``h(x) = [x₁x₂, x₁x₃, x₂x₃, x₁², x₂², x₃²]`` (seed 004 eq 3.28), vectorised over leading axes.
 
     The filters of :mod:`fusionlab.gfimu_ekf` and :mod:`fusionlab.gfimu_dynamics` call this once per sample on
@@ -421,7 +425,7 @@ def quadratic_terms(x, check=True):
     return _qt(validate.vectors(x, "x") if check else x)
 
 
-def quadratic_jacobian(x, check=True):
+def quadratic_jacobian(x: ArrayLike, check: bool = True) -> np.ndarray:
     """Jacobian of :func:`quadratic_terms` (seed 004 eq 3.29).
 
     As for :func:`quadratic_terms`, the filters pass ``check=False`` from their inner loops.
@@ -477,25 +481,25 @@ class GFRecord:
     d: float
 
     @property
-    def dtheta(self):
+    def dtheta(self) -> np.ndarray:
         """True angular change per step, ω(t_k) Δt (the three-state EKF's state, eq 3.16), rad."""
         return self.omega * self.dt
 
 
 def simulate_gfimu(
-    omega,
-    alpha,
-    dt,
-    d,
-    noise_density=0.0,
-    bias_std=0.0,
-    bias_model="constant",
-    bias_walk=0.0,
-    M=None,
-    a_o=None,
-    runs=None,
-    seed=0,
-):
+    omega: ArrayLike,
+    alpha: ArrayLike,
+    dt: float,
+    d: float,
+    noise_density: float = 0.0,
+    bias_std: float = 0.0,
+    bias_model: str = "constant",
+    bias_walk: float = 0.0,
+    M: ArrayLike | None = None,
+    a_o: ArrayLike | None = None,
+    runs: int | None = None,
+    seed: int = 0,
+) -> GFRecord:
     """Twelve accelerometer readings for a given angular motion (seed 004 eqs 2.1, 2.5–2.12, 3.4, 3.22, 5.10–5.13).
 
     Each reading is ``M_T a + b + v`` per triad T: ``a`` from the lever-arm equation, ``v`` white with σ = N/√Δt per
@@ -567,7 +571,7 @@ def simulate_gfimu(
     return GFRecord(acc=acc, acc_true=true, bias=bias, omega=omega, alpha=alpha, dt=dt, d=d)
 
 
-def calibrate_triads(reference, readings):
+def calibrate_triads(reference: ArrayLike, readings: ArrayLike) -> list[calibration.TriadFit]:
     """Calibrate each of the four triads with :func:`fusionlab.calibration.fit_triad` (seed 004 eqs 3.11–3.15).
 
     Parameters
@@ -588,7 +592,7 @@ def calibrate_triads(reference, readings):
     return [calibration.fit_triad(ref, z[:, 3 * t : 3 * t + 3], names=("reference", "readings")) for t in range(4)]
 
 
-def apply_calibration(fits, acc):
+def apply_calibration(fits: Sequence[calibration.TriadFit], acc: ArrayLike) -> np.ndarray:
     """Correct twelve readings with four triad fits: ``a = M⁻¹ (z − b)`` per triad.
 
     Parameters
@@ -632,7 +636,14 @@ def _integrate(t, om, al, integrate):
     return t, om[0] + np.cumsum(steps, axis=0), al
 
 
-def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrate="euler"):
+def trajectory_ch3(
+    T: float = 20.0,
+    dt: float = 0.01,
+    omega_x: float = 3.29,
+    omega_z: float = 0.658,
+    f: float = 0.1,
+    integrate: str = "euler",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ω(t) = [Ω_x, 0, Ω_z sin 2πft] and its derivative (seed 004 eq 3.35; Table 3.1, and Table 4.4 with f = 1 Hz).
 
     Parameters
@@ -672,7 +683,9 @@ def trajectory_ch3(T=20.0, dt=0.01, omega_x=3.29, omega_z=0.658, f=0.1, integrat
     return _integrate(t, om, al, integrate)
 
 
-def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
+def trajectory_ch5(
+    T: float = 20.0, dt: float = 0.01, omega_m: float = 0.4112, f: float = 0.5, integrate: str = "euler"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ω(t) = Ω_m sin(2πft)·[1, 1, 0], α(t) = 2πf Ω_m cos(2πft)·[1, 1, 0] (seed 004 eqs 5.31–5.32, Table 5.1).
 
     Parameters
@@ -708,7 +721,9 @@ def trajectory_ch5(T=20.0, dt=0.01, omega_m=0.4112, f=0.5, integrate="euler"):
     return _integrate(t, om, al, integrate)
 
 
-def trajectory_constant(T=20.0, dt=0.01, omega=(3.29, 3.29, 3.29)):
+def trajectory_constant(
+    T: float = 20.0, dt: float = 0.01, omega: ArrayLike = (3.29, 3.29, 3.29)
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Constant ω (seed 004 eq 5.52: 3.29·[1, 1, 1] rad/s), α = 0.
 
     Parameters
@@ -734,7 +749,14 @@ def trajectory_constant(T=20.0, dt=0.01, omega=(3.29, 3.29, 3.29)):
     return t, np.tile(om, (len(t), 1)), np.zeros((len(t), 3))
 
 
-def trajectory_tumbling(T=20.0, dt=0.01, omega_xy=3.29, alpha_z=0.5, omega_z0=-5.0, integrate="euler"):
+def trajectory_tumbling(
+    T: float = 20.0,
+    dt: float = 0.01,
+    omega_xy: float = 3.29,
+    alpha_z: float = 0.5,
+    omega_z0: float = -5.0,
+    integrate: str = "euler",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A tumbling motion: ω = [Ω, Ω, ω_z0 + a t], α = [0, 0, a] (not in the seed; the counter-example of §5.9).
 
     The angular acceleration is constant, so the Wiener-sequence model of the constrained filter fits it exactly, but

@@ -23,9 +23,15 @@ frame; noise densities in m/s²/√Hz.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import gfimu, validate
+
+if TYPE_CHECKING:
+    import sympy as sp
 
 __all__ = [
     "caa_model",
@@ -42,7 +48,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
+def caa_model(dt: float, q_alpha: float, n_bias: int = 9, q_bias: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """F and Q of the Wiener-process angular acceleration ("CAA") model with random-walk AIV biases.
 
     State ``[ω (3); α (3); b (n_bias)]``: ω_k = ω_{k−1} + Δt α_{k−1}, α_k = α_{k−1} + w (seed 004 eqs 5.1–5.2);
@@ -83,7 +89,9 @@ def caa_model(dt, q_alpha, n_bias=9, q_bias=0.0):
     return F, Q
 
 
-def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
+def singer_model(
+    dt: float, beta: float, sigma: float, n_bias: int = 9, q_bias: float = 0.0, first_order: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """F and Q of the first-order Markov ("Singer") angular acceleration model (seed 004 §5.2.2, eqs 5.4–5.9).
 
     ``α̇ = −β α + w`` (5.4): a zero-mean stationary process with steady-state variance σ² and autocorrelation
@@ -128,7 +136,7 @@ def singer_model(dt, beta, sigma, n_bias=9, q_bias=0.0, first_order=False):
     return F, Q
 
 
-def aiv_measurement_jacobian(x):
+def aiv_measurement_jacobian(x: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Measurement function and Jacobian of the dynamic models (seed 004 eqs 5.18–5.19, 5.23–5.24).
 
     For x = [ω; α] (6) or [ω; α; b] (15): ``h = [α + b₁₋₃; q(ω) + b₄₋₉]`` (5.18 [R]; 5.23 without b) and
@@ -197,7 +205,17 @@ class DynamicEKF:
         The underlying filter.
     """
 
-    def __init__(self, dt, d, noise_density, q_alpha, x0, P0, q_bias=0.0, process=None):
+    def __init__(
+        self,
+        dt: float,
+        d: float,
+        noise_density: float,
+        q_alpha: float,
+        x0: ArrayLike,
+        P0: float | ArrayLike,
+        q_bias: float = 0.0,
+        process: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> None:
         from filterpy.kalman import ExtendedKalmanFilter
 
         x0 = validate.array(x0, "x0")
@@ -219,7 +237,7 @@ class DynamicEKF:
             else validate.covariance(P0, "P0", n).copy()
         )
 
-    def step(self, acc):
+    def step(self, acc: ArrayLike) -> np.ndarray:
         """One sample of the twelve accelerometers.
 
         Parameters
@@ -237,7 +255,7 @@ class DynamicEKF:
         self.ekf.update(y, HJacobian=lambda x: _dyn_h(x)[1], Hx=lambda x: _dyn_h(x)[0])
         return self.ekf.x.copy()
 
-    def run(self, acc):
+    def run(self, acc: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Filter a record, one :meth:`step` per sample.
 
         Parameters
@@ -261,7 +279,9 @@ class DynamicEKF:
         return xs, ps
 
 
-def observability_matrix(augmented=True, order=None):
+def observability_matrix(
+    augmented: bool = True, order: int | None = None
+) -> tuple[sp.Matrix, list[sp.Symbol], list[sp.Matrix]]:
     """Symbolic Lie-derivative observability matrix of the CAA model (seed 004 eqs 5.25–5.29, App. A.4).
 
     Noise-free system ẋ = f(x) = [α; 0; 0], y = h(x) of (5.18). ``L⁰h = h``, ``Lᵏh = ∂(Lᵏ⁻¹h)/∂x · f`` (5.26–5.27);
@@ -304,7 +324,7 @@ def observability_matrix(augmented=True, order=None):
     return O, list(x), lie
 
 
-def observability_rank(omega, alpha, augmented=True, exact=True):
+def observability_rank(omega: ArrayLike, alpha: ArrayLike, augmented: bool = True, exact: bool = True) -> int:
     """Rank of :func:`observability_matrix` at a state (biases do not enter). Rank 15 iff α ≠ 0, 12 when α = 0.
 
     Parameters

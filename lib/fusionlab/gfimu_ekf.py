@@ -29,7 +29,10 @@ Units and frames at this module's edge: SI (m/s², rad/s, rad/s², rad), body fr
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import gfimu, validate
 
@@ -119,7 +122,9 @@ class ThreeStateEKF:
         The underlying filter (``kf.x`` the current Δθ, ``kf.P`` its covariance).
     """
 
-    def __init__(self, dt, d, noise_density, x0, P0, m_sign=-1):
+    def __init__(
+        self, dt: float, d: float, noise_density: float, x0: ArrayLike, P0: float | ArrayLike, m_sign: int = -1
+    ) -> None:
         from filterpy.kalman import KalmanFilter
 
         self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
@@ -143,7 +148,7 @@ class ThreeStateEKF:
     def _h(self, x, gyro):
         return gfimu.quadratic_terms(x, check=False), gfimu.quadratic_jacobian(x, check=False)
 
-    def step(self, acc, gyro=None):
+    def step(self, acc: ArrayLike, gyro: ArrayLike | None = None) -> np.ndarray:
         """Process one sample of the twelve accelerometers.
 
         Parameters
@@ -170,7 +175,7 @@ class ThreeStateEKF:
     def _z(self, y, gyro):
         return y
 
-    def run(self, acc, gyro=None):
+    def run(self, acc: ArrayLike, gyro: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Filter a record, one :meth:`step` per sample.
 
         Parameters
@@ -232,7 +237,16 @@ class HybridEKF(ThreeStateEKF):
 
     _dim_z = 9
 
-    def __init__(self, dt, d, noise_density, arw, x0, P0, m_sign=-1):
+    def __init__(
+        self,
+        dt: float,
+        d: float,
+        noise_density: float,
+        arw: float,
+        x0: ArrayLike,
+        P0: float | ArrayLike,
+        m_sign: int = -1,
+    ) -> None:
         self.Rg = validate.scalar(arw, "arw", nonnegative=True) ** 2 / validate.time_step(dt, "dt")
         super().__init__(dt, d, noise_density, x0, P0, m_sign)
 
@@ -256,7 +270,7 @@ class HybridEKF(ThreeStateEKF):
             raise ValueError("gyro must be given: the hybrid filter needs the gyro rate (3,) rad/s of each sample")
         return np.concatenate([self.dt * np.asarray(gyro, float), y])
 
-    def run(self, acc, gyro):
+    def run(self, acc: ArrayLike, gyro: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Filter a record, one :meth:`step` per sample.
 
         Parameters
@@ -352,7 +366,15 @@ def _batch_noise(noise_density, dt, d, m_sign, runs):
     return N2 * Q, N2 * R, signs * N2 * M
 
 
-def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
+def three_state_batch(
+    acc: ArrayLike,
+    dt: float,
+    d: float,
+    noise_density: float | ArrayLike,
+    x0: ArrayLike,
+    P0: float | ArrayLike,
+    m_sign: int | ArrayLike = -1,
+) -> tuple[np.ndarray, np.ndarray]:
     """:class:`ThreeStateEKF` vectorised over a leading axis of runs (the same equations, 3.19–3.34).
 
     Parameters
@@ -389,7 +411,17 @@ def three_state_batch(acc, dt, d, noise_density, x0, P0, m_sign=-1):
     return _batch_core(u, y, Q, R, M, _batch_x0(x0, len(acc)), P0)
 
 
-def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
+def hybrid_batch(
+    acc: ArrayLike,
+    gyro: ArrayLike,
+    dt: float,
+    d: float,
+    noise_density: float | ArrayLike,
+    arw: float,
+    x0: ArrayLike,
+    P0: float | ArrayLike,
+    m_sign: int | ArrayLike = -1,
+) -> tuple[np.ndarray, np.ndarray]:
     """:class:`HybridEKF` vectorised over runs (eqs 4.50–4.54).
 
     Parameters
@@ -436,7 +468,7 @@ def hybrid_batch(acc, gyro, dt, d, noise_density, arw, x0, P0, m_sign=-1):
     return _batch_core(u, y, Q, R, M, _batch_x0(x0, len(acc)), P0, gyro_dtheta=dt * gyro, Rg=Rg)
 
 
-def nees(err, P):
+def nees(err: ArrayLike, P: ArrayLike) -> np.ndarray:
     """Normalised estimation error squared εᵀP⁻¹ε (not in the seed; the standard consistency test).
 
     Averaged over runs, a consistent filter gives n.
@@ -465,7 +497,7 @@ def nees(err, P):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def constraints(x):
+def constraints(x: ArrayLike) -> np.ndarray:
     """The two equality constraints of the constrained model (seed 004 eq 5.40 [R][V]), vectorised.
 
     For x = [Δθ; Δω] (ω and α scaled by Δt): ``e = [x₁(x₂x₆ − x₃x₅), x₂(x₃x₄ − x₁x₆)]``, i.e.
@@ -495,7 +527,7 @@ def _e(x):
     return np.stack([x1 * (x2 * x6 - x3 * x5), x2 * (x3 * x4 - x1 * x6)], -1)  # (004 eq 5.40)
 
 
-def constraint_jacobian(x):
+def constraint_jacobian(x: ArrayLike) -> np.ndarray:
     """Jacobian of :func:`constraints` (differentiated from eq 5.40).
 
     Parameters
@@ -520,7 +552,9 @@ def _E(x):
     return np.stack([r1, r2], -2)
 
 
-def sckf_project(x, P, alpha_f=0.1, s_th=100.0, max_iter=30):
+def sckf_project(
+    x: ArrayLike, P: ArrayLike, alpha_f: float = 0.1, s_th: float = 100.0, max_iter: int = 30
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Smoothly constrained Kalman filter step (De Geeter; seed 004 eqs 5.50–5.51, lost, reconstructed [R][V]).
 
     For each constraint row c in turn: start with R₀ = α_f·E_c P E_cᵀ and apply the pseudo-measurement 0 = e_c(x)
@@ -643,7 +677,19 @@ class ConstrainedEKF:
         Its covariance.
     """
 
-    def __init__(self, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0):
+    def __init__(
+        self,
+        dt: float,
+        d: float,
+        noise_density: float,
+        q_dw: float,
+        x0: ArrayLike,
+        P0: float | ArrayLike,
+        alpha_f: float = 0.1,
+        s_th: float = 100.0,
+        max_iter: int = 30,
+        t_on: float | None = 10.0,
+    ) -> None:
         self.dt, self.d = validate.time_step(dt, "dt"), validate.positive(d, "d")
         self.N = validate.positive(noise_density, "noise_density")  # R is inverted: > 0
         self.F, self.Q = _wiener6(self.dt, validate.scalar(q_dw, "q_dw", nonnegative=True))
@@ -657,7 +703,7 @@ class ConstrainedEKF:
         )
         self.t_on, self.k = (None if t_on is None else validate.scalar(t_on, "t_on", nonnegative=True)), 0
 
-    def step(self, acc):
+    def step(self, acc: ArrayLike) -> np.ndarray:
         """One sample: predict, update, and (from ``t_on`` on) constrain.
 
         Parameters
@@ -690,7 +736,7 @@ class ConstrainedEKF:
         self.k += 1
         return self.x.copy()
 
-    def run(self, acc):
+    def run(self, acc: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Filter a record, one :meth:`step` per sample.
 
         Parameters
@@ -723,8 +769,19 @@ def _wiener6(dt, q):
 
 
 def constrained_batch(
-    acc, dt, d, noise_density, q_dw, x0, P0, alpha_f=0.1, s_th=100.0, max_iter=30, t_on=10.0, progress=False
-):
+    acc: ArrayLike,
+    dt: float,
+    d: float,
+    noise_density: float | ArrayLike,
+    q_dw: float | ArrayLike,
+    x0: ArrayLike,
+    P0: float | ArrayLike,
+    alpha_f: float = 0.1,
+    s_th: float = 100.0,
+    max_iter: int = 30,
+    t_on: float | ArrayLike | None = 10.0,
+    progress: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:class:`ConstrainedEKF` vectorised over a leading axis of runs (the same equations, 5.41–5.51).
 
     Parameters
@@ -815,18 +872,18 @@ def constrained_batch(
 
 
 def table53_monte_carlo(
-    n_runs=100,
-    seed=53,
-    grades=("tactical", "automotive", "consumer"),
-    q_dw=1e-5,
-    alpha_f=0.1,
-    s_th=100.0,
-    t_on=10.0,
-    window=(15.0, 20.0),
-    m_sign=1,
-    q_sweep=(),
-    progress=True,
-):
+    n_runs: int = 100,
+    seed: int = 53,
+    grades: Sequence[str] = ("tactical", "automotive", "consumer"),
+    q_dw: float = 1e-5,
+    alpha_f: float = 0.1,
+    s_th: float = 100.0,
+    t_on: float = 10.0,
+    window: tuple[float, ...] = (15.0, 20.0),
+    m_sign: int = 1,
+    q_sweep: Sequence[float] = (),
+    progress: bool = True,
+) -> dict:
     """Reproduce Table 5.3: steady-state RMSE of Δθ, three-state vs constrained 6-state, per accelerometer grade.
 
     Setup of seed 004 §5.11 (eq 5.52): ω = 3.29·[1, 1, 1] rad/s constant, d = 1 m, Δt = 0.01 s, T = 20 s, white

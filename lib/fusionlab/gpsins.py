@@ -34,6 +34,7 @@ import math as _m
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import dcm, rotations, validate
 
@@ -65,7 +66,7 @@ INS_SLICES = dict(c=slice(0, 9), b_g=slice(9, 12), r=slice(12, 15), v=slice(15, 
 UKF_SLICES = dict(r=slice(0, 3), v=slice(3, 6), euler=slice(6, 9), b_a=slice(9, 12), b_g=slice(12, 15))
 
 
-def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
+def ins_propagate(x: ArrayLike, acc: ArrayLike, A_tilde: ArrayLike, dt: float, g: float = dcm.G) -> np.ndarray:
     """The direct form of the 21-state mean propagation (004 eqs 7.7-7.11), cheaper than ``F x + g_c``.
 
     ``c_i ← Ãᵀ c_i - Δt[c_i×] b_g``; ``r ← r + v Δt``; ``v ← v + C (ã - b_a) Δt + g_n Δt`` with the *previous* C;
@@ -96,7 +97,7 @@ def ins_propagate(x, acc, A_tilde, dt, g=dcm.G):
     return _ins_propagate_raw(x, acc, A_tilde, dt, validate.positive(g, "g"))
 
 
-def ins_transition(x, acc, A_tilde, dt):
+def ins_transition(x: ArrayLike, acc: ArrayLike, A_tilde: ArrayLike, dt: float) -> np.ndarray:
     """The 21×21 pseudo-linear transition ``F(x̂)`` of the DCM GPS/INS filter (004 eq 7.12, reconstructed).
 
     ``x⁻ = F(x̂) x̂ + g_c`` with ``g_c`` = ``g_n Δt`` in the velocity rows is eq 7.14 (eq 7.13, between them, is the
@@ -140,7 +141,15 @@ def _ins_F(x, acc, A_tilde, dt):
     return F
 
 
-def ins_process_noise(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_noise=0.0):
+def ins_process_noise(
+    x: ArrayLike,
+    dt: float,
+    gyro_noise: float,
+    acc_noise: float,
+    gyro_bias_walk: float,
+    acc_bias_walk: float,
+    pos_noise: float = 0.0,
+) -> np.ndarray:
     """Process noise of the 21-state filter (004 eq 7.15: "diagonal in the noise elements"; values not given, ours).
 
     DCM rows: ``N_g² Δt [ĉi×][ĉj×]ᵀ`` (the gyro noise through eq 7.7); velocity ``N_a² Δt I`` (``C w_a Δt``
@@ -197,7 +206,7 @@ def _ins_Q(x, dt, gyro_noise, acc_noise, gyro_bias_walk, acc_bias_walk, pos_nois
     return Q
 
 
-def gps_measurement_matrix():
+def gps_measurement_matrix() -> np.ndarray:
     """Loosely coupled GPS position + velocity: ``H = [0_{6×12}, I₆, 0_{6×3}]`` (004 eq 7.17).
 
     Returns
@@ -271,7 +280,19 @@ def _imu_door(gyr, acc, fs, g):
     return validate.gyro_rad(gyr, "gyr", acc=acc, fs=fs), acc, fs, validate.positive(g, "g")
 
 
-def run_gps_ins(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, static=None, acc_sigma=0.02, still_speed=1.0):
+def run_gps_ins(
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    gps: ArrayLike,
+    fs: float,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    tuning: InsTuning = InsTuning(),
+    g: float = dcm.G,
+    static: ArrayLike | None = None,
+    acc_sigma: float = 0.02,
+    still_speed: float = 1.0,
+) -> dict[str, np.ndarray]:
     """The 21-state loosely coupled DCM GPS/INS Kalman filter (004 §7.2) over a recording.
 
     Per IMU sample: ``Ã = A(ω̃ Δt)``, mean by the direct form (:func:`ins_propagate`, eqs 7.7-7.11), covariance
@@ -420,7 +441,7 @@ def _ins_propagate_raw(x, acc, A_tilde, dt, g):
     return out
 
 
-def euler_ins_fx(x, dt, gyr, acc, g=dcm.G):
+def euler_ins_fx(x: ArrayLike, dt: float, gyr: ArrayLike, acc: ArrayLike, g: float = dcm.G) -> np.ndarray:
     """Process model of the 15-state Euler-angle UKF (004 eq 7.23, not legible in our copy; our reconstruction).
 
     Derived in docs/derivations.md §5:
@@ -487,7 +508,7 @@ def _euler_ins_fx(x, dt, gyr, acc, g):
     )
 
 
-def sigma_points_2n(x, P):
+def sigma_points_2n(x: ArrayLike, P: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The thesis' 2n sigma points and weights (004 eqs 7.24-7.26, after Simon).
 
     ``x ± (√(nP))_iᵀ``, i = 1…n, with ``√`` the upper Cholesky factor (Matlab ``chol``) and ``(·)_i`` its i-th
@@ -526,7 +547,17 @@ def sigma_points_2n(x, P):
     return np.vstack([x + U, x - U]), np.full(2 * n, 1.0 / (2 * n))  # (004 eqs 7.24-7.25)
 
 
-def run_euler_ukf(gyr, acc, gps, fs, x0, P0, tuning=InsTuning(), g=dcm.G, engine="filterpy"):
+def run_euler_ukf(
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    gps: ArrayLike,
+    fs: float,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    tuning: InsTuning = InsTuning(),
+    g: float = dcm.G,
+    engine: str = "filterpy",
+) -> dict[str, np.ndarray]:
     """The 15-state total-state Euler-angle UKF of seed 004 §7.3 ("EAUKF").
 
     Prediction with the points ``x ± rows of chol(n P)`` and weights 1/(2n) (eqs 7.24-7.26) through the process

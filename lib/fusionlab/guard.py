@@ -26,10 +26,15 @@ import builtins
 import re
 import sys
 import types
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.linalg  # noqa: F401  (loaded now, so their functions are in the baseline before any answer cell)
 import numpy.testing  # noqa: F401
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Sequence
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "ForbiddenCall",
@@ -208,12 +213,12 @@ class forbid:
     -3.0
     """
 
-    def __init__(self, *functions, exercise=None):
+    def __init__(self, *functions: Callable, exercise: int | str | None = None) -> None:
         self.functions = _tuple(_target(f) for f in functions)
         self.exercise = exercise if exercise is not None else _state["exercise"]
         self.calls = []
 
-    def message(self, func):
+    def message(self, func: Callable) -> str:
         """The sentence a forbidden call of ``func`` is reported with.
 
         Parameters
@@ -284,7 +289,7 @@ _reserved = {}  # exercise -> forbid scope entered by reserve()
 _violations = {}  # exercise -> what release() found
 
 
-def reserve(*functions, exercise):
+def reserve(*functions: Callable, exercise: int | str) -> None:
     """Forbid ``functions`` from now until ``release(exercise=...)``: for exercises whose answer is a value.
 
     Called in a lab's setup cell; the exercise's test cell calls :func:`release` first thing.
@@ -303,7 +308,7 @@ def reserve(*functions, exercise):
     _reserved[exercise] = scope
 
 
-def release(*functions, exercise, check=True):
+def release(*functions: Callable, exercise: int | str, check: bool = True) -> None:
     """End :func:`reserve` for ``exercise``; fail if a reserved function was called in between.
 
     ``functions`` are named again here only so a reader (and the integrity report) sees them in the test cell. A
@@ -362,7 +367,14 @@ def _index(flat, shape):
     return "[" + ", ".join(_str(i) for i in idx[::-1]) + "]"
 
 
-def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
+def assert_close(
+    actual: ArrayLike | float,
+    expected: ArrayLike | float,
+    *,
+    what: str = "the result",
+    rtol: float = 1e-9,
+    atol: float = 1e-12,
+) -> None:
     """Fail unless ``actual`` equals ``expected`` within ``atol + rtol·|expected|``, element by element.
 
     Shapes must agree (a scalar expected value is compared with every element, and an empty result never equals
@@ -442,7 +454,7 @@ def assert_close(actual, expected, *, what="the result", rtol=1e-9, atol=1e-12):
     )
 
 
-def assert_equal(actual, expected, *, what="the result"):
+def assert_equal(actual: object, expected: ArrayLike | float | str | bool | None, *, what: str = "the result") -> None:
     """Fail unless ``actual`` equals ``expected`` exactly (numbers element by element, or plain str/bool/int).
 
     Parameters
@@ -480,8 +492,17 @@ def _copy(obj):
 
 
 def grade(
-    student_fn, reference_fn, cases, *, forbid=(), what="the result", rtol=1e-9, atol=1e-12, exercise=None, compare=None
-):
+    student_fn: Callable,
+    reference_fn: Callable,
+    cases: Iterable[tuple | dict],
+    *,
+    forbid: Sequence[Callable] = (),
+    what: str | tuple[str, ...] = "the result",
+    rtol: float = 1e-9,
+    atol: float = 1e-12,
+    exercise: int | str | None = None,
+    compare: Callable | None = None,
+) -> None:
     """Hidden test in one line: the reference on every case first, then the student's function under ``forbid``.
 
     Parameters
@@ -674,7 +695,7 @@ def _problems():
     return unique
 
 
-def intact():
+def intact() -> None:
     """Fail if an earlier cell replaced a function of numpy, scipy, filterpy, the library or the builtins.
 
     The visible tests call it so that a patched ``np.allclose`` cannot show a pass while a student works; grades do

@@ -17,6 +17,7 @@ gravity is :data:`fusionlab.earth.G`.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import earth, validate
 
@@ -39,7 +40,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def coriolis_acceleration(omega, v):
+def coriolis_acceleration(omega: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Apparent Coriolis acceleration in a frame rotating at ``omega``: ``-2 Ω × v`` in m/s²
     (seed 000 eq 3.33, corrected).
 
@@ -73,7 +74,13 @@ def coriolis_acceleration(omega, v):
     return -2.0 * np.cross(w, v)  # (000 eq 3.33, corrected sign)
 
 
-def precession_rate(mass, arm, inertia, spin, g=earth.G):
+def precession_rate(
+    mass: float | ArrayLike,
+    arm: float | ArrayLike,
+    inertia: float | ArrayLike,
+    spin: float | ArrayLike,
+    g: float = earth.G,
+) -> float | np.ndarray:
     """Precession rate of a spinning top (a mechanical gyro), ``ω_p = M g D / (I ω)`` rad/s (seed 000 eqs 3.22-3.25).
 
     The gravity torque ``τ = dL/dt = M g D sin θ`` (3.22) turns the angular momentum ``L = I ω`` about the vertical
@@ -105,7 +112,7 @@ def precession_rate(mass, arm, inertia, spin, g=earth.G):
     return mass * g * arm / (inertia * spin)  # (000 eq 3.25)
 
 
-def coriolis_force(mass, omega, v):
+def coriolis_force(mass: float, omega: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Coriolis force on a mass moving at ``v`` in a frame rotating at ``omega``: ``F = -2 m Ω × v`` in N
     (000 eq 3.34, corrected).
 
@@ -133,7 +140,7 @@ def coriolis_force(mass, omega, v):
     return m * coriolis_acceleration(omega, v)  # (000 eq 3.34, corrected sign)
 
 
-def seed000_eq334_printed(mass, omega, v):
+def seed000_eq334_printed(mass: float, omega: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Seed 000 eq 3.34 **as printed**, ``F = 2M(Ω × v)`` -- the opposite of the Coriolis force; kept for the erratum.
 
     Parameters
@@ -157,7 +164,9 @@ def seed000_eq334_printed(mass, omega, v):
     return 2.0 * m * np.cross(w, v)
 
 
-def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
+def rotating_frame_acceleration(
+    a_inertial: ArrayLike, omega: ArrayLike, r: ArrayLike, v: ArrayLike, omega_dot: ArrayLike | None = None
+) -> np.ndarray:
     """Acceleration seen in a rotating frame, from seed 000 eq 3.32 solved for it (with the Ω̇ term corrected).
 
     Eq 3.32: ``A_space = a_rot + 2 Ω×v + Ω×(Ω×r) + Ω̇×r`` (the thesis writes ``α̇×R`` for the last term), so
@@ -199,7 +208,14 @@ def rotating_frame_acceleration(a_inertial, omega, r, v, omega_dot=None):
     )
 
 
-def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
+def point_acceleration(
+    a_o: ArrayLike,
+    omega: ArrayLike,
+    alpha: ArrayLike,
+    r: ArrayLike,
+    v_rel: ArrayLike | None = None,
+    a_rel: ArrayLike | None = None,
+) -> np.ndarray:
     """Acceleration of a point moving inside a rotating body: seed 000 eq 3.32 plus the origin's own acceleration.
 
     ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` -- transport, relative, Coriolis, Euler and centripetal terms.
@@ -255,7 +271,12 @@ def point_acceleration(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     )  # (000 eq 3.32; 004 eqs 3.4, 4.3)
 
 
-def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
+def gyro_measure(
+    rate_true: ArrayLike,
+    bias: float | ArrayLike = 0.0,
+    noise_std: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+) -> np.ndarray:
     """A rate gyro's reading: true rate + constant bias + white noise, ``ω_m = ω + b + n`` (seed 001 sensors note §3).
 
     Seed 001's full model also has a scale factor, misalignment and temperature drift (``p = S⁻¹(M⁻¹ p_m + β(T))``);
@@ -285,7 +306,7 @@ def gyro_measure(rate_true, bias=0.0, noise_std=0.0, rng=None):
     return w + b + sd * rng.standard_normal(w.shape)
 
 
-def integrate_rate(rate, dt, angle0=0.0):
+def integrate_rate(rate: ArrayLike, dt: float, angle0: float | ArrayLike = 0.0) -> np.ndarray:
     """Angle from a rate by forward Euler, ``θ[n+1] = θ[n] + dt·ω[n]`` (seed 001 attitude note §3: ``φ⁺ = φ + Tφ̇``).
 
     The angle at each sample time ``t_n = n·dt``: ``θ[0] = angle0`` and ``θ[n] = angle0 + dt·Σ_{k<n} ω[k]``, so the
@@ -324,7 +345,9 @@ def integrate_rate(rate, dt, angle0=0.0):
     return a0 + np.concatenate([np.zeros_like(w[:1]), steps], axis=0)
 
 
-def integration_drift(t, bias, noise_std, dt):
+def integration_drift(
+    t: ArrayLike, bias: float | ArrayLike, noise_std: float | ArrayLike, dt: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Mean and standard deviation of the angle error of an integrated gyro after time ``t``.
 
     A constant bias ``b`` gives a mean error ``b·t``; white noise of standard deviation ``σ`` per sample, integrated

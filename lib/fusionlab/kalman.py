@@ -30,6 +30,7 @@ docstring.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import solve_discrete_are
 
 from . import validate
@@ -73,7 +74,9 @@ def _square(a, name):
 _KEYS = ("P", "H", "R", "A", "Q", "B", "u", "x", "z", "K")
 
 
-def check_model(names=None, optional=(), **given):
+def check_model(
+    names: dict[str, str] | None = None, optional: tuple[str, ...] = (), **given: ArrayLike | None
+) -> dict[str, np.ndarray | None]:
     """Check a set of Kalman-filter matrices against each other, once, at a filter's public door.
 
     Every public function of this module and the filters built on it (:class:`fusionlab.falling_body.ThesisKF`)
@@ -176,7 +179,9 @@ def check_model(names=None, optional=(), **given):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def gaussian_product(mu1, var1, mu2, var2):
+def gaussian_product(
+    mu1: float | ArrayLike, var1: float | ArrayLike, mu2: float | ArrayLike, var2: float | ArrayLike
+) -> tuple[float | np.ndarray, float | np.ndarray]:
     """Mean and variance of the (normalised) product of two 1-D Gaussians (000 §4.2, figs 24-25).
 
     ``μ = (σ₂² μ₁ + σ₁² μ₂) / (σ₁² + σ₂²)``, ``σ² = σ₁² σ₂² / (σ₁² + σ₂²)``: the prediction N(μ₁, σ₁²) times the
@@ -217,7 +222,9 @@ def gaussian_product(mu1, var1, mu2, var2):
     return (float(mu), float(var)) if np.ndim(mu) == 0 else (mu, var)
 
 
-def rls_scalar(y, R, x0=0.0, P0=np.inf):
+def rls_scalar(
+    y: ArrayLike, R: float, x0: float = 0.0, P0: float = np.inf
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Scalar recursive least squares for a constant (000 eqs 4.7, 4.8, 4.31, 4.17 with H = 1).
 
     ``K_k = P_{k-1} / (P_{k-1} + R)``, ``x̂_k = x̂_{k-1} + K_k (y_k - x̂_{k-1})``, ``P_k = (1 - K_k) P_{k-1}``.
@@ -307,7 +314,7 @@ def _joseph(P, K, H, R):
     return I_KH @ P @ I_KH.T + K @ R @ K.T  # (000 eq 4.17)
 
 
-def kalman_gain(P, H, R):
+def kalman_gain(P: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """Optimal gain ``K = P Hᵀ (H P Hᵀ + R)⁻¹`` (000 eq 4.31), from the prior covariance ``P``.
 
     Parameters
@@ -333,7 +340,7 @@ def kalman_gain(P, H, R):
     return _gain(d["P"], d["H"], d["R"])
 
 
-def joseph_covariance(P, K, H, R):
+def joseph_covariance(P: ArrayLike, K: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """Posterior covariance, Joseph form ``(I - K H) P (I - K H)ᵀ + K R Kᵀ`` (000 eq 4.17).
 
     Valid for *any* gain K (it is the covariance of ``x - x̂`` for the estimator 4.8 with that K) and symmetric
@@ -359,7 +366,7 @@ def joseph_covariance(P, K, H, R):
     return _joseph(d["P"], d["K"], d["H"], d["R"])
 
 
-def short_covariance(P, K, H):
+def short_covariance(P: ArrayLike, K: ArrayLike, H: ArrayLike) -> np.ndarray:
     """Posterior covariance, short form ``(I - K H) P`` (000 §4.3.1 alternate form).
 
     The lab code's ``s.P = s.P - K*s.H*s.P``. Equals the Joseph form only at the optimal K.
@@ -383,7 +390,7 @@ def short_covariance(P, K, H):
     return (np.eye(P.shape[0]) - K @ H) @ P  # (000 §4.3.1, alternate form)
 
 
-def information_covariance(P, H, R):
+def information_covariance(P: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """Posterior covariance, information form ``(P⁻¹ + Hᵀ R⁻¹ H)⁻¹`` (000 §4.3.1 alternate form).
 
     Parameters
@@ -405,7 +412,7 @@ def information_covariance(P, H, R):
     return _information(P, H, R)  # (000 §4.3.1, alternate form)
 
 
-def gain_from_posterior(P_post, H, R):
+def gain_from_posterior(P_post: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """The alternate gain ``K = P_k Hᵀ R⁻¹`` (000 §4.3.1), written with the *posterior* covariance ``P_k``.
 
     Parameters
@@ -427,7 +434,7 @@ def gain_from_posterior(P_post, H, R):
     return d["P"] @ d["H"].T @ R_inv  # (000 §4.3.1, alternate form)
 
 
-def expanded_covariance(P, K, H, R):
+def expanded_covariance(P: ArrayLike, K: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """Eq 4.27 corrected: ``P - K H P - P Hᵀ Kᵀ + K (H P Hᵀ + R) Kᵀ``, the Joseph form multiplied out.
 
     Parameters
@@ -451,7 +458,7 @@ def expanded_covariance(P, K, H, R):
     return P - K @ H @ P - P @ H.T @ K.T + K @ (H @ P @ H.T + R) @ K.T  # (000 eq 4.27, corrected)
 
 
-def seed000_eq427_printed(P, K, H, R):
+def seed000_eq427_printed(P: ArrayLike, K: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """Seed 000 eq 4.27 *as printed*: ``P - P K H - P Kᵀ Hᵀ + K H P Kᵀ Hᵀ + K R Kᵀ``.
 
     Erratum: the factors are in the wrong order (the correct expansion is :func:`expanded_covariance`). The printed
@@ -481,7 +488,7 @@ def seed000_eq427_printed(P, K, H, R):
     return P - P @ K @ H - P @ K.T @ H.T + K @ H @ P @ K.T @ H.T + K @ R @ K.T  # (000 eq 4.27, as printed)
 
 
-def trace_gradient(P, K, H, R):
+def trace_gradient(P: ArrayLike, K: ArrayLike, H: ArrayLike, R: ArrayLike) -> np.ndarray:
     """``∂ tr P_k / ∂K = -2 P Hᵀ + 2 K (H P Hᵀ + R)`` (000 eq 4.29 last line, = 4.30); zero at the optimal K.
 
     Parameters
@@ -512,7 +519,7 @@ def trace_gradient(P, K, H, R):
 _FORMS = ("joseph", "short", "information")
 
 
-def check_covariance_form(covariance):
+def check_covariance_form(covariance: str) -> str:
     """The name of a covariance update, checked: one of ``'joseph'``, ``'short'``, ``'information'``.
 
     Parameters
@@ -541,7 +548,9 @@ def check_covariance_form(covariance):
     return covariance
 
 
-def update_step(x, P, z, H, R, form):
+def update_step(
+    x: np.ndarray, P: np.ndarray, z: np.ndarray, H: np.ndarray, R: np.ndarray, form: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The measurement update of :func:`update` (000 eqs 4.31, 4.8, 4.17), on arrays checked beforehand.
 
     Nothing is checked here: a filter checks its matrices once (:func:`check_model`,
@@ -595,7 +604,9 @@ def update_step(x, P, z, H, R, form):
     return x, P, K
 
 
-def update(x, P, z, H, R, covariance="joseph"):
+def update(
+    x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike, covariance: str = "joseph"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measurement update of the thesis' filter (000 eqs 4.31, 4.8, 4.17; fig 26 boxes 1-3).
 
     Parameters
@@ -639,7 +650,9 @@ def update(x, P, z, H, R, covariance="joseph"):
     return update_step(d["x"], d["P"], d["z"], d["H"], d["R"], check_covariance_form(covariance))
 
 
-def predict_step(x, P, A, Q, Bu):
+def predict_step(
+    x: np.ndarray, P: np.ndarray, A: np.ndarray, Q: np.ndarray, Bu: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The state projection of :func:`predict` (000 eqs 4.32 with ``B u``, 4.36), on arrays checked beforehand.
 
     Nothing is checked here (see :func:`update_step`); call :func:`predict` otherwise.
@@ -682,7 +695,9 @@ def predict_step(x, P, A, Q, Bu):
     return x, P
 
 
-def predict(x, P, A, Q, B=None, u=None):
+def predict(
+    x: ArrayLike, P: ArrayLike, A: ArrayLike, Q: ArrayLike, B: ArrayLike | None = None, u: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """State projection of the thesis' filter (000 eqs 4.32 and 4.36; fig 26 box 4).
 
     ``x' = A x + B u`` and ``P' = A P Aᵀ + Q``. Eq 4.32 prints ``x' = F x`` without the input term G u of
@@ -733,7 +748,20 @@ def predict(x, P, A, Q, B=None, u=None):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=True, control=True):
+def kf_batch(
+    zs: ArrayLike,
+    A: ArrayLike,
+    B: ArrayLike,
+    u: ArrayLike,
+    Q: ArrayLike,
+    R: ArrayLike,
+    H: ArrayLike,
+    x0: ArrayLike,
+    P0: ArrayLike,
+    covariance: str = "joseph",
+    project_state: bool = True,
+    control: bool = True,
+) -> dict[str, np.ndarray]:
     """:class:`fusionlab.falling_body.ThesisKF` over many runs at once (the fast twin; tests assert both agree).
 
     The covariance and gain sequences do not depend on the measurements, so they are computed once and shared;
@@ -810,7 +838,7 @@ def kf_batch(zs, A, B, u, Q, R, H, x0, P0, covariance="joseph", project_state=Tr
     return out
 
 
-def nees(err, P):
+def nees(err: ArrayLike, P: ArrayLike) -> np.ndarray:
     """Normalised estimation error squared ``εᵀ P⁻¹ ε`` (an addition: the standard consistency test, not in the seed).
 
     For a consistent filter its mean over runs is the state dimension n (here 2).
@@ -845,7 +873,7 @@ def nees(err, P):
     return np.einsum("...i,...i->...", err, sol)
 
 
-def nees_bounds(n_runs, dim=2, prob=0.95):
+def nees_bounds(n_runs: int, dim: int = 2, prob: float = 0.95) -> tuple[float, float]:
     """Two-sided ``prob`` interval of the *run-averaged* NEES of a consistent filter: ``χ²(n_runs·dim) / n_runs``.
 
     Parameters
@@ -874,7 +902,7 @@ def nees_bounds(n_runs, dim=2, prob=0.95):
     return lo / n_runs, hi / n_runs
 
 
-def steady_state(A, H, Q, R):
+def steady_state(A: ArrayLike, H: ArrayLike, Q: ArrayLike, R: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Steady-state prior covariance, gain and posterior covariance from the discrete algebraic Riccati equation.
 
     The prior covariance of the thesis' loop converges to the solution of

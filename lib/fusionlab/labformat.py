@@ -64,7 +64,7 @@ class GradeId(NamedTuple):
     role: str
 
 
-def parse(grade_id):
+def parse(grade_id: str | None) -> GradeId | None:
     """The :class:`GradeId` of an exercise's or a question's cell.
 
     Parameters
@@ -81,7 +81,7 @@ def parse(grade_id):
     return GradeId(m["kind"], m["number"], m["role"] or "") if m else None
 
 
-def solution_id(number):
+def solution_id(number: int | str) -> str:
     """The grade id of an exercise's answer cell.
 
     Parameters
@@ -97,7 +97,7 @@ def solution_id(number):
     return f"ex{number}_solution"
 
 
-def check_id(number):
+def check_id(number: int | str) -> str:
     """The grade id of an exercise's visible check.
 
     Parameters
@@ -113,7 +113,7 @@ def check_id(number):
     return f"ex{number}_check"
 
 
-def autograder_id(number):
+def autograder_id(number: int | str) -> str:
     """The grade id of an exercise's autograder cell.
 
     Parameters
@@ -129,7 +129,7 @@ def autograder_id(number):
     return f"ex{number}_tests"
 
 
-def label(grade_id):
+def label(grade_id: str | None) -> str:
     """What a student calls the exercise or question a cell belongs to.
 
     Parameters
@@ -149,7 +149,7 @@ def label(grade_id):
     return f"{'exercise' if g.kind == 'ex' else 'question'} {g.number}"
 
 
-def stub(grade_id):
+def stub(grade_id: str | None) -> str:
     """The line an answer cell's solution becomes in the release: it raises, naming the exercise to do.
 
     Parameters
@@ -165,7 +165,7 @@ def stub(grade_id):
     return _STUB.format(label=label(grade_id))
 
 
-def unfinished(text):
+def unfinished(text: str | BaseException) -> str | None:
     """The exercise a release stub's error (:func:`stub`) waits for.
 
     Parameters
@@ -182,7 +182,7 @@ def unfinished(text):
     return f"{m.group(1)} {m.group(2)}" if m else None
 
 
-def top_level_names(tree):
+def top_level_names(tree: ast.Module) -> set[str]:
     """The names a cell's code binds at top level: definitions, classes, imports and assignments.
 
     Parameters

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import rotations, validate
 
@@ -63,7 +64,7 @@ def _offset(x, name):
     return validate.scalar(validate.angles_rad(x, name, limit=np.pi + 1e-9), name)
 
 
-def error_quaternion(q_est, q_ref):
+def error_quaternion(q_est: ArrayLike, q_ref: ArrayLike) -> np.ndarray:
     """Orientation error in the earth frame, ``q_err = q_est ⊗ conj(q_ref)`` (BROAD, Laidig et al. 2021).
 
     Parameters
@@ -105,7 +106,7 @@ def _error_parts(q_err):
     return q_err[..., 0], q_err[..., 3]
 
 
-def total_error(q_err):
+def total_error(q_err: ArrayLike) -> float | np.ndarray:
     """Total error angle (rad, in [0, π]): ``2·acos(|w|)`` of the error quaternion. NaN in, NaN out.
 
     Parameters
@@ -135,7 +136,7 @@ def total_error(q_err):
     return 2 * np.arccos(np.clip(np.abs(w), 0.0, 1.0))  # (BROAD: total)
 
 
-def heading_error(q_err):
+def heading_error(q_err: ArrayLike) -> float | np.ndarray:
     """Heading error angle (rad, in [0, π]): ``2·atan(|z / w|)``, the rotation about the vertical.
 
     Written ``2·atan2(|z|, |w|)``: the same value, and π (not a division by zero) when ``w = 0``.
@@ -154,7 +155,7 @@ def heading_error(q_err):
     return 2 * np.arctan2(np.abs(z), np.abs(w))  # (BROAD: heading)
 
 
-def inclination_error(q_err):
+def inclination_error(q_err: ArrayLike) -> float | np.ndarray:
     """Inclination error angle (rad, in [0, π]): ``2·acos(√(w² + z²))``, the angle between the two verticals.
 
     Parameters
@@ -171,7 +172,7 @@ def inclination_error(q_err):
     return 2 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))  # (BROAD: inclination)
 
 
-def signed_heading_error(q_err):
+def signed_heading_error(q_err: ArrayLike) -> float | np.ndarray:
     """Signed heading error (rad, in (-π, π]): ``2·atan2(z, w)`` with ``w >= 0``; its magnitude is
     :func:`heading_error`. Positive: the estimate is turned counter-clockwise about the nav z axis.
 
@@ -190,7 +191,7 @@ def signed_heading_error(q_err):
     return 2 * np.arctan2(s * z, s * w)
 
 
-def mean_heading_offset(q_err, mask=None):
+def mean_heading_offset(q_err: ArrayLike, mask: ArrayLike | None = None) -> float:
     """Constant heading offset (rad) of an estimate: the circular mean of :func:`signed_heading_error` over the
     samples where ``mask`` is true and the error is defined.
 
@@ -216,7 +217,7 @@ def mean_heading_offset(q_err, mask=None):
     return float(np.arctan2(np.mean(np.sin(d)), np.mean(np.cos(d))))
 
 
-def remove_heading_offset(q_est, offset):
+def remove_heading_offset(q_est: ArrayLike, offset: float) -> np.ndarray:
     """Turn estimates by ``-offset`` (rad) about the nav z axis: ``q_z(-offset) ⊗ q_est``.
 
     The error quaternion becomes ``q_z(-offset) ⊗ q_err``: its heading part shifts by ``-offset``, its
@@ -239,7 +240,9 @@ def remove_heading_offset(q_est, offset):
     return _turn_heading(q_est, offset)
 
 
-def rms(x, mask=None, *, axis=None):
+def rms(
+    x: ArrayLike, mask: ArrayLike | None = None, *, axis: int | tuple[int, ...] | None = None
+) -> float | np.ndarray:
     """Root mean square of ``x`` over the samples where ``mask`` is true, ignoring NaN samples.
 
     Parameters
@@ -313,7 +316,7 @@ def _axes(axis, ndim):
     return out
 
 
-def wrap_deg(a):
+def wrap_deg(a: float | ArrayLike) -> np.ndarray | np.floating:
     """An angle or angle difference in radians as degrees within [-180, 180].
 
     The difference of two headings (or of two Euler angles) jumps by 360° where one of them crosses ±180°; wrapped,
@@ -350,7 +353,7 @@ def wrap_deg(a):
     return np.degrees(np.angle(np.exp(1j * a)))
 
 
-def small(x, tol=1e-12):
+def small(x: float, tol: float = 1e-12) -> str:
     """Text for a number that should vanish up to rounding: ``'< 1e-12'`` below ``tol``, else ``'%.2e'``.
 
     Two computations that agree to machine precision differ by a few 1e-16 that change with the platform and the
@@ -428,7 +431,9 @@ class OrientationRMSE:
     heading_offset_deg: float = 0.0
 
 
-def broad_rmse(q_est, q_ref, movement=None, heading_offset=None):
+def broad_rmse(
+    q_est: ArrayLike, q_ref: ArrayLike, movement: ArrayLike | None = None, heading_offset: str | float | None = None
+) -> OrientationRMSE:
     """Total, heading and inclination RMSE (degrees) of an orientation estimate, as the BROAD authors define them.
 
     Parameters

@@ -61,7 +61,7 @@ RELIES_ON = (
 _VALIDATOR_USERS = ("nbgrader.apps.validateapp", "nbgrader.server_extensions.validate_assignment.handlers")
 
 
-def check_version(version=None):
+def check_version(version: str | None = None) -> None:
     """Refuse an nbgrader these patches were not written for.
 
     Parameters
@@ -125,7 +125,7 @@ class ClearSolutionsForRunAll(ClearSolutions):
         read = {n.id for n in nodes if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)} - anywhere
         return read, labformat.top_level_names(tree)
 
-    def preprocess(self, nb, resources):
+    def preprocess(self, nb: nbformat.NotebookNode, resources: dict) -> tuple:
         """Tag the cells Run All must go past, then clear the solutions.
 
         Parameters
@@ -155,7 +155,7 @@ class ClearSolutionsForRunAll(ClearSolutions):
                 tainted -= bound  # made afresh by a cell that cannot fail
         return super().preprocess(nb, resources)
 
-    def preprocess_cell(self, cell, resources, cell_index):
+    def preprocess_cell(self, cell: nbformat.NotebookNode, resources: dict, cell_index: int) -> tuple:
         """ClearSolutions' own step, with the cell's stub line (:func:`fusionlab.labformat.stub`) in the stub.
 
         Parameters
@@ -194,7 +194,7 @@ class HideTestSource(NbGraderPreprocessor):
         nbgrader's and traitlets' own options (``config=``, ...), passed on.
     """
 
-    def preprocess_cell(self, cell, resources, index):
+    def preprocess_cell(self, cell: nbformat.NotebookNode, resources: dict, index: int) -> tuple:
         """Cut the traceback of a failed test cell to its last line.
 
         Parameters
@@ -229,7 +229,7 @@ _MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$(?![\s$])(.+?)(?<![\\\s$])\$", re
 _LINK = re.compile(r"\[([^\]]+)\]\(((?!(?:https?:|mailto:|#|/))[^)\s]+)\)")
 
 
-def offline_markdown(source, folder="labs/NN_name"):
+def offline_markdown(source: str, folder: str = "labs/NN_name") -> str:
     """``source`` (a Markdown cell) as a page read offline shows it: each ``$...$`` and ``$$...$$`` as MathML, which
     the browser draws itself (MathJax would come from the web), and each link relative to the lab's ``folder`` as
     its text and the path in the course folder (from ``feedback/<student>/<lab>/`` the link would lead nowhere).
@@ -278,7 +278,7 @@ class OfflineFeedback(NbGraderPreprocessor):
         nbgrader's and traitlets' own options (``config=``, ...), passed on.
     """
 
-    def preprocess(self, nb, resources):
+    def preprocess(self, nb: nbformat.NotebookNode, resources: dict) -> tuple:
         """Every Markdown cell through :func:`offline_markdown`; the wrapping style added to the page's.
 
         Parameters
@@ -313,7 +313,7 @@ class RefuseAutograde(NbGraderPreprocessor):
         nbgrader's and traitlets' own options (``config=``, ...), passed on.
     """
 
-    def preprocess(self, nb, resources):
+    def preprocess(self, nb: nbformat.NotebookNode, resources: dict) -> None:
         """Refuse, naming the command to use.
 
         Parameters
@@ -367,7 +367,7 @@ class SummaryValidator(Validator):
         )
         return passed
 
-    def validate(self, filename):
+    def validate(self, filename: str) -> dict:
         """nbgrader's validation, with the count of passing tests added to a report that has failures.
 
         Parameters
@@ -392,7 +392,7 @@ class SummaryValidator(Validator):
                 failed.insert(0, {"source": "", "error": head, "raw_error": f"{self.summary}."})
         return results
 
-    def validate_and_print(self, filename):
+    def validate_and_print(self, filename: str) -> None:
         """``nbgrader validate``'s report: the count, nbgrader's line on the failures, then the failing cells.
 
         Parameters
@@ -412,7 +412,7 @@ class SummaryValidator(Validator):
         super()._print_num_failed(num_failed)
 
 
-def install_summary_validator():
+def install_summary_validator() -> None:
     """Put :class:`SummaryValidator` under the name ``Validator`` in the modules that build nbgrader's validator by
     that name (the Validate button's handler and ``nbgrader validate``), when they are loaded."""
     for name in _VALIDATOR_USERS:

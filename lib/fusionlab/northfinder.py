@@ -33,7 +33,10 @@ level z axis, eqs 4.21, 4.26). Accelerations m/s², rates rad/s, lengths m; 1 µ
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import earth, inertial, rotations, validate
 
@@ -110,7 +113,14 @@ HARMONICS = {
 # --------------------------------------------------------------------------------------------------------------
 
 
-def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
+def point_specific_force(
+    a_o: ArrayLike,
+    omega: ArrayLike,
+    alpha: ArrayLike,
+    r: ArrayLike,
+    v_rel: ArrayLike | None = None,
+    a_rel: ArrayLike | None = None,
+) -> np.ndarray:
     """Acceleration sensed at a point that moves inside the body (004 eq 4.3).
 
     ``a = a_o + a_rel + 2 ω×v_rel + α×r + ω×(ω×r)`` (gravity gradient dropped, eq 3.3); with ``v_rel = a_rel = 0``
@@ -140,7 +150,9 @@ def point_specific_force(a_o, omega, alpha, r, v_rel=None, a_rel=None):
     return inertial.point_acceleration(a_o, omega, alpha, r, v_rel, a_rel)  # (004 eq 4.3)
 
 
-def rotating_kinematics(t, rho, l, omega_r):
+def rotating_kinematics(
+    t: float | ArrayLike, rho: float, l: float, omega_r: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position, velocity and acceleration of the rotating accelerometers r_D, r_B, r_C (004 eqs 4.4–4.12).
 
     r_D spins about x and senses x, r_B about y and senses y, r_C about z and senses z; each on radius ``rho``
@@ -187,7 +199,9 @@ def rotating_kinematics(t, rho, l, omega_r):
     return p, v, a
 
 
-def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
+def rotating_outputs(
+    a_A: ArrayLike, omega: ArrayLike, alpha: ArrayLike, t: float | ArrayLike, rho: float, l: float, omega_r: float
+) -> np.ndarray:
     """Outputs of the three rotating accelerometers, closed form (004 eq 4.13).
 
     ``a^{rD}_x = a^A_x + 2ρω_r(ω_z sin ω_r t + ω_y cos ω_r t) + (ω_xω_y − α_z) ρ cos ω_r t
@@ -229,7 +243,7 @@ def rotating_outputs(a_A, omega, alpha, t, rho, l, omega_r):
     return np.stack([rD, rB, rC], -1)  # (004 eq 4.13)
 
 
-def fixed_triad_outputs(a_A, omega, alpha, d):
+def fixed_triad_outputs(a_A: ArrayLike, omega: ArrayLike, alpha: ArrayLike, d: float) -> np.ndarray:
     """The four fixed triads A (origin), B, C, D (at ``d`` on x, y, z) of Fig. 4.1, from eq 4.3 with v_rel = 0.
 
     Parameters
@@ -256,7 +270,9 @@ def fixed_triad_outputs(a_A, omega, alpha, d):
     return point_specific_force(a_A[..., None, :], w[..., None, :], al[..., None, :], pos)
 
 
-def rate_from_rotating(a_rot, fixed, d, rho, l, omega_r):
+def rate_from_rotating(
+    a_rot: ArrayLike, fixed: ArrayLike, d: float, rho: float, l: float, omega_r: float
+) -> np.ndarray:
     """Angular rate, sign included, from the rotating and fixed accelerometers at ``sin ω_r t = 0`` (004 eq 4.15).
 
     ``ω_y = [a^{rD}_x − a^A_x − (a^D_x − a^A_x) l/d − (a^C_x − a^A_x) ρ/d] / (2ρω_r)``, and cyclically
@@ -316,7 +332,7 @@ def _geometry(rho, d, l, omega_r):
     )
 
 
-def rate_noise_coefficient(rho, d, l, omega_r):
+def rate_noise_coefficient(rho: float, d: float, l: float, omega_r: float) -> float:
     """σ_g² / R_a as printed (004 eq 4.44): ``2 [1/(2ρω_r)² + 1/(2dω_r)² + l²/(2dρω_r)²]`` (s²/m²).
 
     It treats the three differences of eq 4.15 as independent, each with variance 2R_a. For Table 4.1 it gives
@@ -355,7 +371,7 @@ def rate_noise_coefficient(rho, d, l, omega_r):
     return out if np.ndim(out) else float(out)
 
 
-def rate_noise_coefficient_exact(rho, d, l, omega_r):
+def rate_noise_coefficient_exact(rho: float, d: float, l: float, omega_r: float) -> float:
     """σ_g² / R_a propagated exactly through eq 4.15 (the correction of 004 eq 4.44; ours).
 
     Eq 4.15 weighs four independent accelerometers: ``a^r`` by 1, the lever-arm partner by −l/d, the other by −ρ/d
@@ -384,7 +400,7 @@ def rate_noise_coefficient_exact(rho, d, l, omega_r):
     return out if np.ndim(out) else float(out)
 
 
-def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
+def rate_noise_density(w_acc: float, rho: float, d: float, l: float, omega_r: float, exact: bool = False) -> float:
     """Rate noise density σ_g (rad/s/√Hz) for an accelerometer noise density ``w_acc`` (m/s²/√Hz) (004 eq 4.46).
 
     ``σ_g = w_acc · sqrt(coefficient)``; the printed coefficient (eq 4.44) unless ``exact``.
@@ -414,7 +430,7 @@ def rate_noise_density(w_acc, rho, d, l, omega_r, exact=False):
     return w_acc * np.sqrt(coef(rho, d, l, omega_r))
 
 
-def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
+def rate_noise_monte_carlo(n: int, rho: float, d: float, l: float, omega_r: float, seed: int = 0) -> np.ndarray:
     """Sample variance of eq 4.15 when every accelerometer carries independent unit white noise.
 
     Fifteen accelerometers (four fixed triads, three rotating) get N(0, 1) samples; :func:`rate_from_rotating`
@@ -453,7 +469,7 @@ def rate_noise_monte_carlo(n, rho, d, l, omega_r, seed=0):
 # --------------------------------------------------------------------------------------------------------------
 
 
-def coriolis_amplitude(rho, omega_r, lat):
+def coriolis_amplitude(rho: float, omega_r: float, lat: float) -> float:
     """Amplitude of the Earth-rate line, ``A_c = 2 ρ ω_r ω_ie cos Φ`` (m/s²) (004 eq 4.26).
 
     Parameters
@@ -475,7 +491,7 @@ def coriolis_amplitude(rho, omega_r, lat):
     return 2 * rho * omega_r * earth.OMEGA_IE * np.cos(lat)
 
 
-def leveled_body_rate(heading, lat):
+def leveled_body_rate(heading: float | ArrayLike, lat: float) -> np.ndarray:
     """Earth rate in a level body frame at ``heading`` (004 eq 4.24).
 
     ``C_nb ω_ie^n = [ω_N cos ψ, −ω_N sin ψ, ω_D]`` with ``ω_ie^n`` from :func:`fusionlab.earth.earth_rate_ned`.
@@ -505,7 +521,7 @@ def leveled_body_rate(heading, lat):
     return np.einsum("...ji,...j->...i", C_bn, w_n)
 
 
-def tilted_heading(zeta, roll, pitch, lat):
+def tilted_heading(zeta: float, roll: float, pitch: float, lat: float) -> float:
     """Heading of a *non-level* rotating-accelerometer north finder from the phase of its Earth-rate line.
 
     004 §4.4.3, eqs 4.36–4.43; the closed form after the thesis' ref. [45], reconstructed and checked here.
@@ -557,20 +573,20 @@ def tilted_heading(zeta, roll, pitch, lat):
 
 
 def synthetic_record(
-    heading,
-    duration=60.0,
-    fs=512.0,
-    rpm=200.0,
-    rho=0.14,
-    lat=SIEGEN_LAT,
-    g=9.81,
-    scale=1.0,
-    bias=0.0,
-    noise=0.2 * UG,
-    harmonics=None,
-    theta0=0.3,
-    seed=0,
-):
+    heading: float,
+    duration: float = 60.0,
+    fs: float = 512.0,
+    rpm: float = 200.0,
+    rho: float = 0.14,
+    lat: float = SIEGEN_LAT,
+    g: float = 9.81,
+    scale: float = 1.0,
+    bias: float = 0.0,
+    noise: float = 0.2 * UG,
+    harmonics: dict | None = None,
+    theta0: float = 0.3,
+    seed: int = 0,
+) -> dict:
     """A leveled rotating accelerometer on a turntable at ``heading`` (004 eqs 4.16, 4.24–4.27; the record is ours).
 
     ``a = s_a (g + 2ρω_r(ω_y sin θ + ω_x cos θ) + Σ_k h_k A_c cos(kθ + φ_k)) + b_a + w_a`` with the rotor angle
@@ -650,7 +666,9 @@ def synthetic_record(
 # --------------------------------------------------------------------------------------------------------------
 
 
-def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
+def bandpass_firls(
+    order: int, fs: float, f_r: float, pass_half_width: float = 0.2, stop_half_width: float = 1.5
+) -> np.ndarray:
     """Least-squares linear-phase FIR band-pass around ``f_r`` (004 eqs 4.47–4.48, Matlab ``firls``).
 
     ``scipy.signal.firls`` with ``order + 1`` taps; pass band ``f_r ± pass_half_width``, stop bands below
@@ -695,7 +713,9 @@ def bandpass_firls(order, fs, f_r, pass_half_width=0.2, stop_half_width=1.5):
 _TAPS = {}
 
 
-def bandpass(x, theta, taps, remove_mean=True):
+def bandpass(
+    x: ArrayLike, theta: ArrayLike, taps: ArrayLike, remove_mean: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
     """Apply the FIR (004 eq 4.47) and keep its steady-state part, aligned with the rotor angle.
 
     The causal filter delays by ``order/2`` samples (linear phase) and needs ``order`` samples to fill; the output
@@ -740,7 +760,7 @@ def bandpass(x, theta, taps, remove_mean=True):
     return y, theta[m // 2 : len(theta) - m // 2]
 
 
-def whole_turns(theta):
+def whole_turns(theta: ArrayLike) -> slice:
     """Slice of the samples from the first index pulse (θ = 2πk) to the last one: a whole number of turns.
 
     Parameters
@@ -775,7 +795,7 @@ def _signal_and_angle(x, theta):
     return x, theta
 
 
-def demodulate(x, theta, reference="sampled"):
+def demodulate(x: ArrayLike, theta: ArrayLike, reference: str = "sampled") -> float:
     """Heading by synchronous demodulation with sign-function references (004 eqs 4.28–4.32).
 
     ``c_i = ∫ a sgn(cos ω_r t) dt ≈ s_a A_c (4/ω_r) cos ψ``,
@@ -819,7 +839,7 @@ def demodulate(x, theta, reference="sampled"):
     return float(np.arctan2(s_i, c_i))  # (004 eq 4.32)
 
 
-def synchronous_sampling(x, theta):
+def synchronous_sampling(x: ArrayLike, theta: ArrayLike) -> float:
     """Heading by synchronous sampling (004 eqs 4.33–4.35): ``ψ = atan2(−a_90, a_0)``.
 
     For every whole turn k in the record, ``a_0`` is the sample nearest the index pulse θ = 2πk and ``a_90`` the
@@ -853,7 +873,7 @@ def synchronous_sampling(x, theta):
     return float(np.arctan2(-a90, a0))  # (004 eq 4.35)
 
 
-def period_average(x, theta, bins=128, turns=None):
+def period_average(x: ArrayLike, theta: ArrayLike, bins: int = 128, turns: int | None = None) -> dict:
     """Average the whole turns of a record into one period and read the heading from it (004 §4.5.5, Fig. 4.9).
 
     The thesis averages the filtered signal's periods "to produce one sinusoidal period to improve the accuracy of
@@ -916,7 +936,9 @@ def period_average(x, theta, bins=128, turns=None):
     return dict(phi=phi, period=period, turns=turns, heading=float(np.arctan2(s_i, c_i)))  # (004 eq 4.32)
 
 
-def north_finder(record, order, method="demodulation", reference="sampled", **band):
+def north_finder(
+    record: dict, order: int, method: str = "demodulation", reference: str = "sampled", **band: float
+) -> float:
     """The whole chain on one record: band-pass of ``order`` then a heading read-out (rad).
 
     Parameters
@@ -947,7 +969,9 @@ def north_finder(record, order, method="demodulation", reference="sampled", **ba
     raise ValueError(f"method must be 'demodulation' or 'sampling'; got {method!r}")
 
 
-def steps_experiment(headings, orders=(2000, 1000, 200), seed=0, **record):
+def steps_experiment(
+    headings: ArrayLike, orders: Sequence[int] = (2000, 1000, 200), seed: int = 0, **record
+) -> np.ndarray:
     """A Table 4.3 analogue: one synthetic record per turntable position, each read out three ways per order.
 
     Parameters

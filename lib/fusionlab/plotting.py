@@ -17,12 +17,23 @@ them in a figure.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import matplotlib.pyplot as plt
 import numpy as np
+from numpy.typing import ArrayLike
 from matplotlib.lines import Line2D
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from . import rotations, validate
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+    from mpl_toolkits.mplot3d.axes3d import Axes3D
 
 __all__ = [
     "NED_TO_DISPLAY",
@@ -48,7 +59,7 @@ GREY, RED = "0.6", "tab:red"
 AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
 
 
-def ned_to_display(v):
+def ned_to_display(v: ArrayLike) -> np.ndarray:
     """NED vectors to the plotted coordinates ``(East, North, Up)``.
 
     Parameters
@@ -70,7 +81,7 @@ def ned_to_display(v):
     return v @ NED_TO_DISPLAY.T
 
 
-def setup_ned_axes(ax, lim=1.2, elev=25, azim=-70):
+def setup_ned_axes(ax: Axes3D, lim: float = 1.2, elev: float = 25, azim: float = -70) -> Axes3D:
     """Label a 3-D axis for NED data drawn with :func:`ned_to_display`: equal aspect, Down pointing down.
 
     Parameters
@@ -99,7 +110,17 @@ def _colors(colors):
     return [colors] * 3 if isinstance(colors, str) else list(colors)
 
 
-def draw_triad(ax, C, origin=(0, 0, 0), colors=AXIS_COLORS, label=None, alpha=1.0, length=1.0, lw=2.0, label_at=1.15):
+def draw_triad(
+    ax: Axes3D,
+    C: ArrayLike,
+    origin: ArrayLike = (0, 0, 0),
+    colors: str | Sequence[str] = AXIS_COLORS,
+    label: str | None = None,
+    alpha: float = 1.0,
+    length: float = 1.0,
+    lw: float = 2.0,
+    label_at: float = 1.15,
+) -> list[Artist]:
     """Draw the three columns of ``C`` as arrows labelled ``x_label``, ``y_label``, ``z_label``.
 
     Parameters
@@ -172,7 +193,7 @@ _STABILISER = np.array(
 _FIN = np.array([[-0.55, 0, 0], [-0.78, 0, -0.35], [-0.88, 0, -0.35], [-0.82, 0, 0]])  # -z: up when level
 
 
-def draw_aircraft(ax, C_bn, scale=1.0, color="lightsteelblue"):
+def draw_aircraft(ax: Axes3D, C_bn: ArrayLike, scale: float = 1.0, color: str = "lightsteelblue") -> list[Artist]:
     """Draw a simple aircraft at attitude ``C_bn``: fuselage on body x, wings on body y, fin toward body -z.
 
     The right (starboard) wing tip carries a green light, the left (port) one a red light, as on real aircraft,
@@ -233,7 +254,7 @@ def _angle(x, name):
     return float(a)
 
 
-def euler_frames(euler):
+def euler_frames(euler: ArrayLike) -> dict[str, np.ndarray]:
     """The four frames of the Z-Y-X sequence as DCMs to NED (columns = the frame's axes in NED).
 
     Parameters
@@ -272,7 +293,7 @@ def _new_axes(n, ax, figsize):
     return axes[0].figure, axes
 
 
-def plot_euler_frames(euler, ax=None, stages=True):
+def plot_euler_frames(euler: ArrayLike, ax: Axes3D | Sequence[Axes3D] | None = None, stages: bool = True) -> Figure:
     """Draw the Euler sequence I → v1 (yaw) → v2 (pitch) → B (roll), as in seed 001 figs 2-4.
 
     Parameters
@@ -355,7 +376,7 @@ def plot_euler_frames(euler, ax=None, stages=True):
     return fig
 
 
-def plot_gimbal_lock(roll, yaw, pitch=np.pi / 2):
+def plot_gimbal_lock(roll: float, yaw: float, pitch: float = np.pi / 2) -> Figure:
     """Two (roll, yaw) pairs that give the same body triad at θ = ±90° (seed 001 Euler note §6, fig 5).
 
     At θ = +90° only ``φ - ψ`` is observable, at θ = -90° only ``φ + ψ`` (Lab 01 shows why). The second pair keeps that
@@ -428,7 +449,14 @@ def _gauss_pdf(x, mu, var):
     return np.exp(-0.5 * (x - mu) ** 2 / var) / np.sqrt(2 * np.pi * var)
 
 
-def plot_gaussian_product(mu1, var1, mu2, var2, ax=None, labels=("prediction", "measurement")):
+def plot_gaussian_product(
+    mu1: float,
+    var1: float,
+    mu2: float,
+    var2: float,
+    ax: Axes | None = None,
+    labels: tuple[str, ...] = ("prediction", "measurement"),
+) -> Figure:
     """Two 1-D Gaussians and their normalised product (seed 000 figs 24-25), on one axis.
 
     Parameters
@@ -483,7 +511,17 @@ def plot_gaussian_product(mu1, var1, mu2, var2, ax=None, labels=("prediction", "
     return fig
 
 
-def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title=None):
+def plot_kf_run(
+    t: ArrayLike,
+    truth: ArrayLike,
+    z: ArrayLike,
+    x: ArrayLike,
+    P: ArrayLike,
+    component: int = 0,
+    name: str = "position",
+    unit: str = "m",
+    title: str | None = None,
+) -> Figure:
     """One filter run: truth, measurements and estimate (top) and the estimate's error with its ±2σ band (bottom).
 
     Parameters
@@ -548,7 +586,7 @@ def plot_kf_run(t, truth, z, x, P, component=0, name="position", unit="m", title
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def plot_tuning_sweep(sweep, chosen=None, figsize=(11, 3.6)):
+def plot_tuning_sweep(sweep, chosen: float | None = None, figsize: tuple[float, ...] = (11, 3.6)) -> Figure:
     """Left: RMSE against the option's value, one line per trial (log axis), the chosen value marked.
 
     Right: the error over time at the chosen value (default: the first value), movement phase shaded.
@@ -605,7 +643,7 @@ from . import datasets as _datasets  # noqa: E402  (a data loader; plotting sits
 __all__ += ["shade_movement", "plot_trial"]
 
 
-def shade_movement(ax, t, movement, color="0.9"):
+def shade_movement(ax: Axes, t: ArrayLike, movement: ArrayLike, color: str = "0.9") -> list[Rectangle]:
     """Shade, behind the data, each stretch of samples that ``movement`` marks (the phase the metrics score).
 
     Parameters
@@ -634,7 +672,7 @@ def shade_movement(ax, t, movement, color="0.9"):
     return [ax.axvspan(t[a], t[b - 1], color=color, zorder=0, gid="movement") for a, b in zip(edges[::2], edges[1::2])]
 
 
-def plot_trial(trial, title, step=3):
+def plot_trial(trial: _datasets.BroadTrial, title: str, step: int = 3) -> Figure:
     """The raw data of one BROAD trial in four stacked panels: gyro (deg/s), accelerometer (m/s²), magnetometer
     (µT) and the optical reference as Euler angles (deg, ENU), the movement phase shaded in each.
 
@@ -699,7 +737,7 @@ def _record(rec):
     return rec
 
 
-def plot_earth_rate_line(rec, heading, title, t_max=0.9, f_max=90.0):
+def plot_earth_rate_line(rec: dict, heading: float, title: str, t_max: float = 0.9, f_max: float = 90.0) -> Figure:
     """The rotating accelerometer's record against the Earth-rate line it hides (left, the first ``t_max`` s) and
     the record's amplitude spectrum with the line marked (right).
 
@@ -756,7 +794,14 @@ def plot_earth_rate_line(rec, heading, title, t_max=0.9, f_max=90.0):
     return fig
 
 
-def plot_bandpass(rec, taps, title, shown=None, f_max=45.0, t_max=12.0):
+def plot_bandpass(
+    rec: dict,
+    taps: dict[int, ArrayLike],
+    title: str,
+    shown: int | None = None,
+    f_max: float = 45.0,
+    t_max: float = 12.0,
+) -> Figure:
     """FIR band-pass filters around the spin rate: their gains with the drive harmonics dotted (left), and one of
     them run causally on the raw record, filling up before the line appears (right).
 
@@ -828,7 +873,9 @@ def plot_bandpass(rec, taps, title, shown=None, f_max=45.0, t_max=12.0):
 __all__ += ["plot_error_signatures"]
 
 
-def plot_error_signatures(clouds, t, angles, title):
+def plot_error_signatures(
+    clouds: dict[str, tuple[ArrayLike, ArrayLike]], t: ArrayLike, angles: dict[str, ArrayLike], title: str
+) -> Figure:
     """Sensor errors by their marks: one panel per point cloud (x-y projection of an ideal and a measured triad,
     equal axes), and a last panel of integrated gyro angles against time.
 
@@ -898,7 +945,7 @@ def plot_error_signatures(clouds, t, angles, title):
 __all__ += ["plot_disturbance_sweeps"]
 
 
-def plot_disturbance_sweeps(sweeps, title):
+def plot_disturbance_sweeps(sweeps: dict[str, tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike]], title: str) -> Figure:
     """Tilt error of a weighted and of an equal-weight estimate, and the weight ``α_g`` the weighted one gave the
     accelerometer, as one disturbance grows: one panel per disturbance, ``α_g`` on a right-hand axis.
 

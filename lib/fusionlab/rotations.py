@@ -25,6 +25,7 @@ plain conversions (``rot_x(angle).T``) that several seeds print.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import validate
 
@@ -68,7 +69,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def skew(v):
+def skew(v: ArrayLike) -> np.ndarray:
     """Cross-product matrix: ``skew(v) @ u == np.cross(v, u)``.
 
     Parameters
@@ -112,7 +113,7 @@ def _elem(a, axis):
     return np.stack([np.stack(r, -1) for r in rows], -2)
 
 
-def rot_x(angle):
+def rot_x(angle: float | ArrayLike) -> np.ndarray:
     """Active rotation by ``angle`` (rad) about x: turns a vector counter-clockwise seen from +x.
 
     Parameters
@@ -128,7 +129,7 @@ def rot_x(angle):
     return _elementary(angle, "angle", 0)
 
 
-def rot_y(angle):
+def rot_y(angle: float | ArrayLike) -> np.ndarray:
     """Active rotation by ``angle`` (rad) about y.
 
     Parameters
@@ -144,7 +145,7 @@ def rot_y(angle):
     return _elementary(angle, "angle", 1)
 
 
-def rot_z(angle):
+def rot_z(angle: float | ArrayLike) -> np.ndarray:
     """Active rotation by ``angle`` (rad) about z.
 
     Parameters
@@ -169,7 +170,7 @@ def rot_z(angle):
     return _elementary(angle, "angle", 2)
 
 
-def frame_rot_x(angle):
+def frame_rot_x(angle: float | ArrayLike) -> np.ndarray:
     """Passive (frame) rotation about x, as seed 000 eq 3.38 and seed 001 §5 print it: ``rot_x(angle).T``.
 
     Parameters
@@ -185,7 +186,7 @@ def frame_rot_x(angle):
     return np.swapaxes(rot_x(angle), -1, -2)
 
 
-def frame_rot_y(angle):
+def frame_rot_y(angle: float | ArrayLike) -> np.ndarray:
     """Passive (frame) rotation about y, seed 000 eq 3.37 / seed 001 §4: ``rot_y(angle).T``.
 
     Parameters
@@ -201,7 +202,7 @@ def frame_rot_y(angle):
     return np.swapaxes(rot_y(angle), -1, -2)
 
 
-def frame_rot_z(angle):
+def frame_rot_z(angle: float | ArrayLike) -> np.ndarray:
     """Passive (frame) rotation about z, seed 000 eq 3.36 / seed 001 §3: ``rot_z(angle).T``.
 
     Parameters
@@ -222,7 +223,7 @@ def frame_rot_z(angle):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def euler_to_dcm(euler):
+def euler_to_dcm(euler: ArrayLike) -> np.ndarray:
     """Body→navigation DCM from aerospace Z-Y-X Euler angles (seed 000 eq 3.40; seed 004 eq for C_b^n).
 
     Parameters
@@ -249,7 +250,7 @@ def euler_to_dcm(euler):
     return _elem(e[..., 2], 2) @ _elem(e[..., 1], 1) @ _elem(e[..., 0], 0)  # (000 eq 3.40): Rz Ry Rx
 
 
-def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
+def dcm_to_euler(C_bn: ArrayLike, yaw_at_lock: float = 0.0, lock_tol: float = 1e-9) -> np.ndarray:
     """Euler angles ``[roll, pitch, yaw]`` (rad) of a body→navigation DCM, correct at gimbal lock.
 
     Away from lock (seed 000 eqs 3.69, 3.72, 3.75): ``θ = -asin(r31)``, ``φ = atan2(r32, r33)``,
@@ -305,7 +306,7 @@ def dcm_to_euler(C_bn, yaw_at_lock=0.0, lock_tol=1e-9):
     return np.stack([roll, pitch, yaw], -1)
 
 
-def sequence_to_dcm(angles, seq):
+def sequence_to_dcm(angles: ArrayLike, seq: str) -> np.ndarray:
     """DCM of an intrinsic rotation sequence: ``seq='ZYX'`` with angles ``(a1, a2, a3)`` is
     ``R_Z(a1) @ R_Y(a2) @ R_X(a3)`` -- rotate about Z, then about the *new* Y, then the newest X.
 
@@ -329,7 +330,7 @@ def sequence_to_dcm(angles, seq):
     return _elem(a[..., 0], ax[seq[0]]) @ _elem(a[..., 1], ax[seq[1]]) @ _elem(a[..., 2], ax[seq[2]])
 
 
-def dcm_to_sequence(C, seq):
+def dcm_to_sequence(C: ArrayLike, seq: str) -> np.ndarray:
     """Angles (rad) of the intrinsic sequence ``seq`` that gives rotation ``C`` (inverse of :func:`sequence_to_dcm`).
 
     Uses ``scipy.spatial.transform.Rotation`` (upper-case sequences are intrinsic there too); the middle angle is
@@ -366,7 +367,7 @@ def _wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-def quat_to_dcm(q):
+def quat_to_dcm(q: ArrayLike) -> np.ndarray:
     """Body→navigation DCM ``C_bn`` of a unit quaternion ``[w, x, y, z]`` (seed 001 quaternion note §3 matrix).
 
     Parameters
@@ -391,7 +392,7 @@ def quat_to_dcm(q):
     )
 
 
-def dcm_to_quat(C_bn):
+def dcm_to_quat(C_bn: ArrayLike) -> np.ndarray:
     """Unit quaternion ``[w, x, y, z]`` with ``w >= 0`` of a rotation matrix (Shepperd's method: the largest of
     ``w, x, y, z`` is found from the trace/diagonal first, so there is no division by a small number).
 
@@ -451,7 +452,7 @@ def dcm_to_quat(C_bn):
     return np.where(q[..., :1] < 0, -q, q)
 
 
-def euler_to_quat(euler):
+def euler_to_quat(euler: ArrayLike) -> np.ndarray:
     """Quaternion of Z-Y-X Euler angles: ``q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`` (same rotation as :func:`euler_to_dcm`).
 
     Parameters
@@ -481,7 +482,7 @@ def euler_to_quat(euler):
     return quat_multiply(quat_multiply(qz, qy), qx)
 
 
-def quat_to_euler(q, yaw_at_lock=0.0):
+def quat_to_euler(q: ArrayLike, yaw_at_lock: float = 0.0) -> np.ndarray:
     """Euler angles ``[roll, pitch, yaw]`` (rad) of a unit quaternion; gimbal-lock aware (see :func:`dcm_to_euler`).
 
     Parameters
@@ -499,7 +500,7 @@ def quat_to_euler(q, yaw_at_lock=0.0):
     return dcm_to_euler(quat_to_dcm(q), yaw_at_lock=yaw_at_lock)
 
 
-def quat_multiply(p, q):
+def quat_multiply(p: ArrayLike, q: ArrayLike) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` of scalar-first quaternions (seed 001 quaternion note §2). Shapes broadcast.
 
     Parameters
@@ -539,7 +540,7 @@ def quat_multiply(p, q):
     )
 
 
-def quat_conjugate(q):
+def quat_conjugate(q: ArrayLike) -> np.ndarray:
     """``q* = [w, -x, -y, -z]``: the inverse rotation of a unit quaternion.
 
     Parameters
@@ -556,7 +557,7 @@ def quat_conjugate(q):
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
-def quat_normalize(q):
+def quat_normalize(q: ArrayLike) -> np.ndarray:
     """``q / |q|``; raises for a zero quaternion (it encodes no rotation).
 
     Parameters
@@ -576,7 +577,7 @@ def quat_normalize(q):
     return q / n
 
 
-def quat_rotate(q, v):
+def quat_rotate(q: ArrayLike, v: ArrayLike) -> np.ndarray:
     """Rotate body vectors into the navigation frame: ``v_n = q ⊗ (0, v_b) ⊗ q*``.
 
     Parameters
@@ -606,7 +607,7 @@ def quat_rotate(q, v):
     return quat_multiply(quat_multiply(q, v4), quat_conjugate(q))[..., 1:]
 
 
-def quat_angle_between(q1, q2):
+def quat_angle_between(q1: ArrayLike, q2: ArrayLike) -> float | np.ndarray:
     """Angle (rad, in [0, π]) of the rotation that takes attitude ``q1`` to ``q2``; sign of q does not matter.
 
     Parameters
@@ -641,7 +642,7 @@ def quat_angle_between(q1, q2):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def rotvec_to_quat(sigma, order="exact"):
+def rotvec_to_quat(sigma: ArrayLike, order: str = "exact") -> np.ndarray:
     """Quaternion of a rotation vector ``σ`` (axis × angle, rad).
 
     ``order='exact'``: ``[cos(s/2), sin(s/2) σ/s]`` with ``s = |σ|`` (series near 0).
@@ -681,7 +682,7 @@ def rotvec_to_quat(sigma, order="exact"):
     return np.concatenate([np.cos(s / 2), k * sigma], -1)
 
 
-def quat_to_rotvec(q):
+def quat_to_rotvec(q: ArrayLike) -> np.ndarray:
     """Rotation vector (rad) of a unit quaternion, angle in [0, π] (``q`` and ``-q`` give the same answer).
 
     Parameters
@@ -704,7 +705,7 @@ def quat_to_rotvec(q):
     return scale * v
 
 
-def rodrigues_dcm(sigma, order="exact"):
+def rodrigues_dcm(sigma: ArrayLike, order: str = "exact") -> np.ndarray:
     """DCM increment ``A`` for a body rotation vector over one step: ``C_bn(t+dt) = C_bn(t) @ A``.
 
     ``order='exact'`` is Rodrigues' formula, seed 000 eq 3.54 **corrected**:
@@ -751,7 +752,7 @@ def rodrigues_dcm(sigma, order="exact"):
     return eye + a * B + b * (B @ B)  # (000 eq 3.54, corrected)
 
 
-def dcm_renormalize(C, axis="columns"):
+def dcm_renormalize(C: ArrayLike, axis: str = "columns") -> np.ndarray:
     """Re-orthonormalise a drifting DCM (seed 000 eqs 3.59-3.65; Premerlani & Bizard).
 
     Take the first two rows (``axis='rows'``, as the thesis text does) or columns (as its lab code does),
@@ -783,7 +784,7 @@ def dcm_renormalize(C, axis="columns"):
     return np.swapaxes(out, -1, -2) if axis == "columns" else out
 
 
-def is_rotation(C, tol=1e-6):
+def is_rotation(C: ArrayLike, tol: float = 1e-6) -> bool | np.ndarray:
     """True where ``C`` is orthonormal with determinant +1 within ``tol``.
 
     Parameters
@@ -811,7 +812,7 @@ def _roll_pitch(roll, pitch):
     return r, p
 
 
-def euler_rates_matrix(roll, pitch):
+def euler_rates_matrix(roll: float | ArrayLike, pitch: float | ArrayLike) -> np.ndarray:
     """Matrix ``D(φ, θ)`` mapping body rates ``(p, q, r)`` to Euler-angle rates (seed 001 Euler note §7).
 
     ``[φ̇, θ̇, ψ̇] = D @ [p, q, r]``. It does not depend on yaw (the note's ``D(φ, θ, ψ)`` is a misnomer) and both
@@ -838,7 +839,7 @@ def euler_rates_matrix(roll, pitch):
     )  # (001 Euler §7, D)
 
 
-def body_rates_matrix(roll, pitch):
+def body_rates_matrix(roll: float | ArrayLike, pitch: float | ArrayLike) -> np.ndarray:
     """Matrix ``W(φ, θ)`` mapping Euler-angle rates to body rates, the inverse of :func:`euler_rates_matrix`.
 
     ``[p, q, r] = W @ [φ̇, θ̇, ψ̇]``; ``det W = cos θ`` (not printed in the note; derived in docs/derivations.md §4).
@@ -863,7 +864,9 @@ def body_rates_matrix(roll, pitch):
     )
 
 
-def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
+def integrate_gyro_dcm(
+    C0: ArrayLike, gyr: ArrayLike, dt: float, order: str = "first", renormalize: str | None = "columns"
+) -> np.ndarray:
     """Propagate a body→nav DCM with body rates: ``C_{k+1} = C_k @ A(ω_k dt)`` (seed 000 eqs 3.44, 3.54-3.55).
 
     Parameters
@@ -917,7 +920,7 @@ def integrate_gyro_dcm(C0, gyr, dt, order="first", renormalize="columns"):
     return out
 
 
-def integrate_gyro_quat(q0, gyr, dt):
+def integrate_gyro_quat(q0: ArrayLike, gyr: ArrayLike, dt: float) -> np.ndarray:
     """Propagate a body→nav quaternion exactly for piecewise-constant rates: ``q_{k+1} = q_k ⊗ q(ω_k dt)``.
 
     Parameters
@@ -977,7 +980,7 @@ NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 _Q_NED_ENU = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])  # the quaternion of NED_ENU
 
 
-def dcm_nav_swap(C_bn):
+def dcm_nav_swap(C_bn: ArrayLike) -> np.ndarray:
     """The same attitude with the navigation frame changed NED ↔ ENU: ``NED_ENU @ C_bn`` (body axes unchanged).
 
     Parameters
@@ -994,7 +997,7 @@ def dcm_nav_swap(C_bn):
     return NED_ENU @ C
 
 
-def quat_nav_swap(q):
+def quat_nav_swap(q: ArrayLike) -> np.ndarray:
     """Quaternion form of :func:`dcm_nav_swap` (NED ↔ ENU navigation frame), ``w >= 0``.
 
     Parameters

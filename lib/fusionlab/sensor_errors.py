@@ -24,6 +24,7 @@ independent), a diagonal sensitivity ``S(T)`` and a bias ``β(T)``; the temperat
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import earth, validate
 
@@ -76,7 +77,7 @@ def _triad_params(M, S, beta, who, names=("M", "S", "beta")):
     return M, S, beta
 
 
-def accel_measure(f, M, S, beta):
+def accel_measure(f: ArrayLike, M: ArrayLike, S: ArrayLike, beta: ArrayLike) -> np.ndarray:
     """Accelerometer forward model, seed 001 sensors note §2: ``a_m = M_a (S_a(T) f − β(T))``.
 
     ``f = (F − F_g)/m`` is the specific force (:func:`fusionlab.accel_tilt.specific_force`); the seed writes
@@ -117,7 +118,7 @@ def accel_measure(f, M, S, beta):
     return (f @ S.T - beta) @ M.T  # (001 sensors §2, model)
 
 
-def accel_correct(a_m, M, S, beta):
+def accel_correct(a_m: ArrayLike, M: ArrayLike, S: ArrayLike, beta: ArrayLike) -> np.ndarray:
     """Accelerometer correction, seed 001 sensors note §2: ``a_c = S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T))``.
 
     The exact inverse of :func:`accel_measure` (the seed writes the bias ``β`` in the model, ``β_a`` here).
@@ -143,7 +144,14 @@ def accel_correct(a_m, M, S, beta):
     return _solve(S, _solve(M, a_m) + beta)  # (001 sensors §2, correction)
 
 
-def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
+def gyro_measure_full(
+    rate: ArrayLike,
+    M: ArrayLike,
+    S: ArrayLike,
+    beta: ArrayLike,
+    C_ga: ArrayLike | None = None,
+    a_c: ArrayLike | None = None,
+) -> np.ndarray:
     """Rate-gyro forward model with g-sensitivity, inverse of seed 001's correction (sensors note §3):
     ``p_m = M_g (S_g(T) p − β_g(T) + C_g,a a_c)``.
 
@@ -173,7 +181,14 @@ def gyro_measure_full(rate, M, S, beta, C_ga=None, a_c=None):
     return (p @ S.T - beta + g_term) @ M.T  # (001 sensors §3, solved for p_m)
 
 
-def gyro_correct(p_m, M, S, beta, C_ga=None, a_c=None):
+def gyro_correct(
+    p_m: ArrayLike,
+    M: ArrayLike,
+    S: ArrayLike,
+    beta: ArrayLike,
+    C_ga: ArrayLike | None = None,
+    a_c: ArrayLike | None = None,
+) -> np.ndarray:
     """Rate-gyro correction, seed 001 sensors note §3: ``p = S_g⁻¹(T) (M_g⁻¹ p_m + β_g(T) − C_g,a a_c)``.
 
     Parameters
@@ -217,7 +232,14 @@ def _g_sensitivity(C_ga, a_c, **rates):
     return a_c @ C.T
 
 
-def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
+def mag_measure(
+    b: ArrayLike,
+    M: ArrayLike,
+    S: ArrayLike,
+    beta: ArrayLike,
+    D_s: ArrayLike | None = None,
+    beta_h: ArrayLike | None = None,
+) -> np.ndarray:
     """Magnetometer forward model, the inverse of seed 001's corrected formula (sensors note §4):
     ``b_m = M_b (S_b(T) D_s⁻¹ (b + β_h) − β_b(T))``.
 
@@ -251,7 +273,14 @@ def mag_measure(b, M, S, beta, D_s=None, beta_h=None):
     return (_solve(D, b + h) @ S.T - beta) @ M.T  # (001 sensors §4, solved for b_m)
 
 
-def mag_correct(b_m, M, S, beta, D_s=None, beta_h=None):
+def mag_correct(
+    b_m: ArrayLike,
+    M: ArrayLike,
+    S: ArrayLike,
+    beta: ArrayLike,
+    D_s: ArrayLike | None = None,
+    beta_h: ArrayLike | None = None,
+) -> np.ndarray:
     """Magnetometer correction, seed 001 sensors note §4, corrected (Lab 12's erratum):
     ``b_c = D_s S_b⁻¹(T) (M_b⁻¹ b_m + β_b(T)) − β_h``. The printed form is :func:`seed001_mag_correct_printed`.
 
@@ -291,7 +320,14 @@ def _iron(D_s, beta_h):
     return D, h
 
 
-def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
+def seed001_mag_correct_printed(
+    b_m: ArrayLike,
+    M_a: ArrayLike,
+    S_a: ArrayLike,
+    beta_a: ArrayLike,
+    D_s: ArrayLike | None = None,
+    beta_h: ArrayLike | None = None,
+) -> np.ndarray:
     """Seed 001's combined magnetometer formula **as printed** (sensors note §4; the erratum of Lab 12):
     ``b_c = D_s S_a⁻¹(T) (M_a⁻¹ a_m + β_a(T)) − β_h``.
 
@@ -323,7 +359,14 @@ def seed001_mag_correct_printed(b_m, M_a, S_a, beta_a, D_s=None, beta_h=None):
     return mag_correct(b_m, M_a, S_a, beta_a, D_s, beta_h)
 
 
-def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
+def gyro_noise(
+    n: int,
+    fs: float,
+    arw: float = 0.0,
+    bias_instability: float = 0.0,
+    rrw: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+) -> np.ndarray:
     """Synthetic gyro rate error with the three Allan-variance terms (seed 004 §2.1 vocabulary; IEEE Std 952).
 
     * white rate noise, angle random walk ``N`` (rad/s/√Hz = rad/√s): each sample ``N·√fs·u``;
@@ -372,7 +415,7 @@ def gyro_noise(n, fs, arw=0.0, bias_instability=0.0, rrw=0.0, rng=None):
     return out
 
 
-def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
+def allan_model(tau: ArrayLike, arw: float = 0.0, bias_instability: float = 0.0, rrw: float = 0.0) -> np.ndarray:
     """Allan deviation of white + flicker + random-walk rate noise (IEEE Std 952):
     ``σ(τ)² = N²/τ + (2 ln2/π) B² + K² τ/3``. So ``σ(1 s) = N`` on the ARW line, the flat floor is ``0.664·B`` and
     ``σ(3 s) = K`` on the RRW line.
@@ -407,7 +450,7 @@ def allan_model(tau, arw=0.0, bias_instability=0.0, rrw=0.0):
     return np.sqrt(arw**2 / tau + 2 * np.log(2) / np.pi * bias_instability**2 + rrw**2 * tau / 3)
 
 
-def remove_gravity(q_bn, acc, g=earth.G, frame="NED"):
+def remove_gravity(q_bn: ArrayLike, acc: ArrayLike, g: float = earth.G, frame: str = "NED") -> np.ndarray:
     """Acceleration in the navigation frame from the specific force, seed 001 position note §2:
     ``a_I = R_B^I a_m + (0, 0, g)`` in NED (``a_m`` at rest reads ``(0, 0, −g)`` level), i.e. ``C_bn f + g_n``.
 
@@ -445,7 +488,9 @@ def remove_gravity(q_bn, acc, g=earth.G, frame="NED"):
     return rotations.quat_rotate(q_bn, acc) + g_n  # (001 position §1: a_I = R_B^I a_m + g)
 
 
-def dead_reckon(acc_nav, dt, v0=None, p0=None):
+def dead_reckon(
+    acc_nav: ArrayLike, dt: float, v0: ArrayLike | None = None, p0: ArrayLike | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Velocity and position by the seed's discrete scheme (seed 001 position note §3):
     ``v[k+1] = v[k] + T a[k]``, ``r[k+1] = r[k] + T v[k]``.
 
@@ -489,7 +534,9 @@ def dead_reckon(acc_nav, dt, v0=None, p0=None):
     return v, p
 
 
-def seed001_table1(angle_deg, t, g=9.8, printed=True):
+def seed001_table1(
+    angle_deg: ArrayLike, t: ArrayLike, g: float = 9.8, printed: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Seed 001's Table 1 (position note §4): acceleration, velocity and position error of a tilt error.
 
     ``a = g·sin(δ)`` (inferred; the note states no model), ``v = a·t``; position as printed ``a·t²``
@@ -534,7 +581,7 @@ def seed001_table1(angle_deg, t, g=9.8, printed=True):
     return a, vel, pos
 
 
-def tilt_error_position(t, angle_err, g=earth.G):
+def tilt_error_position(t: ArrayLike, angle_err: float | ArrayLike, g: float = earth.G) -> np.ndarray:
     """Position error of a constant tilt error ``δ`` (rad): ``½ g sin(δ) t²`` -- grows like t².
 
     Parameters
@@ -555,7 +602,7 @@ def tilt_error_position(t, angle_err, g=earth.G):
     return 0.5 * validate.positive(g, "g") * np.sin(validate.angles_rad(angle_err, "angle_err")) * t**2
 
 
-def gyro_bias_position(t, bias, g=earth.G):
+def gyro_bias_position(t: ArrayLike, bias: float | ArrayLike, g: float = earth.G) -> np.ndarray:
     """Position error of a constant gyro bias ``b`` (rad/s) about a level axis: the tilt grows as ``b t``, the
     acceleration error as ``g b t`` (small angles), the position as ``g b t³/6`` -- grows like t³.
 
@@ -577,7 +624,7 @@ def gyro_bias_position(t, bias, g=earth.G):
     return validate.positive(g, "g") * validate.array(bias, "bias") * t**3 / 6
 
 
-def observer_steady_state_error(L, T, bias):
+def observer_steady_state_error(L: float, T: float, bias: float | ArrayLike) -> float | np.ndarray:
     """Steady-state angle error of seed 001's fixed-gain observer with a constant gyro bias (attitude note §4):
     predict ``θ⁺ = θ + T(ω + b)``, update ``θ = θ⁺ + L(θ_acc − θ⁺)`` gives ``e_ss = (1 − L)·T·b / L``.
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import validate
 
@@ -73,7 +74,7 @@ EPS0 = 8.8541878128e-12
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def smd_transfer(omega, m, k, b):
+def smd_transfer(omega: ArrayLike, m: float, k: float, b: float | ArrayLike) -> np.ndarray:
     """Frequency response of the proof mass, ``H(jω) = X/A = -1 / ((jω)² + (b/m) jω + k/m)`` (seed 000 eq 3.5).
 
     ``x`` is the displacement of the mass relative to the case, ``a`` the acceleration of the case (eq 3.2:
@@ -115,7 +116,7 @@ def smd_transfer(omega, m, k, b):
     return -1.0 / (s**2 + (b / m) * s + k / m)  # (000 eq 3.5)
 
 
-def smd_natural_frequency(m, k):
+def smd_natural_frequency(m: float, k: float) -> float:
     """Undamped natural frequency ``ω_n = √(k/m)``, rad/s: the "knee" of seed 000 fig 4 (000 §3.1, after eq 3.5).
 
     Parameters
@@ -133,7 +134,7 @@ def smd_natural_frequency(m, k):
     return np.sqrt(validate.positive(k, "k") / validate.positive(m, "m"))
 
 
-def smd_damping_ratio(m, k, b):
+def smd_damping_ratio(m: float, k: float, b: float | ArrayLike) -> float | np.ndarray:
     """Damping ratio ``ζ = b / (2√(k m))`` (dimensionless); ``b = 2ζ√(km)`` gives the damping for a chosen ζ.
 
     Parameters
@@ -155,7 +156,7 @@ def smd_damping_ratio(m, k, b):
     return validate.nonnegative(b, "b") / (2.0 * np.sqrt(k * m))
 
 
-def smd_dc_gain(m, k):
+def smd_dc_gain(m: float, k: float) -> float:
     """Low-frequency gain of the proof mass, ``H(0) = -m/k`` in s² (seed 000 eq 3.6).
 
     A static acceleration ``a`` deflects the mass by ``x = H(0)·a = -(m/k)·a``.
@@ -175,7 +176,7 @@ def smd_dc_gain(m, k):
     return -validate.positive(m, "m") / validate.positive(k, "k")  # (000 eq 3.6)
 
 
-def accel_from_displacement(x, m, k):
+def accel_from_displacement(x: ArrayLike, m: float, k: float) -> np.ndarray:
     """Case acceleration from the proof-mass displacement in the flat band, ``a = -(k/m)·x``
     (seed 000 eq 3.7, corrected).
 
@@ -210,7 +211,7 @@ def accel_from_displacement(x, m, k):
     return -(validate.positive(k, "k") / validate.positive(m, "m")) * x  # (000 eq 3.7, corrected)
 
 
-def seed000_eq37_printed(x, m, k):
+def seed000_eq37_printed(x: ArrayLike, m: float, k: float) -> np.ndarray:
     """Seed 000 eq 3.7 **as printed**, ``a = -(m/k)·x`` -- wrong (units m·s², not m/s²); kept to show the erratum.
 
     Parameters
@@ -236,7 +237,7 @@ def seed000_eq37_printed(x, m, k):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def parallel_plate_capacitance(eps, area, gap):
+def parallel_plate_capacitance(eps: float, area: float | ArrayLike, gap: float | ArrayLike) -> float | np.ndarray:
     """Parallel-plate capacitance ``C = ε·A/x`` in farads (seed 000 eq 3.8).
 
     ``eps`` is the *absolute* permittivity ``ε0·εr`` (F/m); the thesis calls ``ε0ε`` the "relative permittivity",
@@ -262,7 +263,7 @@ def parallel_plate_capacitance(eps, area, gap):
     return eps * area / gap  # (000 eq 3.8)
 
 
-def differential_capacitances(c0, delta):
+def differential_capacitances(c0: float, delta: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The two gaps of a differential sensor, ``C1 = C0/(1+δ)`` and ``C2 = C0/(1-δ)`` with ``δ = x/x0``
     (000 eqs 3.9-3.10).
 
@@ -287,7 +288,7 @@ def differential_capacitances(c0, delta):
     return c0 / (1 + d), c0 / (1 - d)  # (000 eqs 3.9, 3.10)
 
 
-def bridge_output(c1, c2, v_in):
+def bridge_output(c1: float | ArrayLike, c2: float | ArrayLike, v_in: float | ArrayLike) -> np.ndarray:
     """Exact output of the capacitive half bridge of seed 000 fig 6, in volts.
 
     The excitation ``v_in`` drives ``C1`` and ``C2`` in series; the reference leg (``C0``, ``C0``) sits at
@@ -325,7 +326,7 @@ def bridge_output(c1, c2, v_in):
     return v_in * c2 / (c1 + c2) - v_in / 2
 
 
-def half_bridge_output(delta, v_in):
+def half_bridge_output(delta: ArrayLike, v_in: float | ArrayLike) -> np.ndarray:
     """Half-bridge output ``Vout = δ·Vin/2`` (seed 000 eq 3.11).
 
     The thesis derives it for δ ≪ 1; for a differential pair it is exact (see :func:`bridge_output`).
@@ -348,7 +349,7 @@ def half_bridge_output(delta, v_in):
     return 0.5 * d * v_in  # (000 eq 3.11)
 
 
-def accel_from_bridge(v_out, v_in, x0, m, k):
+def accel_from_bridge(v_out: ArrayLike, v_in: float | ArrayLike, x0: float, m: float, k: float) -> np.ndarray:
     """Acceleration from the bridge voltage, ``a = -(k/m)·x0·(2·Vout/Vin)`` (seed 000 eqs 3.12-3.13, corrected).
 
     The thesis prints ``-(m/k)`` here as in eq 3.7 (the same erratum); ``x = x0·δ`` and ``δ = 2·Vout/Vin``.
@@ -379,7 +380,7 @@ def accel_from_bridge(v_out, v_in, x0, m, k):
     return accel_from_displacement(x0 * delta, m, k)  # (000 eqs 3.12-3.13, corrected)
 
 
-def adxl335_bandwidth(c, r=32e3):
+def adxl335_bandwidth(c: float | ArrayLike, r: float = 32e3) -> float | np.ndarray:
     """-3 dB bandwidth of an ADXL335 output, ``1 / (2π · 32 kΩ · C)`` in Hz (seed 000 §3.1.1, from the datasheet).
 
     Parameters
@@ -452,7 +453,7 @@ class AnalogSensor:
             )
 
 
-def adxl335(vs=3.0):
+def adxl335(vs: float = 3.0) -> AnalogSensor:
     """ADXL335 accelerometer numbers at supply ``vs`` (V): ratiometric, so zero-g level ``Vs/2`` and ≈ ``0.1·Vs`` V/g.
 
     At 3 V the datasheet gives 300 mV/g and 1.5 V (typical); it quotes 360 mV/g at 3.6 V and 195 mV/g at 2 V,
@@ -501,7 +502,7 @@ def _bits(bits):
     return int(bits)
 
 
-def adc_full_scale(bits=ADC_BITS):
+def adc_full_scale(bits: int = ADC_BITS) -> int:
     """The thesis' "ADC Resolution": the largest count, ``2**bits - 1`` (1023 for 10 bits) (seed 000 eq 3.14).
 
     Many converters define one count as ``Vref / 2**bits`` instead; the thesis divides by ``2**bits - 1`` and so do we.
@@ -541,7 +542,7 @@ def _counts(counts, bits):
 VOLTS_MAX = 5.5
 
 
-def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
+def adc_to_volts(counts: ArrayLike, v_ref: float = 3.0, bits: int = ADC_BITS) -> np.ndarray:
     """ADC result to volts, ``V = counts · Vref / (2**bits - 1)`` (seed 000 eq 3.14).
 
     Parameters
@@ -568,7 +569,14 @@ def adc_to_volts(counts, v_ref=3.0, bits=ADC_BITS):
     return c * validate.positive(v_ref, "v_ref") / adc_full_scale(bits)  # (000 eq 3.14)
 
 
-def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, null_offset=0.0):
+def adc_to_physical(
+    counts: ArrayLike,
+    zero_level: float | ArrayLike,
+    sensitivity: float | ArrayLike,
+    v_ref: float = 3.0,
+    bits: int = ADC_BITS,
+    null_offset: float | ArrayLike = 0.0,
+) -> np.ndarray:
     """ADC result to the sensor's unit, ``(counts·Vref/(2**bits-1) - zero) / sensitivity + NullOffset``.
 
     Seed 000 eq 3.16 (accelerometer, g) and eq 3.35 (gyro, °/s) are this formula; eqs 5.1-5.3 and 5.11-5.12 add the
@@ -611,7 +619,13 @@ def adc_to_physical(counts, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS, n
     return (volts - zero) / sens + off  # (000 eqs 3.15-3.16, 3.35, 5.1)
 
 
-def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
+def physical_to_adc(
+    value: ArrayLike,
+    zero_level: float | ArrayLike,
+    sensitivity: float | ArrayLike,
+    v_ref: float = 3.0,
+    bits: int = ADC_BITS,
+) -> np.ndarray:
     """The ADC a simulator needs: a reading in the sensor's unit to the integer count the MCU would print.
 
     Inverse of :func:`adc_to_physical` (without NullOffset), rounded to the nearest count and clipped to
@@ -652,7 +666,7 @@ def physical_to_adc(value, zero_level, sensitivity, v_ref=3.0, bits=ADC_BITS):
     return np.clip(np.rint(volts / validate.positive(v_ref, "v_ref") * top), 0, top).astype(np.int64)
 
 
-def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
+def adc_step(sensitivity: float | ArrayLike, v_ref: float = 3.0, bits: int = ADC_BITS) -> float | np.ndarray:
     """Quantisation step: one ADC count in the sensor's unit, ``Vref / (2**bits - 1) / sensitivity``.
 
     10 bits at 3.0 V: 9.78 mg for the ADXL335 (0.300 V/g), 0.322 °/s for the IDG-500 X4.5OUT (9.1 mV/(°/s)).
@@ -676,7 +690,7 @@ def adc_step(sensitivity, v_ref=3.0, bits=ADC_BITS):
     )
 
 
-def null_offset(readings, expected=0.0):
+def null_offset(readings: ArrayLike, expected: float | ArrayLike = 0.0) -> float | np.ndarray:
     """NullOffset of seed 000 eqs 5.1-5.3 and 5.11-5.12: ``expected - mean(readings)`` over a still, level record.
 
     The thesis nulls the sensors on a level surface ("Initialize/Null/Zero") but does not say how; the natural

@@ -16,6 +16,7 @@ its length, the time of each sample and its duration on one uniform time base.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import validate
 
@@ -36,12 +37,12 @@ class Sampled:
         return len(self.gyr)
 
     @property
-    def t(self):
+    def t(self) -> np.ndarray:
         """ndarray, shape (N,): time of each sample, s, from 0."""
         return np.arange(len(self)) / self.fs
 
     @property
-    def duration(self):
+    def duration(self) -> float:
         """float: length of the recording, s."""
         return len(self) / self.fs
 
@@ -51,7 +52,7 @@ class Sampled:
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def trailing_max(x, n):
+def trailing_max(x: ArrayLike, n: int) -> np.ndarray:
     """Causal running maximum: ``out[k] = max(x[k-n+1 … k])`` (fewer samples at the start), for a (N,) array.
 
     The one window both accelerometer-disturbance holds use (the complementary filter's and the Freescale fast
@@ -99,7 +100,7 @@ def _held_true(ok, n):
     return ok & (idx - last_bad >= n)
 
 
-def lowpass(x, fs, tau):
+def lowpass(x: ArrayLike, fs: float, tau: float) -> np.ndarray:
     """First-order causal low-pass along the first axis: ``y_k = y_{k-1} + a (x_k - y_{k-1})``,
     ``a = 1 - exp(-1/(fs tau))``, started at ``y_0 = x_0`` (no transient from zero).
 
@@ -148,7 +149,16 @@ def lowpass(x, fs, tau):
     return y
 
 
-def rest_detect(gyr, acc, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
+def rest_detect(
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    fs: float,
+    gyr_tol: float = np.radians(2.0),
+    acc_tol: float = 0.5,
+    min_time: float = 1.5,
+    tau: float = 0.5,
+    bias_max: float = np.radians(2.0),
+) -> tuple[np.ndarray, np.ndarray]:
     """Rest detection on a recording, causal; at rest the low-passed gyro *is* the gyro bias.
 
     The idea is VQF's (Laidig & Seel 2023, its rest detection; written here from the paper, not from its code):
@@ -221,7 +231,15 @@ class RestDetector:
         Largest low-passed rate that can be a bias, rad/s.
     """
 
-    def __init__(self, fs, gyr_tol=np.radians(2.0), acc_tol=0.5, min_time=1.5, tau=0.5, bias_max=np.radians(2.0)):
+    def __init__(
+        self,
+        fs: float,
+        gyr_tol: float = np.radians(2.0),
+        acc_tol: float = 0.5,
+        min_time: float = 1.5,
+        tau: float = 0.5,
+        bias_max: float = np.radians(2.0),
+    ) -> None:
         fs = validate.sample_rate(fs)
         self.a = 1.0 - np.exp(-1.0 / (fs * validate.positive(tau, "tau")))  # the step of :func:`lowpass`
         self.gyr_tol, self.acc_tol = validate.positive(gyr_tol, "gyr_tol"), validate.positive(acc_tol, "acc_tol")
@@ -230,7 +248,7 @@ class RestDetector:
         self.gyr_lp = self.acc_lp = None
         self.quiet_run = 0  # consecutive quiet samples
 
-    def update(self, gyr, acc):
+    def update(self, gyr: ArrayLike, acc: ArrayLike) -> tuple[bool, np.ndarray]:
         """Take the next sample.
 
         Parameters
@@ -269,7 +287,9 @@ class RestDetector:
         return self.quiet_run >= self.n_min, self.gyr_lp.copy()
 
 
-def field_reference(mag, fs, tol=0.1, tau=20.0, new_time=20.0):
+def field_reference(
+    mag: ArrayLike, fs: float, tol: float = 0.1, tau: float = 20.0, new_time: float = 20.0
+) -> tuple[np.ndarray, np.ndarray]:
     """A running reference of the geomagnetic field strength that disturbances do not pull, causal.
 
     A real-time filter cannot know the field strength of the whole recording (its median, say); it can learn it

@@ -44,9 +44,12 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import accel_tilt, earth, inertial, sensors, validate
 
@@ -97,8 +100,8 @@ def _smoothstep(u):
 
 
 def motion_profile(
-    fs=FS,
-    waypoints=(
+    fs: float = FS,
+    waypoints: Sequence[tuple[float, float]] = (
         (0.0, 0.0),
         (1.0, 0.0),
         (3.0, 60.0),
@@ -107,7 +110,7 @@ def motion_profile(
         (9.0, 0.0),
         (11.0, 0.0),
     ),
-):
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """True angle and rate of the Lab 3 motion test (seed 000 §5.4 Part 2; the waypoints are ours), cosine ramps
     between waypoints.
 
@@ -157,17 +160,17 @@ def motion_profile(
 
 
 def imu_record(
-    roll_deg,
-    pitch_deg,
-    fs=FS,
-    rng=None,
-    vib_amp=VIB_AMP,
-    vib_freq=VIB_FREQ,
-    acc_noise=ACC_NOISE,
-    gyro_bias=GYRO_BIAS,
-    gyro_noise=GYRO_NOISE,
-    translation_g=None,
-):
+    roll_deg: ArrayLike,
+    pitch_deg: ArrayLike,
+    fs: float = FS,
+    rng: np.random.Generator | int | None = None,
+    vib_amp: float = VIB_AMP,
+    vib_freq: float = VIB_FREQ,
+    acc_noise: float = ACC_NOISE,
+    gyro_bias: ArrayLike = GYRO_BIAS,
+    gyro_noise: float = GYRO_NOISE,
+    translation_g: ArrayLike | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Readings of the 5DOF board (thesis frame, Z up) for a true attitude history; g and °/s.
 
     Specific force ``ax = -sin θ, ay = sin φ cos θ, az = cos φ cos θ`` (seed 000 eq 3.40, third row) plus
@@ -234,7 +237,14 @@ def imu_record(
     return acc, gyr
 
 
-def adc_record(acc, gyr, accel=sensors.ADXL335, gyro=sensors.IDG500, v_ref=3.0, bits=sensors.ADC_BITS):
+def adc_record(
+    acc: ArrayLike,
+    gyr: ArrayLike,
+    accel: sensors.AnalogSensor = sensors.ADXL335,
+    gyro: sensors.AnalogSensor = sensors.IDG500,
+    v_ref: float = 3.0,
+    bits: int = sensors.ADC_BITS,
+) -> np.ndarray:
     """Quantise g and °/s to the counts the NanoCore12 prints (seed 000 eqs 5.1-5.3 and 5.11-5.12, inverted).
 
     Uses :func:`fusionlab.sensors.physical_to_adc` (round to nearest, saturate at 0 and ``2**bits - 1``).
@@ -286,7 +296,7 @@ def _shaking(n, fs, rng, rms=SHAKE_RMS, cutoff=SHAKE_CUTOFF):
     return np.concatenate([out, np.zeros((n, 1))], axis=1)
 
 
-def lab03_records(seed=LAB03_SEED, fs=FS):
+def lab03_records(seed: int = LAB03_SEED, fs: float = FS) -> dict[str, dict]:
     """The three Lab 3 records: ``stationary`` (10 s level, motor on), ``motion`` (the test, motor on) and
     ``translation`` (10 s horizontal shaking, no rotation, motor off).
 
@@ -333,7 +343,7 @@ _MENU = (
 )
 
 
-def terminal_log(counts, title="Get RAW Sensor Data"):
+def terminal_log(counts: ArrayLike, title: str = "Get RAW Sensor Data") -> str:
     """The Tera Term text of one recording: menu, header, one line of space-delimited 3-digit hex per sample, stop.
 
     Lines end with CR LF as a terminal log does. Columns: :data:`LOG_COLUMNS`.
@@ -374,7 +384,7 @@ def terminal_log(counts, title="Get RAW Sensor Data"):
     )
 
 
-def truth_csv(rec):
+def truth_csv(rec: dict) -> str:
     """CSV text of the true angles beside a log: ``sample,t_s,angle_x_deg,angle_y_deg`` (rotation about X and Y).
 
     Parameters
@@ -401,7 +411,7 @@ def truth_csv(rec):
     return "\n".join(lines) + "\n"
 
 
-def sha256_file(path):
+def sha256_file(path: str | os.PathLike) -> str:
     """SHA-256 hex digest of a file's bytes.
 
     Parameters
@@ -417,7 +427,7 @@ def sha256_file(path):
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def write_lab03(out, seed=LAB03_SEED):
+def write_lab03(out: str | os.PathLike, seed: int = LAB03_SEED) -> list[Path]:
     """Write ``<out>/lab03/{name}.log``, ``{name}_truth.csv`` and ``SHA256SUMS``; returns the written paths.
 
     Parameters
@@ -447,7 +457,7 @@ def write_lab03(out, seed=LAB03_SEED):
     return paths + [folder / "SHA256SUMS"]
 
 
-def lab03_data(search_from=None, search_package=True):
+def lab03_data(search_from: str | os.PathLike | None = None, search_package: bool = True) -> Path:
     """The folder of Lab 03's terminal logs: the repository's ``data/lab03`` when it can be found, else a fresh copy.
 
     Looks in ``data/lab03`` above ``search_from`` (default: the working directory) and above this package -- a
@@ -481,7 +491,7 @@ def lab03_data(search_from=None, search_package=True):
     return cache / "lab03"
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     """Command line ``python -m fusionlab.simulate [--out DATA] [--seed N]``: write the Lab 03 files.
 
     Parameters
@@ -530,16 +540,16 @@ def _body_rates(C):
 
 
 def hand_motion_record(
-    seed=9,
-    fs=100.0,
-    duration=120.0,
-    euler0_deg=(4.0, -3.0, 30.0),
-    still=10.0,
-    bias_dps=(2.0, -3.0, 1.5),
-    inclination_deg=66.0,
-    field_gauss=0.48,
-    acc_bias=True,
-):
+    seed: int = 9,
+    fs: float = 100.0,
+    duration: float = 120.0,
+    euler0_deg: ArrayLike = (4.0, -3.0, 30.0),
+    still: float = 10.0,
+    bias_dps: ArrayLike = (2.0, -3.0, 1.5),
+    inclination_deg: float = 66.0,
+    field_gauss: float = 0.48,
+    acc_bias: bool = True,
+) -> dict:
     """A 120 s hand-motion recording like seed 004's AHRS experiment (§6.5, Table 6.1) -- ours.
 
     Still at ``euler0`` for ``still`` seconds at both ends; in between, roll, pitch and yaw swing as sums of sinusoids
@@ -658,17 +668,17 @@ T71_ACC_BIAS = 1e-3 * 9.80665
 
 
 def car_record(
-    seed=11,
-    fs=1 / T71_DT,
-    duration=120.0,
-    stops=((0.0, 10.0), (55.0, 65.0), (112.0, 120.0)),
-    tunnels=((30.0, 38.0), (85.0, 93.0)),
-    mount_deg=(2.0, -1.5),
-    gyro_bias_dph=(1500.0, -1500.0, 1500.0),
-    acc_bias_mg=(1.0, -1.0, 1.0),
-    speed=14.0,
-    g=9.80665,
-):
+    seed: int = 11,
+    fs: float = 1 / T71_DT,
+    duration: float = 120.0,
+    stops: Sequence[tuple[float, float]] = ((0.0, 10.0), (55.0, 65.0), (112.0, 120.0)),
+    tunnels: Sequence[tuple[float, float]] = ((30.0, 38.0), (85.0, 93.0)),
+    mount_deg: ArrayLike = (2.0, -1.5),
+    gyro_bias_dph: ArrayLike = (1500.0, -1500.0, 1500.0),
+    acc_bias_mg: ArrayLike = (1.0, -1.0, 1.0),
+    speed: float = 14.0,
+    g: float = 9.80665,
+) -> dict:
     """A car drive like seed 004's experiment (§7.5; Table 7.1 sensor grades) -- ours, the thesis' data are not public.
 
     Stands still during ``stops`` (s), drives at up to ``speed`` m/s on a flat road in between with two turns, and
@@ -757,17 +767,17 @@ def car_record(
 
 
 def air_vehicle_record(
-    seed=10,
-    fs=1 / T71_DT,
-    duration=68.0,
-    gyro_bias_dph=(1500.0, -1500.0, 1500.0),
-    acc_bias_mg=(1.0, -1.0, 1.0),
-    speed=60.0,
-    g=9.80665,
-    noise=True,
-    model="thesis",
-    lat_deg=50.87,
-):
+    seed: int = 10,
+    fs: float = 1 / T71_DT,
+    duration: float = 68.0,
+    gyro_bias_dph: ArrayLike = (1500.0, -1500.0, 1500.0),
+    acc_bias_mg: ArrayLike = (1.0, -1.0, 1.0),
+    speed: float = 60.0,
+    g: float = 9.80665,
+    noise: bool = True,
+    model: str = "thesis",
+    lat_deg: float = 50.87,
+) -> dict:
     """A 68 s air-vehicle flight like seed 004's GPS/INS simulation (§7.5, Table 7.1) -- ours.
 
     Coordinated turns (bank up to about 20°) left and right, two climbs and a descent (pitch up to about ±5°) and

@@ -20,6 +20,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import sensors, validate
 
@@ -80,7 +81,7 @@ _LINE_END = re.compile(r"\r\n|\r|\n")
 _MAX_REPORTED = 5
 
 
-def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
+def parse_terminal_sessions(log: str | Path | bytes, bits: int = sensors.ADC_BITS) -> list[np.ndarray]:
     r"""Every "Get RAW Sensor Data" section of a terminal log, as ADC counts.
 
     The format is exactly what the MCU prints (:func:`fusionlab.simulate.terminal_log`): a section starts at the
@@ -205,7 +206,7 @@ def parse_terminal_sessions(log, bits=sensors.ADC_BITS):
     return [np.array(r, dtype=np.int64).reshape(-1, 5) for r in sections]
 
 
-def parse_terminal_log(log, bits=sensors.ADC_BITS):
+def parse_terminal_log(log: str | Path | bytes, bits: int = sensors.ADC_BITS) -> np.ndarray:
     """The one "Get RAW Sensor Data" section of a terminal log, as an (N, 5) int64 array of counts.
 
     See :func:`parse_terminal_sessions` for the format and the errors; this one also raises if the log holds more
@@ -278,7 +279,9 @@ SHEET_TO_PIPELINE = {
 }
 
 
-def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9):
+def write_spreadsheet(
+    counts: ArrayLike, path: str | Path, dt: float, n_ma: int = 12, accel_weight: str = "ratio", eps: float = 1e-9
+) -> Path:
     """Write the Lab 3 spreadsheet: the raw log, parameters, and steps a)-l) as **live formulas** (seed 000 §5.4.3).
 
     Sheets: ``log`` (the hex text split into columns AX..GY, as *Text to Columns* leaves it), ``params`` (dt,
@@ -391,7 +394,7 @@ def write_spreadsheet(counts, path, dt, n_ma=12, accel_weight="ratio", eps=1e-9)
     return Path(path)
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     """``python -m fusionlab.spreadsheet --xlsx data/lab03_fusion.xlsx``: the Lab 3 spreadsheet of the motion log.
 
     Parameters

@@ -20,7 +20,10 @@ same slips on real BROAD recordings.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
 
 __all__ = [
     "flag",
@@ -77,7 +80,9 @@ def _shape_text(shape, lead=""):
     return "(" + lead + ", ".join("N" if s is None else str(s) for s in shape) + ")"
 
 
-def array(x, name, shape=None, finite=True, dtype=float):
+def array(
+    x: ArrayLike, name: str, shape: tuple[int | None, ...] | None = None, finite: bool = True, dtype: DTypeLike = float
+) -> np.ndarray:
     """Return ``x`` as a float array, checking its trailing shape and that every value is finite.
 
     Parameters
@@ -148,7 +153,7 @@ def _is_bool(x):
     return False
 
 
-def exact_shape(x, name, shape):
+def exact_shape(x: ArrayLike, name: str, shape: tuple[int, ...]) -> np.ndarray:
     """``x`` as a float array of exactly ``shape`` (no leading batch axes, unlike :func:`array`), finite.
 
     For one vector or matrix of a filter's model, whose size the other matrices fix (a measurement ``z`` of
@@ -189,7 +194,7 @@ def exact_shape(x, name, shape):
     return a
 
 
-def samples(x, name, n=3):
+def samples(x: ArrayLike, name: str, n: int = 3) -> np.ndarray:
     """``x`` as a recording: exactly two axes, shape ``(N, n)`` (one row per sample).
 
     Parameters
@@ -227,7 +232,7 @@ def samples(x, name, n=3):
     return array(a, name)
 
 
-def series(x, name):
+def series(x: ArrayLike, name: str) -> np.ndarray:
     """``x`` as one time series: exactly one axis, shape ``(N,)``, finite.
 
     Parameters
@@ -256,7 +261,7 @@ def series(x, name):
     return a
 
 
-def vectors(x, name, n=3):
+def vectors(x: ArrayLike, name: str, n: int = 3) -> np.ndarray:
     """``x`` as an array of ``n``-vectors, shape ``(..., n)``.
 
     Parameters
@@ -276,7 +281,7 @@ def vectors(x, name, n=3):
     return array(x, name, shape=(n,))
 
 
-def matrices(x, name, n=3):
+def matrices(x: ArrayLike, name: str, n: int = 3) -> np.ndarray:
     """``x`` as an array of ``n``×``n`` matrices, shape ``(..., n, n)``.
 
     Parameters
@@ -296,7 +301,7 @@ def matrices(x, name, n=3):
     return array(x, name, shape=(n, n))
 
 
-def quaternions(q, name, unit=True, tol=1e-6):
+def quaternions(q: ArrayLike, name: str, unit: bool = True, tol: float = 1e-6) -> np.ndarray:
     """``q`` as scalar-first quaternions ``(..., 4)``; with ``unit`` they must have norm 1 within ``tol``.
 
     A common slip is passing ``[x, y, z, w]`` (scipy's order) or a quaternion that has drifted off the unit sphere;
@@ -344,7 +349,7 @@ def quaternions(q, name, unit=True, tol=1e-6):
     return q
 
 
-def quaternions_or_nan(q, name, tol=1e-6):
+def quaternions_or_nan(q: ArrayLike, name: str, tol: float = 1e-6) -> np.ndarray:
     """Quaternions ``(..., 4)`` that are each either unit (within ``tol``) or hold NaN (an undefined sample).
 
     A row with any NaN component is returned as all NaN, so that NaN in gives NaN out whatever component it sits
@@ -375,7 +380,7 @@ def quaternions_or_nan(q, name, tol=1e-6):
     return q
 
 
-def scalar(x, name, positive=False, nonnegative=False):
+def scalar(x: float, name: str, positive: bool = False, nonnegative: bool = False) -> float:
     """One finite number (optionally > 0 or >= 0), as a float; a list, array, string or None names ``name``.
 
     Parameters
@@ -409,7 +414,7 @@ def scalar(x, name, positive=False, nonnegative=False):
     return v
 
 
-def flag(x, name):
+def flag(x: bool, name: str) -> bool:
     """A yes/no option: ``True`` or ``False`` (numpy's too); None, 0/1, strings and arrays name ``name``.
 
     Parameters
@@ -429,7 +434,7 @@ def flag(x, name):
     return bool(x)
 
 
-def positive(x, name):
+def positive(x: float, name: str) -> float:
     """A finite scalar > 0 (sample rates, time steps, masses).
 
     Parameters
@@ -462,7 +467,7 @@ def _show(x):
     return repr(x)
 
 
-def count(x, name, minimum=0):
+def count(x: int | float, name: str, minimum: int = 0) -> int:
     """A whole number >= ``minimum`` (sample counts, seeds); ``3.0`` is accepted, ``3.5`` and ``True`` are not.
 
     Parameters
@@ -497,7 +502,7 @@ def count(x, name, minimum=0):
 INNER_ERRORS = (ValueError, TypeError, IndexError, AttributeError, np.linalg.LinAlgError)
 
 
-def generator(rng, name="rng"):
+def generator(rng: np.random.Generator | int | None, name: str = "rng") -> np.random.Generator:
     """A random generator: a ``numpy.random.Generator`` (used as is), None (fresh entropy) or a whole-number seed.
 
     A list or array of seeds is refused: numpy would mix it into one seed without complaint, so ``rng=[1, 2]``
@@ -532,7 +537,7 @@ def generator(rng, name="rng"):
     return np.random.default_rng(count(rng, name))
 
 
-def choice(x, name, allowed):
+def choice(x: object, name: str, allowed: tuple) -> object:
     """One of the values ``allowed`` (numbers compared by value); True/False is refused where a number is meant.
 
     Parameters
@@ -557,7 +562,7 @@ def choice(x, name, allowed):
     return x
 
 
-def nonnegative(x, name):
+def nonnegative(x: float | ArrayLike, name: str) -> np.ndarray:
     """A finite number or array with no element < 0 (frequencies, times, noise levels, damping).
 
     Parameters
@@ -578,7 +583,7 @@ def nonnegative(x, name):
     return a
 
 
-def positive_array(x, name):
+def positive_array(x: float | ArrayLike, name: str) -> np.ndarray:
     """A finite number or array whose every element is > 0 (areas, gaps, sensitivities, time constants).
 
     Unlike :func:`positive`, which takes one scalar, it keeps the shape so that a batch of values broadcasts.
@@ -601,7 +606,7 @@ def positive_array(x, name):
     return a
 
 
-def same_length(**arrays):
+def same_length(**arrays: ArrayLike | None) -> int:
     """Check that every given array has the same first-axis length; returns that length.
 
     Parameters
@@ -630,7 +635,7 @@ def same_length(**arrays):
     return next(iter(lengths.values())) if lengths else 0
 
 
-def angles_rad(x, name, limit=2 * np.pi + 1e-9):
+def angles_rad(x: ArrayLike, name: str, limit: float = 2 * np.pi + 1e-9) -> np.ndarray:
     """Angles in radians; values beyond ±``limit`` almost always mean degrees were passed.
 
     Parameters
@@ -665,7 +670,7 @@ def angles_rad(x, name, limit=2 * np.pi + 1e-9):
     return a
 
 
-def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
+def rotation_vectors(x: ArrayLike, name: str = "sigma", limit: float = 2 * np.pi + 1e-9) -> np.ndarray:
     """Rotation vectors ``(..., 3)`` (unit axis × angle) in radians: an angle beyond one full turn means degrees.
 
     Every rotation has a rotation vector of angle at most π; up to 2π (the same rotation the long way round) is
@@ -705,7 +710,7 @@ def rotation_vectors(x, name="sigma", limit=2 * np.pi + 1e-9):
     return v
 
 
-def euler_rad(x, name="euler"):
+def euler_rad(x: ArrayLike, name: str = "euler") -> np.ndarray:
     """Euler angles ``(..., 3)`` = ``[roll, pitch, yaw]`` in radians: roll and yaw within ±2π, pitch within ±π.
 
     Pitch lives in [-π/2, π/2] by the Z-Y-X convention (±π still allows a pitch "over the top"); a pitch beyond ±π
@@ -737,7 +742,7 @@ def euler_rad(x, name="euler"):
     return e
 
 
-def broadcast(core=None, **arrays):
+def broadcast(core: dict[str, int] | None = None, **arrays: ArrayLike | None) -> tuple[int, ...]:
     """Check that the named arrays broadcast together; returns the broadcast batch shape.
 
     ``core`` maps a name to the number of trailing axes that belong to one item (1 for a 3-vector or a
@@ -772,7 +777,7 @@ class UnknownOption(TypeError, ValueError):
     input check of the library, so that either ``except`` catches it."""
 
 
-def options(given, allowed, where):
+def options(given: Iterable[str], allowed: Iterable[str], where: str) -> None:
     """Unknown keyword options are errors: a misspelt ``mn_sdt=`` must not be silently ignored.
 
     Parameters
@@ -812,7 +817,7 @@ def options(given, allowed, where):
         )
 
 
-def covariance(P, name, n=None, tol=1e-9, definite=False):
+def covariance(P: ArrayLike, name: str, n: int | None = None, tol: float = 1e-9, definite: bool = False) -> np.ndarray:
     """A covariance matrix: square ``(n, n)``, finite, symmetric and positive semi-definite within ``tol``.
 
     ``tol`` is relative to the largest diagonal entry (rounding in a Joseph or short-form update leaves asymmetry
@@ -859,7 +864,7 @@ def covariance(P, name, n=None, tol=1e-9, definite=False):
     return P
 
 
-def covariances(P, name, n, tol=1e-9, definite=True):
+def covariances(P: ArrayLike, name: str, n: int, tol: float = 1e-9, definite: bool = True) -> np.ndarray:
     """A batch of covariance matrices ``(..., n, n)``: each symmetric and positive (semi-)definite within ``tol``.
 
     The batched twin of :func:`covariance` (same tolerances, relative to each matrix's largest entry), for a
@@ -915,7 +920,7 @@ def covariances(P, name, n, tol=1e-9, definite=True):
     return P
 
 
-def rotation(C, name, tol=1e-6):
+def rotation(C: ArrayLike, name: str, tol: float = 1e-6) -> np.ndarray:
     """``C`` as rotation matrices ``(..., 3, 3)``: orthonormal with det +1 within ``tol``.
 
     A reflection (det -1), a zero matrix or a drifted DCM gives numbers that look like angles but describe no
@@ -956,7 +961,7 @@ def rotation(C, name, tol=1e-6):
     return C
 
 
-def unit_vectors(x, name, tol=0.5):
+def unit_vectors(x: ArrayLike, name: str, tol: float = 0.5) -> np.ndarray:
     """``x`` as 3-vectors ``(..., 3)`` of length 1 within ``tol`` (DCM rows, directions an estimator carries).
 
     A filter's rows drift a little from unit length between renormalisations, so the tolerance is wide; what it
@@ -989,7 +994,7 @@ def unit_vectors(x, name, tol=0.5):
     return a
 
 
-def sample_rate(fs, name="fs", low=1.0, high=1e5):
+def sample_rate(fs: float, name: str = "fs", low: float = 1.0, high: float = 1e5) -> float:
     """A sample rate in Hz between ``low`` and ``high`` (1 Hz – 100 kHz: every IMU of the course is in it).
 
     A value outside is almost always a unit slip: a sample *interval* in s passed as the rate (0.01), a rate in kHz
@@ -1031,7 +1036,15 @@ def sample_rate(fs, name="fs", low=1.0, high=1e5):
     return v
 
 
-def gyro_rad(gyr, name="gyr", peak=50.0, typical=10.0, acc=None, fs=None, acc_name="acc"):
+def gyro_rad(
+    gyr: ArrayLike,
+    name: str = "gyr",
+    peak: float = 50.0,
+    typical: float = 10.0,
+    acc: np.ndarray | None = None,
+    fs: float | None = None,
+    acc_name: str = "acc",
+) -> np.ndarray:
     """Gyro rates ``(N, 3)`` in rad/s, refusing records that look like °/s.
 
     Two tests on the gyro alone, both far outside a body's motion in rad/s and squarely inside it in °/s: a peak
@@ -1132,7 +1145,7 @@ TILT_WINDOW, TILT_MIN, TILT_WINDOWS_MIN, TILT_RATIO_MIN = 0.1, 0.05, 20, 0.25
 SWAP_GYR_MIN, SWAP_ACC_MAX = 4.0, 0.5
 
 
-def gyro_tilt_ratio(gyr, acc, fs):
+def gyro_tilt_ratio(gyr: np.ndarray, acc: np.ndarray, fs: float) -> tuple[float, int]:
     """How far the direction of gravity turns, as a fraction of the tilt the gyro integrates (median over windows).
 
     The record is cut into windows of :data:`TILT_WINDOW` s; in each the accelerometer is averaged (the direction
@@ -1179,7 +1192,7 @@ def gyro_tilt_ratio(gyr, acc, fs):
     return float(np.median(observed[count] / predicted[count])), int(count.sum())
 
 
-def accel_ms2(acc, name="acc", g=9.80665, per_sample=True):
+def accel_ms2(acc: ArrayLike, name: str = "acc", g: float = 9.80665, per_sample: bool = True) -> np.ndarray:
     """Accelerometer specific force ``(N, 3)`` (``(..., 3)`` with ``per_sample=False``) in m/s², refusing records
     that look like g.
 
@@ -1262,7 +1275,9 @@ RAW_FIELD_UT = (2.0, 5000.0)
 _FIELD_UNITS = (("gauss", 100.0), ("milligauss", 0.1), ("nT", 1e-3), ("T", 1e6), ("mT", 1e3))
 
 
-def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
+def field_uT(
+    mag: ArrayLike | float, name: str = "mag", low: float = 10.0, high: float = 200.0, per_sample: bool = True
+) -> np.ndarray | float:
     """A magnetometer record in µT: its median field strength must lie between ``low`` and ``high``.
 
     The Earth's field is 25-65 µT (:data:`EARTH_FIELD_UT`); indoors and near iron the median of a record stays
@@ -1315,7 +1330,7 @@ def field_uT(mag, name="mag", low=10.0, high=200.0, per_sample=True):
     return float(m[0]) if strength else m
 
 
-def accel_g(G, name="G", per_sample=False):
+def accel_g(G: ArrayLike, name: str = "G", per_sample: bool = False) -> np.ndarray:
     """An accelerometer reading in units of g (the Freescale note's unit): refuse m/s² and milli-g.
 
     At rest ``|G|`` is 1; a median magnitude between 5 and 20 is m/s² (9.81 at rest), one of 200 or more is
@@ -1368,7 +1383,7 @@ def accel_g(G, name="G", per_sample=False):
     return a
 
 
-def time_step(dt, name="dt", low=1e-5, high=1.0):
+def time_step(dt: float, name: str = "dt", low: float = 1e-5, high: float = 1.0) -> float:
     """A sample interval in s between ``low`` and ``high`` (10 µs – 1 s: the rates of :func:`sample_rate`).
 
     A value above is almost always the sample *rate* in Hz passed as the interval (100 for 0.01 s), or a time in
@@ -1408,7 +1423,7 @@ def time_step(dt, name="dt", low=1e-5, high=1.0):
     return v
 
 
-def turn_per_step(gyr, dt, name="gyr"):
+def turn_per_step(gyr: np.ndarray, dt: float, name: str = "gyr") -> np.ndarray:
     """Refuse rates whose turn over one step, ``|ω| dt``, exceeds π: no sampled record can resolve it.
 
     Half a turn or more between two samples aliases (a turn of 1.5π reads as −0.5π); from a real sensor it means

@@ -12,12 +12,17 @@ run (nbconvert, nbgrader autograding, pytest) it is constructed, draws once and 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import ipywidgets as W
 import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
 from . import plotting, rotations, validate
+
+if TYPE_CHECKING:
+    from .bench import TuningSweep
 
 __all__ = ["viewer_state", "euler_viewer"]
 
@@ -30,7 +35,7 @@ def _fmt(x, digits=3):
     return f"{round(float(x), digits) + 0.0:.{digits}f}"  # + 0.0 turns -0.000 into 0.000
 
 
-def viewer_state(roll_deg, pitch_deg, yaw_deg, lock=False):
+def viewer_state(roll_deg: float, pitch_deg: float, yaw_deg: float, lock: bool = False) -> dict:
     """What the viewer shows for one slider setting.
 
     Parameters
@@ -129,7 +134,7 @@ def _soon(callback, delay=0.15):
     return loop.call_later(delay, callback)
 
 
-def euler_viewer(roll=10, pitch=-10, yaw=40):
+def euler_viewer(roll: float = 10, pitch: float = -10, yaw: float = 40) -> W.VBox:
     """Sliders for ψ, θ, φ (degrees), a gimbal-lock toggle, the C_bn readout and the Euler-sequence figure.
 
     The sliders move in 1° steps (arrow keys too) and follow a drag continuously: the C_bn readout is redrawn at
@@ -211,7 +216,7 @@ from . import kalman as _kalman  # noqa: E402  (a seed-method module; widgets si
 __all__ += ["gaussian_product_state", "gaussian_product_explorer"]
 
 
-def gaussian_product_state(mu1, var1, mu2, var2):
+def gaussian_product_state(mu1: float, var1: float, mu2: float, var2: float) -> dict:
     """What the Gaussian-product explorer shows for one slider setting (pure; testable without a browser).
 
     Parameters
@@ -256,7 +261,7 @@ def gaussian_product_state(mu1, var1, mu2, var2):
     return {"mu": mu, "var": var, "K": K, "html": html}
 
 
-def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
+def gaussian_product_explorer(mu1: float = 0.0, var1: float = 4.0, mu2: float = 3.0, var2: float = 1.0) -> W.VBox:
     """Sliders for the two means and variances; the product and its Kalman-gain reading update as they move.
 
     Building it needs no front end (a headless run constructs it, draws once and returns).
@@ -308,7 +313,7 @@ def gaussian_product_explorer(mu1=0.0, var1=4.0, mu2=3.0, var2=1.0):
 __all__ += ["tuning_explorer"]
 
 
-def tuning_explorer(sweep, start=None):
+def tuning_explorer(sweep: TuningSweep, start: float | None = None) -> W.VBox:
     """A slider over the values of a :class:`fusionlab.bench.TuningSweep`; the figure and the RMSE readout follow.
 
     Every run is done once, in :func:`fusionlab.bench.tuning_sweep`, so moving the slider only redraws. Building

@@ -13,8 +13,10 @@ import os
 import re
 import textwrap
 import traceback
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import datasets, guard, labformat
 from .exercises import EXERCISES, resolve
@@ -117,7 +119,9 @@ def _pair(got, expected, digits=4, fmt=None):
     return a, b
 
 
-def describe_difference(got, expected, name="your result", *, atol=1e-9, rtol=1e-9):
+def describe_difference(
+    got: ArrayLike, expected: ArrayLike, name: str = "your result", *, atol: float = 1e-9, rtol: float = 1e-9
+) -> str | None:
     """Where ``got`` differs from ``expected``, in words a student can act on; None when they agree.
 
     Names the one row or column that is wrong when only one is, otherwise up to three entries with both values;
@@ -348,7 +352,7 @@ def _show_unfinished(shell, etype, evalue, tb, tb_offset=None):
     return None
 
 
-def friendly_errors():
+def friendly_errors() -> None:
     """In a notebook, explain unfinished exercises: a stub's NotImplementedError becomes one line saying which
     exercise to finish, and a ``NameError`` says which earlier cell (and exercise) should have made the name --
     unless the name was to be made by a cell that stopped because a data file is missing, which the hint then says.
@@ -449,7 +453,7 @@ def _general_case(got, ref, case, advice, rtol=1e-9, atol=1e-12):
         raise Feedback(f"right on the lab's cases, but not on {case}. {advice}")
 
 
-def check_close(name, value, expected, tol, hint=""):
+def check_close(name: str, value: ArrayLike | None, expected: ArrayLike, tol: float, hint: str = "") -> None:
     """Check that ``value`` is ``expected`` within ``tol`` (absolute), with an optional hint on failure."""
     value = np.asarray(_answered(name, value), dtype=float)
     expected = np.asarray(expected, dtype=float)
@@ -469,7 +473,7 @@ def check_close(name, value, expected, tol, hint=""):
 _REFERENCES = {e.check: e.forbid for e in EXERCISES}  # check name -> the dotted names it forbids (the table)
 
 
-def forbids(check):
+def forbids(check: Callable[..., None]) -> Callable[..., None]:
     """Decorate a check so that every function it is given runs with its exercise's ``forbid`` out of reach.
 
     The names come from the table of exercises (:mod:`fusionlab.checks.exercises`), by the check's name: dotted

@@ -118,7 +118,7 @@ class Exercise:
     packages: tuple = ()
 
     @property
-    def grade_id(self):
+    def grade_id(self) -> str:
         """The grade id of the exercise's test cell (``ex4_tests``)."""
         return f"ex{self.number}_tests"
 
@@ -487,7 +487,7 @@ PACKAGES = {"ahrs": "absent", "filterpy": "kept"}
 ANSWERING = ("scipy.spatial.transform.Rotation", "ahrs.common.orientation.q_prod", "ahrs.common.orientation.q2R")
 
 
-def hidden_packages(lab=None):
+def hidden_packages(lab: str | None = None) -> tuple[str, ...]:
     """The packages absent from the box that grades ``lab``, each once: those :data:`PACKAGES` keeps out of every
     lab's box, then the ``packages`` of the lab's exercises (with no ``lab``: those of every box).
 
@@ -506,7 +506,7 @@ def hidden_packages(lab=None):
     return tuple(dict.fromkeys([*every, *(name for e in rows for name in e.packages)]))
 
 
-def of_lab(lab):
+def of_lab(lab: str) -> tuple[Exercise, ...]:
     """The exercises of ``lab`` (its folder name), in order.
 
     Parameters
@@ -522,7 +522,7 @@ def of_lab(lab):
     return tuple(e for e in EXERCISES if e.lab == lab)
 
 
-def by_check(check):
+def by_check(check: str) -> Exercise | None:
     """The exercise whose visible check is the function named ``check``.
 
     Parameters
@@ -541,7 +541,7 @@ def by_check(check):
     return None
 
 
-def loaders(lab=None):
+def loaders(lab: str | None = None) -> tuple[str, ...]:
     """The ``loaders`` of the exercises (of ``lab`` only, when given), each once, in the table's order.
 
     Parameters
@@ -558,7 +558,7 @@ def loaders(lab=None):
     return tuple(dict.fromkeys(name for e in rows for name in e.loaders))
 
 
-def qualified(dotted):
+def qualified(dotted: str) -> tuple[str, str]:
     """The module and the attribute path a dotted name of the table stands for: ``"kalman.update"`` is
     ``("fusionlab.kalman", "update")``, other packages by their full name (``"filterpy.kalman.KalmanFilter.predict"``
     is ``("filterpy.kalman", "KalmanFilter.predict")``): the longest module from which the rest is a chain of
@@ -590,7 +590,7 @@ def qualified(dotted):
 _MISSING = object()
 
 
-def resolve(dotted):
+def resolve(dotted: str) -> object:
     """The function a dotted name of the table stands for: ``"kalman.update"`` is fusionlab.kalman.update, other
     packages by their full name (``"numpy.arctan2"``). Raises ImportError or AttributeError for a name that is not
     there."""

@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import accel_tilt as _accel_tilt, earth as _earth, inertial as _inertial, rotations, sensors as _sensors
 from ._core import Feedback, _pair, _answered, _call, _first_match, forbids, _general_case, _ok
@@ -24,7 +27,7 @@ __all__ = [
 ]
 
 
-def check_adc_096(v_ref_096, zero_096, sens_096):
+def check_adc_096(v_ref_096: float | None, zero_096: float | None, sens_096: float | None) -> None:
     """Lab 00 exercise 4: the three single-parameter changes that make count 508 read 0.96 g (seed 000 §3.1.2).
 
     The expected values are computed here, so the student's notebook does not show them."""
@@ -61,7 +64,7 @@ def check_adc_096(v_ref_096, zero_096, sens_096):
     _ok("v_ref_096, zero_096 and sens_096 each make count 508 read 0.96 g.")
 
 
-def check_adc_step(lsb_accel_mg, lsb_gyro_dps):
+def check_adc_step(lsb_accel_mg: float | None, lsb_gyro_dps: float | None) -> None:
     """Lab 00 exercise 5: one ADC count of the ADXL335 (mg) and of the IDG-500 X4.5OUT (°/s), 10 bits at 3.0 V.
 
     The expected values are computed here, not with ``sensors.adc_step``: that one is reserved until the exercise's
@@ -97,7 +100,7 @@ def check_adc_step(lsb_accel_mg, lsb_gyro_dps):
     _ok("one count: lsb_accel_mg and lsb_gyro_dps are right.")
 
 
-def check_gyro_bias(bias_hat, still, fs=100.0, seconds=5.0):
+def check_gyro_bias(bias_hat: float | None, still: ArrayLike, fs: float = 100.0, seconds: float = 5.0) -> None:
     """Lab 00 exercise 11: the gyro bias from the first ``seconds`` of the still record ``still`` (°/s)."""
     v = float(np.asarray(_answered("bias_hat", bias_hat), dtype=float))
     n = int(round(seconds * fs))
@@ -121,7 +124,7 @@ def check_gyro_bias(bias_hat, still, fs=100.0, seconds=5.0):
 
 
 @forbids
-def check_smd_magnitude(fn):
+def check_smd_magnitude(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(omega, m, k, b) -> |H(jω)|`` (seed 000 eq 3.5) against the library."""
     m = 1e-9
     k = m * (2 * np.pi * 5e3) ** 2
@@ -175,7 +178,7 @@ def check_smd_magnitude(fn):
 
 
 @forbids
-def check_accel_from_bridge(fn):
+def check_accel_from_bridge(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(v_out, v_in, x0, m, k) -> a`` (seed 000 eq 3.13 corrected: a = -(k/m)·x0·2·Vout/Vin)."""
     m = 1e-9
     k = m * (2 * np.pi * 5e3) ** 2
@@ -209,7 +212,7 @@ def check_accel_from_bridge(fn):
 
 
 @forbids
-def check_adc_to_physical(fn):
+def check_adc_to_physical(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(counts, zero_level, sensitivity, v_ref, bits) -> reading`` (seed 000 eqs 3.14-3.16)."""
     cases = [
         (508, 1.35, 0.300, 3.0, 10),
@@ -257,7 +260,7 @@ def check_adc_to_physical(fn):
 
 
 @forbids
-def check_atan2(fn):
+def check_atan2(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's four-quadrant ``fn(y, x)`` (seed 000 eq 3.21, corrected), away from the origin."""
     pts = [
         (1.0, 2.0),
@@ -304,7 +307,7 @@ def check_atan2(fn):
 
 
 @forbids
-def check_roll_pitch(fn):
+def check_roll_pitch(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(acc) -> (roll, pitch)`` for a forward-right-down sensor at rest (seed 001, full range)."""
     cases = [(10.0, 20.0, 1.0), (120.0, -45.0, 1.0), (-150.0, 60.0, 1.0), (179.0, 5.0, 1.0), (-60.0, 30.0, 0.1)]
 
@@ -359,7 +362,7 @@ def check_roll_pitch(fn):
 
 
 @forbids
-def check_precession_rate(fn):
+def check_precession_rate(fn: Callable[..., ArrayLike]) -> None:
     """Lab 00 exercise 8: a student's ``fn(mass, arm, inertia, spin, g=9.80665) -> ω_p`` (rad/s), the precession
     rate of a spinning top, ``M g D / (I ω)`` (seed 000 eqs 3.22-3.25)."""
     cases = [(0.1, 0.03, 0.5 * 0.1 * 0.025**2, 2 * np.pi * 50.0), (2.0, 0.1, 0.01, 300.0), (0.02, 0.005, 1e-6, 900.0)]
@@ -401,7 +404,7 @@ def check_precession_rate(fn):
 
 
 @forbids
-def check_coriolis_force(fn):
+def check_coriolis_force(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(m, omega, v) -> F`` (seed 000 eq 3.34, corrected: F = -2 m Ω × v)."""
     cases = [(2e-9, [0.0, 0.0, 1.7], [1.2, 0.0, 0.0]), (0.5, [0.3, -0.2, 0.9], [-1.0, 2.0, 0.5])]
     for m, w, v in cases:
@@ -432,7 +435,7 @@ def check_coriolis_force(fn):
 
 
 @forbids
-def check_integrate_rate(fn):
+def check_integrate_rate(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's forward-Euler ``fn(rate, dt, angle0) -> angle`` (seed 001 attitude note §3)."""
     rate = np.array([1.0, 2.0, 0.5, -1.0, 3.0])
     dt, a0 = 0.1, 5.0

@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import expm
 
 from .. import conventions, rotations
@@ -23,7 +26,7 @@ __all__ = [
 ]
 
 
-def diagnose_dcm(C, euler, tol=1e-6):
+def diagnose_dcm(C: ArrayLike, euler: ArrayLike, tol: float = 1e-6) -> str | None:
     """Name the likely slip when ``C`` should be ``euler_to_dcm(euler)``; returns None when it is right."""
     C = np.asarray(C, dtype=float)
     if C.shape != (3, 3):
@@ -64,7 +67,7 @@ def diagnose_dcm(C, euler, tol=1e-6):
 
 
 @forbids
-def check_euler_to_dcm(fn):
+def check_euler_to_dcm(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(roll, pitch, yaw) -> C_bn`` (radians) on a few attitudes."""
     cases = np.radians([[10, -10, 40], [30, 20, 45], [-120, 60, 200]])
     for e in cases:
@@ -76,7 +79,7 @@ def check_euler_to_dcm(fn):
 
 
 @forbids
-def check_renormalize(fn):
+def check_renormalize(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's column renormalisation ``fn(R) -> R'`` (seed 000 eqs 3.59-3.65)."""
     rng = np.random.default_rng(7)
     R = rotations.euler_to_dcm([0.3, -0.2, 1.0]) + 1e-3 * rng.standard_normal((3, 3))
@@ -108,7 +111,7 @@ def check_renormalize(fn):
 
 
 @forbids
-def check_rodrigues(fn):
+def check_rodrigues(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's exact DCM increment ``fn(sigma) -> A`` (seed 000 eq 3.54, corrected)."""
     for sigma in ([0.3, -0.2, 0.5], [1e-9, 0.0, 0.0], [0.0, 2.0, 0.0]):
         sigma = np.asarray(sigma, dtype=float)
@@ -139,7 +142,7 @@ def check_rodrigues(fn):
     _ok("the Rodrigues increment equals the matrix exponential, including σ → 0.")
 
 
-def check_body_gravity(f_body, C_bn):
+def check_body_gravity(f_body: ArrayLike | None, C_bn: ArrayLike) -> None:
     """Lab 01 exercise 2: the accelerometer reading of a body at rest with attitude ``C_bn`` (NED, m/s²): the
     reaction to gravity, (0, 0, -g) in NED, carried into the body frame. The expected value is computed here."""
     v = np.asarray(_answered("f_body", f_body), dtype=float)
@@ -160,7 +163,7 @@ def check_body_gravity(f_body, C_bn):
     raise Feedback("Use the transpose: v_b = C_bn.T @ v_n; and the reading is +g *up* = (0, 0, -g) in NED.")
 
 
-def check_sequence_angles(angles_deg, seq, C_bn, tol=1e-3):
+def check_sequence_angles(angles_deg: ArrayLike | None, seq: str, C_bn: ArrayLike, tol: float = 1e-3) -> None:
     """Check that ``angles_deg`` (degrees, in the order applied) in intrinsic sequence ``seq`` give ``C_bn``."""
     a = np.asarray(_answered(f"the {seq} angles", angles_deg), dtype=float)
     if a.shape != (3,):
@@ -193,7 +196,7 @@ def check_sequence_angles(angles_deg, seq, C_bn, tol=1e-3):
 
 
 @forbids
-def check_lock_roll(fn):
+def check_lock_roll(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(C_bn, yaw) -> roll`` at gimbal lock (seed 000 eqs 3.79/3.81, corrected)."""
     for pitch in (90.0, -90.0):
         for roll_deg, yaw_deg in ((25.0, 15.0), (-60.0, 100.0)):
@@ -216,7 +219,7 @@ def check_lock_roll(fn):
 
 
 @forbids
-def check_quat_multiply(fn):
+def check_quat_multiply(fn: Callable[..., ArrayLike]) -> None:
     """Lab 01 exercise 7: a student's Hamilton product ``fn(p, q) -> p ⊗ q`` of scalar-first quaternions (seed 001
     quaternion note §2). Cases are general (not unit) quaternions, so a normalised result shows up too."""
     rng = np.random.default_rng(71)
@@ -271,7 +274,7 @@ def check_quat_multiply(fn):
 
 
 @forbids
-def check_quat_to_dcm(fn):
+def check_quat_to_dcm(fn: Callable[..., ArrayLike]) -> None:
     """Lab 01 exercise 8: a student's ``fn(q) -> C_bn`` of a unit body→navigation quaternion ``[w, x, y, z]``:
     ``C(q) v = vector part of q ⊗ (0, v) ⊗ q*`` (seed 001 quaternion note §3). Diagnoses the transpose (the note's
     literal ``q* ⊗ v ⊗ q``, or seed 002's R(q)) and the scalar-last reading."""

@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import falling_body as _falling_body, kalman as _kalman
 from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _ok, _same, _where
@@ -46,7 +49,7 @@ def _general_kf_cases(seed, shapes=((3, 2), (2, 1), (4, 4))):
 
 
 @forbids
-def check_joseph(fn):
+def check_joseph(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's Joseph-form covariance ``fn(P, K, H, R) -> P_post`` (seed 000 eq 4.17)."""
     P, H, R = _kf_case()
     cases = [
@@ -128,7 +131,7 @@ def check_joseph(fn):
 
 
 @forbids
-def check_state_space(fn):
+def check_state_space(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(k, m, g, dt) -> (A, B, u)`` for the falling body (seed 000 §4.4.2)."""
     for k, m, g, dt in ((0.25, 10.0, 9.8, 0.01), (0.5, 2.0, 9.81, 0.1)):
         A, B, u = _call_tuple(fn, (k, m, g, dt), 3, "your function")
@@ -172,7 +175,7 @@ def check_state_space(fn):
 
 
 @forbids
-def check_predict(fn):
+def check_predict(fn: Callable[..., tuple]) -> None:
     """Check a student's projection ``fn(x, P, A, Q, B, u) -> (x', P')`` (seed 000 eqs 4.32 + G u, 4.36)."""
     A, B, u = _falling_body.falling_body_state_space(0.25, 10.0, 9.8, 0.1)
     x = np.array([150.0, -12.0])
@@ -226,7 +229,7 @@ def check_predict(fn):
 
 
 @forbids
-def check_update(fn):
+def check_update(fn: Callable[..., tuple]) -> None:
     """Check a student's update ``fn(x, P, z, H, R) -> (x_post, P_post, K)`` (seed 000 eqs 4.31, 4.8, 4.17)."""
     P, H, R = _kf_case()
     x = np.array([150.0, -12.0])

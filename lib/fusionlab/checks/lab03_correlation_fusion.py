@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import correlation as _correlation
 from ._core import Feedback, _pair, _call, _first_match, forbids, _general_case, _ok
@@ -13,7 +16,7 @@ __all__ = ["check_moving_average", "check_ratio", "check_fuse"]
 
 
 @forbids
-def check_moving_average(fn):
+def check_moving_average(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's causal ``fn(x, n)`` against seed 000 eq 5.7 with an expanding start."""
     x = np.array([4.0, 8.0, 0.0, 2.0, 6.0, 10.0, 1.0, 3.0])
     got = _call(fn, x, 3, what="your moving average").ravel()
@@ -55,7 +58,7 @@ def check_moving_average(fn):
 
 
 @forbids
-def check_ratio(fn):
+def check_ratio(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(gyro_rate, accel_term) -> ratio`` (seed 000 eqs 5.15-5.16 with ε for 0/0)."""
     g = np.array([10.0, -10.0, 5.0, 0.0, 3.0, 0.0])
     a = np.array([10.0, 30.0, -15.0, 4.0, 0.0, 0.0])
@@ -91,7 +94,7 @@ def check_ratio(fn):
 
 
 @forbids
-def check_fuse(fn):
+def check_fuse(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(accel_deg, increment, weight, f0) -> fused`` (seed 000 eq 5.17)."""
     a = np.array([10.0, 12.0, 8.0, 11.0, 9.0])
     inc = np.array([0.5, -0.2, 0.1, 0.3, -0.4])

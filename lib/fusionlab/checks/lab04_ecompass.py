@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import ecompass, rotations
 from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok, _where
@@ -17,7 +20,7 @@ def _unit_pairs(seed, k=2):
     return s / np.linalg.norm(s, axis=1, keepdims=True), r / np.linalg.norm(r, axis=1, keepdims=True)
 
 
-def check_profile_matrix(fn):
+def check_profile_matrix(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(s, r, alpha) -> B = Σ α_k s_k r_kᵀ`` (seed 002 eq 29)."""
     s, r = _unit_pairs(41)
     alpha = np.array([0.3, 0.7])
@@ -52,7 +55,7 @@ def check_profile_matrix(fn):
 
 
 @forbids
-def check_kappa(fn):
+def check_kappa(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(s, r, alpha) -> κ`` (seed 002 eq 41, corrected) on random vector pairs."""
     for seed in (42, 43):
         s, r = _unit_pairs(seed)
@@ -109,7 +112,7 @@ def check_kappa(fn):
     _ok("κ is right (symmetric, traceless, and equal to Davenport's form), for two and three vector pairs.")
 
 
-def check_largest_eigenvector(fn):
+def check_largest_eigenvector(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(kappa) -> q`` (largest-eigenvalue eigenvector, q0 >= 0; seed 002 eqs 46-47)."""
     rng = np.random.default_rng(46)
     for _ in range(3):
@@ -154,7 +157,7 @@ def check_largest_eigenvector(fn):
 
 
 @forbids
-def check_weights(fn):
+def check_weights(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(G, B_c, B) -> (alpha_g, alpha_m)`` (seed 002 eqs 9, 15, 64-65, with the 0/0 guard)."""
     cases = [
         ([0.1, 0.2, 1.1], [30.0, 5.0, 44.0], 50.0),
@@ -204,7 +207,7 @@ def check_weights(fn):
 
 
 @forbids
-def check_heading(fn):
+def check_heading(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(G, B_c) -> heading`` (rad; tilt-compensated compass, NED)."""
     for e in np.array([[0.0, 0.0, 0.5], [0.3, -0.2, 2.5], [-2.0, 0.4, -1.0]]):
         q = rotations.euler_to_quat(e)

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import ecompass, freescale as fz, rotations
 from ._core import Feedback, _answer, _call, _first_match, forbids, _general_case, _ok, _same, _where
@@ -23,7 +25,7 @@ __all__ = [
 
 
 @forbids
-def check_measurement_matrix(fn):
+def check_measurement_matrix(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(dt) -> C`` (7×10; seed 002 eq 141 as reconstructed from eqs 137-139)."""
     for dt in (0.04, 0.01):
         C = _call(fn, dt, what="your C")
@@ -63,7 +65,7 @@ def check_measurement_matrix(fn):
 
 
 @forbids
-def check_process_noise(fn):
+def check_process_noise(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x_prev, dt) -> Q_w`` (10×10; seed 002 eqs 142-159, v5.00 constants)."""
     rng = np.random.default_rng(142)
     for x in (np.zeros(10), np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.5, 3), [1.5]])):
@@ -113,7 +115,7 @@ def check_process_noise(fn):
 
 
 @forbids
-def check_measurement_noise(fn):
+def check_measurement_noise(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(qvgqa, qvbqd, dt) -> Q_v`` (7×7; seed 002 eqs 160-165 with the 7 µT² floor)."""
     for qa, qd in ((0.0, 0.0), (0.006, 50.0), (1.0, 3.0)):
         Q = _call(fn, qa, qd, 0.04, what="your Q_v")
@@ -155,7 +157,7 @@ def check_measurement_noise(fn):
 
 
 @forbids
-def check_gain(fn):
+def check_gain(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(Q_w, C, Q_v) -> K`` (seed 002 eq 170)."""
     C, Qw, Qv = fz.measurement_matrix(0.04), fz.process_noise(np.zeros(10), 0.04), fz.measurement_noise(0.0, 0.0, 0.04)
     K = _call(fn, Qw, C, Qv, what="your gain")
@@ -189,7 +191,7 @@ def check_gain(fn):
 
 
 @forbids
-def check_step(fn):
+def check_step(fn: Callable[..., None]) -> None:
     """Check a student's ``fn(kf, gyr_dps, G, B_c)`` that advances a ``freescale.Kalman9`` one step in place."""
     rng = np.random.default_rng(170)
     n = 25
@@ -235,7 +237,7 @@ def _turned(q, u):
 
 
 @forbids
-def check_qrot(fn):
+def check_qrot(fn: Callable[..., ArrayLike]) -> None:
     """Lab 05 exercise 5: a student's ``fn(u, v) -> q``, the quaternion of the rotation between two vectors with
     ``v = q* u q`` and q0 >= 0 (seed 002 §4.2-4.4, eqs 66-76), including both 180° rules (eqs 73-75). Vectors are
     not unit, so a formula that forgets to normalise them shows up."""

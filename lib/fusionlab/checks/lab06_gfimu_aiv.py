@@ -4,7 +4,10 @@ the visible checks of its exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import gfimu as _gfimu
 from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _general_case, _ok, _where
@@ -13,7 +16,7 @@ __all__ = ["check_aiv_map", "check_quadratic_jacobian", "check_three_state_noise
 
 
 @forbids
-def check_aiv_map(fn):
+def check_aiv_map(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn() -> L`` (9×12, AIV = L a / d; seed 004 eqs 3.8–3.10 [R])."""
     L = _call(fn, what="your L")
     ref = _gfimu.aiv_map()
@@ -56,7 +59,7 @@ def check_aiv_map(fn):
 
 
 @forbids
-def check_quadratic_jacobian(fn):
+def check_quadratic_jacobian(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x) -> H`` (6×3, seed 004 eq 3.29)."""
     for x in (np.array([0.0329, -0.002, 0.0066]), np.array([1.0, 2.0, 3.0])):
         H = _call(fn, x, what="your H")
@@ -80,7 +83,7 @@ def check_quadratic_jacobian(fn):
 
 
 @forbids
-def check_three_state_noise(fn):
+def check_three_state_noise(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(noise_density, dt, d) -> (Q, R, M)`` (seed 004 eqs 3.24–3.25, 3.30–3.31, M corrected)."""
     args = (500 * _gfimu.UG, 0.01, 1.0)
     out = _call_tuple(fn, args, 3, "your noise matrices")
@@ -144,7 +147,7 @@ def _reference_update(x, P, y, R, M):
 
 
 @forbids
-def check_correlated_update(fn):
+def check_correlated_update(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(x, P, y, R, M) -> (x_post, P_post)`` (seed 004 eqs 3.32–3.34 with h(x) of 3.28)."""
     for seed in (32, 33):
         x, P, y, R, M = _update_case(seed)

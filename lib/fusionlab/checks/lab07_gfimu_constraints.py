@@ -4,16 +4,23 @@ checks of its exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import gfimu_ekf as _gfimu_ekf, gfimu_dynamics as _gfimu_dynamics
 from ._core import Feedback, _pair, _answer, _call, _call_tuple, _first_match, forbids, _ok, _where
+
+if TYPE_CHECKING:
+    import sympy as sp
 
 __all__ = ["check_dynamic_jacobian", "check_lie_derivative", "check_constraints"]
 
 
 @forbids
-def check_dynamic_jacobian(fn):
+def check_dynamic_jacobian(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x) -> H`` (9×15; seed 004 eq 5.19) for x = [ω, α, b₁…b₉]."""
     rng = np.random.default_rng(519)
     for x in (np.concatenate([[0.4, 0.3, 0.0], [1.2, 1.2, 0.0], rng.normal(0, 0.05, 9)]), rng.normal(0, 1, 15)):
@@ -46,7 +53,7 @@ def check_dynamic_jacobian(fn):
 
 
 @forbids
-def check_lie_derivative(fn):
+def check_lie_derivative(fn: Callable[..., sp.Matrix]) -> None:
     """Check a student's sympy ``fn(L, f, x) -> ∂L/∂x · f`` (seed 004 eqs 5.26–5.27)."""
     import sympy as sp  # here, not at the top: sympy takes a second to import
 
@@ -70,7 +77,7 @@ def check_lie_derivative(fn):
 
 
 @forbids
-def check_constraints(fn):
+def check_constraints(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(x) -> (e, E)`` (seed 004 eq 5.40 and its Jacobian), x = [Δθ; Δω]."""
     rng = np.random.default_rng(540)
     for x in (rng.normal(0, 0.03, 6), np.array([0.03, 0.02, -0.01, 0.006, 0.004, -0.002])):

@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import northfinder as _nf
 from ._core import Feedback, _pair, _call, _first_match, forbids, _ok
@@ -20,7 +23,7 @@ __all__ = [
 
 
 @forbids
-def check_omega_x(fn):
+def check_omega_x(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(a_rC, a_Az, a_Bz, a_Cz, d, rho, l, omega_r) -> ω_x`` (seed 004 eq 4.15)."""
     rng = np.random.default_rng(801)
     d, rho, l, wr = 0.15, 0.02, 0.1, 50.0
@@ -62,7 +65,7 @@ def _noise_cases():
 
 
 @forbids
-def check_noise_printed(fn):
+def check_noise_printed(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` as printed (seed 004 eq 4.44)."""
     for case in _noise_cases():
         got = float(_call(fn, *case, what="your coefficient"))
@@ -91,7 +94,7 @@ def check_noise_printed(fn):
 
 
 @forbids
-def check_noise_exact(fn):
+def check_noise_exact(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's exact ``fn(rho, d, l, omega_r) -> σ_g²/R_a`` (correction of seed 004 eq 4.44)."""
     for case in _noise_cases():
         got = float(_call(fn, *case, what="your coefficient"))
@@ -176,7 +179,7 @@ def _demod_variants(x, th):
 
 
 @forbids
-def check_demodulate(fn):
+def check_demodulate(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.28-4.32 (sampled references)."""
     for deg, x, th in _demod_cases():
         got = float(_call(fn, x, th, what="your demodulation"))
@@ -197,7 +200,7 @@ def check_demodulate(fn):
 
 
 @forbids
-def check_sync_sampling(fn):
+def check_sync_sampling(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x, theta) -> heading`` (rad) against seed 004 eqs 4.33-4.35 (nearest samples)."""
     for deg, x, th in _demod_cases()[:2] + [_demod_cases()[3]]:
         got = float(_call(fn, x, th, what="your synchronous sampling"))
@@ -240,7 +243,7 @@ def _tilted_phase(psi, roll, pitch, lat):
 
 
 @forbids
-def check_tilted_heading(fn):
+def check_tilted_heading(fn: Callable[..., ArrayLike]) -> None:
     """Lab 08 exercise 6: a student's ``fn(zeta, roll, pitch, lat) -> ψ`` (rad), the heading of a tilted north finder
     from the phase of its line (seed 004 §4.4.3, eqs 4.36-4.43). The phases are made here from known headings."""
     wrap = lambda a: float(np.angle(np.exp(1j * a)))

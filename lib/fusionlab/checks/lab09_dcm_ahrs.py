@@ -4,7 +4,10 @@ exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import dcm as _dcm, rotations
 from ._core import Feedback, _call, _call_tuple, _first_match, forbids, _ok, _same, _where
@@ -13,7 +16,7 @@ __all__ = ["check_dcm_measurement_matrices", "check_dcm_predict"]
 
 
 @forbids
-def check_dcm_measurement_matrices(fn_a, fn_m):
+def check_dcm_measurement_matrices(fn_a: Callable[..., ArrayLike], fn_m: Callable[..., ArrayLike]) -> None:
     """Check ``fn_a(g) -> H_a`` and ``fn_m(inclination) -> H_m`` (3×9 each; seed 004 eqs 6.16, 6.19)."""
     for g in (_dcm.G, 9.81):
         H = _call(fn_a, g, what="your H_a")
@@ -88,7 +91,7 @@ def _dcm_predict_ref(x, P, gyr, dt, gyro_noise, bias_walk):
 
 
 @forbids
-def check_dcm_predict(fn):
+def check_dcm_predict(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(x, P, gyr, dt, gyro_noise, bias_walk) -> (x_pred, P_pred)`` (seed 004 eqs 6.11-6.13)."""
     rng = np.random.default_rng(611)
     C = rotations.euler_to_dcm([0.4, -0.3, 2.0])

@@ -4,7 +4,10 @@ its exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
 from .. import dcm as _dcm, gpsins as _gpsins, rotations
@@ -14,7 +17,7 @@ __all__ = ["check_ins_transition", "check_sigma_points"]
 
 
 @forbids
-def check_ins_transition(fn):
+def check_ins_transition(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(x, acc, A_tilde, dt) -> F`` (21×21; seed 004 eq 7.12, in x̂⁻ = F x̂ + g_c of eq 7.14)."""
     rng = np.random.default_rng(713)
     C = rotations.euler_to_dcm([0.3, -0.1, 2.2])
@@ -80,7 +83,7 @@ def check_ins_transition(fn):
 
 
 @forbids
-def check_sigma_points(fn):
+def check_sigma_points(fn: Callable[..., tuple]) -> None:
     """Check a student's ``fn(x, P) -> (sigmas (2n, n), weights (2n,))`` (seed 004 eqs 7.24-7.26)."""
     rng = np.random.default_rng(724)
     L = rng.normal(size=(4, 4))

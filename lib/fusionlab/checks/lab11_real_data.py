@@ -4,7 +4,10 @@ checks of its exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import metrics, rotations
 from ._core import Feedback, _pair, _call, _first_match, forbids, _ok
@@ -83,7 +86,7 @@ def _broad_angle_check(fn, what, ref_fn, formula, truth):
 
 
 @forbids
-def check_broad_heading(fn):
+def check_broad_heading(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(q_err) -> (N,) rad``: heading error ``2·atan(|z/w|)`` (BROAD, Laidig et al. 2021)."""
     q, abs_delta, _ = _broad_error_cases()
     _broad_angle_check(
@@ -93,7 +96,7 @@ def check_broad_heading(fn):
 
 
 @forbids
-def check_broad_inclination(fn):
+def check_broad_inclination(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(q_err) -> (N,) rad``: inclination error ``2·acos(√(w² + z²))`` (BROAD)."""
     q, _, eps = _broad_error_cases()
     got = _call(fn, q, what="your inclination error").reshape(-1)
@@ -111,7 +114,7 @@ def check_broad_inclination(fn):
 
 
 @forbids
-def check_broad_rmse(fn):
+def check_broad_rmse(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(angle_rad, movement) -> float`` degrees: RMS over the mask, NaN samples ignored."""
     rng = np.random.default_rng(1112)
     x = rng.uniform(0.0, 0.3, 200)

@@ -4,7 +4,10 @@ visible checks of its exercises (see :mod:`fusionlab.checks`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import calibration, rotations, sensor_errors
 from ._core import Feedback, _call, _first_match, forbids, _general_case, _ok
@@ -21,7 +24,7 @@ def _lab12_ellipsoid(seed, noise=0.0):
 
 
 @forbids
-def check_quadric_fit(fn):
+def check_quadric_fit(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(mag) -> (9,)``: the normal equations ``(DᵀD) v = Dᵀ1`` of the quadric fit."""
     mag = _lab12_ellipsoid(1201, noise=0.3)
     got = _call(fn, mag, what="your quadric fit").ravel()
@@ -61,7 +64,7 @@ def check_quadric_fit(fn):
 
 
 @forbids
-def check_arw_reading(fn):
+def check_arw_reading(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(taus, adev, tau_max) -> N``: slope −½ line through τ <= tau_max, read at τ = 1 s."""
     rng = np.random.default_rng(1202)
     taus = np.logspace(-2, 2, 30)
@@ -110,7 +113,7 @@ def check_arw_reading(fn):
 
 
 @forbids
-def check_remove_gravity(fn):
+def check_remove_gravity(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(q_bn, acc, g) -> (N, 3)``: ENU acceleration ``C_bn f − (0, 0, g)``
     (seed 001 position note §2)."""
     rng = np.random.default_rng(1203)

@@ -4,7 +4,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import rotations
 from ._core import Feedback, _call, _first_match, _general_case, _ok, _where, forbids
@@ -21,7 +24,7 @@ def _case():
 
 
 @forbids
-def check_integrate_gyro(fn):
+def check_integrate_gyro(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(q0, gyr, fs) -> (N, 4)``: the attitude after each gyro sample, ``q_k = q_{k-1} ⊗
     q(ω_k / fs)``, body->ENU quaternions, the rates in the body frame."""
     q0, gyr, fs = _case()
@@ -95,7 +98,7 @@ def check_integrate_gyro(fn):
 
 
 @forbids
-def check_capstone_filter(estimate, sensors="9D"):
+def check_capstone_filter(estimate: Callable[..., ArrayLike], sensors: str = "9D") -> None:
     """Check a student's capstone filter ``estimate(gyr, acc, mag, fs) -> (N, 4)`` on a short synthetic hand-motion
     record (no data needed): no module of the library beyond what the grader's box holds
     (:func:`fusionlab.capstone.outside_box`), N unit quaternions, within the time budget, causal (as

@@ -6,8 +6,10 @@ the angle between two attitudes: the visible checks of its exercises (see :mod:`
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable, Iterator
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import accel_tilt, calibration, rotations
 from ._core import Feedback, _call, _first_match, _general_case, _ok, _pair, forbids
@@ -35,7 +37,7 @@ _NEXT = (
 
 
 @contextlib.contextmanager
-def refusal_box():
+def refusal_box() -> Iterator[None]:
     """Around Lab 14's loading call: a ``ValueError`` -- how :func:`fusionlab.recordings.load_recording` refuses a
     file or an argument, naming the file, the line and the argument that fixes it -- stops the cell as one ✗ box (a
     :class:`RecordingRefused`) with that message and what to do next, not as a traceback through the loader. Any
@@ -74,7 +76,7 @@ def _lab14_gyro():
 
 
 @forbids
-def check_phone_gyro_bias(fn):
+def check_phone_gyro_bias(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(gyr, rest) -> (3,)``: the mean gyro reading over the samples where ``rest`` is True."""
     gyr, rest = _lab14_gyro()
     got = _call(fn, gyr, rest, what="your gyro bias")
@@ -132,7 +134,7 @@ def _tilt_ref(acc):
 
 
 @forbids
-def check_rest_tilt(fn):
+def check_rest_tilt(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(acc) -> float``: the angle (deg) of the phone's z axis from up, from the mean specific
     force of rest samples."""
     acc = _lab14_rest_acc(35.0, 120.0, 1402)
@@ -208,7 +210,7 @@ def _lab14_quats():
 
 
 @forbids
-def check_rotation_angle(fn):
+def check_rotation_angle(fn: Callable[..., ArrayLike]) -> None:
     """Check a student's ``fn(q1, q2) -> (N,)``: the angle (deg) of the rotation that takes attitude q1 to q2."""
     q1, q2 = _lab14_quats()
     got = _call(fn, q1, q2, what="your rotation angle")

@@ -621,26 +621,26 @@ if len(_BY_ID) != len(SLIPS):
     raise RuntimeError("fusionlab.checks.slips: two slips share an id")
 
 
-def by_id(slip_id):
+def by_id(slip_id: str) -> Slip:
     """The :class:`Slip` of ``slip_id``; raises KeyError for an id that is not listed."""
     return _BY_ID[slip_id]
 
 
-def of_check(check):
+def of_check(check: str) -> tuple[Slip, ...]:
     """The slips the check named ``check`` (``"check_quat_multiply"``) may name: its own, then any check's."""
     if not isinstance(check, str):
         raise ValueError(f"check must be a check's name (a str); got {type(check).__name__}")
     return tuple(s for s in SLIPS if s.check == check) + tuple(s for s in SLIPS if not s.check)
 
 
-def named(check, message):
+def named(check: str, message: str) -> str | None:
     """The id of the first slip of ``check`` that ``message`` (a check's Feedback) names, or None."""
     if not isinstance(message, str):
         raise ValueError(f"message must be a str; got {type(message).__name__}")
     return next((s.id for s in of_check(check) if s.says in message), None)
 
 
-def outcome(check, message):
+def outcome(check: str, message: str) -> str:
     """What the message of a failed check says of the answer: a slip's id, :data:`NOT_ATTEMPTED` (the answer is
     still the release's stub) or :data:`UNRECOGNISED`."""
     slip = named(check, message)
@@ -651,7 +651,7 @@ def outcome(check, message):
     return UNRECOGNISED
 
 
-def text(slip_id):
+def text(slip_id: str) -> str:
     """``slip_id`` in words: the check's own words for a slip, the outcome's words otherwise."""
     if slip_id in OUTCOMES:
         return OUTCOMES[slip_id]
