@@ -28,8 +28,13 @@ import signal
 import socket
 import sys
 import tempfile
+from typing import TYPE_CHECKING
 
 from grading import client, handin, sandbox
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterable, Sequence
+    from typing import IO
 
 #: Judges run as users above the boxes' (:data:`grading.sandbox.FIRST_UID` + slot): one per slot, as the boxes.
 JUDGE_FIRST_UID = sandbox.FIRST_UID + sandbox.MAX_SLOTS
@@ -40,7 +45,7 @@ _MESSAGE_BYTES = 4096
 APART_CPU_SECONDS = 120
 
 
-def judge_uid(slot):
+def judge_uid(slot: int) -> int:
     """The user the judge of slot ``slot`` runs as when grading as root."""
     if not isinstance(slot, int) or not 0 <= slot < sandbox.MAX_SLOTS:
         raise ValueError(f"slot must be an int in [0, {sandbox.MAX_SLOTS}); got {slot!r}")
@@ -52,18 +57,18 @@ class LabBoxes:
     folder seeded with the student's submitted files or with none. Started in this process by :meth:`start`; as
     root, :func:`split` hands the same object to the launcher, which calls :meth:`open`."""
 
-    def __init__(self, lab, student, slot):
+    def __init__(self, lab, student: str, slot: int) -> None:
         self.lab, self.student, self.slot = lab, student, slot
 
-    def keys(self):
+    def keys(self) -> set[str]:
         return set(self.lab.tests)
 
-    def prepare(self):
+    def prepare(self) -> None:
         """What a box needs that the judge, no longer root, could not make: each test's library copy."""
         for gid in self.lab.tests:
             self.lab.box_root(gid)
 
-    def open(self, key, files):
+    def open(self, key: str, files: bool) -> tuple[client.Started, IO[bytes], IO[bytes]]:
         """Start the box of test ``key``: (process, input, output) as :class:`grading.client.Box` takes them."""
         if key not in self.keys():
             raise ValueError(f"expected a test cell of {self.lab.lab}, got {key!r}")
@@ -76,11 +81,11 @@ class LabBoxes:
             memory_bytes=sandbox.box_bytes(getattr(self.lab, "limits", None)),
         )
 
-    def start(self, key, files=True):
+    def start(self, key: str, files: bool = True) -> client.Box:
         """A :class:`grading.client.Box` running the box ``key``, started in this process."""
         return client.Box(self.open(key, files))
 
-    def close(self):
+    def close(self) -> None:
         pass
 
 
@@ -154,10 +159,10 @@ class _Remote:
 class RemoteBoxes:
     """The judge's end of the launcher's socket: the boxes it starts, as :meth:`LabBoxes.start` would."""
 
-    def __init__(self, sock, launcher_pid):
+    def __init__(self, sock: socket.socket, launcher_pid: int) -> None:
         self.sock, self.launcher_pid = sock, launcher_pid
 
-    def ask(self, request, fds=0):
+    def ask(self, request: dict, fds: int = 0) -> dict | tuple[dict, list[int]]:
         self.sock.send(json.dumps(request).encode())
         data, got, *_ = socket.recv_fds(self.sock, _MESSAGE_BYTES, fds)
         if not data:
@@ -169,23 +174,23 @@ class RemoteBoxes:
             raise RuntimeError(f"the launcher could not do {request}: {reply['error']}")
         return (reply, got) if fds else reply
 
-    def start(self, key, files=True):
+    def start(self, key: str, files: bool = True) -> client.Box:
         reply, fds = self.ask({"start": [key, bool(files)]}, fds=2)
         if len(fds) != 2:
             raise RuntimeError(f"the launcher sent {len(fds)} pipe ends for a box, expected 2")
         return client.Box((_Remote(self, reply["box"]), os.fdopen(fds[0], "wb"), os.fdopen(fds[1], "rb")))
 
-    def forget(self):
+    def forget(self) -> str:
         """:func:`forget_caches`, done by the launcher (root)."""
         return self.ask({"forget": None})["forgot"]
 
-    def close(self):
+    def close(self) -> None:
         """Close the socket (the launcher ends every box it started and exits) and wait for the launcher."""
         self.sock.close()
         os.waitpid(self.launcher_pid, 0)
 
 
-def forget_caches():
+def forget_caches() -> str:
     """Make the kernel forget the file system's caches (its names, found and not found, its inodes, the pages of
     files): what one box could leave there for a later box to time (a name looked up, a file read). Root only; "" when
     done, else why not. Machine-wide and cheap (about 0.4 s here), the caches fill again as they are used."""
@@ -208,7 +213,7 @@ def _libc():
     return ctypes.CDLL(None, use_errno=True)
 
 
-def drop_root(uid, read_all=False):
+def drop_root(uid: int, read_all: bool = False) -> None:
     """Run the rest of this process as ``uid`` (group ``uid``, no other groups), with ``no_new_privs``: nothing it
     runs can gain a privilege back (a set-user-id program runs as the caller). With ``read_all`` it keeps one
     capability, ``CAP_DAC_READ_SEARCH`` (read any file, list any folder; no writing, no signals): the last resort
@@ -236,7 +241,7 @@ def drop_root(uid, read_all=False):
         raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
 
 
-def closed_folders(paths):
+def closed_folders(paths: Iterable[str]) -> dict[str, list[str]]:
     """``{folder: entries}``: for each of ``paths``, the first folder on its way from ``/`` that other users may not
     enter (no ``o+x``: root's home, say), with the entry of it on that way (``/root`` -> ``.pyenv``). ``{}`` when
     every path is open to all."""
@@ -255,7 +260,7 @@ def closed_folders(paths):
     return {folder: sorted(entries) for folder, entries in out.items()}
 
 
-def open_view(paths, stage):
+def open_view(paths: Iterable[str], stage: str) -> list[str]:
     """Give this process a view of the file system of its own (a mount namespace) in which each folder of
     :func:`closed_folders` of ``paths`` is an empty, open folder holding only the entries on the way to ``paths``
     (root's home shows ``.pyenv`` and nothing else), so that a judge that is not root imports from there without
@@ -315,7 +320,7 @@ def _in_dropped_child(slot, read_all, task):
     return said
 
 
-def judge_problem(slots):
+def judge_problem(slots: Iterable[int]) -> str | None:
     """Why the judges of ``slots`` cannot run as their own users here, as a message saying what to do; None if they
     can (or not root: nothing is given up). Each is tried in a child process."""
     if os.geteuid() != 0:
@@ -331,7 +336,7 @@ def judge_problem(slots):
     return None
 
 
-def import_folders():
+def import_folders() -> list[str]:
     """The folders the judge imports from: the import path, and the folders holding the course's own packages
     (``fusionlab`` and ``grading``), which an editable install reaches through an import hook of its own rather than
     through the import path. A module the judge imports late (after it gave up root) is looked up there."""
@@ -342,7 +347,7 @@ def import_folders():
     return [p for p in dict.fromkeys([*sys.path, *own]) if p and os.path.isdir(p)]
 
 
-def course_files():
+def course_files() -> list[str]:
     """The folders and Python files of the course's own packages (``fusionlab``, ``grading``), which the judge
     imports from, some of them late (after it gave up root)."""
     import fusionlab
@@ -356,7 +361,7 @@ def course_files():
     return out
 
 
-def closed_within(paths):
+def closed_within(paths: Iterable[str]) -> str | None:
     """The first of ``paths``, or of :func:`course_files`, that other users may not read (a folder they may not
     list or enter, a file they may not read) even once every folder on its way is open: a checkout made under
     ``umask 077``, say. None when all are open; then :func:`open_view` is enough for the judge."""
@@ -381,7 +386,7 @@ def _first_refused(paths):
     return next((f for f in course_files() if not os.access(f, os.R_OK)), "")
 
 
-def unreadable(slot, paths=None):
+def unreadable(slot: int, paths: Iterable[str] | None = None) -> str | None:
     """The first folder of ``paths`` (by default :func:`import_folders`, from which the judge imports the library and
     Python's packages), or file of :func:`course_files`, that the judge of ``slot`` cannot read as its own user, or
     None (or not root)."""
@@ -391,7 +396,7 @@ def unreadable(slot, paths=None):
     return _in_dropped_child(slot, False, lambda: _first_refused(paths)) or None
 
 
-def view_problem(slot, paths=None):
+def view_problem(slot: int, paths: Iterable[str] | None = None) -> str:
     """Why the judge of ``slot`` cannot reach ``paths`` (:func:`import_folders` by default) through :func:`open_view`
     as its own user, with no capability; "" when it can. Tried in a child process."""
     paths = [p for p in (import_folders() if paths is None else paths) if p and os.path.isdir(p)]
@@ -409,7 +414,7 @@ def view_problem(slot, paths=None):
     return _in_dropped_child(slot, None, task)
 
 
-def reach_message(blocked, slot):
+def reach_message(blocked: str, slot: int) -> str:
     """What a grading run says when the import path crosses ``blocked``, a folder only root may read."""
     problem = view_problem(slot)
     if not problem:
@@ -423,7 +428,7 @@ def reach_message(blocked, slot):
     )
 
 
-def become_judge(slot, folders, stage_in, read_all):
+def become_judge(slot: int, folders: Sequence[str], stage_in: str, read_all: bool) -> None:
     """Give up root for the judge of ``slot``. ``read_all`` (``folders`` cross a folder only root may enter): first
     a view of its own in which the folders on their way are open (:func:`open_view`, staged in a new folder of
     ``stage_in``); where the kernel gives none, or where something within them is closed too
@@ -438,7 +443,7 @@ def become_judge(slot, folders, stage_in, read_all):
     drop_root(judge_uid(slot), read_all=keep)
 
 
-def split(maker, slot, read_all=False):
+def split(maker, slot: int, read_all: bool = False):
     """The boxes of one student (``maker``: :class:`LabBoxes`, or the capstone's). As root: fork the launcher, which
     starts them with ``maker.open``, and run the rest of this process as :func:`judge_uid` (call it in a process of
     its own: :func:`apart`); returns the judge's end. Otherwise ``maker`` itself, which starts them here.
@@ -497,7 +502,15 @@ def _effective_capabilities():
         return next((int(line.split(":")[1], 16) for line in f if line.startswith("CapEff:")), -1)
 
 
-def apart(target, args, *, preload, memory_bytes, who, cpu_seconds=APART_CPU_SECONDS):
+def apart(
+    target: Callable[..., dict],
+    args: tuple,
+    *,
+    preload: Iterable[str],
+    memory_bytes: int,
+    who: str,
+    cpu_seconds: int = APART_CPU_SECONDS,
+) -> dict:
     """``target(*args)`` (a module's function returning a dict of plain data) in a process of its own with
     ``memory_bytes`` of address space and ``cpu_seconds`` of its own CPU time (the boxes' time is theirs), started
     from a clean server process (not forked from this one's threads), which imports ``preload`` once for all. What

@@ -1,6 +1,8 @@
 """``python -m grading.capstone fetch`` and ``python -m grading.capstone grade ...``: :func:`grading.capstone.main`
 (in :mod:`grading.capstone.command`)."""
 
+from __future__ import annotations
+
 import sys
 
 from .command import main

@@ -12,10 +12,16 @@ compared with the whole-trial outputs afterwards (:func:`verdict`); a call that 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fusionlab.capstone import CAUSAL_TOL, causal_ks, change_up_to, changed_after, samples_up_to
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+
+    from .trials import Scored
 
 
 @dataclass
@@ -30,7 +36,14 @@ class Probe:
     why: str = ""
 
 
-def probe(runner, scored, chosen, budgets, rng, every):
+def probe(
+    runner,
+    scored: Sequence[Scored],
+    chosen: int,
+    budgets: Sequence[float],
+    rng: np.random.Generator,
+    every: np.random.Generator,
+) -> list[Probe]:
     """The causality check's calls, each in a fresh box, before any box sees a whole trial: on the ``chosen`` trial,
     its samples after each of three secret k replaced (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``) and
     its samples up to another secret k alone (:func:`prefix_k`); on every other trial, its samples after one secret k
@@ -53,7 +66,9 @@ def probe(runner, scored, chosen, budgets, rng, every):
     return out
 
 
-def verdict(probes, scored, outputs, chosen):
+def verdict(
+    probes: Iterable[Probe], scored: Sequence[Scored], outputs: dict[int, np.ndarray], chosen: int
+) -> tuple[bool | None, str]:
     """(True/False/None, message) of the calls :func:`probe` made, against ``outputs`` (``{trial index: q}`` of the
     trials on which the filter ran): the chosen trial's calls first. A call that gave no quaternions on a trial on
     which the filter ran leaves it not checked: a filter that fails on the changed samples was not shown causal there
@@ -95,12 +110,12 @@ def verdict(probes, scored, outputs, chosen):
     )
 
 
-def prefix_k(n, rng):
+def prefix_k(n: int, rng: np.random.Generator) -> int:
     """The secret k of the prefix check for a trial of ``n`` samples: anywhere after its first tenth."""
     return int(rng.integers(max(1, n // 10), n - 1))
 
 
-def causality_trial(seed, n, rng=None):
+def causality_trial(seed: int, n: int, rng: np.random.Generator | None = None) -> int:
     """Index of the secret trial (of ``n``) on which the causality check runs, for the disguise's ``seed``."""
     rng = np.random.default_rng([seed, 7]) if rng is None else rng
     return int(rng.integers(n))

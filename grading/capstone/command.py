@@ -12,10 +12,18 @@ import json
 import secrets
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .program import IMPLAUSIBLY_CLOSE, LAB
 from .report import grade_class
 from .trials import CapstoneDataMissing, disguise, fetch, hidden_trials, stand_in
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import nbformat
+
+    from fusionlab.datasets import BroadTrial
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -23,7 +31,7 @@ from .trials import CapstoneDataMissing, disguise, fetch, hidden_trials, stand_i
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def read_submissions(submitted, only=None):
+def read_submissions(submitted: Path | str, only: list[str] | None = None) -> dict[str, nbformat.NotebookNode | str]:
     """``{student: notebook, or the reason it cannot be read}`` from ``<submitted>/<student>/13_capstone/``."""
     import nbformat
 
@@ -51,7 +59,7 @@ def read_submissions(submitted, only=None):
     return out
 
 
-def saved_seed(path, trials, stand_in):
+def saved_seed(path: Path | str, trials: Sequence[BroadTrial], stand_in: bool) -> int | None:
     """The seed that ``run.json`` at ``path`` saved, if it was saved for the same trials (names, lengths, stand-in
     or hidden); None otherwise."""
     try:
@@ -68,7 +76,7 @@ def saved_seed(path, trials, stand_in):
     return run["seed"] if same else None
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m grading.capstone", description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
     f = sub.add_parser("fetch", help="download the hidden trials once (make capstone-data)")

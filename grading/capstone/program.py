@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from fusionlab.capstone import ALLOWED_MODULES, BOX_MODULES, SENSORS
 from fusionlab.checks import exercises
@@ -14,6 +15,11 @@ from grading import boxlib
 from grading.cells import nbg, parse, prune, python_of
 
 from .scoring import MATCH_RAD
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    import nbformat
 
 LAB = "13_capstone"
 FUNCTION = "estimate"
@@ -166,7 +172,7 @@ EMBED_CHARS = 200_000  # code the box runs beyond this size is listed for review
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def program_of(nb):
+def program_of(nb: nbformat.NotebookNode) -> list[tuple[str | None, str]]:
     """The cells the box runs, as source: the setup cell (grade id ``imports``), every answer cell, and the other
     cells those need (:func:`grading.cells.prune`). Tuning and plotting cells that define nothing the answers use
     are left out (they read the shipped trials, which the box does not have)."""
@@ -204,7 +210,7 @@ def _module_scope(tree):
             stack += list(ast.iter_child_nodes(node))
 
 
-def declared_sensors(cells):
+def declared_sensors(cells: Iterable[tuple[str | None, str]]) -> tuple[str, str]:
     """The sensor set a submission declares, read from its code (never from its process): ``(sensors, note)``.
 
     A declaration is a top-level assignment of a literal, ``SENSORS = "6D"`` or ``SENSORS = "9D"``, in one of the
@@ -264,7 +270,7 @@ def declared_sensors(cells):
     return (literal[0] if literal else "9D"), ""
 
 
-def loaders():
+def loaders() -> tuple[str, ...]:
     """The loaders the scan names (:attr:`fusionlab.checks.exercises.Exercise.loaders` of the capstone's filter,
     the table of exercises' row): modules and functions that load a module or run code from a name or a text built
     at run time (``importlib``, ``pydoc.locate``, ``timeit``'s text, ``ctypes`` ...)."""
@@ -273,7 +279,7 @@ def loaders():
     return next(e.loaders for e in exercises.of_lab(LAB) if FUNCTION in e.answer)
 
 
-def as_run(source):
+def as_run(source: str) -> str:
     """The Python text that the box's IPython shell runs for a cell's ``source``: its magics and escapes made calls
     (``x = %time f()`` is ``x = get_ipython().run_line_magic('time', 'f()')``, ``,exec a`` is ``exec("a")``), which
     is what :func:`scan` reads."""
@@ -313,7 +319,7 @@ def _ipython_uses(tree):
     ]
 
 
-def scan(cells):
+def scan(cells: Iterable[tuple[str | None, str]]) -> list[tuple[str, str]]:
     """Cheats seen in the code the box runs (``[(grade_id, source)]``): ``[(kind, why)]`` (kinds of :data:`CHEATS`).
 
     Each cell is read as the box's IPython shell runs it (:func:`as_run`: magics and escapes as the calls they
@@ -405,7 +411,7 @@ def _allowed_code():
 _BASELINES = {}
 
 
-def model_program(course):
+def model_program(course: Path | str) -> str:
     """The code the box would run of the lab's own notebook (the solution's, else the release's; "" without
     either): what an honest answer may have in common with the library (the starter, the solution's filter)."""
     for folder in ("solutions", "labs"):
@@ -417,7 +423,7 @@ def model_program(course):
     return ""
 
 
-def library_copies(cells, model=""):
+def library_copies(cells: Iterable[tuple[str | None, str]], model: str = "") -> list[tuple[str, str]]:
     """Cheats ``[("copies the library's filter", why)]``: cells the box runs that hold code of one of the library's
     filter functions (:func:`_filter_functions`), found as :mod:`grading.similarity` finds a pasted library function:
     the match covers :data:`grading.similarity.LIB_SHARE` of the library function, is at least
@@ -452,7 +458,7 @@ def library_copies(cells, model=""):
     return found
 
 
-def absent_modules():
+def absent_modules() -> tuple[str, ...]:
     """The library's modules that the capstone's box holds as placeholders (:func:`placeholder_module`): every
     module of ``fusionlab``'s top level but :data:`fusionlab.capstone.BOX_MODULES`, the filters and data loaders
     (:data:`FILTER_MODULES`, :data:`FILE_MODULES`) among them. Subpackages (``fusionlab.checks``) stay."""
@@ -469,7 +475,7 @@ def absent_modules():
     return names
 
 
-def placeholder_module(short):
+def placeholder_module(short: str) -> str:
     """The text of the module that stands for ``fusionlab.<short>`` (one of :func:`absent_modules`) in the
     capstone's box, written here and holding none of the library's code. A filter or data module's names say
     :data:`STUB_MESSAGE` (reaching one is a cheat); every other absent module's say :data:`BLOCK_MESSAGE`.
@@ -506,7 +512,7 @@ def placeholder_module(short):
     return "\n".join(lines)
 
 
-def box_library(scratch):
+def box_library(scratch: Path | str) -> Path:
     """The library copy and shadow packages every capstone box gets (made once per run); returns its folder.
 
     The copy is the library's, but for the modules of :func:`absent_modules` (the filters and data loaders, and

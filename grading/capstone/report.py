@@ -10,6 +10,7 @@ import shutil
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import quote
 
 import numpy as np
@@ -20,6 +21,15 @@ from grading import cgroup, launcher, sandbox
 from .program import CHEATS, LAB, box_library, model_program
 from .runner import StudentResult, gates_failed, grade_apart
 from .scoring import PUBLISHED, cached_references, mean_scored, references_of, rubric_points
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Sequence
+
+    import nbformat
+    from matplotlib.figure import Figure
+
+    from .scoring import TrialResult
+    from .trials import Scored
 
 COLUMNS = (
     "rank",
@@ -142,7 +152,7 @@ def _cheat_text(cheats):
     return "; ".join(parts)
 
 
-def leaderboard_rows(results, refs):
+def leaderboard_rows(results: Sequence[StudentResult], refs: dict) -> list[dict]:
     """Rows of :data:`COLUMNS`, one block per sensor set (9D, then 6D). In each, the set's students are ranked
     among themselves (rank 1 is the best of the set) by points, then by the mean RMSE the set is scored on, and the
     set's reference rows sit among them; ``ratio_to_vqf`` is to VQF of the same sensors."""
@@ -192,14 +202,14 @@ def _fmt(v):
     return str(v)
 
 
-def write_csv(rows, path, columns):
+def write_csv(rows: list[dict], path: Path | str, columns: Sequence[str]) -> Path:
     """The leaderboard's CSV: :func:`fusionlab.bench.write_csv` with two decimals and empty cells for NaN."""
     from fusionlab import bench
 
     return bench.write_csv(rows, path, columns, fmt=_fmt)
 
 
-def trial_rows(results, refs):
+def trial_rows(results: Sequence[StudentResult], refs: dict) -> list[dict]:
     rows = []
     for kind, items in (
         ("student", [(r.name, r.sensors, r.trials) for r in results]),
@@ -277,7 +287,14 @@ def _rubric_html():
     )
 
 
-def write_leaderboard(results, refs, scored, out, class_name, label=""):
+def write_leaderboard(
+    results: Sequence[StudentResult],
+    refs: dict,
+    scored: Sequence[Scored],
+    out: Path | str,
+    class_name: str,
+    label: str = "",
+) -> Path:
     """``leaderboard.html``, ``leaderboard.csv``, ``trials.csv`` and each student's feedback page and figure."""
     import matplotlib
 
@@ -330,7 +347,14 @@ def _plain_log_formatter(**kwargs):
     return PlainLog(**kwargs)
 
 
-def trials_figure(res, names, shown, mine, vqf_mean, stand_in=False):
+def trials_figure(
+    res: StudentResult,
+    names: Sequence[str],
+    shown: dict[str, list[float]],
+    mine: dict[str, TrialResult],
+    vqf_mean: float,
+    stand_in: bool = False,
+) -> Figure:
     """A student's figure: one column of markers per trial (theirs a black dot, each reference its own marker) of
     the RMSE they are scored on, on a log scale with plain numbers: readable at 3 trials as at 31, in a figure of
     fixed size; the legend below the axes, where it covers no marker. Returns the figure."""
@@ -376,7 +400,7 @@ def trials_figure(res, names, shown, mine, vqf_mean, stand_in=False):
     return fig
 
 
-def feedback(res, refs, folder, label=""):
+def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = "") -> None:
     """One student's page: their row, each trial against the references of their sensor set, the figure
     (``trials.png``) of the RMSE they are scored on."""
     import matplotlib.pyplot as plt
@@ -452,21 +476,21 @@ def feedback(res, refs, folder, label=""):
 
 
 def grade_class(
-    course,
-    submissions,
-    scored,
-    out,
-    class_name,
+    course: Path | str,
+    submissions: dict[str, nbformat.NotebookNode | str],
+    scored: Sequence[Scored],
+    out: Path | str,
+    class_name: str,
     *,
-    workers=1,
-    seed=0,
-    label="",
-    progress=True,
-    seconds_per_sample=SECONDS_PER_SAMPLE,
-    min_seconds=MIN_SECONDS,
-    limits=None,
-    cleared=(),
-):
+    workers: int = 1,
+    seed: int = 0,
+    label: str = "",
+    progress: bool = True,
+    seconds_per_sample: float = SECONDS_PER_SAMPLE,
+    min_seconds: float = MIN_SECONDS,
+    limits: dict | None = None,
+    cleared: Iterable[str] = (),
+) -> tuple[list[StudentResult], dict]:
     """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
     leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
     :func:`cached_references`). ``cleared``: students whose estimate :data:`IMPLAUSIBLY_CLOSE` to the reference

@@ -10,6 +10,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,6 +53,14 @@ from .scoring import (
     score_trial,
 )
 
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from typing import IO
+
+    import nbformat
+
+    from .trials import Scored
+
 SETUP_SECONDS = 60.0  # the notebook's cells, run once per box
 MAX_RESTARTS = 5  # boxes started again after a call ran over its budget or ended the box (the fresh
 # boxes of the causality checks are not counted)
@@ -65,7 +74,12 @@ CPU_SLACK_S = 60  # ... plus the notebook's cells (SETUP_SECONDS) and this; neve
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def box_limits(scored, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS, limits=None):
+def box_limits(
+    scored: Sequence[Scored],
+    seconds_per_sample: float = SECONDS_PER_SAMPLE,
+    min_seconds: float = MIN_SECONDS,
+    limits: dict | None = None,
+) -> dict:
     """The sandbox limits of a capstone box (:data:`grading.sandbox.DEFAULT_LIMITS`, then ``limits``), its CPU time
     made from the budgets: one box may run the notebook's cells and every trial, each within its budget, so its
     limit is :data:`CPU_PER_BUDGET` CPU seconds per second of the trials' budgets, plus :data:`SETUP_SECONDS` and
@@ -83,7 +97,7 @@ NOT_SHOWN = (
 )
 
 
-def error_message(text):
+def error_message(text: str) -> str:
     """What the feedback says of an error ``text`` (``"Type: message"``, as the box reports it) that ``estimate``
     raised on a hidden trial: never the text itself, which the student's code wrote and which can carry the
     trial's numbers (``raise ValueError(repr(gyr[:50]))``), nor its type, which the code chose as well (one of some
@@ -112,7 +126,7 @@ def error_message(text):
     return f"raised an error{NOT_SHOWN}"
 
 
-def invalid_message(value, n):
+def invalid_message(value: object, n: int) -> str:
     """What the feedback says of an output that is not ``n`` unit quaternions, in words written here (the output's
     own numbers -- its shape, its norms -- are the student's, and could carry the trial's)."""
     try:
@@ -133,22 +147,22 @@ class CapstoneBoxes:
 
     KEY = "capstone"
 
-    def __init__(self, course, scratch, slot=0, limits=None):
+    def __init__(self, course: Path | str, scratch: Path | str, slot: int = 0, limits: dict | None = None) -> None:
         self.course, self.scratch, self.slot, self.limits = Path(course), Path(scratch), slot, limits or {}
         self.root = box_library(scratch)
         self.hide = boxlib.shadowed(self.root / "shadow")
 
-    def keys(self):
+    def keys(self) -> set[str]:
         return {self.KEY}
 
-    def prepare(self):
+    def prepare(self) -> None:
         pass  # box_library was made when this object was
 
-    def forget(self):
+    def forget(self) -> str:
         """:func:`grading.launcher.forget_caches` (done only as root: else why not)."""
         return launcher.forget_caches()
 
-    def open(self, key, files=False):
+    def open(self, key: str, files: bool = False) -> tuple[client.Started, IO[bytes], IO[bytes]]:
         if key != self.KEY or files:
             raise ValueError(f"expected the capstone's box ({self.KEY!r}, no files), got {key!r}, files={files}")
         uid = sandbox.box_uid(self.slot)
@@ -171,10 +185,10 @@ class CapstoneBoxes:
             memory_bytes=sandbox.box_bytes(self.limits),
         )
 
-    def start(self, key=KEY, files=False):
+    def start(self, key: str = KEY, files: bool = False) -> client.Box:
         return client.Box(self.open(key, files))
 
-    def close(self):
+    def close(self) -> None:
         pass
 
 
@@ -190,7 +204,16 @@ class Runner:
     The errors of the notebook's cells are kept as the box reports them from the first box only, which runs them
     before any trial is sent; in a box started after a trial was sent, they are reported without their text."""
 
-    def __init__(self, cells, course, scratch, slot=0, limits=None, sensors="9D", boxes=None):
+    def __init__(
+        self,
+        cells: Sequence[str],
+        course: Path | str,
+        scratch: Path | str,
+        slot: int = 0,
+        limits: dict | None = None,
+        sensors: str = "9D",
+        boxes: CapstoneBoxes | launcher.RemoteBoxes | None = None,
+    ) -> None:
         if sensors not in SENSORS:
             raise ValueError(f"sensors must be one of {', '.join(SENSORS)}; got {sensors!r}")
         self.cells, self.sensors = cells, sensors
@@ -205,11 +228,11 @@ class Runner:
         self.sent = False  # a trial's data has been sent to a box of this runner
 
     @property
-    def restarts(self):
+    def restarts(self) -> int:
         """Boxes started after a call that ran over its budget or ended its box."""
         return max(0, self.starts - self.fresh - 1)
 
-    def start(self):
+    def start(self) -> bool:
         self.close()
         self.starts += 1
         self.box = self.boxes.start(CapstoneBoxes.KEY, files=False)
@@ -236,7 +259,14 @@ class Runner:
         self.close()
         return False
 
-    def call(self, trial, seconds, gyr=None, acc=None, mag=None):
+    def call(
+        self,
+        trial: Scored,
+        seconds: float,
+        gyr: np.ndarray | None = None,
+        acc: np.ndarray | None = None,
+        mag: np.ndarray | None = None,
+    ) -> tuple[np.ndarray | None, str, str, float]:
         """(quaternions or None, status, message, seconds) of one call of ``estimate`` on the trial's sensor data
         (``gyr``, ``acc``, ``mag`` instead of the trial's when given; no magnetometer at all for a 6D runner)."""
         if self.box is None and (self.setup_error or self.restarts >= MAX_RESTARTS or not self.start()):
@@ -276,7 +306,14 @@ class Runner:
             return None, "invalid", invalid_message(value, len(args[0])), elapsed
         return q, "ok", "", elapsed
 
-    def call_fresh(self, trial, seconds, gyr=None, acc=None, mag=None):
+    def call_fresh(
+        self,
+        trial: Scored,
+        seconds: float,
+        gyr: np.ndarray | None = None,
+        acc: np.ndarray | None = None,
+        mag: np.ndarray | None = None,
+    ) -> tuple[np.ndarray | None, str, str, float]:
         """:meth:`call` in a box started for this call alone (the notebook's cells run again) and closed after it:
         nothing of an earlier call -- its data, its output -- is left for this one to see."""
         self.close()
@@ -290,13 +327,13 @@ class Runner:
         finally:
             self.close()
 
-    def forget(self):
+    def forget(self) -> str:
         """Make the kernel forget what the boxes so far could leave in its file caches ("" when done, else why not):
         between the causality check's boxes and the first that sees a whole trial."""
         self.close()
         return self.boxes.forget()
 
-    def close(self):
+    def close(self) -> None:
         if self.box is not None:
             self.box.kill()
             self.box = None
@@ -321,31 +358,31 @@ class StudentResult:
     process: dict = field(default_factory=dict)  # of the process that graded it (grade_apart): peak MB, user
 
     @property
-    def total_points(self):
+    def total_points(self) -> float:
         return float(sum(self.points.values()))
 
     @property
-    def all_ran(self):
+    def all_ran(self) -> bool:
         return bool(self.trials) and all(r.status == "ok" for r in self.trials)
 
 
 def grade_submission(
-    name,
-    nb,
-    scored,
-    refs,
-    course,
-    scratch,
+    name: str,
+    nb: nbformat.NotebookNode,
+    scored: Sequence[Scored],
+    refs: dict,
+    course: Path | str,
+    scratch: Path | str,
     *,
-    slot=0,
-    seed=0,
-    seconds_per_sample=SECONDS_PER_SAMPLE,
-    min_seconds=MIN_SECONDS,
-    limits=None,
-    cleared=False,
-    model=None,
-    boxes=None,
-):
+    slot: int = 0,
+    seed: int = 0,
+    seconds_per_sample: float = SECONDS_PER_SAMPLE,
+    min_seconds: float = MIN_SECONDS,
+    limits: dict | None = None,
+    cleared: bool = False,
+    model: str | None = None,
+    boxes: CapstoneBoxes | launcher.RemoteBoxes | None = None,
+) -> StudentResult:
     """Grade one notebook on the disguised trials ``scored``; every number is computed here.
 
     ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
@@ -438,7 +475,7 @@ def grade_submission(
     return res
 
 
-def gates_failed(res):
+def gates_failed(res: StudentResult) -> bool:
     """Does ``res`` get no points for its filter? When a cheat is named, when it is not causal, and when it ran on
     trials but the causality check could not run it (an error, over its budget, ... on the check's data): a filter
     that fails only there would escape the check, so causality that was never shown counts as not shown."""
@@ -446,7 +483,7 @@ def gates_failed(res):
     return bool(res.cheats) or res.causal is False or unchecked
 
 
-def implausibly_close(res, refs):
+def implausibly_close(res: StudentResult, refs: dict) -> str:
     """The evidence (text) when ``res``'s scored RMSE is below :data:`IMPLAUSIBLE` x the best reference filter's
     on at least :data:`IMPLAUSIBLE_TRIALS` of the trials it ran (2, and a tenth); "" otherwise. The best on a trial
     is the lowest scored RMSE there of every reference filter of the student's sensor set (VQF, Madgwick and each
@@ -518,7 +555,18 @@ def _graded_apart(name, nb, scored, refs, course, scratch, slot, read_all, kw):
     return {"result": dataclasses.asdict(res)}
 
 
-def grade_apart(name, nb, scored, refs, course, scratch, *, slot=0, read_all=False, **kw):
+def grade_apart(
+    name: str,
+    nb: nbformat.NotebookNode,
+    scored: Sequence[Scored],
+    refs: dict,
+    course: Path | str,
+    scratch: Path | str,
+    *,
+    slot: int = 0,
+    read_all: bool = False,
+    **kw,
+) -> StudentResult:
     """:func:`grade_submission` (``kw``: its keywords) in a process of its own (:func:`grading.launcher.apart`),
     which, as root, is not root once a box has replied; what comes back is its numbers and texts."""
     reply = launcher.apart(

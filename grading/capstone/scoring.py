@@ -9,10 +9,18 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fusionlab.capstone import RUBRIC, SENSORS, accuracy_points
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike
+
+    from .trials import Scored
 
 MATCH_RAD = 1e-6  # a student's output this close to a reference filter's, everywhere, is that filter
 MATCH_STRIDE = 5  # ... compared at every 5th sample
@@ -38,7 +46,7 @@ class TrialResult:
     q: np.ndarray | None = None
 
 
-def score_trial(result, q, trial, metric="total_deg"):
+def score_trial(result: TrialResult, q: ArrayLike, trial: Scored, metric: str = "total_deg") -> TrialResult:
     """Fill ``result`` with the authors' metrics of ``q`` on ``trial`` (as :func:`fusionlab.bench.score` does);
     ``metric`` (``'total_deg'`` for a 9D filter, ``'inclination_deg'`` for a 6D one) is the one counted."""
     from fusionlab import metrics
@@ -49,7 +57,7 @@ def score_trial(result, q, trial, metric="total_deg"):
     return result
 
 
-def never_moves(trial, metric="total_deg"):
+def never_moves(trial: Scored, metric: str = "total_deg") -> float:
     """RMSE (``metric``) of the identity quaternion on ``trial``: what a trial without a valid estimate counts."""
     from fusionlab import metrics
 
@@ -72,7 +80,7 @@ class Reference:
 PUBLISHED = {"9D": ("vqf9", "madgwick9"), "6D": ("vqf6", "madgwick6")}
 
 
-def references(scored, progress=False):
+def references(scored: Sequence[Scored], progress: bool = False) -> dict:
     """The reference rows of both sensor sets on the disguised trials: VQF and Madgwick 9D with every 9D filter of
     the library, scored on total RMSE, and VQF and Madgwick 6D with every 6D filter of the library, scored on
     inclination RMSE; the library's best of each set (by that RMSE) is kept.
@@ -127,7 +135,7 @@ def references(scored, progress=False):
     return out
 
 
-def references_of(refs, sensors):
+def references_of(refs: dict, sensors: str) -> dict[str, Reference]:
     """The reference rows of one sensor set: ``{name: Reference}`` (VQF, Madgwick, the library's best)."""
     return {n: ref for n, ref in refs.items() if not n.startswith("_") and ref.sensors == sensors}
 
@@ -141,7 +149,7 @@ CACHE_FORMAT = 1
 _TRIAL_FIELDS = [f.name for f in dataclasses.fields(TrialResult) if f.name != "q"]
 
 
-def references_key(scored, seed):
+def references_key(scored: Sequence[Scored], seed: int) -> dict:
     """What the reference rows depend on, as a dict that :func:`cached_references` compares: the disguise's seed,
     the trials' names and lengths, a hash of their disguised data, and a hash of the code that computes the
     rows (the library's source files and this module) with the versions of the packages of VQF and Madgwick."""
@@ -176,7 +184,7 @@ def references_key(scored, seed):
     }
 
 
-def save_references(refs, path, key):
+def save_references(refs: dict, path: Path | str, key: dict) -> Path:
     """Write ``refs`` (:func:`references`) and ``key`` to ``path`` (an ``.npz`` of numbers and JSON text, no pickle),
     whole or not at all."""
     path = Path(path)
@@ -205,7 +213,7 @@ def save_references(refs, path, key):
     return path
 
 
-def load_references(path, key):
+def load_references(path: Path | str, key: dict) -> dict | None:
     """The reference rows saved in ``path`` if they were saved with ``key``; None otherwise (no file, another key,
     a file that cannot be read)."""
     try:
@@ -228,7 +236,7 @@ def load_references(path, key):
     return out
 
 
-def cached_references(scored, folder, seed, progress=False):
+def cached_references(scored: Sequence[Scored], folder: Path | str, seed: int, progress: bool = False) -> dict:
     """:func:`references` of ``scored``, kept in ``<folder>/references.npz`` (:data:`REFERENCE_CACHE`): computed
     once per disguise and reused while :func:`references_key` is the same (re-grading a late student with the
     class's seed); recomputed and saved again when it differs."""
@@ -246,26 +254,28 @@ def cached_references(scored, folder, seed, progress=False):
     return refs
 
 
-def mean_scored(trials):
+def mean_scored(trials: Sequence[TrialResult]) -> float:
     """Mean over the trials of the RMSE they are scored on, as counted (a failed trial with the identity's error),
     deg: total RMSE for a 9D filter, inclination RMSE for a 6D one."""
     return float(np.mean([r.counted_deg for r in trials])) if trials else float("nan")
 
 
-def mean_total(trials):
+def mean_total(trials: Sequence[TrialResult]) -> float:
     """Mean total RMSE as counted, deg, of trials scored on total RMSE (a 9D filter's)."""
     if any(r.metric != "total_deg" for r in trials):
         raise ValueError("trials must be scored on total RMSE (a 9D filter's); use mean_scored")
     return mean_scored(trials)
 
 
-def published_means(refs, sensors):
+def published_means(refs: dict, sensors: str) -> tuple[float, float]:
     """(Madgwick's, VQF's) mean scored RMSE of one sensor set: what :func:`rubric_points` compares with."""
     vqf, madgwick = PUBLISHED[sensors]
     return mean_scored(refs[madgwick].trials), mean_scored(refs[vqf].trials)
 
 
-def rubric_points(mean_deg, all_ran, gated_out, madgwick_deg, vqf_deg, sensors="9D"):
+def rubric_points(
+    mean_deg: float, all_ran: bool, gated_out: bool, madgwick_deg: float, vqf_deg: float, sensors: str = "9D"
+) -> dict[str, float]:
     """Points of each rubric criterion (:data:`RUBRIC`) for a mean RMSE (total for a 9D filter, inclination for a
     6D one), against Madgwick's and VQF's of the same sensor set (:func:`fusionlab.capstone.accuracy_points`); none
     when ``gated_out``."""

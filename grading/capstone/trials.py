@@ -8,10 +8,17 @@ import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fusionlab.capstone import SHIPPED
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+    from typing import TextIO
+
+    from fusionlab.datasets import BroadTrial
 
 MAX_CROP_SECONDS = 0.5  # secret cut at the start (inside the rest before the movement) ...
 MAX_END_CROP_SECONDS = 3.0  # ... and at the end (never into the movement): a trial's length does not name it
@@ -31,14 +38,14 @@ class CapstoneDataMissing(FileNotFoundError):
 # ----------------------------------------------------------------------------------------------------------------
 
 
-def hidden_names():
+def hidden_names() -> list[str]:
     """The full names of the hidden trials: every BROAD trial that the course does not ship (:data:`SHIPPED`)."""
     from fusionlab import datasets
 
     return [t.name for t in datasets.list_trials() if t.number not in SHIPPED]
 
 
-def absent(names, folder=None):
+def absent(names: Iterable[str], folder: str | os.PathLike | None = None) -> list[str]:
     """Those of the trials ``names`` that are not on this computer (no download): what ``make capstone`` and
     ``make capstone-data`` both count, over the whole list."""
     from fusionlab import datasets
@@ -52,7 +59,7 @@ def absent(names, folder=None):
     return missing
 
 
-def hidden_trials(folder=None, names=None):
+def hidden_trials(folder: Path | str | None = None, names: list[str] | None = None) -> list[BroadTrial]:
     """Load the hidden trials (without a download), or raise :class:`CapstoneDataMissing` saying how to get them.
 
     Parameters
@@ -80,7 +87,7 @@ def hidden_trials(folder=None, names=None):
     return [datasets.load_trial(n, folder=folder, download=False, progress=False) for n in names]
 
 
-def stand_in(numbers, max_samples=None):
+def stand_in(numbers: list[int], max_samples: int | None = None) -> list[BroadTrial]:
     """Shipped trials held back as a STAND-IN for the hidden set (tests, a dry run): not the capstone's scores.
 
     Parameters
@@ -108,7 +115,7 @@ def stand_in(numbers, max_samples=None):
     return out
 
 
-def fetch(names=None, progress=True, out=None):
+def fetch(names: Iterable[str] | None = None, progress: bool = True, out: TextIO | None = None) -> int:
     """``make capstone-data``: every hidden trial through the library's checked download; returns the exit status.
 
     Each file is written to a temporary file, checked (length, and SHA-256 where the library knows the sum) and only
@@ -190,7 +197,7 @@ class Scored:
         return len(self.gyr)
 
 
-def disguise(trials, seed):
+def disguise(trials: Iterable[BroadTrial], seed: int) -> list[Scored]:
     """Each trial cut at both ends by random amounts and given a little fresh sensor noise, in the sensors' own frame.
 
     The start loses under 0.5 s of the rest before the movement, the end under 3 s but never a sample of the

@@ -34,10 +34,18 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import metrics, validate
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from numpy.typing import ArrayLike
+
+    from .datasets import BroadTrial
 
 __all__ = [
     "SHIPPED",
@@ -106,7 +114,7 @@ BOX_MODULES = ALLOWED_MODULES + (
 )
 
 
-def outside_box(estimate):
+def outside_box(estimate: Callable[..., ArrayLike]) -> list[str]:
     """The library's modules that ``estimate`` reaches by name and the grader's box does not hold.
 
     Follows the names the function's code (and its nested functions) looks up among its globals or takes from an
@@ -234,7 +242,7 @@ GATES = (
 )
 
 
-def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SECONDS):
+def budget_seconds(n: int, seconds_per_sample: float = SECONDS_PER_SAMPLE, min_seconds: float = MIN_SECONDS) -> float:
     """The time one call of ``estimate`` may take on a trial of ``n`` samples, in seconds.
 
     Parameters
@@ -262,7 +270,7 @@ def budget_seconds(n, seconds_per_sample=SECONDS_PER_SAMPLE, min_seconds=MIN_SEC
     return max(min_seconds, n * seconds_per_sample)
 
 
-def accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors="9D"):
+def accuracy_points(mean_deg: float, madgwick_deg: float, vqf_deg: float, sensors: str = "9D") -> float:
     """The rubric's accuracy points (:data:`RUBRIC`) of a mean RMSE, against Madgwick's and VQF's of the same sensors.
 
     The points are ``8 * log(madgwick / mean) / log(madgwick / full)``, clipped to 0..8, where ``full`` is
@@ -303,7 +311,7 @@ def accuracy_points(mean_deg, madgwick_deg, vqf_deg, sensors="9D"):
     return float(points * np.clip(share, 0.0, 1.0))
 
 
-def causal_ks(n, rng=None):
+def causal_ks(n: int, rng: np.random.Generator | int | None = None) -> list[int]:
     """The samples k after which the causality check changes the data, for a trial of ``n`` samples.
 
     Without ``rng`` they are fixed: one inside the first steps, one after the first 0.7 s (a filter's start-up
@@ -338,7 +346,7 @@ def causal_ks(n, rng=None):
     return sorted(min(int(rng.integers(lo, hi + 1)), n - 2) for lo, hi in spans)
 
 
-def perturb_future(x, k, scale, rng):
+def perturb_future(x: ArrayLike, k: int, scale: float, rng: np.random.Generator) -> np.ndarray:
     """A copy of ``x`` whose samples after k are replaced: sample k held, plus Gaussian noise of standard deviation
     ``scale``. Nothing of the samples after k is left (not even their mean), so a filter run on it learns nothing
     of the real future, whatever it keeps or passes on: the causality check's data.
@@ -374,7 +382,7 @@ def perturb_future(x, k, scale, rng):
     return y
 
 
-def as_quaternions(value, n):
+def as_quaternions(value: object, n: int) -> np.ndarray:
     """``value`` as ``(n, 4)`` unit quaternions, or a ValueError that says what a filter returned instead.
 
     Norms within 1e-3 of 1 are accepted and made exactly 1.
@@ -405,7 +413,15 @@ def as_quaternions(value, n):
     return q / norm[:, None]
 
 
-def causality_change(run, gyr, acc, mag, q, k, rng):
+def causality_change(
+    run: Callable[..., ArrayLike],
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    mag: ArrayLike | None,
+    q: ArrayLike,
+    k: int,
+    rng: np.random.Generator,
+) -> float:
     """How much ``run``'s output up to sample k changes when every sample after k is replaced by noisy ones.
 
     Parameters
@@ -432,7 +448,9 @@ def causality_change(run, gyr, acc, mag, q, k, rng):
     return change_up_to(as_quaternions(run(*changed_after(gyr, acc, mag, k, rng)), len(q)), q, k)
 
 
-def changed_after(gyr, acc, mag, k, rng):
+def changed_after(
+    gyr: ArrayLike, acc: ArrayLike, mag: ArrayLike | None, k: int, rng: np.random.Generator
+) -> list[np.ndarray | None]:
     """``[gyr, acc, mag]`` as the causality check at k gives them: each through :func:`perturb_future` with its
     noise of :data:`CAUSAL_NOISE`, drawn for gyr, acc and mag in this order (``mag`` None stays None).
 
@@ -459,7 +477,7 @@ def changed_after(gyr, acc, mag, k, rng):
     return [None if x is None else perturb_future(x, k, s, rng) for x, s in zip((gyr, acc, mag), CAUSAL_NOISE)]
 
 
-def change_up_to(q2, q, k):
+def change_up_to(q2: ArrayLike, q: ArrayLike, k: int) -> float:
     """The largest difference of any quaternion component between ``q2`` and ``q`` over samples 0..k: what the
     causality check compares (a causal filter's is at most :data:`CAUSAL_TOL`).
 
@@ -485,7 +503,15 @@ def change_up_to(q2, q, k):
     return float(np.max(np.abs(q2[: k + 1] - q[: k + 1])))
 
 
-def first_change(run, gyr, acc, mag, q, ks, rng):
+def first_change(
+    run: Callable[..., ArrayLike],
+    gyr: ArrayLike,
+    acc: ArrayLike,
+    mag: ArrayLike | None,
+    q: ArrayLike,
+    ks: Sequence[int],
+    rng: np.random.Generator,
+) -> tuple[int, float] | None:
     """The first k of ``ks`` at which :func:`causality_change` finds the output up to k changed beyond
     :data:`CAUSAL_TOL`, with that change; None when it finds none (the filter passed at every k).
 
@@ -514,7 +540,9 @@ def first_change(run, gyr, acc, mag, q, ks, rng):
     return None
 
 
-def prefix_change(run, gyr, acc, mag, q, k):
+def prefix_change(
+    run: Callable[..., ArrayLike], gyr: ArrayLike, acc: ArrayLike, mag: ArrayLike | None, q: ArrayLike, k: int
+) -> float:
     """How much ``run``'s output on the samples up to k alone differs from the first k+1 rows of ``q``, its output
     on all of them: a causal filter's output on a prefix of the data is the prefix of its output.
 
@@ -543,7 +571,7 @@ def prefix_change(run, gyr, acc, mag, q, k):
     return change_up_to(as_quaternions(run(*samples_up_to(gyr, acc, mag, k)), k + 1), q, k)
 
 
-def samples_up_to(gyr, acc, mag, k):
+def samples_up_to(gyr: ArrayLike, acc: ArrayLike, mag: ArrayLike | None, k: int) -> list[np.ndarray | None]:
     """``[gyr, acc, mag]`` cut after sample k: the data of the prefix check (``mag`` None stays None).
 
     Parameters
@@ -595,14 +623,14 @@ class SelfCheck:
     outside: list = field(default_factory=list)
 
     @property
-    def ok(self):
+    def ok(self) -> bool:
         """True when every trial gave a valid estimate within its budget, the filter is causal and it uses no module
         of the library that the grader's box does not hold."""
         return (
             bool(self.rows) and all(r["status"] == "ok" for r in self.rows) and self.causal is True and not self.outside
         )
 
-    def mean(self, key=None):
+    def mean(self, key: str | None = None) -> float:
         """The mean of one metric over the trials that ran (NaN when none did).
 
         Parameters
@@ -647,7 +675,14 @@ class SelfCheck:
         return "\n".join(lines)
 
 
-def self_check(estimate, trials, sensors="9D", seed=0, causality=True, random_ks=False):
+def self_check(
+    estimate: Callable[..., ArrayLike],
+    trials: list[BroadTrial],
+    sensors: str = "9D",
+    seed: int = 0,
+    causality: bool = True,
+    random_ks: bool = False,
+) -> SelfCheck:
     """Run ``estimate`` on ``trials`` as the grader does: valid output, the time budget, the metrics, causality.
 
     Causality is checked on the first trial that ran, as the grader checks it on a trial of its choice: the samples
@@ -772,7 +807,7 @@ BAR_COLUMNS = (
 )
 
 
-def make_bar(path=BAR_FILE, progress=True):
+def make_bar(path: Path | str = BAR_FILE, progress: bool = True) -> Path:
     """Score every filter of :func:`fusionlab.bench.contenders` on every shipped trial, whole and as the lab's
     window (:meth:`fusionlab.datasets.BroadTrial.window`, its defaults), and write :data:`BAR_FILE` (about two
     minutes: Madgwick's filter is plain Python).
@@ -806,7 +841,7 @@ def make_bar(path=BAR_FILE, progress=True):
     return Path(path)
 
 
-def bar(span="whole", path=BAR_FILE):
+def bar(span: str = "whole", path: Path | str = BAR_FILE) -> list[dict]:
     """The bar's rows for one span (``'whole'`` trials or the lab's ``'window'``): a list of dicts with the numbers
     as floats, in the order :func:`make_bar` wrote them.
 

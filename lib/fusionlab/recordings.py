@@ -112,10 +112,15 @@ import zipfile
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import earth, signals, validate
+
+if TYPE_CHECKING:
+    import os
+    from collections.abc import Sequence
 
 __all__ = [
     "load_recording",
@@ -262,7 +267,7 @@ class Summary:
     checks: tuple
 
     @property
-    def dropped(self):
+    def dropped(self) -> int:
         """int: samples dropped by all sensors together."""
         return sum(s.dropped for s in self.sensors)
 
@@ -315,11 +320,11 @@ class Recording(signals.Sampled):
     summary: Summary
 
     @property
-    def quat_ref(self):
+    def quat_ref(self) -> None:
         """None: a phone recording has no ground truth (``quat_phone`` is the phone's estimate, not a reference)."""
         return None
 
-    def window(self, t0, t1):
+    def window(self, t0: float, t1: float) -> Recording:
         """The same recording cut to the samples whose time (:attr:`t`, s from its first sample) is in ``[t0, t1)``.
 
         A rest phase for a calibration, or the moving part alone, without index arithmetic: ``t1`` may be the
@@ -1243,8 +1248,17 @@ def _check_columns(columns, units):
 
 
 def load_recording(
-    path, *, format=None, columns=None, units=None, acc_convention=None, fs=None, max_gap=MAX_GAP, check=True, name=None
-):
+    path: str | os.PathLike,
+    *,
+    format: str | None = None,
+    columns: dict[str, str | Sequence[str]] | None = None,
+    units: dict[str, str] | None = None,
+    acc_convention: str | None = None,
+    fs: float | None = None,
+    max_gap: float = MAX_GAP,
+    check: bool = True,
+    name: str | None = None,
+) -> Recording:
     """Load a phone's IMU export (phyphox, Sensor Logger, or a plain CSV), resampled onto one time base and checked.
 
     Parameters
@@ -1500,7 +1514,7 @@ def _write(out, name, files):
     return written
 
 
-def make_examples(out, broad_dir=None):
+def make_examples(out: str | os.PathLike, broad_dir: str | os.PathLike | None = None) -> list[Path]:
     """Write the example exports of ``data/phone/``: BROAD trial 2 (30-61.5 s) in each app's format, seeded.
 
     No phone recording can be made where the course is built, so each file is a BROAD recording (a myon aktos-t IMU,
@@ -1617,7 +1631,7 @@ def make_examples(out, broad_dir=None):
     return written + [out / "SHA256SUMS"]
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     """``python -m fusionlab.recordings --out data/phone/``: write the example exports (see :func:`make_examples`).
 
     Parameters
