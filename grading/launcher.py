@@ -241,32 +241,58 @@ def drop_root(uid: int, read_all: bool = False) -> None:
         raise RuntimeError(f"the judge could not give up root (uid {os.getuid()}, euid {os.geteuid()})")
 
 
+def _closed(folder):
+    """Other users may not enter ``folder`` (no ``o+x``); None when it is not there."""
+    try:
+        return not os.stat(folder).st_mode & 0o001
+    except OSError:
+        return None
+
+
+def _way(path):
+    """The folders from ``/`` to ``path`` (itself included), in order."""
+    parts = os.path.abspath(path).split(os.sep)[1:]
+    return [os.sep + os.path.join(*parts[: i + 1]) for i in range(len(parts))]
+
+
+def importable(folder: str) -> list[str]:
+    """The entries of ``folder`` that Python imports from it as a folder of the import path: its modules (``.py``,
+    extension modules) and its packages (folders with an ``__init__.py``); nothing else it holds."""
+    out = []
+    for name in sorted(os.listdir(folder)):
+        full = os.path.join(folder, name)
+        if name.endswith((".py", ".so", ".pth")) or os.path.isfile(os.path.join(full, "__init__.py")):
+            out.append(name)
+    return out
+
+
 def closed_folders(paths: Iterable[str]) -> dict[str, list[str]]:
-    """``{folder: entries}``: for each of ``paths``, the first folder on its way from ``/`` that other users may not
-    enter (no ``o+x``: root's home, say), with the entry of it on that way (``/root`` -> ``.pyenv``). ``{}`` when
-    every path is open to all."""
+    """``{folder: entries}``: each folder on the way from ``/`` to each of ``paths`` (the path itself included) that
+    other users may not enter (no ``o+x``), with the entries of it the judge needs: the one on the way to the path
+    (``/root`` -> ``.pyenv``), or, where that folder is the path itself (a checkout only root may enter, on the
+    import path), what Python imports from it (:func:`importable`: its packages and modules, not its other files).
+    Shallow folders first; ``{}`` when every path is open to all."""
     out = {}
     for path in paths:
-        parts = os.path.abspath(path).split(os.sep)[1:]
-        for i in range(len(parts) - 1):
-            folder = os.sep + os.path.join(*parts[: i + 1])
-            try:
-                closed = not os.stat(folder).st_mode & 0o001
-            except OSError:
+        way = _way(path)
+        for i, folder in enumerate(way):
+            closed = _closed(folder)
+            if closed is None:
                 break
             if closed:
-                out.setdefault(folder, set()).add(parts[i + 1])
-                break
-    return {folder: sorted(entries) for folder, entries in out.items()}
+                entries = [os.path.basename(way[i + 1])] if i + 1 < len(way) else importable(folder)
+                out.setdefault(folder, set()).update(entries)
+    return {folder: sorted(out[folder]) for folder in sorted(out, key=lambda f: f.count(os.sep))}
 
 
 def open_view(paths: Iterable[str], stage: str) -> list[str]:
     """Give this process a view of the file system of its own (a mount namespace) in which each folder of
-    :func:`closed_folders` of ``paths`` is an empty, open folder holding only the entries on the way to ``paths``
-    (root's home shows ``.pyenv`` and nothing else), so that a judge that is not root imports from there without
-    any capability. Root, before :func:`drop_root`, in a process with one thread; ``stage`` is an empty folder
-    outside them for the moves. The machine's own view is not changed. Returns the folders opened; raises OSError
-    where the kernel refuses (root of a user namespace without mount rights)."""
+    :func:`closed_folders` of ``paths`` is an empty, open folder holding only the entries the judge needs (root's
+    home shows ``.pyenv`` and nothing else; a closed checkout on the import path, its packages), shallow folders
+    first, so that a judge that is not root imports from there without any capability. Root, before
+    :func:`drop_root`, in a process with one thread; ``stage`` is an empty folder outside them for the moves. The
+    machine's own view is not changed. Returns the folders opened; raises OSError where the kernel refuses (root of
+    a user namespace without mount rights)."""
     closed = closed_folders(paths)
     if not closed:
         return []
@@ -362,27 +388,60 @@ def course_files() -> list[str]:
 
 
 def closed_within(paths: Iterable[str]) -> str | None:
-    """The first of ``paths``, or of :func:`course_files`, that other users may not read (a folder they may not
-    list or enter, a file they may not read) even once every folder on its way is open: a checkout made under
-    ``umask 077``, say. None when all are open; then :func:`open_view` is enough for the judge."""
-    for path in [*paths, *course_files()]:
-        try:
-            mode = os.stat(path).st_mode
-        except OSError:
-            continue
-        need = 0o005 if os.path.isdir(path) else 0o004
-        if mode & need != need:
+    """What the judge still cannot read once :func:`open_view` opened the closed folders on ``paths``' way: a path
+    it may enter but not list, an entry of an opened path closed to other users (a package, a module), or a folder
+    or file of :func:`course_files` (a checkout made under ``umask 077``, say). None when there is none: the view
+    is enough."""
+    opened = closed_folders(paths)
+    for path in paths:
+        if path in opened:
+            for entry in opened[path]:
+                refused = _closed_tree(os.path.join(path, entry))
+                if refused:
+                    return refused
+        elif os.path.isdir(path) and not os.stat(path).st_mode & 0o004:
+            return path  # entered, not listed: Python finds nothing in it
+    for path in course_files():
+        if _closed_tree(path, walk=False):
             return path
     return None
 
 
+def _closed_tree(path, walk=True):
+    """``path`` or, with ``walk``, the first folder or Python file below it that other users may not read (a folder:
+    list and enter; a file: read); None."""
+    found = [path]
+    if walk and os.path.isdir(path):
+        for folder, dirs, files in os.walk(path):
+            found += [os.path.join(folder, d) for d in dirs]
+            found += [os.path.join(folder, f) for f in files if f.endswith(".py")]
+    for full in found:
+        need = 0o005 if os.path.isdir(full) else 0o004
+        try:
+            if os.stat(full).st_mode & need != need:
+                return full
+        except OSError:
+            continue
+    return None
+
+
 def _first_refused(paths):
-    """As the judge: the first of ``paths`` it cannot list, or of :func:`course_files` it cannot read; ""."""
+    """As the judge: the first of ``paths``, or of the packages in them, it cannot list, or of their modules and
+    of :func:`course_files` it cannot read; ""."""
     for path in paths:
         try:
-            os.listdir(path)
+            names = importable(path)
         except PermissionError:
             return path
+        for full in (os.path.join(path, name) for name in names):
+            if not os.path.isdir(full):
+                if not os.access(full, os.R_OK):
+                    return full
+                continue
+            try:
+                os.listdir(full)
+            except PermissionError:
+                return full
     return next((f for f in course_files() if not os.access(f, os.R_OK)), "")
 
 
@@ -403,12 +462,15 @@ def view_problem(slot: int, paths: Iterable[str] | None = None) -> str:
 
     def task():
         stage = tempfile.mkdtemp()
+        opened = closed_folders(paths)  # as root: what the view shows of a closed path, its packages and modules
+        shown = [os.path.join(path, entry) for path in paths for entry in opened.get(path, [])]
         try:
             open_view(paths, stage)
         except OSError as exc:
             return f"no view of its own: {exc}"
         drop_root(judge_uid(slot))
-        refused = _first_refused(paths)
+        refused = _first_refused(paths) or _first_refused(p for p in shown if os.path.isdir(p))
+        refused = refused or next((p for p in shown if not os.path.isdir(p) and not os.access(p, os.R_OK)), "")
         return f"{refused} is still closed in its view" if refused else ""
 
     return _in_dropped_child(slot, None, task)

@@ -331,9 +331,10 @@ def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_a
 
 @AS_ROOT
 def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_late(course):
-    """A course checked out under ``umask 077`` inside root's home: the view opens root's home, but the checkout's
-    own folder and files stay closed to the judge. Both checks say so, and the judge keeps reading (the capability)
-    so that a module it imports after giving up root is found (the capstone imports its code scan that late)."""
+    """A course checked out under ``umask 077`` inside root's home: the view opens root's home and the checkout, but
+    the checkout's packages and files stay closed to the judge. Both checks say so, and the judge keeps reading (the
+    capability) so that a module it imports after giving up root is found (the capstone imports its code scan that
+    late)."""
     home = course / "home"
     checkout = home / "main"
     (checkout / "latepkg").mkdir(parents=True)
@@ -342,11 +343,12 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
     for path, mode in ((home, 0o700), (checkout, 0o700), (checkout / "latepkg", 0o700)):
         os.chmod(path, mode)
     os.chmod(checkout / "latepkg" / "late.py", 0o600)
-    assert launcher.closed_within([str(checkout)]) == str(checkout)
-    assert "still closed" in launcher.view_problem(3, [str(checkout)])
-    os.chmod(checkout, 0o755)
-    assert launcher.closed_within([str(checkout)]) is None, "the package below is not looked into: its folder is"
-    os.chmod(checkout, 0o700)
+    assert launcher.closed_folders([str(checkout)]) == {str(home): ["main"], str(checkout): ["latepkg"]}
+    assert launcher.closed_within([str(checkout)]) == str(checkout / "latepkg")
+    assert "latepkg is still closed" in launcher.view_problem(3, [str(checkout)])
+    os.chmod(checkout / "latepkg", 0o755)
+    assert launcher.closed_within([str(checkout)]) == str(checkout / "latepkg" / "late.py")
+    os.chmod(checkout / "latepkg", 0o700)
 
     def body():
         sys.path.insert(0, str(checkout))
@@ -373,6 +375,40 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
 def test_only_root_makes_the_kernel_forget_its_file_caches(monkeypatch):
     monkeypatch.setattr(os, "geteuid", lambda: 1000)
     assert launcher.forget_caches() == "not root"
+
+
+@AS_ROOT
+def test_a_checkout_only_root_may_enter_is_opened_to_its_packages_alone_and_no_capability_is_kept(course):
+    """The checkout itself closed (0700), its contents open, and the checkout on the import path (``python -m`` from
+    it): the judge's view shows the checkout as a folder holding its packages and modules alone, from which a module
+    imported late is found with no capability; its other files stay out of the view."""
+    checkout = course / "main"
+    (checkout / "latepkg").mkdir(parents=True)
+    (checkout / "latepkg" / "__init__.py").write_text("")
+    (checkout / "latepkg" / "late.py").write_text("VALUE = 7\n")
+    (checkout / "top.py").write_text("")
+    (checkout / "gradebook.db").write_text("grades")
+    (checkout / "notes").mkdir()
+    os.chmod(checkout, 0o700)
+    assert launcher.closed_folders([str(checkout)]) == {str(checkout): ["latepkg", "top.py"]}
+    assert launcher.closed_within([str(checkout)]) is None
+    assert launcher.view_problem(3, [str(checkout)]) == ""
+
+    def body():
+        sys.path.insert(0, str(checkout))
+        launcher.become_judge(3, [str(checkout)], str(course), read_all=True)
+        import latepkg.late
+
+        status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
+        return {
+            "value": latepkg.late.VALUE,
+            "listed": sorted(os.listdir(checkout)),
+            "caps": status["CapEff"].strip(),
+        }
+
+    got = _in_child(body)
+    assert got == {"value": 7, "listed": ["latepkg", "top.py"], "caps": "0000000000000000"}, got
+    assert sorted(os.listdir(checkout)) == ["gradebook.db", "latepkg", "notes", "top.py"], "the machine's view is kept"
 
 
 def test_the_folders_of_the_course_packages_are_opened_to_the_judge_even_off_the_import_path():
