@@ -392,6 +392,46 @@ def test_too_little_tilt_to_check_a_gyros_unit_is_said_in_the_summary_with_what_
     assert rec.summary.method == "linear interpolation onto the gyro's median rate" and rec.fs == pytest.approx(100.0)
 
 
+def test_a_record_too_short_for_the_tilt_check_is_called_short_not_still(tmp_path):
+    # 1.2 s in all: 12 windows of 0.1 s, under the 20 the check needs even if each had motion
+    t, gyr, acc = _still_then_tilting(still=0.5, tilting=0.7)
+    text = str(recordings.load_recording(_phyphox_custom(tmp_path / "brief", t, gyr, acc)).summary)
+    assert "gyr: deg/s (the header of Gyroscope.csv); too short for the tilt check (1.2 s: 12 windows of 0.1 s" in text
+    assert "too little motion" not in text
+
+
+def test_a_field_outside_the_earths_is_loaded_in_its_unit_but_never_called_agreeing(tmp_path):
+    """An outside check loaded a real export reading 79 µT (a magnet near the phone) and was told "physics agrees";
+    the unit is right (no other unit fits), the place is not the Earth's field alone: said so."""
+    folder = _sensor_logger_export(tmp_path / "android", "android")
+    t, _, _ = _still_then_tilting()
+    for field, agrees in ((44.0, True), (79.0, False), (150.0, False)):
+        _sensor_logger_csv(folder / "Magnetometer.csv", t, np.tile([0.0, field * 0.6, -field * 0.8], (len(t), 1)))
+        text = str(recordings.load_recording(folder).summary)
+        assert ("physics agrees: median field" in text) is agrees, text
+        if not agrees:
+            assert f"the unit fits, but the median field is {field:.3g} µT where the Earth's is 25-65" in text, text
+
+
+def test_a_folder_with_a_dot_in_its_name_keeps_its_whole_name(tmp_path):
+    folder = _sensor_logger_export(tmp_path / "run_2024.06.19", "android")
+    assert recordings.load_recording(folder).name == "run_2024.06.19"
+
+
+def test_flat_rests_apart_are_said_as_the_longest_of_them_not_one_stretch_from_first_to_last(tmp_path):
+    # face up 1.5 s, tilted 2.5 s, back face up (turned back) for 1.5 s: two flat stretches with motion between
+    t, gyr, acc = _still_then_tilting()
+    back = len(t)
+    t2 = np.concatenate([t, t[-1] + 0.01 + np.arange(150) / 100.0])
+    gyr2 = np.concatenate([gyr, np.zeros((150, 3))])
+    acc2 = np.concatenate([acc, np.tile([0.0, 0.0, G], (150, 1))])
+    acc2[back:] += np.random.default_rng(9).normal(0.0, 1e-3, (150, 3))
+    text = str(
+        recordings.load_recording(_phyphox_custom(tmp_path / "two_rests", t2, gyr2, acc2, gyro_unit="rad/s")).summary
+    )
+    assert "still and flat at 0.0-1.5 s (the longest of 2 stretches, 3.0 s in all)" in text, text
+
+
 def test_a_combined_phyphox_file_without_a_gyroscope_is_refused_saying_what_it_holds(tmp_path):
     # phyphox's 'Acceleration with g' exported as one Raw Data.csv, with its absolute-value column
     t, _, acc = _still_then_tilting()

@@ -40,11 +40,14 @@ quantity   the physics                                                    what i
            screen), the gravity vector −1 g                               Motion, −1 g on z face up)
 ``gyr``    the gyro's tilt against the turn of gravity in the             rad/s from °/s (×57.3)
            accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`),
-           or, with too little motion, its peak and median rate
+           or, with too little motion (or a record too short), its peak
+           and median rate
 ``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
            turns it, median cosine near +1 (-1 mirrored), over the same   one (``z, y, x`` read as ``x, y, z``)
            windows (at least 20)                                          or a gyro of the opposite sign
-``mag``    the median field strength: 25-65 µT on Earth                   µT from nT, gauss, mT
+``mag``    the median field strength: 25-65 µT on Earth (10-200 is       µT from nT, gauss, mT
+           loaded in its unit, said to be off: iron, an uncalibrated
+           magnetometer)
 =========  =============================================================  =====================================
 
 The sign of the accelerometer cannot be read from the gyro: gravity and its opposite are both fixed in the Earth
@@ -1031,7 +1034,8 @@ def _acc_unit_from_physics(acc_raw):
 
 
 def _flat_rest(acc, fs):
-    """Still and flat: windows of 0.5 s with a steady reading of 1 g along ±z. Returns (z, t from, t to) or None."""
+    """Still and flat: windows of 0.5 s with a steady reading of 1 g along ±z. Returns (z, where) or None: the median
+    z reading of the windows of the usual sign, and where they are in words (a stretch, or the longest of several)."""
     m = max(1, int(round(0.5 * fs)))
     nb = len(acc) // m
     if nb < 1:
@@ -1045,7 +1049,12 @@ def _flat_rest(acc, fs):
     z = np.sign(mean[ok, 2])
     major = 1.0 if (z > 0).sum() >= (z < 0).sum() else -1.0
     sel = np.flatnonzero(ok)[z == major]
-    return float(np.median(mean[sel, 2])), sel[0] * m / fs, (sel[-1] + 1) * m / fs
+    stretches = np.split(sel, np.flatnonzero(np.diff(sel) > 1) + 1)  # runs of consecutive windows
+    longest = max(stretches, key=len)
+    where = f"at {longest[0] * m / fs:.1f}-{(longest[-1] + 1) * m / fs:.1f} s"
+    if len(stretches) > 1:
+        where += f" (the longest of {len(stretches)} stretches, {len(sel) * m / fs:.1f} s in all)"
+    return float(np.median(mean[sel, 2])), where
 
 
 def _fix(key, value):
@@ -1098,9 +1107,9 @@ def _settle_acc(raw, stated_unit, stated_sign, fs, where, check):
             )
         sign_how = f"{sign} ({stated_sign.by}); not checked: the phone never lay still and flat"
     else:
-        z, t_from, t_to = rest
+        z, where_flat = rest
         seen = "specific force" if z > 0 else "gravity"
-        posture = f"still and flat at {t_from:.1f}-{t_to:.1f} s, z reads {z:+.2f} m/s², the phone assumed face up"
+        posture = f"still and flat {where_flat}, z reads {z:+.2f} m/s², the phone assumed face up"
         if sign is None:
             sign, sign_how = seen, f"{seen} (not stated; inferred: {posture})"
         elif sign != seen:
@@ -1162,10 +1171,14 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         if 0 < n_o < validate.TILT_WINDOWS_MIN
         else ""
     )
-    return (
-        f"gyr: {unit} ({by}); too little motion for the tilt check ({n} windows{hint}), peak {top:.3g} rad/s "
-        f"and median {med:.3g} plausible"
+    windows = len(rad) // max(1, int(round(validate.TILT_WINDOW * fs)))
+    why = (
+        f"too short for the tilt check ({len(rad) / fs:.1f} s: {windows} windows of {validate.TILT_WINDOW:g} s, "
+        f"{n} of them with motion{hint})"
+        if windows < validate.TILT_WINDOWS_MIN
+        else f"too little motion for the tilt check ({n} windows{hint})"
     )
+    return f"gyr: {unit} ({by}); {why}, peak {top:.3g} rad/s and median {med:.3g} plausible"
 
 
 def _tilt_direction(gyr, acc, fs):
@@ -1199,8 +1212,14 @@ def _settle_mag(mag, stated, where, check):
     if not check:
         return f"mag: {unit} ({by}); physics not checked (check=False)"
     med = float(np.median(np.linalg.norm(mag, axis=1)))
-    if 10.0 <= med <= 200.0:
+    if 25.0 <= med <= 65.0:
         return f"mag: {unit} ({by}); physics agrees: median field {med:.3g} µT (Earth: 25-65)"
+    if 10.0 <= med <= 200.0:  # the unit is right; the place or the sensor is not the Earth's field alone
+        return (
+            f"mag: {unit} ({by}); the unit fits, but the median field is {med:.3g} µT where the Earth's is 25-65: "
+            "iron or a magnet near the phone, or a magnetometer not calibrated (Lab 04's hard iron) -- heading "
+            "from this magnetometer will be off"
+        )
     raw = med / UNITS["mag"][unit]
     fits = [u for u, f in UNITS["mag"].items() if 12.5 <= raw * f <= 130.0 and u != unit]
     hint = f"the magnetometer is in {fits[0]} -- pass {_fix('mag', fits[0])}" if fits else "not a field in any unit"
@@ -1389,7 +1408,7 @@ def load_recording(
         str(path), export.format, export.platform, fs, len(grid), float(start - origin), method, reports, tuple(checks)
     )
     frozen = [_frozen(a) if a is not None else None for a in (gyr, acc, mag, values.get("quat_phone"))]
-    return Recording(name or p.stem, fs, *frozen, float(export.t0 + start), summary)
+    return Recording(name or (p.name if p.is_dir() else p.stem), fs, *frozen, float(export.t0 + start), summary)
 
 
 def _path_arg(path):
