@@ -45,7 +45,7 @@ quantity   the physics                                                    what i
 ``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
            turns it, median cosine near +1 (-1 mirrored), over the same   one (``z, y, x`` read as ``x, y, z``)
            windows (at least 20)                                          or a gyro of the opposite sign
-``mag``    the median field strength: 25-65 µT on Earth (10-200 is       µT from nT, gauss, mT
+``mag``    the median field strength: 25-65 µT on Earth (10-200 is        µT from nT, gauss, mT
            loaded in its unit, said to be off: iron, an uncalibrated
            magnetometer)
 =========  =============================================================  =====================================
