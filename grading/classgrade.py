@@ -52,7 +52,7 @@ from typing import TYPE_CHECKING
 
 import nbformat
 
-from grading import cells, cgroup, gradebook, judge, launcher, sandbox, similarity, slipreport, submission
+from grading import boxfiles, cells, cgroup, gradebook, judge, launcher, sandbox, similarity, slipreport, submission
 from grading.lab import CELL_SECONDS, Lab
 from grading.submission import read_submission, students_of  # noqa: F401 -- the one reader, named here too
 
@@ -345,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(
                 f"cannot grade {lab}: the sandbox does not start on this machine, so no student is graded.\n{problem}"
             )
-        files, size = sandbox.warm(sandbox.view(course))
+        files, size = boxfiles.warm(boxfiles.view(course))
         print(f"every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True)
         print(cgroup.said(sandbox.box_bytes()), flush=True)
         if not args.no_generate:

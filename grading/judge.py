@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 from fusionlab import guard, labformat
 from fusionlab.checks import slips
 from fusionlab.checks._core import Feedback
-from grading import boxlib, cells, client, launcher, sandbox
+from grading import boxfiles, boxlib, cells, client, launcher
 from grading.lab import Lab
 from grading.client import BoxDied, BoxTimeout, ReplyTooLarge
 from grading.session import NotData, Session, StudentError, StudentRaised
@@ -264,7 +264,7 @@ JUDGE_MEMORY_BYTES = 3 << 30
 
 def _judge_child(lab, submitted, student, slot, system, part, earlier):
     """The judge's process (:func:`judge_apart`): as root, the boxes' launcher stays root and this process does not."""
-    sandbox.system_files(known=system)
+    boxfiles.system_files(known=system)
     boxes = launcher.split(launcher.LabBoxes(lab, student, slot), slot, read_all=lab.judge_reads_all)
     try:
         return {"verdict": dataclasses.asdict(judge(lab, submitted, student, slot, boxes, part, earlier))}
@@ -303,7 +303,7 @@ def judge_apart(
     # (matplotlib, the library's modules ...), which each process would otherwise import again (a second or so)
     reply = launcher.apart(
         _judge_child,
-        (lab, submitted, student, slot, sandbox.system_files(), part, earlier),
+        (lab, submitted, student, slot, boxfiles.system_files(), part, earlier),
         preload=["grading.judge", *_imported_modules(lab.setup_source)],
         memory_bytes=memory_bytes,
         who=student,

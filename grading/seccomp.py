@@ -30,8 +30,8 @@ boxes of one slot (one user id) or of different slots run at once or one after a
 A box still fills the cache by reading, and can tell a cached page from one read from disk, exactly, by the
 major-fault count ``getrusage`` reports after its first touch of a page of a mapped file: a box touching pages
 nothing else reads and a later box counting faults on them share bits (an outside review carried a class's hidden
-inputs that way). So every file a box can read (:func:`grading.sandbox.view`) is read into the page cache before
-a class is graded (:func:`grading.sandbox.warm`): a touch then changes nothing, and with eviction refused nothing
+inputs that way). So every file a box can read (:func:`grading.boxfiles.view`) is read into the page cache before
+a class is graded (:func:`grading.boxfiles.warm`): a touch then changes nothing, and with eviction refused nothing
 leaves the cache but under the machine's own memory pressure. Timing a read stays possible, and says as little:
 the page is cached.
 """

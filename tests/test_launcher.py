@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import grading
-from grading import client, launcher, sandbox
+from grading import client, launcher, reach, sandbox
 
 AS_ROOT = pytest.mark.skipif(os.geteuid() != 0, reason="the launcher splits off only when grading as root")
 
@@ -299,13 +299,13 @@ def test_a_closed_folder_on_the_import_path_is_opened_in_the_judges_view_alone_a
     (home / "secret.txt").write_text("answers")
     os.chmod(home, 0o700)
     path = str(home / "py" / "lib")
-    assert launcher.closed_folders([path, str(course)]) == {str(home): ["py"]}
+    assert reach.closed_folders([path, str(course)]) == {str(home): ["py"]}
     assert launcher.unreadable(3, [path]) == path
     assert launcher.view_problem(3, [path]) == ""
 
     def body():
         stage = tempfile.mkdtemp(dir=str(course))
-        opened = launcher.open_view([path], stage)
+        opened = reach.open_view([path], stage)
         launcher.drop_root(launcher.judge_uid(3))
         status = dict(line.split(":", 1) for line in open("/proc/self/status") if ":" in line)
         try:
@@ -343,11 +343,11 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
     for path, mode in ((home, 0o700), (checkout, 0o700), (checkout / "latepkg", 0o700)):
         os.chmod(path, mode)
     os.chmod(checkout / "latepkg" / "late.py", 0o600)
-    assert launcher.closed_folders([str(checkout)]) == {str(home): ["main"], str(checkout): ["latepkg"]}
-    assert launcher.closed_within([str(checkout)]) == str(checkout / "latepkg")
+    assert reach.closed_folders([str(checkout)]) == {str(home): ["main"], str(checkout): ["latepkg"]}
+    assert reach.closed_within([str(checkout)]) == str(checkout / "latepkg")
     assert "latepkg is still closed" in launcher.view_problem(3, [str(checkout)])
     os.chmod(checkout / "latepkg", 0o755)
-    assert launcher.closed_within([str(checkout)]) == str(checkout / "latepkg" / "late.py")
+    assert reach.closed_within([str(checkout)]) == str(checkout / "latepkg" / "late.py")
     os.chmod(checkout / "latepkg", 0o700)
 
     def body():
@@ -359,7 +359,7 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
 
     def view_alone():
         sys.path.insert(0, str(checkout))
-        launcher.open_view([str(checkout)], tempfile.mkdtemp(dir=str(course)))
+        reach.open_view([str(checkout)], tempfile.mkdtemp(dir=str(course)))
         launcher.drop_root(launcher.judge_uid(3))
         try:
             import latepkg.late  # noqa: F401
@@ -390,8 +390,8 @@ def test_a_checkout_only_root_may_enter_is_opened_to_its_packages_alone_and_no_c
     (checkout / "gradebook.db").write_text("grades")
     (checkout / "notes").mkdir()
     os.chmod(checkout, 0o700)
-    assert launcher.closed_folders([str(checkout)]) == {str(checkout): ["latepkg", "top.py"]}
-    assert launcher.closed_within([str(checkout)]) is None
+    assert reach.closed_folders([str(checkout)]) == {str(checkout): ["latepkg", "top.py"]}
+    assert reach.closed_within([str(checkout)]) is None
     assert launcher.view_problem(3, [str(checkout)]) == ""
 
     def body():
@@ -417,7 +417,7 @@ def test_the_folders_of_the_course_packages_are_opened_to_the_judge_even_off_the
     the capstone's program check) is not found where the course sits in a folder only root may enter."""
     import fusionlab
 
-    folders = launcher.import_folders()
+    folders = reach.import_folders()
     for package in (fusionlab, grading):
         assert os.path.dirname(os.path.dirname(os.path.abspath(package.__file__))) in folders, package.__name__
     assert all(os.path.isdir(f) for f in folders) and len(folders) == len(set(folders))

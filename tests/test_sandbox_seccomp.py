@@ -34,7 +34,7 @@ import uuid
 import pytest
 
 from conftest import ROOT
-from grading import handin, sandbox, seccomp
+from grading import boxfiles, handin, sandbox, seccomp
 
 LAB = "02_kalman_falling_body"
 NEEDS_BWRAP = pytest.mark.skipif(not shutil.which("bwrap"), reason="needs bubblewrap (apt-get install bubblewrap)")
@@ -755,10 +755,10 @@ def _evict(path):
 def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_box(tmp_path):
     """The channel the seccomp filter leaves: box A touches pages of a file nothing else reads, box B counts its
     major faults on them (exact, no call refused). Shown working on a file just evicted, then closed: grading
-    first reads every file a box can read (``sandbox.warm`` over ``sandbox.view``), and B sees every page cached
+    first reads every file a box can read (``boxfiles.warm`` over ``boxfiles.view``), and B sees every page cached
     whatever A did."""
     path, _ = _venv_file()
-    view = sandbox.view(tmp_path / "course", data=False)
+    view = boxfiles.view(tmp_path / "course", data=False)
     assert any(path == v or path.startswith(v.rstrip("/") + "/") for v in view), "the file is one a box can read"
     touched, pages = [20, 60], [20, 40, 60, 80]
     with sandbox.claimed_slots(2) as (a, b):
@@ -769,7 +769,7 @@ def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_b
             "without the warming, box B reads box A's bits"
         )
         assert _evict(path)
-        files, size = sandbox.warm(view)
+        files, size = boxfiles.warm(view)
         assert size > 100 << 20 and files > 1000, (files, size)
         _faults(tmp_path, a, path, touched, touch=True)
         assert _faults(tmp_path, b, path, pages, touch=False) == [True] * 4, "every page was cached before A ran"
@@ -777,7 +777,7 @@ def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_b
 
 def test_a_box_reads_nothing_the_warming_leaves_out(tmp_path):
     """Every folder and file mounted read-only into a box (the system's libraries, the Python installation, the
-    library, the data, the box's own script) is in ``sandbox.view``: none can hold a page no grading run has read.
+    library, the data, the box's own script) is in ``boxfiles.view``: none can hold a page no grading run has read.
     The private folders (the submission's copy, /tmp, the lab folder) are the box's own."""
     course = tmp_path / "course"
     (course / "lib").mkdir(parents=True)
@@ -790,7 +790,7 @@ def test_a_box_reads_nothing_the_warming_leaves_out(tmp_path):
     args = sandbox.bwrap_command(
         ["python", str(client.SCRIPT)], course=course, lab=LAB, lib=course / "lib", work=str(work)
     )
-    view = [os.path.realpath(v) for v in sandbox.view(course)]
+    view = [os.path.realpath(v) for v in boxfiles.view(course)]
     sources = [os.path.realpath(args[i + 1]) for i, a in enumerate(args) if a in ("--ro-bind", "--ro-bind-try")]
     outside = [
         src

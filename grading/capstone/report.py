@@ -16,7 +16,7 @@ from urllib.parse import quote
 import numpy as np
 
 from fusionlab.capstone import GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_PER_SAMPLE, SENSORS
-from grading import cgroup, launcher, sandbox
+from grading import boxfiles, cgroup, launcher, sandbox
 
 from .program import CHEATS, LAB, box_library, model_program
 from .runner import StudentResult, gates_failed, grade_apart
@@ -508,7 +508,7 @@ def grade_class(
                 print(f"==> reference filters on {len(scored)} trials", flush=True)
             refs = cached_references(scored, out, seed, progress=progress)
             lib = box_library(scratch)
-            files, size = sandbox.warm(sandbox.view(course, lib=lib, data=False) + [str(lib)])
+            files, size = boxfiles.warm(boxfiles.view(course, lib=lib, data=False) + [str(lib)])
             if progress:
                 print(
                     f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True
