@@ -30,7 +30,6 @@ from grading.submission import read_submission, students_of
 if TYPE_CHECKING:
     from collections.abc import Callable, Collection, Iterable, Iterator
     from nbgrader.api import Gradebook
-    from grading.classgrade import Result
 
 
 def nbgrader_env(extra: dict[str, str] | None = None) -> dict[str, str]:
@@ -171,7 +170,7 @@ def recorded_tests(course: Path, lab: str) -> dict[str, str]:
         return {name: sources[name] for name in tests}
 
 
-def record(course: Path, lab: Lab, student: str, result: Result) -> None:
+def record(course: Path, lab: Lab, student: str, result) -> None:
     """Write one student's autograded scores into the gradebook and the autograded notebook into the course."""
     from sqlalchemy.exc import SAWarning
 

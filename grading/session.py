@@ -15,7 +15,6 @@ from grading.client import BoxDied, BoxTimeout
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable
     import nbformat
-    from grading.lab import Lab
     from grading.launcher import LabBoxes, RemoteBoxes
 
 STUDENT_SECONDS = 900  # wall time of the whole submission
@@ -43,7 +42,7 @@ class Session:
 
     def __init__(
         self,
-        lab: Lab,
+        lab,
         submitted: nbformat.NotebookNode | None,
         boxes: LabBoxes | RemoteBoxes,
         gid: str,

@@ -38,7 +38,6 @@ from fusionlab.checks import slips
 if TYPE_CHECKING:
     import os
     from collections.abc import Iterable, Sequence
-    from grading.classgrade import Result
 
 FIELDS = ["student", "lab", "exercise", "grade_id", "points", "score", "slip", "says"]
 #: The outcomes whose bar links to an example answer: every named slip, and these.
@@ -55,7 +54,7 @@ def _says(slip):
         return slip
 
 
-def rows_of(lab: str, results: Iterable[Result]) -> list[dict[str, str]]:
+def rows_of(lab: str, results: Iterable) -> list[dict[str, str]]:
     """The CSV rows of the graded ``results`` (:class:`grading.classgrade.Result`) of ``lab``."""
     out = []
     for r in results:
@@ -79,7 +78,7 @@ def rows_of(lab: str, results: Iterable[Result]) -> list[dict[str, str]]:
     return out
 
 
-def write(course: str | os.PathLike, lab: str, results: list[Result]) -> tuple[Path, Path]:
+def write(course: str | os.PathLike, lab: str, results: list) -> tuple[Path, Path]:
     """Write ``slips_<lab>.csv`` and ``slips_<lab>.html`` into ``course``: this run's students, and the earlier rows
     of the others. Returns both paths (HTML, CSV)."""
     if not isinstance(lab, str) or not lab:
