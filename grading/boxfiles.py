@@ -6,16 +6,19 @@ the page cache (:func:`warm`). :mod:`grading.sandbox` builds the box around them
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import re
 import stat
 import subprocess
 import sys
 import sysconfig
+import time
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Sequence
+    from collections.abc import Iterable, Iterator, Sequence
 
 # Files of /etc a Python kernel needs (user names, the dynamic linker, time zone); the rest of /etc stays outside.
 ETC = [
@@ -177,3 +180,43 @@ def matplotlib_cache():
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "matplotlib"
     )
     return os.path.realpath(base) if os.path.isdir(base) else ""
+
+
+#: The machine's lock on the page cache: a grading run that warmed it holds the lock shared for as long as it counts
+#: on it (:func:`cache_kept`); the capstone takes it exclusive to make the kernel forget the caches
+#: (:func:`forgetting`, :func:`grading.launcher.forget_caches`), so that it never empties the cache under a class.
+CACHE_LOCK = "/tmp/fusionlab-page-cache.lock"
+
+
+@contextlib.contextmanager
+def cache_kept() -> Iterator[None]:
+    """While held, no capstone run on this machine makes the kernel forget its caches: what :func:`warm` read stays
+    read (but for the machine's own memory pressure)."""
+    fd = os.open(CACHE_LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def forgetting(seconds: float) -> Iterator[bool]:
+    """The lock taken exclusive, waiting up to ``seconds`` for the runs that keep the cache (:func:`cache_kept`) to
+    end: yields True when it was taken, False when they still ran."""
+    fd = os.open(CACHE_LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
+    try:
+        deadline = time.monotonic() + seconds
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                taken = True
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    taken = False
+                    break
+                time.sleep(0.2)
+        yield taken
+    finally:
+        os.close(fd)

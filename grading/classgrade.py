@@ -345,6 +345,7 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(
                 f"cannot grade {lab}: the sandbox does not start on this machine, so no student is graded.\n{problem}"
             )
+        stack.enter_context(boxfiles.cache_kept())  # no capstone run here empties it while this class is graded
         files, size = boxfiles.warm(boxfiles.view(course))
         print(f"every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True)
         print(cgroup.said(sandbox.box_bytes()), flush=True)

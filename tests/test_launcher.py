@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import grading
-from grading import client, launcher, reach, sandbox
+from grading import boxfiles, client, launcher, reach, sandbox
 
 AS_ROOT = pytest.mark.skipif(os.geteuid() != 0, reason="the launcher splits off only when grading as root")
 
@@ -370,6 +370,18 @@ def test_a_checkout_closed_within_is_found_and_its_judge_still_imports_a_module_
     assert _in_child(view_alone) == "not found", "the case is real: a view alone does not reach a closed checkout"
     got = _in_child(body)
     assert got == {"value": 42, "uid": launcher.judge_uid(3)}, got
+
+
+@AS_ROOT
+def test_the_caches_are_not_forgotten_while_a_class_keeps_them_warm(tmp_path, monkeypatch):
+    lock = str(tmp_path / "cache.lock")
+    monkeypatch.setattr(boxfiles, "CACHE_LOCK", lock)  # this test's own: a class graded here meanwhile is not held
+    with boxfiles.cache_kept():
+        t0 = time.monotonic()
+        said = launcher.forget_caches(wait=0.5)
+        waited = time.monotonic() - t0
+    assert said == "a class graded on this machine kept the page cache for over 0.5 s" and 0.4 < waited < 3, said
+    assert launcher.forget_caches(wait=0.5) in ("", "the kernel refused: Read-only file system"), "free: forgotten"
 
 
 def test_only_root_makes_the_kernel_forget_its_file_caches(monkeypatch):
