@@ -296,8 +296,9 @@ def view_problem(slot: int, paths: Iterable[str] | None = None) -> str:
     as its own user, with no capability; "" when it can. Tried in a child process."""
     paths = [p for p in (import_folders() if paths is None else paths) if p and os.path.isdir(p)]
 
+    stage = tempfile.mkdtemp()  # made and removed here: the child that moves its mounts through it cannot
+
     def task():
-        stage = tempfile.mkdtemp()
         opened = closed_folders(paths)  # as root: what the view shows of a closed path, its packages and modules
         shown = [os.path.join(path, entry) for path in paths for entry in opened.get(path, [])]
         try:
@@ -309,7 +310,10 @@ def view_problem(slot: int, paths: Iterable[str] | None = None) -> str:
         refused = refused or next((p for p in shown if not os.path.isdir(p) and not os.access(p, os.R_OK)), "")
         return f"{refused} is still closed in its view" if refused else ""
 
-    return _in_dropped_child(slot, None, task)
+    try:
+        return _in_dropped_child(slot, None, task)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def reach_message(blocked: str, slot: int) -> str:

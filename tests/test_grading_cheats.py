@@ -178,6 +178,39 @@ FILTERPY_CHEATS = {
         "return f.x, f.P, f.K",
     },
 }
+# Other ways through the library an outside review found (each scored full marks before Lab 02 forbade them): the
+# whole run with a measurement that observes nothing, the thesis's printed filter, the lab's own simulator probed one
+# step from three states, the prediction's sandwich as the Joseph form, the information form with the posterior gain,
+# and filterpy's update made to use the given gain.
+LIBRARY_ROUTES = {
+    "routes_a": {
+        1: "n = np.shape(P)[0]\nreturn kf.predict(np.zeros(n), P, np.eye(n) - K @ H, K @ R @ K.T)[1]",
+        2: "step = lambda x0, v0: np.array([a[1] for a in falling_body.seed000_labcode_falling_body("
+        "k=k, m=m, g=g, dt=dt, TMAX=2, x0=x0, v0=v0)])\n"
+        "Bu = step(0.0, 0.0)\n"
+        "return np.column_stack([step(1.0, 0.0) - Bu, step(0.0, 1.0) - Bu]), np.eye(2), Bu",
+        3: "out = kf.kf_batch(np.zeros((1, 2, 1)), A, B, u, Q, np.eye(1), np.zeros((1, len(x))), x, P)\n"
+        "return out['x_prior'][0, 1], out['P_prior'][1]",
+        4: "n = len(x)\n"
+        "x_post, P_post = falling_body.seed000_labcode_kalman(x, P, z, np.eye(n), np.zeros((n, n)), H, R)\n"
+        "return x_post, P_post, kf.gain_from_posterior(P_post, H, R)",
+    },
+    "routes_b": {
+        1: "from filterpy.kalman import KalmanFilter\n"
+        "class _Gain:\n"
+        "    def __array_function__(self, func, types, args, kwargs):\n"
+        "        return np.array(K, dtype=float)\n"
+        "n, m = np.shape(K)\n"
+        "f = KalmanFilter(dim_x=n, dim_z=m)\n"
+        "f.P, f.H, f.R = np.array(P, float), np.array(H, float), np.array(R, float)\n"
+        "f.inv = lambda S: _Gain()\n"
+        "f.update(np.zeros(m))\n"
+        "return f.P",
+        4: "P_post = kf.information_covariance(P, H, R)\n"
+        "K = kf.gain_from_posterior(P_post, H, R)\n"
+        "return x + K @ (z - H @ x), P_post, K",
+    },
+}
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh,
 # the capstone's filter of the student's own).
 NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3), ("13_capstone", 2)}
@@ -271,6 +304,7 @@ def _students(lab, release, solution):
     }
     if lab == "02_kalman_falling_body":
         out.update({f"filterpy_{name}": _answered(release, solution, c) for name, c in FILTERPY_CHEATS.items()})
+        out.update({name: _answered(release, solution, c) for name, c in LIBRARY_ROUTES.items()})
     if lab in JUNK:
         junk = _answered(release, solution, JUNK[lab])
         out["junk_patched_numpy"] = _prepend(junk, "ex1_solution", PATCH_NUMPY)
@@ -353,6 +387,45 @@ def test_filterpys_other_kalman_steps_score_nothing_on_predict_and_update(graded
     assert got["scores"][f"filterpy_{name}"] == {1: points[1], 2: points[2], 3: 0, 4: 0}, got["messages"][
         f"filterpy_{name}"
     ]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(LIBRARY_ROUTES))
+def test_the_librarys_other_routes_through_a_kalman_step_score_nothing(graded, name):
+    points = _points("02_kalman_falling_body")
+    got = graded("02_kalman_falling_body")
+    expected = {n: 0 if n in LIBRARY_ROUTES[name] else points[n] for n in points}
+    assert got["scores"][name] == expected, got["messages"][name]
+
+
+@pytest.mark.parametrize("name", sorted(LIBRARY_ROUTES))
+def test_each_library_route_is_a_right_answer_where_nothing_is_stubbed(name):
+    """Outside the box, each route computes its exercise exactly: forbidding it is what scores it nothing."""
+    from fusionlab import falling_body
+    from fusionlab import kalman as kf
+
+    rng = np.random.default_rng(8)
+    M = rng.standard_normal((3, 3))
+    P, R, H = M @ M.T + np.eye(3), 0.5 * np.eye(2), rng.standard_normal((2, 3))
+    x, z, K = rng.standard_normal(3), np.ones(2), rng.standard_normal((3, 2))
+    A, B, u, Q = rng.standard_normal((3, 3)), rng.standard_normal((3, 2)), rng.standard_normal(2), 0.3 * np.eye(3)
+    ns = {"np": np, "kf": kf, "falling_body": falling_body}
+    calls = {
+        1: ("my_joseph", "P, K, H, R", (P, K, H, R), kf.joseph_covariance(P, K, H, R)),
+        2: ("my_state_space", "k, m, g, dt", (0.25, 10.0, 9.8, 0.01), falling_body.falling_body_state_space()),
+        3: ("my_predict", "x, P, A, Q, B, u", (x, P, A, Q, B, u), kf.predict(x, P, A, Q, B, u)),
+        4: ("my_update", "x, P, z, H, R", (x, P, z, H, R), kf.update(x, P, z, H, R)),
+    }
+    for n, body in LIBRARY_ROUTES[name].items():
+        fname, args, values, ref = calls[n]
+        exec(f"def {fname}({args}):\n" + "\n".join("    " + ln for ln in body.splitlines()), ns)  # noqa: S102
+        mine = ns[fname](*values)
+        if n == 2:  # the state space as the lab checks it: A, and the input's effect B u
+            (a, b, u_), (a_ref, b_ref, u_ref) = mine, ref
+            mine, ref = (a, np.asarray(b) @ np.asarray(u_)), (a_ref, np.asarray(b_ref) @ np.asarray(u_ref))
+        mine, ref = (mine, ref) if isinstance(ref, tuple) else ((mine,), (ref,))
+        assert len(mine) == len(ref), (name, n)
+        assert all(np.allclose(np.ravel(a), np.ravel(b), atol=1e-9) for a, b in zip(mine, ref)), (name, n)
 
 
 def _as_function(name, args, body):

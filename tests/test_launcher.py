@@ -384,6 +384,20 @@ def test_the_caches_are_not_forgotten_while_a_class_keeps_them_warm(tmp_path, mo
     assert launcher.forget_caches(wait=0.5) in ("", "the kernel refused: Read-only file system"), "free: forgotten"
 
 
+@AS_ROOT
+def test_trying_the_judges_view_leaves_no_folder_behind(course, monkeypatch):
+    """An outside review found an empty root-owned folder left in /tmp by every grading run: the staging folder of
+    the view tried before grading (view_problem)."""
+    home = course / "home"
+    (home / "py").mkdir(parents=True)
+    os.chmod(home, 0o700)
+    tmp = course / "tmp"
+    tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    assert launcher.view_problem(3, [str(home / "py")]) == ""
+    assert list(tmp.iterdir()) == []
+
+
 def test_only_root_makes_the_kernel_forget_its_file_caches(monkeypatch):
     monkeypatch.setattr(os, "geteuid", lambda: 1000)
     assert launcher.forget_caches() == "not root"

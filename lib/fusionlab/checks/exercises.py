@@ -93,6 +93,22 @@ FILTERPY_UPDATE = tuple(
 )
 
 
+#: The library's ways through one Kalman step (Lab 02): the course's own predict and update, the whole run
+#: (``kf_batch``: a measurement that observes nothing leaves the prediction), the thesis's printed filter and its class
+#: (with A = I and Q = 0 it is the update, with H = 0 the prediction). Each exercise of Lab 02 forbids them all: the
+#: Joseph form is the prediction's sandwich with A = I - KH (an outside review answered exercise 1 with kf.predict).
+LAB02_STEPS = (
+    "kalman.predict",
+    "kalman.predict_step",
+    "kalman.update",
+    "kalman.update_step",
+    "kalman.kf_batch",
+    "falling_body.seed000_labcode_kalman",
+    "falling_body.ThesisKF.step",
+    "falling_body.ThesisKF.run",
+)
+
+
 @dataclass(frozen=True)
 class Exercise:
     """One autograded exercise: its lab, number, points, the names the answer defines, its check, what it forbids.
@@ -241,7 +257,14 @@ EXERCISES = (
         2,
         ("my_joseph",),
         "check_joseph",
-        ("kalman._joseph", "kalman.expanded_covariance", "kalman.joseph_covariance"),
+        (
+            "kalman._joseph",
+            "kalman.expanded_covariance",
+            "kalman.joseph_covariance",
+            *LAB02_STEPS,
+            *FILTERPY_PREDICT,
+            *FILTERPY_UPDATE,
+        ),
     ),
     Exercise(
         "02_kalman_falling_body",
@@ -249,7 +272,12 @@ EXERCISES = (
         2,
         ("my_state_space",),
         "check_state_space",
-        ("falling_body.falling_body_state_space",),
+        (
+            "falling_body.falling_body_state_space",
+            "falling_body.seed000_labcode_falling_body",
+            "falling_body.falling_body_euler",
+            "falling_body.ThesisKF.falling_body",
+        ),
     ),
     Exercise(
         "02_kalman_falling_body",
@@ -257,7 +285,7 @@ EXERCISES = (
         2,
         ("my_predict",),
         "check_predict",
-        (*FILTERPY_PREDICT, "kalman.predict", "kalman.predict_step"),
+        (*FILTERPY_PREDICT, *LAB02_STEPS),
     ),
     Exercise(
         "02_kalman_falling_body",
@@ -267,10 +295,11 @@ EXERCISES = (
         "check_update",
         (
             *FILTERPY_UPDATE,
+            *LAB02_STEPS,
             "kalman._gain",
             "kalman.kalman_gain",
-            "kalman.update",
-            "kalman.update_step",
+            "kalman.information_covariance",
+            "kalman.gain_from_posterior",
         ),
     ),
     # 03_correlation_fusion
