@@ -192,7 +192,7 @@ CACHE_LOCK = "/tmp/fusionlab-page-cache.lock"
 def cache_kept() -> Iterator[None]:
     """While held, no capstone run on this machine makes the kernel forget its caches: what :func:`warm` read stays
     read (but for the machine's own memory pressure)."""
-    fd = os.open(CACHE_LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
+    fd = _open_lock()
     try:
         fcntl.flock(fd, fcntl.LOCK_SH)
         yield
@@ -204,19 +204,24 @@ def cache_kept() -> Iterator[None]:
 def forgetting(seconds: float) -> Iterator[bool]:
     """The lock taken exclusive, waiting up to ``seconds`` for the runs that keep the cache (:func:`cache_kept`) to
     end: yields True when it was taken, False when they still ran."""
-    fd = os.open(CACHE_LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
+    fd = _open_lock()
     try:
         deadline = time.monotonic() + seconds
-        while True:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                taken = True
-                break
-            except BlockingIOError:
-                if time.monotonic() >= deadline:
-                    taken = False
-                    break
-                time.sleep(0.2)
+        while not (taken := _exclusive(fd)) and time.monotonic() < deadline:
+            time.sleep(0.2)
         yield taken
     finally:
         os.close(fd)
+
+
+def _open_lock():
+    return os.open(CACHE_LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
+
+
+def _exclusive(fd):
+    """The lock taken exclusive now, or False: a class run holds it."""
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    return True

@@ -190,6 +190,11 @@ class RemoteBoxes:
         os.waitpid(self.launcher_pid, 0)
 
 
+#: What :func:`forget_caches` says where it is not root (nothing to say to a student: the boxes share the grader's
+#: user then, and the run says so).
+NOT_ROOT = "not root"
+
+
 def forget_caches(wait: float = 900.0) -> str:
     """Make the kernel forget the file system's caches (its names, found and not found, its inodes, the pages of
     files): what one box could leave there for a later box to time (a name looked up, a file read). Root only; "" when
@@ -197,7 +202,7 @@ def forget_caches(wait: float = 900.0) -> str:
     (up to ``wait`` seconds) while a class graded on this machine keeps the cache it warmed
     (:func:`grading.boxfiles.cache_kept`)."""
     if os.geteuid() != 0:
-        return "not root"
+        return NOT_ROOT
     with boxfiles.forgetting(wait) as free:
         if not free:
             return f"a class graded on this machine kept the page cache for over {wait:g} s"
@@ -306,8 +311,7 @@ def view_problem(slot: int, paths: Iterable[str] | None = None) -> str:
         except OSError as exc:
             return f"no view of its own: {exc}"
         drop_root(judge_uid(slot))
-        refused = first_refused(paths) or first_refused(p for p in shown if os.path.isdir(p))
-        refused = refused or next((p for p in shown if not os.path.isdir(p) and not os.access(p, os.R_OK)), "")
+        refused = first_refused([*paths, *shown])
         return f"{refused} is still closed in its view" if refused else ""
 
     try:

@@ -104,26 +104,28 @@ def open_view(paths: Iterable[str], stage: str) -> list[str]:
     return list(closed)
 
 
+def _course_packages():
+    """The folders of the course's own packages, ``fusionlab`` and ``grading``."""
+    import fusionlab
+    import grading
+
+    return [os.path.dirname(os.path.abspath(m.__file__)) for m in (fusionlab, grading)]
+
+
 def import_folders() -> list[str]:
     """The folders the judge imports from: the import path, and the folders holding the course's own packages
     (``fusionlab`` and ``grading``), which an editable install reaches through an import hook of its own rather than
     through the import path. A module the judge imports late (after it gave up root) is looked up there."""
-    import fusionlab
-    import grading
-
-    own = [os.path.dirname(os.path.dirname(os.path.abspath(m.__file__))) for m in (fusionlab, grading)]
+    own = [os.path.dirname(folder) for folder in _course_packages()]
     return [p for p in dict.fromkeys([*sys.path, *own]) if p and os.path.isdir(p)]
 
 
 def course_files() -> list[str]:
     """The folders and Python files of the course's own packages (``fusionlab``, ``grading``), which the judge
     imports from, some of them late (after it gave up root)."""
-    import fusionlab
-    import grading
-
     out = []
-    for package in (fusionlab, grading):
-        for folder, dirs, files in os.walk(os.path.dirname(os.path.abspath(package.__file__))):
+    for package in _course_packages():
+        for folder, dirs, files in os.walk(package):
             dirs[:] = [d for d in dirs if d != "__pycache__"]
             out += [folder, *(os.path.join(folder, f) for f in sorted(files) if f.endswith(".py"))]
     return out
@@ -167,21 +169,26 @@ def _closed_tree(path, walk=True):
     return None
 
 
+def _refused(path):
+    """As this process: it cannot list the folder ``path``, or read the file."""
+    if not os.path.isdir(path):
+        return not os.access(path, os.R_OK)
+    try:
+        os.listdir(path)
+    except PermissionError:
+        return True
+    return False
+
+
 def first_refused(paths):
-    """As the judge: the first of ``paths``, or of the packages in them, it cannot list, or of their modules and
-    of :func:`course_files` it cannot read; ""."""
+    """As the judge: the first of ``paths`` (folders and files), or of the packages and modules in a folder of them,
+    it cannot list or read, then the first of :func:`course_files`; ""."""
     for path in paths:
-        try:
-            names = importable(path)
-        except PermissionError:
+        if _refused(path):
             return path
-        for full in (os.path.join(path, name) for name in names):
-            if not os.path.isdir(full):
-                if not os.access(full, os.R_OK):
-                    return full
-                continue
-            try:
-                os.listdir(full)
-            except PermissionError:
-                return full
-    return next((f for f in course_files() if not os.access(f, os.R_OK)), "")
+        if os.path.isdir(path):
+            inside = (os.path.join(path, name) for name in importable(path))
+            refused = next((full for full in inside if _refused(full)), None)
+            if refused:
+                return refused
+    return next((f for f in course_files() if _refused(f)), "")

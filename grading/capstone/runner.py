@@ -425,7 +425,7 @@ def grade_submission(
         # the causality check's calls first, before any box sees a whole trial (grading.capstone.causality)
         probes = probe(runner, scored, chosen, budgets, rng, every)
         forgot = runner.forget()
-        if forgot and forgot != "not root":  # not root: the boxes share the grader's user anyway (the run says so)
+        if forgot and forgot != launcher.NOT_ROOT:
             res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
         for i, t in enumerate(scored):
             r = TrialResult(t.name, budget_s=budgets[i])
