@@ -281,6 +281,7 @@ def bwrap_command(
     uid: int | None = None,
     data: bool = True,
     hide: Iterable[str] = (),
+    proc: bool = True,
 ) -> list[str]:
     """The ``bwrap`` command line that runs ``command`` (a list, e.g. ``[python, box.py]``) in the box.
 
@@ -291,6 +292,11 @@ def bwrap_command(
     data the judge sends). ``hide`` lists folders and files of the mounted Python installation that the box must
     not reach (:func:`package_paths`: the real packages that ``shadow`` replaces): each folder is covered by an
     empty read-only one and each file by an empty file, so that taking the shadow off ``sys.path`` finds nothing.
+    With ``proc=False`` the box has no /proc at all (an empty read-only folder): every inode of a process's entries
+    there takes its number from a counter of the whole machine (get_next_ino), which a box moves by looking its
+    entries up and reads back from their numbers -- a channel from box to box that no call filter closes. The
+    capstone's boxes, whose calls must not learn what an earlier box saw, run so; a lab's box keeps what a Python
+    kernel reads there (its own /proc/self), the machine's counters hidden (:func:`proc_masks`).
     """
     course = os.path.realpath(course)
     limits = {**DEFAULT_LIMITS, **(limits or {})}
@@ -313,9 +319,8 @@ def bwrap_command(
         args += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
     else:
         args += ["--unshare-user", "--disable-userns"]
+    args += ["--proc", "/proc"] if proc else ["--perms", "0555", "--tmpfs", "/proc", "--remount-ro", "/proc"]
     args += [
-        "--proc",
-        "/proc",
         "--dev",
         "/dev",
         "--perms",
@@ -325,7 +330,7 @@ def bwrap_command(
         "--tmpfs",
         "/tmp",
     ]
-    args += proc_masks()
+    args += proc_masks() if proc else []
     args += boxfiles.system_binds() + boxfiles.python_binds() + data_args
     for path in hide:  # after the installation's mounts, which they cover
         path = os.path.realpath(path)

@@ -22,9 +22,11 @@ boxes of one slot (one user id) or of different slots run at once or one after a
   a filter cannot read, is answered ENOSYS (:data:`MISSING_SYSCALLS`), as an older kernel would, so the C library
   falls back to ``clone``. Forks and threads work as before;
 - making the objects that take a number from a counter of the whole machine: pipes and sockets (their inode numbers,
-  a socket's cookie), memfds and System V shared memory, userfaultfd, pidfds; a box that makes them until a new
-  batch of numbers starts reads and sets the count, and a later box reads it back (an outside review carried the
-  capstone's causality check's k from its boxes to the scored box so). With pipes goes the child process, which
+  a socket's cookie), POSIX message queues, memfds and System V shared memory, userfaultfd, pidfds; a box that
+  makes them until a new batch of numbers starts reads and sets the count, and a later box reads it back (outside
+  reviews carried the capstone's causality check's k from its boxes to the scored box so, twice). The same counter
+  numbers a process's entries in /proc, which the capstone's boxes therefore do not have
+  (:func:`grading.sandbox.bwrap_command`). With pipes goes the child process, which
   Python starts through one: no box needs one.
 
 A box still fills the cache by reading, and can tell a cached page from one read from disk, exactly, by the
@@ -125,6 +127,14 @@ REFUSED_SYSCALLS = {
     "shmget": (29, 194, None),
     "userfaultfd": (323, 282, None),
     "pidfd_open": (434, 434, None),
+    # POSIX message queues: each new queue is an inode of the box's own mqueue file system, numbered by the same
+    # counter as pipes' (an outside review carried the capstone's k through it once pipes were refused)
+    "mq_open": (240, 180, None),
+    "mq_unlink": (241, 181, None),
+    "mq_timedsend": (242, 182, None),
+    "mq_timedreceive": (243, 183, None),
+    "mq_notify": (244, 184, None),
+    "mq_getsetattr": (245, 185, None),
     # and what reads or moves the kernel's event counters and programs: no box needs either
     "perf_event_open": (298, 241, None),
     "bpf": (321, 280, None),

@@ -67,6 +67,12 @@ COUNTER_CALLS = {
     "shmget": (29, 194),
     "userfaultfd": (323, 282),
     "pidfd_open": (434, 434),
+    "mq_open": (240, 180),  # POSIX message queues: every call on them (from the kernel's tables)
+    "mq_unlink": (241, 181),
+    "mq_timedsend": (242, 182),
+    "mq_timedreceive": (243, 183),
+    "mq_notify": (244, 184),
+    "mq_getsetattr": (245, 185),
     "perf_event_open": (298, 241),
     "bpf": (321, 280),
 }
@@ -969,26 +975,38 @@ COUNTER_PROBE = """
         ino = os.fstat(fd).st_ino
         os.close(fd), os.waitpid(pid, 0)
         return ino
-    first = {name: made(f) for name, f in (("pipe", pipe_ino), ("cookie", cookie), ("memfd", memfd), ("pidfd", pidfd))}
-    second = {name: made(f) for name, f in (("pipe", pipe_ino), ("cookie", cookie), ("memfd", memfd), ("pidfd", pidfd))}
+    def mqueue():
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        name = b"/fusionlab-probe-%d" % os.getpid()
+        fd = libc.mq_open(name, os.O_CREAT | os.O_RDWR, 0o600, None)
+        if fd < 0:
+            raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+        ino = os.fstat(fd).st_ino
+        os.close(fd), libc.mq_unlink(name)
+        return ino
+    makers = (("pipe", pipe_ino), ("cookie", cookie), ("memfd", memfd), ("pidfd", pidfd), ("mqueue", mqueue))
+    first = {name: made(f) for name, f in makers}
+    second = {name: made(f) for name, f in makers}
     print(json.dumps({"first": first, "second": second, "socketpair": made(lambda: socket.socketpair() and 0)}))
 """
 
 
 @NEEDS_BWRAP
 def test_a_box_makes_nothing_numbered_by_a_counter_of_the_whole_machine(tmp_path, slot):
-    """Outside a box, each new pipe, socket, memfd and pidfd takes the next number of a counter the whole machine
-    shares (the outside review's channel: read by making objects until a batch begins, set by making more). In a
-    box, making one is refused: there is nothing to read or to move."""
+    """Outside a box, each new pipe, socket, memfd, pidfd and POSIX message queue takes the next number of a counter
+    the whole machine shares (the outside reviews' channel: read by making objects until a batch begins, set by
+    making more). In a box, making one is refused: there is nothing to read or to move."""
     outside = _run_probe(COUNTER_PROBE)
-    for name in ("pipe", "cookie", "memfd", "pidfd"):
+    kinds = ("pipe", "cookie", "memfd", "pidfd", "mqueue")
+    for name in kinds:
         a, b = outside["first"][name], outside["second"][name]
         assert isinstance(a, int) and isinstance(b, int) and b > a, (name, outside)
     got = _run_probe(COUNTER_PROBE, tmp_path=tmp_path, slot=slot)
     refused = ["PermissionError", EPERM]
     assert got == {
-        "first": dict.fromkeys(("pipe", "cookie", "memfd", "pidfd"), refused),
-        "second": dict.fromkeys(("pipe", "cookie", "memfd", "pidfd"), refused),
+        "first": dict.fromkeys(kinds, refused),
+        "second": dict.fromkeys(kinds, refused),
         "socketpair": refused,
     }, got
 

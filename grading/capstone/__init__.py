@@ -56,12 +56,13 @@ process:
 * **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret, every sample
   after k is replaced (sample k held, with noise) and ``estimate`` is called again; its output up to k must
   not change (1e-10), for three k drawn in secret (:func:`fusionlab.capstone.causal_ks` with the grader's
-  generator: in the first hundredth, the first tenth and the second half of the trial). Then ``estimate`` is
-  called on the samples up to another secret k alone: its output must be the first k+1 rows of its output on the
-  whole trial (a causal filter's output on a prefix is the prefix of its output). Each of these calls runs in a box
-  started for it alone (:meth:`Runner.call_fresh`), and all of them come before any box sees a whole trial, the
-  kernel's file caches forgotten in between (:meth:`Runner.forget`, as root): no box has a future to pass on to a
-  later one (:mod:`grading.capstone.causality`). Every other trial is checked so at one secret k. A filter
+  generator: in the first hundredth, the first tenth and the second half of the trial); every other trial is
+  checked so at one secret k. On every trial ``estimate`` is also called on the samples up to each of three secret
+  cuts alone (:func:`prefix_cuts`): its output must be the first rows of its output on the whole trial. Each of these
+  calls runs in a box started for it alone (:meth:`Runner.call_fresh`), all of them before any box sees a whole
+  trial (the kernel's file caches forgotten in between, :meth:`Runner.forget`, as root) and, on each trial, in the
+  order of how far into it their data reach (:func:`plan`): what a box could pass to a later one holds nothing of
+  the samples the later call was not given (:mod:`grading.capstone.causality`). A filter
   that ran on the trials but not on the check's data (an error, over its budget) was never shown causal and gets no
   points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
@@ -202,7 +203,7 @@ from .runner import (
     implausibly_close,
     invalid_message,
 )
-from .causality import Probe, causality_trial, prefix_k, probe, verdict
+from .causality import Probe, causality_trial, plan, prefix_cuts, probe, verdict
 from .scoring import (
     CACHE_FORMAT,
     MATCH_RAD,

@@ -1,13 +1,18 @@
-"""The capstone's causality check: is a filter's output up to a secret k unchanged when the samples after k are
-replaced, and is its output on the samples up to k alone the first k+1 rows of its output on the whole trial?
+"""The capstone's causality check: the order of its calls, and its verdict.
 
-The check's calls (:func:`probe`) are all made **before** any box sees a whole trial, each in a box started for it
-alone (:meth:`grading.capstone.runner.Runner.call_fresh`), on data that hold nothing of the samples after k
-(:func:`fusionlab.capstone.perturb_future`): so whatever a box could leave behind for a later one -- in the kernel's
-caches, say -- holds nothing of a trial's future when the check's calls are made. Between the check's boxes and the
-first that sees a whole trial the kernel's file caches are forgotten (:meth:`Runner.forget`). The calls' outputs are
-compared with the whole-trial outputs afterwards (:func:`verdict`); a call that gave no quaternions leaves the filter
-"not checked"."""
+On every trial the filter is called several times before it is called on the whole trial, each call in a box
+started for it alone (:meth:`grading.capstone.runner.Runner.call_fresh`): on the samples up to each of three secret
+cuts alone ("prefix", :func:`prefix_cuts`), and on the trial with its samples after a secret k replaced ("later":
+sample k held, plus noise, :func:`fusionlab.capstone.perturb_future`; at three k on one trial chosen in secret, at
+one on every other). A causal filter's output up to a call's reach is the first rows of its output on the whole
+trial; :func:`verdict` compares them. All these calls come before any box sees a whole trial (the kernel's file
+caches forgotten in between, :meth:`Runner.forget`), and on each trial they are made in the order of how far into
+it their data reach (:func:`plan`): whatever a box could leave behind for a later one -- in a counter of the
+kernel, its caches, anything a sandbox does not close -- holds nothing of the samples the later call was not given.
+So a filter that looks ahead across any call's reach is caught, whatever passes between its boxes; even a perfect
+channel could hide only a look-ahead from a sample to the next reach (at most three fifths of a trial, a fifth on
+average).
+A call that gave no quaternions leaves the filter "not checked"."""
 
 from __future__ import annotations
 
@@ -36,33 +41,33 @@ class Probe:
     why: str = ""
 
 
+def plan(n: int, chosen: bool, rng: np.random.Generator) -> list[tuple[str, int]]:
+    """The causality check's calls on a trial of ``n`` samples, as ``(kind, k)`` in the order they are made: the
+    prefix calls at :func:`prefix_cuts` and the calls with the samples after k replaced -- at three secret k on the
+    ``chosen`` trial (:func:`fusionlab.capstone.causal_ks`), at one after its first hundredth on the others -- in the
+    order of how far into the trial their data reach (the whole trial's call comes after all of them). ``rng``
+    draws the ks."""
+    later = causal_ks(n, rng) if chosen else [int(rng.integers(max(1, n // 100), n - 1))]
+    calls = [("later", k) for k in later] + [("prefix", k) for k in prefix_cuts(n, rng)]
+    return sorted(calls, key=lambda c: (c[1], c[0]))
+
+
 def probe(
-    runner,
-    scored: Sequence[Scored],
-    chosen: int,
-    budgets: Sequence[float],
-    rng: np.random.Generator,
-    every: np.random.Generator,
+    runner, i: int, trial: Scored, budget: float, calls: Sequence[tuple[str, int]], rng: np.random.Generator
 ) -> list[Probe]:
-    """The causality check's calls, each in a fresh box, before any box sees a whole trial: on the ``chosen`` trial,
-    its samples after each of three secret k replaced (:func:`fusionlab.capstone.causal_ks` drawn with ``rng``) and
-    its samples up to another secret k alone (:func:`prefix_k`); on every other trial, its samples after one secret k
-    (drawn with ``every`` after its first hundredth) replaced. ``budgets``: each trial's time budget (s). A filter
-    that looks ahead on some trials only (chosen from their data) is caught on those. (For a 6D runner, the gyro and
-    accelerometer samples: it gets no magnetometer.)"""
+    """The calls of :func:`plan` on the scored trial ``trial`` (index ``i``), each in a fresh box, in their order;
+    ``budget``: the trial's time budget (s); ``rng`` draws the noise of the replaced samples. (For a 6D runner, the gyro
+    and accelerometer samples: it gets no magnetometer.)"""
+    mag = None if runner.sensors == "6D" else trial.mag
     out = []
-    for i, trial in enumerate(scored):
-        n = len(trial)
-        mag = None if runner.sensors == "6D" else trial.mag
-        draw = rng if i == chosen else every
-        ks = causal_ks(n, rng) if i == chosen else [int(every.integers(max(1, n // 100), n - 1))]
-        calls = [("later", k, changed_after(trial.gyr, trial.acc, mag, k, draw)) for k in ks]
-        if i == chosen:
-            k = prefix_k(n, rng)
-            calls.append(("prefix", k, samples_up_to(trial.gyr, trial.acc, mag, k)))
-        for kind, k, data in calls:
-            q, status, why, _ = runner.call_fresh(trial, budgets[i], *data)
-            out.append(Probe(i, kind, k, q, "" if q is not None else f"{why} ({status})"))
+    for kind, k in calls:
+        data = (
+            samples_up_to(trial.gyr, trial.acc, mag, k)
+            if kind == "prefix"
+            else changed_after(trial.gyr, trial.acc, mag, k, rng)
+        )
+        q, status, why, _ = runner.call_fresh(trial, budget, *data)
+        out.append(Probe(i, kind, k, q, "" if q is not None else f"{why} ({status})"))
     return out
 
 
@@ -72,7 +77,8 @@ def verdict(
     """(True/False/None, message) of the calls :func:`probe` made, against ``outputs`` (``{trial index: q}`` of the
     trials on which the filter ran): the chosen trial's calls first. A call that gave no quaternions on a trial on
     which the filter ran leaves it not checked: a filter that fails on the changed samples was not shown causal there
-    (else a filter that looks ahead could fail on purpose wherever it sees the check's data)."""
+    (else a filter that looks ahead could fail on purpose wherever it sees the check's data). No k is named: the
+    seed of a class run is kept for a second run, whose ks a first run's messages would otherwise give away."""
     if not outputs:
         return None, "not checked: estimate ran on no trial"
     ordered = sorted((p for p in probes if p.trial in outputs), key=lambda p: p.trial != chosen)
@@ -80,39 +86,53 @@ def verdict(
         name, alone = scored[p.trial].name, p.trial == chosen
         if p.q is None:
             if p.kind == "prefix":
-                return None, f"not checked: given the samples up to a k alone, estimate {p.why}"
+                return None, f"not checked: given the samples up to a secret k of {name} alone, estimate {p.why}"
             if alone:
                 return None, f"not checked: with later samples changed, estimate {p.why}"
             return None, f"not checked: with the samples after a secret k of {name} changed, estimate {p.why}"
         change = change_up_to(p.q, outputs[p.trial], p.k)
         if change <= CAUSAL_TOL:
             continue
+        every = "every trial is checked at four secret places, one of them at six"
         if p.kind == "prefix":
+            why = "a filter may use no later sample, nor the length of the data" + ("" if alone else f"; {every}")
             return False, (
-                f"NOT causal: given only the samples up to k = {p.k} of {name}, its estimate up to k differs by "
-                f"{change:.2g} from its estimate on the whole trial (a filter may use no later sample, nor the "
-                "length of the data)"
+                f"NOT causal: given only the samples up to a secret k of {name}, its estimate up to k differs by "
+                f"{change:.2g} from its estimate on the whole trial ({why})"
             )
         why = (
             "a filter may use no later sample, nor random numbers it does not seed"
             if alone
-            else "a filter may use no later sample on any trial; every trial is checked at one secret k, one of "
-            "them at four"
+            else f"a filter may use no later sample on any trial; {every}"
         )
         return False, (
-            f"NOT causal: changing the samples after k = {p.k} of {name} changed the estimate up to k by "
+            f"NOT causal: changing the samples after a secret k of {name} changed the estimate up to k by "
             f"{change:.2g} ({why})"
         )
     return True, (
-        "causal (the estimate up to k unchanged when the samples after k are replaced: on every trial at a secret "
-        "k, and on one trial at three more and when they are left out; each call in a fresh box, all of them "
-        "before any box saw a whole trial)"
+        "causal (the estimate up to k unchanged when the samples after k are replaced, on every trial at a secret "
+        "k and on one trial at three, and given the samples up to each of three secret cuts alone; each call in a "
+        "fresh box, in the order of how far into the trial its data reach, all of them before any box saw a whole "
+        "trial)"
     )
 
 
-def prefix_k(n: int, rng: np.random.Generator) -> int:
-    """The secret k of the prefix check for a trial of ``n`` samples: anywhere after its first tenth."""
-    return int(rng.integers(max(1, n // 10), n - 1))
+#: Where the prefix calls cut a trial, as spans of its samples (fractions): one cut drawn in each, in secret; with
+#: the check's changed futures, no stretch of a trial longer than three fifths of it lies between two calls' reaches.
+PREFIX_SPANS = ((0.1, 0.4), (0.4, 0.7), (0.7, 0.95))
+
+
+def prefix_cuts(n: int, rng: np.random.Generator) -> list[int]:
+    """The secret cuts of the prefix calls on a trial of ``n`` samples, in order: the last sample of each call's
+    data, one drawn in each span of :data:`PREFIX_SPANS` (before the trial's last sample; fewer on a very short
+    trial)."""
+    cuts = []
+    for lo, hi in PREFIX_SPANS:
+        a = max(int(lo * n), cuts[-1] + 1 if cuts else 1)
+        b = min(int(hi * n), n - 1)
+        if a < b:
+            cuts.append(int(rng.integers(a, b)))
+    return cuts
 
 
 def causality_trial(seed: int, n: int, rng: np.random.Generator | None = None) -> int:

@@ -19,7 +19,7 @@ from grading import box as wire
 from grading import boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .causality import causality_trial, probe, verdict
+from .causality import causality_trial, plan, probe, verdict
 from .program import (
     BLOCK_MESSAGE,
     DECLARATION,
@@ -178,6 +178,7 @@ class CapstoneBoxes:
             uid=uid,
             data=False,
             hide=self.hide,
+            proc=False,  # no /proc: its entries' inode numbers are a counter of the whole machine (sandbox.py)
         )
         return client.start(
             command,
@@ -418,12 +419,15 @@ def grade_submission(
     )
     rng = np.random.default_rng([seed, 7])
     chosen = causality_trial(seed, len(scored), rng)
-    every = np.random.default_rng([seed, 11])  # the one secret k of each other trial (its own stream)
+    every = np.random.default_rng([seed, 11])  # the secret ks and cuts of each other trial (its own stream)
     budgets = [budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored]
-    outputs = {}  # each trial's output, for the causality check's verdict
+    outputs, probes = {}, {}  # each trial's whole-trial output and its check's calls, for the verdict
     try:
-        # the causality check's calls first, before any box sees a whole trial (grading.capstone.causality)
-        probes = probe(runner, scored, chosen, budgets, rng, every)
+        # the causality check's calls first, before any box sees a whole trial, on each trial in the order of how far
+        # into it their data reach (grading.capstone.causality)
+        for i, t in enumerate(scored):
+            draw = rng if i == chosen else every
+            probes[i] = probe(runner, i, t, budgets[i], plan(len(t), i == chosen, draw), draw)
         forgot = runner.forget()
         if forgot and forgot != launcher.NOT_ROOT:
             res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
@@ -446,7 +450,7 @@ def grade_submission(
                 ):
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
-        res.causal, res.causal_message = verdict(probes, scored, outputs, chosen)
+        res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
             res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
