@@ -24,6 +24,9 @@ STUB_MESSAGE = (
     "{name} is the answer to an exercise of this lab (or computes it): it is not available while the "
     "lab is graded. Write it yourself."
 )
+#: What a function of a lab's visible checks says in a box: they compare with the references, so a box holds none of
+#: their code (the judge runs every check in its own process); the package still imports, as the setup cells need.
+CHECK_MESSAGE = "{name} is a visible check: it runs outside the grading box, where the judge runs the tests."
 HIDDEN_PACKAGES = exercises.hidden_packages()  # packages whose functions answer exercises: absent from every box
 WHY_HIDDEN = "its functions answer exercises of the labs"  # what importing a hidden package says
 
@@ -66,6 +69,17 @@ def _strip_module(path: Path, qualnames, message=STUB_MESSAGE):
     return done
 
 
+def _check_code(path: Path) -> set[str]:
+    """The functions of the visible-check module ``path`` that a box need not run: its checks and their private
+    helpers (which compute references and slips); its public helpers that are not checks (Lab 14's ✗ box around the
+    loading call, Lab 01's diagnosis of a DCM) and the methods of its classes (the feedback's exceptions) stay."""
+    return {
+        node.name
+        for node in cells.parse(path.read_text()).body
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith(("check_", "_"))
+    }
+
+
 def strip_packages(
     dest: Path,
     lib: Path,
@@ -79,7 +93,9 @@ def strip_packages(
     ``forbidden`` holds ``module:qualname`` names; the packages ``hidden`` are absent (importing one raises
     ImportError saying ``why``); ``message`` is the stubs' text (``{name}`` is the function's). Functions of
     ``fusionlab`` and of other pure-Python packages become stubs in a copy; C functions cannot be removed and are
-    returned (the integrity report flags their use by name). Returns the names that could not be stubbed."""
+    returned (the integrity report flags their use by name). Returns the names that could not be stubbed. The labs'
+    visible checks and their helpers (:func:`_check_code`) are stubs in every copy: they compare with the
+    references (a helper that lists an answer's slips computes the answer), and the box runs no check."""
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
     shutil.copytree(lib, dest / "lib", ignore=ignore)
     (dest / "shadow").mkdir()
@@ -88,6 +104,8 @@ def strip_packages(
         (dest / "shadow" / package / "__init__.py").write_text(
             f"raise ImportError({f'{package} is not available while the lab is graded: {why}'!r})\n"
         )
+    for path in sorted((dest / "lib" / "fusionlab" / "checks").glob("lab*.py")):
+        _strip_module(path, _check_code(path), CHECK_MESSAGE)  # the visible checks: they run in the judge, never here
     by_file, left = {}, []
     for name in sorted(forbidden):
         module, qualname = name.split(":")

@@ -61,6 +61,8 @@ FILTERPY_PREDICT = tuple(
         "CubatureKalmanFilter.predict",
         "FixedLagSmoother.smooth",
         "FixedLagSmoother.smooth_batch",
+        "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
+        "KalmanFilter.rts_smoother",
     )
 )
 
@@ -89,6 +91,8 @@ FILTERPY_UPDATE = tuple(
         "CubatureKalmanFilter.update",
         "FixedLagSmoother.smooth",
         "FixedLagSmoother.smooth_batch",
+        "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
+        "KalmanFilter.rts_smoother",
     )
 )
 
@@ -106,6 +110,29 @@ LAB02_STEPS = (
     "falling_body.seed000_labcode_kalman",
     "falling_body.ThesisKF.step",
     "falling_body.ThesisKF.run",
+)
+
+
+#: The library's ways to a DCM from angles or a rotation vector, in the course's convention or a seed's (Lab 01,
+#: exercises 1 and 8): a seed's matrix is the course's after a transpose or a sign (an outside review answered
+#: exercise 1 with seed 001's R_IB transposed, exercise 8 through the rotation vector and Rodrigues' formula).
+DCM_BUILDERS = (
+    "rotations.euler_to_dcm",
+    "rotations.sequence_to_dcm",
+    "rotations.rodrigues_dcm",
+    "dcm.A_matrix",
+    "conventions.seed000_eq339",
+    "conventions.seed000_labcode_dcm",
+    "conventions.seed001_R_IB",
+)
+
+#: The library's Hamilton products (Lab 01, exercise 7): the course's own, the fast Freescale filter's, and the two
+#: loops that write one out (the gyro integration turns q by the rotation vector's quaternion).
+QUAT_PRODUCTS = (
+    "rotations.quat_multiply",
+    "freescale_fast._qmul",
+    "rotations.integrate_gyro_quat",
+    "correlation._weighted_tilt_fusion",
 )
 
 
@@ -143,9 +170,21 @@ EXERCISES = (
     # 00_mems_sensors
     Exercise("00_mems_sensors", 1, 2, ("my_smd_magnitude",), "check_smd_magnitude", ("sensors.smd_transfer",)),
     Exercise(
-        "00_mems_sensors", 2, 2, ("my_accel_from_bridge",), "check_accel_from_bridge", ("sensors.accel_from_bridge",)
+        "00_mems_sensors",
+        2,
+        2,
+        ("my_accel_from_bridge",),
+        "check_accel_from_bridge",
+        ("sensors.accel_from_bridge", "sensors.accel_from_displacement", "sensors.seed000_eq37_printed"),
     ),
-    Exercise("00_mems_sensors", 3, 2, ("my_adc_to_physical",), "check_adc_to_physical", ("sensors.adc_to_physical",)),
+    Exercise(
+        "00_mems_sensors",
+        3,
+        2,
+        ("my_adc_to_physical",),
+        "check_adc_to_physical",
+        ("sensors.adc_to_physical", "sensors.adc_to_volts"),
+    ),
     Exercise(
         "00_mems_sensors",
         4,
@@ -182,9 +221,23 @@ EXERCISES = (
             "math.atan2",
             "numpy.angle",
             "numpy.arctan2",
+            "rotations.dcm_to_sequence",  # scipy's Euler angles: its own atan2, out of the guard's reach
         ),
     ),
-    Exercise("00_mems_sensors", 7, 2, ("my_roll_pitch",), "check_roll_pitch", ("accel_tilt.tilt_from_accel",)),
+    Exercise(
+        "00_mems_sensors",
+        7,
+        2,
+        ("my_roll_pitch",),
+        "check_roll_pitch",
+        (
+            "accel_tilt.tilt_from_accel",
+            "accel_tilt.tilt_3d",
+            "dcm.level_and_compass",
+            "estimators.triad",  # an attitude from gravity and any second vector
+            "ecompass.ecompass",
+        ),
+    ),
     Exercise("00_mems_sensors", 8, 1, ("my_precession_rate",), "check_precession_rate", ("inertial.precession_rate",)),
     Exercise(
         "00_mems_sensors",
@@ -192,7 +245,12 @@ EXERCISES = (
         2,
         ("my_coriolis_force",),
         "check_coriolis_force",
-        ("inertial.coriolis_acceleration", "inertial.coriolis_force"),
+        (
+            "inertial.coriolis_acceleration",
+            "inertial.coriolis_force",
+            "inertial.seed000_eq334_printed",  # the printed sign, negated
+            "inertial.point_acceleration",  # its Coriolis term alone
+        ),
     ),
     Exercise("00_mems_sensors", 10, 2, ("my_integrate_rate",), "check_integrate_rate", ("inertial.integrate_rate",)),
     Exercise("00_mems_sensors", 11, 1, ("bias_hat",), "check_gyro_bias", ("sensors.null_offset",)),
@@ -203,7 +261,7 @@ EXERCISES = (
         2,
         ("my_euler_to_dcm",),
         "check_euler_to_dcm",
-        ("rotations.euler_to_dcm", "rotations.euler_to_quat", "rotations.sequence_to_dcm"),
+        (*DCM_BUILDERS, "rotations.euler_to_quat", "rotations.quat_to_dcm"),
     ),
     Exercise("01_euler_rotations", 2, 1, ("f_body",), "check_body_gravity", ("accel_tilt.specific_force",)),
     Exercise(
@@ -215,7 +273,7 @@ EXERCISES = (
             "angles_yxz",
         ),
         "check_sequence_angles",
-        ("rotations.dcm_to_sequence",),
+        ("rotations.dcm_to_sequence", "conventions.seed000_labcode_angles"),
     ),
     Exercise("01_euler_rotations", 4, 3, ("my_renormalize",), "check_renormalize", ("rotations.dcm_renormalize",)),
     Exercise(
@@ -224,7 +282,13 @@ EXERCISES = (
         2,
         ("my_rodrigues",),
         "check_rodrigues",
-        ("dcm.A_matrix", "rotations.rodrigues_dcm", "rotations.rotvec_to_quat", "scipy.linalg.expm"),
+        (
+            "dcm.A_matrix",
+            "rotations.rodrigues_dcm",
+            "rotations.rotvec_to_quat",
+            "scipy.linalg.expm",
+            "freescale_fast._gyro_chain",  # one gyro step from the identity: the rotation vector's quaternion
+        ),
     ),
     Exercise(
         "01_euler_rotations",
@@ -232,7 +296,7 @@ EXERCISES = (
         2,
         ("my_lock_roll",),
         "check_lock_roll",
-        ("rotations.dcm_to_euler", "rotations.quat_to_euler"),
+        ("rotations.dcm_to_euler", "rotations.quat_to_euler", "conventions.seed000_eq379_381_printed"),
     ),
     Exercise(
         "01_euler_rotations",
@@ -240,7 +304,7 @@ EXERCISES = (
         2,
         ("my_quat_multiply",),
         "check_quat_multiply",
-        ("freescale_fast._qmul", "rotations.quat_multiply"),
+        QUAT_PRODUCTS,
     ),
     Exercise(
         "01_euler_rotations",
@@ -248,7 +312,16 @@ EXERCISES = (
         2,
         ("my_quat_to_dcm",),
         "check_quat_to_dcm",
-        ("ecompass.rotation_matrix", "freescale_fast._R", "rotations.quat_rotate", "rotations.quat_to_dcm"),
+        (
+            "ecompass.rotation_matrix",
+            "freescale_fast._R",
+            "rotations.quat_rotate",
+            "rotations.quat_to_dcm",
+            "rotations.quat_to_rotvec",
+            "rotations.quat_to_euler",
+            "conventions.seed001_quat_to_euler",
+            *DCM_BUILDERS,
+        ),
     ),
     # 02_kalman_falling_body
     Exercise(
@@ -307,7 +380,14 @@ EXERCISES = (
         "03_correlation_fusion", 1, 2, ("my_moving_average",), "check_moving_average", ("correlation.moving_average",)
     ),
     Exercise("03_correlation_fusion", 2, 2, ("my_ratio",), "check_ratio", ("correlation.ratio",)),
-    Exercise("03_correlation_fusion", 3, 3, ("my_fuse",), "check_fuse", ("correlation.fuse",)),
+    Exercise(
+        "03_correlation_fusion",
+        3,
+        3,
+        ("my_fuse",),
+        "check_fuse",
+        ("correlation.fuse", "correlation.ComplementaryFilter.step"),  # its step with alpha = 1 - w each time
+    ),
     # 04_ecompass
     Exercise("04_ecompass", 1, 1, ("my_profile_matrix",), "check_profile_matrix", ()),
     Exercise(
@@ -316,7 +396,7 @@ EXERCISES = (
         3,
         ("my_kappa",),
         "check_kappa",
-        ("ecompass.kappa", "ecompass.kappa_davenport", "ecompass.kappa_general"),
+        ("ecompass.kappa", "ecompass.kappa_davenport", "ecompass.kappa_general", "ecompass.wahba_error"),
     ),
     Exercise("04_ecompass", 3, 2, ("my_largest_eigenvector",), "check_largest_eigenvector", ()),
     Exercise(
@@ -333,13 +413,20 @@ EXERCISES = (
         2,
         ("my_heading",),
         "check_heading",
-        ("ecompass.ecompass", "ecompass.heading", "ecompass.tilt_compensated_heading"),
+        ("ecompass.ecompass", "ecompass.heading", "ecompass.tilt_compensated_heading", "dcm.level_and_compass"),
     ),
     # 05_freescale_kalman
     Exercise("05_freescale_kalman", 1, 2, ("my_C",), "check_measurement_matrix", ("freescale.measurement_matrix",)),
     Exercise("05_freescale_kalman", 2, 2, ("my_Qw",), "check_process_noise", ("freescale.process_noise",)),
     Exercise("05_freescale_kalman", 3, 2, ("my_Qv",), "check_measurement_noise", ("freescale.measurement_noise",)),
-    Exercise("05_freescale_kalman", 4, 1, ("my_gain",), "check_gain", ("freescale.kalman_gain",)),
+    Exercise(
+        "05_freescale_kalman",
+        4,
+        1,
+        ("my_gain",),
+        "check_gain",
+        ("freescale.kalman_gain", "kalman.kalman_gain", "kalman._gain", *FILTERPY_UPDATE),  # Lab 02's gain
+    ),
     Exercise(
         "05_freescale_kalman",
         5,
@@ -353,15 +440,35 @@ EXERCISES = (
     ),
     # 06_gfimu_aiv
     Exercise("06_gfimu_aiv", 1, 2, ("my_aiv_map",), "check_aiv_map", ("gfimu.aiv_map",)),
-    Exercise("06_gfimu_aiv", 2, 1, ("my_Hq",), "check_quadratic_jacobian", ("gfimu._qj", "gfimu.quadratic_jacobian")),
-    Exercise("06_gfimu_aiv", 3, 2, ("my_noise",), "check_three_state_noise", ("gfimu.three_state_noise",)),
+    Exercise(
+        "06_gfimu_aiv",
+        2,
+        1,
+        ("my_Hq",),
+        "check_quadratic_jacobian",
+        ("gfimu._qj", "gfimu.quadratic_jacobian", "gfimu._qt", "gfimu.quadratic_terms"),  # exact central difference
+    ),
+    Exercise(
+        "06_gfimu_aiv",
+        3,
+        2,
+        ("my_noise",),
+        "check_three_state_noise",
+        ("gfimu.three_state_noise", "gfimu.aiv_covariance", "gfimu_ekf._constrained_noise"),
+    ),
     Exercise(
         "06_gfimu_aiv",
         4,
         3,
         ("my_update",),
         "check_correlated_update",
-        ("filterpy.kalman.KalmanFilter.update_correlated", "gfimu_ekf.ThreeStateEKF.step"),
+        (
+            "filterpy.kalman.KalmanFilter.update_correlated",
+            "gfimu_ekf.ThreeStateEKF.step",
+            "gfimu_ekf._batch_core",  # the batch runs' first step is the update alone
+            "gfimu_ekf.three_state_batch",
+            "gfimu_ekf.hybrid_batch",
+        ),
     ),
     # 07_gfimu_constraints
     Exercise(
@@ -370,7 +477,7 @@ EXERCISES = (
         2,
         ("my_H15",),
         "check_dynamic_jacobian",
-        ("gfimu_dynamics.aiv_measurement_jacobian",),
+        ("gfimu_dynamics.aiv_measurement_jacobian", "gfimu_dynamics._dyn_h"),
     ),
     Exercise(
         "07_gfimu_constraints", 2, 2, ("my_lie",), "check_lie_derivative", ("gfimu_dynamics.observability_matrix",)
@@ -381,7 +488,7 @@ EXERCISES = (
         2,
         ("my_constraints",),
         "check_constraints",
-        ("gfimu_ekf._E", "gfimu_ekf._e", "gfimu_ekf.constraint_jacobian", "gfimu_ekf.constraints"),
+        ("gfimu_ekf._E", "gfimu_ekf._e", "gfimu_ekf._e_row", "gfimu_ekf.constraint_jacobian", "gfimu_ekf.constraints"),
     ),
     # 08_north_finder
     Exercise("08_north_finder", 1, 2, ("my_omega_x",), "check_omega_x", ("northfinder.rate_from_rotating",)),
@@ -431,27 +538,66 @@ EXERCISES = (
             "dcm.ahrs_transition",
             "dcm.row_propagate",
             "dcm_filter.DcmAhrs.step",
+            "gpsins.ins_transition",  # Lab 10's 21-state model holds the AHRS's blocks
+            "gpsins._ins_F",
+            "gpsins.ins_process_noise",
+            "gpsins._ins_Q",
         ),
     ),
     # 10_gps_ins
-    Exercise("10_gps_ins", 1, 3, ("my_ins_F",), "check_ins_transition", ("gpsins._ins_F", "gpsins.ins_transition")),
+    Exercise(
+        "10_gps_ins",
+        1,
+        3,
+        ("my_ins_F",),
+        "check_ins_transition",
+        (
+            "gpsins._ins_F",
+            "gpsins.ins_transition",
+            "gpsins.ins_propagate",  # F probed one column at a time
+            "gpsins._ins_propagate_raw",
+            "gpsins.run_gps_ins",
+        ),
+    ),
     Exercise(
         "10_gps_ins",
         2,
         2,
         ("my_sigma_points",),
         "check_sigma_points",
-        ("filterpy.kalman.JulierSigmaPoints.sigma_points", "gpsins.sigma_points_2n"),
+        (
+            "filterpy.kalman.JulierSigmaPoints.sigma_points",
+            "filterpy.kalman.MerweScaledSigmaPoints.sigma_points",  # alpha 1, kappa 0: the same points
+            "filterpy.kalman.spherical_radial_sigmas",  # the cubature filter's points: the same 2n
+            "gpsins.sigma_points_2n",
+        ),
     ),
     # 11_real_data
-    Exercise("11_real_data", 1, 2, ("my_heading_error",), "check_broad_heading", ("metrics.heading_error",)),
     Exercise(
-        "11_real_data", 2, 2, ("my_inclination_error",), "check_broad_inclination", ("metrics.inclination_error",)
+        "11_real_data",
+        1,
+        2,
+        ("my_heading_error",),
+        "check_broad_heading",
+        ("metrics.heading_error", "metrics.signed_heading_error"),
+    ),
+    Exercise(
+        "11_real_data",
+        2,
+        2,
+        ("my_inclination_error",),
+        "check_broad_inclination",
+        ("metrics.inclination_error", "ecompass.tilt_error", "metrics.signed_heading_error"),
     ),
     Exercise("11_real_data", 3, 1, ("my_rmse_deg",), "check_broad_rmse", ("metrics.rms",)),
     # 12_sensor_errors
     Exercise(
-        "12_sensor_errors", 1, 2, ("my_quadric_fit",), "check_quadric_fit", ("calibration.quadric_normal_equations",)
+        "12_sensor_errors",
+        1,
+        2,
+        ("my_quadric_fit",),
+        "check_quadric_fit",
+        ("calibration.quadric_normal_equations", "calibration.ellipsoid_design_matrix"),
     ),
     Exercise(
         "12_sensor_errors",
@@ -471,7 +617,12 @@ EXERCISES = (
         2,
         ("my_integrate_gyro",),
         "check_integrate_gyro",
-        ("rotations.integrate_gyro_quat", "rotations.integrate_gyro_dcm", "correlation._weighted_tilt_fusion"),
+        (
+            "rotations.integrate_gyro_quat",
+            "rotations.integrate_gyro_dcm",
+            "correlation._weighted_tilt_fusion",
+            "freescale_fast._gyro_chain",  # the fast Freescale filter's gyro step, every partial kept
+        ),
     ),  # the complementary filters' loop, with no correction
     Exercise(
         "13_capstone",
@@ -497,10 +648,22 @@ EXERCISES = (
         packages=("ahrs", "vqf", "imufusion", "filterpy"),
     ),
     # 14_phone_imu
-    Exercise("14_phone_imu", 1, 1, ("my_gyro_bias",), "check_phone_gyro_bias", ("calibration.gyro_bias_from_rest",)),
+    Exercise(
+        "14_phone_imu",
+        1,
+        1,
+        ("my_gyro_bias",),
+        "check_phone_gyro_bias",
+        ("calibration.gyro_bias_from_rest", "sensors.null_offset"),
+    ),
     Exercise("14_phone_imu", 2, 2, ("my_tilt_deg",), "check_rest_tilt", ("accel_tilt.tilt_3d",)),
     Exercise(
-        "14_phone_imu", 3, 2, ("my_rotation_angle_deg",), "check_rotation_angle", ("rotations.quat_angle_between",)
+        "14_phone_imu",
+        3,
+        2,
+        ("my_rotation_angle_deg",),
+        "check_rotation_angle",
+        ("rotations.quat_angle_between", "rotations.quat_to_rotvec"),
     ),
 )
 
