@@ -386,8 +386,9 @@ def test_too_little_tilt_to_check_a_gyros_unit_is_said_in_the_summary_with_what_
     assert rec.gyr[-10:, 0] == pytest.approx(np.radians(1.0), abs=1e-4)
     text = str(rec.summary)
     assert (
-        "gyr: deg/s (the header of Gyroscope.csv); too little motion for the tilt check (0 windows; read in "
-        "rad/s, 11 windows count (ratio 1.00), under the 20 the check needs)"
+        "gyr: deg/s (the header of Gyroscope.csv); too little tilting for the tilt check (0 of the 20 windows it "
+        "needs turn the phone across gravity; turns about the vertical do not count; read in rad/s, 11 windows "
+        "count (ratio 1.00), under the 20 the check needs)"
     ) in text
     assert rec.summary.method == "linear interpolation onto the gyro's median rate" and rec.fs == pytest.approx(100.0)
 

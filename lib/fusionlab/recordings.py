@@ -40,7 +40,7 @@ quantity   the physics                                                    what i
            screen), the gravity vector −1 g                               Motion, −1 g on z face up)
 ``gyr``    the gyro's tilt against the turn of gravity in the             rad/s from °/s (×57.3)
            accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`),
-           or, with too little motion (or a record too short), its peak
+           or, with too little tilting (or a record too short), its peak
            and median rate
 ``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
            turns it, median cosine near +1 (-1 mirrored), over the same   one (``z, y, x`` read as ``x, y, z``)
@@ -1176,7 +1176,10 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         f"too short for the tilt check ({len(rad) / fs:.1f} s: {windows} windows of {validate.TILT_WINDOW:g} s, "
         f"{n} of them with motion{hint})"
         if windows < validate.TILT_WINDOWS_MIN
-        else f"too little motion for the tilt check ({n} windows{hint})"
+        else (
+            f"too little tilting for the tilt check ({n} of the {validate.TILT_WINDOWS_MIN} windows it needs turn the "
+            f"phone across gravity; turns about the vertical do not count{hint})"
+        )
     )
     return f"gyr: {unit} ({by}); {why}, peak {top:.3g} rad/s and median {med:.3g} plausible"
 
