@@ -30,7 +30,6 @@ def flip_sin(M):  # one elementary matrix with the sin terms' signs swapped... a
         (lambda r, p, y: good(r, p, y).T, "transpose of C_bn"),
         (lambda r, p, y: good(*np.radians([r, p, y])), "radians twice"),
         (lambda r, p, y: rotations.rot_x(r) @ rotations.rot_y(p) @ rotations.rot_z(y), "wrong order"),
-        (lambda r, p, y: conventions.seed000_eq339(r, p, y), "eq 3.39 as printed"),
         (lambda r, p, y: good(p, r, y), "roll and pitch are swapped"),
         (lambda r, p, y: flip_sin(good(r, p, y)), "det\\(C\\) = -1: a reflection"),
         (lambda r, p, y: 1.1 * good(r, p, y), "not orthonormal"),
@@ -42,6 +41,17 @@ def flip_sin(M):  # one elementary matrix with the sin terms' signs swapped... a
 def test_check_euler_to_dcm_names_the_slip(fn, match):
     with pytest.raises(checks.Feedback, match=match):
         checks.check_euler_to_dcm(fn)
+
+
+def test_the_printed_eq_3_39_is_named_and_calling_the_librarys_copy_of_it_is_refused():
+    """A student who types eq 3.39 as printed is told so; one who calls the library's printed form is told it is the
+    library's own (transposed, it is the answer: exercise 1 forbids it). The check without its forbid stands for the
+    typed one."""
+    printed = lambda r, p, y: conventions.seed000_eq339(r, p, y)  # noqa: E731
+    with pytest.raises(checks.Feedback, match="eq 3.39 as printed"):
+        checks.check_euler_to_dcm.unguarded(printed)
+    with pytest.raises(checks.Feedback, match="called conventions.seed000_eq339, the library's own solution"):
+        checks.check_euler_to_dcm(printed)
 
 
 def test_check_euler_to_dcm_passes_the_right_answer(capsys):
@@ -134,8 +144,11 @@ def test_check_sequence_angles_spots_radians_and_reversed_order():
 
 
 def test_check_lock_roll_recognises_the_swapped_printed_rule():
-    with pytest.raises(checks.Feedback, match="printed rule"):
-        checks.check_lock_roll(lambda C, yaw: float(conventions.seed000_eq379_381_printed(C, yaw)))
+    printed = lambda C, yaw: float(conventions.seed000_eq379_381_printed(C, yaw))  # noqa: E731
+    with pytest.raises(checks.Feedback, match="printed rule"):  # typed by hand: the check without its forbid
+        checks.check_lock_roll.unguarded(printed)
+    with pytest.raises(checks.Feedback, match="the library's own solution"):  # the library's copy: forbidden
+        checks.check_lock_roll(printed)
     with pytest.raises(checks.Feedback, match="does not rebuild the matrix$"):
         checks.check_lock_roll(lambda C, yaw: 0.0)
 
