@@ -4,7 +4,9 @@ For every lab and every autograded exercise, a submission whose answer only call
 "reference call": the solution region replaced by the line in ``CHEATS``) scores 0 on that exercise: the judge gives
 each test a box whose copy of the library has that test's references as stubs (``grading.judge``). Each lab is
 graded with two such students: one cheats on the odd exercises and answers the even ones with the model answer, the
-other the reverse, so every exercise is seen both cheated (0 points) and honestly solved (full points). Labs 01 and 02
+other the reverse, so every exercise is seen both cheated (0 points) and honestly solved (full points). Every lab
+also gets the students of ``LIBRARY_ROUTES``: the other ways through the library to an exercise's answer that outside
+reviews found, each shown right where nothing is stubbed and scoring nothing in the box. Labs 01 and 02
 also get junk answers behind a patched ``np.allclose`` / ``np.isclose`` / ``np.testing.assert_allclose``: the
 comparisons are made in the judge's process, which the patch never reaches. The untouched release scoring 0 on every
 lab is tested in ``test_pipeline.py``; a whole class run with every attack, in ``test_judge.py``.
