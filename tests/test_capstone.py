@@ -1273,8 +1273,8 @@ def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(
     res = _grade_in_process(monkeypatch, scored, lambda: lambda gyr, acc, mag, fs: _tilt(acc), min_seconds=5.0)
     assert res.causal is True and "each call in a fresh box" in res.causal_message
     [runner] = _InProcess.made
-    # on the chosen trial three changed futures, one on every other trial, and three prefixes on every trial
-    assert runner.fresh == 3 + (len(scored) - 1) + 3 * len(scored), runner.fresh
+    # on the chosen trial three changed futures, one on every other trial, and four prefixes on every trial
+    assert runner.fresh == 3 + (len(scored) - 1) + 4 * len(scored), runner.fresh
     assert runner.limits == capstone.box_limits(scored, capstone.SECONDS_PER_SAMPLE, 5.0)
 
 
@@ -1312,7 +1312,8 @@ def test_a_look_ahead_passed_between_boxes_is_caught_as_the_check_comes_first(sc
     [runner] = _InProcess.made
     first_whole = runner.calls.index("whole")
     assert set(runner.calls[:first_whole]) == {"fresh", "forget"} and runner.calls[first_whole - 1] == "forget"
-    assert "fresh" not in runner.calls[first_whole:], runner.calls
+    # then the whole trials, and one fresh call per trial past every earlier reach (the final cut)
+    assert runner.calls[first_whole:] == ["whole"] * len(scored) + ["fresh"] * len(scored), runner.calls
 
 
 def _reach(gyr, trial):
@@ -1342,11 +1343,42 @@ def test_each_trials_calls_reach_further_into_it_one_after_another(scored, monke
     assert res.causal is True, res.causal_message
     assert len(seen) == len(scored)
     for t in scored:
-        reach = [_reach(g, t) for g in seen[tuple(np.round(t.gyr[0], 12))]]
+        *reach, last = [_reach(g, t) for g in seen[tuple(np.round(t.gyr[0], 12))]]
         assert reach == sorted(reach) and reach[-1] == len(t) and reach.count(len(t)) == 1, (t.name, reach)
         assert len(reach) in (1 + 3 + 1, 1 + 3 + 3), (t.name, reach)  # prefixes, changed futures, the whole trial
         gaps = np.diff([0, *reach]) / len(t)
         assert gaps.max() < 0.6, (t.name, reach)  # no stretch of a trial beyond three fifths between two reaches
+        assert reach[-2] < last < len(t), (t.name, reach, last)  # after the whole trial: past every other reach
+
+
+def test_a_look_ahead_past_every_earlier_reach_is_caught_by_the_cut_after_the_whole_trial(scored, monkeypatch):
+    """An outside review passed how far the check's calls reached to the whole trial's box through the wall clock,
+    and looked ahead only past it: causal on every call before. Here with a perfect channel from those calls (a dict
+    every box reads and writes): the prefix call made after the whole trial's, past them all, catches it."""
+    reached, order = {}, []
+
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            key = tuple(np.round(np.asarray(gyr, dtype=float)[0], 12))
+            q = _tilt(acc)
+            far = reached.get(key, 0)
+            scored_call = key in order and order[-1] != key  # its trial's checks done, other trials' since
+            order.append(key)
+            if scored_call and len(gyr) > far:
+                q[far:] = _tilt(uniform_filter1d(np.asarray(acc, dtype=float), 51, axis=0))[far:]  # a centred mean
+            trial = next(t for t in scored if np.array_equal(t.gyr[0], gyr[0]))  # as a box tells it: exactly here
+            reached[key] = max(far, _reach(gyr, trial))
+            return q
+
+        return estimate
+
+    from scipy.ndimage import uniform_filter1d
+
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert res.causal is False and "given only the samples up to a secret k of" in res.causal_message, (
+        res.causal_message
+    )
+    assert res.total_points == 0
 
 
 def test_the_prefix_cuts_lie_one_in_each_span_in_order():

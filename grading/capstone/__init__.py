@@ -62,7 +62,9 @@ process:
   calls runs in a box started for it alone (:meth:`Runner.call_fresh`), all of them before any box sees a whole
   trial (the kernel's file caches forgotten in between, :meth:`Runner.forget`, as root) and, on each trial, in the
   order of how far into it their data reach (:func:`plan`): what a box could pass to a later one holds nothing of
-  the samples the later call was not given (:mod:`grading.capstone.causality`). A filter
+  the samples the later call was not given (:mod:`grading.capstone.causality`). One more prefix call, at a secret
+  cut past all of theirs, comes after the whole trial's (:func:`final_cut`): a filter that learned where they
+  stopped, and looked ahead only past it, is caught there. A filter
   that ran on the trials but not on the check's data (an error, over its budget) was never shown causal and gets no
   points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
@@ -203,7 +205,7 @@ from .runner import (
     implausibly_close,
     invalid_message,
 )
-from .causality import Probe, causality_trial, plan, prefix_cuts, probe, verdict
+from .causality import Probe, causality_trial, final_cut, plan, prefix_cuts, probe, verdict
 from .scoring import (
     CACHE_FORMAT,
     MATCH_RAD,

@@ -11,8 +11,11 @@ it their data reach (:func:`plan`): whatever a box could leave behind for a late
 kernel, its caches, anything a sandbox does not close -- holds nothing of the samples the later call was not given.
 So a filter that looks ahead across any call's reach is caught, whatever passes between its boxes; even a perfect
 channel could hide only a look-ahead from a sample to the next reach (at most three fifths of a trial, a fifth on
-average).
-A call that gave no quaternions leaves the filter "not checked"."""
+average). The stretch past the last reach is checked by one more prefix call, after the whole trial's
+(:func:`final_cut`): a filter that learned through a channel (an outside review used the wall clock) where the
+earlier calls stopped, and looked ahead only past it, is caught there, unless the whole trial's box passes its
+look-ahead on to that later box -- a few bits a second through the clock. A call that gave no quaternions leaves
+the filter "not checked"."""
 
 from __future__ import annotations
 
@@ -50,6 +53,15 @@ def plan(n: int, chosen: bool, rng: np.random.Generator) -> list[tuple[str, int]
     later = causal_ks(n, rng) if chosen else [int(rng.integers(max(1, n // 100), n - 1))]
     calls = [("later", k) for k in later] + [("prefix", k) for k in prefix_cuts(n, rng)]
     return sorted(calls, key=lambda c: (c[1], c[0]))
+
+
+def final_cut(n: int, calls: Sequence[tuple[str, int]], rng: np.random.Generator) -> int | None:
+    """The secret cut of the call made **after** the whole trial's: anywhere past the furthest sample that the calls
+    of :func:`plan` (``calls``) reached, before the trial's last sample (None when they left no room). A box that
+    learned how far the earlier calls reached (through a channel between boxes: the wall clock is one) and looks
+    ahead only past that point is caught here, unless a box started after it receives its look-ahead."""
+    start = max((k for _, k in calls), default=0) + 1
+    return int(rng.integers(start, n - 1)) if start < n - 1 else None
 
 
 def probe(
@@ -111,9 +123,9 @@ def verdict(
         )
     return True, (
         "causal (the estimate up to k unchanged when the samples after k are replaced, on every trial at a secret "
-        "k and on one trial at three, and given the samples up to each of three secret cuts alone; each call in a "
-        "fresh box, in the order of how far into the trial its data reach, all of them before any box saw a whole "
-        "trial)"
+        "k and on one trial at three, and given the samples up to each of four secret cuts alone; each call in a "
+        "fresh box, in the order of how far into the trial its data reach, before any box saw a whole trial, but "
+        "the last cut's, past all the others, after it)"
     )
 
 

@@ -19,7 +19,7 @@ from grading import box as wire
 from grading import boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .causality import causality_trial, plan, probe, verdict
+from .causality import causality_trial, final_cut, plan, probe, verdict
 from .program import (
     BLOCK_MESSAGE,
     DECLARATION,
@@ -421,13 +421,14 @@ def grade_submission(
     chosen = causality_trial(seed, len(scored), rng)
     every = np.random.default_rng([seed, 11])  # the secret ks and cuts of each other trial (its own stream)
     budgets = [budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored]
-    outputs, probes = {}, {}  # each trial's whole-trial output and its check's calls, for the verdict
+    outputs, calls, probes = {}, {}, {}  # each trial's whole-trial output, its check's calls and their outputs
     try:
         # the causality check's calls first, before any box sees a whole trial, on each trial in the order of how far
         # into it their data reach (grading.capstone.causality)
         for i, t in enumerate(scored):
             draw = rng if i == chosen else every
-            probes[i] = probe(runner, i, t, budgets[i], plan(len(t), i == chosen, draw), draw)
+            calls[i] = plan(len(t), i == chosen, draw)
+            probes[i] = probe(runner, i, t, budgets[i], calls[i], draw)
         forgot = runner.forget()
         if forgot and forgot != launcher.NOT_ROOT:
             res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
@@ -450,6 +451,10 @@ def grade_submission(
                 ):
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
+        for i, t in enumerate(scored):  # and last, the stretch past every reach, on the trials the filter ran on
+            k = final_cut(len(t), calls[i], rng if i == chosen else every)
+            if i in outputs and k is not None:
+                probes[i] += probe(runner, i, t, budgets[i], [("prefix", k)], rng if i == chosen else every)
         res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
