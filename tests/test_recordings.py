@@ -324,6 +324,16 @@ def _sensor_logger_export(folder, platform):
     return folder
 
 
+def test_a_turn_of_gravity_too_shaken_to_read_is_said_not_checked_not_agreed(tmp_path, monkeypatch):
+    """A real iPhone export shaken hard (hand motion of 4.7 m/s² on average) gave a median cosine of +0.03 between
+    the gyro's turn of gravity and the accelerometer's: no evidence either way. Said "not checked", not "agrees"."""
+    folder = _sensor_logger_export(tmp_path / "shaken", "ios")
+    monkeypatch.setattr(recordings, "_tilt_direction", lambda gyr, acc, fs: (0.03, 58))
+    text = str(recordings.load_recording(folder).summary)
+    assert "the direction of the turn not checked (median cosine +0.03 over 58 windows: the phone was shaken" in text
+    assert "the way the gyro turns it" not in text
+
+
 @pytest.mark.parametrize("platform, sign", [("android", "specific force"), ("ios", "gravity")])
 def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_read(tmp_path, platform, sign):
     folder = _sensor_logger_export(tmp_path / platform, platform)

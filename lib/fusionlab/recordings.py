@@ -1143,7 +1143,12 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
 
     if fits(ratio, n):
         cos, k = _tilt_direction(rad, acc, fs)
-        turns = f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
+        turns = (
+            f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
+            if cos >= DIRECTION_AGREES or k < validate.TILT_WINDOWS_MIN
+            else f"the direction of the turn not checked (median cosine {cos:+.2f} over {k} windows: the phone was "
+            "shaken too hard for the accelerometer to show which way gravity turned)"
+        )
         if k >= validate.TILT_WINDOWS_MIN and cos < 0.0:
             raise ValueError(
                 f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
@@ -1182,6 +1187,12 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
         )
     )
     return f"gyr: {unit} ({by}); {why}, peak {top:.3g} rad/s and median {med:.3g} plausible"
+
+
+#: The median cosine of :func:`_tilt_direction` from which the gyro's and the accelerometer's turns of gravity are
+#: said to agree (a right-handed phone gently moved reads near +1; a real export shaken hard, +0.03): below it, and
+#: not below 0 (a mirrored frame, refused), the direction is not checked.
+DIRECTION_AGREES = 0.5
 
 
 def _tilt_direction(gyr, acc, fs):
