@@ -605,7 +605,7 @@ def test_a_filter_that_looks_ahead_only_where_the_full_check_does_not_look_is_no
     assert res.all_ran and res.causal is False, res.causal_message
     assert "NOT causal: " in res.causal_message and "secret k of " in res.causal_message, res.causal_message
     assert f"of {chosen}" not in res.causal_message, "it is caught on a trial the full check did not see"
-    assert "every trial is checked at four secret places" in res.causal_message
+    assert "every trial is checked at 5 secret places, one of them at 7" in res.causal_message
     assert not re.search(r"k = \d", res.causal_message), "the secret k is not named"
     assert res.total_points == 0
     assert graded[0]["good"].causal is True and "on every trial at a secret k" in graded[0]["good"].causal_message

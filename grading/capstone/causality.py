@@ -105,7 +105,7 @@ def verdict(
         change = change_up_to(p.q, outputs[p.trial], p.k)
         if change <= CAUSAL_TOL:
             continue
-        every = "every trial is checked at four secret places, one of them at six"
+        every = f"every trial is checked at {PLACES} secret places, one of them at {PLACES + 2}"
         if p.kind == "prefix":
             why = "a filter may use no later sample, nor the length of the data" + ("" if alone else f"; {every}")
             return False, (
@@ -123,15 +123,18 @@ def verdict(
         )
     return True, (
         "causal (the estimate up to k unchanged when the samples after k are replaced, on every trial at a secret "
-        "k and on one trial at three, and given the samples up to each of four secret cuts alone; each call in a "
-        "fresh box, in the order of how far into the trial its data reach, before any box saw a whole trial, but "
-        "the last cut's, past all the others, after it)"
+        f"k and on one trial at three, and given the samples up to each of {len(PREFIX_SPANS) + 1} secret cuts alone; "
+        "each call in a fresh box, in the order of how far into the trial its data reach, before any box saw a whole "
+        "trial, but the last cut's, past all the others, after it)"
     )
 
 
 #: Where the prefix calls cut a trial, as spans of its samples (fractions): one cut drawn in each, in secret; with
 #: the check's changed futures, no stretch of a trial longer than three fifths of it lies between two calls' reaches.
 PREFIX_SPANS = ((0.1, 0.4), (0.4, 0.7), (0.7, 0.95))
+#: Where a trial's output is compared with its whole-trial output: the prefix cuts, the cut after the whole trial's
+#: call (:func:`final_cut`) and one changed future (three on the chosen trial).
+PLACES = len(PREFIX_SPANS) + 2
 
 
 def prefix_cuts(n: int, rng: np.random.Generator) -> list[int]:
