@@ -425,10 +425,10 @@ def grade_submission(
     try:
         # the causality check's calls first, before any box sees a whole trial, on each trial in the order of how far
         # into it their data reach (grading.capstone.causality)
+        draws = [rng if i == chosen else every for i in range(len(scored))]  # each trial's stream of secrets
         for i, t in enumerate(scored):
-            draw = rng if i == chosen else every
-            calls[i] = plan(len(t), i == chosen, draw)
-            probes[i] = probe(runner, i, t, budgets[i], calls[i], draw)
+            calls[i] = plan(len(t), i == chosen, draws[i])
+            probes[i] = probe(runner, i, t, budgets[i], calls[i], draws[i])
         forgot = runner.forget()
         if forgot and forgot != launcher.NOT_ROOT:
             res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
@@ -452,9 +452,9 @@ def grade_submission(
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
         for i, t in enumerate(scored):  # and last, the stretch past every reach, on the trials the filter ran on
-            k = final_cut(len(t), calls[i], rng if i == chosen else every)
+            k = final_cut(len(t), calls[i], draws[i])
             if i in outputs and k is not None:
-                probes[i] += probe(runner, i, t, budgets[i], [("prefix", k)], rng if i == chosen else every)
+                probes[i] += probe(runner, i, t, budgets[i], [("prefix", k)], draws[i])
         res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
