@@ -664,7 +664,7 @@ def _without_reservations(source):
 
     lines = source.splitlines()
     drop = set()
-    for node in ast.parse("\n".join("" if ln.lstrip().startswith("%") else ln for ln in lines)).body:
+    for node in ast.parse(cells.python_of(source)).body:  # magics blanked, lines kept
         call = getattr(node, "value", None)
         if isinstance(call, ast.Call) and ast.unparse(call.func) == "guard.reserve":
             drop.update(range(node.lineno - 1, node.end_lineno))
