@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import nbformat
+import numpy as np
 
 from fusionlab import labformat
 from grading import cells
@@ -62,11 +63,41 @@ class Pair:
     lines_b: str
 
 
+def kgram_hashes(text: str, k: int) -> np.ndarray:
+    """The hash of every k-gram of ``text`` (int64), the same in every process and on every machine.
+
+    copydetect hashes its k-grams with Python's ``hash()``, which is salted per process: its pairs, scores and
+    matched lines would vary from one run to the next on the same notebooks. This is a polynomial hash of the
+    characters modulo 2**64, its bits mixed by SplitMix64's finaliser (the winnowing window keeps each window's
+    smallest hash, so the order of hashes must look random)."""
+    codes = np.frombuffer(text.encode("utf-32-le"), dtype="<u4").astype(np.uint64)
+    n = len(codes) - k + 1
+    if n <= 0:
+        return np.zeros(0, dtype=np.int64)
+    h = np.zeros(n, dtype=np.uint64)
+    for j in range(k):  # uint64 arithmetic wraps: the polynomial modulo 2**64
+        h = h * np.uint64(1_000_003) + codes[j : j + n]
+    for shift, mult in ((30, 0xBF58476D1CE4E5B9), (27, 0x94D049BB133111EB)):
+        h = (h ^ (h >> np.uint64(shift))) * np.uint64(mult)
+    return (h ^ (h >> np.uint64(31))).view(np.int64)
+
+
+@functools.lru_cache(maxsize=1)
+def _copydetect():
+    """copydetect's utilities, its k-gram hash replaced by :func:`kgram_hashes` (once per process; every
+    fingerprint of the course is made through here)."""
+    from copydetect import utils
+
+    utils.hashed_kgrams = kgram_hashes
+    return utils
+
+
 @functools.lru_cache(maxsize=64)
 def _boilerplate(boilerplate):
     """The fingerprints of the code ``boilerplate`` (a tuple of texts), made once per process; each once (copydetect
     takes them as unique)."""
-    from copydetect.utils import filter_code, get_document_fingerprints
+    utils = _copydetect()
+    filter_code, get_document_fingerprints = utils.filter_code, utils.get_document_fingerprints
 
     hashes = []
     for text in boilerplate:
@@ -77,6 +108,7 @@ def _boilerplate(boilerplate):
 
 @functools.lru_cache(maxsize=4096)
 def _fingerprint(code, boilerplate=()):
+    _copydetect()
     from copydetect import CodeFingerprint
 
     return CodeFingerprint(
@@ -113,6 +145,7 @@ def compare(
     ``numbers`` the lines are given as lists of their numbers (1-based) instead of their text."""
     from copydetect import compare_files
 
+    _copydetect()
     fa = _fingerprint(a_code, tuple(boilerplate))
     fb = _fingerprint(b_code, tuple(boilerplate if b_boilerplate is None else b_boilerplate))
     tokens, (share_a, share_b), (slices_a, slices_b) = compare_files(fa, fb)

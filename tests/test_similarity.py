@@ -95,3 +95,41 @@ def test_the_report_names_each_pair_with_its_score_and_lines(tmp_path):
     assert "| ex5_solution | a | library rotations.rodrigues_dcm | 0.91 | 250 |" in text and "x = 1" in text
     rows = (tmp_path / "s.csv").read_text().splitlines()
     assert rows[1] == "ex5_solution,a,library rotations.rodrigues_dcm,0.910,250"
+
+
+_SAME_EVERYWHERE = """
+import inspect, json
+from fusionlab import rotations
+from grading import similarity
+lib = inspect.getsource(rotations.dcm_renormalize)
+paste = lib.replace("R", "M").replace("def dcm_renormalize", "def mine")
+fp = similarity._fingerprint(lib)
+print(json.dumps([sorted(int(h) for h in fp.hashes)[:50], similarity.compare(paste, lib, numbers=True)]))
+"""
+
+
+def test_fingerprints_and_matches_are_the_same_in_every_process():
+    """copydetect's own k-gram hash is Python's salted ``hash()``: two processes would fingerprint the same code
+    differently, and a report or a capstone's verdict would vary between runs on the same notebooks."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    outs = []
+    for seed in ("1", "2", "3"):
+        env = dict(os.environ, PYTHONHASHSEED=seed, PYTHONPATH=os.pathsep.join([str(ROOT / "lib"), str(ROOT)]))
+        cmd = [sys.executable, "-c", _SAME_EVERYWHERE]
+        res = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
+        assert res.returncode == 0, res.stderr[-2000:]
+        outs.append(json.loads(res.stdout))
+    assert outs[0] == outs[1] == outs[2]
+    hashes, (share, tokens, *_rest) = outs[0]
+    assert len(set(hashes)) == len(hashes) > 10 and share > 0.9 and tokens > 100
+
+
+def test_the_kgram_hash_is_fixed_and_spreads():
+    h = similarity.kgram_hashes("abcdefgh" * 4, 5)
+    assert h.dtype.name == "int64" and len(h) == 28 and h[0] == h[8] != h[1]
+    assert similarity.kgram_hashes("abc", 5).size == 0
+    assert int(similarity.kgram_hashes("hello", 5)[0]) == int(similarity.kgram_hashes("xhello", 5)[1])
