@@ -605,7 +605,7 @@ def test_a_filter_that_looks_ahead_only_where_the_full_check_does_not_look_is_no
     assert res.all_ran and res.causal is False, res.causal_message
     assert "NOT causal: " in res.causal_message and "secret k of " in res.causal_message, res.causal_message
     assert f"of {chosen}" not in res.causal_message, "it is caught on a trial the full check did not see"
-    assert "every trial is checked at 5 secret places, one of them at 7" in res.causal_message
+    assert "every trial is checked at 6 secret places, one of them at 8" in res.causal_message
     assert not re.search(r"k = \d", res.causal_message), "the secret k is not named"
     assert res.total_points == 0
     assert graded[0]["good"].causal is True and "on every trial at a secret k" in graded[0]["good"].causal_message
@@ -1273,8 +1273,9 @@ def test_the_causality_checks_run_in_fresh_boxes_with_the_budget_made_cpu_limit(
     res = _grade_in_process(monkeypatch, scored, lambda: lambda gyr, acc, mag, fs: _tilt(acc), min_seconds=5.0)
     assert res.causal is True and "each call in a fresh box" in res.causal_message
     [runner] = _InProcess.made
-    # on the chosen trial three changed futures, one on every other trial, and four prefixes on every trial
-    assert runner.fresh == 3 + (len(scored) - 1) + 4 * len(scored), runner.fresh
+    # on the chosen trial three changed futures, one on every other trial, and five prefixes on every trial (four
+    # before the whole trial's call, one after it)
+    assert runner.fresh == 3 + (len(scored) - 1) + 5 * len(scored), runner.fresh
     assert runner.limits == capstone.box_limits(scored, capstone.SECONDS_PER_SAMPLE, 5.0)
 
 
@@ -1327,8 +1328,8 @@ def _reach(gyr, trial):
 def test_each_trials_calls_reach_further_into_it_one_after_another(scored, monkeypatch):
     """On every trial, each call's data reach at least as far as every earlier call's, the whole trial last: what a
     box could pass to a later one through any channel holds nothing of samples that the later call was not given.
-    So a filter that looks ahead is caught wherever its look-ahead crosses a call's reach (at four secret places
-    of every trial, six on one), and even a perfect channel cannot hide more than the look-ahead from a sample to
+    So a filter that looks ahead is caught wherever its look-ahead crosses a call's reach (at five secret places
+    of every trial, seven on one), and even a perfect channel cannot hide more than the look-ahead from a sample to
     the next reach."""
     seen = {}
 
@@ -1345,10 +1346,11 @@ def test_each_trials_calls_reach_further_into_it_one_after_another(scored, monke
     for t in scored:
         *reach, last = [_reach(g, t) for g in seen[tuple(np.round(t.gyr[0], 12))]]
         assert reach == sorted(reach) and reach[-1] == len(t) and reach.count(len(t)) == 1, (t.name, reach)
-        assert len(reach) in (1 + 3 + 1, 1 + 3 + 3), (t.name, reach)  # prefixes, changed futures, the whole trial
+        assert len(reach) in (1 + 4 + 1, 1 + 4 + 3), (t.name, reach)  # prefixes, changed futures, the whole trial
         gaps = np.diff([0, *reach]) / len(t)
         assert gaps.max() < 0.6, (t.name, reach)  # no stretch of a trial beyond three fifths between two reaches
         assert reach[-2] < last < len(t), (t.name, reach, last)  # after the whole trial: past every other reach
+        assert reach[-2] >= 0.95 * len(t) - 1, (t.name, reach)  # what only the cut after it checks: a twentieth
 
 
 def test_a_look_ahead_past_every_earlier_reach_is_caught_by_the_cut_after_the_whole_trial(scored, monkeypatch):
@@ -1576,6 +1578,7 @@ def probe():
     assert len(markers) > 20 and "def _weighted_tilt_fusion(" in markers
 
 
+@needs_box
 def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scored, tmp_path, monkeypatch):
     """The first box runs the cells before any trial is sent: their errors are the notebook's own. A box started
     after a trial was sent could have kept something of it (a channel between boxes): its cells' errors are shown

@@ -54,19 +54,19 @@ process:
   A trial without a valid estimate (an error, over its budget, not N unit quaternions) counts with that RMSE of an
   estimate that never moves (the identity quaternion).
 * **Causality** (as ``tests/test_causality.py`` checks the library): on one trial, chosen in secret, every sample
-  after k is replaced (sample k held, with noise) and ``estimate`` is called again; its output up to k must
-  not change (1e-10), for three k drawn in secret (:func:`fusionlab.capstone.causal_ks` with the grader's
-  generator: in the first hundredth, the first tenth and the second half of the trial); every other trial is
-  checked so at one secret k. On every trial ``estimate`` is also called on the samples up to each of three secret
-  cuts alone (:func:`prefix_cuts`): its output must be the first rows of its output on the whole trial. Each of these
-  calls runs in a box started for it alone (:meth:`Runner.call_fresh`), all of them before any box sees a whole
-  trial (the kernel's file caches forgotten in between, :meth:`Runner.forget`, as root) and, on each trial, in the
-  order of how far into it their data reach (:func:`plan`): what a box could pass to a later one holds nothing of
-  the samples the later call was not given (:mod:`grading.capstone.causality`). One more prefix call, at a secret
-  cut past all of theirs, comes after the whole trial's (:func:`final_cut`): a filter that learned where they
-  stopped, and looked ahead only past it, is caught there. A filter
-  that ran on the trials but not on the check's data (an error, over its budget) was never shown causal and gets no
-  points for the filter (:func:`gates_failed`): else failing the check's calls would escape it.
+  after k is replaced (sample k held, with noise) and ``estimate`` is called again; its output up to k must not change
+  (1e-10), for three k drawn in secret (:func:`fusionlab.capstone.causal_ks` with the grader's generator: in the first
+  hundredth, the first tenth and the second half of the trial); every other trial is checked so at one secret k. On
+  every trial ``estimate`` is also called on the samples up to each of four secret cuts alone (:func:`prefix_cuts`,
+  the last past 95 % of the trial): its output must be the first rows of its output on the whole trial. Each of these
+  calls runs in a box started for it alone (:meth:`Runner.call_fresh`), all of them before any box sees a whole trial
+  (the kernel's file caches forgotten in between, :meth:`Runner.forget`, as root) and, on each trial, in the order of
+  how far into it their data reach (:func:`plan`): what a box could pass to a later one holds nothing of the samples
+  the later call was not given (:mod:`grading.capstone.causality`). One more prefix call, at a secret cut past all of
+  theirs, comes after the whole trial's (:func:`final_cut`): a filter that learned where they stopped, and looked
+  ahead only past it, is caught there. A filter that ran on the trials but not on the check's data (an error, over its
+  budget) was never shown causal and gets no points for the filter (:func:`gates_failed`): else failing the check's
+  calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
   :func:`library_copies`): imports or uses of a reference filter, files read, the import system reached around
   (:func:`grading.codescan.tampering`, with the indirect loaders that the table of exercises lists for the

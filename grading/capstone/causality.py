@@ -1,21 +1,21 @@
 """The capstone's causality check: the order of its calls, and its verdict.
 
-On every trial the filter is called several times before it is called on the whole trial, each call in a box
-started for it alone (:meth:`grading.capstone.runner.Runner.call_fresh`): on the samples up to each of three secret
-cuts alone ("prefix", :func:`prefix_cuts`), and on the trial with its samples after a secret k replaced ("later":
-sample k held, plus noise, :func:`fusionlab.capstone.perturb_future`; at three k on one trial chosen in secret, at
-one on every other). A causal filter's output up to a call's reach is the first rows of its output on the whole
-trial; :func:`verdict` compares them. All these calls come before any box sees a whole trial (the kernel's file
-caches forgotten in between, :meth:`Runner.forget`), and on each trial they are made in the order of how far into
-it their data reach (:func:`plan`): whatever a box could leave behind for a later one -- in a counter of the
-kernel, its caches, anything a sandbox does not close -- holds nothing of the samples the later call was not given.
-So a filter that looks ahead across any call's reach is caught, whatever passes between its boxes; even a perfect
-channel could hide only a look-ahead from a sample to the next reach (at most three fifths of a trial, a fifth on
-average). The stretch past the last reach is checked by one more prefix call, after the whole trial's
-(:func:`final_cut`): a filter that learned through a channel (an outside review used the wall clock) where the
-earlier calls stopped, and looked ahead only past it, is caught there, unless the whole trial's box passes its
-look-ahead on to that later box -- a few bits a second through the clock. A call that gave no quaternions leaves
-the filter "not checked"."""
+On every trial the filter is called several times before it is called on the whole trial, each call in a box started
+for it alone (:meth:`grading.capstone.runner.Runner.call_fresh`): on the samples up to each of four secret cuts
+alone ("prefix", :func:`prefix_cuts`), and on the trial with its samples after a secret k replaced ("later": sample
+k held, plus noise, :func:`fusionlab.capstone.perturb_future`; at three k on one trial chosen in secret, at one on
+every other). A causal filter's output up to a call's reach is the first rows of its output on the whole trial;
+:func:`verdict` compares them. All these calls come before any box sees a whole trial (the kernel's file caches
+forgotten in between, :meth:`Runner.forget`), and on each trial they are made in the order of how far into it their
+data reach (:func:`plan`): whatever a box could leave behind for a later one -- in a counter of the kernel, its
+caches, anything a sandbox does not close -- holds nothing of the samples the later call was not given. So a filter
+that looks ahead across any call's reach is caught, whatever passes between its boxes; even a perfect channel could
+hide only a look-ahead from a sample to the next reach (at most three fifths of a trial, a sixth on average), and
+the last reach lies past 95 % of the trial. The stretch past the last reach is checked by one more prefix call,
+after the whole trial's (:func:`final_cut`): a filter that learned through a channel (an outside review used the
+wall clock) where the earlier calls stopped, and looked ahead only past it, is caught there, unless the whole
+trial's box passes its look-ahead on to that later box -- a few bits a second through the clock. A call that gave no
+quaternions leaves the filter "not checked"."""
 
 from __future__ import annotations
 
@@ -130,8 +130,11 @@ def verdict(
 
 
 #: Where the prefix calls cut a trial, as spans of its samples (fractions): one cut drawn in each, in secret; with
-#: the check's changed futures, no stretch of a trial longer than three fifths of it lies between two calls' reaches.
-PREFIX_SPANS = ((0.1, 0.4), (0.4, 0.7), (0.7, 0.95))
+#: the check's changed futures, no stretch of a trial longer than three fifths of it lies between two calls' reaches,
+#: and the last reaches past 95 % of it: what a filter could look ahead at past every reach before the whole trial's
+#: call -- checked only by the cut after it, which a channel through the clock can escape -- is a twentieth of it at
+#: most.
+PREFIX_SPANS = ((0.1, 0.4), (0.4, 0.7), (0.7, 0.95), (0.95, 0.99))
 #: Where a trial's output is compared with its whole-trial output: the prefix cuts, the cut after the whole trial's
 #: call (:func:`final_cut`) and one changed future (three on the chosen trial).
 PLACES = len(PREFIX_SPANS) + 2
