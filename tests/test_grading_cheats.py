@@ -286,6 +286,23 @@ LIBRARY_ROUTES = {
         },
     },
     "03_correlation_fusion": {
+        "routes_b": {
+            3: "a = np.radians(np.r_[f0, accel_deg])\n"
+            "i = np.radians(np.r_[0.0, increment])\n"
+            "z = np.zeros_like(a)\n"
+            "q = co._weighted_tilt_fusion(np.column_stack([i, z, z]), np.column_stack([z, -np.sin(a), -np.cos(a)]),\n"
+            "                             1.0, np.r_[1.0, weight])\n"
+            "return np.degrees(2 * np.arctan2(q[1:, 1], q[1:, 0]))",
+        },
+        "routes_c": {
+            3: "from filterpy.gh import GHFilter\n"
+            "gh = GHFilter(x=float(f0), dx=0.0, dt=1.0, g=0.0, h=0.0)\n"
+            "out = []\n"
+            "for a, i, w in zip(accel_deg, increment, weight):\n"
+            "    gh.dx = float(i)\n"
+            "    out.append(gh.update(float(a), g=float(w), h=0.0)[0])\n"
+            "return np.array(out)",
+        },
         "routes_a": {
             3: "cf = co.ComplementaryFilter(alpha=0.5, dt=1.0, angle0=f0)\n"
             "out = []\n"
@@ -296,6 +313,10 @@ LIBRARY_ROUTES = {
         },
     },
     "04_ecompass": {
+        "routes_b": {
+            5: "from fusionlab import estimators\n"
+            "return rotations.dcm_to_euler(estimators.triad(-np.asarray(G, float), B_c))[2]",
+        },
         "routes_a": {
             2: "E = lambda q: ecompass.wahba_error(q, s, r, alpha)\n"
             "I = np.eye(4)\n"
@@ -329,6 +350,19 @@ LIBRARY_ROUTES = {
         },
     },
     "06_gfimu_aiv": {
+        "routes_b": {
+            2: "from fusionlab import gfimu_dynamics\n"
+            "import sympy as sp\n"
+            "O, s, _ = gfimu_dynamics.observability_matrix(augmented=False, order=1)\n"
+            "return np.array(sp.lambdify(s[:3], O[3:, :3], 'numpy')(*np.asarray(x, float)), dtype=float)",
+            4: "import filterpy.kalman\n"
+            "x, P = np.asarray(x, float), np.asarray(P, float)\n"
+            "H = gfimu.quadratic_jacobian(x)\n"
+            "xa, Pa = filterpy.kalman.update(np.r_[x, np.zeros(6)], np.block([[P, M], [M.T, R]]),\n"
+            "                                y - gfimu.quadratic_terms(x) + H @ x, np.zeros((6, 6)),\n"
+            "                                np.hstack([H, np.eye(6)]))\n"
+            "return xa[:3], Pa[:3, :3]",
+        },
         "routes_a": {
             2: "x = np.asarray(x, float)\n"
             "return np.column_stack([(gfimu.quadratic_terms(x + e) - gfimu.quadratic_terms(x - e)) / 2 "
@@ -342,6 +376,16 @@ LIBRARY_ROUTES = {
         },
     },
     "07_gfimu_constraints": {
+        "routes_b": {
+            1: "O, s, _ = gfimu_dynamics.observability_matrix(augmented=True, order=1)\n"
+            "return np.array(sp.lambdify(s, O, 'numpy')(*np.asarray(x, float)), dtype=float)",
+        },
+        "routes_c": {
+            1: "H = np.zeros((9, 15))\n"
+            "H[:3, 3:6], H[:, 6:] = np.eye(3), np.eye(9)\n"
+            "H[3:, :3] = gfimu.quadratic_jacobian(np.asarray(x, float)[:3])\n"
+            "return H",
+        },
         "routes_a": {
             1: "return gfimu_dynamics._dyn_h(np.asarray(x, float))[1]",
             3: "xb = np.asarray(x, float)[None]\n"
@@ -350,12 +394,37 @@ LIBRARY_ROUTES = {
         },
     },
     "08_north_finder": {
+        "routes_b": {
+            3: "f = lambda a, fx: nf.rate_from_rotating(a, fx, d, rho, l, omega_r)[0]\n"
+            "w = [f(e, np.zeros((4, 3))) for e in np.eye(3)] + [f(np.zeros(3), e.reshape(4, 3)) for e in np.eye(12)]\n"
+            "return float(np.sum(np.square(w)))",
+        },
         "routes_a": {
             4: "return np.radians(checks.lab08_north_finder._demod_variants(\n"
             "    np.r_[0.0, x, 0.0], np.r_[theta[0] - np.pi, theta, theta[-1] + np.pi])[-1][0])",
         },
     },
     "09_dcm_ahrs": {
+        "routes_b": {
+            2: "from fusionlab import gpsins\n"
+            "A = dcm.A_matrix(np.asarray(gyr) * dt)\n"
+            "x = np.asarray(x, float)\n"
+            "i = np.r_[0:3, 6:9, 9:12]\n"
+            "base = np.zeros(21)\n"
+            "base[i[:6]] = x[:6]\n"
+            "step = lambda y: gpsins.ins_propagate(y, np.zeros(3), A, dt)[i]\n"
+            "F = np.empty((9, 9))\n"
+            "for j in range(9):\n"
+            "    b = base if j >= 6 else np.zeros(21)\n"
+            "    p = b.copy()\n"
+            "    p[i[j]] += 1.0\n"
+            "    F[:, j] = step(p) - step(b)\n"
+            "Fcb = F[0:6, 6:9]\n"
+            "Q = np.zeros((9, 9))\n"
+            "Q[0:6, 0:6] = gyro_noise**2 / dt * Fcb @ Fcb.T\n"
+            "Q[6:9, 6:9] = bias_walk**2 * dt * np.eye(3)\n"
+            "return F @ x, F @ P @ F.T + Q",
+        },
         "routes_a": {
             2: "from fusionlab import gpsins\n"
             "A = dcm.A_matrix(np.asarray(gyr) * dt)\n"
@@ -394,6 +463,16 @@ LIBRARY_ROUTES = {
         },
     },
     "11_real_data": {
+        "routes_b": {
+            1: "tot, inc = metrics.total_error(q_err), metrics.inclination_error(q_err)\n"
+            "return 2 * np.arccos(np.clip(np.cos(tot / 2) / np.cos(inc / 2), -1.0, 1.0))",
+            2: "from fusionlab import dcm\n"
+            "return np.pi / 2 - dcm.inclination_from(rotations.quat_rotate(q_err, [0.0, 0.0, 1.0]), [0.0, 0.0, 1.0])",
+        },
+        "routes_c": {
+            2: "tot, hd = metrics.total_error(q_err), metrics.heading_error(q_err)\n"
+            "return 2 * np.arccos(np.clip(np.cos(tot / 2) / np.cos(hd / 2), -1.0, 1.0))",
+        },
         "routes_a": {
             1: "return np.abs(metrics.signed_heading_error(q_err))",
             2: "from fusionlab import ecompass\nreturn ecompass.tilt_error(q_err, np.array([1.0, 0.0, 0.0, 0.0]))",
@@ -405,6 +484,34 @@ LIBRARY_ROUTES = {
         },
     },
     "13_capstone": {
+        "routes_b": {
+            1: "from fusionlab import dcm_filter\n"
+            "n = len(gyr)\n"
+            "a = np.random.default_rng(0).normal(size=(n, 3))\n"
+            "a = 9.81 * a / np.linalg.norm(a, axis=1, keepdims=True)\n"
+            "r = dcm_filter.run_ahrs(gyr, a, None, fs, C0=rotations.quat_to_dcm(q), update_every=n + 1)\n"
+            "out, prev = np.array(r['q'], dtype=float), q\n"
+            "for k in range(n):\n"
+            "    if out[k] @ prev < 0:\n"
+            "        out[k] = -out[k]\n"
+            "    prev = out[k]\n"
+            "return out",
+        },
+        "routes_c": {
+            1: "from fusionlab import gpsins\n"
+            "n = len(gyr)\n"
+            "a = np.random.default_rng(0).normal(size=(n, 3))\n"
+            "a = 9.81 * a / np.linalg.norm(a, axis=1, keepdims=True)\n"
+            "x0 = np.zeros(21)\n"
+            "x0[0:9] = rotations.quat_to_dcm(q).ravel()\n"
+            "r = gpsins.run_gps_ins(gyr, a, np.full((n, 6), np.nan), fs, x0, np.ones(21))\n"
+            "out, prev = rotations.dcm_to_quat(r['C_bn']), q\n"
+            "for k in range(n):\n"
+            "    if out[k] @ prev < 0:\n"
+            "        out[k] = -out[k]\n"
+            "    prev = out[k]\n"
+            "return out",
+        },
         "routes_a": {
             1: "from fusionlab import freescale_fast\n"
             "_, parts = freescale_fast._gyro_chain(tuple(q), np.degrees(gyr), (0.0, 0.0, 0.0), 1.0 / fs)\n"
@@ -412,6 +519,11 @@ LIBRARY_ROUTES = {
         },
     },
     "14_phone_imu": {
+        "routes_b": {
+            2: "from fusionlab import dcm\n"
+            "return float(np.degrees(np.pi / 2 - dcm.inclination_from(np.mean(acc, axis=0), [0.0, 0.0, 1.0])))",
+            3: "return np.degrees(metrics.total_error(metrics.error_quaternion(q2, q1)))",
+        },
         "routes_a": {
             1: "from fusionlab import sensors\nreturn -sensors.null_offset(gyr[np.asarray(rest, dtype=bool)])",
             3: "d = rotations.quat_multiply(rotations.quat_conjugate(q1), q2)\n"

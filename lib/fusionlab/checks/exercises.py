@@ -97,6 +97,21 @@ FILTERPY_UPDATE = tuple(
 )
 
 
+#: filterpy's g-h filters: with h = 0 and the increment as dx, one update is the weighted fusion of Lab 03.
+FILTERPY_GH = tuple(
+    "filterpy.gh." + name
+    for name in (
+        "GHFilter.update",
+        "GHFilter.batch_filter",
+        "GHFilterOrder.update",
+        "GHKFilter.update",
+        "GHKFilter.batch_filter",
+    )
+)
+
+#: The library's angles between two vectors (the angle of a measured vertical from up, Labs 11 and 14).
+ANGLE_BETWEEN = ("dcm.inclination_from", "ecompass.inclination")
+
 #: The library's ways through one Kalman step (Lab 02): the course's own predict and update, the whole run
 #: (``kf_batch``: a measurement that observes nothing leaves the prediction), the thesis's printed filter and its class
 #: (with A = I and Q = 0 it is the update, with H = 0 the prediction). Each exercise of Lab 02 forbids them all: the
@@ -386,7 +401,12 @@ EXERCISES = (
         3,
         ("my_fuse",),
         "check_fuse",
-        ("correlation.fuse", "correlation.ComplementaryFilter.step"),  # its step with alpha = 1 - w each time
+        (
+            "correlation.fuse",
+            "correlation.ComplementaryFilter.step",  # its step with alpha = 1 - w each time
+            "correlation._weighted_tilt_fusion",  # the fusion step about one axis
+            *FILTERPY_GH,
+        ),
     ),
     # 04_ecompass
     Exercise("04_ecompass", 1, 1, ("my_profile_matrix",), "check_profile_matrix", ()),
@@ -413,7 +433,13 @@ EXERCISES = (
         2,
         ("my_heading",),
         "check_heading",
-        ("ecompass.ecompass", "ecompass.heading", "ecompass.tilt_compensated_heading", "dcm.level_and_compass"),
+        (
+            "ecompass.ecompass",
+            "ecompass.heading",
+            "ecompass.tilt_compensated_heading",
+            "dcm.level_and_compass",
+            "estimators.triad",  # the yaw of TRIAD's attitude from -G and B
+        ),
     ),
     # 05_freescale_kalman
     Exercise("05_freescale_kalman", 1, 2, ("my_C",), "check_measurement_matrix", ("freescale.measurement_matrix",)),
@@ -446,7 +472,13 @@ EXERCISES = (
         1,
         ("my_Hq",),
         "check_quadratic_jacobian",
-        ("gfimu._qj", "gfimu.quadratic_jacobian", "gfimu._qt", "gfimu.quadratic_terms"),  # exact central difference
+        (
+            "gfimu._qj",
+            "gfimu.quadratic_jacobian",
+            "gfimu._qt",
+            "gfimu.quadratic_terms",  # exact central difference
+            "gfimu_dynamics.observability_matrix",  # its rows below the first three: the Jacobian, symbolic
+        ),
     ),
     Exercise(
         "06_gfimu_aiv",
@@ -463,7 +495,7 @@ EXERCISES = (
         ("my_update",),
         "check_correlated_update",
         (
-            "filterpy.kalman.KalmanFilter.update_correlated",
+            *FILTERPY_UPDATE,  # update_correlated, and the others with the state augmented by the measurement noise
             "gfimu_ekf.ThreeStateEKF.step",
             "gfimu_ekf._batch_core",  # the batch runs' first step is the update alone
             "gfimu_ekf.three_state_batch",
@@ -477,7 +509,13 @@ EXERCISES = (
         2,
         ("my_H15",),
         "check_dynamic_jacobian",
-        ("gfimu_dynamics.aiv_measurement_jacobian", "gfimu_dynamics._dyn_h"),
+        (
+            "gfimu_dynamics.aiv_measurement_jacobian",
+            "gfimu_dynamics._dyn_h",
+            "gfimu_dynamics.observability_matrix",  # its first rows are H
+            "gfimu.quadratic_jacobian",  # Lab 06's block, the only one H15 does not hold as I or 0
+            "gfimu._qj",
+        ),
     ),
     Exercise(
         "07_gfimu_constraints", 2, 2, ("my_lie",), "check_lie_derivative", ("gfimu_dynamics.observability_matrix",)
@@ -506,7 +544,11 @@ EXERCISES = (
         2,
         ("my_noise_exact",),
         "check_noise_exact",
-        ("northfinder.rate_noise_coefficient_exact", "northfinder.rate_noise_density"),
+        (
+            "northfinder.rate_noise_coefficient_exact",
+            "northfinder.rate_noise_density",
+            "northfinder.rate_from_rotating",  # linear: its weights probed one input at a time
+        ),
     ),
     Exercise("08_north_finder", 4, 3, ("my_demodulate",), "check_demodulate", ("northfinder.demodulate",)),
     Exercise(
@@ -542,6 +584,9 @@ EXERCISES = (
             "gpsins._ins_F",
             "gpsins.ins_process_noise",
             "gpsins._ins_Q",
+            "gpsins.ins_propagate",  # F probed one column at a time
+            "gpsins._ins_propagate_raw",
+            "gpsins.run_gps_ins",
         ),
     ),
     # 10_gps_ins
@@ -579,7 +624,12 @@ EXERCISES = (
         2,
         ("my_heading_error",),
         "check_broad_heading",
-        ("metrics.heading_error", "metrics.signed_heading_error"),
+        (
+            "metrics.heading_error",
+            "metrics.signed_heading_error",
+            "metrics.total_error",  # heading from total and inclination: cos(θ/2) = cos(δ/2) cos(ε/2)
+            "metrics.inclination_error",
+        ),
     ),
     Exercise(
         "11_real_data",
@@ -587,7 +637,14 @@ EXERCISES = (
         2,
         ("my_inclination_error",),
         "check_broad_inclination",
-        ("metrics.inclination_error", "ecompass.tilt_error", "metrics.signed_heading_error"),
+        (
+            "metrics.inclination_error",
+            "ecompass.tilt_error",
+            "metrics.signed_heading_error",
+            "metrics.total_error",  # inclination from total and heading
+            "metrics.heading_error",
+            *ANGLE_BETWEEN,  # the angle of the rotated vertical from the vertical
+        ),
     ),
     Exercise("11_real_data", 3, 1, ("my_rmse_deg",), "check_broad_rmse", ("metrics.rms",)),
     # 12_sensor_errors
@@ -622,6 +679,16 @@ EXERCISES = (
             "rotations.integrate_gyro_dcm",
             "correlation._weighted_tilt_fusion",
             "freescale_fast._gyro_chain",  # the fast Freescale filter's gyro step, every partial kept
+            "freescale.delta_quat",  # the Freescale filter's own, q = q dq
+            # the library's filters run with no correction (an update never due, every GPS fix missing) integrate
+            # the gyro alone: their increment A(w dt) and the runs built on it
+            "dcm.A_matrix",
+            "dcm.row_propagate",
+            "dcm_filter.DcmAhrs.step",
+            "dcm_filter.run_ahrs",
+            "gpsins.ins_propagate",
+            "gpsins._ins_propagate_raw",
+            "gpsins.run_gps_ins",
         ),
     ),  # the complementary filters' loop, with no correction
     Exercise(
@@ -656,14 +723,19 @@ EXERCISES = (
         "check_phone_gyro_bias",
         ("calibration.gyro_bias_from_rest", "sensors.null_offset"),
     ),
-    Exercise("14_phone_imu", 2, 2, ("my_tilt_deg",), "check_rest_tilt", ("accel_tilt.tilt_3d",)),
+    Exercise("14_phone_imu", 2, 2, ("my_tilt_deg",), "check_rest_tilt", ("accel_tilt.tilt_3d", *ANGLE_BETWEEN)),
     Exercise(
         "14_phone_imu",
         3,
         2,
         ("my_rotation_angle_deg",),
         "check_rotation_angle",
-        ("rotations.quat_angle_between", "rotations.quat_to_rotvec"),
+        (
+            "rotations.quat_angle_between",
+            "rotations.quat_to_rotvec",
+            "metrics.total_error",  # the angle of the error quaternion between them
+            "metrics.error_quaternion",
+        ),
     ),
 )
 
