@@ -1950,3 +1950,62 @@ def test_the_students_figure_has_plain_ticks_an_honest_label_and_a_legend_off_th
     legend = fig.legends[0].get_window_extent()
     assert not legend.overlaps(ax.get_window_extent()), "the legend lies on the axes"
     plt.close(fig)
+
+
+def test_the_ladder_of_start_times_rounds_up_by_a_tenth_at_most_and_has_few_rungs():
+    from grading.capstone import causality
+
+    xs = np.geomspace(0.05, 3000.0, 20001)
+    starts = np.array([causality.final_start(x) for x in xs])
+    assert np.all(starts >= xs) and np.all(np.diff(starts) >= 0)
+    above = xs > causality.FIRST_RUNG
+    assert np.all(starts[above] <= causality.RUNG * xs[above] * (1 + 1e-12)), "the wait costs a tenth at most"
+    rungs = np.log(starts / causality.FIRST_RUNG) / np.log(causality.RUNG)
+    assert np.allclose(rungs, np.round(rungs), atol=1e-6), "every start is a rung"
+    # from a filter 30 times faster than its budget to the budget's end: about five bits for all the trials
+    within = {causality.final_start(x) for x in np.geomspace(20.0, 600.0, 5000)}
+    assert 30 <= len(within) <= 40 and np.log2(len(within)) < 5.4, len(within)
+    for bad in (float("nan"), -1.0, float("inf")):
+        with pytest.raises(ValueError, match="elapsed"):
+            causality.final_start(bad)
+
+
+def test_the_calls_after_the_whole_trials_start_on_a_rung_once_the_box_that_saw_them_has_ended(scored, monkeypatch):
+    """The clock carried a look-ahead from the box that saw whole trials to the later calls (an outside review): the
+    later calls now start only on a rung of a ladder of times, after that box was ended, so a later box can read
+    which rung, not when the box that saw whole trials chose to end."""
+    import time as real_time
+    from types import SimpleNamespace
+
+    from grading.capstone import causality
+
+    events, t0 = [], []
+
+    def make():
+        def estimate(gyr, acc, mag, fs):
+            events.append("call")
+            return _tilt(acc)
+
+        return estimate
+
+    def sleep(s):
+        events.append(("sleep", real_time.monotonic() - t0[0], s))
+
+    def forget(self):  # just before the first whole trial's call
+        t0.append(real_time.monotonic())
+        events.append("forget")
+        return ""
+
+    monkeypatch.setattr(capstone.runner, "time", SimpleNamespace(monotonic=real_time.monotonic, sleep=sleep))
+    monkeypatch.setattr(_InProcess, "close", lambda self: events.append("close"))
+    monkeypatch.setattr(_InProcess, "forget", forget)
+    res = _grade_in_process(monkeypatch, scored, make)
+    assert res.causal is True, res.causal_message
+    [i] = [i for i, e in enumerate(events) if isinstance(e, tuple)]
+    _, elapsed, hold = events[i]
+    whole = events.index("forget") + 1
+    assert events[whole:i] == ["call"] * len(scored) + ["close"], events  # the whole trials, the box ended, the wait
+    assert events[i + 1 :] == ["call"] * len(scored) + ["close"], events  # then one call past every reach, per trial
+    assert hold >= 0 and causality.final_start(elapsed) - hold == pytest.approx(elapsed, abs=0.05)
+    rung = np.log((elapsed + hold) / causality.FIRST_RUNG) / np.log(causality.RUNG)
+    assert abs(rung - round(rung)) < 0.2, (elapsed, hold)

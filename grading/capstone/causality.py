@@ -14,8 +14,9 @@ hide only a look-ahead from a sample to the next reach (at most three fifths of 
 the last reach lies past 95 % of the trial. The stretch past the last reach is checked by one more prefix call,
 after the whole trial's (:func:`final_cut`): a filter that learned through a channel (an outside review used the
 wall clock) where the earlier calls stopped, and looked ahead only past it, is caught there, unless the whole
-trial's box passes its look-ahead on to that later box -- a few bits a second through the clock. A call that gave no
-quaternions leaves the filter "not checked"."""
+trial's box passes its look-ahead on to that later box. Those later calls start on a rung of a ladder of times
+(:func:`final_start`), after the box that saw whole trials has ended: what the clock can pass them is which rung,
+a few bits for all the trials together. A call that gave no quaternions leaves the filter "not checked"."""
 
 from __future__ import annotations
 
@@ -62,6 +63,32 @@ def final_cut(n: int, calls: Sequence[tuple[str, int]], rng: np.random.Generator
     ahead only past that point is caught here, unless a box started after it receives its look-ahead."""
     start = max((k for _, k in calls), default=0) + 1
     return int(rng.integers(start, n - 1)) if start < n - 1 else None
+
+
+#: The rungs of the ladder on which the calls after the whole trials start (:func:`final_start`): from
+#: :data:`FIRST_RUNG` seconds, each this many times the one below.
+RUNG = 1.1
+FIRST_RUNG = 0.1
+
+
+def final_start(elapsed: float) -> float:
+    """When (s after the first whole-trial call) the calls after the whole trials start, given ``elapsed``, the time
+    the whole-trial calls took: the lowest rung at or above it of a ladder from :data:`FIRST_RUNG`, each rung
+    :data:`RUNG` times the last.
+
+    The clock is a channel no box can be kept from: a box that saw whole trials could end at a moment it chose, and
+    the box started next read the moment, a few bits a second. With the later calls started on a rung, and the box
+    that saw whole trials ended before the wait, a later box learns from the clock only which rung the whole-trial
+    calls reached: between the fastest they can be and the end of the trials' budgets, some thirty rungs, about five
+    bits for all the trials together (not per trial), at a cost of a tenth of their time at most."""
+    if not np.isfinite(elapsed) or elapsed < 0:
+        raise ValueError(f"elapsed must be a finite time >= 0 in seconds; got {elapsed!r}")
+    if elapsed <= FIRST_RUNG:
+        return FIRST_RUNG
+    j = int(np.ceil(np.log(elapsed / FIRST_RUNG) / np.log(RUNG) - 1e-9))
+    while FIRST_RUNG * RUNG**j < elapsed:  # rounding in the log
+        j += 1
+    return FIRST_RUNG * RUNG**j
 
 
 def probe(

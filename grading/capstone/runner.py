@@ -19,7 +19,7 @@ from grading import box as wire
 from grading import boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
-from .causality import causality_trial, final_cut, plan, probe, verdict
+from .causality import causality_trial, final_cut, final_start, plan, probe, verdict
 from .program import (
     BLOCK_MESSAGE,
     DECLARATION,
@@ -432,6 +432,7 @@ def grade_submission(
         forgot = runner.forget()
         if forgot and forgot != launcher.NOT_ROOT:
             res.notes.append(f"the kernel's file caches were not forgotten before the scored calls ({forgot})")
+        whole_from = time.monotonic()
         for i, t in enumerate(scored):
             r = TrialResult(t.name, budget_s=budgets[i])
             q, r.status, r.message, r.seconds = runner.call(t, r.budget_s)
@@ -451,10 +452,16 @@ def grade_submission(
                 ):
                     res.cheats.append(("calls a reference filter", f"{t.name}: estimate {r.message}"))
             res.trials.append(r)
-        for i, t in enumerate(scored):  # and last, the stretch past every reach, on the trials the filter ran on
-            k = final_cut(len(t), calls[i], draws[i])
-            if i in outputs and k is not None:
-                probes[i] += probe(runner, i, t, budgets[i], [("prefix", k)], draws[i])
+        # and last, the stretch past every reach, on the trials the filter ran on: started on a rung of a ladder of
+        # times, after the box that saw whole trials has ended, so that the clock tells those calls only the rung
+        finals = {i: final_cut(len(t), calls[i], draws[i]) for i, t in enumerate(scored) if i in outputs}
+        finals = {i: k for i, k in finals.items() if k is not None}
+        runner.close()
+        if finals:
+            elapsed = time.monotonic() - whole_from
+            time.sleep(max(0.0, final_start(elapsed) - elapsed))
+        for i, k in finals.items():
+            probes[i] += probe(runner, i, scored[i], budgets[i], [("prefix", k)], draws[i])
         res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
