@@ -16,7 +16,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from fusionlab import datasets, recordings, rotations, signals
+from fusionlab import datasets, recordings, rotations, signals, validate
 
 PHONE = recordings.EXAMPLES_DIR
 PLAIN = dict(
@@ -334,6 +334,40 @@ def test_a_turn_of_gravity_too_shaken_to_read_is_said_not_checked_not_agreed(tmp
     assert "the way the gyro turns it" not in text
 
 
+def test_the_gyros_checks_read_gravitys_turn_from_gravity_csv_where_the_hand_shakes_the_accelerometer(tmp_path):
+    """A real iPhone export shaken hard read a median cosine of +0.03 from its accelerometer and +0.99 from its own
+    Gravity.csv. Here the hand shakes the phone at 5 Hz with 5 m/s² while it tilts: read from the accelerometer,
+    the turn of gravity is lost; read from Gravity.csv, the check holds, and a mirrored gyro is still refused."""
+    folder = _sensor_logger_export(tmp_path / "shaken", "ios")
+    t, _, _ = _still_then_tilting()
+    phase = np.random.default_rng(9).uniform(0.0, 6.0, 3)
+    shake = 5.0 * np.sin(2 * np.pi * 5.0 * t[:, None] + phase) * (t > 1.5)[:, None]
+    _lines(
+        folder / "Accelerometer.csv",
+        lambda ls: (
+            [ls[0]]
+            + [
+                ",".join([*r.split(",")[:2], *(repr(float(x) + float(d)) for x, d in zip(r.split(",")[2:], sh))])
+                for r, sh in zip(ls[1:], shake)
+            ]
+        ),
+    )
+    rec = recordings.load_recording(folder)
+    cos_acc, n_acc = recordings._tilt_direction(rec.gyr, rec.acc, rec.fs)  # as it was read before Gravity.csv
+    assert n_acc >= validate.TILT_WINDOWS_MIN and cos_acc < recordings.DIRECTION_AGREES, (cos_acc, n_acc)
+    text = str(rec.summary)
+    assert "physics agrees" in text and "gravity read from Gravity.csv (the platform's gravity vector)" in text, text
+    assert "(median cosine +1.00, gravity read from Gravity.csv" in text, text
+    _lines(
+        folder / "Gyroscope.csv",
+        lambda ls: (
+            [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in r.split(",")[2:])]) for r in ls[1:]]
+        ),
+    )
+    with pytest.raises(ValueError, match=r"opposite way to Gravity.csv .*median cosine -1.00"):
+        recordings.load_recording(folder)
+
+
 @pytest.mark.parametrize("platform, sign", [("android", "specific force"), ("ios", "gravity")])
 def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_read(tmp_path, platform, sign):
     folder = _sensor_logger_export(tmp_path / platform, platform)
@@ -344,7 +378,11 @@ def test_sensor_logger_writes_m_s2_on_both_platforms_and_each_platforms_sign_is_
     text = str(rec.summary)
     assert f"acc: m/s^2 (Sensor Logger on {platform}; physics agrees: median |acc| 9.8" in text
     assert f"{sign} (Sensor Logger on {platform}); physics agrees: still and flat at 0.0-1.5 s" in text
-    assert "gravity turned 1.0" in text and "the way the gyro turns it (median cosine +1.00)" in text
+    source = {"android": "the accelerometer", "ios": "Gravity.csv (the platform's gravity vector)"}[platform]
+    assert (
+        "gravity turned 1.0" in text
+        and f"the way the gyro turns it (median cosine +1.00, gravity read from {source})" in text
+    )
     with pytest.raises(ValueError, match=r"which is m/s\^2, not g as units= says -- pass units=\{'acc': 'm/s\^2'\}"):
         recordings.load_recording(folder, units={"acc": "g"})
 
@@ -466,7 +504,9 @@ def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as
     folder = _unzip("sensorlogger_android_trial02.zip", tmp_path)
     for name in ("Accelerometer.csv", "Gravity.csv", "Gyroscope.csv", "Magnetometer.csv"):
         _edit(folder / name, lambda s: s.replace("seconds_elapsed,z,y,x", "seconds_elapsed,x,y,z", 1))
-    message = r"Gyroscope.csv: .* the gyro turns gravity the opposite way.*median cosine -0.99 .* a mirrored frame"
+    message = (
+        r"Gyroscope.csv: .* the gyro turns gravity the opposite way to Gravity.csv.*cosine -1.00 .* mirrored frame"
+    )
     with pytest.raises(ValueError, match=message):
         recordings.load_recording(folder)
     folder = _sensor_logger_export(tmp_path / "flipped", "android")

@@ -628,6 +628,7 @@ class _Export:
     convention: _Stated
     t0: float
     notes: list
+    gravity: object = None  # the platform's own gravity vector (Sensor Logger's Gravity.csv), for the gyro's checks
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -823,10 +824,11 @@ def _read_sensor_logger(src):
         return _stream(sensor, table, t, cols[1:])
 
     streams["gyr"] = stream("Gyroscope.csv", "gyr")
+    gravity = stream("Gravity.csv", "acc") if "Gravity.csv" in tables else None
     if "TotalAcceleration.csv" in tables:
         streams["acc"] = stream("TotalAcceleration.csv", "acc")
     elif "Gravity.csv" in tables:
-        lin, grav = stream("Accelerometer.csv", "acc"), stream("Gravity.csv", "acc")
+        lin, grav = stream("Accelerometer.csv", "acc"), gravity
         _check_times(lin)
         _check_times(grav)
         same = len(lin.t) == len(grav.t) and np.array_equal(lin.t, grav.t)
@@ -852,7 +854,7 @@ def _read_sensor_logger(src):
         by = "Sensor Logger (both platforms)"
         units = {"gyr": _Stated("rad/s", by), "mag": _Stated("uT", by), "acc": _Stated(None, None)}
         convention = _Stated(None, None)
-    return _Export("sensor_logger", platform, streams, units, convention, origin * 1e-9, notes)
+    return _Export("sensor_logger", platform, streams, units, convention, origin * 1e-9, notes, gravity)
 
 
 def _read_plain(src, columns, units):
@@ -1125,11 +1127,20 @@ def _settle_acc(raw, stated_unit, stated_sign, fs, where, check):
     return acc, f"acc: {unit} ({how}); {sign_how}"
 
 
-def _settle_gyr(gyr, acc, fs, stated, where, check):
-    """The summary line of the gyro (``gyr`` in the file's numbers), refusing a unit the tilt of gravity contradicts."""
+def _settle_gyr(gyr, acc, fs, stated, where, check, gravity=None):
+    """The summary line of the gyro (``gyr`` in the file's numbers), refusing a unit the tilt of gravity contradicts.
+
+    Gravity's turn is read from ``gravity``, the platform's own gravity vector, where the export holds one
+    (Sensor Logger's Gravity.csv), else from the accelerometer: the platform's vector holds none of the hand's
+    shaking, which can hide the turn in the accelerometer (a real iPhone export: median cosine +0.03 from the
+    accelerometer, +0.99 from its Gravity.csv). The platform computes that vector with its own gyro, so it checks
+    how the file was read (units, axis order, signs), not the sensor."""
     unit, by = stated.value, stated.by
     if not check:
         return f"gyr: {unit} ({by}); physics not checked (check=False)"
+    source = "the accelerometer"
+    if gravity is not None:
+        acc, source = gravity, "Gravity.csv (the platform's gravity vector)"
     other = "deg/s" if unit == "rad/s" else "rad/s"
     rad = gyr * UNITS["gyr"][unit]  # gyr as the file has it, read in the stated unit
     ratio, n = validate.gyro_tilt_ratio(rad, acc, fs)
@@ -1144,15 +1155,15 @@ def _settle_gyr(gyr, acc, fs, stated, where, check):
     if fits(ratio, n):
         cos, k = _tilt_direction(rad, acc, fs)
         turns = (
-            f"gravity turned the way the gyro turns it (median cosine {cos:+.2f})"
+            f"gravity turned the way the gyro turns it (median cosine {cos:+.2f}, gravity read from {source})"
             if cos >= DIRECTION_AGREES or k < validate.TILT_WINDOWS_MIN
             else f"the direction of the turn not checked (median cosine {cos:+.2f} over {k} windows: the phone was "
             "shaken too hard for the accelerometer to show which way gravity turned)"
         )
         if k >= validate.TILT_WINDOWS_MIN and cos < 0.0:
             raise ValueError(
-                f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to the "
-                f"accelerometer (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
+                f"{where}: {seen(ratio, n, unit)}, but the gyro turns gravity the opposite way to "
+                f"{source} (median cosine {cos:+.2f} over {k} windows; a right-handed phone reads "
                 "near +1): a mirrored frame -- axes read in the wrong order (Sensor Logger writes z, y, "
                 "x; columns= lists x, y, z) or one sensor's sign flipped; no unit fixes it: check the "
                 "file's header or columns="
@@ -1406,7 +1417,11 @@ def load_recording(
     st = export.streams
     acc, acc_line = _settle_acc(values["acc"], export.units["acc"], export.convention, fs, st["acc"].where, check)
     gyr = values["gyr"] * UNITS["gyr"][export.units["gyr"].value]
-    checks = [acc_line, _settle_gyr(values["gyr"], acc, fs, export.units["gyr"], st["gyr"].where, check)]
+    gravity = None
+    if export.gravity is not None:
+        _check_times(export.gravity)
+        gravity = _interp(export.gravity, grid)
+    checks = [acc_line, _settle_gyr(values["gyr"], acc, fs, export.units["gyr"], st["gyr"].where, check, gravity)]
     mag = None
     if "mag" in values:
         mag = values["mag"] * UNITS["mag"][export.units["mag"].value]
