@@ -39,7 +39,9 @@ quantity   the physics                                                    what i
            specific force then reads +9.81 m/s² on z (out of the          from the gravity vector (iOS Core
            screen), the gravity vector −1 g                               Motion, −1 g on z face up)
 ``gyr``    the gyro's tilt against the turn of gravity in the             rad/s from °/s (×57.3)
-           accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`),
+           accelerometer (:func:`fusionlab.validate.gyro_tilt_ratio`;
+           in the platform's own gravity vector where the export has
+           one, Sensor Logger's Gravity.csv: no hand shaking in it),
            or, with too little tilting (or a record too short), its peak
            and median rate
 ``gyr``    the direction of that turn: gravity turns the way the gyro     a right-handed frame from a mirrored
