@@ -1313,8 +1313,8 @@ def test_a_look_ahead_passed_between_boxes_is_caught_as_the_check_comes_first(sc
     [runner] = _InProcess.made
     first_whole = runner.calls.index("whole")
     assert set(runner.calls[:first_whole]) == {"fresh", "forget"} and runner.calls[first_whole - 1] == "forget"
-    # then the whole trials, and one fresh call per trial past every earlier reach (the final cut)
-    assert runner.calls[first_whole:] == ["whole"] * len(scored) + ["fresh"] * len(scored), runner.calls
+    # then the whole trials, the caches forgotten again, and one fresh call per trial past every earlier reach
+    assert runner.calls[first_whole:] == ["whole"] * len(scored) + ["forget"] + ["fresh"] * len(scored), runner.calls
 
 
 def _reach(gyr, trial):
@@ -2004,8 +2004,27 @@ def test_the_calls_after_the_whole_trials_start_on_a_rung_once_the_box_that_saw_
     [i] = [i for i, e in enumerate(events) if isinstance(e, tuple)]
     _, elapsed, hold = events[i]
     whole = events.index("forget") + 1
-    assert events[whole:i] == ["call"] * len(scored) + ["close"], events  # the whole trials, the box ended, the wait
+    # the whole trials, their box ended, the caches forgotten (and every file read again), the wait
+    assert events[whole:i] == ["call"] * len(scored) + ["close", "forget"], events
     assert events[i + 1 :] == ["call"] * len(scored) + ["close"], events  # then one call past every reach, per trial
     assert hold >= 0 and causality.final_start(elapsed) - hold == pytest.approx(elapsed, abs=0.05)
     rung = np.log((elapsed + hold) / causality.FIRST_RUNG) / np.log(causality.RUNG)
     assert abs(rung - round(rung)) < 0.2, (elapsed, hold)
+
+
+def test_the_capstone_boxes_forget_the_caches_and_read_every_file_a_box_can_read_again(tmp_path, monkeypatch):
+    """An outside review filled pages the kernel had just forgotten (every cache is dropped before the whole trials)
+    and read them back in a later box through its page-fault count: a bit a page, a look-ahead carried. Every file a
+    box can read is read again right after the forgetting, so no page is left for a box to fill."""
+    from grading import launcher
+    from grading.capstone import runner as capstone_runner
+
+    asked = []
+    monkeypatch.setattr(launcher, "forget_caches", lambda wait=900.0, warm=(): asked.append(list(warm)) or "")
+    boxes = capstone_runner.CapstoneBoxes(ROOT, tmp_path)
+    assert boxes.forget() == ""
+    [warm] = asked
+    assert warm == capstone_runner.box_view(ROOT, boxes.root) and str(boxes.root) in warm
+    from grading import boxfiles
+
+    assert set(boxfiles.python_prefixes()) <= set(warm), warm  # the Python installation too

@@ -461,3 +461,38 @@ def test_a_process_apart_returns_plain_data_and_one_over_its_cpu_time_is_stopped
             eval, ("sum(range(10 ** 12)) and {}",), preload=[], memory_bytes=1 << 30, who="bob", cpu_seconds=1
         )
     assert time.monotonic() - t0 < 30
+
+
+def _resident_share(path):
+    """The share of ``path``'s pages in the page cache (mincore on a mapping of it)."""
+    import ctypes
+    import mmap
+
+    import numpy as np
+
+    size = os.path.getsize(path)
+    n = (size + mmap.PAGESIZE - 1) // mmap.PAGESIZE
+    vec = (ctypes.c_ubyte * n)()
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.mincore.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.POINTER(ctypes.c_ubyte)]
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), size, prot=mmap.PROT_READ) as m:
+        pages = np.frombuffer(m, dtype=np.uint8)
+        ok = libc.mincore(ctypes.c_void_p(pages.ctypes.data), size, vec)
+        del pages
+    if ok != 0:
+        raise OSError(ctypes.get_errno(), "mincore")
+    return sum(v & 1 for v in vec) / n
+
+
+@AS_ROOT
+def test_forgetting_the_caches_reads_the_files_it_is_given_again(tmp_path):
+    """After the kernel forgets its caches, the files a box can read are read again: none of their pages is left
+    for a box to fill and a later one to find filled (an outside review's channel)."""
+    kept, left = tmp_path / "kept.bin", tmp_path / "left.bin"
+    for f in (kept, left):
+        f.write_bytes(os.urandom(4 << 20))
+    said = launcher.forget_caches(wait=5.0, warm=[str(kept)])
+    if said:
+        pytest.skip(f"the kernel's caches cannot be forgotten here: {said}")
+    assert _resident_share(kept) == 1.0
+    assert _resident_share(left) < 0.5, "the file not given was forgotten, not read again"

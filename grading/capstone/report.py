@@ -19,7 +19,7 @@ from fusionlab.capstone import GATES, MAX_POINTS, MIN_SECONDS, RUBRIC, SECONDS_P
 from grading import boxfiles, cgroup, launcher, sandbox
 
 from .program import CHEATS, LAB, box_library, model_program
-from .runner import StudentResult, gates_failed, grade_apart
+from .runner import StudentResult, box_view, gates_failed, grade_apart
 from .scoring import PUBLISHED, cached_references, mean_scored, references_of, rubric_points
 
 if TYPE_CHECKING:
@@ -508,7 +508,7 @@ def grade_class(
                 print(f"==> reference filters on {len(scored)} trials", flush=True)
             refs = cached_references(scored, out, seed, progress=progress)
             lib = box_library(scratch)
-            files, size = boxfiles.warm(boxfiles.view(course, lib=lib, data=False) + [str(lib)])
+            files, size = boxfiles.warm(box_view(course, lib))
             if progress:
                 print(
                     f"  every file a box can read is in the page cache: {files} files, {size / 1e9:.1f} GB", flush=True

@@ -16,7 +16,7 @@ import numpy as np
 
 from fusionlab.capstone import MIN_SECONDS, SECONDS_PER_SAMPLE, SENSORS, as_quaternions, budget_seconds
 from grading import box as wire
-from grading import boxlib, client, handin, launcher, sandbox
+from grading import boxfiles, boxlib, client, handin, launcher, sandbox
 from grading.cells import bound_names, python_of
 
 from .causality import causality_trial, final_cut, final_start, plan, probe, verdict
@@ -140,6 +140,12 @@ def invalid_message(value: object, n: int) -> str:
     return "did not return unit quaternions (norms within 1e-3 of 1)"
 
 
+def box_view(course: Path | str, lib: Path | str) -> list[str]:
+    """Every file a capstone box can read: the course's view (:func:`grading.boxfiles.view`, no data) and the
+    library copy ``lib`` the boxes get (:func:`box_library`)."""
+    return boxfiles.view(Path(course), lib=Path(lib), data=False) + [str(lib)]
+
+
 class CapstoneBoxes:
     """The capstone's boxes of one student, all alike (key :attr:`KEY`): no files, the library copy without its
     filters (:func:`box_library`), no data. Started in this process by :meth:`start`; as root,
@@ -158,9 +164,15 @@ class CapstoneBoxes:
     def prepare(self) -> None:
         pass  # box_library was made when this object was
 
+    def view(self) -> list[str]:
+        """Every file a box can read (:func:`grading.boxfiles.view` with the library copy): what the page cache holds
+        before any box starts, and again after each :meth:`forget`."""
+        return box_view(self.course, self.root)
+
     def forget(self) -> str:
-        """:func:`grading.launcher.forget_caches` (done only as root: else why not)."""
-        return launcher.forget_caches()
+        """:func:`grading.launcher.forget_caches`, every file a box can read then read again (done only as root: else
+        why not)."""
+        return launcher.forget_caches(warm=self.view())
 
     def open(self, key: str, files: bool = False) -> tuple[client.Started, IO[bytes], IO[bytes]]:
         if key != self.KEY or files:
@@ -458,6 +470,11 @@ def grade_submission(
         finals = {i: k for i, k in finals.items() if k is not None}
         runner.close()
         if finals:
+            # the kernel forgets what the boxes that saw whole trials could leave in its caches (names looked up,
+            # pages filled), and every file a box can read is read again; then the wait for the ladder's rung
+            forgot = runner.forget()
+            if forgot and forgot != launcher.NOT_ROOT:
+                res.notes.append(f"the kernel's file caches were not forgotten before the last cuts ({forgot})")
             elapsed = time.monotonic() - whole_from
             time.sleep(max(0.0, final_start(elapsed) - elapsed))
         for i, k in finals.items():
