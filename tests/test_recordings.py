@@ -342,28 +342,14 @@ def test_the_gyros_checks_read_gravitys_turn_from_gravity_csv_where_the_hand_sha
     t, _, _ = _still_then_tilting()
     phase = np.random.default_rng(9).uniform(0.0, 6.0, 3)
     shake = 5.0 * np.sin(2 * np.pi * 5.0 * t[:, None] + phase) * (t > 1.5)[:, None]
-    _lines(
-        folder / "Accelerometer.csv",
-        lambda ls: (
-            [ls[0]]
-            + [
-                ",".join([*r.split(",")[:2], *(repr(float(x) + float(d)) for x, d in zip(r.split(",")[2:], sh))])
-                for r, sh in zip(ls[1:], shake)
-            ]
-        ),
-    )
+    _edit_values(folder / "Accelerometer.csv", lambda v, i: v + shake[i])
     rec = recordings.load_recording(folder)
     cos_acc, n_acc = recordings._tilt_direction(rec.gyr, rec.acc, rec.fs)  # as it was read before Gravity.csv
     assert n_acc >= validate.TILT_WINDOWS_MIN and cos_acc < recordings.DIRECTION_AGREES, (cos_acc, n_acc)
     text = str(rec.summary)
     assert "physics agrees" in text and "gravity read from Gravity.csv (the platform's gravity vector)" in text, text
     assert "(median cosine +1.00, gravity read from Gravity.csv" in text, text
-    _lines(
-        folder / "Gyroscope.csv",
-        lambda ls: (
-            [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in r.split(",")[2:])]) for r in ls[1:]]
-        ),
-    )
+    _edit_values(folder / "Gyroscope.csv", lambda v, i: -v)
     with pytest.raises(ValueError, match=r"opposite way to Gravity.csv .*median cosine -1.00"):
         recordings.load_recording(folder)
 
@@ -510,12 +496,7 @@ def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as
     with pytest.raises(ValueError, match=message):
         recordings.load_recording(folder)
     folder = _sensor_logger_export(tmp_path / "flipped", "android")
-    _lines(
-        folder / "Gyroscope.csv",
-        lambda ls: (
-            [ls[0]] + [",".join([*r.split(",")[:2], *(str(-float(x)) for x in r.split(",")[2:])]) for r in ls[1:]]
-        ),
-    )
+    _edit_values(folder / "Gyroscope.csv", lambda v, i: -v)
     with pytest.raises(ValueError, match=r"median cosine -1.00 over 25 windows.* one sensor's sign flipped"):
         recordings.load_recording(folder)
     rec = recordings.load_recording(folder, check=False)  # trusted as stated when asked to
@@ -530,6 +511,21 @@ def test_axes_read_in_the_wrong_order_or_a_gyro_of_the_wrong_sign_are_refused_as
 def _lines(path, fn):
     lines = path.read_text(encoding="utf-8").splitlines()
     path.write_text("\n".join(fn(lines)) + "\n", encoding="utf-8")
+
+
+def _edit_values(path, change):
+    """A Sensor Logger file with each row's sensor values (after its two time columns) replaced by
+    ``change(values, row)``."""
+    _lines(
+        path,
+        lambda ls: (
+            [ls[0]]
+            + [
+                ",".join([*r.split(",")[:2], *(repr(float(x)) for x in change(np.array(r.split(",")[2:], float), i))])
+                for i, r in enumerate(ls[1:])
+            ]
+        ),
+    )
 
 
 def _swap(lines, k):
