@@ -284,6 +284,34 @@ LIBRARY_ROUTES = {
             "                                             np.array([F, F]), np.array([Q, Q]))\n"
             "return xs[0], Ps[0], Ks[0][:, :m]",
         },
+        "routes_d": {  # filterpy's unscented transform: exact for a linear map
+            1: "from filterpy.kalman import MerweScaledSigmaPoints, unscented_transform\n"
+            "P, K, H, R = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (P, K, H, R))\n"
+            "n = P.shape[0]\n"
+            "pts = MerweScaledSigmaPoints(n, alpha=1.0, beta=0.0, kappa=1.0)\n"
+            "s = pts.sigma_points(np.zeros(n), P) @ (np.eye(n) - K @ H).T\n"
+            "return unscented_transform(s, pts.Wm, pts.Wc, K @ R @ K.T)[1]",
+            3: "from filterpy.kalman import MerweScaledSigmaPoints, unscented_transform\n"
+            "x0, P0 = np.asarray(x, dtype=float), np.atleast_2d(np.asarray(P, dtype=float))\n"
+            "n = P0.shape[0]\n"
+            "pts = MerweScaledSigmaPoints(n, alpha=1.0, beta=0.0, kappa=1.0)\n"
+            "Bu = (np.asarray(B, dtype=float) @ np.atleast_1d(np.asarray(u, dtype=float))).ravel()\n"
+            "s = pts.sigma_points(x0.ravel(), P0) @ np.asarray(A, dtype=float).T + Bu\n"
+            "xp, Pp = unscented_transform(s, pts.Wm, pts.Wc, np.asarray(Q, dtype=float))\n"
+            "return xp.reshape(x0.shape), Pp",
+            4: "from filterpy.kalman import MerweScaledSigmaPoints, unscented_transform\n"
+            "x0 = np.asarray(x, dtype=float)\n"
+            "P0, H0, R0 = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (P, H, R))\n"
+            "n = P0.shape[0]\n"
+            "pts = MerweScaledSigmaPoints(n, alpha=1.0, beta=0.0, kappa=1.0)\n"
+            "s = pts.sigma_points(x0.ravel(), P0)\n"
+            "zs = s @ H0.T\n"
+            "zp, S = unscented_transform(zs, pts.Wm, pts.Wc, R0)\n"
+            "Pxz = sum(w * np.outer(a - x0.ravel(), b - zp) for w, a, b in zip(pts.Wc, s, zs))\n"
+            "K = Pxz @ np.linalg.inv(S)\n"
+            "xn = x0.ravel() + K @ (np.asarray(z, dtype=float).ravel() - zp)\n"
+            "return xn.reshape(x0.shape), P0 - K @ S @ K.T, K",
+        },
     },
     "03_correlation_fusion": {
         "routes_b": {

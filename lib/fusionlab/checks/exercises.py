@@ -38,62 +38,83 @@ __all__ = [
 ]
 
 
+#: filterpy's sigma-point transforms: exact for a linear map, so the unscented transform of the sigma points of (x, P)
+#: through A is the prediction (Lab 02, exercise 3), through I - KH the Joseph form (exercise 1) and through H the
+#: innovation covariance of an update (exercise 4). Part of both lists below.
+SIGMA_POINT_TRANSFORMS = tuple(
+    "filterpy.kalman." + name
+    for name in (
+        "unscented_transform",
+        "ckf_transform",
+        "spherical_radial_sigmas",
+        "MerweScaledSigmaPoints.sigma_points",
+        "JulierSigmaPoints.sigma_points",
+        "SimplexSigmaPoints.sigma_points",
+    )
+)
+
 #: filterpy's ways to one linear Kalman prediction (Lab 02, exercise 3): every filter class of ``filterpy.kalman``
 #: whose step is the linear one, or is exactly it when given a linear model (the extended, unscented and cubature
 #: filters, the fading-memory filter with alpha 1, the square-root and information forms, the fixed-lag smoother).
-FILTERPY_PREDICT = tuple(
-    "filterpy.kalman." + name
-    for name in (
-        "predict",
-        "batch_filter",
-        "KalmanFilter.predict",
-        "KalmanFilter.get_prediction",
-        "KalmanFilter.batch_filter",
-        "ExtendedKalmanFilter.predict",
-        "ExtendedKalmanFilter.predict_x",
-        "ExtendedKalmanFilter.predict_update",
-        "FadingKalmanFilter.predict",
-        "FadingKalmanFilter.get_prediction",
-        "FadingKalmanFilter.batch_filter",
-        "SquareRootKalmanFilter.predict",
-        "InformationFilter.predict",
-        "UnscentedKalmanFilter.predict",
-        "CubatureKalmanFilter.predict",
-        "FixedLagSmoother.smooth",
-        "FixedLagSmoother.smooth_batch",
-        "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
-        "KalmanFilter.rts_smoother",
+FILTERPY_PREDICT = (
+    tuple(
+        "filterpy.kalman." + name
+        for name in (
+            "predict",
+            "batch_filter",
+            "KalmanFilter.predict",
+            "KalmanFilter.get_prediction",
+            "KalmanFilter.batch_filter",
+            "ExtendedKalmanFilter.predict",
+            "ExtendedKalmanFilter.predict_x",
+            "ExtendedKalmanFilter.predict_update",
+            "FadingKalmanFilter.predict",
+            "FadingKalmanFilter.get_prediction",
+            "FadingKalmanFilter.batch_filter",
+            "SquareRootKalmanFilter.predict",
+            "InformationFilter.predict",
+            "UnscentedKalmanFilter.predict",
+            "CubatureKalmanFilter.predict",
+            "FixedLagSmoother.smooth",
+            "FixedLagSmoother.smooth_batch",
+            "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
+            "KalmanFilter.rts_smoother",
+        )
     )
+    + SIGMA_POINT_TRANSFORMS
 )
 
 #: filterpy's ways to one linear Kalman update (Lab 02, exercise 4), as :data:`FILTERPY_PREDICT` for the prediction:
 #: the Kalman filter's own update and its variants (``get_update`` returns it without storing it, correlated noise
 #: and sequential updates reduce to it), and the update of each filter class that is exactly it for a linear model.
-FILTERPY_UPDATE = tuple(
-    "filterpy.kalman." + name
-    for name in (
-        "update",
-        "update_steadystate",
-        "batch_filter",
-        "KalmanFilter.update",
-        "KalmanFilter.get_update",
-        "KalmanFilter.update_correlated",
-        "KalmanFilter.update_sequential",
-        "KalmanFilter.update_steadystate",
-        "KalmanFilter.batch_filter",
-        "ExtendedKalmanFilter.update",
-        "ExtendedKalmanFilter.predict_update",
-        "FadingKalmanFilter.update",
-        "FadingKalmanFilter.batch_filter",
-        "SquareRootKalmanFilter.update",
-        "InformationFilter.update",
-        "UnscentedKalmanFilter.update",
-        "CubatureKalmanFilter.update",
-        "FixedLagSmoother.smooth",
-        "FixedLagSmoother.smooth_batch",
-        "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
-        "KalmanFilter.rts_smoother",
+FILTERPY_UPDATE = (
+    tuple(
+        "filterpy.kalman." + name
+        for name in (
+            "update",
+            "update_steadystate",
+            "batch_filter",
+            "KalmanFilter.update",
+            "KalmanFilter.get_update",
+            "KalmanFilter.update_correlated",
+            "KalmanFilter.update_sequential",
+            "KalmanFilter.update_steadystate",
+            "KalmanFilter.batch_filter",
+            "ExtendedKalmanFilter.update",
+            "ExtendedKalmanFilter.predict_update",
+            "FadingKalmanFilter.update",
+            "FadingKalmanFilter.batch_filter",
+            "SquareRootKalmanFilter.update",
+            "InformationFilter.update",
+            "UnscentedKalmanFilter.update",
+            "CubatureKalmanFilter.update",
+            "FixedLagSmoother.smooth",
+            "FixedLagSmoother.smooth_batch",
+            "rts_smoother",  # its covariances and gains, for the model given (the measurement written into it)
+            "KalmanFilter.rts_smoother",
+        )
     )
+    + SIGMA_POINT_TRANSFORMS
 )
 
 
