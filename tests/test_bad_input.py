@@ -478,6 +478,20 @@ SEN = [
         ),
     ),
     Case(
+        "DipReference",
+        signals.DipReference,
+        dict(
+            dip0=S(1.2),
+            period=S(0.02, positive=True),
+            tol=S(0.17, positive=True),
+            hold=S(0.5, positive=True),
+            tau=S(20.0, positive=True),
+            new_time=S(20.0, positive=True),
+            new_first_time=S(5.0, positive=True),
+            min_gyr=S(0.35, positive=True),
+        ),
+    ),
+    Case(
         "gyro_measure",
         inertial.gyro_measure,
         dict(

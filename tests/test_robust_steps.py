@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fusionlab import accel_tilt, dcm, dcm_filter, rotations, signals
+from fusionlab import accel_tilt, dcm, dcm_filter, rotations, signals, simulate
 
 FS = 100.0
 C_TILT = rotations.euler_to_dcm(np.radians([15.0, -10.0, 40.0]))
@@ -122,6 +122,66 @@ def test_the_dip_test_ignores_a_field_that_turns_while_keeping_its_strength():
     assert err["norm only"][window].max() > 5.0, err["norm only"][window].max()
 
 
+def test_a_dip_reference_is_replaced_only_by_a_steady_dip_with_the_norm_undisturbed_while_the_sensor_turns():
+    turning, still, room, magnet = np.radians(45.0), 0.0, np.radians(68.0), np.radians(86.0)
+    period = 0.02  # 50 Hz
+
+    def fed(dips, norm_ok=True, rate=turning):
+        ref = signals.DipReference(magnet, period)
+        trusted = [ref.update(d, norm_ok, rate) for d in dips]
+        return ref, trusted
+
+    # never trusted: a new reference after 5 s of the room's dip (250 updates), trusted 0.5 s later
+    ref, trusted = fed([room] * 300)
+    assert ref.ref == room and trusted.index(True) == 250 + 25
+    ref, trusted = fed([room] * 249)
+    assert ref.ref == magnet and not any(trusted)
+    # nothing replaces it while the sensor keeps still, while the norm is disturbed, or when the dip jumps
+    assert fed([room] * 3000, rate=still)[0].ref == magnet
+    assert fed([room] * 3000, norm_ok=False)[0].ref == magnet
+    jumping = np.where(np.arange(3000) % 100 < 50, room, room - np.radians(25.0))  # a magnet carried along
+    assert fed(jumping)[0].ref == magnet
+    # once trusted while turning for 5 s, a new field must last 20 s
+    ref = signals.DipReference(room, period)
+    assert all([ref.update(room, True, turning) for _ in range(300)][25:])
+    new = np.radians(50.0)
+    assert not any(ref.update(new, True, turning) for _ in range(999)) and ref.ref == room
+    assert [ref.update(new, True, turning) for _ in range(30)][-1] and ref.ref == new
+    for name, kwargs in (("period", dict(period=0.0)), ("new_first_time", dict(period=0.02, new_first_time=-1.0))):
+        with pytest.raises(ValueError, match=name):
+            signals.DipReference(room, **kwargs)
+
+
+def _started_beside_a_magnet(seconds, beside=3.0, turn_deg=40.0):
+    """seed 004-like hand motion; for the first ``beside`` s the field is turned by ``turn_deg`` about north (a
+    magnet beside the start: dip and heading off, |h| kept)."""
+    rec = simulate.hand_motion_record(seed=4, duration=seconds, still=1.0, bias_dps=(0.0, 0.0, 0.0))
+    n = int(beside * rec["fs"])
+    field = rec["field"] * dcm.mag_reference(rec["inclination"])
+    R = rotations.euler_to_dcm([np.radians(turn_deg), 0.0, 0.0])
+    mag = rec["mag"].copy()
+    mag[:n] += np.einsum("nji,j->ni", rec["C_bn"][:n], R @ field - field)
+    return rec, mag
+
+
+def test_a_start_beside_a_magnet_finds_the_room_field_and_its_heading_again():
+    rec, mag = _started_beside_a_magnet(60.0)
+    fs, err, trusted = rec["fs"], {}, {}
+    for label, tu in (
+        ("replaced", dcm_filter.HANDHELD),
+        ("kept", replace(dcm_filter.HANDHELD, dip_new_time=1e9, dip_new_first_time=1e9)),
+    ):
+        out = _ahrs(rec["gyr"], rec["acc"], mag, tu, fs=fs)
+        err[label] = np.degrees(rotations.quat_angle_between(out["q"], rec["q"]))
+        trusted[label] = out["mag_trusted"]
+    start = int(3.0 * fs)
+    assert err["kept"][:start].min() > 40.0  # the compass of the first sample points 40-odd degrees off
+    first = start + int(np.argmax(trusted["replaced"][start:]))
+    assert first < 10.0 * fs and trusted["replaced"][first:].mean() > 0.95, first / fs
+    assert err["replaced"][-20 * int(fs) :].max() < 5.0, err["replaced"][-20 * int(fs) :].max()
+    assert not trusted["kept"][start:].any() and err["kept"][-20 * int(fs) :].min() > 40.0
+
+
 # --- the accelerometer: a hand's back-and-forth acceleration averages out -----------------------------------------
 
 
@@ -198,3 +258,20 @@ def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag, 
     assert np.max(np.abs(xs[:, 0:3] - fast["c1"])) < 1e-9
     assert np.max(np.abs(xs[:, 3:6] - fast["c3"])) < 1e-9
     assert np.max(np.abs(xs[-1, 6:9] - fast["bias"][-1])) < 1e-10
+
+
+def test_readable_filter_equals_the_fast_path_when_a_start_beside_a_magnet_is_found_out():
+    rec, mag = _started_beside_a_magnet(60.0)
+    fs, tuning, n = rec["fs"], dcm_filter.HANDHELD, 1500  # the first 15 s: replaced after about 9 s
+    gyr, acc_b, mag = rec["gyr"][:n], dcm.accel_to_seed004(rec["acc"][:n]), mag[:n]
+    h = mag / signals.field_reference(mag, fs)[0][:, None]
+    fast = dcm_filter.run_ahrs(gyr, acc_b, h, fs, tuning=tuning, init_seconds=0.0)
+    C0 = rotations.euler_to_dcm(dcm.level_and_compass(acc_b[0], h[0]))
+    f = dcm_filter.DcmAhrs(C0, float(dcm.inclination_from(acc_b[0], h[0])), 1 / fs, tuning=tuning, g=dcm.G)
+    xs = []
+    for k in range(len(h)):
+        f.step(gyr[k], acc_b[k], h[k])
+        xs.append(f.x.copy())
+    xs = np.array(xs)
+    assert abs(np.degrees(f.inclination) - 66.0) < 2.0 and abs(np.degrees(fast["inclination"]) - 66.0) < 2.0
+    assert np.max(np.abs(xs[:, 0:6] - np.hstack([fast["c1"], fast["c3"]]))) < 1e-9

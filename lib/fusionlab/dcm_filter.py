@@ -95,6 +95,10 @@ class AhrsTuning:
         dip is within ``dip_tol`` (rad) of a running reference. None: off (the thesis).
     dip_tau : float, optional
         Time constant of the dip reference, s.
+    dip_new_time : float, optional
+        How long a steady dip away from the reference must last to become the reference, s.
+    dip_new_first_time : float, optional
+        The same while the reference has never been trusted, s.
     acc_lp_tau : float or None, optional
         Time constant, s, of the accelerometer low-passed in an almost inertial frame (not the thesis'; the idea is
         VQF's). None: off, the raw reading (the thesis).
@@ -138,9 +142,13 @@ class AhrsTuning:
     #: predicted ``ĉ3``) is within ``dip_tol`` (rad) of a running reference, both held for ``hold`` seconds. The
     #: reference follows the trusted dip with time constant ``dip_tau`` (s) and sets ``H_m`` (the thesis fixes the
     #: inclination once, at the start). A magnet that keeps ``|h|`` near 1 but turns the field is caught by its
-    #: dip. None: off (the thesis).
+    #: dip. A dip that stays away from the reference but steady for ``dip_new_time`` seconds becomes the reference,
+    #: after ``dip_new_first_time`` if the reference was never trusted (the first sample, which starts it, may have
+    #: been taken beside a magnet): :class:`fusionlab.signals.DipReference`. None: off (the thesis).
     dip_tol: float | None = None
     dip_tau: float = 20.0
+    dip_new_time: float = 20.0
+    dip_new_first_time: float = 5.0
     #: **the accelerometer low-passed in an almost inertial frame** (not the thesis'; the idea is VQF's):
     #: each accelerometer reading is turned into the frame of a gyro-only strapdown attitude (bias-corrected with the
     #: filter's estimate), low-passed there with this time constant (s), and turned back into the body frame; the
@@ -168,6 +176,8 @@ class AhrsTuning:
             "sigma_c0",
             "sigma_b0",
             "dip_tau",
+            "dip_new_time",
+            "dip_new_first_time",
         ):
             validate.positive(getattr(self, f), f)
         for f in ("bias_walk", "R_ss"):
@@ -265,7 +275,7 @@ class DcmAhrs:
         self.k = 0  # update count, for the decaying R_c (eq 6.27)
         self.acc_run = 0  # consecutive samples with |a| ≈ g
         self.mag_run = 0  # ... with |h| ≈ 1
-        self.dip_run = 0  # ... with the dip near its reference (tuning.dip_tol)
+        self.dip = None  # a signals.DipReference, made by update() when the dip test is on
         self.H_am = np.vstack([dcm.accel_measurement_matrix(self.g), dcm.mag_measurement_matrix(self.inclination)])
         self.rest = None  # a signals.RestDetector, made by step() when rest is on
         self.C_g, self.v_lp, self.n_g = C0.copy(), None, 0  # gyro-only strapdown and low-passed acc (acc_lp_tau)
@@ -314,6 +324,7 @@ class DcmAhrs:
         mag_trusted: bool | None = None,
         bias_at_rest: ArrayLike | None = None,
         acc_lp: ArrayLike | None = None,
+        rate: float = 0.0,
     ) -> None:
         """Joint accelerometer + magnetometer + orthogonality update (004 eqs 6.15-6.28), then, at rest, the bias.
 
@@ -334,6 +345,9 @@ class DcmAhrs:
         acc_lp : array_like, shape (3,), or None, optional
             The accelerometer low-passed in the almost inertial frame, m/s² (ours, after VQF; ``tuning.acc_lp_tau``):
             the measurement then, while ``acc_b`` still sets the trust test.
+        rate : float, optional
+            The rate of turn at this update, rad/s: the dip test (``tuning.dip_tol``) replaces its reference only by
+            a dip that stays steady while the sensor turns (:class:`fusionlab.signals.DipReference`).
         """
         t = self.tuning
         a = np.asarray(acc_b, float)
@@ -347,11 +361,16 @@ class DcmAhrs:
             self.mag_run = self.mag_run + 1 if abs(np.linalg.norm(h) - 1.0) < t.mag_tol else 0
             mag_ok = self.mag_run >= self.hold
             if t.dip_tol is not None:  # ours, after VQF
+                if self.dip is None:
+                    self.dip = _dip_reference(self.inclination, self.dt, t)
                 dip = _m.asin(max(-1.0, min(1.0, (self.c3 @ h) / (np.linalg.norm(self.c3) * np.linalg.norm(h)))))
-                self.dip_run = self.dip_run + 1 if abs(dip - self.inclination) < t.dip_tol else 0
-                mag_ok = mag_ok and self.dip_run >= self.hold
-                if mag_ok:  # learn the dip while trusted
-                    self.inclination += (1.0 - _m.exp(-self.dt / t.dip_tau)) * (dip - self.inclination)
+                mag_ok = self.dip.update(dip, mag_ok, float(rate))
+                if self.dip.replaced:  # a new field: the heading learnt from the old one starts again from it
+                    self.x[0:3] = _north_row(self.c3, h)
+                    self.P[0:3] = self.P[:, 0:3] = 0.0
+                    self.P[0:3, 0:3] = t.sigma_c0**2 * np.eye(3)
+                if self.dip.ref != self.inclination:  # the reference learnt (or replaced): it sets H_m
+                    self.inclination = self.dip.ref
                     self.H_am[3:6] = H_m = dcm.mag_measurement_matrix(self.inclination)
             mag_ok = mag_ok if mag_trusted is None else mag_trusted
         r_c, H_c = dcm.orthogonality_pseudo_measurement(self.c1, self.c3)  # (004 eqs 6.24-6.26)
@@ -425,10 +444,30 @@ class DcmAhrs:
             self.v_lp = v if self.v_lp is None else self.v_lp + a * (v - self.v_lp)
             acc_lp = self.C_g.T @ self.v_lp  # back in the body frame
         self.predict(A, self.dt)
-        self.update(acc_b, mag_b, bias_at_rest=bias_at_rest, acc_lp=acc_lp)
+        self.update(acc_b, mag_b, bias_at_rest=bias_at_rest, acc_lp=acc_lp, rate=float(np.linalg.norm(gyr)))
 
 
 _I3 = np.arange(3, 6)  # the magnetometer rows of the joint H
+
+
+def _north_row(c3, h):
+    """Row 1 of ``C_bn`` (north in the body frame) from row 3 (down) and the magnetometer, as a compass does."""
+    east = np.cross(c3, h)
+    north = np.cross(east, c3)
+    return north / np.linalg.norm(north)
+
+
+def _dip_reference(dip0, period, t):
+    """The dip test of tuning ``t`` for updates ``period`` s apart (both paths use it)."""
+    return signals.DipReference(
+        dip0,
+        period,
+        tol=t.dip_tol,
+        hold=t.hold,
+        tau=t.dip_tau,
+        new_time=t.dip_new_time,
+        new_first_time=t.dip_new_first_time,
+    )
 
 
 def _prefix_products(A, M):
@@ -563,8 +602,10 @@ def run_ahrs(
         Rm = np.ones(nb)
     Rd = np.repeat(np.stack([Ra, Rm, Rc], 1), 3, axis=1)  # (nb, 9) diagonal of R (eq 6.21)
     dip_on = use_mag and t.dip_tol is not None  # ours, after VQF: see AhrsTuning
-    dip_ref, dip_run, hold_u = float(inclination), 0, max(1, int(round(t.hold * fs / M)))
-    a_dip = 1.0 - _m.exp(-M * dt / t.dip_tau)
+    dip_ref = float(inclination)
+    if dip_on:
+        dip_track = _dip_reference(dip_ref, M * dt, t)
+        rate = np.linalg.norm(gyr[last], axis=1).tolist()  # the rate of turn at each update
     mag_upd = mag_ok[last].copy()
     rest_on = t.bias_sigma_rest is not None  # ours, after VQF: see AhrsTuning
     if rest_on:
@@ -624,10 +665,14 @@ def run_ahrs(
             h1, h2, h3 = z[j, 3:6].tolist()
             den = _m.sqrt((b1 * b1 + b2 * b2 + b3 * b3) * (h1 * h1 + h2 * h2 + h3 * h3))
             dip = _m.asin(max(-1.0, min(1.0, (b1 * h1 + b2 * h2 + b3 * h3) / den))) if den > 0 else dip_ref
-            dip_run = dip_run + 1 if abs(dip - dip_ref) < t.dip_tol else 0
-            ok = bool(mag_ok[last[j]]) and dip_run >= hold_u
-            if ok:  # learn the dip while trusted; it sets H_m
-                dip_ref += a_dip * (dip - dip_ref)
+            ok = dip_track.update(dip, bool(mag_ok[last[j]]), rate[j])
+            if dip_track.replaced:  # a new field: the heading learnt from the old one starts again from it
+                x[0:3] = _north_row(x[3:6], z[j, 3:6])
+                a1, a2, a3 = x[0:3].tolist()  # for the orthogonality rows below
+                P[0:3] = P[:, 0:3] = 0.0
+                P[0:3, 0:3] = t.sigma_c0**2 * np.eye(3)
+            if dip_track.ref != dip_ref:  # the reference learnt (or replaced): it sets H_m
+                dip_ref = dip_track.ref
                 H[_I3, _I3 - 3] = _m.cos(dip_ref)  # H_m = [h_N I, h_D I, 0]
                 H[_I3, _I3] = _m.sin(dip_ref)  # (004 eq 6.19)
             Rd[j, 3:6] = (t.mag_sigma if ok else t.mag_sigma_untrusted) ** 2

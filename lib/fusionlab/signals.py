@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from . import validate
 
-__all__ = ["Sampled", "trailing_max", "lowpass", "rest_detect", "RestDetector", "field_reference"]
+__all__ = ["Sampled", "trailing_max", "lowpass", "rest_detect", "RestDetector", "field_reference", "DipReference"]
 
 
 class Sampled:
@@ -361,3 +361,125 @@ def field_reference(
                 cand, run = b, 0
         ref[k] = r
     return ref, ok
+
+
+class DipReference:
+    """The dip half of VQF's magnetic disturbance detection: is the magnetometer's dip that of the reference field?
+
+    The filter computes each update's dip, ``asin(ĉ3·h/|h|)`` with its own estimate of the down axis, and calls
+    :meth:`update` with it. The dip is *near* while within ``tol`` of the reference; the magnetometer is trusted once
+    the norm is undisturbed (``norm_ok``, from :func:`field_reference`) and the dip has been near for ``hold``
+    seconds; while trusted, the reference follows the dip with time constant ``tau``. A dip that stays away from
+    the reference but steady -- within ``tol`` of a candidate that follows it, with the norm undisturbed -- for
+    ``new_time`` seconds becomes the reference: the sensor moved to another room. Only updates while the sensor
+    turns faster than ``min_gyr`` count towards that time: a magnet carried with the sensor turns the dip as the
+    sensor turns, so it stays steady only while the sensor keeps still. A reference never yet trusted while turning
+    (the filter starts it at the first sample, which may have been taken beside a magnet) is replaced sooner, after
+    ``new_first_time`` seconds. Written from the paper (Laidig & Seel 2023); VQF's published 10°, 20 s, 20 s, 5 s
+    and 20 °/s are the defaults, not fitted here.
+
+    Parameters
+    ----------
+    dip0 : float
+        The first reference, rad (the dip of the first sample, say).
+    period : float
+        Time between two calls of :meth:`update`, s.
+    tol : float, default 10° in rad
+        Largest distance of a near dip from the reference (and of a steady dip from the candidate), rad.
+    hold : float, default 0.5
+        How long the dip must be near before the magnetometer is trusted, s.
+    tau : float, default 20.0
+        Time constant of the reference (and of the candidate), s.
+    new_time : float, default 20.0
+        How long a steady candidate must last to replace the reference, s.
+    new_first_time : float, default 5.0
+        The same while the reference has never been trusted while turning, s.
+    min_gyr : float, default 20 °/s in rad/s
+        Slowest turn that counts towards a candidate's time (and confirms the reference), rad/s.
+
+    Examples
+    --------
+    Started beside a magnet (a dip of 86°) in a room whose field dips 68°: after 5 s of the room's dip, the
+    reference is the room's and the magnetometer is trusted.
+
+    >>> import numpy as np
+    >>> from fusionlab import signals
+    >>> ref = signals.DipReference(np.radians(86.0), period=0.02)
+    >>> turning = np.radians(45.0)  # the sensor's rate, rad/s
+    >>> trusted = [ref.update(np.radians(68.0), True, turning) for _ in range(300)]  # 6 s at 50 Hz
+    >>> trusted[0], trusted[-1], round(float(np.degrees(ref.ref)), 1)
+    (False, True, 68.0)
+
+    Once trusted while turning for 5 s, a steady new dip must last 20 s -- and a sensor that keeps still never
+    replaces it:
+
+    >>> trusted = [ref.update(np.radians(68.0), True, turning) for _ in range(250)]
+
+    >>> [ref.update(np.radians(50.0), True, 0.0) for _ in range(3000)][-1], round(float(np.degrees(ref.ref)), 1)
+    (False, 68.0)
+    >>> [ref.update(np.radians(50.0), True, turning) for _ in range(750)][-1], round(float(np.degrees(ref.ref)), 1)
+    (False, 68.0)
+    >>> [ref.update(np.radians(50.0), True, turning) for _ in range(300)][-1], round(float(np.degrees(ref.ref)), 1)
+    (True, 50.0)
+    """
+
+    def __init__(
+        self,
+        dip0: float,
+        period: float,
+        tol: float = np.radians(10.0),
+        hold: float = 0.5,
+        tau: float = 20.0,
+        new_time: float = 20.0,
+        new_first_time: float = 5.0,
+        min_gyr: float = np.radians(20.0),
+    ) -> None:
+        self.ref = float(validate.angles_rad(validate.scalar(dip0, "dip0"), "dip0"))
+        period = validate.positive(period, "period")
+        self.tol = validate.positive(tol, "tol")
+        self.hold_n = max(1, int(round(validate.positive(hold, "hold") / period)))
+        self.new_n = max(1, int(round(validate.positive(new_time, "new_time") / period)))
+        self.new_first_n = max(1, int(round(validate.positive(new_first_time, "new_first_time") / period)))
+        self.min_gyr = validate.positive(min_gyr, "min_gyr")
+        self.confirmed_run = 0  # updates trusted while turning, up to new_first_n: then the reference is confirmed
+        self.a = 1.0 - float(np.exp(-period / validate.positive(tau, "tau")))
+        self.near_run = 0  # consecutive updates with the dip near the reference
+        self.candidate, self.candidate_run = None, 0  # a steady dip away from it, and for how many updates
+        self.replaced = False  # the last update replaced the reference
+
+    def update(self, dip: float, norm_ok: bool, gyr_norm: float) -> bool:
+        """Take the next update's dip.
+
+        Parameters
+        ----------
+        dip : float
+            The magnetometer's dip at this update, rad.
+        norm_ok : bool
+            The field's norm is undisturbed at this update.
+        gyr_norm : float
+            The sensor's rate of turn at this update, rad/s.
+
+        Returns
+        -------
+        bool
+            Trust the magnetometer at this update.
+        """
+        self.replaced = False
+        near = abs(dip - self.ref) < self.tol
+        self.near_run = self.near_run + 1 if near else 0
+        trusted = bool(norm_ok) and self.near_run >= self.hold_n
+        if trusted:  # learn the dip while trusted
+            self.ref += self.a * (dip - self.ref)
+            self.confirmed_run += self.confirmed_run < self.new_first_n and gyr_norm > self.min_gyr
+        if near or not norm_ok:  # no candidate while near the reference or with a disturbed norm
+            self.candidate, self.candidate_run = None, 0
+        elif self.candidate is not None and abs(dip - self.candidate) < self.tol:
+            self.candidate += self.a * (dip - self.candidate)
+            self.candidate_run += gyr_norm > self.min_gyr  # only a turning sensor tells a magnet it carries
+            confirmed = self.confirmed_run >= self.new_first_n
+            if self.candidate_run >= (self.new_n if confirmed else self.new_first_n):  # the new reference
+                self.ref, self.candidate, self.candidate_run, self.confirmed_run = self.candidate, None, 0, 0
+                self.replaced = True
+        else:  # a new candidate starts here
+            self.candidate, self.candidate_run = float(dip), 0
+        return trusted
