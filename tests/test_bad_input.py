@@ -492,6 +492,11 @@ SEN = [
         ),
     ),
     Case(
+        "LowpassStep",
+        signals.LowpassStep,
+        dict(period=S(0.02, positive=True), tau=S(1.0, positive=True), order=S(2, integer=True, positive=True)),
+    ),
+    Case(
         "gyro_measure",
         inertial.gyro_measure,
         dict(

@@ -110,8 +110,9 @@ def test_dcm_ahrs6_is_registered_as_a_6d_filter_citing_seed_004():
         "acc_sigma_untrusted": dcm_filter.HANDHELD.acc_sigma_untrusted,
         "hold": dcm_filter.HANDHELD.hold,
         "acc_lp_tau": dcm_filter.HANDHELD.acc_lp_tau,
+        "acc_lp_order": 2,
     }
-    assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0}
+    assert estimators.options("dcm_ahrs6") == {**estimators.options("dcm_ahrs"), "acc_lp_tau": 3.0, "acc_lp_order": 1}
 
 
 @pytest.mark.parametrize("euler", [[0.3, -0.2, 1.0], [-2.5, 0.6, -2.0]])

@@ -61,6 +61,34 @@ def test_lowpass_is_the_first_order_recursion_and_the_rest_detector_agrees_with_
     assert np.max(np.abs(lp - np.array([v for _, v in steps]))) < 1e-12
 
 
+def test_the_second_order_low_pass_is_a_butterworth_filter_started_in_its_steady_state():
+    """LowpassStep of order 2 against scipy's own Butterworth design and filter (an independent implementation):
+    the same output, started where a constant first sample leaves it; and it passes a 1 Hz hand motion a third as
+    much as the first order with the same time constant (each at its design's gain)."""
+    from scipy import signal as sps
+
+    tau, period = 1.0, 0.02
+    x = 9.81 + np.random.default_rng(5).standard_normal((2000, 3))
+    f = signals.LowpassStep(period, tau, order=2)
+    ours = np.array([f.step(v) for v in x])
+    b, a = sps.butter(2, np.sqrt(2) / (2 * np.pi * tau), fs=1 / period)  # VQF's cut-off
+    theirs = sps.lfilter(b, a, x, axis=0, zi=sps.lfilter_zi(b, a)[:, None] * x[0])[0]
+    assert np.max(np.abs(ours - theirs)) < 1e-9
+    t = np.arange(2000) * period
+    wave = np.sin(2 * np.pi * 1.0 * t)[:, None] * np.ones(3)
+    amp = {}
+    for order in (1, 2):
+        f = signals.LowpassStep(period, tau, order)
+        amp[order] = np.abs(np.array([f.step(v) for v in wave])[1000:, 0]).max()
+    fc = np.sqrt(2) / (2 * np.pi * tau)  # the gains of the two designs at 1 Hz: 0.157 and 0.051
+    assert abs(amp[1] / (1 / np.hypot(1, 2 * np.pi * 1.0 * tau)) - 1) < 0.05, amp
+    assert abs(amp[2] / (1 / np.sqrt(1 + (1.0 / fc) ** 4)) - 1) < 0.05, amp
+    with pytest.raises(ValueError, match="order"):
+        signals.LowpassStep(period, tau, order=3)
+    with pytest.raises(ValueError, match="acc_lp_order"):
+        dcm_filter.AhrsTuning(acc_lp_order=3)
+
+
 def test_rest_is_found_after_min_time_of_quiet_and_never_during_motion():
     gyr, acc, _ = _static(30.0, (0.3, -0.2, 0.4))
     move = slice(1000, 1800)  # 10-18 s: turning about the
@@ -236,6 +264,8 @@ def test_a_start_in_motion_learns_the_bias_better_from_the_low_passed_reading_th
         (True, dcm_filter.HANDHELD),
         (False, dcm_filter.HANDHELD),
         (False, dcm_filter.HANDHELD6),
+        (True, replace(dcm_filter.HANDHELD, acc_lp_order=2)),
+        (False, replace(dcm_filter.HANDHELD6, acc_lp_order=2)),
     ],
 )
 def test_readable_filter_equals_the_fast_path_with_the_handheld_steps(with_mag, tuning):

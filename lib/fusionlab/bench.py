@@ -525,8 +525,17 @@ def tuning_sweep(
 #: is chosen from in :func:`leave_one_out` (every default is in its grid). Everything else in these filters is a
 #: seed's value, a physical value, or a value VQF publishes (each filter's docstring says which).
 TUNED = {
-    "dcm_ahrs": {"acc_sigma_untrusted": (0.5, 1.0, 2.0), "hold": (0.5, 1.0), "acc_lp_tau": (1.0, 3.0)},
-    "dcm_ahrs6": {"acc_sigma_untrusted": (0.5, 1.0, 2.0), "acc_lp_tau": (1.0, 3.0)},  # hold: no effect in 6D
+    "dcm_ahrs": {
+        "acc_sigma_untrusted": (0.5, 1.0, 2.0),
+        "hold": (0.5, 1.0),
+        "acc_lp_tau": (1.0, 3.0),
+        "acc_lp_order": (1, 2),
+    },
+    "dcm_ahrs6": {  # hold: no effect in 6D
+        "acc_sigma_untrusted": (0.5, 1.0, 2.0),
+        "acc_lp_tau": (1.0, 3.0),
+        "acc_lp_order": (1, 2),
+    },
     "freescale6": {"accel_hold": (0.0, 0.25, 0.5, 1.0)},
     "complementary": {"tau": (0.5, 1.0, 2.0)},
 }
