@@ -196,14 +196,17 @@ NOT_ROOT = "not root"
 
 
 def forget_caches(wait: float = 900.0, warm: Sequence[str] = ()) -> str:
-    """Make the kernel forget the file system's caches (its names, found and not found, its inodes, the pages of
-    files): what one box could leave there for a later box to time (a name looked up, a file read). Root only; "" when
-    done, else why not. Machine-wide (about 0.6 s here); it waits (up to ``wait`` seconds) while a class graded on
-    this machine keeps the cache it warmed (:func:`grading.boxfiles.cache_kept`).
+    """Make the kernel forget the file system's names and inodes: what one box could leave there for a later box to
+    time -- a name looked up, found or not (an outside review sent 506 of 512 bits from box to box by timing ``stat``
+    of names that do not exist). Root only; "" when done, else why not. Machine-wide (about 0.3 s here); it waits
+    (up to ``wait`` seconds) while a class graded on this machine keeps the cache it warmed
+    (:func:`grading.boxfiles.cache_kept`).
 
-    Then every file under ``warm`` (the files a box can read) is read again (:func:`grading.boxfiles.warm`, 10-25 s
-    here for the capstone's 2 GB): a page left uncached after the forgetting is one a box can fill and a later box
-    can find filled (its page-fault count says so), a bit each -- an outside review carried a look-ahead so."""
+    Then every file under ``warm`` (the files a box can read) is read again (:func:`grading.boxfiles.warm`, about 5 s
+    here for the capstone's 2 GB): every name a box can find is known again, and every page of every file is cached.
+    The pages need not be forgotten: a page left uncached is one a box could fill and a later box find filled (its
+    page-fault count says so; an outside review carried a look-ahead so), but after the reading none is uncached,
+    and a box cannot evict one (the seccomp filter refuses the calls that would, its memory is capped)."""
     if os.geteuid() != 0:
         return NOT_ROOT
     with boxfiles.forgetting(wait) as free:
@@ -212,7 +215,7 @@ def forget_caches(wait: float = 900.0, warm: Sequence[str] = ()) -> str:
         try:
             os.sync()
             with open("/proc/sys/vm/drop_caches", "w") as f:
-                f.write("3\n")
+                f.write("2\n")  # names and inodes; the reading below makes the pages uniform
         except OSError as exc:
             return f"the kernel refused: {exc.strerror or exc}"
         boxfiles.warm(warm)

@@ -1312,7 +1312,9 @@ def test_a_look_ahead_passed_between_boxes_is_caught_as_the_check_comes_first(sc
     assert res.total_points == 0
     [runner] = _InProcess.made
     first_whole = runner.calls.index("whole")
-    assert set(runner.calls[:first_whole]) == {"fresh", "forget"} and runner.calls[first_whole - 1] == "forget"
+    # the caches forgotten first (what the boxes graded before could leave), then the check's calls, forgotten again
+    assert runner.calls[0] == "forget" and runner.calls[first_whole - 1] == "forget"
+    assert set(runner.calls[1 : first_whole - 1]) == {"fresh"}
     # then the whole trials, the caches forgotten again, and one fresh call per trial past every earlier reach
     assert runner.calls[first_whole:] == ["whole"] * len(scored) + ["forget"] + ["fresh"] * len(scored), runner.calls
 
@@ -1926,6 +1928,30 @@ def test_the_leaderboard_reads_in_words_and_links_each_students_page(tmp_path):
     assert "vqf6: inclination RMSE (deg)" in mine["six_d"] and "vqf6_inclination" not in mine["six_d"]
 
 
+def test_the_pages_students_read_tell_no_run_time_and_no_budget(tmp_path):
+    """An outside review slept in its filter to spell a hidden trial's length in the run time the feedback showed
+    (to 10 ms; 8 bits a trial), and a trial's budget is its length. The pages show neither, only each trial's
+    status; the instructor's CSVs keep both."""
+    import dataclasses
+
+    from grading.capstone import report
+
+    results, refs, _ = _fake_class()
+    secret = [
+        dataclasses.replace(r, seconds=7.01 + 0.02 * i, budget_s=12.34 + i) for i, r in enumerate(results[0].trials)
+    ]
+    secret[1] = dataclasses.replace(secret[1], status="timeout", message="finished, but over its time budget")
+    results[0] = dataclasses.replace(results[0], trials=secret)
+    board = report.write_leaderboard(results, refs, [], tmp_path, "spring").read_text()
+    mine = (tmp_path / "feedback" / results[0].name / "capstone.html").read_text()
+    for page in (board, mine):
+        assert "run time (s)" not in page and "budget (s)" not in page
+        assert not re.search(r"7\.0[0-3]|12\.3|13\.3|14\.3|21\.0", page), "a time or a budget is shown"
+    assert "timeout" in mine and "over its time budget" in mine
+    trials_csv = (tmp_path / "trials.csv").read_text()
+    assert "7.03" in trials_csv and "13.34" in trials_csv  # the instructor's
+
+
 @pytest.mark.parametrize("stand_in", [True, False])
 def test_the_students_figure_has_plain_ticks_an_honest_label_and_a_legend_off_the_markers(stand_in):
     import matplotlib
@@ -1991,8 +2017,9 @@ def test_the_calls_after_the_whole_trials_start_on_a_rung_once_the_box_that_saw_
     def sleep(s):
         events.append(("sleep", real_time.monotonic() - t0[0], s))
 
-    def forget(self):  # just before the first whole trial's call
-        t0.append(real_time.monotonic())
+    def forget(self):  # first, then just before the first whole trial's call, then before the last cuts
+        if events.count("forget") == 1:
+            t0.append(real_time.monotonic())
         events.append("forget")
         return ""
 
@@ -2003,7 +2030,8 @@ def test_the_calls_after_the_whole_trials_start_on_a_rung_once_the_box_that_saw_
     assert res.causal is True, res.causal_message
     [i] = [i for i, e in enumerate(events) if isinstance(e, tuple)]
     _, elapsed, hold = events[i]
-    whole = events.index("forget") + 1
+    assert events[0] == "forget"  # before the first call
+    whole = events.index("forget", 1) + 1
     # the whole trials, their box ended, the caches forgotten (and every file read again), the wait
     assert events[whole:i] == ["call"] * len(scored) + ["close", "forget"], events
     assert events[i + 1 :] == ["call"] * len(scored) + ["close"], events  # then one call past every reach, per trial

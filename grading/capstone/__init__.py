@@ -60,13 +60,13 @@ process:
   every trial ``estimate`` is also called on the samples up to each of four secret cuts alone (:func:`prefix_cuts`,
   the last past 95 % of the trial): its output must be the first rows of its output on the whole trial. Each of these
   calls runs in a box started for it alone (:meth:`Runner.call_fresh`), all of them before any box sees a whole trial
-  (the kernel's file caches forgotten in between, :meth:`Runner.forget`, as root) and, on each trial, in the order of
-  how far into it their data reach (:func:`plan`): what a box could pass to a later one holds nothing of the samples
-  the later call was not given (:mod:`grading.capstone.causality`). One more prefix call, at a secret cut past all of
-  theirs, comes after the whole trial's (:func:`final_cut`): a filter that learned where they stopped, and looked
-  ahead only past it, is caught there. A filter that ran on the trials but not on the check's data (an error, over its
-  budget) was never shown causal and gets no points for the filter (:func:`gates_failed`): else failing the check's
-  calls would escape it.
+  (the kernel's file caches forgotten before them and in between, :meth:`Runner.forget`, as root) and, on each
+  trial, in the order of how far into it their data reach (:func:`plan`): what a box could pass to a later one holds
+  nothing of the samples the later call was not given (:mod:`grading.capstone.causality`). One more prefix call, at a
+  secret cut past all of theirs, comes after the whole trial's (:func:`final_cut`): a filter that learned where they
+  stopped, and looked ahead only past it, is caught there. A filter that ran on the trials but not on the check's data
+  (an error, over its budget) was never shown causal and gets no points for the filter (:func:`gates_failed`): else
+  failing the check's calls would escape it.
 * **The code** the box runs is read first, as the box's IPython shell runs it (:func:`scan`, :func:`as_run`,
   :func:`library_copies`): imports or uses of a reference filter, files read, the import system reached around
   (:func:`grading.codescan.tampering`, with the indirect loaders that the table of exercises lists for the
@@ -101,7 +101,8 @@ process:
 
 Outputs (``--out``, default ``capstone_<class>/`` in the course): ``leaderboard.html`` and ``leaderboard.csv`` (one
 row per student and per reference: sensor set, mean total / heading / inclination RMSE, rank, ratio to VQF with the
-same sensors, run time, budget and causality held, points, cheats; 9D and 6D filters are ranked separately, each rank
+same sensors, run time (in the CSV only: a filter's own timing can spell a hidden figure), budget and causality held,
+points, cheats; 9D and 6D filters are ranked separately, each rank
 within its set, a table per set on the page), ``trials.csv`` (every student and reference on every trial), per
 student ``feedback/<student>/capstone.html`` with a per-trial figure (``trials.png``) of the RMSE they are scored on,
 ``run.json`` (the seed and the trials) and ``references.npz``.

@@ -296,7 +296,8 @@ class Runner:
             reply = client.call(self.box, FUNCTION, args, {}, t0 + seconds)
         except client.BoxTimeout:
             self.close()
-            return None, "timeout", f"ran over its budget of {seconds:.1f} s (stopped)", time.monotonic() - t0
+            # no figure in the message: a hidden trial's budget is its length, which the feedback must not tell
+            return None, "timeout", "ran over its time budget (stopped)", time.monotonic() - t0
         except client.BoxDied as exc:
             self.close()
             too_large = isinstance(exc, client.ReplyTooLarge)
@@ -435,6 +436,11 @@ def grade_submission(
     budgets = [budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored]
     outputs, calls, probes = {}, {}, {}  # each trial's whole-trial output, its check's calls and their outputs
     try:
+        # the kernel forgets what the boxes before these could leave in its caches: the last boxes of the student
+        # graded before (or of this notebook's last run), whose data reach past anything the check's calls see
+        forgot = runner.forget()
+        if forgot and forgot != launcher.NOT_ROOT:
+            res.notes.append(f"the kernel's file caches were not forgotten before the first calls ({forgot})")
         # the causality check's calls first, before any box sees a whole trial, on each trial in the order of how far
         # into it their data reach (grading.capstone.causality)
         draws = [rng if i == chosen else every for i in range(len(scored))]  # each trial's stream of secrets
@@ -450,7 +456,7 @@ def grade_submission(
             q, r.status, r.message, r.seconds = runner.call(t, r.budget_s)
             if q is not None and r.seconds > r.budget_s:
                 r.status, q = "timeout", None
-                r.message = f"took {r.seconds:.1f} s, over its budget of {r.budget_s:.1f} s"
+                r.message = "finished, but over its time budget"
             if q is not None:
                 score_trial(r, q, t, metric)
                 r.q = q
