@@ -1581,10 +1581,10 @@ def probe():
 
 
 @needs_box
-def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scored, tmp_path, monkeypatch):
-    """The first box runs the cells before any trial is sent: their errors are the notebook's own. A box started
-    after a trial was sent could have kept something of it (a channel between boxes): its cells' errors are shown
-    without their text, and a call's reply never with its text."""
+def test_a_cells_error_is_never_shown_with_its_text(scored, tmp_path, monkeypatch):
+    """A box started after a trial was sent could have kept something of it (a channel between boxes), and even the
+    first box runs after the boxes of the students graded before (a time stamp in its error would carry what their
+    ends told the clock): a cell's error is shown without its text, and a call's reply never with its text."""
 
     class Replay:
         """client.Box as the trusted side sees it: the replies of a box whose second cell fails with the data."""
@@ -1609,12 +1609,12 @@ def test_a_cells_error_is_shown_only_from_the_box_that_ran_before_any_trial(scor
     monkeypatch.setattr(capstone.runner.client, "Box", Replay)
     runner = capstone.Runner(["x = 1", "y = 2"], ROOT, tmp_path)
     assert runner.start()
-    assert runner.cell_errors == {1: f"ValueError: {scored[0].gyr[0, 0]!r}"}  # before any trial: as it is
+    assert runner.cell_errors == {1: capstone.runner.CELL_ERROR}  # even before any trial: never the text
     runner.cell_errors.clear()
     q, status, why, _ = runner.call(scored[0], 60)
     assert (q, status, why) == (None, "error", "raised an error" + capstone.NOT_SHOWN)
     assert runner.start() and repr(scored[0].gyr[0, 0]) not in str(runner.cell_errors)
-    assert runner.cell_errors == {1: "(message not shown: the box was started again after a trial had been sent)"}
+    assert runner.cell_errors == {1: capstone.runner.CELL_ERROR}
     runner.close()
 
 
@@ -1950,6 +1950,34 @@ def test_the_pages_students_read_tell_no_run_time_and_no_budget(tmp_path):
     assert "timeout" in mine and "over its time budget" in mine
     trials_csv = (tmp_path / "trials.csv").read_text()
     assert "7.03" in trials_csv and "13.34" in trials_csv  # the instructor's
+
+
+def test_a_filter_without_points_for_the_filter_has_no_errors_shown_nor_its_cells_messages(tmp_path):
+    """An outside review wrote each hidden trial's length into a non-causal filter's own error (a turn of
+    5 + (n - 15000) / 8 degrees), read it back from its page to 0.01 degrees, and gave up only that submission's
+    points. A filter that gets no points for the filter has none of its errors on the pages students read, nor by
+    how much it was not causal; a cell's error is never shown with its text (a time stamp would carry the clock)."""
+    import dataclasses
+
+    from grading.capstone import report
+
+    results, refs, _ = _fake_class()
+    spelled = [
+        dataclasses.replace(r, total_deg=129.33 + i, heading_deg=128.17 + i) for i, r in enumerate(results[0].trials)
+    ]
+    results[0] = dataclasses.replace(
+        results[0], trials=spelled, causal=False, causal_message="NOT causal: ...", points={}
+    )
+    board = report.write_leaderboard(results, refs, [], tmp_path, "spring").read_text()
+    mine = (tmp_path / "feedback" / results[0].name / "capstone.html").read_text()
+    for page in (board, mine):
+        assert not re.search(r"12[89]\.|13[01]\.", page), "a withheld error is shown"
+    assert html.escape(report.WITHHELD) in mine
+    theirs = (tmp_path / "feedback" / results[1].name / "capstone.html").read_text()
+    assert "58.00" in theirs or "1.50" in theirs  # a filter with points keeps its errors
+    assert (
+        capstone.runner.CELL_ERROR == "(message not shown: run the notebook's cells to read it; they see no trial data)"
+    )
 
 
 @pytest.mark.parametrize("stand_in", [True, False])

@@ -117,7 +117,8 @@ def verdict(
     trials on which the filter ran): the chosen trial's calls first. A call that gave no quaternions on a trial on
     which the filter ran leaves it not checked: a filter that fails on the changed samples was not shown causal there
     (else a filter that looks ahead could fail on purpose wherever it sees the check's data). No k is named: the
-    seed of a class run is kept for a second run, whose ks a first run's messages would otherwise give away."""
+    seed of a class run is kept for a second run, whose ks a first run's messages would otherwise give away. Nor how
+    much the estimate changed: the filter sets that figure, and could spell a hidden trial's length in it."""
     if not outputs:
         return None, "not checked: estimate ran on no trial"
     ordered = sorted((p for p in probes if p.trial in outputs), key=lambda p: p.trial != chosen)
@@ -136,8 +137,8 @@ def verdict(
         if p.kind == "prefix":
             why = "a filter may use no later sample, nor the length of the data" + ("" if alone else f"; {every}")
             return False, (
-                f"NOT causal: given only the samples up to a secret k of {name}, its estimate up to k differs by "
-                f"{change:.2g} from its estimate on the whole trial ({why})"
+                f"NOT causal: given only the samples up to a secret k of {name}, its estimate up to k differs "
+                f"from its estimate on the whole trial ({why})"
             )
         why = (
             "a filter may use no later sample, nor random numbers it does not seed"
@@ -145,8 +146,7 @@ def verdict(
             else f"a filter may use no later sample on any trial; {every}"
         )
         return False, (
-            f"NOT causal: changing the samples after a secret k of {name} changed the estimate up to k by "
-            f"{change:.2g} ({why})"
+            f"NOT causal: changing the samples after a secret k of {name} changed the estimate up to k ({why})"
         )
     return True, (
         "causal (the estimate up to k unchanged when the samples after k are replaced, on every trial at a secret "

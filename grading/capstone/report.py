@@ -9,6 +9,7 @@ import queue
 import shutil
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import quote
@@ -157,6 +158,20 @@ def _cheat_text(cheats):
     return "; ".join(parts)
 
 
+#: Said, on the pages students read, in place of the errors of a filter that gets no points for the filter.
+WITHHELD = (
+    "Your filter gets no points for the filter (see above), so its errors on the hidden trials are not shown: a "
+    "filter that need not be right can write what it was given (a trial's length, say) into its own error."
+)
+
+
+def _withheld(trials):
+    """``trials`` with no error figures, only what ran: for a filter that gets no points for the filter."""
+    return [
+        replace(r, total_deg=np.nan, heading_deg=np.nan, inclination_deg=np.nan, counted_deg=np.nan) for r in trials
+    ]
+
+
 def leaderboard_rows(results: Sequence[StudentResult], refs: dict) -> list[dict]:
     """Rows of :data:`COLUMNS`, one block per sensor set (9D, then 6D). In each, the set's students are ranked
     among themselves (rank 1 is the best of the set) by points, then by the mean RMSE the set is scored on, and the
@@ -175,7 +190,7 @@ def leaderboard_rows(results: Sequence[StudentResult], refs: dict) -> list[dict]
                     res.name,
                     "student",
                     sensors,
-                    res.trials,
+                    _withheld(res.trials) if gates_failed(res) else res.trials,  # WITHHELD
                     vqf,
                     res.total_points,
                     causal,
@@ -416,7 +431,8 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
     what = metric[:-4]  # total, inclination
     vqf = refs[PUBLISHED[res.sensors][0]]
     names = [r.trial for r in vqf.trials]
-    mine = {r.trial: r for r in res.trials}
+    gated = gates_failed(res)
+    mine = {r.trial: r for r in (_withheld(res.trials) if gated else res.trials)}  # WITHHELD
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
         shown[n] = [getattr(r, metric) for r in ref.trials]
@@ -439,7 +455,7 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
             **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
             message=r.message,
         )
-        for r in res.trials
+        for r in mine.values()
     ]
     pts = [dict(points=f"{res.points.get(c.key, 0):g} of {c.points:g}", rule=c.rule) for c in RUBRIC]
     flags = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(w)}</li>" for k, w in res.cheats)
@@ -452,6 +468,7 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
         _table(pts, ("points", "rule")),
         f"<ul>{flags}</ul>" if flags else "",
         f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
+        f"<p class='note'>{html.escape(WITHHELD)}</p>" if gated else "",
         f"<img src='trials.png' alt='{what} RMSE per trial'>",
         f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if res.sensors == "6D" else "",
         _table(

@@ -62,6 +62,11 @@ if TYPE_CHECKING:
     from .trials import Scored
 
 SETUP_SECONDS = 60.0  # the notebook's cells, run once per box
+#: What the feedback says of a notebook cell that failed in a box: never the error's text. Even the first box,
+#: which runs the cells before this student's trials are sent, runs after the boxes of the students graded before
+#: it, and its text (a time stamp, say) would carry what their ends told the clock into the pages students read
+#: (an outside review's route). The cells see no trial: run the notebook to read the error.
+CELL_ERROR = "(message not shown: run the notebook's cells to read it; they see no trial data)"
 MAX_RESTARTS = 5  # boxes started again after a call ran over its budget or ended the box (the fresh
 # boxes of the causality checks are not counted)
 CPU_PER_BUDGET = 2.0  # the box's CPU-time limit: this many CPU seconds per second of the trials' budgets
@@ -262,13 +267,8 @@ class Runner:
             errors = exc.errors
             self.setup_error = "the notebook's cells ended the process"
         finally:
-            for cell, text in errors.items():
-                self.cell_errors.setdefault(
-                    cell,
-                    "(message not shown: the box was started again after a trial had been sent)"
-                    if self.sent
-                    else text[:300],
-                )
+            for cell in errors:  # never the text: see CELL_ERROR
+                self.cell_errors.setdefault(cell, CELL_ERROR)
         self.close()
         return False
 
@@ -488,7 +488,7 @@ def grade_submission(
         res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
-            res.notes += [f"a cell of the notebook failed in the box: {e}" for e in runner.cell_errors.values()]
+            res.notes += [f"answer cell {c + 1} failed in the box {e}" for c, e in runner.cell_errors.items()]
         if runner.restarts:
             res.notes.append(
                 f"the box was started again {runner.restarts} times (after calls that ran over or ended it)"
