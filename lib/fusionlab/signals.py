@@ -547,7 +547,19 @@ class LowpassStep:
         self.y = self.s1 = self.s2 = None
 
     def step(self, x: np.ndarray) -> np.ndarray:
-        """Filter the next sample ``x`` (a float array, used as given) and return the output."""
+        """Filter the next sample and return the output.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The next sample, a float array of the filter's shape, used as given (not copied or checked:
+            this runs once per sample inside a filter loop).
+
+        Returns
+        -------
+        numpy.ndarray
+            The filtered sample.
+        """
         if self.y is None:  # start in the steady state of the first sample
             self.y = x.copy()
             if self.order == 2:
