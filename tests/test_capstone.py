@@ -2056,16 +2056,20 @@ def test_the_calls_after_the_whole_trials_start_on_a_rung_once_the_box_that_saw_
     monkeypatch.setattr(_InProcess, "forget", forget)
     res = _grade_in_process(monkeypatch, scored, make)
     assert res.causal is True, res.causal_message
-    [i] = [i for i, e in enumerate(events) if isinstance(e, tuple)]
+    [i, j] = [i for i, e in enumerate(events) if isinstance(e, tuple)]
     _, elapsed, hold = events[i]
     assert events[0] == "forget"  # before the first call
     whole = events.index("forget", 1) + 1
     # the whole trials, their box ended, the caches forgotten (and every file read again), the wait
     assert events[whole:i] == ["call"] * len(scored) + ["close", "forget"], events
-    assert events[i + 1 :] == ["call"] * len(scored) + ["close"], events  # then one call past every reach, per trial
-    assert hold >= 0 and causality.final_start(elapsed) - hold == pytest.approx(elapsed, abs=0.05)
-    rung = np.log((elapsed + hold) / causality.FIRST_RUNG) / np.log(causality.RUNG)
-    assert abs(rung - round(rung)) < 0.2, (elapsed, hold)
+    # then one call past every reach, per trial; their box ended, and the wait for a rung again before the next
+    # student's first box (a box whose data reach past 95 % of a trial chose when the last of them ended)
+    assert events[i + 1 :] == ["call"] * len(scored) + ["close", events[j], "close"], events
+    for (_, since, hold), start in ((events[i], 0.0), (events[j], events[i][1])):  # sleep is mocked
+        elapsed = since - start
+        assert hold >= 0 and causality.final_start(elapsed) - hold == pytest.approx(elapsed, abs=0.05)
+        rung = np.log((elapsed + hold) / causality.FIRST_RUNG) / np.log(causality.RUNG)
+        assert abs(rung - round(rung)) < 0.2, (elapsed, hold)
 
 
 def test_the_capstone_boxes_forget_the_caches_and_read_every_file_a_box_can_read_again(tmp_path, monkeypatch):
