@@ -1137,6 +1137,36 @@ def test_a_pasted_library_filter_is_named_with_its_lines_and_honest_code_is_not(
     assert [k for k, _ in res.cheats] == ["copies the library's filter"] and res.total_points == 0
 
 
+@pytest.mark.parametrize("package", ["vqf", "ahrs"])
+def test_a_pasted_published_filter_is_named_and_honest_code_is_not(package):
+    """An outside review pasted VQF's own Python filter into the notebook with one time constant changed (its output
+    then no longer equals VQF's): 10 of 10, nothing named. The published filters' source is looked for as the
+    library's is."""
+    import importlib.util
+
+    from grading.capstone import program
+
+    folder = Path(list(importlib.util.find_spec(package).submodule_search_locations)[0])
+    if package == "vqf":
+        src = (folder / "pyvqf.py").read_text()
+        assert "tauAcc: float = 3.0\n" in src
+        src = src.replace("tauAcc: float = 3.0\n", "tauAcc: float = 3.05\n")  # its output no longer VQF's
+        call = "PyVQF(1.0 / fs).updateBatch(gyr, acc, mag)['quat9D']"
+    else:
+        src = (folder / "filters" / "madgwick.py").read_text()
+        assert "gain" in src
+        src = src.replace("gain", "beta_gain")  # names changed
+        call = "Madgwick(gyr=gyr, acc=acc, mag=mag, frequency=fs).Q"
+    pasted = src + f"\n\ndef estimate(gyr, acc, mag, fs):\n    return {call}\n"
+    model = capstone.model_program(ROOT)
+    found = capstone.library_copies(capstone.program_of(notebook(pasted)), model)
+    assert found and {k for k, _ in found} == {"copies a published filter"}, found
+    assert found[0][1].startswith(f"{package}."), found
+    assert package in program.PUBLISHED_FILTERS and "copies a published filter" in program.CHEATS
+    for name, code in CLASS.items():  # the starter, the solution's filter and the rest: their own
+        assert capstone.library_copies(capstone.program_of(notebook(code)), model) == [], name
+
+
 def test_the_boxs_cpu_limit_is_made_from_the_budgets():
     """31 trials of 186 s have budgets of 26.6 s each, 825 s in all: more than the sandbox's default 600 CPU s."""
     trials = [np.zeros(53240)] * 31

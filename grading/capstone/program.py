@@ -5,6 +5,7 @@ of the library, whose filter and data-loader modules are placeholders written he
 from __future__ import annotations
 
 import ast
+import functools
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -46,6 +47,8 @@ CHEATS = {
     f"comments aside (grading.similarity's fingerprints: at least {COPY_MIN_CHARS} "
     "characters and most of the library function; the rotation and metric helpers "
     "may be used, and are not looked for)",
+    "copies a published filter": "code of VQF's or ahrs's filters (the packages' own Python source) pasted into the "
+    "notebook, names, comments and a changed number aside: found as a pasted library filter is",
     "tampers with imports": "reaches around Python's import system or builtins: importlib, __import__, sys.path, "
     "sys.modules, import hooks, the builtins module, exec/eval/compile of text, modules that "
     "load by a name or run a text built at run time (runpy, pydoc, timeit, "
@@ -388,12 +391,38 @@ def scan(cells: Iterable[tuple[str | None, str]]) -> list[tuple[str, str]]:
     return list(dict.fromkeys(found))
 
 
+#: Where the published filters of the capstone filter's packages (the table of exercises) keep their Python source:
+#: a subfolder of each installed package ("" for all of it). A pasted copy of one of their functions is named, as
+#: a pasted library filter is (an outside review pasted VQF's own Python filter, one time constant changed: 10 of
+#: 10 and nothing named). filterpy is left out: its Kalman steps are the textbook code a filter may write again.
+PUBLISHED_FILTERS = {"vqf": "", "ahrs": "filters"}
+
+
 def _filter_functions():
     """``{"module.function": source}`` of the library's filter modules (:data:`FILTER_MODULES`), as
-    :func:`grading.similarity.library_functions` indexes the library: the code a pasted filter would match."""
+    :func:`grading.similarity.library_functions` indexes the library, and of the published filters of
+    :data:`PUBLISHED_FILTERS` (``"vqf.pyvqf.updateAcc"``): the code a pasted filter would match."""
     from grading import similarity
 
-    return {name: src for name, src in similarity.library_functions().items() if name.split(".")[0] in FILTER_MODULES}
+    own = {name: src for name, src in similarity.library_functions().items() if name.split(".")[0] in FILTER_MODULES}
+    return {**own, **_published_functions()}
+
+
+@functools.lru_cache(maxsize=1)
+def _published_functions():
+    import importlib.util
+
+    from grading import similarity
+
+    out = {}
+    for package, sub in PUBLISHED_FILTERS.items():
+        spec = importlib.util.find_spec(package)
+        if spec is None or not spec.submodule_search_locations:
+            continue  # not installed here: nothing of it to paste from either
+        folder = Path(list(spec.submodule_search_locations)[0]) / sub
+        prefix = f"{package}.{sub}." if sub else f"{package}."
+        out.update({prefix + name: src for name, src in similarity.library_functions(folder).items()})
+    return out
 
 
 def _allowed_code():
@@ -451,7 +480,9 @@ def library_copies(cells: Iterable[tuple[str | None, str]], model: str = "") -> 
             name, chars, share, lines = best
             found.append(
                 (
-                    "copies the library's filter",
+                    "copies a published filter"
+                    if name.split(".")[0] in PUBLISHED_FILTERS
+                    else "copies the library's filter",
                     f"{name}: lines {lines[0]}-{lines[-1]} of cell {i} ({share:.0%} of it, {chars} characters alike)",
                 )
             )
