@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 
 
 from fusionlab import guard, labformat
-from fusionlab.checks import slips
+from fusionlab.checks import exercises, slips
 from fusionlab.checks._core import Feedback
 from grading import boxfiles, boxlib, cells, client, launcher
 from grading.lab import Lab
@@ -353,7 +353,7 @@ def known_error(error: str, lab: Lab, gid: str) -> str | None:
         stubbed = boxlib.STUB_MESSAGE.format(name=f"{module.rsplit('.', 1)[-1]}.{qualname}")
         if error == f"NotImplementedError: {stubbed}":
             return FORBIDDEN_CALLED
-    for package in boxlib.HIDDEN_PACKAGES:
+    for package in exercises.hidden_packages(lab.lab):
         if error in (
             f"ImportError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",
             f"ModuleNotFoundError: {package} is not available while the lab is graded: {boxlib.WHY_HIDDEN}",

@@ -116,7 +116,10 @@ class Lab:
             import fusionlab  # the library the judge computes with is the one the box gets (references stubbed)
 
             self.unstubbed[gid] = boxlib.strip_packages(
-                root, Path(fusionlab.__file__).resolve().parents[1], self.forbidden[gid]
+                root,
+                Path(fusionlab.__file__).resolve().parents[1],
+                self.forbidden[gid],
+                hidden=exercises.hidden_packages(self.lab),  # every box's, and those kept only for other labs
             )
             boxlib.seal(root)  # the box mounts it read-only: compiled once here, not per box
         return root

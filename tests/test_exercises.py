@@ -224,7 +224,13 @@ def test_what_answers_exercises_beyond_forbid_is_stated_once_in_the_table_and_re
     from grading import flags
     from grading.capstone import program
 
-    assert set(exercises.PACKAGES.values()) <= {"absent", "kept"}
+    labs = {e.lab for e in exercises.EXERCISES}
+    for package, where in exercises.PACKAGES.items():  # absent, kept, or kept only for the labs named
+        assert where in ("absent", "kept") or (isinstance(where, tuple) and set(where) <= labs), (package, where)
+        if isinstance(where, tuple):
+            for lab in labs:
+                assert (package in exercises.hidden_packages(lab)) is (lab not in where), (package, lab)
+            assert package not in exercises.hidden_packages()  # not absent from every box
     for dotted in exercises.ANSWERING:
         assert callable(exercises.resolve(dotted)), dotted  # each names a class or function that is there
     absent = tuple(p for p, where in exercises.PACKAGES.items() if where == "absent")
@@ -232,12 +238,15 @@ def test_what_answers_exercises_beyond_forbid_is_stated_once_in_the_table_and_re
     assert {m for m, kind in flags.MODULE_KINDS.items() if kind == "package"} == set(exercises.PACKAGES)
     assert set(flags.ANSWERING_NAMES) == {d.rsplit(".", 1)[-1] for d in exercises.ANSWERING}
     assert set(flags.ANSWERING_NAMES.values()) == {"package"}
+    absent_there = tuple(
+        p for p, w in exercises.PACKAGES.items() if w == "absent" or (isinstance(w, tuple) and program.LAB not in w)
+    )
     capstone = [e for e in exercises.EXERCISES if e.packages]
     assert [(e.lab, e.number) for e in capstone] == [(program.LAB, 2)], "only the capstone's filter has packages"
     assert (
         program.HIDDEN_PACKAGES
         == exercises.hidden_packages(program.LAB)
-        == (*absent, *(p for p in capstone[0].packages if p not in absent))
+        == (*absent_there, *(p for p in capstone[0].packages if p not in absent_there))
     )
 
 
@@ -256,4 +265,4 @@ def test_the_hidden_packages_follow_a_changed_table_entry(monkeypatch):
     monkeypatch.setattr(exercises, "EXERCISES", tuple(fewer if e is row else e for e in exercises.EXERCISES))
     assert "imufusion" not in exercises.hidden_packages(row.lab) and "vqf" in exercises.hidden_packages(row.lab)
     monkeypatch.setattr(exercises, "PACKAGES", {**exercises.PACKAGES, "filterpy": "absent"})
-    assert exercises.hidden_packages() == ("ahrs", "filterpy")
+    assert exercises.hidden_packages() == ("ahrs", "filterpy", "vqf")

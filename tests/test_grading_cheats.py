@@ -231,6 +231,15 @@ LIBRARY_ROUTES = {
             "(0.0, 0.0, 0.0), 1.0)\n"
             "return rotations.quat_to_dcm(np.array(q))",
         },
+        # other packages than the library (an outside review: 16 of 16): absent from Lab 01's boxes
+        "routes_d": {
+            5: "import mpmath\n"
+            "m = mpmath.expm(mpmath.matrix(rotations.skew(np.asarray(sigma, float)).tolist()))\n"
+            "return np.array(m.tolist(), dtype=float)",
+            7: "from vqf import PyVQF\nreturn PyVQF.quatMultiply(np.asarray(p, float), np.asarray(q, float))",
+            8: "from sympy.algebras.quaternion import Quaternion\n"
+            "return np.array(Quaternion(*np.asarray(q, float)).to_rotation_matrix().tolist(), dtype=float)",
+        },
     },
     "02_kalman_falling_body": {
         "routes_a": {
@@ -563,6 +572,9 @@ ROUTE_STUDENTS = [(lab, name) for lab in sorted(LIBRARY_ROUTES) for name in sort
 # Routes through a helper of the visible checks: a stub in the box only (in the student's own kernel the checks are
 # the check's own code, and the student reads the answer there anyway: the lab's check cell prints it).
 BOX_ONLY = {("08_north_finder", 4)}
+# Route students through packages absent from the lab's boxes (exercises.PACKAGES): installed in the student's own
+# kernel, where the visible check cannot take them away.
+BOX_ONLY_ROUTES = {("01_euler_rotations", "routes_d")}
 # Exercises whose answer no library function computes (a derived constant, a matrix built by hand, numpy's eigh,
 # the capstone's filter of the student's own).
 NO_REFERENCE = {("00_mems_sensors", 4), ("04_ecompass", 1), ("04_ecompass", 3), ("13_capstone", 2)}
@@ -777,7 +789,11 @@ def test_each_library_route_is_a_right_answer_where_nothing_is_stubbed(lab, name
         else:  # a check of a value: the value was computed before it, with nothing reserved
             plain = nbformat.v4.new_code_cell(source)
         added = [plain]
-        if any(a.startswith("my_") for a in checks_of[n].answer) and (lab, n) not in BOX_ONLY:
+        if (
+            any(a.startswith("my_") for a in checks_of[n].answer)
+            and (lab, n) not in BOX_ONLY
+            and (lab, name) not in BOX_ONLY_ROUTES
+        ):
             added.append(
                 nbformat.v4.new_code_cell(
                     "try:\n"
@@ -856,3 +872,25 @@ def test_a_reference_the_box_must_keep_is_flagged_by_name(tmp_path, lab, n):
     nbformat.write(_answered(release, solution, {n: CHEATS[lab][n]}), path)
     flags = integrity.scan_notebook(ROOT / "solutions" / lab / f"{lab}.ipynb", path)
     assert any(f["cell"] == f"ex{n}_solution" and f["kind"] == "reference" for f in flags), flags
+
+
+def test_scipys_private_rotation_functions_are_flagged_by_name(tmp_path):
+    """An outside review answered Lab 01 with the functions of scipy's private rotation module, the word ``Rotation``
+    nowhere: scipy stays in every box (the library needs it), so each use is named in the integrity report."""
+    from grading import integrity
+
+    lab = "01_euler_rotations"
+    release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    routes = {
+        5: "from scipy.spatial.transform import _rotation_cy as _r\n"
+        "return _r.as_matrix(_r.from_rotvec(np.asarray(sigma, float)[None]))[0]",
+        7: "from scipy.spatial.transform._rotation_cy import compose_quat\n"
+        "return compose_quat(np.roll(p, -1)[None], np.roll(q, -1)[None])[0]",
+        8: "from scipy.spatial.transform import _rotation_xp\nreturn _rotation_xp.as_matrix(np.roll(q, -1))",
+    }
+    path = tmp_path / f"{lab}.ipynb"
+    nbformat.write(_answered(release, solution, routes), path)
+    flags = integrity.scan_notebook(ROOT / "solutions" / lab / f"{lab}.ipynb", path)
+    for n in routes:
+        assert any(f["cell"] == f"ex{n}_solution" and f["kind"] == "package" for f in flags), (n, flags)

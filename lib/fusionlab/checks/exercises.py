@@ -761,20 +761,57 @@ EXERCISES = (
 )
 
 #: What answers exercises of many labs beyond each one's ``forbid``: packages whose functions do (ahrs's quaternion
-#: products and DCMs, filterpy's Kalman steps), each with where it is while a lab is graded: ``"absent"`` from every
-#: lab's box (importing it there raises ImportError), or ``"kept"`` (a lab's setup cell imports filterpy; the
-#: functions of it that answer an exercise are stubs while that exercise is graded, through its ``forbid``). The
-#: integrity report flags any import of one.
-PACKAGES = {"ahrs": "absent", "filterpy": "kept"}
+#: products and DCMs, filterpy's Kalman steps, VQF's quaternion product and rotation, sympy's quaternions and
+#: mpmath's matrix exponential), each with where it is while a lab is graded: ``"absent"`` from every lab's box
+#: (importing it there raises ImportError), ``"kept"`` (a lab's setup cell imports filterpy; the functions of it
+#: that answer an exercise are stubs while that exercise is graded, through its ``forbid``), or the labs whose own
+#: cells need it, absent from every other lab's box (Lab 07 derives its model with sympy, which needs mpmath; an
+#: outside review answered Lab 01's quaternion product, DCM and Rodrigues exercises with sympy's ``Quaternion`` and
+#: mpmath's ``expm``: 16 of 16). Labs 11 and 14 use VQF only when it is there. The integrity report flags any
+#: import of one.
+PACKAGES = {
+    "ahrs": "absent",
+    "filterpy": "kept",
+    "vqf": "absent",
+    "sympy": ("07_gfimu_constraints",),
+    "mpmath": ("07_gfimu_constraints",),
+}
 
 #: Classes and functions of other packages that answer exercises, by dotted name (scipy's ``Rotation``, ahrs's
 #: quaternion product and DCM): the integrity report flags any use of their names.
-ANSWERING = ("scipy.spatial.transform.Rotation", "ahrs.common.orientation.q_prod", "ahrs.common.orientation.q2R")
+#: scipy's rotations are also functions of its private modules (an outside review answered Lab 01 with
+#: ``_rotation_cy.compose_quat``, ``as_matrix`` and ``from_rotvec``, the word ``Rotation`` nowhere): scipy cannot be
+#: taken out of a box (the library needs it), so these are named where used.
+ANSWERING = (
+    "scipy.spatial.transform.Rotation",
+    *(
+        f"scipy.spatial.transform.{module}.{name}"
+        for module in ("_rotation_cy", "_rotation_xp")
+        for name in (
+            "compose_quat",
+            "as_matrix",
+            "from_matrix",
+            "from_rotvec",
+            "as_rotvec",
+            "from_quat",
+            "as_quat",
+            "from_euler",
+            "as_euler",
+            "from_mrp",
+            "as_mrp",
+            "from_davenport",
+            "as_davenport",
+        )
+    ),
+    "ahrs.common.orientation.q_prod",
+    "ahrs.common.orientation.q2R",
+)
 
 
 def hidden_packages(lab: str | None = None) -> tuple[str, ...]:
     """The packages absent from the box that grades ``lab``, each once: those :data:`PACKAGES` keeps out of every
-    lab's box, then the ``packages`` of the lab's exercises (with no ``lab``: those of every box).
+    lab's box, those it keeps only for other labs, then the ``packages`` of the lab's exercises (with no ``lab``:
+    those absent from every box).
 
     Parameters
     ----------
@@ -786,7 +823,11 @@ def hidden_packages(lab: str | None = None) -> tuple[str, ...]:
     tuple of str
         Top-level package names (``"ahrs"``).
     """
-    every = [name for name, where in PACKAGES.items() if where == "absent"]
+    every = [
+        name
+        for name, where in PACKAGES.items()
+        if where == "absent" or (lab is not None and isinstance(where, tuple) and lab not in where)
+    ]
     rows = of_lab(lab) if lab is not None else ()
     return tuple(dict.fromkeys([*every, *(name for e in rows for name in e.packages)]))
 
