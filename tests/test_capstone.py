@@ -2010,6 +2010,37 @@ def test_a_filter_without_points_for_the_filter_has_no_errors_shown_nor_its_cell
     )
 
 
+def test_the_pages_students_read_say_a_trial_failed_never_how_trial_by_trial(tmp_path):
+    """An outside review failed each hidden trial in one of seven ways (an error, a crash, over its budget, NaN, a
+    wrong shape, ...) picked by the trial's length modulo 7, and read the residues off its page. The pages say which
+    trials failed, and the ways once for all of them, sorted; ``trials.csv`` keeps each trial's."""
+    import dataclasses
+
+    from grading.capstone import report
+
+    results, refs, _ = _fake_class()
+    ways = [("error", "raised an error"), ("invalid", "returned NaN"), ("timeout", "ran over its time budget")]
+    chosen = [
+        dataclasses.replace(r, status=ways[i % 3][0], message=ways[i % 3][1], total_deg=np.nan)
+        for i, r in enumerate(results[0].trials)
+    ]
+    results[0] = dataclasses.replace(results[0], trials=chosen)
+    board = report.write_leaderboard(results, refs, [], tmp_path, "spring").read_text()
+    mine = html.unescape((tmp_path / "feedback" / results[0].name / "capstone.html").read_text())
+    rows = re.findall(r"<tr[^>]*>(.*?)</tr>", mine, re.S)
+    trial_rows = [r for r in rows if any(t.trial in r for t in chosen)]
+    assert len(trial_rows) >= len(chosen)
+    for row in trial_rows:
+        assert not any(w in row for pair in ways for w in pair), row  # no way, no message, in any trial's row
+        assert report.FAILED in row
+    said = report._ways_failed(chosen)
+    assert said in mine and all(said.count(f"{s}: {m}") == 1 for s, m in ways)  # each way once, for all the trials
+    assert [said.index(f"{s}: {m}") for s, m in sorted(ways)] == sorted(said.index(f"{s}: {m}") for s, m in ways)
+    assert "raised an error" not in board
+    trials_csv = (tmp_path / "trials.csv").read_text()
+    assert all(m in trials_csv for _, m in ways)  # the instructor's
+
+
 @pytest.mark.parametrize("stand_in", [True, False])
 def test_the_students_figure_has_plain_ticks_an_honest_label_and_a_legend_off_the_markers(stand_in):
     import matplotlib

@@ -172,6 +172,32 @@ def _withheld(trials):
     ]
 
 
+#: What the pages students read say of a hidden trial the filter gave no usable estimate on: that it failed, not
+#: how. How (an error, a crash, over its budget, NaN, a wrong shape ...) is the filter's choice, made from the
+#: trial's data: an outside review failed each hidden trial in one of seven ways picked by the trial's length modulo
+#: 7 and read the three lengths' residues off the page. The ways seen are listed once for all the trials, in a fixed
+#: order, not trial by trial; ``trials.csv`` keeps each trial's, for the instructor.
+FAILED = "failed"
+
+
+def _said_to_students(trials):
+    """``trials`` as the pages students read show them: each status ``ok`` or :data:`FAILED`, no message."""
+    return [r if r.status == "ok" else replace(r, status=FAILED, message="") for r in trials]
+
+
+def _ways_failed(trials) -> str:
+    """One sentence: on how many trials the filter failed, and the ways it failed, each once, sorted."""
+    bad = [r for r in trials if r.status != "ok"]
+    if not bad:
+        return ""
+    ways = sorted({f"{r.status}: {r.message}" if r.message else r.status for r in bad})
+    return (
+        f"Your filter gave no usable estimate on {len(bad)} of the {len(trials)} hidden trials (marked "
+        f"'{FAILED}'; each counts with the error of an estimate that never moves). What went wrong, over all of "
+        f"them and not trial by trial: {'; '.join(ways)}. Run the self-check on the shipped trials to see it happen."
+    )
+
+
 def leaderboard_rows(results: Sequence[StudentResult], refs: dict) -> list[dict]:
     """Rows of :data:`COLUMNS`, one block per sensor set (9D, then 6D). In each, the set's students are ranked
     among themselves (rank 1 is the best of the set) by points, then by the mean RMSE the set is scored on, and the
@@ -432,7 +458,8 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
     vqf = refs[PUBLISHED[res.sensors][0]]
     names = [r.trial for r in vqf.trials]
     gated = gates_failed(res)
-    mine = {r.trial: r for r in (_withheld(res.trials) if gated else res.trials)}  # WITHHELD
+    mine = {r.trial: r for r in _said_to_students(_withheld(res.trials) if gated else res.trials)}  # WITHHELD, FAILED
+    failed = _ways_failed(res.trials)
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
         shown[n] = [getattr(r, metric) for r in ref.trials]
@@ -453,7 +480,6 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
             heading_deg=r.heading_deg,
             inclination_deg=r.inclination_deg,
             **{c: by.get(r.trial, float("nan")) for c, by in ref_cols.items()},
-            message=r.message,
         )
         for r in mine.values()
     ]
@@ -469,6 +495,7 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
         f"<ul>{flags}</ul>" if flags else "",
         f"<p>Notes:</p><ul>{notes}</ul>" if notes else "",
         f"<p class='note'>{html.escape(WITHHELD)}</p>" if gated else "",
+        f"<p class='note'>{html.escape(failed)}</p>" if failed else "",
         f"<img src='trials.png' alt='{what} RMSE per trial'>",
         f"<p class='note'>{html.escape(UNOBSERVABLE_HEADING)}</p>" if res.sensors == "6D" else "",
         _table(
@@ -480,7 +507,6 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
                 "heading_deg",
                 "inclination_deg",
                 *ref_cols,
-                "message",
             ),
             headings=ref_headings,
         ),
