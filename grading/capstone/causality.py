@@ -16,9 +16,7 @@ after the whole trial's (:func:`final_cut`): a filter that learned through a cha
 wall clock) where the earlier calls stopped, and looked ahead only past it, is caught there, unless the whole
 trial's box passes its look-ahead on to that later box. Those later calls start on a rung of a ladder of times
 (:func:`final_start`), after the box that saw whole trials has ended: what the clock can pass them is which rung,
-a few bits for all the trials together; and the next student's first box starts only after a rung of the same
-ladder, counted from those later calls' start, once their last box has ended. A call that gave no quaternions
-leaves the filter "not checked"."""
+a few bits for all the trials together. A call that gave no quaternions leaves the filter "not checked"."""
 
 from __future__ import annotations
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import html
 import os
 import queue
+import random
 import shutil
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
@@ -519,6 +520,21 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
 # ----------------------------------------------------------------------------------------------------------------
 
 
+def grading_order(submissions: Iterable[str]) -> list[str]:
+    """The students of ``submissions`` in the order they are graded: shuffled afresh on each run, from the operating
+    system's randomness (not the disguise's seed, which a regrade reuses).
+
+    The clock is the one channel between boxes no sandbox closes: a student's last box (whose data reach past 95 %
+    of a trial) chooses when it ends, and the next student's first box reads when it starts. An outside review read
+    about a bit per pair of students through it on a quiet machine (the caches' forgetting in between, 16 to 21 s,
+    blurs the rest); its relay of a look-ahead was caught. In a shuffled order two students who agree to pass a
+    look-ahead this way do not know who is graded after whom: in a class of n they are next to each other with
+    probability 2/n."""
+    order = sorted(submissions)
+    random.SystemRandom().shuffle(order)
+    return order
+
+
 def grade_class(
     course: Path | str,
     submissions: dict[str, nbformat.NotebookNode | str],
@@ -592,7 +608,7 @@ def grade_class(
                     free.put(slot)
 
             with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-                results = list(pool.map(one, sorted(submissions)))
+                results = sorted(pool.map(one, grading_order(submissions)), key=lambda r: r.name)
             for res in results:
                 if progress:
                     print(

@@ -483,15 +483,8 @@ def grade_submission(
                 res.notes.append(f"the kernel's file caches were not forgotten before the last cuts ({forgot})")
             elapsed = time.monotonic() - whole_from
             time.sleep(max(0.0, final_start(elapsed) - elapsed))
-        last_from = time.monotonic() if finals else whole_from
         for i, k in finals.items():
             probes[i] += probe(runner, i, scored[i], budgets[i], [("prefix", k)], draws[i])
-        # this student's last box ends on a rung as well, once it has ended: the next student's first box (or this
-        # notebook's, graded again) learns from the clock which rung, not the moment a box whose data reach past
-        # 95 % of a trial chose to end
-        runner.close()
-        elapsed = time.monotonic() - last_from
-        time.sleep(max(0.0, final_start(elapsed) - elapsed))
         res.causal, res.causal_message = verdict([p for ps in probes.values() for p in ps], scored, outputs, chosen)
         outputs.clear()
         if runner.cell_errors:
