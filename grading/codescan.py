@@ -261,6 +261,8 @@ class _Visitor(ast.NodeVisitor):
                     "sys-hook" if mod == "sys" else OS_CALLS[min(names & set(OS_CALLS))],
                     f"imports {', '.join(sorted(names))} from `{mod}`",
                 )
+        for name in sorted(names & ANSWERING_NAMES.keys()):  # under another name, its uses would not show it
+            self.flag(node, ANSWERING_NAMES[name], f"imports `{name}`")
         self._reference(node, names)
 
     def _rebinds(self, node):

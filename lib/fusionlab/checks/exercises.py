@@ -780,8 +780,9 @@ PACKAGES = {
 #: Classes and functions of other packages that answer exercises, by dotted name (scipy's ``Rotation``, ahrs's
 #: quaternion product and DCM): the integrity report flags any use of their names.
 #: scipy's rotations are also functions of its private modules (an outside review answered Lab 01 with
-#: ``_rotation_cy.compose_quat``, ``as_matrix`` and ``from_rotvec``, the word ``Rotation`` nowhere): scipy cannot be
-#: taken out of a box (the library needs it), so these are named where used.
+#: ``_rotation_cy.compose_quat``, ``as_matrix`` and ``from_rotvec``, the word ``Rotation`` nowhere), and a later one
+#: with ``RigidTransform`` and matplotlib's private ``_Quaternion``: scipy and matplotlib cannot be taken out of a
+#: box (the library needs them), so these are named where used.
 ANSWERING = (
     "scipy.spatial.transform.Rotation",
     *(
@@ -803,6 +804,10 @@ ANSWERING = (
             "as_davenport",
         )
     ),
+    "scipy.spatial.transform.RigidTransform",  # a rotation with a translation: its rotation part answers as well
+    "scipy.linalg.expm_frechet",  # its first value is expm of the matrix (Rodrigues' formula, Lab 01)
+    "scipy.linalg.funm",  # any matrix function, exp among them
+    "mpl_toolkits.mplot3d.axes3d._Quaternion",  # matplotlib's own product and rotation matrix (the library plots 3D)
     "ahrs.common.orientation.q_prod",
     "ahrs.common.orientation.q2R",
 )
