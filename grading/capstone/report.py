@@ -173,17 +173,23 @@ def _withheld(trials):
     ]
 
 
-#: What the pages students read say of a hidden trial the filter gave no usable estimate on: that it failed, not
-#: how. How (an error, a crash, over its budget, NaN, a wrong shape ...) is the filter's choice, made from the
-#: trial's data: an outside review failed each hidden trial in one of seven ways picked by the trial's length modulo
-#: 7 and read the three lengths' residues off the page. The ways seen are listed once for all the trials, in a fixed
-#: order, not trial by trial; ``trials.csv`` keeps each trial's, for the instructor.
-FAILED = "failed"
-
-
 def _said_to_students(trials):
-    """``trials`` as the pages students read show them: each status ``ok`` or :data:`FAILED`, no message."""
-    return [r if r.status == "ok" else replace(r, status=FAILED, message="") for r in trials]
+    """``trials`` as the pages students read show them: as they are when all ran; when some failed, none with its
+    status, message or figures.
+
+    When the filter gave no usable estimate on some hidden trials, the pages say how many and the ways it failed,
+    listed once and sorted (:func:`_ways_failed`) -- not which trials, nor its figures trial by trial. Whether and how
+    a filter fails on a trial is its choice, made from the trial's data: one outside review failed each hidden trial
+    in one of seven ways picked by the trial's length modulo 7 and read the residues off the page, a later one failed
+    the trials of even length and read the parities from which trials failed. ``trials.csv`` keeps every trial's
+    figures and way, for the instructor."""
+    if all(r.status == "ok" for r in trials):
+        return list(trials)
+    nan = float("nan")
+    return [
+        replace(r, status="", message="", total_deg=nan, heading_deg=nan, inclination_deg=nan, counted_deg=nan)
+        for r in trials
+    ]
 
 
 def _ways_failed(trials) -> str:
@@ -193,9 +199,10 @@ def _ways_failed(trials) -> str:
         return ""
     ways = sorted({f"{r.status}: {r.message}" if r.message else r.status for r in bad})
     return (
-        f"Your filter gave no usable estimate on {len(bad)} of the {len(trials)} hidden trials (marked "
-        f"'{FAILED}'; each counts with the error of an estimate that never moves). What went wrong, over all of "
-        f"them and not trial by trial: {'; '.join(ways)}. Run the self-check on the shipped trials to see it happen."
+        f"Your filter gave no usable estimate on {len(bad)} of the {len(trials)} hidden trials (each counts with "
+        f"the error of an estimate that never moves, in the mean above). Which trials is not shown, nor your errors "
+        f"trial by trial: a filter can choose from a trial's data whether to fail on it. What went wrong, over all "
+        f"of them: {'; '.join(ways)}. Run the self-check on the shipped trials to see it happen."
     )
 
 
@@ -418,7 +425,7 @@ def trials_figure(
         ax.plot(x, vals, ls="none", marker=marker, color=color, ms=size, mew=2, label=n, zorder=3 if n == "you" else 2)
     for i, n in enumerate(names):
         status = mine[n].status if n in mine else "not run"
-        if status != "ok":
+        if status not in ("ok", ""):  # "": not said (_said_to_students)
             ax.text(
                 x[i],
                 0.02,
@@ -459,7 +466,9 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
     vqf = refs[PUBLISHED[res.sensors][0]]
     names = [r.trial for r in vqf.trials]
     gated = gates_failed(res)
-    mine = {r.trial: r for r in _said_to_students(_withheld(res.trials) if gated else res.trials)}  # WITHHELD, FAILED
+    mine = {
+        r.trial: r for r in _said_to_students(_withheld(res.trials) if gated else res.trials)
+    }  # WITHHELD, and failures
     failed = _ways_failed(res.trials)
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
