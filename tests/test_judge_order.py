@@ -69,6 +69,7 @@ class FakeSession:
 
 def _lab():
     return types.SimpleNamespace(
+        lab="02_kalman_falling_body",
         tests=TESTS,
         points={"ex1_tests": 1.0, "ex2_tests": 1.0},
         cell_seconds=10,

@@ -329,6 +329,7 @@ def test_a_hidden_verdict_names_only_the_courses_own_errors_word_for_word():
     from grading import boxlib, judge
 
     class Lab:
+        lab = "02_kalman_falling_body"
         forbidden = {"ex3_tests": {"fusionlab.kalman:predict"}}
 
     stub = "NotImplementedError: " + boxlib.STUB_MESSAGE.format(name="kalman.predict")
@@ -343,6 +344,8 @@ def test_a_hidden_verdict_names_only_the_courses_own_errors_word_for_word():
     )
     absent = f"ImportError: ahrs is not available while the lab is graded: {boxlib.WHY_HIDDEN}"
     assert judge.known_error(absent, Lab, "ex3_tests") == judge.HIDDEN_IMPORTED and "ahrs" not in judge.HIDDEN_IMPORTED
+    only_here = f"ImportError: sympy is not available while the lab is graded: {boxlib.WHY_HIDDEN}"  # kept for Lab 07
+    assert judge.known_error(only_here, Lab, "ex3_tests") == judge.HIDDEN_IMPORTED
     for forged in (
         stub + " 5.8138",
         "NotImplementedError: exercise 3 not attempted yet (P = 5.81)",
