@@ -896,7 +896,11 @@ def test_scipys_private_rotation_functions_are_flagged_by_name(tmp_path):
         "return np.r_[r.scalar, r.vector]",
         8: "from scipy.spatial.transform import RigidTransform as RT\nreturn RT.from_rotation(None).apply(np.eye(3)).T",
     }
-    for k, answers in enumerate((routes, later)):
+    sparse = [  # scipy's sparse matrix exponentials take a dense matrix too: in the exercise's forbid, named
+        {5: "import scipy.sparse.linalg as sl\nreturn sl.expm(rotations.skew(np.asarray(sigma, float)))"},
+        {5: "from scipy.sparse.linalg import expm_multiply as em\nreturn em(rotations.skew(sigma), np.eye(3))"},
+    ]
+    for k, answers in enumerate((routes, later, *sparse)):
         path = tmp_path / f"{lab}_{k}.ipynb"
         nbformat.write(_answered(release, solution, answers), path)
         flags = integrity.scan_notebook(ROOT / "solutions" / lab / f"{lab}.ipynb", path)

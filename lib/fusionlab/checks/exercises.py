@@ -323,6 +323,8 @@ EXERCISES = (
             "rotations.rodrigues_dcm",
             "rotations.rotvec_to_quat",
             "scipy.linalg.expm",
+            "scipy.sparse.linalg.expm",  # its own Pade approximant, for dense matrices too
+            "scipy.sparse.linalg.expm_multiply",  # expm(A) @ B, with B the identity
             "freescale_fast._gyro_chain",  # one gyro step from the identity: the rotation vector's quaternion
         ),
     ),
