@@ -17,6 +17,15 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 if str(ROOT / "tests") not in sys.path:  # the tests' shared helpers (numeric_helpers, longrun_record) import by name
     sys.path.insert(0, str(ROOT / "tests"))
+# The machine's page-cache lock (grading.boxfiles.CACHE_LOCK) keeps a capstone run from making the kernel forget its
+# caches while a class is graded: make test's two workers stand for two machines, each with its own lock, or the
+# capstone's tests wait for every class the other worker grades.
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.setdefault(
+        "FUSIONLAB_CACHE_LOCK",
+        f"/tmp/fusionlab-page-cache-{os.environ.get('PYTEST_XDIST_TESTRUNUID', os.getppid())}-"
+        f"{os.environ['PYTEST_XDIST_WORKER']}.lock",
+    )
 LABS = sorted(p.name for p in (ROOT / "solutions").iterdir() if p.is_dir() and p.name[:2].isdigit())
 
 
@@ -134,3 +143,10 @@ LONG_FIRST = (
 def pytest_collection_modifyitems(config, items):
     rank = {name: i for i, name in enumerate(LONG_FIRST)}
     items.sort(key=lambda item: rank.get(item.path.name, len(LONG_FIRST)))  # stable: the rest keep their order
+
+
+def pytest_unconfigure(config):
+    """The worker's page-cache lock (above) is left behind by nothing."""
+    lock = os.environ.get("FUSIONLAB_CACHE_LOCK", "")
+    if os.environ.get("PYTEST_XDIST_WORKER") and lock.startswith("/tmp/fusionlab-page-cache-"):
+        Path(lock).unlink(missing_ok=True)
