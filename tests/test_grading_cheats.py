@@ -899,6 +899,12 @@ def test_scipys_private_rotation_functions_are_flagged_by_name(tmp_path):
     sparse = [  # scipy's sparse matrix exponentials take a dense matrix too: in the exercise's forbid, named
         {5: "import scipy.sparse.linalg as sl\nreturn sl.expm(rotations.skew(np.asarray(sigma, float)))"},
         {5: "from scipy.sparse.linalg import expm_multiply as em\nreturn em(rotations.skew(sigma), np.eye(3))"},
+        {5: "import scipy.sparse.linalg\nreturn scipy.sparse.linalg.expm_multiply(rotations.skew(sigma), np.eye(3))"},
+        {  # a later review: matplotlib's private Rodrigues formula
+            5: "from mpl_toolkits.mplot3d import proj3d\n"
+            "s = np.linalg.norm(sigma)\n"
+            "return proj3d._rotation_about_vector(np.asarray(sigma) / s, s) if s else np.eye(3)"
+        },
     ]
     for k, answers in enumerate((routes, later, *sparse)):
         path = tmp_path / f"{lab}_{k}.ipynb"

@@ -840,6 +840,20 @@ def test_the_judges_give_up_root_before_they_read_a_reply(graded):
     assert "\n  with no capability\n" in graded["run"].stdout, "no capability kept, Python in root's home or not"
 
 
+def test_a_class_run_starts_by_making_the_kernel_forget_what_earlier_runs_boxes_left(graded):
+    """An outside review carried the first hidden input of Lab 02 from one run to the next: the hidden round's box
+    looked up names that do not exist in numpy's folder, the next run's visible round timed them and raised an error
+    that spelled the input in its verdict (the run says what it did; the forgetting itself:
+    tests/test_launcher.py)."""
+    out = graded["run"].stdout
+    forgot = "the kernel forgot the names earlier runs' boxes looked up; every file a box can read was read again"
+    if os.geteuid() != 0:
+        assert "the names earlier runs' boxes looked up are NOT forgotten: " in out
+        return
+    assert forgot in out, out[:3000]
+    assert out.index(forgot) < out.index("model solution: "), "before any box of the run"
+
+
 def test_values_that_blow_up_in_the_tests_arithmetic_cost_only_their_own_judge_process(graded):
     """The judge of each student runs in a process of its own with a bounded address space: the 12.8 GB product
     fails that student's test at once, and neither the class's grading process nor a judge process grows."""

@@ -763,12 +763,20 @@ def test_the_boxes_files_are_warmed_so_a_page_fault_carries_no_bit_from_box_to_b
     """The channel the seccomp filter leaves: box A touches pages of a file nothing else reads, box B counts its
     major faults on them (exact, no call refused). Shown working on a file just evicted, then closed: grading
     first reads every file a box can read (``boxfiles.warm`` over ``boxfiles.view``), and B sees every page cached
-    whatever A did."""
-    path, _ = _venv_file()
+    whatever A did.
+
+    The file is the course's own (its library folder, which every box reads) and stays open here: a forgetting of
+    the kernel's caches by a grading run beside this test (another worker) neither evicts it (its inode is in use)
+    nor reads it (it is in no other course's view)."""
+    (tmp_path / "course" / "lib").mkdir(parents=True)
+    path = str(tmp_path / "course" / "lib" / "pages.bin")
+    with open(path, "wb") as f:
+        f.write(os.urandom(100 * 4096))
+        os.fsync(f.fileno())  # clean pages: the kernel evicts only those
     view = boxfiles.view(tmp_path / "course", data=False)
     assert any(path == v or path.startswith(v.rstrip("/") + "/") for v in view), "the file is one a box can read"
     touched, pages = [20, 60], [20, 40, 60, 80]
-    with sandbox.claimed_slots(2) as (a, b):
+    with open(path, "rb"), sandbox.claimed_slots(2) as (a, b):
         if not _evict(path):
             pytest.skip("the kernel here keeps the file cached after POSIX_FADV_DONTNEED")
         _faults(tmp_path, a, path, touched, touch=True)

@@ -810,6 +810,7 @@ ANSWERING = (
     "scipy.linalg.expm_frechet",  # its first value is expm of the matrix (Rodrigues' formula, Lab 01)
     "scipy.linalg.funm",  # any matrix function, exp among them
     "mpl_toolkits.mplot3d.axes3d._Quaternion",  # matplotlib's own product and rotation matrix (the library plots 3D)
+    "mpl_toolkits.mplot3d.proj3d._rotation_about_vector",  # Rodrigues' formula, from an axis and an angle
     "ahrs.common.orientation.q_prod",
     "ahrs.common.orientation.q2R",
 )
