@@ -20,12 +20,14 @@ if str(ROOT / "tests") not in sys.path:  # the tests' shared helpers (numeric_he
 # The machine's page-cache lock (grading.boxfiles.CACHE_LOCK) keeps a capstone run from making the kernel forget its
 # caches while a class is graded: make test's two workers stand for two machines, each with its own lock, or the
 # capstone's tests wait for every class the other worker grades.
-if os.environ.get("PYTEST_XDIST_WORKER"):
-    os.environ.setdefault(
-        "FUSIONLAB_CACHE_LOCK",
-        f"/tmp/fusionlab-page-cache-{os.environ.get('PYTEST_XDIST_TESTRUNUID', os.getppid())}-"
-        f"{os.environ['PYTEST_XDIST_WORKER']}.lock",
-    )
+_WORKER_LOCK = (
+    f"/tmp/fusionlab-page-cache-{os.environ.get('PYTEST_XDIST_TESTRUNUID', os.getppid())}-"
+    f"{os.environ['PYTEST_XDIST_WORKER']}.lock"
+    if os.environ.get("PYTEST_XDIST_WORKER")
+    else None
+)
+if _WORKER_LOCK:
+    os.environ.setdefault("FUSIONLAB_CACHE_LOCK", _WORKER_LOCK)
 LABS = sorted(p.name for p in (ROOT / "solutions").iterdir() if p.is_dir() and p.name[:2].isdigit())
 
 
@@ -147,6 +149,5 @@ def pytest_collection_modifyitems(config, items):
 
 def pytest_unconfigure(config):
     """The worker's page-cache lock (above) is left behind by nothing."""
-    lock = os.environ.get("FUSIONLAB_CACHE_LOCK", "")
-    if os.environ.get("PYTEST_XDIST_WORKER") and lock.startswith("/tmp/fusionlab-page-cache-"):
-        Path(lock).unlink(missing_ok=True)
+    if _WORKER_LOCK and os.environ.get("FUSIONLAB_CACHE_LOCK") == _WORKER_LOCK:
+        Path(_WORKER_LOCK).unlink(missing_ok=True)
