@@ -466,9 +466,8 @@ def feedback(res: StudentResult, refs: dict, folder: Path | str, label: str = ""
     vqf = refs[PUBLISHED[res.sensors][0]]
     names = [r.trial for r in vqf.trials]
     gated = gates_failed(res)
-    mine = {
-        r.trial: r for r in _said_to_students(_withheld(res.trials) if gated else res.trials)
-    }  # WITHHELD, and failures
+    # the trials as students may see them: WITHHELD when a gate failed, nothing trial by trial when some failed
+    mine = {r.trial: r for r in _said_to_students(_withheld(res.trials) if gated else res.trials)}
     failed = _ways_failed(res.trials)
     shown = {"you": [getattr(mine[n], metric) if n in mine else float("nan") for n in names]}
     for n, ref in references_of(refs, res.sensors).items():
