@@ -2,7 +2,8 @@
 own ``utils`` and :mod:`fusionlab.labformat`), and what its code reads and binds.
 
 * :func:`python_of` -- a cell as the judge and the box run it (IPython magics and shell escapes dropped);
-* :func:`bound_names`, :func:`free_names`, :func:`reads_and_writes` and :func:`prune` -- which cells a test needs;
+* :func:`bound_names`, :func:`free_names`, :func:`reads_and_writes`, :func:`reads_dynamically`, :func:`statements`
+  and :func:`prune` -- which cells (and which of the setup cell's imports) a test needs;
 * :func:`forbidden_expressions` -- what a test cell names as its references;
 * :func:`test_parts` -- a test cell's visible and hidden parts.
 
@@ -12,7 +13,9 @@ Parsing goes through :func:`parse`, which one thread at a time may run (see its 
 from __future__ import annotations
 
 import ast
+import io
 import threading
+import tokenize
 from typing import TYPE_CHECKING
 
 import nbformat
@@ -67,8 +70,25 @@ def is_check(cell: dict) -> bool:
 
 
 def python_of(source: str) -> str:
-    """The cell as Python: IPython magics and shell escapes dropped (the judge and the box run no magics)."""
-    return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines())
+    """The cell as Python: IPython magics and shell escapes dropped (the judge and the box run no magics). A line
+    that starts with ``%`` or ``!`` inside brackets, a string or after a backslash is Python (``"%.1f"\n  % x``)."""
+    kept = []
+    for line in source.splitlines():
+        magic = line.lstrip().startswith(("%", "!")) and not _open_at_end("\n".join(kept))
+        kept.append("" if magic else line)
+    return "\n".join(kept)
+
+
+def _open_at_end(code: str) -> bool:
+    """True if ``code`` ends inside brackets, a string or a backslash continuation: its next line continues it."""
+    try:
+        for _ in tokenize.generate_tokens(io.StringIO(code + "\n").readline):
+            pass
+    except tokenize.TokenError:
+        return True
+    except SyntaxError:  # an indentation error: the cell does not parse, whatever follows
+        return False
+    return False
 
 
 def bound_names(source: str) -> set[str]:
@@ -183,6 +203,42 @@ def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
             if isinstance(root, ast.Name):
                 changed.add(root.id)
     return global_reads(tree), bound_names(source), changed
+
+
+#: Names through which code reaches the notebook's names without naming them (``globals()["x"]``, ``eval("x")``): a
+#: box whose cells read one of them runs the whole setup cell (:meth:`grading.lab.Lab.program`).
+DYNAMIC_READS = frozenset({"globals", "locals", "vars", "dir", "eval", "exec", "get_ipython", "__import__"})
+
+
+def reads_dynamically(source: str) -> bool:
+    """True if ``source`` may read the notebook's names without naming them (:data:`DYNAMIC_READS`), or does not
+    parse."""
+    info = reads_and_writes(source)
+    return info is None or bool(info[0] & DYNAMIC_READS)
+
+
+def statements(source: str) -> list[tuple[str, bool]] | None:
+    """The top-level statements of ``source`` in order as ``[(code, is_import)]``, one imported name per import (``from
+    m import a, b as c`` gives ``from m import a`` and ``from m import b as c``), or None if it does not parse. A star
+    or ``__future__`` import is not an import here: it binds names no reader can name."""
+    try:
+        tree = parse(source)
+    except SyntaxError:
+        return None
+    out = []
+    for node in tree.body:
+        star = isinstance(node, ast.ImportFrom) and (node.module == "__future__" or node.names[0].name == "*")
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and not star:
+            for alias in node.names:
+                one = (
+                    ast.Import([alias])
+                    if isinstance(node, ast.Import)
+                    else ast.ImportFrom(node.module, [alias], node.level)
+                )
+                out.append((ast.unparse(one), True))
+        else:
+            out.append((ast.get_source_segment(source, node), False))
+    return out
 
 
 def prune(cells: list[tuple[str | None, str, bool]], need: Iterable[str] = ()) -> list[tuple[str | None, str, bool]]:

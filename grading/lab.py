@@ -193,11 +193,14 @@ class Lab:
         Provided (locked) cells come from the release, whatever the submission holds; answer cells and the cells the
         student added or may edit come from the submission. Test cells and visible checks are not run in the box:
         the judge runs the tests. Of the provided cells (locked, or unmarked and as the release has them) only those
-        that make or change a name the other cells, or the names ``need``, read are run: the setup cell, every answer
-        and every cell the student added or edited always are (:func:`prune`)."""
+        that make or change a name the other cells, or the names ``need``, read are run: every answer and every cell
+        the student added or edited always are (:func:`prune`), and so is the setup cell, but for its imports, each
+        of which runs only where a kept cell reads the name it binds (importing pyplot and filterpy is most of a box's
+        start, and a test of a function rarely needs them). Where a kept cell reads names without naming them
+        (``globals()``, ``eval``: :func:`grading.cells.reads_dynamically`), the whole setup cell runs."""
         seq, notes = self.layout(submitted)
         released = {c.source.strip() for c in self.release.cells if c.cell_type == "code" and not cells.grade_id(c)}
-        program = []
+        program, whole = [], []  # the setup's imports each a cell of their own; the setup as one cell
         for kind, gid, cell in seq:
             if upto is not None and gid == upto:
                 break
@@ -206,13 +209,29 @@ class Lab:
             source = cell.get("source", "")
             if kind == "added":
                 program.append((None, cells.python_of(source), source.strip() not in released))
+                whole.append(program[-1])
                 continue
             mine = self._release_cell(gid)
             if cells.is_test(mine) or cells.is_check(mine):
                 continue
             answer = cells.is_answer(mine) or not cells.nbg(mine).get("locked")
-            program.append((gid, cells.python_of(source if answer else mine.source), answer or gid == labformat.SETUP))
-        return [(gid, src) for gid, src, _ in cells.prune(program, need)], notes
+            code = cells.python_of(source if answer else mine.source)
+            whole.append((gid, code, answer or gid == labformat.SETUP))
+            pieces = cells.statements(code) if gid == labformat.SETUP and not answer else None
+            if pieces is None:
+                program.append(whole[-1])
+            else:  # each import runs where a kept cell reads what it binds: a box that plots nothing imports no pyplot
+                program += [(gid, piece, not optional) for piece, optional in pieces]
+        pruned = cells.prune(program, need)
+        if any(cells.reads_dynamically(src) for _, src, _ in pruned):
+            pruned = cells.prune(whole, need)
+        kept = []
+        for gid, src, _ in pruned:
+            if kept and gid == labformat.SETUP and kept[-1][0] == gid:
+                kept[-1] = (gid, f"{kept[-1][1]}\n{src}")  # the setup's kept statements, one cell again
+            else:
+                kept.append((gid, src))
+        return kept, notes
 
     def _release_cell(self, gid):
         for c in self.release.cells:

@@ -1,0 +1,116 @@
+"""What a test's box runs (:meth:`grading.lab.Lab.program`): the cells the test needs, and of the setup cell only the
+imports those cells read, so that a box testing a function imports no pyplot and no filterpy."""
+
+from __future__ import annotations
+
+import ast
+
+import nbformat
+import pytest
+
+from conftest import ROOT
+from fusionlab import labformat
+from grading import cells
+from grading.lab import Lab
+
+LABS = sorted(p.name for p in (ROOT / "labs").iterdir() if (p / f"{p.name}.ipynb").exists())
+
+
+def _lab(lab, tmp_path):
+    release = nbformat.read(ROOT / "labs" / lab / f"{lab}.ipynb", as_version=4)
+    solution = nbformat.read(ROOT / "solutions" / lab / f"{lab}.ipynb", as_version=4)
+    tests = {cells.grade_id(c): c.source for c in solution.cells if cells.is_test(c)}
+    return Lab(ROOT, lab, release, tests, solution, tmp_path), release, solution
+
+
+def _program(the_lab, nb, gid):
+    return the_lab.program(nb, upto=gid, need=cells.free_names(the_lab.tests[gid]))[0]
+
+
+def _setup(program):
+    return [src for gid, src in program if gid == labformat.SETUP]
+
+
+def _imported(source):
+    return {
+        (a.asname or a.name).split(".")[0]
+        for n in ast.parse(source).body
+        if isinstance(n, (ast.Import, ast.ImportFrom))
+        for a in n.names
+    }
+
+
+def _with_answer(nb, gid, code):
+    nb = nbformat.from_dict(nb)
+    for cell in nb.cells:
+        if cells.grade_id(cell) == gid:
+            cell.source = code
+    return nb
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_the_setup_in_each_box_keeps_every_statement_but_the_imports_no_kept_cell_reads(lab, tmp_path):
+    the_lab, release, solution = _lab(lab, tmp_path)
+    setup = next(cells.python_of(c.source) for c in release.cells if cells.grade_id(c) == labformat.SETUP)
+    pieces = cells.statements(setup)
+    for gid in the_lab.tests:
+        program = _program(the_lab, solution, gid)
+        [kept] = _setup(program)
+        assert program[0][0] == labformat.SETUP, "the setup runs first"
+        kept_pieces = cells.statements(kept)
+        assert [p for p, imp in pieces if not imp] == [p for p, imp in kept_pieces if not imp], gid
+        read = set(cells.free_names(the_lab.tests[gid])).union(
+            *[cells.reads_and_writes(src)[0] for g, src in program if g != labformat.SETUP],
+            *[cells.reads_and_writes(p)[0] for p, imp in kept_pieces if not imp],
+        )
+        for piece, imp in pieces:
+            if imp:
+                assert ((piece, True) in kept_pieces) == bool(cells.bound_names(piece) & read), (gid, piece)
+
+
+def test_a_box_testing_a_function_of_numbers_imports_neither_pyplot_nor_filterpy(tmp_path):
+    the_lab, _, solution = _lab("02_kalman_falling_body", tmp_path)
+    [setup] = _setup(_program(the_lab, solution, "ex1_tests"))
+    assert "numpy" in setup and "matplotlib" not in setup and "filterpy" not in setup and "widgets" not in setup
+
+
+def test_an_answer_that_plots_or_uses_filterpy_gets_the_imports_it_reads(tmp_path):
+    the_lab, _, solution = _lab("02_kalman_falling_body", tmp_path)
+    answer = (
+        "def my_joseph(P, K, H, R):\n"
+        "    plt.figure()\n"
+        "    f = KalmanFilter(dim_x=2, dim_z=1)\n"
+        "    I = np.eye(len(P))\n"
+        "    return (I - K @ H) @ P @ (I - K @ H).T + K @ R @ K.T\n"
+    )
+    [setup] = _setup(_program(the_lab, _with_answer(solution, "ex1_solution", answer), "ex1_tests"))
+    assert {"np", "plt", "KalmanFilter"} <= _imported(setup) and "widgets" not in setup
+
+
+@pytest.mark.parametrize("reach", ['globals()["plt"]', 'eval("plt")', "vars()", "exec('x = 1')"])
+def test_an_answer_that_reads_names_without_naming_them_gets_the_whole_setup(tmp_path, reach):
+    the_lab, release, solution = _lab("02_kalman_falling_body", tmp_path)
+    answer = f"def my_joseph(P, K, H, R):\n    {reach}\n    return P\n"
+    [setup] = _setup(_program(the_lab, _with_answer(solution, "ex1_solution", answer), "ex1_tests"))
+    whole = next(cells.python_of(c.source) for c in release.cells if cells.grade_id(c) == labformat.SETUP)
+    assert setup == whole
+
+
+def test_a_setup_that_does_not_parse_is_run_whole():
+    assert cells.statements("import numpy as np\nx = (") is None
+    assert cells.statements("from m import a, b as c\nimport x.y, z\nfrom k import *\nw = 1") == [
+        ("from m import a", True),
+        ("from m import b as c", True),
+        ("import x.y", True),
+        ("import z", True),
+        ("from k import *", False),
+        ("w = 1", False),
+    ]
+
+
+def test_a_line_that_starts_with_a_percent_sign_inside_brackets_is_python_not_a_magic():
+    source = '%matplotlib inline\nx = ("%d"\n     % 3)\ny = 2 \\\n    % 3\n!ls\ns = """\n%kept\n"""\n%time z = 1'
+    assert cells.python_of(source) == '\nx = ("%d"\n     % 3)\ny = 2 \\\n    % 3\n\ns = """\n%kept\n"""\n'
+    namespace = {}
+    exec(cells.python_of(source), namespace)  # noqa: S102 -- the test's own code
+    assert (namespace["x"], namespace["y"], namespace["s"]) == ("3", 2, "\n%kept\n")
