@@ -309,12 +309,7 @@ def run(requests: BinaryIO, replies: BinaryIO) -> None:
         replies.flush()
 
     program = json.loads(requests.readline())
-    import matplotlib
-
-    matplotlib.use("Agg")
     from IPython.core.interactiveshell import InteractiveShell
-    import matplotlib.pyplot as plt
-
     from traitlets.config import Config
 
     config = Config()
@@ -328,7 +323,9 @@ def run(requests: BinaryIO, replies: BinaryIO) -> None:
             error = result.error_before_exec or result.error_in_exec
         except BaseException as exc:  # noqa: BLE001 -- a cell that escapes the shell is still only its own failure
             error = exc
-        plt.close("all")
+        pyplot = sys.modules.get("matplotlib.pyplot")  # imported by the cells that plot (the backend: MPLBACKEND=Agg)
+        if pyplot is not None:
+            pyplot.close("all")
         send({"cell": i, "state": "done", "error": _short(error) if error is not None else None})
     send({"ready": True})
     ns = shell.user_ns

@@ -4,13 +4,17 @@ imports those cells read, so that a box testing a function imports no pyplot and
 from __future__ import annotations
 
 import ast
+import json
+import os
+import subprocess
+import sys
 
 import nbformat
 import pytest
 
 from conftest import ROOT
 from fusionlab import labformat
-from grading import cells
+from grading import cells, judge
 from grading.lab import Lab
 
 LABS = sorted(p.name for p in (ROOT / "labs").iterdir() if (p / f"{p.name}.ipynb").exists())
@@ -24,7 +28,8 @@ def _lab(lab, tmp_path):
 
 
 def _program(the_lab, nb, gid):
-    return the_lab.program(nb, upto=gid, need=cells.free_names(the_lab.tests[gid]))[0]
+    """What the judge's box for test ``gid`` runs (the names the test asks it for: :func:`grading.judge._asked`)."""
+    return the_lab.program(nb, upto=gid, need=judge._asked(the_lab.tests[gid], the_lab.base()))[0]
 
 
 def _setup(program):
@@ -59,7 +64,7 @@ def test_the_setup_in_each_box_keeps_every_statement_but_the_imports_no_kept_cel
         assert program[0][0] == labformat.SETUP, "the setup runs first"
         kept_pieces = cells.statements(kept)
         assert [p for p, imp in pieces if not imp] == [p for p, imp in kept_pieces if not imp], gid
-        read = set(cells.free_names(the_lab.tests[gid])).union(
+        read = set(judge._asked(the_lab.tests[gid], the_lab.base())).union(
             *[cells.reads_and_writes(src)[0] for g, src in program if g != labformat.SETUP],
             *[cells.reads_and_writes(p)[0] for p, imp in kept_pieces if not imp],
         )
@@ -68,10 +73,30 @@ def test_the_setup_in_each_box_keeps_every_statement_but_the_imports_no_kept_cel
                 assert ((piece, True) in kept_pieces) == bool(cells.bound_names(piece) & read), (gid, piece)
 
 
-def test_a_box_testing_a_function_of_numbers_imports_neither_pyplot_nor_filterpy(tmp_path):
+def test_a_box_testing_a_function_of_numbers_imports_numpy_alone(tmp_path):
     the_lab, _, solution = _lab("02_kalman_falling_body", tmp_path)
     [setup] = _setup(_program(the_lab, solution, "ex1_tests"))
-    assert "numpy" in setup and "matplotlib" not in setup and "filterpy" not in setup and "widgets" not in setup
+    assert setup == "import numpy as np\nnp.set_printoptions(precision=4, suppress=True)"
+
+
+def test_the_box_imports_pyplot_only_for_cells_that_plot_and_closes_their_figures():
+    run = (
+        "import io, json, sys\n"
+        "from grading import box\n"
+        "program = json.dumps({'cells': sys.argv[1:]}) + '\\n'\n"
+        "replies = io.BytesIO()\n"
+        "box.run(io.BytesIO(program.encode()), replies)\n"
+        "pyplot = sys.modules.get('matplotlib.pyplot')\n"
+        "print(json.dumps([pyplot is not None, pyplot.get_fignums() if pyplot else None]))\n"
+    )
+    env = {**os.environ, "PYTHONPATH": f"{ROOT / 'lib'}:{ROOT}", "MPLBACKEND": "Agg"}
+
+    def after(*cells_):
+        res = subprocess.run([sys.executable, "-c", run, *cells_], env=env, capture_output=True, text=True, check=True)
+        return json.loads(res.stdout.splitlines()[-1])
+
+    assert after("x = 1", "y = x + 1") == [False, None]
+    assert after("import matplotlib.pyplot as plt\nfig = plt.figure()", "z = 1") == [True, []]
 
 
 def test_an_answer_that_plots_or_uses_filterpy_gets_the_imports_it_reads(tmp_path):
