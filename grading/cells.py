@@ -189,12 +189,17 @@ def global_reads(node: ast.AST) -> set[str]:
 
 def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
     """(names a cell reads from the notebook, names it binds, names whose objects it changes in place), or None if it
-    does not parse."""
+    does not parse. A name is read from the notebook where a top-level statement reads it before any earlier one
+    surely bound it (:func:`_surely_bound`): ``k = 2`` then ``print(k)`` reads no ``k``, ``k = k + 1`` does."""
     try:
         tree = parse(source)
     except SyntaxError:
         return None
     changed = set()
+    reads, bound = set(), set()
+    for stmt in tree.body:  # a name a statement reads after an earlier one surely bound it is the cell's own
+        reads |= global_reads(stmt) - bound
+        bound |= _surely_bound(stmt)
     for n in ast.walk(tree):
         if isinstance(n, (ast.Attribute, ast.Subscript)) and isinstance(n.ctx, (ast.Store, ast.Del)):
             root = n
@@ -202,7 +207,33 @@ def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
                 root = root.value
             if isinstance(root, ast.Name):
                 changed.add(root.id)
-    return global_reads(tree), bound_names(source), changed
+    return reads, bound_names(source), changed
+
+
+def _surely_bound(stmt: ast.stmt) -> set[str]:
+    """The names a top-level statement binds whenever it completes: an assignment's target names (not names bound
+    inside its value, such as a comprehension's), an import's, a definition's; none for a loop, a branch, a ``with``."""
+    if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return {stmt.name}
+    if isinstance(stmt, (ast.Import, ast.ImportFrom)):
+        return {(a.asname or a.name).split(".")[0] for a in stmt.names if a.name != "*"}
+    targets = (
+        stmt.targets
+        if isinstance(stmt, ast.Assign)
+        else [stmt.target]
+        if isinstance(stmt, ast.AnnAssign) and stmt.value
+        else []
+    )
+    out = set()
+    while targets:
+        t = targets.pop()
+        if isinstance(t, ast.Name):
+            out.add(t.id)
+        elif isinstance(t, (ast.Tuple, ast.List)):
+            targets += t.elts
+        elif isinstance(t, ast.Starred):
+            targets.append(t.value)
+    return out
 
 
 #: Names through which code reaches the notebook's names without naming them (``globals()["x"]``, ``eval("x")``): a

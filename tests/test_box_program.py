@@ -139,3 +139,26 @@ def test_a_line_that_starts_with_a_percent_sign_inside_brackets_is_python_not_a_
     namespace = {}
     exec(cells.python_of(source), namespace)  # noqa: S102 -- the test's own code
     assert (namespace["x"], namespace["y"], namespace["s"]) == ("3", 2, "\n%kept\n")
+
+
+@pytest.mark.parametrize(
+    ("source", "reads"),
+    [
+        ("k = 2\nprint(k)", {"print"}),  # bound before it is read: the cell's own k
+        ("k = k + 1", {"k"}),
+        ("x = [i for i in range(3)]\nprint(i)", {"range", "print", "i"}),  # a comprehension binds no i here
+        ("for i in range(3):\n    pass\nprint(i)", {"range", "print", "i"}),  # a loop may bind nothing
+        ("def f():\n    return g\ng = 1\nf()", {"g"}),  # f was made before g was bound
+        ("a, (b, *c) = 1, (2, 3)\nprint(a, b, c, d)", {"print", "d"}),
+        ("x: int\nprint(x)", {"int", "print", "x"}),  # an annotation binds nothing
+    ],
+)
+def test_a_cell_reads_from_the_notebook_only_what_it_has_not_surely_bound_first(source, reads):
+    assert cells.reads_and_writes(source)[0] == reads
+
+
+def test_a_box_for_a_kalman_step_runs_no_plotting_cell_above_it(tmp_path):
+    the_lab, _, solution = _lab("02_kalman_falling_body", tmp_path)
+    for gid in ("ex3_tests", "ex4_tests"):
+        program = _program(the_lab, solution, gid)
+        assert not any("plt" in (cells.reads_and_writes(src)[0] | cells.bound_names(src)) for _, src in program), gid
