@@ -181,7 +181,11 @@ def global_reads(node: ast.AST) -> set[str]:
         reads = set().union(*[global_reads(b) for b in body]) - local
         defaults = [*args.defaults, *[d for d in args.kw_defaults if d is not None]]
         decorators = getattr(node, "decorator_list", [])
-        return reads.union(*[global_reads(d) for d in [*defaults, *decorators]])
+        every = [*args.posonlyargs, *args.args, *args.kwonlyargs, args.vararg, args.kwarg]
+        annotations = [a.annotation for a in every if a and a.annotation]  # evaluated where the function is made
+        if getattr(node, "returns", None) is not None:
+            annotations.append(node.returns)
+        return reads.union(*[global_reads(d) for d in [*defaults, *decorators, *annotations]])
     if isinstance(node, ast.Name):
         return {node.id} if isinstance(node.ctx, ast.Load) else set()
     return set().union(*[global_reads(child) for child in ast.iter_child_nodes(node)])
@@ -236,16 +240,28 @@ def _surely_bound(stmt: ast.stmt) -> set[str]:
     return out
 
 
-#: Names through which code reaches the notebook's names without naming them (``globals()["x"]``, ``eval("x")``): a
-#: box whose cells read one of them runs the whole setup cell (:meth:`grading.lab.Lab.program`).
-DYNAMIC_READS = frozenset({"globals", "locals", "vars", "dir", "eval", "exec", "get_ipython", "__import__"})
+#: Names through which code reaches the notebook's names without naming them (``globals()["x"]``, ``eval("x")``), and
+#: modules through which it does (``sys.modules["__main__"].x``, ``from __main__ import x``): a box whose cells read
+#: one of the names or import one of the modules runs the whole setup cell (:meth:`grading.lab.Lab.program`).
+DYNAMIC_READS = frozenset(
+    {"globals", "locals", "vars", "dir", "eval", "exec", "get_ipython", "__import__", "__builtins__"}
+)
+DYNAMIC_MODULES = frozenset({"__main__", "sys", "inspect", "builtins", "gc", "ctypes", "importlib", "runpy"})
 
 
 def reads_dynamically(source: str) -> bool:
-    """True if ``source`` may read the notebook's names without naming them (:data:`DYNAMIC_READS`), or does not
-    parse."""
+    """True if ``source`` may read the notebook's names without naming them (:data:`DYNAMIC_READS`,
+    :data:`DYNAMIC_MODULES`), or does not parse."""
     info = reads_and_writes(source)
-    return info is None or bool(info[0] & DYNAMIC_READS)
+    if info is None or info[0] & DYNAMIC_READS:
+        return True
+    imported = set()
+    for n in ast.walk(parse(source)):
+        if isinstance(n, ast.Import):
+            imported |= {a.name.split(".")[0] for a in n.names}
+        elif isinstance(n, ast.ImportFrom) and n.module and not n.level:
+            imported.add(n.module.split(".")[0])
+    return bool(imported & DYNAMIC_MODULES)
 
 
 def statements(source: str) -> list[tuple[str, bool]] | None:

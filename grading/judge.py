@@ -174,7 +174,7 @@ def _first_round(lab, submitted, boxes, verdict, keep_open):
             result = TestResult(gid, lab.points.get(gid, 0.0))
             verdict.tests.append(result)
             reference = lab.reference_values(gid, boxes)
-            session = Session(lab, submitted, boxes, gid, need=_asked(source, base), stopped=stopped)
+            session = Session(lab, submitted, boxes, gid, need=_asked(lab, source, base), stopped=stopped)
             ns = dict(base)
             rest = _visible_part(lab, session, source, ns, reference, result)
             if rest and keep_open:
@@ -205,7 +205,7 @@ def _second_round(lab, submitted, boxes, verdict):
         result.pending = False
         source = lab.tests[result.grade_id]
         reference = lab.reference_values(result.grade_id, boxes)
-        session = Session(lab, submitted, boxes, result.grade_id, need=_asked(source, base), stopped=stopped)
+        session = Session(lab, submitted, boxes, result.grade_id, need=_asked(lab, source, base), stopped=stopped)
         ns = dict(base)
         try:
             rest = _visible_again(lab, session, source, ns, reference, result)
@@ -421,10 +421,12 @@ def _visible_part(lab, session, source, ns, reference, result):
     return rest
 
 
-def _asked(source, base):
-    """The names the test ``source`` may ask its box for: those it reads that the judge's own setup (``base``) lacks
-    (:func:`_names`); the box runs the cells that make them, and the setup's imports only where its cells read them."""
-    return [n for n in cells.free_names(source) if n not in base]
+def _asked(lab, source, base):
+    """The names the test ``source`` may ask its box for (:func:`_names`): those it reads that neither the judge's own
+    setup (``base``) nor the provided cells (their values come from the model solution's run) make. The box runs
+    the cells that make them, and the setup's imports only where its cells read them; so what a box runs says
+    nothing of what the test's hidden part reads beyond the student's own names."""
+    return [n for n in cells.free_names(source) if n not in base and n not in lab.provided_names]
 
 
 def _names(session, source, ns, reference, budget):

@@ -185,7 +185,11 @@ class Lab:
         return seq, notes
 
     def program(
-        self, submitted: nbformat.NotebookNode | None, upto: str | None = None, need: Iterable[str] = ()
+        self,
+        submitted: nbformat.NotebookNode | None,
+        upto: str | None = None,
+        need: Iterable[str] = (),
+        whole_setup: bool = False,
     ) -> tuple[list[tuple[str | None, str]], list[str]]:
         """The cells the box runs, in order, as ``(grade_id, source)``, and notes on the submission's cells: the code
         cells above the test cell ``upto`` (all of them without it), as the notebook runs them before that test.
@@ -197,7 +201,8 @@ class Lab:
         the student added or edited always are (:func:`prune`), and so is the setup cell, but for its imports, each
         of which runs only where a kept cell reads the name it binds (importing pyplot and filterpy is most of a box's
         start, and a test of a function rarely needs them). Where a kept cell reads names without naming them
-        (``globals()``, ``eval``: :func:`grading.cells.reads_dynamically`), the whole setup cell runs."""
+        (``globals()``, ``eval``, ``sys.modules``: :func:`grading.cells.reads_dynamically`), or with ``whole_setup``,
+        the whole setup cell runs."""
         seq, notes = self.layout(submitted)
         released = {c.source.strip() for c in self.release.cells if c.cell_type == "code" and not cells.grade_id(c)}
         program, whole = [], []  # the setup's imports each a cell of their own; the setup as one cell
@@ -217,7 +222,7 @@ class Lab:
             answer = cells.is_answer(mine) or not cells.nbg(mine).get("locked")
             code = cells.python_of(source if answer else mine.source)
             whole.append((gid, code, answer or gid == labformat.SETUP))
-            pieces = cells.statements(code) if gid == labformat.SETUP and not answer else None
+            pieces = cells.statements(code) if gid == labformat.SETUP and not answer and not whole_setup else None
             if pieces is None:
                 program.append(whole[-1])
             else:  # each import runs where a kept cell reads what it binds: a box that plots nothing imports no pyplot
@@ -251,6 +256,7 @@ class Lab:
             limits=self.limits,
             uid=uid,
             hide=boxlib.shadowed(root / "shadow"),
+            proc=False,  # no /proc: its entries' inode numbers are a counter of the whole machine, kept between runs
         )
 
     # -- values of the provided cells, from the model solution ------------------------------------------------------

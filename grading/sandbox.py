@@ -294,9 +294,10 @@ def bwrap_command(
     empty read-only one and each file by an empty file, so that taking the shadow off ``sys.path`` finds nothing.
     With ``proc=False`` the box has no /proc at all (an empty read-only folder): every inode of a process's entries
     there takes its number from a counter of the whole machine (get_next_ino), which a box moves by looking its
-    entries up and reads back from their numbers -- a channel from box to box that no call filter closes. The
-    capstone's boxes, whose calls must not learn what an earlier box saw, run so; a lab's box keeps what a Python
-    kernel reads there (its own /proc/self), the machine's counters hidden (:func:`proc_masks`).
+    entries up and reads back from their numbers -- a channel from box to box that no call filter closes, and that
+    no grading run resets (an outside review carried a hidden input from one run's hidden round to the next run's
+    visible verdict through it). Every box of a lab and of the capstone runs so; ``proc=True`` (the default) gives
+    a /proc with the machine's counters hidden (:func:`proc_masks`), what the tests of those masks run.
     """
     course = os.path.realpath(course)
     limits = {**DEFAULT_LIMITS, **(limits or {})}
@@ -446,6 +447,7 @@ def box_problem(course: str | os.PathLike, lab: str, scratch: str | os.PathLike,
             lib=os.path.join(course, "lib"),
             work=work,
             uid=uids[0],
+            proc=False,  # as every box of a lab and of the capstone
         )
         run = subprocess.run(command, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
     except (OSError, subprocess.SubprocessError) as exc:

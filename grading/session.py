@@ -51,7 +51,9 @@ class Session:
         files: bool = True,
     ) -> None:
         self.lab, self.submitted, self.boxes, self.gid, self.files = lab, submitted, boxes, gid, files
-        self.cells, self.notes = lab.program(submitted, upto=gid, need=need)
+        self.need = list(need)
+        self.cells, self.notes = lab.program(submitted, upto=gid, need=self.need)
+        self.whole_setup = False
         # cells stopped in an earlier box of this student (over time, or ended the process) are left out from the
         # start: a stuck cell costs its time once per student, not once per test
         self.stopped = set() if stopped is None else stopped
@@ -75,9 +77,12 @@ class Session:
             self._spawn()
             program = ["pass" if i in self.skipped else src for i, (_, src) in enumerate(self.cells)]
             try:
-                self.cell_errors.update(
-                    client.run_program(self.box, program, cell_seconds=self.lab.cell_seconds, deadline=self.deadline)
+                errors = client.run_program(
+                    self.box, program, cell_seconds=self.lab.cell_seconds, deadline=self.deadline
                 )
+                if errors and self._with_whole_setup(errors):
+                    continue
+                self.cell_errors.update(errors)
                 return
             except (BoxTimeout, BoxDied) as exc:
                 self.box.kill()
@@ -103,6 +108,23 @@ class Session:
                 self.skipped.add(current)
                 self.stopped.add(tuple(self.cells[current]))
                 self.restarts += 1
+
+    def _with_whole_setup(self, errors: dict[int, str]) -> bool:
+        """After a run whose cells raised a NameError, ImportError or AttributeError: if the program left out imports
+        of the setup cell (:meth:`grading.lab.Lab.program`), it becomes the program with the whole setup, to be run in
+        a fresh box (True), so that a name reached in a way the program's reading missed (an annotation evaluated in a
+        way it does not know) costs the student nothing; False if there is nothing to run again."""
+        missing = ("NameError", "ImportError", "ModuleNotFoundError", "AttributeError")
+        if self.whole_setup or not any(e.startswith(missing) for e in errors.values()):
+            return False
+        self.whole_setup = True
+        whole, _ = self.lab.program(self.submitted, upto=self.gid, need=self.need, whole_setup=True)
+        if whole == self.cells:
+            return False
+        self.box.kill()
+        self.cells = whole
+        self.skipped = {i for i, cell in enumerate(self.cells) if tuple(cell) in self.stopped}
+        return True
 
     def _where(self, i):
         if i is None:

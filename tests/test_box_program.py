@@ -6,15 +6,17 @@ from __future__ import annotations
 import ast
 import json
 import os
+import shutil
 import subprocess
 import sys
+import time
 
 import nbformat
 import pytest
 
 from conftest import ROOT
 from fusionlab import labformat
-from grading import cells, judge
+from grading import cells, client, judge, launcher, sandbox, session
 from grading.lab import Lab
 
 LABS = sorted(p.name for p in (ROOT / "labs").iterdir() if (p / f"{p.name}.ipynb").exists())
@@ -29,7 +31,7 @@ def _lab(lab, tmp_path):
 
 def _program(the_lab, nb, gid):
     """What the judge's box for test ``gid`` runs (the names the test asks it for: :func:`grading.judge._asked`)."""
-    return the_lab.program(nb, upto=gid, need=judge._asked(the_lab.tests[gid], the_lab.base()))[0]
+    return the_lab.program(nb, upto=gid, need=judge._asked(the_lab, the_lab.tests[gid], the_lab.base()))[0]
 
 
 def _setup(program):
@@ -64,7 +66,7 @@ def test_the_setup_in_each_box_keeps_every_statement_but_the_imports_no_kept_cel
         assert program[0][0] == labformat.SETUP, "the setup runs first"
         kept_pieces = cells.statements(kept)
         assert [p for p, imp in pieces if not imp] == [p for p, imp in kept_pieces if not imp], gid
-        read = set(judge._asked(the_lab.tests[gid], the_lab.base())).union(
+        read = set(judge._asked(the_lab, the_lab.tests[gid], the_lab.base())).union(
             *[cells.reads_and_writes(src)[0] for g, src in program if g != labformat.SETUP],
             *[cells.reads_and_writes(p)[0] for p, imp in kept_pieces if not imp],
         )
@@ -162,3 +164,88 @@ def test_a_box_for_a_kalman_step_runs_no_plotting_cell_above_it(tmp_path):
     for gid in ("ex3_tests", "ex4_tests"):
         program = _program(the_lab, solution, gid)
         assert not any("plt" in (cells.reads_and_writes(src)[0] | cells.bound_names(src)) for _, src in program), gid
+
+
+@pytest.mark.parametrize(
+    ("answer", "kept"),
+    [
+        ("def show(ax: plt.Axes, P):\n    ax.imshow(P)", {"plt"}),  # annotations are evaluated where f is made
+        ("def state_of(f: KalmanFilter) -> np.ndarray:\n    return f.x", {"KalmanFilter", "np"}),
+        ("class Twin:\n    def same(self, f: KalmanFilter):\n        return f", {"KalmanFilter"}),
+    ],
+)
+def test_an_annotation_keeps_the_import_it_names(tmp_path, answer, kept):
+    the_lab, _, solution = _lab("02_kalman_falling_body", tmp_path)
+    source = next(c.source for c in solution.cells if cells.grade_id(c) == "ex1_solution")
+    nb = _with_answer(solution, "ex1_solution", f"{answer}\n\n{source}")
+    [setup] = _setup(_program(the_lab, nb, "ex1_tests"))
+    assert kept <= _imported(setup)
+
+
+@pytest.mark.parametrize(
+    "reach",
+    ['sys.modules["__main__"].small(0.0)', "__import__('__main__').small(0.0)", "inspect.stack()"],
+)
+def test_an_answer_that_reaches_the_notebook_through_a_module_gets_the_whole_setup(tmp_path, reach):
+    the_lab, release, solution = _lab("02_kalman_falling_body", tmp_path)
+    module = reach.split(".")[0] if reach[0] != "_" else "builtins"
+    answer = f"import {module}\n\n\ndef my_joseph(P, K, H, R):\n    {reach}\n    return P\n"
+    [setup] = _setup(_program(the_lab, _with_answer(solution, "ex1_solution", answer), "ex1_tests"))
+    whole = next(cells.python_of(c.source) for c in release.cells if cells.grade_id(c) == labformat.SETUP)
+    assert setup == whole
+    answer = "from __main__ import small\n\n\ndef my_joseph(P, K, H, R):\n    return P\n"
+    [setup] = _setup(_program(the_lab, _with_answer(solution, "ex1_solution", answer), "ex1_tests"))
+    assert setup == whole
+
+
+needs_bwrap = pytest.mark.skipif(
+    shutil.which("bwrap") is None, reason="bubblewrap (bwrap) is not installed: apt-get install bubblewrap"
+)
+
+
+def _graded(the_lab, nb):
+    with sandbox.claimed_slots(1) as [slot]:
+        verdict = judge.judge(the_lab, nb, "someone", slot)
+    return {t.grade_id: t.score for t in verdict.tests}
+
+
+@needs_bwrap
+def test_an_import_the_reading_of_the_cells_missed_is_run_again_with_the_whole_setup(tmp_path, monkeypatch):
+    """The program's reading is a shortcut: a box whose cells fail for want of a name runs again with the whole
+    setup, so an honest answer that reaches the setup's names in a way the reading does not know scores in full."""
+    scratch = tmp_path / "scratch"
+    scratch.mkdir(mode=0o755)
+    the_lab, _, solution = _lab("02_kalman_falling_body", scratch)
+    source = next(c.source for c in solution.cells if cells.grade_id(c) == "ex1_solution")
+    nb = _with_answer(solution, "ex1_solution", f"from __main__ import small\n\n{source}")
+    monkeypatch.setattr(cells, "reads_dynamically", lambda source: False)  # the reading misses the import
+    full = _graded(the_lab, solution)
+    assert _graded(the_lab, nb) == full == {"ex1_tests": 2, "ex2_tests": 2, "ex3_tests": 2, "ex4_tests": 3}
+    monkeypatch.setattr(session.Session, "_with_whole_setup", lambda self, errors: False)
+    assert _graded(the_lab, nb)["ex1_tests"] == 0  # without the second run, the answer cell's ImportError costs it
+
+
+@needs_bwrap
+def test_a_labs_box_has_no_proc_whose_entries_number_a_counter_of_the_whole_machine(tmp_path):
+    """Each look-up of a /proc entry takes an inode number from one counter of the machine, which no grading run
+    resets: a hidden round's box moved it and the next run's visible round read it back (an outside review)."""
+    scratch = tmp_path / "scratch"
+    scratch.mkdir(mode=0o755)
+    the_lab, _, _ = _lab("02_kalman_falling_body", scratch)
+    probe = (
+        "import os\n"
+        "assert os.listdir('/proc') == [], os.listdir('/proc')\n"
+        "try:\n"
+        "    os.lstat('/proc/self/fd/0')\n"
+        "except FileNotFoundError:\n"
+        "    pass\n"
+        "else:\n"
+        "    raise AssertionError('/proc/self is there')\n"
+    )
+    with sandbox.claimed_slots(1) as [slot]:
+        box = launcher.LabBoxes(the_lab, "someone", slot).start("ex1_tests", files=False)
+        try:
+            errors = client.run_program(box, [probe, "1 / 0"], cell_seconds=30, deadline=time.monotonic() + 60)
+        finally:
+            box.kill()
+    assert errors == {1: "ZeroDivisionError: division by zero"}  # the probe ran, and passed
