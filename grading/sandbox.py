@@ -132,7 +132,8 @@ def _with_parent_folders(args):
     for p in sorted(parents, key=lambda p: p.count("/")):
         if not mounted(p):
             head += ["--perms", "0755", "--dir", p]
-    at = args.index("--tmpfs") + 2  # after the private /tmp: a scratch folder under the host's /tmp gets them too
+    # after the private /tmp (not an empty /proc's tmpfs): a scratch folder under the host's /tmp gets them too
+    at = next(i for i in range(len(args) - 1) if args[i : i + 2] == ["--tmpfs", "/tmp"]) + 2
     return args[:at] + head + args[at:]
 
 

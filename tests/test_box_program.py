@@ -249,3 +249,18 @@ def test_a_labs_box_has_no_proc_whose_entries_number_a_counter_of_the_whole_mach
         finally:
             box.kill()
     assert errors == {1: "ZeroDivisionError: division by zero"}  # the probe ran, and passed
+
+
+@needs_bwrap
+def test_a_box_starts_for_a_course_under_the_machines_tmp(tmp_path):
+    """The folders above a course under /tmp are made inside the box's own /tmp, not under the empty /proc's
+    tmpfs that comes before it (every grading run first starts such a box: :func:`grading.sandbox.box_problem`)."""
+    course = tmp_path / "course"
+    (course / "labs" / "02_kalman_falling_body").mkdir(parents=True)
+    shutil.copytree(ROOT / "lib", course / "lib", ignore=shutil.ignore_patterns("__pycache__"))
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    for p in (tmp_path, course, scratch):
+        p.chmod(0o755)
+    with sandbox.claimed_slots(1) as slots:
+        assert sandbox.box_problem(course, "02_kalman_falling_body", scratch, slots) is None
