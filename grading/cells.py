@@ -185,10 +185,24 @@ def global_reads(node: ast.AST) -> set[str]:
         annotations = [a.annotation for a in every if a and a.annotation]  # evaluated where the function is made
         if getattr(node, "returns", None) is not None:
             annotations.append(node.returns)
-        return reads.union(*[global_reads(d) for d in [*defaults, *decorators, *annotations]])
+        return reads.union(*[global_reads(d) for d in [*defaults, *decorators]], *map(_annotation_reads, annotations))
+    if isinstance(node, ast.AnnAssign):
+        parts = [node.target] + ([node.value] if node.value else [])
+        return _annotation_reads(node.annotation).union(*map(global_reads, parts))
     if isinstance(node, ast.Name):
         return {node.id} if isinstance(node.ctx, ast.Load) else set()
     return set().union(*[global_reads(child) for child in ast.iter_child_nodes(node)])
+
+
+def _annotation_reads(node: ast.expr) -> set[str]:
+    """The names an annotation reads, also where it is a string (``f: "KalmanFilter"``), which
+    ``typing.get_type_hints`` evaluates in the notebook's names."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        try:
+            return global_reads(parse(node.value, mode="eval"))
+        except SyntaxError:
+            return set()
+    return global_reads(node)
 
 
 def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:

@@ -172,6 +172,8 @@ def test_a_box_for_a_kalman_step_runs_no_plotting_cell_above_it(tmp_path):
         ("def show(ax: plt.Axes, P):\n    ax.imshow(P)", {"plt"}),  # annotations are evaluated where f is made
         ("def state_of(f: KalmanFilter) -> np.ndarray:\n    return f.x", {"KalmanFilter", "np"}),
         ("class Twin:\n    def same(self, f: KalmanFilter):\n        return f", {"KalmanFilter"}),
+        ('def state_of(f: "KalmanFilter"):\n    return f', {"KalmanFilter"}),  # typing.get_type_hints reads it
+        ('class Pred:\n    ref: "KalmanFilter | None" = None', {"KalmanFilter"}),
     ],
 )
 def test_an_annotation_keeps_the_import_it_names(tmp_path, answer, kept):
