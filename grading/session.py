@@ -8,8 +8,9 @@ import dataclasses
 import time
 from typing import TYPE_CHECKING
 
+from fusionlab import labformat
 from grading import box as wire
-from grading import client
+from grading import cells, client
 from grading.client import BoxDied, BoxTimeout
 
 if TYPE_CHECKING:
@@ -110,17 +111,18 @@ class Session:
                 self.restarts += 1
 
     def _with_whole_setup(self, errors: dict[int, str]) -> bool:
-        """After a run whose cells raised a NameError, ImportError or AttributeError: if the program left out imports
-        of the setup cell (:meth:`grading.lab.Lab.program`), it becomes the program with the whole setup, to be run in
-        a fresh box (True), so that a name reached in a way the program's reading missed (an annotation evaluated in a
-        way it does not know) costs the student nothing; False if there is nothing to run again."""
-        missing = ("NameError", "ImportError", "ModuleNotFoundError", "AttributeError")
-        if self.whole_setup or not any(e.startswith(missing) for e in errors.values()):
+        """After a run whose cells raised a NameError, ImportError or AttributeError that names a name the program
+        left out of the setup cell (:meth:`grading.lab.Lab.program`), the program becomes the one with the whole
+        setup, to be run in a fresh box (True), so that a name reached in a way the program's reading missed costs
+        the student nothing; False otherwise (an unfinished exercise's NameError costs no second box)."""
+        missing = [e for e in errors.values() if e.startswith(("NameError", "ImportError", "AttributeError"))]
+        if self.whole_setup or not missing:
+            return False
+        whole, _ = self.lab.program(self.submitted, upto=self.gid, need=self.need, whole_setup=True)
+        dropped = _setup_names(whole) - _setup_names(self.cells)  # a name the error quotes: 'plt', 'small'
+        if not any(f"'{name}'" in e for name in dropped for e in missing):
             return False
         self.whole_setup = True
-        whole, _ = self.lab.program(self.submitted, upto=self.gid, need=self.need, whole_setup=True)
-        if whole == self.cells:
-            return False
         self.box.kill()
         self.cells = whole
         self.skipped = {i for i, cell in enumerate(self.cells) if tuple(cell) in self.stopped}
@@ -193,3 +195,8 @@ class Session:
         if self.box is not None:
             self.largest = max(self.largest, self.box.largest)
             self.box.kill()
+
+
+def _setup_names(program: list[tuple[str | None, str]]) -> set[str]:
+    """The names the setup cell of ``program`` binds."""
+    return set().union(*[cells.bound_names(src) for gid, src in program if gid == labformat.SETUP])
