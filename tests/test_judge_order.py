@@ -76,6 +76,7 @@ def _lab():
         forbidden={},
         base=lambda: {"guard": judge.guard},
         reference_values=lambda gid, boxes: {},
+        provided_names=set(),
     )
 
 
