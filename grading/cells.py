@@ -231,10 +231,8 @@ def reads_and_writes(source: str) -> tuple[set[str], set[str], set[str]] | None:
 def _surely_bound(stmt: ast.stmt) -> set[str]:
     """The names a top-level statement binds whenever it completes: an assignment's target names (not names bound
     inside its value, such as a comprehension's), an import's, a definition's; none for a loop, a branch, a ``with``."""
-    if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return {stmt.name}
-    if isinstance(stmt, (ast.Import, ast.ImportFrom)):
-        return {(a.asname or a.name).split(".")[0] for a in stmt.names if a.name != "*"}
+    if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Import, ast.ImportFrom)):
+        return labformat.top_level_names(ast.Module([stmt], [])) - {"*"}
     targets = (
         stmt.targets
         if isinstance(stmt, ast.Assign)
@@ -266,11 +264,14 @@ DYNAMIC_MODULES = frozenset({"__main__", "sys", "inspect", "builtins", "gc", "ct
 def reads_dynamically(source: str) -> bool:
     """True if ``source`` may read the notebook's names without naming them (:data:`DYNAMIC_READS`,
     :data:`DYNAMIC_MODULES`), or does not parse."""
-    info = reads_and_writes(source)
-    if info is None or info[0] & DYNAMIC_READS:
+    try:
+        tree = parse(source)
+    except SyntaxError:
+        return True
+    if global_reads(tree) & DYNAMIC_READS:
         return True
     imported = set()
-    for n in ast.walk(parse(source)):
+    for n in ast.walk(tree):
         if isinstance(n, ast.Import):
             imported |= {a.name.split(".")[0] for a in n.names}
         elif isinstance(n, ast.ImportFrom) and n.module and not n.level:

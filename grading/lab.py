@@ -205,7 +205,7 @@ class Lab:
         the whole setup cell runs."""
         seq, notes = self.layout(submitted)
         released = {c.source.strip() for c in self.release.cells if c.cell_type == "code" and not cells.grade_id(c)}
-        program, whole = [], []  # the setup's imports each a cell of their own; the setup as one cell
+        program = []
         for kind, gid, cell in seq:
             if upto is not None and gid == upto:
                 break
@@ -214,22 +214,20 @@ class Lab:
             source = cell.get("source", "")
             if kind == "added":
                 program.append((None, cells.python_of(source), source.strip() not in released))
-                whole.append(program[-1])
                 continue
             mine = self._release_cell(gid)
             if cells.is_test(mine) or cells.is_check(mine):
                 continue
             answer = cells.is_answer(mine) or not cells.nbg(mine).get("locked")
             code = cells.python_of(source if answer else mine.source)
-            whole.append((gid, code, answer or gid == labformat.SETUP))
             pieces = cells.statements(code) if gid == labformat.SETUP and not answer and not whole_setup else None
             if pieces is None:
-                program.append(whole[-1])
+                program.append((gid, code, answer or gid == labformat.SETUP))
             else:  # each import runs where a kept cell reads what it binds: a box that plots nothing imports no pyplot
                 program += [(gid, piece, not optional) for piece, optional in pieces]
         pruned = cells.prune(program, need)
-        if any(cells.reads_dynamically(src) for _, src, _ in pruned):
-            pruned = cells.prune(whole, need)
+        if not whole_setup and any(cells.reads_dynamically(src) for _, src, _ in pruned):
+            return self.program(submitted, upto, need, whole_setup=True)
         kept = []
         for gid, src, _ in pruned:
             if kept and gid == labformat.SETUP and kept[-1][0] == gid:
