@@ -255,7 +255,8 @@ def drop_root(uid: int, read_all: bool = False) -> None:
 
 def _in_dropped_child(slot, read_all, task):
     """Run ``task()`` (returns a string) in a child process that has given up root as :func:`judge_uid`; what it
-    returned, or what stopped it."""
+    returned, or what stopped it. A child that ends without answering raises RuntimeError: its silence must not read
+    as "nothing refused" (a grading run once went on with judges that could not import Python's own modules)."""
     r, w = os.pipe()
     pid = os.fork()
     if pid == 0:
@@ -268,13 +269,18 @@ def _in_dropped_child(slot, read_all, task):
         except Exception as exc:  # noqa: BLE001 -- said to the grader
             said = f"{type(exc).__name__}: {exc}"
         finally:
-            os.write(w, said.encode()[:4000])
+            os.write(w, b"=" + said.encode()[:4000])
             os._exit(0)
     os.close(w)
     with os.fdopen(r, "rb") as f:
-        said = f.read().decode()
-    os.waitpid(pid, 0)
-    return said
+        said = f.read().decode(errors="replace")
+    _, status = os.waitpid(pid, 0)
+    if not said.startswith("="):
+        raise RuntimeError(
+            f"the check run as the judge's user {judge_uid(slot)} ended without answering (wait status {status}): "
+            "grading stops here rather than guess what the judges may read"
+        )
+    return said[1:]
 
 
 def judge_problem(slots: Iterable[int]) -> str | None:

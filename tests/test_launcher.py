@@ -508,3 +508,12 @@ def test_forgetting_the_caches_forgets_names_not_found_and_reads_the_files_it_is
         pytest.skip(f"the kernel's caches cannot be forgotten here: {said}")
     assert _negative_names() < 5000, "the names not found are forgotten"
     assert _resident_share(kept) == 1.0
+
+
+def test_a_check_as_the_judge_that_ends_without_answering_stops_the_run_instead_of_reading_as_nothing_refused():
+    """An outside review saw a class run go on with judges that could not import Python's own modules (a child's
+    silence read as "no folder refused"): silence is now an error, and an answer, even an empty one, is kept."""
+    assert launcher._in_dropped_child(0, None, lambda: "") == ""
+    assert launcher._in_dropped_child(0, None, lambda: "/root is closed") == "/root is closed"
+    with pytest.raises(RuntimeError, match=r"ended without answering \(wait status 768\)"):
+        launcher._in_dropped_child(0, None, lambda: os._exit(3))

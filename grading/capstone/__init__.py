@@ -78,9 +78,9 @@ process:
 * **Feedback on hidden trials** holds no text of the student's code: what a call of ``estimate`` raised or returned
   is reported in words written here (the type of a built-in error, what was wrong with the output, the placeholder
   or refusing package it reached: :func:`error_message`, :func:`invalid_message`), never its message, which could
-  carry the trial's numbers; so are the errors of the notebook's cells in a box started after a trial was sent
-  (:class:`Runner`). Only the cells' errors in the first box, which runs them before any trial is sent, are shown as
-  they are.
+  carry the trial's numbers. Of the notebook's cells, the feedback names those that failed in the first box, which
+  runs them before any trial is sent, never with their text (:class:`Runner`); in a box started after a trial was
+  sent, which cells fail is not reported at all.
 * **Points** come from the stated rubric (:data:`RUBRIC`), not from rank: 2 for a valid estimate on every trial
   within its budget, and up to 8 that grow with the mean RMSE the filter is scored on, on a log scale from
   Madgwick's filter's mean to VQF's with the same sensors (9D: total RMSE of the 9D versions; 6D: inclination RMSE of

@@ -116,8 +116,8 @@ def verdict(
     """(True/False/None, message) of the calls :func:`probe` made, against ``outputs`` (``{trial index: q}`` of the
     trials on which the filter ran): the chosen trial's calls first. A call that gave no quaternions on a trial on
     which the filter ran leaves it not checked: a filter that fails on the changed samples was not shown causal there
-    (else a filter that looks ahead could fail on purpose wherever it sees the check's data). No k is named: the
-    seed of a class run is kept for a second run, whose ks a first run's messages would otherwise give away. Nor how
+    (else a filter that looks ahead could fail on purpose wherever it sees the check's data). No k is named (each
+    run draws its own, but a named k would still tell the student where this run looked). Nor how
     much the estimate changed: the filter sets that figure, and could spell a hidden trial's length in it."""
     if not outputs:
         return None, "not checked: estimate ran on no trial"

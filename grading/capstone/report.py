@@ -558,11 +558,13 @@ def grade_class(
     min_seconds: float = MIN_SECONDS,
     limits: dict | None = None,
     cleared: Iterable[str] = (),
+    check_seed: int | None = None,
 ) -> tuple[list[StudentResult], dict]:
     """Grade ``submissions`` (``{student: notebook}``) on ``scored``, disguised with ``seed``; writes the
     leaderboard; returns the results and the reference rows (kept in ``<out>/references.npz``,
     :func:`cached_references`). ``cleared``: students whose estimate :data:`IMPLAUSIBLY_CLOSE` to the reference
-    the instructor has cleared after reading their code."""
+    the instructor has cleared after reading their code. ``check_seed``: the causality check's secret for every
+    student (tests); by default each student's is drawn afresh (:func:`grading.capstone.grade_submission`)."""
     cleared = set(cleared)
     model = model_program(course)
     scratch = Path(tempfile.mkdtemp(prefix="capstone-"))
@@ -605,7 +607,7 @@ def grade_class(
                         scratch,
                         slot=slot,
                         read_all=read_all,
-                        seed=seed,
+                        check_seed=check_seed,
                         seconds_per_sample=seconds_per_sample,
                         min_seconds=min_seconds,
                         limits=limits,

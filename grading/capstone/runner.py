@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import secrets
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -219,8 +220,8 @@ class Runner:
 
     Every message it returns is written here: what the box replies is the student's, and a call carries a hidden
     trial, so no text of the box's reply reaches the feedback (:func:`error_message`, :func:`invalid_message`).
-    The errors of the notebook's cells are kept as the box reports them from the first box only, which runs them
-    before any trial is sent; in a box started after a trial was sent, they are reported without their text."""
+    Which of the notebook's cells failed is kept from the first box only, which runs them before any trial is
+    sent (and never their text: :data:`CELL_ERROR`); in a box started after a trial was sent they are not reported."""
 
     def __init__(
         self,
@@ -267,7 +268,11 @@ class Runner:
             errors = exc.errors
             self.setup_error = "the notebook's cells ended the process"
         finally:
-            for cell in errors:  # never the text: see CELL_ERROR
+            # never the text (see CELL_ERROR), and from the first box only: a box started after a trial was sent
+            # runs after boxes that saw it, and which of its cells fail is the student's to choose (an outside
+            # review spelled the causality check's secret cuts, read in earlier boxes, in which of 238 added cells
+            # raised)
+            for cell in errors if not self.sent else ():
                 self.cell_errors.setdefault(cell, CELL_ERROR)
         self.close()
         return False
@@ -389,15 +394,22 @@ def grade_submission(
     scratch: Path | str,
     *,
     slot: int = 0,
-    seed: int = 0,
     seconds_per_sample: float = SECONDS_PER_SAMPLE,
     min_seconds: float = MIN_SECONDS,
     limits: dict | None = None,
     cleared: bool = False,
     model: str | None = None,
     boxes: CapstoneBoxes | launcher.RemoteBoxes | None = None,
+    check_seed: int | None = None,
 ) -> StudentResult:
     """Grade one notebook on the disguised trials ``scored``; every number is computed here.
+
+    ``check_seed``: the causality check's secret (the trial checked in full, every k and cut, the noise of the
+    replaced samples). By default it is drawn afresh from the system's randomness for each student on each run,
+    never from the disguise's seed (which made ``scored``): a class shares that seed and a second run reuses it, so
+    cuts made from it would be the same for every student and every run, and a page that once carried them (an
+    outside review spelled them out in which of its notebook's cells failed) would tell everyone where a filter may
+    look ahead. Tests pass it to check at known places.
 
     ``cleared``: the instructor has read the code and clears an estimate :data:`IMPLAUSIBLY_CLOSE` to the
     reference (it is then a note, not a cheat). ``model``: the lab's own program (:func:`model_program` of
@@ -430,9 +442,10 @@ def grade_submission(
         sensors=res.sensors,
         boxes=boxes,
     )
-    rng = np.random.default_rng([seed, 7])
-    chosen = causality_trial(seed, len(scored), rng)
-    every = np.random.default_rng([seed, 11])  # the secret ks and cuts of each other trial (its own stream)
+    check_seed = secrets.randbits(63) if check_seed is None else check_seed
+    rng = np.random.default_rng([check_seed, 7])
+    chosen = causality_trial(check_seed, len(scored), rng)
+    every = np.random.default_rng([check_seed, 11])  # the secret ks and cuts of each other trial (its own stream)
     budgets = [budget_seconds(len(t), seconds_per_sample, min_seconds) for t in scored]
     outputs, calls, probes = {}, {}, {}  # each trial's whole-trial output, its check's calls and their outputs
     try:
