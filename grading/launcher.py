@@ -256,7 +256,8 @@ def drop_root(uid: int, read_all: bool = False) -> None:
 def _in_dropped_child(slot, read_all, task):
     """Run ``task()`` (returns a string) in a child process that has given up root as :func:`judge_uid`; what it
     returned, or what stopped it. A child that ends without answering raises RuntimeError: its silence must not read
-    as "nothing refused" (a grading run once went on with judges that could not import Python's own modules)."""
+    as "nothing refused" (an outside review saw a capstone run whose judges could not import Python's own modules,
+    with no word of the closed folder on its way; a silent child is one way to get there)."""
     r, w = os.pipe()
     pid = os.fork()
     if pid == 0:

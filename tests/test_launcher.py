@@ -511,8 +511,9 @@ def test_forgetting_the_caches_forgets_names_not_found_and_reads_the_files_it_is
 
 
 def test_a_check_as_the_judge_that_ends_without_answering_stops_the_run_instead_of_reading_as_nothing_refused():
-    """An outside review saw a class run go on with judges that could not import Python's own modules (a child's
-    silence read as "no folder refused"): silence is now an error, and an answer, even an empty one, is kept."""
+    """An outside review saw a capstone run whose judges could not import Python's own modules, with no word of the
+    closed folder (a child's silence would read as "no folder refused"): silence is an error; an answer, even an
+    empty one, is kept."""
     assert launcher._in_dropped_child(0, None, lambda: "") == ""
     assert launcher._in_dropped_child(0, None, lambda: "/root is closed") == "/root is closed"
     with pytest.raises(RuntimeError, match=r"ended without answering \(wait status 768\)"):
