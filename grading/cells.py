@@ -4,6 +4,7 @@ own ``utils`` and :mod:`fusionlab.labformat`), and what its code reads and binds
 * :func:`python_of` -- a cell as the judge and the box run it (IPython magics and shell escapes dropped);
 * :func:`bound_names`, :func:`free_names`, :func:`reads_and_writes`, :func:`reads_dynamically`, :func:`statements`
   and :func:`prune` -- which cells (and which of the setup cell's imports) a test needs;
+* :func:`imported_modules` -- the modules import statements name;
 * :func:`forbidden_expressions` -- what a test cell names as its references;
 * :func:`test_parts` -- a test cell's visible and hidden parts.
 
@@ -270,13 +271,19 @@ def reads_dynamically(source: str) -> bool:
         return True
     if global_reads(tree) & DYNAMIC_READS:
         return True
-    imported = set()
-    for n in ast.walk(tree):
-        if isinstance(n, ast.Import):
-            imported |= {a.name.split(".")[0] for a in n.names}
-        elif isinstance(n, ast.ImportFrom) and n.module and not n.level:
-            imported.add(n.module.split(".")[0])
-    return bool(imported & DYNAMIC_MODULES)
+    return any(m.split(".")[0] in DYNAMIC_MODULES for m in imported_modules(ast.walk(tree)))
+
+
+def imported_modules(nodes: Iterable[ast.AST]) -> list[str]:
+    """The modules the import statements among ``nodes`` import, by dotted name, in order (``import a.b``: ``a.b``;
+    ``from a import b``: ``a`` and ``a.b``, which may not be a module); relative imports are left out."""
+    names = []
+    for node in nodes:
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+    return list(dict.fromkeys(names))
 
 
 def statements(source: str) -> list[tuple[str, bool]] | None:

@@ -35,7 +35,6 @@ cell.
 
 from __future__ import annotations
 
-import ast
 import builtins
 import contextlib
 import copy
@@ -279,13 +278,7 @@ def _imported_modules(source):
         tree = cells.parse(cells.python_of(source))
     except SyntaxError:
         return []
-    names = []
-    for node in tree.body:
-        if isinstance(node, ast.Import):
-            names += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
-            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]  # a name may be a module
-    return list(dict.fromkeys(names))
+    return cells.imported_modules(tree.body)
 
 
 def judge_apart(

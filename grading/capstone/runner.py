@@ -272,8 +272,9 @@ class Runner:
             # runs after boxes that saw it, and which of its cells fail is the student's to choose (an outside
             # review spelled the causality check's secret cuts, read in earlier boxes, in which of 238 added cells
             # raised)
-            for cell in errors if not self.sent else ():
-                self.cell_errors.setdefault(cell, CELL_ERROR)
+            if not self.sent:
+                for cell in errors:
+                    self.cell_errors.setdefault(cell, CELL_ERROR)
         self.close()
         return False
 
